@@ -1,0 +1,67 @@
+"""hexapod: equations of motion of constrained multibody systems in absolute coordinates.
+
+Describe a system as a :class:`Scene`, build it once with :func:`assemble`, then run the
+algorithms on the :class:`~hexapod.model.Model` with a :class:`~hexapod.model.Data` workspace::
+
+    model = hexapod.assemble(scene)
+    data = hexapod.Data()
+    q, v = hexapod.consistent_state(model)
+    v_dot = hexapod.forward_dynamics(model, data, 0.0, q, v)
+    wrenches = hexapod.joint_wrenches(model, q, data.lam, data.Phi_v)
+"""
+
+from hexapod.assembly import assemble
+from hexapod.dynamics import forward_dynamics
+from hexapod.errors import (
+    AssemblyError,
+    HexapodError,
+    InputFileError,
+    IntegrationError,
+    ModelError,
+    SingularSystemError,
+)
+from hexapod.kinematics import (
+    assemble_positions,
+    consistent_state,
+    degrees_of_freedom,
+    solve_accelerations,
+    solve_velocities,
+)
+from hexapod.model import Data, Model
+from hexapod.reactions import JointWrenches, driver_efforts, joint_wrenches
+from hexapod.scene import (
+    GROUND,
+    AppliedForce,
+    AppliedTorque,
+    Constant,
+    CoordinateDriver,
+    Distance,
+    Fixed,
+    Harmonic,
+    JointDriver,
+    JointEffort,
+    Particle,
+    PlanarBody,
+    Polynomial,
+    Prismatic,
+    Revolute,
+    Scene,
+    SpatialBody,
+    Spherical,
+    Spline,
+    SpringDamper,
+)
+from hexapod.spatial import Placement, rotation_about_axis, rotation_from_rpy
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "GROUND", "AppliedForce", "AppliedTorque", "AssemblyError", "Constant", "CoordinateDriver",
+    "Data", "Distance", "Fixed", "Harmonic", "HexapodError", "InputFileError",
+    "IntegrationError", "JointDriver", "JointEffort", "JointWrenches", "Model", "ModelError",
+    "Particle", "Placement", "PlanarBody", "Polynomial", "Prismatic", "Revolute", "Scene",
+    "SingularSystemError", "SpatialBody", "Spherical", "Spline", "SpringDamper", "assemble",
+    "assemble_positions", "consistent_state", "degrees_of_freedom", "driver_efforts",
+    "forward_dynamics", "joint_wrenches", "rotation_about_axis", "rotation_from_rpy",
+    "solve_accelerations", "solve_velocities",
+]

@@ -1,0 +1,61 @@
+"""Forward dynamics at a state: accelerations and multipliers from the saddle-point system
+
+    [[M, Phi_v^T], [Phi_v, 0]] [v_dot; lambda] = [Q; gamma]
+
+solved on the equilibrated constraint matrix (:mod:`hexapod.linalg`). Accelerations are always
+unique. When rows are redundant their multipliers follow DESIGN's unit-free default policy: among
+all multipliers that satisfy the equations, those minimising ``sum_k |F_k|^2 + |T_k / l|^2`` over
+the joint wrenches, with ``l = model.characteristic_length``; the redundant rows are named.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from hexapod.linalg import equilibrate, solve_saddle, split_rows
+from hexapod.model import Data, Model
+from hexapod.reactions import policy_map
+
+
+def forward_dynamics(model: Model, data: Data, t: float, q: np.ndarray, v: np.ndarray, *,
+                     condition: bool = False) -> np.ndarray:
+    """Accelerations ``v_dot`` at ``(t, q, v)``; fills ``data``.
+
+    ``data`` receives ``Phi_v, gamma, Q, v_dot, lam`` (n_c), ``independent_rows``,
+    ``redundant_rows`` (row indices; names in ``model.rows``), ``extra["Q_across"]``, and, when
+    ``condition`` is true, ``condition_number`` (2-norm, of the equilibrated saddle-point matrix
+    of the independent rows) and ``extra["sigma_min"]`` (the smallest singular value of the
+    equilibrated ``Phi_v``: the distance to a singular configuration).
+
+    Raises
+    ------
+    SingularSystemError
+        When redundant constraints contradict each other.
+    """
+    q = np.asarray(q, dtype=float)
+    v = np.asarray(v, dtype=float)
+    w, wd, wdd = model.law_values(t)
+    Phi_v = model.call("Phi_v", q=q, w=w)
+    gamma = model.call("gamma", q=q, v=v, w=w, wd=wd, wdd=wdd)
+    Q = model.call("Q", q=q, v=v, w=w)
+    Q_across = model.call("Q_across", q=q, v=v, w=w) if model.Q_across is not None else None
+    W, d = equilibrate(Phi_v, model.mass_inv_sqrt)
+    split = split_rows(W, d, model.row_priority, model.rank_tolerance)
+    wrench_map = offset = None
+    if split.redundant.size:
+        wrench_map, offset = policy_map(model, q, Phi_v, Q_across)
+    solution = solve_saddle(model.mass_inv_sqrt, Phi_v, Q, gamma, model.row_priority,
+                            model.rank_tolerance, row_names=[r.name for r in model.rows],
+                            wrench_map=wrench_map, wrench_offset=offset, split=split)
+    data.t, data.q, data.v, data.w, data.wd, data.wdd = t, q, v, w, wd, wdd
+    data.Phi_v, data.gamma, data.Q = Phi_v, gamma, Q
+    data.v_dot, data.lam = solution.v_dot, solution.lam
+    data.independent_rows, data.redundant_rows = split.independent, split.redundant
+    data.extra["Q_across"] = Q_across
+    data.extra["inconsistency"] = solution.inconsistency
+    data.condition_number = None
+    if condition:
+        data.condition_number = split.condition_number(model.n_v)
+        sigma = split.singular_values()
+        data.extra["sigma_min"] = float(sigma.min()) if sigma.size else float("inf")
+    return solution.v_dot

@@ -1,0 +1,64 @@
+"""The one exception family of hexapod.
+
+Every error a user can cause is a :class:`HexapodError`; its message names the file (when there is
+one), the element and what is wrong. Misuse of the API by a programmer (wrong types, wrong shapes)
+may raise the usual ``TypeError`` / ``ValueError``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+class HexapodError(Exception):
+    """Base class of every error raised for bad input or a failed computation."""
+
+
+@dataclass(frozen=True)
+class Problem:
+    """One problem found in a scene description.
+
+    Attributes
+    ----------
+    element : str
+        What the problem is about, e.g. ``"body 'femur'"`` or ``"scene"``.
+    message : str
+        What is wrong, with the offending value.
+    where : str
+        Where it was written, e.g. ``"leg.toml, body[2].mass"``; empty for scenes built in Python.
+    """
+
+    element: str
+    message: str
+    where: str = ""
+
+    def __str__(self) -> str:
+        location = f" ({self.where})" if self.where else ""
+        return f"{self.element}{location}: {self.message}"
+
+
+class ModelError(HexapodError):
+    """A scene description is invalid. Carries every problem found, not only the first."""
+
+    def __init__(self, subject: str, problems: list[Problem]):
+        self.subject = subject
+        self.problems = list(problems)
+        count = len(self.problems)
+        head = f"{subject}: {count} problem{'s' if count != 1 else ''}"
+        super().__init__(head + "".join(f"\n  - {p}" for p in self.problems))
+
+
+class InputFileError(HexapodError):
+    """A file cannot be read or parsed (missing, syntax error, wrong structure)."""
+
+
+class AssemblyError(HexapodError):
+    """No configuration satisfies the constraints from the given guess."""
+
+
+class SingularSystemError(HexapodError):
+    """The equations of motion have no unique solution (e.g. inconsistent constraints)."""
+
+
+class IntegrationError(HexapodError):
+    """A time integration cannot proceed."""

@@ -1,0 +1,135 @@
+"""Position, velocity and acceleration analysis.
+
+Position: Newton iterations on ``phi(q, t) = 0`` in the tangent space. Each step is the
+least-``M``-norm velocity-space correction ``dv`` with ``Phi_v dv = -phi`` (so the step is
+unit-free and redundant rows are handled by the rank decision of :mod:`hexapod.linalg`), applied
+with the Lie-group update of :meth:`Model.integrate` and a backtracking line search.
+Velocity: the least-``M``-norm correction of a guess onto ``Phi_v v = nu``. Acceleration: the
+same for ``Phi_v v_dot = gamma``; both are unique when drivers fix every degree of freedom.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from hexapod.errors import AssemblyError
+from hexapod.linalg import RowSplit, equilibrate, split_rows
+from hexapod.model import Model
+
+
+def _split(model: Model, Phi_v: np.ndarray) -> RowSplit:
+    W, d = equilibrate(Phi_v, model.mass_inv_sqrt)
+    return split_rows(W, d, model.row_priority, model.rank_tolerance)
+
+
+def scaled_residual(model: Model, q: np.ndarray, t: float = 0.0) -> np.ndarray:
+    """``phi`` with length rows divided by the characteristic length (dimensionless)."""
+    w, _, _ = model.law_values(t)
+    return model.call("phi", q=q, w=w) / model.row_scale
+
+
+def _violations(model: Model, scaled: np.ndarray, count: int = 5) -> str:
+    worst = np.argsort(-np.abs(scaled))[:count]
+    return ", ".join(f"{model.rows[i].name} = {scaled[i] * model.row_scale[i]:.3g}"
+                     + (" m" if model.rows[i].kind == "length" else " rad")
+                     for i in worst if abs(scaled[i]) > 0)
+
+
+def assemble_positions(model: Model, q: np.ndarray | None = None, t: float = 0.0, *,
+                       tol: float = 1e-12, max_iterations: int = 60) -> np.ndarray:
+    """A configuration satisfying every constraint at time ``t``, near the guess ``q``.
+
+    Parameters
+    ----------
+    q : ndarray (n_q,), optional
+        Rough guess (default: the scene's initial poses).
+    tol : float
+        On ``max |phi_i| / s_i`` with ``s_i`` the characteristic length for length rows and 1
+        for angle rows.
+
+    Raises
+    ------
+    AssemblyError
+        Naming the constraints still violated when Newton's method stalls.
+    """
+    q = model.normalize(model.q0 if q is None else q)
+    w, _, _ = model.law_values(t)
+    if model.n_c == 0:
+        return q
+    residual = model.call("phi", q=q, w=w) / model.row_scale
+    merit = float(np.max(np.abs(residual)))
+    for _ in range(max_iterations):
+        if merit <= tol:
+            return q
+        Phi_v = model.call("Phi_v", q=q, w=w)
+        split = _split(model, Phi_v)
+        dv = model.mass_inv_sqrt @ split.min_norm_correction(-residual * model.row_scale)
+        step = 1.0
+        while step > 1e-4:
+            trial = model.integrate(q, step * dv)
+            trial_residual = model.call("phi", q=trial, w=w) / model.row_scale
+            trial_merit = float(np.max(np.abs(trial_residual)))
+            if trial_merit < merit or trial_merit <= tol:
+                break
+            step *= 0.5
+        else:
+            break
+        q, residual, merit = trial, trial_residual, trial_merit
+    if merit <= tol:
+        return q
+    raise AssemblyError(
+        f"model '{model.name}': cannot assemble the constraints at t = {t:g} from the given "
+        f"guess (largest violations: {_violations(model, residual)}); check the joint "
+        "frames and initial poses, or the driver laws at that time")
+
+
+def solve_velocities(model: Model, q: np.ndarray, t: float = 0.0,
+                     v: np.ndarray | None = None) -> np.ndarray:
+    """Velocities satisfying ``Phi_v v = nu`` closest to ``v`` in the kinetic-energy norm."""
+    v = model.v0 if v is None else np.asarray(v, dtype=float)
+    if model.n_c == 0:
+        return v.copy()
+    w, wd, _ = model.law_values(t)
+    Phi_v = model.call("Phi_v", q=q, w=w)
+    nu = model.call("nu", q=q, w=w, wd=wd)
+    split = _split(model, Phi_v)
+    return v + model.mass_inv_sqrt @ split.min_norm_correction(nu - Phi_v @ v)
+
+
+def solve_accelerations(model: Model, q: np.ndarray, v: np.ndarray,
+                        t: float = 0.0) -> np.ndarray:
+    """Accelerations satisfying ``Phi_v v_dot = gamma`` of least kinetic-energy norm (unique for
+    a fully driven mechanism): the acceleration analysis of prescribed motion."""
+    w, wd, wdd = model.law_values(t)
+    Phi_v = model.call("Phi_v", q=q, w=w)
+    gamma = model.call("gamma", q=q, v=v, w=w, wd=wd, wdd=wdd)
+    split = _split(model, Phi_v)
+    return model.mass_inv_sqrt @ split.min_norm_correction(gamma)
+
+
+def consistent_state(model: Model, t: float = 0.0, q: np.ndarray | None = None,
+                     v: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Positions assembled and velocities projected at time ``t`` from guesses (default: the
+    scene's initial state)."""
+    q = assemble_positions(model, q, t)
+    return q, solve_velocities(model, q, t, v)
+
+
+def degrees_of_freedom(model: Model, q: np.ndarray, t: float = 0.0) -> dict:
+    """Numerical mobility at ``q``: ``n_v - rank(Phi_v)`` of the joints alone and with the
+    drivers, and the redundant rows (named)."""
+    w, _, _ = model.law_values(t)
+    Phi_v = model.call("Phi_v", q=q, w=w)
+    split = _split(model, Phi_v)
+    driver_rows = {d.row for d in model.drivers}
+    joint_rows = np.array([i for i in range(model.n_c) if i not in driver_rows], dtype=int)
+    W, d = split.W[joint_rows], split.scale[joint_rows]
+    priority = [i for i in model.row_priority if i not in driver_rows]
+    position = {row: k for k, row in enumerate(joint_rows)}
+    joint_split = split_rows(W, d, np.array([position[i] for i in priority], dtype=int),
+                             model.rank_tolerance)
+    return {
+        "dof": model.n_v - joint_split.rank,
+        "dof_with_drivers": model.n_v - split.rank,
+        "redundant_rows": [model.rows[i].name for i in split.redundant],
+    }

@@ -1,0 +1,226 @@
+"""Saddle-point solves on the equilibrated constraint matrix, with an explicit rank decision.
+
+Everything is done on ``W = D^-1 Phi_v M^-1/2``: the columns are scaled by the (block-diagonal,
+constant) ``M^-1/2`` and the rows by their norms ``D``. Each row of ``W`` is then dimensionless
+and of unit length whatever the length unit, the mass unit or the scaling of the residual, so
+the rank decision and everything built on it are unit-free.
+
+Rank decision: rows are taken in a priority order (tree joints, loop-closing joints, drivers);
+a row is **redundant** when its distance to the span of the rows kept before it is at most
+``tol`` (the sine of its angle to that span). This names redundant rows deterministically.
+
+Accelerations solve ``min |M^1/2 (v_dot - M^-1 Q)|`` subject to the kept rows (Gauss's
+principle); with ``W_I^T = Q_I R_I`` (thin QR, never the squared Schur complement)::
+
+    y0 = M^-1/2 Q,   z = R^-T (gamma_I / d_I),   y = y0 - Q_I Q_I^T y0 + Q_I z
+    v_dot = M^-1/2 y,   lambda_I = R^-1 (Q_I^T y0 - z) / d_I
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.linalg import qr, solve_triangular
+
+from hexapod.errors import SingularSystemError
+
+
+@dataclass
+class RowSplit:
+    """Independent and redundant rows of an equilibrated constraint matrix.
+
+    Attributes
+    ----------
+    independent, redundant : ndarray of int
+        Row indices, in priority order.
+    basis : ndarray (n_v, r)
+        Orthonormal basis ``Q_I`` of the span of the kept rows of ``W``.
+    R : ndarray (r, r)
+        Upper triangular, ``W[independent].T = basis @ R``.
+    scale : ndarray (n_c,)
+        Row norms ``d`` of ``Phi_v M^-1/2`` (1 for rows that are zero).
+    W : ndarray (n_c, n_v)
+        The equilibrated matrix.
+    """
+
+    independent: np.ndarray
+    redundant: np.ndarray
+    basis: np.ndarray
+    R: np.ndarray
+    scale: np.ndarray
+    W: np.ndarray
+
+    @property
+    def rank(self) -> int:
+        return int(self.independent.size)
+
+    def singular_values(self) -> np.ndarray:
+        """Singular values of the kept rows of ``W`` (those of ``R``)."""
+        if self.rank == 0:
+            return np.zeros(0)
+        return np.linalg.svd(self.R, compute_uv=False)
+
+    def condition_number(self, n_v: int) -> float:
+        """2-norm condition number of the equilibrated saddle-point matrix
+        ``[[I, W_I^T], [W_I, 0]]`` of the kept rows, from the singular values of ``W_I``: its
+        eigenvalues are ``(1 +- sqrt(1 + 4 s^2)) / 2`` and 1 (``n_v - r`` times)."""
+        s = self.singular_values()
+        if s.size == 0:
+            return 1.0
+        root = np.sqrt(1.0 + 4.0 * s**2)
+        magnitudes = np.concatenate([(1.0 + root) / 2.0, (root - 1.0) / 2.0,
+                                     np.ones(1 if n_v > s.size else 0)])
+        smallest = magnitudes.min()
+        return float(magnitudes.max() / smallest) if smallest > 0 else float("inf")
+
+    def min_norm_correction(self, residual: np.ndarray) -> np.ndarray:
+        """``dy`` of least norm with ``W_I dy = residual_I / d_I`` (in ``M^1/2``-scaled space)."""
+        if self.rank == 0:
+            return np.zeros(self.W.shape[1])
+        rhs = residual[self.independent] / self.scale[self.independent]
+        return self.basis @ solve_triangular(self.R, rhs, trans="T")
+
+
+def equilibrate(Phi_v: np.ndarray, mass_inv_sqrt) -> tuple[np.ndarray, np.ndarray]:
+    """``W = D^-1 Phi_v M^-1/2`` and the row norms ``d`` (zero rows keep ``d = 1``)."""
+    W = Phi_v @ mass_inv_sqrt
+    d = np.linalg.norm(W, axis=1)
+    d[d == 0.0] = 1.0
+    return W / d[:, None], d
+
+
+def split_rows(W: np.ndarray, scale: np.ndarray, priority: np.ndarray, tol: float) -> RowSplit:
+    """Decide the rank of ``W`` (rows of unit length) and which rows are redundant.
+
+    A single QR factorisation in priority order settles the usual full-rank case; when some
+    diagonal entry falls below ``tol`` the rows are taken one by one (Gram-Schmidt, twice), so
+    a redundant row never leaves a spurious direction in the basis.
+    """
+    n_c, n_v = W.shape
+    order = np.asarray(priority, dtype=int)
+    if n_c == 0:
+        return RowSplit(order, order, np.zeros((n_v, 0)), np.zeros((0, 0)), scale, W)
+    if n_c <= n_v:
+        basis, R = qr(W[order].T, mode="economic")
+        if np.all(np.abs(np.diag(R)) > tol):
+            signs = np.sign(np.diag(R))
+            return RowSplit(order, np.zeros(0, dtype=int), basis * signs, signs[:, None] * R,
+                            scale, W)
+    kept, redundant, columns, coefficients = [], [], [], []
+    for row in order:
+        w = W[row]
+        if columns:
+            Qb = np.column_stack(columns)
+            c1 = Qb.T @ w
+            r = w - Qb @ c1
+            c2 = Qb.T @ r
+            r -= Qb @ c2
+            c = c1 + c2
+        else:
+            r, c = w.copy(), np.zeros(0)
+        rho = float(np.linalg.norm(r))
+        if rho > tol and len(columns) < n_v:
+            kept.append(row)
+            columns.append(r / rho)
+            coefficients.append(np.concatenate([c, [rho]]))
+        else:
+            redundant.append(row)
+    r_count = len(kept)
+    R = np.zeros((r_count, r_count))
+    for j, col in enumerate(coefficients):
+        R[: j + 1, j] = col
+    basis = np.column_stack(columns) if columns else np.zeros((n_v, 0))
+    return RowSplit(np.array(kept, dtype=int), np.array(redundant, dtype=int), basis, R,
+                    scale, W)
+
+
+@dataclass
+class SaddleSolution:
+    """Result of :func:`solve_saddle`."""
+
+    v_dot: np.ndarray
+    lam: np.ndarray
+    split: RowSplit
+    #: largest violation of the redundant rows by the accelerations, in ``M^1/2``-scaled units
+    #: relative to the size of the problem (0 when no row is redundant)
+    inconsistency: float
+
+
+def solve_saddle(mass_inv_sqrt, Phi_v: np.ndarray, Q: np.ndarray, gamma: np.ndarray,
+                 priority: np.ndarray, tol: float, *, row_names=None,
+                 wrench_map=None, wrench_offset=None, consistency_tol: float = 1e-6,
+                 split: RowSplit | None = None) -> SaddleSolution:
+    """Solve ``[[M, Phi_v^T], [Phi_v, 0]] [v_dot; lam] = [Q; gamma]``.
+
+    Parameters
+    ----------
+    mass_inv_sqrt :
+        ``M^-1/2`` (anything supporting ``@`` from both sides, e.g. a ``BlockDiagonal``).
+    priority : ndarray of int
+        Row order for the rank decision (earlier rows are kept).
+    tol : float
+        Rank tolerance on the equilibrated rows.
+    wrench_map, wrench_offset :
+        When rows are redundant, multipliers are chosen to minimise
+        ``|wrench_map @ lam + wrench_offset|^2`` among all that satisfy the equations (the
+        unit-free policy of DESIGN: joint wrenches, moments divided by a stated length).
+        Without a map the redundant rows get zero multipliers.
+    split :
+        A row split computed earlier for the same ``Phi_v`` (skips the rank decision).
+
+    Raises
+    ------
+    SingularSystemError
+        When the redundant rows' ``gamma`` contradicts the kept rows (inconsistent
+        constraints, e.g. two drivers prescribing incompatible motions).
+    """
+    if split is None:
+        W, d = equilibrate(Phi_v, mass_inv_sqrt)
+        split = split_rows(W, d, priority, tol)
+    W, d = split.W, split.scale
+    I = split.independent
+    y0 = mass_inv_sqrt @ Q
+    lam = np.zeros(W.shape[0])
+    if split.rank:
+        z = solve_triangular(split.R, gamma[I] / d[I], trans="T")
+        Qty0 = split.basis.T @ y0
+        y = y0 - split.basis @ Qty0 + split.basis @ z
+        lam[I] = solve_triangular(split.R, Qty0 - z) / d[I]
+    else:
+        y = y0
+    inconsistency = 0.0
+    if split.redundant.size:
+        red = split.redundant
+        violation = np.abs(W[red] @ y - gamma[red] / d[red])
+        size = max(np.linalg.norm(y0), np.linalg.norm(gamma / d), np.finfo(float).tiny)
+        inconsistency = float(violation.max() / size)
+        if inconsistency > consistency_tol:
+            worst = red[np.argsort(-violation)[:5]]
+            names = [row_names[i] if row_names is not None else str(i) for i in worst]
+            raise SingularSystemError(
+                "the constraints are inconsistent: redundant rows " + ", ".join(names)
+                + f" cannot be met together with the others (relative violation "
+                f"{inconsistency:.1e})")
+        if wrench_map is not None and split.rank:
+            lam = _distribute(split, lam, wrench_map, wrench_offset)
+    return SaddleSolution(mass_inv_sqrt @ y, lam, split, inconsistency)
+
+
+def _distribute(split: RowSplit, lam: np.ndarray, wrench_map: np.ndarray,
+                wrench_offset) -> np.ndarray:
+    """Among ``lam + N z`` (``N`` spans the null space of ``Phi_v^T``), the multipliers of least
+    ``|wrench_map lam + wrench_offset|``."""
+    I, red, d = split.independent, split.redundant, split.scale
+    # each redundant row k: W_k = sum_i c_ki W_Ii, so e_k - sum_i c_ki e_Ii is a null vector of
+    # W^T (multiplier space scaled by d), i.e. (e_k - sum c_ki e_Ii) / d of Phi_v^T
+    C = solve_triangular(split.R, split.basis.T @ split.W[red].T)  # (r, n_red)
+    N = np.zeros((lam.size, red.size))
+    N[red, np.arange(red.size)] = 1.0
+    N[I, :] = -C
+    N /= d[:, None]
+    offset = wrench_map @ lam
+    if wrench_offset is not None:
+        offset = offset + wrench_offset
+    z = np.linalg.lstsq(wrench_map @ N, -offset, rcond=None)[0]
+    return lam + N @ z

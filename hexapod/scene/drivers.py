@@ -1,0 +1,85 @@
+"""Drivers: rheonomic constraint rows that prescribe a joint coordinate or a body coordinate.
+
+A driver on a revolute joint prescribes its angle with the **wrapped** row
+``atan2(sin(theta - f), cos(theta - f))`` (correct past +-pi); on a prismatic joint its
+displacement, ``s - f``. A coordinate driver prescribes one coordinate of a body's centre of mass
+(``x``, ``y``, ``z``) or, in the plane, its ``angle``. Laws must be C2 (see :mod:`.laws`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from hexapod.errors import Problem
+from hexapod.scene.element import Attachment, Element
+from hexapod.scene.laws import Law, as_law
+
+#: coordinates a :class:`CoordinateDriver` may prescribe
+COORDINATES = ("x", "y", "z", "angle")
+
+
+@dataclass(eq=False)
+class JointDriver(Element):
+    """Prescribes the coordinate of a revolute (rad) or prismatic (L) joint by ``law``."""
+
+    name: str
+    joint: str
+    law: Law
+    source: str = ""
+    family = "driver"
+    kind = "joint"
+
+    def __post_init__(self):
+        self.law = as_law(self.law)
+
+    def problems(self) -> list[Problem]:
+        return [self.problem("law", message) for message in self.law.problems()]
+
+    def scaled(self, length):
+        """``length`` is 1 for angles; the scene passes the unit factor for displacements."""
+        out = super().scaled(length)
+        out.law = self.law.scaled(length)
+        return out
+
+    def attached(self, attachment: Attachment):
+        out = super().attached(attachment)
+        out.joint = attachment.name(self.joint)
+        return out
+
+
+@dataclass(eq=False)
+class CoordinateDriver(Element):
+    """Prescribes ``coordinate`` (``x``, ``y``, ``z`` of the centre of mass, or the planar
+    ``angle``) of ``body`` by ``law``, in world axes."""
+
+    name: str
+    body: str
+    coordinate: str
+    law: Law
+    source: str = ""
+    family = "driver"
+    kind = "coordinate"
+
+    def __post_init__(self):
+        self.law = as_law(self.law)
+
+    def problems(self):
+        out = [self.problem("law", message) for message in self.law.problems()]
+        if self.coordinate not in COORDINATES:
+            out.append(self.problem("coordinate", f"must be one of {', '.join(COORDINATES)},"
+                                    f" got {self.coordinate!r}"))
+        return out
+
+    def scaled(self, length):
+        out = super().scaled(length)
+        if self.coordinate != "angle":
+            out.law = self.law.scaled(length)
+        return out
+
+    def attached(self, attachment: Attachment):
+        out = super().attached(attachment)
+        out.body = attachment.body(self.body)
+        return out
+
+
+DRIVER_TYPES: dict[str, type[Element]] = {"joint": JointDriver, "coordinate": CoordinateDriver}

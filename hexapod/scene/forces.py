@@ -1,0 +1,207 @@
+"""Force elements: spring-dampers, applied forces and torques, joint actuator efforts.
+
+Gravity is a property of the scene. Points are marker names or coordinates in the body's
+reference frame (world coordinates on the ground); a missing point means the centre of mass.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from hexapod.errors import Problem
+from hexapod.scene.element import (
+    GROUND,
+    Attachment,
+    Element,
+    check_finite,
+    ground_ref,
+    scaled_ref,
+)
+from hexapod.scene.laws import Law, as_law
+
+FRAMES = ("world", "body")
+
+
+class ForceElement(Element):
+    family = "force"
+
+
+def _laws(values) -> tuple[Law, ...]:
+    if isinstance(values, Law) or np.ndim(values) == 0:
+        values = [values]
+    return tuple(as_law(v) for v in values)
+
+
+def _law_problems(element: Element, key: str, laws) -> list[Problem]:
+    return [element.problem(f"{key}[{i}]", m) for i, law in enumerate(laws)
+            for m in law.problems()]
+
+
+@dataclass(eq=False)
+class SpringDamper(ForceElement):
+    """A translational spring-damper (and optional actuator) between two points.
+
+    Tension ``f = stiffness (L - free_length) + damping dL/dt + force(t)`` pulls the points
+    together when positive. ``free_length`` defaults to the distance at the initial pose.
+    Units: stiffness N/L, damping N s/L, force N.
+    """
+
+    name: str
+    body_a: str
+    body_b: str
+    point_a: object = None
+    point_b: object = None
+    stiffness: float = 0.0
+    damping: float = 0.0
+    free_length: float | None = None
+    force: Law | None = None
+    source: str = ""
+    kind = "spring"
+
+    def __post_init__(self):
+        if self.force is not None:
+            self.force = as_law(self.force)
+
+    def problems(self):
+        out: list[Problem] = []
+        for key in ("stiffness", "damping"):
+            value = getattr(self, key)
+            if check_finite(self, key, value, out) and value < 0:
+                out.append(self.problem(key, f"must not be negative, got {value}"))
+        if self.free_length is not None and check_finite(self, "free_length",
+                                                         self.free_length, out):
+            if self.free_length < 0:
+                out.append(self.problem("free_length", "must not be negative"))
+        for key in ("point_a", "point_b"):
+            ref = getattr(self, key)
+            if ref is not None and not isinstance(ref, str):
+                check_finite(self, key, ref, out)
+        if self.force is not None:
+            out.extend(self.problem("force", m) for m in self.force.problems())
+        if self.body_a == self.body_b:
+            out.append(self.problem("body_b", "both ends are on the same body"))
+        return out
+
+    def scaled(self, length):
+        out = super().scaled(length)
+        out.point_a = scaled_ref(self.point_a, length)
+        out.point_b = scaled_ref(self.point_b, length)
+        out.stiffness = self.stiffness / length
+        out.damping = self.damping / length
+        if self.free_length is not None:
+            out.free_length = self.free_length * length
+        return out
+
+    def attached(self, attachment: Attachment):
+        out = super().attached(attachment)
+        out.body_a, out.body_b = attachment.body(self.body_a), attachment.body(self.body_b)
+        out.point_a = ground_ref(self.point_a, self.body_a, attachment)
+        out.point_b = ground_ref(self.point_b, self.body_b, attachment)
+        return out
+
+
+@dataclass(eq=False)
+class AppliedForce(ForceElement):
+    """A force (N) at a point of a body; components are numbers or laws of time, in ``frame``
+    (``world`` or ``body``: the body's reference axes). World-frame loads of an attached
+    sub-model stay in the world frame (a ground reaction does not turn with the trunk)."""
+
+    name: str
+    body: str
+    force: tuple
+    point: object = None
+    frame: str = "world"
+    source: str = ""
+    kind = "applied-force"
+
+    def __post_init__(self):
+        self.force = _laws(self.force)
+
+    def problems(self):
+        out = _law_problems(self, "force", self.force)
+        if self.frame not in FRAMES:
+            out.append(self.problem("frame", f"must be 'world' or 'body', got {self.frame!r}"))
+        if self.point is not None and not isinstance(self.point, str):
+            check_finite(self, "point", self.point, out)
+        if self.body == GROUND:
+            out.append(self.problem("body", "a load on the ground does nothing"))
+        return out
+
+    def scaled(self, length):
+        out = super().scaled(length)
+        out.point = scaled_ref(self.point, length)
+        return out
+
+    def attached(self, attachment: Attachment):
+        out = super().attached(attachment)
+        out.body = attachment.body(self.body)
+        return out
+
+
+@dataclass(eq=False)
+class AppliedTorque(ForceElement):
+    """A torque (N L) on a body; 3 components in space, 1 in the plane, in ``frame``."""
+
+    name: str
+    body: str
+    torque: tuple
+    frame: str = "world"
+    source: str = ""
+    kind = "applied-torque"
+
+    def __post_init__(self):
+        self.torque = _laws(self.torque)
+
+    def problems(self):
+        out = _law_problems(self, "torque", self.torque)
+        if self.frame not in FRAMES:
+            out.append(self.problem("frame", f"must be 'world' or 'body', got {self.frame!r}"))
+        if self.body == GROUND:
+            out.append(self.problem("body", "a load on the ground does nothing"))
+        return out
+
+    def scaled(self, length):
+        out = super().scaled(length)
+        out.torque = tuple(law.scaled(length) for law in self.torque)
+        return out
+
+    def attached(self, attachment: Attachment):
+        out = super().attached(attachment)
+        out.body = attachment.body(self.body)
+        return out
+
+
+@dataclass(eq=False)
+class JointEffort(ForceElement):
+    """An actuator effort along a joint's coordinate, exerted by the parent on the child:
+    a torque (N L) about a revolute axis, a force (N) along a prismatic axis."""
+
+    name: str
+    joint: str
+    law: Law
+    source: str = ""
+    kind = "effort"
+
+    def __post_init__(self):
+        self.law = as_law(self.law)
+
+    def problems(self):
+        return [self.problem("law", m) for m in self.law.problems()]
+
+    def scaled(self, length):
+        """``length`` is the unit factor for torques, 1 for forces (the scene decides)."""
+        out = super().scaled(length)
+        out.law = self.law.scaled(length)
+        return out
+
+    def attached(self, attachment: Attachment):
+        out = super().attached(attachment)
+        out.joint = attachment.name(self.joint)
+        return out
+
+
+FORCE_TYPES: dict[str, type[ForceElement]] = {
+    cls.kind: cls for cls in (SpringDamper, AppliedForce, AppliedTorque, JointEffort)
+}

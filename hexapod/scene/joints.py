@@ -1,0 +1,181 @@
+"""Joints (kinematic pairs) as descriptions: who they connect and where their frames are.
+
+Each joint connects a **parent** (its first body) and a **child** (its second); either may be the
+ground. It owns a **joint frame** fixed to the child, with its origin at the joint point; every
+liaison force is reported in that frame (DESIGN section 1). The matching frame on the parent
+coincides with it when the joint coordinate is zero.
+
+The frames may be given in three ways:
+
+* ``origin`` (and optionally ``rotation``): the joint frame in **world** coordinates at the
+  initial pose, as one draws a mechanism; both body frames follow from the bodies' initial poses;
+* ``child_frame``: the joint frame in the child's reference frame (a placement or a marker
+  name), as URDF does; ``parent_frame`` is then derived from the initial poses unless given;
+* nothing: the joint frame is the child's reference frame.
+
+The residual rows themselves are written in :mod:`hexapod.assembly.joints`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from hexapod.errors import Problem
+from hexapod.scene.element import (
+    Attachment,
+    Element,
+    check_axis,
+    check_finite,
+    check_frame,
+    ground_ref,
+    scaled_ref,
+)
+from hexapod.spatial import Placement, is_rotation
+
+
+@dataclass(eq=False)
+class Joint(Element):
+    """Base class. See the module docstring for the frame arguments."""
+
+    name: str
+    parent: str
+    child: str
+    parent_frame: Placement | str | None = None
+    child_frame: Placement | str | None = None
+    origin: np.ndarray | None = None
+    rotation: np.ndarray | None = None
+    source: str = ""
+    family = "joint"
+    #: whether a driver or an actuator effort may act along the joint coordinate
+    drivable = False
+    #: the joint frame's axis along which the joint moves (a field of revolute and prismatic)
+    axis = None
+
+    def __post_init__(self):
+        if self.origin is not None:
+            self.origin = np.array(self.origin, dtype=float).reshape(-1)
+        if self.rotation is not None:
+            self.rotation = np.array(self.rotation, dtype=float)
+        if self.axis is not None:
+            self.axis = np.array(self.axis, dtype=float).reshape(-1)
+
+    def problems(self) -> list[Problem]:
+        out: list[Problem] = []
+        if self.parent == self.child:
+            out.append(self.problem("child", f"parent and child are the same ('{self.child}')"))
+        check_frame(self, "parent_frame", self.parent_frame, out)
+        check_frame(self, "child_frame", self.child_frame, out)
+        check_finite(self, "origin", self.origin, out)
+        if self.rotation is not None:
+            if self.origin is None:
+                out.append(self.problem("rotation", "is given without an origin"))
+            if check_finite(self, "rotation", self.rotation, out) and not is_rotation(
+                self.rotation
+            ):
+                out.append(self.problem("rotation", "is not a proper rotation matrix"))
+        if self.origin is not None and (self.child_frame is not None
+                                        or self.parent_frame is not None):
+            out.append(self.problem("origin", "give either origin (world) or parent_frame/"
+                                    "child_frame (body coordinates), not both"))
+        if self.axis is not None:
+            check_axis(self, "axis", self.axis, out)
+        return out
+
+    def scaled(self, length):
+        out = super().scaled(length)
+        out.parent_frame = scaled_ref(self.parent_frame, length)
+        out.child_frame = scaled_ref(self.child_frame, length)
+        out.origin = scaled_ref(self.origin, length)
+        return out
+
+    def attached(self, attachment: Attachment):
+        out = super().attached(attachment)
+        out.parent = attachment.body(self.parent)
+        out.child = attachment.body(self.child)
+        out.parent_frame = ground_ref(self.parent_frame, self.parent, attachment)
+        out.child_frame = ground_ref(self.child_frame, self.child, attachment)
+        if self.origin is not None:
+            T = attachment.transform
+            out.origin = T.transform_point(self.origin)
+            out.rotation = T.rotation @ (np.eye(T.dimension) if self.rotation is None
+                                         else self.rotation)
+        return out
+
+
+def _axis_default(joint: Joint, default) -> None:
+    joint.axis = np.array(default if joint.axis is None else joint.axis, dtype=float).reshape(-1)
+
+
+@dataclass(eq=False)
+class Revolute(Joint):
+    """One rotation about ``axis`` (in the joint frame; default z). 5 rows in space, 2 in the plane
+    (where the axis is always normal to the plane). The joint angle is measured from the parent
+    frame to the child frame, positive about the axis."""
+
+    axis: np.ndarray | None = None
+    kind = "revolute"
+    drivable = True
+
+    def __post_init__(self):
+        _axis_default(self, (0.0, 0.0, 1.0))
+        super().__post_init__()
+
+
+@dataclass(eq=False)
+class Prismatic(Joint):
+    """One translation along ``axis`` (in the joint frame; default x in the plane, z in space).
+    5 rows in space, 2 in the plane. The displacement is that of the child frame's origin from
+    the parent frame's origin, along the axis."""
+
+    axis: np.ndarray | None = None
+    kind = "prismatic"
+    drivable = True
+
+
+@dataclass(eq=False)
+class Spherical(Joint):
+    """A ball joint: the two frame origins coincide (3 rows). Space only (in the plane it would
+    be a revolute joint)."""
+
+    kind = "spherical"
+
+
+@dataclass(eq=False)
+class Fixed(Joint):
+    """A weld: no relative motion (6 rows in space, 3 in the plane)."""
+
+    kind = "fixed"
+
+
+@dataclass(eq=False)
+class Distance(Joint):
+    """A rigid link between the parent frame's origin and the child frame's origin (1 row).
+
+    ``length`` defaults to the distance at the initial pose; the rods of seed 002 are distance
+    joints between particles.
+    """
+
+    length: float | None = None
+    kind = "distance"
+
+    def problems(self):
+        out = super().problems()
+        if self.length is not None and check_finite(self, "length", self.length, out) and (
+            not self.length > 0
+        ):
+            out.append(self.problem("length", f"must be positive, got {self.length}"))
+        return out
+
+    def scaled(self, length):
+        out = super().scaled(length)
+        if self.length is not None:
+            out.length = self.length * length
+        return out
+
+
+#: Joint classes by the ``type`` used in scene files.
+JOINT_TYPES: dict[str, type[Joint]] = {
+    cls.kind: cls for cls in (Revolute, Prismatic, Spherical, Fixed, Distance)
+}

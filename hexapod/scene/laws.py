@@ -1,0 +1,240 @@
+"""Scalar functions of time for drivers and loads: value, first and second derivative.
+
+The model's CasADi functions never see ``t``: they take the values and derivatives of every law
+as inputs (see :mod:`hexapod.assembly`), so a law can be anything that returns ``f, f', f''``
+for an array of times. Drivers need laws that are at least C2 (DESIGN: prescribed motion).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+class Law:
+    """Base class: a scalar function of time, C2 at least."""
+
+    #: Short name used in scene files (``type = "..."``).
+    kind: str = ""
+
+    def evaluate(self, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Value, first and second time derivatives at ``t`` (scalar or array), shaped like t."""
+        raise NotImplementedError
+
+    def __call__(self, t):
+        return self.evaluate(t)[0]
+
+    def scaled(self, factor: float) -> Law:
+        """The law multiplied by ``factor`` (unit conversion)."""
+        return Scaled(self, factor) if factor != 1.0 else self
+
+    def problems(self) -> list[str]:
+        """What is wrong with the law's own numbers (empty when it is fine)."""
+        return []
+
+
+def _finite(values) -> bool:
+    return bool(np.all(np.isfinite(np.asarray(values, dtype=float))))
+
+
+@dataclass(frozen=True)
+class Constant(Law):
+    """``f(t) = value``."""
+
+    value: float
+    kind = "constant"
+
+    def evaluate(self, t):
+        t = np.asarray(t, dtype=float)
+        return np.full_like(t, self.value), np.zeros_like(t), np.zeros_like(t)
+
+    def scaled(self, factor):
+        return Constant(self.value * factor)
+
+    def problems(self):
+        return [] if math.isfinite(self.value) else [f"value is not finite: {self.value}"]
+
+
+@dataclass(frozen=True)
+class Polynomial(Law):
+    """``f(t) = sum_k c_k (t - t0)^k``, coefficients in ascending powers."""
+
+    coefficients: tuple[float, ...]
+    t0: float = 0.0
+    kind = "polynomial"
+
+    def __post_init__(self):
+        object.__setattr__(self, "coefficients", tuple(float(c) for c in self.coefficients))
+
+    def evaluate(self, t):
+        s = np.asarray(t, dtype=float) - self.t0
+        c = np.polynomial.polynomial
+        coef = np.array(self.coefficients if self.coefficients else (0.0,))
+        d1 = c.polyder(coef) if coef.size > 1 else np.zeros(1)
+        d2 = c.polyder(d1) if d1.size > 1 else np.zeros(1)
+        return c.polyval(s, coef), c.polyval(s, d1), c.polyval(s, d2)
+
+    def scaled(self, factor):
+        return Polynomial(tuple(c * factor for c in self.coefficients), self.t0)
+
+    def problems(self):
+        out = []
+        if not self.coefficients:
+            out.append("coefficients are empty")
+        if not _finite(self.coefficients) or not math.isfinite(self.t0):
+            out.append("coefficients or t0 are not finite")
+        return out
+
+
+@dataclass(frozen=True)
+class Harmonic(Law):
+    """``f(t) = offset + sum_k a_k cos(k w (t - t0)) + b_k sin(k w (t - t0))``, w = 2 pi frequency.
+
+    ``cos[k-1]`` and ``sin[k-1]`` are the amplitudes of harmonic ``k``; ``frequency`` in Hz.
+    """
+
+    offset: float = 0.0
+    cos: tuple[float, ...] = ()
+    sin: tuple[float, ...] = ()
+    frequency: float = 1.0
+    t0: float = 0.0
+    kind = "harmonic"
+
+    def __post_init__(self):
+        object.__setattr__(self, "cos", tuple(float(a) for a in self.cos))
+        object.__setattr__(self, "sin", tuple(float(b) for b in self.sin))
+
+    def evaluate(self, t):
+        s = np.asarray(t, dtype=float) - self.t0
+        w = 2.0 * np.pi * self.frequency
+        f = np.full_like(s, self.offset)
+        fd = np.zeros_like(s)
+        fdd = np.zeros_like(s)
+        for k, a in enumerate(self.cos, start=1):
+            kw = k * w
+            f += a * np.cos(kw * s)
+            fd -= a * kw * np.sin(kw * s)
+            fdd -= a * kw**2 * np.cos(kw * s)
+        for k, b in enumerate(self.sin, start=1):
+            kw = k * w
+            f += b * np.sin(kw * s)
+            fd += b * kw * np.cos(kw * s)
+            fdd -= b * kw**2 * np.sin(kw * s)
+        return f, fd, fdd
+
+    def scaled(self, factor):
+        return Harmonic(self.offset * factor, tuple(a * factor for a in self.cos),
+                        tuple(b * factor for b in self.sin), self.frequency, self.t0)
+
+    def problems(self):
+        out = []
+        if not _finite([self.offset, self.frequency, self.t0, *self.cos, *self.sin]):
+            out.append("offset, amplitudes, frequency or t0 are not finite")
+        elif self.frequency <= 0:
+            out.append(f"frequency must be positive, got {self.frequency}")
+        return out
+
+
+_BOUNDARY = {"not-a-knot": None, "natural": "natural", "clamped": "clamped",
+             "periodic": "periodic"}
+
+
+@dataclass(frozen=True)
+class Spline(Law):
+    """Interpolating spline through tabulated samples ``(times, values)``.
+
+    ``degree`` 3 (C2, the default) or 5 (C4); ``boundary`` one of ``not-a-knot``, ``natural``,
+    ``clamped`` (zero end slopes) or ``periodic`` (values at both ends must be equal). Outside the
+    table the end polynomials are continued (periodic splines repeat).
+    """
+
+    times: tuple[float, ...]
+    values: tuple[float, ...]
+    degree: int = 3
+    boundary: str = "not-a-knot"
+    _spline: object = field(default=None, init=False, repr=False, compare=False)
+    kind = "spline"
+
+    def __post_init__(self):
+        object.__setattr__(self, "times", tuple(float(x) for x in self.times))
+        object.__setattr__(self, "values", tuple(float(y) for y in self.values))
+        if not self.problems():
+            from scipy.interpolate import make_interp_spline
+
+            bc = _BOUNDARY[self.boundary]
+            if self.degree == 5 and bc in ("natural", "clamped"):
+                # quintic ends: clamped fixes the 1st and 2nd derivatives, natural the 3rd and 4th
+                order = 1 if bc == "clamped" else 3
+                ends = [(order, 0.0), (order + 1, 0.0)]
+                bc = (ends, ends)
+            spline = make_interp_spline(self.times, self.values, k=self.degree, bc_type=bc)
+            if self.boundary == "periodic":
+                spline.extrapolate = "periodic"
+            object.__setattr__(self, "_spline", spline)
+
+    def evaluate(self, t):
+        if self._spline is None:
+            raise ValueError("spline law is invalid: " + "; ".join(self.problems()))
+        t = np.asarray(t, dtype=float)
+        s = self._spline
+        return s(t), s(t, nu=1), s(t, nu=2)
+
+    def scaled(self, factor):
+        return Spline(self.times, tuple(v * factor for v in self.values), self.degree,
+                      self.boundary)
+
+    def problems(self):
+        out = []
+        if self.degree not in (3, 5):
+            out.append(f"degree must be 3 or 5 (C2 at least), got {self.degree}")
+            return out
+        if self.boundary not in _BOUNDARY:
+            out.append(f"boundary must be one of {', '.join(_BOUNDARY)}, got {self.boundary!r}")
+            return out
+        if len(self.times) != len(self.values):
+            out.append(f"{len(self.times)} times but {len(self.values)} values")
+            return out
+        if len(self.times) < self.degree + 1:
+            out.append(f"a degree-{self.degree} spline needs at least {self.degree + 1} samples,"
+                       f" got {len(self.times)}")
+        if not _finite(self.times) or not _finite(self.values):
+            out.append("times or values are not finite")
+        elif np.any(np.diff(self.times) <= 0):
+            out.append("times must be strictly increasing")
+        elif self.boundary == "periodic" and self.values[0] != self.values[-1]:
+            out.append("a periodic spline needs equal first and last values")
+        return out
+
+
+@dataclass(frozen=True)
+class Scaled(Law):
+    """``factor * law(t)``."""
+
+    law: Law
+    factor: float
+    kind = "scaled"
+
+    def evaluate(self, t):
+        f, fd, fdd = self.law.evaluate(t)
+        return self.factor * f, self.factor * fd, self.factor * fdd
+
+    def scaled(self, factor):
+        return Scaled(self.law, self.factor * factor)
+
+    def problems(self):
+        return self.law.problems()
+
+
+def as_law(value) -> Law:
+    """A law from a law or a number (a number is a :class:`Constant`)."""
+    if isinstance(value, Law):
+        return value
+    return Constant(float(value))
+
+
+#: Law classes by the ``type`` used in scene files.
+LAW_TYPES: dict[str, type[Law]] = {
+    cls.kind: cls for cls in (Constant, Polynomial, Harmonic, Spline)
+}

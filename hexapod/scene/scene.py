@@ -1,0 +1,403 @@
+"""The scene: a mutable description of bodies, joints, drivers and force elements.
+
+A scene is planar (``dimension=2``) or spatial (``dimension=3``) and has one length unit; every
+length, gravity included, is in that unit, and :func:`hexapod.assemble` converts to SI.
+:meth:`Scene.validate` collects every problem and raises one :class:`~hexapod.errors.ModelError`.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterator
+
+import numpy as np
+
+from hexapod.errors import ModelError, Problem
+from hexapod.scene.bodies import Body, Particle, PlanarBody, SpatialBody
+from hexapod.scene.drivers import COORDINATES, CoordinateDriver, JointDriver
+from hexapod.scene.element import GROUND, Attachment, Element
+from hexapod.scene.forces import (
+    AppliedForce,
+    AppliedTorque,
+    ForceElement,
+    JointEffort,
+    SpringDamper,
+)
+from hexapod.scene.joints import Distance, Joint, Prismatic, Revolute, Spherical
+from hexapod.spatial import Placement
+
+#: Length units a scene may use, in metres.
+LENGTH_UNITS = {"m": 1.0, "dm": 0.1, "cm": 0.01, "mm": 1e-3, "um": 1e-6, "in": 0.0254,
+                "ft": 0.3048}
+
+STANDARD_GRAVITY = 9.81  # m/s^2, DESIGN's default
+
+_NAME = re.compile(r"^[A-Za-z0-9_.\-]+(/[A-Za-z0-9_.\-]+)*$")
+
+
+class Scene:
+    """A multibody system described by its elements.
+
+    Parameters
+    ----------
+    name : str
+    dimension : int
+        3 for a spatial scene, 2 for a planar one.
+    length_unit : str
+        One of :data:`LENGTH_UNITS`. Masses are in kg, times in s, forces in N.
+    gravity : array_like, optional
+        In L/s^2. Default: 9.81 m/s^2 along -z in space, -y in the plane, converted to L/s^2.
+    characteristic_length : float, optional
+        The length ``l`` (L) of the redundancy policy, which minimises
+        ``sum |F|^2 + |T / l|^2`` over the joint wrenches. Default: see :func:`hexapod.assemble`.
+    """
+
+    def __init__(self, name: str = "scene", dimension: int = 3, length_unit: str = "m",
+                 gravity=None, characteristic_length: float | None = None, source: str = ""):
+        self.name = name
+        self.dimension = dimension
+        self.length_unit = length_unit
+        self.characteristic_length = characteristic_length
+        self.source = source
+        self._gravity = None if gravity is None else np.array(gravity, dtype=float).reshape(-1)
+        self._elements: list[Element] = []
+
+    # ---------------------------------------------------------------- contents
+
+    @property
+    def unit(self) -> float:
+        """Metres per length unit."""
+        return LENGTH_UNITS[self.length_unit]
+
+    @property
+    def gravity(self) -> np.ndarray:
+        if self._gravity is not None:
+            return self._gravity
+        g = np.zeros(self.dimension)
+        g[-1] = -STANDARD_GRAVITY / LENGTH_UNITS.get(self.length_unit, 1.0)
+        return g
+
+    @gravity.setter
+    def gravity(self, value):
+        self._gravity = np.array(value, dtype=float).reshape(-1)
+
+    def _of(self, family: type) -> dict:
+        out: dict = {}
+        for element in self._elements:
+            if isinstance(element, family):
+                out.setdefault(element.name, element)
+        return out
+
+    @property
+    def bodies(self) -> dict[str, Body]:
+        return self._of(Body)
+
+    @property
+    def joints(self) -> dict[str, Joint]:
+        return self._of(Joint)
+
+    @property
+    def drivers(self) -> dict[str, Element]:
+        return self._of((JointDriver, CoordinateDriver))
+
+    @property
+    def forces(self) -> dict[str, ForceElement]:
+        return self._of(ForceElement)
+
+    @property
+    def elements(self) -> tuple[Element, ...]:
+        return tuple(self._elements)
+
+    def add(self, *elements: Element) -> Element:
+        """Add elements in order; returns the last. Problems are reported by :meth:`validate`."""
+        for element in elements:
+            if not isinstance(element, Element):
+                raise TypeError(f"cannot add {element!r} to a scene")
+            self._elements.append(element)
+        return elements[-1] if elements else None
+
+    def attach(self, sub: Scene, prefix: str, base: str = GROUND,
+               placement: Placement | None = None) -> None:
+        """Add a copy of ``sub`` with every name prefixed by ``prefix + "/"``.
+
+        The sub-model's ground becomes the frame ``placement`` of body ``base`` (default: the
+        world); its bodies' initial poses move with it; it is converted to this scene's unit.
+        Its gravity is ignored, this scene's applies.
+        """
+        if sub.dimension != self.dimension:
+            raise ModelError(f"scene '{self.name}'", [Problem(
+                f"sub-model '{sub.name}'", f"is {sub.dimension}-D, the scene {self.dimension}-D")])
+        if not _NAME.match(prefix):
+            raise ModelError(f"scene '{self.name}'", [Problem(
+                f"sub-model '{sub.name}'", f"prefix {prefix!r} is not a valid name")])
+        placement = placement or Placement.identity(self.dimension)
+        if base == GROUND:
+            base_pose = Placement.identity(self.dimension)
+        elif base in self.bodies:
+            base_pose = self.bodies[base].pose
+        else:
+            raise ModelError(f"scene '{self.name}'", [Problem(
+                f"sub-model '{sub.name}'", f"base body '{base}' is not in the scene")])
+        attachment = Attachment(prefix, base, placement, base_pose @ placement)
+        for element in sub.scaled_elements(sub.unit / self.unit):
+            self.add(element.attached(attachment))
+
+    # ---------------------------------------------------------------- units
+
+    def scaled_elements(self, factor: float) -> Iterator[Element]:
+        """Copies of the elements with lengths multiplied by ``factor``.
+
+        Driver laws and actuator efforts are lengths (or torques) only on some joint types,
+        so the scene, which knows the joints, decides their factor.
+        """
+        joints = self.joints
+        for element in self._elements:
+            if isinstance(element, JointDriver):
+                joint = joints.get(element.joint)
+                yield element.scaled(factor if isinstance(joint, Prismatic) else 1.0)
+            elif isinstance(element, JointEffort):
+                joint = joints.get(element.joint)
+                yield element.scaled(factor if isinstance(joint, Revolute) else 1.0)
+            else:
+                yield element.scaled(factor)
+
+    def in_si(self) -> Scene:
+        """A copy in metres (gravity and every length converted)."""
+        factor = self.unit
+        out = Scene(self.name, self.dimension, "m", self.gravity * factor,
+                    None if self.characteristic_length is None
+                    else self.characteristic_length * factor, self.source)
+        out._elements = list(self.scaled_elements(factor))
+        return out
+
+    # ---------------------------------------------------------------- frames
+
+    def pose(self, body: str) -> Placement:
+        """Initial pose of a body's reference frame (identity for the ground)."""
+        if body == GROUND:
+            return Placement.identity(self.dimension)
+        return self.bodies[body].pose
+
+    def frame(self, body: str, ref) -> Placement:
+        """A frame reference (None, marker, Placement or point) in ``body``'s reference frame."""
+        if ref is None:
+            return Placement.identity(self.dimension)
+        if isinstance(ref, str):
+            return self.bodies[body].markers[ref]
+        if isinstance(ref, Placement):
+            return ref
+        return Placement(ref)
+
+    def joint_frames(self, joint: Joint) -> tuple[Placement, Placement]:
+        """The joint's frames on the parent and on the child, each in that body's reference
+        frame (world for the ground). Raises ``KeyError`` for unknown names (see validate)."""
+        if joint.origin is not None:
+            world = Placement(joint.origin, joint.rotation)
+            return (self.pose(joint.parent).inverse() @ world,
+                    self.pose(joint.child).inverse() @ world)
+        child = self.frame(joint.child, joint.child_frame)
+        if joint.parent_frame is not None:
+            return self.frame(joint.parent, joint.parent_frame), child
+        world = self.pose(joint.child) @ child
+        return self.pose(joint.parent).inverse() @ world, child
+
+    def point(self, body: str, ref) -> np.ndarray:
+        """A point reference in ``body``'s reference frame (default: its centre of mass)."""
+        if ref is None:
+            return (np.zeros(self.dimension) if body == GROUND
+                    else np.array(self.bodies[body].com, dtype=float))
+        return self.frame(body, ref).position
+
+    # ---------------------------------------------------------------- validation
+
+    def validate(self) -> None:
+        """Raise one :class:`ModelError` listing every problem, or return quietly."""
+        problems = self.problems()
+        if problems:
+            where = f" ({self.source})" if self.source else ""
+            raise ModelError(f"scene '{self.name}'{where}", problems)
+
+    def problems(self) -> list[Problem]:
+        """Every problem of the scene: its own settings, each element, names and references."""
+        out = self._scene_problems()
+        for element in self._elements:
+            out.extend(element.problems())
+        out.extend(self._name_problems())
+        bodies = self.bodies
+        for element in self._elements:
+            out.extend(_ReferenceCheck(self, bodies, element).problems())
+        return out
+
+    def _scene_problem(self, key: str, message: str) -> Problem:
+        return Problem("scene", message, f"{self.source}, scene.{key}" if self.source else key)
+
+    def _scene_problems(self) -> list[Problem]:
+        out = []
+        if self.dimension not in (2, 3):
+            out.append(self._scene_problem("dimension", f"must be 2 or 3, got {self.dimension}"))
+            return out
+        if self.length_unit not in LENGTH_UNITS:
+            out.append(self._scene_problem(
+                "length_unit", f"unknown unit {self.length_unit!r}; use one of "
+                + ", ".join(LENGTH_UNITS)))
+        g = self.gravity
+        if g.size != self.dimension or not np.all(np.isfinite(g)):
+            out.append(self._scene_problem(
+                "gravity", f"needs {self.dimension} finite numbers, got {g.tolist()}"))
+        length = self.characteristic_length
+        if length is not None and not (np.isfinite(length) and length > 0):
+            out.append(self._scene_problem("characteristic_length",
+                                           f"must be positive, got {length}"))
+        return out
+
+    def _name_problems(self) -> list[Problem]:
+        out = []
+        seen_bodies: set[str] = set()
+        seen_others: dict[str, Element] = {}
+        for element in self._elements:
+            name = element.name
+            if not isinstance(name, str) or not _NAME.match(name):
+                out.append(element.problem("name", f"{name!r} is not a valid name (letters, "
+                           "digits, '_', '-', '.', parts joined by '/')"))
+                continue
+            if name == GROUND:
+                out.append(element.problem("name", "'ground' is reserved for the fixed frame"))
+            if isinstance(element, Body):
+                if name in seen_bodies:
+                    out.append(element.problem("name", "duplicate body name"))
+                seen_bodies.add(name)
+            else:
+                if name in seen_others:
+                    out.append(element.problem(
+                        "name", f"name already used by {seen_others[name].label}"))
+                seen_others.setdefault(name, element)
+        return out
+
+
+class _ReferenceCheck:
+    """The checks of one element against the rest of the scene."""
+
+    def __init__(self, scene: Scene, bodies: dict[str, Body], element: Element):
+        self.scene = scene
+        self.bodies = bodies
+        self.element = element
+        self.out: list[Problem] = []
+
+    def problems(self) -> list[Problem]:
+        e = self.element
+        if isinstance(e, Body):
+            self._body(e)
+        elif isinstance(e, Joint):
+            self._joint(e)
+        elif isinstance(e, JointDriver):
+            self._driven_joint(e.joint, "joint", "driver")
+            driven = [d for d in self.scene.elements
+                      if isinstance(d, JointDriver) and d.joint == e.joint]
+            if driven and driven[0] is not e:
+                self._add("joint", f"joint '{e.joint}' is already driven by '{driven[0].name}'")
+        elif isinstance(e, CoordinateDriver):
+            self._coordinate_driver(e)
+        elif isinstance(e, SpringDamper):
+            self._point(e.body_a, e.point_a, "point_a", "body_a")
+            self._point(e.body_b, e.point_b, "point_b", "body_b")
+        elif isinstance(e, AppliedForce):
+            if self._body_ref(e.body, "body"):
+                self._point(e.body, e.point, "point", "body")
+            self._components("force", e.force, self.scene.dimension)
+        elif isinstance(e, AppliedTorque):
+            self._body_ref(e.body, "body")
+            self._components("torque", e.torque, 3 if self.scene.dimension == 3 else 1)
+        elif isinstance(e, JointEffort):
+            self._driven_joint(e.joint, "joint", "actuator effort")
+        return self.out
+
+    def _add(self, key, message):
+        self.out.append(self.element.problem(key, message))
+
+    def _body(self, body: Body):
+        dim = self.scene.dimension
+        if isinstance(body, SpatialBody) and dim != 3:
+            self._add("type", "a spatial body in a planar scene")
+        if isinstance(body, PlanarBody) and dim != 2:
+            self._add("type", "a planar body in a spatial scene")
+        if isinstance(body, Particle) and body.dimension != dim:
+            self._add("position", f"needs {dim} coordinates in a {dim}-D scene")
+
+    def _body_ref(self, name: str, key: str, ground_ok: bool = False) -> bool:
+        if name == GROUND and ground_ok:
+            return True
+        if name not in self.bodies:
+            self._add(key, f"unknown body '{name}'")
+            return False
+        return True
+
+    def _frame(self, body: str, ref, key: str):
+        if isinstance(ref, str):
+            if body == GROUND:
+                self._add(key, f"the ground has no markers (got '{ref}'); give coordinates")
+            elif ref not in self.bodies[body].markers:
+                self._add(key, f"body '{body}' has no marker '{ref}'")
+        elif ref is not None:
+            frame = ref if isinstance(ref, Placement) else Placement(ref)
+            if frame.dimension != self.scene.dimension:
+                self._add(key, f"needs {self.scene.dimension} coordinates")
+
+    def _point(self, body: str, ref, key: str, body_key: str):
+        if self._body_ref(body, body_key, ground_ok=True):
+            self._frame(body, ref, key)
+
+    def _components(self, key: str, laws, count: int):
+        if len(laws) != count:
+            self._add(key, f"needs {count} components in a {self.scene.dimension}-D scene, "
+                      f"got {len(laws)}")
+
+    def _joint(self, joint: Joint):
+        dim = self.scene.dimension
+        ok_parent = self._body_ref(joint.parent, "parent", ground_ok=True)
+        ok_child = self._body_ref(joint.child, "child", ground_ok=True)
+        if joint.parent == GROUND and joint.child == GROUND:
+            self._add("child", "a joint between the ground and itself")
+        if ok_parent:
+            self._frame(joint.parent, joint.parent_frame, "parent_frame")
+        if ok_child:
+            self._frame(joint.child, joint.child_frame, "child_frame")
+        if joint.origin is not None and joint.origin.size != dim:
+            self._add("origin", f"needs {dim} coordinates")
+        if joint.rotation is not None and joint.rotation.shape != (dim, dim):
+            self._add("rotation", f"needs a {dim} x {dim} matrix")
+        if isinstance(joint, Distance) and joint.origin is not None:
+            self._add("origin", "a distance joint joins two points: give parent_frame and "
+                      "child_frame (or markers), not one origin")
+        if isinstance(joint, Spherical) and dim == 2:
+            self._add("type", "no spherical joint in the plane: use a revolute joint")
+        if joint.axis is not None:
+            if dim == 3 and joint.axis.size != 3:
+                self._add("axis", "needs 3 components in space")
+            if dim == 2 and isinstance(joint, Prismatic) and joint.axis.size != 2:
+                self._add("axis", "needs 2 components in the plane")
+        needs_orientation = not isinstance(joint, (Spherical, Distance))
+        if dim == 2:
+            needs_orientation = not isinstance(joint, (Revolute, Distance))
+        for key, name in (("parent", joint.parent), ("child", joint.child)):
+            if needs_orientation and isinstance(self.bodies.get(name), Particle):
+                allowed = "a spherical or distance" if dim == 3 else "a revolute or distance"
+                self._add(key, f"particle '{name}' has no orientation: use {allowed} joint")
+
+    def _driven_joint(self, name: str, key: str, what: str):
+        joint = self.scene.joints.get(name)
+        if joint is None:
+            self._add(key, f"unknown joint '{name}'")
+        elif not joint.drivable:
+            self._add(key, f"a {joint.kind} joint cannot take a {what} (revolute and prismatic "
+                      "joints can)")
+
+    def _coordinate_driver(self, driver: CoordinateDriver):
+        if not self._body_ref(driver.body, "body") or driver.coordinate not in COORDINATES:
+            return
+        body = self.bodies[driver.body]
+        if driver.coordinate == "angle" and not isinstance(body, PlanarBody):
+            self._add("coordinate", "only a planar body has an 'angle' coordinate; drive a "
+                      "revolute joint instead")
+        if driver.coordinate == "z" and self.scene.dimension == 2:
+            self._add("coordinate", "no 'z' in a planar scene")
+

@@ -1,0 +1,212 @@
+"""Rotations, Euler parameters and frames, written once for CasADi SX and for numbers.
+
+Conventions (DESIGN section 1): Euler parameters ``p = (e0, e1, e2, e3)`` are stored **scalar
+first**; ``A(p)`` maps body to global components; ``G(p)`` and ``E(p)`` are Haug's 3 x 4 matrices
+with ``omega' = 2 G(p) p_dot`` (body frame) and ``omega = 2 E(p) p_dot`` (global frame).
+
+The matrix-valued functions accept a NumPy array or a CasADi SX/MX vector and return the same kind,
+so the model's residuals and the numerical helpers share one formula.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import casadi as ca
+import numpy as np
+
+_SYMBOLIC = (ca.SX, ca.MX, ca.DM)
+
+
+def _is_symbolic(*xs) -> bool:
+    return any(isinstance(x, _SYMBOLIC) for x in xs)
+
+
+def _matrix(rows, symbolic: bool):
+    """Build a matrix from nested lists of scalars, as CasADi or NumPy."""
+    if symbolic:
+        return ca.vertcat(*[ca.horzcat(*row) for row in rows])
+    return np.array(rows, dtype=float)
+
+
+def skew(w):
+    """Cross-product matrix: ``skew(w) @ x == cross(w, x)``."""
+    w0, w1, w2 = w[0], w[1], w[2]
+    return _matrix([[0.0, -w2, w1], [w2, 0.0, -w0], [-w1, w0, 0.0]], _is_symbolic(w))
+
+
+def rotation_from_euler_parameters(p):
+    """``A(p) = (2 e0^2 - 1) I + 2 (e e^T + e0 ~e)``, body -> global (unit ``p`` assumed)."""
+    e0, e1, e2, e3 = p[0], p[1], p[2], p[3]
+    return _matrix(
+        [
+            [2 * (e0 * e0 + e1 * e1) - 1, 2 * (e1 * e2 - e0 * e3), 2 * (e1 * e3 + e0 * e2)],
+            [2 * (e1 * e2 + e0 * e3), 2 * (e0 * e0 + e2 * e2) - 1, 2 * (e2 * e3 - e0 * e1)],
+            [2 * (e1 * e3 - e0 * e2), 2 * (e2 * e3 + e0 * e1), 2 * (e0 * e0 + e3 * e3) - 1],
+        ],
+        _is_symbolic(p),
+    )
+
+
+def g_matrix(p):
+    """Haug's ``G(p) = [-e, -~e + e0 I]`` (3 x 4): ``omega' = 2 G(p) p_dot``."""
+    e0, e1, e2, e3 = p[0], p[1], p[2], p[3]
+    return _matrix(
+        [[-e1, e0, e3, -e2], [-e2, -e3, e0, e1], [-e3, e2, -e1, e0]], _is_symbolic(p)
+    )
+
+
+def e_matrix(p):
+    """Haug's ``E(p) = [-e, ~e + e0 I]`` (3 x 4): ``omega = 2 E(p) p_dot``."""
+    e0, e1, e2, e3 = p[0], p[1], p[2], p[3]
+    return _matrix(
+        [[-e1, e0, -e3, e2], [-e2, e3, e0, -e1], [-e3, -e2, e1, e0]], _is_symbolic(p)
+    )
+
+
+def rotation_2d(angle):
+    """Planar rotation matrix of ``angle`` (rad)."""
+    if _is_symbolic(angle):
+        c, s = ca.cos(angle), ca.sin(angle)
+        return _matrix([[c, -s], [s, c]], True)
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c, -s], [s, c]])
+
+
+# ---------------------------------------------------------------- numbers only
+
+def quaternion_product(p, q):
+    """Hamilton product, scalar first: ``A(p * q) = A(p) A(q)``."""
+    p = np.asarray(p, dtype=float)
+    q = np.asarray(q, dtype=float)
+    s = p[0] * q[0] - p[1:] @ q[1:]
+    v = p[0] * q[1:] + q[0] * p[1:] + np.cross(p[1:], q[1:])
+    return np.concatenate(([s], v))
+
+
+def quaternion_exp(rotation_vector):
+    """Unit quaternion of the rotation ``rotation_vector`` (axis times angle, rad)."""
+    theta = np.asarray(rotation_vector, dtype=float)
+    angle = float(np.linalg.norm(theta))
+    if angle < 1e-12:
+        # second-order series keeps the result smooth and unit to round-off
+        q = np.concatenate(([1.0 - angle**2 / 8.0], 0.5 * theta))
+        return q / np.linalg.norm(q)
+    return np.concatenate(([np.cos(angle / 2)], np.sin(angle / 2) * theta / angle))
+
+
+def euler_parameters_from_rotation(R) -> np.ndarray:
+    """Unit Euler parameters (scalar first, ``e0 >= 0``) of a rotation matrix (Shepperd)."""
+    R = np.asarray(R, dtype=float)
+    trace = np.trace(R)
+    candidates = np.array([trace, R[0, 0], R[1, 1], R[2, 2]])
+    k = int(np.argmax(candidates))
+    if k == 0:
+        e0 = 0.5 * np.sqrt(1.0 + trace)
+        p = [e0, (R[2, 1] - R[1, 2]) / (4 * e0), (R[0, 2] - R[2, 0]) / (4 * e0),
+             (R[1, 0] - R[0, 1]) / (4 * e0)]
+    elif k == 1:
+        e1 = 0.5 * np.sqrt(1.0 + 2 * R[0, 0] - trace)
+        p = [(R[2, 1] - R[1, 2]) / (4 * e1), e1, (R[0, 1] + R[1, 0]) / (4 * e1),
+             (R[0, 2] + R[2, 0]) / (4 * e1)]
+    elif k == 2:
+        e2 = 0.5 * np.sqrt(1.0 + 2 * R[1, 1] - trace)
+        p = [(R[0, 2] - R[2, 0]) / (4 * e2), (R[0, 1] + R[1, 0]) / (4 * e2), e2,
+             (R[1, 2] + R[2, 1]) / (4 * e2)]
+    else:
+        e3 = 0.5 * np.sqrt(1.0 + 2 * R[2, 2] - trace)
+        p = [(R[1, 0] - R[0, 1]) / (4 * e3), (R[0, 2] + R[2, 0]) / (4 * e3),
+             (R[1, 2] + R[2, 1]) / (4 * e3), e3]
+    p = np.array(p)
+    p /= np.linalg.norm(p)
+    return -p if p[0] < 0 else p
+
+
+def rotation_about_axis(axis, angle) -> np.ndarray:
+    """Rodrigues' formula: rotation by ``angle`` (rad) about the unit direction of ``axis``."""
+    a = np.asarray(axis, dtype=float)
+    a = a / np.linalg.norm(a)
+    K = skew(a)
+    return np.eye(3) + np.sin(angle) * K + (1.0 - np.cos(angle)) * (K @ K)
+
+
+def rotation_from_rpy(roll, pitch, yaw) -> np.ndarray:
+    """URDF convention: ``R = Rz(yaw) Ry(pitch) Rx(roll)`` (fixed axes x, y, z)."""
+    return (
+        rotation_about_axis([0, 0, 1], yaw)
+        @ rotation_about_axis([0, 1, 0], pitch)
+        @ rotation_about_axis([1, 0, 0], roll)
+    )
+
+
+def orthonormal_complement(axis) -> tuple[np.ndarray, np.ndarray]:
+    """Unit vectors ``u, w`` with ``(u, w, a)`` right-handed orthonormal, ``a = axis / |axis|``.
+
+    Deterministic: ``u`` is the normalised component of the coordinate axis least aligned with
+    ``a``, so a joint's rows do not change from one run to the next.
+    """
+    a = np.asarray(axis, dtype=float)
+    a = a / np.linalg.norm(a)
+    e = np.eye(3)[int(np.argmin(np.abs(a)))]
+    u = e - (e @ a) * a
+    u /= np.linalg.norm(u)
+    return u, np.cross(a, u)
+
+
+def is_rotation(R, tol: float = 1e-9) -> bool:
+    """True for a proper rotation matrix (orthonormal, determinant +1) to ``tol``."""
+    R = np.asarray(R, dtype=float)
+    if R.shape not in ((2, 2), (3, 3)) or not np.all(np.isfinite(R)):
+        return False
+    n = R.shape[0]
+    return bool(np.allclose(R.T @ R, np.eye(n), atol=tol) and abs(np.linalg.det(R) - 1) < tol)
+
+
+@dataclass(frozen=True)
+class Placement:
+    """A frame given in another frame: origin ``position`` and ``rotation`` (local -> outer axes).
+
+    In space ``position`` has 3 entries and ``rotation`` is 3 x 3; in the plane, 2 and 2 x 2.
+    Compose with ``@``: ``a @ b`` is frame ``b`` (given in ``a``) expressed in ``a``'s outer
+    frame.
+    """
+
+    position: np.ndarray
+    rotation: np.ndarray = field(default=None)  # type: ignore[assignment]
+
+    def __post_init__(self):
+        position = np.array(self.position, dtype=float).reshape(-1)
+        n = position.size
+        rotation = np.eye(n) if self.rotation is None else self.rotation
+        rotation = np.array(rotation, dtype=float)
+        if rotation.ndim == 0 and n == 2:
+            rotation = rotation_2d(float(rotation))
+        object.__setattr__(self, "position", position)
+        object.__setattr__(self, "rotation", rotation)
+
+    @classmethod
+    def identity(cls, dimension: int = 3) -> Placement:
+        return cls(np.zeros(dimension))
+
+    @property
+    def dimension(self) -> int:
+        return self.position.size
+
+    @property
+    def angle(self) -> float:
+        """Rotation angle of a planar placement (rad)."""
+        return float(np.arctan2(self.rotation[1, 0], self.rotation[0, 0]))
+
+    def __matmul__(self, other: Placement) -> Placement:
+        return Placement(self.position + self.rotation @ other.position,
+                         self.rotation @ other.rotation)
+
+    def inverse(self) -> Placement:
+        return Placement(-self.rotation.T @ self.position, self.rotation.T)
+
+    def transform_point(self, x) -> np.ndarray:
+        return self.position + self.rotation @ np.asarray(x, dtype=float)
+
+    def scaled(self, factor: float) -> Placement:
+        """The same frame with lengths multiplied by ``factor`` (unit conversion)."""
+        return Placement(self.position * factor, self.rotation)
