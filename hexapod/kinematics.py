@@ -13,13 +13,17 @@ from __future__ import annotations
 import numpy as np
 
 from hexapod.errors import AssemblyError
-from hexapod.linalg import RowSplit, equilibrate, split_rows
+from hexapod.linalg import RowSplit, check_consistency, equilibrate, split_rows
 from hexapod.model import Model
 
 
 def _split(model: Model, Phi_v: np.ndarray) -> RowSplit:
     W, d = equilibrate(Phi_v, model.mass_inv_sqrt)
     return split_rows(W, d, model.row_priority, model.rank_tolerance)
+
+
+def _names(model: Model) -> list[str]:
+    return [r.name for r in model.rows]
 
 
 def scaled_residual(model: Model, q: np.ndarray, t: float = 0.0) -> np.ndarray:
@@ -93,7 +97,10 @@ def solve_velocities(model: Model, q: np.ndarray, t: float = 0.0,
     Phi_v = model.call("Phi_v", q=q, w=w)
     nu = model.call("nu", q=q, w=w, wd=wd)
     split = _split(model, Phi_v)
-    return v + model.mass_inv_sqrt @ split.min_norm_correction(nu - Phi_v @ v)
+    residual = nu - Phi_v @ v
+    dy = split.min_norm_correction(residual)
+    check_consistency(split, dy, residual, row_names=_names(model), what="velocity constraints")
+    return v + model.mass_inv_sqrt @ dy
 
 
 def solve_accelerations(model: Model, q: np.ndarray, v: np.ndarray,
@@ -104,7 +111,10 @@ def solve_accelerations(model: Model, q: np.ndarray, v: np.ndarray,
     Phi_v = model.call("Phi_v", q=q, w=w)
     gamma = model.call("gamma", q=q, v=v, w=w, wd=wd, wdd=wdd)
     split = _split(model, Phi_v)
-    return model.mass_inv_sqrt @ split.min_norm_correction(gamma)
+    y = split.min_norm_correction(gamma)
+    check_consistency(split, y, gamma, row_names=_names(model),
+                      what="acceleration constraints")
+    return model.mass_inv_sqrt @ y
 
 
 def consistent_state(model: Model, t: float = 0.0, q: np.ndarray | None = None,

@@ -189,22 +189,36 @@ def solve_saddle(mass_inv_sqrt, Phi_v: np.ndarray, Q: np.ndarray, gamma: np.ndar
         lam[I] = solve_triangular(split.R, Qty0 - z) / d[I]
     else:
         y = y0
-    inconsistency = 0.0
-    if split.redundant.size:
-        red = split.redundant
-        violation = np.abs(W[red] @ y - gamma[red] / d[red])
-        size = max(np.linalg.norm(y0), np.linalg.norm(gamma / d), np.finfo(float).tiny)
-        inconsistency = float(violation.max() / size)
-        if inconsistency > consistency_tol:
-            worst = red[np.argsort(-violation)[:5]]
-            names = [row_names[i] if row_names is not None else str(i) for i in worst]
-            raise SingularSystemError(
-                "the constraints are inconsistent: redundant rows " + ", ".join(names)
-                + f" cannot be met together with the others (relative violation "
-                f"{inconsistency:.1e})")
-        if wrench_map is not None and split.rank:
-            lam = _distribute(split, lam, wrench_map, wrench_offset)
+    inconsistency = check_consistency(split, y, gamma, np.linalg.norm(y0), row_names,
+                                      consistency_tol)
+    if split.redundant.size and wrench_map is not None and split.rank:
+        lam = _distribute(split, lam, wrench_map, wrench_offset)
     return SaddleSolution(mass_inv_sqrt @ y, lam, split, inconsistency)
+
+
+def check_consistency(split: RowSplit, y: np.ndarray, rhs: np.ndarray, size: float = 0.0,
+                      row_names=None, tol: float = 1e-6, what: str = "constraints") -> float:
+    """Relative violation of the redundant rows by a solution ``y`` (``M^1/2``-scaled) of the
+    kept rows ``W_I y = rhs_I / d_I``; raises when it exceeds ``tol``, naming the rows.
+
+    Redundant rows are dropped from the solve, so this is where contradicting constraints (two
+    drivers prescribing incompatible motions, say) are caught instead of silently ignored.
+    """
+    red = split.redundant
+    if red.size == 0:
+        return 0.0
+    d = split.scale
+    violation = np.abs(split.W[red] @ y - rhs[red] / d[red])
+    scale = max(size, np.linalg.norm(y), np.linalg.norm(rhs / d), np.finfo(float).tiny)
+    inconsistency = float(violation.max() / scale)
+    if inconsistency > tol:
+        worst = red[np.argsort(-violation)[:5]]
+        names = [row_names[i] if row_names is not None else str(i) for i in worst]
+        raise SingularSystemError(
+            f"the {what} are inconsistent: redundant rows " + ", ".join(names)
+            + f" cannot be met together with the others (relative violation "
+            f"{inconsistency:.1e})")
+    return inconsistency
 
 
 def _distribute(split: RowSplit, lam: np.ndarray, wrench_map: np.ndarray,

@@ -1,0 +1,117 @@
+"""Small mechanisms shared by the tests, each built in the ways the tests compare."""
+
+from __future__ import annotations
+
+import numpy as np
+
+import hexapod as hx
+
+# ------------------------------------------------------------------ simple pendulum
+
+PENDULUM = dict(mass=1.3, length=0.8, inertia=0.02)  # kg, m (pivot to centre of mass), kg m^2
+
+
+def pendulum(form: str, theta: float, unit: str = "m", mass=None, inertia=None) -> hx.Scene:
+    """A pendulum about the pivot at the origin, ``theta`` measured from the downward vertical.
+
+    ``form`` is ``spatial`` (a rigid body swinging in the x-z plane about the y axis),
+    ``planar`` (x-y plane) or ``particle-3d`` / ``particle-2d`` (a point mass on a rigid link).
+    Lengths are written in ``unit``.
+    """
+    m = PENDULUM["mass"] if mass is None else mass
+    Ic = PENDULUM["inertia"] if inertia is None else inertia
+    k = hx.scene.LENGTH_UNITS[unit]
+    lenu = PENDULUM["length"] / k
+    inertia_u = Ic / k**2
+    s, c = np.sin(theta), np.cos(theta)
+    if form == "spatial":
+        scene = hx.Scene("pendulum", 3, unit)
+        # x right, z up; rotating about +y by theta takes -z (down) towards -x
+        scene.add(hx.SpatialBody("bob", m, [inertia_u, inertia_u, inertia_u],
+                                 position=[-lenu * s, 0.0, -lenu * c],
+                                 rotation=hx.rotation_about_axis([0, 1, 0], theta)))
+        scene.add(hx.Revolute("pivot", "ground", "bob", origin=[0, 0, 0], axis=[0, 1, 0]))
+    elif form == "planar":
+        scene = hx.Scene("pendulum", 2, unit)
+        scene.add(hx.PlanarBody("bob", m, inertia_u, position=[lenu * s, -lenu * c],
+                                angle=theta))
+        scene.add(hx.Revolute("pivot", "ground", "bob", origin=[0, 0]))
+    elif form in ("particle-3d", "particle-2d"):
+        dim = 3 if form == "particle-3d" else 2
+        scene = hx.Scene("pendulum", dim, unit)
+        position = [lenu * s, 0.0, -lenu * c] if dim == 3 else [lenu * s, -lenu * c]
+        scene.add(hx.Particle("bob", m, position=position))
+        scene.add(hx.Distance("rod", "ground", "bob", parent_frame=hx.Placement(np.zeros(dim))))
+    else:
+        raise ValueError(form)
+    return scene
+
+
+def pendulum_closed_form(theta, theta_dot, inertia=None, mass=None):
+    """Angular acceleration and the force of the pivot on the pendulum, as (radial, tangential)
+    components: radial along pivot -> centre of mass, tangential along increasing theta."""
+    m = PENDULUM["mass"] if mass is None else mass
+    Ic = PENDULUM["inertia"] if inertia is None else inertia
+    l, g = PENDULUM["length"], 9.81
+    I_O = Ic + m * l**2
+    theta_dd = -m * g * l * np.sin(theta) / I_O
+    radial = -m * l * theta_dot**2 - m * g * np.cos(theta)
+    tangential = m * l * theta_dd + m * g * np.sin(theta)
+    return theta_dd, radial, tangential
+
+
+# ------------------------------------------------------------------ four-bar
+
+FOUR_BAR = dict(ground=0.30, crank=0.10, coupler=0.25, rocker=0.20, density=2.0)  # m, kg/m
+
+
+def four_bar_points(theta):
+    """Pivots A, D and moving joints B, C of the four-bar at crank angle ``theta`` (plane)."""
+    g, a, b, c = (FOUR_BAR[k] for k in ("ground", "crank", "coupler", "rocker"))
+    A, D = np.zeros(2), np.array([g, 0.0])
+    B = a * np.array([np.cos(theta), np.sin(theta)])
+    # C on the circles (B, b) and (D, c), upper branch
+    d = np.linalg.norm(D - B)
+    x = (b**2 - c**2 + d**2) / (2 * d)
+    h = np.sqrt(b**2 - x**2)
+    e = (D - B) / d
+    C = B + x * e + h * np.array([-e[1], e[0]])
+    return A, B, C, D
+
+
+def four_bar(dimension: int, theta: float, *, driven: bool = True, unit: str = "m",
+             gravity=None, law=None) -> hx.Scene:
+    """The four-bar A-B-C-D at crank angle ``theta``; in 3-D all four revolute axes are along z
+    (three rows redundant). Joints in tree order, the rocker's ground pivot closing the loop."""
+    k = hx.scene.LENGTH_UNITS[unit]
+    A, B, C, D = (p / k for p in four_bar_points(theta))
+    scene = hx.Scene("four-bar", dimension, unit)
+    if gravity is not None:
+        scene.gravity = np.asarray(gravity, dtype=float) / k
+    rho = FOUR_BAR["density"]
+    links = {"crank": (A, B), "coupler": (B, C), "rocker": (D, C)}
+    for name, (P, R) in links.items():
+        length_u = np.linalg.norm(R - P)
+        mass = rho * length_u * k
+        angle = np.arctan2(*(R - P)[::-1])
+        transverse = mass * length_u**2 / 12
+        centre = (P + R) / 2
+        if dimension == 3:
+            radius = 0.01 / k
+            scene.add(hx.SpatialBody(
+                name, mass, [mass * radius**2 / 2, transverse, transverse],
+                position=[*centre, 0.0], rotation=hx.rotation_about_axis([0, 0, 1], angle)))
+        else:
+            scene.add(hx.PlanarBody(name, mass, transverse, position=centre, angle=angle))
+
+    def at(p):
+        return [*p, 0.0] if dimension == 3 else list(p)
+
+    scene.add(hx.Revolute("crank_pin", "ground", "crank", origin=at(A)))
+    scene.add(hx.Revolute("coupler_pin", "crank", "coupler", origin=at(B)))
+    scene.add(hx.Revolute("rocker_pin", "coupler", "rocker", origin=at(C)))
+    scene.add(hx.Revolute("rocker_ground", "rocker", "ground", origin=at(D)))
+    if driven:
+        scene.add(hx.JointDriver("motor", "crank_pin",
+                                 law or hx.Polynomial([0.0, 2.0, -1.5])))
+    return scene
