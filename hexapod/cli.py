@@ -54,7 +54,7 @@ def _state_report(model: Model, t: float, condition: bool) -> dict:
     v = solve_velocities(model, q, t)
     data = Data()
     forward_dynamics(model, data, t, q, v, condition=condition)
-    wrenches = joint_wrenches(model, q, data.lam, data.Phi_v, data.extra["Q_across"])
+    wrenches = joint_wrenches(model, q, data.lam, data.Phi_v, data.Q_across)
     mobility = degrees_of_freedom(model, q, t)
     w, _, _ = model.law_values(t)
     phi = model.call("phi", q=q, w=w) if model.n_c else np.zeros(0)
@@ -77,7 +77,7 @@ def _state_report(model: Model, t: float, condition: bool) -> dict:
     }
     if condition:
         report["condition_number"] = data.condition_number
-        report["sigma_min"] = data.extra["sigma_min"]
+        report["sigma_min"] = data.sigma_min
     return report | {"_wrenches": wrenches, "_model": model}
 
 
@@ -115,8 +115,16 @@ def _print_dynamics(report: dict) -> None:
               + " ".join(f"{x:11.4g}" for x in (*f, np.linalg.norm(f), *t)))
 
 
-def _jsonable(report: dict) -> dict:
-    return {k: v for k, v in report.items() if not k.startswith("_")}
+def _jsonable(value):
+    """Plain JSON: private keys dropped, non-finite numbers (e.g. the smallest singular value of
+    a scene without constraints, infinite) written as null."""
+    if isinstance(value, dict):
+        return {k: _jsonable(v) for k, v in value.items() if not str(k).startswith("_")}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, float) and not np.isfinite(value):
+        return None
+    return value
 
 
 def cmd_dynamics(args) -> int:
@@ -124,7 +132,7 @@ def cmd_dynamics(args) -> int:
     model = assemble(scene)
     report = _state_report(model, args.t, condition=True)
     if args.json:
-        json.dump(_jsonable(report), sys.stdout, indent=2)
+        json.dump(_jsonable(report), sys.stdout, indent=2, allow_nan=False)
         print()
     else:
         _print_dynamics(report)
@@ -195,6 +203,9 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("hexapod: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # output piped into a reader that stopped (e.g. head): not an error
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
     except Exception as error:  # an internal error: still one line unless debugging
         if os.environ.get("HEXAPOD_DEBUG"):
             raise

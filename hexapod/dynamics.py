@@ -21,11 +21,11 @@ def forward_dynamics(model: Model, data: Data, t: float, q: np.ndarray, v: np.nd
                      condition: bool = False) -> np.ndarray:
     """Accelerations ``v_dot`` at ``(t, q, v)``; fills ``data``.
 
-    ``data`` receives ``Phi_v, gamma, Q, v_dot, lam`` (n_c), ``independent_rows``,
-    ``redundant_rows`` (row indices; names in ``model.rows``), ``extra["Q_across"]``, and, when
+    ``data`` receives ``Phi_v, gamma, Q, Q_across, v_dot, lam`` (n_c), ``independent_rows``,
+    ``redundant_rows`` (row indices; names in ``model.rows``), ``inconsistency``, and, when
     ``condition`` is true, ``condition_number`` (2-norm, of the equilibrated saddle-point matrix
-    of the independent rows) and ``extra["sigma_min"]`` (the smallest singular value of the
-    equilibrated ``Phi_v``: the distance to a singular configuration).
+    of the independent rows) and ``sigma_min`` (the smallest singular value of the equilibrated
+    ``Phi_v``: the distance to a singular configuration).
 
     Raises
     ------
@@ -51,11 +51,11 @@ def forward_dynamics(model: Model, data: Data, t: float, q: np.ndarray, v: np.nd
     data.Phi_v, data.gamma, data.Q = Phi_v, gamma, Q
     data.v_dot, data.lam = solution.v_dot, solution.lam
     data.independent_rows, data.redundant_rows = split.independent, split.redundant
-    data.extra["Q_across"] = Q_across
-    data.extra["inconsistency"] = solution.inconsistency
-    data.condition_number = None
+    data.Q_across = Q_across
+    data.inconsistency = solution.inconsistency
+    data.condition_number = data.sigma_min = None
     if condition:
         data.condition_number = split.condition_number(model.n_v)
         sigma = split.singular_values()
-        data.extra["sigma_min"] = float(sigma.min()) if sigma.size else float("inf")
+        data.sigma_min = float(sigma.min()) if sigma.size else float("inf")
     return solution.v_dot

@@ -61,22 +61,34 @@ def assemble_positions(model: Model, q: np.ndarray | None = None, t: float = 0.0
     if model.n_c == 0:
         return q
     residual = model.call("phi", q=q, w=w) / model.row_scale
+    if not np.all(np.isfinite(residual)) or not np.all(np.isfinite(q)):
+        raise AssemblyError(f"model '{model.name}': the constraint residuals are not finite at "
+                            "the initial guess (check the scene's magnitudes and length unit)")
     merit = float(np.max(np.abs(residual)))
+    polished = False
     for _ in range(max_iterations):
         if merit <= tol:
-            return q
+            if polished:
+                return q
+            # Newton converges quadratically: one more step takes the residual to round-off
+            # (joint points coincide to ~1e-16 m instead of ~tol), kept only if it helps
+            polished = True
         Phi_v = model.call("Phi_v", q=q, w=w)
         split = _split(model, Phi_v)
         dv = model.mass_inv_sqrt @ split.min_norm_correction(-residual * model.row_scale)
         step = 1.0
-        while step > 1e-4:
+        while True:  # backtracking line search on the largest scaled residual
             trial = model.integrate(q, step * dv)
             trial_residual = model.call("phi", q=trial, w=w) / model.row_scale
             trial_merit = float(np.max(np.abs(trial_residual)))
-            if trial_merit < merit or trial_merit <= tol:
+            if trial_merit < merit or (trial_merit <= tol and not polished):
                 break
             step *= 0.5
-        else:
+            if polished or step < 1e-4:
+                break
+        if trial_merit >= merit and (polished or trial_merit > tol):
+            if polished:
+                return q
             break
         q, residual, merit = trial, trial_residual, trial_merit
     if merit <= tol:

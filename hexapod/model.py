@@ -21,7 +21,7 @@ Functions: ``phi(q, w)``, ``Phi_q(q, w)``, ``Phi_v(q, w)``, ``nu(q, w, wd)``,
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cached_property
 
 import casadi as ca
@@ -149,7 +149,6 @@ class Symbolic:
     phi: ca.SX
     Q: ca.SX
     Q_across: ca.SX | None = None  # n_v x (joints with force elements across them)
-    extra: dict = field(default_factory=dict)
 
 
 class Model:
@@ -435,7 +434,9 @@ class Data:
     Q: np.ndarray | None = None
     v_dot: np.ndarray | None = None
     lam: np.ndarray | None = None
+    Q_across: np.ndarray | None = None  # forces of the elements acting across joints
     independent_rows: np.ndarray | None = None
     redundant_rows: np.ndarray | None = None
+    inconsistency: float | None = None  # relative violation of the redundant rows
     condition_number: float | None = None
-    extra: dict = field(default_factory=dict)
+    sigma_min: float | None = None  # smallest singular value of the equilibrated Phi_v

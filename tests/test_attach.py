@@ -73,7 +73,7 @@ def _results(scene, t=0.4):
     v = hx.solve_velocities(model, q, t)
     data = hx.Data()
     v_dot = hx.forward_dynamics(model, data, t, q, v)
-    w = hx.joint_wrenches(model, q, data.lam, data.Phi_v, data.extra["Q_across"])
+    w = hx.joint_wrenches(model, q, data.lam, data.Phi_v, data.Q_across)
     return model, q, v_dot, w
 
 

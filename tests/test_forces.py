@@ -136,7 +136,7 @@ def test_joint_effort_drives_a_pendulum():
         assert v_dot[2] == pytest.approx((tau - m * 9.81 * l * np.cos(theta))
                                          / (Ic + m * l**2), rel=1e-12)
         wrenches = hx.joint_wrenches(model, model.q0, data.lam, data.Phi_v,
-                                     data.extra["Q_across"])
+                                     data.Q_across)
         # the joint wrench gathers the effort acting across the joint
         assert wrenches.effort[0] == pytest.approx(tau, rel=1e-12)
         assert model.joints[0].across == ("motor",)

@@ -76,5 +76,5 @@ def test_condition_number_equals_the_direct_computation():
     n_v, n_c = W.shape[1], W.shape[0]
     kkt = np.block([[np.eye(n_v), W.T], [W, np.zeros((n_c, n_c))]])
     assert data.condition_number == pytest.approx(np.linalg.cond(kkt), rel=1e-8)
-    assert data.extra["sigma_min"] == pytest.approx(np.linalg.svd(W, compute_uv=False).min(),
+    assert data.sigma_min == pytest.approx(np.linalg.svd(W, compute_uv=False).min(),
                                                     rel=1e-10)

@@ -94,7 +94,7 @@ def test_accelerations_equal_the_planar_model(driven):
 def _wrenches(scene, t=0.3):
     model, q, _, _, data = _solve(scene, t)
     return model, q, data, joint_wrenches(model, q, data.lam, data.Phi_v,
-                                          data.extra["Q_across"], frame="world")
+                                          data.Q_across, frame="world")
 
 
 def test_length_unit_changes_no_reported_force():
