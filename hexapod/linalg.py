@@ -82,8 +82,20 @@ class RowSplit:
         return self.basis @ solve_triangular(self.R, rhs, trans="T")
 
 
+def require_finite(array: np.ndarray, what: str) -> None:
+    """Raise a clear error instead of letting NaN or infinity into a factorisation."""
+    if not np.all(np.isfinite(array)):
+        raise SingularSystemError(
+            f"{what} has non-finite entries (an overflow or NaN: check the scene's magnitudes, "
+            "its length unit and the state)")
+
+
 def equilibrate(Phi_v: np.ndarray, mass_inv_sqrt) -> tuple[np.ndarray, np.ndarray]:
-    """``W = D^-1 Phi_v M^-1/2`` and the row norms ``d`` (zero rows keep ``d = 1``)."""
+    """``W = D^-1 Phi_v M^-1/2`` and the row norms ``d`` (zero rows keep ``d = 1``).
+
+    Raises :class:`SingularSystemError` when ``Phi_v`` is not finite (an overflow, typically from
+    coordinates or lengths far out of range: check the scene's magnitudes and unit)."""
+    require_finite(Phi_v, "the constraint Jacobian Phi_v")
     W = Phi_v @ mass_inv_sqrt
     d = np.linalg.norm(W, axis=1)
     d[d == 0.0] = 1.0
@@ -175,6 +187,8 @@ def solve_saddle(mass_inv_sqrt, Phi_v: np.ndarray, Q: np.ndarray, gamma: np.ndar
         When the redundant rows' ``gamma`` contradicts the kept rows (inconsistent
         constraints, e.g. two drivers prescribing incompatible motions).
     """
+    require_finite(Q, "the applied forces Q")
+    require_finite(gamma, "the acceleration right-hand side gamma")
     if split is None:
         W, d = equilibrate(Phi_v, mass_inv_sqrt)
         split = split_rows(W, d, priority, tol)

@@ -153,13 +153,15 @@ def orthonormal_complement(axis) -> tuple[np.ndarray, np.ndarray]:
     return u, np.cross(a, u)
 
 
-def is_rotation(R, tol: float = 1e-9) -> bool:
-    """True for a proper rotation matrix (orthonormal, determinant +1) to ``tol``."""
+def is_rotation(R, tol: float = 1e-6) -> bool:
+    """True for a proper rotation matrix: ``|R^T R - I| <= tol`` entrywise and ``det R > 0``.
+
+    The tolerance admits matrices written with six or more significant digits."""
     R = np.asarray(R, dtype=float)
     if R.shape not in ((2, 2), (3, 3)) or not np.all(np.isfinite(R)):
         return False
     n = R.shape[0]
-    return bool(np.allclose(R.T @ R, np.eye(n), atol=tol) and abs(np.linalg.det(R) - 1) < tol)
+    return bool(np.max(np.abs(R.T @ R - np.eye(n))) <= tol and np.linalg.det(R) > 0)
 
 
 @dataclass(frozen=True)

@@ -72,11 +72,13 @@ def _bodies(scene: Scene):
     nq = nv = 0
     for index, body in enumerate(scene.bodies.values()):
         pose = body.com_pose
+        arm = pose.position - body.position  # reference origin -> centre of mass, world
         if isinstance(body, SpatialBody):
             kind, dq, dv = "spatial", 7, 6
             inertia = body.body_inertia
             q0 += [*pose.position, *euler_parameters_from_rotation(pose.rotation)]
-            v0 += [*body.velocity, *(pose.rotation.T @ body.angular_velocity)]
+            v_com = body.velocity + np.cross(body.angular_velocity, arm)
+            v0 += [*v_com, *(pose.rotation.T @ body.angular_velocity)]
             diagonal += [body.mass] * 3 + [0.0] * 3
             blocks.append(inertia)
             block_index.append(list(range(nv + 3, nv + 6)))
@@ -84,7 +86,8 @@ def _bodies(scene: Scene):
             kind, dq, dv = "planar", 3, 3
             inertia = np.array([[body.inertia]])
             q0 += [*pose.position, body.angle]
-            v0 += [*body.velocity, body.angular_velocity]
+            v_com = body.velocity + body.angular_velocity * np.array([-arm[1], arm[0]])
+            v0 += [*v_com, body.angular_velocity]
             diagonal += [body.mass, body.mass, body.inertia]
         else:
             assert isinstance(body, Particle)
@@ -196,9 +199,10 @@ def assemble(scene: Scene, *, rank_tolerance: float = 1e-9) -> Model:
         if isinstance(joint, Distance):
             length = joint.length
             if length is None:
-                world_p = (si.pose(joint.parent) @ si.frame(joint.parent, joint.parent_frame))
-                world_c = (si.pose(joint.child) @ si.frame(joint.child, joint.child_frame))
-                length = float(np.linalg.norm(world_c.position - world_p.position))
+                on_parent, on_child = si.joint_frames(joint)
+                world_p = si.pose(joint.parent).transform_point(on_parent.position)
+                world_c = si.pose(joint.child).transform_point(on_child.position)
+                length = float(np.linalg.norm(world_c - world_p))
             joint_rows = distance_rows(g, length)
         else:
             joint_rows = ROWS[joint.kind](g)

@@ -96,7 +96,8 @@ class SpatialBody(Body):
     position, rotation :
         Pose of the reference frame in the world at the initial guess (L; rotation body -> world).
     velocity, angular_velocity : array_like, shape (3,)
-        Initial velocity of the centre of mass and angular velocity, both in world axes.
+        Initial velocity of the reference frame's origin and angular velocity, both in world
+        axes (like ``position``, the velocity belongs to the reference frame).
     markers : dict
         Named frames (:class:`~hexapod.spatial.Placement`) or points in the reference frame.
     """
@@ -188,7 +189,8 @@ class PlanarBody(Body):
     """A rigid body in the plane: coordinates ``(x, y, angle)`` of its centre of mass.
 
     ``inertia`` is the moment of inertia about the centre of mass (kg L^2); ``position`` and
-    ``angle`` give the reference frame in the world at the initial guess; ``com`` is in that frame.
+    ``angle`` give the reference frame in the world at the initial guess; ``com`` is in that frame;
+    ``velocity`` is that of the reference frame's origin, ``angular_velocity`` in rad/s.
     """
 
     name: str
@@ -254,13 +256,13 @@ class PlanarBody(Body):
 class Particle(Body):
     """A point mass: its position only (3 coordinates in space, 2 in the plane).
 
-    The dimension follows ``position`` (2 or 3 numbers). A particle has no orientation: markers on
-    it are points that translate with it.
+    The dimension follows ``position`` (2 or 3 numbers), which is therefore required. A particle
+    has no orientation: markers on it are points that translate with it.
     """
 
     name: str
     mass: float
-    position: np.ndarray = None  # type: ignore[assignment]
+    position: np.ndarray
     velocity: np.ndarray = None  # type: ignore[assignment]
     markers: dict = field(default_factory=dict)
     source: str = ""
@@ -268,7 +270,7 @@ class Particle(Body):
 
     def __post_init__(self):
         self.mass = float(self.mass)
-        self.position = vector(self.position, (2, 3), np.zeros(3))
+        self.position = vector(self.position, (2, 3))
         self.velocity = vector(self.velocity, self.position.size, np.zeros(self.position.size))
         self.markers = _markers(self.markers, self.position.size)
 

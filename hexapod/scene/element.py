@@ -89,7 +89,8 @@ def vector(value, size: int | tuple[int, ...], default=None) -> np.ndarray | Non
     array = np.array(value, dtype=float)
     sizes = (size,) if isinstance(size, int) else size
     if array.ndim != 1 or array.size not in sizes:
-        raise ValueError(f"expected {' or '.join(map(str, sizes))} numbers, got {value!r}")
+        shown = array.tolist() if isinstance(value, np.ndarray) else value
+        raise ValueError(f"expected {' or '.join(map(str, sizes))} numbers, got {shown!r}")
     return array
 
 

@@ -155,24 +155,36 @@ class Spline(Law):
     degree: int = 3
     boundary: str = "not-a-knot"
     _spline: object = field(default=None, init=False, repr=False, compare=False)
+    _failure: str = field(default="", init=False, repr=False, compare=False)
     kind = "spline"
 
     def __post_init__(self):
         object.__setattr__(self, "times", tuple(float(x) for x in self.times))
         object.__setattr__(self, "values", tuple(float(y) for y in self.values))
-        if not self.problems():
-            from scipy.interpolate import make_interp_spline
+        if not self._sample_problems():
+            object.__setattr__(self, "_spline", self._fit())
 
-            bc = _BOUNDARY[self.boundary]
-            if self.degree == 5 and bc in ("natural", "clamped"):
-                # quintic ends: clamped fixes the 1st and 2nd derivatives, natural the 3rd and 4th
-                order = 1 if bc == "clamped" else 3
-                ends = [(order, 0.0), (order + 1, 0.0)]
-                bc = (ends, ends)
+    def _fit(self):
+        from scipy.interpolate import make_interp_spline
+
+        bc = _BOUNDARY[self.boundary]
+        if self.degree == 5 and bc in ("natural", "clamped"):
+            # quintic ends: clamped fixes the 1st and 2nd derivatives, natural the 3rd and 4th
+            order = 1 if bc == "clamped" else 3
+            ends = [(order, 0.0), (order + 1, 0.0)]
+            bc = (ends, ends)
+        try:
             spline = make_interp_spline(self.times, self.values, k=self.degree, bc_type=bc)
-            if self.boundary == "periodic":
-                spline.extrapolate = "periodic"
-            object.__setattr__(self, "_spline", spline)
+        except (ValueError, ArithmeticError, np.linalg.LinAlgError) as error:
+            object.__setattr__(self, "_failure", f"the samples cannot be interpolated ({error})")
+            return None
+        if not np.all(np.isfinite(spline.c)):
+            object.__setattr__(self, "_failure", "the samples cannot be interpolated (times "
+                               "too close together for floating point)")
+            return None
+        if self.boundary == "periodic":
+            spline.extrapolate = "periodic"
+        return spline
 
     def evaluate(self, t):
         if self._spline is None:
@@ -186,6 +198,9 @@ class Spline(Law):
                       self.boundary)
 
     def problems(self):
+        return self._sample_problems() or ([self._failure] if self._failure else [])
+
+    def _sample_problems(self):
         out = []
         if self.degree not in (3, 5):
             out.append(f"degree must be 3 or 5 (C2 at least), got {self.degree}")

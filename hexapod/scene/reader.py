@@ -3,6 +3,10 @@
 Every problem, from a misspelt key to a non-positive mass, is collected with the file and the key
 it was found at, and reported in one :class:`~hexapod.errors.ModelError`. A file that cannot be
 read or parsed gives an :class:`~hexapod.errors.InputFileError`.
+
+Each element is converted key by key. A key that cannot be converted is reported; when it is
+optional the element is still built without it, so its other problems are reported in the same
+run; when it is required the element is dropped (and references to it are not reported again).
 """
 
 from __future__ import annotations
@@ -15,7 +19,7 @@ import numpy as np
 
 from hexapod.errors import InputFileError, ModelError, Problem
 from hexapod.scene.bodies import Particle, PlanarBody, SpatialBody
-from hexapod.scene.drivers import CoordinateDriver, JointDriver
+from hexapod.scene.drivers import DRIVER_TYPES
 from hexapod.scene.element import Element
 from hexapod.scene.forces import FORCE_TYPES
 from hexapod.scene.joints import JOINT_TYPES
@@ -31,7 +35,21 @@ from hexapod.spatial import (
 
 
 class _Invalid(ValueError):
-    """A value that cannot be converted; its message says why."""
+    """A value that cannot be converted. ``key`` locates it inside the value (a sub-key)."""
+
+    def __init__(self, message: str, key: str = ""):
+        super().__init__(message)
+        self.key = key
+
+
+def _items(count: int, what: str) -> str:
+    return f"{count} {what}" if count == 1 else f"{count} {what}s"
+
+
+def _choices(sizes: tuple[int, ...], what: str) -> str:
+    if len(sizes) == 1:
+        return _items(sizes[0], what)
+    return " or ".join(map(str, sizes[:-1])) + f" or {_items(sizes[-1], what)}"
 
 
 # ------------------------------------------------------------------ value converters
@@ -39,7 +57,11 @@ class _Invalid(ValueError):
 def _number(value) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise _Invalid(f"must be a number, got {value!r}")
-    return float(value)
+    try:
+        return float(value)
+    except OverflowError:
+        raise _Invalid(f"is too large for a floating-point number ({str(value)[:20]}...)")\
+            from None
 
 
 def _vector(size: int | tuple[int, ...]):
@@ -47,11 +69,16 @@ def _vector(size: int | tuple[int, ...]):
 
     def convert(value) -> np.ndarray:
         if not isinstance(value, list) or len(value) not in sizes:
-            raise _Invalid(f"must be a list of {' or '.join(map(str, sizes))} numbers, "
-                           f"got {value!r}")
+            raise _Invalid(f"must be a list of {_choices(sizes, 'number')}, got {value!r}")
         return np.array([_number(x) for x in value])
 
     return convert
+
+
+def _numbers(value) -> tuple[float, ...]:
+    if not isinstance(value, list) or not value:
+        raise _Invalid(f"must be a non-empty list of numbers, got {value!r}")
+    return tuple(_number(x) for x in value)
 
 
 def _string(value) -> str:
@@ -69,7 +96,7 @@ def _integer(value) -> int:
 def _matrix3(value) -> np.ndarray:
     if not (isinstance(value, list) and len(value) == 3
             and all(isinstance(r, list) and len(r) == 3 for r in value)):
-        raise _Invalid(f"must be a 3 x 3 matrix (list of 3 lists of 3 numbers), got {value!r}")
+        raise _Invalid(f"must be a 3 x 3 matrix (a list of 3 lists of 3 numbers), got {value!r}")
     return np.array([[_number(x) for x in row] for row in value])
 
 
@@ -77,6 +104,38 @@ def _inertia(value):
     if isinstance(value, list) and value and isinstance(value[0], list):
         return _matrix3(value)
     return _vector((3, 6))(value)
+
+
+def _nearest_rotation(R: np.ndarray) -> np.ndarray:
+    """A matrix written with rounded digits, made exactly orthonormal (left as is when it is
+    far from a rotation, so that validation reports it)."""
+    if not np.all(np.isfinite(R)):
+        return R
+    U, _, Vt = np.linalg.svd(R)
+    nearest = U @ Vt
+    if np.linalg.det(nearest) > 0 and np.max(np.abs(nearest - R)) < 1e-6:
+        return nearest
+    return R
+
+
+def _table_rotation(value: dict, keys: set) -> np.ndarray:
+    """A spatial rotation from a table with exactly one way of giving it."""
+    if keys == {"rpy"}:
+        roll, pitch, yaw = _vector(3)(value["rpy"])
+        return rotation_from_rpy(roll, pitch, yaw)
+    if keys == {"quaternion"}:
+        p = _vector(4)(value["quaternion"])
+        if not np.all(np.isfinite(p)) or np.linalg.norm(p) < 1e-12:
+            raise _Invalid("quaternion must be finite and non-zero")
+        return rotation_from_euler_parameters(p / np.linalg.norm(p))
+    if keys == {"matrix"}:
+        return _nearest_rotation(_matrix3(value["matrix"]))
+    if keys == {"axis", "angle"}:
+        axis = _vector(3)(value["axis"])
+        if not np.all(np.isfinite(axis)) or np.linalg.norm(axis) < 1e-12:
+            raise _Invalid("axis must be finite and non-zero")
+        return rotation_about_axis(axis, _number(value["angle"]))
+    raise _Invalid("give exactly one of rpy, quaternion, matrix, or axis and angle")
 
 
 def _rotation(dimension: int) -> Callable:
@@ -96,26 +155,6 @@ def _rotation(dimension: int) -> Callable:
             raise _Invalid(f"{'/'.join(sorted(keys))}: {error}") from None
 
     return convert
-
-
-def _table_rotation(value: dict, keys: set) -> np.ndarray:
-    """A spatial rotation from a table with exactly one way of giving it."""
-    if keys == {"rpy"}:
-        roll, pitch, yaw = _vector(3)(value["rpy"])
-        return rotation_from_rpy(roll, pitch, yaw)
-    if keys == {"quaternion"}:
-        p = _vector(4)(value["quaternion"])
-        if not np.all(np.isfinite(p)) or np.linalg.norm(p) < 1e-12:
-            raise _Invalid("quaternion must be finite and non-zero")
-        return rotation_from_euler_parameters(p / np.linalg.norm(p))
-    if keys == {"matrix"}:
-        return _matrix3(value["matrix"])
-    if keys == {"axis", "angle"}:
-        axis = _vector(3)(value["axis"])
-        if not np.all(np.isfinite(axis)) or np.linalg.norm(axis) < 1e-12:
-            raise _Invalid("axis must be finite and non-zero")
-        return rotation_about_axis(axis, _number(value["angle"]))
-    raise _Invalid("give exactly one of rpy, quaternion, matrix, or axis and angle")
 
 
 def _frame(dimension: int) -> Callable:
@@ -149,46 +188,55 @@ def _point(dimension: int) -> Callable:
     return convert
 
 
+#: keys of each law table: converter and whether it is required
+_LAW_KEYS = {
+    "constant": {"value": (_number, True)},
+    "polynomial": {"coefficients": (_numbers, True), "t0": (_number, False)},
+    "harmonic": {"offset": (_number, False), "cos": (_numbers, False),
+                 "sin": (_numbers, False), "frequency": (_number, True),
+                 "t0": (_number, False)},
+    "spline": {"times": (_numbers, True), "values": (_numbers, True),
+               "degree": (_integer, False), "boundary": (_string, False)},
+}
+
+
 def _law(value) -> Law:
     """A number (constant) or a table ``{type = "...", ...}``."""
     if not isinstance(value, dict):
         return Constant(_number(value))
     kind = value.get("type")
-    if kind not in LAW_TYPES:
+    if not isinstance(kind, str) or kind not in LAW_TYPES:
         raise _Invalid(f"law type must be one of {', '.join(LAW_TYPES)}, got {kind!r}")
+    spec = _LAW_KEYS[kind]
     fields = {k: v for k, v in value.items() if k != "type"}
-    spec = {
-        "constant": {"value": _number},
-        "polynomial": {"coefficients": _vector(tuple(range(1, 64))), "t0": _number},
-        "harmonic": {"offset": _number, "cos": _list_of_numbers, "sin": _list_of_numbers,
-                     "frequency": _number, "t0": _number},
-        "spline": {"times": _list_of_numbers, "values": _list_of_numbers,
-                   "degree": _integer, "boundary": _string},
-    }[kind]
     unknown = set(fields) - set(spec)
     if unknown:
         raise _Invalid(f"unknown key(s) {', '.join(sorted(unknown))} for a {kind} law "
                        f"(expected {', '.join(spec)})")
-    args = {k: spec[k](v) for k, v in fields.items()}
-    law = LAW_TYPES[kind](**{k: tuple(v) if isinstance(v, np.ndarray) else v
-                             for k, v in args.items()})
+    missing = [k for k, (_, required) in spec.items() if required and k not in fields]
+    if missing:
+        raise _Invalid(f"a {kind} law needs {', '.join(missing)}")
+    args = {}
+    for key, raw in fields.items():
+        try:
+            args[key] = spec[key][0](raw)
+        except _Invalid as error:
+            raise _Invalid(f"{key} {error}") from None
+    law = LAW_TYPES[kind](**args)
     problems = law.problems()
     if problems:
         raise _Invalid("; ".join(problems))
     return law
 
 
-def _list_of_numbers(value) -> tuple[float, ...]:
-    if not isinstance(value, list):
-        raise _Invalid(f"must be a list of numbers, got {value!r}")
-    return tuple(_number(x) for x in value)
+def _laws(count: int) -> Callable:
+    """``count`` components, each a number or a law; one component may be given bare."""
 
-
-def _laws(count: tuple[int, ...]) -> Callable:
     def convert(value):
-        if not isinstance(value, list) or len(value) not in count:
-            raise _Invalid(f"must be a list of {' or '.join(map(str, count))} numbers or laws, "
-                           f"got {value!r}")
+        if count == 1 and not isinstance(value, list):
+            value = [value]
+        if not isinstance(value, list) or len(value) != count:
+            raise _Invalid(f"must be a list of {_items(count, 'number')} or laws, got {value!r}")
         return tuple(_law(x) for x in value)
 
     return convert
@@ -203,9 +251,9 @@ def _markers(dimension: int) -> Callable:
             try:
                 ref = _frame(dimension)(frame)
             except _Invalid as error:
-                raise _Invalid(f"marker '{name}': {error}") from None
+                raise _Invalid(str(error), key=name) from None
             if isinstance(ref, str):
-                raise _Invalid(f"marker '{name}' must be a point or a frame, not a name")
+                raise _Invalid("must be a point or a frame, not a name", key=name)
             frames[name] = ref
         return frames
 
@@ -214,52 +262,71 @@ def _markers(dimension: int) -> Callable:
 
 # ------------------------------------------------------------------ element schemas
 
-def _body_schema(kind: str, dimension: int) -> tuple[type[Element], dict, set]:
-    common = {"name": _string, "type": _string, "mass": _number,
-              "position": _vector(dimension), "velocity": _vector(dimension),
-              "markers": _markers(dimension)}
+#: a schema: the element class, and per key its converter and whether it is required
+Schema = tuple[type[Element], dict[str, tuple[Callable, bool]]]
+
+
+def _body_schema(kind: str, scene_dimension: int) -> Schema:
+    # a body's own dimension, so a planar body in a spatial scene reads and is then reported as
+    # misplaced rather than as badly written
+    dim = {"spatial": 3, "planar": 2}.get(kind, scene_dimension)
+    common = {"name": (_string, True), "type": (_string, False), "mass": (_number, True),
+              "position": (_vector(dim), False), "velocity": (_vector(dim), False),
+              "markers": (_markers(dim), False)}
     if kind == "particle":
-        return Particle, common, {"name", "mass"}
+        return Particle, common
     if kind == "planar":
-        return PlanarBody, {**common, "inertia": _number, "com": _vector(2), "angle": _number,
-                            "angular_velocity": _number}, {"name", "mass", "inertia"}
-    return SpatialBody, {**common, "inertia": _inertia, "com": _vector(3),
-                         "rotation": _rotation(3), "inertia_rotation": _rotation(3),
-                         "angular_velocity": _vector(3)}, {"name", "mass", "inertia"}
+        return PlanarBody, {**common, "inertia": (_number, True), "com": (_vector(2), False),
+                            "angle": (_number, False), "angular_velocity": (_number, False)}
+    return SpatialBody, {**common, "inertia": (_inertia, True), "com": (_vector(3), False),
+                         "rotation": (_rotation(3), False),
+                         "inertia_rotation": (_rotation(3), False),
+                         "angular_velocity": (_vector(3), False)}
 
 
-def _joint_schema(kind: str, dimension: int) -> tuple[type[Element], dict, set]:
-    schema = {"name": _string, "type": _string, "parent": _string, "child": _string,
-              "parent_frame": _frame(dimension), "child_frame": _frame(dimension),
-              "origin": _vector(dimension), "rotation": _rotation(dimension)}
+def _joint_schema(kind: str, dimension: int) -> Schema:
+    schema = {"name": (_string, True), "type": (_string, True), "parent": (_string, True),
+              "child": (_string, True), "parent_frame": (_frame(dimension), False),
+              "child_frame": (_frame(dimension), False), "origin": (_vector(dimension), False),
+              "rotation": (_rotation(dimension), False)}
     if kind == "revolute" and dimension == 3 or kind == "prismatic":
-        schema["axis"] = _vector(dimension)
+        schema["axis"] = (_vector(dimension), False)
     if kind == "distance":
-        schema["length"] = _number
-    return JOINT_TYPES[kind], schema, {"name", "parent", "child"}
+        schema["length"] = (_number, False)
+    return JOINT_TYPES[kind], schema
 
 
-def _driver_schema(table: dict, dimension: int) -> tuple[type[Element], dict, set]:
-    if "joint" in table:
-        return JointDriver, {"name": _string, "joint": _string, "law": _law}, {"name", "law"}
-    return CoordinateDriver, {"name": _string, "body": _string, "coordinate": _string,
-                              "law": _law}, {"name", "body", "coordinate", "law"}
+def _driver_schema(kind: str, dimension: int) -> Schema:
+    common = {"name": (_string, True), "type": (_string, False), "law": (_law, True)}
+    if kind == "joint":
+        return DRIVER_TYPES[kind], {**common, "joint": (_string, True)}
+    return DRIVER_TYPES[kind], {**common, "body": (_string, True),
+                                "coordinate": (_string, True)}
 
 
-def _force_schema(kind: str, dimension: int) -> tuple[type[Element], dict, set]:
-    torque_count = (3,) if dimension == 3 else (1,)
+def _force_schema(kind: str, dimension: int) -> Schema:
+    torque_count = 3 if dimension == 3 else 1
     schemas = {
-        "spring": ({"body_a": _string, "body_b": _string, "point_a": _point(dimension),
-                    "point_b": _point(dimension), "stiffness": _number, "damping": _number,
-                    "free_length": _number, "force": _law}, {"body_a", "body_b"}),
-        "applied-force": ({"body": _string, "force": _laws((dimension,)),
-                           "point": _point(dimension), "frame": _string}, {"body", "force"}),
-        "applied-torque": ({"body": _string, "torque": _laws(torque_count),
-                            "frame": _string}, {"body", "torque"}),
-        "effort": ({"joint": _string, "law": _law}, {"joint", "law"}),
+        "spring": {"body_a": (_string, True), "body_b": (_string, True),
+                   "point_a": (_point(dimension), False), "point_b": (_point(dimension), False),
+                   "stiffness": (_number, False), "damping": (_number, False),
+                   "free_length": (_number, False), "force": (_law, False)},
+        "applied-force": {"body": (_string, True), "force": (_laws(dimension), True),
+                          "point": (_point(dimension), False), "frame": (_string, False)},
+        "applied-torque": {"body": (_string, True), "torque": (_laws(torque_count), True),
+                           "frame": (_string, False)},
+        "effort": {"joint": (_string, True), "law": (_law, True)},
     }
-    schema, required = schemas[kind]
-    return FORCE_TYPES[kind], {"name": _string, "type": _string, **schema}, {"name"} | required
+    return FORCE_TYPES[kind], {"name": (_string, True), "type": (_string, True),
+                               **schemas[kind]}
+
+
+def _driver_kind(table: dict) -> str:
+    """Drivers may state their type; otherwise a ``joint`` key makes a joint driver."""
+    kind = table.get("type")
+    if isinstance(kind, str):
+        return kind
+    return "joint" if "joint" in table else "coordinate"
 
 
 # ------------------------------------------------------------------ the reader
@@ -271,7 +338,7 @@ class _Reader:
     def __init__(self, path: Path):
         self.path = path
         self.problems: list[Problem] = []
-        self.failed: set[str] = set()  # names of elements that could not be converted
+        self.failed: set[str] = set()  # names of elements that could not be built
 
     def where(self, key: str) -> str:
         return f"{self.path}, {key}"
@@ -286,16 +353,15 @@ class _Reader:
                          + ", ".join(f"[{s}]" if s == "scene" else f"[[{s}]]"
                                      for s in _SECTIONS) + ")")
         scene = self._scene(document.get("scene", {}))
-        tables = {
-            "body": lambda t: _body_schema(
-                t.get("type", "spatial" if scene.dimension == 3 else "planar"), scene.dimension),
-            "joint": lambda t: _joint_schema(t.get("type"), scene.dimension),
-            "driver": lambda t: _driver_schema(t, scene.dimension),
-            "force": lambda t: _force_schema(t.get("type"), scene.dimension),
+        dim = scene.dimension
+        sections = {
+            "body": (lambda t: t.get("type", "spatial" if dim == 3 else "planar"),
+                     ("spatial", "planar", "particle"), _body_schema),
+            "joint": (lambda t: t.get("type"), tuple(JOINT_TYPES), _joint_schema),
+            "driver": (_driver_kind, tuple(DRIVER_TYPES), _driver_schema),
+            "force": (lambda t: t.get("type"), tuple(FORCE_TYPES), _force_schema),
         }
-        kinds = {"body": ("spatial", "planar", "particle"), "joint": tuple(JOINT_TYPES),
-                 "force": tuple(FORCE_TYPES)}
-        for section, schema in tables.items():
+        for section, (kind_of, kinds, schema) in sections.items():
             entries = document.get(section, [])
             if not isinstance(entries, list):
                 self.add("file", section, f"must be an array of tables, written [[{section}]]")
@@ -305,16 +371,16 @@ class _Reader:
                 if not isinstance(table, dict):
                     self.add(section, key, "must be a table")
                     continue
-                label = f"{section} '{table.get('name', f'#{i}')}'"
-                if section in kinds:
-                    default = "spatial" if scene.dimension == 3 else "planar"
-                    kind = table.get("type", default if section == "body" else None)
-                    if kind not in kinds[section]:
-                        self.add(label, f"{key}.type", f"type must be one of "
-                                 f"{', '.join(kinds[section])}, got {kind!r}")
-                        self.failed.add(str(table.get("name")))
-                        continue
-                element = self._element(table, key, label, *schema(table))
+                name = table.get("name")
+                kind = kind_of(table)
+                label = f"{section} '{name if isinstance(name, str) else f'#{i}'}'"
+                if not isinstance(kind, str) or kind not in kinds:
+                    self.add(label, f"{key}.type",
+                             f"type must be one of {', '.join(kinds)}, got {kind!r}")
+                    self.failed.add(str(name))
+                    continue
+                label += f" ({kind})" if kind != section else ""
+                element = self._element(table, key, label, dim, *schema(kind, dim))
                 if element is not None:
                     element.source = self.where(key)
                     scene.add(element)
@@ -324,8 +390,9 @@ class _Reader:
         if not isinstance(table, dict):
             self.add("scene", "scene", "must be a table, written [scene]")
             table = {}
-        spec = {"name": _string, "dimension": _integer, "length_unit": _string,
-                "gravity": _vector((2, 3)), "characteristic_length": _number}
+        spec = {"name": (_string, False), "dimension": (_integer, False),
+                "length_unit": (_string, False), "gravity": (_vector((2, 3)), False),
+                "characteristic_length": (_number, False)}
         values = self._convert(table, "scene", "scene", spec)
         values.setdefault("name", self.path.stem)
         dimension = values.get("dimension", 3)
@@ -342,25 +409,26 @@ class _Reader:
                          f"{', '.join(k for k in spec if k != 'type')})")
                 continue
             try:
-                values[name] = spec[name](value)
-            except _Invalid as error:
-                self.add(label, f"{key}.{name}", str(error))
+                values[name] = spec[name][0](value)
             except ValueError as error:
-                self.add(label, f"{key}.{name}", str(error))
+                sub = f".{error.key}" if isinstance(error, _Invalid) and error.key else ""
+                self.add(label, f"{key}.{name}{sub}", str(error))
         return values
 
-    def _element(self, table: dict, key: str, label: str, cls: type[Element], spec: dict,
-                 required: set) -> Element | None:
+    def _element(self, table: dict, key: str, label: str, dimension: int,
+                 cls: type[Element], spec: dict) -> Element | None:
         values = self._convert(table, key, label, spec)
-        count = len(self.problems)
-        bad_values = len(values) < len(set(table) & set(spec))
-        for name in sorted(required - set(table)):
+        required = {k for k, (_, needed) in spec.items() if needed}
+        missing = sorted(required - set(table))
+        for name in missing:
             self.add(label, f"{key}.{name}", f"missing required key '{name}'")
-        # unknown keys are reported but do not stop the element's own checks
-        if bad_values or len(self.problems) > count:
+        unreadable = required & (set(table) - set(values))
+        if missing or unreadable:
             self.failed.add(str(table.get("name")))
             return None
         values.pop("type", None)
+        if cls is Particle and "position" not in values:
+            values["position"] = np.zeros(dimension)  # a particle's size follows the scene
         try:
             return cls(**values)
         except (TypeError, ValueError) as error:
@@ -390,6 +458,8 @@ def read_scene(path: str | Path) -> Scene:
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
         raise InputFileError(f"{path}: no such file") from None
+    except IsADirectoryError:
+        raise InputFileError(f"{path}: is a directory, not a scene file") from None
     except (OSError, UnicodeDecodeError) as error:
         raise InputFileError(f"{path}: cannot read the file ({error})") from None
     try:
@@ -402,4 +472,3 @@ def read_scene(path: str | Path) -> Scene:
     if problems:
         raise ModelError(f"scene file {path}", problems)
     return scene
-

@@ -196,7 +196,8 @@ class Scene:
             return (self.pose(joint.parent).inverse() @ world,
                     self.pose(joint.child).inverse() @ world)
         child = self.frame(joint.child, joint.child_frame)
-        if joint.parent_frame is not None:
+        if joint.parent_frame is not None or isinstance(joint, Distance):
+            # a distance joint's two points are apart: each defaults to its body's origin
             return self.frame(joint.parent, joint.parent_frame), child
         world = self.pose(joint.child) @ child
         return self.pose(joint.parent).inverse() @ world, child
@@ -290,7 +291,7 @@ class _ReferenceCheck:
         elif isinstance(e, Joint):
             self._joint(e)
         elif isinstance(e, JointDriver):
-            self._driven_joint(e.joint, "joint", "driver")
+            self._driven_joint(e.joint, "joint", "a driver")
             driven = [d for d in self.scene.elements
                       if isinstance(d, JointDriver) and d.joint == e.joint]
             if driven and driven[0] is not e:
@@ -301,14 +302,18 @@ class _ReferenceCheck:
             self._point(e.body_a, e.point_a, "point_a", "body_a")
             self._point(e.body_b, e.point_b, "point_b", "body_b")
         elif isinstance(e, AppliedForce):
-            if self._body_ref(e.body, "body"):
+            # a load on the ground is reported by the element itself
+            if self._body_ref(e.body, "body", ground_ok=True):
                 self._point(e.body, e.point, "point", "body")
             self._components("force", e.force, self.scene.dimension)
         elif isinstance(e, AppliedTorque):
-            self._body_ref(e.body, "body")
+            if self._body_ref(e.body, "body", ground_ok=True) and isinstance(
+                    self.bodies.get(e.body), Particle):
+                self._add("body", f"particle '{e.body}' has no orientation: a torque on it "
+                          "does nothing")
             self._components("torque", e.torque, 3 if self.scene.dimension == 3 else 1)
         elif isinstance(e, JointEffort):
-            self._driven_joint(e.joint, "joint", "actuator effort")
+            self._driven_joint(e.joint, "joint", "an actuator effort")
         return self.out
 
     def _add(self, key, message):
@@ -322,6 +327,9 @@ class _ReferenceCheck:
             self._add("type", "a planar body in a spatial scene")
         if isinstance(body, Particle) and body.dimension != dim:
             self._add("position", f"needs {dim} coordinates in a {dim}-D scene")
+        for marker in body.markers:
+            if not isinstance(marker, str) or not _NAME.match(marker):
+                self._add(f"markers.{marker}", f"{marker!r} is not a valid marker name")
 
     def _body_ref(self, name: str, key: str, ground_ok: bool = False) -> bool:
         if name == GROUND and ground_ok:
@@ -388,8 +396,11 @@ class _ReferenceCheck:
         if joint is None:
             self._add(key, f"unknown joint '{name}'")
         elif not joint.drivable:
-            self._add(key, f"a {joint.kind} joint cannot take a {what} (revolute and prismatic "
+            self._add(key, f"a {joint.kind} joint cannot take {what} (revolute and prismatic "
                       "joints can)")
+        elif joint.kind == "revolute" and any(isinstance(self.bodies.get(b), Particle)
+                                              for b in (joint.parent, joint.child)):
+            self._add(key, f"joint '{name}' joins a particle, which has no angle to drive")
 
     def _coordinate_driver(self, driver: CoordinateDriver):
         if not self._body_ref(driver.body, "body") or driver.coordinate not in COORDINATES:

@@ -1,0 +1,238 @@
+"""The ``hexapod`` command, run as ``python -m hexapod.cli`` in a subprocess."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import hexapod
+from hexapod.cli import DEFAULT_SCENE, builtin_scenes
+from hexapod.scene.reader import read_scene
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENES = ROOT / "data" / "scenes"
+MALFORMED = Path(__file__).resolve().parent / "data" / "malformed_scene.toml"
+
+SUBCOMMANDS = ("dynamics", "validate", "scenes")
+REPORT_KEYS = {"scene", "t", "dimension", "counts", "dof", "dof_with_drivers", "redundant_rows",
+               "characteristic_length_m", "max_abs_phi", "joints", "driver_efforts",
+               "accelerations", "multipliers", "condition_number", "sigma_min"}
+
+
+def hexapod_cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
+    """Run ``python -m hexapod.cli ARGS`` from ``cwd`` (so no file there shadows a scene name)."""
+    env = {k: v for k, v in os.environ.items() if k != "HEXAPOD_DEBUG"}
+    return subprocess.run([sys.executable, "-m", "hexapod.cli", *args], cwd=cwd, env=env,
+                          capture_output=True, text=True, timeout=120)
+
+
+def assert_no_traceback(result: subprocess.CompletedProcess) -> None:
+    assert "Traceback" not in result.stdout + result.stderr, result.stderr
+
+
+def assert_one_error_line(result: subprocess.CompletedProcess) -> str:
+    """A failure: non-zero exit, nothing on stdout, one ``hexapod: error:`` line on stderr."""
+    assert result.returncode != 0
+    assert_no_traceback(result)
+    assert result.stdout == ""
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1, result.stderr
+    assert lines[0].startswith("hexapod: error: "), result.stderr
+    return lines[0]
+
+
+def strict_json(text: str):
+    """Parse JSON as the standard defines it (no NaN or Infinity)."""
+    def reject(constant):
+        raise ValueError(f"non-standard JSON constant {constant}")
+    return json.loads(text, parse_constant=reject)
+
+
+# ------------------------------------------------------------------ help
+
+def test_help_lists_the_subcommands(tmp_path):
+    result = hexapod_cli("--help", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.startswith("usage: hexapod")
+    for name in SUBCOMMANDS:
+        assert name in result.stdout
+
+
+@pytest.mark.parametrize("name", SUBCOMMANDS)
+def test_subcommand_help(tmp_path, name):
+    result = hexapod_cli(name, "--help", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.startswith(f"usage: hexapod {name}")
+    assert result.stderr == ""
+
+
+def test_no_subcommand_is_a_usage_error(tmp_path):
+    result = hexapod_cli(cwd=tmp_path)
+    assert result.returncode == 2
+    assert "usage: hexapod" in result.stderr
+    assert_no_traceback(result)
+
+
+def test_unknown_subcommand_is_a_usage_error(tmp_path):
+    result = hexapod_cli("simulate", cwd=tmp_path)
+    assert result.returncode == 2
+    assert "invalid choice" in result.stderr
+    assert_no_traceback(result)
+
+
+def test_console_script_if_installed(tmp_path):
+    script = Path(sys.executable).with_name("hexapod")
+    if not script.exists():
+        pytest.skip("no hexapod console script next to the interpreter")
+    result = subprocess.run([str(script), "--help"], cwd=tmp_path, capture_output=True,
+                            text=True, timeout=120)
+    assert result.returncode == 0 and "dynamics" in result.stdout
+
+
+# ------------------------------------------------------------------ dynamics
+
+def test_scenes_lists_the_default_scene(tmp_path):
+    result = hexapod_cli("scenes", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert f"{DEFAULT_SCENE} (default)" in result.stdout
+
+
+@pytest.fixture(scope="module")
+def default_joints() -> list[str]:
+    scene = builtin_scenes()[DEFAULT_SCENE].load()()
+    return list(scene.joints)
+
+
+def test_dynamics_runs_the_default_scene(tmp_path, default_joints):
+    result = hexapod_cli("dynamics", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert_no_traceback(result)
+    out = result.stdout
+    assert f"scene '{DEFAULT_SCENE}'" in out
+    assert ("joint wrenches: exerted by the parent on the child, about the joint origin, "
+            "in the child's joint frame") in out
+    lines = out.splitlines()
+    (header,) = [line for line in lines if line.split()[:2] == ["joint", "type"]]
+    assert header.split()[2:] == ["tau", "Fx", "Fy", "Fz", "|F|", "Tx", "Ty", "Tz"]
+    table = lines[lines.index(header) + 1:]
+    assert [row.split()[0] for row in table] == default_joints
+    for row in table:
+        numbers = [float(x) for x in row.split()[2:] if x != "-"]
+        assert len(numbers) >= 7
+
+
+def test_dynamics_json(tmp_path, default_joints):
+    result = hexapod_cli("dynamics", "--json", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    report = strict_json(result.stdout)
+    assert set(report) == REPORT_KEYS
+    assert report["scene"] == DEFAULT_SCENE and report["t"] == 0.0
+    assert list(report["joints"]) == default_joints
+    for wrench in report["joints"].values():
+        assert {"Fx", "Fy", "Fz", "Tx", "Ty", "Tz"} <= set(wrench)
+    assert report["counts"]["joints"] == len(default_joints)
+
+
+@pytest.mark.parametrize("path", sorted(SCENES.glob("*.toml")), ids=lambda p: p.name)
+def test_dynamics_json_on_the_example_files(tmp_path, path):
+    result = hexapod_cli("dynamics", str(path), "--json", "--t", "0.25", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    report = strict_json(result.stdout)
+    assert set(report) == REPORT_KEYS
+    assert report["t"] == 0.25
+    assert list(report["joints"]) == list(read_scene(path).joints)
+    if path.name == "four_bar_3d.toml":
+        assert len(report["redundant_rows"]) == 3
+
+
+def test_dynamics_json_is_standard_for_a_scene_without_constraints(tmp_path):
+    """A free body has no constraint rows: its report must still be standard JSON."""
+    scene = tmp_path / "free.toml"
+    scene.write_text("[[body]]\nname = 'block'\nmass = 0.2\ninertia = [2e-5, 2e-5, 3e-5]\n")
+    result = hexapod_cli("dynamics", str(scene), "--json", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    strict_json(result.stdout)
+
+
+# ------------------------------------------------------------------ validate
+
+@pytest.mark.parametrize("path", sorted(SCENES.glob("*.toml")), ids=lambda p: p.name)
+def test_validate_good_file(tmp_path, path):
+    result = hexapod_cli("validate", str(path), cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert "is valid" in result.stdout
+    assert result.stderr == ""
+
+
+def test_validate_malformed_file_prints_every_problem(tmp_path):
+    with pytest.raises(hexapod.ModelError) as info:
+        read_scene(MALFORMED)
+    problems = info.value.problems
+    assert len(problems) > 20
+    result = hexapod_cli("validate", str(MALFORMED), cwd=tmp_path)
+    assert result.returncode != 0
+    assert_no_traceback(result)
+    assert result.stdout == ""
+    assert result.stderr.startswith("hexapod: error: ")
+    for problem in problems:
+        assert str(problem) in result.stderr
+    assert f"{len(problems)} problems" in result.stderr
+
+
+def test_dynamics_on_the_malformed_file(tmp_path):
+    result = hexapod_cli("dynamics", str(MALFORMED), cwd=tmp_path)
+    assert result.returncode != 0
+    assert_no_traceback(result)
+    assert "problems" in result.stderr
+
+
+# ------------------------------------------------------------------ input errors
+
+@pytest.mark.parametrize("command", ["validate", "dynamics"])
+def test_missing_file(tmp_path, command):
+    line = assert_one_error_line(hexapod_cli(command, "no_such_scene.toml", cwd=tmp_path))
+    assert "no_such_scene.toml: no such file" in line
+
+
+@pytest.mark.parametrize("command", ["validate", "dynamics"])
+def test_unknown_builtin_scene(tmp_path, command):
+    line = assert_one_error_line(hexapod_cli(command, "no-such-robot", cwd=tmp_path))
+    assert "no-such-robot" in line and "built-in" in line and DEFAULT_SCENE in line
+
+
+@pytest.mark.parametrize("command", ["validate", "dynamics"])
+def test_toml_syntax_error(tmp_path, command):
+    path = tmp_path / "broken.toml"
+    path.write_text("[scene]\nname = 'broken'\n\n[[body]\nname = 'b'\n")
+    line = assert_one_error_line(hexapod_cli(command, str(path), cwd=tmp_path))
+    assert str(path) in line and "not valid TOML" in line and "line 4" in line
+
+
+def test_directory_instead_of_file(tmp_path):
+    line = assert_one_error_line(hexapod_cli("validate", str(tmp_path), cwd=tmp_path))
+    assert "is a directory" in line
+
+
+def test_scene_that_cannot_be_assembled(tmp_path):
+    """Two welds hold one body at two places: valid as a description, but no configuration
+    satisfies both."""
+    path = tmp_path / "apart.toml"
+    path.write_text("[[body]]\nname = 'a'\nmass = 1.0\ninertia = [1, 1, 1]\n"
+                    "[[joint]]\nname = 'weld'\ntype = 'fixed'\nparent = 'ground'\nchild = 'a'\n"
+                    "[[joint]]\nname = 'weld2'\ntype = 'fixed'\nparent = 'ground'\n"
+                    "child = 'a'\nparent_frame = [0.0, 0.0, 1.0]\nchild_frame = [0.0, 0.0, 0.0]\n")
+    assert hexapod_cli("validate", str(path), cwd=tmp_path).returncode == 0
+    line = assert_one_error_line(hexapod_cli("dynamics", str(path), cwd=tmp_path))
+    assert "cannot assemble" in line and "weld2/z" in line
+
+
+def test_bad_time_option(tmp_path):
+    result = hexapod_cli("dynamics", "--t", "soon", cwd=tmp_path)
+    assert result.returncode == 2
+    assert "--t" in result.stderr
+    assert_no_traceback(result)
