@@ -18,7 +18,12 @@ import numpy as np
 from hexapod.assembly import assemble
 from hexapod.dynamics import forward_dynamics
 from hexapod.errors import HexapodError, InputFileError
-from hexapod.kinematics import assemble_positions, degrees_of_freedom, solve_velocities
+from hexapod.kinematics import (
+    assemble_positions,
+    degrees_of_freedom,
+    scaled_residual,
+    solve_velocities,
+)
 from hexapod.model import Data, Model
 from hexapod.reactions import JointWrenches, driver_efforts, joint_wrenches
 from hexapod.scene.reader import read_scene
@@ -56,8 +61,7 @@ def _state_report(model: Model, t: float, condition: bool) -> dict:
     forward_dynamics(model, data, t, q, v, condition=condition)
     wrenches = joint_wrenches(model, q, data.lam, data.Phi_v, data.Q_across)
     mobility = degrees_of_freedom(model, q, t)
-    w, _, _ = model.law_values(t)
-    phi = model.call("phi", q=q, w=w) if model.n_c else np.zeros(0)
+    phi = scaled_residual(model, q, t)
     report = {
         "scene": model.name,
         "t": t,
@@ -69,7 +73,7 @@ def _state_report(model: Model, t: float, condition: bool) -> dict:
         "dof_with_drivers": mobility["dof_with_drivers"],
         "redundant_rows": [model.rows[i].name for i in data.redundant_rows],
         "characteristic_length_m": model.characteristic_length,
-        "max_abs_phi": float(np.max(np.abs(phi / model.row_scale))) if phi.size else 0.0,
+        "max_abs_phi": float(np.max(np.abs(phi))) if phi.size else 0.0,
         "joints": wrenches.as_dict(),
         "driver_efforts": driver_efforts(model, data.lam),
         "accelerations": dict(zip(model.velocity_names, data.v_dot.tolist(), strict=True)),

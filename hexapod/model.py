@@ -28,7 +28,13 @@ import casadi as ca
 import numpy as np
 
 from hexapod.scene.laws import Law
-from hexapod.spatial import Placement, rotation_from_euler_parameters
+from hexapod.spatial import (
+    Placement,
+    quaternion_exp,
+    quaternion_log,
+    quaternion_product,
+    rotation_from_euler_parameters,
+)
 
 GROUND_INDEX = -1
 _MATRIX_OUTPUTS = frozenset({"Phi_q", "Phi_v", "M", "Q_across"})
@@ -361,15 +367,8 @@ class Model:
         out = np.array(q, dtype=float)
         out[self._lin_q] += dv[self._lin_v]
         if self._quat_q.size:
-            p = out[self._quat_q]
-            theta = np.asarray(dv, dtype=float)[self._omega_v]
-            angle = np.linalg.norm(theta, axis=1)
-            half = 0.5 * angle
-            # sin(x/2)/x with its series near zero
-            k = np.where(angle > 1e-8, np.sin(half) / np.where(angle > 1e-8, angle, 1.0),
-                         0.5 - angle**2 / 48.0)
-            dq = np.column_stack([np.cos(half), k[:, None] * theta])
-            out[self._quat_q] = _quaternion_products(p, dq)
+            step = quaternion_exp(np.asarray(dv, dtype=float)[self._omega_v])
+            out[self._quat_q] = quaternion_product(out[self._quat_q], step)
         return out
 
     def normalize(self, q: np.ndarray) -> np.ndarray:
@@ -385,15 +384,8 @@ class Model:
         dv = np.zeros(self.n_v)
         dv[self._lin_v] = q1[self._lin_q] - q0[self._lin_q]
         if self._quat_q.size:
-            p0 = q0[self._quat_q]
-            p1 = q1[self._quat_q]
-            conj = p0 * np.array([1.0, -1.0, -1.0, -1.0])
-            d = _quaternion_products(conj, p1)
-            d *= np.where(d[:, :1] < 0, -1.0, 1.0)
-            s = np.linalg.norm(d[:, 1:], axis=1)
-            angle = 2.0 * np.arctan2(s, d[:, 0])
-            k = np.where(s > 1e-12, angle / np.where(s > 1e-12, s, 1.0), 2.0)
-            dv[self._omega_v] = k[:, None] * d[:, 1:]
+            conjugate = q0[self._quat_q] * np.array([1.0, -1.0, -1.0, -1.0])
+            dv[self._omega_v] = quaternion_log(quaternion_product(conjugate, q1[self._quat_q]))
         return dv
 
     def body_pose(self, q: np.ndarray, body: int) -> Placement:
@@ -407,13 +399,6 @@ class Model:
         if info.kind == "planar":
             return Placement(qb[:2], float(qb[2]))
         return Placement(qb)
-
-
-def _quaternion_products(p: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """Row-wise Hamilton products of (n, 4) arrays, scalar first."""
-    s = p[:, 0] * q[:, 0] - np.einsum("ij,ij->i", p[:, 1:], q[:, 1:])
-    v = p[:, :1] * q[:, 1:] + q[:, :1] * p[:, 1:] + np.cross(p[:, 1:], q[:, 1:])
-    return np.column_stack([s, v])
 
 
 @dataclass

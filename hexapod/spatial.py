@@ -75,24 +75,36 @@ def rotation_2d(angle):
 
 # ---------------------------------------------------------------- numbers only
 
-def quaternion_product(p, q):
-    """Hamilton product, scalar first: ``A(p * q) = A(p) A(q)``."""
+def quaternion_product(p, q) -> np.ndarray:
+    """Hamilton product, scalar first: ``A(p * q) = A(p) A(q)``; row-wise for (n, 4) arrays."""
     p = np.asarray(p, dtype=float)
     q = np.asarray(q, dtype=float)
-    s = p[0] * q[0] - p[1:] @ q[1:]
-    v = p[0] * q[1:] + q[0] * p[1:] + np.cross(p[1:], q[1:])
-    return np.concatenate(([s], v))
+    s = p[..., 0] * q[..., 0] - np.sum(p[..., 1:] * q[..., 1:], axis=-1)
+    v = (p[..., :1] * q[..., 1:] + q[..., :1] * p[..., 1:]
+         + np.cross(p[..., 1:], q[..., 1:]))
+    return np.concatenate([s[..., None], v], axis=-1)
 
 
-def quaternion_exp(rotation_vector):
-    """Unit quaternion of the rotation ``rotation_vector`` (axis times angle, rad)."""
+def quaternion_exp(rotation_vector) -> np.ndarray:
+    """Unit quaternion of the rotation ``rotation_vector`` (axis times angle, rad); row-wise for
+    (n, 3) arrays."""
     theta = np.asarray(rotation_vector, dtype=float)
-    angle = float(np.linalg.norm(theta))
-    if angle < 1e-12:
-        # second-order series keeps the result smooth and unit to round-off
-        q = np.concatenate(([1.0 - angle**2 / 8.0], 0.5 * theta))
-        return q / np.linalg.norm(q)
-    return np.concatenate(([np.cos(angle / 2)], np.sin(angle / 2) * theta / angle))
+    angle = np.linalg.norm(theta, axis=-1, keepdims=True)
+    small = angle < 1e-8
+    # sin(x/2)/x, with its series near zero so that the result stays smooth and unit
+    k = np.where(small, 0.5 - angle**2 / 48.0, np.sin(angle / 2) / np.where(small, 1.0, angle))
+    return np.concatenate([np.cos(angle / 2), k * theta], axis=-1)
+
+
+def quaternion_log(p) -> np.ndarray:
+    """Rotation vector of unit Euler parameters (the shorter way round: ``p`` and ``-p`` give
+    the same); row-wise for (n, 4) arrays. Inverse of :func:`quaternion_exp`."""
+    p = np.asarray(p, dtype=float)
+    p = p * np.where(p[..., :1] < 0, -1.0, 1.0)
+    s = np.linalg.norm(p[..., 1:], axis=-1, keepdims=True)
+    angle = 2.0 * np.arctan2(s, p[..., :1])
+    k = np.where(s > 1e-12, angle / np.where(s > 1e-12, s, 1.0), 2.0)
+    return k * p[..., 1:]
 
 
 def euler_parameters_from_rotation(R) -> np.ndarray:

@@ -6,6 +6,18 @@ import numpy as np
 
 import hexapod as hx
 
+
+def solve_state(scene: hx.Scene, t: float = 0.0):
+    """Assemble ``scene`` at ``t``: model, positions, velocities, accelerations and the workspace
+    holding the multipliers."""
+    model = hx.assemble(scene)
+    q = hx.assemble_positions(model, t=t)
+    v = hx.solve_velocities(model, q, t)
+    data = hx.Data()
+    v_dot = hx.forward_dynamics(model, data, t, q, v)
+    return model, q, v, v_dot, data
+
+
 # ------------------------------------------------------------------ simple pendulum
 
 PENDULUM = dict(mass=1.3, length=0.8, inertia=0.02)  # kg, m (pivot to centre of mass), kg m^2

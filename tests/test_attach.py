@@ -8,6 +8,8 @@ import pytest
 import hexapod as hx
 from legs import front_leg_scene
 
+from mechanisms import solve_state
+
 
 def arm(unit="m", world_joint=False):
     """A two-link arm whose first joint is on the sub-model's ground."""
@@ -68,11 +70,7 @@ def direct_scene():
 
 
 def _results(scene, t=0.4):
-    model = hx.assemble(scene)
-    q = hx.assemble_positions(model, t=t)
-    v = hx.solve_velocities(model, q, t)
-    data = hx.Data()
-    v_dot = hx.forward_dynamics(model, data, t, q, v)
+    model, q, _, v_dot, data = solve_state(scene, t)
     w = hx.joint_wrenches(model, q, data.lam, data.Phi_v, data.Q_across)
     return model, q, v_dot, w
 

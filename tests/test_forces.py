@@ -34,13 +34,16 @@ def _euler_rhs(body, R, omega_body, force_world, moment_world):
     return a, omega_dot
 
 
-def test_free_body_follows_euler_equations():
-    """No joint at all: free fall and torque-free rotation of an asymmetric body."""
-    rng = np.random.default_rng(1)
-    body = _free_body(rng)
+def _free_model(seed):
+    body = _free_body(np.random.default_rng(seed))
     scene = hx.Scene("free")
     scene.add(body)
-    model = hx.assemble(scene)
+    return body, hx.assemble(scene)
+
+
+def test_free_body_follows_euler_equations():
+    """No joint at all: free fall and torque-free rotation of an asymmetric body."""
+    body, model = _free_model(1)
     q, v = model.q0, model.v0
     v_dot, data = _fd(model, q, v)
     assert model.n_c == 0 and data.lam.size == 0
@@ -169,11 +172,7 @@ def test_planar_spring_and_torque():
 
 def test_gyroscopic_term_matches_skew_form():
     """Q's rotational part for a free body is -omega' x J' omega' (DESIGN), zero without spin."""
-    rng = np.random.default_rng(4)
-    body = _free_body(rng)
-    scene = hx.Scene("gyro")
-    scene.add(body)
-    model = hx.assemble(scene)
+    body, model = _free_model(4)
     Q = model.call("Q", q=model.q0, v=model.v0)
     omega = model.v0[3:]
     J = body.body_inertia

@@ -239,21 +239,28 @@ def _revolute_drivable(case):
 
 # ------------------------------------------------------------------ allowed motions
 
+def _move(v, info, pose, linear, angular, about):
+    """Set the velocities of one body moving with angular velocity ``angular`` about the point
+    ``about`` plus a translation ``linear`` (world components)."""
+    arm = pose.position - about
+    if arm.size == 3:
+        v_com = linear + np.cross(angular, arm)
+    else:
+        v_com = linear + angular * np.array([-arm[1], arm[0]])
+    v[info.v.start:info.v.start + arm.size] = v_com
+    if info.kind == "spatial":
+        v[info.v.start + 3:info.v.stop] = pose.rotation.T @ angular
+    elif info.kind == "planar":
+        v[info.v.start + 2] = angular
+
+
 def rigid_motion(case, model, q, linear, angular):
     """Velocities of every body when the whole pair moves as one rigid body with the twist
     (linear velocity of the world origin, angular velocity), both world components."""
     v = np.zeros(model.n_v)
     for info in model.bodies:
-        pose = model.body_pose(q, info.index)
-        if case.dimension == 3:
-            v_com = linear + np.cross(angular, pose.position)
-        else:
-            v_com = linear + angular * np.array([-pose.position[1], pose.position[0]])
-        v[info.v.start:info.v.start + case.dimension] = v_com
-        if info.kind == "spatial":
-            v[info.v.start + 3:info.v.stop] = pose.rotation.T @ angular
-        elif info.kind == "planar":
-            v[info.v.start + 2] = angular
+        _move(v, info, model.body_pose(q, info.index), linear, angular,
+              np.zeros(case.dimension))
     return v
 
 
@@ -262,17 +269,7 @@ def child_motion(case, model, q, linear, angular, about):
     translation ``linear``: the parent stays still."""
     v = np.zeros(model.n_v)
     info = model.bodies[model.body_index["C"]]
-    pose = model.body_pose(q, info.index)
-    arm = pose.position - about
-    if case.dimension == 3:
-        v_com = linear + np.cross(angular, arm)
-    else:
-        v_com = linear + angular * np.array([-arm[1], arm[0]])
-    v[info.v.start:info.v.start + case.dimension] = v_com
-    if info.kind == "spatial":
-        v[info.v.start + 3:info.v.stop] = pose.rotation.T @ angular
-    elif info.kind == "planar":
-        v[info.v.start + 2] = angular
+    _move(v, info, model.body_pose(q, info.index), linear, angular, about)
     return v
 
 

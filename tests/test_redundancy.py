@@ -15,23 +15,14 @@ import hexapod as hx
 from hexapod.linalg import solve_saddle
 from hexapod.reactions import joint_wrenches, policy_map
 
-from mechanisms import four_bar
+from mechanisms import four_bar, solve_state
 
 THETA = 1.05
 TILTED = [0.0, -9.81 * np.cos(0.35), -9.81 * np.sin(0.35)]  # gravity with an out-of-plane part
 
 
-def _solve(scene, t=0.3):
-    model = hx.assemble(scene)
-    q = hx.assemble_positions(model, t=t)
-    v = hx.solve_velocities(model, q, t)
-    data = hx.Data()
-    v_dot = hx.forward_dynamics(model, data, t, q, v)
-    return model, q, v, v_dot, data
-
-
 def test_four_bar_in_3d_names_three_redundant_rows():
-    model, q, _, _, data = _solve(four_bar(3, THETA))
+    model, q, _, _, data = solve_state(four_bar(3, THETA), 0.3)
     names = [model.rows[i].name for i in data.redundant_rows]
     assert names == ["rocker_ground/z", "rocker_ground/ax1", "rocker_ground/ax2"]
     mobility = hx.degrees_of_freedom(model, q, 0.3)
@@ -92,7 +83,7 @@ def test_accelerations_equal_the_planar_model(driven):
 
 
 def _wrenches(scene, t=0.3):
-    model, q, _, _, data = _solve(scene, t)
+    model, q, _, _, data = solve_state(scene, t)
     return model, q, data, joint_wrenches(model, q, data.lam, data.Phi_v,
                                           data.Q_across, frame="world")
 
