@@ -148,6 +148,170 @@ def _characteristic_length(scene: Scene, joint_points: list[np.ndarray]) -> floa
     return rms if rms > 1e-12 else 1.0
 
 
+class _Assembly:
+    """The symbols and expressions of one model, built one concern at a time."""
+
+    def __init__(self, si: Scene):
+        self.si = si
+        self.dim = si.dimension
+        self.bodies, self.q0, self.v0, self.mass = _bodies(si)
+        self.index = {b.name: b.index for b in self.bodies}
+        self.q = ca.SX.sym("q", self.q0.size)
+        self.v = ca.SX.sym("v", self.v0.size)
+        self.states = {b.name: _state(b, self.q, self.v) for b in self.bodies}
+        self.states[GROUND] = BodyState.ground(self.dim)
+        self.qdot = (ca.vertcat(*[self.states[b.name].qdot for b in self.bodies])
+                     if self.bodies else ca.SX(0, 1))
+        self.laws = _Laws()
+        self.rows: list[RowInfo] = []
+        self.residuals: list[ca.SX] = []
+        self.geometries: dict[str, JointGeometry] = {}
+        self.joint_points: list[np.ndarray] = []  # world joint origins at the initial pose
+
+    def _add_row(self, name: str, owner: str, unit: str, expr: ca.SX) -> int:
+        self.rows.append(RowInfo(name, owner, unit))
+        self.residuals.append(expr)
+        return len(self.rows) - 1
+
+    def joints(self) -> list[dict]:
+        """Rows of every joint; the spanning tree decides which joints close loops."""
+        si = self.si
+        scene_joints = list(si.joints.values())
+        _, chords = spanning_forest([GROUND, *self.index],
+                                    [(j.parent, j.child) for j in scene_joints])
+        parts = []
+        for k, joint in enumerate(scene_joints):
+            on_parent, on_child = si.joint_frames(joint)  # reference frames of the bodies
+            world_p = si.pose(joint.parent).transform_point(on_parent.position)
+            world_c = si.pose(joint.child).transform_point(on_child.position)
+            self.joint_points.append(world_c)
+            frame_p = _com_frame(si, joint.parent, on_parent)
+            frame_c = _com_frame(si, joint.child, on_child)
+            axis = _joint_axis(joint, self.dim)
+            g = JointGeometry(self.states[joint.parent], self.states[joint.child], frame_p,
+                              frame_c, axis, self.dim)
+            self.geometries[joint.name] = g
+            if isinstance(joint, Distance):
+                length = joint.length
+                if length is None:
+                    length = float(np.linalg.norm(world_c - world_p))
+                joint_rows = distance_rows(g, length)
+            else:
+                joint_rows = ROWS[joint.kind](g)
+            rows = [self._add_row(f"{joint.name}/{name}", joint.name, unit, expr)
+                    for name, expr, unit in joint_rows]
+            parts.append(dict(name=joint.name, kind=joint.kind, index=k,
+                              parent=self.index.get(joint.parent, GROUND_INDEX),
+                              child=self.index.get(joint.child, GROUND_INDEX),
+                              parent_frame=frame_p, child_frame=frame_c, axis=axis,
+                              rows=np.array(rows, dtype=int), loop_closing=k in chords))
+        return parts
+
+    def drivers(self) -> tuple[list[DriverInfo], dict[str, list[int]]]:
+        """Driver rows, and the rows of the drivers acting on each joint."""
+        si = self.si
+        joint_index = {name: k for k, name in enumerate(si.joints)}
+        offset = {"x": 0, "y": 1, "z": 2, "angle": 2}
+        drivers, on_joint = [], {}
+        for driver in si.drivers.values():
+            f, law = self.laws.value(driver.law, driver.name)
+            if isinstance(driver, JointDriver):
+                joint = si.joints[driver.joint]
+                unit = "length" if joint.kind == "prismatic" else "angle"
+                row = self._add_row(driver.name, driver.name, unit,
+                                    driver_row(joint.kind, self.geometries[joint.name], f))
+                on_joint.setdefault(joint.name, []).append(row)
+                drivers.append(DriverInfo(driver.name, "joint", row, law,
+                                          joint=joint_index[joint.name]))
+            else:
+                assert isinstance(driver, CoordinateDriver)
+                body = self.bodies[self.index[driver.body]]
+                unit = "angle" if driver.coordinate == "angle" else "length"
+                coordinate = self.q[body.q.start + offset[driver.coordinate]]
+                row = self._add_row(driver.name, driver.name, unit, coordinate - f)
+                drivers.append(DriverInfo(driver.name, "coordinate", row, law,
+                                          body=body.index, coordinate=driver.coordinate))
+        return drivers, on_joint
+
+    def _point(self, body: str, ref) -> tuple[np.ndarray, np.ndarray]:
+        """A point reference: in the body's centre-of-mass frame, and in the world initially."""
+        local = self.si.point(body, ref)
+        return (_com_frame(self.si, body, Placement(local)).position,
+                self.si.pose(body).transform_point(local))
+
+    def _components(self, name: str, laws) -> ca.SX:
+        return ca.vertcat(*[self.laws.value(law, f"{name}[{i}]")[0]
+                            for i, law in enumerate(laws)])
+
+    def forces(self) -> tuple[ForceBuilder, dict[str, list[str]]]:
+        """Generalized forces of every element, and the elements acting across each joint
+        (efforts on it; spring-dampers between its two bodies, given to the first such joint)."""
+        si = self.si
+        builder = ForceBuilder(self.q, self.v, self.qdot)
+        across: dict[str, list[str]] = {}
+        pairs = {frozenset((j.parent, j.child)): j.name for j in reversed(si.joints.values())}
+        for element in si.forces.values():
+            name = element.name
+            if isinstance(element, SpringDamper):
+                a, b = element.body_a, element.body_b
+                pa, world_a = self._point(a, element.point_a)
+                pb, world_b = self._point(b, element.point_b)
+                free = element.free_length
+                if free is None:
+                    free = float(np.linalg.norm(world_b - world_a))
+                force = None if element.force is None else self.laws.value(element.force,
+                                                                           name)[0]
+                builder.spring_damper(name, self.states[a], pa, self.states[b], pb,
+                                      element.stiffness, element.damping, free, force)
+                if frozenset((a, b)) in pairs:
+                    across.setdefault(pairs[frozenset((a, b))], []).append(name)
+            elif isinstance(element, AppliedForce):
+                state = self.states[element.body]
+                components = self._components(name, element.force)
+                if element.frame == "body":
+                    components = ca.mtimes(state.R, components)
+                builder.force_at(name, state, self._point(element.body, element.point)[0],
+                                 components)
+            elif isinstance(element, AppliedTorque):
+                state = self.states[element.body]
+                components = self._components(name, element.torque)
+                if element.frame == "body" and self.dim == 3:
+                    components = ca.mtimes(state.R, components)
+                builder.torque_on(name, state, components)
+            elif isinstance(element, JointEffort):
+                joint = si.joints[element.joint]
+                rate = joint_rate(joint.kind, self.geometries[joint.name], self.q, self.qdot)
+                builder.effort(name, rate, self.laws.value(element.law, name)[0])
+                across.setdefault(joint.name, []).append(name)
+        return builder, across
+
+    def model(self, rank_tolerance: float) -> Model:
+        parts = self.joints()
+        drivers, on_joint = self.drivers()
+        builder, across = self.forces()
+        n_v = self.v0.size
+        columns, joints = [], []
+        for part in parts:
+            names = tuple(across.get(part["name"], ()))
+            if names:
+                columns.append(sum((builder.terms[n] for n in names), ca.SX.zeros(n_v)))
+            joints.append(JointInfo(**part, driver_rows=np.array(on_joint.get(part["name"], []),
+                                                                 dtype=int),
+                                    across=names, across_column=len(columns) - 1 if names else -1))
+        w, wd, wdd = self.laws.symbols()
+        symbolic = Symbolic(
+            q=self.q, v=self.v, w=w, wd=wd, wdd=wdd, qdot=self.qdot,
+            phi=ca.vertcat(*self.residuals) if self.residuals else ca.SX(0, 1),
+            Q=inertial_forces(self.bodies, self.v, self.si.gravity, n_v) + builder.total(),
+            Q_across=ca.horzcat(*columns) if columns else None)
+        return Model(name=self.si.name, dimension=self.dim, bodies=self.bodies,
+                     joints=tuple(joints), drivers=tuple(drivers), rows=tuple(self.rows),
+                     laws=tuple(self.laws.laws), gravity=self.si.gravity,
+                     characteristic_length=_characteristic_length(self.si, self.joint_points),
+                     q0=self.q0, v0=self.v0, mass=self.mass, symbolic=symbolic,
+                     force_names=tuple(self.si.forces), rank_tolerance=rank_tolerance)
+
+
 def assemble(scene: Scene, *, rank_tolerance: float = 1e-9) -> Model:
     """Validate ``scene`` and build its :class:`~hexapod.model.Model` (SI units).
 
@@ -164,151 +328,4 @@ def assemble(scene: Scene, *, rank_tolerance: float = 1e-9) -> Model:
         Listing every problem of the scene.
     """
     scene.validate()
-    si = scene.in_si()
-    dim = si.dimension
-    bodies, q0, v0, mass = _bodies(si)
-    index = {b.name: b.index for b in bodies}
-    n_q, n_v = q0.size, v0.size
-    q = ca.SX.sym("q", n_q)
-    v = ca.SX.sym("v", n_v)
-    states = {b.name: _state(b, q, v) for b in bodies}
-    states[GROUND] = BodyState.ground(dim)
-    qdot = ca.vertcat(*[states[b.name].qdot for b in bodies]) if bodies else ca.SX(0, 1)
-    laws = _Laws()
-
-    # joints: frames, tree, rows
-    scene_joints = list(si.joints.values())
-    _, chords = spanning_forest([GROUND, *index],
-                                [(j.parent, j.child) for j in scene_joints])
-    chords = set(chords)
-    rows: list[RowInfo] = []
-    residuals: list[ca.SX] = []
-    geometries: dict[str, JointGeometry] = {}
-    joint_parts = []
-    joint_points = []
-    for k, joint in enumerate(scene_joints):
-        frame_p, frame_c = si.joint_frames(joint)
-        frame_p = _com_frame(si, joint.parent, frame_p)
-        frame_c = _com_frame(si, joint.child, frame_c)
-        axis = _joint_axis(joint, dim)
-        g = JointGeometry(states[joint.parent], states[joint.child], frame_p, frame_c, axis, dim)
-        geometries[joint.name] = g
-        joint_points.append(si.pose(joint.child).transform_point(
-            si.frame(joint.child, joint.child_frame).position)
-            if joint.origin is None else joint.origin)
-        if isinstance(joint, Distance):
-            length = joint.length
-            if length is None:
-                on_parent, on_child = si.joint_frames(joint)
-                world_p = si.pose(joint.parent).transform_point(on_parent.position)
-                world_c = si.pose(joint.child).transform_point(on_child.position)
-                length = float(np.linalg.norm(world_c - world_p))
-            joint_rows = distance_rows(g, length)
-        else:
-            joint_rows = ROWS[joint.kind](g)
-        start = len(rows)
-        for row_name, expr, unit in joint_rows:
-            rows.append(RowInfo(f"{joint.name}/{row_name}", joint.name, unit))
-            residuals.append(expr)
-        joint_parts.append(dict(
-            name=joint.name, kind=joint.kind, index=k,
-            parent=index.get(joint.parent, GROUND_INDEX),
-            child=index.get(joint.child, GROUND_INDEX),
-            parent_frame=frame_p, child_frame=frame_c, axis=axis,
-            rows=np.arange(start, len(rows)), loop_closing=k in chords))
-
-    # drivers
-    joint_index = {j.name: k for k, j in enumerate(scene_joints)}
-    drivers: list[DriverInfo] = []
-    driver_rows: dict[str, list[int]] = {}
-    coordinate_offset = {"x": 0, "y": 1, "z": 2, "angle": 2}
-    for driver in si.drivers.values():
-        f, law_index = laws.value(driver.law, driver.name)
-        row = len(rows)
-        if isinstance(driver, JointDriver):
-            joint = si.joints[driver.joint]
-            expr = driver_row(joint.kind, geometries[joint.name], f)
-            unit = "length" if joint.kind == "prismatic" else "angle"
-            driver_rows.setdefault(joint.name, []).append(row)
-            info = DriverInfo(driver.name, "joint", row, law_index,
-                              joint=joint_index[joint.name])
-        else:
-            assert isinstance(driver, CoordinateDriver)
-            body = bodies[index[driver.body]]
-            expr = q[body.q.start + coordinate_offset[driver.coordinate]] - f
-            unit = "angle" if driver.coordinate == "angle" else "length"
-            info = DriverInfo(driver.name, "coordinate", row, law_index, body=body.index,
-                              coordinate=driver.coordinate)
-        rows.append(RowInfo(driver.name, driver.name, unit))
-        residuals.append(expr)
-        drivers.append(info)
-
-    # forces
-    builder = ForceBuilder(q, v, qdot)
-    across: dict[str, list[str]] = {}
-    body_pairs = {frozenset((j.parent, j.child)): j.name for j in reversed(scene_joints)}
-    for element in si.forces.values():
-        name = element.name
-        if isinstance(element, SpringDamper):
-            a, b = element.body_a, element.body_b
-            pa = _com_frame(si, a, Placement(si.point(a, element.point_a))).position
-            pb = _com_frame(si, b, Placement(si.point(b, element.point_b))).position
-            free = element.free_length
-            if free is None:
-                wa = si.pose(a).transform_point(si.point(a, element.point_a))
-                wb = si.pose(b).transform_point(si.point(b, element.point_b))
-                free = float(np.linalg.norm(wb - wa))
-            force = None if element.force is None else laws.value(element.force, name)[0]
-            builder.spring_damper(name, states[a], pa, states[b], pb, element.stiffness,
-                                  element.damping, free, force)
-            pair = frozenset((a, b))
-            if pair in body_pairs:
-                across.setdefault(body_pairs[pair], []).append(name)
-        elif isinstance(element, AppliedForce):
-            state = states[element.body]
-            point = _com_frame(si, element.body,
-                               Placement(si.point(element.body, element.point))).position
-            components = ca.vertcat(*[laws.value(law, f"{name}[{i}]")[0]
-                                      for i, law in enumerate(element.force)])
-            if element.frame == "body":
-                components = ca.mtimes(state.R, components)
-            builder.force_at(name, state, point, components)
-        elif isinstance(element, AppliedTorque):
-            state = states[element.body]
-            components = ca.vertcat(*[laws.value(law, f"{name}[{i}]")[0]
-                                      for i, law in enumerate(element.torque)])
-            if element.frame == "body" and dim == 3:
-                components = ca.mtimes(state.R, components)
-            builder.torque_on(name, state, components)
-        elif isinstance(element, JointEffort):
-            joint = si.joints[element.joint]
-            value = laws.value(element.law, name)[0]
-            builder.effort(name, joint_rate(joint.kind, geometries[joint.name], q, qdot), value)
-            across.setdefault(joint.name, []).append(name)
-
-    Q = inertial_forces(bodies, v, si.gravity, n_v) + builder.total()
-    across_columns = []
-    joints = []
-    for part in joint_parts:
-        names = tuple(across.get(part["name"], ()))
-        column = -1
-        if names:
-            column = len(across_columns)
-            total = ca.SX.zeros(n_v)
-            for n in names:
-                total = total + builder.terms[n]
-            across_columns.append(total)
-        joints.append(JointInfo(**part, driver_rows=np.array(driver_rows.get(part["name"], []),
-                                                             dtype=int),
-                                across=names, across_column=column))
-
-    w, wd, wdd = laws.symbols()
-    symbolic = Symbolic(q=q, v=v, w=w, wd=wd, wdd=wdd, qdot=qdot,
-                        phi=ca.vertcat(*residuals) if residuals else ca.SX(0, 1), Q=Q,
-                        Q_across=ca.horzcat(*across_columns) if across_columns else None)
-    return Model(name=si.name, dimension=dim, bodies=bodies, joints=tuple(joints),
-                 drivers=tuple(drivers), rows=tuple(rows), laws=tuple(laws.laws),
-                 gravity=si.gravity, characteristic_length=_characteristic_length(si,
-                                                                                  joint_points),
-                 q0=q0, v0=v0, mass=mass, symbolic=symbolic,
-                 force_names=tuple(si.forces), rank_tolerance=rank_tolerance)
+    return _Assembly(scene.in_si()).model(rank_tolerance)

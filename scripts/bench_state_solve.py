@@ -1,0 +1,86 @@
+"""Cost of one forward-dynamics solve at a state against the number of bodies (not a test).
+
+Protocol: for serial chains of N spatial bodies joined by revolute joints (alternating axes),
+the model is built once (assembly and first Function evaluation reported apart), one solve is
+run as warm-up, then the median of REPEATS solves is taken. The growth exponent is the slope of
+log(time) against log(N) fitted over the chain lengths. The front leg and the six-legged robot
+are timed the same way.
+
+    python3 scripts/bench_state_solve.py [--sizes 10 30 100] [--repeats 7]
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+
+import numpy as np
+
+import hexapod as hx
+from legs import front_leg_scene
+
+
+def chain(n: int) -> hx.Scene:
+    scene = hx.Scene(f"chain-{n}")
+    for k in range(n):
+        scene.add(hx.SpatialBody(f"b{k}", 1.0, [1e-3, 1e-2, 1e-2], com=[0.05, 0, 0],
+                                 position=[0.1 * k, 0, 0]))
+        scene.add(hx.Revolute(f"j{k}", "ground" if k == 0 else f"b{k - 1}", f"b{k}",
+                              origin=[0.1 * k, 0, 0], axis=[0, 1, 0] if k % 2 else [0, 0, 1]))
+    return scene
+
+
+def hexapod_robot() -> hx.Scene:
+    scene = hx.Scene("six-legs")
+    scene.add(hx.SpatialBody("trunk", 18.4, [0.218, 1.055, 1.226]))
+    scene.add(hx.Fixed("stand", "ground", "trunk"))
+    for k, side in enumerate(("L1", "R1", "L2", "R2", "L3", "R3")):
+        left = side.startswith("L")
+        placement = hx.Placement([0.24 - 0.12 * (k // 2), 0.08 if left else -0.08, -0.04],
+                                 np.diag([1.0, 1.0, 1.0]) if left else np.diag([1.0, -1.0, -1.0]))
+        scene.attach(front_leg_scene(phase=0.0 if side in ("L1", "R2", "L3") else np.pi),
+                     side, base="trunk", placement=placement)
+    return scene
+
+
+def measure(scene: hx.Scene, repeats: int, t: float = 0.1) -> dict:
+    start = time.perf_counter()
+    model = hx.assemble(scene)
+    built = time.perf_counter()
+    q = hx.assemble_positions(model, t=t)
+    v = hx.solve_velocities(model, q, t)
+    data = hx.Data()
+    hx.forward_dynamics(model, data, t, q, v)  # warm-up: builds the CasADi Functions
+    warm = time.perf_counter()
+    times = []
+    for _ in range(repeats):
+        tic = time.perf_counter()
+        hx.forward_dynamics(model, data, t, q, v)
+        times.append(time.perf_counter() - tic)
+    return {"bodies": len(model.bodies), "n_v": model.n_v, "n_c": model.n_c,
+            "assemble_s": built - start, "first_solve_s": warm - built,
+            "solve_ms": 1e3 * statistics.median(times)}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--sizes", type=int, nargs="+", default=[10, 30, 100])
+    parser.add_argument("--repeats", type=int, default=7)
+    args = parser.parse_args()
+    rows = [("front leg", measure(front_leg_scene(), args.repeats)),
+            ("six legs on a trunk", measure(hexapod_robot(), args.repeats))]
+    chains = [(f"chain of {n}", measure(chain(n), args.repeats)) for n in args.sizes]
+    print(f"{'scene':<22}{'bodies':>7}{'n_v':>6}{'n_c':>6}{'assemble s':>12}"
+          f"{'1st solve s':>12}{'solve ms':>10}")
+    for name, r in rows + chains:
+        print(f"{name:<22}{r['bodies']:>7}{r['n_v']:>6}{r['n_c']:>6}{r['assemble_s']:>12.3f}"
+              f"{r['first_solve_s']:>12.3f}{r['solve_ms']:>10.2f}")
+    if len(chains) >= 2:
+        n = np.log([r["bodies"] for _, r in chains])
+        cost = np.log([r["solve_ms"] for _, r in chains])
+        print(f"growth exponent of the solve over the chains: {np.polyfit(n, cost, 1)[0]:.2f}")
+
+
+if __name__ == "__main__":
+    main()
