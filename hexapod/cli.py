@@ -16,18 +16,10 @@ from pathlib import Path
 import numpy as np
 
 from hexapod.assembly import assemble
-from hexapod.dynamics import forward_dynamics
 from hexapod.errors import HexapodError, InputFileError
-from hexapod.kinematics import (
-    assemble_positions,
-    degrees_of_freedom,
-    scaled_residual,
-    solve_velocities,
-)
-from hexapod.model import Data, Model
-from hexapod.reactions import JointWrenches, driver_efforts, joint_wrenches
 from hexapod.scene.reader import read_scene
 from hexapod.scene.scene import Scene
+from hexapod.summary import describe_model, describe_state, format_model, format_state
 
 DEFAULT_SCENE = "front-leg"
 
@@ -52,78 +44,13 @@ def load_scene(name_or_path: str) -> Scene:
                          f"name (built-in: {known})")
 
 
-# ------------------------------------------------------------------ dynamics
-
-def _state_report(model: Model, t: float, condition: bool) -> dict:
-    q = assemble_positions(model, t=t)
-    v = solve_velocities(model, q, t)
-    data = Data()
-    forward_dynamics(model, data, t, q, v, condition=condition)
-    wrenches = joint_wrenches(model, q, data.lam, data.Phi_v, data.Q_across)
-    mobility = degrees_of_freedom(model, q, t)
-    phi = scaled_residual(model, q, t)
-    report = {
-        "scene": model.name,
-        "t": t,
-        "dimension": model.dimension,
-        "counts": {"bodies": len(model.bodies), "joints": len(model.joints),
-                   "drivers": len(model.drivers), "forces": len(model.force_names),
-                   "n_q": model.n_q, "n_v": model.n_v, "n_c": model.n_c, "laws": model.n_w},
-        "dof": mobility["dof"],
-        "dof_with_drivers": mobility["dof_with_drivers"],
-        "redundant_rows": [model.rows[i].name for i in data.redundant_rows],
-        "characteristic_length_m": model.characteristic_length,
-        "max_abs_phi": float(np.max(np.abs(phi))) if phi.size else 0.0,
-        "joints": wrenches.as_dict(),
-        "driver_efforts": driver_efforts(model, data.lam),
-        "accelerations": dict(zip(model.velocity_names, data.v_dot.tolist(), strict=True)),
-        "multipliers": {model.rows[i].name: float(data.lam[i]) for i in range(model.n_c)},
-    }
-    if condition:
-        report["condition_number"] = data.condition_number
-        report["sigma_min"] = data.sigma_min
-    return report | {"_wrenches": wrenches, "_model": model}
-
-
-def _print_dynamics(report: dict) -> None:
-    model: Model = report["_model"]
-    wrenches: JointWrenches = report["_wrenches"]
-    c = report["counts"]
-    print(f"scene '{report['scene']}' ({report['dimension']}-D): {c['bodies']} bodies, "
-          f"{c['joints']} joints, {c['drivers']} drivers, {c['forces']} force elements")
-    print(f"model: n_q = {c['n_q']}, n_v = {c['n_v']}, n_c = {c['n_c']} rows, "
-          f"{c['laws']} time laws")
-    print(f"state at t = {report['t']:g} s: positions assembled, max |phi|/s = "
-          f"{report['max_abs_phi']:.1e}")
-    redundant = ", ".join(report["redundant_rows"]) or "none"
-    print(f"degrees of freedom: {report['dof']} (joints), {report['dof_with_drivers']} left by "
-          f"the drivers; redundant rows: {redundant}")
-    if "condition_number" in report:
-        print(f"condition number (equilibrated saddle-point matrix): "
-              f"{report['condition_number']:.3e}; smallest singular value of the equilibrated "
-              f"Phi_v: {report['sigma_min']:.3e}")
-    if report["redundant_rows"]:
-        print(f"multipliers of redundant rows: least sum |F|^2 + |T/l|^2, "
-              f"l = {report['characteristic_length_m']:.4g} m")
-    print()
-    print("joint wrenches: exerted by the parent on the child, about the joint origin, "
-          "in the child's joint frame (N, N m)")
-    width = max([5] + [len(n) for n in wrenches.names])
-    header = (f"{'joint':<{width}}  {'type':<9} {'tau':>11} {'Fx':>11} {'Fy':>11} {'Fz':>11} "
-              f"{'|F|':>11} {'Tx':>11} {'Ty':>11} {'Tz':>11}")
-    print(header)
-    for k, joint in enumerate(model.joints):
-        f, t = wrenches.force[k], wrenches.torque[k]
-        tau = f"{wrenches.effort[k]:11.4g}" if np.isfinite(wrenches.effort[k]) else f"{'-':>11}"
-        print(f"{joint.name:<{width}}  {joint.kind:<9} {tau} "
-              + " ".join(f"{x:11.4g}" for x in (*f, np.linalg.norm(f), *t)))
-
+# ------------------------------------------------------------------ commands
 
 def _jsonable(value):
-    """Plain JSON: private keys dropped, non-finite numbers (e.g. the smallest singular value of
-    a scene without constraints, infinite) written as null."""
+    """Plain JSON: non-finite numbers (e.g. the smallest singular value of a scene without
+    constraints, infinite) written as null."""
     if isinstance(value, dict):
-        return {k: _jsonable(v) for k, v in value.items() if not str(k).startswith("_")}
+        return {k: _jsonable(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
         return [_jsonable(v) for v in value]
     if isinstance(value, float) and not np.isfinite(value):
@@ -131,15 +58,23 @@ def _jsonable(value):
     return value
 
 
-def cmd_dynamics(args) -> int:
-    scene = load_scene(args.scene)
-    model = assemble(scene)
-    report = _state_report(model, args.t, condition=True)
-    if args.json:
+def _emit(report: dict, as_json: bool, formatter) -> None:
+    if as_json:
         json.dump(_jsonable(report), sys.stdout, indent=2, allow_nan=False)
         print()
     else:
-        _print_dynamics(report)
+        print(formatter(report))
+
+
+def cmd_dynamics(args) -> int:
+    model = assemble(load_scene(args.scene))
+    _emit(describe_state(model, args.t), args.json, format_state)
+    return 0
+
+
+def cmd_info(args) -> int:
+    model = assemble(load_scene(args.scene))
+    _emit(describe_model(model, args.t, graph=args.graph), args.json, format_model)
     return 0
 
 
@@ -183,6 +118,22 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--t", type=float, default=0.0, help="time in s (default 0)")
     p.add_argument("--json", action="store_true", help="print the results as JSON")
     p.set_defaults(run=cmd_dynamics)
+
+    p = sub.add_parser(
+        "info", help="what a scene holds and how it was built: rows, topology, degrees of "
+        "freedom, redundancy, condition number",
+        description="Describe SCENE: its bodies, joints, drivers and force elements; what the "
+        "model was built with (coordinates per body, rows per joint and driver, force terms); "
+        "its loops; degrees of freedom counted (Grubler-Kutzbach) and numerical (n_v - rank "
+        "Phi_v); the redundant rows and the condition number at the pose assembled at time T.")
+    p.add_argument("scene", nargs="?", default=DEFAULT_SCENE,
+                   help=f"a TOML scene file or a built-in scene name (default: {DEFAULT_SCENE})")
+    p.add_argument("--t", type=float, default=0.0, help="time of the pose in s (default 0)")
+    p.add_argument("--json", action="store_true", help="print the description as JSON")
+    p.add_argument("--graph", action="store_true",
+                   help="add the vector-network graph of seed 002: its edges and its incidence, "
+                   "cutset and circuit matrices")
+    p.set_defaults(run=cmd_info)
 
     p = sub.add_parser("validate", help="check a scene and list every problem",
                        description="Read SCENE and report every problem found, or that it is "

@@ -80,10 +80,23 @@ class DriverInfo:
     name: str
     kind: str  # "joint" | "coordinate"
     row: int
-    law: int  # index into Model.laws
+    law: int  # index into Model.laws, -1 for a constant law (folded into the row)
+    spec: Law | None = None  # the law itself, for descriptions
     joint: int | None = None
     body: int | None = None
     coordinate: str | None = None
+
+
+@dataclass(frozen=True)
+class ForceInfo:
+    """One force element: the bodies it acts on and where (points in the bodies'
+    centre-of-mass frames, world on the ground; none for torques), or the joint it acts across."""
+
+    name: str
+    kind: str  # "spring", "applied-force", "applied-torque", "effort", "rotational-spring"
+    bodies: tuple[int, ...]
+    points: tuple[np.ndarray, ...] = ()
+    joint: int | None = None
 
 
 @dataclass(frozen=True)
@@ -164,7 +177,7 @@ class Model:
                  joints: tuple[JointInfo, ...], drivers: tuple[DriverInfo, ...],
                  rows: tuple[RowInfo, ...], laws: tuple[Law, ...], gravity: np.ndarray,
                  characteristic_length: float, q0: np.ndarray, v0: np.ndarray,
-                 mass: BlockDiagonal, symbolic: Symbolic, force_names: tuple[str, ...],
+                 mass: BlockDiagonal, symbolic: Symbolic, forces: tuple[ForceInfo, ...],
                  rank_tolerance: float = 1e-9):
         self.name = name
         self.dimension = dimension
@@ -180,7 +193,8 @@ class Model:
         self.mass = mass
         self.mass_inv = mass.map_blocks(np.linalg.inv)
         self.mass_inv_sqrt = mass.map_blocks(lambda J: _sym_sqrt(J, -0.5))
-        self.force_names = force_names
+        self.forces = forces
+        self.force_names = tuple(f.name for f in forces)
         self.rank_tolerance = rank_tolerance
         self._sym = symbolic
         self.n_q = q0.size

@@ -31,9 +31,9 @@ class JointWrenches:
         N and N m, about the joint origin, in the child's joint frame (or world axes when
         computed with ``frame="world"``).
     effort : ndarray (n_joints,)
-        The axial component ``tau`` (torque about a revolute axis, force along a prismatic
-        axis), NaN for joints without an axis. Equals ``-lambda`` of a driver on the joint plus
-        the actuator efforts on it.
+        The axial component ``tau`` of revolute and prismatic joints (torque about the axis,
+        force along it), NaN for the other joints. Equals ``-lambda`` of a driver on the joint
+        plus the efforts and torsion springs acting across it.
     frame : str
     """
 
@@ -122,11 +122,11 @@ def joint_wrenches(model: Model, q: np.ndarray, lam: np.ndarray, Phi_v: np.ndarr
         origin, R = joint_origin(model, q, joint)
         f, t = _on_child(model, q, joint, g[:, None], origin)
         f, t = f[:, 0], t[:, 0]
-        if joint.axis is not None:
-            axis = R @ _embed_vector(np.asarray(joint.axis, float)[:, None])[:, 0]
-            effort[k] = (f if joint.kind == "prismatic" else t) @ axis
-        elif joint.kind == "revolute":  # planar revolute: axis normal to the plane
-            effort[k] = t[2]
+        if joint.kind == "prismatic":
+            effort[k] = f @ (R @ _embed_vector(np.asarray(joint.axis, float)[:, None])[:, 0])
+        elif joint.kind == "revolute":  # about the axis; in the plane, about its normal
+            axis = np.array([0.0, 0.0, 1.0]) if joint.axis is None else joint.axis
+            effort[k] = t @ (R @ axis)
         if frame == "joint":
             f, t = R.T @ f, R.T @ t
         force[k], torque[k] = f, t

@@ -18,10 +18,10 @@ ROOT = Path(__file__).resolve().parents[1]
 SCENES = ROOT / "data" / "scenes"
 MALFORMED = Path(__file__).resolve().parent / "data" / "malformed_scene.toml"
 
-SUBCOMMANDS = ("dynamics", "validate", "scenes")
+SUBCOMMANDS = ("dynamics", "info", "validate", "scenes")
 REPORT_KEYS = {"scene", "t", "dimension", "counts", "dof", "dof_with_drivers", "redundant_rows",
-               "characteristic_length_m", "max_abs_phi", "joints", "driver_efforts",
-               "accelerations", "multipliers", "condition_number", "sigma_min"}
+               "state", "joints", "driver_efforts", "accelerations", "multipliers"}
+STATE_KEYS = {"t", "max_abs_phi", "condition_number", "sigma_min", "characteristic_length_m"}
 
 
 def hexapod_cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
@@ -130,7 +130,7 @@ def test_dynamics_json(tmp_path, default_joints):
     result = hexapod_cli("dynamics", "--json", cwd=tmp_path)
     assert result.returncode == 0, result.stderr
     report = strict_json(result.stdout)
-    assert set(report) == REPORT_KEYS
+    assert set(report) == REPORT_KEYS and set(report["state"]) == STATE_KEYS
     assert report["scene"] == DEFAULT_SCENE and report["t"] == 0.0
     assert list(report["joints"]) == default_joints
     for wrench in report["joints"].values():
@@ -236,3 +236,45 @@ def test_bad_time_option(tmp_path):
     assert result.returncode == 2
     assert "--t" in result.stderr
     assert_no_traceback(result)
+
+
+# ------------------------------------------------------------------ info
+
+def test_info_on_a_redundant_mechanism_names_the_redundant_rows(tmp_path):
+    result = hexapod_cli("info", str(SCENES / "four_bar_3d.toml"), cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert "redundant rows: D/z, D/ax1, D/ax2" in result.stdout
+    assert "-2 counted (Grubler-Kutzbach), 1 numerical" in result.stdout
+    assert "loop closed by D" in result.stdout and "condition number" in result.stdout
+
+
+def test_info_json_and_graph(tmp_path):
+    result = hexapod_cli("info", str(SCENES / "closed_pendulum_seed002.toml"), "--json",
+                         "--graph", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    info = strict_json(result.stdout)
+    assert {"bodies", "joints", "drivers", "forces", "model", "topology", "mobility",
+            "initial_pose", "vector_network"} <= set(info)
+    assert info["topology"]["independent_loops"] == 1
+    assert info["mobility"]["numerical"] == info["mobility"]["counted"] == 1
+    net = info["vector_network"]
+    assert (len(net["vertices"]), len(net["edges"]), len(net["cutset"]),
+            len(net["circuit"])) == (5, 9, 4, 5)
+    assert net["orthogonal"] is True
+    assert [b["coordinates"] for b in info["bodies"]] == [["m1.x", "m1.y"], ["m2.x", "m2.y"]]
+
+
+def test_info_graph_prints_the_matrices(tmp_path):
+    result = hexapod_cli("info", str(SCENES / "seed002_figure2.toml"), "--graph", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert "6 vertices, 8 edges, 5 cutsets, 3 circuits" in result.stdout
+    for title in ("incidence matrix", "cutset matrix [U A]", "circuit matrix [B U]"):
+        assert title in result.stdout
+
+
+def test_info_on_a_malformed_file_is_one_clear_error(tmp_path):
+    result = hexapod_cli("info", str(MALFORMED), cwd=tmp_path)
+    assert result.returncode != 0
+    assert_no_traceback(result)
+    assert result.stdout == ""
+    assert result.stderr.startswith("hexapod: error: scene file")

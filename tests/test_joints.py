@@ -19,7 +19,12 @@ import numpy as np
 import pytest
 
 import hexapod as hx
-from hexapod.spatial import Placement, euler_parameters_from_rotation, rotation_2d
+from hexapod.spatial import (
+    Placement,
+    euler_parameters_from_rotation,
+    orthonormal_complement,
+    rotation_2d,
+)
 
 RNG_SEED = 20261122
 
@@ -74,6 +79,10 @@ class Case:
         d = self.dimension
         self.rng = rng
         self.axis = unit(rng, 3) if d == 3 else unit(rng, 2)
+        self.axis2 = unit(rng, 3) if d == 3 else None
+        if d == 3:  # a universal joint's second axis is perpendicular to the first
+            self.axis2 = np.cross(self.axis, self.axis2)
+            self.axis2 /= np.linalg.norm(self.axis2)
         self.frame_p = self._frame(self.parent)
         self.frame_c = self._frame(self.child)
         self.length = rng.uniform(0.5, 1.5)
@@ -130,6 +139,21 @@ class Case:
         if self.joint == "spherical":
             return Placement(np.zeros(3), rot(self.rel_axes[0], w[0](t))
                              @ rot(self.rel_axes[1], w[1](t)))
+        if self.joint == "universal":  # about the parent's axis, then the child's
+            return Placement(np.zeros(3), rot(self.axis, w[0](t)) @ rot(self.axis2, w[1](t)))
+        if self.joint == "cylindrical":  # in the plane: a pin sliding and turning in a slot
+            return Placement(self.slide(t) * self.axis, rot(self.axis, self.angle(t)) if d == 3
+                             else self.angle(t))
+        if self.joint in ("planar", "point-on-plane") and d == 3:
+            u, v = orthonormal_complement(self.axis)
+            offset = w[0](t) * u + w[1](t) * v  # in the plane normal to the axis
+            if self.joint == "planar":
+                return Placement(offset, rot(self.axis, w[2](t)))
+            return Placement(offset, rot(self.rel_axes[0], w[2](t)) @ rot(self.rel_axes[1],
+                                                                           w[0](t)))
+        if self.joint == "point-on-plane":  # in the plane: a point on the line normal to axis
+            line = np.array([-self.axis[1], self.axis[0]])
+            return Placement(w[0](t) * line, w[1](t))
         # distance: the child point on a sphere (circle) about the parent point
         if d == 3:
             direction = rot(self.rel_axes[0], w[0](t)) @ rot(self.rel_axes[1], w[1](t)) @ [1, 0, 0]
@@ -149,7 +173,9 @@ class Case:
         if which == "p":
             return self.p_rotation0 + self.p_waves[3](t)
         base = self.planar_angle("p", t) if self.parent == "planar" else 0.0
-        rel = {"revolute": self.angle(t), "distance": self.rel_waves[1](t)}.get(self.joint, 0.0)
+        rel = {"revolute": self.angle(t), "cylindrical": self.angle(t),
+               "distance": self.rel_waves[1](t),
+               "point-on-plane": self.rel_waves[1](t)}.get(self.joint, 0.0)
         return base + self.frame_p.angle + rel - self.frame_c.angle
 
     # the scene and its coordinates ------------------------------------------------------
@@ -175,10 +201,11 @@ class Case:
         if self.child != "ground":
             scene.add(self._body("C", self.child, self.child_pose(0.0), self.com["c"]))
         kwargs = dict(parent_frame=self.frame_p, child_frame=self.frame_c)
-        cls = {"revolute": hx.Revolute, "prismatic": hx.Prismatic, "spherical": hx.Spherical,
-               "fixed": hx.Fixed, "distance": hx.Distance}[self.joint]
-        if self.joint == "revolute" and self.dimension == 3 or self.joint == "prismatic":
+        cls = hx.scene.joints.JOINT_TYPES[self.joint]
+        if self.joint in AXIAL or self.joint == "revolute" and self.dimension == 3:
             kwargs["axis"] = self.axis
+        if self.joint == "universal":
+            kwargs["axis2"] = self.axis2
         if self.joint == "distance":
             kwargs["length"] = self.length
         scene.add(cls("J", parent, child, **kwargs))
@@ -213,18 +240,28 @@ class Case:
         return model.bodies[model.body_index[name]] if name in model.body_index else None
 
 
+AXIAL = ("prismatic", "cylindrical", "planar", "point-on-plane", "universal")
+
 SPATIAL = [("revolute", "spatial", "spatial"), ("revolute", "ground", "spatial"),
            ("revolute", "spatial", "ground"), ("prismatic", "spatial", "spatial"),
            ("prismatic", "ground", "spatial"), ("spherical", "spatial", "spatial"),
            ("spherical", "particle", "particle"), ("spherical", "spatial", "particle"),
            ("fixed", "spatial", "spatial"), ("fixed", "ground", "spatial"),
            ("distance", "spatial", "spatial"), ("distance", "particle", "spatial"),
-           ("distance", "particle", "particle")]
+           ("distance", "particle", "particle"),
+           ("universal", "spatial", "spatial"), ("universal", "ground", "spatial"),
+           ("cylindrical", "spatial", "spatial"), ("cylindrical", "ground", "spatial"),
+           ("cylindrical", "spatial", "ground"), ("planar", "spatial", "spatial"),
+           ("planar", "ground", "spatial"), ("point-on-plane", "spatial", "spatial"),
+           ("point-on-plane", "ground", "spatial"), ("point-on-plane", "ground", "particle")]
 PLANAR = [("revolute", "planar", "planar"), ("revolute", "ground", "planar"),
           ("revolute", "particle", "planar"), ("revolute", "particle", "particle"),
           ("prismatic", "planar", "planar"), ("prismatic", "ground", "planar"),
           ("fixed", "planar", "planar"), ("distance", "planar", "planar"),
-          ("distance", "particle", "particle"), ("distance", "ground", "particle")]
+          ("distance", "particle", "particle"), ("distance", "ground", "particle"),
+          ("cylindrical", "planar", "planar"), ("cylindrical", "ground", "particle"),
+          ("point-on-plane", "planar", "planar"), ("point-on-plane", "ground", "planar"),
+          ("point-on-plane", "ground", "particle")]
 CASES = ([Case(j, 3, p, c, k) for k, (j, p, c) in enumerate(SPATIAL)]
          + [Case(j, 2, p, c, 100 + k) for k, (j, p, c) in enumerate(PLANAR)])
 
@@ -295,6 +332,26 @@ def allowed_motions(case, model, q):
         moves.append(child_motion(case, model, q, axis, no_spin, origin))
     elif case.joint == "spherical":
         moves += [child_motion(case, model, q, zero, w, origin) for w in spins]
+    elif case.joint == "universal":
+        parent_axis = (case.parent_pose(t) @ case.frame_p).rotation @ case.axis
+        moves += [child_motion(case, model, q, zero, w, origin)
+                  for w in (parent_axis, joint_world.rotation @ case.axis2)]
+    elif case.joint == "cylindrical":
+        axis = (case.parent_pose(t) @ case.frame_p).rotation @ case.axis
+        moves.append(child_motion(case, model, q, axis, no_spin, origin))
+        if case.child != "particle":
+            moves.append(child_motion(case, model, q, zero, axis if d == 3 else 1.0, origin))
+    elif case.joint in ("planar", "point-on-plane"):
+        parent_frame = (case.parent_pose(t) @ case.frame_p).rotation
+        if d == 3:
+            in_plane = [parent_frame @ e for e in orthonormal_complement(case.axis)]
+        else:
+            in_plane = [parent_frame @ np.array([-case.axis[1], case.axis[0]])]
+        moves += [child_motion(case, model, q, e, no_spin, origin) for e in in_plane]
+        if case.joint == "planar":
+            moves.append(child_motion(case, model, q, zero, parent_frame @ case.axis, origin))
+        elif case.child != "particle":
+            moves += [child_motion(case, model, q, zero, w, origin) for w in spins]
     elif case.joint == "distance":
         parent_point = (case.parent_pose(t) @ case.frame_p).position
         gap = origin - parent_point

@@ -18,6 +18,7 @@ from hexapod.assembly.joints import (
     distance_rows,
     driver_row,
     joint_rate,
+    wrapped_angle,
 )
 from hexapod.graph import spanning_forest
 from hexapod.model import (
@@ -25,6 +26,7 @@ from hexapod.model import (
     BlockDiagonal,
     BodyInfo,
     DriverInfo,
+    ForceInfo,
     JointInfo,
     Model,
     RowInfo,
@@ -33,7 +35,13 @@ from hexapod.model import (
 from hexapod.scene.bodies import Particle, PlanarBody, SpatialBody
 from hexapod.scene.drivers import CoordinateDriver, JointDriver
 from hexapod.scene.element import GROUND
-from hexapod.scene.forces import AppliedForce, AppliedTorque, JointEffort, SpringDamper
+from hexapod.scene.forces import (
+    AppliedForce,
+    AppliedTorque,
+    JointEffort,
+    RotationalSpringDamper,
+    SpringDamper,
+)
 from hexapod.scene.joints import Distance
 from hexapod.scene.laws import Constant, Law
 from hexapod.scene.scene import Scene
@@ -119,20 +127,27 @@ def _com_frame(scene: Scene, body: str, frame: Placement) -> Placement:
     return scene.bodies[body].marker_in_com_frame(frame)
 
 
+#: default axis in the joint frame, in space and in the plane
+_DEFAULT_AXES = {
+    "prismatic": ([0.0, 0.0, 1.0], [1.0, 0.0]),
+    "cylindrical": ([0.0, 0.0, 1.0], [1.0, 0.0]),
+    "planar": ([0.0, 0.0, 1.0], None),
+    "point-on-plane": ([0.0, 0.0, 1.0], [0.0, 1.0]),
+    "universal": ([1.0, 0.0, 0.0], None),
+    "revolute": ([0.0, 0.0, 1.0], None),  # in the plane: the plane's normal, not stored
+}
+
+
+def _unit(axis) -> np.ndarray | None:
+    return None if axis is None else np.asarray(axis, dtype=float) / np.linalg.norm(axis)
+
+
 def _joint_axis(joint, dimension: int) -> np.ndarray | None:
-    """The unit axis in the joint frame: revolute (z by default; always z in the plane, where it
-    is not stored) and prismatic (z in space, x in the plane by default); None otherwise."""
-    if joint.kind == "revolute":
-        axis = joint.axis if dimension == 3 else None
-    elif joint.kind == "prismatic":
-        axis = joint.axis if joint.axis is not None else (
-            [0.0, 0.0, 1.0] if dimension == 3 else [1.0, 0.0])
-    else:
+    """The joint's unit axis in the joint frame (None for joints without one)."""
+    if joint.kind not in _DEFAULT_AXES or (joint.kind == "revolute" and dimension == 2):
         return None
-    if axis is None:
-        return None
-    axis = np.array(axis, dtype=float)
-    return axis / np.linalg.norm(axis)
+    default = _DEFAULT_AXES[joint.kind][0 if dimension == 3 else 1]
+    return _unit(joint.axis if joint.axis is not None else default)
 
 
 def _characteristic_length(scene: Scene, joint_points: list[np.ndarray]) -> float:
@@ -189,7 +204,7 @@ class _Assembly:
             frame_c = _com_frame(si, joint.child, on_child)
             axis = _joint_axis(joint, self.dim)
             g = JointGeometry(self.states[joint.parent], self.states[joint.child], frame_p,
-                              frame_c, axis, self.dim)
+                              frame_c, axis, self.dim, _unit(getattr(joint, "axis2", None)))
             self.geometries[joint.name] = g
             if isinstance(joint, Distance):
                 length = joint.length
@@ -221,7 +236,7 @@ class _Assembly:
                 row = self._add_row(driver.name, driver.name, unit,
                                     driver_row(joint.kind, self.geometries[joint.name], f))
                 on_joint.setdefault(joint.name, []).append(row)
-                drivers.append(DriverInfo(driver.name, "joint", row, law,
+                drivers.append(DriverInfo(driver.name, "joint", row, law, driver.law,
                                           joint=joint_index[joint.name]))
             else:
                 assert isinstance(driver, CoordinateDriver)
@@ -229,7 +244,7 @@ class _Assembly:
                 unit = "angle" if driver.coordinate == "angle" else "length"
                 coordinate = self.q[body.q.start + offset[driver.coordinate]]
                 row = self._add_row(driver.name, driver.name, unit, coordinate - f)
-                drivers.append(DriverInfo(driver.name, "coordinate", row, law,
+                drivers.append(DriverInfo(driver.name, "coordinate", row, law, driver.law,
                                           body=body.index, coordinate=driver.coordinate))
         return drivers, on_joint
 
@@ -243,12 +258,27 @@ class _Assembly:
         return ca.vertcat(*[self.laws.value(law, f"{name}[{i}]")[0]
                             for i, law in enumerate(laws)])
 
-    def forces(self) -> tuple[ForceBuilder, dict[str, list[str]]]:
-        """Generalized forces of every element, and the elements acting across each joint
-        (efforts on it; spring-dampers between its two bodies, given to the first such joint)."""
+    def forces(self) -> tuple[ForceBuilder, dict[str, list[str]], list[ForceInfo]]:
+        """Generalized forces of every element, the elements acting across each joint (efforts
+        and torsion springs on it; spring-dampers between its two bodies, given to the first
+        such joint), and what each element acts on."""
         si = self.si
         builder = ForceBuilder(self.q, self.v, self.qdot)
         across: dict[str, list[str]] = {}
+        infos: list[ForceInfo] = []
+        joint_index = {name: k for k, name in enumerate(si.joints)}
+
+        def body(name):
+            return self.index.get(name, GROUND_INDEX)
+
+        def on_joint(element):
+            joint = si.joints[element.joint]
+            infos.append(ForceInfo(element.name, element.kind,
+                                   (body(joint.parent), body(joint.child)),
+                                   joint=joint_index[joint.name]))
+            across.setdefault(joint.name, []).append(element.name)
+            return joint, self.geometries[joint.name]
+
         pairs = {frozenset((j.parent, j.child)): j.name for j in reversed(si.joints.values())}
         for element in si.forces.values():
             name = element.name
@@ -265,30 +295,40 @@ class _Assembly:
                                       element.stiffness, element.damping, free, force)
                 if frozenset((a, b)) in pairs:
                     across.setdefault(pairs[frozenset((a, b))], []).append(name)
+                infos.append(ForceInfo(name, element.kind, (body(a), body(b)), (pa, pb)))
             elif isinstance(element, AppliedForce):
                 state = self.states[element.body]
                 components = self._components(name, element.force)
                 if element.frame == "body":
                     components = ca.mtimes(state.R, components)
-                builder.force_at(name, state, self._point(element.body, element.point)[0],
-                                 components)
+                point = self._point(element.body, element.point)[0]
+                builder.force_at(name, state, point, components)
+                infos.append(ForceInfo(name, element.kind, (body(element.body),), (point,)))
             elif isinstance(element, AppliedTorque):
                 state = self.states[element.body]
                 components = self._components(name, element.torque)
                 if element.frame == "body" and self.dim == 3:
                     components = ca.mtimes(state.R, components)
                 builder.torque_on(name, state, components)
+                infos.append(ForceInfo(name, element.kind, (body(element.body),)))
             elif isinstance(element, JointEffort):
-                joint = si.joints[element.joint]
-                rate = joint_rate(joint.kind, self.geometries[joint.name], self.q, self.qdot)
+                joint, g = on_joint(element)
+                rate = joint_rate(joint.kind, g, self.q, self.qdot)
                 builder.effort(name, rate, self.laws.value(element.law, name)[0])
-                across.setdefault(joint.name, []).append(name)
-        return builder, across
+            elif isinstance(element, RotationalSpringDamper):
+                _, g = on_joint(element)
+                rate = joint_rate("revolute", g, self.q, self.qdot)
+                torque = (-element.stiffness * wrapped_angle(g, element.free_angle)
+                          - element.damping * rate)
+                if element.torque is not None:
+                    torque = torque + self.laws.value(element.torque, name)[0]
+                builder.effort(name, rate, torque)
+        return builder, across, infos
 
     def model(self, rank_tolerance: float) -> Model:
         parts = self.joints()
         drivers, on_joint = self.drivers()
-        builder, across = self.forces()
+        builder, across, forces = self.forces()
         n_v = self.v0.size
         columns, joints = [], []
         for part in parts:
@@ -309,7 +349,7 @@ class _Assembly:
                      laws=tuple(self.laws.laws), gravity=self.si.gravity,
                      characteristic_length=_characteristic_length(self.si, self.joint_points),
                      q0=self.q0, v0=self.v0, mass=self.mass, symbolic=symbolic,
-                     force_names=tuple(self.si.forces), rank_tolerance=rank_tolerance)
+                     forces=tuple(forces), rank_tolerance=rank_tolerance)
 
 
 def assemble(scene: Scene, *, rank_tolerance: float = 1e-9) -> Model:

@@ -13,6 +13,11 @@ orthonormal triad of the joint frame with ``a`` the joint axis.
 * fixed: ``x, y, z``, ``rx = z_p . y_c``, ``ry = x_p . z_c``, ``rz = y_p . x_c``; in the plane
   ``x, y, rot``.
 * distance: ``length = (d . d - L^2) / (2 L)``, in space and in the plane.
+* universal: ``x, y, z``, ``cross = a_p . b_c`` (``a`` the parent's axis, ``b`` the child's).
+* cylindrical: ``ax1, ax2, t1, t2`` as for a prismatic joint, without ``rot``; in the plane (a
+  pin in a slot along the axis) ``t = n_p . d``.
+* planar: ``ax1, ax2`` and ``t = a_p . d`` (``a`` the plane's normal).
+* point-on-plane: ``normal = a_p . d`` (``a`` the plane's normal), in space and in the plane.
 """
 
 from __future__ import annotations
@@ -38,6 +43,7 @@ class JointGeometry:
     child_frame: Placement  # in the child's centre-of-mass frame
     axis: np.ndarray | None  # unit, joint frame
     dimension: int
+    axis2: np.ndarray | None = None  # a universal joint's child axis, unit, joint frame
 
     @property
     def gap(self) -> ca.SX:
@@ -107,13 +113,47 @@ def fixed_rows(g: JointGeometry):
                              ("rz", _dot(y_p, x_c), ANGLE)]
 
 
+def universal_rows(g: JointGeometry):
+    return _point_rows(g) + [("cross", _dot(g.parent_vector(g.axis), g.child_vector(g.axis2)),
+                              ANGLE)]
+
+
+def _normal_in_plane(axis: np.ndarray) -> np.ndarray:
+    return np.array([-axis[1], axis[0]])
+
+
+def cylindrical_rows(g: JointGeometry):
+    d = g.gap
+    if g.dimension == 2:
+        return [("t", _dot(g.parent_vector(_normal_in_plane(g.axis)), d), LENGTH)]
+    u, w, a = g.triad()
+    a_c = g.child_vector(a)
+    u_p, w_p = g.parent_vector(u), g.parent_vector(w)
+    return [("ax1", _dot(u_p, a_c), ANGLE), ("ax2", _dot(w_p, a_c), ANGLE),
+            ("t1", _dot(u_p, d), LENGTH), ("t2", _dot(w_p, d), LENGTH)]
+
+
+def planar_rows(g: JointGeometry):
+    u, w, a = g.triad()
+    a_c = g.child_vector(a)
+    return [("ax1", _dot(g.parent_vector(u), a_c), ANGLE),
+            ("ax2", _dot(g.parent_vector(w), a_c), ANGLE),
+            ("t", _dot(g.parent_vector(a), g.gap), LENGTH)]
+
+
+def point_on_plane_rows(g: JointGeometry):
+    return [("normal", _dot(g.parent_vector(g.axis), g.gap), LENGTH)]
+
+
 def distance_rows(g: JointGeometry, length: float):
     d = g.gap
     return [("length", (_dot(d, d) - length**2) / (2.0 * length), LENGTH)]
 
 
 ROWS = {"revolute": revolute_rows, "prismatic": prismatic_rows,
-        "spherical": spherical_rows, "fixed": fixed_rows}
+        "spherical": spherical_rows, "fixed": fixed_rows, "universal": universal_rows,
+        "cylindrical": cylindrical_rows, "planar": planar_rows,
+        "point-on-plane": point_on_plane_rows}
 
 
 # ------------------------------------------------------------------ joint coordinates
@@ -133,14 +173,10 @@ def prismatic_displacement(g: JointGeometry) -> ca.SX:
     return _dot(g.parent_vector(g.axis), g.gap)
 
 
-def driver_row(kind: str, g: JointGeometry, f: ca.SX) -> ca.SX:
-    """The driver residual: the wrapped angle difference (revolute) or ``s - f`` (prismatic).
-
-    ``atan2(sin(theta - f), cos(theta - f))`` has derivative +1 in theta and stays correct past
-    +-pi (DESIGN section 1).
-    """
-    if kind == "prismatic":
-        return prismatic_displacement(g) - f
+def wrapped_angle(g: JointGeometry, f) -> ca.SX:
+    """``atan2(sin(theta - f), cos(theta - f))``: the joint angle minus ``f``, brought into
+    (-pi, pi]. Derivative +1 in theta, correct past +-pi (DESIGN section 1); the angle is about
+    the joint axis (revolute and cylindrical joints)."""
     if g.dimension == 2:
         delta = g.relative_angle() - f
         return ca.atan2(ca.sin(delta), ca.cos(delta))
@@ -148,8 +184,16 @@ def driver_row(kind: str, g: JointGeometry, f: ca.SX) -> ca.SX:
     return ca.atan2(s * ca.cos(f) - c * ca.sin(f), c * ca.cos(f) + s * ca.sin(f))
 
 
+def driver_row(kind: str, g: JointGeometry, f: ca.SX) -> ca.SX:
+    """The driver residual: the wrapped angle difference (revolute) or ``s - f`` (prismatic)."""
+    if kind == "prismatic":
+        return prismatic_displacement(g) - f
+    return wrapped_angle(g, f)
+
+
 def joint_rate(kind: str, g: JointGeometry, q: ca.SX, qdot: ca.SX) -> ca.SX:
-    """Rate of the joint coordinate: the power-conjugate of an actuator effort on the joint."""
+    """Rate of the joint coordinate: the power-conjugate of an effort on the joint (the angle's
+    rate for revolute and cylindrical joints, the displacement's for prismatic joints)."""
     if kind == "prismatic":
         return ca.jtimes(prismatic_displacement(g), q, qdot)
     zero = ca.DM.zeros(3 if g.dimension == 3 else 1)

@@ -202,6 +202,53 @@ class JointEffort(ForceElement):
         return out
 
 
+@dataclass(eq=False)
+class RotationalSpringDamper(ForceElement):
+    """A torsion spring-damper (and optional actuator) across a revolute or cylindrical joint:
+    the torque of the parent on the child about the joint axis is
+    ``-stiffness * wrap(theta - free_angle) - damping * dtheta/dt + torque(t)``, with ``wrap``
+    the angle difference brought into (-pi, pi]. Units: stiffness N L/rad, damping N L s/rad,
+    torque N L."""
+
+    name: str
+    joint: str
+    stiffness: float = 0.0
+    damping: float = 0.0
+    free_angle: float = 0.0
+    torque: Law | None = None
+    source: str = ""
+    kind = "rotational-spring"
+
+    def __post_init__(self):
+        if self.torque is not None:
+            self.torque = as_law(self.torque)
+
+    def problems(self):
+        out: list[Problem] = []
+        for key in ("stiffness", "damping"):
+            value = getattr(self, key)
+            if check_finite(self, key, value, out) and value < 0:
+                out.append(self.problem(key, f"must not be negative, got {value}"))
+        check_finite(self, "free_angle", self.free_angle, out)
+        if self.torque is not None:
+            out.extend(self.problem("torque", m) for m in self.torque.problems())
+        return out
+
+    def scaled(self, length):
+        out = super().scaled(length)
+        out.stiffness = self.stiffness * length
+        out.damping = self.damping * length
+        if self.torque is not None:
+            out.torque = self.torque.scaled(length)
+        return out
+
+    def attached(self, attachment: Attachment):
+        out = super().attached(attachment)
+        out.joint = attachment.name(self.joint)
+        return out
+
+
 FORCE_TYPES: dict[str, type[ForceElement]] = {
-    cls.kind: cls for cls in (SpringDamper, AppliedForce, AppliedTorque, JointEffort)
+    cls.kind: cls for cls in (SpringDamper, AppliedForce, AppliedTorque, JointEffort,
+                              RotationalSpringDamper)
 }

@@ -175,7 +175,75 @@ class Distance(Joint):
         return out
 
 
+@dataclass(eq=False)
+class Universal(Joint):
+    """A Cardan joint: rotations about ``axis`` (fixed to the parent, default x) and ``axis2``
+    (fixed to the child, default y), both given in the joint frame and perpendicular. The two
+    frame origins coincide: 4 rows. Space only."""
+
+    axis: np.ndarray | None = None
+    axis2: np.ndarray | None = None
+    kind = "universal"
+
+    def __post_init__(self):
+        _axis_default(self, (1.0, 0.0, 0.0))
+        self.axis2 = np.array((0.0, 1.0, 0.0) if self.axis2 is None else self.axis2,
+                              dtype=float).reshape(-1)
+        super().__post_init__()
+
+    def problems(self):
+        out = super().problems()
+        check_axis(self, "axis2", self.axis2, out)
+        if not out and self.axis.size == self.axis2.size == 3:
+            cosine = self.axis @ self.axis2 / np.linalg.norm(self.axis) / np.linalg.norm(
+                self.axis2)
+            if abs(cosine) > 1e-9:
+                out.append(self.problem("axis2", f"must be perpendicular to axis (cosine "
+                                        f"{cosine:.3g})"))
+        return out
+
+
+@dataclass(eq=False)
+class Cylindrical(Joint):
+    """Rotation about and translation along ``axis`` (joint frame; default z): 4 rows in space.
+    In the plane it is a pin in a slot along ``axis`` (default x): the child frame's origin
+    stays on the parent's line, and the child may turn (1 row)."""
+
+    axis: np.ndarray | None = None
+    kind = "cylindrical"
+
+
+@dataclass(eq=False)
+class PlanarJoint(Joint):
+    """The child frame slides and turns in the plane of the parent frame whose normal is
+    ``axis`` (joint frame; default z): two translations and a rotation, 3 rows. Space only."""
+
+    axis: np.ndarray | None = None
+    kind = "planar"
+
+
+@dataclass(eq=False)
+class PointOnPlane(Joint):
+    """The child frame's origin stays on the plane through the parent frame's origin with
+    normal ``axis`` (joint frame on the parent; default z, or y in the plane, where the plane is
+    a line): a foot on the ground. 1 row; the child may be a particle."""
+
+    axis: np.ndarray | None = None
+    kind = "point-on-plane"
+
+
 #: Joint classes by the ``type`` used in scene files.
 JOINT_TYPES: dict[str, type[Joint]] = {
-    cls.kind: cls for cls in (Revolute, Prismatic, Spherical, Fixed, Distance)
+    cls.kind: cls for cls in (Revolute, Prismatic, Spherical, Fixed, Distance, Universal,
+                              Cylindrical, PlanarJoint, PointOnPlane)
+}
+
+#: Joints that exist in a planar scene.
+PLANE_JOINTS = frozenset({"revolute", "prismatic", "fixed", "distance", "cylindrical",
+                          "point-on-plane"})
+
+#: Joints whose parent (p) or child (c) may be a particle, in space (3) and in the plane (2).
+PARTICLE_ENDS = {
+    3: {"spherical": "pc", "distance": "pc", "point-on-plane": "c"},
+    2: {"revolute": "pc", "distance": "pc", "cylindrical": "c", "point-on-plane": "c"},
 }

@@ -289,8 +289,11 @@ def _joint_schema(kind: str, dimension: int) -> Schema:
               "child": (_string, True), "parent_frame": (_frame(dimension), False),
               "child_frame": (_frame(dimension), False), "origin": (_vector(dimension), False),
               "rotation": (_rotation(dimension), False)}
-    if kind == "revolute" and dimension == 3 or kind == "prismatic":
+    if kind in ("prismatic", "cylindrical", "planar", "point-on-plane", "universal") or (
+            kind == "revolute" and dimension == 3):
         schema["axis"] = (_vector(dimension), False)
+    if kind == "universal":
+        schema["axis2"] = (_vector(dimension), False)
     if kind == "distance":
         schema["length"] = (_number, False)
     return JOINT_TYPES[kind], schema
@@ -316,6 +319,9 @@ def _force_schema(kind: str, dimension: int) -> Schema:
         "applied-torque": {"body": (_string, True), "torque": (_laws(torque_count), True),
                            "frame": (_string, False)},
         "effort": {"joint": (_string, True), "law": (_law, True)},
+        "rotational-spring": {"joint": (_string, True), "stiffness": (_number, False),
+                              "damping": (_number, False), "free_angle": (_number, False),
+                              "torque": (_law, False)},
     }
     return FORCE_TYPES[kind], {"name": (_string, True), "type": (_string, True),
                                **schemas[kind]}

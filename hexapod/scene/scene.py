@@ -21,9 +21,17 @@ from hexapod.scene.forces import (
     AppliedTorque,
     ForceElement,
     JointEffort,
+    RotationalSpringDamper,
     SpringDamper,
 )
-from hexapod.scene.joints import Distance, Joint, Prismatic, Revolute, Spherical
+from hexapod.scene.joints import (
+    PARTICLE_ENDS,
+    PLANE_JOINTS,
+    Distance,
+    Joint,
+    Prismatic,
+    Revolute,
+)
 from hexapod.spatial import Placement
 
 #: Length units a scene may use, in metres.
@@ -314,6 +322,16 @@ class _ReferenceCheck:
             self._components("torque", e.torque, 3 if self.scene.dimension == 3 else 1)
         elif isinstance(e, JointEffort):
             self._driven_joint(e.joint, "joint", "an actuator effort")
+        elif isinstance(e, RotationalSpringDamper):
+            joint = self.scene.joints.get(e.joint)
+            if joint is None:
+                self._add("joint", f"unknown joint '{e.joint}'")
+            elif joint.kind not in ("revolute", "cylindrical"):
+                self._add("joint", f"a {joint.kind} joint has no axis to turn about "
+                          "(revolute and cylindrical joints have)")
+            elif any(isinstance(self.bodies.get(b), Particle)
+                     for b in (joint.parent, joint.child)):
+                self._add("joint", f"joint '{e.joint}' joins a particle, which has no angle")
         return self.out
 
     def _add(self, key, message):
@@ -376,20 +394,22 @@ class _ReferenceCheck:
         if isinstance(joint, Distance) and joint.origin is not None:
             self._add("origin", "a distance joint joins two points: give parent_frame and "
                       "child_frame (or markers), not one origin")
-        if isinstance(joint, Spherical) and dim == 2:
-            self._add("type", "no spherical joint in the plane: use a revolute joint")
-        if joint.axis is not None:
-            if dim == 3 and joint.axis.size != 3:
-                self._add("axis", "needs 3 components in space")
-            if dim == 2 and isinstance(joint, Prismatic) and joint.axis.size != 2:
-                self._add("axis", "needs 2 components in the plane")
-        needs_orientation = not isinstance(joint, (Spherical, Distance))
-        if dim == 2:
-            needs_orientation = not isinstance(joint, (Revolute, Distance))
+        if dim == 2 and joint.kind not in PLANE_JOINTS:
+            hint = {"spherical": "a revolute joint", "universal": "a revolute joint",
+                    "planar": "no joint (a free planar body)"}[joint.kind]
+            self._add("type", f"no {joint.kind} joint in the plane: use {hint}")
+        for key in ("axis", "axis2"):
+            axis = getattr(joint, key, None)
+            if axis is None or (dim == 2 and isinstance(joint, Revolute)):
+                continue  # a planar revolute turns about the plane's normal
+            if axis.size != dim:
+                self._add(key, f"needs {dim} components in a {dim}-D scene")
+        ends = PARTICLE_ENDS[dim].get(joint.kind, "")
         for key, name in (("parent", joint.parent), ("child", joint.child)):
-            if needs_orientation and isinstance(self.bodies.get(name), Particle):
-                allowed = "a spherical or distance" if dim == 3 else "a revolute or distance"
-                self._add(key, f"particle '{name}' has no orientation: use {allowed} joint")
+            if isinstance(self.bodies.get(name), Particle) and key[0] not in ends:
+                allowed = ", ".join(k for k, e in PARTICLE_ENDS[dim].items() if key[0] in e)
+                self._add(key, f"particle '{name}' has no orientation: as {key} of a joint "
+                          f"it needs one of: {allowed}")
 
     def _driven_joint(self, name: str, key: str, what: str):
         joint = self.scene.joints.get(name)
