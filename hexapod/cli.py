@@ -19,6 +19,7 @@ from hexapod.assembly import assemble
 from hexapod.errors import HexapodError, InputFileError
 from hexapod.scene.reader import read_scene
 from hexapod.scene.scene import Scene
+from hexapod.scene.writer import write_scene
 from hexapod.summary import describe_model, describe_state, format_model, format_state
 
 DEFAULT_SCENE = "front-leg"
@@ -88,6 +89,14 @@ def cmd_validate(args) -> int:
 
 
 def cmd_scenes(args) -> int:
+    if args.name:
+        scene = load_scene(args.name)
+        if not args.write:
+            raise InputFileError("give --write PATH to write the scene to a file")
+        write_scene(scene, args.write, header=f"Built-in scene '{args.name}', written by "
+                    f"'hexapod scenes {args.name} --write'.")
+        print(f"wrote {args.write}")
+        return 0
     scenes = builtin_scenes()
     if not scenes:
         print("no built-in scenes installed")
@@ -98,6 +107,14 @@ def cmd_scenes(args) -> int:
 
 
 # ------------------------------------------------------------------ main
+
+def _scene_arguments(parser: argparse.ArgumentParser, json_help: str) -> None:
+    parser.add_argument("scene", nargs="?", default=DEFAULT_SCENE,
+                        help="a TOML scene file or a built-in scene name (default: "
+                        f"{DEFAULT_SCENE})")
+    parser.add_argument("--t", type=float, default=0.0, help="time in s (default 0)")
+    parser.add_argument("--json", action="store_true", help=json_help)
+
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
@@ -113,10 +130,7 @@ def build_parser() -> argparse.ArgumentParser:
         "projected), solve the saddle-point system and print the joint wrenches (exerted by "
         "the parent on the child, about the joint origin, in the child's joint frame), the "
         "driver efforts, degrees of freedom, redundant rows and the condition number.")
-    p.add_argument("scene", nargs="?", default=DEFAULT_SCENE,
-                   help=f"a TOML scene file or a built-in scene name (default: {DEFAULT_SCENE})")
-    p.add_argument("--t", type=float, default=0.0, help="time in s (default 0)")
-    p.add_argument("--json", action="store_true", help="print the results as JSON")
+    _scene_arguments(p, "print the results as JSON")
     p.set_defaults(run=cmd_dynamics)
 
     p = sub.add_parser(
@@ -126,10 +140,7 @@ def build_parser() -> argparse.ArgumentParser:
         "model was built with (coordinates per body, rows per joint and driver, force terms); "
         "its loops; degrees of freedom counted (Grubler-Kutzbach) and numerical (n_v - rank "
         "Phi_v); the redundant rows and the condition number at the pose assembled at time T.")
-    p.add_argument("scene", nargs="?", default=DEFAULT_SCENE,
-                   help=f"a TOML scene file or a built-in scene name (default: {DEFAULT_SCENE})")
-    p.add_argument("--t", type=float, default=0.0, help="time of the pose in s (default 0)")
-    p.add_argument("--json", action="store_true", help="print the description as JSON")
+    _scene_arguments(p, "print the description as JSON")
     p.add_argument("--graph", action="store_true",
                    help="add the vector-network graph of seed 002: its edges and its incidence, "
                    "cutset and circuit matrices")
@@ -141,8 +152,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("scene", help="a TOML scene file or a built-in scene name")
     p.set_defaults(run=cmd_validate)
 
-    p = sub.add_parser("scenes", help="list the built-in scenes",
-                       description="List the built-in scenes, usable wherever a SCENE is asked.")
+    p = sub.add_parser("scenes", help="list the built-in scenes, or write one to a file",
+                       description="List the built-in scenes, usable wherever a SCENE is "
+                       "asked; with NAME and --write, write that scene as a TOML file.")
+    p.add_argument("name", nargs="?", help="a built-in scene (or a scene file) to write")
+    p.add_argument("--write", metavar="PATH", help="the TOML file to write")
     p.set_defaults(run=cmd_scenes)
     return parser
 

@@ -113,3 +113,21 @@ def test_open_chain_and_free_body():
     assert graph.independent_loops == 0 and graph.components == 2
     m = mobility(model, hx.assemble_positions(model))
     assert m.counted == m.numerical == 6 + 6
+
+
+def _reference_examples():
+    import re
+    text = (DATA.parent / "docs" / "scene-format.md").read_text()
+    return {m.group(2): m.group(1) for m in
+            re.finditer(r'```toml\n(.*?name = "([^"]+)".*?)```', text, re.S)}
+
+
+@pytest.mark.parametrize("name, counted, with_drivers", [("four-bar", 1, 0), ("leg", 2, 0),
+                                                         ("slider-crank", 1, 0)])
+def test_degrees_of_freedom_stated_by_the_reference(tmp_path, name, counted, with_drivers):
+    path = tmp_path / f"{name}.toml"
+    path.write_text(_reference_examples()[name])
+    model = hx.assemble(read_scene(path))
+    m = mobility(model, hx.assemble_positions(model, t=0.3), 0.3)
+    assert (m.counted, m.numerical, m.numerical_with_drivers) == (counted, counted,
+                                                                   with_drivers)

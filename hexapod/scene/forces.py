@@ -34,6 +34,13 @@ def _laws(values) -> tuple[Law, ...]:
     return tuple(as_law(v) for v in values)
 
 
+def _non_negative(element: Element, keys: tuple[str, ...], out: list[Problem]) -> None:
+    for key in keys:
+        value = getattr(element, key)
+        if check_finite(element, key, value, out) and value < 0:
+            out.append(element.problem(key, f"must not be negative, got {value}"))
+
+
 def _law_problems(element: Element, key: str, laws) -> list[Problem]:
     return [element.problem(f"{key}[{i}]", m) for i, law in enumerate(laws)
             for m in law.problems()]
@@ -66,14 +73,8 @@ class SpringDamper(ForceElement):
 
     def problems(self):
         out: list[Problem] = []
-        for key in ("stiffness", "damping"):
-            value = getattr(self, key)
-            if check_finite(self, key, value, out) and value < 0:
-                out.append(self.problem(key, f"must not be negative, got {value}"))
-        if self.free_length is not None and check_finite(self, "free_length",
-                                                         self.free_length, out):
-            if self.free_length < 0:
-                out.append(self.problem("free_length", "must not be negative"))
+        _non_negative(self, ("stiffness", "damping") + (
+            ("free_length",) if self.free_length is not None else ()), out)
         for key in ("point_a", "point_b"):
             ref = getattr(self, key)
             if ref is not None and not isinstance(ref, str):
@@ -225,10 +226,7 @@ class RotationalSpringDamper(ForceElement):
 
     def problems(self):
         out: list[Problem] = []
-        for key in ("stiffness", "damping"):
-            value = getattr(self, key)
-            if check_finite(self, key, value, out) and value < 0:
-                out.append(self.problem(key, f"must not be negative, got {value}"))
+        _non_negative(self, ("stiffness", "damping"), out)
         check_finite(self, "free_angle", self.free_angle, out)
         if self.torque is not None:
             out.extend(self.problem("torque", m) for m in self.torque.problems())

@@ -81,6 +81,11 @@ def _numbers(value) -> tuple[float, ...]:
     return tuple(_number(x) for x in value)
 
 
+def _amplitudes(value) -> tuple[float, ...]:
+    """A list of numbers that may be empty (harmonic amplitudes)."""
+    return _numbers(value) if value != [] else ()
+
+
 def _string(value) -> str:
     if not isinstance(value, str):
         raise _Invalid(f"must be a string, got {value!r}")
@@ -192,8 +197,8 @@ def _point(dimension: int) -> Callable:
 _LAW_KEYS = {
     "constant": {"value": (_number, True)},
     "polynomial": {"coefficients": (_numbers, True), "t0": (_number, False)},
-    "harmonic": {"offset": (_number, False), "cos": (_numbers, False),
-                 "sin": (_numbers, False), "frequency": (_number, True),
+    "harmonic": {"offset": (_number, False), "cos": (_amplitudes, False),
+                 "sin": (_amplitudes, False), "frequency": (_number, True),
                  "t0": (_number, False)},
     "spline": {"times": (_numbers, True), "values": (_numbers, True),
                "degree": (_integer, False), "boundary": (_string, False)},

@@ -1,0 +1,189 @@
+"""Write a scene as a TOML file that :func:`hexapod.scene.reader.read_scene` reads back.
+
+Values equal to their defaults are left out; rotations are written as ``rpy`` (URDF's
+convention) unless the pitch is within 1e-6 of +-90 degrees, where the matrix is written; the
+file is written atomically (a temporary file renamed), so a failure leaves no partial file.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from hexapod.errors import InputFileError
+from hexapod.scene.bodies import Body
+from hexapod.scene.drivers import CoordinateDriver, JointDriver
+from hexapod.scene.element import Element
+from hexapod.scene.forces import ForceElement
+from hexapod.scene.joints import Joint
+from hexapod.scene.laws import Constant, Law, Scaled
+from hexapod.scene.scene import Scene
+from hexapod.spatial import Placement
+
+
+def _number(x: float) -> str:
+    return repr(float(x))
+
+
+def _array(values) -> str:
+    values = np.asarray(values, dtype=float)
+    if values.ndim == 2:
+        return "[" + ", ".join(_array(row) for row in values) + "]"
+    return "[" + ", ".join(_number(x) for x in values) + "]"
+
+
+def _string(text: str) -> str:
+    return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
+def _rotation(R: np.ndarray) -> str:
+    R = np.asarray(R, dtype=float)
+    if R.shape == (2, 2):
+        return _number(np.arctan2(R[1, 0], R[0, 0]))
+    sin_pitch = -R[2, 0]
+    if abs(sin_pitch) > 1 - 1e-12:  # gimbal lock: the matrix is exact
+        return f"{{ matrix = {_array(R)} }}"
+    pitch = np.arcsin(np.clip(sin_pitch, -1.0, 1.0))
+    roll = np.arctan2(R[2, 1], R[2, 2])
+    yaw = np.arctan2(R[1, 0], R[0, 0])
+    return f"{{ rpy = {_array([roll, pitch, yaw])} }}"
+
+
+def _frame(frame) -> str:
+    if isinstance(frame, str):
+        return _string(frame)
+    parts = [f"position = {_array(frame.position)}"]
+    if not np.allclose(frame.rotation, np.eye(frame.dimension), rtol=0, atol=0):
+        parts.append(f"rotation = {_rotation(frame.rotation)}")
+    return "{ " + ", ".join(parts) + " }"
+
+
+def _law(law: Law) -> str:
+    if isinstance(law, Scaled):
+        return _law(law.law.scaled(law.factor))
+    if isinstance(law, Constant):
+        return _number(law.value)
+    parts = [f'type = "{law.kind}"']
+    for f in dataclasses.fields(law):
+        if f.name.startswith("_"):
+            continue
+        value = getattr(law, f.name)
+        if isinstance(value, tuple):
+            if value:
+                parts.append(f"{f.name} = {_array(value)}")
+        elif isinstance(value, str):
+            parts.append(f"{f.name} = {_string(value)}")
+        elif isinstance(value, int) and not isinstance(value, bool):
+            parts.append(f"{f.name} = {value}")
+        else:
+            parts.append(f"{f.name} = {_number(value)}")
+    return "{ " + ", ".join(parts) + " }"
+
+
+def _inertia(J: np.ndarray) -> str:
+    J = np.asarray(J, dtype=float)
+    if np.count_nonzero(J - np.diag(np.diag(J))) == 0:
+        return _array(np.diag(J))
+    return _array([J[0, 0], J[1, 1], J[2, 2], J[0, 1], J[0, 2], J[1, 2]])
+
+
+def _is_default(name: str, value) -> bool:
+    if value is None:
+        return True
+    if name in ("com", "position", "velocity", "angular_velocity", "angle", "damping",
+                "stiffness", "free_angle") and np.all(np.asarray(value, dtype=float) == 0):
+        return True
+    if name in ("rotation", "inertia_rotation") and np.array_equal(
+            np.asarray(value), np.eye(np.asarray(value).shape[0])):
+        return True
+    return name == "frame" and value == "world"
+
+
+def _value(name: str, value) -> str:
+    if name in ("rotation", "inertia_rotation"):
+        return _rotation(value)
+    if name == "inertia":
+        return _number(value) if np.ndim(value) == 0 else _inertia(value)
+    if name in ("parent_frame", "child_frame"):
+        return _frame(value)
+    if name == "markers":
+        return "{ " + ", ".join(f"{_string(k)} = {_frame(v)}" for k, v in value.items()) + " }"
+    if isinstance(value, Law):
+        return _law(value)
+    if isinstance(value, tuple):  # force and torque components
+        return "[" + ", ".join(_law(law) for law in value) + "]"
+    if isinstance(value, str):
+        return _string(value)
+    if isinstance(value, Placement):
+        return _frame(value)
+    if np.ndim(value) >= 1:
+        return _array(value)
+    return _number(value)
+
+
+def _section(element: Element) -> str:
+    if isinstance(element, Body):
+        return "body"
+    if isinstance(element, Joint):
+        return "joint"
+    if isinstance(element, (JointDriver, CoordinateDriver)):
+        return "driver"
+    assert isinstance(element, ForceElement)
+    return "force"
+
+
+def _table(element: Element, dimension: int) -> list[str]:
+    lines = [f"[[{_section(element)}]]", f"name = {_string(element.name)}",
+             f'type = "{element.kind}"']
+    for f in dataclasses.fields(element):
+        if f.name in ("name", "source") or f.name.startswith("_"):
+            continue
+        if f.name == "axis" and element.kind == "revolute" and dimension == 2:
+            continue  # a planar revolute turns about the plane's normal
+        value = getattr(element, f.name)
+        if _is_default(f.name, value) or (f.name == "markers" and not value):
+            continue
+        lines.append(f"{f.name} = {_value(f.name, value)}")
+    return lines
+
+
+def scene_text(scene: Scene, header: str = "") -> str:
+    """The TOML text of ``scene``."""
+    lines = [f"# {line}" if line else "#" for line in header.splitlines()]
+    lines += ["[scene]", f"name = {_string(scene.name)}", f"dimension = {scene.dimension}",
+              f"length_unit = {_string(scene.length_unit)}",
+              f"gravity = {_array(scene.gravity)}"]
+    if scene.characteristic_length is not None:
+        lines.append(f"characteristic_length = {_number(scene.characteristic_length)}")
+    for element in scene.elements:
+        lines += [""] + _table(element, scene.dimension)
+    return "\n".join(lines) + "\n"
+
+
+def write_scene(scene: Scene, path: str | Path, header: str = "") -> Path:
+    """Write ``scene`` to ``path`` atomically; ``header`` becomes a comment at the top.
+
+    Raises
+    ------
+    InputFileError
+        The file cannot be written (the target is left untouched).
+    """
+    path = Path(path)
+    text = scene_text(scene, header)
+    try:
+        handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.",
+                                             suffix=".tmp")
+    except OSError as error:
+        raise InputFileError(f"{path}: cannot write the file ({error})") from None
+    try:
+        with os.fdopen(handle, "w", encoding="utf-8") as stream:
+            stream.write(text)
+        os.replace(temporary, path)
+    except OSError as error:
+        os.unlink(temporary)
+        raise InputFileError(f"{path}: cannot write the file ({error})") from None
+    return path
