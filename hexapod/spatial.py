@@ -73,10 +73,12 @@ def rotation_2d(angle):
     return np.array([[c, -s], [s, c]])
 
 
-# ---------------------------------------------------------------- numbers only
-
-def quaternion_product(p, q) -> np.ndarray:
-    """Hamilton product, scalar first: ``A(p * q) = A(p) A(q)``; row-wise for (n, 4) arrays."""
+def quaternion_product(p, q):
+    """Hamilton product, scalar first: ``A(p * q) = A(p) A(q)``; row-wise for (n, 4) arrays,
+    or of two CasADi 4-vectors."""
+    if _is_symbolic(p, q):
+        s = p[0] * q[0] - ca.dot(p[1:4], q[1:4])
+        return ca.vertcat(s, p[0] * q[1:4] + q[0] * p[1:4] + ca.cross(p[1:4], q[1:4]))
     p = np.asarray(p, dtype=float)
     q = np.asarray(q, dtype=float)
     s = p[..., 0] * q[..., 0] - np.sum(p[..., 1:] * q[..., 1:], axis=-1)
@@ -84,6 +86,8 @@ def quaternion_product(p, q) -> np.ndarray:
          + np.cross(p[..., 1:], q[..., 1:]))
     return np.concatenate([s[..., None], v], axis=-1)
 
+
+# ---------------------------------------------------------------- numbers only
 
 def quaternion_exp(rotation_vector) -> np.ndarray:
     """Unit quaternion of the rotation ``rotation_vector`` (axis times angle, rad); row-wise for

@@ -127,3 +127,38 @@ def four_bar(dimension: int, theta: float, *, driven: bool = True, unit: str = "
         scene.add(hx.JointDriver("motor", "crank_pin",
                                  law or hx.Polynomial([0.0, 2.0, -1.5])))
     return scene
+
+
+# ------------------------------------------------------------------ random trees
+
+def random_tree(seed: int, n_bodies: int, *, chain: bool = False, prismatic: float = 0.3,
+                driven: bool = True) -> hx.Scene:
+    """A random tree (or chain) of spatial bodies hanging from the ground: revolute and
+    prismatic joints with random axes and offsets, random centres of mass and full rotated
+    inertias; every joint driven by a harmonic law when ``driven``."""
+    rng = np.random.default_rng(seed)
+    scene = hx.Scene(f"tree-{seed}")
+    points = {"ground": np.zeros(3)}
+    for k in range(n_bodies):
+        name = f"b{k}"
+        parent = "ground" if k == 0 else (f"b{k - 1}" if chain else f"b{rng.integers(0, k)}")
+        origin = points[parent] + rng.normal(size=3) * 0.3
+        rotation = hx.rotation_about_axis(rng.normal(size=3), rng.uniform(0, np.pi))
+        moments = np.sort(rng.uniform(0.02, 0.1, size=3))
+        moments[2] = min(moments[2], moments[0] + moments[1])  # a physical inertia
+        scene.add(hx.SpatialBody(name, rng.uniform(0.5, 2.0), moments,
+                                 com=rng.normal(size=3) * 0.2, position=origin,
+                                 rotation=rotation,
+                                 inertia_rotation=hx.rotation_about_axis(rng.normal(size=3),
+                                                                         rng.uniform(0, 3))))
+        cls = hx.Prismatic if rng.uniform() < prismatic else hx.Revolute
+        axis = rng.normal(size=3) * rng.uniform(0.5, 3.0)  # not normalised on purpose
+        scene.add(cls(f"j{k}", parent, name, origin=origin,
+                      rotation=hx.rotation_about_axis(rng.normal(size=3), rng.uniform(0, 3)),
+                      axis=axis))
+        law = hx.Harmonic(offset=rng.normal() * 0.3, sin=[rng.uniform(0.2, 0.8)],
+                          cos=[rng.normal() * 0.2], frequency=rng.uniform(0.3, 1.5))
+        if driven:  # the law is drawn either way, so driven and free twins share a geometry
+            scene.add(hx.JointDriver(f"d{k}", f"j{k}", law))
+        points[name] = origin + rng.normal(size=3) * 0.2
+    return scene

@@ -224,6 +224,55 @@ class Spline(Law):
 
 
 @dataclass(frozen=True)
+class Hermite(Law):
+    """Tabulated values with their first and second derivatives: the quintic Hermite
+    interpolant, C2, equal to the given values, rates and accelerations at every sample (a
+    motion file with exact derivatives). Outside the table the end polynomials are continued."""
+
+    times: tuple[float, ...]
+    values: tuple[float, ...]
+    rates: tuple[float, ...]
+    accelerations: tuple[float, ...]
+    _poly: object = field(default=None, init=False, repr=False, compare=False)
+    kind = "hermite"
+
+    def __post_init__(self):
+        for key in ("times", "values", "rates", "accelerations"):
+            object.__setattr__(self, key, tuple(float(x) for x in getattr(self, key)))
+        if not self.problems():
+            from scipy.interpolate import BPoly
+
+            samples = np.column_stack([self.values, self.rates, self.accelerations])
+            object.__setattr__(self, "_poly", BPoly.from_derivatives(self.times, samples))
+
+    def evaluate(self, t):
+        if self._poly is None:
+            raise ValueError("hermite law is invalid: " + "; ".join(self.problems()))
+        t = np.asarray(t, dtype=float)
+        p = self._poly
+        return p(t), p(t, nu=1), p(t, nu=2)
+
+    def scaled(self, factor):
+        return Hermite(self.times, tuple(v * factor for v in self.values),
+                       tuple(v * factor for v in self.rates),
+                       tuple(v * factor for v in self.accelerations))
+
+    def problems(self):
+        n = len(self.times)
+        if any(len(getattr(self, k)) != n for k in ("values", "rates", "accelerations")):
+            return [f"{n} times but {len(self.values)} values, {len(self.rates)} rates and "
+                    f"{len(self.accelerations)} accelerations"]
+        if n < 2:
+            return ["needs at least 2 samples"]
+        if not all(_finite(getattr(self, k)) for k in ("times", "values", "rates",
+                                                        "accelerations")):
+            return ["times, values, rates or accelerations are not finite"]
+        if np.any(np.diff(self.times) <= 0):
+            return ["times must be strictly increasing"]
+        return []
+
+
+@dataclass(frozen=True)
 class Scaled(Law):
     """``factor * law(t)``."""
 
@@ -251,5 +300,5 @@ def as_law(value) -> Law:
 
 #: Law classes by the ``type`` used in scene files.
 LAW_TYPES: dict[str, type[Law]] = {
-    cls.kind: cls for cls in (Constant, Polynomial, Harmonic, Spline)
+    cls.kind: cls for cls in (Constant, Polynomial, Harmonic, Spline, Hermite)
 }

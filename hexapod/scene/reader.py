@@ -202,6 +202,8 @@ _LAW_KEYS = {
                  "t0": (_number, False)},
     "spline": {"times": (_numbers, True), "values": (_numbers, True),
                "degree": (_integer, False), "boundary": (_string, False)},
+    "hermite": {"times": (_numbers, True), "values": (_numbers, True),
+                "rates": (_numbers, True), "accelerations": (_numbers, True)},
 }
 
 

@@ -1,0 +1,110 @@
+"""Inverse dynamics of prescribed motion over a gait: the tree path, the saddle path, seed 000's
+recursive model and a virtual-power balance agree."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import hexapod as hx
+from hexapod.inverse import inverse_dynamics, tree_plan
+from hexapod.recursive import ChainModel
+from legs import front_leg_scene
+from mechanisms import four_bar, random_tree
+
+TIMES = np.linspace(0.0, 1.2, 25)
+
+
+def _close(a, b, rel=1e-10):
+    scale = max(np.nanmax(np.abs(a)), 1e-300)
+    return np.nanmax(np.abs(a - b)) <= rel * scale
+
+
+@pytest.mark.parametrize("scene", [front_leg_scene(), random_tree(3, 6), random_tree(4, 7),
+                                   random_tree(5, 5, chain=True)],
+                         ids=["front-leg", "tree-6", "tree-7", "chain-5"])
+@pytest.mark.parametrize("frame", ["joint", "world"])
+def test_tree_and_saddle_paths_agree(scene, frame):
+    model = hx.assemble(scene)
+    assert tree_plan(model) is not None
+    tree = inverse_dynamics(model, TIMES, method="tree", frame=frame)
+    saddle = inverse_dynamics(model, TIMES, method="saddle", frame=frame)
+    assert tree.method == "tree" and saddle.method == "saddle"
+    for key in ("force", "torque", "effort", "v_dot"):
+        assert _close(getattr(tree, key), getattr(saddle, key)), key
+    assert tree.max_violation < 1e-13
+
+
+@pytest.mark.parametrize("seed, n, chain", [(2, 4, True), (3, 6, False)])
+def test_tree_path_equals_seed000(seed, n, chain):
+    model = hx.assemble(random_tree(seed, n, chain=chain))
+    result = inverse_dynamics(model, TIMES, frame="world")
+    recursive = ChainModel.from_model(model)
+    order = sorted(model.drivers, key=lambda d: d.joint)
+    w, wd, wdd = model.law_values(TIMES)
+    for k in range(TIMES.size):
+        q, q_d, q_dd = (np.array([x[d.law, k] for d in order]) for x in (w, wd, wdd))
+        force, moment = recursive.joint_wrenches(q, q_d, q_dd)
+        links = [model.joint_index[name] for name in recursive.names]
+        assert _close(result.effort[k], recursive.inverse(q, q_d, q_dd), 1e-9)
+        assert _close(result.force[k][links], force, 1e-9)
+        assert _close(result.torque[k][links], moment, 1e-9)
+
+
+def test_four_bar_crank_torque_balances_the_power():
+    """Closed loop (saddle path): the crank's torque times its rate equals the rate of change
+    of kinetic energy minus the power of gravity, sum of m v.(a - g) + I w alpha."""
+    model = hx.assemble(four_bar(2, 1.05, law=hx.Harmonic(offset=1.05, sin=[0.6],
+                                                          frequency=0.8)))
+    assert tree_plan(model) is None
+    result = inverse_dynamics(model, TIMES)
+    crank = model.joint_index["crank_pin"]
+    g = np.array([0.0, -9.81])
+    for k in range(TIMES.size):
+        v, a = result.v[k], result.v_dot[k]
+        power = 0.0
+        for b in model.bodies:
+            vb, ab = v[b.v], a[b.v]
+            power += b.mass * vb[:2] @ (ab[:2] - g) + b.inertia[0, 0] * vb[2] * ab[2]
+        crank_rate = v[model.bodies[model.body_index["crank"]].v][2]
+        assert result.effort[k, crank] * crank_rate == pytest.approx(power, abs=1e-9 * (
+            1 + abs(power)))
+
+
+def test_driven_pendulum_effort_over_a_gait():
+    m, l, Ic = 1.3, 0.7, 0.02
+    law = hx.Harmonic(offset=0.3, sin=[1.1], cos=[-0.4], frequency=0.9)
+    scene = hx.Scene("arm")
+    scene.add(hx.SpatialBody("arm", m, [Ic, Ic, Ic], position=[l, 0.0, 0.0]))
+    scene.add(hx.Revolute("motor_pin", "ground", "arm", origin=[0, 0, 0], axis=[0, -1, 0]))
+    scene.add(hx.JointDriver("motor", "motor_pin", law))
+    result = inverse_dynamics(hx.assemble(scene), TIMES)
+    theta, _, theta_dd = law.evaluate(TIMES)
+    # about -y, theta lifts the arm from the horizontal: tau = I_O theta_dd + m g l cos(theta)
+    expected = (Ic + m * l**2) * theta_dd + m * 9.81 * l * np.cos(theta)
+    assert np.allclose(result.effort[:, 0], expected, rtol=1e-11)
+
+
+def test_motion_must_fix_every_degree_of_freedom():
+    scene = front_leg_scene()
+    scene._elements = [e for e in scene.elements if e.name != "drive_fti"]
+    model = hx.assemble(scene)
+    assert tree_plan(model) is None
+    with pytest.raises(hx.SingularSystemError, match="1 degree"):
+        inverse_dynamics(model, TIMES)
+
+
+def test_hermite_law_is_exact_at_samples_and_smooth():
+    times = np.linspace(0, 1, 9)
+    values, rates, accelerations = np.sin(3 * times), 3 * np.cos(3 * times), -9 * np.sin(
+        3 * times)
+    law = hx.scene.laws.Hermite(times, values, rates, accelerations)
+    f, fd, fdd = law.evaluate(times)
+    assert np.allclose(f, values, atol=1e-14) and np.allclose(fd, rates, atol=1e-12)
+    assert np.allclose(fdd, accelerations, atol=1e-10)
+    inner, eps = times[1:-1], 1e-9
+    for nu in range(3):
+        assert np.allclose(law._poly(inner - eps, nu=nu), law._poly(inner + eps, nu=nu),
+                           atol=1e-5)
+    assert "strictly increasing" in hx.scene.laws.Hermite([0, 0], [0, 1], [0, 0],
+                                                          [0, 0]).problems()[0]
