@@ -10,6 +10,7 @@ import hexapod as hx
 from hexapod.inverse import inverse_dynamics, tree_plan
 from hexapod.recursive import ChainModel
 from legs import front_leg_scene
+
 from mechanisms import four_bar, random_tree
 
 TIMES = np.linspace(0.0, 1.2, 25)
