@@ -10,6 +10,7 @@ import argparse
 import json
 import os
 import sys
+import warnings
 from importlib.metadata import entry_points
 from pathlib import Path
 
@@ -17,8 +18,13 @@ import numpy as np
 
 from hexapod.assembly import assemble
 from hexapod.errors import HexapodError, InputFileError
+from hexapod.fileio import write_atomically
+from hexapod.inverse import inverse_dynamics
+from hexapod.reports import inverse_csv_text
+from hexapod.scene.motion import MotionWarning, apply_motion, read_motion
 from hexapod.scene.reader import read_scene
 from hexapod.scene.scene import Scene
+from hexapod.scene.urdf import read_urdf
 from hexapod.scene.writer import write_scene
 from hexapod.summary import describe_model, describe_state, format_model, format_state
 
@@ -33,8 +39,10 @@ def builtin_scenes() -> dict:
 
 
 def load_scene(name_or_path: str) -> Scene:
-    """A scene from a TOML file, or a built-in scene by name."""
+    """A scene from a URDF or TOML file, or a built-in scene by name."""
     path = Path(name_or_path)
+    if path.suffix.lower() in (".urdf", ".xml"):
+        return read_urdf(path)
     if path.suffix == ".toml" or path.exists():
         return read_scene(path)
     scenes = builtin_scenes()
@@ -77,6 +85,28 @@ def cmd_info(args) -> int:
     model = assemble(load_scene(args.scene))
     _emit(describe_model(model, args.t, graph=args.graph), args.json, format_model)
     return 0
+
+
+def cmd_inverse(args) -> int:
+    motion = read_motion(args.motion)
+    model = assemble(apply_motion(load_scene(args.model), motion))
+    times = motion.times
+    progress = _progress("inverse dynamics") if sys.stderr.isatty() else None
+    result = inverse_dynamics(model, times, method=args.method, frame=args.frame,
+                              progress=progress)
+    write_atomically(args.out, inverse_csv_text(model, result))
+    if progress is not None:
+        print(file=sys.stderr)
+    print(f"wrote {args.out}: {times.size} samples, {len(model.joints)} joints "
+          f"({result.method} path)")
+    return 0
+
+
+def _progress(label: str):
+    def report(done: int, total: int) -> None:
+        if done == total or done % max(1, total // 100) == 0:
+            print(f"\r{label}: {done}/{total} samples", end="", file=sys.stderr, flush=True)
+    return report
 
 
 def cmd_validate(args) -> int:
@@ -146,6 +176,25 @@ def build_parser() -> argparse.ArgumentParser:
                    "cutset and circuit matrices")
     p.set_defaults(run=cmd_info)
 
+    p = sub.add_parser(
+        "inverse", help="joint efforts and wrenches of a prescribed motion, as CSV",
+        description="Inverse dynamics: drive MODEL (a URDF, a scene file or a built-in scene) "
+        "by MOTION.csv (columns t, one per joint in rad or m, optional qd:<joint> and "
+        "qdd:<joint>) and write OUT.csv: t, then for every joint tau:<joint> (revolute and "
+        "prismatic) and Fx, Fy, Fz, Tx, Ty, Tz:<joint>, the wrench by the parent on the "
+        "child about the joint origin in the child's joint frame (N, N m). The file is "
+        "written whole or not at all.")
+    p.add_argument("model", help="a URDF (.urdf), a TOML scene file or a built-in scene")
+    p.add_argument("--motion", required=True, metavar="MOTION.csv", help="the motion")
+    p.add_argument("--out", required=True, metavar="OUT.csv", help="the CSV to write")
+    p.add_argument("--frame", choices=("joint", "world"), default="joint",
+                   help="axes of the wrench components (default: the child's joint frame)")
+    p.add_argument("--method", choices=("auto", "tree", "saddle"), default="auto",
+                   help="tree-ordered solve (open trees with every joint driven) or the "
+                   "saddle-point solve per sample (any mechanism); default: the fastest that "
+                   "applies")
+    p.set_defaults(run=cmd_inverse)
+
     p = sub.add_parser("validate", help="check a scene and list every problem",
                        description="Read SCENE and report every problem found, or that it is "
                        "valid.")
@@ -165,7 +214,13 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        return args.run(args)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", MotionWarning)
+            try:
+                return args.run(args)
+            finally:
+                for message in dict.fromkeys(str(w.message) for w in caught):
+                    print(f"hexapod: warning: {message}", file=sys.stderr)
     except HexapodError as error:
         print(f"hexapod: error: {error}", file=sys.stderr)
         return 1

@@ -126,9 +126,13 @@ def _saddle(model, times, frame, progress) -> InverseResult:
         if k == 0:
             free = degrees_of_freedom(model, q, t)["dof_with_drivers"]
             if free:
+                driven = {d.joint for d in model.drivers if d.kind == "joint"}
+                idle = [j.name for j in model.joints
+                        if j.kind in ("revolute", "prismatic") and j.index not in driven]
+                hint = f" (joints without a driver: {', '.join(idle)})" if idle else ""
                 raise SingularSystemError(
                     f"model '{model.name}': the drivers leave {free} degree(s) of freedom "
-                    "free; inverse dynamics needs the motion of every degree of freedom")
+                    f"free{hint}; inverse dynamics needs the motion of every degree of freedom")
         v = solve_velocities(model, q, t)
         data = Data()
         A[k] = forward_dynamics(model, data, t, q, v)

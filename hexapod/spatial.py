@@ -155,6 +155,17 @@ def rotation_from_rpy(roll, pitch, yaw) -> np.ndarray:
     )
 
 
+def rpy_from_rotation(R) -> np.ndarray:
+    """``(roll, pitch, yaw)`` with ``R = Rz(yaw) Ry(pitch) Rx(roll)`` (URDF), accurate to
+    round-off everywhere (pitch from ``atan2``, not ``arcsin``, which loses half the digits near
+    +-90 degrees). At gimbal lock the whole turn about z is put in yaw."""
+    R = np.asarray(R, dtype=float)
+    pitch = np.arctan2(-R[2, 0], np.hypot(R[0, 0], R[1, 0]))
+    if np.hypot(R[0, 0], R[1, 0]) < 1e-12:
+        return np.array([0.0, pitch, np.arctan2(-R[0, 1], R[1, 1])])
+    return np.array([np.arctan2(R[2, 1], R[2, 2]), pitch, np.arctan2(R[1, 0], R[0, 0])])
+
+
 def orthonormal_complement(axis) -> tuple[np.ndarray, np.ndarray]:
     """Unit vectors ``u, w`` with ``(u, w, a)`` right-handed orthonormal, ``a = axis / |axis|``.
 

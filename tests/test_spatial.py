@@ -100,3 +100,10 @@ def test_placements_compose_and_invert():
     assert np.allclose(identity.position, 0) and np.allclose(identity.rotation, np.eye(3))
     planar = Placement([1.0, 2.0], 0.5)
     assert planar.angle == pytest.approx(0.5) and planar.dimension == 2
+
+
+@pytest.mark.parametrize("pitch", [0.3, np.pi / 2 - 1e-9, -np.pi / 2 + 1e-7, np.pi / 2])
+def test_rpy_round_trip_is_exact_even_near_gimbal_lock(pitch):
+    from hexapod.spatial import rpy_from_rotation
+    R = rotation_from_rpy(0.4, pitch, -1.1)
+    assert np.allclose(rotation_from_rpy(*rpy_from_rotation(R)), R, rtol=0, atol=2e-16 * 8)

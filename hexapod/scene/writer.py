@@ -1,20 +1,18 @@
 """Write a scene as a TOML file that :func:`hexapod.scene.reader.read_scene` reads back.
 
 Values equal to their defaults are left out; rotations are written as ``rpy`` (URDF's
-convention) unless the pitch is within 1e-6 of +-90 degrees, where the matrix is written; the
+convention) (pitch from atan2, exact to round-off even near +-90 degrees); the
 file is written atomically (a temporary file renamed), so a failure leaves no partial file.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
-from hexapod.errors import InputFileError
+from hexapod.fileio import write_atomically
 from hexapod.scene.bodies import Body
 from hexapod.scene.drivers import CoordinateDriver, JointDriver
 from hexapod.scene.element import Element
@@ -22,7 +20,7 @@ from hexapod.scene.forces import ForceElement
 from hexapod.scene.joints import Joint
 from hexapod.scene.laws import Constant, Law, Scaled
 from hexapod.scene.scene import Scene
-from hexapod.spatial import Placement
+from hexapod.spatial import Placement, rpy_from_rotation
 
 
 def _number(x: float) -> str:
@@ -44,13 +42,7 @@ def _rotation(R: np.ndarray) -> str:
     R = np.asarray(R, dtype=float)
     if R.shape == (2, 2):
         return _number(np.arctan2(R[1, 0], R[0, 0]))
-    sin_pitch = -R[2, 0]
-    if abs(sin_pitch) > 1 - 1e-12:  # gimbal lock: the matrix is exact
-        return f"{{ matrix = {_array(R)} }}"
-    pitch = np.arcsin(np.clip(sin_pitch, -1.0, 1.0))
-    roll = np.arctan2(R[2, 1], R[2, 2])
-    yaw = np.arctan2(R[1, 0], R[0, 0])
-    return f"{{ rpy = {_array([roll, pitch, yaw])} }}"
+    return f"{{ rpy = {_array(rpy_from_rotation(R))} }}"
 
 
 def _frame(frame) -> str:
@@ -172,18 +164,4 @@ def write_scene(scene: Scene, path: str | Path, header: str = "") -> Path:
     InputFileError
         The file cannot be written (the target is left untouched).
     """
-    path = Path(path)
-    text = scene_text(scene, header)
-    try:
-        handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.",
-                                             suffix=".tmp")
-    except OSError as error:
-        raise InputFileError(f"{path}: cannot write the file ({error})") from None
-    try:
-        with os.fdopen(handle, "w", encoding="utf-8") as stream:
-            stream.write(text)
-        os.replace(temporary, path)
-    except OSError as error:
-        os.unlink(temporary)
-        raise InputFileError(f"{path}: cannot write the file ({error})") from None
-    return path
+    return write_atomically(path, scene_text(scene, header))

@@ -1,0 +1,173 @@
+"""Motion files: a prescribed motion of a model's joints, sample by sample (CSV).
+
+Columns: ``t`` (s, strictly increasing), then one column per driven joint named as in the model
+(rad for revolute joints, m for prismatic joints, whatever the scene's length unit), and
+optionally ``qd:<joint>`` and ``qdd:<joint>`` with exact first and second derivatives. Each
+joint becomes a driver whose law passes through the samples:
+
+* with ``qd`` and ``qdd``: the quintic Hermite interpolant, exact at every sample (C2);
+* with ``qd`` only: the same, with ``qdd`` the derivative of a C2 spline through ``qd``;
+* with neither: a C2 (cubic, not-a-knot) interpolating spline, whose derivatives are used.
+
+The last two warn (:class:`MotionWarning`), since the derivatives are then estimated.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from hexapod.errors import InputFileError, ModelError, Problem
+from hexapod.scene.drivers import JointDriver
+from hexapod.scene.joints import Prismatic
+from hexapod.scene.laws import Hermite, Spline
+from hexapod.scene.scene import Scene
+
+
+class MotionWarning(UserWarning):
+    """Derivatives of a motion were estimated by a spline rather than given."""
+
+
+@dataclass(frozen=True)
+class Motion:
+    """Samples of joint coordinates (SI), with the derivatives that were given."""
+
+    times: np.ndarray
+    values: dict[str, np.ndarray]
+    rates: dict[str, np.ndarray]
+    accelerations: dict[str, np.ndarray]
+    source: str = ""
+
+    @property
+    def joints(self) -> tuple[str, ...]:
+        return tuple(self.values)
+
+
+def read_motion(path: str | Path) -> Motion:
+    """Read a motion CSV file; every problem is named with the file, line and column."""
+    path = Path(path)
+    try:
+        with path.open(newline="", encoding="utf-8") as stream:
+            rows = list(csv.reader(stream))
+    except FileNotFoundError:
+        raise InputFileError(f"{path}: no such file") from None
+    except IsADirectoryError:
+        raise InputFileError(f"{path}: is a directory, not a motion file") from None
+    except (OSError, UnicodeDecodeError, csv.Error) as error:
+        raise InputFileError(f"{path}: cannot read the motion file ({error})") from None
+    rows = [row for row in rows if row and any(cell.strip() for cell in row)]
+    if not rows:
+        raise InputFileError(f"{path}: the motion file is empty")
+    header = [cell.strip() for cell in rows[0]]
+    problems: list[Problem] = []
+
+    def problem(where: str, message: str):
+        problems.append(Problem("motion", message, f"{path}, {where}"))
+
+    if not header or header[0] != "t":
+        problem("line 1", f"the first column must be 't', got {header[0]!r}")
+    seen = set()
+    for name in header:
+        if name in seen:
+            problem("line 1", f"column {name!r} appears twice")
+        seen.add(name)
+    data = np.full((len(rows) - 1, len(header)), np.nan)
+    for i, row in enumerate(rows[1:], start=2):
+        if len(row) != len(header):
+            problem(f"line {i}", f"{len(row)} values for {len(header)} columns")
+            continue
+        for j, cell in enumerate(row):
+            try:
+                data[i - 2, j] = float(cell)
+            except ValueError:
+                problem(f"line {i}, column {header[j]!r}", f"{cell.strip()!r} is not a number")
+                continue
+            if not math.isfinite(data[i - 2, j]):
+                problem(f"line {i}, column {header[j]!r}", f"{cell.strip()} is not finite")
+    if data.shape[0] < 2:
+        problem("line 2", f"a motion needs at least 2 samples, got {data.shape[0]}")
+    if problems:
+        raise ModelError(f"motion file {path}", problems)
+    times = data[:, 0]
+    steps = np.diff(times)
+    if np.any(steps <= 0):
+        bad = int(np.argmax(steps <= 0)) + 3
+        problem(f"line {bad}", "times must be strictly increasing")
+    columns = {name: data[:, j] for j, name in enumerate(header) if j > 0}
+    values, rates, accelerations = {}, {}, {}
+    for name, column in columns.items():
+        kind, _, joint = name.partition(":") if ":" in name else ("q", "", name)
+        target = {"q": values, "qd": rates, "qdd": accelerations}.get(kind)
+        if target is None or not joint:
+            problem("line 1", f"column {name!r}: use '<joint>', 'qd:<joint>' or 'qdd:<joint>'")
+            continue
+        target[joint] = column
+    for kind, table in (("qd", rates), ("qdd", accelerations)):
+        for joint in table:
+            if joint not in values:
+                problem("line 1", f"column '{kind}:{joint}' has no column '{joint}'")
+    if not values:
+        problem("line 1", "no joint columns")
+    if problems:
+        raise ModelError(f"motion file {path}", problems)
+    return Motion(times, values, rates, accelerations, str(path))
+
+
+def _law(motion: Motion, joint: str, factor: float):
+    """The driver law of one joint; ``factor`` converts SI values to the scene's unit."""
+    t = motion.times
+    q = motion.values[joint] * factor
+    if joint in motion.rates:
+        qd = motion.rates[joint] * factor
+        if joint in motion.accelerations:
+            qdd = motion.accelerations[joint] * factor
+        else:
+            qdd = Spline(t, qd).evaluate(t)[1] if t.size >= 4 else np.zeros_like(t)
+            warnings.warn(f"{motion.source}: no 'qdd:{joint}' column: accelerations of "
+                          f"'{joint}' are the derivative of a C2 spline through its rates",
+                          MotionWarning, stacklevel=3)
+        return Hermite(t, q, qd, qdd)
+    warnings.warn(f"{motion.source}: no 'qd:{joint}'/'qdd:{joint}' columns: the derivatives "
+                  f"of '{joint}' come from a C2 interpolating spline", MotionWarning,
+                  stacklevel=3)
+    return Spline(t, q)
+
+
+def apply_motion(scene: Scene, motion: Motion) -> Scene:
+    """A copy of ``scene`` whose joints named in ``motion`` are driven by it (driver names
+    ``motion/<joint>``). Raises ``ModelError`` for unknown or undrivable joints, joints already
+    driven, or too few samples for a spline."""
+    joints = scene.joints
+    driven = {d.joint: d.name for d in scene.drivers.values() if isinstance(d, JointDriver)}
+    problems = []
+    where = motion.source or "motion"
+
+    def problem(joint: str, message: str):
+        problems.append(Problem(f"motion column '{joint}'", message, f"{where}, line 1"))
+
+    for joint in motion.joints:
+        if joint not in joints:
+            problem(joint, "is not a joint of the model (joints: " + ", ".join(joints) + ")")
+        elif not joints[joint].drivable:
+            problem(joint, f"joint '{joint}' is {joints[joint].kind}: only revolute and "
+                    "prismatic joints can be driven")
+        elif joint in driven:
+            problem(joint, f"joint '{joint}' is already driven by '{driven[joint]}'")
+        elif joint not in motion.rates and motion.times.size < 4:
+            problem(joint, "a spline through the samples needs at least 4 of them (or give "
+                    f"'qd:{joint}' and 'qdd:{joint}')")
+    if problems:
+        raise ModelError(f"motion file {where}", problems)
+    out = Scene(scene.name, scene.dimension, scene.length_unit, scene.gravity,
+                scene.characteristic_length, scene.source)
+    out._elements = list(scene.elements)
+    for joint in motion.joints:
+        factor = 1.0 / scene.unit if isinstance(joints[joint], Prismatic) else 1.0
+        out.add(JointDriver(f"motion/{joint}", joint, _law(motion, joint, factor),
+                            source=f"{where}, column '{joint}'"))
+    return out

@@ -1,0 +1,319 @@
+"""Read a URDF model into an absolute-coordinate scene.
+
+Policy (stated here and in the scene reference):
+
+* the **root link is fixed to the ground**: it becomes the ground itself (its inertia plays no
+  part), and joints from it are joints to the ground;
+* each other link is a spatial body whose reference frame is the URDF link frame; its inertial
+  (``<origin xyz rpy>``, ``<mass>``, ``<inertia ixx ixy ixz iyy iyz izz>``, the tensor about the
+  centre of mass in the rotated inertial axes) gives ``com``, ``inertia_rotation``, ``inertia``;
+* ``revolute`` and ``continuous`` joints become revolute joints, ``prismatic`` prismatic and
+  ``fixed`` fixed joints (their wrenches are reported too). The **joint frame is the child link
+  frame**; ``<origin xyz rpy>`` (``R = Rz(yaw) Ry(pitch) Rx(roll)``) places it in the parent link
+  frame at zero joint coordinate; ``<axis xyz>`` (default x) is normalised; ``<limit>``,
+  ``<dynamics>``, ``<mimic>``, visuals and collisions are ignored;
+* a link **without an inertial** (or with zero mass) hanging from its parent by a fixed joint is
+  **merged into the parent** as a frame: the joints below it hang from the parent; a massless
+  link that moves would make the mass matrix singular, and is **rejected** with an error naming
+  it (give it a mass, or attach it by a fixed joint).
+
+Every problem is collected and reported in one :class:`~hexapod.errors.ModelError` naming the
+file and the element.
+"""
+
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from hexapod.errors import InputFileError, ModelError, Problem
+from hexapod.scene.bodies import SpatialBody
+from hexapod.scene.element import GROUND
+from hexapod.scene.joints import Fixed, Prismatic, Revolute
+from hexapod.scene.scene import Scene
+from hexapod.spatial import Placement, rotation_from_rpy, rpy_from_rotation
+
+_JOINTS = {"revolute": Revolute, "continuous": Revolute, "prismatic": Prismatic,
+           "fixed": Fixed}
+
+
+@dataclass
+class _Link:
+    name: str
+    mass: float = 0.0
+    com: Placement = field(default_factory=Placement.identity)
+    inertia: np.ndarray = field(default_factory=lambda: np.zeros(6))
+
+
+@dataclass
+class _Joint:
+    name: str
+    kind: str
+    parent: str
+    child: str
+    origin: Placement
+    axis: np.ndarray
+
+
+class _UrdfReader:
+    def __init__(self, path: Path):
+        self.path = path
+        self.problems: list[Problem] = []
+
+    def add(self, element: str, message: str) -> None:
+        self.problems.append(Problem(element, message, str(self.path)))
+
+    def numbers(self, node, attribute: str, count: int, default, element: str):
+        text = node.get(attribute) if node is not None else None
+        if text is None:
+            return np.array(default, dtype=float)
+        try:
+            values = [float(x) for x in text.split()]
+        except ValueError:
+            self.add(element, f"{attribute}=\"{text}\" is not {count} numbers")
+            return np.array(default, dtype=float)
+        if len(values) != count or not all(math.isfinite(x) for x in values):
+            self.add(element, f"{attribute}=\"{text}\" must be {count} finite numbers")
+            return np.array(default, dtype=float)
+        return np.array(values)
+
+    def origin(self, node, element: str) -> Placement:
+        origin = node.find("origin") if node is not None else None
+        xyz = self.numbers(origin, "xyz", 3, [0, 0, 0], element)
+        rpy = self.numbers(origin, "rpy", 3, [0, 0, 0], element)
+        return Placement(xyz, rotation_from_rpy(*rpy))
+
+    def link(self, node) -> _Link:
+        name = node.get("name")
+        link = _Link(name)
+        inertial = node.find("inertial")
+        if inertial is None:
+            return link
+        label = f"link '{name}'"
+        link.com = self.origin(inertial, label)
+        mass = inertial.find("mass")
+        link.mass = float(self.numbers(mass, "value", 1, [0.0], label)[0]) if mass is not None \
+            else 0.0
+        inertia = inertial.find("inertia")
+        if inertia is None:
+            self.add(label, "<inertial> has no <inertia>")
+        else:
+            link.inertia = np.array([self.numbers(inertia, key, 1, [0.0], label)[0]
+                                     for key in ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")])
+        return link
+
+    def joint(self, node, links: dict) -> _Joint | None:
+        name = node.get("name")
+        label = f"joint '{name}'"
+        kind = node.get("type")
+        if kind not in _JOINTS:
+            self.add(label, f"type \"{kind}\" is not supported (revolute, continuous, prismatic, "
+                     "fixed)")
+            return None
+        ends = {}
+        for end in ("parent", "child"):
+            tag = node.find(end)
+            ends[end] = tag.get("link") if tag is not None else None
+            if ends[end] is None:
+                self.add(label, f"has no <{end} link=\"...\"/>")
+            elif ends[end] not in links:
+                self.add(label, f"{end} link '{ends[end]}' is not defined")
+        if None in ends.values() or any(v not in links for v in ends.values()):
+            return None
+        axis = self.numbers(node.find("axis"), "xyz", 3, [1, 0, 0], label)
+        if kind != "fixed" and np.linalg.norm(axis) < 1e-12:
+            self.add(label, "axis has zero length")
+            axis = np.array([1.0, 0.0, 0.0])
+        return _Joint(name, kind, ends["parent"], ends["child"], self.origin(node, label),
+                      axis / max(np.linalg.norm(axis), 1e-300))
+
+    def read(self, root_node) -> Scene:
+        if root_node.tag != "robot":
+            raise InputFileError(f"{self.path}: not a URDF file (the root element is "
+                                 f"<{root_node.tag}>, not <robot>)")
+        links: dict[str, _Link] = {}
+        for node in root_node.findall("link"):
+            name = node.get("name")
+            if not name:
+                self.add("link", "has no name")
+            elif name in links:
+                self.add(f"link '{name}'", "is defined twice")
+            else:
+                links[name] = self.link(node)
+        joints: list[_Joint] = []
+        for node in root_node.findall("joint"):
+            if not node.get("name"):
+                self.add("joint", "has no name")
+                continue
+            if node.get("name") in {j.name for j in joints}:
+                self.add(f"joint '{node.get('name')}'", "is defined twice")
+            joint = self.joint(node, links)
+            if joint is not None:
+                joints.append(joint)
+        scene = Scene(root_node.get("name") or self.path.stem, 3, "m", source=str(self.path))
+        if not links:
+            self.add("robot", "has no links")
+        if self.problems:
+            raise ModelError(f"URDF file {self.path}", self.problems)
+        return self.build(scene, links, joints)
+
+    def build(self, scene: Scene, links: dict, joints: list) -> Scene:
+        parent_of = {}
+        for joint in joints:
+            if joint.child in parent_of:
+                self.add(f"link '{joint.child}'", "is the child of two joints (URDF is a tree)")
+            parent_of[joint.child] = joint
+        roots = [name for name in links if name not in parent_of]
+        if len(roots) != 1:
+            self.add("robot", f"needs exactly one root link, found {len(roots)}: "
+                     + ", ".join(roots) if roots else "the joints form a loop")
+            raise ModelError(f"URDF file {self.path}", self.problems)
+        root = roots[0]
+        # link frames at zero joint coordinates, and the body (or ground) each link belongs to
+        pose = {root: Placement.identity()}
+        owner = {root: (GROUND, Placement.identity())}  # (body, link frame in body frame)
+        pending = list(joints)
+        ordered = []
+        while pending:
+            ready = [j for j in pending if j.parent in pose]
+            if not ready:
+                self.add("robot", "some links are not connected to the root: "
+                         + ", ".join(sorted({j.child for j in pending})))
+                raise ModelError(f"URDF file {self.path}", self.problems)
+            for joint in ready:
+                pending.remove(joint)
+                pose[joint.child] = pose[joint.parent] @ joint.origin
+                ordered.append(joint)
+        merged = set()
+        for joint in ordered:  # parents first: a merged link's owner is known before its children
+            link = links[joint.child]
+            body, in_body = owner[joint.parent]
+            if link.mass <= 0:
+                if joint.kind != "fixed":
+                    self.add(f"link '{link.name}'", f"has no mass but moves (joint "
+                             f"'{joint.name}' is {joint.kind}): the mass matrix would be "
+                             "singular; give it an <inertial> or attach it by a fixed joint")
+                owner[link.name] = (body, in_body @ joint.origin)  # merged into its parent
+                merged.add(joint.name)
+            else:
+                owner[link.name] = (link.name, Placement.identity())
+        for joint in joints:  # the file's order, for bodies, joints and output columns
+            if joint.name in merged:
+                continue
+            link = links[joint.child]
+            body, in_body = owner[joint.parent]
+            scene.add(SpatialBody(link.name, link.mass, link.inertia, com=link.com.position,
+                                  position=pose[link.name].position,
+                                  rotation=pose[link.name].rotation,
+                                  inertia_rotation=link.com.rotation))
+            cls = _JOINTS[joint.kind]
+            extra = {"axis": joint.axis} if cls is not Fixed else {}
+            scene.add(cls(joint.name, body, link.name, parent_frame=in_body @ joint.origin,
+                          child_frame=Placement.identity(), **extra))
+        if self.problems:
+            raise ModelError(f"URDF file {self.path}", self.problems)
+        return scene
+
+
+def read_urdf(path: str | Path) -> Scene:
+    """Read a URDF file into a :class:`Scene` (metres, gravity -9.81 m/s^2 along z).
+
+    Raises
+    ------
+    InputFileError
+        The file is missing, unreadable or not well-formed XML.
+    ModelError
+        The URDF is XML but not a model we can build; every problem is listed.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise InputFileError(f"{path}: no such file") from None
+    except IsADirectoryError:
+        raise InputFileError(f"{path}: is a directory, not a URDF file") from None
+    except (OSError, UnicodeDecodeError) as error:
+        raise InputFileError(f"{path}: cannot read the file ({error})") from None
+    try:
+        root = ET.fromstring(text)
+    except ET.ParseError as error:
+        raise InputFileError(f"{path}: not well-formed XML ({error})") from None
+    reader = _UrdfReader(path)
+    scene = reader.read(root)
+    problems = scene.problems()
+    if problems:
+        raise ModelError(f"URDF file {path}", problems)
+    return scene
+
+
+# ------------------------------------------------------------------ writing
+
+def _xyz(x) -> str:
+    return " ".join(repr(float(v)) for v in x)
+
+
+def _rpy(R: np.ndarray) -> str:
+    return _xyz(rpy_from_rotation(R))
+
+
+def urdf_text(scene: Scene) -> str:
+    """The URDF of a spatial tree of revolute, prismatic and fixed joints hanging from the
+    ground; each link frame is its body's joint frame (URDF's rule), at the initial pose."""
+    scene.validate()
+    si = scene.in_si()
+    problems = []
+    if si.dimension != 3 or any(not isinstance(b, SpatialBody) for b in si.bodies.values()):
+        problems.append(Problem("scene", "URDF holds spatial bodies only"))
+    parent_joint = {}
+    for joint in si.joints.values():
+        if joint.kind not in ("revolute", "prismatic", "fixed"):
+            problems.append(Problem(joint.label, "URDF has revolute, prismatic and fixed "
+                                    "joints only here"))
+        if joint.child == GROUND or joint.child in parent_joint:
+            problems.append(Problem(joint.label, "the joints do not form a tree hanging from "
+                                    "the ground (a loop, or the ground as a child)"))
+        parent_joint[joint.child] = joint
+    missing = [b for b in si.bodies if b not in parent_joint]
+    if missing:
+        problems.append(Problem("scene", "free bodies cannot be written: " + ", ".join(missing)))
+    if problems:
+        raise ModelError(f"scene '{scene.name}'", problems)
+    link_frame = {GROUND: Placement.identity()}  # world pose of every link frame
+    for body, joint in parent_joint.items():
+        link_frame[body] = si.pose(body) @ si.joint_frames(joint)[1]
+    root = "ground"
+    lines = ['<?xml version="1.0"?>', f'<robot name="{si.name}">',
+             f"  <!-- written by hexapod; gravity of the scene: {_xyz(si.gravity)} m/s^2 -->",
+             f'  <link name="{root}"/>']
+    for name, body in si.bodies.items():
+        frame = link_frame[name]
+        centre = frame.inverse().transform_point(si.pose(name).transform_point(body.com))
+        axes = frame.rotation.T @ body.rotation @ body.inertia_rotation
+        J = body.inertia
+        lines += [f'  <link name="{name}">', "    <inertial>",
+                  f'      <origin xyz="{_xyz(centre)}" rpy="{_rpy(axes)}"/>',
+                  f'      <mass value="{float(body.mass)!r}"/>',
+                  "      <inertia " + " ".join(
+                      f'{key}="{float(J[i, j])!r}"' for key, i, j in (
+                          ("ixx", 0, 0), ("ixy", 0, 1), ("ixz", 0, 2), ("iyy", 1, 1),
+                          ("iyz", 1, 2), ("izz", 2, 2))) + "/>",
+                  "    </inertial>", "  </link>"]
+    for name, joint in parent_joint.items():
+        parent = root if joint.parent == GROUND else joint.parent
+        on_parent = si.pose(joint.parent) @ si.joint_frames(joint)[0]
+        origin = link_frame[joint.parent].inverse() @ on_parent
+        kind = joint.kind
+        lines += [f'  <joint name="{joint.name}" type="{kind}">',
+                  f'    <parent link="{parent}"/>', f'    <child link="{name}"/>',
+                  f'    <origin xyz="{_xyz(origin.position)}" rpy="{_rpy(origin.rotation)}"/>']
+        if kind != "fixed":
+            axis = np.asarray(joint.axis, dtype=float)
+            lines += [f'    <axis xyz="{_xyz(axis / np.linalg.norm(axis))}"/>',
+                      '    <limit lower="-1e9" upper="1e9" effort="1e9" velocity="1e9"/>']
+        lines += ["  </joint>"]
+    lines.append("</robot>")
+    return "\n".join(lines) + "\n"
