@@ -1,7 +1,8 @@
 """The ``hexapod`` command.
 
 Every error a user can cause ends with one message on stderr and a non-zero exit, never a
-traceback (set ``HEXAPOD_DEBUG=1`` to see one for an internal error).
+traceback (set ``HEXAPOD_DEBUG=1`` to see one for an internal error). Each subcommand imports
+what it needs when it runs, so that a short job does not pay for the others' imports.
 """
 
 from __future__ import annotations
@@ -11,22 +12,15 @@ import json
 import os
 import sys
 import warnings
-from importlib.metadata import entry_points
 from pathlib import Path
 
 import numpy as np
 
 from hexapod.assembly import assemble
 from hexapod.errors import HexapodError, InputFileError
-from hexapod.fileio import write_atomically
-from hexapod.inverse import inverse_dynamics
-from hexapod.reports import inverse_csv_text
-from hexapod.scene.motion import MotionWarning, apply_motion, read_motion
+from hexapod.scene.motion import MotionWarning
 from hexapod.scene.reader import read_scene
 from hexapod.scene.scene import Scene
-from hexapod.scene.urdf import read_urdf
-from hexapod.scene.writer import write_scene
-from hexapod.summary import describe_model, describe_state, format_model, format_state
 
 DEFAULT_SCENE = "front-leg"
 
@@ -35,6 +29,8 @@ DEFAULT_SCENE = "front-leg"
 
 def builtin_scenes() -> dict:
     """Built-in scenes by name: entry points of the group ``hexapod.scenes``."""
+    from importlib.metadata import entry_points
+
     return {ep.name: ep for ep in entry_points(group="hexapod.scenes")}
 
 
@@ -42,6 +38,8 @@ def load_scene(name_or_path: str) -> Scene:
     """A scene from a URDF or TOML file, or a built-in scene by name."""
     path = Path(name_or_path)
     if path.suffix.lower() in (".urdf", ".xml"):
+        from hexapod.scene.urdf import read_urdf
+
         return read_urdf(path)
     if path.suffix == ".toml" or path.exists():
         return read_scene(path)
@@ -76,18 +74,27 @@ def _emit(report: dict, as_json: bool, formatter) -> None:
 
 
 def cmd_dynamics(args) -> int:
+    from hexapod.summary import describe_state, format_state
+
     model = assemble(load_scene(args.scene))
     _emit(describe_state(model, args.t), args.json, format_state)
     return 0
 
 
 def cmd_info(args) -> int:
+    from hexapod.summary import describe_model, format_model
+
     model = assemble(load_scene(args.scene))
     _emit(describe_model(model, args.t, graph=args.graph), args.json, format_model)
     return 0
 
 
 def cmd_inverse(args) -> int:
+    from hexapod.fileio import write_atomically
+    from hexapod.inverse import inverse_dynamics
+    from hexapod.reports import inverse_csv_text
+    from hexapod.scene.motion import apply_motion, read_motion
+
     motion = read_motion(args.motion)
     model = assemble(apply_motion(load_scene(args.model), motion))
     times = motion.times
@@ -120,6 +127,8 @@ def cmd_validate(args) -> int:
 
 def cmd_scenes(args) -> int:
     if args.name:
+        from hexapod.scene.writer import write_scene
+
         scene = load_scene(args.name)
         if not args.write:
             raise InputFileError("give --write PATH to write the scene to a file")

@@ -21,9 +21,16 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import qr, solve_triangular
 
 from hexapod.errors import SingularSystemError
+
+
+def solve_triangular(R, b, trans: str = "N"):
+    """SciPy's triangular solve, imported when first needed (SciPy's import is slow and a
+    command such as ``hexapod inverse`` on a tree never needs it)."""
+    from scipy.linalg import solve_triangular as solve
+
+    return solve(R, b, trans=trans)
 
 
 @dataclass
@@ -114,7 +121,7 @@ def split_rows(W: np.ndarray, scale: np.ndarray, priority: np.ndarray, tol: floa
     if n_c == 0:
         return RowSplit(order, order, np.zeros((n_v, 0)), np.zeros((0, 0)), scale, W)
     if n_c <= n_v:
-        basis, R = qr(W[order].T, mode="economic")
+        basis, R = np.linalg.qr(W[order].T, mode="reduced")
         if np.all(np.abs(np.diag(R)) > tol):
             signs = np.sign(np.diag(R))
             return RowSplit(order, np.zeros(0, dtype=int), basis * signs, signs[:, None] * R,

@@ -205,6 +205,9 @@ class Model:
         self.joint_index = {j.name: j.index for j in joints}
         self.driver_index = {d.name: i for i, d in enumerate(drivers)}
         self.row_index = {r.name: i for i, r in enumerate(rows)}
+        #: objects built from the model by the algorithms, kept so that they are built once
+        #: (e.g. the compiled tree-ordered inverse dynamics)
+        self.derived: dict = {}
         self._lie_indices()
 
     # ---------------------------------------------------------------- descriptions

@@ -40,6 +40,28 @@ def inverse_table(model: Model, result: InverseResult) -> np.ndarray:
 
 def inverse_csv_text(model: Model, result: InverseResult) -> str:
     rows = inverse_table(model, result)
-    lines = [",".join(inverse_columns(model))]
-    lines += [",".join(format(x, ".17g") for x in row) for row in rows]
-    return "\n".join(lines) + "\n"
+    line = ",".join(["%.17g"] * rows.shape[1])
+    return ",".join(inverse_columns(model)) + "\n" + "".join(
+        line % tuple(row) + "\n" for row in rows)
+
+
+def agreement(columns: list[str], table: np.ndarray, reference_columns: list[str],
+              reference: np.ndarray) -> float:
+    """Largest difference from a reference CSV, relative to the largest magnitude of the same
+    quantity: for each joint, its forces (``Fx, Fy, Fz``) against the largest of them, its
+    moments (``tau, Tx, Ty, Tz``) against the largest of those, over all samples. Columns of the
+    table that the reference lacks (fixed joints, say) are not compared."""
+    index = {name: k for k, name in enumerate(columns)}
+    groups: dict[tuple[str, str], list[int]] = {}
+    for k, name in enumerate(reference_columns):
+        if ":" not in name:
+            continue
+        component, joint = name.split(":", 1)
+        kind = "force" if component.startswith("F") else "moment"
+        groups.setdefault((joint, kind), []).append(k)
+    worst = 0.0
+    for members in groups.values():
+        scale = max(np.abs(reference[:, members]).max(), np.finfo(float).tiny)
+        ours = table[:, [index[reference_columns[k]] for k in members]]
+        worst = max(worst, float(np.abs(ours - reference[:, members]).max() / scale))
+    return worst

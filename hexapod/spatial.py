@@ -29,12 +29,33 @@ def _matrix(rows, symbolic: bool):
     return np.array(rows, dtype=float)
 
 
+def _inlined(formula):
+    """Evaluate ``formula`` on numbers directly; on CasADi symbols through an SX Function built
+    once from it, whose call inlines the whole formula in one step (building it operation by
+    operation from Python costs far more when models have many bodies)."""
+    cache: dict = {}
+
+    def wrapper(*args):
+        if not _is_symbolic(*args):
+            return formula(*args)
+        sizes = tuple(int(a.numel()) for a in args)
+        if sizes not in cache:
+            symbols = [ca.SX.sym(f"x{k}", n) for k, n in enumerate(sizes)]
+            cache[sizes] = ca.Function(formula.__name__, symbols, [formula(*symbols)])
+        return cache[sizes](*args)
+
+    wrapper.__name__ = formula.__name__
+    wrapper.__doc__ = formula.__doc__
+    return wrapper
+
+
 def skew(w):
     """Cross-product matrix: ``skew(w) @ x == cross(w, x)``."""
     w0, w1, w2 = w[0], w[1], w[2]
     return _matrix([[0.0, -w2, w1], [w2, 0.0, -w0], [-w1, w0, 0.0]], _is_symbolic(w))
 
 
+@_inlined
 def rotation_from_euler_parameters(p):
     """``A(p) = (2 e0^2 - 1) I + 2 (e e^T + e0 ~e)``, body -> global (unit ``p`` assumed)."""
     e0, e1, e2, e3 = p[0], p[1], p[2], p[3]
@@ -48,6 +69,7 @@ def rotation_from_euler_parameters(p):
     )
 
 
+@_inlined
 def g_matrix(p):
     """Haug's ``G(p) = [-e, -~e + e0 I]`` (3 x 4): ``omega' = 2 G(p) p_dot``."""
     e0, e1, e2, e3 = p[0], p[1], p[2], p[3]
@@ -56,6 +78,7 @@ def g_matrix(p):
     )
 
 
+@_inlined
 def e_matrix(p):
     """Haug's ``E(p) = [-e, ~e + e0 I]`` (3 x 4): ``omega = 2 E(p) p_dot``."""
     e0, e1, e2, e3 = p[0], p[1], p[2], p[3]
@@ -73,6 +96,7 @@ def rotation_2d(angle):
     return np.array([[c, -s], [s, c]])
 
 
+@_inlined
 def quaternion_product(p, q):
     """Hamilton product, scalar first: ``A(p * q) = A(p) A(q)``; row-wise for (n, 4) arrays,
     or of two CasADi 4-vectors."""

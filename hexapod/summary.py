@@ -35,7 +35,7 @@ def law_description(law: Law | None) -> dict:
     out: dict = {"type": law.kind}
     for key, value in fields.items():
         out[key] = law_description(value) if isinstance(value, Law) else (
-            list(value) if isinstance(value, tuple) else value)
+            np.asarray(value).tolist() if isinstance(value, (tuple, np.ndarray)) else value)
     return out
 
 

@@ -27,8 +27,11 @@ class Law:
         return self.evaluate(t)[0]
 
     def scaled(self, factor: float) -> Law:
-        """The law multiplied by ``factor`` (unit conversion)."""
-        return Scaled(self, factor) if factor != 1.0 else self
+        """The law multiplied by ``factor`` (unit conversion); the law itself for 1."""
+        return self if factor == 1.0 else self._scaled(factor)
+
+    def _scaled(self, factor: float) -> Law:
+        return Scaled(self, factor)
 
     def problems(self) -> list[str]:
         """What is wrong with the law's own numbers (empty when it is fine)."""
@@ -50,7 +53,7 @@ class Constant(Law):
         t = np.asarray(t, dtype=float)
         return np.full_like(t, self.value), np.zeros_like(t), np.zeros_like(t)
 
-    def scaled(self, factor):
+    def _scaled(self, factor):
         return Constant(self.value * factor)
 
     def problems(self):
@@ -76,7 +79,7 @@ class Polynomial(Law):
         d2 = c.polyder(d1) if d1.size > 1 else np.zeros(1)
         return c.polyval(s, coef), c.polyval(s, d1), c.polyval(s, d2)
 
-    def scaled(self, factor):
+    def _scaled(self, factor):
         return Polynomial(tuple(c * factor for c in self.coefficients), self.t0)
 
     def problems(self):
@@ -124,7 +127,7 @@ class Harmonic(Law):
             fdd -= b * kw**2 * np.sin(kw * s)
         return f, fd, fdd
 
-    def scaled(self, factor):
+    def _scaled(self, factor):
         return Harmonic(self.offset * factor, tuple(a * factor for a in self.cos),
                         tuple(b * factor for b in self.sin), self.frequency, self.t0)
 
@@ -193,7 +196,7 @@ class Spline(Law):
         s = self._spline
         return s(t), s(t, nu=1), s(t, nu=2)
 
-    def scaled(self, factor):
+    def _scaled(self, factor):
         return Spline(self.times, tuple(v * factor for v in self.values), self.degree,
                       self.boundary)
 
@@ -223,43 +226,62 @@ class Spline(Law):
         return out
 
 
-@dataclass(frozen=True)
+#: The quintic Hermite basis on [0, 1], ascending powers: the polynomials with value, first and
+#: second derivative 1 for one end quantity and 0 for the five others, in the order
+#: (y0, y0', y0'', y1, y1', y1'').
+_QUINTIC_HERMITE = (
+    (1, 0, 0, -10, 15, -6), (0, 1, 0, -6, 8, -3), (0, 0, 0.5, -1.5, 1.5, -0.5),
+    (0, 0, 0, 10, -15, 6), (0, 0, 0, -4, 7, -3), (0, 0, 0, 0.5, -1, 0.5),
+)
+
+
+@dataclass(frozen=True, eq=False)
 class Hermite(Law):
     """Tabulated values with their first and second derivatives: the quintic Hermite
     interpolant, C2, equal to the given values, rates and accelerations at every sample (a
     motion file with exact derivatives). Outside the table the end polynomials are continued."""
 
-    times: tuple[float, ...]
-    values: tuple[float, ...]
-    rates: tuple[float, ...]
-    accelerations: tuple[float, ...]
-    _poly: object = field(default=None, init=False, repr=False, compare=False)
+    times: np.ndarray
+    values: np.ndarray
+    rates: np.ndarray
+    accelerations: np.ndarray
+    _table: object = field(default=None, init=False, repr=False, compare=False)
     kind = "hermite"
 
     def __post_init__(self):
-        for key in ("times", "values", "rates", "accelerations"):
-            object.__setattr__(self, key, tuple(float(x) for x in getattr(self, key)))
+        for key in ("times", "values", "rates", "accelerations"):  # arrays: motions are long
+            object.__setattr__(self, key, np.asarray(getattr(self, key), dtype=float).ravel())
         if not self.problems():
-            from scipy.interpolate import BPoly
-
-            samples = np.column_stack([self.values, self.rates, self.accelerations])
-            object.__setattr__(self, "_poly", BPoly.from_derivatives(self.times, samples))
+            object.__setattr__(self, "_table", np.array(
+                [self.times, self.values, self.rates, self.accelerations]))
 
     def evaluate(self, t):
-        if self._poly is None:
+        """On each interval ``[t0, t1]`` of length ``h``, with ``s = (t - t0) / h``, the quintic
+        ``sum_k f_k H_k(s)`` through the end values ``(y, h y', h^2 y'')`` (the standard quintic
+        Hermite basis); outside the table the end interval's polynomial continues."""
+        if self._table is None:
             raise ValueError("hermite law is invalid: " + "; ".join(self.problems()))
+        times, y, yd, ydd = self._table
         t = np.asarray(t, dtype=float)
-        p = self._poly
-        return p(t), p(t, nu=1), p(t, nu=2)
+        i = np.clip(np.searchsorted(times, t, side="right") - 1, 0, times.size - 2)
+        h = times[i + 1] - times[i]
+        s = (t - times[i]) / h
+        ends = (y[i], h * yd[i], h * h * ydd[i], y[i + 1], h * yd[i + 1], h * h * ydd[i + 1])
+        f = fd = fdd = 0.0
+        for coefficients, end in zip(_QUINTIC_HERMITE, ends, strict=True):
+            p = np.polynomial.polynomial
+            f = f + end * p.polyval(s, coefficients)
+            fd = fd + end * p.polyval(s, p.polyder(coefficients)) / h
+            fdd = fdd + end * p.polyval(s, p.polyder(coefficients, 2)) / h**2
+        return f, fd, fdd
 
-    def scaled(self, factor):
-        return Hermite(self.times, tuple(v * factor for v in self.values),
-                       tuple(v * factor for v in self.rates),
-                       tuple(v * factor for v in self.accelerations))
+    def _scaled(self, factor):
+        return Hermite(self.times, self.values * factor, self.rates * factor,
+                       self.accelerations * factor)
 
     def problems(self):
-        n = len(self.times)
-        if any(len(getattr(self, k)) != n for k in ("values", "rates", "accelerations")):
+        n = self.times.size
+        if any(getattr(self, k).size != n for k in ("values", "rates", "accelerations")):
             return [f"{n} times but {len(self.values)} values, {len(self.rates)} rates and "
                     f"{len(self.accelerations)} accelerations"]
         if n < 2:
@@ -284,7 +306,7 @@ class Scaled(Law):
         f, fd, fdd = self.law.evaluate(t)
         return self.factor * f, self.factor * fd, self.factor * fdd
 
-    def scaled(self, factor):
+    def _scaled(self, factor):
         return Scaled(self.law, self.factor * factor)
 
     def problems(self):

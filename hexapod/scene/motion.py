@@ -15,6 +15,7 @@ The last two warn (:class:`MotionWarning`), since the derivatives are then estim
 from __future__ import annotations
 
 import csv
+import io
 import math
 import warnings
 from dataclasses import dataclass
@@ -48,18 +49,36 @@ class Motion:
         return tuple(self.values)
 
 
+def _fast_table(text: str) -> tuple[list[str], np.ndarray] | None:
+    """Header and numbers of a well-formed file, parsed by NumPy; None when anything is off
+    (the careful parser then says what)."""
+    header, _, body = text.partition("\n")
+    try:
+        data = np.loadtxt(io.StringIO(body), delimiter=",", ndmin=2)
+    except ValueError:
+        return None
+    names = [cell.strip() for cell in header.split(",")]
+    if data.shape[1] != len(names) or data.shape[0] < 2 or not np.all(np.isfinite(data)):
+        return None
+    return names, data
+
+
 def read_motion(path: str | Path) -> Motion:
     """Read a motion CSV file; every problem is named with the file, line and column."""
     path = Path(path)
     try:
-        with path.open(newline="", encoding="utf-8") as stream:
-            rows = list(csv.reader(stream))
+        text = path.read_text(encoding="utf-8")
+        fast = _fast_table(text) if '"' not in text else None
+        rows = [] if fast else list(csv.reader(io.StringIO(text, newline="")))
     except FileNotFoundError:
         raise InputFileError(f"{path}: no such file") from None
     except IsADirectoryError:
         raise InputFileError(f"{path}: is a directory, not a motion file") from None
     except (OSError, UnicodeDecodeError, csv.Error) as error:
         raise InputFileError(f"{path}: cannot read the motion file ({error})") from None
+    if fast:
+        header, data = fast
+        return _motion(path, header, data, [])
     rows = [row for row in rows if row and any(cell.strip() for cell in row)]
     if not rows:
         raise InputFileError(f"{path}: the motion file is empty")
@@ -69,13 +88,6 @@ def read_motion(path: str | Path) -> Motion:
     def problem(where: str, message: str):
         problems.append(Problem("motion", message, f"{path}, {where}"))
 
-    if not header or header[0] != "t":
-        problem("line 1", f"the first column must be 't', got {header[0]!r}")
-    seen = set()
-    for name in header:
-        if name in seen:
-            problem("line 1", f"column {name!r} appears twice")
-        seen.add(name)
     data = np.full((len(rows) - 1, len(header)), np.nan)
     for i, row in enumerate(rows[1:], start=2):
         if len(row) != len(header):
@@ -91,6 +103,19 @@ def read_motion(path: str | Path) -> Motion:
                 problem(f"line {i}, column {header[j]!r}", f"{cell.strip()} is not finite")
     if data.shape[0] < 2:
         problem("line 2", f"a motion needs at least 2 samples, got {data.shape[0]}")
+    return _motion(path, header, data, problems)
+
+
+def _motion(path: Path, header: list[str], data: np.ndarray, problems: list) -> Motion:
+    """Check the columns and times of a parsed table and build the motion."""
+
+    def problem(where: str, message: str):
+        problems.append(Problem("motion", message, f"{path}, {where}"))
+
+    if not header or header[0] != "t":
+        problem("line 1", f"the first column must be 't', got {header[0]!r}")
+    for name in sorted({n for n in header if header.count(n) > 1}):
+        problem("line 1", f"column {name!r} appears twice")
     if problems:
         raise ModelError(f"motion file {path}", problems)
     times = data[:, 0]

@@ -64,8 +64,8 @@ def _law(law: Law) -> str:
         if f.name.startswith("_"):
             continue
         value = getattr(law, f.name)
-        if isinstance(value, tuple):
-            if value:
+        if isinstance(value, (tuple, np.ndarray)):
+            if len(value):
                 parts.append(f"{f.name} = {_array(value)}")
         elif isinstance(value, str):
             parts.append(f"{f.name} = {_string(value)}")
