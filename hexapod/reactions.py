@@ -105,13 +105,25 @@ def _joint_rows(joint: JointInfo) -> np.ndarray:
     return np.concatenate([joint.rows, joint.driver_rows]).astype(int)
 
 
+def parent_point(model: Model, q: np.ndarray, joint: JointInfo):
+    """World position (3-D) and rotation (3 x 3) of the joint's frame on the parent."""
+    pose = model.body_pose(q, joint.parent) @ joint.parent_frame
+    return _embed_vector(pose.position[:, None])[:, 0], _embed_rotation(pose.rotation)
+
+
 def joint_wrenches(model: Model, q: np.ndarray, lam: np.ndarray, Phi_v: np.ndarray,
-                   Q_across: np.ndarray | None = None, frame: str = "joint") -> JointWrenches:
+                   Q_across: np.ndarray | None = None, frame: str = "joint",
+                   on: str = "child") -> JointWrenches:
     """Wrench of every joint (report convention) from the multipliers ``lam``.
 
     ``Q_across`` is ``model.Q_across`` evaluated at the same state (None when the model has no
     force element across a joint); ``frame="world"`` gives world components instead.
+    ``on="parent"`` gives the reaction on the parent: the opposite wrench, its moment about the
+    parent's joint point (which differs from the child's for prismatic and distance joints),
+    in the parent's joint frame (or world axes); ``effort`` stays that of the child.
     """
+    if on not in ("child", "parent"):
+        raise ValueError(f"on must be 'child' or 'parent', got {on!r}")
     n = len(model.joints)
     force, torque, effort = np.zeros((n, 3)), np.zeros((n, 3)), np.full(n, np.nan)
     for k, joint in enumerate(model.joints):
@@ -127,6 +139,9 @@ def joint_wrenches(model: Model, q: np.ndarray, lam: np.ndarray, Phi_v: np.ndarr
         elif joint.kind == "revolute":  # about the axis; in the plane, about its normal
             axis = np.array([0.0, 0.0, 1.0]) if joint.axis is None else joint.axis
             effort[k] = t @ (R @ axis)
+        if on == "parent":
+            point, R = parent_point(model, q, joint)
+            f, t = -f, -t + np.cross(origin - point, -f)
         if frame == "joint":
             f, t = R.T @ f, R.T @ t
         force[k], torque[k] = f, t

@@ -144,6 +144,8 @@ def run(name: str, scene: hx.Scene, folder: Path, args) -> dict:
     if pin is not None:
         row["pin_us"] = pin["per_sample_us"]
         row["ratio"] = row["jit_us"] / pin["per_sample_us"]
+        if "vm_us" in row:
+            row["vm_ratio"] = row["vm_us"] / pin["per_sample_us"]
         row["agreement"] = agreement(*row["table"], *pin["table"])
     print(f"  {name}: done", file=sys.stderr, flush=True)
     return row
@@ -164,7 +166,8 @@ def main() -> None:
             rows.append(run(f"chain {n}", chain_scene(n), Path(folder), args))
     columns = [("model", "{:<18}"), ("joints", "{:>6}"), ("jit_build_s", "{:>9.2f}"),
                ("jit_us", "{:>9.2f}"), ("vm_build_s", "{:>9.2f}"), ("vm_us", "{:>9.2f}"),
-               ("pin_us", "{:>9.2f}"), ("ratio", "{:>7.2f}"), ("agreement", "{:>10.1e}")]
+               ("pin_us", "{:>9.2f}"), ("ratio", "{:>7.2f}"), ("vm_ratio", "{:>8.2f}"),
+               ("agreement", "{:>10.1e}")]
     print(f"samples per call: {args.samples}; costs in microseconds per sample (median of "
           f"{args.repeats}); build in seconds")
     print(" ".join(f"{name:>{len(fmt.format(0)) if 'model' not in name else 18}}"
@@ -176,13 +179,16 @@ def main() -> None:
             cells.append(fmt.format(row[name]) if name in row else f"{'-':>{width}}")
         print(" ".join(cells))
     chains = [r for r in rows if r["model"].startswith("chain")]
-    if len(chains) >= 2:
-        slope = np.polyfit(np.log([r["joints"] for r in chains]),
-                           np.log([r["jit_us"] for r in chains]), 1)[0]
-        print(f"growth exponent over the chains (compiled): {slope:.2f}")
-        ratios = [r["ratio"] for r in rows if "ratio" in r]
+    for mode, label in (("jit", "compiled"), ("vm", "interpreted")):
+        if len(chains) >= 2 and f"{mode}_us" in chains[0]:
+            slope = np.polyfit(np.log([r["joints"] for r in chains]),
+                               np.log([r[f"{mode}_us"] for r in chains]), 1)[0]
+            print(f"growth exponent over the chains ({label}): {slope:.2f}")
+        key = "ratio" if mode == "jit" else "vm_ratio"
+        ratios = [r[key] for r in rows if key in r]
         if ratios:
-            print(f"time ratio hexapod / Pinocchio: {min(ratios):.2f} to {max(ratios):.2f}")
+            print(f"time ratio hexapod ({label}) / Pinocchio: {min(ratios):.2f} to "
+                  f"{max(ratios):.2f}")
 
 
 if __name__ == "__main__":

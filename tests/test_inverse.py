@@ -122,3 +122,37 @@ def test_compiled_and_interpreted_tree_paths_agree():
         assert _close(getattr(interpreted, key), getattr(compiled, key), 1e-13), key
     if plan.compiled is not plan.function:  # a C compiler was found
         assert plan.is_compiled
+
+
+def test_reactions_on_the_parent():
+    """The reaction on the parent is the opposite wrench about the parent's joint point: for a
+    prismatic joint that point is apart from the child's, and the moments differ by the arm."""
+    model = hx.assemble(random_tree(9, 5, prismatic=0.6))
+    assert any(j.kind == "prismatic" for j in model.joints)
+    q = hx.assemble_positions(model, t=0.4)
+    v = hx.solve_velocities(model, q, 0.4)
+    data = hx.Data()
+    hx.forward_dynamics(model, data, 0.4, q, v)
+    child = hx.joint_wrenches(model, q, data.lam, data.Phi_v, frame="world")
+    parent = hx.joint_wrenches(model, q, data.lam, data.Phi_v, frame="world", on="parent")
+    local = hx.joint_wrenches(model, q, data.lam, data.Phi_v, on="parent")
+    from hexapod.reactions import joint_origin, parent_point
+    for k, joint in enumerate(model.joints):
+        origin, _ = joint_origin(model, q, joint)
+        point, R = parent_point(model, q, joint)
+        assert np.allclose(parent.force[k], -child.force[k], atol=1e-12)
+        # moved back to the child's point, the parent's moment is the child's, reversed
+        back = parent.torque[k] + np.cross(point - origin, parent.force[k])
+        assert np.allclose(back, -child.torque[k], atol=1e-10 * (1 + np.abs(child.torque).max()))
+        assert np.allclose(R @ local.force[k], parent.force[k], atol=1e-12)
+        if joint.kind == "prismatic":
+            assert np.linalg.norm(point - origin) > 1e-6  # the points are apart
+
+
+def test_without_a_compiler_the_interpreter_is_used(monkeypatch):
+    monkeypatch.setenv("HEXAPOD_NO_JIT", "1")
+    model = hx.assemble(front_leg_scene())
+    result = inverse_dynamics(model, TIMES, compile=True)
+    plan = tree_plan(model)
+    assert plan.compiled is plan.function and not plan.is_compiled
+    assert np.all(np.isfinite(result.effort))
