@@ -13,22 +13,17 @@ from __future__ import annotations
 
 import argparse
 import statistics
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
 import hexapod as hx
 from legs import front_leg_scene
 
-
-def chain(n: int) -> hx.Scene:
-    scene = hx.Scene(f"chain-{n}")
-    for k in range(n):
-        scene.add(hx.SpatialBody(f"b{k}", 1.0, [1e-3, 1e-2, 1e-2], com=[0.05, 0, 0],
-                                 position=[0.1 * k, 0, 0]))
-        scene.add(hx.Revolute(f"j{k}", "ground" if k == 0 else f"b{k - 1}", f"b{k}",
-                              origin=[0.1 * k, 0, 0], axis=[0, 1, 0] if k % 2 else [0, 0, 1]))
-    return scene
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_inverse import chain_scene  # noqa: E402  (the same chains in both benchmarks)
 
 
 def hexapod_robot() -> hx.Scene:
@@ -70,7 +65,7 @@ def main() -> None:
     args = parser.parse_args()
     rows = [("front leg", measure(front_leg_scene(), args.repeats)),
             ("six legs on a trunk", measure(hexapod_robot(), args.repeats))]
-    chains = [(f"chain of {n}", measure(chain(n), args.repeats)) for n in args.sizes]
+    chains = [(f"chain of {n}", measure(chain_scene(n), args.repeats)) for n in args.sizes]
     print(f"{'scene':<22}{'bodies':>7}{'n_v':>6}{'n_c':>6}{'assemble s':>12}"
           f"{'1st solve s':>12}{'solve ms':>10}")
     for name, r in rows + chains:

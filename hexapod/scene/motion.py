@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from hexapod.errors import InputFileError, ModelError, Problem
+from hexapod.fileio import read_text
 from hexapod.scene.drivers import JointDriver
 from hexapod.scene.joints import Prismatic
 from hexapod.scene.laws import Hermite, Spline
@@ -66,15 +67,11 @@ def _fast_table(text: str) -> tuple[list[str], np.ndarray] | None:
 def read_motion(path: str | Path) -> Motion:
     """Read a motion CSV file; every problem is named with the file, line and column."""
     path = Path(path)
+    text = read_text(path, "motion file")
+    fast = _fast_table(text) if '"' not in text else None
     try:
-        text = path.read_text(encoding="utf-8")
-        fast = _fast_table(text) if '"' not in text else None
         rows = [] if fast else list(csv.reader(io.StringIO(text, newline="")))
-    except FileNotFoundError:
-        raise InputFileError(f"{path}: no such file") from None
-    except IsADirectoryError:
-        raise InputFileError(f"{path}: is a directory, not a motion file") from None
-    except (OSError, UnicodeDecodeError, csv.Error) as error:
+    except csv.Error as error:
         raise InputFileError(f"{path}: cannot read the motion file ({error})") from None
     if fast:
         header, data = fast

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from hexapod.errors import InputFileError, ModelError, Problem
+from hexapod.fileio import read_text
 from hexapod.scene.bodies import Particle, PlanarBody, SpatialBody
 from hexapod.scene.drivers import DRIVER_TYPES
 from hexapod.scene.element import Element
@@ -467,14 +468,7 @@ def read_scene(path: str | Path) -> Scene:
         The file is TOML but describes an invalid scene; lists every problem with its key.
     """
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise InputFileError(f"{path}: no such file") from None
-    except IsADirectoryError:
-        raise InputFileError(f"{path}: is a directory, not a scene file") from None
-    except (OSError, UnicodeDecodeError) as error:
-        raise InputFileError(f"{path}: cannot read the file ({error})") from None
+    text = read_text(path, "scene file")
     try:
         document = tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:

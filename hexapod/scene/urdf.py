@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from hexapod.errors import InputFileError, ModelError, Problem
+from hexapod.fileio import read_text
 from hexapod.scene.bodies import SpatialBody
 from hexapod.scene.element import GROUND
 from hexapod.scene.joints import Fixed, Prismatic, Revolute
@@ -230,14 +231,7 @@ def read_urdf(path: str | Path) -> Scene:
         The URDF is XML but not a model we can build; every problem is listed.
     """
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise InputFileError(f"{path}: no such file") from None
-    except IsADirectoryError:
-        raise InputFileError(f"{path}: is a directory, not a URDF file") from None
-    except (OSError, UnicodeDecodeError) as error:
-        raise InputFileError(f"{path}: cannot read the file ({error})") from None
+    text = read_text(path, "URDF file")
     try:
         root = ET.fromstring(text)
     except ET.ParseError as error:
