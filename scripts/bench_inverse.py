@@ -157,13 +157,18 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--chains", type=int, nargs="*", default=[10, 30, 100, 300])
     parser.add_argument("--vm", action="store_true", help="also time the interpreted path")
+    parser.add_argument("--keep", metavar="DIR", help="keep the URDFs and motions in DIR (to "
+                        "time whole commands, e.g. hexapod inverse against "
+                        "scripts/pinocchio_inverse.py)")
     args = parser.parse_args()
     rows = []
-    with tempfile.TemporaryDirectory() as folder:
+    with tempfile.TemporaryDirectory() as scratch:
+        folder = Path(args.keep or scratch)
+        folder.mkdir(parents=True, exist_ok=True)
         for name, build in MODELS.items():
-            rows.append(run(name, build(), Path(folder), args))
+            rows.append(run(name, build(), folder, args))
         for n in args.chains:
-            rows.append(run(f"chain {n}", chain_scene(n), Path(folder), args))
+            rows.append(run(f"chain {n}", chain_scene(n), folder, args))
     columns = [("model", "{:<18}"), ("joints", "{:>6}"), ("jit_build_s", "{:>9.2f}"),
                ("jit_us", "{:>9.2f}"), ("vm_build_s", "{:>9.2f}"), ("vm_us", "{:>9.2f}"),
                ("pin_us", "{:>9.2f}"), ("ratio", "{:>7.2f}"), ("vm_ratio", "{:>8.2f}"),
