@@ -37,7 +37,9 @@ from hexapod.scene import (
     CoordinateDriver,
     Distance,
     Fixed,
+    Gait,
     Harmonic,
+    Hermite,
     JointDriver,
     JointEffort,
     Particle,
@@ -57,7 +59,7 @@ __version__ = "0.1.0"
 
 __all__ = [
     "GROUND", "AppliedForce", "AppliedTorque", "AssemblyError", "Constant", "CoordinateDriver",
-    "Data", "Distance", "Fixed", "Harmonic", "HexapodError", "InputFileError",
+    "Data", "Distance", "Fixed", "Gait", "Harmonic", "Hermite", "HexapodError", "InputFileError",
     "IntegrationError", "JointDriver", "JointEffort", "JointWrenches", "Model", "ModelError",
     "Particle", "Placement", "PlanarBody", "Polynomial", "Prismatic", "Revolute", "Scene",
     "SingularSystemError", "SpatialBody", "Spherical", "Spline", "SpringDamper", "assemble",

@@ -41,11 +41,13 @@ def load_scene(name_or_path: str) -> Scene:
         from hexapod.scene.urdf import read_urdf
 
         return read_urdf(path)
-    if path.suffix == ".toml" or path.exists():
+    if path.suffix == ".toml" or path.is_file():
         return read_scene(path)
     scenes = builtin_scenes()
     if name_or_path in scenes:
         return scenes[name_or_path].load()()
+    if path.is_dir():
+        raise InputFileError(f"{path}: is a directory, not a scene file")
     known = ", ".join(sorted(scenes)) or "none installed"
     raise InputFileError(f"{name_or_path}: no such scene file, and no built-in scene of that "
                          f"name (built-in: {known})")

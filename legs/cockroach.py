@@ -1,10 +1,14 @@
-"""Cockroach leg data at natural scale, and the 20:1 scaling of seed 001's robot.
+"""Cockroach leg and body data at natural scale, and the 20:1 scaling of seed 001's robot.
 
-Source: the project's research note ``insect-legs.md`` (section 4.2, working table; section 6,
-layout A). The lengths, radii and mass split are **estimates** there ([E]), built around measured
-hind-leg masses (Kram, Wong & Full 1997) and effective leg lengths (Bender et al. 2011); replace
-them when primary tables are available. Segments are solid cylinders with the centre of mass at
-mid-length.
+Source: the project's research note ``insect-legs.md``. Tags as there: [S] from a cited source,
+[D] derived by a stated calculation, [E] an estimate to be replaced by measured values.
+
+* Segment lengths, radii and masses: section 4.2, working table ([E], built around measured
+  hind-leg masses, Kram, Wong & Full 1997, and effective leg lengths, Bender et al. 2011).
+  Layout A fuses trochanter and femur: length and mass add, the femur's radius is kept ([D]).
+* Segments are solid cylinders with the centre of mass at mid-length (I_t, I_a of the note).
+* Rest poses: section 6 for the front leg ([E]); the middle and hind legs' are ours ([E]).
+* Thorax-coxa points and the trunk: section 3 ([E]).
 """
 
 from __future__ import annotations
@@ -35,26 +39,51 @@ class Segment:
         return length, mass, transverse, axial
 
 
-#: Front leg, layout A: the trochanter is fused to the femur (one body, "trochanter + femur").
-FRONT_LEG = (
-    Segment("coxa", 5.0, 1.00, 11.98),
-    Segment("femur", 7.5, 0.55, 11.45),
-    Segment("tibia", 5.0, 0.35, 2.66),
-    Segment("tarsus", 5.0, 0.20, 0.53),
-)
+def _fused(trochanter: Segment, femur: Segment) -> Segment:
+    """Layout A's "trochanter + femur as one body" [D]."""
+    return Segment("femur", trochanter.length_mm + femur.length_mm, femur.radius_mm,
+                   trochanter.mass_mg + femur.mass_mg)
 
-#: The two zero-length links of the three-axis thorax-coxa joint: 1 % of the coxa mass with the
-#: inertia of a sphere of radius 0.5 mm (natural scale), the placeholder of the note, section 6.
-BRACKET = Segment("bracket", 0.0, 0.5, 0.01 * 11.98)
 
-#: Rest pose (section 6): the leg plane turned 40 deg forward of lateral; segment inclinations
-#: below the horizontal (deg). The tarsus angle is our estimate, chosen so the foot reaches
-#: the ground about 9 mm below the thorax-coxa joint at natural scale.
-REST_POSE_DEG = {"plane_forward": 40.0, "coxa": 40.0, "femur": 0.0, "tibia": 60.0,
-                 "tarsus": 20.0}
+#: Segments of layout A (coxa, trochanter + femur, tibia, tarsus), section 4.2.
+SEGMENTS = {
+    "front": (Segment("coxa", 5.0, 1.00, 11.98),
+              _fused(Segment("trochanter", 1.5, 0.50, 1.33), Segment("femur", 6.0, 0.55, 10.12)),
+              Segment("tibia", 5.0, 0.35, 2.66), Segment("tarsus", 5.0, 0.20, 0.53)),
+    "middle": (Segment("coxa", 5.0, 1.10, 20.60),
+               _fused(Segment("trochanter", 1.5, 0.55, 2.29),
+                      Segment("femur", 8.0, 0.60, 17.39)),
+               Segment("tibia", 8.0, 0.40, 4.58), Segment("tarsus", 7.0, 0.22, 0.92)),
+    "hind": (Segment("coxa", 6.0, 1.30, 36.00),
+             _fused(Segment("trochanter", 2.0, 0.60, 4.00), Segment("femur", 10.0, 0.70, 30.40)),
+             Segment("tibia", 12.0, 0.45, 8.00), Segment("tarsus", 9.0, 0.25, 1.60)),
+}
 
-#: Tripod-gait joint laws of section 7.3: amplitude (deg) and shape of q_i(t) = A h(w t + phase),
-#: for the joints J1 ... J6 of layout A. Phase origin w t = 0 at lift-off.
+#: The zero-length links of the three-axis thorax-coxa joint: 1 % of the coxa mass with the
+#: inertia of a sphere of radius 0.5 mm (natural scale), the placeholder of section 6.
+def bracket(leg: str) -> Segment:
+    return Segment("bracket", 0.0, 0.5, 0.01 * SEGMENTS[leg][0].mass_mg)
+
+
+#: Rest poses: the leg plane turned forward of lateral by ``plane_forward`` (negative: backward),
+#: segment inclinations below the horizontal (deg). Front: section 6 [E]; the tarsus angle, the
+#: middle and the hind legs are our estimates [E] (the hind leg reaches back).
+REST_POSE_DEG = {
+    "front": {"plane_forward": 40.0, "coxa": 40.0, "femur": 0.0, "tibia": 60.0, "tarsus": 20.0},
+    "middle": {"plane_forward": 0.0, "coxa": 35.0, "femur": 0.0, "tibia": 65.0, "tarsus": 20.0},
+    "hind": {"plane_forward": -40.0, "coxa": 30.0, "femur": 0.0, "tibia": 70.0, "tarsus": 20.0},
+}
+
+#: Thorax-coxa points from the body's centre of mass (x forward, y left, z up), mm at natural
+#: scale, left side (the right mirrors y): section 3 [E].
+THC_POINT_MM = {"front": (12.0, 4.0, -2.0), "middle": (6.0, 4.0, -2.0), "hind": (0.0, 4.5, -2.0)}
+
+#: The trunk without legs at natural scale: mass (g) and principal moments (kg m^2) of the
+#: uniform ellipsoid of section 3 [E].
+TRUNK = {"mass_g": 2.30, "inertia": (0.218 / 3.2e6, 1.055 / 3.2e6, 1.226 / 3.2e6)}
+
+#: Tripod-gait joint laws of section 7.3 for the joints J1 ... J6 of layout A: amplitude (deg)
+#: and shape of q_i = A h(phase), phase 0 at lift-off, pi at touch-down [E]. Used for every leg.
 GAIT_LAWS = (
     ("thc_protraction", 25.0, "-cos"),
     ("thc_levation", 8.0, "sin"),
@@ -64,5 +93,5 @@ GAIT_LAWS = (
     ("tita", 10.0, "-cos"),
 )
 
-#: One stride in the 0-0.5 s window of seed 001's Fig. 7 (Froude-scaled 9 Hz -> 2 Hz).
+#: One stride in the 0-0.5 s window of seed 001's Fig. 7 (Froude-scaled 9 Hz -> 2 Hz) [D].
 STRIDE_PERIOD = 0.5

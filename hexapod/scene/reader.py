@@ -205,6 +205,9 @@ _LAW_KEYS = {
                "degree": (_integer, False), "boundary": (_string, False)},
     "hermite": {"times": (_numbers, True), "values": (_numbers, True),
                 "rates": (_numbers, True), "accelerations": (_numbers, True)},
+    "gait": {"offset": (_number, False), "cos": (_amplitudes, False),
+             "sin": (_amplitudes, False), "period": (_number, True), "duty": (_number, False),
+             "shift": (_number, False), "blend": (_number, False)},
 }
 
 
