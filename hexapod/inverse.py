@@ -79,6 +79,8 @@ class InverseResult:
 #: Compiling the tree path costs about 0.2 s per joint and saves about 4.4 microseconds per joint
 #: and sample (scripts/bench_inverse.py): it pays from some 50 000 samples on.
 COMPILE_FROM_SAMPLES = 50_000
+#: Samples per call of the tree path when progress is reported.
+PROGRESS_CHUNK = 2_000
 
 
 def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = "joint",
@@ -100,7 +102,8 @@ def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = 
         compile when there are at least :data:`COMPILE_FROM_SAMPLES` samples, or when the
         model's tree path was compiled before (compilation is kept with the model).
     progress :
-        Called as ``progress(done, total)`` while the saddle path runs.
+        Called as ``progress(done, total)`` as samples are done (by chunks of
+        :data:`PROGRESS_CHUNK` on the tree path).
 
     Raises
     ------
@@ -120,7 +123,7 @@ def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = 
     if plan is not None and method in ("auto", "tree"):
         if compile is None:
             compile = plan.is_compiled or times.size >= COMPILE_FROM_SAMPLES
-        return plan.solve(times, w, wd, wdd, frame, compiled=compile)
+        return plan.solve(times, w, wd, wdd, frame, compiled=compile, progress=progress)
     return _saddle(model, times, frame, progress)
 
 
@@ -310,18 +313,25 @@ class TreePlan:
             cache[n, compiled] = (mapped, *mapped.buffer())
         return cache[n, compiled]
 
-    def solve(self, times, w, wd, wdd, frame, compiled: bool) -> InverseResult:
+    def solve(self, times, w, wd, wdd, frame, compiled: bool,
+              progress: Callable[[int, int], None] | None = None) -> InverseResult:
         model, n, J = self.model, times.size, len(self.model.joints)
-        _, buffer, evaluate = self._evaluator(n, compiled)
         # CasADi's column-major (rows x n) is NumPy's C-order (n x rows): no conversion
         inputs = [np.ascontiguousarray(x.T) for x in (w, wd, wdd)]
         q, v, v_dot = np.empty((n, model.n_q)), np.empty((n, model.n_v)), np.empty((n, model.n_v))
         wrench, rotation = np.empty((n, J, 6)), np.empty((n, J, 9))
-        for i, x in enumerate(inputs):
-            buffer.set_arg(i, memoryview(x))
-        for i, y in enumerate((q, v, v_dot, wrench, rotation)):
-            buffer.set_res(i, memoryview(y))
-        evaluate()
+        # one call for all samples, or calls over chunks of samples to report progress
+        chunk = max(1, n if progress is None else min(n, PROGRESS_CHUNK))
+        for start in range(0, n, chunk):
+            stop = min(n, start + chunk)
+            _, buffer, evaluate = self._evaluator(stop - start, compiled)
+            for i, x in enumerate(inputs):
+                buffer.set_arg(i, memoryview(x[start:stop]))
+            for i, y in enumerate((q, v, v_dot, wrench, rotation)):
+                buffer.set_res(i, memoryview(y[start:stop]))
+            evaluate()
+            if progress is not None:
+                progress(stop, n)
         force, torque = wrench[..., :3], wrench[..., 3:]
         effort = np.full((n, J), np.nan)
         for j, joint in enumerate(model.joints):

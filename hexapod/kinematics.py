@@ -15,6 +15,7 @@ import numpy as np
 from hexapod.errors import AssemblyError
 from hexapod.linalg import RowSplit, check_consistency, equilibrate, split_rows
 from hexapod.model import Model
+from hexapod.spatial import rotation_from_euler_parameters
 
 
 def _split(model: Model, Phi_v: np.ndarray) -> RowSplit:
@@ -155,3 +156,39 @@ def degrees_of_freedom(model: Model, q: np.ndarray, t: float = 0.0) -> dict:
         "dof_with_drivers": model.n_v - split.rank,
         "redundant_rows": [model.rows[i].name for i in split.redundant],
     }
+
+
+def body_poses(model: Model, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """World poses of every body's centre-of-mass frame over samples ``q`` (N, n_q): positions
+    (N, n_bodies, 3) and rotations (N, n_bodies, 3, 3), planar poses embedded in 3-D (z = 0,
+    rotation about z) and particles with the identity."""
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    n, n_b = q.shape[0], len(model.bodies)
+    position, rotation = np.zeros((n, n_b, 3)), np.tile(np.eye(3), (n, n_b, 1, 1))
+    for b, body in enumerate(model.bodies):
+        qb = q[:, body.q]
+        if body.kind == "spatial":
+            position[:, b] = qb[:, :3]
+            rotation[:, b] = np.moveaxis(rotation_from_euler_parameters(qb[:, 3:].T), -1, 0)
+        elif body.kind == "planar":
+            position[:, b, :2] = qb[:, :2]
+            c, s = np.cos(qb[:, 2]), np.sin(qb[:, 2])
+            rotation[:, b, :2, :2] = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], 1)
+        else:
+            position[:, b, :qb.shape[1]] = qb
+    return position, rotation
+
+
+def marker_trajectories(model: Model, q: np.ndarray, marker: str) -> dict[str, np.ndarray]:
+    """World positions (N, 3) over samples ``q`` of the markers named ``marker``, by body (every
+    body that has one)."""
+    owners = [b for b, body in enumerate(model.bodies) if marker in body.markers]
+    if not owners:
+        return {}
+    position, rotation = body_poses(model, q)
+    out = {}
+    for b in owners:
+        offset = model.bodies[b].markers[marker].position
+        offset = np.concatenate([offset, np.zeros(3 - offset.size)])
+        out[model.bodies[b].name] = position[:, b] + rotation[:, b] @ offset
+    return out

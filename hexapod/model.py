@@ -21,7 +21,7 @@ Functions: ``phi(q, w)``, ``Phi_q(q, w)``, ``Phi_v(q, w)``, ``nu(q, w, wd)``,
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 
 import casadi as ca
@@ -52,6 +52,7 @@ class BodyInfo:
     mass: float
     inertia: np.ndarray  # about the centre of mass, body axes: 3 x 3, 1 x 1 (plane), 0 x 0
     com: np.ndarray  # centre of mass in the body's reference frame (for reference-frame poses)
+    markers: dict[str, Placement] = field(default_factory=dict)  # in the centre-of-mass frame
 
 
 @dataclass(frozen=True)
@@ -357,6 +358,19 @@ class Model:
         out = function(*[np.asarray(values[n], dtype=float) for n in function.name_in()])
         array = out.full()
         return array if name in _MATRIX_OUTPUTS else array.reshape(-1)
+
+    def call_samples(self, name: str, **values) -> np.ndarray:
+        """Evaluate the Function ``name`` at N samples in one call: inputs by name with the
+        samples along the first axis, (N, size); the output likewise, (N, size) for vectors and
+        (N, rows, columns) for matrices."""
+        function = getattr(self, name)
+        inputs = [np.atleast_2d(np.asarray(values[n], dtype=float)) for n in function.name_in()]
+        n = inputs[0].shape[0] if inputs else 1
+        array = function.map(n, "serial")(*[x.T for x in inputs]).full()
+        if name in _MATRIX_OUTPUTS:
+            rows, columns = function.size_out(0)
+            return array.reshape(rows, n, columns).transpose(1, 0, 2)
+        return array.T
 
     # ---------------------------------------------------------------- Lie-group helpers
 

@@ -106,7 +106,9 @@ def _bodies(scene: Scene):
             v0 += list(body.velocity)
             diagonal += [body.mass] * dq
         infos.append(BodyInfo(body.name, kind, index, slice(nq, nq + dq), slice(nv, nv + dv),
-                              body.mass, inertia, np.array(body.com, dtype=float)))
+                              body.mass, inertia, np.array(body.com, dtype=float),
+                              {name: body.marker_in_com_frame(frame)
+                               for name, frame in body.markers.items()}))
         nq += dq
         nv += dv
     mass = BlockDiagonal(np.array(diagonal), np.array(blocks).reshape(-1, 3, 3),
@@ -158,8 +160,12 @@ def _characteristic_length(scene: Scene, joint_points: list[np.ndarray]) -> floa
     points = joint_points + [b.com_pose.position for b in scene.bodies.values()]
     if len(points) < 2:
         return 1.0
-    P = np.array(points)
-    rms = float(np.sqrt(np.mean(np.sum((P - P.mean(axis=0)) ** 2, axis=1))))
+    spread = np.array(points) - np.mean(points, axis=0)
+    largest = float(np.abs(spread).max())
+    if not largest > 0:
+        return 1.0
+    # scaled before squaring, so that huge (but finite) coordinates do not overflow
+    rms = largest * float(np.sqrt(np.mean(np.sum((spread / largest) ** 2, axis=1))))
     return rms if rms > 1e-12 else 1.0
 
 

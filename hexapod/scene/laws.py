@@ -37,6 +37,11 @@ class Law:
         """What is wrong with the law's own numbers (empty when it is fine)."""
         return []
 
+    def cycle_time(self) -> float | None:
+        """The time after which the law repeats itself, None when it does not (or when it is
+        constant, which repeats at any time)."""
+        return None
+
 
 def _finite(values) -> bool:
     return bool(np.all(np.isfinite(np.asarray(values, dtype=float))))
@@ -127,6 +132,9 @@ class Harmonic(Law):
             fdd -= b * kw**2 * np.sin(kw * s)
         return f, fd, fdd
 
+    def cycle_time(self):
+        return 1.0 / self.frequency if (self.cos or self.sin) else None
+
     def _scaled(self, factor):
         return Harmonic(self.offset * factor, tuple(a * factor for a in self.cos),
                         tuple(b * factor for b in self.sin), self.frequency, self.t0)
@@ -195,6 +203,9 @@ class Spline(Law):
         t = np.asarray(t, dtype=float)
         s = self._spline
         return s(t), s(t, nu=1), s(t, nu=2)
+
+    def cycle_time(self):
+        return self.times[-1] - self.times[0] if self.boundary == "periodic" else None
 
     def _scaled(self, factor):
         return Spline(self.times, tuple(v * factor for v in self.values), self.degree,
@@ -337,6 +348,9 @@ class Gait(Law):
             fdd += value_dd * phi_d**2 + value_d * phi_dd
         return f, fd, fdd
 
+    def cycle_time(self):
+        return self.period if (self.cos or self.sin) else None
+
     def _scaled(self, factor):
         return Gait(self.offset * factor, tuple(a * factor for a in self.cos),
                     tuple(b * factor for b in self.sin), self.period, self.duty, self.shift,
@@ -442,6 +456,9 @@ class Scaled(Law):
 
     def _scaled(self, factor):
         return Scaled(self.law, self.factor * factor)
+
+    def cycle_time(self):
+        return self.law.cycle_time()
 
     def problems(self):
         return self.law.problems()
