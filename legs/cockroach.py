@@ -95,3 +95,16 @@ GAIT_LAWS = (
 
 #: One stride in the 0-0.5 s window of seed 001's Fig. 7 (Froude-scaled 9 Hz -> 2 Hz) [D].
 STRIDE_PERIOD = 0.5
+
+#: The stride seen from the trunk, natural scale (mm): the foot's travel in stance, duty factor
+#: times stride length, 11.6-13.5 mm over the speeds of section 7.2 [D]; its lift in swing,
+#: 2-3 mm (section 7.3) [E]; the ground's height in the trunk frame [E, ours: the rest poses'
+#: feet lie 11-19 mm below the centre of mass].
+STANCE_LENGTH_MM = 13.0
+FOOT_LIFT_MM = 2.5
+GROUND_Z_MM = -14.0
+
+#: Fore-aft offset of each leg's stance line (its middle) from the rest pose's foot, mm [E,
+#: ours]: the front leg's rest pose reaches far forward, so its stride is centred further back,
+#: where the whole of it is reachable with the joints well inside their ranges.
+STANCE_OFFSET_MM = {"front": -10.0, "middle": -1.0, "hind": 1.0}

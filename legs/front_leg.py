@@ -26,7 +26,7 @@ def front_leg_scene(scale: float = MODEL_SCALE, gait: bool = True, phase: float 
     shifted by ``phase`` (rad); without, free (6 degrees of freedom). No load on the foot."""
     laws = None
     if gait:
-        laws = {joint: replace(law, shift=(law.shift + phase / (2 * np.pi)) % 1.0)
+        laws = {joint: replace(law, t0=law.t0 - phase / (2 * np.pi) * period)
                 for joint, law in GAITS["tripod"].joint_laws("L1", period).items()}
     return leg_scene("front", "L", scale, laws, name)
 

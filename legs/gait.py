@@ -1,10 +1,11 @@
 """Gaits: which legs swing together, for how long, and the laws that follow from it.
 
 A gait gives each leg a **lift-off time** (a fraction of the period) and all legs one **duty
-factor** (the fraction of the cycle in stance); a leg's law leads by ``shift = -lift_off``
-(modulo 1). Each joint then follows ``q_i = A_i h_i(phi)`` in the duty-factor-warped phase
-``phi`` of :class:`hexapod.Gait` (0 at lift-off, pi at touch-down, C2; the laws of
-section 7.3 of the leg note).
+factor** (the fraction of the cycle in stance). A leg's cycle fraction ``tau = t / T - lift_off``
+(modulo 1) runs through swing, ``[0, 1 - duty)``, then stance; its joints follow the laws of
+:mod:`legs.stepping`, which put its foot on the ground in stance, moving backwards at the walking
+speed, and lift it in swing (the laws are harmonic series in time, C-infinity, started at the
+leg's lift-off time).
 
 ================  ====  ==============================================================
 gait              duty  lift-off times (fraction of the period)
@@ -29,8 +30,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hexapod import Gait, Spline
-from legs.cockroach import GAIT_LAWS, STRIDE_PERIOD
+from hexapod import Harmonic, Spline
+from legs.cockroach import MODEL_SCALE, STANCE_LENGTH_MM, STRIDE_PERIOD, THC_POINT_MM
+from legs.stepping import path_targets, stepping_harmonics
 
 LEG_NAMES = ("L1", "L2", "L3", "R1", "R2", "R3")
 _POSITION = {"1": "front", "2": "middle", "3": "hind"}
@@ -46,38 +48,49 @@ class GaitPattern:
     name: str
     duty: float
     lift_off: dict[str, float]  # fraction of the period
-    blend: float = 0.1  # the phase rate's switch width, a fraction of the period
 
-    def shift(self, leg: str) -> float:
-        return (-self.lift_off[leg]) % 1.0
-
-    def joint_laws(self, leg: str = "L1", period: float = STRIDE_PERIOD) -> dict:
-        """The drivers' laws of one leg's six joints (joint name -> law)."""
-        laws = {}
-        for joint, amplitude, shape in GAIT_LAWS:
-            a = np.radians(amplitude)
-            harmonic = {"sin": {"sin": [a]}, "-cos": {"cos": [-a]}}[shape]
-            laws[joint] = Gait(period=period, duty=self.duty, shift=self.shift(leg),
-                               blend=self.blend, **harmonic)
-        return laws
-
-    def phase_law(self, leg: str, period: float = STRIDE_PERIOD) -> Gait:
-        """The leg's phase as a law (``sin`` of it): for the stance test of the phases."""
-        return Gait(period=period, duty=self.duty, shift=self.shift(leg), blend=self.blend,
-                    sin=[1.0])
+    def cycle_fraction(self, leg: str, t, period: float = STRIDE_PERIOD) -> np.ndarray:
+        """Where the leg is in its cycle at ``t``: 0 at lift-off, 1 - duty at touch-down."""
+        return (np.asarray(t, dtype=float) / period - self.lift_off[leg]) % 1.0
 
     def in_stance(self, leg: str, t, period: float = STRIDE_PERIOD) -> np.ndarray:
-        """True where the leg is in stance (phase in [pi, 2 pi) modulo 2 pi)."""
-        phi = self.phase_law(leg, period).phase(t)[0] % (2 * np.pi)
-        return phi >= np.pi
+        return self.cycle_fraction(leg, t, period) >= 1.0 - self.duty
+
+    def walking_speed(self, period: float = STRIDE_PERIOD, scale: float = MODEL_SCALE) -> float:
+        """The trunk's speed over the ground, the feet's in stance relative to it (m/s)."""
+        return STANCE_LENGTH_MM * 1e-3 * scale / (self.duty * period)
+
+    def foot_targets(self, t, period: float = STRIDE_PERIOD,
+                     scale: float = MODEL_SCALE) -> dict[str, np.ndarray]:
+        """Where each foot is designed to be at times ``t`` (N, 3 per leg; m, in the trunk
+        frame of :func:`legs.robot.hexapod_scene`): its leg's path, mirrored on the right,
+        from its thorax-coxa point."""
+        out = {}
+        for leg in LEG_NAMES:
+            position, side = leg_of(leg)
+            path = path_targets(position, self.cycle_fraction(leg, t, period), self.duty, scale)
+            thc = np.array(THC_POINT_MM[position]) * 1e-3 * scale
+            if side == "R":
+                path[:, 1], thc[1] = -path[:, 1], -thc[1]
+            out[leg] = path + thc
+        return out
+
+    def joint_laws(self, leg: str = "L1", period: float = STRIDE_PERIOD) -> dict:
+        """The drivers' laws of one leg's six joints (joint name -> law): its foot follows its
+        path (:mod:`legs.stepping`)."""
+        position, _ = leg_of(leg)
+        return {joint: Harmonic(offset, cos, sin, frequency=1.0 / period,
+                                t0=self.lift_off[leg] * period)
+                for joint, (offset, cos, sin) in stepping_harmonics(position,
+                                                                    self.duty).items()}
 
     def stance_load(self, leg: str, weight: float, period: float = STRIDE_PERIOD,
                     samples: int = 120) -> tuple[Spline, Spline, Spline]:
         """The ground's reaction on the leg's foot (world x, y, z, N) as periodic laws."""
         t = np.linspace(0.0, period, samples + 1)
-        phi = self.phase_law(leg, period).phase(t)[0] % (2 * np.pi)
-        stance = phi >= np.pi
-        progress = np.where(stance, (phi - np.pi) / np.pi, 0.0)
+        tau = self.cycle_fraction(leg, t, period)
+        stance = tau >= 1.0 - self.duty
+        progress = np.where(stance, (tau - (1.0 - self.duty)) / self.duty, 0.0)
         peak = weight / (6 * self.duty) / 0.5
         vertical = np.where(stance, peak * np.sin(np.pi * progress) ** 2, 0.0)
         position, _ = leg_of(leg)
@@ -96,5 +109,5 @@ GAITS = {
     "tetrapod": GaitPattern("tetrapod", 2 / 3, {"L3": 0.0, "R2": 0.0, "L2": 1 / 3,
                                                 "R1": 1 / 3, "L1": 2 / 3, "R3": 2 / 3}),
     "wave": GaitPattern("wave", 5 / 6, {"L3": 0.0, "L2": 1 / 6, "L1": 2 / 6, "R3": 3 / 6,
-                                        "R2": 4 / 6, "R1": 5 / 6}, blend=0.08),
+                                        "R2": 4 / 6, "R1": 5 / 6}),
 }

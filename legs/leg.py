@@ -11,16 +11,19 @@ element 2, reported in element 2's joint frame):
  2   ``thc_levation``      E1 -> E2 ``thc_link_2``     horizontal, normal to the leg plane:
                                                        positive raises the leg
  3   ``coxa_rotation``     E2 -> E3 ``coxa``           along the coxa, pointing away from the body
+                                                       on the left and towards it on the right
  4   ``ctr``               E3 -> E4 ``femur``          normal to the leg plane (as J2)
  5   ``fti``               E4 -> E5 ``tibia``          normal to the leg plane
  6   ``tita``              E5 -> E6 ``tarsus``         normal to the leg plane
 ===  ====================  =========================  ============================================
 
-E1 and E2 are the zero-length links of the three-axis thorax-coxa joint; E4 is trochanter and
-femur as one body. The scene's world is the trunk frame at the thorax-coxa point (x forward,
-y left, z up); all joint angles are zero in the rest pose. Each segment's reference frame sits
-at its proximal joint with x along the segment and z along the leg plane's normal; markers
-``distal`` (the next joint) and, on the tarsus, ``foot``.
+On the right, every axis is the mirror image of the left one's, reversed (axes are
+pseudo-vectors), so equal angles give mirror-image motions. E1 and E2 are the zero-length links
+of the three-axis thorax-coxa joint; E4 is trochanter and femur as one body. The scene's world
+is the trunk frame at the thorax-coxa point (x forward, y left, z up); all joint angles are zero
+in the rest pose. Each segment's reference frame sits at its proximal joint with x along the
+segment and z along the leg plane's normal; markers ``distal`` (the next joint) and, on the
+tarsus, ``foot``.
 """
 
 from __future__ import annotations
@@ -96,7 +99,7 @@ def leg_geometry(leg: str = "front", side: str = "L", scale: float = MODEL_SCALE
     frames = (
         _frame(lateral, -sign * up),  # J1: down on the left, up on the right
         _frame(lateral, normal),  # J2
-        _frame(normal, direction("coxa")),  # J3: along the coxa
+        _frame(normal, sign * direction("coxa")),  # J3: along the coxa, mirrored
         *segment_frames[1:],  # J4 ... J6: the femur's, tibia's and tarsus's frames
     )
     return LegGeometry(leg, side, tuple(points), tuple(frames), tuple(segment_frames),

@@ -81,3 +81,47 @@ def test_unit_scaling_of_laws():
         for a, b in zip(scaled.evaluate(TIMES), law.evaluate(TIMES), strict=True):
             # a new spline is fitted to the scaled samples: round-off of its collocation solve
             assert np.allclose(a, 10.0 * b, rtol=1e-10, atol=1e-12), name
+
+
+# ------------------------------------------------------------------ the warped-phase law
+
+GAIT_CASES = [(0.5, 0.1, 0.0), (2 / 3, 0.1, 0.25), (5 / 6, 0.08, 0.6)]  # duty, blend, shift
+
+
+@pytest.mark.parametrize("duty, blend, shift", GAIT_CASES)
+def test_gait_law_is_c2(duty, blend, shift):
+    law = hx.Gait(0.1, cos=[0.3, -0.05], sin=[0.4, 0.02], period=0.5, duty=duty, shift=shift,
+                  blend=blend)
+    t = np.linspace(-0.3, 1.3, 4001)
+    f, fd, fdd = law.evaluate(t)
+    h = 1e-6
+    assert np.allclose((law(t + h) - law(t - h)) / (2 * h), fd, atol=1e-6 * np.abs(fd).max())
+    assert np.allclose((law.evaluate(t + h)[1] - law.evaluate(t - h)[1]) / (2 * h), fdd,
+                       atol=1e-5 * np.abs(fdd).max())
+    # no jump in value, rate or acceleration across the rate switches: the one-sided limits
+    # agree there to within what the third derivative allows over the 2e-9 s gap (a C1 blend
+    # would leave a jump of order one in the acceleration)
+    a, d = 1.0 - duty, blend / 2
+    edges = np.array([0.0, d, a - d, a + d, 1.0 - d]) if duty != 0.5 else np.array([0.0])
+    switches = (edges - shift) * law.period
+    eps = 1e-9
+    left, right = law.evaluate(switches - eps), law.evaluate(switches + eps)
+    for k, (lo, hi) in enumerate(zip(left, right, strict=True)):
+        scale = np.abs((f, fd, fdd)[k]).max()
+        assert np.abs(hi - lo).max() < 1e-6 * scale, f"derivative {k} jumps at a switch"
+
+
+@pytest.mark.parametrize("duty, blend, shift", GAIT_CASES)
+def test_gait_law_phase_reaches_pi_at_touch_down(duty, blend, shift):
+    """Phase 0 at lift-off (t = -shift * period), pi at touch-down, a fraction 1 - duty of the
+    period later, 2 pi one period after lift-off; the stance (phase past pi) lasts duty."""
+    period = 0.5
+    law = hx.Gait(sin=[1.0], period=period, duty=duty, shift=shift, blend=blend)
+    lift = -shift * period
+    phi = law.phase(np.array([lift, lift + (1 - duty) * period, lift + period]))[0]
+    assert phi[0] == pytest.approx(0.0, abs=1e-12)
+    assert phi[1] == pytest.approx(np.pi, abs=1e-12)
+    assert phi[2] == pytest.approx(2 * np.pi, abs=1e-12)
+    t = np.linspace(0.0, period, 60001)[:-1]
+    assert (law.phase(t)[0] % (2 * np.pi) >= np.pi).mean() == pytest.approx(duty, abs=1e-4)
+    assert np.all(law.phase(t)[1] > 0)  # the phase never runs backwards

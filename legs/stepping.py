@@ -1,0 +1,173 @@
+"""Foot paths of a walking leg, and the joint laws that make the foot follow them.
+
+Seen from the trunk, which moves forward at a constant speed, a foot in **stance** stays on the
+ground: it moves backwards along a straight line parallel to the body's axis, at the walking
+speed, over ``STANCE_LENGTH_MM`` in the stance time (the duty factor of the period). In
+**swing** it returns forwards, lifted by up to ``FOOT_LIFT_MM``. The swing's fore-aft motion
+leaves and rejoins the stance line with the stance's velocity and zero second to fourth
+derivatives (a ninth-degree smooth step: the foot reverses smoothly, overshooting the line's
+ends a little); its lift is ``1024 u^5 (1 - u)^5`` of the swing's progress ``u``. The path is
+C4. Every leg walks on the same ground at the same speed, so the feet in stance do not slip
+against each other, whatever the gait.
+
+The joints: ``thc_levation`` and ``coxa_rotation`` rise and fall with the foot's lift, ``tita``
+follows its fore-aft position, with the amplitudes of the leg note's section 7.3;
+``thc_protraction``, ``ctr`` and ``fti`` are solved (inverse kinematics, Newton's method for all
+samples of the cycle at once) so that the foot is on its path. Each joint's angle is then a
+periodic function of time, fitted by least squares with ``HARMONICS`` harmonics
+(:class:`hexapod.Harmonic`, C-infinity), the three prescribed ones first so that the solved
+ones compensate exactly what the fit makes of them. ``scripts/gait_paths.py`` measures how
+closely the feet then follow their paths. Angles do not depend on the scale, so the fit is done
+once per leg position and duty factor, at natural scale, and serves both sides (the right leg's
+axes mirror the left's, see :mod:`legs.leg`).
+"""
+
+from __future__ import annotations
+
+from functools import cache
+
+import numpy as np
+
+from legs.cockroach import (
+    FOOT_LIFT_MM,
+    GAIT_LAWS,
+    GROUND_Z_MM,
+    STANCE_LENGTH_MM,
+    STANCE_OFFSET_MM,
+    THC_POINT_MM,
+)
+from legs.leg import JOINTS, LegGeometry, leg_geometry
+
+#: The joints placed by inverse kinematics (protraction swings the leg, CTr and FTi set its
+#: reach and height); the others are prescribed.
+SOLVED_JOINTS = ("thc_protraction", "ctr", "fti")
+HARMONICS = 64
+SAMPLES = 720  # over one cycle, for the inverse kinematics and the fit
+
+
+def _smooth_step(u):
+    """0 to 1 on [0, 1] with zero first to fourth derivatives at both ends."""
+    return u**5 * (126 - 420 * u + 540 * u**2 - 315 * u**3 + 70 * u**4)
+
+
+def foot_path(tau, duty: float, length: float, lift: float) -> tuple[np.ndarray, np.ndarray]:
+    """The foot's fore-aft position from the stance line's middle and its height above the
+    ground, at cycle fractions ``tau`` (0 at lift-off; swing until ``1 - duty``)."""
+    tau = np.asarray(tau, dtype=float) % 1.0
+    swing_share = 1.0 - duty
+    fore_aft, height = np.empty_like(tau), np.zeros_like(tau)
+    stance = tau >= swing_share
+    fore_aft[stance] = length / 2 - length * (tau[stance] - swing_share) / duty
+    u = tau[~stance] / swing_share
+    rate = -length * swing_share / duty  # the stance velocity, per unit of swing progress
+    fore_aft[~stance] = -length / 2 + rate * u + (length - rate) * _smooth_step(u)
+    height[~stance] = lift * 1024 * u**5 * (1 - u) ** 5
+    return fore_aft, height
+
+
+def _rotate(vectors: np.ndarray, axes: np.ndarray, angles: np.ndarray) -> np.ndarray:
+    """Rodrigues' rotation of ``vectors`` (n, 3) about unit ``axes`` (n, 3) by ``angles``."""
+    c, s = np.cos(angles)[:, None], np.sin(angles)[:, None]
+    along = np.sum(axes * vectors, axis=1, keepdims=True)
+    return vectors * c + np.cross(axes, vectors) * s + axes * along * (1 - c)
+
+
+def foot_position(geometry: LegGeometry, angles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The foot (n, 3) at joint angles (n, 6), in the leg's frame (the thorax-coxa point, trunk
+    axes), and its Jacobian (n, 3, 6). Product of exponentials: each joint turns everything
+    beyond it about its rest-pose axis and point, the proximal joint last."""
+    n = angles.shape[0]
+    foot = np.tile(geometry.points[6], (n, 1))
+    for k in reversed(range(6)):
+        origin = geometry.points[k]
+        foot = origin + _rotate(foot - origin, np.tile(geometry.axes[k], (n, 1)), angles[:, k])
+    # the Jacobian's columns: the joints' axes and points as moved by the joints before them
+    axes = [np.tile(a, (n, 1)) for a in geometry.axes]
+    points = [np.tile(p, (n, 1)) for p in geometry.points[:6]]
+    for k in range(6):
+        for j in range(k):
+            axes[k] = _rotate(axes[k], axes[j], angles[:, j])
+            points[k] = points[j] + _rotate(points[k] - points[j], axes[j], angles[:, j])
+    jacobian = np.stack([np.cross(axes[k], foot - points[k]) for k in range(6)], axis=2)
+    return foot, jacobian
+
+
+def solve_joints(geometry: LegGeometry, targets: np.ndarray, angles: np.ndarray,
+                 solved: tuple[int, ...], steps: int = 10, tol: float = 1e-14) -> np.ndarray:
+    """Angles (n, 6) placing the foot at ``targets`` (n, 3): the joints ``solved`` found, the
+    others as given in ``angles``. Newton's method for all samples at once, continued from the
+    rest pose (all angles zero) in ``steps``, so that every sample stays on the rest pose's
+    branch (the knee bent the same way).
+
+    Raises
+    ------
+    ValueError
+        When a target is out of reach.
+    """
+    solved = list(solved)
+    fixed = [k for k in range(6) if k not in solved]
+    rest_foot = geometry.points[6]
+    tolerance = tol * np.abs(geometry.points[6]).max()
+    current = np.zeros_like(angles)
+    for s in np.linspace(0.0, 1.0, steps + 1)[1:]:
+        goal = rest_foot + s * (targets - rest_foot)
+        current[:, fixed] = s * angles[:, fixed]
+        for _ in range(30):
+            foot, jacobian = foot_position(geometry, current)
+            residual = foot - goal
+            if np.abs(residual).max() <= tolerance:
+                break
+            step = np.linalg.solve(jacobian[:, :, solved], residual[..., None])[..., 0]
+            current[:, solved] -= step
+        else:
+            worst = float(np.abs(residual).max() / np.linalg.norm(rest_foot))
+            raise ValueError(f"{geometry.leg} leg: the foot path is out of reach (missed by "
+                             f"{worst:.2g} of the leg's reach)")
+    return current
+
+
+def _fourier_basis(tau: np.ndarray, harmonics: int) -> np.ndarray:
+    k = np.arange(1, harmonics + 1)
+    x = 2 * np.pi * tau
+    return np.hstack([np.ones((tau.size, 1)), np.cos(np.outer(x, k)), np.sin(np.outer(x, k))])
+
+
+def path_targets(position: str, tau: np.ndarray, duty: float,
+                 scale: float = 1.0) -> np.ndarray:
+    """Where the foot of a left ``position`` leg should be at cycle fractions ``tau``, in the
+    leg's frame (m at ``scale``; the right leg's is the mirror image, y negated)."""
+    geometry = leg_geometry(position, "L", scale)
+    mm = 1e-3 * scale
+    fore_aft, height = foot_path(tau, duty, STANCE_LENGTH_MM * mm, FOOT_LIFT_MM * mm)
+    rest_foot = geometry.points[6]
+    ground = (GROUND_Z_MM - THC_POINT_MM[position][2]) * mm
+    return np.column_stack([rest_foot[0] + STANCE_OFFSET_MM[position] * mm + fore_aft,
+                            np.full_like(fore_aft, rest_foot[1]), ground + height])
+
+
+@cache
+def stepping_harmonics(position: str, duty: float,
+                       harmonics: int = HARMONICS) -> dict[str, tuple]:
+    """The harmonics ``(offset, cos, sin)`` in the cycle fraction (0 at lift-off) of every joint
+    of a ``front``, ``middle`` or ``hind`` leg walking with ``duty``, such that the foot follows
+    :func:`foot_path`."""
+    geometry = leg_geometry(position, "L", scale=1.0)
+    tau = np.arange(SAMPLES) / SAMPLES
+    fore_aft, height = foot_path(tau, duty, 1.0, 1.0)  # shapes: unit stride and lift
+    amplitude = {joint: np.radians(a) for joint, a, _ in GAIT_LAWS}
+    prescribed = {"thc_levation": amplitude["thc_levation"] * height,
+                  "coxa_rotation": amplitude["coxa_rotation"] * height,
+                  "tita": amplitude["tita"] * 2 * fore_aft}
+    basis = _fourier_basis(tau, harmonics)
+    coefficients = {}
+    angles = np.zeros((SAMPLES, 6))
+    for joint, values in prescribed.items():
+        coefficients[joint] = np.linalg.lstsq(basis, values, rcond=None)[0]
+        angles[:, JOINTS.index(joint)] = basis @ coefficients[joint]
+    solved = tuple(JOINTS.index(j) for j in SOLVED_JOINTS)
+    angles = solve_joints(geometry, path_targets(position, tau, duty), angles, solved)
+    fitted = np.linalg.lstsq(basis, angles[:, list(solved)], rcond=None)[0]
+    coefficients.update({joint: fitted[:, k] for k, joint in enumerate(SOLVED_JOINTS)})
+    return {joint: (float(c[0]), tuple(c[1:harmonics + 1].tolist()),
+                    tuple(c[harmonics + 1:].tolist()))
+            for joint, c in ((j, coefficients[j]) for j in JOINTS)}
