@@ -111,6 +111,56 @@ def cmd_inverse(args) -> int:
     return 0
 
 
+def report_window(model, duration: float | None) -> tuple[float, str]:
+    """The report's duration: as asked, else one cycle of the scene's periodic laws (the
+    longest), else one second."""
+    if duration is not None:
+        return duration, "as asked"
+    cycles = [c for law in model.laws if (c := law.cycle_time()) is not None]
+    if cycles:
+        return max(cycles), "one cycle of the scene's periodic laws"
+    return 1.0, "the default duration: the scene's laws do not repeat"
+
+
+def cmd_report(args) -> int:
+    import time
+
+    from hexapod.balance import body_balance
+    from hexapod.fileio import write_directory_atomically
+    from hexapod.inverse import inverse_dynamics
+    from hexapod.kinematics import marker_trajectories
+    from hexapod.reports import FOOT_MARKER, RunInfo, report_files
+
+    scene = load_scene(args.scene)
+    model = assemble(scene)
+    duration, why = report_window(model, args.duration)
+    times = args.start + np.linspace(0.0, duration, args.samples)
+    out = Path(args.out or f"{scene.name}-report")
+    show = sys.stderr.isatty()
+    progress = _progress("inverse dynamics") if show else None
+    started = time.perf_counter()
+    result = inverse_dynamics(model, times, method=args.method, frame=args.frame,
+                              progress=progress)
+    run_time = time.perf_counter() - started
+    if show:
+        print("\rdrawing the figures" + " " * 40, end="", file=sys.stderr, flush=True)
+    balance = body_balance(model, times, result.q, result.v, result.v_dot, result.force,
+                           result.torque, result.frame)
+    feet = marker_trajectories(model, result.q, FOOT_MARKER)
+    run = RunInfo(scene.name, args.scene, run_time, f"{why}, {duration:g} s")
+    files = report_files(model, result, balance, run, feet)
+    write_directory_atomically(out, files)
+    if show:
+        print("\r" + " " * 60 + "\r", end="", file=sys.stderr)
+    worst = int(np.argmax(np.linalg.norm(result.force, axis=2).max(axis=0)))
+    print(f"wrote {out}/: {', '.join(files)}")
+    print(f"{times.size} samples over {duration:g} s ({result.method} path, {run_time:.3g} s); "
+          f"largest joint force {np.linalg.norm(result.force[:, worst], axis=1).max():.4g} N "
+          f"at {model.joints[worst].name}; body balance within "
+          f"{balance.relative().max():.1e} (relative)")
+    return 0
+
+
 def _progress(label: str):
     def report(done: int, total: int) -> None:
         if done == total or done % max(1, total // 100) == 0:
@@ -148,6 +198,30 @@ def cmd_scenes(args) -> int:
 
 
 # ------------------------------------------------------------------ main
+
+def _positive(kind):
+    def parse(text: str):
+        try:
+            value = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+        if not (np.isfinite(value) and value > 0):
+            raise argparse.ArgumentTypeError(f"must be positive, got {text}")
+        return value
+    return parse
+
+
+def _at_least(smallest: int):
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
+        if value < smallest:
+            raise argparse.ArgumentTypeError(f"must be at least {smallest}, got {value}")
+        return value
+    return parse
+
 
 def _scene_arguments(parser: argparse.ArgumentParser, json_help: str) -> None:
     parser.add_argument("scene", nargs="?", default=DEFAULT_SCENE,
@@ -205,6 +279,32 @@ def build_parser() -> argparse.ArgumentParser:
                    "saddle-point solve per sample (any mechanism); default: the fastest that "
                    "applies")
     p.set_defaults(run=cmd_inverse)
+
+    p = sub.add_parser(
+        "report", help="the liaison force report of a driven scene: CSV, summary, figures",
+        description="Inverse dynamics of SCENE (a scene file or a built-in scene whose drivers "
+        "prescribe every degree of freedom) over a time window, written to the directory OUT: "
+        "inverse.csv (the CSV of 'hexapod inverse'), summary.md (per joint the peak and RMS "
+        "force and moment magnitudes, per driver the peak effort and RMS power, per body the "
+        "residual of its equations of motion under the reported wrenches) and the figures "
+        "forces.png, torques.png, efforts.png and, when bodies have a 'foot' marker, foot.png. "
+        "The directory is written whole or not at all.")
+    p.add_argument("scene", nargs="?", default=DEFAULT_SCENE,
+                   help=f"a TOML scene file or a built-in scene name (default: {DEFAULT_SCENE})")
+    p.add_argument("--out", metavar="DIR",
+                   help="the directory to write (default: SCENE-NAME-report); an earlier "
+                   "report there is replaced")
+    p.add_argument("--start", type=float, default=0.0, help="first time in s (default 0)")
+    p.add_argument("--duration", type=_positive(float), metavar="S",
+                   help="length of the window in s (default: one cycle of the scene's periodic "
+                   "laws, e.g. the gait's stride, or 1 s)")
+    p.add_argument("--samples", type=_at_least(2), default=501,
+                   help="samples over the window, ends included (default 501)")
+    p.add_argument("--frame", choices=("joint", "world"), default="joint",
+                   help="axes of the wrench components (default: the child's joint frame)")
+    p.add_argument("--method", choices=("auto", "tree", "saddle"), default="auto",
+                   help="as for 'hexapod inverse'")
+    p.set_defaults(run=cmd_report)
 
     p = sub.add_parser("validate", help="check a scene and list every problem",
                        description="Read SCENE and report every problem found, or that it is "

@@ -18,7 +18,7 @@ ROOT = Path(__file__).resolve().parents[1]
 SCENES = ROOT / "data" / "scenes"
 MALFORMED = Path(__file__).resolve().parent / "data" / "malformed_scene.toml"
 
-SUBCOMMANDS = ("dynamics", "info", "validate", "scenes")
+SUBCOMMANDS = ("dynamics", "info", "inverse", "report", "validate", "scenes")
 REPORT_KEYS = {"scene", "t", "dimension", "counts", "dof", "dof_with_drivers", "redundant_rows",
                "state", "joints", "driver_efforts", "accelerations", "multipliers"}
 STATE_KEYS = {"t", "max_abs_phi", "condition_number", "sigma_min", "characteristic_length_m"}
