@@ -198,6 +198,10 @@ class RunInfo:
     window: str  # why the time window is what it is
 
 
+def _count(n: int, noun: str, plural: str | None = None) -> str:
+    return f"{n} {noun if n == 1 else plural or noun + 's'}"
+
+
 def _g(x: float) -> str:
     return f"{x:.4g}"
 
@@ -215,8 +219,9 @@ def summary_markdown(model: Model, result: InverseResult, balance: BodyBalance,
     lines = [
         f"# Liaison force report: {run.scene}",
         "",
-        f"Scene `{run.source}`: {len(model.bodies)} bodies, {len(model.joints)} joints, "
-        f"{len(model.drivers)} drivers, {len(model.forces)} force elements.",
+        f"Scene `{run.source}`: {_count(len(model.bodies), 'body', 'bodies')}, "
+        f"{_count(len(model.joints), 'joint')}, {_count(len(model.drivers), 'driver')}, "
+        f"{_count(len(model.forces), 'force element')}.",
         f"{t.size} samples over t = {t[0]:g} ... {t[-1]:g} s ({run.window}); "
         f"{result.method} path, {run.run_time:.3g} s of inverse dynamics.",
         f"Largest constraint residual {result.max_violation:.1e} (scaled); "
@@ -231,8 +236,8 @@ def summary_markdown(model: Model, result: InverseResult, balance: BodyBalance,
         "",
     ]
     lines += _markdown_table(
-        ["wrench", "joint", "parent -> child", "peak abs F (N)", "at t (s)", "RMS abs F (N)",
-         "peak abs T (N m)", "at t (s)", "RMS abs T (N m)"],
+        ["wrench", "joint", "parent -> child", "peak \\|F\\| (N)", "at t (s)",
+         "RMS \\|F\\| (N)", "peak \\|T\\| (N m)", "at t (s)", "RMS \\|T\\| (N m)"],
         [[s.label, f"`{s.name}`", f"{s.parent} -> {s.child}", _g(s.peak_force.value),
           f"{s.peak_force.time:.4g}", _g(s.rms_force), _g(s.peak_torque.value),
           f"{s.peak_torque.time:.4g}", _g(s.rms_torque)]
@@ -242,7 +247,7 @@ def summary_markdown(model: Model, result: InverseResult, balance: BodyBalance,
                   "The actuator's effort about (along) the joint axis, and the power it "
                   "delivers, effort times joint rate; work is the net energy over the run.", ""]
         lines += _markdown_table(
-            ["joint", "peak abs effort", "at t (s)", "RMS effort", "peak abs power (W)",
+            ["joint", "peak \\|effort\\|", "at t (s)", "RMS effort", "peak \\|power\\| (W)",
              "at t (s)", "RMS power (W)", "work (J)"],
             [[f"`{d.joint}`", f"{_g(d.peak_effort.value)} {d.unit}", f"{d.peak_effort.time:.4g}",
               f"{_g(d.rms_effort)} {d.unit}", _g(d.peak_power.value),
