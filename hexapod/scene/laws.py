@@ -116,20 +116,15 @@ class Harmonic(Law):
 
     def evaluate(self, t):
         s = np.asarray(t, dtype=float) - self.t0
-        w = 2.0 * np.pi * self.frequency
-        f = np.full_like(s, self.offset)
-        fd = np.zeros_like(s)
-        fdd = np.zeros_like(s)
-        for k, a in enumerate(self.cos, start=1):
-            kw = k * w
-            f += a * np.cos(kw * s)
-            fd -= a * kw * np.sin(kw * s)
-            fdd -= a * kw**2 * np.cos(kw * s)
-        for k, b in enumerate(self.sin, start=1):
-            kw = k * w
-            f += b * np.sin(kw * s)
-            fd += b * kw * np.cos(kw * s)
-            fdd -= b * kw**2 * np.sin(kw * s)
+        a, b, kw = _harmonic_arrays(self.cos, self.sin, 2.0 * np.pi * self.frequency)
+        if not kw.size:
+            return np.full_like(s, self.offset), np.zeros_like(s), np.zeros_like(s)
+        # all harmonics at once: one cos and one sin of the (samples x harmonics) angles
+        angle = np.multiply.outer(s, kw)
+        c, n = np.cos(angle), np.sin(angle)
+        f = self.offset + c @ a + n @ b
+        fd = n @ (-a * kw) + c @ (b * kw)
+        fdd = -(c @ (a * kw**2) + n @ (b * kw**2))
         return f, fd, fdd
 
     def cycle_time(self):
@@ -146,6 +141,14 @@ class Harmonic(Law):
         elif self.frequency <= 0:
             out.append(f"frequency must be positive, got {self.frequency}")
         return out
+
+
+def _harmonic_arrays(cos, sin, rate: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Cosine and sine amplitudes padded to one length, and the harmonics' rates k * rate."""
+    n = max(len(cos), len(sin))
+    a, b = np.zeros(n), np.zeros(n)
+    a[:len(cos)], b[:len(sin)] = cos, sin
+    return a, b, rate * np.arange(1, n + 1)
 
 
 _BOUNDARY = {"not-a-knot": None, "natural": "natural", "clamped": "clamped",
@@ -335,18 +338,15 @@ class Gait(Law):
 
     def evaluate(self, t):
         phi, phi_d, phi_dd = self.phase(t)
-        f = np.full_like(phi, self.offset)
-        fd, fdd = np.zeros_like(phi), np.zeros_like(phi)
-        for k, (a, b) in enumerate(zip(self.cos + (0.0,) * max(0, len(self.sin) - len(self.cos)),
-                                       self.sin + (0.0,) * max(0, len(self.cos) - len(self.sin)),
-                                       strict=True), start=1):
-            c, s = np.cos(k * phi), np.sin(k * phi)
-            value_d = k * (-a * s + b * c)  # d/dphi
-            value_dd = -k * k * (a * c + b * s)
-            f += a * c + b * s
-            fd += value_d * phi_d
-            fdd += value_dd * phi_d**2 + value_d * phi_dd
-        return f, fd, fdd
+        a, b, k = _harmonic_arrays(self.cos, self.sin, 1.0)
+        if not k.size:
+            return np.full_like(phi, self.offset), np.zeros_like(phi), np.zeros_like(phi)
+        angle = np.multiply.outer(phi, k)
+        c, n = np.cos(angle), np.sin(angle)
+        value_d = n @ (-a * k) + c @ (b * k)  # d/dphi
+        value_dd = -(c @ (a * k**2) + n @ (b * k**2))
+        return (self.offset + c @ a + n @ b, value_d * phi_d,
+                value_dd * phi_d**2 + value_d * phi_dd)
 
     def cycle_time(self):
         return self.period if (self.cos or self.sin) else None
