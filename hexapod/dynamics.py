@@ -18,8 +18,13 @@ from hexapod.reactions import policy_map
 
 
 def forward_dynamics(model: Model, data: Data, t: float, q: np.ndarray, v: np.ndarray, *,
-                     condition: bool = False) -> np.ndarray:
+                     condition: bool = False,
+                     baumgarte: tuple[float, float] | None = None) -> np.ndarray:
     """Accelerations ``v_dot`` at ``(t, q, v)``; fills ``data``.
+
+    With ``baumgarte = (alpha, beta)`` (1/s) the acceleration constraints are stabilised,
+    ``Phi_v v_dot = gamma - 2 alpha (Phi_v v - nu) - beta^2 phi``, so that drifted positions
+    and velocities are pulled back to the constraints (Baumgarte 1972).
 
     ``data`` receives ``Phi_v, gamma, Q, Q_across, v_dot, lam`` (n_c), ``independent_rows``,
     ``redundant_rows`` (row indices; names in ``model.rows``), ``inconsistency``, and, when
@@ -35,9 +40,14 @@ def forward_dynamics(model: Model, data: Data, t: float, q: np.ndarray, v: np.nd
     q = np.asarray(q, dtype=float)
     v = np.asarray(v, dtype=float)
     w, wd, wdd = model.law_values(t)
-    Phi_v = model.call("Phi_v", q=q, w=w)
-    gamma = model.call("gamma", q=q, v=v, w=w, wd=wd, wdd=wdd)
-    Q = model.call("Q", q=q, v=v, w=w)
+    values = {"q": q, "v": v, "w": w, "wd": wd, "wdd": wdd}
+    terms = model.dynamics_terms
+    Phi_v, gamma, Q = (x.full() for x in terms(*[values[n] for n in terms.name_in()]))
+    gamma, Q = gamma.reshape(-1), Q.reshape(-1)
+    if baumgarte is not None and model.n_c:
+        alpha, beta = baumgarte
+        velocity_error = Phi_v @ v - model.call("nu", q=q, w=w, wd=wd)
+        gamma = gamma - 2 * alpha * velocity_error - beta**2 * model.call("phi", q=q, w=w)
     Q_across = model.call("Q_across", q=q, v=v, w=w) if model.Q_across is not None else None
     W, d = equilibrate(Phi_v, model.mass_inv_sqrt)
     split = split_rows(W, d, model.row_priority, model.rank_tolerance)

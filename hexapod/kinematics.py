@@ -41,7 +41,8 @@ def _violations(model: Model, scaled: np.ndarray, count: int = 5) -> str:
 
 
 def assemble_positions(model: Model, q: np.ndarray | None = None, t: float = 0.0, *,
-                       tol: float = 1e-12, max_iterations: int = 60) -> np.ndarray:
+                       tol: float = 1e-12, max_iterations: int = 60,
+                       counts: dict | None = None) -> np.ndarray:
     """A configuration satisfying every constraint at time ``t``, near the guess ``q``.
 
     Parameters
@@ -51,6 +52,9 @@ def assemble_positions(model: Model, q: np.ndarray | None = None, t: float = 0.0
     tol : float
         On ``max |phi_i| / s_i`` with ``s_i`` the characteristic length for length rows and 1
         for angle rows.
+    counts : dict, optional
+        Receives the work done: ``newton`` (iterations, each a Jacobian evaluation and a
+        factorisation) added to what it holds.
 
     Raises
     ------
@@ -76,6 +80,8 @@ def assemble_positions(model: Model, q: np.ndarray | None = None, t: float = 0.0
             polished = True
         Phi_v = model.call("Phi_v", q=q, w=w)
         split = _split(model, Phi_v)
+        if counts is not None:
+            counts["newton"] = counts.get("newton", 0) + 1
         dv = model.mass_inv_sqrt @ split.min_norm_correction(-residual * model.row_scale)
         step = 1.0
         while True:  # backtracking line search on the largest scaled residual

@@ -30,7 +30,7 @@ def solve_triangular(R, b, trans: str = "N"):
     command such as ``hexapod inverse`` on a tree never needs it)."""
     from scipy.linalg import solve_triangular as solve
 
-    return solve(R, b, trans=trans)
+    return solve(R, b, trans=trans, check_finite=False)  # inputs are checked finite upstream
 
 
 @dataclass
@@ -213,7 +213,7 @@ def solve_saddle(mass_inv_sqrt, Phi_v: np.ndarray, Q: np.ndarray, gamma: np.ndar
     inconsistency = check_consistency(split, y, gamma, np.linalg.norm(y0), row_names,
                                       consistency_tol)
     if split.redundant.size and wrench_map is not None and split.rank:
-        lam = _distribute(split, lam, wrench_map, wrench_offset)
+        lam = distribute(split, lam, wrench_map, wrench_offset)
     return SaddleSolution(mass_inv_sqrt @ y, lam, split, inconsistency)
 
 
@@ -242,10 +242,10 @@ def check_consistency(split: RowSplit, y: np.ndarray, rhs: np.ndarray, size: flo
     return inconsistency
 
 
-def _distribute(split: RowSplit, lam: np.ndarray, wrench_map: np.ndarray,
-                wrench_offset) -> np.ndarray:
-    """Among ``lam + N z`` (``N`` spans the null space of ``Phi_v^T``), the multipliers of least
-    ``|wrench_map lam + wrench_offset|``."""
+def distribute(split: RowSplit, lam: np.ndarray, wrench_map: np.ndarray,
+               wrench_offset) -> np.ndarray:
+    """Among ``lam + N z`` (``N`` spans the null space of ``Phi_v^T``: the multipliers that
+    give the same constraint forces), those of least ``|wrench_map lam + wrench_offset|``."""
     I, red, d = split.independent, split.redundant, split.scale
     # each redundant row k: W_k = sum_i c_ki W_Ii, so e_k - sum_i c_ki e_Ii is a null vector of
     # W^T (multiplier space scaled by d), i.e. (e_k - sum c_ki e_Ii) / d of Phi_v^T

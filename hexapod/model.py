@@ -169,6 +169,7 @@ class Symbolic:
     phi: ca.SX
     Q: ca.SX
     Q_across: ca.SX | None = None  # n_v x (joints with force elements across them)
+    potential: ca.SX | None = None  # potential energy of gravity and springs (scalar)
 
 
 class Model:
@@ -179,8 +180,10 @@ class Model:
                  rows: tuple[RowInfo, ...], laws: tuple[Law, ...], gravity: np.ndarray,
                  characteristic_length: float, q0: np.ndarray, v0: np.ndarray,
                  mass: BlockDiagonal, symbolic: Symbolic, forces: tuple[ForceInfo, ...],
-                 rank_tolerance: float = 1e-9):
+                 rank_tolerance: float = 1e-9, working_elements: tuple[str, ...] = (),
+                 report_forces: bool = False):
         self.name = name
+        self.report_forces = report_forces
         self.dimension = dimension
         self.bodies = bodies
         self.joints = joints
@@ -197,6 +200,9 @@ class Model:
         self.forces = forces
         self.force_names = tuple(f.name for f in forces)
         self.rank_tolerance = rank_tolerance
+        #: drivers with time laws and force elements that do work not drawn from a potential
+        #: (dampers, loads, efforts): the energy is conserved when there are none
+        self.working_elements = working_elements
         self._sym = symbolic
         self.n_q = q0.size
         self.n_v = v0.size
@@ -342,6 +348,50 @@ class Model:
         if self._sym.Q_across is None:
             return None
         return self._function("Q_across", ["q", "v", "w"], [("Q_across", self._sym.Q_across)])
+
+    @cached_property
+    def dynamics_terms(self) -> ca.Function:
+        """``dynamics_terms(q, v, w, wd, wdd) -> (Phi_v, gamma, Q)``: what a forward-dynamics
+        solve needs, in one call (each call costs tens of microseconds of overhead)."""
+        s = self._sym
+        args = [n for n in ("q", "v", "w", "wd", "wdd") if n in ("q", "v") or self.n_w > 0]
+        outputs = [function(*[getattr(s, n) for n in function.name_in()])
+                   for function in (self.Phi_v, self.gamma, self.Q)]
+        return ca.Function("dynamics_terms", [getattr(s, n) for n in args], outputs, args,
+                           ["Phi_v", "gamma", "Q"])
+
+    @property
+    def energy_conserved(self) -> bool:
+        """True when no driver follows a time law and every force element derives from a
+        potential: then kinetic plus potential energy is constant along motions."""
+        return not self.working_elements
+
+    @cached_property
+    def energy(self) -> ca.Function:
+        """``energy(q, v) -> (kinetic, potential)``: ``v^T M v / 2``, and the potential energy of
+        gravity and springs (J)."""
+        s = self._sym
+        kinetic = ca.mtimes([s.v.T, ca.DM(self.mass.dense()), s.v]) / 2
+        potential = s.potential if s.potential is not None else ca.SX(0.0)
+        return ca.Function("energy", [s.q, s.v], [kinetic, potential], ["q", "v"],
+                           ["kinetic", "potential"])
+
+    @cached_property
+    def tangent_matrices(self) -> ca.Function:
+        """``tangent_matrices(q, v, lam, w) -> (K, C)``: derivatives of the force residual
+        ``g = Phi_v^T lam - Q`` along a Lie-group displacement of the positions,
+        ``K = dg/dq B(q)``, and in the velocities, ``C = dg/dv`` (n_v x n_v each): the tangent
+        stiffness and damping of implicit integrators."""
+        s = self._sym
+        lam = ca.SX.sym("lam", self.n_c)
+        g = ca.mtimes(self._Phi_v_expr.T, lam) - s.Q
+        B = ca.jacobian(s.qdot, s.v)
+        K = ca.mtimes(ca.jacobian(g, s.q), B)
+        C = ca.jacobian(g, s.v)
+        names = [n for n in ("q", "v", "lam", "w") if n != "w" or self.n_w > 0]
+        symbols = {"q": s.q, "v": s.v, "lam": lam, "w": s.w}
+        return ca.Function("tangent_matrices", [symbols[n] for n in names], [K, C], names,
+                           ["K", "C"])
 
     @cached_property
     def qdot(self) -> ca.Function:

@@ -10,7 +10,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from hexapod.assembly.forces import ForceBuilder, inertial_forces
+from hexapod.assembly.forces import ForceBuilder, gravity_potential, inertial_forces
 from hexapod.assembly.frames import BodyState
 from hexapod.assembly.joints import (
     ROWS,
@@ -309,6 +309,7 @@ class _Assembly:
                     components = ca.mtimes(state.R, components)
                 point = self._point(element.body, element.point)[0]
                 builder.force_at(name, state, point, components)
+                builder.nonconservative.append(name)
                 infos.append(ForceInfo(name, element.kind, (body(element.body),), (point,)))
             elif isinstance(element, AppliedTorque):
                 state = self.states[element.body]
@@ -316,18 +317,23 @@ class _Assembly:
                 if element.frame == "body" and self.dim == 3:
                     components = ca.mtimes(state.R, components)
                 builder.torque_on(name, state, components)
+                builder.nonconservative.append(name)
                 infos.append(ForceInfo(name, element.kind, (body(element.body),)))
             elif isinstance(element, JointEffort):
                 joint, g = on_joint(element)
                 rate = joint_rate(joint.kind, g, self.q, self.qdot)
                 builder.effort(name, rate, self.laws.value(element.law, name)[0])
+                builder.nonconservative.append(name)
             elif isinstance(element, RotationalSpringDamper):
                 _, g = on_joint(element)
                 rate = joint_rate("revolute", g, self.q, self.qdot)
-                torque = (-element.stiffness * wrapped_angle(g, element.free_angle)
-                          - element.damping * rate)
+                twist = wrapped_angle(g, element.free_angle)
+                torque = -element.stiffness * twist - element.damping * rate
+                builder.potential = builder.potential + element.stiffness * twist**2 / 2
                 if element.torque is not None:
                     torque = torque + self.laws.value(element.torque, name)[0]
+                if element.damping or element.torque is not None:
+                    builder.nonconservative.append(name)
                 builder.effort(name, rate, torque)
         return builder, across, infos
 
@@ -349,13 +355,18 @@ class _Assembly:
             q=self.q, v=self.v, w=w, wd=wd, wdd=wdd, qdot=self.qdot,
             phi=ca.vertcat(*self.residuals) if self.residuals else ca.SX(0, 1),
             Q=inertial_forces(self.bodies, self.v, self.si.gravity, n_v) + builder.total(),
-            Q_across=ca.horzcat(*columns) if columns else None)
+            Q_across=ca.horzcat(*columns) if columns else None,
+            potential=gravity_potential(self.bodies, self.q, self.si.gravity)
+            + builder.potential)
+        # work is done by rheonomic drivers (time laws) and by the non-conservative elements
+        working = [d.name for d in drivers if d.law >= 0] + builder.nonconservative
         return Model(name=self.si.name, dimension=self.dim, bodies=self.bodies,
                      joints=tuple(joints), drivers=tuple(drivers), rows=tuple(self.rows),
                      laws=tuple(self.laws.laws), gravity=self.si.gravity,
                      characteristic_length=_characteristic_length(self.si, self.joint_points),
                      q0=self.q0, v0=self.v0, mass=self.mass, symbolic=symbolic,
-                     forces=tuple(forces), rank_tolerance=rank_tolerance)
+                     forces=tuple(forces), rank_tolerance=rank_tolerance,
+                     working_elements=tuple(working), report_forces=self.si.report_forces)
 
 
 def assemble(scene: Scene, *, rank_tolerance: float = 1e-9) -> Model:

@@ -4,6 +4,11 @@ A force ``F`` at a point moving with velocity ``v_P(q, v)`` contributes ``dv_P/d
 ``T`` contributes ``domega/dv^T T``; a spring-damper of tension ``f`` contributes
 ``-f dL_dot/dv``; an actuator effort ``e`` on a joint contributes ``e d(rate)/dv``. CasADi forms
 these derivatives, so every body kind is handled by the same lines.
+
+The builder also keeps the potential energy of the springs (``k (L - L0)^2 / 2``, and
+``k wrap(theta - theta0)^2 / 2`` for torsion springs) and the names of the elements that are
+not conservative (dampers, time laws, applied loads, efforts), so that the energy of a scene
+is defined, and known to be conserved or not.
 """
 
 from __future__ import annotations
@@ -20,6 +25,8 @@ class ForceBuilder:
     def __init__(self, q: ca.SX, v: ca.SX, qdot: ca.SX):
         self.q, self.v, self.qdot = q, v, qdot
         self.terms: dict[str, ca.SX] = {}
+        self.potential: ca.SX = ca.SX(0.0)
+        self.nonconservative: list[str] = []  # elements doing work not from a potential
 
     def _add(self, name: str, generalized: ca.SX) -> None:
         self.terms[name] = self.terms.get(name, 0) + generalized
@@ -46,10 +53,13 @@ class ForceBuilder:
         length = ca.sqrt(ca.dot(d, d))
         rate = self.velocity(length)
         tension = stiffness * (length - free_length)
+        self.potential = self.potential + stiffness * (length - free_length) ** 2 / 2
         if damping:
             tension = tension + damping * rate
         if force is not None:
             tension = tension + force
+        if damping or force is not None:
+            self.nonconservative.append(name)
         self._add(name, -tension * ca.gradient(rate, self.v))
 
     def effort(self, name: str, rate: ca.SX, effort: ca.SX) -> None:
@@ -61,6 +71,15 @@ class ForceBuilder:
         for term in self.terms.values():
             out = out + term
         return out
+
+
+def gravity_potential(bodies, q: ca.SX, gravity: np.ndarray) -> ca.SX:
+    """``-sum m g . r`` over the bodies' centres of mass."""
+    out = ca.SX(0.0)
+    dim = gravity.size
+    for info in bodies:
+        out = out - info.mass * ca.dot(ca.DM(gravity), q[info.q.start:info.q.start + dim])
+    return out
 
 
 def inertial_forces(bodies, v: ca.SX, gravity: np.ndarray, n_v: int) -> ca.SX:

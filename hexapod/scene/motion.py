@@ -186,7 +186,7 @@ def apply_motion(scene: Scene, motion: Motion) -> Scene:
     if problems:
         raise ModelError(f"motion file {where}", problems)
     out = Scene(scene.name, scene.dimension, scene.length_unit, scene.gravity,
-                scene.characteristic_length, scene.source)
+                scene.characteristic_length, scene.source, report_forces=scene.report_forces)
     out._elements = list(scene.elements)
     for joint in motion.joints:
         factor = 1.0 / scene.unit if isinstance(joints[joint], Prismatic) else 1.0

@@ -93,6 +93,12 @@ def _string(value) -> str:
     return value
 
 
+def _boolean(value) -> bool:
+    if not isinstance(value, bool):
+        raise _Invalid(f"must be true or false, got {value!r}")
+    return value
+
+
 def _integer(value) -> int:
     if isinstance(value, bool) or not isinstance(value, int):
         raise _Invalid(f"must be an integer, got {value!r}")
@@ -409,7 +415,7 @@ class _Reader:
             table = {}
         spec = {"name": (_string, False), "dimension": (_integer, False),
                 "length_unit": (_string, False), "gravity": (_vector((2, 3)), False),
-                "characteristic_length": (_number, False)}
+                "characteristic_length": (_number, False), "report_forces": (_boolean, False)}
         values = self._convert(table, "scene", "scene", spec)
         values.setdefault("name", self.path.stem)
         dimension = values.get("dimension", 3)

@@ -58,11 +58,15 @@ class Scene:
     characteristic_length : float, optional
         The length ``l`` (L) of the redundancy policy, which minimises
         ``sum |F|^2 + |T / l|^2`` over the joint wrenches. Default: see :func:`hexapod.assemble`.
+    report_forces : bool
+        Ask simulations of this scene for the joint wrenches at the saved states.
     """
 
     def __init__(self, name: str = "scene", dimension: int = 3, length_unit: str = "m",
-                 gravity=None, characteristic_length: float | None = None, source: str = ""):
+                 gravity=None, characteristic_length: float | None = None, source: str = "",
+                 *, report_forces: bool = False):
         self.name = name
+        self.report_forces = bool(report_forces)
         self.dimension = dimension
         self.length_unit = length_unit
         self.characteristic_length = characteristic_length
@@ -174,7 +178,8 @@ class Scene:
         factor = self.unit
         out = Scene(self.name, self.dimension, "m", self.gravity * factor,
                     None if self.characteristic_length is None
-                    else self.characteristic_length * factor, self.source)
+                    else self.characteristic_length * factor, self.source,
+                    report_forces=self.report_forces)
         out._elements = list(self.scaled_elements(factor))
         return out
 

@@ -151,6 +151,8 @@ def scene_text(scene: Scene, header: str = "") -> str:
               f"gravity = {_array(scene.gravity)}"]
     if scene.characteristic_length is not None:
         lines.append(f"characteristic_length = {_number(scene.characteristic_length)}")
+    if scene.report_forces:
+        lines.append("report_forces = true")
     for element in scene.elements:
         lines += [""] + _table(element, scene.dimension)
     return "\n".join(lines) + "\n"
