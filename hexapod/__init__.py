@@ -8,6 +8,7 @@ algorithms on the :class:`~hexapod.model.Model` with a :class:`~hexapod.model.Da
     q, v = hexapod.consistent_state(model)
     v_dot = hexapod.forward_dynamics(model, data, 0.0, q, v)
     wrenches = hexapod.joint_wrenches(model, q, data.lam, data.Phi_v)
+    result = hexapod.simulate(model, 2.0, method="dopri5-projection")
 """
 
 from hexapod.assembly import assemble
@@ -53,6 +54,7 @@ from hexapod.scene import (
     Spline,
     SpringDamper,
 )
+from hexapod.simulate import simulate
 from hexapod.spatial import Placement, rotation_about_axis, rotation_from_rpy
 
 __version__ = "0.1.0"
@@ -65,5 +67,5 @@ __all__ = [
     "SingularSystemError", "SpatialBody", "Spherical", "Spline", "SpringDamper", "assemble",
     "assemble_positions", "consistent_state", "degrees_of_freedom", "driver_efforts",
     "forward_dynamics", "joint_wrenches", "rotation_about_axis", "rotation_from_rpy",
-    "solve_accelerations", "solve_velocities",
+    "simulate", "solve_accelerations", "solve_velocities",
 ]

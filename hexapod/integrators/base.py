@@ -1,0 +1,191 @@
+"""The contract every integrator of the registry keeps (as SciPy's ``OdeSolver`` writes its own).
+
+An integrator advances the constrained equations of motion
+
+    q_dot = B(q) v,   M v_dot + Phi_v^T lambda = Q(q, v, t),   phi(q, t) = 0
+
+from a consistent state, one accepted step per call of :meth:`Integrator.step`, until
+``t_bound``. A subclass declares what it is (class attributes ``name``, ``order``, ``index``,
+``stabilisation``, ``adaptive``, ``description``) and implements :meth:`Integrator._step`, which
+advances ``t, q, v, v_dot, lam`` by one accepted step and counts its work in ``counters`` through
+the services of this class (:meth:`_dynamics`, :meth:`_project`). The base class makes the
+initial state consistent (positions assembled, velocities projected, accelerations and
+multipliers solved), keeps the last step inside ``t_bound``, and turns any failure into data:
+``status = "failed"`` and a ``message`` naming the time and the cause, never an exception
+escaping :meth:`step`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from typing import ClassVar
+
+import numpy as np
+
+from hexapod.dynamics import forward_dynamics
+from hexapod.errors import HexapodError
+from hexapod.kinematics import assemble_positions, solve_velocities
+from hexapod.model import Data, Model
+
+
+@dataclass
+class Counters:
+    """The work of a run.
+
+    Attributes
+    ----------
+    steps, rejected :
+        Accepted steps; steps rejected by the error test or by a failed Newton iteration.
+    rhs :
+        Evaluations of the equations of motion (a saddle-point solve, or an implicit residual).
+    jacobians :
+        Evaluations of the constraint Jacobian ``Phi_v`` (with the tangent matrices, for
+        implicit methods).
+    factorisations :
+        Matrix factorisations (QR of the equilibrated ``Phi_v``, or LU of an iteration matrix).
+    newton :
+        Newton iterations, of projections and of implicit solves.
+    """
+
+    steps: int = 0
+    rejected: int = 0
+    rhs: int = 0
+    jacobians: int = 0
+    factorisations: int = 0
+    newton: int = 0
+
+    def as_dict(self) -> dict[str, int]:
+        return asdict(self)
+
+
+class Integrator:
+    """Base class of the integrators (see the module's description of the contract).
+
+    Parameters
+    ----------
+    model : Model
+    t0, t_bound : float
+        Start and end times (s).
+    q0, v0 : ndarray, optional
+        Guesses of the initial positions and velocities (default: the scene's); they are made
+        consistent first.
+    rtol, atol : float
+        Tolerances of adaptive methods (relative; absolute in SI units of ``q`` and ``v``).
+    step : float, optional
+        The step of fixed-step methods, the first step of adaptive ones (s).
+    max_step : float
+        Largest step of adaptive methods (s).
+    """
+
+    name: ClassVar[str] = ""
+    order: ClassVar[int] = 0
+    #: 1: the acceleration-level equations integrated as an ODE in (q, v); 3: position-level
+    #: constraints solved at every step
+    index: ClassVar[int] = 1
+    stabilisation: ClassVar[str] = ""
+    adaptive: ClassVar[bool] = False
+    description: ClassVar[str] = ""
+    #: fixed-step methods without a ``step``: this many steps over the run
+    default_steps: ClassVar[int] = 1000
+
+    def __init__(self, model: Model, t0: float, t_bound: float, q0: np.ndarray | None = None,
+                 v0: np.ndarray | None = None, *, rtol: float = 1e-6, atol: float = 1e-8,
+                 step: float | None = None, max_step: float = np.inf):
+        if not t_bound > t0:
+            raise ValueError(f"t_bound must be after t0, got {t0} and {t_bound}")
+        if step is not None and not step > 0:
+            raise ValueError(f"step must be positive, got {step}")
+        if not (rtol > 0 and atol > 0):
+            raise ValueError(f"rtol and atol must be positive, got {rtol} and {atol}")
+        self.model = model
+        self.t0, self.t_bound = float(t0), float(t_bound)
+        self.rtol, self.atol, self.max_step = float(rtol), float(atol), float(max_step)
+        self.h = float(step) if step is not None else (self.t_bound - self.t0) / self.default_steps
+        self.counters = Counters()
+        self.data = Data()
+        self.status = "running"
+        self.message = ""
+        q = assemble_positions(model, q0, t0, counts=self._newton_counts())
+        self._count_newton()
+        v = solve_velocities(model, q, t0, v0)
+        self.counters.jacobians += 1
+        self.counters.factorisations += 1
+        self.t, self.q, self.v = self.t0, q, v
+        self.v_dot, self.lam = self._dynamics(self.t, q, v)
+        self._start()
+
+    # ------------------------------------------------------------------ the contract
+
+    def _start(self) -> None:
+        """Set up the method's own state from the consistent initial state (optional)."""
+
+    def _step(self) -> None:
+        """Advance ``t, q, v, v_dot, lam`` by one accepted step, no further than ``t_bound``;
+        raise :class:`IntegrationError` (or any :class:`HexapodError`) when it cannot."""
+        raise NotImplementedError
+
+    def step(self) -> None:
+        """One accepted step; sets ``status`` to ``"finished"`` at ``t_bound``, or to
+        ``"failed"`` with a ``message``."""
+        if self.status != "running":
+            raise RuntimeError(f"the integrator is {self.status}: nothing to step")
+        t_before = self.t
+        try:
+            with np.errstate(over="ignore", invalid="ignore"):  # a blow-up is reported below
+                self._step()
+        except (HexapodError, np.linalg.LinAlgError) as error:
+            self.status = "failed"
+            self.message = f"{self.name} failed after t = {t_before:.6g} s: {error}"
+            return
+        self.counters.steps += 1
+        if not np.all(np.isfinite(self.q)) or not np.all(np.isfinite(self.v)):
+            self.status = "failed"
+            self.message = (f"{self.name}: the state became non-finite at t = {self.t:.6g} s "
+                            "(the step is too large for this method, or the motion is unstable)")
+        elif self.t >= self.t_bound - 1e-12 * max(1.0, abs(self.t_bound)):
+            self.t = self.t_bound
+            self.status = "finished"
+
+    def next_step(self) -> float:
+        """The step to take now: the method's current step, cut to end at ``t_bound`` (and a
+        step that would leave a sliver of less than 1 % is stretched to the end)."""
+        remaining = self.t_bound - self.t
+        h = min(self.h, self.max_step)
+        return remaining if h >= 0.99 * remaining else h
+
+    # ------------------------------------------------------------------ services
+
+    def _dynamics(self, t: float, q: np.ndarray, v: np.ndarray,
+                  baumgarte: tuple[float, float] | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Accelerations and multipliers at a state (one saddle-point solve)."""
+        v_dot = forward_dynamics(self.model, self.data, t, q, v, baumgarte=baumgarte)
+        self.counters.rhs += 1
+        self.counters.jacobians += 1
+        self.counters.factorisations += 1
+        return v_dot, self.data.lam
+
+    def _project(self, t: float, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The nearest consistent state in the kinetic-energy norm: positions onto
+        ``phi = 0`` (Newton's method), then velocities onto ``Phi_v v = nu``."""
+        q = assemble_positions(self.model, q, t, counts=self._newton_counts())
+        self._count_newton()
+        v = solve_velocities(self.model, q, t, v)
+        self.counters.jacobians += 1
+        self.counters.factorisations += 1
+        return q, v
+
+    def _newton_counts(self) -> dict:
+        self._pending = {}
+        return self._pending
+
+    def _count_newton(self) -> None:
+        iterations = self._pending.get("newton", 0)
+        self.counters.newton += iterations
+        self.counters.jacobians += iterations
+        self.counters.factorisations += iterations
+
+    @classmethod
+    def describe(cls) -> dict:
+        return {"name": cls.name, "order": cls.order, "index": cls.index,
+                "stabilisation": cls.stabilisation, "adaptive": cls.adaptive,
+                "description": cls.description}
