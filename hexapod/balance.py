@@ -80,6 +80,8 @@ def body_balance(model: Model, times: np.ndarray, q: np.ndarray, v: np.ndarray,
     force_scale, moment_scale = np.zeros(n_b), np.zeros(n_b)
 
     def add(b, f, m):  # a term of body b's equations: f (N, 3), m about its centre (N, 3)
+        if model.bodies[b].kind == "particle":  # no moment equation (only round-off there)
+            m = np.zeros_like(m)
         force_sum[:, b] += f
         moment_sum[:, b] += m
         force_scale[b] = max(force_scale[b], np.linalg.norm(f, axis=1).max(initial=0.0))
