@@ -111,9 +111,9 @@ def cmd_inverse(args) -> int:
     return 0
 
 
-def report_window(model, duration: float | None) -> tuple[float, str]:
-    """The report's duration: as asked, else one cycle of the scene's periodic laws (the
-    longest), else one second."""
+def time_window(model, duration: float | None) -> tuple[float, str]:
+    """The duration of a report or a simulation: as asked, else one cycle of the scene's
+    periodic laws (the longest), else one second."""
     if duration is not None:
         return duration, "as asked"
     cycles = [c for law in model.laws if (c := law.cycle_time()) is not None]
@@ -133,7 +133,7 @@ def cmd_report(args) -> int:
 
     scene = load_scene(args.scene)
     model = assemble(scene)
-    duration, why = report_window(model, args.duration)
+    duration, why = time_window(model, args.duration)
     times = args.start + np.linspace(0.0, duration, args.samples)
     out = Path(args.out or f"{scene.name}-report")
     show = sys.stderr.isatty()
@@ -159,6 +159,52 @@ def cmd_report(args) -> int:
           f"at {model.joints[worst].name}; body balance within "
           f"{balance.relative().max():.1e} (relative)")
     return 0
+
+
+def cmd_simulate(args) -> int:
+    from hexapod.fileio import write_directory_atomically
+    from hexapod.simulate import simulate
+
+    scene = load_scene(args.scene)
+    model = assemble(scene)
+    duration, why = time_window(model, args.t_end)
+    out = Path(args.out or f"{scene.name}-simulation")
+    show = sys.stderr.isatty()
+    result = simulate(model, args.start + duration, t0=args.start, method=args.method,
+                      rtol=args.rtol, atol=args.atol, step=args.step, every=args.every,
+                      forces=True if args.forces else None,
+                      progress=_time_progress(args.method) if show else None)
+    if show:
+        print("\r" + " " * 60 + "\r", end="", file=sys.stderr)
+    stats = result.statistics()
+    files = {"results.csv": result.csv_text().encode(), "results.npz": result.npz_bytes(),
+             "stats.json": (json.dumps(_jsonable(stats), indent=2) + "\n").encode()}
+    write_directory_atomically(out, files)
+    print(f"wrote {out}/: {', '.join(files)}")
+    drift = ("" if result.energy_drift is None
+             else f", energy drift {result.energy_drift:.2e} (relative)")
+    print(f"{result.method} over {duration:g} s ({why}): {stats['steps']} steps, "
+          f"{stats['rejected']} rejected, {stats['rhs']} right-hand sides, "
+          f"{result.wall_time:.3g} s; max |phi| {result.max_position_violation:.2e}, "
+          f"max |Phi_v v - nu| {result.max_velocity_violation:.2e}/s{drift}")
+    if not result.success:
+        print(f"hexapod: error: {result.message} (the states up to it are in {out}/)",
+              file=sys.stderr)
+        return 1
+    return 0
+
+
+def _time_progress(method: str):
+    import time
+
+    last = [0.0]
+
+    def report(t: float, t_end: float) -> None:
+        now = time.perf_counter()
+        if now - last[0] > 0.1 or t >= t_end:
+            last[0] = now
+            print(f"\r{method}: t = {t:.4g} / {t_end:g} s", end="", file=sys.stderr, flush=True)
+    return report
 
 
 def _progress(label: str):
@@ -305,6 +351,44 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--method", choices=("auto", "tree", "saddle"), default="auto",
                    help="as for 'hexapod inverse'")
     p.set_defaults(run=cmd_report)
+
+    from hexapod.integrators import DEFAULT_METHOD, INTEGRATORS
+
+    methods = "; ".join(f"{name}: order {cls.order}, index {cls.index}, "
+                        f"{'adaptive' if cls.adaptive else 'fixed step'}, {cls.stabilisation}"
+                        for name, cls in INTEGRATORS.items())
+    p = sub.add_parser(
+        "simulate", help="forward dynamics over time: states, multipliers, statistics",
+        description="Integrate the motion of SCENE from a consistent start (positions "
+        "assembled, velocities projected) and write the directory OUT: results.csv (t, "
+        "q:<coordinate>, v:<velocity>, vdot:<velocity>, lambda:<row> and, with --forces or "
+        "when the scene sets report_forces, tau/Fx..Tz:<joint> as in 'hexapod inverse'; SI "
+        "units), results.npz (the same arrays, compressed) and stats.json (counters, times, "
+        "largest constraint violations, energy drift). A run that fails still writes the "
+        "states up to the failure, says why and exits with status 1. The directory is "
+        "written whole or not at all.")
+    p.add_argument("scene", nargs="?", default=DEFAULT_SCENE,
+                   help=f"a TOML scene file or a built-in scene name (default: {DEFAULT_SCENE})")
+    p.add_argument("--method", choices=list(INTEGRATORS), default=DEFAULT_METHOD,
+                   metavar="NAME", help=f"the integrator (default {DEFAULT_METHOD}): {methods}")
+    p.add_argument("--t-end", type=_positive(float), metavar="S",
+                   help="duration in s (default: one cycle of the scene's periodic laws, or 1 s)")
+    p.add_argument("--start", type=float, default=0.0, help="start time in s (default 0)")
+    p.add_argument("--rtol", type=_positive(float), default=1e-6,
+                   help="relative tolerance of adaptive methods (default 1e-6)")
+    p.add_argument("--atol", type=_positive(float), default=1e-8,
+                   help="absolute tolerance of adaptive methods, SI units (default 1e-8)")
+    p.add_argument("--step", type=_positive(float), metavar="S",
+                   help="step of fixed-step methods (default: the duration / 1000), first step "
+                   "of adaptive ones (default: chosen)")
+    p.add_argument("--every", type=_at_least(1), default=1, metavar="N",
+                   help="save every N-th accepted step (default 1; the last state always)")
+    p.add_argument("--forces", action="store_true",
+                   help="also write every joint's wrench at the saved states")
+    p.add_argument("--out", metavar="DIR",
+                   help="the directory to write (default: SCENE-NAME-simulation); an earlier "
+                   "run there is replaced")
+    p.set_defaults(run=cmd_simulate)
 
     p = sub.add_parser("validate", help="check a scene and list every problem",
                        description="Read SCENE and report every problem found, or that it is "

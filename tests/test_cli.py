@@ -18,7 +18,7 @@ ROOT = Path(__file__).resolve().parents[1]
 SCENES = ROOT / "data" / "scenes"
 MALFORMED = Path(__file__).resolve().parent / "data" / "malformed_scene.toml"
 
-SUBCOMMANDS = ("dynamics", "info", "inverse", "report", "validate", "scenes")
+SUBCOMMANDS = ("dynamics", "info", "inverse", "report", "simulate", "validate", "scenes")
 REPORT_KEYS = {"scene", "t", "dimension", "counts", "dof", "dof_with_drivers", "redundant_rows",
                "state", "joints", "driver_efforts", "accelerations", "multipliers"}
 STATE_KEYS = {"t", "max_abs_phi", "condition_number", "sigma_min", "characteristic_length_m"}
@@ -79,7 +79,7 @@ def test_no_subcommand_is_a_usage_error(tmp_path):
 
 
 def test_unknown_subcommand_is_a_usage_error(tmp_path):
-    result = hexapod_cli("simulate", cwd=tmp_path)
+    result = hexapod_cli("fly", cwd=tmp_path)
     assert result.returncode == 2
     assert "invalid choice" in result.stderr
     assert_no_traceback(result)
