@@ -173,9 +173,9 @@ def cmd_simulate(args) -> int:
     result = simulate(model, args.start + duration, t0=args.start, method=args.method,
                       rtol=args.rtol, atol=args.atol, step=args.step, every=args.every,
                       forces=True if args.forces else None,
-                      progress=_time_progress(args.method) if show else None)
+                      progress=_time_progress(args.method, args.start) if show else None)
     if show:
-        print("\r" + " " * 60 + "\r", end="", file=sys.stderr)
+        print("\r" + " " * 90 + "\r", end="", file=sys.stderr)
     stats = result.statistics()
     files = {"results.csv": result.csv_text().encode(), "results.npz": result.npz_bytes(),
              "stats.json": (json.dumps(_jsonable(stats), indent=2) + "\n").encode()}
@@ -194,7 +194,8 @@ def cmd_simulate(args) -> int:
     return 0
 
 
-def _time_progress(method: str):
+def _time_progress(method: str, t0: float):
+    """A progress bar on stderr, redrawn at most ten times a second."""
     import time
 
     last = [0.0]
@@ -203,7 +204,10 @@ def _time_progress(method: str):
         now = time.perf_counter()
         if now - last[0] > 0.1 or t >= t_end:
             last[0] = now
-            print(f"\r{method}: t = {t:.4g} / {t_end:g} s", end="", file=sys.stderr, flush=True)
+            done = min(max((t - t0) / (t_end - t0), 0.0), 1.0)
+            bar = "#" * int(30 * done) + "." * (30 - int(30 * done))
+            print(f"\r{method} [{bar}] {100 * done:3.0f} %  t = {t:.4g} s", end="",
+                  file=sys.stderr, flush=True)
     return report
 
 
@@ -269,10 +273,14 @@ def _at_least(smallest: int):
     return parse
 
 
-def _scene_arguments(parser: argparse.ArgumentParser, json_help: str) -> None:
+def _scene_positional(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("scene", nargs="?", default=DEFAULT_SCENE,
                         help="a TOML scene file or a built-in scene name (default: "
                         f"{DEFAULT_SCENE})")
+
+
+def _scene_arguments(parser: argparse.ArgumentParser, json_help: str) -> None:
+    _scene_positional(parser)
     parser.add_argument("--t", type=float, default=0.0, help="time in s (default 0)")
     parser.add_argument("--json", action="store_true", help=json_help)
 
@@ -335,8 +343,7 @@ def build_parser() -> argparse.ArgumentParser:
         "residual of its equations of motion under the reported wrenches) and the figures "
         "forces.png, torques.png, efforts.png and, when bodies have a 'foot' marker, foot.png. "
         "The directory is written whole or not at all.")
-    p.add_argument("scene", nargs="?", default=DEFAULT_SCENE,
-                   help=f"a TOML scene file or a built-in scene name (default: {DEFAULT_SCENE})")
+    _scene_positional(p)
     p.add_argument("--out", metavar="DIR",
                    help="the directory to write (default: SCENE-NAME-report); an earlier "
                    "report there is replaced")
@@ -367,8 +374,7 @@ def build_parser() -> argparse.ArgumentParser:
         "largest constraint violations, energy drift). A run that fails still writes the "
         "states up to the failure, says why and exits with status 1. The directory is "
         "written whole or not at all.")
-    p.add_argument("scene", nargs="?", default=DEFAULT_SCENE,
-                   help=f"a TOML scene file or a built-in scene name (default: {DEFAULT_SCENE})")
+    _scene_positional(p)
     p.add_argument("--method", choices=list(INTEGRATORS), default=DEFAULT_METHOD,
                    metavar="NAME", help=f"the integrator (default {DEFAULT_METHOD}): {methods}")
     p.add_argument("--t-end", type=_positive(float), metavar="S",
