@@ -379,7 +379,8 @@ def build_parser() -> argparse.ArgumentParser:
                    metavar="NAME", help=f"the integrator (default {DEFAULT_METHOD}): {methods}")
     p.add_argument("--t-end", type=_positive(float), metavar="S",
                    help="duration in s (default: one cycle of the scene's periodic laws, or 1 s)")
-    p.add_argument("--start", type=float, default=0.0, help="start time in s (default 0)")
+    p.add_argument("--start", type=float, default=0.0, metavar="S",
+                   help="start time in s (default 0)")
     p.add_argument("--rtol", type=_positive(float), default=1e-6,
                    help="relative tolerance of adaptive methods (default 1e-6)")
     p.add_argument("--atol", type=_positive(float), default=1e-8,
