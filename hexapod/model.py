@@ -283,9 +283,13 @@ class Model:
         return ca.jacobian(self._sym.phi, self._sym.q)
 
     @cached_property
+    def _B_expr(self) -> ca.SX:
+        """``B(q)``: ``qdot = B v``."""
+        return ca.jacobian(self._sym.qdot, self._sym.v)
+
+    @cached_property
     def _Phi_v_expr(self) -> ca.SX:
-        B = ca.jacobian(self._sym.qdot, self._sym.v)  # B(q): qdot = B v
-        return ca.mtimes(self._Phi_q_expr, B)
+        return ca.mtimes(self._Phi_q_expr, self._B_expr)
 
     @cached_property
     def phi(self) -> ca.Function:
@@ -385,8 +389,7 @@ class Model:
         s = self._sym
         lam = ca.SX.sym("lam", self.n_c)
         g = ca.mtimes(self._Phi_v_expr.T, lam) - s.Q
-        B = ca.jacobian(s.qdot, s.v)
-        K = ca.mtimes(ca.jacobian(g, s.q), B)
+        K = ca.mtimes(ca.jacobian(g, s.q), self._B_expr)
         C = ca.jacobian(g, s.v)
         names = [n for n in ("q", "v", "lam", "w") if n != "w" or self.n_w > 0]
         symbols = {"q": s.q, "v": s.v, "lam": lam, "w": s.w}

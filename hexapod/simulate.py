@@ -59,8 +59,9 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
     saved = {"t": [], "q": [], "v": [], "v_dot": [], "lam": []}
     energy_saved: list[float] = []
     conserved = model.energy_conserved
-    energy0 = _energy(model, integrator.q, integrator.v) if conserved else None
+    energy0 = _energy(model, integrator.q, integrator.v)[1] if conserved else None
     worst = {"phi": 0.0, "velocity": 0.0, "drift": 0.0, "kinetic": 0.0}
+    latest = {"energy": energy0}  # the energy of the state watched last, saved with it
 
     def watch() -> None:
         t, q, v = integrator.t, integrator.q, integrator.v
@@ -72,15 +73,16 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
             worst["velocity"] = max(worst["velocity"],
                                     float(np.abs(rate / model.row_scale).max()))
         if conserved:
-            kinetic, total = _energy_parts(model, q, v)
+            kinetic, total = _energy(model, q, v)
             worst["kinetic"] = max(worst["kinetic"], kinetic)
             worst["drift"] = max(worst["drift"], abs(total - energy0))
+            latest["energy"] = total
 
     def save() -> None:
         for key in saved:
             saved[key].append(np.array(getattr(integrator, key), dtype=float, copy=True))
         if conserved:
-            energy_saved.append(_energy(model, integrator.q, integrator.v))
+            energy_saved.append(latest["energy"])
 
     watch()
     save()
@@ -116,13 +118,10 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
     return result
 
 
-def _energy_parts(model: Model, q: np.ndarray, v: np.ndarray) -> tuple[float, float]:
+def _energy(model: Model, q: np.ndarray, v: np.ndarray) -> tuple[float, float]:
+    """Kinetic and total energy (J)."""
     kinetic, potential = model.energy(q, v)
     return float(kinetic), float(kinetic) + float(potential)
-
-
-def _energy(model: Model, q: np.ndarray, v: np.ndarray) -> float:
-    return _energy_parts(model, q, v)[1]
 
 
 def _add_wrenches(result: SimulationResult) -> None:

@@ -105,11 +105,7 @@ class Integrator:
         self.data = Data()
         self.status = "running"
         self.message = ""
-        q = assemble_positions(model, q0, t0, counts=self._newton_counts())
-        self._count_newton()
-        v = solve_velocities(model, q, t0, v0)
-        self.counters.jacobians += 1
-        self.counters.factorisations += 1
+        q, v = self._project(self.t0, q0, v0)  # guesses of None: the scene's initial state
         self.t, self.q, self.v = self.t0, q, v
         self.v_dot, self.lam = self._dynamics(self.t, q, v)
         self._start()
@@ -164,25 +160,18 @@ class Integrator:
         self.counters.factorisations += 1
         return v_dot, self.data.lam
 
-    def _project(self, t: float, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _project(self, t: float, q: np.ndarray | None,
+                 v: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
         """The nearest consistent state in the kinetic-energy norm: positions onto
         ``phi = 0`` (Newton's method), then velocities onto ``Phi_v v = nu``."""
-        q = assemble_positions(self.model, q, t, counts=self._newton_counts())
-        self._count_newton()
+        counts: dict = {}
+        q = assemble_positions(self.model, q, t, counts=counts)
         v = solve_velocities(self.model, q, t, v)
-        self.counters.jacobians += 1
-        self.counters.factorisations += 1
-        return q, v
-
-    def _newton_counts(self) -> dict:
-        self._pending = {}
-        return self._pending
-
-    def _count_newton(self) -> None:
-        iterations = self._pending.get("newton", 0)
+        iterations = counts.get("newton", 0)  # each a Jacobian and a factorisation
         self.counters.newton += iterations
-        self.counters.jacobians += iterations
-        self.counters.factorisations += iterations
+        self.counters.jacobians += iterations + 1
+        self.counters.factorisations += iterations + 1
+        return q, v
 
     @classmethod
     def describe(cls) -> dict:
