@@ -26,6 +26,7 @@ from hexapod.dynamics import forward_dynamics
 from hexapod.errors import HexapodError
 from hexapod.kinematics import assemble_positions, solve_velocities
 from hexapod.model import Data, Model
+from hexapod.rates import compiled_rates
 
 
 @dataclass
@@ -108,6 +109,8 @@ class Integrator:
         q, v = self._project(self.t0, q0, v0)  # guesses of None: the scene's initial state
         self.t, self.q, self.v = self.t0, q, v
         self.v_dot, self.lam = self._dynamics(self.t, q, v)
+        # the stages' right-hand sides, compiled for the rows independent at the start
+        self._compiled = compiled_rates(model, self.data.independent_rows)
         self._start()
 
     # ------------------------------------------------------------------ the contract
@@ -159,6 +162,18 @@ class Integrator:
         self.counters.jacobians += 1
         self.counters.factorisations += 1
         return v_dot, self.data.lam
+
+    def _rates(self, t: float, q: np.ndarray, v: np.ndarray,
+               alpha: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """``(q_dot, v_dot)`` at a state, without multipliers (the stages of explicit methods):
+        one compiled call, or the exact solve of :meth:`_dynamics` where the compiled one is
+        refused (a change of rank, a singular configuration). ``alpha``: Baumgarte's rate."""
+        rates = self._compiled(t, q, v, alpha)
+        if rates is not None:
+            self.counters.rhs += 1
+            return rates
+        v_dot, _ = self._dynamics(t, q, v, (alpha, alpha) if alpha else None)
+        return self.model.call("qdot", q=q, v=v), v_dot
 
     def _project(self, t: float, q: np.ndarray | None,
                  v: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:

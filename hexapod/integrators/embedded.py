@@ -42,9 +42,8 @@ class EmbeddedRungeKutta(Integrator):
         if self._given_step is None:
             self.h = self._initial_step()
 
-    def _rates(self, t, q, v):
-        v_dot, _ = self._dynamics(t, q, v)
-        return np.concatenate([self.model.call("qdot", q=q, v=v), v_dot])
+    def _derivative(self, t, q, v):
+        return np.concatenate(self._rates(t, q, v))
 
     def _norm(self, x: np.ndarray, y0: np.ndarray, y1: np.ndarray) -> float:
         weight = self.atol + self.rtol * np.maximum(np.abs(y0), np.abs(y1))
@@ -64,7 +63,7 @@ class EmbeddedRungeKutta(Integrator):
         h0 = min(h0, self.t_bound - self.t)
         n_q = self.model.n_q
         y1 = y0 + h0 * f0
-        f1 = self._rates(self.t + h0, y1[:n_q], y1[n_q:])
+        f1 = self._derivative(self.t + h0, y1[:n_q], y1[n_q:])
         d2 = self._norm(f1 - f0, y0, y0) / h0
         if max(d1, d2) <= 1e-15:
             h1 = max(1e-6, h0 * 1e-3)
@@ -85,7 +84,7 @@ class EmbeddedRungeKutta(Integrator):
             stages = [f0]
             for i in range(1, len(self.c)):
                 y = y0 + h * sum(a * k for a, k in zip(self.A[i, :i], stages, strict=True))
-                stages.append(self._rates(self.t + self.c[i] * h, y[:n_q], y[n_q:]))
+                stages.append(self._derivative(self.t + self.c[i] * h, y[:n_q], y[n_q:]))
             K = np.array(stages)
             y1 = y0 + h * (self.b @ K)
             error = self._error(h, K, y0, y1) if np.all(np.isfinite(y1)) else np.inf
@@ -143,7 +142,7 @@ class DormandPrince853(EmbeddedRungeKutta):
 
     def _error(self, h, K, y0, y1):
         n_q = self.model.n_q
-        K = np.vstack([K, self._rates(self.t + h, y1[:n_q], y1[n_q:])])
+        K = np.vstack([K, self._derivative(self.t + h, y1[:n_q], y1[n_q:])])
         weight = self.atol + self.rtol * np.maximum(np.abs(y0), np.abs(y1))
         err5 = np.sum((dop853.E5 @ K / weight) ** 2)
         err3 = np.sum((dop853.E3 @ K / weight) ** 2)

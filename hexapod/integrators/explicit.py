@@ -13,8 +13,6 @@ method's truncation error, not to round-off.
 
 from __future__ import annotations
 
-import numpy as np
-
 from hexapod.integrators.base import Integrator
 
 
@@ -37,12 +35,8 @@ class RungeKutta4Baumgarte(Integrator):
     def __init__(self, *args, alpha: float = 10.0, **kwargs):
         if not alpha >= 0:
             raise ValueError(f"alpha must be non-negative, got {alpha}")
-        self.baumgarte = (float(alpha), float(alpha))
+        self.alpha = float(alpha)
         super().__init__(*args, **kwargs)
-
-    def _rates(self, t: float, q: np.ndarray, v: np.ndarray):
-        v_dot, lam = self._dynamics(t, q, v, self.baumgarte)
-        return self.model.call("qdot", q=q, v=v), v_dot, lam
 
     def _step(self) -> None:
         h = self.next_step()
@@ -50,10 +44,10 @@ class RungeKutta4Baumgarte(Integrator):
         # the accelerations at the current state come from the end of the last step, with the
         # same stabilisation (at the start the state is consistent and the terms vanish)
         dq1, dv1 = self.model.call("qdot", q=q, v=v), self.v_dot
-        dq2, dv2, _ = self._rates(t + h / 2, q + h / 2 * dq1, v + h / 2 * dv1)
-        dq3, dv3, _ = self._rates(t + h / 2, q + h / 2 * dq2, v + h / 2 * dv2)
-        dq4, dv4, _ = self._rates(t + h, q + h * dq3, v + h * dv3)
+        dq2, dv2 = self._rates(t + h / 2, q + h / 2 * dq1, v + h / 2 * dv1, self.alpha)
+        dq3, dv3 = self._rates(t + h / 2, q + h / 2 * dq2, v + h / 2 * dv2, self.alpha)
+        dq4, dv4 = self._rates(t + h, q + h * dq3, v + h * dv3, self.alpha)
         self.q = self.model.normalize(q + h / 6 * (dq1 + 2 * dq2 + 2 * dq3 + dq4))
         self.v = v + h / 6 * (dv1 + 2 * dv2 + 2 * dv3 + dv4)
         self.t = t + h
-        _, self.v_dot, self.lam = self._rates(self.t, self.q, self.v)
+        self.v_dot, self.lam = self._dynamics(self.t, self.q, self.v, (self.alpha, self.alpha))

@@ -1,0 +1,127 @@
+"""The state derivatives ``(q_dot, v_dot)`` of the equations of motion as one compiled call.
+
+Integrators evaluate the right-hand side many times per step and need only the accelerations
+there, not multipliers by the redundancy policy. :class:`CompiledRates` builds, once per model
+and row set, a single CasADi ``MX`` Function
+
+    rates(q, v, w, wd, wdd, alpha) -> (q_dot, v_dot, residual)
+
+that forms ``Phi_v, gamma, Q`` and solves the equilibrated saddle-point system
+
+    [[I, W^T], [W, 0]] [y; mu] = [M^-1/2 Q; D^-1 gamma],   W = D^-1 Phi_v M^-1/2,
+    v_dot = M^-1/2 y
+
+with a sparse QR factorisation (CasADi's ``qr`` linear solver, symbolic analysis done once), on
+the independent rows chosen by the rank decision at a reference state. Equilibration keeps the
+conditioning that of ``W`` (not squared, as a Schur complement would); the sparse factorisation
+keeps the cost linear in the number of bodies for chains and trees. ``alpha`` is Baumgarte's
+rate (``alpha = beta``, 0 to switch it off).
+
+The fixed row set is what makes one compiled Function possible, so every call also returns the
+``residual`` of *all* rows, ``max |D^-1 (Phi_v v_dot - gamma)|`` relative to the size of the
+solution: a singular configuration, or a change of rank, shows there, and
+:meth:`CompiledRates.__call__` then returns None so that the caller falls back on the exact,
+rank-deciding solve of :func:`hexapod.dynamics.forward_dynamics`.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+from scipy import sparse
+
+from hexapod.model import Model
+
+#: relative residual above which a compiled solve is refused (the rank changed, or a
+#: configuration is singular); far above round-off, far below any integrator's tolerance
+RESIDUAL_TOLERANCE = 1e-9
+
+
+def _sparse_dm(matrix: np.ndarray) -> ca.DM:
+    coo = sparse.csc_matrix(matrix)
+    coo.eliminate_zeros()
+    pattern = ca.Sparsity(coo.shape[0], coo.shape[1], coo.indptr.tolist(), coo.indices.tolist())
+    return ca.DM(pattern, coo.data.tolist())
+
+
+class CompiledRates:
+    """``(q_dot, v_dot)`` at a state in one call (see the module's description).
+
+    Parameters
+    ----------
+    model : Model
+    rows : ndarray of int
+        The independent constraint rows to solve with (indices into ``model.rows``); the other
+        rows are redundant and only checked.
+    """
+
+    def __init__(self, model: Model, rows: np.ndarray):
+        self.model = model
+        self.rows = np.asarray(rows, dtype=int)
+        self.function = self._build()
+        self._args = [n for n in ("q", "v", "w", "wd", "wdd") if n in ("q", "v") or model.n_w]
+
+    def _build(self) -> ca.Function:
+        model, rows = self.model, self.rows
+        symbols = {"q": ca.MX.sym("q", model.n_q), "v": ca.MX.sym("v", model.n_v),
+                   "w": ca.MX.sym("w", model.n_w), "wd": ca.MX.sym("wd", model.n_w),
+                   "wdd": ca.MX.sym("wdd", model.n_w)}
+        alpha = ca.MX.sym("alpha")
+        args = [n for n in ("q", "v", "w", "wd", "wdd") if n in ("q", "v") or model.n_w]
+
+        def call(function):
+            return function(*[symbols[n] for n in function.name_in()])
+
+        v = symbols["v"]
+        Phi_v, gamma, Q = call(model.dynamics_terms)
+        q_dot = call(model.qdot)
+        m_inv_sqrt = _sparse_dm(model.mass_inv_sqrt.dense())
+        y0 = ca.mtimes(m_inv_sqrt, Q)
+        if model.n_c == 0:
+            v_dot = ca.mtimes(m_inv_sqrt, y0)
+            residual = ca.MX(0)
+        else:
+            # Baumgarte: Phi_v v_dot = gamma - 2 alpha (Phi_v v - nu) - alpha^2 phi
+            gamma = (gamma - 2 * alpha * (ca.mtimes(Phi_v, v) - call(model.nu))
+                     - alpha**2 * call(model.phi))
+            W_all = ca.mtimes(Phi_v, m_inv_sqrt)
+            d_all = ca.sqrt(ca.sum2(W_all * W_all))
+            d_all = ca.if_else(d_all > 0, d_all, 1.0)
+            W = W_all[rows.tolist(), :] / ca.repmat(d_all[rows.tolist()], 1, model.n_v)
+            n_r = rows.size
+            K = ca.vertcat(ca.horzcat(ca.MX.eye(model.n_v), W.T),
+                           ca.horzcat(W, ca.MX(n_r, n_r)))
+            rhs = ca.vertcat(y0, gamma[rows.tolist()] / d_all[rows.tolist()])
+            solution = ca.solve(K, rhs, "qr")
+            y = solution[: model.n_v]
+            v_dot = ca.mtimes(m_inv_sqrt, y)
+            scaled = (ca.mtimes(Phi_v, v_dot) - gamma) / d_all
+            residual = ca.mmax(ca.fabs(scaled)) / (ca.norm_inf(y) + ca.norm_inf(y0) + 1e-300)
+        inputs = [symbols[n] for n in args] + [alpha]
+        return ca.Function("rates", inputs, [q_dot, v_dot, residual], args + ["alpha"],
+                           ["q_dot", "v_dot", "residual"])
+
+    def __call__(self, t: float, q: np.ndarray, v: np.ndarray,
+                 alpha: float = 0.0) -> tuple[np.ndarray, np.ndarray] | None:
+        """``(q_dot, v_dot)`` at ``(t, q, v)``, or None when the compiled solve cannot be
+        trusted there (non-finite, or the rows it solves with no longer span the constraints)."""
+        values = {"q": q, "v": v}
+        if self.model.n_w:
+            values["w"], values["wd"], values["wdd"] = self.model.law_values(t)
+        try:
+            q_dot, v_dot, residual = self.function(*[values[n] for n in self._args], alpha)
+        except RuntimeError:  # the factorisation failed: a singular matrix, or NaN in it
+            return None
+        v_dot = v_dot.full().reshape(-1)
+        if not (float(residual) <= RESIDUAL_TOLERANCE and np.all(np.isfinite(v_dot))):
+            return None
+        return q_dot.full().reshape(-1), v_dot
+
+
+def compiled_rates(model: Model, rows: np.ndarray) -> CompiledRates:
+    """The :class:`CompiledRates` of ``model`` for a row set, built once and kept in
+    ``model.derived``."""
+    key = ("rates", tuple(int(r) for r in rows))
+    if key not in model.derived:
+        model.derived[key] = CompiledRates(model, rows)
+    return model.derived[key]
