@@ -41,9 +41,9 @@ def forward_dynamics(model: Model, data: Data, t: float, q: np.ndarray, v: np.nd
     v = np.asarray(v, dtype=float)
     w, wd, wdd = model.law_values(t)
     values = {"q": q, "v": v, "w": w, "wd": wd, "wdd": wdd}
-    terms = model.dynamics_terms
-    Phi_v, gamma, Q = (x.full() for x in terms(*[values[n] for n in terms.name_in()]))
-    gamma, Q = gamma.reshape(-1), Q.reshape(-1)
+    terms = model.fast("dynamics_terms")
+    Phi_v, gamma, Q = terms(*[values[n] for n in terms.name_in])
+    Phi_v = Phi_v.reshape(model.n_c, model.n_v)
     if baumgarte is not None and model.n_c:
         alpha, beta = baumgarte
         velocity_error = Phi_v @ v - model.call("nu", q=q, w=w, wd=wd)

@@ -27,6 +27,7 @@ from functools import cached_property
 import casadi as ca
 import numpy as np
 
+from hexapod.fastcall import FastFunction
 from hexapod.scene.laws import Law
 from hexapod.spatial import (
     Placement,
@@ -215,6 +216,7 @@ class Model:
         #: objects built from the model by the algorithms, kept so that they are built once
         #: (e.g. the compiled tree-ordered inverse dynamics)
         self.derived: dict = {}
+        self._fast: dict[str, FastFunction] = {}
         self._lie_indices()
 
     # ---------------------------------------------------------------- descriptions
@@ -407,10 +409,18 @@ class Model:
 
         >>> model.call("phi", q=q, w=w)      # doctest: +SKIP
         """
-        function = getattr(self, name)
-        out = function(*[np.asarray(values[n], dtype=float) for n in function.name_in()])
-        array = out.full()
-        return array if name in _MATRIX_OUTPUTS else array.reshape(-1)
+        function = self.fast(name)
+        (array,) = function(*[values[n] for n in function.name_in])
+        if name in _MATRIX_OUTPUTS:
+            return array.reshape(getattr(self, name).size_out(0))
+        return array.reshape(-1)
+
+    def fast(self, name: str) -> FastFunction:
+        """The Function ``name`` evaluated through buffers (:mod:`hexapod.fastcall`): the same
+        numbers, without the cost of converting arguments; built once."""
+        if name not in self._fast:
+            self._fast[name] = FastFunction(getattr(self, name))
+        return self._fast[name]
 
     def call_samples(self, name: str, **values) -> np.ndarray:
         """Evaluate the Function ``name`` at N samples in one call: inputs by name with the

@@ -30,6 +30,7 @@ import casadi as ca
 import numpy as np
 from scipy import sparse
 
+from hexapod.fastcall import FastFunction
 from hexapod.model import Model
 
 #: relative residual above which a compiled solve is refused (the rank changed, or a
@@ -59,6 +60,7 @@ class CompiledRates:
         self.model = model
         self.rows = np.asarray(rows, dtype=int)
         self.function = self._build()
+        self._fast = FastFunction(self.function)
         self._args = [n for n in ("q", "v", "w", "wd", "wdd") if n in ("q", "v") or model.n_w]
 
     def _build(self) -> ca.Function:
@@ -109,13 +111,12 @@ class CompiledRates:
         if self.model.n_w:
             values["w"], values["wd"], values["wdd"] = self.model.law_values(t)
         try:
-            q_dot, v_dot, residual = self.function(*[values[n] for n in self._args], alpha)
+            q_dot, v_dot, residual = self._fast(*[values[n] for n in self._args], alpha)
         except RuntimeError:  # the factorisation failed: a singular matrix, or NaN in it
             return None
-        v_dot = v_dot.full().reshape(-1)
-        if not (float(residual) <= RESIDUAL_TOLERANCE and np.all(np.isfinite(v_dot))):
+        if not (residual[0] <= RESIDUAL_TOLERANCE and np.all(np.isfinite(v_dot))):
             return None
-        return q_dot.full().reshape(-1), v_dot
+        return q_dot, v_dot
 
 
 def compiled_rates(model: Model, rows: np.ndarray) -> CompiledRates:

@@ -58,3 +58,23 @@ def test_a_row_set_that_no_longer_spans_the_constraints_is_refused():
     rows = data.independent_rows
     assert CompiledRates(model, rows)(0.0, q, v) is not None
     assert CompiledRates(model, rows[:-1])(0.0, q, v) is None
+
+
+def test_fast_function_equals_the_casadi_call():
+    import casadi as ca
+
+    from hexapod.fastcall import FastFunction
+
+    x = ca.SX.sym("x", 3)
+    y = ca.SX.sym("y", 2, 2)
+    sparse_matrix = ca.vertcat(ca.horzcat(x[0], 0), ca.horzcat(x[1] * x[2], 0),
+                               ca.horzcat(0, y[0, 1]))  # structural zeros, 3 x 2
+    function = ca.Function("f", [x, y], [sparse_matrix, ca.sin(x) + y[1, 0]])
+    fast = FastFunction(function)
+    rng = np.random.default_rng(0)
+    for _ in range(3):  # the buffers are reused: each call sees its own arguments
+        X, Y = rng.normal(size=3), rng.normal(size=(2, 2))
+        A, b = fast(X, Y)
+        A_ref, b_ref = (o.full() for o in function(X, Y))
+        assert A.shape == (3, 2) and np.array_equal(A, A_ref)
+        assert b.shape == (3,) and np.array_equal(b, b_ref.reshape(-1))
