@@ -1,4 +1,5 @@
-"""The state derivatives ``(q_dot, v_dot)`` of the equations of motion as one compiled call.
+"""Compiled kernels of the integrators: the state derivatives ``(q_dot, v_dot)``, and the
+projection of a state onto the constraints, each one CasADi call.
 
 Integrators evaluate the right-hand side many times per step and need only the accelerations
 there, not multipliers by the redundancy policy. :class:`CompiledRates` builds, once per model
@@ -32,6 +33,7 @@ from scipy import sparse
 
 from hexapod.fastcall import FastFunction
 from hexapod.model import Model
+from hexapod.spatial import quaternion_product
 
 #: relative residual above which a compiled solve is refused (the rank changed, or a
 #: configuration is singular); far above round-off, far below any integrator's tolerance
@@ -117,6 +119,104 @@ class CompiledRates:
         if not (residual[0] <= RESIDUAL_TOLERANCE and np.all(np.isfinite(v_dot))):
             return None
         return q_dot, v_dot
+
+
+def _exp_step(model: Model, q: ca.MX, dv: ca.MX) -> ca.MX:
+    """``q (+) dv`` as :meth:`Model.integrate` computes it, symbolically."""
+    parts = [q[i] for i in range(model.n_q)]
+    for i, j in zip(model._lin_q, model._lin_v, strict=True):
+        parts[i] = q[int(i)] + dv[int(j)]
+    for quat, omega in zip(model._quat_q, model._omega_v, strict=True):
+        theta = dv[omega.tolist()]
+        angle2 = ca.dot(theta, theta)
+        small = angle2 < 1e-16
+        angle = ca.sqrt(ca.if_else(small, 1.0, angle2))
+        # sin(x/2)/x with its series near zero (no 0/0 in the branch not taken)
+        k = ca.if_else(small, 0.5 - angle2 / 48.0, ca.sin(angle / 2) / angle)
+        c = ca.if_else(small, 1.0 - angle2 / 8.0, ca.cos(angle / 2))
+        step = ca.vertcat(c, k * theta)
+        p = ca.vertcat(*[q[int(i)] for i in quat])
+        product = quaternion_product(p, step)
+        product = product / ca.norm_2(product)
+        for n, i in enumerate(quat):
+            parts[int(i)] = product[n]
+    return ca.vertcat(*parts)
+
+
+class CompiledProjection:
+    """The nearest consistent state in the kinetic-energy norm, as :func:`assemble_positions`
+    and :func:`solve_velocities` compute it from a state near the constraints (the end of an
+    integration step): ``newton`` Newton iterations on ``phi = 0``, each the least-``M``-norm
+    correction through the equilibrated saddle-point system, then the velocities projected
+    onto ``Phi_v v = nu``, in one call. Returns None when the result cannot be trusted (the
+    largest scaled residual above ``tol``, a change of rank): the caller then projects with the
+    exact, rank-deciding functions.
+    """
+
+    def __init__(self, model: Model, rows: np.ndarray, newton: int = 2, tol: float = 1e-12):
+        self.model, self.rows, self.newton, self.tol = model, np.asarray(rows, int), newton, tol
+        self._fast = FastFunction(self._build())
+        self._args = ["q", "v"] + (["w", "wd"] if model.n_w else [])
+
+    def _build(self) -> ca.Function:
+        model, rows = self.model, self.rows.tolist()
+        q, v = ca.MX.sym("q", model.n_q), ca.MX.sym("v", model.n_v)
+        w, wd = ca.MX.sym("w", model.n_w), ca.MX.sym("wd", model.n_w)
+        laws = [w, wd] if model.n_w else []
+        symbols = {"q": q, "v": v, "w": w, "wd": wd}
+        m_inv_sqrt = _sparse_dm(model.mass_inv_sqrt.dense())
+        m_sqrt = _sparse_dm(np.linalg.inv(model.mass_inv_sqrt.dense()))
+        scale = ca.DM(model.row_scale)
+
+        def call(function, **values):
+            return function(*[values.get(n, symbols[n]) for n in function.name_in()])
+
+        def saddle(position, top, bottom_all):
+            """Solve [[I, W^T], [W, 0]] [y; mu] = [top; bottom / d] on the kept rows."""
+            Phi_v = call(model.Phi_v, q=position)
+            W_all = ca.mtimes(Phi_v, m_inv_sqrt)
+            d = ca.sqrt(ca.sum2(W_all * W_all))
+            d = ca.if_else(d > 0, d, 1.0)
+            W = W_all[rows, :] / ca.repmat(d[rows], 1, model.n_v)
+            K = ca.vertcat(ca.horzcat(ca.MX.eye(model.n_v), W.T),
+                           ca.horzcat(W, ca.MX(len(rows), len(rows))))
+            return ca.solve(K, ca.vertcat(top, bottom_all[rows] / d[rows]), "qr")[:model.n_v]
+
+        position = q
+        for _ in range(self.newton):
+            residual = call(model.phi, q=position)
+            y = saddle(position, ca.MX.zeros(model.n_v), -residual)
+            position = _exp_step(model, position, ca.mtimes(m_inv_sqrt, y))
+        phi_error = ca.mmax(ca.fabs(call(model.phi, q=position) / scale))
+        nu = call(model.nu, q=position)
+        y = saddle(position, ca.mtimes(m_sqrt, v), nu)
+        velocity = ca.mtimes(m_inv_sqrt, y)
+        rate_error = (ca.mtimes(call(model.Phi_v, q=position), velocity) - nu) / scale
+        size = ca.norm_inf(velocity) + ca.norm_inf(nu / scale) + 1e-300
+        return ca.Function("project", [q, v, *laws], [position, velocity, phi_error,
+                                                      ca.mmax(ca.fabs(rate_error)) / size])
+
+    def __call__(self, t: float, q: np.ndarray,
+                 v: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        values = {"q": q, "v": v}
+        if self.model.n_w:
+            values["w"], values["wd"], _ = self.model.law_values(t)
+        try:
+            position, velocity, phi_error, rate_error = self._fast(
+                *[values[n] for n in self._args])
+        except RuntimeError:  # the factorisation failed: a singular matrix, or NaN in it
+            return None
+        if not (phi_error[0] <= self.tol and rate_error[0] <= RESIDUAL_TOLERANCE):
+            return None
+        return position, velocity
+
+
+def compiled_projection(model: Model, rows: np.ndarray) -> CompiledProjection:
+    """The :class:`CompiledProjection` of ``model`` for a row set, built once."""
+    key = ("projection", tuple(int(r) for r in rows))
+    if key not in model.derived:
+        model.derived[key] = CompiledProjection(model, rows)
+    return model.derived[key]
 
 
 def compiled_rates(model: Model, rows: np.ndarray) -> CompiledRates:

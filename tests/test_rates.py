@@ -78,3 +78,40 @@ def test_fast_function_equals_the_casadi_call():
         A_ref, b_ref = (o.full() for o in function(X, Y))
         assert A.shape == (3, 2) and np.array_equal(A, A_ref)
         assert b.shape == (3,) and np.array_equal(b, b_ref.reshape(-1))
+
+
+@pytest.mark.parametrize("case", ["front_leg", "four-bar-3d", "driven-tree"])
+def test_compiled_projection_equals_the_exact_one(case):
+    from hexapod.rates import compiled_projection
+
+    if case == "four-bar-3d":
+        scene = four_bar(3, 0.7, driven=False)
+    elif case == "driven-tree":
+        scene = random_tree(3, 4)
+    else:
+        scene = read_scene(SCENES / f"{case}.toml")
+    model, q, v, _, data = solve_state(scene, 0.2)
+    rng = np.random.default_rng(5)
+    # the end of an integration step: off the constraints by about a tolerance
+    drifted_q = model.integrate(q, 1e-7 * rng.normal(size=model.n_v))
+    drifted_v = v + 1e-6 * rng.normal(size=model.n_v)
+    projected = compiled_projection(model, data.independent_rows)(0.2, drifted_q, drifted_v)
+    assert projected is not None
+    exact_q = hx.assemble_positions(model, drifted_q, 0.2)
+    exact_v = hx.solve_velocities(model, exact_q, 0.2, drifted_v)
+    w, wd, _ = model.law_values(0.2)
+    assert np.abs(model.call("phi", q=projected[0], w=w) / model.row_scale).max() < 1e-12
+    rate = model.call("Phi_v", q=projected[0], w=w) @ projected[1] - model.call(
+        "nu", q=projected[0], w=w, wd=wd)
+    assert np.abs(rate).max() < 1e-12 * max(1.0, np.abs(exact_v).max())
+    if case == "four-bar-3d":
+        # the drift makes the redundant rows independent to the exact projection's rank
+        # decision, not to the compiled one's: two points of the constraints within the drift
+        assert np.abs(projected[0] - exact_q).max() < 1e-6
+    else:
+        # both take least-M-norm Newton steps from the same start: the same point
+        assert np.abs(projected[0] - exact_q).max() < 1e-13
+        assert np.abs(projected[1] - exact_v).max() < 1e-12 * max(1.0, np.abs(exact_v).max())
+    # far from the constraints two Newton steps are not enough: refused, not returned
+    far = model.integrate(q, 0.3 * rng.normal(size=model.n_v))
+    assert compiled_projection(model, data.independent_rows)(0.2, far, v) is None

@@ -166,7 +166,8 @@ def test_a_failed_run_writes_the_states_up_to_it_and_says_why(tmp_path):
     errors = result.stderr.strip().splitlines()
     assert len(errors) == 1 and errors[0].startswith("hexapod: error: dopri5-projection failed")
     stats = strict_json((tmp_path / "run" / "stats.json").read_text())
-    assert stats["status"] == "failed" and 0.49 < stats["t_end"] <= 0.5
+    # the reach is exhausted at 0.5 s; a step may end past it by the assembly tolerance
+    assert stats["status"] == "failed" and 0.49 < stats["t_end"] <= 0.5 + 1e-9
     _, table = read_csv(tmp_path / "run" / "results.csv")
     assert table[-1, 0] == stats["t_end"] and np.all(np.isfinite(table))
 

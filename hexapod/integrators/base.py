@@ -26,7 +26,7 @@ from hexapod.dynamics import forward_dynamics
 from hexapod.errors import HexapodError
 from hexapod.kinematics import assemble_positions, solve_velocities
 from hexapod.model import Data, Model
-from hexapod.rates import compiled_rates
+from hexapod.rates import compiled_projection, compiled_rates
 
 
 @dataclass
@@ -88,6 +88,9 @@ class Integrator:
     description: ClassVar[str] = ""
     #: fixed-step methods without a ``step``: this many steps over the run
     default_steps: ClassVar[int] = 1000
+    #: True when the method counts its accepted steps itself: a call of :meth:`step` then
+    #: returns one state but may stand for many steps of an underlying solver
+    counts_own_steps: ClassVar[bool] = False
 
     def __init__(self, model: Model, t0: float, t_bound: float, q0: np.ndarray | None = None,
                  v0: np.ndarray | None = None, *, rtol: float = 1e-6, atol: float = 1e-8,
@@ -109,9 +112,23 @@ class Integrator:
         q, v = self._project(self.t0, q0, v0)  # guesses of None: the scene's initial state
         self.t, self.q, self.v = self.t0, q, v
         self.v_dot, self.lam = self._dynamics(self.t, q, v)
-        # the stages' right-hand sides, compiled for the rows independent at the start
+        # the stages' right-hand sides and the projection, compiled for the rows independent
+        # at the start
         self._compiled = compiled_rates(model, self.data.independent_rows)
+        self._compiled_projection = compiled_projection(model, self.data.independent_rows)
         self._start()
+
+    @property
+    def lam(self) -> np.ndarray:
+        """The multipliers at the current state (by the redundancy policy of DESIGN); a method
+        that advances with the compiled right-hand side solves for them only when asked."""
+        if self._lam is None:
+            self._lam = self._dynamics(self.t, self.q, self.v)[1]
+        return self._lam
+
+    @lam.setter
+    def lam(self, value: np.ndarray | None) -> None:
+        self._lam = value
 
     # ------------------------------------------------------------------ the contract
 
@@ -136,7 +153,8 @@ class Integrator:
             self.status = "failed"
             self.message = f"{self.name} failed after t = {t_before:.6g} s: {error}"
             return
-        self.counters.steps += 1
+        if not self.counts_own_steps:
+            self.counters.steps += 1
         if not np.all(np.isfinite(self.q)) or not np.all(np.isfinite(self.v)):
             self.status = "failed"
             self.message = (f"{self.name}: the state became non-finite at t = {self.t:.6g} s "
@@ -179,6 +197,14 @@ class Integrator:
                  v: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
         """The nearest consistent state in the kinetic-energy norm: positions onto
         ``phi = 0`` (Newton's method), then velocities onto ``Phi_v v = nu``."""
+        projector = getattr(self, "_compiled_projection", None)  # None: the start
+        if projector is not None and q is not None and v is not None:
+            state = projector(t, q, v)
+            if state is not None:
+                self.counters.newton += projector.newton
+                self.counters.jacobians += projector.newton + 1
+                self.counters.factorisations += projector.newton + 1
+                return state
         counts: dict = {}
         q = assemble_positions(self.model, q, t, counts=counts)
         v = solve_velocities(self.model, q, t, v)

@@ -98,7 +98,8 @@ class EmbeddedRungeKutta(Integrator):
             self.h = h * factor
         self.t += h
         self.q, self.v = self._project(self.t, model.normalize(y1[:n_q]), y1[n_q:])
-        self.v_dot, self.lam = self._dynamics(self.t, self.q, self.v)
+        # the accelerations start the next step; the multipliers are solved when asked
+        self.v_dot, self.lam = self._rates(self.t, self.q, self.v)[1], None
         self.h = h * factor
 
 
