@@ -83,6 +83,7 @@ class CompiledRates:
         y0 = ca.mtimes(m_inv_sqrt, Q)
         if model.n_c == 0:
             v_dot = ca.mtimes(m_inv_sqrt, y0)
+            lam = ca.MX(0, 1)
             residual = ca.MX(0)
         else:
             # Baumgarte: Phi_v v_dot = gamma - 2 alpha (Phi_v v - nu) - alpha^2 phi
@@ -98,27 +99,43 @@ class CompiledRates:
             rhs = ca.vertcat(y0, gamma[rows.tolist()] / d_all[rows.tolist()])
             solution = ca.solve(K, rhs, "qr")
             y = solution[: model.n_v]
+            # the kept rows' multipliers (lambda_I = mu / d_I); the others are zero
+            lam = ca.MX(model.n_c, 1)
+            lam[rows.tolist()] = solution[model.n_v:] / d_all[rows.tolist()]
             v_dot = ca.mtimes(m_inv_sqrt, y)
             scaled = (ca.mtimes(Phi_v, v_dot) - gamma) / d_all
             residual = ca.mmax(ca.fabs(scaled)) / (ca.norm_inf(y) + ca.norm_inf(y0) + 1e-300)
         inputs = [symbols[n] for n in args] + [alpha]
-        return ca.Function("rates", inputs, [q_dot, v_dot, residual], args + ["alpha"],
-                           ["q_dot", "v_dot", "residual"])
+        return ca.Function("rates", inputs, [q_dot, v_dot, lam, residual], args + ["alpha"],
+                           ["q_dot", "v_dot", "lam", "residual"])
+
+    @property
+    def complete(self) -> bool:
+        """True when every row is solved with (none redundant): the multipliers are then
+        unique, and those of the compiled solve are the policy's."""
+        return self.rows.size == self.model.n_c
 
     def __call__(self, t: float, q: np.ndarray, v: np.ndarray,
                  alpha: float = 0.0) -> tuple[np.ndarray, np.ndarray] | None:
-        """``(q_dot, v_dot)`` at ``(t, q, v)``, or None when the compiled solve cannot be
-        trusted there (non-finite, or the rows it solves with no longer span the constraints)."""
+        """``(q_dot, v_dot)``, or None (see :meth:`solve`)."""
+        solution = self.solve(t, q, v, alpha)
+        return None if solution is None else solution[:2]
+
+    def solve(self, t: float, q: np.ndarray, v: np.ndarray,
+              alpha: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """``(q_dot, v_dot, lam)`` at ``(t, q, v)``, or None when the compiled solve cannot be
+        trusted there (non-finite, or the rows it solves with no longer span the constraints).
+        ``lam`` holds the kept rows' multipliers, zero on the others."""
         values = {"q": q, "v": v}
         if self.model.n_w:
             values["w"], values["wd"], values["wdd"] = self.model.law_values(t)
         try:
-            q_dot, v_dot, residual = self._fast(*[values[n] for n in self._args], alpha)
+            q_dot, v_dot, lam, residual = self._fast(*[values[n] for n in self._args], alpha)
         except RuntimeError:  # the factorisation failed: a singular matrix, or NaN in it
             return None
         if not (residual[0] <= RESIDUAL_TOLERANCE and np.all(np.isfinite(v_dot))):
             return None
-        return q_dot, v_dot
+        return q_dot, v_dot, lam
 
 
 def _exp_step(model: Model, q: ca.MX, dv: ca.MX) -> ca.MX:

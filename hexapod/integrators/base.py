@@ -123,7 +123,13 @@ class Integrator:
         """The multipliers at the current state (by the redundancy policy of DESIGN); a method
         that advances with the compiled right-hand side solves for them only when asked."""
         if self._lam is None:
-            self._lam = self._dynamics(self.t, self.q, self.v)[1]
+            solution = self._compiled.solve(self.t, self.q, self.v) if (
+                self._compiled.complete) else None
+            if solution is not None:  # no redundant row: the multipliers are unique
+                self.counters.rhs += 1
+                self._lam = solution[2]
+            else:
+                self._lam = self._dynamics(self.t, self.q, self.v)[1]
         return self._lam
 
     @lam.setter
