@@ -37,7 +37,8 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
         Tolerances of adaptive methods; the step of fixed-step methods (the first step of
         adaptive ones). See :class:`~hexapod.integrators.Integrator`.
     every :
-        Save every ``every``-th accepted step.
+        Save every ``every``-th accepted step (every ``every``-th state a method returns, for
+        a method that returns states at output times and counts its own steps).
     forces :
         Also compute the joint wrenches at the saved states (report convention); default: as
         the scene asks (``[scene] report_forces``).
@@ -86,6 +87,7 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
 
     watch()
     save()
+    returned = 0
     wall, cpu = time.perf_counter(), time.process_time()
     while integrator.status == "running":
         if integrator.counters.steps >= max_steps:
@@ -97,7 +99,8 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
         if integrator.status == "failed":
             break
         watch()
-        if integrator.status == "finished" or integrator.counters.steps % every == 0:
+        returned += 1  # states returned, one per call (many steps for some methods)
+        if integrator.status == "finished" or returned % every == 0:
             save()
         if progress is not None:
             progress(integrator.t, t_end)

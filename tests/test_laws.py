@@ -125,3 +125,29 @@ def test_gait_law_phase_reaches_pi_at_touch_down(duty, blend, shift):
     t = np.linspace(0.0, period, 60001)[:-1]
     assert (law.phase(t)[0] % (2 * np.pi) >= np.pi).mean() == pytest.approx(duty, abs=1e-4)
     assert np.all(law.phase(t)[1] > 0)  # the phase never runs backwards
+
+
+# ------------------------------------------------------------------ closed forms for CasADi
+
+@pytest.mark.parametrize("name", LAWS)
+def test_symbolic_form_equals_the_numeric_law(name):
+    """``Law.symbolic`` (the CasADi expression compiled integrators use) against
+    ``Law.evaluate`` at the sample times, in SX and MX: value, first and second derivative
+    equal to round-off (two evaluations of one closed form). Laws without a closed form (the
+    splines) say so with None, and are then evaluated numerically through a callback."""
+    import casadi as ca
+
+    law = LAWS[name]
+    for kind in (ca.SX, ca.MX):
+        t = kind.sym("t")
+        form = law.symbolic(t)
+        if name.startswith("spline"):
+            assert form is None
+            continue
+        function = ca.Function("law", [t], list(form))
+        got = np.array([np.array(function(x)).reshape(-1) for x in TIMES]).T
+        for k, (a, b) in enumerate(zip(got, law.evaluate(TIMES), strict=True)):
+            assert np.allclose(a, b, rtol=1e-13, atol=1e-13 * (1 + np.abs(b).max())), (name, k)
+    for other in (hx.Gait(sin=[1.0]), hx.Hermite([0.0, 1.0], [0.0, 1.0], [0.0, 0.0],
+                                                 [0.0, 0.0])):
+        assert other.symbolic(ca.SX.sym("t")) is None

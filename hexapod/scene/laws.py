@@ -42,6 +42,12 @@ class Law:
         constant, which repeats at any time)."""
         return None
 
+    def symbolic(self, t):
+        """Value, first and second derivatives as CasADi expressions of the symbol ``t`` (SX or
+        MX), for integrators whose time loop runs in compiled code; None when the law has no
+        closed form to offer (such an integrator then calls :meth:`evaluate`)."""
+        return None
+
 
 def _finite(values) -> bool:
     return bool(np.all(np.isfinite(np.asarray(values, dtype=float))))
@@ -57,6 +63,9 @@ class Constant(Law):
     def evaluate(self, t):
         t = np.asarray(t, dtype=float)
         return np.full_like(t, self.value), np.zeros_like(t), np.zeros_like(t)
+
+    def symbolic(self, t):
+        return self.value + 0 * t, 0 * t, 0 * t
 
     def _scaled(self, factor):
         return Constant(self.value * factor)
@@ -83,6 +92,21 @@ class Polynomial(Law):
         d1 = c.polyder(coef) if coef.size > 1 else np.zeros(1)
         d2 = c.polyder(d1) if d1.size > 1 else np.zeros(1)
         return c.polyval(s, coef), c.polyval(s, d1), c.polyval(s, d2)
+
+    def symbolic(self, t):
+        c = np.polynomial.polynomial
+        coef = np.array(self.coefficients if self.coefficients else (0.0,))
+        d1 = c.polyder(coef) if coef.size > 1 else np.zeros(1)
+        d2 = c.polyder(d1) if d1.size > 1 else np.zeros(1)
+        s = t - self.t0
+
+        def horner(a):
+            out = 0 * t + a[-1]
+            for x in a[-2::-1]:
+                out = out * s + x
+            return out
+
+        return horner(coef), horner(d1), horner(d2)
 
     def _scaled(self, factor):
         return Polynomial(tuple(c * factor for c in self.coefficients), self.t0)
@@ -129,6 +153,22 @@ class Harmonic(Law):
 
     def cycle_time(self):
         return 1.0 / self.frequency if (self.cos or self.sin) else None
+
+    def symbolic(self, t):
+        import casadi as ca
+
+        a, b, kw = _harmonic_arrays(self.cos, self.sin, 2.0 * np.pi * self.frequency)
+        if not kw.size:
+            return self.offset + 0 * t, 0 * t, 0 * t
+        # all harmonics as one vector expression (a series of hundreds of terms stays cheap)
+        angle = ca.DM(kw) * (t - self.t0)
+        c, n = ca.cos(angle), ca.sin(angle)
+
+        def dot(weights, x):
+            return ca.dot(ca.DM(weights), x)
+
+        return (self.offset + dot(a, c) + dot(b, n), dot(b * kw, c) - dot(a * kw, n),
+                -(dot(a * kw**2, c) + dot(b * kw**2, n)))
 
     def _scaled(self, factor):
         return Harmonic(self.offset * factor, tuple(a * factor for a in self.cos),
@@ -459,6 +499,10 @@ class Scaled(Law):
 
     def cycle_time(self):
         return self.law.cycle_time()
+
+    def symbolic(self, t):
+        inner = self.law.symbolic(t)
+        return None if inner is None else tuple(self.factor * x for x in inner)
 
     def problems(self):
         return self.law.problems()
