@@ -146,7 +146,8 @@ def test_closed_loop_pendulum_of_seed002_follows_its_lagrange_equation(method):
     settings of each method (the paper's figures resolve 1e-2 dm)."""
     model = hx.assemble(read_scene(SCENES / "closed_pendulum_seed002.toml"))
     settings = {"rk4-baumgarte": dict(step=1e-3), "dopri5-projection": dict(rtol=1e-9,
-                atol=1e-11), "generalized-alpha": dict(step=2.5e-4)}.get(method, {})
+                atol=1e-11), "generalized-alpha": dict(step=2.5e-4),
+                "rattle": dict(step=2.5e-4)}.get(method, {})
     result = simulate(model, 1.5, method=method, **settings)
     assert result.success, result.message
     p1, p2, _ = ClosedLoopPendulum().solve(1.5)(result.t)
@@ -184,7 +185,8 @@ def test_spinning_top_keeps_its_energy_and_vertical_momentum(method):
     settings = {"dopri5-projection": dict(rtol=1e-9, atol=1e-9)}.get(method, dict(step=5e-4))
     result = simulate(model, 0.5, method=method, **settings)
     assert result.success, result.message
-    bound = {"generalized-alpha": 1e-3}.get(method, 1e-6)
+    # rattle: second order, its energy error ~1e-6 at 5e-4 s (bounded, not drifting)
+    bound = {"generalized-alpha": 1e-3, "rattle": 1e-5}.get(method, 1e-6)
     assert result.energy_drift < bound
     body = model.bodies[0]
     momentum = []
@@ -204,11 +206,14 @@ def test_constraint_drift_is_bounded(method):
     result = simulate(model, 1.0, method=method, step=2e-3, rtol=1e-6, atol=1e-8)
     assert result.success
     cls = INTEGRATORS[method]
-    if cls.index == 3 or "projection" in cls.stabilisation:
+    if method == "idas-bdf":  # projected only when the drift passes its tolerance, rtol here
+        assert result.max_position_violation <= 1e-6
+        assert result.max_velocity_violation <= 1e-6 * 10  # scaled by alpha = 10/s
+    elif cls.index == 3 or "projection" in cls.stabilisation:
         assert result.max_position_violation < 1e-13
     else:
         assert result.max_position_violation < 1e-6
-    if "projection" in cls.stabilisation:
+    if "projection" in cls.stabilisation and method != "idas-bdf":
         assert result.max_velocity_violation < 1e-12
 
 
@@ -241,7 +246,11 @@ def test_a_driver_pulling_past_reach_fails_with_a_message(method):
     assert result.t[-1] >= 0.5 - 1e-6 and np.all(np.isfinite(result.q))
     cls = INTEGRATORS[method]
     if cls.index == 3 or "projection" in cls.stabilisation:
-        assert result.t[-1] < 0.5 and result.counters.rejected > 10
+        # t = 0.5 itself has a solution (x = 1, y = 0): a method may reach it, not pass it;
+        # idas-bdf holds the constraints to drift_tol = rtol = 1e-6 m / L (L = 1 m), and at
+        # 0.5 + d no position violates them by less than d (m): it may pass by 1e-6 s
+        late = 1e-6 if method == "idas-bdf" else 1e-12
+        assert result.t[-1] <= 0.5 + late and result.counters.rejected > 10
         assert ("Newton" in result.message) == (cls.index == 3)
 
 
@@ -313,11 +322,12 @@ def test_energy_with_a_spring_is_conserved_and_lost_to_its_damper(method):
     says so (no drift reported)."""
     model = sprung_top(damping=0.0)
     assert model.energy_conserved
-    settings = {"generalized-alpha": dict(step=2e-4)}.get(
+    settings = {"generalized-alpha": dict(step=2e-4), "rattle": dict(step=2e-4)}.get(
         method, dict(step=1e-3, rtol=1e-9, atol=1e-9))
     result = simulate(model, 0.3, method=method, **settings)
     assert result.success, result.message
-    assert result.energy_drift < {"generalized-alpha": 1e-3}.get(method, 1e-6)
+    # rattle: second order, ~2e-6 at 2e-4 s
+    assert result.energy_drift < {"generalized-alpha": 1e-3, "rattle": 1e-5}.get(method, 1e-6)
     kinetic, potential = model.energy(result.q[-1], result.v[-1])
     assert float(kinetic) + float(potential) == pytest.approx(result.energy[-1], abs=1e-15)
     damped = simulate(sprung_top(damping=3.0), 0.05, method=method, **settings)

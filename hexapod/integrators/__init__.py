@@ -7,6 +7,10 @@ name                        order  index  stabilisation
 ``dopri5-projection``       5      1      projection onto phi = 0 and Phi_v v = nu
 ``dop853-projection``       8      1      projection onto phi = 0 and Phi_v v = nu
 ``generalized-alpha``       2      3      position constraints solved (Newton)
+``rattle``                  2      3      position constraints solved (Newton), symplectic
+``radau5-ggl``              5      2      GGL: phi = 0 and Phi_v v = nu, B Phi_v^T mu
+``idas-bdf``                1-5    1      Baumgarte terms in the DAE; projection and restart
+                                          when the drift passes a tolerance
 ==========================  =====  =====  =============================================
 
 Tests and studies iterate over :data:`INTEGRATORS`; :func:`get_integrator` accepts a name or a
@@ -19,6 +23,9 @@ from hexapod.integrators.base import Counters, Integrator
 from hexapod.integrators.embedded import DormandPrince5, DormandPrince853, EmbeddedRungeKutta
 from hexapod.integrators.explicit import RungeKutta4Baumgarte
 from hexapod.integrators.generalized_alpha import LieGroupGeneralizedAlpha
+from hexapod.integrators.radau import RadauIIA5GGL
+from hexapod.integrators.rattle import Rattle
+from hexapod.integrators.sundials import IdasBDF
 
 #: Integrators by name, in the order studies list them.
 INTEGRATORS: dict[str, type[Integrator]] = {}
@@ -46,10 +53,10 @@ def get_integrator(method: str | type[Integrator]) -> type[Integrator]:
     return INTEGRATORS[method]
 
 
-for _cls in (RungeKutta4Baumgarte, DormandPrince5, DormandPrince853, LieGroupGeneralizedAlpha):
+for _cls in (RungeKutta4Baumgarte, DormandPrince5, DormandPrince853, LieGroupGeneralizedAlpha,
+             Rattle, RadauIIA5GGL, IdasBDF):
     register(_cls)
 
 __all__ = ["DEFAULT_METHOD", "INTEGRATORS", "Counters", "DormandPrince5", "DormandPrince853",
-           "EmbeddedRungeKutta",
-           "Integrator", "LieGroupGeneralizedAlpha", "RungeKutta4Baumgarte",
-           "get_integrator", "register"]
+           "EmbeddedRungeKutta", "IdasBDF", "Integrator", "LieGroupGeneralizedAlpha",
+           "RadauIIA5GGL", "Rattle", "RungeKutta4Baumgarte", "get_integrator", "register"]
