@@ -14,7 +14,8 @@ PACKAGE = ROOT / "hexapod"
 
 #: Layer of each module (a package entry covers its sub-modules).
 LAYERS = {
-    "hexapod.errors": 0, "hexapod.spatial": 0, "hexapod.fastcall": 0, "hexapod.graph": 0, "hexapod.fileio": 0,
+    "hexapod.errors": 0, "hexapod.spatial": 0, "hexapod.fastcall": 0, "hexapod.graph": 0,
+    "hexapod.fileio": 0,
     "hexapod.scene": 1,
     "hexapod.assembly": 2, "hexapod.model": 2,
     "hexapod.linalg": 3, "hexapod.kinematics": 3, "hexapod.dynamics": 3,
