@@ -20,6 +20,25 @@ def solve_state(scene: hx.Scene, t: float = 0.0):
 
 # ------------------------------------------------------------------ simple pendulum
 
+def rod_pendulum(dimension: int):
+    """A 1 m, 1 kg rod about an end, released horizontal at rest (data/scenes/pendulum.toml, and
+    its planar twin): the model and the small-oscillation frequency; energy 0 throughout, the
+    centre of mass 0.5 m from the pivot."""
+    from pathlib import Path
+
+    from hexapod.scene.reader import read_scene
+
+    if dimension == 3:
+        scenes = Path(__file__).resolve().parents[1] / "data" / "scenes"
+        model = hx.assemble(read_scene(scenes / "pendulum.toml"))
+    else:
+        scene = hx.Scene("planar-pendulum", 2)
+        scene.add(hx.PlanarBody("rod", 1.0, 0.0833, position=[0.5, 0.0]))
+        scene.add(hx.Revolute("pivot", "ground", "rod", origin=[0.0, 0.0]))
+        model = hx.assemble(scene)
+    return model, np.sqrt(9.81 * 0.5 / (0.0833 + 0.25))
+
+
 PENDULUM = dict(mass=1.3, length=0.8, inertia=0.02)  # kg, m (pivot to centre of mass), kg m^2
 
 
@@ -162,3 +181,20 @@ def random_tree(seed: int, n_bodies: int, *, chain: bool = False, prismatic: flo
             scene.add(hx.JointDriver(f"d{k}", f"j{k}", law))
         points[name] = origin + rng.normal(size=3) * 0.2
     return scene
+
+
+# ------------------------------------------------------------------ a top on a spring
+
+def sprung_top(damping: float, inertia=(0.002, 0.002, 0.004)) -> hx.Model:
+    """A top on a spherical joint (spinning at 30 rad/s, tilted 0.5 rad) held by a spring from a
+    point of its rim to a fixed point: gyroscopic terms, a spring potential, and, with damping,
+    a force depending on the velocities."""
+    scene = hx.Scene("sprung-top", 3)
+    rotation = hx.rotation_about_axis([1.0, 0.0, 0.0], 0.5)
+    scene.add(hx.SpatialBody("top", 0.5, list(inertia), position=rotation @ [0, 0, 0.1],
+                             rotation=rotation, angular_velocity=[1.0, -2.0, 30.0]))
+    scene.add(hx.Spherical("tip", "ground", "top", origin=[0.0, 0.0, 0.0]))
+    scene.add(hx.SpringDamper("spring", "ground", "top", point_a=[0.3, 0.1, 0.2],
+                              point_b=[0.05, 0.0, 0.0], stiffness=40.0, damping=damping,
+                              free_length=0.2))
+    return hx.assemble(scene)

@@ -15,6 +15,8 @@ from hexapod.scene.laws import Polynomial
 from hexapod.scene.reader import read_scene
 from hexapod.simulate import simulate
 
+from mechanisms import sprung_top
+
 SCENES = Path(__file__).resolve().parents[1] / "data" / "scenes"
 G = 9.81
 FIXED = [name for name, cls in INTEGRATORS.items() if not cls.adaptive]
@@ -273,20 +275,6 @@ def test_integrator_base_class_is_abstract():
 
 
 # ------------------------------------------------------------------ services of the model
-
-def sprung_top(damping: float):
-    """The top of :func:`symmetric_top` held by a spring from a point of its rim to a fixed
-    point (a force depending on position and, with damping, on velocity)."""
-    scene = hx.Scene("sprung-top", 3)
-    rotation = hx.rotation_about_axis([1.0, 0.0, 0.0], 0.5)
-    scene.add(hx.SpatialBody("top", 0.5, [0.002, 0.002, 0.004], position=rotation @ [0, 0, 0.1],
-                             rotation=rotation, angular_velocity=[1.0, -2.0, 30.0]))
-    scene.add(hx.Spherical("tip", "ground", "top", origin=[0.0, 0.0, 0.0]))
-    scene.add(hx.SpringDamper("spring", "ground", "top", point_a=[0.3, 0.1, 0.2],
-                              point_b=[0.05, 0.0, 0.0], stiffness=40.0, damping=damping,
-                              free_length=0.2))
-    return hx.assemble(scene)
-
 
 @pytest.mark.parametrize("which", ["sprung-top", "four-bar"])
 def test_tangent_matrices_are_the_derivatives_on_the_group(which):

@@ -18,7 +18,7 @@ from hexapod.references import pendulum_exact
 from hexapod.scene.reader import read_scene
 from hexapod.simulate import simulate
 
-from mechanisms import four_bar, four_bar_points
+from mechanisms import four_bar, four_bar_points, rod_pendulum, sprung_top
 
 SCENES = Path(__file__).resolve().parents[1] / "data" / "scenes"
 G = 9.81
@@ -37,14 +37,8 @@ def test_registered_with_its_declarations():
 def pendulum(dimension: int):
     """A 1 m, 1 kg rod on a revolute joint at its end, released horizontal at rest (the
     spatial one turns about the world y axis): model, small-oscillation frequency, arm."""
-    if dimension == 3:
-        model = hx.assemble(read_scene(SCENES / "pendulum.toml"))
-    else:
-        scene = hx.Scene("planar-pendulum", 2)
-        scene.add(hx.PlanarBody("rod", 1.0, 0.0833, position=[0.5, 0.0]))
-        scene.add(hx.Revolute("pivot", "ground", "rod", origin=[0.0, 0.0]))
-        model = hx.assemble(scene)
-    return model, np.sqrt(G * 0.5 / (0.0833 + 0.25)), 0.5
+    model, omega0 = rod_pendulum(dimension)
+    return model, omega0, 0.5
 
 
 def pendulum_error(result, omega0: float, arm: float) -> float:
@@ -250,15 +244,7 @@ def test_jacobian_is_the_derivative_of_the_residual():
     the residual in ``(xi, v, lambda, mu)``: a top on a spherical joint with a spring-damper
     (gyroscopic, spring, damper and constraint terms, Lie-group positions). Error O(eps^2)
     plus round-off O(1e-16 / eps) relative to the entries."""
-    scene = hx.Scene("sprung-top", 3)
-    rotation = hx.rotation_about_axis([1.0, 0.0, 0.0], 0.5)
-    scene.add(hx.SpatialBody("top", 0.5, [0.002, 0.002, 0.004], position=rotation @ [0, 0, 0.1],
-                             rotation=rotation, angular_velocity=[1.0, -2.0, 30.0]))
-    scene.add(hx.Spherical("tip", "ground", "top", origin=[0.0, 0.0, 0.0]))
-    scene.add(hx.SpringDamper("spring", "ground", "top", point_a=[0.3, 0.1, 0.2],
-                              point_b=[0.05, 0.0, 0.0], stiffness=40.0, damping=3.0,
-                              free_length=0.2))
-    model = hx.assemble(scene)
+    model = sprung_top(damping=3.0)
     functions = ggl_functions(model)
     rng = np.random.default_rng(5)
     n_v, n_c = model.n_v, model.n_c

@@ -14,26 +14,13 @@ import pytest
 import hexapod as hx
 from hexapod.integrators import get_integrator
 from hexapod.references import pendulum_exact, pendulum_period
-from hexapod.scene.reader import read_scene
 from hexapod.simulate import simulate
 
-from mechanisms import four_bar
+from mechanisms import four_bar, rod_pendulum
+from mechanisms import sprung_top as _sprung_top
 
 SCENES = Path(__file__).resolve().parents[1] / "data" / "scenes"
 G = 9.81
-
-
-def rod_pendulum(dimension: int):
-    """A 1 m, 1 kg rod about an end, released horizontal at rest (data/scenes/pendulum.toml, and
-    its planar twin): energy 0 throughout, the centre of mass 0.5 m from the pivot."""
-    if dimension == 3:
-        model = hx.assemble(read_scene(SCENES / "pendulum.toml"))
-    else:
-        scene = hx.Scene("planar-pendulum", 2)
-        scene.add(hx.PlanarBody("rod", 1.0, 0.0833, position=[0.5, 0.0]))
-        scene.add(hx.Revolute("pivot", "ground", "rod", origin=[0.0, 0.0]))
-        model = hx.assemble(scene)
-    return model, np.sqrt(G * 0.5 / (0.0833 + 0.25))
 
 
 def run(model, h: float, steps: int, method: str = "rattle", q0=None, v0=None, **options):
@@ -118,26 +105,15 @@ def test_second_order_against_the_exact_pendulum(dimension):
     assert errors[-1] < 2e-3
 
 
-def sprung_top(damping: float) -> hx.Model:
-    """A top on a spherical joint held by a spring from a rim point to a fixed point (as in
-    test_integrators), optionally with a damper: gyroscopic terms, a spring potential, and,
-    with damping, a force depending on the velocities."""
-    scene = hx.Scene("sprung-top", 3)
-    rotation = hx.rotation_about_axis([1.0, 0.0, 0.0], 0.5)
-    scene.add(hx.SpatialBody("top", 0.5, [0.002, 0.003, 0.004],
-                             position=rotation @ [0, 0, 0.1], rotation=rotation,
-                             angular_velocity=[1.0, -2.0, 30.0]))
-    scene.add(hx.Spherical("tip", "ground", "top", origin=[0.0, 0.0, 0.0]))
-    scene.add(hx.SpringDamper("spring", "ground", "top", point_a=[0.3, 0.1, 0.2],
-                              point_b=[0.05, 0.0, 0.0], stiffness=40.0, damping=damping,
-                              free_length=0.2))
-    return hx.assemble(scene)
-
-
 def swinging_four_bar() -> hx.Model:
     """The spatial four-bar (four revolutes along z: three redundant rows), free, with gravity
     in its plane, released away from equilibrium."""
     return hx.assemble(four_bar(3, 1.0, driven=False, gravity=[0.0, -G, 0.0]))
+
+
+def sprung_top(damping: float) -> hx.Model:
+    """The top of the registry's tests with unequal transverse inertias (no symmetry to help)."""
+    return _sprung_top(damping, inertia=(0.002, 0.003, 0.004))
 
 
 def driven_pivot_pendulum() -> hx.Model:

@@ -23,7 +23,7 @@ from typing import ClassVar
 import numpy as np
 
 from hexapod.dynamics import forward_dynamics
-from hexapod.errors import HexapodError
+from hexapod.errors import HexapodError, IntegrationError
 from hexapod.kinematics import assemble_positions, solve_velocities
 from hexapod.model import Data, Model
 from hexapod.rates import compiled_projection, compiled_rates
@@ -198,6 +198,21 @@ class Integrator:
             return rates
         v_dot, _ = self._dynamics(t, q, v, (alpha, alpha) if alpha else None)
         return self.model.call("qdot", q=q, v=v), v_dot
+
+    def _halving(self, attempt):
+        """Take one step by ``attempt(h)``, which returns the new state or None when Newton's
+        method fails: then the step is halved (a rejection) and tried again. Returns the step
+        taken and the attempt's result; the caller grows the step back."""
+        while True:
+            h = self.next_step()
+            if h < 1e-12 * max(1.0, self.t_bound - self.t0):
+                raise IntegrationError(f"Newton's method does not converge even with a step of "
+                                       f"{h:.3g} s")
+            result = attempt(h)
+            if result is not None:
+                return h, result
+            self.counters.rejected += 1
+            self.h = h / 2
 
     def _project(self, t: float, q: np.ndarray | None,
                  v: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:

@@ -33,7 +33,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from hexapod.errors import IntegrationError
 from hexapod.integrators.base import Integrator
 from hexapod.linalg import distribute, equilibrate, split_rows
 from hexapod.reactions import policy_map
@@ -71,16 +70,7 @@ class LieGroupGeneralizedAlpha(Integrator):
         self.mass = self.model.mass.dense()
 
     def _step(self) -> None:
-        while True:
-            h = self.next_step()
-            if h < 1e-12 * max(1.0, self.t_bound - self.t0):
-                raise IntegrationError(f"Newton's method does not converge even with a step of "
-                                  f"{h:.3g} s")
-            result = self._attempt(h)
-            if result is not None:
-                break
-            self.counters.rejected += 1
-            self.h = h / 2
+        h, result = self._halving(self._attempt)
         self.t, self.q, self.v, self.v_dot, self.a, self.lam = result
         self.h = min(self.nominal, 2 * h) if h < self.nominal else self.h
 

@@ -60,7 +60,6 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from hexapod.errors import IntegrationError
 from hexapod.integrators.base import Integrator
 from hexapod.linalg import check_consistency, equilibrate, split_rows
 from hexapod.spatial import quaternion_product, skew
@@ -173,20 +172,18 @@ class Rattle(Integrator):
     # ------------------------------------------------------------ the step
 
     def _step(self) -> None:
-        while True:
-            h = self.next_step()
-            if h < 1e-12 * max(1.0, self.t_bound - self.t0):
-                raise IntegrationError(f"Newton's method does not converge even with a step of "
-                                       f"{h:.3g} s")
-            result = self._attempt(h)
-            if result is not None:
-                break
-            self.counters.rejected += 1
-            self.history.clear()
-            self.h = h / 2
+        h, result = self._halving(self._attempt_or_forget)
         self.t, self.q, self.v = result
         self._stale = True
         self.h = min(self.nominal, 2 * h) if h < self.nominal else self.h
+
+    def _attempt_or_forget(self, h: float):
+        """:meth:`_attempt`; after a failure the multipliers of the last steps no longer
+        predict those of the shorter step: forgotten."""
+        result = self._attempt(h)
+        if result is None:
+            self.history.clear()
+        return result
 
     def _predict(self, Phi_v: np.ndarray, rows: np.ndarray) -> np.ndarray:
         """Starting multipliers: extrapolated from the last two steps (``O(h^2)``), else those
