@@ -15,7 +15,7 @@ from hexapod.scene.laws import Polynomial
 from hexapod.scene.reader import read_scene
 from hexapod.simulate import simulate
 
-from mechanisms import sprung_top
+from mechanisms import four_bar, sprung_top
 
 SCENES = Path(__file__).resolve().parents[1] / "data" / "scenes"
 G = 9.81
@@ -327,16 +327,20 @@ def test_redundant_closed_chain_runs_and_keeps_the_policy(method):
     """The spatial four-bar (four revolutes: three redundant rows) swinging freely under
     gravity: constraints held, energy kept, and the multipliers at the last state those of
     the dynamics there, redundancy policy included."""
-    scene = read_scene(SCENES / "four_bar_3d.toml")
-    free = hx.Scene(scene.name, 3, gravity=scene.gravity)
-    free.add(*[e for e in scene.elements if e.family != "driver"])
-    model = hx.assemble(free)
+    # released with the crank at 0.7 rad, away from equilibrium (the scene file's pose is one)
+    model = hx.assemble(four_bar(3, 0.7, driven=False, gravity=[0.0, -9.81, 0.0]))
     settings = {"generalized-alpha": dict(step=5e-4)}.get(
         method, dict(step=1e-3, rtol=1e-9, atol=1e-10))
     result = simulate(model, 0.4, method=method, **settings)
     assert result.success, result.message
-    assert result.max_position_violation < (1e-9 if method == "rk4-baumgarte" else 1e-12)
-    assert result.energy_drift < {"generalized-alpha": 1e-3}.get(method, 1e-6)
+    assert np.abs(result.v).max() > 0.5  # it swings (m/s, rad/s)
+    # projection and index 3: round-off; Baumgarte: the truncation error; Radau and IDAS hold
+    # the constraints to their tolerance (rtol 1e-9)
+    loose = ("rk4-baumgarte", "radau5-ggl", "idas-bdf")
+    assert result.max_position_violation < (1e-8 if method in loose else 1e-12)
+    # second-order fixed-step methods: an energy error O(h^2)
+    second_order = ("generalized-alpha", "rattle")
+    assert result.energy_drift < (1e-3 if method in second_order else 1e-6)
     data = hx.Data()
     hx.forward_dynamics(model, data, result.t[-1], result.q[-1], result.v[-1])
     tolerance = {"generalized-alpha": 1e-3}.get(method, 1e-8)
