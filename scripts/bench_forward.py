@@ -68,7 +68,8 @@ Protocol
   not run.
 
 Outputs in ``--out`` (default ``bench-forward/``): the Markdown table on stdout,
-``bench_forward.json`` (every rung of every method), ``bench_forward.png`` (CPU per step against
+``bench_forward.json`` (every rung of every method; rewritten after each problem, with
+``"complete": false`` until the end), ``bench_forward.png`` (CPU per step against
 bodies over the chains with the fitted exponents, and CPU time to 1e-6 per problem) and the
 references, each written atomically; progress on stderr.
 
@@ -607,12 +608,13 @@ def bench_problem(problem: Problem, methods: list[str], args, exudyn_ok: bool) -
             return STEP_LADDER, STEP_LADDER.index(REPRESENTATIVE_STEP)
         return RTOL_LADDER, RTOL_LADDER.index(REPRESENTATIVE_RTOL)
 
-    def record(library: str, method: str, fixed: bool, runs: dict[int, Run], extra=None):
+    def record(library: str, method: str, fixed: bool, runs: dict[int, Run],
+               description: str = ""):
         ladder, start = ladder_of(fixed)
         value, qualifier = time_to_target(runs)
         representative = runs[start]
         result["methods"][method] = {
-            "library": library, "adaptive": not fixed, "description": extra or "",
+            "library": library, "adaptive": not fixed, "description": description,
             "representative": representative.as_dict(),
             # a run stopped by the budget still measured the cost of its steps
             "cpu_per_step_ms": (representative.per_step_ms
@@ -794,7 +796,7 @@ def figure(results: list[dict], exponents: dict) -> bytes:
     chains = [r for r in results if r["problem"]["chain"]]
     methods = list(dict.fromkeys(m for r in results for m in r["methods"]))
     markers = dict(zip(methods, "osD^v<>ph*x+", strict=False))
-    for method in methods:
+    for k, method in enumerate(methods):  # colour k in both panels
         points = [(r["bodies"], r["methods"][method]["cpu_per_step_ms"]) for r in chains
                   if method in r["methods"]
                   and np.isfinite(r["methods"][method]["cpu_per_step_ms"])]
@@ -803,7 +805,7 @@ def figure(results: list[dict], exponents: dict) -> bytes:
             library = next(r["methods"][method]["library"] for r in results
                            if method in r["methods"])
             label = method + (f" (slope {exponents[method]:.2f})" if method in exponents else "")
-            left.loglog(n, cost, marker=markers.get(method, "o"),
+            left.loglog(n, cost, marker=markers.get(method, "o"), color=f"C{k % 10}",
                         linestyle="--" if library == "exudyn" else "-", label=label)
     left.set_xlabel("bodies in the chain")
     left.set_ylabel("CPU time per step (ms)")
@@ -891,20 +893,31 @@ def main() -> None:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
-    results = [bench_problem(problem, methods, args, exudyn_ok) for problem in todo]
-    exponents = growth_exponents(results)
-    table = markdown(results, exponents, args)
-    print(table)
-    report = {"protocol": __doc__, "target": TARGET, "repeat": args.repeat,
-              "budget_s": args.budget, "sizes": args.sizes, "methods": methods,
-              "hexapod": hx.__version__, "exudyn": exudyn_version if exudyn_ok else None,
-              "python": sys.version.split()[0], "numpy": np.__version__,
-              "machine": platform.platform(), "processor": platform.processor(),
-              "wall_time_s": time.perf_counter() - started,
-              "growth_exponents": exponents, "problems": results,
-              "ratios": {r["problem"]["key"]: ratios(r) for r in results}, "table": table}
-    write_atomically(out / "bench_forward.json", json.dumps(finite(report), indent=1))
-    write_bytes_atomically(out / "bench_forward.png", figure(results, exponents))
+
+    def report(results: list[dict], complete: bool) -> dict:
+        exponents = growth_exponents(results)
+        return {"complete": complete, "protocol": __doc__, "target": TARGET,
+                "repeat": args.repeat, "budget_s": args.budget, "sizes": args.sizes,
+                "methods": methods, "hexapod": hx.__version__,
+                "exudyn": exudyn_version if exudyn_ok else None,
+                "python": sys.version.split()[0], "numpy": np.__version__,
+                "machine": platform.platform(), "processor": platform.processor(),
+                "wall_time_s": time.perf_counter() - started,
+                "growth_exponents": exponents, "problems": results,
+                "ratios": {r["problem"]["key"]: ratios(r) for r in results},
+                "table": markdown(results, exponents, args)}
+
+    results = []
+    for k, problem in enumerate(todo):
+        results.append(bench_problem(problem, methods, args, exudyn_ok))
+        if k + 1 < len(todo):  # what is done survives an interrupted run
+            write_atomically(out / "bench_forward.json",
+                             json.dumps(finite(report(results, False)), indent=1))
+    final = report(results, True)
+    print(final["table"])
+    write_atomically(out / "bench_forward.json", json.dumps(finite(final), indent=1))
+    write_bytes_atomically(out / "bench_forward.png",
+                           figure(results, final["growth_exponents"]))
     log(f"wrote {out / 'bench_forward.json'} and {out / 'bench_forward.png'}")
 
 
