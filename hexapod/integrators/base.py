@@ -92,6 +92,16 @@ class Integrator:
     #: returns one state but may stand for many steps of an underlying solver
     counts_own_steps: ClassVar[bool] = False
 
+    @classmethod
+    def largest_stable_step(cls, eigenvalues, constrained: bool = False,
+                            **options) -> float | None:
+        """The largest step stable on linear modes ``exp(lambda t)`` (:mod:`.stability`), for
+        the scene's ``eigenvalues`` (of its linearisation on the constraint manifold, see
+        :func:`hexapod.diagnostics.diagnose`); ``constrained`` when the scene has constraints,
+        ``options`` those of the constructor. None for methods without such a limit
+        (implicit ones)."""
+        return None
+
     def __init__(self, model: Model, t0: float, t_bound: float, q0: np.ndarray | None = None,
                  v0: np.ndarray | None = None, *, rtol: float = 1e-6, atol: float = 1e-8,
                  step: float | None = None, max_step: float = np.inf):

@@ -17,6 +17,7 @@ from scipy.integrate._ivp import dop853_coefficients as dop853
 
 from hexapod.errors import IntegrationError
 from hexapod.integrators.base import Integrator
+from hexapod.integrators.stability import largest_stable_step, runge_kutta_stability
 
 
 class EmbeddedRungeKutta(Integrator):
@@ -33,6 +34,13 @@ class EmbeddedRungeKutta(Integrator):
     c: np.ndarray
     error_order: int
     safety, min_factor, max_factor = 0.9, 0.2, 10.0
+
+    @classmethod
+    def largest_stable_step(cls, eigenvalues, constrained: bool = False,
+                            **options) -> float | None:
+        """On the scene's modes: projection removes the drift, so only they count."""
+        R = runge_kutta_stability(cls.A, cls.b)
+        return largest_stable_step(lambda z: abs(R(z)), eigenvalues)
 
     def __init__(self, *args, step: float | None = None, **kwargs):
         self._given_step = step

@@ -13,7 +13,15 @@ method's truncation error, not to round-off.
 
 from __future__ import annotations
 
+import numpy as np
+
 from hexapod.integrators.base import Integrator
+from hexapod.integrators.stability import largest_stable_step, runge_kutta_stability
+
+#: the classical tableau, for the stability function
+_A = np.array([[0, 0, 0, 0], [0.5, 0, 0, 0], [0, 0.5, 0, 0], [0, 0, 1, 0]], dtype=float)
+_B = np.array([1, 2, 2, 1], dtype=float) / 6
+_R = runge_kutta_stability(_A, _B)
 
 
 class RungeKutta4Baumgarte(Integrator):
@@ -32,7 +40,19 @@ class RungeKutta4Baumgarte(Integrator):
     adaptive = False
     description = "classical Runge-Kutta, fixed step, acceleration level"
 
-    def __init__(self, *args, alpha: float = 10.0, **kwargs):
+    DEFAULT_ALPHA = 10.0
+
+    @classmethod
+    def largest_stable_step(cls, eigenvalues, constrained: bool = False,
+                            **options) -> float | None:
+        """On the scene's modes and, with constraints, on the stabilisation's own: a drift
+        decays like ``exp(-alpha t)`` (a double root), which the step must resolve too."""
+        modes = list(np.asarray(eigenvalues, dtype=complex))
+        if constrained:
+            modes.append(-float(options.get("alpha", cls.DEFAULT_ALPHA)) + 0j)
+        return largest_stable_step(lambda z: abs(_R(z)), modes)
+
+    def __init__(self, *args, alpha: float = DEFAULT_ALPHA, **kwargs):
         if not alpha >= 0:
             raise ValueError(f"alpha must be non-negative, got {alpha}")
         self.alpha = float(alpha)

@@ -61,6 +61,7 @@ import casadi as ca
 import numpy as np
 
 from hexapod.integrators.base import Integrator
+from hexapod.integrators.stability import largest_stable_step, oscillator_parameters
 from hexapod.linalg import check_consistency, equilibrate, split_rows
 from hexapod.spatial import quaternion_product, skew
 
@@ -70,6 +71,19 @@ from hexapod.spatial import quaternion_product, skew
 #: leaves it above ROTATION_TOL (relative to ``h |Pi|``) is halved.
 ROTATION_ITERATIONS = 6
 ROTATION_TOL = 1e-12
+
+
+def _kick_drift_kick_growth(z: complex) -> float:
+    """Spectral radius of one step on ``x'' + c x' + k x = 0`` (``z = h lambda``), in the
+    variables ``(x, h x')``, with the damper in the kicks as :class:`Rattle` applies it."""
+    k, c = oscillator_parameters(z)
+    step = np.zeros((2, 2))
+    for column, (x, u) in enumerate(((1.0, 0.0), (0.0, 1.0))):
+        u_half = u + 0.5 * (-k * x - c * u)
+        x1 = x + u_half
+        u1 = u_half + 0.5 * (-k * x1 - c * (2 * u_half - u))
+        step[:, column] = x1, u1
+    return float(np.max(np.abs(np.linalg.eigvals(step))))
 
 
 class Rattle(Integrator):
@@ -91,6 +105,13 @@ class Rattle(Integrator):
     max_iterations = 25
 
     _stale = False  # True when v_dot and lam are not yet those of the current state
+
+    @classmethod
+    def largest_stable_step(cls, eigenvalues, constrained: bool = False,
+                            **options) -> float | None:
+        """On each mode, the kick-drift-kick map of its oscillator (Stormer-Verlet, ``h omega
+        < 2``, when undamped; a damper enters the kicks explicitly)."""
+        return largest_stable_step(_kick_drift_kick_growth, eigenvalues)
 
     def __init__(self, *args, newton_tol: float = 1e-13, **kwargs):
         if not newton_tol > 0:
