@@ -15,6 +15,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from hexapod.errors import HexapodError
 from hexapod.integrators import DEFAULT_METHOD, Integrator, get_integrator
 from hexapod.model import Model
 from hexapod.reactions import joint_wrenches
@@ -25,6 +26,7 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
              t0: float = 0.0, q0: np.ndarray | None = None, v0: np.ndarray | None = None,
              rtol: float = 1e-6, atol: float = 1e-8, step: float | None = None,
              every: int = 1, forces: bool | None = None, max_steps: int = 10_000_000,
+             cpu_budget: float | None = None,
              progress: Callable[[float, float], None] | None = None,
              options: dict | None = None) -> SimulationResult:
     """Integrate the motion of ``model`` from ``t0`` to ``t_end``.
@@ -42,6 +44,9 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
     forces :
         Also compute the joint wrenches at the saved states (report convention); default: as
         the scene asks (``[scene] report_forces``).
+    cpu_budget :
+        Stop the run, as failed, once its time loop has used this many CPU seconds (the states
+        up to there are kept), as ``max_steps`` stops it after that many steps.
     progress :
         Called as ``progress(t, t_end)`` after each accepted step.
     options :
@@ -80,8 +85,17 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
             latest["energy"] = total
 
     def save() -> None:
-        for key in saved:
-            saved[key].append(np.array(getattr(integrator, key), dtype=float, copy=True))
+        # accelerations and multipliers may be solved only now (lazily): a state the solve
+        # refuses ends the run as a failure, with the states saved before it
+        try:
+            values = {key: np.array(getattr(integrator, key), dtype=float, copy=True)
+                      for key in saved}
+        except HexapodError as error:
+            integrator.status = "failed"
+            integrator.message = (f"{cls.name}: failed at t = {integrator.t:.6g} s: {error}")
+            return
+        for key, value in values.items():
+            saved[key].append(value)
         if conserved:
             energy_saved.append(latest["energy"])
 
@@ -95,8 +109,19 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
             integrator.message = (f"{cls.name}: stopped after {max_steps} steps at "
                                   f"t = {integrator.t:.6g} s (raise max_steps, or the step)")
             break
+        if cpu_budget is not None and time.process_time() - cpu > cpu_budget:
+            integrator.status = "failed"
+            integrator.message = (f"{cls.name}: stopped by the CPU budget of {cpu_budget:g} s "
+                                  f"at t = {integrator.t:.6g} s")
+            break
         integrator.step()
         if integrator.status == "failed":
+            break
+        if not (np.all(np.isfinite(integrator.q)) and np.all(np.isfinite(integrator.v))):
+            integrator.status = "failed"
+            integrator.message = (f"{cls.name}: the state became non-finite at "
+                                  f"t = {integrator.t:.6g} s (the step is too large for this "
+                                  "method, or the motion is unstable)")
             break
         watch()
         returned += 1  # states returned, one per call (many steps for some methods)

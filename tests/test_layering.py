@@ -22,6 +22,7 @@ LAYERS = {
     "hexapod.reactions": 3, "hexapod.inverse": 3, "hexapod.topology": 3,
     "hexapod.recursive": 3, "hexapod.balance": 3, "hexapod.rates": 3,
     "hexapod.integrators": 4, "hexapod.simulate": 4, "hexapod.results": 4,
+    "hexapod.diagnostics": 4, "hexapod.extreme": 5,
     "hexapod.studies": 5, "hexapod.references": 5, "hexapod.reports": 5, "hexapod.plotting": 5,
     "hexapod.export": 5, "hexapod.summary": 5, "hexapod.cli": 5, "hexapod.__main__": 5,
     "hexapod": 6,  # the package's __init__ re-exports the public API (this exact module only)
