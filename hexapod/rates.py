@@ -5,7 +5,7 @@ Integrators evaluate the right-hand side many times per step and need only the a
 there, not multipliers by the redundancy policy. :class:`CompiledRates` builds, once per model
 and row set, a single CasADi ``MX`` Function
 
-    rates(q, v, w, wd, wdd, alpha) -> (q_dot, v_dot, residual)
+    rates(q, v, w, wd, wdd, alpha) -> (q_dot, v_dot, lam, residual)
 
 that forms ``Phi_v, gamma, Q`` and solves the equilibrated saddle-point system
 
@@ -19,9 +19,9 @@ keeps the cost linear in the number of bodies for chains and trees. ``alpha`` is
 rate (``alpha = beta``, 0 to switch it off).
 
 The fixed row set is what makes one compiled Function possible, so every call also returns the
-``residual`` of *all* rows, ``max |D^-1 (Phi_v v_dot - gamma)|`` relative to the size of the
-solution: a singular configuration, or a change of rank, shows there, and
-:meth:`CompiledRates.__call__` then returns None so that the caller falls back on the exact,
+``residual``, ``max |D^-1 (Phi_v v_dot - gamma)|`` relative to the size of the solution, of the
+kept rows and of the rows left out: a singular configuration, or a change of rank, shows there,
+and :meth:`CompiledRates.__call__` then returns None so that the caller falls back on the exact,
 rank-deciding solve of :func:`hexapod.dynamics.forward_dynamics`.
 """
 
@@ -38,6 +38,12 @@ from hexapod.spatial import quaternion_product
 #: relative residual above which a compiled solve is refused (the rank changed, or a
 #: configuration is singular); far above round-off, far below any integrator's tolerance
 RESIDUAL_TOLERANCE = 1e-9
+#: relative residual of the rows left out as redundant above which a compiled solve is refused.
+#: Redundancy holds exactly on the constraint manifold only: at the stage states of a step,
+#: off it by the truncation error, left-out rows (Bricard's mechanism) disagree with the kept
+#: ones by about that error and are rightly ignored (the step's end is projected); a row that
+#: has become independent (leaving a singular pose) disagrees by far more
+REDUNDANT_TOLERANCE = 1e-3
 
 
 def _sparse_dm(matrix: np.ndarray) -> ca.DM:
@@ -84,7 +90,7 @@ class CompiledRates:
         if model.n_c == 0:
             v_dot = ca.mtimes(m_inv_sqrt, y0)
             lam = ca.MX(0, 1)
-            residual = ca.MX(0)
+            residual = ca.MX.zeros(2)
         else:
             # Baumgarte: Phi_v v_dot = gamma - 2 alpha (Phi_v v - nu) - alpha^2 phi
             gamma = (gamma - 2 * alpha * (ca.mtimes(Phi_v, v) - call(model.nu))
@@ -103,8 +109,12 @@ class CompiledRates:
             lam = ca.MX(model.n_c, 1)
             lam[rows.tolist()] = solution[model.n_v:] / d_all[rows.tolist()]
             v_dot = ca.mtimes(m_inv_sqrt, y)
-            scaled = (ca.mtimes(Phi_v, v_dot) - gamma) / d_all
-            residual = ca.mmax(ca.fabs(scaled)) / (ca.norm_inf(y) + ca.norm_inf(y0) + 1e-300)
+            scaled = ca.fabs(ca.mtimes(Phi_v, v_dot) - gamma) / d_all
+            size = ca.norm_inf(y) + ca.norm_inf(y0) + 1e-300
+            others = [i for i in range(model.n_c) if i not in set(rows.tolist())]
+            residual = ca.vertcat(
+                ca.mmax(scaled[rows.tolist()]) / size,
+                ca.mmax(scaled[others]) / size if others else ca.MX(0.0))
         inputs = [symbols[n] for n in args] + [alpha]
         return ca.Function("rates", inputs, [q_dot, v_dot, lam, residual], args + ["alpha"],
                            ["q_dot", "v_dot", "lam", "residual"])
@@ -133,7 +143,8 @@ class CompiledRates:
             q_dot, v_dot, lam, residual = self._fast(*[values[n] for n in self._args], alpha)
         except RuntimeError:  # the factorisation failed: a singular matrix, or NaN in it
             return None
-        if not (residual[0] <= RESIDUAL_TOLERANCE and np.all(np.isfinite(v_dot))):
+        if not (residual[0] <= RESIDUAL_TOLERANCE and residual[1] <= REDUNDANT_TOLERANCE
+                and np.all(np.isfinite(v_dot))):
             return None
         return q_dot, v_dot, lam
 
