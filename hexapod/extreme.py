@@ -105,6 +105,25 @@ def observed_stable_step(model: Model, method: str, predicted: float, *, steps: 
     return float(np.sqrt(low * high)), "bisection"
 
 
+#: damping ratio of the stiff springs of the stability study: enough for a stable step to lose
+#: energy within a few hundred steps, little enough to keep the modes oscillatory
+DAMPING_RATIO = 0.2
+
+
+def stiff_spring(stiffness: float):
+    """A 1 kg block on a prismatic joint, held by a spring-damper of ``stiffness`` (N/m) and
+    damping ratio :data:`DAMPING_RATIO`, released 10 mm from rest, no gravity."""
+    from hexapod.scene import PlanarBody, Prismatic, Scene, SpringDamper
+
+    scene = Scene(f"stiff-spring-{stiffness:.0e}", 2, gravity=[0.0, 0.0])
+    scene.add(PlanarBody("block", 1.0, 1e-2, position=[1.01, 0.0]))
+    scene.add(Prismatic("slide", "ground", "block", origin=[0.0, 0.0]))
+    scene.add(SpringDamper("spring", "ground", "block", point_a=[0.0, 0.0], point_b=[0.0, 0.0],
+                           stiffness=stiffness, damping=2 * DAMPING_RATIO * np.sqrt(stiffness),
+                           free_length=1.0))
+    return scene
+
+
 def explicit_methods() -> list[str]:
     """The registered methods with a stability limit (explicit ones)."""
     return [name for name, cls in INTEGRATORS.items()
@@ -215,6 +234,70 @@ class CaseRun:
 
     def as_dict(self) -> dict:
         return asdict(self)
+
+
+def _from_mechanism(case, step_count: int | None = None, rtol: float = 1e-6) -> SuiteCase:
+    """A case of :mod:`hexapod.mechanisms`, assembled, judged against its reference."""
+    from hexapod.assembly import assemble
+
+    model = assemble(case.scene)
+
+    def error(result: SimulationResult) -> float:
+        return case.error(model, result.t, result.q)
+
+    step = case.t_end / step_count if step_count else None
+    return SuiteCase(case.name, case.category, case.description, model, case.t_end, error,
+                     step=step, rtol=rtol, atol=rtol * 1e-2 * case.length, notes=case.notes)
+
+
+def _standing_case(scene, t_end: float) -> SuiteCase:
+    """The hexapod standing on its feet: its exact motion is rest (the pose is an equilibrium:
+    gravity is vertical and the feet carry it); the error is the largest displacement of any
+    body's centre of mass relative to the legs' size."""
+    from hexapod.assembly import assemble
+    from hexapod.kinematics import body_poses
+
+    model = assemble(scene)
+    q0, _ = consistent_state(model)
+    start = body_poses(model, q0)[0][0]
+
+    def error(result: SimulationResult) -> float:
+        moved = np.abs(body_poses(model, result.q)[0] - start).max()
+        return float(moved / model.characteristic_length)
+
+    return SuiteCase(scene.name, "redundant", "six feet on the ground, every joint held: "
+                     "the foot forces are statically indeterminate", model, t_end, error)
+
+
+def build_suite(quick: bool = False, standing=None) -> list[SuiteCase]:
+    """The extreme cases (:mod:`hexapod.mechanisms`), and the standing hexapod when its scene
+    is given. ``quick``: shorter runs, one stiffness in three (for the tests)."""
+    from hexapod import mechanisms as m
+
+    if quick:
+        chosen = [(m.stiff_slider(1e3), None), (m.stiff_slider(1e9, t_end=0.02), None),
+                  (m.flyball_governor(t_end=1.0), None), (m.n_four_bar(t_end=2.0), None),
+                  (m.bricard(t_end=2.0), None), (m.four_bar_dead_points(), None),
+                  (m.mass_ratio(t_end=0.2), None), (m.stretched_leg(), None),
+                  (m.long_pendulum(periods=20), 2000), (m.large_step_pendulum(periods=2), 20)]
+    else:
+        chosen = [(m.stiff_slider(k), None) for k in (1e3, 1e5, 1e7, 1e9)] + [
+            (m.stiff_spring_pendulum(), None), (m.flyball_governor(), None),
+            (m.n_four_bar(), None), (m.n_four_bar(dimension=3), None), (m.bricard(), None),
+            (m.four_bar_dead_points(), None), (m.four_bar_dead_points(driven=True), None),
+            (m.mass_ratio(), None), (m.mass_ratio_pendulum(), None), (m.stretched_leg(), None),
+            (m.stretched_leg(driven=True), None),
+            # the long horizon: 1e5 fixed steps; very large steps: 10 per period
+            (m.long_pendulum(), 100_000), (m.large_step_pendulum(), 100)]
+    cases = [_from_mechanism(case, steps) for case, steps in chosen]
+    if standing is not None:
+        cases.append(_standing_case(standing, 0.5 if quick else 2.0))
+    return cases
+
+
+def scene_case(name: str, model: Model, t_end: float) -> SuiteCase:
+    """A user's scene as a case: no reference, judged by its drift and energy."""
+    return SuiteCase(name, "scene", "the given scene", model, t_end)
 
 
 def _setting(case: SuiteCase, method: str) -> dict:
@@ -364,15 +447,8 @@ def recommendations(runs: list[CaseRun], cases: list[SuiteCase]) -> str:
 
 
 def runs_csv(runs: list[CaseRun]) -> str:
-    buffer = io.StringIO()
-    fields = list(CaseRun.__dataclass_fields__)
-    writer = csv.DictWriter(buffer, fieldnames=fields, lineterminator="\n")
-    writer.writeheader()
-    for r in runs:
-        row = r.as_dict()
-        row["redundant_rows"] = " ".join(row["redundant_rows"])
-        writer.writerow(row)
-    return buffer.getvalue()
+    rows = [{**r.as_dict(), "redundant_rows": " ".join(r.redundant_rows)} for r in runs]
+    return _rows_csv(rows) if rows else ""
 
 
 def outcome_figure(runs: list[CaseRun]):
@@ -403,9 +479,9 @@ def outcome_figure(runs: list[CaseRun]):
     return figure
 
 
-def condition_figure(results: dict[str, tuple[Model, SimulationResult]]):
+def condition_figure(cases: list[SuiteCase], samples: int = 200):
     """The condition number of the equilibrated saddle-point matrix and the smallest singular
-    value of the equilibrated Phi_v along runs (one line per case)."""
+    value of the equilibrated ``Phi_v`` along a run of the default method, per case."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -414,20 +490,99 @@ def condition_figure(results: dict[str, tuple[Model, SimulationResult]]):
     figure, (top, bottom) = plt.subplots(2, 1, figsize=(7.0, 5.6), sharex=True,
                                          layout="constrained")
     data = Data()
-    for name, (model, result) in results.items():
+    for case in cases:
+        result = simulate(case.model, case.t_end, method=DEFAULT_METHOD, rtol=case.rtol,
+                          atol=case.atol, forces=False, cpu_budget=60.0)
+        picks = np.unique(np.linspace(0, result.t.size - 1, min(samples, result.t.size))
+                          .astype(int))
         cond, sigma = [], []
-        for t, q, v in zip(result.t, result.q, result.v, strict=True):
-            forward_dynamics(model, data, float(t), q, v, condition=True)
+        for k in picks:
+            forward_dynamics(case.model, data, float(result.t[k]), result.q[k], result.v[k],
+                             condition=True)
             cond.append(data.condition_number)
             sigma.append(data.sigma_min)
-        fraction = result.t / result.t[-1]
-        top.semilogy(fraction, cond, label=name)
-        bottom.semilogy(fraction, sigma, label=name)
-    top.set_ylabel("condition number")
+        fraction = result.t[picks] / case.t_end
+        top.semilogy(fraction, cond, label=case.name)
+        bottom.semilogy(fraction, sigma, label=case.name)
+    top.set_ylabel("condition number (equilibrated)")
     bottom.set_ylabel("smallest singular value")
     bottom.set_xlabel(f"fraction of the run ({DEFAULT_METHOD})")
-    top.set_title("Along the singular and redundant cases", fontsize=10)
+    top.set_title("Conditioning along the runs", fontsize=10)
     for axis in (top, bottom):
         axis.grid(True, which="both", alpha=0.3)
     top.legend(fontsize=7)
     return figure
+
+
+# ------------------------------------------------------------------ the report
+
+def diagnosis_table(diagnoses: dict) -> str:
+    """Markdown: the diagnostics of each case at its start."""
+    def n(x):
+        return _number(x, 3)
+
+    lines = ["| case | DOF (counted) | redundant rows | cond (equilibrated / as written) | "
+             "min sigma | distance to singular | stiffness ratio | fastest mode (1/s) | "
+             "stable step rk4 / dopri5 / dop853 / rattle (s) |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for name, d in diagnoses.items():
+        steps = " / ".join(n(d.stable_steps.get(m)) for m in
+                           ("rk4-baumgarte", "dopri5-projection", "dop853-projection",
+                            "rattle"))
+        lines.append(f"| {name} | {d.dof} ({d.dof_counted}) | {len(d.redundant_rows)} | "
+                     f"{n(d.condition_number)} / {n(d.condition_number_unscaled)} | "
+                     f"{n(d.sigma_min)} | {n(d.singular_distance)} | {n(d.stiffness_ratio)} | "
+                     f"{n(d.fastest_rate)} | {steps} |")
+    return "\n".join(lines)
+
+
+def report_files(cases: list[SuiteCase], runs: list[CaseRun], diagnoses: dict,
+                 stability: list[StabilityRow], command: str) -> dict[str, bytes]:
+    """The files of ``hexapod check``: ``check.md``, ``runs.csv``, ``diagnostics.json``,
+    ``stability.csv`` and the figures (written together, atomically, by the caller)."""
+    import json
+
+    from hexapod.plotting import png_bytes
+
+    text = ["# Extreme-case check", "", f"Command: `{command}`. CPU time of each run's time "
+            "loop. An accurate run is within "
+            f"{ACCURACY:g} of the case's independent reference (relative), or, without one, "
+            f"holds the constraints to {DRIFT_LIMIT:g} and the energy to {ACCURACY:g}.", "",
+            "## What to use", "", recommendations(runs, cases), "",
+            "## Diagnostics at the start", "", diagnosis_table(diagnoses), ""]
+    if stability:
+        text += ["## Largest stable step of the explicit methods on stiff springs", "",
+                 stability_table(stability), ""]
+    text += ["## Every method on every case", "", suite_table(runs), ""]
+    files = {"check.md": "\n".join(text).encode(), "runs.csv": runs_csv(runs).encode(),
+             "diagnostics.json": json.dumps(
+                 {name: _finite(d.as_dict()) for name, d in diagnoses.items()},
+                 indent=1).encode(),
+             "outcomes.png": png_bytes(outcome_figure(runs))}
+    if stability:
+        files["stability.csv"] = _rows_csv([r.as_dict() for r in stability]).encode()
+        files["stability.png"] = png_bytes(stability_figure(stability))
+    watched = [c for c in cases if c.category in ("singular", "redundant")] or cases[:1]
+    files["condition.png"] = png_bytes(condition_figure(watched))
+    return files
+
+
+def _finite(value):
+    """JSON without NaN or infinity (written as null)."""
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_finite(v) for v in value]
+    if isinstance(value, float | np.floating) and not np.isfinite(value):
+        return None
+    if isinstance(value, np.floating | np.integer):
+        return value.item()
+    return value
+
+
+def _rows_csv(rows: list[dict]) -> str:
+    buffer = io.StringIO()
+    writer = csv.DictWriter(buffer, fieldnames=list(rows[0]), lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
+    return buffer.getvalue()
