@@ -232,7 +232,8 @@ def diagnose(model: Model, t: float, q: np.ndarray, v: np.ndarray, *,
     forward_dynamics(model, data, t, q, v, condition=True)
     kept = np.sort(data.independent_rows)
     W, d = equilibrate(data.Phi_v, model.mass_inv_sqrt)
-    split = split_rows(W, d, model.row_priority, model.rank_tolerance)
+    split = split_rows(W, d, model.row_priority, model.rank_tolerance,
+                           groups=model.row_groups)
     sigma = np.sort(split.singular_values())
     m = mobility(model, q, t)
     if distance is None:

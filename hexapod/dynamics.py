@@ -50,7 +50,8 @@ def forward_dynamics(model: Model, data: Data, t: float, q: np.ndarray, v: np.nd
         gamma = gamma - 2 * alpha * velocity_error - beta**2 * model.call("phi", q=q, w=w)
     Q_across = model.call("Q_across", q=q, v=v, w=w) if model.Q_across is not None else None
     W, d = equilibrate(Phi_v, model.mass_inv_sqrt)
-    split = split_rows(W, d, model.row_priority, model.rank_tolerance)
+    split = split_rows(W, d, model.row_priority, model.rank_tolerance,
+                           groups=model.row_groups)
     wrench_map = offset = None
     if split.redundant.size:
         wrench_map, offset = policy_map(model, q, Phi_v, Q_across)

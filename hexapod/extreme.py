@@ -333,6 +333,13 @@ def _along_run(model: Model, result: SimulationResult) -> tuple[float, float, li
     return float(worst), float(smallest), list(redundant)
 
 
+def _at_rest(model: Model, result: SimulationResult) -> bool:
+    """Whether the run never moved (its largest kinetic energy is round-off)."""
+    picks = np.linspace(0, result.t.size - 1, min(CONDITION_SAMPLES, result.t.size)).astype(int)
+    kinetic = max(float(model.energy(result.q[k], result.v[k])[0]) for k in picks)
+    return kinetic < 1e-20
+
+
 def _diverged(result: SimulationResult) -> str:
     """Why a finished run is not to be believed: non-finite or runaway states."""
     if not (np.all(np.isfinite(result.q)) and np.all(np.isfinite(result.v))):
@@ -354,6 +361,8 @@ def run_case(case: SuiteCase, method: str, *, budget: float = 60.0) -> CaseRun:
         if why:
             status, reason = "diverged", why
     conserved = result.energy_drift if case.model.energy_conserved else None
+    if conserved is not None and _at_rest(case.model, result):
+        conserved = None  # relative to a kinetic energy of zero: meaningless
     error = None
     if status == "finished" and case.error is not None:
         error = float(case.error(result))

@@ -12,15 +12,33 @@ from __future__ import annotations
 
 import numpy as np
 
-from hexapod.errors import AssemblyError
+from hexapod.errors import AssemblyError, SingularSystemError
 from hexapod.linalg import RowSplit, check_consistency, equilibrate, split_rows
 from hexapod.model import Model
 from hexapod.spatial import rotation_from_euler_parameters
 
 
+def _subject(model: Model) -> str:
+    """How messages name a model: with the file it was read from, when there is one."""
+    source = getattr(model, "source", "")
+    return f"model '{model.name}'" + (f" ({source})" if source else "")
+
+
 def _split(model: Model, Phi_v: np.ndarray) -> RowSplit:
-    W, d = equilibrate(Phi_v, model.mass_inv_sqrt)
-    return split_rows(W, d, model.row_priority, model.rank_tolerance)
+    try:
+        W, d = equilibrate(Phi_v, model.mass_inv_sqrt)
+        return split_rows(W, d, model.row_priority, model.rank_tolerance,
+                           groups=model.row_groups)
+    except SingularSystemError as error:  # the linear algebra does not know the model
+        raise SingularSystemError(f"{_subject(model)}: {error}") from None
+
+
+def _check(model: Model, split: RowSplit, y: np.ndarray, rhs: np.ndarray, what: str) -> None:
+    """The redundant rows are met too (see :func:`hexapod.linalg.check_consistency`)."""
+    try:
+        check_consistency(split, y, rhs, row_names=_names(model), what=what)
+    except SingularSystemError as error:
+        raise SingularSystemError(f"{_subject(model)}: {error}") from None
 
 
 def _names(model: Model) -> list[str]:
@@ -67,7 +85,7 @@ def assemble_positions(model: Model, q: np.ndarray | None = None, t: float = 0.0
         return q
     residual = model.call("phi", q=q, w=w) / model.row_scale
     if not np.all(np.isfinite(residual)) or not np.all(np.isfinite(q)):
-        raise AssemblyError(f"model '{model.name}': the constraint residuals are not finite at "
+        raise AssemblyError(f"{_subject(model)}: the constraint residuals are not finite at "
                             "the initial guess (check the scene's magnitudes and length unit)")
     merit = float(np.max(np.abs(residual)))
     polished = False
@@ -101,7 +119,7 @@ def assemble_positions(model: Model, q: np.ndarray | None = None, t: float = 0.0
     if merit <= tol:
         return q
     raise AssemblyError(
-        f"model '{model.name}': cannot assemble the constraints at t = {t:g} from the given "
+        f"{_subject(model)}: cannot assemble the constraints at t = {t:g} from the given "
         f"guess (largest violations: {_violations(model, residual)}); check the joint "
         "frames and initial poses, or the driver laws at that time")
 
@@ -118,7 +136,7 @@ def solve_velocities(model: Model, q: np.ndarray, t: float = 0.0,
     split = _split(model, Phi_v)
     residual = nu - Phi_v @ v
     dy = split.min_norm_correction(residual)
-    check_consistency(split, dy, residual, row_names=_names(model), what="velocity constraints")
+    _check(model, split, dy, residual, "velocity constraints")
     return v + model.mass_inv_sqrt @ dy
 
 
@@ -131,8 +149,7 @@ def solve_accelerations(model: Model, q: np.ndarray, v: np.ndarray,
     gamma = model.call("gamma", q=q, v=v, w=w, wd=wd, wdd=wdd)
     split = _split(model, Phi_v)
     y = split.min_norm_correction(gamma)
-    check_consistency(split, y, gamma, row_names=_names(model),
-                      what="acceleration constraints")
+    _check(model, split, y, gamma, "acceleration constraints")
     return model.mass_inv_sqrt @ y
 
 

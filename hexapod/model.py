@@ -252,6 +252,16 @@ class Model:
         return np.concatenate(parts).astype(int) if parts else np.zeros(0, dtype=int)
 
     @cached_property
+    def row_groups(self) -> np.ndarray:
+        """The group of each entry of :attr:`row_priority` for the rank decision: joint rows
+        each on their own (taken in order), drivers together (the best-conditioned first, see
+        :func:`hexapod.linalg.split_rows`). Which of several drivers over-constrains a
+        mechanism is a matter of conditioning; which joint row closes a loop is the policy's."""
+        joint_rows = sum(j.rows.size for j in self.joints)
+        return np.concatenate([np.arange(joint_rows),
+                               np.full(len(self.drivers), joint_rows)]).astype(int)
+
+    @cached_property
     def row_scale(self) -> np.ndarray:
         """Natural size of each row's residual: the characteristic length for length rows, 1 for
         angle rows; used for convergence tests and drift reports in SI."""

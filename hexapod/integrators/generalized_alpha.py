@@ -126,7 +126,8 @@ class LieGroupGeneralizedAlpha(Integrator):
         """The iteration's saddle-point system on the independent rows (LU)."""
         model = self.model
         W, d = equilibrate(Phi_v, model.mass_inv_sqrt)
-        split = split_rows(W, d, model.row_priority, model.rank_tolerance)
+        split = split_rows(W, d, model.row_priority, model.rank_tolerance,
+                           groups=model.row_groups)
         I = split.independent
         n, m = A.shape[0], I.size
         S = np.zeros((n + m, n + m))
@@ -143,7 +144,8 @@ class LieGroupGeneralizedAlpha(Integrator):
         """The multipliers of redundant rows set by the redundancy policy (DESIGN section 1)."""
         model = self.model
         W, d = equilibrate(Phi_v, model.mass_inv_sqrt)
-        split = split_rows(W, d, model.row_priority, model.rank_tolerance)
+        split = split_rows(W, d, model.row_priority, model.rank_tolerance,
+                           groups=model.row_groups)
         if not split.redundant.size or not split.rank:
             return lam
         Q_across = (model.call("Q_across", q=q, v=v, w=w) if model.Q_across is not None

@@ -373,7 +373,8 @@ class RadauIIA5GGL(Integrator):
         kept = np.arange(n_c)
         if n_c:
             W, d = equilibrate(Phi_v, model.mass_inv_sqrt)
-            split = split_rows(W, d, model.row_priority, model.rank_tolerance)
+            split = split_rows(W, d, model.row_priority, model.rank_tolerance,
+                           groups=model.row_groups)
             self.counters.factorisations += 1
             kept = np.sort(split.independent)
             dropped = np.setdiff1d(np.arange(n_c), kept)

@@ -171,7 +171,8 @@ class Rattle(Integrator):
     def _split(self, Phi_v: np.ndarray):
         W, d = equilibrate(Phi_v, self.model.mass_inv_sqrt)
         self.counters.factorisations += 1
-        return split_rows(W, d, self.model.row_priority, self.model.rank_tolerance)
+        return split_rows(W, d, self.model.row_priority, self.model.rank_tolerance,
+                          groups=self.model.row_groups)
 
     def _start_state(self):
         """``Phi_v``, the force and the rank decision at the current state: those of the end of
