@@ -272,7 +272,7 @@ def _standing_case(scene, t_end: float) -> SuiteCase:
 def build_suite(quick: bool = False, standing=None) -> list[SuiteCase]:
     """The extreme cases (:mod:`hexapod.mechanisms`), and the standing hexapod when its scene
     is given. ``quick``: shorter runs, one stiffness in three (for the tests)."""
-    from hexapod import mechanisms as m
+    import hexapod.mechanisms as m
 
     if quick:
         chosen = [(m.stiff_slider(1e3), None), (m.stiff_slider(1e9, t_end=0.02), None),
