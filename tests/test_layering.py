@@ -17,7 +17,7 @@ LAYERS = {
     "hexapod.errors": 0, "hexapod.spatial": 0, "hexapod.fastcall": 0, "hexapod.graph": 0,
     "hexapod.fileio": 0,
     "hexapod.scene": 1,
-    "hexapod.assembly": 2, "hexapod.model": 2,
+    "hexapod.assembly": 2, "hexapod.model": 2, "hexapod.mechanisms": 2,
     "hexapod.linalg": 3, "hexapod.kinematics": 3, "hexapod.dynamics": 3,
     "hexapod.reactions": 3, "hexapod.inverse": 3, "hexapod.topology": 3,
     "hexapod.recursive": 3, "hexapod.balance": 3, "hexapod.rates": 3,

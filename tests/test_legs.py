@@ -190,3 +190,33 @@ def test_the_hexapod_is_a_tree_of_37_bodies_and_weighs_about_21_kg():
     for leg in LEG_NAMES:
         assert leg_of(leg)[1] == leg[0]
         assert np.all(np.isfinite(result.effort[:, model.joint_index[f"{leg}/fti"]]))
+
+
+@pytest.mark.parametrize("feet", [6, 3])
+def test_the_standing_hexapod_holds_still_on_statically_indeterminate_feet(feet):
+    """A free trunk, 36 joints held by constant drivers, ``feet`` feet pinned to the ground:
+    the pose is consistent (feet on z = GROUND_Z_MM), 3 feet - 6 rows are redundant and named,
+    nothing accelerates, and the feet carry the weight."""
+    from legs.robot import STANDING_FEET, hexapod_standing, standing_feet
+
+    model = hx.assemble(hexapod_standing(feet))
+    q, v = hx.consistent_state(model)
+    assert np.abs(q - model.q0).max() < 1e-12  # built at the standing pose
+    trunk = model.bodies[model.body_index["trunk"]]
+    assert np.allclose(q[trunk.q], [0, 0, 0, 1, 0, 0, 0], atol=1e-12)
+    feet_at = marker_trajectories(model, q[None], "foot")
+    ground = GROUND_Z_MM * 1e-3 * MODEL_SCALE
+    for leg, point in standing_feet().items():
+        assert point[2] == pytest.approx(ground, abs=1e-12)
+        assert np.allclose(feet_at[f"{leg}/tarsus"][0], point, atol=1e-12)
+    data = hx.Data()
+    v_dot = hx.forward_dynamics(model, data, 0.0, q, v)
+    assert np.abs(v_dot).max() < 1e-9
+    names = [model.rows[i].name for i in data.redundant_rows]
+    assert len(names) == 3 * feet - 6 and all(n for n in names)
+    dof = hx.degrees_of_freedom(model, q)
+    assert dof["dof_with_drivers"] == 0 and dof["redundant_rows"] == names
+    wrenches = hx.joint_wrenches(model, q, data.lam, data.Phi_v, data.Q_across,
+                                 frame="world").as_dict()
+    vertical = sum(wrenches[f"{leg}/ground"]["Fz"] for leg in STANDING_FEET[:feet])
+    assert vertical == pytest.approx(robot_weight(), rel=1e-9)

@@ -1,0 +1,115 @@
+"""The extreme-case suite, reduced: the default method through every case against its
+independent reference, the redundancy policy along Bricard's run, the outcome of methods that
+must break, and the report of ``hexapod check``."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import hexapod as hx
+from hexapod.cli import main
+from hexapod.extreme import (
+    ACCURACY,
+    build_suite,
+    recommend,
+    report_files,
+    run_case,
+    run_suite,
+    scene_case,
+)
+from hexapod.integrators import DEFAULT_METHOD
+
+CASES = {case.name: case for case in build_suite(quick=True)}
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_default_method_runs_every_case_to_the_end_accurately(name):
+    """Stiff, singular, redundant, light, long and coarse: the default method finishes and
+    stays within ACCURACY of the independent reference (and the energy, relative to the largest
+    kinetic energy), constraints held to round-off."""
+    run = run_case(CASES[name], DEFAULT_METHOD, budget=120.0)
+    assert run.status == "finished", run.reason
+    assert run.error is not None and run.error < ACCURACY
+    assert run.position_drift < 1e-9
+    if run.energy_error is not None:
+        assert run.energy_error < ACCURACY
+
+
+def test_n_four_bar_stays_on_its_branch_through_the_singular_pose():
+    """All cranks pass horizontal together (the pose where the DOF jumps from 1 to 11): the
+    run follows the one-DOF reference of the parallelogram chain and keeps its energy."""
+    case = CASES["n-four-bar-10"]
+    result = hx.simulate(case.model, case.t_end, rtol=1e-8, atol=1e-10)
+    assert result.success
+    assert case.error(result) < 1e-6
+    assert result.energy_drift < 1e-6
+
+
+def test_bricard_names_its_redundant_row_and_keeps_unique_constraint_forces():
+    """Grubler counts 0 DOF, the mechanism has 1: one row is redundant all along. The
+    constraint forces -Phi_v^T lambda are unique (they balance M v_dot - Q); the multipliers
+    follow the policy, which is the same at every saved state: the redundant row is named."""
+    case = CASES["bricard"]
+    model = case.model
+    result = hx.simulate(model, 0.5, rtol=1e-8, atol=1e-10)
+    assert result.success
+    data = hx.Data()
+    for k in range(0, result.t.size, max(1, result.t.size // 5)):
+        q, v = result.q[k], result.v[k]
+        v_dot = hx.forward_dynamics(model, data, float(result.t[k]), q, v)
+        assert [model.rows[i].name for i in data.redundant_rows]
+        balance = model.mass @ v_dot + data.Phi_v.T @ data.lam - data.Q
+        assert np.abs(balance).max() < 1e-9 * max(1.0, np.abs(data.Q).max())
+        assert np.allclose(data.lam, result.lam[k], rtol=1e-6, atol=1e-9)
+
+
+def test_stiff_spring_breaks_the_explicit_fixed_step_and_not_the_implicit_methods():
+    """1e9 N/m on 1 kg at h = 2e-5 s: the implicit, adaptive methods follow the oscillator;
+    the fixed-step ones at that step are not accurate (RK4 loses phase, the index-3 methods
+    damp or distort it)."""
+    case = CASES["stiff-slider-k1e+09"]
+    runs = run_suite([case], ["rk4-baumgarte", "radau5-ggl", "idas-bdf"], budget=60.0)
+    outcome = {r.method: r for r in runs}
+    assert outcome["radau5-ggl"].accurate and outcome["idas-bdf"].accurate
+    assert not outcome["rk4-baumgarte"].accurate
+    assert recommend(runs).split()[0] in ("radau5-ggl", "idas-bdf")
+
+
+def test_report_has_table_recommendation_and_figures(tmp_path):
+    case = CASES["stretched-leg"]
+    runs = run_suite([case], [DEFAULT_METHOD, "rk4-baumgarte"], budget=30.0)
+    q, v = hx.consistent_state(case.model)
+    from hexapod.diagnostics import diagnose
+
+    files = report_files([case], runs, {case.name: diagnose(case.model, 0.0, q, v)}, [],
+                         "hexapod check")
+    text = files["check.md"].decode()
+    assert "## What to use" in text and "stretched-leg" in text
+    assert text.count("| stretched-leg |") >= 3
+    for figure in ("outcomes.png", "condition.png"):
+        assert files[figure].startswith(b"\x89PNG")
+    assert files["runs.csv"].decode().splitlines()[0].startswith("case,category,method")
+
+
+def test_check_command_on_a_scene_writes_its_report(tmp_path, capsys):
+    out = tmp_path / "check"
+    code = main(["check", "data/scenes/pendulum.toml", "--t-end", "0.5", "--methods",
+                 DEFAULT_METHOD, "rattle", "--out", str(out)])
+    assert code == 0
+    assert sorted(p.name for p in out.iterdir()) == [
+        "check.md", "condition.png", "diagnostics.json", "outcomes.png", "runs.csv"]
+    printed = capsys.readouterr().out
+    assert "largest stable step" in printed and "What to use" in printed
+
+
+def test_a_scene_case_without_reference_is_judged_by_drift_and_energy():
+    from hexapod.scene.reader import read_scene
+
+    model = hx.assemble(read_scene("data/scenes/pendulum.toml"))
+    good = run_case(scene_case("pendulum", model, 1.0), DEFAULT_METHOD)
+    assert good.accurate and good.error is None and good.energy_error < ACCURACY
+    coarse = scene_case("pendulum", model, 1.0)
+    coarse.step = 0.25  # RATTLE at a quarter second: bounded, but far from the energy
+    bad = run_case(coarse, "rattle")
+    assert bad.status == "finished" and not bad.accurate
