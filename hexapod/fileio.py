@@ -12,22 +12,36 @@ from hexapod.errors import InputFileError
 
 def read_text(path: str | Path, what: str) -> str:
     """The text of a file, or an :class:`InputFileError` saying why it cannot be read
-    (``what`` names the kind of file expected, e.g. ``"scene file"``)."""
+    (``what`` names the kind of file expected, e.g. ``"scene file"``). The text is UTF-8; a
+    byte-order mark at its start, as some editors write, is dropped."""
     path = Path(path)
     try:
-        return path.read_text(encoding="utf-8")
+        data = path.read_bytes()
     except FileNotFoundError:
         raise InputFileError(f"{path}: no such file") from None
     except IsADirectoryError:
         raise InputFileError(f"{path}: is a directory, not a {what}") from None
-    except (OSError, UnicodeDecodeError) as error:
+    except OSError as error:
         raise InputFileError(f"{path}: cannot read the file ({error})") from None
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as error:
+        line = data[:error.start].count(b"\n") + 1
+        raise InputFileError(f"{path}: not UTF-8 text (byte 0x{data[error.start]:02x} on line "
+                             f"{line}); a {what} must be saved as UTF-8") from None
 
 
 def _umask() -> int:
     mask = os.umask(0)
     os.umask(mask)
     return mask
+
+
+def _sync(stream) -> None:
+    """Flush a file to the disk before it is renamed into place, so that a crash of the machine
+    cannot leave the new name on an empty file."""
+    stream.flush()
+    os.fsync(stream.fileno())
 
 
 def write_atomically(path: str | Path, text: str) -> Path:
@@ -49,6 +63,7 @@ def write_atomically(path: str | Path, text: str) -> Path:
         os.chmod(temporary, 0o666 & ~_umask())  # as open() would create it (mkstemp: 0600)
         with os.fdopen(handle, "w", encoding="utf-8", newline="") as stream:
             stream.write(text)
+            _sync(stream)
         os.replace(temporary, path)
     except BaseException as error:
         if os.path.exists(temporary):
@@ -88,7 +103,9 @@ def write_directory_atomically(path: str | Path, files: dict[str, bytes]) -> Pat
     try:
         os.chmod(staging, 0o777 & ~_umask())  # as mkdir would make it (mkdtemp: 0700)
         for name, content in files.items():
-            (staging / name).write_bytes(content)
+            with open(staging / name, "wb") as stream:
+                stream.write(content)
+                _sync(stream)
         if path.exists():
             retired = Path(tempfile.mkdtemp(dir=parent, prefix=f".{path.name}.", suffix=".old"))
             os.rmdir(retired)

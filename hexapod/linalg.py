@@ -129,9 +129,10 @@ def split_rows(W: np.ndarray, scale: np.ndarray, priority: np.ndarray, tol: floa
             signs = np.sign(np.diag(R))
             return RowSplit(order, np.zeros(0, dtype=int), basis * signs, signs[:, None] * R,
                             scale, W)
-    # rows are taken group by group (see Model.row_groups); within a group the row farthest from the span of those kept comes first (column pivoting), so that a
-    # nearly dependent row is not kept where a better one exists: in index order a standing
-    # hexapod kept drivers whose smallest singular value was 5.6e-7 where 4.4e-4 was to be had
+    # rows are taken group by group (see Model.row_groups); within a group the row farthest
+    # from the span of those kept comes first (column pivoting), so that a nearly dependent row
+    # is not kept where a better one exists: in index order a standing hexapod kept drivers
+    # whose smallest singular value was 5.6e-7 where 4.4e-4 was to be had
     labels = np.arange(order.size) if groups is None else np.asarray(groups)
     kept, columns = [], []
     begin = 0

@@ -112,7 +112,7 @@ BAD_URDF = {
                      '<child link="b"/></joint></robot>', "not supported"),
     "missing-link": ('<robot name="r"><link name="a"/><joint name="j" type="revolute">'
                      '<parent link="a"/><child link="b"/></joint></robot>',
-                     "child link 'b' is not defined"),
+                     'child link "b" is not defined'),
     "massless-moving": ('<robot name="r"><link name="a"/><link name="b"/><joint name="j" '
                         'type="revolute"><parent link="a"/><child link="b"/></joint></robot>',
                         "has no mass but moves"),

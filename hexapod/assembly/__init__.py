@@ -385,4 +385,6 @@ def assemble(scene: Scene, *, rank_tolerance: float = 1e-9) -> Model:
         Listing every problem of the scene.
     """
     scene.validate()
-    return _Assembly(scene.in_si()).model(rank_tolerance)
+    model = _Assembly(scene.in_si()).model(rank_tolerance)
+    model.source = scene.source  # the file the scene was read from, named by later errors
+    return model

@@ -35,6 +35,15 @@ class Attachment:
         return self.base if name == GROUND else self.name(name)
 
 
+def quoted(name) -> str:
+    """A name as messages show it: in quotes, or as its shortened repr when it is not a short
+    printable string (a name with a line break must not break the one-line message)."""
+    if isinstance(name, str) and name.isprintable() and len(name) <= 60:
+        return f"'{name}'"
+    text = repr(name)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
 class Element:
     """Base of bodies, joints, drivers and force elements.
 
@@ -53,7 +62,7 @@ class Element:
     @property
     def label(self) -> str:
         kind = f" ({self.kind})" if self.kind and self.kind != self.family else ""
-        return f"{self.family} '{self.name}'{kind}"
+        return f"{self.family} {quoted(self.name)}{kind}"
 
     def problem(self, key: str, message: str) -> Problem:
         where = f"{self.source}.{key}" if self.source else key

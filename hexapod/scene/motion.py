@@ -26,8 +26,9 @@ import numpy as np
 from hexapod.errors import InputFileError, ModelError, Problem
 from hexapod.fileio import read_text
 from hexapod.scene.drivers import JointDriver
+from hexapod.scene.element import quoted
 from hexapod.scene.joints import Prismatic
-from hexapod.scene.laws import Hermite, Spline
+from hexapod.scene.laws import Hermite, Law, Spline
 from hexapod.scene.scene import Scene
 
 
@@ -140,8 +141,21 @@ def _motion(path: Path, header: list[str], data: np.ndarray, problems: list) -> 
     return Motion(times, values, rates, accelerations, str(path))
 
 
-def _law(motion: Motion, joint: str, factor: float):
-    """The driver law of one joint; ``factor`` converts SI values to the scene's unit."""
+def _spline_rate(t: np.ndarray, values: np.ndarray) -> tuple[np.ndarray | None, str]:
+    """The derivative at the samples of the C2 spline through ``values``, or None and why the
+    samples cannot be interpolated (times too close together for floating point, say)."""
+    if t.size < 4:
+        return np.zeros_like(t), ""
+    spline = Spline(t, values)
+    problems = spline.problems()
+    if problems:
+        return None, "; ".join(problems)
+    return spline.evaluate(t)[1], ""
+
+
+def _law(motion: Motion, joint: str, factor: float) -> tuple[Law | None, str]:
+    """The driver law of one joint (``factor`` converts SI values to the scene's unit), or None
+    and what is wrong with the samples."""
     t = motion.times
     q = motion.values[joint] * factor
     if joint in motion.rates:
@@ -149,47 +163,74 @@ def _law(motion: Motion, joint: str, factor: float):
         if joint in motion.accelerations:
             qdd = motion.accelerations[joint] * factor
         else:
-            qdd = Spline(t, qd).evaluate(t)[1] if t.size >= 4 else np.zeros_like(t)
-            warnings.warn(f"{motion.source}: no 'qdd:{joint}' column: accelerations of "
-                          f"'{joint}' are the derivative of a C2 spline through its rates",
-                          MotionWarning, stacklevel=3)
-        return Hermite(t, q, qd, qdd)
-    warnings.warn(f"{motion.source}: no 'qd:{joint}'/'qdd:{joint}' columns: the derivatives "
-                  f"of '{joint}' come from a C2 interpolating spline", MotionWarning,
-                  stacklevel=3)
-    return Spline(t, q)
+            qdd, trouble = _spline_rate(t, qd)
+            if qdd is None:
+                return None, (f"no C2 spline through the rates 'qd:{joint}' ({trouble}); "
+                              f"give 'qdd:{joint}'")
+        law = Hermite(t, q, qd, qdd)
+    else:
+        law = Spline(t, q)
+    problems = law.problems()
+    return (None, "; ".join(problems)) if problems else (law, "")
+
+
+def _estimated(motion: Motion, joint: str) -> str:
+    """The warning for derivatives of a joint that were estimated rather than given."""
+    if joint not in motion.rates:
+        return (f"{motion.source}: no 'qd:{joint}'/'qdd:{joint}' columns: the derivatives of "
+                f"'{joint}' come from a C2 interpolating spline")
+    if joint not in motion.accelerations:
+        return (f"{motion.source}: no 'qdd:{joint}' column: accelerations of '{joint}' are "
+                "the derivative of a C2 spline through its rates")
+    return ""
+
+
+def _column_problems(scene: Scene, motion: Motion) -> list[tuple[str, str]]:
+    """What stops each column from driving its joint: (joint, problem)."""
+    joints = scene.joints
+    driven = {d.joint: d.name for d in scene.drivers.values() if isinstance(d, JointDriver)}
+    out = []
+    for joint in motion.joints:
+        if joint not in joints:
+            out.append((joint, "is not a joint of the model (joints: " + ", ".join(joints)
+                        + ")"))
+        elif not joints[joint].drivable:
+            out.append((joint, f"joint '{joint}' is {joints[joint].kind}: only revolute and "
+                        "prismatic joints can be driven"))
+        elif joint in driven:
+            out.append((joint, f"joint '{joint}' is already driven by '{driven[joint]}'"))
+        elif joint not in motion.rates and motion.times.size < 4:
+            out.append((joint, "a spline through the samples needs at least 4 of them (or "
+                        f"give 'qd:{joint}' and 'qdd:{joint}')"))
+    return out
 
 
 def apply_motion(scene: Scene, motion: Motion) -> Scene:
     """A copy of ``scene`` whose joints named in ``motion`` are driven by it (driver names
     ``motion/<joint>``). Raises ``ModelError`` for unknown or undrivable joints, joints already
-    driven, or too few samples for a spline."""
-    joints = scene.joints
-    driven = {d.joint: d.name for d in scene.drivers.values() if isinstance(d, JointDriver)}
-    problems = []
+    driven, too few samples for a spline, or samples no spline passes through."""
     where = motion.source or "motion"
 
-    def problem(joint: str, message: str):
-        problems.append(Problem(f"motion column '{joint}'", message, f"{where}, line 1"))
+    def problem(joint: str, message: str) -> Problem:
+        return Problem(f"motion column {quoted(joint)}", message, f"{where}, line 1")
 
-    for joint in motion.joints:
-        if joint not in joints:
-            problem(joint, "is not a joint of the model (joints: " + ", ".join(joints) + ")")
-        elif not joints[joint].drivable:
-            problem(joint, f"joint '{joint}' is {joints[joint].kind}: only revolute and "
-                    "prismatic joints can be driven")
-        elif joint in driven:
-            problem(joint, f"joint '{joint}' is already driven by '{driven[joint]}'")
-        elif joint not in motion.rates and motion.times.size < 4:
-            problem(joint, "a spline through the samples needs at least 4 of them (or give "
-                    f"'qd:{joint}' and 'qdd:{joint}')")
+    problems = [problem(joint, message) for joint, message in _column_problems(scene, motion)]
+    laws = {}
+    if not problems:
+        for joint in motion.joints:
+            factor = 1.0 / scene.unit if isinstance(scene.joints[joint], Prismatic) else 1.0
+            laws[joint], trouble = _law(motion, joint, factor)
+            if trouble:
+                problems.append(problem(joint, trouble))
     if problems:
         raise ModelError(f"motion file {where}", problems)
+    # both files, so that an error of the driven model (it cannot be assembled) names them
+    source = ", driven by ".join(s for s in (scene.source, motion.source) if s)
     out = Scene(scene.name, scene.dimension, scene.length_unit, scene.gravity,
-                scene.characteristic_length, scene.source, report_forces=scene.report_forces)
+                scene.characteristic_length, source, report_forces=scene.report_forces)
     out._elements = list(scene.elements)
-    for joint in motion.joints:
-        factor = 1.0 / scene.unit if isinstance(joints[joint], Prismatic) else 1.0
-        out.add(JointDriver(f"motion/{joint}", joint, _law(motion, joint, factor),
-                            source=f"{where}, column '{joint}'"))
+    for joint, law in laws.items():
+        out.add(JointDriver(f"motion/{joint}", joint, law, source=f"{where}, column '{joint}'"))
+        if _estimated(motion, joint):
+            warnings.warn(_estimated(motion, joint), MotionWarning, stacklevel=2)
     return out

@@ -11,6 +11,7 @@ run; when it is required the element is dropped (and references to it are not re
 
 from __future__ import annotations
 
+import re
 import tomllib
 from collections.abc import Callable
 from pathlib import Path
@@ -21,7 +22,7 @@ from hexapod.errors import InputFileError, ModelError, Problem
 from hexapod.fileio import read_text
 from hexapod.scene.bodies import Particle, PlanarBody, SpatialBody
 from hexapod.scene.drivers import DRIVER_TYPES
-from hexapod.scene.element import Element
+from hexapod.scene.element import Element, quoted
 from hexapod.scene.forces import FORCE_TYPES
 from hexapod.scene.joints import JOINT_TYPES
 from hexapod.scene.laws import LAW_TYPES, Constant, Law
@@ -43,6 +44,18 @@ class _Invalid(ValueError):
         self.key = key
 
 
+def _shown(value, limit: int = 60) -> str:
+    """A value as a message shows it: its repr, cut short when long (a list of thousands of
+    numbers, a string with line breaks), so that each problem stays on one line."""
+    text = repr(value)
+    return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
+def _key(name: str) -> str:
+    """A TOML key as a location shows it: as written when it is a bare key, else quoted."""
+    return name if re.fullmatch(r"[A-Za-z0-9_-]+", name) else _shown(name)
+
+
 def _items(count: int, what: str) -> str:
     return f"{count} {what}" if count == 1 else f"{count} {what}s"
 
@@ -55,13 +68,17 @@ def _choices(sizes: tuple[int, ...], what: str) -> str:
 
 # ------------------------------------------------------------------ value converters
 
+def _is_number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
 def _number(value) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise _Invalid(f"must be a number, got {value!r}")
+    if not _is_number(value):
+        raise _Invalid(f"must be a number, got {_shown(value)}")
     try:
         return float(value)
     except OverflowError:
-        raise _Invalid(f"is too large for a floating-point number ({str(value)[:20]}...)")\
+        raise _Invalid(f"is too large for a floating-point number ({_shown(value, 20)})")\
             from None
 
 
@@ -69,16 +86,17 @@ def _vector(size: int | tuple[int, ...]):
     sizes = (size,) if isinstance(size, int) else size
 
     def convert(value) -> np.ndarray:
-        if not isinstance(value, list) or len(value) not in sizes:
-            raise _Invalid(f"must be a list of {_choices(sizes, 'number')}, got {value!r}")
+        if not (isinstance(value, list) and len(value) in sizes
+                and all(_is_number(x) for x in value)):
+            raise _Invalid(f"must be a list of {_choices(sizes, 'number')}, got {_shown(value)}")
         return np.array([_number(x) for x in value])
 
     return convert
 
 
 def _numbers(value) -> tuple[float, ...]:
-    if not isinstance(value, list) or not value:
-        raise _Invalid(f"must be a non-empty list of numbers, got {value!r}")
+    if not (isinstance(value, list) and value and all(_is_number(x) for x in value)):
+        raise _Invalid(f"must be a non-empty list of numbers, got {_shown(value)}")
     return tuple(_number(x) for x in value)
 
 
@@ -89,26 +107,28 @@ def _amplitudes(value) -> tuple[float, ...]:
 
 def _string(value) -> str:
     if not isinstance(value, str):
-        raise _Invalid(f"must be a string, got {value!r}")
+        raise _Invalid(f"must be a string, got {_shown(value)}")
     return value
 
 
 def _boolean(value) -> bool:
     if not isinstance(value, bool):
-        raise _Invalid(f"must be true or false, got {value!r}")
+        raise _Invalid(f"must be true or false, got {_shown(value)}")
     return value
 
 
 def _integer(value) -> int:
     if isinstance(value, bool) or not isinstance(value, int):
-        raise _Invalid(f"must be an integer, got {value!r}")
+        raise _Invalid(f"must be an integer, got {_shown(value)}")
     return value
 
 
 def _matrix3(value) -> np.ndarray:
     if not (isinstance(value, list) and len(value) == 3
-            and all(isinstance(r, list) and len(r) == 3 for r in value)):
-        raise _Invalid(f"must be a 3 x 3 matrix (a list of 3 lists of 3 numbers), got {value!r}")
+            and all(isinstance(r, list) and len(r) == 3 and all(map(_is_number, r))
+                    for r in value)):
+        raise _Invalid("must be a 3 x 3 matrix (a list of 3 lists of 3 numbers), got "
+                       f"{_shown(value)}")
     return np.array([[_number(x) for x in row] for row in value])
 
 
@@ -159,7 +179,7 @@ def _rotation(dimension: int) -> Callable:
             return rotation_2d(_number(value))
         if not isinstance(value, dict) or not value:
             raise _Invalid("must be a table with rpy, quaternion, matrix or axis and angle, "
-                           f"got {value!r}")
+                           f"got {_shown(value)}")
         keys = set(value)
         try:
             return _table_rotation(value, keys)
@@ -181,12 +201,12 @@ def _frame(dimension: int) -> Callable:
         if isinstance(value, dict):
             unknown = set(value) - {"position", "rotation"}
             if unknown:
-                raise _Invalid(f"unknown key(s) {', '.join(sorted(unknown))}; a frame has "
-                               "position and rotation")
+                raise _Invalid(f"unknown key(s) {', '.join(map(_key, sorted(unknown)))}; a "
+                               "frame has position and rotation")
             position = _vector(dimension)(value.get("position", [0.0] * dimension))
             rotation = _rotation(dimension)(value["rotation"]) if "rotation" in value else None
             return Placement(position, rotation)
-        raise _Invalid(f"must be a marker name, a point or a table, got {value!r}")
+        raise _Invalid(f"must be a marker name, a point or a table, got {_shown(value)}")
 
     return convert
 
@@ -223,12 +243,12 @@ def _law(value) -> Law:
         return Constant(_number(value))
     kind = value.get("type")
     if not isinstance(kind, str) or kind not in LAW_TYPES:
-        raise _Invalid(f"law type must be one of {', '.join(LAW_TYPES)}, got {kind!r}")
+        raise _Invalid(f"law type must be one of {', '.join(LAW_TYPES)}, got {_shown(kind)}")
     spec = _LAW_KEYS[kind]
     fields = {k: v for k, v in value.items() if k != "type"}
     unknown = set(fields) - set(spec)
     if unknown:
-        raise _Invalid(f"unknown key(s) {', '.join(sorted(unknown))} for a {kind} law "
+        raise _Invalid(f"unknown key(s) {', '.join(map(_key, sorted(unknown)))} for a {kind} law "
                        f"(expected {', '.join(spec)})")
     missing = [k for k, (_, required) in spec.items() if required and k not in fields]
     if missing:
@@ -253,7 +273,8 @@ def _laws(count: int) -> Callable:
         if count == 1 and not isinstance(value, list):
             value = [value]
         if not isinstance(value, list) or len(value) != count:
-            raise _Invalid(f"must be a list of {_items(count, 'number')} or laws, got {value!r}")
+            raise _Invalid(f"must be a list of {_items(count, 'number')} or laws, got "
+                           f"{_shown(value)}")
         return tuple(_law(x) for x in value)
 
     return convert
@@ -262,7 +283,7 @@ def _laws(count: int) -> Callable:
 def _markers(dimension: int) -> Callable:
     def convert(value):
         if not isinstance(value, dict):
-            raise _Invalid(f"must be a table of named frames, got {value!r}")
+            raise _Invalid(f"must be a table of named frames, got {_shown(value)}")
         frames = {}
         for name, frame in value.items():
             try:
@@ -372,7 +393,7 @@ class _Reader:
     def read(self, document: dict) -> Scene:
         for key in document:
             if key not in _SECTIONS:
-                self.add("file", key, f"unknown section '{key}' (expected "
+                self.add("file", _key(key), f"unknown section {_shown(key)} (expected "
                          + ", ".join(f"[{s}]" if s == "scene" else f"[[{s}]]"
                                      for s in _SECTIONS) + ")")
         scene = self._scene(document.get("scene", {}))
@@ -396,10 +417,10 @@ class _Reader:
                     continue
                 name = table.get("name")
                 kind = kind_of(table)
-                label = f"{section} '{name if isinstance(name, str) else f'#{i}'}'"
+                label = f"{section} {quoted(name if isinstance(name, str) else f'#{i}')}"
                 if not isinstance(kind, str) or kind not in kinds:
                     self.add(label, f"{key}.type",
-                             f"type must be one of {', '.join(kinds)}, got {kind!r}")
+                             f"type must be one of {', '.join(kinds)}, got {_shown(kind)}")
                     self.failed.add(str(name))
                     continue
                 label += f" ({kind})" if kind != section else ""
@@ -428,13 +449,13 @@ class _Reader:
         values = {}
         for name, value in table.items():
             if name not in spec:
-                self.add(label, f"{key}.{name}", f"unknown key '{name}' (expected one of "
-                         f"{', '.join(k for k in spec if k != 'type')})")
+                self.add(label, f"{key}.{_key(name)}", f"unknown key {_shown(name)} (expected "
+                         f"one of {', '.join(k for k in spec if k != 'type')})")
                 continue
             try:
                 values[name] = spec[name][0](value)
             except ValueError as error:
-                sub = f".{error.key}" if isinstance(error, _Invalid) and error.key else ""
+                sub = f".{_key(error.key)}" if isinstance(error, _Invalid) and error.key else ""
                 self.add(label, f"{key}.{name}{sub}", str(error))
         return values
 
@@ -480,11 +501,16 @@ def read_scene(path: str | Path) -> Scene:
     text = read_text(path, "scene file")
     try:
         document = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as error:
-        raise InputFileError(f"{path}: not valid TOML: {error}") from None
+    except ValueError as error:  # a TOMLDecodeError, or an integer of thousands of digits
+        reason = str(error).split(";")[0]  # not Python's advice on its digit limit
+        raise InputFileError(f"{path}: not valid TOML: {reason}") from None
+    except RecursionError:  # tomllib parses nested arrays and tables recursively
+        raise InputFileError(f"{path}: arrays or tables nested too deeply to be a scene") \
+            from None
     reader = _Reader(path)
-    scene = reader.read(document)
-    problems = reader.problems + reader.follow_up(scene.problems())
+    with np.errstate(all="ignore"):  # huge values overflow in the checks, which report them
+        scene = reader.read(document)
+        problems = reader.problems + reader.follow_up(scene.problems())
     if problems:
         raise ModelError(f"scene file {path}", problems)
     return scene

@@ -353,6 +353,23 @@ class _ReferenceCheck:
         for marker in body.markers:
             if not isinstance(marker, str) or not _NAME.match(marker):
                 self._add(f"markers.{marker}", f"{marker!r} is not a valid marker name")
+        self._computable(body)
+
+    def _computable(self, body: Body):
+        """A positive mass or moment of inertia so small that, in SI, it is below the smallest
+        normal floating-point number: the mass matrix could not be inverted (1e-320 kg um^2 is
+        zero in kg m^2). Masses are not scaled; inertias scale with the unit squared."""
+        tiny = np.finfo(float).tiny
+        if np.isfinite(body.mass) and 0 < body.mass < tiny:
+            self._add("mass", f"is too small to compute with ({body.mass:.3g} kg)")
+        inertia = getattr(body, "inertia", None)
+        unit = LENGTH_UNITS.get(self.scene.length_unit)
+        if inertia is None or unit is None or not np.all(np.isfinite(inertia)):
+            return
+        smallest = np.linalg.eigvalsh(np.atleast_2d(inertia)).min()
+        if smallest > 0 and smallest * unit**2 < tiny:  # not positive: reported by the body
+            self._add("inertia", "is too small to compute with (smallest principal moment "
+                      f"{smallest:.3g} kg {self.scene.length_unit}^2)")
 
     def _body_ref(self, name: str, key: str, ground_ok: bool = False) -> bool:
         if name == GROUND and ground_ok:

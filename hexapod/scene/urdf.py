@@ -42,6 +42,18 @@ _JOINTS = {"revolute": Revolute, "continuous": Revolute, "prismatic": Prismatic,
            "fixed": Fixed}
 
 
+def _quoted(text: str, limit: int = 60) -> str:
+    """An attribute value as a message shows it: in double quotes, cut short when long, with
+    line breaks escaped (each problem stays on one line)."""
+    text = text if len(text) <= limit else text[:limit - 3] + "..."
+    return '"' + text.replace("\\", "\\\\").replace("\n", "\\n").replace("\r", "\\r") + '"'
+
+
+def _tag(tag: str, name: str | None) -> str:
+    """How messages name a link or a joint: as it is written, ``<joint name="knee">``."""
+    return f"<{tag}>" if name is None else f"<{tag} name={_quoted(name)}>"
+
+
 @dataclass
 class _Link:
     name: str
@@ -69,16 +81,17 @@ class _UrdfReader:
         self.problems.append(Problem(element, message, str(self.path)))
 
     def numbers(self, node, attribute: str, count: int, default, element: str):
+        """The numbers of an attribute (``default`` when it is absent or wrong, and reported)."""
         text = node.get(attribute) if node is not None else None
         if text is None:
             return np.array(default, dtype=float)
         try:
             values = [float(x) for x in text.split()]
         except ValueError:
-            self.add(element, f"{attribute}=\"{text}\" is not {count} numbers")
-            return np.array(default, dtype=float)
+            values = []
         if len(values) != count or not all(math.isfinite(x) for x in values):
-            self.add(element, f"{attribute}=\"{text}\" must be {count} finite numbers")
+            wanted = "a finite number" if count == 1 else f"{count} finite numbers"
+            self.add(element, f"<{node.tag}> {attribute}={_quoted(text)} must be {wanted}")
             return np.array(default, dtype=float)
         return np.array(values)
 
@@ -94,11 +107,13 @@ class _UrdfReader:
         inertial = node.find("inertial")
         if inertial is None:
             return link
-        label = f"link '{name}'"
+        label = _tag("link", name)
         link.com = self.origin(inertial, label)
         mass = inertial.find("mass")
         link.mass = float(self.numbers(mass, "value", 1, [0.0], label)[0]) if mass is not None \
             else 0.0
+        if link.mass < 0:
+            self.add(label, f"<mass> value={_quoted(mass.get('value'))} must not be negative")
         inertia = inertial.find("inertia")
         if inertia is None:
             self.add(label, "<inertial> has no <inertia>")
@@ -109,11 +124,11 @@ class _UrdfReader:
 
     def joint(self, node, links: dict) -> _Joint | None:
         name = node.get("name")
-        label = f"joint '{name}'"
+        label = _tag("joint", name)
         kind = node.get("type")
         if kind not in _JOINTS:
-            self.add(label, f"type \"{kind}\" is not supported (revolute, continuous, prismatic, "
-                     "fixed)")
+            given = "has no type" if kind is None else f"type={_quoted(kind)} is not supported"
+            self.add(label, f"{given} (revolute, continuous, prismatic, fixed)")
             return None
         ends = {}
         for end in ("parent", "child"):
@@ -122,15 +137,21 @@ class _UrdfReader:
             if ends[end] is None:
                 self.add(label, f"has no <{end} link=\"...\"/>")
             elif ends[end] not in links:
-                self.add(label, f"{end} link '{ends[end]}' is not defined")
+                self.add(label, f"{end} link {_quoted(ends[end])} is not defined")
         if None in ends.values() or any(v not in links for v in ends.values()):
             return None
+        if ends["parent"] == ends["child"]:
+            self.add(label, f"joins link {_quoted(ends['child'])} to itself")
+            return None
         axis = self.numbers(node.find("axis"), "xyz", 3, [1, 0, 0], label)
-        if kind != "fixed" and np.linalg.norm(axis) < 1e-12:
-            self.add(label, "axis has zero length")
-            axis = np.array([1.0, 0.0, 0.0])
+        # scaled by its largest component first, so that huge (finite) components do not
+        # overflow the norm
+        largest = float(np.max(np.abs(axis)))
+        if kind != "fixed" and not largest > 1e-12:
+            self.add(label, "<axis> has zero length")
+        unit = axis / largest if largest > 1e-12 else np.array([1.0, 0.0, 0.0])
         return _Joint(name, kind, ends["parent"], ends["child"], self.origin(node, label),
-                      axis / max(np.linalg.norm(axis), 1e-300))
+                      unit / np.linalg.norm(unit))
 
     def read(self, root_node) -> Scene:
         if root_node.tag != "robot":
@@ -140,24 +161,24 @@ class _UrdfReader:
         for node in root_node.findall("link"):
             name = node.get("name")
             if not name:
-                self.add("link", "has no name")
+                self.add("<link>", "has no name")
             elif name in links:
-                self.add(f"link '{name}'", "is defined twice")
+                self.add(_tag("link", name), "is defined twice")
             else:
                 links[name] = self.link(node)
         joints: list[_Joint] = []
         for node in root_node.findall("joint"):
             if not node.get("name"):
-                self.add("joint", "has no name")
+                self.add("<joint>", "has no name")
                 continue
             if node.get("name") in {j.name for j in joints}:
-                self.add(f"joint '{node.get('name')}'", "is defined twice")
+                self.add(_tag("joint", node.get("name")), "is defined twice")
             joint = self.joint(node, links)
             if joint is not None:
                 joints.append(joint)
         scene = Scene(root_node.get("name") or self.path.stem, 3, "m", source=str(self.path))
         if not links:
-            self.add("robot", "has no links")
+            self.add("<robot>", "has no links")
         if self.problems:
             raise ModelError(f"URDF file {self.path}", self.problems)
         return self.build(scene, links, joints)
@@ -166,11 +187,12 @@ class _UrdfReader:
         parent_of = {}
         for joint in joints:
             if joint.child in parent_of:
-                self.add(f"link '{joint.child}'", "is the child of two joints (URDF is a tree)")
+                self.add(_tag("link", joint.child), "is the child of two joints (URDF is a "
+                         "tree)")
             parent_of[joint.child] = joint
         roots = [name for name in links if name not in parent_of]
         if len(roots) != 1:
-            self.add("robot", f"needs exactly one root link, found {len(roots)}: "
+            self.add("<robot>", f"needs exactly one root link, found {len(roots)}: "
                      + ", ".join(roots) if roots else "the joints form a loop")
             raise ModelError(f"URDF file {self.path}", self.problems)
         root = roots[0]
@@ -182,7 +204,7 @@ class _UrdfReader:
         while pending:
             ready = [j for j in pending if j.parent in pose]
             if not ready:
-                self.add("robot", "some links are not connected to the root: "
+                self.add("<robot>", "some links are not connected to the root: "
                          + ", ".join(sorted({j.child for j in pending})))
                 raise ModelError(f"URDF file {self.path}", self.problems)
             for joint in ready:
@@ -195,7 +217,7 @@ class _UrdfReader:
             body, in_body = owner[joint.parent]
             if link.mass <= 0:
                 if joint.kind != "fixed":
-                    self.add(f"link '{link.name}'", f"has no mass but moves (joint "
+                    self.add(_tag("link", link.name), f"has no mass but moves (joint "
                              f"'{joint.name}' is {joint.kind}): the mass matrix would be "
                              "singular; give it an <inertial> or attach it by a fixed joint")
                 owner[link.name] = (body, in_body @ joint.origin)  # merged into its parent
@@ -210,11 +232,13 @@ class _UrdfReader:
             scene.add(SpatialBody(link.name, link.mass, link.inertia, com=link.com.position,
                                   position=pose[link.name].position,
                                   rotation=pose[link.name].rotation,
-                                  inertia_rotation=link.com.rotation))
+                                  inertia_rotation=link.com.rotation,
+                                  source=f"{self.path}, {_tag('link', link.name)}"))
             cls = _JOINTS[joint.kind]
             extra = {"axis": joint.axis} if cls is not Fixed else {}
             scene.add(cls(joint.name, body, link.name, parent_frame=in_body @ joint.origin,
-                          child_frame=Placement.identity(), **extra))
+                          child_frame=Placement.identity(),
+                          source=f"{self.path}, {_tag('joint', joint.name)}", **extra))
         if self.problems:
             raise ModelError(f"URDF file {self.path}", self.problems)
         return scene
@@ -237,8 +261,9 @@ def read_urdf(path: str | Path) -> Scene:
     except ET.ParseError as error:
         raise InputFileError(f"{path}: not well-formed XML ({error})") from None
     reader = _UrdfReader(path)
-    scene = reader.read(root)
-    problems = scene.problems()
+    with np.errstate(all="ignore"):  # huge values overflow in the checks, which report them
+        scene = reader.read(root)
+        problems = scene.problems()
     if problems:
         raise ModelError(f"URDF file {path}", problems)
     return scene
