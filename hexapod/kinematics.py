@@ -33,10 +33,12 @@ def _split(model: Model, Phi_v: np.ndarray) -> RowSplit:
         raise SingularSystemError(f"{_subject(model)}: {error}") from None
 
 
-def _check(model: Model, split: RowSplit, y: np.ndarray, rhs: np.ndarray, what: str) -> None:
-    """The redundant rows are met too (see :func:`hexapod.linalg.check_consistency`)."""
+def _check(model: Model, split: RowSplit, y: np.ndarray, rhs: np.ndarray, what: str,
+           size: float = 0.0) -> None:
+    """The redundant rows are met too (see :func:`hexapod.linalg.check_consistency`), relative
+    to ``size`` or the correction's own, whichever is larger."""
     try:
-        check_consistency(split, y, rhs, row_names=_names(model), what=what)
+        check_consistency(split, y, rhs, size, row_names=_names(model), what=what)
     except SingularSystemError as error:
         raise SingularSystemError(f"{_subject(model)}: {error}") from None
 
@@ -136,7 +138,10 @@ def solve_velocities(model: Model, q: np.ndarray, t: float = 0.0,
     split = _split(model, Phi_v)
     residual = nu - Phi_v @ v
     dy = split.min_norm_correction(residual)
-    _check(model, split, dy, residual, "velocity constraints")
+    # relative to the velocities themselves: re-projecting a consistent state makes a
+    # correction of round-off, against which Bricard's redundant row looked inconsistent
+    size = float(np.linalg.norm(model.mass @ (model.mass_inv_sqrt @ v)))  # |M^1/2 v|
+    _check(model, split, dy, residual, "velocity constraints", size)
     return v + model.mass_inv_sqrt @ dy
 
 
