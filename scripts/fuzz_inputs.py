@@ -53,6 +53,7 @@ import datetime
 import io
 import json
 import math
+import numbers
 import os
 import random
 import shutil
@@ -228,16 +229,16 @@ def _toml_string(text: str) -> str:
 
 def toml_value(value) -> str:
     """A value as inline TOML."""
-    if isinstance(value, bool):
+    if isinstance(value, bool) or type(value).__name__ == "bool_":  # NumPy's too
         return "true" if value else "false"
-    if isinstance(value, int):
-        return str(value)
-    if isinstance(value, float):
+    if isinstance(value, numbers.Integral):
+        return str(int(value))
+    if isinstance(value, numbers.Real):
         if math.isnan(value):
             return "nan"
         if math.isinf(value):
             return "inf" if value > 0 else "-inf"
-        return repr(value)
+        return repr(float(value))  # NumPy 2 writes np.float64(...) otherwise
     if isinstance(value, str):
         return _toml_string(value)
     if isinstance(value, (datetime.date, datetime.time)):

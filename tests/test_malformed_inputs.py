@@ -8,7 +8,6 @@ every run (``derandomize``).
 
 from __future__ import annotations
 
-import importlib.util
 import os
 import re
 import signal
@@ -20,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from fuzzer import fuzz
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -33,16 +33,6 @@ from hexapod.scene.urdf import read_urdf
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _load_fuzzer():
-    spec = importlib.util.spec_from_file_location("fuzz_inputs",
-                                                  ROOT / "scripts" / "fuzz_inputs.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["fuzz_inputs"] = module  # dataclasses look their module up
-    spec.loader.exec_module(module)
-    return module
-
-
-fuzz = _load_fuzzer()
 FIXTURE = ROOT / "tests" / "data" / "pinocchio" / "chain-3"
 PENDULUM = ROOT / "data" / "scenes" / "pendulum.toml"
 

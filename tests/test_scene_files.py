@@ -4,7 +4,6 @@ length units, and robustness of the reader against damaged files."""
 from __future__ import annotations
 
 import copy
-import json
 import math
 import re
 import tomllib
@@ -12,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from fuzzer import fuzz
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -28,54 +28,9 @@ SCENE_FILES = sorted(SCENES.glob("*.toml"))
 
 # ------------------------------------------------------------------ helpers
 
-_BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
-
-
-def _toml_key(key: str) -> str:
-    return key if _BARE_KEY.match(key) else json.dumps(key)
-
-
-def _toml_value(value) -> str:
-    """A value as inline TOML (JSON string escapes are valid TOML basic-string escapes)."""
-    if isinstance(value, (bool, np.bool_)):
-        return "true" if value else "false"
-    if isinstance(value, (int, np.integer)):
-        return str(int(value))
-    if isinstance(value, (float, np.floating)):
-        if math.isnan(value):
-            return "nan"
-        if math.isinf(value):
-            return "inf" if value > 0 else "-inf"
-        return repr(float(value))
-    if isinstance(value, str):
-        return json.dumps(value)
-    if isinstance(value, list):
-        return "[" + ", ".join(_toml_value(x) for x in value) + "]"
-    if isinstance(value, dict):
-        return "{" + ", ".join(f"{_toml_key(k)} = {_toml_value(v)}"
-                               for k, v in value.items()) + "}"
-    raise TypeError(f"cannot write {value!r} as TOML")
-
-
-def toml_dumps(document: dict) -> str:
-    """A document as TOML: tables as ``[name]``, arrays of tables as ``[[name]]``."""
-    head, tail = [], []
-    for key, value in document.items():
-        if isinstance(value, dict):
-            tail.append(f"[{_toml_key(key)}]")
-            tail += [f"{_toml_key(k)} = {_toml_value(v)}" for k, v in value.items()]
-        elif isinstance(value, list) and value and all(isinstance(t, dict) for t in value):
-            for table in value:
-                tail.append(f"[[{_toml_key(key)}]]")
-                tail += [f"{_toml_key(k)} = {_toml_value(v)}" for k, v in table.items()]
-        else:
-            head.append(f"{_toml_key(key)} = {_toml_value(value)}")
-    return "\n".join(head + tail) + "\n"
-
-
 def write_scene(directory: Path, name: str, document: dict | str) -> Path:
     path = directory / f"{name}.toml"
-    path.write_text(document if isinstance(document, str) else toml_dumps(document),
+    path.write_text(document if isinstance(document, str) else fuzz.toml_text(document),
                     encoding="utf-8")
     return path
 
