@@ -151,11 +151,13 @@ def _joint_rows(model: Model) -> np.ndarray:
     return np.array([i for i in range(model.n_c) if i not in driven], dtype=int)
 
 
-def _sigma_min(model: Model, q: np.ndarray, w: np.ndarray, rows: np.ndarray):
-    """Smallest singular value of the equilibrated kept joint rows, its left vector, and the
-    rows' names in order."""
-    Phi_v = model.call("Phi_v", q=q, w=w)[rows]
-    W, _ = equilibrate(Phi_v, model.mass_inv_sqrt)
+def _sigma_min(model: Model, q: np.ndarray, w: np.ndarray, rows: np.ndarray,
+               Phi_v: np.ndarray | None = None):
+    """Smallest singular value of the equilibrated ``rows`` of ``Phi_v`` (evaluated at ``q``
+    unless given), and its left singular vector."""
+    if Phi_v is None:
+        Phi_v = model.call("Phi_v", q=q, w=w)
+    W, _ = equilibrate(Phi_v[rows], model.mass_inv_sqrt)
     u, s, _ = np.linalg.svd(W, full_matrices=False)
     return float(s[-1]), u[:, -1]
 
@@ -168,13 +170,13 @@ def singular_distance(model: Model, t: float, q: np.ndarray) -> tuple[float, flo
     rows = _joint_rows(model)
     if rows.size == 0:
         return float("inf"), float("inf"), []
-    Phi_v = model.call("Phi_v", q=q, w=w)[rows]
-    W, d = equilibrate(Phi_v, model.mass_inv_sqrt)
+    Phi_v = model.call("Phi_v", q=q, w=w)
+    W, d = equilibrate(Phi_v[rows], model.mass_inv_sqrt)
     split = split_rows(W, d, np.arange(rows.size), model.rank_tolerance)
     rows = rows[np.sort(split.independent)]
-    sigma, u = _sigma_min(model, q, w, rows)
+    sigma, u = _sigma_min(model, q, w, rows, Phi_v)
     scale = _tangent_scale(model)
-    Phi_scaled = model.call("Phi_v", q=q, w=w)[rows] * scale
+    Phi_scaled = Phi_v[rows] * scale
     directions = _null_space(Phi_scaled / np.linalg.norm(Phi_scaled, axis=1, keepdims=True),
                              rows.size)
     gradient = np.zeros(directions.shape[1])
@@ -231,10 +233,7 @@ def diagnose(model: Model, t: float, q: np.ndarray, v: np.ndarray, *,
     data = Data()
     forward_dynamics(model, data, t, q, v, condition=True)
     kept = np.sort(data.independent_rows)
-    W, d = equilibrate(data.Phi_v, model.mass_inv_sqrt)
-    split = split_rows(W, d, model.row_priority, model.rank_tolerance,
-                           groups=model.row_groups)
-    sigma = np.sort(split.singular_values())
+    sigma = data.singular_values
     m = mobility(model, q, t)
     if distance is None:
         distance = model.n_v <= DISTANCE_LIMIT

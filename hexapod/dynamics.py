@@ -29,8 +29,8 @@ def forward_dynamics(model: Model, data: Data, t: float, q: np.ndarray, v: np.nd
     ``data`` receives ``Phi_v, gamma, Q, Q_across, v_dot, lam`` (n_c), ``independent_rows``,
     ``redundant_rows`` (row indices; names in ``model.rows``), ``inconsistency``, and, when
     ``condition`` is true, ``condition_number`` (2-norm, of the equilibrated saddle-point matrix
-    of the independent rows) and ``sigma_min`` (the smallest singular value of the equilibrated
-    ``Phi_v``: the distance to a singular configuration).
+    of the independent rows), ``singular_values`` (of the equilibrated kept rows of ``Phi_v``,
+    ascending) and ``sigma_min``, the smallest (the distance to a singular configuration).
 
     Raises
     ------
@@ -64,9 +64,10 @@ def forward_dynamics(model: Model, data: Data, t: float, q: np.ndarray, v: np.nd
     data.independent_rows, data.redundant_rows = split.independent, split.redundant
     data.Q_across = Q_across
     data.inconsistency = solution.inconsistency
-    data.condition_number = data.sigma_min = None
+    data.condition_number = data.sigma_min = data.singular_values = None
     if condition:
         data.condition_number = split.condition_number(model.n_v)
-        sigma = split.singular_values()
-        data.sigma_min = float(sigma.min()) if sigma.size else float("inf")
+        data.singular_values = np.sort(split.singular_values())
+        sigma = data.singular_values
+        data.sigma_min = float(sigma[0]) if sigma.size else float("inf")
     return solution.v_dot

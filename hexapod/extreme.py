@@ -111,17 +111,12 @@ DAMPING_RATIO = 0.2
 
 
 def stiff_spring(stiffness: float):
-    """A 1 kg block on a prismatic joint, held by a spring-damper of ``stiffness`` (N/m) and
-    damping ratio :data:`DAMPING_RATIO`, released 10 mm from rest, no gravity."""
-    from hexapod.scene import PlanarBody, Prismatic, Scene, SpringDamper
+    """The scene of the stability study: :func:`hexapod.mechanisms.stiff_slider` (1 kg, released
+    10 mm from rest) without gravity, at damping ratio :data:`DAMPING_RATIO`."""
+    from hexapod.mechanisms import stiff_slider
 
-    scene = Scene(f"stiff-spring-{stiffness:.0e}", 2, gravity=[0.0, 0.0])
-    scene.add(PlanarBody("block", 1.0, 1e-2, position=[1.01, 0.0]))
-    scene.add(Prismatic("slide", "ground", "block", origin=[0.0, 0.0]))
-    scene.add(SpringDamper("spring", "ground", "block", point_a=[0.0, 0.0], point_b=[0.0, 0.0],
-                           stiffness=stiffness, damping=2 * DAMPING_RATIO * np.sqrt(stiffness),
-                           free_length=1.0))
-    return scene
+    damping = 2 * DAMPING_RATIO * np.sqrt(stiffness)
+    return stiff_slider(stiffness, damping, gravity=False).scene
 
 
 def explicit_methods() -> list[str]:
@@ -231,9 +226,12 @@ class CaseRun:
     sigma_min: float
     redundant_rows: list[str]
     accurate: bool
+    #: the run itself, kept for the default method only (the condition figure draws it)
+    result: SimulationResult | None = field(default=None, repr=False, compare=False)
 
     def as_dict(self) -> dict:
-        return asdict(self)
+        return {name: getattr(self, name) for name in self.__dataclass_fields__
+                if name != "result"}
 
 
 def _from_mechanism(case, step_count: int | None = None, rtol: float = 1e-6) -> SuiteCase:
@@ -377,7 +375,8 @@ def run_case(case: SuiteCase, method: str, *, budget: float = 60.0) -> CaseRun:
     return CaseRun(case.name, case.category, method, _label(setting), status, reason,
                    result.counters.steps, result.counters.rejected, result.cpu_time,
                    result.max_position_violation, result.max_velocity_violation, conserved,
-                   error, condition, sigma, redundant, accurate)
+                   error, condition, sigma, redundant, accurate,
+                   result if method == DEFAULT_METHOD else None)
 
 
 def run_suite(cases: list[SuiteCase], methods=None, *, budget: float = 60.0,
@@ -488,9 +487,10 @@ def outcome_figure(runs: list[CaseRun]):
     return figure
 
 
-def condition_figure(cases: list[SuiteCase], samples: int = 200):
+def condition_figure(cases: list[SuiteCase], runs: list[CaseRun], samples: int = 200):
     """The condition number of the equilibrated saddle-point matrix and the smallest singular
-    value of the equilibrated ``Phi_v`` along a run of the default method, per case."""
+    value of the equilibrated ``Phi_v`` along the default method's run of each case (from
+    ``runs``, or run here when the suite left the default method out)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -499,9 +499,11 @@ def condition_figure(cases: list[SuiteCase], samples: int = 200):
     figure, (top, bottom) = plt.subplots(2, 1, figsize=(7.0, 5.6), sharex=True,
                                          layout="constrained")
     data = Data()
+    kept = {r.case: r.result for r in runs if r.result is not None}
     for case in cases:
-        result = simulate(case.model, case.t_end, method=DEFAULT_METHOD, rtol=case.rtol,
-                          atol=case.atol, forces=False, cpu_budget=60.0)
+        result = kept.get(case.name) or simulate(
+            case.model, case.t_end, method=DEFAULT_METHOD, rtol=case.rtol, atol=case.atol,
+            forces=False, cpu_budget=60.0)
         picks = np.unique(np.linspace(0, result.t.size - 1, min(samples, result.t.size))
                           .astype(int))
         cond, sigma = [], []
@@ -572,7 +574,7 @@ def report_files(cases: list[SuiteCase], runs: list[CaseRun], diagnoses: dict,
         files["stability.csv"] = _rows_csv([r.as_dict() for r in stability]).encode()
         files["stability.png"] = png_bytes(stability_figure(stability))
     watched = [c for c in cases if c.category in ("singular", "redundant")] or cases[:1]
-    files["condition.png"] = png_bytes(condition_figure(watched))
+    files["condition.png"] = png_bytes(condition_figure(watched, runs))
     return files
 
 

@@ -529,3 +529,4 @@ class Data:
     inconsistency: float | None = None  # relative violation of the redundant rows
     condition_number: float | None = None
     sigma_min: float | None = None  # smallest singular value of the equilibrated Phi_v
+    singular_values: np.ndarray | None = None  # all of them, of the kept rows, ascending

@@ -111,7 +111,8 @@ class CompiledRates:
             v_dot = ca.mtimes(m_inv_sqrt, y)
             scaled = ca.fabs(ca.mtimes(Phi_v, v_dot) - gamma) / d_all
             size = ca.norm_inf(y) + ca.norm_inf(y0) + 1e-300
-            others = [i for i in range(model.n_c) if i not in set(rows.tolist())]
+            kept = set(rows.tolist())
+            others = [i for i in range(model.n_c) if i not in kept]
             residual = ca.vertcat(
                 ca.mmax(scaled[rows.tolist()]) / size,
                 ca.mmax(scaled[others]) / size if others else ca.MX(0.0))

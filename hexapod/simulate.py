@@ -117,12 +117,6 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
         integrator.step()
         if integrator.status == "failed":
             break
-        if not (np.all(np.isfinite(integrator.q)) and np.all(np.isfinite(integrator.v))):
-            integrator.status = "failed"
-            integrator.message = (f"{cls.name}: the state became non-finite at "
-                                  f"t = {integrator.t:.6g} s (the step is too large for this "
-                                  "method, or the motion is unstable)")
-            break
         watch()
         returned += 1  # states returned, one per call (many steps for some methods)
         if integrator.status == "finished" or returned % every == 0:

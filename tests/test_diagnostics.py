@@ -11,6 +11,7 @@ from hexapod.diagnostics import diagnose
 from hexapod.extreme import observed_stable_step
 from hexapod.integrators import INTEGRATORS
 from hexapod.integrators.stability import runge_kutta_stability
+from hexapod.mechanisms import stiff_slider
 
 from mechanisms import pendulum
 
@@ -23,15 +24,9 @@ def state(scene):
     return model, q, v
 
 
-def block_on_spring(stiffness: float, damping: float, offset: float = 0.01) -> hx.Scene:
+def block_on_spring(stiffness: float, damping: float) -> hx.Scene:
     """A 1 kg block on a prismatic joint, a spring-damper to the ground, no gravity."""
-    scene = hx.Scene("block", 2)
-    scene.gravity = [0.0, 0.0]
-    scene.add(hx.PlanarBody("block", 1.0, 1e-2, position=[1.0 + offset, 0.0]))
-    scene.add(hx.Prismatic("slide", "ground", "block", origin=[0.0, 0.0]))
-    scene.add(hx.SpringDamper("spring", "ground", "block", point_a=[0, 0], point_b=[0, 0],
-                              stiffness=stiffness, damping=damping, free_length=1.0))
-    return scene
+    return stiff_slider(stiffness, damping, gravity=False).scene
 
 
 def parallelogram(theta: float) -> hx.Scene:
