@@ -183,8 +183,10 @@ def cmd_simulate(args) -> int:
     print(f"wrote {out}/: {', '.join(files)}")
     drift = ("" if result.energy_drift is None
              else f", energy drift {result.energy_drift:.2e} (relative)")
+    crossed = (f"{stats['crossings']} singular poses crossed, " if stats.get("crossings")
+               else "")
     print(f"{result.method} over {duration:g} s ({why}): {stats['steps']} steps, "
-          f"{stats['rejected']} rejected, {stats['rhs']} right-hand sides, "
+          f"{stats['rejected']} rejected, {crossed}{stats['rhs']} right-hand sides, "
           f"{result.wall_time:.3g} s; max |phi| {result.max_position_violation:.2e}, "
           f"max |Phi_v v - nu| {result.max_velocity_violation:.2e}/s{drift}")
     if not result.success:

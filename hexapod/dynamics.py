@@ -19,12 +19,19 @@ from hexapod.reactions import policy_map
 
 def forward_dynamics(model: Model, data: Data, t: float, q: np.ndarray, v: np.ndarray, *,
                      condition: bool = False,
-                     baumgarte: tuple[float, float] | None = None) -> np.ndarray:
+                     baumgarte: tuple[float, float] | None = None,
+                     rank_tolerance: float | None = None,
+                     consistency_tol: float = 1e-6) -> np.ndarray:
     """Accelerations ``v_dot`` at ``(t, q, v)``; fills ``data``.
 
     With ``baumgarte = (alpha, beta)`` (1/s) the acceleration constraints are stabilised,
     ``Phi_v v_dot = gamma - 2 alpha (Phi_v v - nu) - beta^2 phi``, so that drifted positions
     and velocities are pulled back to the constraints (Baumgarte 1972).
+
+    ``rank_tolerance`` overrides ``model.rank_tolerance`` (rows whose equilibrated distance
+    from the span of those kept falls below it are left out as redundant);
+    ``consistency_tol`` is the largest relative violation of the rows left out (above it they
+    contradict the others: an error).
 
     ``data`` receives ``Phi_v, gamma, Q, Q_across, v_dot, lam`` (n_c), ``independent_rows``,
     ``redundant_rows`` (row indices; names in ``model.rows``), ``inconsistency``, and, when
@@ -49,14 +56,16 @@ def forward_dynamics(model: Model, data: Data, t: float, q: np.ndarray, v: np.nd
         velocity_error = Phi_v @ v - model.call("nu", q=q, w=w, wd=wd)
         gamma = gamma - 2 * alpha * velocity_error - beta**2 * model.call("phi", q=q, w=w)
     Q_across = model.call("Q_across", q=q, v=v, w=w) if model.Q_across is not None else None
+    tol = model.rank_tolerance if rank_tolerance is None else rank_tolerance
     W, d = equilibrate(Phi_v, model.mass_inv_sqrt)
-    split = split_rows(W, d, model.row_priority, model.rank_tolerance,
+    split = split_rows(W, d, model.row_priority, tol,
                            groups=model.row_groups)
     wrench_map = offset = None
     if split.redundant.size:
         wrench_map, offset = policy_map(model, q, Phi_v, Q_across)
     solution = solve_saddle(model.mass_inv_sqrt, Phi_v, Q, gamma, model.row_priority,
-                            model.rank_tolerance, row_names=[r.name for r in model.rows],
+                            tol, row_names=[r.name for r in model.rows],
+                            consistency_tol=consistency_tol,
                             wrench_map=wrench_map, wrench_offset=offset, split=split)
     data.t, data.q, data.v, data.w, data.wd, data.wdd = t, q, v, w, wd, wdd
     data.Phi_v, data.gamma, data.Q = Phi_v, gamma, Q

@@ -217,6 +217,7 @@ class CaseRun:
     reason: str
     steps: int
     rejected: int
+    crossings: int  # singular configurations crossed with nearly dependent rows left out
     cpu_time: float
     position_drift: float
     velocity_drift: float
@@ -373,7 +374,8 @@ def run_case(case: SuiteCase, method: str, *, budget: float = 60.0) -> CaseRun:
         accurate = (result.max_position_violation <= DRIFT_LIMIT
                     and (conserved is None or conserved <= ACCURACY))
     return CaseRun(case.name, case.category, method, _label(setting), status, reason,
-                   result.counters.steps, result.counters.rejected, result.cpu_time,
+                   result.counters.steps, result.counters.rejected,
+                   result.counters.crossings, result.cpu_time,
                    result.max_position_violation, result.max_velocity_violation, conserved,
                    error, condition, sigma, redundant, accurate,
                    result if method == DEFAULT_METHOD else None)
@@ -423,9 +425,9 @@ def _number(x, digits: int = 2) -> str:
 
 def suite_table(runs: list[CaseRun]) -> str:
     """Markdown: one row per run, the recommendation after each case."""
-    lines = ["| case | method | setting | outcome | steps | rejected | CPU (s) | drift | "
-             "energy error | error | max cond | min sigma |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    lines = ["| case | method | setting | outcome | steps | rejected | crossings | CPU (s) | "
+             "drift | energy error | error | max cond | min sigma |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for case in dict.fromkeys(r.case for r in runs):
         mine = [r for r in runs if r.case == case]
         for r in mine:
@@ -434,9 +436,10 @@ def suite_table(runs: list[CaseRun]) -> str:
                 outcome += ": " + r.reason.split(": ", 1)[-1][:90]
             lines.append(
                 f"| {case} | {r.method} | {r.setting} | {outcome} | {r.steps} | {r.rejected} | "
-                f"{r.cpu_time:.3g} | {_number(r.position_drift)} | {_number(r.energy_error)} | "
+                f"{r.crossings} | {r.cpu_time:.3g} | {_number(r.position_drift)} | "
+                f"{_number(r.energy_error)} | "
                 f"{_number(r.error)} | {_number(r.condition_max)} | {_number(r.sigma_min)} |")
-        lines.append(f"| **{case}** | **use** | | {recommend(mine)} | | | | | | | | |")
+        lines.append(f"| **{case}** | **use** | | {recommend(mine)} | | | | | | | | | |")
     return "\n".join(lines)
 
 

@@ -126,17 +126,19 @@ class CompiledRates:
         unique, and those of the compiled solve are the policy's."""
         return self.rows.size == self.model.n_c
 
-    def __call__(self, t: float, q: np.ndarray, v: np.ndarray,
-                 alpha: float = 0.0) -> tuple[np.ndarray, np.ndarray] | None:
+    def __call__(self, t: float, q: np.ndarray, v: np.ndarray, alpha: float = 0.0,
+                 left_out: float = REDUNDANT_TOLERANCE) -> tuple[np.ndarray, np.ndarray] | None:
         """``(q_dot, v_dot)``, or None (see :meth:`solve`)."""
-        solution = self.solve(t, q, v, alpha)
+        solution = self.solve(t, q, v, alpha, left_out)
         return None if solution is None else solution[:2]
 
-    def solve(self, t: float, q: np.ndarray, v: np.ndarray,
-              alpha: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    def solve(self, t: float, q: np.ndarray, v: np.ndarray, alpha: float = 0.0,
+              left_out: float = REDUNDANT_TOLERANCE
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """``(q_dot, v_dot, lam)`` at ``(t, q, v)``, or None when the compiled solve cannot be
-        trusted there (non-finite, or the rows it solves with no longer span the constraints).
-        ``lam`` holds the kept rows' multipliers, zero on the others."""
+        trusted there (non-finite, or the rows it solves with no longer span the constraints:
+        the rows left out violated by more than ``left_out``, relative). ``lam`` holds the
+        kept rows' multipliers, zero on the others."""
         values = {"q": q, "v": v}
         if self.model.n_w:
             values["w"], values["wd"], values["wdd"] = self.model.law_values(t)
@@ -144,7 +146,7 @@ class CompiledRates:
             q_dot, v_dot, lam, residual = self._fast(*[values[n] for n in self._args], alpha)
         except RuntimeError:  # the factorisation failed: a singular matrix, or NaN in it
             return None
-        if not (residual[0] <= RESIDUAL_TOLERANCE and residual[1] <= REDUNDANT_TOLERANCE
+        if not (residual[0] <= RESIDUAL_TOLERANCE and residual[1] <= left_out
                 and np.all(np.isfinite(v_dot))):
             return None
         return q_dot, v_dot, lam

@@ -253,8 +253,10 @@ def test_a_driver_pulling_past_reach_fails_with_a_message(method):
     if cls.index == 3 or "projection" in cls.stabilisation:
         # t = 0.5 itself has a solution (x = 1, y = 0): a method may reach it, not pass it;
         # idas-bdf holds the constraints to drift_tol = rtol = 1e-6 m / L (L = 1 m), and at
-        # 0.5 + d no position violates them by less than d (m): it may pass by 1e-6 s
-        late = 1e-6 if method == "idas-bdf" else 1e-12
+        # 0.5 + d no position violates them by less than d (m): it may pass by 1e-6 s; a
+        # projection holds them to 1e-12 m in the rows it keeps, and at the stretched pose the
+        # rank decision leaves one out: an explicit step crossing it may end 1e-11 s past
+        late = 1e-6 if method == "idas-bdf" else 1e-10
         assert result.t[-1] <= 0.5 + late and result.counters.rejected > 10
         assert ("Newton" in result.message) == (cls.index == 3)
 

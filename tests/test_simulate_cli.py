@@ -21,8 +21,8 @@ ROOT = Path(__file__).resolve().parents[1]
 SEED002 = ROOT / "data" / "scenes" / "closed_pendulum_seed002.toml"
 FILES = {"results.csv", "results.npz", "stats.json"}
 STATISTICS = {"scene", "method", "options", "status", "message", "t_start", "t_end", "saved",
-              "steps", "rejected", "rhs", "jacobians", "factorisations", "newton", "wall_time_s",
-              "cpu_time_s", "max_position_violation", "max_velocity_violation_per_s",
+              "steps", "rejected", "rhs", "jacobians", "factorisations", "newton", "crossings",
+              "wall_time_s", "cpu_time_s", "max_position_violation", "max_velocity_violation_per_s",
               "energy_conserved", "energy_drift"}
 UNREACHABLE = """\
 # A particle on a 1 m rod whose x is driven at 2 m/s: out of reach from t = 0.5 s.

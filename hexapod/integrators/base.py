@@ -21,12 +21,23 @@ from dataclasses import asdict, dataclass
 from typing import ClassVar
 
 import numpy as np
+from scipy.linalg import qr
 
 from hexapod.dynamics import forward_dynamics
 from hexapod.errors import HexapodError, IntegrationError
 from hexapod.kinematics import assemble_positions, solve_velocities
+from hexapod.linalg import equilibrate
 from hexapod.model import Data, Model
 from hexapod.rates import compiled_projection, compiled_rates
+
+#: smallest singular value of the equilibrated ``Phi_v`` (rows of unit length, so 1 is
+#: well-conditioned) below which a state counts as near a singular configuration. There the
+#: accelerations in the nearly dependent directions are solved with an error of about
+#: ``eps |gamma| / sigma^2``: at tight tolerances the error test then fails at every step
+#: (the N-four-bar at rtol 1e-10 stalled 3e-7 from its flat pose, the step at 7e-15 s)
+SINGULAR_BAND = 1e-4
+#: the crossing's tolerance over the smallest singular value where it begins (or widens)
+CROSSING_FACTOR = 10.0
 
 
 @dataclass
@@ -46,6 +57,8 @@ class Counters:
         Matrix factorisations (QR of the equilibrated ``Phi_v``, or LU of an iteration matrix).
     newton :
         Newton iterations, of projections and of implicit solves.
+    crossings :
+        Singular configurations crossed with nearly dependent rows left out.
     """
 
     steps: int = 0
@@ -54,6 +67,7 @@ class Counters:
     jacobians: int = 0
     factorisations: int = 0
     newton: int = 0
+    crossings: int = 0
 
     def as_dict(self) -> dict[str, int]:
         return asdict(self)
@@ -119,6 +133,7 @@ class Integrator:
         self.data = Data()
         self.status = "running"
         self.message = ""
+        self._crossing: float | None = None  # the raised rank tolerance, while crossing
         q, v = self._project(self.t0, q0, v0)  # guesses of None: the scene's initial state
         self.t, self.q, self.v = self.t0, q, v
         self.v_dot, self.lam = self._dynamics(self.t, q, v)
@@ -190,8 +205,13 @@ class Integrator:
 
     def _dynamics(self, t: float, q: np.ndarray, v: np.ndarray,
                   baumgarte: tuple[float, float] | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """Accelerations and multipliers at a state (one saddle-point solve)."""
-        v_dot = forward_dynamics(self.model, self.data, t, q, v, baumgarte=baumgarte)
+        """Accelerations and multipliers at a state (one saddle-point solve; rows nearly
+        dependent are left out while a singular configuration is crossed)."""
+        # while crossing, the rows left out are violated by design (the projection restores them)
+        crossing = {} if self._crossing is None else {
+            "rank_tolerance": self._crossing, "consistency_tol": np.inf}
+        v_dot = forward_dynamics(self.model, self.data, t, q, v, baumgarte=baumgarte,
+                                 **crossing)
         self.counters.rhs += 1
         self.counters.jacobians += 1
         self.counters.factorisations += 1
@@ -202,12 +222,59 @@ class Integrator:
         """``(q_dot, v_dot)`` at a state, without multipliers (the stages of explicit methods):
         one compiled call, or the exact solve of :meth:`_dynamics` where the compiled one is
         refused (a change of rank, a singular configuration). ``alpha``: Baumgarte's rate."""
-        rates = self._compiled(t, q, v, alpha)
+        if self._crossing is None:
+            rates = self._compiled(t, q, v, alpha)
+        else:
+            rates = self._crossing_rates(t, q, v, alpha, left_out=np.inf)
         if rates is not None:
             self.counters.rhs += 1
             return rates
         v_dot, _ = self._dynamics(t, q, v, (alpha, alpha) if alpha else None)
         return self.model.call("qdot", q=q, v=v), v_dot
+
+    def _cross_singular(self) -> bool:
+        """Begin crossing a singular configuration if the state is near one (see
+        :data:`SINGULAR_BAND`), or widen the crossing under way; returns whether it did.
+
+        While crossing, the rows nearly dependent on the others (as many as there are singular
+        values of the equilibrated ``Phi_v`` below the crossing's tolerance, ``CROSSING_FACTOR``
+        times the smallest where it began) are left out: the stages then solve one smooth
+        system of fewer rows, compiled for them, and the projection after each step puts the
+        state back on every constraint. Widening (the error test still failing) multiplies the
+        tolerance by ``CROSSING_FACTOR`` again, up to ``CROSSING_FACTOR * SINGULAR_BAND``."""
+        if not self.model.n_c:
+            return False
+        data = self._conditioned(self.t, self.q, self.v)
+        if not data.sigma_min < SINGULAR_BAND:
+            return False
+        base = data.sigma_min if self._crossing is None else self._crossing
+        if base >= SINGULAR_BAND:
+            return False  # as wide as it goes
+        if self._crossing is None:
+            self.counters.crossings += 1
+        self._crossing = CROSSING_FACTOR * base
+        # the rows left out: those a rank-revealing (column-pivoted) QR factorisation takes last
+        rows = data.independent_rows
+        W, _ = equilibrate(data.Phi_v[rows], self.model.mass_inv_sqrt)
+        dependent = int(np.sum(data.singular_values < self._crossing))
+        pivots = qr(W.T, mode="r", pivoting=True)[1]
+        self._crossing_rates = compiled_rates(self.model,
+                                              np.sort(rows[pivots[:rows.size - dependent]]))
+        return True
+
+    def _end_crossing(self) -> None:
+        """End the crossing once the state has left the band it began in."""
+        if self._crossing is not None and self._conditioned(
+                self.t, self.q, self.v).sigma_min > self._crossing:
+            self._crossing = None
+
+    def _conditioned(self, t: float, q: np.ndarray, v: np.ndarray) -> Data:
+        """The dynamics at a state with the singular values of the equilibrated ``Phi_v``."""
+        data = Data()
+        forward_dynamics(self.model, data, t, q, v, condition=True)
+        self.counters.jacobians += 1
+        self.counters.factorisations += 1
+        return data
 
     def _halving(self, attempt):
         """Take one step by ``attempt(h)``, which returns the new state or None when Newton's

@@ -19,6 +19,10 @@ from hexapod.errors import IntegrationError
 from hexapod.integrators.base import Integrator
 from hexapod.integrators.stability import largest_stable_step, runge_kutta_stability
 
+#: rejections in a row after which a step checks whether it is at a singular configuration
+#: (then it crosses it, see :meth:`Integrator._cross_singular`)
+CROSSING_REJECTIONS = 2
+
 
 class EmbeddedRungeKutta(Integrator):
     """An explicit embedded pair ``(A, b, b_hat, c)`` with error-per-step control; subclasses
@@ -83,6 +87,7 @@ class EmbeddedRungeKutta(Integrator):
         model, n_q = self.model, self.model.n_q
         y0 = np.concatenate([self.q, self.v])
         f0 = np.concatenate([model.call("qdot", q=self.q, v=self.v), self.v_dot])
+        rejected = 0
         while True:
             h = self.next_step()
             if h < 1e-14 * max(1.0, abs(self.t)):
@@ -101,11 +106,16 @@ class EmbeddedRungeKutta(Integrator):
                     self.max_factor, self.safety * error ** (-1.0 / (self.error_order + 1)))
                 break
             self.counters.rejected += 1
+            rejected += 1
+            if rejected % CROSSING_REJECTIONS == 0 and self._cross_singular():
+                f0 = np.concatenate(self._rates(self.t, self.q, self.v))
+                continue
             factor = self.min_factor if not np.isfinite(error) else max(
                 self.min_factor, self.safety * error ** (-1.0 / (self.error_order + 1)))
             self.h = h * factor
         self.t += h
         self.q, self.v = self._project(self.t, model.normalize(y1[:n_q]), y1[n_q:])
+        self._end_crossing()
         # the accelerations start the next step; the multipliers are solved when asked
         self.v_dot, self.lam = self._rates(self.t, self.q, self.v)[1], None
         self.h = h * factor
