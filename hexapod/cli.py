@@ -163,6 +163,7 @@ def cmd_report(args) -> int:
 
 def cmd_simulate(args) -> int:
     from hexapod.fileio import write_directory_atomically
+    from hexapod.results import scene_reference
     from hexapod.simulate import simulate
 
     scene = load_scene(args.scene)
@@ -174,6 +175,7 @@ def cmd_simulate(args) -> int:
                       rtol=args.rtol, atol=args.atol, step=args.step, every=args.every,
                       forces=True if args.forces else None,
                       progress=_time_progress(args.method, args.start) if show else None)
+    result.source = scene_reference(args.scene)  # for 'hexapod export'
     if show:
         print("\r" + " " * 90 + "\r", end="", file=sys.stderr)
     stats = result.statistics()
@@ -300,6 +302,39 @@ def cmd_check(args) -> int:
         print(diagnoses[cases[0].name].text())
     print(files["check.md"].decode().split("## Diagnostics")[0].rstrip())
     print(f"wrote {out}/: {', '.join(files)}")
+    return 0
+
+
+def cmd_export(args) -> int:
+    from hexapod.export import frames, read_mesh, read_recording, vtk_files
+    from hexapod.fileio import write_directory_atomically
+
+    recording = read_recording(args.results)
+    source = args.scene or recording.scene
+    if not source:
+        raise InputFileError(f"{recording.scene_file}: does not say which scene the results "
+                             "were computed on; give it with --scene SCENE")
+    try:
+        scene = load_scene(source)
+    except InputFileError as error:
+        said = "given with --scene" if args.scene else f"named in {recording.scene_file}"
+        hint = "" if args.scene else "; give it with --scene SCENE if it has moved"
+        raise InputFileError(f"{error} (the scene {said}{hint})") from None
+    meshes = {}
+    for item in args.mesh or []:
+        body, sep, path = item.partition("=")
+        if not sep or not body or not path:
+            raise InputFileError(f"--mesh {item}: expected BODY=FILE")
+        meshes[body] = read_mesh(path)
+    model = assemble(scene)
+    files = vtk_files(model, frames(model, recording), meshes, every=args.every)
+    out = Path(args.vtk)
+    write_directory_atomically(out, files)
+    count = sum(name.startswith("bodies_") for name in files)
+    indices = [name for name in files if name.endswith(".pvd")]
+    print(f"wrote {out}/: {count} instants of {recording.kind} '{scene.name}' over t = "
+          f"{recording.t[0]:g} ... {recording.t[-1]:g} s, {len(files)} files; open "
+          f"{' and '.join(indices)} in ParaView")
     return 0
 
 
@@ -529,12 +564,38 @@ def build_parser() -> argparse.ArgumentParser:
                    help="duration of the runs on SCENE in s (default: one cycle of its "
                    "periodic laws, or 1 s)")
     p.add_argument("--quick", action="store_true",
-                   help="shorter runs and fewer stiffnesses (a few minutes)")
+                   help="shorter runs and fewer stiffnesses (the suite in about 25 minutes "
+                   "on 2 cores, with --budget 20)")
     p.add_argument("--budget", type=_positive(float), default=60.0, metavar="S",
                    help="CPU seconds after which a run is stopped, as failed (default 60)")
     p.add_argument("--out", metavar="DIR",
                    help="the directory to write (default: extreme-check, or SCENE-NAME-check)")
     p.set_defaults(run=cmd_check)
+
+    p = sub.add_parser(
+        "export", help="VTK files of a simulation or a report, for ParaView",
+        description="Turn RESULTS, a directory written by 'hexapod simulate' or 'hexapod "
+        "report', into VTK files in the directory DIR: per saved instant bodies_NNNN.vtu (each "
+        "body's solid, posed: its equivalent box of inertia and bars to its joints, or a mesh "
+        "given with --mesh; cell data 'body' and 'part') and joints_NNNN.vtu (each joint "
+        "origin with point data 'force' and 'moment' in world axes, the same in the child's "
+        "joint frame, and 'effort'); the time indices bodies.pvd and joints.pvd; and "
+        "bodies.csv and joints.csv naming the indices. The scene is the one the results "
+        "record (a file's path or a built-in scene), or --scene. The directory is written "
+        "whole or not at all.")
+    p.add_argument("results", metavar="RESULTS",
+                   help="a directory written by 'hexapod simulate' or 'hexapod report'")
+    p.add_argument("--vtk", required=True, metavar="DIR",
+                   help="the directory to write; an earlier export there is replaced when it "
+                   "has the same files (the same instants), else refused")
+    p.add_argument("--scene", metavar="SCENE",
+                   help="the scene the results were computed on (default: the one they record)")
+    p.add_argument("--every", type=_at_least(1), default=1, metavar="N",
+                   help="export every N-th saved instant, and the last (default 1)")
+    p.add_argument("--mesh", action="append", metavar="BODY=FILE",
+                   help="draw BODY with a mesh file meshio reads (STL, OBJ, VTU ...), given "
+                   "in the body's centre-of-mass frame in metres; repeatable")
+    p.set_defaults(run=cmd_export)
 
     from hexapod.studies import PROBLEMS
 

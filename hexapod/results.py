@@ -15,7 +15,8 @@ Columns of ``results.csv`` (names built from the elements' names; SI units):
 ===================  ===================================================================
 
 ``results.npz`` holds the same arrays (``t, q, v, v_dot, lam`` and, with forces, ``force,
-torque, effort``), the column names and the run's statistics (JSON), compressed.
+torque, effort``), the column names, the run's statistics (JSON) and, when known, ``source``:
+the scene the run was made on (see :func:`scene_reference`), compressed.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from __future__ import annotations
 import io
 import json
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -80,6 +82,9 @@ class SimulationResult:
     torque: np.ndarray | None = None
     effort: np.ndarray | None = None
     options: dict = field(default_factory=dict)
+    #: the scene the run was made on, set by the caller (:func:`scene_reference`); written to
+    #: ``results.npz`` as ``source`` when known, so that ``hexapod export`` can pose the bodies
+    source: str = ""
 
     @property
     def success(self) -> bool:
@@ -132,9 +137,18 @@ class SimulationResult:
                   "velocities": np.array(self.model.velocity_names),
                   "rows": np.array([r.name for r in self.model.rows]),
                   "statistics": np.array(json.dumps(self.statistics()))}
+        if self.source:
+            arrays["source"] = np.array(self.source)
         if self.force is not None:
             arrays.update(force=self.force, torque=self.torque, effort=self.effort,
                           joints=np.array([j.name for j in self.model.joints]))
         buffer = io.BytesIO()
         np.savez_compressed(buffer, **arrays)
         return buffer.getvalue()
+
+
+def scene_reference(name_or_path: str) -> str:
+    """How a result records the scene it was made on: a scene file's absolute path, or the
+    name of a built-in scene as given."""
+    path = Path(name_or_path)
+    return str(path.resolve()) if path.is_file() else name_or_path
