@@ -18,6 +18,11 @@ coefficients of ``q_dd`` and ``V`` minus the free terms, so ``V`` carries minus 
 centrifugal and gravity terms (DESIGN). The same sums without the projection on ``e_k`` are the
 force and moment the parent transmits to the part beyond joint ``k``: the joint's wrench.
 
+The same ``W`` and ``V`` can be formed by the Lagrange and Gibbs-Appell methods of the seed's
+Part II (reconstructed from the literature: :mod:`hexapod.recursive_methods`): pass
+``method="lagrange"`` or ``method="gibbs-appell"`` to :meth:`ChainModel.matrices`,
+:meth:`ChainModel.inverse` and :meth:`ChainModel.forward`.
+
 This module works in joint coordinates only, independently of the absolute-coordinate engine; it
 takes the geometry (joint frames, axes, masses, inertias) from a :class:`~hexapod.model.Model`
 of a tree of spatial bodies with revolute, prismatic and fixed joints.
@@ -31,6 +36,7 @@ import numpy as np
 
 from hexapod.errors import ModelError, Problem
 from hexapod.model import GROUND_INDEX, Model
+from hexapod.recursive_methods import METHODS, Layout, form, layout
 from hexapod.spatial import Placement, rotation_about_axis, skew
 
 
@@ -196,8 +202,23 @@ class ChainModel:
 
     # ---------------------------------------------------------------- dynamics
 
-    def matrices(self, q: np.ndarray, q_d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``W(q)`` and ``V(q, q_d)`` of ``W q_dd = P + V`` by the method of basic theorems."""
+    @property
+    def layout(self) -> Layout:
+        """The constants of the chain for :mod:`hexapod.recursive_methods` (built once)."""
+        if getattr(self, "_layout", None) is None:
+            self._layout = layout(self)
+        return self._layout
+
+    def matrices(self, q: np.ndarray, q_d: np.ndarray,
+                 method: str = "basic") -> tuple[np.ndarray, np.ndarray]:
+        """``W(q)`` and ``V(q, q_d)`` of ``W q_dd = P + V``: by the method of basic theorems
+        (``"basic"``, this module's vectorised form), ``"lagrange"`` or ``"gibbs-appell"``
+        (:mod:`hexapod.recursive_methods`)."""
+        if method != "basic":
+            if method not in METHODS:
+                raise ValueError(f"unknown method '{method}': choose one of "
+                                 + ", ".join(METHODS))
+            return form(self.layout, q, q_d, method)
         s = self.kinematics(q, q_d)
         W, V = np.zeros((self.dof, self.dof)), np.zeros(self.dof)
         subtrees = self._subtrees()
@@ -218,14 +239,15 @@ class ChainModel:
                     V[c] -= m * e @ (s.theta[j] - self.gravity)
         return W, V
 
-    def inverse(self, q, q_d, q_dd) -> np.ndarray:
-        """Driving forces and torques ``P = W q_dd - V``."""
-        W, V = self.matrices(q, q_d)
+    def inverse(self, q, q_d, q_dd, method: str = "basic") -> np.ndarray:
+        """Driving forces and torques ``P = W q_dd - V`` (``W``, ``V`` formed by ``method``)."""
+        W, V = self.matrices(q, q_d, method)
         return W @ q_dd - V
 
-    def forward(self, q, q_d, P) -> np.ndarray:
-        """Generalized accelerations ``q_dd = W^-1 (P + V)``."""
-        W, V = self.matrices(q, q_d)
+    def forward(self, q, q_d, P, method: str = "basic") -> np.ndarray:
+        """Generalized accelerations ``q_dd = W^-1 (P + V)`` (``W``, ``V`` formed by
+        ``method``)."""
+        W, V = self.matrices(q, q_d, method)
         return np.linalg.solve(W, np.asarray(P, dtype=float) + V)
 
     def joint_wrenches(self, q, q_d, q_dd) -> tuple[np.ndarray, np.ndarray]:
