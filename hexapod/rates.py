@@ -202,6 +202,9 @@ class CompiledProjection:
         def call(function, **values):
             return function(*[values.get(n, symbols[n]) for n in function.name_in()])
 
+        if model.n_c == 0:  # nothing to project on
+            return ca.Function("project", [q, v, *laws], [q, v, ca.MX(0.0), ca.MX(0.0)])
+
         def saddle(position, top, bottom_all):
             """Solve [[I, W^T], [W, 0]] [y; mu] = [top; bottom / d] on the kept rows."""
             Phi_v = call(model.Phi_v, q=position)
