@@ -3,19 +3,15 @@ against each other, against the absolute-coordinate engine, and the operation co
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
+from script_loader import load_script
 
 import hexapod as hx
 from hexapod import recursive_methods as rm
 from hexapod.recursive import ChainModel
 
 from mechanisms import random_tree
-
-SCRIPTS = Path(__file__).resolve().parents[1] / "scripts"
 
 # (seed, bodies, chain?): chains and trees, revolute and prismatic joints with random axes
 CASES = [(21, 1, True), (22, 3, True), (23, 5, False), (24, 6, True), (25, 8, False)]
@@ -159,8 +155,7 @@ def test_counted_runs_give_the_float_results():
 def test_operation_counts_grow_as_the_methods_predict():
     """Forming by Lagrange with Christoffel symbols is O(n^4) on a chain; the basic theorems
     and Gibbs-Appell are O(n^3) at most; counts do not depend on the state."""
-    sys.path.insert(0, str(SCRIPTS))
-    from seed000_efficiency import chain_scene
+    chain_scene = load_script("seed000_efficiency").chain_scene
 
     counts = {}
     for n in (4, 8, 16):
@@ -180,9 +175,7 @@ def test_operation_counts_grow_as_the_methods_predict():
 
 
 def test_efficiency_script_writes_csv_and_figures(tmp_path):
-    pytest.importorskip("matplotlib")
-    sys.path.insert(0, str(SCRIPTS))
-    import seed000_efficiency
+    seed000_efficiency = load_script("seed000_efficiency")
 
     result = seed000_efficiency.main(["--out", str(tmp_path), "--count-sizes", "1", "2", "3",
                                       "--time-sizes", "1", "3", "--repeats", "1"])

@@ -7,12 +7,9 @@ from ``legs`` rather than loaded by name."""
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
+from script_loader import load_script
 
 import hexapod as hx
 from hexapod.recursive import ChainModel
@@ -20,7 +17,6 @@ from legs import GAITS, walking_leg_scene
 from legs.leg import ELEMENTS, JOINTS
 from legs.robot import robot_weight
 
-ROOT = Path(__file__).resolve().parents[1]
 PERIOD = 0.5
 SAMPLES = 41  # 0.0125 s apart: the instants below, the stance peak at 0.375 s among them
 INSTANTS = (0.05, 0.2, 0.275, 0.375, 0.45)  # swing, lift-off ... touch-down, stance
@@ -30,16 +26,7 @@ KEYS = {"file", "reproduces", "parameters", "caption", "joint", "wrench", "by_el
 PARAMETERS = {"scene", "gait", "leg", "start", "duration", "samples", "frame"}
 
 
-def _load_script():
-    spec = importlib.util.spec_from_file_location("seed001_figures",
-                                                  ROOT / "scripts" / "seed001_figures.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["seed001_figures"] = module  # dataclasses look their module up
-    spec.loader.exec_module(module)
-    return module
-
-
-figures_script = _load_script()
+figures_script = load_script("seed001_figures")
 
 
 @pytest.fixture(scope="module")

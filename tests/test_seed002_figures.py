@@ -7,25 +7,16 @@ and from the scene file, so a wrong number in either, or a wrong engine, fails t
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
+from script_loader import load_script
 
 from hexapod.references import ClosedLoopPendulum
-
-SCRIPTS = Path(__file__).resolve().parents[1] / "scripts"
 
 
 @pytest.fixture(scope="module")
 def script():
-    sys.path.insert(0, str(SCRIPTS))
-    try:
-        import seed002_figures
-    finally:
-        sys.path.remove(str(SCRIPTS))
-    return seed002_figures
+    return load_script("seed002_figures")
 
 
 @pytest.fixture(scope="module")
