@@ -344,20 +344,28 @@ def test_an_error_after_reading_writes_nothing(tmp_path, capsys, monkeypatch):
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
 def test_a_killed_simulation_leaves_no_output(tmp_path, signum):
     """A long run stopped by Ctrl-C or kill: a clean message, exit 130, no directory."""
+    # a shell that starts a job in the background (nohup ... &) makes it ignore SIGINT, and
+    # Python then never turns SIGINT into KeyboardInterrupt: give the run the default action
     process = subprocess.Popen(
         [sys.executable, "-m", "hexapod", "simulate", str(PENDULUM), "--method",
          "rk4-baumgarte", "--step", "1e-5", "--t-end", "1000", "--every", "1000", "--out",
-         "run"], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    time.sleep(3.0)  # into the time loop, most likely
-    deadline = time.monotonic() + 60
-    while process.poll() is None and time.monotonic() < deadline:
-        # until main() has taken over the signal (the imports may be slow on a busy machine)
-        process.send_signal(signum)
-        try:
-            process.wait(timeout=1.0)
-        except subprocess.TimeoutExpired:
-            pass
-    _, stderr = process.communicate(timeout=60)
+         "run"], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    try:
+        time.sleep(3.0)  # into the time loop, most likely
+        deadline = time.monotonic() + 60
+        while process.poll() is None and time.monotonic() < deadline:
+            # until main() has taken over the signal (the imports may be slow on a busy machine)
+            process.send_signal(signum)
+            try:
+                process.wait(timeout=1.0)
+            except subprocess.TimeoutExpired:
+                pass
+        _, stderr = process.communicate(timeout=60)
+    finally:
+        if process.poll() is None:  # never leave the run behind
+            process.kill()
+            process.wait()
     if process.returncode == 130:
         assert stderr.strip().endswith("hexapod: interrupted"), stderr
     else:  # killed during the imports, before main() ran: nothing was being written
