@@ -306,7 +306,7 @@ def cmd_check(args) -> int:
 
 
 def cmd_export(args) -> int:
-    from hexapod.export import frames, read_mesh, read_recording, vtk_files
+    from hexapod.export import frames, read_mesh, read_recording, scene_meshes, vtk_files
     from hexapod.fileio import write_directory_atomically
 
     recording = read_recording(args.results)
@@ -320,7 +320,7 @@ def cmd_export(args) -> int:
         said = "given with --scene" if args.scene else f"named in {recording.scene_file}"
         hint = "" if args.scene else "; give it with --scene SCENE if it has moved"
         raise InputFileError(f"{error} (the scene {said}{hint})") from None
-    meshes = {}
+    meshes = scene_meshes(scene)
     for item in args.mesh or []:
         body, sep, path = item.partition("=")
         if not sep or not body or not path:

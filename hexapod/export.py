@@ -464,6 +464,25 @@ def vtk_files(model: Model, frames: Frames, meshes: dict | None = None,
     return files
 
 
+def scene_meshes(scene) -> dict:
+    """The meshes the scene's bodies name (their ``mesh`` key), by body name: read, moved from
+    the body's reference frame to its centre-of-mass frame and converted to metres."""
+    base = Path(scene.source).parent if scene.source else Path.cwd()
+    meshes = {}
+    for name, body in scene.bodies.items():
+        if body.mesh:
+            mesh = read_mesh(base / body.mesh)
+            points = np.asarray(mesh.points, dtype=float)
+            com = np.asarray(getattr(body, "com", None) if getattr(body, "com", None) is not None
+                             else np.zeros(points.shape[1]), dtype=float)
+            width = min(points.shape[1], com.size)
+            points = points.copy()
+            points[:, :width] -= com[:width]
+            mesh.points = points * scene.unit
+            meshes[name] = mesh
+    return meshes
+
+
 def read_mesh(path: str | Path):
     """A mesh file (any format meshio reads), or an :class:`InputFileError`."""
     import meshio

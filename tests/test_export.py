@@ -16,6 +16,7 @@ from hexapod.export import PART_BAR, PART_BOX, body_shape
 from hexapod.inverse import inverse_dynamics
 from hexapod.reactions import joint_origin
 from hexapod.scene.reader import read_scene
+from hexapod.scene.writer import write_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 PENDULUM = ROOT / "data" / "scenes" / "pendulum.toml"
@@ -211,3 +212,33 @@ def test_the_scene_comes_from_the_results_or_from_scene(pendulum_export, tmp_pat
     n = saved["t"].size
     times = [t for t, _ in read_pvd(tmp_path / "vtk" / "bodies.pvd")]
     assert times == [saved["t"][k] for k in sorted({*range(0, n, 4), n - 1})]
+
+
+def test_a_mesh_the_scene_names_is_drawn_at_the_body_pose(tmp_path, capsys):
+    """A body's ``mesh`` (points in its reference frame, a path relative to the scene file) is
+    drawn instead of its box: each point is the saved pose applied to the point less the
+    centre of mass. The scene written back keeps the key."""
+    triangle = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, 0.1, 0.2]])
+    meshio.write(tmp_path / "rod.vtu", meshio.Mesh(triangle, [("triangle", [[0, 1, 2]])]))
+    text = PENDULUM.read_text().replace(
+        'position = [0.5, 0.0, 0.0]', 'position = [0.5, 0.0, 0.0]\ncom = [0.1, 0.0, 0.0]\n'
+        'mesh = "rod.vtu"', 1)
+    scene_file = tmp_path / "pendulum.toml"
+    scene_file.write_text(text)
+    scene = read_scene(scene_file)
+    assert scene.bodies["rod"].mesh == "rod.vtu"
+    write_scene(scene, tmp_path / "again.toml")
+    assert read_scene(tmp_path / "again.toml").bodies["rod"].mesh == "rod.vtu"
+    assert run(capsys, "simulate", scene_file, "--t-end", "0.1", "--out", tmp_path / "run")[0] == 0
+    assert run(capsys, "export", tmp_path / "run", "--vtk", tmp_path / "vtk")[0] == 0
+    with np.load(tmp_path / "run" / "results.npz") as saved:
+        q_all = saved["q"]
+    model = hx.assemble(scene)
+    rod = model.bodies[0]
+    for k, (_, name) in enumerate(read_pvd(tmp_path / "vtk" / "bodies.pvd")):
+        mesh = meshio.read(tmp_path / "vtk" / name)
+        q = q_all[k]
+        centre, R = q[rod.q][:3], rotation(q[rod.q][3:])
+        drawn = body_points(mesh, 0)
+        expected = centre + (triangle - [0.1, 0.0, 0.0]) @ R.T
+        assert np.abs(drawn - expected).max() < 1e-9

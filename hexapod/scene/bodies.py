@@ -100,6 +100,10 @@ class SpatialBody(Body):
         axes (like ``position``, the velocity belongs to the reference frame).
     markers : dict
         Named frames (:class:`~hexapod.spatial.Placement`) or points in the reference frame.
+    mesh : str
+        A mesh file (any format meshio reads) that ``hexapod export`` draws for the body, its
+        points in the reference frame (L); a relative path is taken from the scene file's
+        directory. Optional: without it the body is drawn as its box of inertia.
     """
 
     name: str
@@ -112,6 +116,7 @@ class SpatialBody(Body):
     velocity: np.ndarray = None  # type: ignore[assignment]
     angular_velocity: np.ndarray = None  # type: ignore[assignment]
     markers: dict = field(default_factory=dict)
+    mesh: str = ""
     source: str = ""
     dimension = 3
     kind = "spatial"
@@ -202,6 +207,7 @@ class PlanarBody(Body):
     velocity: np.ndarray = None  # type: ignore[assignment]
     angular_velocity: float = 0.0
     markers: dict = field(default_factory=dict)
+    mesh: str = ""
     source: str = ""
     dimension = 2
     kind = "planar"
@@ -265,6 +271,7 @@ class Particle(Body):
     position: np.ndarray
     velocity: np.ndarray = None  # type: ignore[assignment]
     markers: dict = field(default_factory=dict)
+    mesh: str = ""
     source: str = ""
     kind = "particle"
 

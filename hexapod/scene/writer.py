@@ -137,7 +137,7 @@ def _table(element: Element, dimension: int) -> list[str]:
         if f.name == "axis" and element.kind == "revolute" and dimension == 2:
             continue  # a planar revolute turns about the plane's normal
         value = getattr(element, f.name)
-        if _is_default(f.name, value) or (f.name == "markers" and not value):
+        if _is_default(f.name, value) or (f.name in ("markers", "mesh") and not value):
             continue
         lines.append(f"{f.name} = {_value(f.name, value)}")
     return lines
