@@ -471,7 +471,11 @@ def scene_meshes(scene) -> dict:
     meshes = {}
     for name, body in scene.bodies.items():
         if body.mesh:
-            mesh = read_mesh(base / body.mesh)
+            try:
+                mesh = read_mesh(base / body.mesh)
+            except InputFileError as error:
+                raise InputFileError(f"{scene.source or scene.name}: body '{name}', mesh: "
+                                     f"{error}") from None
             points = np.asarray(mesh.points, dtype=float)
             com = np.asarray(getattr(body, "com", None) if getattr(body, "com", None) is not None
                              else np.zeros(points.shape[1]), dtype=float)

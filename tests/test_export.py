@@ -242,3 +242,15 @@ def test_a_mesh_the_scene_names_is_drawn_at_the_body_pose(tmp_path, capsys):
         drawn = body_points(mesh, 0)
         expected = centre + (triangle - [0.1, 0.0, 0.0]) @ R.T
         assert np.abs(drawn - expected).max() < 1e-9
+
+
+def test_a_missing_scene_mesh_names_the_scene_the_body_and_the_file(tmp_path, capsys):
+    text = PENDULUM.read_text().replace('position = [0.5, 0.0, 0.0]',
+                                        'position = [0.5, 0.0, 0.0]\nmesh = "gone.stl"', 1)
+    scene_file = tmp_path / "pendulum.toml"
+    scene_file.write_text(text)
+    assert run(capsys, "simulate", scene_file, "--t-end", "0.05", "--out", tmp_path / "run")[0] == 0
+    code, _, err = run(capsys, "export", tmp_path / "run", "--vtk", tmp_path / "vtk")
+    assert code == 1 and not (tmp_path / "vtk").exists()
+    assert str(scene_file) in err and "body 'rod'" in err and "gone.stl" in err
+    assert len(err.strip().splitlines()) == 1
