@@ -305,6 +305,11 @@ def cmd_check(args) -> int:
     return 0
 
 
+def _count(n: int, noun: str) -> str:
+    plural = "bodies" if noun == "body" else noun + "s"
+    return f"{n} {noun if n == 1 else plural}"
+
+
 def cmd_export(args) -> int:
     from hexapod.export import frames, read_mesh, read_recording, scene_meshes, vtk_files
     from hexapod.fileio import write_directory_atomically
@@ -365,9 +370,10 @@ def _progress(label: str):
 def cmd_validate(args) -> int:
     scene = load_scene(args.scene)
     scene.validate()
-    print(f"{args.scene}: scene '{scene.name}' is valid ({len(scene.bodies)} bodies, "
-          f"{len(scene.joints)} joints, {len(scene.drivers)} drivers, "
-          f"{len(scene.forces)} force elements)")
+    counts = ", ".join(_count(len(items), noun) for items, noun in (
+        (scene.bodies, "body"), (scene.joints, "joint"), (scene.drivers, "driver"),
+        (scene.forces, "force element")))
+    print(f"{args.scene}: scene '{scene.name}' is valid ({counts})")
     return 0
 
 

@@ -28,7 +28,7 @@ import casadi as ca
 import numpy as np
 
 from hexapod.dynamics import forward_dynamics
-from hexapod.errors import SingularSystemError
+from hexapod.errors import HexapodError, SingularSystemError
 from hexapod.kinematics import assemble_positions, degrees_of_freedom, solve_velocities
 from hexapod.model import GROUND_INDEX, Data, Model
 from hexapod.reactions import joint_origin, joint_wrenches
@@ -109,6 +109,8 @@ def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = 
     ------
     SingularSystemError
         When the drivers leave degrees of freedom free (the motion is not prescribed).
+    HexapodError
+        When ``method="tree"`` and the model is not an open tree with every joint driven.
     """
     times = np.atleast_1d(np.asarray(times, dtype=float))
     if frame not in ("joint", "world"):
@@ -116,8 +118,8 @@ def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = 
     w, wd, wdd = (x.reshape(model.n_w, times.size) for x in model.law_values(times))
     plan = tree_plan(model)
     if method == "tree" and plan is None:
-        raise ValueError(f"model '{model.name}' is not an open tree with every joint driven: "
-                         "use the saddle path")
+        raise HexapodError(f"model '{model.name}' is not an open tree with every joint driven, "
+                         "which the tree method needs: use the saddle method")
     if method not in ("auto", "tree", "saddle"):
         raise ValueError(f"method must be 'auto', 'tree' or 'saddle', got {method!r}")
     if plan is not None and method in ("auto", "tree"):

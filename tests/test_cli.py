@@ -278,3 +278,11 @@ def test_info_on_a_malformed_file_is_one_clear_error(tmp_path):
     assert_no_traceback(result)
     assert result.stdout == ""
     assert result.stderr.startswith("hexapod: error: scene file")
+
+
+def test_validate_counts_in_words(capsys):
+    """One body, one joint: no "1 bodies"."""
+    from hexapod.cli import main as cli_main
+
+    assert cli_main(["validate", str(SCENES / "pendulum.toml")]) == 0
+    assert "(1 body, 1 joint, 0 drivers, 0 force elements)" in capsys.readouterr().out

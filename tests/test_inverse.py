@@ -156,3 +156,13 @@ def test_without_a_compiler_the_interpreter_is_used(monkeypatch):
     plan = tree_plan(model)
     assert plan.compiled is plan.function and not plan.is_compiled
     assert np.all(np.isfinite(result.effort))
+
+
+def test_the_tree_method_on_a_closed_loop_is_refused_with_a_message():
+    """A four-bar is no open tree: asking for the tree method is a user error (a HexapodError,
+    one line at the command line), not an internal one."""
+    from hexapod.errors import HexapodError
+
+    model = hx.assemble(four_bar(2, 0.5))
+    with pytest.raises(HexapodError, match="not an open tree"):
+        inverse_dynamics(model, np.linspace(0.0, 0.1, 3), method="tree")
