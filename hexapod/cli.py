@@ -582,10 +582,10 @@ def build_parser() -> argparse.ArgumentParser:
         "export", help="VTK files of a simulation or a report, for ParaView",
         description="Turn RESULTS, a directory written by 'hexapod simulate' or 'hexapod "
         "report', into VTK files in the directory DIR: per saved instant bodies_NNNN.vtu (each "
-        "body's solid, posed: its equivalent box of inertia and bars to its joints, or a mesh "
-        "given with --mesh; cell data 'body' and 'part') and joints_NNNN.vtu (each joint "
-        "origin with point data 'force' and 'moment' in world axes, the same in the child's "
-        "joint frame, and 'effort'); the time indices bodies.pvd and joints.pvd; and "
+        "body's solid, posed: its equivalent box of inertia and bars to its joints, or the mesh "
+        "its scene names or --mesh gives; cell data 'body' and 'part') and joints_NNNN.vtu "
+        "(each joint origin with point data 'force' and 'moment' in world axes, the same in "
+        "the child's joint frame, and 'effort'); the time indices bodies.pvd and joints.pvd; and "
         "bodies.csv and joints.csv naming the indices. The scene is the one the results "
         "record (a file's path or a built-in scene), or --scene. The directory is written "
         "whole or not at all.")

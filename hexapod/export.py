@@ -476,12 +476,11 @@ def scene_meshes(scene) -> dict:
             except InputFileError as error:
                 raise InputFileError(f"{scene.source or scene.name}: body '{name}', mesh: "
                                      f"{error}") from None
-            points = np.asarray(mesh.points, dtype=float)
-            com = np.asarray(getattr(body, "com", None) if getattr(body, "com", None) is not None
-                             else np.zeros(points.shape[1]), dtype=float)
-            width = min(points.shape[1], com.size)
-            points = points.copy()
-            points[:, :width] -= com[:width]
+            points = np.array(mesh.points, dtype=float)
+            com = getattr(body, "com", None)  # a particle's reference point is its mass
+            if com is not None:
+                width = min(points.shape[1], com.size)
+                points[:, :width] -= com[:width]
             mesh.points = points * scene.unit
             meshes[name] = mesh
     return meshes

@@ -24,7 +24,9 @@ def _subject(model: Model) -> str:
     return f"model '{model.name}'" + (f" ({source})" if source else "")
 
 
-def _split(model: Model, Phi_v: np.ndarray) -> RowSplit:
+def rank_split(model: Model, Phi_v: np.ndarray) -> RowSplit:
+    """The rank decision on the equilibrated ``Phi_v`` by the model's policy (its kept rows and
+    their singular values); errors name the model."""
     try:
         W, d = equilibrate(Phi_v, model.mass_inv_sqrt)
         return split_rows(W, d, model.row_priority, model.rank_tolerance,
@@ -99,7 +101,7 @@ def assemble_positions(model: Model, q: np.ndarray | None = None, t: float = 0.0
             # (joint points coincide to ~1e-16 m instead of ~tol), kept only if it helps
             polished = True
         Phi_v = model.call("Phi_v", q=q, w=w)
-        split = _split(model, Phi_v)
+        split = rank_split(model, Phi_v)
         if counts is not None:
             counts["newton"] = counts.get("newton", 0) + 1
         dv = model.mass_inv_sqrt @ split.min_norm_correction(-residual * model.row_scale)
@@ -135,7 +137,7 @@ def solve_velocities(model: Model, q: np.ndarray, t: float = 0.0,
     w, wd, _ = model.law_values(t)
     Phi_v = model.call("Phi_v", q=q, w=w)
     nu = model.call("nu", q=q, w=w, wd=wd)
-    split = _split(model, Phi_v)
+    split = rank_split(model, Phi_v)
     residual = nu - Phi_v @ v
     dy = split.min_norm_correction(residual)
     # relative to the velocities themselves: re-projecting a consistent state makes a
@@ -152,7 +154,7 @@ def solve_accelerations(model: Model, q: np.ndarray, v: np.ndarray,
     w, wd, wdd = model.law_values(t)
     Phi_v = model.call("Phi_v", q=q, w=w)
     gamma = model.call("gamma", q=q, v=v, w=w, wd=wd, wdd=wdd)
-    split = _split(model, Phi_v)
+    split = rank_split(model, Phi_v)
     y = split.min_norm_correction(gamma)
     _check(model, split, y, gamma, "acceleration constraints")
     return model.mass_inv_sqrt @ y
@@ -171,7 +173,7 @@ def degrees_of_freedom(model: Model, q: np.ndarray, t: float = 0.0) -> dict:
     drivers, and the redundant rows (named)."""
     w, _, _ = model.law_values(t)
     Phi_v = model.call("Phi_v", q=q, w=w)
-    split = _split(model, Phi_v)
+    split = rank_split(model, Phi_v)
     driver_rows = {d.row for d in model.drivers}
     joint_rows = np.array([i for i in range(model.n_c) if i not in driver_rows], dtype=int)
     W, d = split.W[joint_rows], split.scale[joint_rows]

@@ -25,8 +25,7 @@ from scipy.linalg import qr
 
 from hexapod.dynamics import forward_dynamics
 from hexapod.errors import HexapodError, IntegrationError
-from hexapod.kinematics import assemble_positions, solve_velocities
-from hexapod.linalg import equilibrate
+from hexapod.kinematics import assemble_positions, rank_split, solve_velocities
 from hexapod.model import Data, Model
 from hexapod.rates import compiled_projection, compiled_rates
 
@@ -244,37 +243,39 @@ class Integrator:
         tolerance by ``CROSSING_FACTOR`` again, up to ``CROSSING_FACTOR * SINGULAR_BAND``."""
         if not self.model.n_c:
             return False
-        data = self._conditioned(self.t, self.q, self.v)
-        if not data.sigma_min < SINGULAR_BAND:
+        split = self._rank_split()
+        sigma = split.singular_values()
+        smallest = sigma.min() if sigma.size else np.inf
+        if not smallest < SINGULAR_BAND:
             return False
-        base = data.sigma_min if self._crossing is None else self._crossing
+        base = smallest if self._crossing is None else self._crossing
         if base >= SINGULAR_BAND:
             return False  # as wide as it goes
         if self._crossing is None:
             self.counters.crossings += 1
         self._crossing = CROSSING_FACTOR * base
         # the rows left out: those a rank-revealing (column-pivoted) QR factorisation takes last
-        rows = data.independent_rows
-        W, _ = equilibrate(data.Phi_v[rows], self.model.mass_inv_sqrt)
-        dependent = int(np.sum(data.singular_values < self._crossing))
-        pivots = qr(W.T, mode="r", pivoting=True)[1]
+        rows = split.independent
+        dependent = int(np.sum(sigma < self._crossing))
+        pivots = qr(split.W[rows].T, mode="r", pivoting=True)[1]
         self._crossing_rates = compiled_rates(self.model,
                                               np.sort(rows[pivots[:rows.size - dependent]]))
         return True
 
     def _end_crossing(self) -> None:
         """End the crossing once the state has left the band it began in."""
-        if self._crossing is not None and self._conditioned(
-                self.t, self.q, self.v).sigma_min > self._crossing:
+        if self._crossing is None:
+            return
+        sigma = self._rank_split().singular_values()
+        if not sigma.size or sigma.min() > self._crossing:
             self._crossing = None
 
-    def _conditioned(self, t: float, q: np.ndarray, v: np.ndarray) -> Data:
-        """The dynamics at a state with the singular values of the equilibrated ``Phi_v``."""
-        data = Data()
-        forward_dynamics(self.model, data, t, q, v, condition=True)
+    def _rank_split(self):
+        """The rank decision on the equilibrated ``Phi_v`` at the current positions."""
+        w, _, _ = self.model.law_values(self.t)
         self.counters.jacobians += 1
         self.counters.factorisations += 1
-        return data
+        return rank_split(self.model, self.model.call("Phi_v", q=self.q, w=w))
 
     def _halving(self, attempt):
         """Take one step by ``attempt(h)``, which returns the new state or None when Newton's
