@@ -102,8 +102,9 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 import hexapod as hx  # noqa: E402
-from hexapod.fileio import write_atomically  # noqa: E402
-from hexapod.integrators import INTEGRATORS, get_integrator  # noqa: E402
+from hexapod._support.files import write_atomically  # noqa: E402
+from hexapod.simulation.integrators import get_integrator  # noqa: E402
+from hexapod.simulation.registry import INTEGRATORS
 from hexapod.spatial import rotation_from_euler_parameters  # noqa: E402
 from legs import front_leg_scene  # noqa: E402
 
@@ -246,7 +247,7 @@ class Reference:
 
 def write_bytes_atomically(path: Path, content: bytes) -> None:
     """Write through a temporary file in the same folder renamed over the target (as
-    :func:`hexapod.fileio.write_atomically`, for bytes)."""
+    :func:`hexapod._support.files.write_atomically`, for bytes)."""
     path.parent.mkdir(parents=True, exist_ok=True)
     handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:

@@ -14,7 +14,7 @@ Protocol
   machine too (``vm``) when ``--vm`` is given.
 * Pinocchio (optional extra ``compare``): in the same process, ``pinocchio.rnea`` then reading
   ``data.f`` and ``tau`` into one array per sample, the job the CSV needs; median of repeats.
-  Agreement (``hexapod.reports.agreement``): the largest difference, relative to the largest
+  Agreement (``hexapod.output.report.agreement``): the largest difference, relative to the largest
   magnitude of the same quantity (a joint's forces, a joint's moments and tau).
 * Growth exponent: slope of log(cost) against log(links) over the chains.
 
@@ -33,8 +33,8 @@ from pathlib import Path
 import numpy as np
 
 import hexapod as hx
-from hexapod.inverse import inverse_dynamics, tree_plan
-from hexapod.reports import agreement, inverse_columns, inverse_table
+from hexapod.algorithms.inverse import inverse_dynamics, tree_plan
+from hexapod.output.report import agreement, inverse_columns, inverse_table
 from hexapod.scene.motion import apply_motion, read_motion
 from hexapod.scene.urdf import read_urdf, urdf_text
 from legs import front_leg_scene

@@ -19,8 +19,8 @@ import time
 import numpy as np
 
 import hexapod as hx
-from hexapod.inverse import inverse_dynamics
-from hexapod.kinematics import marker_trajectories
+from hexapod.algorithms.inverse import inverse_dynamics
+from hexapod.algorithms.kinematics import marker_trajectories
 from legs.cockroach import FOOT_LIFT_MM, GROUND_Z_MM, MODEL_SCALE, STRIDE_PERIOD
 from legs.gait import GAITS, LEG_NAMES
 from legs.robot import hexapod_scene

@@ -37,14 +37,14 @@ SETTINGS = {
 
 
 def exact_centre(t: np.ndarray) -> np.ndarray:
-    from hexapod.references import pendulum_exact
+    from hexapod.benchmarks.references import pendulum_exact
 
     psi, _ = pendulum_exact(t, PSI0, OMEGA0)
     return np.column_stack([ARM * np.sin(psi), np.zeros_like(psi), -ARM * np.cos(psi)])
 
 
 def run(model, method: str, periods: int, period: float) -> dict:
-    from hexapod.simulate import simulate
+    from hexapod.simulation.loop import simulate
 
     settings = dict(SETTINGS.get(method, {}))
     per_period = settings.pop("steps_per_period", None)
@@ -75,10 +75,10 @@ def run(model, method: str, periods: int, period: float) -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     import hexapod as hx
-    from hexapod.fileio import write_directory_atomically
-    from hexapod.integrators import INTEGRATORS
-    from hexapod.references import pendulum_period
+    from hexapod._support.files import write_directory_atomically
+    from hexapod.benchmarks.references import pendulum_period
     from hexapod.scene.reader import read_scene
+    from hexapod.simulation.registry import INTEGRATORS
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--periods", type=int, default=1000)

@@ -6,7 +6,7 @@ Protocol
   centres of mass and rotated full inertia tensors (seeded: general geometry, so no structural
   zero of the geometry helps a method), gravity along -z.
 * Operation counts: one forming of ``W`` and ``V`` by each method of
-  ``hexapod.recursive_methods``, run on ``Counted`` scalars (numpy object arrays of a float
+  ``hexapod.minimal.forming``, run on ``Counted`` scalars (numpy object arrays of a float
   that counts its multiplications and additions); products of constants of the model are
   precomputed and not counted, sines and cosines are counted apart. Counted for every ``n`` of
   ``--count-sizes`` (default 1..30).
@@ -36,8 +36,8 @@ from pathlib import Path
 import numpy as np
 
 import hexapod as hx
-from hexapod.recursive import ChainModel
-from hexapod.recursive_methods import METHODS, count_operations, form
+from hexapod.minimal.chain import ChainModel
+from hexapod.minimal.forming import METHODS, count_operations, form
 
 COUNT_SIZES = tuple(range(1, 31))
 TIME_SIZES = (1, 2, 3, 5, 7, 10, 15, 20, 25, 30)

@@ -40,11 +40,11 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 import hexapod as hx  # noqa: E402
-from hexapod.cli import DEFAULT_SCENE, load_scene, time_window  # noqa: E402
-from hexapod.inverse import InverseResult, inverse_dynamics  # noqa: E402
-from hexapod.model import GROUND_INDEX, Model  # noqa: E402
-from hexapod.plotting import COMPONENT_COLOURS, png_bytes  # noqa: E402
-from hexapod.reports import wrench_label  # noqa: E402
+from hexapod.algorithms.inverse import InverseResult, inverse_dynamics  # noqa: E402
+from hexapod.model.model import GROUND_INDEX, Model  # noqa: E402
+from hexapod.output.figures import COMPONENT_COLOURS, png_bytes  # noqa: E402
+from hexapod.output.report import wrench_label  # noqa: E402
+from hexapod.scene.builtin import DEFAULT_SCENE, load_scene  # noqa: E402
 
 SCENE = DEFAULT_SCENE  # "front-leg": what `hexapod report` runs without a SCENE
 GAIT = "tripod"  # the built-in leg scenes are driven by the tripod gait (legs/front_leg.py)
@@ -78,7 +78,7 @@ def liaison_forces(samples: int = SAMPLES, scene: str = SCENE) -> Run:
     if samples < 2:
         raise ValueError(f"samples must be at least 2, got {samples}")
     model = hx.assemble(load_scene(scene))
-    duration, why = time_window(model, None)
+    duration, why = model.time_window()
     times = np.linspace(0.0, duration, samples)
     result = inverse_dynamics(model, times, frame=FRAME)
     return Run(scene, model, times, result, f"{why}, {duration:g} s")

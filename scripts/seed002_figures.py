@@ -18,13 +18,13 @@ Figures, as the captions of the paper's OCR copy name them:
 * Fig. 9: mass #2 vertical displacement (y2);
 * Fig. 10: mass #2 horizontal displacement (x2).
 
-Each is drawn as the paper draws it: the Lagrange solution (``hexapod.references.
+Each is drawn as the paper draws it: the Lagrange solution (``hexapod.benchmarks.references.
 ClosedLoopPendulum``, built here from the paper's numbers in dm, DOP853 at 1e-13) as a solid
-line, the absolute-coordinate engine (``hexapod.simulate`` on the scene file, default method,
+line, the absolute-coordinate engine (``hexapod.simulation.loop`` on the scene file, default method,
 rtol 1e-10) as triangles, and below it a panel of the difference engine - Lagrange at every
 saved state of the engine. Fig. 6, the vector-network diagram (5 vertices, 9 elements: tree
-edges solid, cotree edges dashed) is drawn from ``hexapod.topology.vector_network``, and its
-incidence, cutset and circuit matrices are written to ``seed002_matrices.md``; the script
+edges solid, cotree edges dashed) is drawn from ``hexapod.algorithms.topology.vector_network``, and
+its incidence, cutset and circuit matrices are written to ``seed002_matrices.md``; the script
 checks ``cutset circuit^T = 0`` (with signs) and ``A = -B^T`` and stops if either fails.
 
     python3 scripts/seed002_figures.py [--out figures/seed002] [--duration 15] [--rtol 1e-10]
@@ -42,10 +42,10 @@ from pathlib import Path
 import numpy as np
 
 import hexapod as hx
-from hexapod.references import ClosedLoopPendulum
+from hexapod.algorithms.topology import VectorNetwork, vector_network
+from hexapod.benchmarks.references import ClosedLoopPendulum
 from hexapod.scene.reader import read_scene
-from hexapod.simulate import simulate
-from hexapod.topology import VectorNetwork, vector_network
+from hexapod.simulation.loop import simulate
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = ROOT / "data" / "scenes" / "closed_pendulum_seed002.toml"
@@ -166,7 +166,7 @@ def matrices_text(net: VectorNetwork) -> str:
         "# Seed 002, Fig. 6: the vector network of the closed-loop pendulum",
         "",
         f"Written by `scripts/seed002_figures.py` from `{SCENE.relative_to(ROOT)}` "
-        "(`hexapod.topology.vector_network`; `hexapod info SCENE --graph` prints the same). "
+        "(`hexapod.vector_network`; `hexapod info SCENE --graph` prints the same). "
         f"{len(net.vertices)} vertices, {len(net.edges)} elements: {len(tree)} tree branches "
         f"(solid in Fig. 6), {len(chords)} chords (cotree, dashed).",
         "",
@@ -209,7 +209,7 @@ def _save(figure, path: Path) -> None:
 
 
 def _style(ax) -> None:
-    # as hexapod.plotting's panels
+    # as hexapod.output.figures's panels
     ax.grid(True, linewidth=0.4, alpha=0.6)
     ax.tick_params(labelsize=8)
 

@@ -3,12 +3,12 @@
     python scripts/singular_crossings.py            # about half a minute
     python scripts/singular_crossings.py --rtol 1e-6 1e-8 1e-10 1e-11
 
-Three cases of ``hexapod.mechanisms`` pass poses where ``Phi_v`` loses rank: the N-four-bar of
-IFToMM A02 (10 windows, 10 s; every crank flat twice per turn), and the anti-parallelogram
-through its change points, free (2 s) and driven (1 s). Each runs with the default method at
-every ``rtol`` (``atol = rtol / 100``); the table gives the outcome, the error against the
-case's independent reference (relative to its size), the singular poses crossed with nearly
-dependent rows left out (see docs/simulate.md), steps, rejected steps and CPU time. Writes
+Three cases of ``hexapod.benchmarks.mechanisms`` pass poses where ``Phi_v`` loses rank: the
+N-four-bar of IFToMM A02 (10 windows, 10 s; every crank flat twice per turn), and the
+anti-parallelogram through its change points, free (2 s) and driven (1 s). Each runs with the
+default method at every ``rtol`` (``atol = rtol / 100``); the table gives the outcome, the error
+against the case's independent reference (relative to its size), the singular poses crossed with
+nearly dependent rows left out (see docs/simulate.md), steps, rejected steps and CPU time. Writes
 nothing: the table goes to standard output.
 """
 
@@ -19,8 +19,8 @@ import time
 from functools import partial
 
 import hexapod as hx
-from hexapod.integrators import DEFAULT_METHOD
-from hexapod.mechanisms import four_bar_dead_points, n_four_bar
+from hexapod.benchmarks.mechanisms import four_bar_dead_points, n_four_bar
+from hexapod.simulation.registry import DEFAULT_METHOD
 
 CASES = {"n-four-bar-10": n_four_bar,
          "anti-parallelogram (free)": four_bar_dead_points,

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 import hexapod
-from hexapod.cli import DEFAULT_SCENE, builtin_scenes
+from hexapod.scene.builtin import DEFAULT_SCENE, builtin_scenes
 from hexapod.scene.reader import read_scene
 
 ROOT = Path(__file__).resolve().parents[1]

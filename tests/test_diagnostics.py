@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 import hexapod as hx
-from hexapod.diagnostics import diagnose
-from hexapod.extreme import observed_stable_step
-from hexapod.integrators import INTEGRATORS
-from hexapod.integrators.stability import runge_kutta_stability
-from hexapod.mechanisms import stiff_slider
+from hexapod.benchmarks.extreme import observed_stable_step
+from hexapod.benchmarks.mechanisms import stiff_slider
+from hexapod.simulation.diagnostics import diagnose
+from hexapod.simulation.integrators.stability import runge_kutta_stability
+from hexapod.simulation.registry import INTEGRATORS
 
 from mechanisms import pendulum
 

@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 import hexapod as hx
+from hexapod.algorithms.inverse import inverse_dynamics
+from hexapod.algorithms.liaison import joint_origin
 from hexapod.cli import main
-from hexapod.export import PART_BAR, PART_BOX, body_shape
-from hexapod.inverse import inverse_dynamics
-from hexapod.reactions import joint_origin
+from hexapod.output.vtk import PART_BAR, PART_BOX, body_shape
 from hexapod.scene.reader import read_scene
 from hexapod.scene.writer import write_scene
 

@@ -10,8 +10,7 @@ import numpy as np
 import pytest
 
 import hexapod as hx
-from hexapod.cli import main
-from hexapod.extreme import (
+from hexapod.benchmarks.extreme import (
     ACCURACY,
     build_suite,
     recommend,
@@ -20,8 +19,9 @@ from hexapod.extreme import (
     run_suite,
     scene_case,
 )
-from hexapod.integrators import DEFAULT_METHOD
-from hexapod.mechanisms import four_bar_dead_points, n_four_bar
+from hexapod.benchmarks.mechanisms import four_bar_dead_points, n_four_bar
+from hexapod.cli import main
+from hexapod.simulation.registry import DEFAULT_METHOD
 
 CASES = {case.name: case for case in build_suite(quick=True)}
 
@@ -102,7 +102,7 @@ def test_report_has_table_recommendation_and_figures(tmp_path):
     case = CASES["stretched-leg"]
     runs = run_suite([case], [DEFAULT_METHOD, "rk4-baumgarte"], budget=30.0)
     q, v = hx.consistent_state(case.model)
-    from hexapod.diagnostics import diagnose
+    from hexapod.simulation.diagnostics import diagnose
 
     files = report_files([case], runs, {case.name: diagnose(case.model, 0.0, q, v)}, [],
                          "hexapod check")
@@ -141,8 +141,8 @@ def test_where_no_run_is_accurate_the_adaptive_ones_retry_tighter():
     """Ten periods of a pendulum released 8 degrees from the top: at the suite's rtol 1e-6 the
     error grows past ACCURACY near the unstable top (measured 6e-3 with DOP853); the retry at
     1e-9 is accurate and the recommendation says at which setting."""
-    import hexapod.mechanisms as m
-    from hexapod.extreme import RETRY_TIGHTER, _from_mechanism
+    import hexapod.benchmarks.mechanisms as m
+    from hexapod.benchmarks.extreme import RETRY_TIGHTER, _from_mechanism
 
     case = _from_mechanism(m.large_step_pendulum(), 100)
     runs = run_suite([case], ["dop853-projection"], budget=60.0)

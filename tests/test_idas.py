@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 
 import hexapod as hx
-from hexapod.integrators import IdasBDF
-from hexapod.references import ClosedLoopPendulum, pendulum_exact
+from hexapod.benchmarks.references import ClosedLoopPendulum, pendulum_exact
 from hexapod.scene.reader import read_scene
-from hexapod.simulate import simulate
+from hexapod.simulation.integrators import IdasBDF
+from hexapod.simulation.loop import simulate
 
 SCENES = Path(__file__).resolve().parents[1] / "data" / "scenes"
 G = 9.81

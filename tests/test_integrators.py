@@ -9,11 +9,12 @@ import numpy as np
 import pytest
 
 import hexapod as hx
-from hexapod.integrators import INTEGRATORS, Integrator, get_integrator, register
-from hexapod.references import ClosedLoopPendulum, pendulum_exact
+from hexapod.benchmarks.references import ClosedLoopPendulum, pendulum_exact
 from hexapod.scene.laws import Polynomial
 from hexapod.scene.reader import read_scene
-from hexapod.simulate import simulate
+from hexapod.simulation.integrators import Integrator
+from hexapod.simulation.loop import simulate
+from hexapod.simulation.registry import INTEGRATORS, get_integrator, register
 
 from mechanisms import four_bar, sprung_top
 

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 import hexapod as hx
-from hexapod.inverse import inverse_dynamics, tree_plan
-from hexapod.recursive import ChainModel
+from hexapod.algorithms.inverse import inverse_dynamics, tree_plan
+from hexapod.minimal.chain import ChainModel
 from legs import front_leg_scene
 
 from mechanisms import four_bar, random_tree
@@ -136,7 +136,7 @@ def test_reactions_on_the_parent():
     child = hx.joint_wrenches(model, q, data.lam, data.Phi_v, frame="world")
     parent = hx.joint_wrenches(model, q, data.lam, data.Phi_v, frame="world", on="parent")
     local = hx.joint_wrenches(model, q, data.lam, data.Phi_v, on="parent")
-    from hexapod.reactions import joint_origin, parent_point
+    from hexapod.algorithms.liaison import joint_origin, parent_point
     for k, joint in enumerate(model.joints):
         origin, _ = joint_origin(model, q, joint)
         point, R = parent_point(model, q, joint)

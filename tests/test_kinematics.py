@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import hexapod as hx
-from hexapod.linalg import equilibrate
+from hexapod.algorithms.linalg import equilibrate
 
 from mechanisms import four_bar
 from test_joints import CASES, case_id

@@ -1,4 +1,10 @@
-"""The import layering of DESIGN section 3: no upward import, no cycle, optional libraries lazy."""
+"""The package layout of DESIGN section 3, enforced: one folder per layer, no upward import, no
+cycle, no scene below the model, ``__init__`` files that only re-export, optional libraries
+imported lazily, and ``legs/`` and ``scripts/`` on the public API alone.
+
+Each rule is a function from sources to a list of violations, so that the tests below can show
+that every rule catches what it forbids (a rule that cannot fail checks nothing).
+"""
 
 from __future__ import annotations
 
@@ -7,28 +13,29 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 import hexapod
 
 ROOT = Path(__file__).resolve().parent.parent
 PACKAGE = ROOT / "hexapod"
 
-#: Layer of each module (a package entry covers its sub-modules).
+#: Layer of each top-level module or folder of the package (DESIGN section 3).
 LAYERS = {
-    "hexapod.errors": 0, "hexapod.spatial": 0, "hexapod.fastcall": 0, "hexapod.graph": 0,
-    "hexapod.fileio": 0,
-    "hexapod.scene": 1,
-    "hexapod.assembly": 2, "hexapod.model": 2, "hexapod.mechanisms": 2,
-    "hexapod.linalg": 3, "hexapod.kinematics": 3, "hexapod.dynamics": 3,
-    "hexapod.reactions": 3, "hexapod.inverse": 3, "hexapod.topology": 3,
-    "hexapod.recursive": 3, "hexapod.recursive_methods": 3, "hexapod.balance": 3,
-    "hexapod.rates": 3,
-    "hexapod.integrators": 4, "hexapod.simulate": 4, "hexapod.results": 4,
-    "hexapod.diagnostics": 4, "hexapod.extreme": 5,
-    "hexapod.studies": 5, "hexapod.references": 5, "hexapod.reports": 5, "hexapod.plotting": 5,
-    "hexapod.export": 5, "hexapod.summary": 5, "hexapod.cli": 5, "hexapod.__main__": 5,
-    "hexapod": 6,  # the package's __init__ re-exports the public API (this exact module only)
+    "errors": 0, "spatial": 0, "_support": 0, "_version": 0,
+    "scene": 1,
+    "model": 2,
+    "algorithms": 3, "minimal": 3,
+    "simulation": 4,
+    "output": 5,
+    "benchmarks": 6, "sweeps": 6,
+    "cli": 7, "__main__": 7,
 }
-LAZY_ONLY = ("matplotlib", "meshio")
+#: The package's own ``__init__`` re-exports the public API: above everything.
+TOP = 8
+#: Layers that see ``Model`` and ``Data``, never a ``Scene``.
+NO_SCENE = ("algorithms", "minimal", "simulation")
+LAZY_ONLY = ("matplotlib", "meshio", "dask")
 
 
 def module_name(path: Path) -> str:
@@ -37,15 +44,18 @@ def module_name(path: Path) -> str:
 
 
 def layer(module: str) -> int:
-    candidates = [m for m in LAYERS if module == m or (m != "hexapod" and module.startswith(
-        m + "."))]
-    assert candidates, f"{module} has no layer in DESIGN: add it to LAYERS"
-    return LAYERS[max(candidates, key=len)]
+    """The layer of ``hexapod.<room>...`` (``hexapod`` itself: TOP)."""
+    parts = module.split(".")
+    if parts == ["hexapod"]:
+        return TOP
+    assert parts[1] in LAYERS, f"{module}: hexapod.{parts[1]} has no layer: add it to LAYERS " \
+                               "(and to DESIGN section 3)"
+    return LAYERS[parts[1]]
 
 
-def imports(path: Path) -> list[tuple[str, bool]]:
-    """(imported module, at module level) for every import in the file."""
-    tree = ast.parse(path.read_text())
+def imports(source: str) -> list[tuple[str, bool]]:
+    """(imported module, at module level) for every absolute import in a source."""
+    tree = ast.parse(source)
     top = {id(node) for node in tree.body}
     out = []
     for node in ast.walk(tree):
@@ -56,44 +66,152 @@ def imports(path: Path) -> list[tuple[str, bool]]:
     return out
 
 
-def modules() -> dict[str, Path]:
-    return {module_name(p): p for p in sorted(PACKAGE.rglob("*.py"))}
+def package_sources() -> dict[str, str]:
+    return {module_name(p): p.read_text() for p in sorted(PACKAGE.rglob("*.py"))}
 
 
-def test_every_module_has_a_layer_and_imports_none_above_it():
-    for name, path in modules().items():
+def packages() -> set[str]:
+    return {module_name(p) for p in PACKAGE.rglob("__init__.py")}
+
+
+# ------------------------------------------------------------------ the rules
+
+def upward_imports(sources: dict[str, str]) -> list[str]:
+    """Imports of a higher layer (or of ``legs``, or of a scene below the model)."""
+    found = []
+    for name, source in sources.items():
         mine = layer(name)
-        for target, _ in imports(path):
-            if target.split(".")[0] == "legs":
-                raise AssertionError(f"{name} imports {target}: the engine never imports legs")
-            if target.split(".")[0] != "hexapod" or name == "hexapod":
+        for target, _ in imports(source):
+            root = target.split(".")[0]
+            if root == "legs":
+                found.append(f"{name} imports {target}: the engine never imports legs")
+            if root != "hexapod" or name == "hexapod":
                 continue
-            assert layer(target) <= mine, f"{name} (layer {mine}) imports {target} " \
-                                          f"(layer {layer(target)})"
+            if layer(target) > mine:
+                found.append(f"{name} (layer {mine}) imports {target} (layer {layer(target)})")
+            if name.split(".")[1] in NO_SCENE and target.split(".")[:2] == ["hexapod", "scene"]:
+                found.append(f"{name} imports {target}: {name.split('.')[1]}/ sees Model and "
+                             "Data, never a Scene")
+    return found
 
 
-def test_no_import_cycle():
-    graph = {name: {t for t, _ in imports(path) if t in modules() and t != name}
-             for name, path in modules().items()}
+def import_cycles(sources: dict[str, str]) -> list[str]:
+    """Cycles among the package's modules, by every import (module level or not)."""
+    graph = {}
+    for name, source in sources.items():
+        targets = set()
+        for target, _ in imports(source):
+            # ``from a.b import c`` may name the module a.b.c
+            while target and target not in sources:
+                target = target.rpartition(".")[0]
+            if target and target != name and not name.startswith(target + "."):
+                targets.add(target)
+        graph[name] = targets
     state: dict[str, int] = {}
+    found = []
 
     def visit(node, stack):
         state[node] = 1
-        for nxt in graph[node]:
+        for nxt in sorted(graph[node]):
             if state.get(nxt) == 1:
-                raise AssertionError("import cycle: " + " -> ".join(stack + [node, nxt]))
-            if nxt not in state:
+                found.append("import cycle: " + " -> ".join(stack + [node, nxt]))
+            elif nxt not in state:
                 visit(nxt, stack + [node])
         state[node] = 2
 
-    for node in graph:
+    for node in sorted(graph):
         if node not in state:
             visit(node, [])
+    return found
+
+
+def _is_reexport(node: ast.stmt, package: str) -> bool:
+    if isinstance(node, ast.Expr) and isinstance(node.value, ast.Constant):
+        return True  # the docstring
+    if isinstance(node, ast.ImportFrom):
+        return node.level == 0 and (node.module or "").startswith(package.split(".")[0])
+    if isinstance(node, ast.Import):
+        return all(a.name == "typing" for a in node.names)
+    if isinstance(node, ast.ImportFrom) and node.module == "typing":
+        return True
+    if isinstance(node, ast.Assign):
+        names = [t.id for target in node.targets
+                 for t in (target.elts if isinstance(target, ast.Tuple) else [target])
+                 if isinstance(t, ast.Name)]
+        return set(names) <= {"__all__", "__getattr__", "__dir__"}
+    if isinstance(node, ast.If):  # ``if TYPE_CHECKING:`` imports, for type checkers
+        return (isinstance(node.test, ast.Name) and node.test.id == "TYPE_CHECKING"
+                and all(isinstance(n, ast.ImportFrom) for n in node.body) and not node.orelse)
+    return False
+
+
+def init_logic(sources: dict[str, str], packages: set[str]) -> list[str]:
+    """Statements of the ``__init__`` modules of ``packages`` that are not re-exports."""
+    found = []
+    for name, source in sources.items():
+        if name not in packages:
+            continue
+        for node in ast.parse(source).body:
+            if isinstance(node, ast.ImportFrom) and node.module == "typing":
+                continue
+            if not _is_reexport(node, name):
+                found.append(f"{name}/__init__.py line {node.lineno}: not a re-export "
+                             f"({type(node).__name__})")
+    return found
+
+
+def private_uses(sources: dict[str, str], public: set[str]) -> list[str]:
+    """Uses of the engine other than ``hexapod.<name in __all__>``."""
+    found = []
+    for name, source in sources.items():
+        tree = ast.parse(source)
+        aliases = {"hexapod"}
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import):
+                for alias in node.names:
+                    if alias.name.startswith("hexapod."):
+                        found.append(f"{name}: import {alias.name}")
+                    elif alias.name == "hexapod":
+                        aliases.add(alias.asname or "hexapod")
+            elif isinstance(node, ast.ImportFrom) and (node.module or "").startswith("hexapod"):
+                if node.module != "hexapod":
+                    found.append(f"{name}: from {node.module} import ...")
+                    continue
+                found += [f"{name}: hexapod.{a.name} is not public" for a in node.names
+                          if a.name not in public]
+        for node in ast.walk(tree):
+            if (isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name)
+                    and node.value.id in aliases and node.attr not in public):
+                found.append(f"{name} line {node.lineno}: hexapod.{node.attr} is not public")
+    return found
+
+
+def sources_in(folder: str) -> dict[str, str]:
+    return {str(p.relative_to(ROOT)): p.read_text() for p in sorted((ROOT / folder).rglob("*.py"))}
+
+
+# ------------------------------------------------------------------ the package obeys them
+
+def test_every_module_has_a_layer_and_imports_none_above_it():
+    assert upward_imports(package_sources()) == []
+
+
+def test_no_import_cycle():
+    assert import_cycles(package_sources()) == []
+
+
+def test_package_init_files_only_reexport():
+    assert init_logic(package_sources(), packages()) == []
+
+
+@pytest.mark.parametrize("folder", ["legs", "scripts"])
+def test_legs_and_scripts_use_only_the_public_api(folder):
+    assert private_uses(sources_in(folder), set(hexapod.__all__)) == []
 
 
 def test_optional_libraries_are_imported_lazily():
-    for name, path in modules().items():
-        for target, at_top in imports(path):
+    for name, source in package_sources().items():
+        for target, at_top in imports(source):
             if target.split(".")[0] in LAZY_ONLY:
                 assert not at_top, f"{name} imports {target} at module level"
     code = "import sys, hexapod, hexapod.cli; print(sorted(m for m in %r if m in sys.modules))"
@@ -102,15 +220,40 @@ def test_optional_libraries_are_imported_lazily():
     assert result.stdout.strip() == "[]"
 
 
-def test_legs_use_only_the_public_api():
-    public = set(hexapod.__all__)
-    for path in sorted((ROOT / "legs").rglob("*.py")):
-        tree = ast.parse(path.read_text())
-        for node in ast.walk(tree):
-            if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith(
-                    "hexapod"):
-                assert node.module == "hexapod", f"{path.name} imports {node.module}"
-                assert {a.name for a in node.names} <= public, path.name
-            if isinstance(node, ast.Import):
-                for alias in node.names:
-                    assert not alias.name.startswith("hexapod."), path.name
+def test_every_public_name_resolves_and_is_documented():
+    for name in hexapod.__all__:
+        value = getattr(hexapod, name)
+        if callable(value) or isinstance(value, type):
+            assert (value.__doc__ or "").strip(), f"hexapod.{name} has no docstring"
+    assert sorted(dir(hexapod)) == sorted(set(dir(hexapod)))
+    assert set(hexapod.__all__) <= set(dir(hexapod))
+
+
+# ------------------------------------------------------------------ the rules can fail
+
+def test_the_rules_catch_what_they_forbid():
+    sources = {
+        "hexapod.algorithms.bad": "from hexapod.output.report import report_files\n",
+        "hexapod.simulation.peek": "def f():\n    from hexapod.scene.scene import Scene\n",
+        "hexapod.model.a": "from hexapod.model.b import x\n",
+        "hexapod.model.b": "def g():\n    from hexapod.model.a import y\n",
+        "hexapod.output": "x = 1\nfrom hexapod.output.report import report_files\n",
+        "hexapod.scene.uses_legs": "import legs\n",
+    }
+    upward = upward_imports(sources)
+    assert any("hexapod.algorithms.bad (layer 3) imports hexapod.output.report" in v
+               for v in upward)
+    assert any("simulation/ sees Model and Data, never a Scene" in v for v in upward)
+    assert any("never imports legs" in v for v in upward)
+    assert any("hexapod.model.a -> hexapod.model.b -> hexapod.model.a" in v
+               for v in import_cycles(sources))
+    assert init_logic(sources, {"hexapod.output"}) == [
+        "hexapod.output/__init__.py line 1: not a re-export (Assign)"]
+    script = ("import hexapod as hx\nfrom hexapod.algorithms.inverse import tree_plan\n"
+              "from hexapod import assemble, _private\nhx.secret(1)\nhx.assemble(2)\n")
+    found = private_uses({"scripts/x.py": script}, {"assemble"})
+    assert found == ["scripts/x.py: from hexapod.algorithms.inverse import ...",
+                     "scripts/x.py: hexapod._private is not public",
+                     "scripts/x.py line 4: hexapod.secret is not public"]
+    with pytest.raises(AssertionError, match="has no layer"):
+        layer("hexapod.attic.module")

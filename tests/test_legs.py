@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import hexapod as hx
-from hexapod.inverse import inverse_dynamics, tree_plan
-from hexapod.kinematics import marker_trajectories
+from hexapod.algorithms.inverse import inverse_dynamics, tree_plan
+from hexapod.algorithms.kinematics import marker_trajectories
 from legs import GAITS, front_leg_scene, hexapod_scene, leg_geometry, walking_leg_scene
 from legs.cockroach import (
     FOOT_LIFT_MM,

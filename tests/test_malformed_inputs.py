@@ -24,7 +24,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import hexapod as hx
-from hexapod import cli, fileio
+from hexapod import cli
+from hexapod._support import files as fileio
 from hexapod.errors import HexapodError, InputFileError, ModelError
 from hexapod.scene.motion import apply_motion, read_motion
 from hexapod.scene.reader import read_scene
@@ -335,7 +336,7 @@ def test_an_error_after_reading_writes_nothing(tmp_path, capsys, monkeypatch):
     def failing(*args, **kwargs):
         raise hx.SingularSystemError("no solution")
 
-    monkeypatch.setattr("hexapod.inverse.inverse_dynamics", failing)
+    monkeypatch.setattr("hexapod.algorithms.inverse.inverse_dynamics", failing)
     code, _ = run_main(["inverse", str(FIXTURE / "model.urdf"), "--motion",
                         str(FIXTURE / "motion.csv"), "--out", str(tmp_path / "X.csv")], capsys)
     assert code == 1 and names(tmp_path) == []
@@ -374,10 +375,10 @@ def test_a_killed_simulation_leaves_no_output(tmp_path, signum):
 
 
 def test_the_command_line_writes_only_through_the_atomic_helpers():
-    """Outputs go through hexapod.fileio (a temporary file or directory renamed into place);
+    """Outputs go through hexapod._support.files (a temporary file or directory renamed into place);
     nothing else in the package opens a file for writing."""
     writes = re.compile(r"\.(write_text|write_bytes|tofile)\(|savetxt\(|\bopen\([^)]*['\"][wax]")
     offenders = [f"{path.relative_to(ROOT)}: {match.group(0)}"
-                 for path in sorted((ROOT / "hexapod").rglob("*.py")) if path.name != "fileio.py"
+                 for path in sorted((ROOT / "hexapod").rglob("*.py")) if path.name != "files.py"
                  for match in writes.finditer(path.read_text())]
     assert offenders == []

@@ -1,4 +1,5 @@
-"""The extreme-case mechanisms (hexapod.mechanisms): each scene against its own reference.
+"""The extreme-case mechanisms (hexapod.benchmarks.mechanisms): each scene against its own
+reference.
 
 The references are written in minimal coordinates apart from the engine; the initial
 accelerations of the centres of mass are the cheap, strong check that a scene and its
@@ -14,8 +15,8 @@ import numpy as np
 import pytest
 
 import hexapod as hx
-from hexapod import mechanisms as mech
-from hexapod.topology import mobility
+from hexapod.algorithms.topology import mobility
+from hexapod.benchmarks import mechanisms as mech
 
 CASES = {case.name: case for case in mech.suite()}
 

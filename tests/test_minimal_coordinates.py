@@ -29,7 +29,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import hexapod as hx
-from hexapod.reactions import joint_origin
+from hexapod.algorithms.liaison import joint_origin
 from hexapod.spatial import Placement
 
 G = 9.81  # m/s^2

@@ -12,11 +12,11 @@ import numpy as np
 import pytest
 
 import hexapod as hx
-from hexapod.integrators import INTEGRATORS
-from hexapod.integrators.radau import RadauIIA5GGL, dexp_inverse_sx, ggl_functions
-from hexapod.references import pendulum_exact
+from hexapod.benchmarks.references import pendulum_exact
 from hexapod.scene.reader import read_scene
-from hexapod.simulate import simulate
+from hexapod.simulation.integrators.radau import RadauIIA5GGL, dexp_inverse_sx, ggl_functions
+from hexapod.simulation.loop import simulate
+from hexapod.simulation.registry import INTEGRATORS
 
 from mechanisms import four_bar, four_bar_points, rod_pendulum, sprung_top
 

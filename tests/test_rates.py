@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 import hexapod as hx
-from hexapod.rates import CompiledRates, compiled_rates
 from hexapod.scene.reader import read_scene
+from hexapod.simulation.kernels import CompiledRates, compiled_rates
 
 from mechanisms import four_bar, random_tree, solve_state
 
@@ -67,7 +67,7 @@ def test_a_row_set_that_no_longer_spans_the_constraints_is_refused():
 def test_fast_function_equals_the_casadi_call():
     import casadi as ca
 
-    from hexapod.fastcall import FastFunction
+    from hexapod._support.fastcall import FastFunction
 
     x = ca.SX.sym("x", 3)
     y = ca.SX.sym("y", 2, 2)
@@ -86,7 +86,7 @@ def test_fast_function_equals_the_casadi_call():
 
 @pytest.mark.parametrize("case", ["front_leg", "four-bar-3d", "driven-tree"])
 def test_compiled_projection_equals_the_exact_one(case):
-    from hexapod.rates import compiled_projection
+    from hexapod.simulation.kernels import compiled_projection
 
     if case == "four-bar-3d":
         scene = four_bar(3, 0.7, driven=False)

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 import hexapod as hx
-from hexapod.integrators import get_integrator
-from hexapod.references import pendulum_exact, pendulum_period
-from hexapod.simulate import simulate
+from hexapod.benchmarks.references import pendulum_exact, pendulum_period
+from hexapod.simulation.loop import simulate
+from hexapod.simulation.registry import get_integrator
 
 from mechanisms import four_bar, rod_pendulum
 from mechanisms import sprung_top as _sprung_top

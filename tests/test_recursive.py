@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import hexapod as hx
-from hexapod.recursive import ChainModel
+from hexapod.minimal.chain import ChainModel
 from legs import front_leg_scene
 
 from mechanisms import four_bar, random_tree

@@ -8,8 +8,8 @@ import pytest
 from script_loader import load_script
 
 import hexapod as hx
-from hexapod import recursive_methods as rm
-from hexapod.recursive import ChainModel
+from hexapod.minimal import forming as rm
+from hexapod.minimal.chain import ChainModel
 
 from mechanisms import random_tree
 
@@ -43,7 +43,7 @@ def test_the_cases_mix_revolute_and_prismatic_joints():
 def test_the_three_methods_form_the_same_model(seed, n, chain):
     model = ChainModel.from_model(hx.assemble(random_tree(seed, n, chain=chain)))
     q, q_d, _ = _state(seed, model.dof)
-    W0, V0 = model.matrices(q, q_d)  # Part I, the vectorised form of hexapod.recursive
+    W0, V0 = model.matrices(q, q_d)  # Part I, the vectorised form of hexapod.minimal.chain
     for method in rm.METHODS:
         W, V = rm.form(model.layout, q, q_d, method)  # "basic": the same arithmetic as the rest
         assert _close(W, W0), method

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 import hexapod as hx
-from hexapod.linalg import solve_saddle
-from hexapod.reactions import joint_wrenches, policy_map
+from hexapod.algorithms.liaison import joint_wrenches, policy_map
+from hexapod.algorithms.linalg import solve_saddle
 
 from mechanisms import four_bar, solve_state
 

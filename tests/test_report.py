@@ -11,19 +11,20 @@ import numpy as np
 import pytest
 
 import hexapod as hx
-from hexapod.balance import body_balance
-from hexapod.cli import DEFAULT_SCENE, builtin_scenes, main
+from hexapod._support.files import write_directory_atomically
+from hexapod.algorithms.balance import body_balance
+from hexapod.algorithms.inverse import inverse_dynamics
+from hexapod.algorithms.kinematics import body_poses, marker_trajectories
+from hexapod.cli import main
 from hexapod.errors import InputFileError
-from hexapod.fileio import write_directory_atomically
-from hexapod.inverse import inverse_dynamics
-from hexapod.kinematics import body_poses, marker_trajectories
-from hexapod.reports import (
+from hexapod.output.report import (
     driver_efforts_over_time,
     driver_statistics,
     inverse_columns,
     joint_statistics,
     time_rms,
 )
+from hexapod.scene.builtin import DEFAULT_SCENE, builtin_scenes
 from legs import front_leg_scene, walking_leg_scene
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -12,7 +12,7 @@ import pytest
 from script_loader import load_script
 
 import hexapod as hx
-from hexapod.recursive import ChainModel
+from hexapod.minimal.chain import ChainModel
 from legs import GAITS, walking_leg_scene
 from legs.leg import ELEMENTS, JOINTS
 from legs.robot import robot_weight

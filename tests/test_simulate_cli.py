@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 import hexapod as hx
-from hexapod.balance import body_balance
-from hexapod.integrators import INTEGRATORS
-from hexapod.references import ClosedLoopPendulum
+from hexapod.algorithms.balance import body_balance
+from hexapod.benchmarks.references import ClosedLoopPendulum
 from hexapod.scene.reader import read_scene
 from hexapod.scene.writer import scene_text
+from hexapod.simulation.registry import INTEGRATORS
 
 ROOT = Path(__file__).resolve().parents[1]
 SEED002 = ROOT / "data" / "scenes" / "closed_pendulum_seed002.toml"

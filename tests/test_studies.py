@@ -8,9 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hexapod.cli import load_scene, main
-from hexapod.simulate import simulate
-from hexapod.studies import (
+from hexapod.benchmarks.work_precision import (
     Run,
     andrews_angles,
     andrews_check,
@@ -18,6 +16,9 @@ from hexapod.studies import (
     cpu_to_reach,
     run_method,
 )
+from hexapod.cli import main
+from hexapod.scene.builtin import load_scene
+from hexapod.simulation.loop import simulate
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 

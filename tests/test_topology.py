@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 import hexapod as hx
+from hexapod.algorithms.topology import body_joint_graph, mobility, vector_network
 from hexapod.scene.reader import read_scene
-from hexapod.topology import body_joint_graph, mobility, vector_network
 from legs import front_leg_scene
 
 from mechanisms import four_bar

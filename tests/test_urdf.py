@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 import hexapod as hx
-from hexapod.inverse import inverse_dynamics
-from hexapod.reports import agreement, inverse_columns
+from hexapod.algorithms.inverse import inverse_dynamics
+from hexapod.output.report import agreement, inverse_columns
 from hexapod.scene.motion import MotionWarning, apply_motion, read_motion
 from hexapod.scene.urdf import read_urdf, urdf_text
 from legs import front_leg_scene
@@ -36,7 +36,7 @@ def cli(*args, cwd):
 
 def assert_matches(header, table, expected_header, expected, rel=1e-10):
     """Every expected force and moment agrees to ``rel`` of the largest magnitude of the same
-    quantity at that joint (``hexapod.reports.agreement``), and every column is there."""
+    quantity at that joint (``hexapod.output.report.agreement``), and every column is there."""
     assert set(expected_header) <= set(header)
     assert agreement(header, table, expected_header, expected) <= rel
 
@@ -59,7 +59,7 @@ def test_saddle_path_matches_pinocchio_too():
                                      read_motion(fixture / "motion.csv")))
     result = inverse_dynamics(model, read_motion(fixture / "motion.csv").times,
                               method="saddle")
-    from hexapod.reports import inverse_table
+    from hexapod.output.report import inverse_table
     assert_matches(inverse_columns(model), inverse_table(model, result),
                    *read_csv(fixture / "expected.csv"), rel=1e-9)
 

@@ -13,7 +13,7 @@ The frames may be given in three ways:
   name), as URDF does; ``parent_frame`` is then derived from the initial poses unless given;
 * nothing: the joint frame is the child's reference frame.
 
-The residual rows themselves are written in :mod:`hexapod.assembly.joints`.
+The residual rows themselves are written in :mod:`hexapod.model.joints`.
 """
 
 from __future__ import annotations

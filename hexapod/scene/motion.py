@@ -23,8 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
+from hexapod._support.files import read_text
 from hexapod.errors import InputFileError, ModelError, Problem
-from hexapod.fileio import read_text
 from hexapod.scene.drivers import JointDriver
 from hexapod.scene.element import quoted
 from hexapod.scene.joints import Prismatic

@@ -18,8 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
+from hexapod._support.files import read_text
 from hexapod.errors import InputFileError, ModelError, Problem
-from hexapod.fileio import read_text
 from hexapod.scene.bodies import Particle, PlanarBody, SpatialBody
 from hexapod.scene.drivers import DRIVER_TYPES
 from hexapod.scene.element import Element, quoted

@@ -30,8 +30,8 @@ from pathlib import Path
 
 import numpy as np
 
+from hexapod._support.files import read_text
 from hexapod.errors import InputFileError, ModelError, Problem
-from hexapod.fileio import read_text
 from hexapod.scene.bodies import SpatialBody
 from hexapod.scene.element import GROUND
 from hexapod.scene.joints import Fixed, Prismatic, Revolute

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hexapod.fileio import write_atomically
+from hexapod._support.files import write_atomically
 from hexapod.scene.bodies import Body
 from hexapod.scene.drivers import CoordinateDriver, JointDriver
 from hexapod.scene.element import Element

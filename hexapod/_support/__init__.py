@@ -1,0 +1,1 @@
+"""Layer 0 helpers with no mechanics: buffered CasADi calls, graphs, atomic files."""

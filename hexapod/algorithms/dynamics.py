@@ -1,0 +1,82 @@
+"""Forward dynamics at a state: accelerations and multipliers from the saddle-point system
+
+    [[M, Phi_v^T], [Phi_v, 0]] [v_dot; lambda] = [Q; gamma]
+
+solved on the equilibrated constraint matrix (:mod:`hexapod.algorithms.linalg`). Accelerations are
+always unique. When rows are redundant their multipliers follow DESIGN's unit-free default policy:
+among all multipliers that satisfy the equations, those minimising ``sum_k |F_k|^2 + |T_k / l|^2``
+over the joint wrenches, with ``l = model.characteristic_length``; the redundant rows are named.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from hexapod.algorithms.liaison import policy_map
+from hexapod.algorithms.linalg import equilibrate, solve_saddle, split_rows
+from hexapod.model.model import Data, Model
+
+
+def forward_dynamics(model: Model, data: Data, t: float, q: np.ndarray, v: np.ndarray, *,
+                     condition: bool = False,
+                     baumgarte: tuple[float, float] | None = None,
+                     rank_tolerance: float | None = None,
+                     consistency_tol: float = 1e-6) -> np.ndarray:
+    """Accelerations ``v_dot`` at ``(t, q, v)``; fills ``data``.
+
+    With ``baumgarte = (alpha, beta)`` (1/s) the acceleration constraints are stabilised,
+    ``Phi_v v_dot = gamma - 2 alpha (Phi_v v - nu) - beta^2 phi``, so that drifted positions
+    and velocities are pulled back to the constraints (Baumgarte 1972).
+
+    ``rank_tolerance`` overrides ``model.rank_tolerance`` (rows whose equilibrated distance
+    from the span of those kept falls below it are left out as redundant);
+    ``consistency_tol`` is the largest relative violation of the rows left out (above it they
+    contradict the others: an error).
+
+    ``data`` receives ``Phi_v, gamma, Q, Q_across, v_dot, lam`` (n_c), ``independent_rows``,
+    ``redundant_rows`` (row indices; names in ``model.rows``), ``inconsistency``, and, when
+    ``condition`` is true, ``condition_number`` (2-norm, of the equilibrated saddle-point matrix
+    of the independent rows), ``singular_values`` (of the equilibrated kept rows of ``Phi_v``,
+    ascending) and ``sigma_min``, the smallest (the distance to a singular configuration).
+
+    Raises
+    ------
+    SingularSystemError
+        When redundant constraints contradict each other.
+    """
+    q = np.asarray(q, dtype=float)
+    v = np.asarray(v, dtype=float)
+    w, wd, wdd = model.law_values(t)
+    values = {"q": q, "v": v, "w": w, "wd": wd, "wdd": wdd}
+    terms = model.fast("dynamics_terms")
+    Phi_v, gamma, Q = terms(*[values[n] for n in terms.name_in])
+    Phi_v = Phi_v.reshape(model.n_c, model.n_v)
+    if baumgarte is not None and model.n_c:
+        alpha, beta = baumgarte
+        velocity_error = Phi_v @ v - model.call("nu", q=q, w=w, wd=wd)
+        gamma = gamma - 2 * alpha * velocity_error - beta**2 * model.call("phi", q=q, w=w)
+    Q_across = model.call("Q_across", q=q, v=v, w=w) if model.Q_across is not None else None
+    tol = model.rank_tolerance if rank_tolerance is None else rank_tolerance
+    W, d = equilibrate(Phi_v, model.mass_inv_sqrt)
+    split = split_rows(W, d, model.row_priority, tol,
+                           groups=model.row_groups)
+    wrench_map = offset = None
+    if split.redundant.size:
+        wrench_map, offset = policy_map(model, q, Phi_v, Q_across)
+    solution = solve_saddle(model.mass_inv_sqrt, Phi_v, Q, gamma, model.row_priority,
+                            tol, row_names=[r.name for r in model.rows],
+                            consistency_tol=consistency_tol,
+                            wrench_map=wrench_map, wrench_offset=offset, split=split)
+    data.t, data.q, data.v, data.w, data.wd, data.wdd = t, q, v, w, wd, wdd
+    data.Phi_v, data.gamma, data.Q = Phi_v, gamma, Q
+    data.v_dot, data.lam = solution.v_dot, solution.lam
+    data.independent_rows, data.redundant_rows = split.independent, split.redundant
+    data.Q_across = Q_across
+    data.inconsistency = solution.inconsistency
+    data.condition_number = data.sigma_min = data.singular_values = None
+    if condition:
+        data.condition_number = split.condition_number(model.n_v)
+        data.singular_values = np.sort(split.singular_values())
+        sigma = data.singular_values
+        data.sigma_min = float(sigma[0]) if sigma.size else float("inf")
+    return solution.v_dot

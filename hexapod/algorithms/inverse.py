@@ -1,0 +1,407 @@
+"""Inverse dynamics of prescribed motion (seed 001, eqs. (12)-(16)) over a whole gait.
+
+When drivers fix every degree of freedom, each sample needs position, velocity and acceleration
+analysis, then the multipliers of ``[[M, Phi_v^T], [Phi_v, 0]] [v_dot; lambda] = [Q; gamma]``,
+and from them the joint wrenches (:mod:`hexapod.algorithms.liaison`). Two ways, with the same
+results:
+
+* **saddle** (any mechanism, closed loops included): per sample, Newton's method warm-started
+  from the previous sample, velocity projection, and the saddle-point solve of
+  :mod:`hexapod.algorithms.dynamics` (rank decision and redundancy policy included);
+* **tree** (an open tree of spatial bodies whose revolute and prismatic joints are all driven,
+  the legs of this project): the same system solved in tree order. A forward pass composes each
+  body's pose from its parent's and its driver's value (exactly: no Newton iterations), CasADi
+  differentiates it for velocities and accelerations, and a backward pass from the leaves gives
+  each joint's wrench from its child's Newton-Euler equations. The whole pass is one CasADi
+  Function, compiled to C when a compiler is present and mapped over all samples in one call;
+  its cost grows linearly with the number of bodies.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import cached_property
+
+import casadi as ca
+import numpy as np
+
+from hexapod.algorithms.dynamics import forward_dynamics
+from hexapod.algorithms.kinematics import assemble_positions, degrees_of_freedom, solve_velocities
+from hexapod.algorithms.liaison import joint_origin, joint_wrenches
+from hexapod.errors import HexapodError, SingularSystemError
+from hexapod.model.model import GROUND_INDEX, Data, Model
+from hexapod.spatial import (
+    g_matrix,
+    quaternion_product,
+    rotation_from_euler_parameters,
+)
+
+
+@dataclass
+class InverseResult:
+    """Joint wrenches and efforts at every sample.
+
+    Attributes
+    ----------
+    times : ndarray (N,)
+    joints : tuple of str
+        Joint names, in model order.
+    force, torque : ndarray (N, J, 3)
+        N and N m: by the parent on the child, about the joint origin, in the child's joint
+        frame (``frame="joint"``) or in world axes (``frame="world"``).
+    effort : ndarray (N, J)
+        ``tau`` of revolute and prismatic joints (NaN for the others).
+    q, v, v_dot : ndarray (N, n_q), (N, n_v), (N, n_v)
+    method : str
+        ``"tree"`` or ``"saddle"``.
+    max_violation : float
+        Largest scaled constraint residual over the samples (round-off for the tree path).
+    redundant_rows : tuple of str
+        Rows named redundant at some sample (saddle path).
+    """
+
+    times: np.ndarray
+    joints: tuple[str, ...]
+    force: np.ndarray
+    torque: np.ndarray
+    effort: np.ndarray
+    q: np.ndarray
+    v: np.ndarray
+    v_dot: np.ndarray
+    frame: str
+    method: str
+    max_violation: float
+    redundant_rows: tuple[str, ...] = ()
+
+
+#: Compiling the tree path costs about 0.2 s per joint and saves about 4.4 microseconds per joint
+#: and sample (scripts/bench_inverse.py): it pays from some 50 000 samples on.
+COMPILE_FROM_SAMPLES = 50_000
+#: Samples per call of the tree path when progress is reported.
+PROGRESS_CHUNK = 2_000
+
+
+def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = "joint",
+                     compile: bool | None = None,
+                     progress: Callable[[int, int], None] | None = None) -> InverseResult:
+    """Joint wrenches and driver efforts of the prescribed motion at ``times``.
+
+    The drivers' laws give the motion (a motion file becomes laws exact at its samples, see
+    :mod:`hexapod.motion`).
+
+    Parameters
+    ----------
+    method :
+        ``"auto"`` (the tree path when the model allows it), ``"tree"`` or ``"saddle"``.
+    frame :
+        ``"joint"`` (the report convention) or ``"world"``.
+    compile :
+        Tree path: evaluate compiled C code (True) or CasADi's interpreter (False); by default
+        compile when there are at least :data:`COMPILE_FROM_SAMPLES` samples, or when the
+        model's tree path was compiled before (compilation is kept with the model).
+    progress :
+        Called as ``progress(done, total)`` as samples are done (by chunks of
+        :data:`PROGRESS_CHUNK` on the tree path).
+
+    Raises
+    ------
+    SingularSystemError
+        When the drivers leave degrees of freedom free (the motion is not prescribed).
+    HexapodError
+        When ``method="tree"`` and the model is not an open tree with every joint driven.
+    """
+    times = np.atleast_1d(np.asarray(times, dtype=float))
+    if frame not in ("joint", "world"):
+        raise ValueError(f"frame must be 'joint' or 'world', got {frame!r}")
+    w, wd, wdd = (x.reshape(model.n_w, times.size) for x in model.law_values(times))
+    plan = tree_plan(model)
+    if method == "tree" and plan is None:
+        raise HexapodError(f"model '{model.name}' is not an open tree with every joint driven, "
+                         "which the tree method needs: use the saddle method")
+    if method not in ("auto", "tree", "saddle"):
+        raise ValueError(f"method must be 'auto', 'tree' or 'saddle', got {method!r}")
+    if plan is not None and method in ("auto", "tree"):
+        if compile is None:
+            compile = plan.is_compiled or times.size >= COMPILE_FROM_SAMPLES
+        return plan.solve(times, w, wd, wdd, frame, compiled=compile, progress=progress)
+    return _saddle(model, times, frame, progress)
+
+
+# ------------------------------------------------------------------ the saddle path
+
+def _saddle(model, times, frame, progress) -> InverseResult:
+    n, J = times.size, len(model.joints)
+    force, torque, effort = np.zeros((n, J, 3)), np.zeros((n, J, 3)), np.zeros((n, J))
+    Q, V, A = np.zeros((n, model.n_q)), np.zeros((n, model.n_v)), np.zeros((n, model.n_v))
+    redundant: list[str] = []
+    worst = 0.0
+    q = model.q0
+    for k, t in enumerate(times):
+        q = assemble_positions(model, q, t)
+        if k == 0:
+            free = degrees_of_freedom(model, q, t)["dof_with_drivers"]
+            if free:
+                driven = {d.joint for d in model.drivers if d.kind == "joint"}
+                idle = [j.name for j in model.joints
+                        if j.kind in ("revolute", "prismatic") and j.index not in driven]
+                hint = f" (joints without a driver: {', '.join(idle)})" if idle else ""
+                raise SingularSystemError(
+                    f"model '{model.name}': the drivers leave {free} degree(s) of freedom "
+                    f"free{hint}; inverse dynamics needs the motion of every degree of freedom")
+        v = solve_velocities(model, q, t)
+        data = Data()
+        A[k] = forward_dynamics(model, data, t, q, v)
+        wrenches = joint_wrenches(model, q, data.lam, data.Phi_v, data.Q_across, frame)
+        force[k], torque[k], effort[k] = wrenches.force, wrenches.torque, wrenches.effort
+        Q[k], V[k] = q, v
+        if model.n_c:
+            worst = max(worst, float(np.max(np.abs(model.call("phi", q=q, w=data.w)
+                                                   / model.row_scale))))
+        redundant += [model.rows[i].name for i in data.redundant_rows
+                      if model.rows[i].name not in redundant]
+        if progress is not None:
+            progress(k + 1, n)
+    return InverseResult(times, tuple(j.name for j in model.joints), force, torque, effort,
+                         Q, V, A, frame, "saddle", worst, tuple(redundant))
+
+
+# ------------------------------------------------------------------ the tree path
+
+def _compiler_options() -> dict:
+    """JIT options for CasADi when a C compiler is present (``HEXAPOD_NO_JIT=1`` disables)."""
+    if os.environ.get("HEXAPOD_NO_JIT") or not (shutil.which("gcc") or shutil.which("cc")):
+        return {}
+    return {"jit": True, "compiler": "shell",
+            "jit_options": {"flags": ["-O2"], "verbose": False}}
+
+
+class TreePlan:
+    """The tree-ordered inverse dynamics of one model (built once, evaluated on many samples)."""
+
+    def __init__(self, model: Model, order: list[int], driver_of: dict[int, int]):
+        self.model = model
+        self.order = order  # joints, parents first
+        self.driver_of = driver_of  # joint index -> driver index
+
+    @cached_property
+    def function(self) -> ca.Function:
+        """``(w, wd, wdd) -> (q, v, v_dot, wrench, rotation)`` for one sample: the joint wrenches
+        (6 x J: force then moment about the joint origin, joint frame) and the joint frames'
+        rotations (9 x J, column-major). Interpreted by CasADi's virtual machine."""
+        return ca.Function("tree_inverse", *self._expressions)
+
+    @cached_property
+    def compiled(self) -> ca.Function:
+        """The same Function compiled to C (JIT), or the interpreted one when no compiler is
+        present or ``HEXAPOD_NO_JIT`` is set."""
+        options = _compiler_options()
+        if not options:
+            return self.function
+        return ca.Function("tree_inverse", *self._expressions, options)
+
+    @cached_property
+    def _expressions(self) -> tuple:
+        model = self.model
+        w, wd, wdd = (ca.SX.sym(n, model.n_w) for n in ("w", "wd", "wdd"))
+        law = ca.vertcat(w, wd)
+        law_rate = ca.vertcat(wd, wdd)
+        n_b = len(model.bodies)
+        p = [None] * n_b
+        r = [None] * n_b
+        origins, rotations = [None] * len(model.joints), [None] * len(model.joints)
+        for j in self.order:
+            joint = model.joints[j]
+            if joint.parent == GROUND_INDEX:
+                p_p, r_p = ca.DM([1.0, 0.0, 0.0, 0.0]), ca.DM.zeros(3)
+            else:
+                p_p, r_p = p[joint.parent], r[joint.parent]
+            A_p = rotation_from_euler_parameters(p_p)
+            frame_p = quaternion_product(p_p, ca.DM(_quaternion(joint.parent_frame.rotation)))
+            point = r_p + ca.mtimes(A_p, ca.DM(joint.parent_frame.position))
+            value = self._driver_value(j, w)
+            axis = np.asarray(joint.axis if joint.axis is not None else np.zeros(3), float)
+            if joint.kind == "revolute":
+                half = value / 2
+                frame_c = quaternion_product(frame_p, ca.vertcat(ca.cos(half),
+                                                                 ca.sin(half) * ca.DM(axis)))
+                origin = point
+            else:
+                frame_c = frame_p
+                origin = point + (value * ca.mtimes(rotation_from_euler_parameters(frame_p),
+                                                    ca.DM(axis)) if joint.kind == "prismatic"
+                                  else 0)
+            inverse_child = _quaternion(joint.child_frame.rotation) * np.array([1, -1, -1, -1])
+            p_c = quaternion_product(frame_c, ca.DM(inverse_child))
+            R_c = rotation_from_euler_parameters(p_c)
+            p[joint.child] = p_c
+            r[joint.child] = origin - ca.mtimes(R_c, ca.DM(joint.child_frame.position))
+            origins[j] = origin
+            rotations[j] = rotation_from_euler_parameters(frame_c)
+        q = ca.vertcat(*[ca.vertcat(r[b], p[b]) for b in range(n_b)])
+        # one forward-mode derivative of all coordinates: the shared kinematic graph is walked
+        # once (derivatives body by body would walk it per body, quadratically in bodies)
+        q_dot = ca.jtimes(q, law, law_rate)
+        v_parts = []
+        for b in range(n_b):
+            r_dot, p_dot = q_dot[7 * b:7 * b + 3], q_dot[7 * b + 3:7 * b + 7]
+            v_parts += [r_dot, 2 * ca.mtimes(g_matrix(p[b]), p_dot)]
+        v = ca.vertcat(*v_parts)
+        v_dot = ca.jtimes(v, law, law_rate)
+        Q = model.Q(*[{"q": q, "v": v, "w": w}[n] for n in model.Q.name_in()])
+        if model.Q_across is not None:
+            across = model.Q_across(*[{"q": q, "v": v, "w": w}[n]
+                                      for n in model.Q_across.name_in()])
+            Q = Q - ca.sum2(across)  # forces across joints belong to the joint wrenches
+        needed = self._mass_times(v_dot) - Q  # what the constraints must apply to each body
+        world = [None] * len(model.joints)  # wrenches about the world origin
+        children: dict[int, list[int]] = {}
+        for k in self.order:
+            children.setdefault(model.joints[k].parent, []).append(k)
+        for j in reversed(self.order):
+            joint = model.joints[j]
+            b = model.bodies[joint.child]
+            force = needed[b.v.start:b.v.start + 3]
+            moment = (ca.mtimes(rotation_from_euler_parameters(p[joint.child]),
+                                needed[b.v.start + 3:b.v.stop])
+                      + ca.cross(r[joint.child], force))
+            for k in children.get(joint.child, ()):  # what this body passes on to its children
+                force = force + world[k][0]
+                moment = moment + world[k][1]
+            world[j] = (force, moment)
+        wrench, frames = [], []
+        for j in range(len(model.joints)):
+            force, moment = world[j]
+            about_origin = moment - ca.cross(origins[j], force)
+            R = rotations[j]
+            wrench.append(ca.vertcat(ca.mtimes(R.T, force), ca.mtimes(R.T, about_origin)))
+            frames.append(ca.reshape(R, 9, 1))
+        # common subexpressions shared: about a third fewer instructions for a leg
+        outputs = ca.cse([q, v, v_dot, ca.horzcat(*wrench), ca.horzcat(*frames)])
+        return ([w, wd, wdd], outputs, ["w", "wd", "wdd"],
+                ["q", "v", "v_dot", "wrench", "rotation"])
+
+    def build(self, compiled: bool = False) -> ca.Function:
+        """Build (and compile, when ``compiled``) the Function now rather than at a solve."""
+        return self.compiled if compiled else self.function
+
+    @property
+    def is_compiled(self) -> bool:
+        return "compiled" in self.__dict__ and self.compiled is not self.function
+
+    def _driver_value(self, joint: int, w: ca.SX):
+        if joint not in self.driver_of:
+            return 0.0
+        driver = self.model.drivers[self.driver_of[joint]]
+        if driver.law >= 0:
+            return w[driver.law]
+        return float(driver.spec.value)
+
+    def _mass_times(self, a: ca.SX) -> ca.SX:
+        """``M a`` for the constant block-diagonal mass matrix."""
+        mass = self.model.mass
+        out = ca.DM(mass.diagonal) * a
+        for block, index in zip(mass.blocks, mass.block_index, strict=True):
+            out[index.tolist()] = ca.mtimes(ca.DM(block), a[index.tolist()])
+        return out
+
+    def _evaluator(self, n: int, compiled: bool):
+        """The Function mapped over ``n`` samples and its buffer, built once per ``n``."""
+        cache = self.__dict__.setdefault("_evaluators", {})
+        if (n, compiled) not in cache:
+            function = self.compiled if compiled else self.function
+            mapped = function.map(n, "serial") if n > 1 else function
+            cache[n, compiled] = (mapped, *mapped.buffer())
+        return cache[n, compiled]
+
+    def solve(self, times, w, wd, wdd, frame, compiled: bool,
+              progress: Callable[[int, int], None] | None = None) -> InverseResult:
+        model, n, J = self.model, times.size, len(self.model.joints)
+        # CasADi's column-major (rows x n) is NumPy's C-order (n x rows): no conversion
+        inputs = [np.ascontiguousarray(x.T) for x in (w, wd, wdd)]
+        q, v, v_dot = np.empty((n, model.n_q)), np.empty((n, model.n_v)), np.empty((n, model.n_v))
+        wrench, rotation = np.empty((n, J, 6)), np.empty((n, J, 9))
+        # one call for all samples, or calls over chunks of samples to report progress
+        chunk = max(1, n if progress is None else min(n, PROGRESS_CHUNK))
+        for start in range(0, n, chunk):
+            stop = min(n, start + chunk)
+            _, buffer, evaluate = self._evaluator(stop - start, compiled)
+            for i, x in enumerate(inputs):
+                buffer.set_arg(i, memoryview(x[start:stop]))
+            for i, y in enumerate((q, v, v_dot, wrench, rotation)):
+                buffer.set_res(i, memoryview(y[start:stop]))
+            evaluate()
+            if progress is not None:
+                progress(stop, n)
+        force, torque = wrench[..., :3], wrench[..., 3:]
+        effort = np.full((n, J), np.nan)
+        for j, joint in enumerate(model.joints):
+            if joint.kind == "revolute":
+                effort[:, j] = torque[:, j] @ joint.axis
+            elif joint.kind == "prismatic":
+                effort[:, j] = force[:, j] @ joint.axis
+        if frame == "world":
+            R = rotation.reshape(n, J, 3, 3).transpose(0, 1, 3, 2)  # column-major blocks
+            force = np.einsum("njab,njb->nja", R, force)
+            torque = np.einsum("njab,njb->nja", R, torque)
+        phi_max = 0.0
+        if model.n_c and n:
+            rows = model.call("phi", q=q[0], w=w[:, 0]) / model.row_scale
+            phi_max = float(np.max(np.abs(rows)))
+        return InverseResult(times, tuple(j.name for j in model.joints), force, torque, effort,
+                             q, v, v_dot, frame, "tree", phi_max)
+
+
+def _quaternion(R: np.ndarray) -> np.ndarray:
+    from hexapod.spatial import euler_parameters_from_rotation
+
+    return euler_parameters_from_rotation(R)
+
+
+def tree_plan(model: Model) -> TreePlan | None:
+    """The tree path for ``model``, or None when it does not apply: an open tree of spatial
+    bodies hanging from the ground, revolute, prismatic and fixed joints, every revolute and
+    prismatic joint driven by exactly one joint driver, no other driver.
+
+    The plan (and its compiled Function) is built once per model and kept with it."""
+    if "tree" not in model.derived:
+        model.derived["tree"] = _make_tree_plan(model)
+    return model.derived["tree"]
+
+
+def _make_tree_plan(model: Model) -> TreePlan | None:
+    if model.dimension != 3 or any(b.kind != "spatial" for b in model.bodies):
+        return None
+    if any(d.kind != "joint" for d in model.drivers):
+        return None
+    driver_of: dict[int, int] = {}
+    for k, driver in enumerate(model.drivers):
+        if driver.joint in driver_of:
+            return None
+        driver_of[driver.joint] = k
+    children = set()
+    for joint in model.joints:
+        if joint.kind not in ("revolute", "prismatic", "fixed") or joint.loop_closing:
+            return None
+        if joint.child == GROUND_INDEX or joint.child in children:
+            return None
+        children.add(joint.child)
+        if joint.kind != "fixed" and joint.index not in driver_of:
+            return None
+    if len(children) != len(model.bodies):
+        return None
+    order, placed = [], {GROUND_INDEX}
+    while len(order) < len(model.joints):
+        ready = [j.index for j in model.joints if j.index not in order and j.parent in placed]
+        if not ready:
+            return None
+        order += ready
+        placed.update(model.joints[j].child for j in ready)
+    return TreePlan(model, order, driver_of)
+
+
+def joint_frames_world(model: Model, q: np.ndarray) -> list:
+    """World origin and rotation of every joint frame at ``q`` (for reports)."""
+    return [joint_origin(model, q, joint) for joint in model.joints]

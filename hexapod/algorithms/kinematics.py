@@ -1,0 +1,224 @@
+"""Position, velocity and acceleration analysis.
+
+Position: Newton iterations on ``phi(q, t) = 0`` in the tangent space. Each step is the
+least-``M``-norm velocity-space correction ``dv`` with ``Phi_v dv = -phi`` (so the step is
+unit-free and redundant rows are handled by the rank decision of :mod:`hexapod.algorithms.linalg`),
+applied with the Lie-group update of :meth:`Model.integrate` and a backtracking line search.
+Velocity: the least-``M``-norm correction of a guess onto ``Phi_v v = nu``. Acceleration: the
+same for ``Phi_v v_dot = gamma``; both are unique when drivers fix every degree of freedom.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from hexapod.algorithms.linalg import RowSplit, check_consistency, equilibrate, split_rows
+from hexapod.errors import AssemblyError, SingularSystemError
+from hexapod.model.model import Model
+from hexapod.spatial import rotation_from_euler_parameters
+
+
+def _subject(model: Model) -> str:
+    """How messages name a model: with the file it was read from, when there is one."""
+    source = getattr(model, "source", "")
+    return f"model '{model.name}'" + (f" ({source})" if source else "")
+
+
+def rank_split(model: Model, Phi_v: np.ndarray) -> RowSplit:
+    """The rank decision on the equilibrated ``Phi_v`` by the model's policy (its kept rows and
+    their singular values); errors name the model."""
+    try:
+        W, d = equilibrate(Phi_v, model.mass_inv_sqrt)
+        return split_rows(W, d, model.row_priority, model.rank_tolerance,
+                           groups=model.row_groups)
+    except SingularSystemError as error:  # the linear algebra does not know the model
+        raise SingularSystemError(f"{_subject(model)}: {error}") from None
+
+
+def _check(model: Model, split: RowSplit, y: np.ndarray, rhs: np.ndarray, what: str,
+           size: float = 0.0) -> None:
+    """The redundant rows are met too (see :func:`hexapod.algorithms.linalg.check_consistency`),
+    relative to ``size`` or the correction's own, whichever is larger."""
+    try:
+        check_consistency(split, y, rhs, size, row_names=_names(model), what=what)
+    except SingularSystemError as error:
+        raise SingularSystemError(f"{_subject(model)}: {error}") from None
+
+
+def _names(model: Model) -> list[str]:
+    return [r.name for r in model.rows]
+
+
+def scaled_residual(model: Model, q: np.ndarray, t: float = 0.0) -> np.ndarray:
+    """``phi`` with length rows divided by the characteristic length (dimensionless)."""
+    w, _, _ = model.law_values(t)
+    return model.call("phi", q=q, w=w) / model.row_scale
+
+
+def _violations(model: Model, scaled: np.ndarray, count: int = 5) -> str:
+    worst = np.argsort(-np.abs(scaled))[:count]
+    return ", ".join(f"{model.rows[i].name} = {scaled[i] * model.row_scale[i]:.3g}"
+                     + (" m" if model.rows[i].kind == "length" else " rad")
+                     for i in worst if abs(scaled[i]) > 0)
+
+
+def assemble_positions(model: Model, q: np.ndarray | None = None, t: float = 0.0, *,
+                       tol: float = 1e-12, max_iterations: int = 60,
+                       counts: dict | None = None) -> np.ndarray:
+    """A configuration satisfying every constraint at time ``t``, near the guess ``q``.
+
+    Parameters
+    ----------
+    q : ndarray (n_q,), optional
+        Rough guess (default: the scene's initial poses).
+    tol : float
+        On ``max |phi_i| / s_i`` with ``s_i`` the characteristic length for length rows and 1
+        for angle rows.
+    counts : dict, optional
+        Receives the work done: ``newton`` (iterations, each a Jacobian evaluation and a
+        factorisation) added to what it holds.
+
+    Raises
+    ------
+    AssemblyError
+        Naming the constraints still violated when Newton's method stalls.
+    """
+    q = model.normalize(model.q0 if q is None else q)
+    w, _, _ = model.law_values(t)
+    if model.n_c == 0:
+        return q
+    residual = model.call("phi", q=q, w=w) / model.row_scale
+    if not np.all(np.isfinite(residual)) or not np.all(np.isfinite(q)):
+        raise AssemblyError(f"{_subject(model)}: the constraint residuals are not finite at "
+                            "the initial guess (check the scene's magnitudes and length unit)")
+    merit = float(np.max(np.abs(residual)))
+    polished = False
+    for _ in range(max_iterations):
+        if merit <= tol:
+            if polished:
+                return q
+            # Newton converges quadratically: one more step takes the residual to round-off
+            # (joint points coincide to ~1e-16 m instead of ~tol), kept only if it helps
+            polished = True
+        Phi_v = model.call("Phi_v", q=q, w=w)
+        split = rank_split(model, Phi_v)
+        if counts is not None:
+            counts["newton"] = counts.get("newton", 0) + 1
+        dv = model.mass_inv_sqrt @ split.min_norm_correction(-residual * model.row_scale)
+        step = 1.0
+        while True:  # backtracking line search on the largest scaled residual
+            trial = model.integrate(q, step * dv)
+            trial_residual = model.call("phi", q=trial, w=w) / model.row_scale
+            trial_merit = float(np.max(np.abs(trial_residual)))
+            if trial_merit < merit or (trial_merit <= tol and not polished):
+                break
+            step *= 0.5
+            if polished or step < 1e-4:
+                break
+        if trial_merit >= merit and (polished or trial_merit > tol):
+            if polished:
+                return q
+            break
+        q, residual, merit = trial, trial_residual, trial_merit
+    if merit <= tol:
+        return q
+    raise AssemblyError(
+        f"{_subject(model)}: cannot assemble the constraints at t = {t:g} from the given "
+        f"guess (largest violations: {_violations(model, residual)}); check the joint "
+        "frames and initial poses, or the driver laws at that time")
+
+
+def solve_velocities(model: Model, q: np.ndarray, t: float = 0.0,
+                     v: np.ndarray | None = None) -> np.ndarray:
+    """Velocities satisfying ``Phi_v v = nu`` closest to ``v`` in the kinetic-energy norm."""
+    v = model.v0 if v is None else np.asarray(v, dtype=float)
+    if model.n_c == 0:
+        return v.copy()
+    w, wd, _ = model.law_values(t)
+    Phi_v = model.call("Phi_v", q=q, w=w)
+    nu = model.call("nu", q=q, w=w, wd=wd)
+    split = rank_split(model, Phi_v)
+    residual = nu - Phi_v @ v
+    dy = split.min_norm_correction(residual)
+    # relative to the velocities themselves: re-projecting a consistent state makes a
+    # correction of round-off, against which Bricard's redundant row looked inconsistent
+    size = float(np.linalg.norm(model.mass @ (model.mass_inv_sqrt @ v)))  # |M^1/2 v|
+    _check(model, split, dy, residual, "velocity constraints", size)
+    return v + model.mass_inv_sqrt @ dy
+
+
+def solve_accelerations(model: Model, q: np.ndarray, v: np.ndarray,
+                        t: float = 0.0) -> np.ndarray:
+    """Accelerations satisfying ``Phi_v v_dot = gamma`` of least kinetic-energy norm (unique for
+    a fully driven mechanism): the acceleration analysis of prescribed motion."""
+    w, wd, wdd = model.law_values(t)
+    Phi_v = model.call("Phi_v", q=q, w=w)
+    gamma = model.call("gamma", q=q, v=v, w=w, wd=wd, wdd=wdd)
+    split = rank_split(model, Phi_v)
+    y = split.min_norm_correction(gamma)
+    _check(model, split, y, gamma, "acceleration constraints")
+    return model.mass_inv_sqrt @ y
+
+
+def consistent_state(model: Model, t: float = 0.0, q: np.ndarray | None = None,
+                     v: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Positions assembled and velocities projected at time ``t`` from guesses (default: the
+    scene's initial state)."""
+    q = assemble_positions(model, q, t)
+    return q, solve_velocities(model, q, t, v)
+
+
+def degrees_of_freedom(model: Model, q: np.ndarray, t: float = 0.0) -> dict:
+    """Numerical mobility at ``q``: ``n_v - rank(Phi_v)`` of the joints alone and with the
+    drivers, and the redundant rows (named)."""
+    w, _, _ = model.law_values(t)
+    Phi_v = model.call("Phi_v", q=q, w=w)
+    split = rank_split(model, Phi_v)
+    driver_rows = {d.row for d in model.drivers}
+    joint_rows = np.array([i for i in range(model.n_c) if i not in driver_rows], dtype=int)
+    W, d = split.W[joint_rows], split.scale[joint_rows]
+    priority = [i for i in model.row_priority if i not in driver_rows]
+    position = {row: k for k, row in enumerate(joint_rows)}
+    joint_split = split_rows(W, d, np.array([position[i] for i in priority], dtype=int),
+                             model.rank_tolerance)
+    return {
+        "dof": model.n_v - joint_split.rank,
+        "dof_with_drivers": model.n_v - split.rank,
+        "redundant_rows": [model.rows[i].name for i in split.redundant],
+    }
+
+
+def body_poses(model: Model, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """World poses of every body's centre-of-mass frame over samples ``q`` (N, n_q): positions
+    (N, n_bodies, 3) and rotations (N, n_bodies, 3, 3), planar poses embedded in 3-D (z = 0,
+    rotation about z) and particles with the identity."""
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    n, n_b = q.shape[0], len(model.bodies)
+    position, rotation = np.zeros((n, n_b, 3)), np.tile(np.eye(3), (n, n_b, 1, 1))
+    for b, body in enumerate(model.bodies):
+        qb = q[:, body.q]
+        if body.kind == "spatial":
+            position[:, b] = qb[:, :3]
+            rotation[:, b] = np.moveaxis(rotation_from_euler_parameters(qb[:, 3:].T), -1, 0)
+        elif body.kind == "planar":
+            position[:, b, :2] = qb[:, :2]
+            c, s = np.cos(qb[:, 2]), np.sin(qb[:, 2])
+            rotation[:, b, :2, :2] = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], 1)
+        else:
+            position[:, b, :qb.shape[1]] = qb
+    return position, rotation
+
+
+def marker_trajectories(model: Model, q: np.ndarray, marker: str) -> dict[str, np.ndarray]:
+    """World positions (N, 3) over samples ``q`` of the markers named ``marker``, by body (every
+    body that has one)."""
+    owners = [b for b, body in enumerate(model.bodies) if marker in body.markers]
+    if not owners:
+        return {}
+    position, rotation = body_poses(model, q)
+    out = {}
+    for b in owners:
+        offset = model.bodies[b].markers[marker].position
+        offset = np.concatenate([offset, np.zeros(3 - offset.size)])
+        out[model.bodies[b].name] = position[:, b] + rotation[:, b] @ offset
+    return out

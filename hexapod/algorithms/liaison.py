@@ -1,0 +1,190 @@
+"""Liaison forces: the wrench each joint transmits, from the multipliers (DESIGN section 1).
+
+**Report convention**: the wrench exerted **by the parent on the child**, **about the joint
+origin**, **in the child's joint frame**. For joint ``k`` it gathers the joint's own rows, the
+driver rows on it and the force elements acting across it. From a generalized force ``g`` on
+the child (``g = -Phi_v^T lambda`` over those rows, plus the elements' forces): the force ``f``
+and the moment about the centre of mass ``n'`` (body axes) are moved to the joint origin ``P``,
+``T_P = A n' + (r - P) x f``, then expressed in the joint frame. When the child is the ground,
+the parent's generalized force is used with the opposite sign (action and reaction).
+
+Planar wrenches are embedded in 3-D: ``(Fx, Fy, 0)`` and ``(0, 0, Tz)``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from hexapod.model.model import GROUND_INDEX, JointInfo, Model
+
+
+@dataclass(frozen=True)
+class JointWrenches:
+    """Wrenches of every joint at one state. Arrays have one row per joint, in model order.
+
+    Attributes
+    ----------
+    names : tuple of str
+    force, torque : ndarray (n_joints, 3)
+        N and N m, about the joint origin, in the child's joint frame (or world axes when
+        computed with ``frame="world"``).
+    effort : ndarray (n_joints,)
+        The axial component ``tau`` of revolute and prismatic joints (torque about the axis,
+        force along it), NaN for the other joints. Equals ``-lambda`` of a driver on the joint
+        plus the efforts and torsion springs acting across it.
+    frame : str
+    """
+
+    names: tuple[str, ...]
+    force: np.ndarray
+    torque: np.ndarray
+    effort: np.ndarray
+    frame: str
+
+    def as_dict(self) -> dict[str, dict[str, float]]:
+        out = {}
+        for k, name in enumerate(self.names):
+            row = dict(zip(("Fx", "Fy", "Fz"), self.force[k].tolist(), strict=True))
+            row.update(zip(("Tx", "Ty", "Tz"), self.torque[k].tolist(), strict=True))
+            if np.isfinite(self.effort[k]):
+                row["tau"] = float(self.effort[k])
+            out[name] = row
+        return out
+
+
+def _embed_rotation(R: np.ndarray) -> np.ndarray:
+    if R.shape == (3, 3):
+        return R
+    out = np.eye(3)
+    out[:2, :2] = R
+    return out
+
+
+def _embed_vector(x: np.ndarray) -> np.ndarray:
+    """2-D columns (2, m) -> 3-D (3, m) with zero z."""
+    return x if x.shape[0] == 3 else np.vstack([x, np.zeros((1,) + x.shape[1:])])
+
+
+def joint_origin(model: Model, q: np.ndarray, joint: JointInfo):
+    """World position (3-D) and rotation (3 x 3) of the joint frame, which is fixed to the child."""
+    pose = model.body_pose(q, joint.child) @ joint.child_frame
+    return _embed_vector(pose.position[:, None])[:, 0], _embed_rotation(pose.rotation)
+
+
+def body_wrench(model: Model, q: np.ndarray, body: int, G: np.ndarray,
+                point: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Force and moment about ``point`` (world, 3-D) of generalized forces ``G`` (n_v, m) acting
+    on ``body``: arrays (3, m) in world axes."""
+    info = model.bodies[body]
+    pose = model.body_pose(q, body)
+    g = G[info.v]
+    r = _embed_vector(pose.position[:, None])[:, 0]
+    if info.kind == "spatial":
+        force = g[:3]
+        moment = pose.rotation @ g[3:]
+    elif info.kind == "planar":
+        force = _embed_vector(g[:2])
+        moment = np.vstack([np.zeros((2, g.shape[1])), g[2:3]])
+    else:
+        force = _embed_vector(g)
+        moment = np.zeros_like(force)
+    arm = (r - point)[:, None]
+    return force, moment + np.cross(arm, force, axis=0)
+
+
+def _on_child(model: Model, q: np.ndarray, joint: JointInfo, G: np.ndarray, point: np.ndarray):
+    if joint.child != GROUND_INDEX:
+        return body_wrench(model, q, joint.child, G, point)
+    force, moment = body_wrench(model, q, joint.parent, G, point)
+    return -force, -moment
+
+
+def _joint_rows(joint: JointInfo) -> np.ndarray:
+    return np.concatenate([joint.rows, joint.driver_rows]).astype(int)
+
+
+def parent_point(model: Model, q: np.ndarray, joint: JointInfo):
+    """World position (3-D) and rotation (3 x 3) of the joint's frame on the parent."""
+    pose = model.body_pose(q, joint.parent) @ joint.parent_frame
+    return _embed_vector(pose.position[:, None])[:, 0], _embed_rotation(pose.rotation)
+
+
+def joint_wrenches(model: Model, q: np.ndarray, lam: np.ndarray, Phi_v: np.ndarray,
+                   Q_across: np.ndarray | None = None, frame: str = "joint",
+                   on: str = "child") -> JointWrenches:
+    """Wrench of every joint (report convention) from the multipliers ``lam``.
+
+    ``Q_across`` is ``model.Q_across`` evaluated at the same state (None when the model has no
+    force element across a joint); ``frame="world"`` gives world components instead.
+    ``on="parent"`` gives the reaction on the parent: the opposite wrench, its moment about the
+    parent's joint point (which differs from the child's for prismatic and distance joints),
+    in the parent's joint frame (or world axes); ``effort`` stays that of the child.
+    """
+    if on not in ("child", "parent"):
+        raise ValueError(f"on must be 'child' or 'parent', got {on!r}")
+    n = len(model.joints)
+    force, torque, effort = np.zeros((n, 3)), np.zeros((n, 3)), np.full(n, np.nan)
+    for k, joint in enumerate(model.joints):
+        rows = _joint_rows(joint)
+        g = -Phi_v[rows].T @ lam[rows]
+        if joint.across_column >= 0 and Q_across is not None:
+            g = g + Q_across[:, joint.across_column]
+        origin, R = joint_origin(model, q, joint)
+        f, t = _on_child(model, q, joint, g[:, None], origin)
+        f, t = f[:, 0], t[:, 0]
+        if joint.kind == "prismatic":
+            effort[k] = f @ (R @ _embed_vector(np.asarray(joint.axis, float)[:, None])[:, 0])
+        elif joint.kind == "revolute":  # about the axis; in the plane, about its normal
+            axis = np.array([0.0, 0.0, 1.0]) if joint.axis is None else joint.axis
+            effort[k] = t @ (R @ axis)
+        if on == "parent":
+            point, R = parent_point(model, q, joint)
+            f, t = -f, -t + np.cross(origin - point, -f)
+        if frame == "joint":
+            f, t = R.T @ f, R.T @ t
+        force[k], torque[k] = f, t
+    return JointWrenches(tuple(j.name for j in model.joints), force, torque, effort, frame)
+
+
+def driver_efforts(model: Model, lam: np.ndarray) -> dict[str, float]:
+    """The effort each driver exerts along its coordinate: ``-lambda_d`` (N m, N)."""
+    return {d.name: float(-lam[d.row]) for d in model.drivers}
+
+
+def policy_map(model: Model, q: np.ndarray, Phi_v: np.ndarray,
+               Q_across: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The linear map from multipliers to the wrenches of the redundancy policy, and its offset.
+
+    One block of 6 rows per joint (force, moment about the joint origin divided by the
+    characteristic length ``l``; world axes, since norms do not depend on axes) and per
+    coordinate driver (force and moment about the body's centre of mass). The policy minimises
+    ``|map @ lam + offset|^2``.
+    """
+    length = model.characteristic_length
+    owners = len(model.joints) + sum(d.kind == "coordinate" for d in model.drivers)
+    A = np.zeros((6 * owners, model.n_c))
+    offset = np.zeros(6 * owners)
+    block = 0
+    for joint in model.joints:
+        rows = _joint_rows(joint)
+        origin, _ = joint_origin(model, q, joint)
+        f, t = _on_child(model, q, joint, -Phi_v[rows].T, origin)
+        A[6 * block:6 * block + 3, rows] = f
+        A[6 * block + 3:6 * block + 6, rows] = t / length
+        if joint.across_column >= 0 and Q_across is not None:
+            g = Q_across[:, joint.across_column][:, None]
+            f0, t0 = _on_child(model, q, joint, g, origin)
+            offset[6 * block:6 * block + 6] = np.concatenate([f0[:, 0], t0[:, 0] / length])
+        block += 1
+    for driver in model.drivers:
+        if driver.kind != "coordinate":
+            continue
+        pose = model.body_pose(q, driver.body)
+        centre = _embed_vector(pose.position[:, None])[:, 0]
+        f, t = body_wrench(model, q, driver.body, -Phi_v[[driver.row]].T, centre)
+        A[6 * block:6 * block + 3, driver.row] = f[:, 0]
+        A[6 * block + 3:6 * block + 6, driver.row] = t[:, 0] / length
+        block += 1
+    return A, offset

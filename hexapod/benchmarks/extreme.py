@@ -1,0 +1,628 @@
+"""The extreme-case suite behind ``hexapod check``: where each method breaks, why, and what to use.
+
+Two studies.
+
+* **Stability of the explicit methods on stiff springs.** For a 1 kg block on a spring-damper of
+  stiffness 1e3 .. 1e9 N/m, the largest stable step predicted by
+  :func:`hexapod.simulation.diagnostics. diagnose` (the method's stability region along the
+  linearised modes) against the one observed: for fixed-step methods the largest step whose run does
+  not gain energy (bisection), for adaptive ones the median step their controller settles on once
+  the motion has died out (the controller then works at the edge of the stability region: Hairer and
+  Wanner, *Solving ODEs II*, IV.2).
+* **Every method on every case** (:func:`run_suite`): finished or failed and why, steps,
+  rejected steps, CPU time, largest constraint drift, energy error, error against an independent
+  reference where the case has one, the condition number along the run; and, per case, the
+  method to use (:func:`recommend`).
+
+A run that finishes with a state grown out of bounds is reported as ``diverged``, not finished.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from hexapod.algorithms.dynamics import forward_dynamics
+from hexapod.algorithms.kinematics import consistent_state
+from hexapod.model.model import Data, Model
+from hexapod.simulation.diagnostics import diagnose
+from hexapod.simulation.loop import simulate
+from hexapod.simulation.registry import DEFAULT_METHOD, INTEGRATORS
+from hexapod.simulation.results import SimulationResult
+
+#: where no run of a case is accurate, its adaptive methods run again at tolerances this much
+#: smaller (a long horizon or a motion near an unstable equilibrium needs them)
+RETRY_TIGHTER = 1e-3
+#: a run is accurate when its error against the reference (relative) is below this; without a
+#: reference, when the energy error (relative to the largest kinetic energy) is below it and
+#: the constraints held to DRIFT_LIMIT
+ACCURACY = 1e-3
+DRIFT_LIMIT = 1e-6
+#: saved states at which the condition number is evaluated along a run
+CONDITION_SAMPLES = 25
+
+
+# ------------------------------------------------------------------ stability of explicit methods
+
+@dataclass
+class StabilityRow:
+    """One explicit method on one stiff spring: predicted and observed largest stable step."""
+
+    stiffness: float
+    method: str
+    predicted: float
+    observed: float
+    how: str  # "bisection" (fixed step) or "median step" (adaptive)
+
+    @property
+    def ratio(self) -> float:
+        return self.observed / self.predicted
+
+    def as_dict(self) -> dict:
+        return {**asdict(self), "ratio": self.ratio}
+
+
+def _energy(model: Model, q: np.ndarray, v: np.ndarray) -> float:
+    kinetic, potential = model.energy(q, v)
+    return float(kinetic) + float(potential)
+
+
+def _grows(model: Model, method: str, step: float, steps: int) -> bool:
+    """Whether ``steps`` fixed steps of ``step`` gain energy on a damped scene (the mark of an
+    unstable step: the exact motion loses energy)."""
+    with np.errstate(over="ignore", invalid="ignore"):  # an unstable step overflows
+        result = simulate(model, step * steps, method=method, step=step, forces=False)
+    if not result.success or not np.all(np.isfinite(result.q[-1])):
+        return True
+    start = _energy(model, result.q[0], result.v[0])
+    tail = max(_energy(model, q, v) for q, v in zip(result.q[-steps // 5:],
+                                                   result.v[-steps // 5:], strict=True))
+    return tail > start
+
+
+def observed_stable_step(model: Model, method: str, predicted: float, *, steps: int = 300,
+                         bisections: int = 14) -> tuple[float, str]:
+    """The largest stable step observed (see the module's description) and how it was found.
+
+    ``model`` must be damped and start away from rest so that a stable run loses energy."""
+    cls = INTEGRATORS[method]
+    if cls.adaptive:
+        result = simulate(model, 1500 * predicted, method=method, rtol=1e-4, atol=1e-10,
+                          forces=False)
+        accepted = np.diff(result.t)
+        return float(np.median(accepted[accepted.size // 2:])), "median step"
+    low, high = predicted / 8, predicted * 8
+    if _grows(model, method, low, steps) or not _grows(model, method, high, steps):
+        return float("nan"), "bisection (no bracket)"
+    for _ in range(bisections):
+        mid = np.sqrt(low * high)
+        if _grows(model, method, mid, steps):
+            high = mid
+        else:
+            low = mid
+    return float(np.sqrt(low * high)), "bisection"
+
+
+#: damping ratio of the stiff springs of the stability study: enough for a stable step to lose
+#: energy within a few hundred steps, little enough to keep the modes oscillatory
+DAMPING_RATIO = 0.2
+
+
+def stiff_spring(stiffness: float):
+    """The scene of the stability study: :func:`hexapod.benchmarks.mechanisms.stiff_slider` (1 kg,
+    released 10 mm from rest) without gravity, at damping ratio :data:`DAMPING_RATIO`."""
+    from hexapod.benchmarks.mechanisms import stiff_slider
+
+    damping = 2 * DAMPING_RATIO * np.sqrt(stiffness)
+    return stiff_slider(stiffness, damping, gravity=False).scene
+
+
+def explicit_methods() -> list[str]:
+    """The registered methods with a stability limit (explicit ones)."""
+    return [name for name, cls in INTEGRATORS.items()
+            if cls.largest_stable_step([1j]) is not None]
+
+
+def stability_study(scene_of: Callable[[float], object], stiffnesses=(1e3, 1e5, 1e7, 1e9),
+                    methods=None, progress: Callable[[str], None] | None = None,
+                    assemble: Callable | None = None) -> list[StabilityRow]:
+    """Predicted and observed largest stable steps of the explicit ``methods`` on the scenes
+    ``scene_of(stiffness)`` (damped, released away from rest)."""
+    from hexapod.model.assemble import assemble as default_assemble
+
+    build = assemble or default_assemble
+    rows = []
+    for k in stiffnesses:
+        model = build(scene_of(k))
+        q, v = consistent_state(model)
+        diagnosis = diagnose(model, 0.0, q, v, methods=methods or explicit_methods(),
+                             distance=False)
+        for method, predicted in diagnosis.stable_steps.items():
+            if predicted is None or not np.isfinite(predicted):
+                continue
+            if progress:
+                progress(f"stability: {method} at k = {k:.0e} N/m")
+            observed, how = observed_stable_step(model, method, predicted)
+            rows.append(StabilityRow(float(k), method, float(predicted), observed, how))
+    return rows
+
+
+def stability_table(rows: list[StabilityRow]) -> str:
+    lines = ["| stiffness (N/m) | method | predicted step (s) | observed step (s) | "
+             "observed / predicted | observed by |", "|---|---|---|---|---|---|"]
+    for r in rows:
+        lines.append(f"| {r.stiffness:.0e} | {r.method} | {r.predicted:.3e} | "
+                     f"{r.observed:.3e} | {r.ratio:.2f} | {r.how} |")
+    return "\n".join(lines)
+
+
+def stability_figure(rows: list[StabilityRow]):
+    """Predicted (lines) and observed (markers) largest stable steps against stiffness."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    figure, axis = plt.subplots(figsize=(7.0, 4.6), layout="constrained")
+    methods = list(dict.fromkeys(r.method for r in rows))
+    for k, method in enumerate(methods):
+        mine = [r for r in rows if r.method == method]
+        stiffness = [r.stiffness for r in mine]
+        colour = f"C{k % 10}"
+        axis.loglog(stiffness, [r.predicted for r in mine], "-", color=colour,
+                    label=f"{method}: predicted")
+        axis.fill_between(stiffness, [r.predicted / 2 for r in mine],
+                          [r.predicted * 2 for r in mine], color=colour, alpha=0.08)
+        axis.loglog(stiffness, [r.observed for r in mine], "o", color=colour,
+                    label=f"{method}: observed ({mine[0].how})")
+    axis.set_xlabel("spring stiffness (N/m), 1 kg block, damping ratio 0.2")
+    axis.set_ylabel("largest stable step (s)")
+    axis.set_title("Explicit methods: predicted (band: factor 2) and observed stable steps",
+                   fontsize=10)
+    axis.grid(True, which="both", alpha=0.3)
+    axis.legend(fontsize=7)
+    return figure
+
+
+# ------------------------------------------------------------------ every method on every case
+
+@dataclass
+class SuiteCase:
+    """One case of the suite. ``error(result)``: relative error of a run against an
+    independent reference, or None when the case has none."""
+
+    name: str
+    category: str
+    description: str
+    model: Model
+    t_end: float
+    error: Callable[[SimulationResult], float] | None = None
+    step: float | None = None  # of fixed-step methods (default: t_end / 1000)
+    rtol: float = 1e-6
+    atol: float = 1e-8
+    notes: list[str] = field(default_factory=list)
+
+
+@dataclass
+class CaseRun:
+    """One method on one case."""
+
+    case: str
+    category: str
+    method: str
+    setting: str
+    status: str  # "finished", "failed", "diverged"
+    reason: str
+    steps: int
+    rejected: int
+    crossings: int  # singular configurations crossed with nearly dependent rows left out
+    cpu_time: float
+    position_drift: float
+    velocity_drift: float
+    energy_error: float | None
+    error: float | None
+    condition_max: float
+    sigma_min: float
+    redundant_rows: list[str]
+    accurate: bool
+    #: the factor on the case's tolerances (below 1: a retry, see run_suite)
+    tighter: float = 1.0
+    #: the run itself, kept for the default method only (the condition figure draws it)
+    result: SimulationResult | None = field(default=None, repr=False, compare=False)
+
+    def as_dict(self) -> dict:
+        return {name: getattr(self, name) for name in self.__dataclass_fields__
+                if name != "result"}
+
+
+def _from_mechanism(case, step_count: int | None = None, rtol: float = 1e-6) -> SuiteCase:
+    """A case of :mod:`hexapod.benchmarks.mechanisms`, assembled, judged against its reference."""
+    from hexapod.model.assemble import assemble
+
+    model = assemble(case.scene)
+
+    def error(result: SimulationResult) -> float:
+        return case.error(model, result.t, result.q)
+
+    step = case.t_end / step_count if step_count else None
+    return SuiteCase(case.name, case.category, case.description, model, case.t_end, error,
+                     step=step, rtol=rtol, atol=rtol * 1e-2 * case.length, notes=case.notes)
+
+
+def _standing_case(scene, t_end: float) -> SuiteCase:
+    """The hexapod standing on its feet: its exact motion is rest (the pose is an equilibrium:
+    gravity is vertical and the feet carry it); the error is the largest displacement of any
+    body's centre of mass relative to the legs' size."""
+    from hexapod.algorithms.kinematics import body_poses
+    from hexapod.model.assemble import assemble
+
+    model = assemble(scene)
+    q0, _ = consistent_state(model)
+    start = body_poses(model, q0)[0][0]
+
+    def error(result: SimulationResult) -> float:
+        moved = np.abs(body_poses(model, result.q)[0] - start).max()
+        return float(moved / model.characteristic_length)
+
+    return SuiteCase(scene.name, "redundant", "six feet on the ground, every joint held: "
+                     "the foot forces are statically indeterminate", model, t_end, error)
+
+
+def build_suite(quick: bool = False, standing=None) -> list[SuiteCase]:
+    """The extreme cases (:mod:`hexapod.benchmarks.mechanisms`), and the standing hexapod when its
+    scene is given. ``quick``: shorter runs, one stiffness in three (for the tests)."""
+    import hexapod.benchmarks.mechanisms as m
+
+    if quick:
+        chosen = [(m.stiff_slider(1e3), None), (m.stiff_slider(1e9, t_end=0.02), None),
+                  (m.flyball_governor(t_end=1.0), None), (m.n_four_bar(t_end=2.0), None),
+                  (m.bricard(t_end=2.0), None), (m.four_bar_dead_points(), None),
+                  (m.mass_ratio(t_end=0.2), None), (m.stretched_leg(), None),
+                  (m.long_pendulum(periods=20), 2000), (m.large_step_pendulum(periods=2), 20)]
+    else:
+        chosen = [(m.stiff_slider(k), None) for k in (1e3, 1e5, 1e7, 1e9)] + [
+            (m.stiff_spring_pendulum(), None), (m.flyball_governor(), None),
+            (m.n_four_bar(), None), (m.n_four_bar(dimension=3), None), (m.bricard(), None),
+            (m.four_bar_dead_points(), None), (m.four_bar_dead_points(driven=True), None),
+            (m.mass_ratio(), None), (m.mass_ratio_pendulum(), None), (m.stretched_leg(), None),
+            (m.stretched_leg(driven=True), None),
+            # the long horizon: 1e5 fixed steps; very large steps: 10 per period
+            (m.long_pendulum(), 100_000), (m.large_step_pendulum(), 100)]
+    cases = [_from_mechanism(case, steps) for case, steps in chosen]
+    if standing is not None:
+        cases.append(_standing_case(standing, 0.5 if quick else 2.0))
+    return cases
+
+
+def scene_case(name: str, model: Model, t_end: float) -> SuiteCase:
+    """A user's scene as a case: no reference, judged by its drift and energy."""
+    return SuiteCase(name, "scene", "the given scene", model, t_end)
+
+
+def _setting(case: SuiteCase, method: str) -> dict:
+    if INTEGRATORS[method].adaptive:
+        return {"rtol": case.rtol, "atol": case.atol}
+    return {"step": case.step or case.t_end / 1000}
+
+
+def _label(setting: dict) -> str:
+    return f"h={setting['step']:.3g}" if "step" in setting else f"rtol={setting['rtol']:.0e}"
+
+
+def _along_run(model: Model, result: SimulationResult) -> tuple[float, float, list[str]]:
+    """Largest condition number and smallest singular value of the equilibrated system over
+    saved states, and the rows found redundant on the way."""
+    count = result.t.size
+    picks = np.unique(np.linspace(0, count - 1, min(CONDITION_SAMPLES, count)).astype(int))
+    worst, smallest, redundant = 1.0, np.inf, {}
+    data = Data()
+    for k in picks:
+        q, v = result.q[k], result.v[k]
+        if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
+            break
+        try:
+            forward_dynamics(model, data, float(result.t[k]), q, v, condition=True)
+        except Exception:  # noqa: BLE001 - a state the run reached but the solve refuses
+            worst = np.inf
+            break
+        worst = max(worst, data.condition_number)
+        smallest = min(smallest, data.sigma_min)
+        for row in data.redundant_rows:
+            redundant[model.rows[row].name] = None
+    return float(worst), float(smallest), list(redundant)
+
+
+def _at_rest(model: Model, result: SimulationResult) -> bool:
+    """Whether the run never moved (its largest kinetic energy is round-off)."""
+    picks = np.linspace(0, result.t.size - 1, min(CONDITION_SAMPLES, result.t.size)).astype(int)
+    kinetic = max(float(model.energy(result.q[k], result.v[k])[0]) for k in picks)
+    return kinetic < 1e-20
+
+
+def _diverged(result: SimulationResult) -> str:
+    """Why a finished run is not to be believed: non-finite or runaway states."""
+    if not (np.all(np.isfinite(result.q)) and np.all(np.isfinite(result.v))):
+        return "the state became non-finite"
+    speed = np.abs(result.v).max(axis=1)
+    if speed[-1] > 1e3 * max(speed[0], np.median(speed), 1e-3):
+        return f"speeds grew from {speed[0]:.3g} to {speed[-1]:.3g} (unstable step)"
+    return ""
+
+
+def run_case(case: SuiteCase, method: str, *, budget: float = 60.0,
+             tighter: float = 1.0) -> CaseRun:
+    """One method on one case, at the case's setting for it (an adaptive method's tolerances
+    multiplied by ``tighter``)."""
+    setting = _setting(case, method)
+    if "rtol" in setting:
+        setting = {name: value * tighter for name, value in setting.items()}
+    result = simulate(case.model, case.t_end, method=method, forces=False, cpu_budget=budget,
+                      **setting)
+    status, reason = result.status, result.message
+    if result.success:
+        why = _diverged(result)
+        if why:
+            status, reason = "diverged", why
+    conserved = result.energy_drift if case.model.energy_conserved else None
+    if conserved is not None and _at_rest(case.model, result):
+        conserved = None  # relative to a kinetic energy of zero: meaningless
+    error = None
+    if status == "finished" and case.error is not None:
+        error = float(case.error(result))
+    condition, sigma, redundant = _along_run(case.model, result)
+    if status != "finished":
+        accurate = False
+    elif error is not None:
+        accurate = error <= ACCURACY
+    else:
+        accurate = (result.max_position_violation <= DRIFT_LIMIT
+                    and (conserved is None or conserved <= ACCURACY))
+    return CaseRun(case.name, case.category, method, _label(setting), status, reason,
+                   result.counters.steps, result.counters.rejected,
+                   result.counters.crossings, result.cpu_time,
+                   result.max_position_violation, result.max_velocity_violation, conserved,
+                   error, condition, sigma, redundant, accurate,
+                   tighter=tighter,
+                   result=result if method == DEFAULT_METHOD else None)
+
+
+def run_suite(cases: list[SuiteCase], methods=None, *, budget: float = 60.0,
+              progress: Callable[[str], None] | None = None) -> list[CaseRun]:
+    """Every method (default: the registry) on every case. Where no run is accurate, the
+    adaptive methods that finished run again with tolerances ``RETRY_TIGHTER`` times smaller,
+    so that the recommendation names a setting that works when one does."""
+    runs = []
+
+    def run(case, method, tighter=1.0):
+        if progress:
+            progress(f"{case.name}: {method}")
+        started = time.perf_counter()
+        runs.append(run_case(case, method, budget=budget, tighter=tighter))
+        if progress:
+            done = runs[-1]
+            progress(f"{case.name}: {method} ({done.setting}) {done.status}"
+                     f"{' (accurate)' if done.accurate else ''} in "
+                     f"{time.perf_counter() - started:.1f} s")
+
+    for case in cases:
+        first = len(runs)
+        for method in methods or INTEGRATORS:
+            run(case, method)
+        mine = runs[first:]
+        if not any(r.accurate for r in mine):
+            for r in mine:
+                if r.status == "finished" and INTEGRATORS[r.method].adaptive:
+                    run(case, r.method, RETRY_TIGHTER)
+    return runs
+
+
+def recommend(runs: list[CaseRun]) -> str:
+    """The method to use on one case: the cheapest accurate run; else the most accurate."""
+    good = sorted((r for r in runs if r.accurate), key=lambda r: r.cpu_time)
+    if good:
+        best = good[0]
+        others = ", ".join(list(dict.fromkeys(
+            r.method for r in good[1:] if r.method != best.method))[:3])
+        return (f"{best.method} at {best.setting} ({best.cpu_time:.3g} s)"
+                + (f"; also accurate: {others}" if others else ""))
+    finished = [r for r in runs if r.status == "finished"]
+    if finished:
+        best = min(finished, key=lambda r: (r.error if r.error is not None else np.inf,
+                                            r.position_drift))
+        return f"none accurate to {ACCURACY:g}; closest: {best.method} (tighten its setting)"
+    return "none finished"
+
+
+def _number(x, digits: int = 2) -> str:
+    if x is None:
+        return "-"
+    if not np.isfinite(x):
+        return "inf"
+    return f"{x:.{digits}g}" if abs(x) >= 1e-3 or x == 0 else f"{x:.{digits - 1}e}"
+
+
+def suite_table(runs: list[CaseRun]) -> str:
+    """Markdown: one row per run, the recommendation after each case."""
+    lines = ["| case | method | setting | outcome | steps | rejected | crossings | CPU (s) | "
+             "drift | energy error | error | max cond | min sigma |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for case in dict.fromkeys(r.case for r in runs):
+        mine = [r for r in runs if r.case == case]
+        for r in mine:
+            outcome = r.status + (", accurate" if r.accurate else "")
+            if r.status != "finished":
+                outcome += ": " + r.reason.split(": ", 1)[-1][:90]
+            lines.append(
+                f"| {case} | {r.method} | {r.setting} | {outcome} | {r.steps} | {r.rejected} | "
+                f"{r.crossings} | {r.cpu_time:.3g} | {_number(r.position_drift)} | "
+                f"{_number(r.energy_error)} | "
+                f"{_number(r.error)} | {_number(r.condition_max)} | {_number(r.sigma_min)} |")
+        lines.append(f"| **{case}** | **use** | | {recommend(mine)} | | | | | | | | | |")
+    return "\n".join(lines)
+
+
+def recommendations(runs: list[CaseRun], cases: list[SuiteCase]) -> str:
+    """Markdown: per case, its category, what is extreme about it, the recommendation."""
+    lines = ["| case | category | what is extreme | redundant rows | use |",
+             "|---|---|---|---|---|"]
+    for case in cases:
+        mine = [r for r in runs if r.case == case.name]
+        redundant = sorted({row for r in mine for row in r.redundant_rows})
+        shown = ", ".join(redundant[:4]) + (f" (+{len(redundant) - 4})" if len(redundant) > 4
+                                           else "")
+        lines.append(f"| {case.name} | {case.category} | {case.description} | "
+                     f"{shown or '-'} | {recommend(mine)} |")
+    return "\n".join(lines)
+
+
+def runs_csv(runs: list[CaseRun]) -> str:
+    rows = [{**r.as_dict(), "redundant_rows": " ".join(r.redundant_rows)} for r in runs]
+    return _rows_csv(rows) if rows else ""
+
+
+def outcome_figure(runs: list[CaseRun]):
+    """Cases against methods: green accurate, yellow finished but inaccurate, red failed or
+    diverged; each cell gives the CPU time."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import ListedColormap
+
+    def column(r):
+        return r.method if r.tighter == 1.0 else f"{r.method}, tol x {r.tighter:g}"
+
+    cases = list(dict.fromkeys(r.case for r in runs))
+    methods = list(dict.fromkeys(column(r) for r in runs))
+    grid = np.full((len(cases), len(methods)), np.nan)
+    figure, axis = plt.subplots(figsize=(1.3 * len(methods) + 2.5, 0.42 * len(cases) + 1.6),
+                                layout="constrained")
+    for r in runs:
+        i, j = cases.index(r.case), methods.index(column(r))
+        grid[i, j] = 2 if r.accurate else (1 if r.status == "finished" else 0)
+        axis.text(j, i, f"{r.cpu_time:.2g} s" if r.status == "finished" else r.status,
+                  ha="center", va="center", fontsize=7)
+    axis.imshow(grid, cmap=ListedColormap(["#f4a6a6", "#f6e3a1", "#b7e4b0"]), vmin=0, vmax=2,
+                aspect="auto")
+    axis.set_xticks(range(len(methods)), methods, rotation=30, ha="right", fontsize=8)
+    axis.set_yticks(range(len(cases)), cases, fontsize=8)
+    axis.set_title("green: accurate; yellow: finished, not accurate; red: failed or diverged "
+                   "(CPU time in the cell)", fontsize=9)
+    return figure
+
+
+def condition_figure(cases: list[SuiteCase], runs: list[CaseRun], samples: int = 200):
+    """The condition number of the equilibrated saddle-point matrix and the smallest singular
+    value of the equilibrated ``Phi_v`` along the default method's run of each case (from
+    ``runs``, or run here when the suite left the default method out)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    figure, (top, bottom) = plt.subplots(2, 1, figsize=(7.0, 5.6), sharex=True,
+                                         layout="constrained")
+    data = Data()
+    kept = {r.case: r.result for r in runs if r.result is not None}
+    for case in cases:
+        result = kept.get(case.name) or simulate(
+            case.model, case.t_end, method=DEFAULT_METHOD, rtol=case.rtol, atol=case.atol,
+            forces=False, cpu_budget=60.0)
+        picks = np.unique(np.linspace(0, result.t.size - 1, min(samples, result.t.size))
+                          .astype(int))
+        cond, sigma = [], []
+        for k in picks:
+            forward_dynamics(case.model, data, float(result.t[k]), result.q[k], result.v[k],
+                             condition=True)
+            cond.append(data.condition_number)
+            sigma.append(data.sigma_min)
+        fraction = result.t[picks] / case.t_end
+        top.semilogy(fraction, cond, label=case.name)
+        bottom.semilogy(fraction, sigma, label=case.name)
+    top.set_ylabel("condition number (equilibrated)")
+    bottom.set_ylabel("smallest singular value")
+    bottom.set_xlabel(f"fraction of the run ({DEFAULT_METHOD})")
+    top.set_title("Conditioning along the runs", fontsize=10)
+    for axis in (top, bottom):
+        axis.grid(True, which="both", alpha=0.3)
+    top.legend(fontsize=7)
+    return figure
+
+
+# ------------------------------------------------------------------ the report
+
+def diagnosis_table(diagnoses: dict) -> str:
+    """Markdown: the diagnostics of each case at its start."""
+    def n(x):
+        return _number(x, 3)
+
+    lines = ["| case | DOF (counted) | redundant rows | cond (equilibrated / as written) | "
+             "min sigma | distance to singular | stiffness ratio | fastest mode (1/s) | "
+             "stable step rk4 / dopri5 / dop853 / rattle (s) |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for name, d in diagnoses.items():
+        steps = " / ".join(n(d.stable_steps.get(m)) for m in
+                           ("rk4-baumgarte", "dopri5-projection", "dop853-projection",
+                            "rattle"))
+        lines.append(f"| {name} | {d.dof} ({d.dof_counted}) | {len(d.redundant_rows)} | "
+                     f"{n(d.condition_number)} / {n(d.condition_number_unscaled)} | "
+                     f"{n(d.sigma_min)} | {n(d.singular_distance)} | {n(d.stiffness_ratio)} | "
+                     f"{n(d.fastest_rate)} | {steps} |")
+    return "\n".join(lines)
+
+
+def report_files(cases: list[SuiteCase], runs: list[CaseRun], diagnoses: dict,
+                 stability: list[StabilityRow], command: str) -> dict[str, bytes]:
+    """The files of ``hexapod check``: ``check.md``, ``runs.csv``, ``diagnostics.json``,
+    ``stability.csv`` and the figures (written together, atomically, by the caller)."""
+    import json
+
+    from hexapod.output.figures import png_bytes
+
+    text = ["# Extreme-case check", "", f"Command: `{command}`. CPU time of each run's time "
+            "loop. An accurate run is within "
+            f"{ACCURACY:g} of the case's independent reference (relative), or, without one, "
+            f"holds the constraints to {DRIFT_LIMIT:g} and the energy to {ACCURACY:g}.", "",
+            "## What to use", "", recommendations(runs, cases), "",
+            "## Diagnostics at the start", "", diagnosis_table(diagnoses), ""]
+    if stability:
+        text += ["## Largest stable step of the explicit methods on stiff springs", "",
+                 stability_table(stability), ""]
+    text += ["## Every method on every case", "", suite_table(runs), ""]
+    files = {"check.md": "\n".join(text).encode(), "runs.csv": runs_csv(runs).encode(),
+             "diagnostics.json": json.dumps(
+                 {name: _finite(d.as_dict()) for name, d in diagnoses.items()},
+                 indent=1).encode(),
+             "outcomes.png": png_bytes(outcome_figure(runs))}
+    if stability:
+        files["stability.csv"] = _rows_csv([r.as_dict() for r in stability]).encode()
+        files["stability.png"] = png_bytes(stability_figure(stability))
+    watched = [c for c in cases if c.category in ("singular", "redundant")] or cases[:1]
+    files["condition.png"] = png_bytes(condition_figure(watched, runs))
+    return files
+
+
+def _finite(value):
+    """JSON without NaN or infinity (written as null)."""
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_finite(v) for v in value]
+    if isinstance(value, float | np.floating) and not np.isfinite(value):
+        return None
+    if isinstance(value, np.floating | np.integer):
+        return value.item()
+    return value
+
+
+def _rows_csv(rows: list[dict]) -> str:
+    buffer = io.StringIO()
+    writer = csv.DictWriter(buffer, fieldnames=list(rows[0]), lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
+    return buffer.getvalue()

@@ -1,0 +1,5 @@
+"""The ``hexapod`` command (layer 7)."""
+
+from hexapod.cli.main import main
+
+__all__ = ["main"]

@@ -1,0 +1,5 @@
+import sys
+
+from hexapod.cli.main import main
+
+sys.exit(main())

@@ -1,0 +1,390 @@
+"""``assemble(scene) -> Model``: the scene's constraints and forces as CasADi expressions.
+
+Only what the scene contains is built: a planar scene has 3 coordinates per body and no 3-D
+terms; a scene without springs has no spring terms; constant laws are folded in as numbers, so
+the law inputs ``w, wd, wdd`` carry only the laws that change with time.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from hexapod._support.graphs import spanning_forest
+from hexapod.model.forces import ForceBuilder, gravity_potential, inertial_forces
+from hexapod.model.frames import BodyState
+from hexapod.model.joints import (
+    ROWS,
+    JointGeometry,
+    distance_rows,
+    driver_row,
+    joint_rate,
+    wrapped_angle,
+)
+from hexapod.model.model import (
+    GROUND_INDEX,
+    BlockDiagonal,
+    BodyInfo,
+    DriverInfo,
+    ForceInfo,
+    JointInfo,
+    Model,
+    RowInfo,
+    Symbolic,
+)
+from hexapod.scene.bodies import Particle, PlanarBody, SpatialBody
+from hexapod.scene.drivers import CoordinateDriver, JointDriver
+from hexapod.scene.element import GROUND
+from hexapod.scene.forces import (
+    AppliedForce,
+    AppliedTorque,
+    JointEffort,
+    RotationalSpringDamper,
+    SpringDamper,
+)
+from hexapod.scene.joints import Distance
+from hexapod.scene.laws import Constant, Law
+from hexapod.scene.scene import Scene
+from hexapod.spatial import Placement, euler_parameters_from_rotation
+
+__all__ = ["assemble"]
+
+
+class _Laws:
+    """Time laws as symbols; constant laws become numbers."""
+
+    def __init__(self):
+        self.laws: list[Law] = []
+        self.w: list[ca.SX] = []
+        self.wd: list[ca.SX] = []
+        self.wdd: list[ca.SX] = []
+
+    def value(self, law: Law, label: str) -> tuple[ca.SX, int]:
+        """The law's value as an expression, and its index (-1 for a constant)."""
+        if isinstance(law, Constant):
+            return ca.SX(law.value), -1
+        index = len(self.laws)
+        self.laws.append(law)
+        for store, suffix in ((self.w, ""), (self.wd, "_d"), (self.wdd, "_dd")):
+            store.append(ca.SX.sym(f"{label}{suffix}"))
+        return self.w[index], index
+
+    def symbols(self) -> tuple[ca.SX, ca.SX, ca.SX]:
+        return tuple(ca.vertcat(*s) if s else ca.SX(0, 1) for s in (self.w, self.wd, self.wdd))
+
+
+def _bodies(scene: Scene):
+    """Body infos, initial coordinates and velocities, mass matrix parts."""
+    infos, q0, v0 = [], [], []
+    diagonal, blocks, block_index = [], [], []
+    nq = nv = 0
+    for index, body in enumerate(scene.bodies.values()):
+        pose = body.com_pose
+        arm = pose.position - body.position  # reference origin -> centre of mass, world
+        if isinstance(body, SpatialBody):
+            kind, dq, dv = "spatial", 7, 6
+            inertia = body.body_inertia
+            q0 += [*pose.position, *euler_parameters_from_rotation(pose.rotation)]
+            v_com = body.velocity + np.cross(body.angular_velocity, arm)
+            v0 += [*v_com, *(pose.rotation.T @ body.angular_velocity)]
+            diagonal += [body.mass] * 3 + [0.0] * 3
+            blocks.append(inertia)
+            block_index.append(list(range(nv + 3, nv + 6)))
+        elif isinstance(body, PlanarBody):
+            kind, dq, dv = "planar", 3, 3
+            inertia = np.array([[body.inertia]])
+            q0 += [*pose.position, body.angle]
+            v_com = body.velocity + body.angular_velocity * np.array([-arm[1], arm[0]])
+            v0 += [*v_com, body.angular_velocity]
+            diagonal += [body.mass, body.mass, body.inertia]
+        else:
+            assert isinstance(body, Particle)
+            kind = "particle"
+            dq = dv = body.dimension
+            inertia = np.zeros((0, 0))
+            q0 += list(body.position)
+            v0 += list(body.velocity)
+            diagonal += [body.mass] * dq
+        infos.append(BodyInfo(body.name, kind, index, slice(nq, nq + dq), slice(nv, nv + dv),
+                              body.mass, inertia, np.array(body.com, dtype=float),
+                              {name: body.marker_in_com_frame(frame)
+                               for name, frame in body.markers.items()}))
+        nq += dq
+        nv += dv
+    mass = BlockDiagonal(np.array(diagonal), np.array(blocks).reshape(-1, 3, 3),
+                         np.array(block_index, dtype=int).reshape(-1, 3))
+    return tuple(infos), np.array(q0, dtype=float), np.array(v0, dtype=float), mass
+
+
+def _state(info: BodyInfo, q: ca.SX, v: ca.SX) -> BodyState:
+    build = {"spatial": BodyState.spatial, "planar": BodyState.planar,
+             "particle": BodyState.particle}[info.kind]
+    return build(q[info.q], v[info.v])
+
+
+def _com_frame(scene: Scene, body: str, frame: Placement) -> Placement:
+    """A frame in a body's reference frame, re-expressed in its centre-of-mass frame."""
+    if body == GROUND:
+        return frame
+    return scene.bodies[body].marker_in_com_frame(frame)
+
+
+#: default axis in the joint frame, in space and in the plane
+_DEFAULT_AXES = {
+    "prismatic": ([0.0, 0.0, 1.0], [1.0, 0.0]),
+    "cylindrical": ([0.0, 0.0, 1.0], [1.0, 0.0]),
+    "planar": ([0.0, 0.0, 1.0], None),
+    "point-on-plane": ([0.0, 0.0, 1.0], [0.0, 1.0]),
+    "universal": ([1.0, 0.0, 0.0], None),
+    "revolute": ([0.0, 0.0, 1.0], None),  # in the plane: the plane's normal, not stored
+}
+
+
+def _unit(axis) -> np.ndarray | None:
+    return None if axis is None else np.asarray(axis, dtype=float) / np.linalg.norm(axis)
+
+
+def _joint_axis(joint, dimension: int) -> np.ndarray | None:
+    """The joint's unit axis in the joint frame (None for joints without one)."""
+    if joint.kind not in _DEFAULT_AXES or (joint.kind == "revolute" and dimension == 2):
+        return None
+    default = _DEFAULT_AXES[joint.kind][0 if dimension == 3 else 1]
+    return _unit(joint.axis if joint.axis is not None else default)
+
+
+def _characteristic_length(scene: Scene, joint_points: list[np.ndarray]) -> float:
+    """The scene's value, else the RMS distance of joint origins and centres of mass from
+    their centroid at the initial pose (1 m when that is zero). SI, so unit-free."""
+    if scene.characteristic_length is not None:
+        return float(scene.characteristic_length)
+    points = joint_points + [b.com_pose.position for b in scene.bodies.values()]
+    if len(points) < 2:
+        return 1.0
+    spread = np.array(points) - np.mean(points, axis=0)
+    largest = float(np.abs(spread).max())
+    if not largest > 0:
+        return 1.0
+    # scaled before squaring, so that huge (but finite) coordinates do not overflow
+    rms = largest * float(np.sqrt(np.mean(np.sum((spread / largest) ** 2, axis=1))))
+    return rms if rms > 1e-12 else 1.0
+
+
+class _Assembly:
+    """The symbols and expressions of one model, built one concern at a time."""
+
+    def __init__(self, si: Scene):
+        self.si = si
+        self.dim = si.dimension
+        self.bodies, self.q0, self.v0, self.mass = _bodies(si)
+        self.index = {b.name: b.index for b in self.bodies}
+        self.q = ca.SX.sym("q", self.q0.size)
+        self.v = ca.SX.sym("v", self.v0.size)
+        self.states = {b.name: _state(b, self.q, self.v) for b in self.bodies}
+        self.states[GROUND] = BodyState.ground(self.dim)
+        self.qdot = (ca.vertcat(*[self.states[b.name].qdot for b in self.bodies])
+                     if self.bodies else ca.SX(0, 1))
+        self.laws = _Laws()
+        self.rows: list[RowInfo] = []
+        self.residuals: list[ca.SX] = []
+        self.geometries: dict[str, JointGeometry] = {}
+        self.joint_points: list[np.ndarray] = []  # world joint origins at the initial pose
+
+    def _add_row(self, name: str, owner: str, unit: str, expr: ca.SX) -> int:
+        self.rows.append(RowInfo(name, owner, unit))
+        self.residuals.append(expr)
+        return len(self.rows) - 1
+
+    def joints(self) -> list[dict]:
+        """Rows of every joint; the spanning tree decides which joints close loops."""
+        si = self.si
+        scene_joints = list(si.joints.values())
+        _, chords = spanning_forest([GROUND, *self.index],
+                                    [(j.parent, j.child) for j in scene_joints])
+        parts = []
+        for k, joint in enumerate(scene_joints):
+            on_parent, on_child = si.joint_frames(joint)  # reference frames of the bodies
+            world_p = si.pose(joint.parent).transform_point(on_parent.position)
+            world_c = si.pose(joint.child).transform_point(on_child.position)
+            self.joint_points.append(world_c)
+            frame_p = _com_frame(si, joint.parent, on_parent)
+            frame_c = _com_frame(si, joint.child, on_child)
+            axis = _joint_axis(joint, self.dim)
+            g = JointGeometry(self.states[joint.parent], self.states[joint.child], frame_p,
+                              frame_c, axis, self.dim, _unit(getattr(joint, "axis2", None)))
+            self.geometries[joint.name] = g
+            if isinstance(joint, Distance):
+                length = joint.length
+                if length is None:
+                    length = float(np.linalg.norm(world_c - world_p))
+                joint_rows = distance_rows(g, length)
+            else:
+                joint_rows = ROWS[joint.kind](g)
+            rows = [self._add_row(f"{joint.name}/{name}", joint.name, unit, expr)
+                    for name, expr, unit in joint_rows]
+            parts.append(dict(name=joint.name, kind=joint.kind, index=k,
+                              parent=self.index.get(joint.parent, GROUND_INDEX),
+                              child=self.index.get(joint.child, GROUND_INDEX),
+                              parent_frame=frame_p, child_frame=frame_c, axis=axis,
+                              rows=np.array(rows, dtype=int), loop_closing=k in chords))
+        return parts
+
+    def drivers(self) -> tuple[list[DriverInfo], dict[str, list[int]]]:
+        """Driver rows, and the rows of the drivers acting on each joint."""
+        si = self.si
+        joint_index = {name: k for k, name in enumerate(si.joints)}
+        offset = {"x": 0, "y": 1, "z": 2, "angle": 2}
+        drivers, on_joint = [], {}
+        for driver in si.drivers.values():
+            f, law = self.laws.value(driver.law, driver.name)
+            if isinstance(driver, JointDriver):
+                joint = si.joints[driver.joint]
+                unit = "length" if joint.kind == "prismatic" else "angle"
+                row = self._add_row(driver.name, driver.name, unit,
+                                    driver_row(joint.kind, self.geometries[joint.name], f))
+                on_joint.setdefault(joint.name, []).append(row)
+                drivers.append(DriverInfo(driver.name, "joint", row, law, driver.law,
+                                          joint=joint_index[joint.name]))
+            else:
+                assert isinstance(driver, CoordinateDriver)
+                body = self.bodies[self.index[driver.body]]
+                unit = "angle" if driver.coordinate == "angle" else "length"
+                coordinate = self.q[body.q.start + offset[driver.coordinate]]
+                row = self._add_row(driver.name, driver.name, unit, coordinate - f)
+                drivers.append(DriverInfo(driver.name, "coordinate", row, law, driver.law,
+                                          body=body.index, coordinate=driver.coordinate))
+        return drivers, on_joint
+
+    def _point(self, body: str, ref) -> tuple[np.ndarray, np.ndarray]:
+        """A point reference: in the body's centre-of-mass frame, and in the world initially."""
+        local = self.si.point(body, ref)
+        return (_com_frame(self.si, body, Placement(local)).position,
+                self.si.pose(body).transform_point(local))
+
+    def _components(self, name: str, laws) -> ca.SX:
+        return ca.vertcat(*[self.laws.value(law, f"{name}[{i}]")[0]
+                            for i, law in enumerate(laws)])
+
+    def forces(self) -> tuple[ForceBuilder, dict[str, list[str]], list[ForceInfo]]:
+        """Generalized forces of every element, the elements acting across each joint (efforts
+        and torsion springs on it; spring-dampers between its two bodies, given to the first
+        such joint), and what each element acts on."""
+        si = self.si
+        builder = ForceBuilder(self.q, self.v, self.qdot)
+        across: dict[str, list[str]] = {}
+        infos: list[ForceInfo] = []
+        joint_index = {name: k for k, name in enumerate(si.joints)}
+
+        def body(name):
+            return self.index.get(name, GROUND_INDEX)
+
+        def on_joint(element):
+            joint = si.joints[element.joint]
+            infos.append(ForceInfo(element.name, element.kind,
+                                   (body(joint.parent), body(joint.child)),
+                                   joint=joint_index[joint.name]))
+            across.setdefault(joint.name, []).append(element.name)
+            return joint, self.geometries[joint.name]
+
+        pairs = {frozenset((j.parent, j.child)): j.name for j in reversed(si.joints.values())}
+        for element in si.forces.values():
+            name = element.name
+            if isinstance(element, SpringDamper):
+                a, b = element.body_a, element.body_b
+                pa, world_a = self._point(a, element.point_a)
+                pb, world_b = self._point(b, element.point_b)
+                free = element.free_length
+                if free is None:
+                    free = float(np.linalg.norm(world_b - world_a))
+                force = None if element.force is None else self.laws.value(element.force,
+                                                                           name)[0]
+                builder.spring_damper(name, self.states[a], pa, self.states[b], pb,
+                                      element.stiffness, element.damping, free, force)
+                if frozenset((a, b)) in pairs:
+                    across.setdefault(pairs[frozenset((a, b))], []).append(name)
+                infos.append(ForceInfo(name, element.kind, (body(a), body(b)), (pa, pb)))
+            elif isinstance(element, AppliedForce):
+                state = self.states[element.body]
+                components = self._components(name, element.force)
+                if element.frame == "body":
+                    components = ca.mtimes(state.R, components)
+                point = self._point(element.body, element.point)[0]
+                builder.force_at(name, state, point, components)
+                builder.nonconservative.append(name)
+                infos.append(ForceInfo(name, element.kind, (body(element.body),), (point,)))
+            elif isinstance(element, AppliedTorque):
+                state = self.states[element.body]
+                components = self._components(name, element.torque)
+                if element.frame == "body" and self.dim == 3:
+                    components = ca.mtimes(state.R, components)
+                builder.torque_on(name, state, components)
+                builder.nonconservative.append(name)
+                infos.append(ForceInfo(name, element.kind, (body(element.body),)))
+            elif isinstance(element, JointEffort):
+                joint, g = on_joint(element)
+                rate = joint_rate(joint.kind, g, self.q, self.qdot)
+                builder.effort(name, rate, self.laws.value(element.law, name)[0])
+                builder.nonconservative.append(name)
+            elif isinstance(element, RotationalSpringDamper):
+                _, g = on_joint(element)
+                rate = joint_rate("revolute", g, self.q, self.qdot)
+                twist = wrapped_angle(g, element.free_angle)
+                torque = -element.stiffness * twist - element.damping * rate
+                builder.potential = builder.potential + element.stiffness * twist**2 / 2
+                if element.torque is not None:
+                    torque = torque + self.laws.value(element.torque, name)[0]
+                if element.damping or element.torque is not None:
+                    builder.nonconservative.append(name)
+                builder.effort(name, rate, torque)
+        return builder, across, infos
+
+    def model(self, rank_tolerance: float) -> Model:
+        parts = self.joints()
+        drivers, on_joint = self.drivers()
+        builder, across, forces = self.forces()
+        n_v = self.v0.size
+        columns, joints = [], []
+        for part in parts:
+            names = tuple(across.get(part["name"], ()))
+            if names:
+                columns.append(sum((builder.terms[n] for n in names), ca.SX.zeros(n_v)))
+            joints.append(JointInfo(**part, driver_rows=np.array(on_joint.get(part["name"], []),
+                                                                 dtype=int),
+                                    across=names, across_column=len(columns) - 1 if names else -1))
+        w, wd, wdd = self.laws.symbols()
+        symbolic = Symbolic(
+            q=self.q, v=self.v, w=w, wd=wd, wdd=wdd, qdot=self.qdot,
+            phi=ca.vertcat(*self.residuals) if self.residuals else ca.SX(0, 1),
+            Q=inertial_forces(self.bodies, self.v, self.si.gravity, n_v) + builder.total(),
+            Q_across=ca.horzcat(*columns) if columns else None,
+            potential=gravity_potential(self.bodies, self.q, self.si.gravity)
+            + builder.potential)
+        # work is done by rheonomic drivers (time laws) and by the non-conservative elements
+        working = [d.name for d in drivers if d.law >= 0] + builder.nonconservative
+        return Model(name=self.si.name, dimension=self.dim, bodies=self.bodies,
+                     joints=tuple(joints), drivers=tuple(drivers), rows=tuple(self.rows),
+                     laws=tuple(self.laws.laws), gravity=self.si.gravity,
+                     characteristic_length=_characteristic_length(self.si, self.joint_points),
+                     q0=self.q0, v0=self.v0, mass=self.mass, symbolic=symbolic,
+                     forces=tuple(forces), rank_tolerance=rank_tolerance,
+                     working_elements=tuple(working), report_forces=self.si.report_forces)
+
+
+def assemble(scene: Scene, *, rank_tolerance: float = 1e-9) -> Model:
+    """Validate ``scene`` and build its :class:`~hexapod.model.model.Model` (SI units).
+
+    Parameters
+    ----------
+    scene : Scene
+    rank_tolerance : float
+        Rows of the equilibrated ``Phi_v`` whose distance to the span of the rows kept before
+        them is below this are redundant (see :mod:`hexapod.algorithms.linalg`).
+
+    Raises
+    ------
+    ModelError
+        Listing every problem of the scene.
+    """
+    scene.validate()
+    model = _Assembly(scene.in_si()).model(rank_tolerance)
+    model.source = scene.source  # the file the scene was read from, named by later errors
+    return model

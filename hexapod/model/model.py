@@ -1,0 +1,552 @@
+"""The assembled model: frozen index maps, the constant mass matrix, and named CasADi Functions.
+
+A :class:`Model` is built once by :func:`hexapod.assemble` and serves any number of runs; the
+algorithms of layer 3 are functions ``f(model, data, t, q, v, ...)`` that keep their per-state
+results in a :class:`Data` workspace (the model/data split of Pinocchio and MuJoCo).
+
+Inputs of every Function (absent ones are dropped from the signature when a scene has no laws):
+
+===========  ======  =====================================================================
+``q``        n_q     positions: per body ``r, p`` (space), ``x, y, angle`` (plane), ``r`` (particle)
+``v``        n_v     velocities: per body ``r_dot, omega'`` (body frame), or coordinate rates
+``w``        n_w     values of the time laws at ``t`` (driver laws and load laws)
+``wd``       n_w     their first time derivatives
+``wdd``      n_w     their second time derivatives
+===========  ======  =====================================================================
+
+Functions: ``phi(q, w)``, ``Phi_q(q, w)``, ``Phi_v(q, w)``, ``nu(q, w, wd)``,
+``gamma(q, v, w, wd, wdd)``, ``M()``, ``Q(q, v, w)``; ``Phi_v v = nu`` and
+``Phi_v v_dot = gamma`` along motions, ``M v_dot + Phi_v^T lambda = Q``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import casadi as ca
+import numpy as np
+
+from hexapod._support.fastcall import FastFunction
+from hexapod.scene.laws import Law
+from hexapod.spatial import (
+    Placement,
+    quaternion_exp,
+    quaternion_log,
+    quaternion_product,
+    rotation_from_euler_parameters,
+)
+
+GROUND_INDEX = -1
+_MATRIX_OUTPUTS = frozenset({"Phi_q", "Phi_v", "M", "Q_across"})
+
+
+@dataclass(frozen=True)
+class BodyInfo:
+    """One body of the model. ``q`` and ``v`` are its slices of the coordinate vectors."""
+
+    name: str
+    kind: str  # "spatial" | "planar" | "particle"
+    index: int
+    q: slice
+    v: slice
+    mass: float
+    inertia: np.ndarray  # about the centre of mass, body axes: 3 x 3, 1 x 1 (plane), 0 x 0
+    com: np.ndarray  # centre of mass in the body's reference frame (for reference-frame poses)
+    markers: dict[str, Placement] = field(default_factory=dict)  # in the centre-of-mass frame
+
+
+@dataclass(frozen=True)
+class JointInfo:
+    """One joint. Frames are given in the centre-of-mass frames of the bodies (world: ground)."""
+
+    name: str
+    kind: str
+    index: int
+    parent: int  # body index, GROUND_INDEX for the ground
+    child: int
+    parent_frame: Placement
+    child_frame: Placement
+    axis: np.ndarray | None  # unit, in the joint frame (revolute, prismatic)
+    rows: np.ndarray  # the joint's own constraint rows
+    driver_rows: np.ndarray  # rows of the drivers acting on this joint
+    loop_closing: bool
+    across: tuple[str, ...] = ()  # force elements acting across the joint
+    across_column: int = -1  # column of Q_across holding them, -1 when none
+
+
+@dataclass(frozen=True)
+class DriverInfo:
+    """One driver row. ``joint`` for joint drivers; ``body`` and ``coordinate`` otherwise."""
+
+    name: str
+    kind: str  # "joint" | "coordinate"
+    row: int
+    law: int  # index into Model.laws, -1 for a constant law (folded into the row)
+    spec: Law | None = None  # the law itself, for descriptions
+    joint: int | None = None
+    body: int | None = None
+    coordinate: str | None = None
+
+
+@dataclass(frozen=True)
+class ForceInfo:
+    """One force element: the bodies it acts on and where (points in the bodies'
+    centre-of-mass frames, world on the ground; none for torques), or the joint it acts across."""
+
+    name: str
+    kind: str  # "spring", "applied-force", "applied-torque", "effort", "rotational-spring"
+    bodies: tuple[int, ...]
+    points: tuple[np.ndarray, ...] = ()
+    joint: int | None = None
+
+
+@dataclass(frozen=True)
+class RowInfo:
+    """One constraint row: its name (``joint/row`` or the driver's name), owner and unit kind."""
+
+    name: str
+    owner: str
+    kind: str  # "length" | "angle"
+
+
+class BlockDiagonal:
+    """A symmetric block-diagonal matrix: scalar entries plus 3 x 3 blocks (spatial rotations).
+
+    ``diagonal`` holds the scalar entries (zero where a block sits); ``blocks[k]`` sits at rows
+    and columns ``block_index[k]``.
+    """
+
+    # make NumPy defer ``ndarray @ BlockDiagonal`` to __rmatmul__
+    __array_ufunc__ = None
+
+    def __init__(self, diagonal: np.ndarray, blocks: np.ndarray, block_index: np.ndarray):
+        self.diagonal = np.asarray(diagonal, dtype=float)
+        self.blocks = np.asarray(blocks, dtype=float).reshape(-1, 3, 3)
+        self.block_index = np.asarray(block_index, dtype=int).reshape(-1, 3)
+        self._block_columns = self.block_index.reshape(-1)
+
+    def map_blocks(self, fn) -> BlockDiagonal:
+        """Apply a matrix function (inverse, square root ...) to every block and scalar."""
+        diagonal = self.diagonal.copy()
+        scalar = np.ones(diagonal.size, dtype=bool)
+        scalar[self._block_columns] = False
+        diagonal[scalar] = [fn(np.array([[d]]))[0, 0] for d in diagonal[scalar]]
+        blocks = np.array([fn(b) for b in self.blocks]).reshape(-1, 3, 3)
+        return BlockDiagonal(diagonal, blocks, self.block_index)
+
+    def __matmul__(self, x: np.ndarray) -> np.ndarray:
+        """``self @ x`` for a vector or a matrix with n rows."""
+        x = np.asarray(x, dtype=float)
+        out = self.diagonal.reshape((-1,) + (1,) * (x.ndim - 1)) * x
+        if self.blocks.size:
+            xb = x[self.block_index]  # (n_b, 3, ...)
+            out[self.block_index] = np.einsum("bij,bj...->bi...", self.blocks, xb)
+        return out
+
+    def __rmatmul__(self, A: np.ndarray) -> np.ndarray:
+        """``A @ self`` for a matrix with n columns."""
+        return (self @ np.asarray(A, dtype=float).T).T
+
+    def dense(self) -> np.ndarray:
+        return self @ np.eye(self.diagonal.size)
+
+
+def _sym_sqrt(J: np.ndarray, power: float) -> np.ndarray:
+    values, vectors = np.linalg.eigh(J)
+    return (vectors * values**power) @ vectors.T
+
+
+@dataclass
+class Symbolic:
+    """The CasADi symbols and expressions a model's Functions are built from."""
+
+    q: ca.SX
+    v: ca.SX
+    w: ca.SX
+    wd: ca.SX
+    wdd: ca.SX
+    qdot: ca.SX  # B(q) v
+    phi: ca.SX
+    Q: ca.SX
+    Q_across: ca.SX | None = None  # n_v x (joints with force elements across them)
+    potential: ca.SX | None = None  # potential energy of gravity and springs (scalar)
+
+
+class Model:
+    """A frozen multibody model. Build it with :func:`hexapod.assemble`."""
+
+    def __init__(self, *, name: str, dimension: int, bodies: tuple[BodyInfo, ...],
+                 joints: tuple[JointInfo, ...], drivers: tuple[DriverInfo, ...],
+                 rows: tuple[RowInfo, ...], laws: tuple[Law, ...], gravity: np.ndarray,
+                 characteristic_length: float, q0: np.ndarray, v0: np.ndarray,
+                 mass: BlockDiagonal, symbolic: Symbolic, forces: tuple[ForceInfo, ...],
+                 rank_tolerance: float = 1e-9, working_elements: tuple[str, ...] = (),
+                 report_forces: bool = False):
+        self.name = name
+        self.report_forces = report_forces
+        self.dimension = dimension
+        self.bodies = bodies
+        self.joints = joints
+        self.drivers = drivers
+        self.rows = rows
+        self.laws = laws
+        self.gravity = gravity
+        self.characteristic_length = characteristic_length
+        self.q0 = q0
+        self.v0 = v0
+        self.mass = mass
+        self.mass_inv = mass.map_blocks(np.linalg.inv)
+        self.mass_inv_sqrt = mass.map_blocks(lambda J: _sym_sqrt(J, -0.5))
+        self.forces = forces
+        self.force_names = tuple(f.name for f in forces)
+        self.rank_tolerance = rank_tolerance
+        #: drivers with time laws and force elements that do work not drawn from a potential
+        #: (dampers, loads, efforts): the energy is conserved when there are none
+        self.working_elements = working_elements
+        self._sym = symbolic
+        self.n_q = q0.size
+        self.n_v = v0.size
+        self.n_c = len(rows)
+        self.n_w = len(laws)
+        self.body_index = {b.name: b.index for b in bodies}
+        self.joint_index = {j.name: j.index for j in joints}
+        self.driver_index = {d.name: i for i, d in enumerate(drivers)}
+        self.row_index = {r.name: i for i, r in enumerate(rows)}
+        #: objects built from the model by the algorithms, kept so that they are built once
+        #: (e.g. the compiled tree-ordered inverse dynamics)
+        self.derived: dict = {}
+        self._fast: dict[str, FastFunction] = {}
+        self._lie_indices()
+
+    # ---------------------------------------------------------------- descriptions
+
+    def __repr__(self) -> str:
+        return (f"Model('{self.name}', {self.dimension}-D: {len(self.bodies)} bodies, "
+                f"{len(self.joints)} joints, {len(self.drivers)} drivers; n_q={self.n_q}, "
+                f"n_v={self.n_v}, n_c={self.n_c})")
+
+    @cached_property
+    def coordinate_names(self) -> tuple[str, ...]:
+        names = {"spatial": ("x", "y", "z", "e0", "e1", "e2", "e3"),
+                 "planar": ("x", "y", "angle"), "particle": ("x", "y", "z")}
+        return tuple(f"{b.name}.{c}" for b in self.bodies
+                     for c in names[b.kind][: b.q.stop - b.q.start])
+
+    @cached_property
+    def velocity_names(self) -> tuple[str, ...]:
+        names = {"spatial": ("vx", "vy", "vz", "wx'", "wy'", "wz'"),
+                 "planar": ("vx", "vy", "w"), "particle": ("vx", "vy", "vz")}
+        return tuple(f"{b.name}.{c}" for b in self.bodies
+                     for c in names[b.kind][: b.v.stop - b.v.start])
+
+    @cached_property
+    def row_priority(self) -> np.ndarray:
+        """Order in which rows are kept when the constraints are redundant: tree joints first,
+        then loop-closing joints, then drivers (so a redundant closure or an over-constraining
+        driver is what gets named)."""
+        tree = [j.rows for j in self.joints if not j.loop_closing]
+        loops = [j.rows for j in self.joints if j.loop_closing]
+        drivers = [np.array([d.row]) for d in self.drivers]
+        parts = tree + loops + drivers
+        return np.concatenate(parts).astype(int) if parts else np.zeros(0, dtype=int)
+
+    @cached_property
+    def row_groups(self) -> np.ndarray:
+        """The group of each entry of :attr:`row_priority` for the rank decision: joint rows
+        each on their own (taken in order), drivers together (the best-conditioned first, see
+        :func:`hexapod.algorithms.linalg.split_rows`). Which of several drivers over-constrains a
+        mechanism is a matter of conditioning; which joint row closes a loop is the policy's."""
+        joint_rows = sum(j.rows.size for j in self.joints)
+        return np.concatenate([np.arange(joint_rows),
+                               np.full(len(self.drivers), joint_rows)]).astype(int)
+
+    @cached_property
+    def row_scale(self) -> np.ndarray:
+        """Natural size of each row's residual: the characteristic length for length rows, 1 for
+        angle rows; used for convergence tests and drift reports in SI."""
+        return np.array([self.characteristic_length if r.kind == "length" else 1.0
+                         for r in self.rows])
+
+    # ---------------------------------------------------------------- time laws
+
+    def law_values(self, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Values and derivatives of every law at ``t``: arrays (n_w,) or (n_w, len(t))."""
+        t = np.asarray(t, dtype=float)
+        shape = (self.n_w,) + t.shape
+        w, wd, wdd = np.zeros(shape), np.zeros(shape), np.zeros(shape)
+        for i, law in enumerate(self.laws):
+            w[i], wd[i], wdd[i] = law.evaluate(t)
+        return w, wd, wdd
+
+    def cycle_time(self) -> float | None:
+        """The longest period of the model's periodic laws (a gait's stride), in s; None when
+        no law repeats."""
+        cycles = [c for law in self.laws if (c := law.cycle_time()) is not None]
+        return max(cycles) if cycles else None
+
+    def time_window(self, duration: float | None = None) -> tuple[float, str]:
+        """The duration of a report or a simulation, in s, and why: as asked, else one cycle of
+        the model's periodic laws (the longest), else one second."""
+        if duration is not None:
+            return duration, "as asked"
+        cycle = self.cycle_time()
+        if cycle is not None:
+            return cycle, "one cycle of the scene's periodic laws"
+        return 1.0, "the default duration: the scene's laws do not repeat"
+
+    def create_data(self) -> Data:
+        """A new, empty :class:`Data` workspace for this model."""
+        return Data()
+
+    # ---------------------------------------------------------------- CasADi Functions
+
+    def _function(self, name: str, inputs: list[str], outputs: list[tuple[str, ca.SX]]):
+        sym = self._sym
+        names = [n for n in inputs if n in ("q", "v") or self.n_w > 0]
+        return ca.Function(name, [getattr(sym, n) for n in names], [e for _, e in outputs],
+                           names, [n for n, _ in outputs])
+
+    def _args(self, inputs: list[str], values: dict) -> list:
+        return [values[n] for n in inputs if n in ("q", "v") or self.n_w > 0]
+
+    @cached_property
+    def _Phi_q_expr(self) -> ca.SX:
+        return ca.jacobian(self._sym.phi, self._sym.q)
+
+    @cached_property
+    def _B_expr(self) -> ca.SX:
+        """``B(q)``: ``qdot = B v``."""
+        return ca.jacobian(self._sym.qdot, self._sym.v)
+
+    @cached_property
+    def _Phi_v_expr(self) -> ca.SX:
+        return ca.mtimes(self._Phi_q_expr, self._B_expr)
+
+    @cached_property
+    def phi(self) -> ca.Function:
+        """``phi(q, w)``: constraint residuals (n_c)."""
+        return self._function("phi", ["q", "w"], [("phi", self._sym.phi)])
+
+    @cached_property
+    def Phi_q(self) -> ca.Function:
+        """``Phi_q(q, w)``: Jacobian of ``phi`` in the coordinates (n_c x n_q)."""
+        return self._function("Phi_q", ["q", "w"], [("Phi_q", self._Phi_q_expr)])
+
+    @cached_property
+    def Phi_v(self) -> ca.Function:
+        """``Phi_v(q, w) = Phi_q B(q)``: Jacobian in the velocities (n_c x n_v)."""
+        return self._function("Phi_v", ["q", "w"], [("Phi_v", self._Phi_v_expr)])
+
+    @cached_property
+    def _time_derivative(self) -> ca.SX:
+        """``Phi_t``: the explicit time derivative of ``phi`` through the laws."""
+        s = self._sym
+        if self.n_w == 0:
+            return ca.SX.zeros(self.n_c)
+        return ca.jtimes(s.phi, s.w, s.wd)
+
+    @cached_property
+    def nu(self) -> ca.Function:
+        """``nu(q, w, wd) = -Phi_t``: right-hand side of ``Phi_v v = nu``."""
+        return self._function("nu", ["q", "w", "wd"], [("nu", -self._time_derivative)])
+
+    @cached_property
+    def gamma(self) -> ca.Function:
+        """``gamma(q, v, w, wd, wdd)``: right-hand side of ``Phi_v v_dot = gamma``.
+
+        ``gamma = -[d(Phi_v v)/dq] B v - 2 d(Phi_v v)/dt - Phi_tt``, with ``B(q)`` inside the
+        derivative (DESIGN section 1).
+        """
+        s = self._sym
+        Pv = ca.mtimes(self._Phi_v_expr, s.v)
+        expr = -ca.jtimes(Pv, s.q, s.qdot)
+        if self.n_w > 0:
+            Phi_t = self._time_derivative
+            Phi_tt = ca.jtimes(Phi_t, s.w, s.wd) + ca.jtimes(s.phi, s.w, s.wdd)
+            expr = expr - 2 * ca.jtimes(Pv, s.w, s.wd) - Phi_tt
+        return self._function("gamma", ["q", "v", "w", "wd", "wdd"], [("gamma", expr)])
+
+    @cached_property
+    def M(self) -> ca.Function:
+        """``M()``: the constant block-diagonal mass matrix (n_v x n_v)."""
+        return ca.Function("M", [], [ca.DM(self.mass.dense())], [], ["M"])
+
+    @cached_property
+    def Q(self) -> ca.Function:
+        """``Q(q, v, w)``: applied, spring, gyroscopic and gravity forces (n_v)."""
+        return self._function("Q", ["q", "v", "w"], [("Q", self._sym.Q)])
+
+    @cached_property
+    def Q_across(self) -> ca.Function | None:
+        """``Q_across(q, v, w)``: generalized forces of the force elements acting across joints,
+        one column per such joint (see ``JointInfo.across_column``); None when there are none."""
+        if self._sym.Q_across is None:
+            return None
+        return self._function("Q_across", ["q", "v", "w"], [("Q_across", self._sym.Q_across)])
+
+    @cached_property
+    def dynamics_terms(self) -> ca.Function:
+        """``dynamics_terms(q, v, w, wd, wdd) -> (Phi_v, gamma, Q)``: what a forward-dynamics
+        solve needs, in one call (each call costs tens of microseconds of overhead)."""
+        s = self._sym
+        args = [n for n in ("q", "v", "w", "wd", "wdd") if n in ("q", "v") or self.n_w > 0]
+        outputs = [function(*[getattr(s, n) for n in function.name_in()])
+                   for function in (self.Phi_v, self.gamma, self.Q)]
+        return ca.Function("dynamics_terms", [getattr(s, n) for n in args], outputs, args,
+                           ["Phi_v", "gamma", "Q"])
+
+    @property
+    def energy_conserved(self) -> bool:
+        """True when no driver follows a time law and every force element derives from a
+        potential: then kinetic plus potential energy is constant along motions."""
+        return not self.working_elements
+
+    @cached_property
+    def energy(self) -> ca.Function:
+        """``energy(q, v) -> (kinetic, potential)``: ``v^T M v / 2``, and the potential energy of
+        gravity and springs (J)."""
+        s = self._sym
+        kinetic = ca.mtimes([s.v.T, ca.DM(self.mass.dense()), s.v]) / 2
+        potential = s.potential if s.potential is not None else ca.SX(0.0)
+        return ca.Function("energy", [s.q, s.v], [kinetic, potential], ["q", "v"],
+                           ["kinetic", "potential"])
+
+    @cached_property
+    def tangent_matrices(self) -> ca.Function:
+        """``tangent_matrices(q, v, lam, w) -> (K, C)``: derivatives of the force residual
+        ``g = Phi_v^T lam - Q`` along a Lie-group displacement of the positions,
+        ``K = dg/dq B(q)``, and in the velocities, ``C = dg/dv`` (n_v x n_v each): the tangent
+        stiffness and damping of implicit integrators."""
+        s = self._sym
+        lam = ca.SX.sym("lam", self.n_c)
+        g = ca.mtimes(self._Phi_v_expr.T, lam) - s.Q
+        K = ca.mtimes(ca.jacobian(g, s.q), self._B_expr)
+        C = ca.jacobian(g, s.v)
+        names = [n for n in ("q", "v", "lam", "w") if n != "w" or self.n_w > 0]
+        symbols = {"q": s.q, "v": s.v, "lam": lam, "w": s.w}
+        return ca.Function("tangent_matrices", [symbols[n] for n in names], [K, C], names,
+                           ["K", "C"])
+
+    @cached_property
+    def qdot(self) -> ca.Function:
+        """``qdot(q, v) = B(q) v``."""
+        return self._function("qdot", ["q", "v"], [("qdot", self._sym.qdot)])
+
+    def call(self, name: str, **values) -> np.ndarray:
+        """Evaluate the Function ``name`` on numbers given by input name; vectors come back 1-D,
+        matrices (``Phi_q``, ``Phi_v``, ``M``, ``Q_across``) 2-D.
+
+        >>> model.call("phi", q=q, w=w)      # doctest: +SKIP
+        """
+        function = self.fast(name)
+        (array,) = function(*[values[n] for n in function.name_in])
+        if name in _MATRIX_OUTPUTS:
+            return array.reshape(getattr(self, name).size_out(0))
+        return array.reshape(-1)
+
+    def fast(self, name: str) -> FastFunction:
+        """The Function ``name`` evaluated through buffers (:mod:`hexapod._support.fastcall`): the
+        same numbers, without the cost of converting arguments; built once."""
+        if name not in self._fast:
+            self._fast[name] = FastFunction(getattr(self, name))
+        return self._fast[name]
+
+    def call_samples(self, name: str, **values) -> np.ndarray:
+        """Evaluate the Function ``name`` at N samples in one call: inputs by name with the
+        samples along the first axis, (N, size); the output likewise, (N, size) for vectors and
+        (N, rows, columns) for matrices."""
+        function = getattr(self, name)
+        inputs = [np.atleast_2d(np.asarray(values[n], dtype=float)) for n in function.name_in()]
+        n = inputs[0].shape[0] if inputs else 1
+        array = function.map(n, "serial")(*[x.T for x in inputs]).full()
+        if name in _MATRIX_OUTPUTS:
+            rows, columns = function.size_out(0)
+            return array.reshape(rows, n, columns).transpose(1, 0, 2)
+        return array.T
+
+    # ---------------------------------------------------------------- Lie-group helpers
+
+    def _lie_indices(self):
+        lin_q, lin_v, quat_q, omega_v = [], [], [], []
+        for b in self.bodies:
+            q = list(range(b.q.start, b.q.stop))
+            v = list(range(b.v.start, b.v.stop))
+            if b.kind == "spatial":
+                lin_q += q[:3]
+                lin_v += v[:3]
+                quat_q.append(q[3:])
+                omega_v.append(v[3:])
+            else:
+                lin_q += q
+                lin_v += v
+        self._lin_q = np.array(lin_q, dtype=int)
+        self._lin_v = np.array(lin_v, dtype=int)
+        self._quat_q = np.array(quat_q, dtype=int).reshape(-1, 4)
+        self._omega_v = np.array(omega_v, dtype=int).reshape(-1, 3)
+
+    def integrate(self, q: np.ndarray, dv: np.ndarray) -> np.ndarray:
+        """``q (+) dv``: translate by the linear part, rotate each spatial body by its body-frame
+        rotation vector, ``p <- p * exp(dpi'/2)`` (unit Euler parameters stay unit)."""
+        out = np.array(q, dtype=float)
+        out[self._lin_q] += dv[self._lin_v]
+        if self._quat_q.size:
+            step = quaternion_exp(np.asarray(dv, dtype=float)[self._omega_v])
+            out[self._quat_q] = quaternion_product(out[self._quat_q], step)
+        return out
+
+    def normalize(self, q: np.ndarray) -> np.ndarray:
+        """Euler parameters scaled to unit length."""
+        out = np.array(q, dtype=float)
+        if self._quat_q.size:
+            p = out[self._quat_q]
+            out[self._quat_q] = p / np.linalg.norm(p, axis=1, keepdims=True)
+        return out
+
+    def difference(self, q1: np.ndarray, q0: np.ndarray) -> np.ndarray:
+        """``q1 (-) q0``: the velocity-space step ``dv`` with ``integrate(q0, dv) = q1``."""
+        dv = np.zeros(self.n_v)
+        dv[self._lin_v] = q1[self._lin_q] - q0[self._lin_q]
+        if self._quat_q.size:
+            conjugate = q0[self._quat_q] * np.array([1.0, -1.0, -1.0, -1.0])
+            dv[self._omega_v] = quaternion_log(quaternion_product(conjugate, q1[self._quat_q]))
+        return dv
+
+    def body_pose(self, q: np.ndarray, body: int) -> Placement:
+        """World pose of a body's centre-of-mass frame (identity for the ground)."""
+        if body == GROUND_INDEX:
+            return Placement.identity(self.dimension)
+        info = self.bodies[body]
+        qb = np.asarray(q, dtype=float)[info.q]
+        if info.kind == "spatial":
+            return Placement(qb[:3], rotation_from_euler_parameters(qb[3:]))
+        if info.kind == "planar":
+            return Placement(qb[:2], float(qb[2]))
+        return Placement(qb)
+
+
+@dataclass
+class Data:
+    """Workspace of one model: the numbers of the last state an algorithm saw.
+
+    Algorithms fill the fields they compute; ``None`` means not computed at this state.
+    """
+
+    t: float | None = None
+    q: np.ndarray | None = None
+    v: np.ndarray | None = None
+    w: np.ndarray | None = None
+    wd: np.ndarray | None = None
+    wdd: np.ndarray | None = None
+    Phi_v: np.ndarray | None = None
+    gamma: np.ndarray | None = None
+    Q: np.ndarray | None = None
+    v_dot: np.ndarray | None = None
+    lam: np.ndarray | None = None
+    Q_across: np.ndarray | None = None  # forces of the elements acting across joints
+    independent_rows: np.ndarray | None = None
+    redundant_rows: np.ndarray | None = None
+    inconsistency: float | None = None  # relative violation of the redundant rows
+    condition_number: float | None = None
+    sigma_min: float | None = None  # smallest singular value of the equilibrated Phi_v
+    singular_values: np.ndarray | None = None  # all of them, of the kept rows, ascending

@@ -1,0 +1,320 @@
+"""The contract every integrator of the registry keeps (as SciPy's ``OdeSolver`` writes its own).
+
+An integrator advances the constrained equations of motion
+
+    q_dot = B(q) v,   M v_dot + Phi_v^T lambda = Q(q, v, t),   phi(q, t) = 0
+
+from a consistent state, one accepted step per call of :meth:`Integrator.step`, until
+``t_bound``. A subclass declares what it is (class attributes ``name``, ``order``, ``index``,
+``stabilisation``, ``adaptive``, ``description``) and implements :meth:`Integrator._step`, which
+advances ``t, q, v, v_dot, lam`` by one accepted step and counts its work in ``counters`` through
+the services of this class (:meth:`_dynamics`, :meth:`_project`). The base class makes the
+initial state consistent (positions assembled, velocities projected, accelerations and
+multipliers solved), keeps the last step inside ``t_bound``, and turns any failure into data:
+``status = "failed"`` and a ``message`` naming the time and the cause, never an exception
+escaping :meth:`step`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from typing import ClassVar
+
+import numpy as np
+from scipy.linalg import qr
+
+from hexapod.algorithms.dynamics import forward_dynamics
+from hexapod.algorithms.kinematics import assemble_positions, rank_split, solve_velocities
+from hexapod.errors import HexapodError, IntegrationError
+from hexapod.model.model import Data, Model
+from hexapod.simulation.kernels import compiled_projection, compiled_rates
+
+#: smallest singular value of the equilibrated ``Phi_v`` (rows of unit length, so 1 is
+#: well-conditioned) below which a state counts as near a singular configuration. There the
+#: accelerations in the nearly dependent directions are solved with an error of about
+#: ``eps |gamma| / sigma^2``: at tight tolerances the error test then fails at every step
+#: (the N-four-bar at rtol 1e-10 stalled 3e-7 from its flat pose, the step at 7e-15 s)
+SINGULAR_BAND = 1e-4
+#: the crossing's tolerance over the smallest singular value where it begins (or widens)
+CROSSING_FACTOR = 10.0
+
+
+@dataclass
+class Counters:
+    """The work of a run.
+
+    Attributes
+    ----------
+    steps, rejected :
+        Accepted steps; steps rejected by the error test or by a failed Newton iteration.
+    rhs :
+        Evaluations of the equations of motion (a saddle-point solve, or an implicit residual).
+    jacobians :
+        Evaluations of the constraint Jacobian ``Phi_v`` (with the tangent matrices, for
+        implicit methods).
+    factorisations :
+        Matrix factorisations (QR of the equilibrated ``Phi_v``, or LU of an iteration matrix).
+    newton :
+        Newton iterations, of projections and of implicit solves.
+    crossings :
+        Singular configurations crossed with nearly dependent rows left out.
+    """
+
+    steps: int = 0
+    rejected: int = 0
+    rhs: int = 0
+    jacobians: int = 0
+    factorisations: int = 0
+    newton: int = 0
+    crossings: int = 0
+
+    def as_dict(self) -> dict[str, int]:
+        return asdict(self)
+
+
+class Integrator:
+    """Base class of the integrators (see the module's description of the contract).
+
+    Parameters
+    ----------
+    model : Model
+    t0, t_bound : float
+        Start and end times (s).
+    q0, v0 : ndarray, optional
+        Guesses of the initial positions and velocities (default: the scene's); they are made
+        consistent first.
+    rtol, atol : float
+        Tolerances of adaptive methods (relative; absolute in SI units of ``q`` and ``v``).
+    step : float, optional
+        The step of fixed-step methods, the first step of adaptive ones (s).
+    max_step : float
+        Largest step of adaptive methods (s).
+    """
+
+    name: ClassVar[str] = ""
+    order: ClassVar[int] = 0
+    #: 1: the acceleration-level equations integrated as an ODE in (q, v); 3: position-level
+    #: constraints solved at every step
+    index: ClassVar[int] = 1
+    stabilisation: ClassVar[str] = ""
+    adaptive: ClassVar[bool] = False
+    description: ClassVar[str] = ""
+    #: fixed-step methods without a ``step``: this many steps over the run
+    default_steps: ClassVar[int] = 1000
+    #: True when the method counts its accepted steps itself: a call of :meth:`step` then
+    #: returns one state but may stand for many steps of an underlying solver
+    counts_own_steps: ClassVar[bool] = False
+
+    @classmethod
+    def largest_stable_step(cls, eigenvalues, constrained: bool = False,
+                            **options) -> float | None:
+        """The largest step stable on linear modes ``exp(lambda t)`` (:mod:`.stability`), for
+        the scene's ``eigenvalues`` (of its linearisation on the constraint manifold, see
+        :func:`hexapod.simulation.diagnostics.diagnose`); ``constrained`` when the scene has
+        constraints, ``options`` those of the constructor. None for methods without such a limit
+        (implicit ones)."""
+        return None
+
+    def __init__(self, model: Model, t0: float, t_bound: float, q0: np.ndarray | None = None,
+                 v0: np.ndarray | None = None, *, rtol: float = 1e-6, atol: float = 1e-8,
+                 step: float | None = None, max_step: float = np.inf):
+        if not t_bound > t0:
+            raise ValueError(f"t_bound must be after t0, got {t0} and {t_bound}")
+        if step is not None and not step > 0:
+            raise ValueError(f"step must be positive, got {step}")
+        if not (rtol > 0 and atol > 0):
+            raise ValueError(f"rtol and atol must be positive, got {rtol} and {atol}")
+        self.model = model
+        self.t0, self.t_bound = float(t0), float(t_bound)
+        self.rtol, self.atol, self.max_step = float(rtol), float(atol), float(max_step)
+        self.h = float(step) if step is not None else (self.t_bound - self.t0) / self.default_steps
+        self.counters = Counters()
+        self.data = Data()
+        self.status = "running"
+        self.message = ""
+        self._crossing: float | None = None  # the raised rank tolerance, while crossing
+        q, v = self._project(self.t0, q0, v0)  # guesses of None: the scene's initial state
+        self.t, self.q, self.v = self.t0, q, v
+        self.v_dot, self.lam = self._dynamics(self.t, q, v)
+        # the stages' right-hand sides and the projection, compiled for the rows independent
+        # at the start
+        self._compiled = compiled_rates(model, self.data.independent_rows)
+        self._compiled_projection = compiled_projection(model, self.data.independent_rows)
+        self._start()
+
+    @property
+    def lam(self) -> np.ndarray:
+        """The multipliers at the current state (by the redundancy policy of DESIGN); a method
+        that advances with the compiled right-hand side solves for them only when asked."""
+        if self._lam is None:
+            solution = self._compiled.solve(self.t, self.q, self.v) if (
+                self._compiled.complete) else None
+            if solution is not None:  # no redundant row: the multipliers are unique
+                self.counters.rhs += 1
+                self._lam = solution[2]
+            else:
+                self._lam = self._dynamics(self.t, self.q, self.v)[1]
+        return self._lam
+
+    @lam.setter
+    def lam(self, value: np.ndarray | None) -> None:
+        self._lam = value
+
+    # ------------------------------------------------------------------ the contract
+
+    def _start(self) -> None:
+        """Set up the method's own state from the consistent initial state (optional)."""
+
+    def _step(self) -> None:
+        """Advance ``t, q, v, v_dot, lam`` by one accepted step, no further than ``t_bound``;
+        raise :class:`IntegrationError` (or any :class:`HexapodError`) when it cannot."""
+        raise NotImplementedError
+
+    def step(self) -> None:
+        """One accepted step; sets ``status`` to ``"finished"`` at ``t_bound``, or to
+        ``"failed"`` with a ``message``."""
+        if self.status != "running":
+            raise RuntimeError(f"the integrator is {self.status}: nothing to step")
+        t_before = self.t
+        try:
+            with np.errstate(over="ignore", invalid="ignore"):  # a blow-up is reported below
+                self._step()
+        except (HexapodError, np.linalg.LinAlgError) as error:
+            self.status = "failed"
+            self.message = f"{self.name} failed after t = {t_before:.6g} s: {error}"
+            return
+        if not self.counts_own_steps:
+            self.counters.steps += 1
+        if not np.all(np.isfinite(self.q)) or not np.all(np.isfinite(self.v)):
+            self.status = "failed"
+            self.message = (f"{self.name}: the state became non-finite at t = {self.t:.6g} s "
+                            "(the step is too large for this method, or the motion is unstable)")
+        elif self.t >= self.t_bound - 1e-12 * max(1.0, abs(self.t_bound)):
+            self.t = self.t_bound
+            self.status = "finished"
+
+    def next_step(self) -> float:
+        """The step to take now: the method's current step, cut to end at ``t_bound`` (and a
+        step that would leave a sliver of less than 1 % is stretched to the end)."""
+        remaining = self.t_bound - self.t
+        h = min(self.h, self.max_step)
+        return remaining if h >= 0.99 * remaining else h
+
+    # ------------------------------------------------------------------ services
+
+    def _dynamics(self, t: float, q: np.ndarray, v: np.ndarray,
+                  baumgarte: tuple[float, float] | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Accelerations and multipliers at a state (one saddle-point solve; rows nearly
+        dependent are left out while a singular configuration is crossed)."""
+        # while crossing, the rows left out are violated by design (the projection restores them)
+        crossing = {} if self._crossing is None else {
+            "rank_tolerance": self._crossing, "consistency_tol": np.inf}
+        v_dot = forward_dynamics(self.model, self.data, t, q, v, baumgarte=baumgarte,
+                                 **crossing)
+        self.counters.rhs += 1
+        self.counters.jacobians += 1
+        self.counters.factorisations += 1
+        return v_dot, self.data.lam
+
+    def _rates(self, t: float, q: np.ndarray, v: np.ndarray,
+               alpha: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """``(q_dot, v_dot)`` at a state, without multipliers (the stages of explicit methods):
+        one compiled call, or the exact solve of :meth:`_dynamics` where the compiled one is
+        refused (a change of rank, a singular configuration). ``alpha``: Baumgarte's rate."""
+        if self._crossing is None:
+            rates = self._compiled(t, q, v, alpha)
+        else:
+            rates = self._crossing_rates(t, q, v, alpha, left_out=np.inf)
+        if rates is not None:
+            self.counters.rhs += 1
+            return rates
+        v_dot, _ = self._dynamics(t, q, v, (alpha, alpha) if alpha else None)
+        return self.model.call("qdot", q=q, v=v), v_dot
+
+    def _cross_singular(self) -> bool:
+        """Begin crossing a singular configuration if the state is near one (see
+        :data:`SINGULAR_BAND`), or widen the crossing under way; returns whether it did.
+
+        While crossing, the rows nearly dependent on the others (as many as there are singular
+        values of the equilibrated ``Phi_v`` below the crossing's tolerance, ``CROSSING_FACTOR``
+        times the smallest where it began) are left out: the stages then solve one smooth
+        system of fewer rows, compiled for them, and the projection after each step puts the
+        state back on every constraint. Widening (the error test still failing) multiplies the
+        tolerance by ``CROSSING_FACTOR`` again, up to ``CROSSING_FACTOR * SINGULAR_BAND``."""
+        if not self.model.n_c:
+            return False
+        split = self._rank_split()
+        sigma = split.singular_values()
+        smallest = sigma.min() if sigma.size else np.inf
+        if not smallest < SINGULAR_BAND:
+            return False
+        base = smallest if self._crossing is None else self._crossing
+        if base >= SINGULAR_BAND:
+            return False  # as wide as it goes
+        if self._crossing is None:
+            self.counters.crossings += 1
+        self._crossing = CROSSING_FACTOR * base
+        # the rows left out: those a rank-revealing (column-pivoted) QR factorisation takes last
+        rows = split.independent
+        dependent = int(np.sum(sigma < self._crossing))
+        pivots = qr(split.W[rows].T, mode="r", pivoting=True)[1]
+        self._crossing_rates = compiled_rates(self.model,
+                                              np.sort(rows[pivots[:rows.size - dependent]]))
+        return True
+
+    def _end_crossing(self) -> None:
+        """End the crossing once the state has left the band it began in."""
+        if self._crossing is None:
+            return
+        sigma = self._rank_split().singular_values()
+        if not sigma.size or sigma.min() > self._crossing:
+            self._crossing = None
+
+    def _rank_split(self):
+        """The rank decision on the equilibrated ``Phi_v`` at the current positions."""
+        w, _, _ = self.model.law_values(self.t)
+        self.counters.jacobians += 1
+        self.counters.factorisations += 1
+        return rank_split(self.model, self.model.call("Phi_v", q=self.q, w=w))
+
+    def _halving(self, attempt):
+        """Take one step by ``attempt(h)``, which returns the new state or None when Newton's
+        method fails: then the step is halved (a rejection) and tried again. Returns the step
+        taken and the attempt's result; the caller grows the step back."""
+        while True:
+            h = self.next_step()
+            if h < 1e-12 * max(1.0, self.t_bound - self.t0):
+                raise IntegrationError(f"Newton's method does not converge even with a step of "
+                                       f"{h:.3g} s")
+            result = attempt(h)
+            if result is not None:
+                return h, result
+            self.counters.rejected += 1
+            self.h = h / 2
+
+    def _project(self, t: float, q: np.ndarray | None,
+                 v: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+        """The nearest consistent state in the kinetic-energy norm: positions onto
+        ``phi = 0`` (Newton's method), then velocities onto ``Phi_v v = nu``."""
+        projector = getattr(self, "_compiled_projection", None)  # None: the start
+        if projector is not None and q is not None and v is not None:
+            state = projector(t, q, v)
+            if state is not None:
+                self.counters.newton += projector.newton
+                self.counters.jacobians += projector.newton + 1
+                self.counters.factorisations += projector.newton + 1
+                return state
+        counts: dict = {}
+        q = assemble_positions(self.model, q, t, counts=counts)
+        v = solve_velocities(self.model, q, t, v)
+        iterations = counts.get("newton", 0)  # each a Jacobian and a factorisation
+        self.counters.newton += iterations
+        self.counters.jacobians += iterations + 1
+        self.counters.factorisations += iterations + 1
+        return q, v
+
+    @classmethod
+    def describe(cls) -> dict:
+        return {"name": cls.name, "order": cls.order, "index": cls.index,
+                "stabilisation": cls.stabilisation, "adaptive": cls.adaptive,
+                "description": cls.description}

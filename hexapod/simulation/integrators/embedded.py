@@ -1,0 +1,170 @@
+"""Embedded Runge-Kutta pairs with adaptive steps and coordinate projection.
+
+The acceleration-level equations are integrated as an ODE in ``(q, v)`` (``q_dot = B(q) v``);
+the difference between the pair's two solutions estimates the local error, and the step is
+accepted when its weighted RMS norm, with weights ``atol + rtol max(|y_n|, |y_n+1|)``, is at
+most one (Hairer, Norsett and Wanner, *Solving ODEs I*, II.4). After every accepted step the
+state is projected back onto the constraints, positions onto ``phi = 0`` by Newton's method and
+velocities onto ``Phi_v v = nu``, both in the kinetic-energy norm (Hairer and Wanner, *Solving
+ODEs II*, VII.2): the constraints then hold to round-off at every step, and the projection
+does not lower the order.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.integrate._ivp import dop853_coefficients as dop853
+
+from hexapod.errors import IntegrationError
+from hexapod.simulation.integrators.base import Integrator
+from hexapod.simulation.integrators.stability import largest_stable_step, runge_kutta_stability
+
+#: rejections in a row after which a step checks whether it is at a singular configuration
+#: (then it crosses it, see :meth:`Integrator._cross_singular`)
+CROSSING_REJECTIONS = 2
+
+
+class EmbeddedRungeKutta(Integrator):
+    """An explicit embedded pair ``(A, b, b_hat, c)`` with error-per-step control; subclasses
+    give the tableau, ``order`` (that of the propagated solution) and ``error_order`` (that of
+    the embedded one, which sets the step controller's exponent)."""
+
+    adaptive = True
+    index = 1
+    stabilisation = "projection of positions and velocities after each step"
+    A: np.ndarray
+    b: np.ndarray
+    b_hat: np.ndarray
+    c: np.ndarray
+    error_order: int
+    safety, min_factor, max_factor = 0.9, 0.2, 10.0
+
+    @classmethod
+    def largest_stable_step(cls, eigenvalues, constrained: bool = False,
+                            **options) -> float | None:
+        """On the scene's modes: projection removes the drift, so only they count."""
+        R = runge_kutta_stability(cls.A, cls.b)
+        return largest_stable_step(lambda z: abs(R(z)), eigenvalues)
+
+    def __init__(self, *args, step: float | None = None, **kwargs):
+        self._given_step = step
+        super().__init__(*args, step=step, **kwargs)
+
+    def _start(self) -> None:
+        if self._given_step is None:
+            self.h = self._initial_step()
+
+    def _derivative(self, t, q, v):
+        return np.concatenate(self._rates(t, q, v))
+
+    def _norm(self, x: np.ndarray, y0: np.ndarray, y1: np.ndarray) -> float:
+        weight = self.atol + self.rtol * np.maximum(np.abs(y0), np.abs(y1))
+        return float(np.sqrt(np.mean((x / weight) ** 2)))
+
+    def _error(self, h: float, K: np.ndarray, y0: np.ndarray, y1: np.ndarray) -> float:
+        """The step's error in the weighted RMS norm (at most 1: accepted)."""
+        return self._norm(h * ((self.b - self.b_hat) @ K), y0, y1)
+
+    def _initial_step(self) -> float:
+        """Hairer's starting step: from the sizes of the state, of its rate and of the rate's
+        change over a trial Euler step."""
+        y0 = np.concatenate([self.q, self.v])
+        f0 = np.concatenate([self.model.call("qdot", q=self.q, v=self.v), self.v_dot])
+        d0, d1 = self._norm(y0, y0, y0), self._norm(f0, y0, y0)
+        h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
+        h0 = min(h0, self.t_bound - self.t)
+        n_q = self.model.n_q
+        y1 = y0 + h0 * f0
+        f1 = self._derivative(self.t + h0, y1[:n_q], y1[n_q:])
+        d2 = self._norm(f1 - f0, y0, y0) / h0
+        if max(d1, d2) <= 1e-15:
+            h1 = max(1e-6, h0 * 1e-3)
+        else:
+            h1 = (0.01 / max(d1, d2)) ** (1.0 / (self.error_order + 1))
+        return min(100 * h0, h1, self.max_step, self.t_bound - self.t)
+
+    def _step(self) -> None:
+        model, n_q = self.model, self.model.n_q
+        y0 = np.concatenate([self.q, self.v])
+        f0 = np.concatenate([model.call("qdot", q=self.q, v=self.v), self.v_dot])
+        rejected = 0
+        while True:
+            h = self.next_step()
+            if h < 1e-14 * max(1.0, abs(self.t)):
+                raise IntegrationError(f"the step size fell to {h:.3g} s (the error test cannot be "
+                                  "met: the motion may be singular or too stiff for an "
+                                  "explicit method)")
+            stages = [f0]
+            for i in range(1, len(self.c)):
+                y = y0 + h * sum(a * k for a, k in zip(self.A[i, :i], stages, strict=True))
+                stages.append(self._derivative(self.t + self.c[i] * h, y[:n_q], y[n_q:]))
+            K = np.array(stages)
+            y1 = y0 + h * (self.b @ K)
+            error = self._error(h, K, y0, y1) if np.all(np.isfinite(y1)) else np.inf
+            if error <= 1.0:
+                factor = self.max_factor if error == 0 else min(
+                    self.max_factor, self.safety * error ** (-1.0 / (self.error_order + 1)))
+                break
+            self.counters.rejected += 1
+            rejected += 1
+            if rejected % CROSSING_REJECTIONS == 0 and self._cross_singular():
+                f0 = np.concatenate(self._rates(self.t, self.q, self.v))
+                continue
+            factor = self.min_factor if not np.isfinite(error) else max(
+                self.min_factor, self.safety * error ** (-1.0 / (self.error_order + 1)))
+            self.h = h * factor
+        self.t += h
+        self.q, self.v = self._project(self.t, model.normalize(y1[:n_q]), y1[n_q:])
+        self._end_crossing()
+        # the accelerations start the next step; the multipliers are solved when asked
+        self.v_dot, self.lam = self._rates(self.t, self.q, self.v)[1], None
+        self.h = h * factor
+
+
+class DormandPrince5(EmbeddedRungeKutta):
+    """Dormand and Prince's 5(4) pair (DOPRI5), the solution propagated at order 5."""
+
+    name = "dopri5-projection"
+    order, error_order = 5, 4
+    description = "Dormand-Prince 5(4), adaptive step, acceleration level"
+    c = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0, 1.0])
+    A = np.array([
+        [0, 0, 0, 0, 0, 0, 0],
+        [1 / 5, 0, 0, 0, 0, 0, 0],
+        [3 / 40, 9 / 40, 0, 0, 0, 0, 0],
+        [44 / 45, -56 / 15, 32 / 9, 0, 0, 0, 0],
+        [19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729, 0, 0, 0],
+        [9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656, 0, 0],
+        [35 / 384, 0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84, 0],
+    ])
+    b = np.array([35 / 384, 0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84, 0])
+    b_hat = np.array([5179 / 57600, 0, 7571 / 16695, 393 / 640, -92097 / 339200, 187 / 2100,
+                      1 / 40])
+
+
+class DormandPrince853(EmbeddedRungeKutta):
+    """Dormand and Prince's 8(5,3) pair (DOP853, Hairer, Norsett and Wanner, *Solving ODEs I*,
+    II.10): order 8, its error estimated from embedded solutions of orders 5 and 3 combined
+    (the stiffer the problem, the more the third-order one weighs), twelve stages and one more
+    right-hand side at the new state. For tight tolerances and long horizons.
+
+    The tableau is SciPy's (``scipy.integrate.DOP853``), so that the two cannot disagree.
+    """
+
+    name = "dop853-projection"
+    order, error_order = 8, 7
+    description = "Dormand-Prince 8(5,3), adaptive step, acceleration level"
+    c = dop853.C[:dop853.N_STAGES]
+    A = dop853.A[:dop853.N_STAGES, :dop853.N_STAGES]
+    b = dop853.B
+    b_hat = dop853.B  # unused: the error comes from the embedded 5th and 3rd order solutions
+
+    def _error(self, h, K, y0, y1):
+        n_q = self.model.n_q
+        K = np.vstack([K, self._derivative(self.t + h, y1[:n_q], y1[n_q:])])
+        weight = self.atol + self.rtol * np.maximum(np.abs(y0), np.abs(y1))
+        err5 = np.sum((dop853.E5 @ K / weight) ** 2)
+        err3 = np.sum((dop853.E3 @ K / weight) ** 2)
+        if err5 == 0.0 and err3 == 0.0:
+            return 0.0
+        return float(h * err5 / np.sqrt((err5 + 0.01 * err3) * y0.size))

@@ -1,0 +1,410 @@
+"""RATTLE in Lie-group form: a symplectic, time-reversible method for constrained multibody
+systems, with the rotations of spatial bodies advanced by the discrete Moser–Veselov map.
+
+Flat coordinates (particles, planar bodies, the centres of mass of spatial bodies) follow the
+classical RATTLE (Andersen 1983; Hairer, Lubich and Wanner, *Geometric Numerical Integration*,
+2nd ed., VII.1): with ``F`` the applied forces without the gyroscopic terms and ``G = Phi_v``,
+
+    v_n+1/2 = v_n + h/2 M^-1 (F_n - G_n^T Lambda),        a half kick
+    q_n+1   = q_n + h v_n+1/2,                            the drift
+    phi(q_n+1, t_n+1) = 0                                 solved for Lambda (Newton),
+    v_n+1   = v_n+1/2 + h/2 M^-1 (F_n+1 - G_n+1^T mu),    a half kick
+    G_n+1 v_n+1 = nu(q_n+1, t_n+1)                        solved for mu (linear).
+
+The rotation of a spatial body is advanced in the same pattern on SO(3), with its body-frame
+angular momentum ``Pi = J omega'``: the half kick adds the body-frame torques of ``F`` and of the
+constraints, ``Pi_n+1/2 = Pi_n + h/2 (tau_n - (G_n^T Lambda)_omega)``; the drift is the rotation
+``R_n+1 = R_n F_k`` whose relative rotation ``F_k`` solves the implicit equation of the discrete
+Moser–Veselov rigid body (Moser and Veselov 1991) as the Lie-group variational integrator of
+Lee, Leok and McClamroch (2005, 2007) writes it,
+
+    h hat(Pi_n+1/2) = F_k J_d - J_d F_k^T,     J_d = tr(J)/2 I - J,
+
+solved by Newton's method for the Cayley vector ``f`` of ``F_k = (I + hat f)(I - hat f)^-1``,
+``h Pi + h Pi x f + h (Pi . f) f - 2 J f = 0``; the momentum is carried to the new body frame,
+``F_k^T Pi_n+1/2``, and receives the second half kick. The gyroscopic term ``-omega' x J omega'``
+of ``Q`` is not a force here: the Moser–Veselov map produces it. This is RATTLE applied to the
+rotation matrix as nine coordinates under the constraints ``R^T R = I`` and ``phi = 0``, with
+the orthogonality multipliers eliminated (HLW VII.5: RATTLE on ``R`` is the Moser–Veselov
+algorithm), the holonomic constraints entering as in Leyendecker, Marsden and Ortiz (2008); so
+the whole step is symplectic and symmetric (time-reversible) for conservative scenes. The
+rotation is applied as :meth:`Model.integrate` applies one, ``p <- p * exp(theta'/2)``, here in
+closed form from the Cayley vector, ``exp(theta'/2) = (1, f) / sqrt(1 + |f|^2)``
+(``tan(|theta'|/2) = |f|``): Euler parameters stay unit to round-off.
+
+Forces. When every force element derives from a potential (gravity, springs and torsion springs
+without dampers; rheonomic drivers allowed), ``F(q) = -B(q)^T dV/dq`` is formed by CasADi from
+the potential of :attr:`Model.energy`: an exact gradient, and the method is symplectic.
+Otherwise ``F = Q(q, v, t) + omega' x J omega'`` (dampers, applied loads, efforts) enters the
+kicks explicitly, the second kick at the velocity ``v^+ + (v_n+1/2 - v_n) = v_n+1 + O(h^2)``
+(``v^+`` the velocity after the drift): the method is then second order, not symplectic.
+
+Newton's method for ``Lambda`` on the independent rows (the rank decision of
+:mod:`hexapod.algorithms.linalg` at ``q_n``) uses the exact Jacobian
+``d phi / d Lambda = -(h^2 / 2) G_n+1 T G_n^T``, ``T`` equal to ``M^-1`` on flat coordinates and,
+per spatial body, to ``A_F^-1`` with ``A_F x = vee(F_k hat(x) J_d + J_d hat(x) F_k^T)`` (the
+derivative of the Moser–Veselov equation along ``F_k exp(hat(dpsi'))``). The velocity stage is
+the projection of the kicked velocities onto ``G v = nu`` in the kinetic-energy norm, redundant
+rows dropped by the same rank decision. When Newton's method does not converge the step is
+halved and retried, then grown back, as in :mod:`hexapod.simulation.integrators.generalized_alpha`.
+
+One CasADi Function, built once per model, forms a whole iterate (kick, Moser–Veselov solves,
+drift, constraints, forces and the Newton matrix); NumPy keeps the rank decisions and the small
+linear solves. The accelerations and multipliers reported at a state (``v_dot``, ``lam``) are
+those of the dynamics there, redundancy policy included, solved when they are first read: the
+method itself does not need them, and the time loop reads them only at the states it saves.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from hexapod.algorithms.linalg import check_consistency, equilibrate, split_rows
+from hexapod.simulation.integrators.base import Integrator
+from hexapod.simulation.integrators.stability import largest_stable_step, oscillator_parameters
+from hexapod.spatial import quaternion_product, skew
+
+#: Newton iterations of each Moser–Veselov equation, unrolled in the step Function: from the
+#: guess ``f = h omega / 2`` (exact to ``O(h^2 |omega|^2)``) they reach round-off for rotations
+#: per step well beyond those of an accurate step; the residual is checked, and a step that
+#: leaves it above ROTATION_TOL (relative to ``h |Pi|``) is halved.
+ROTATION_ITERATIONS = 6
+ROTATION_TOL = 1e-12
+
+
+def _kick_drift_kick_growth(z: complex) -> float:
+    """Spectral radius of one step on ``x'' + c x' + k x = 0`` (``z = h lambda``), in the
+    variables ``(x, h x')``, with the damper in the kicks as :class:`Rattle` applies it."""
+    k, c = oscillator_parameters(z)
+    step = np.zeros((2, 2))
+    for column, (x, u) in enumerate(((1.0, 0.0), (0.0, 1.0))):
+        u_half = u + 0.5 * (-k * x - c * u)
+        x1 = x + u_half
+        u1 = u_half + 0.5 * (-k * x1 - c * (2 * u_half - u))
+        step[:, column] = x1, u1
+    return float(np.max(np.abs(np.linalg.eigvals(step))))
+
+
+class Rattle(Integrator):
+    """RATTLE with Moser–Veselov rotations (Lie-group form), index 3, fixed step (halved when
+    Newton's method fails). Symplectic and time-reversible for conservative scenes.
+
+    ``newton_tol``: tolerance on the position constraints, ``|phi_i| / s_i`` (``s_i`` the
+    characteristic length of length rows, 1 for angle rows).
+    """
+
+    name = "rattle"
+    order = 2
+    index = 3
+    stabilisation = ("none needed: position constraints solved every step (Newton), velocities "
+                     "projected onto Phi_v v = nu by the second half kick")
+    adaptive = False
+    description = ("RATTLE in Lie-group form (Moser-Veselov rotations): symplectic and "
+                   "time-reversible, index 3")
+    max_iterations = 25
+
+    _stale = False  # True when v_dot and lam are not yet those of the current state
+
+    @classmethod
+    def largest_stable_step(cls, eigenvalues, constrained: bool = False,
+                            **options) -> float | None:
+        """On each mode, the kick-drift-kick map of its oscillator (Stormer-Verlet, ``h omega
+        < 2``, when undamped; a damper enters the kicks explicitly)."""
+        return largest_stable_step(_kick_drift_kick_growth, eigenvalues)
+
+    def __init__(self, *args, newton_tol: float = 1e-13, **kwargs):
+        if not newton_tol > 0:
+            raise ValueError(f"newton_tol must be positive, got {newton_tol}")
+        self.newton_tol = float(newton_tol)
+        super().__init__(*args, **kwargs)
+
+    # ------------------------------------------------------------ reported accelerations
+
+    @property
+    def v_dot(self) -> np.ndarray:
+        if self._stale:
+            self._refresh()
+        return self._v_dot
+
+    @v_dot.setter
+    def v_dot(self, value: np.ndarray) -> None:
+        self._v_dot = value
+
+    @property
+    def lam(self) -> np.ndarray:
+        if self._stale:
+            self._refresh()
+        return self._lam
+
+    @lam.setter
+    def lam(self, value: np.ndarray) -> None:
+        self._lam = value
+
+    def _refresh(self) -> None:
+        self._stale = False
+        self._v_dot, self._lam = self._dynamics(self.t, self.q, self.v)
+
+    # ------------------------------------------------------------ set-up
+
+    def _start(self) -> None:
+        model = self.model
+        self.nominal = self.h
+        self.mass_inv = model.mass_inv.dense()
+        start, stage, self.conservative, self.velocity_forces = _functions(model)
+        self.start_terms, self.stage = _Buffered(start), _Buffered(stage)
+        n_q, n_v, n_c, n_w = model.n_q, model.n_v, model.n_c, model.n_w
+        self.inputs = _layout({"q": n_q, "v": n_v, "F": n_v, "Phi_v": n_c * n_v, "h": 1,
+                               "w": n_w, "wd": n_w, "lam": n_c})
+        self.layout = _layout({"q": n_q, "v": n_v, "phi": n_c, "Phi_v": n_c * n_v, "nu": n_c,
+                               "F": n_v, "S": n_c * n_c, "rotation": 1})
+        self.row_names = [r.name for r in model.rows]
+        self.history: list[np.ndarray] = []  # Lambda of the last steps
+        self.cache = None  # (q, Phi_v, F, rank decision) at the current state
+
+    def _laws(self, t: float, derivative: bool) -> list[np.ndarray]:
+        if not self.model.n_w:
+            return []
+        w, wd, _ = self.model.law_values(t)
+        return [w, wd] if derivative else [w]
+
+    def _split(self, Phi_v: np.ndarray):
+        W, d = equilibrate(Phi_v, self.model.mass_inv_sqrt)
+        self.counters.factorisations += 1
+        return split_rows(W, d, self.model.row_priority, self.model.rank_tolerance,
+                          groups=self.model.row_groups)
+
+    def _start_state(self):
+        """``Phi_v``, the force and the rank decision at the current state: those of the end of
+        the last step, unless the forces depend on the velocities."""
+        cache = self.cache
+        if cache is not None and cache[0] is self.q and not self.velocity_forces:
+            return cache[1:]
+        model = self.model
+        self.start_terms.input[:] = np.concatenate([self.q, self.v, *self._laws(self.t, False)])
+        out = self.start_terms()
+        self.counters.rhs += 1
+        self.counters.jacobians += 1
+        size = model.n_c * model.n_v
+        Phi_v = out[:size].reshape(model.n_c, model.n_v, order="F")
+        split = self._split(Phi_v)
+        self.cache = (self.q, Phi_v, out[size:].copy(), split)
+        return self.cache[1:]
+
+    # ------------------------------------------------------------ the step
+
+    def _step(self) -> None:
+        h, result = self._halving(self._attempt_or_forget)
+        self.t, self.q, self.v = result
+        self._stale = True
+        self.h = min(self.nominal, 2 * h) if h < self.nominal else self.h
+
+    def _attempt_or_forget(self, h: float):
+        """:meth:`_attempt`; after a failure the multipliers of the last steps no longer
+        predict those of the shorter step: forgotten."""
+        result = self._attempt(h)
+        if result is None:
+            self.history.clear()
+        return result
+
+    def _predict(self, Phi_v: np.ndarray, rows: np.ndarray) -> np.ndarray:
+        """Starting multipliers: extrapolated from the last two steps (``O(h^2)``), else those
+        of the dynamics at the start mapped onto the independent rows (``O(h)``)."""
+        if len(self.history) == 2 and self.history[-1].shape == rows.shape:
+            return 2 * self.history[-1] - self.history[-2]
+        return np.linalg.lstsq(Phi_v[rows].T, Phi_v.T @ self.lam, rcond=None)[0]
+
+    def _attempt(self, h: float):
+        """One step of length ``h``: ``(t, q, v)``, or None when Newton's method fails."""
+        model = self.model
+        n_c = model.n_c
+        t1 = self.t + h
+        Phi0, force0, split0 = self._start_state()
+        I = split0.independent
+        d = split0.scale[I]
+        lam = self._predict(Phi0, I)
+        # the stage's input; only the multipliers change below
+        z, where = self.stage.input, self.inputs
+        z[where["q"]], z[where["v"]], z[where["F"]] = self.q, self.v, force0
+        z[where["Phi_v"]], z[where["h"]] = Phi0.ravel(order="F"), h
+        if model.n_w:
+            z[where["w"]], z[where["wd"]] = self._laws(t1, True)
+        multipliers = z[where["lam"]]
+        multipliers[:] = 0.0
+        block, dd = np.ix_(I, I), np.outer(d, d)
+        layout = self.layout
+        for iteration in range(self.max_iterations + 1):
+            multipliers[I] = lam
+            out = self.stage()
+            self.counters.rhs += 1
+            self.counters.jacobians += 1
+            phi = out[layout["phi"]]
+            residual = np.abs(phi / model.row_scale).max(initial=0.0)
+            if not (residual < np.inf and out[-1] <= ROTATION_TOL):  # NaN fails both
+                return None
+            # converged after one correction at least: a predictor within the tolerance still
+            # leaves an O(tolerance) offset from the constraints, which the potential of the
+            # forces they balance would see at first order (one correction takes it to
+            # round-off)
+            if residual <= self.newton_tol and (iteration or I.size == 0):
+                break
+            if iteration == self.max_iterations or I.size == 0:
+                return None
+            self.counters.newton += 1
+            self.counters.factorisations += 1
+            S = out[layout["S"]].reshape(n_c, n_c, order="F")
+            try:  # on the rows scaled as the equilibrated Phi_v: S / (d d^T) ~ W W^T
+                step = np.linalg.solve(S[block] / dd, phi[I] / d) / d
+            except np.linalg.LinAlgError:  # a singular iteration matrix: as a failed Newton
+                return None
+            lam = lam + (2 / h**2) * step
+        # copies: the stage's output is overwritten by its next call
+        q1, v_plus, nu, force1 = (out[layout[k]].copy() for k in ("q", "v", "nu", "F"))
+        Phi1 = out[layout["Phi_v"]].reshape(n_c, model.n_v, order="F").copy()
+        self.history = [*self.history[-1:], lam]
+        # the second half kick, and the velocities onto Phi_v v = nu (kinetic-energy norm)
+        v_star = v_plus + (h / 2) * (self.mass_inv @ force1)
+        split1 = self._split(Phi1)
+        gap = nu - Phi1 @ v_star
+        dy = split1.min_norm_correction(gap)
+        check_consistency(split1, dy, gap, row_names=self.row_names,
+                          what="velocity constraints")
+        v1 = v_star + model.mass_inv_sqrt @ dy
+        self.cache = (q1, Phi1, force1, split1)
+        return t1, q1, v1
+
+
+# ---------------------------------------------------------------- the CasADi Functions
+
+def _layout(sizes: dict[str, int]) -> dict[str, slice]:
+    """Slices of consecutive named parts of a vector."""
+    ends = np.cumsum([0, *sizes.values()])
+    return {k: slice(a, b) for k, a, b in zip(sizes, ends[:-1], ends[1:], strict=True)}
+
+
+class _Buffered:
+    """A packed Function evaluated in place on two NumPy arrays through CasADi's function
+    buffer: fill ``input``, call, read the returned ``output`` (overwritten by the next call).
+    A call then costs no conversion (a fifth of an ordinary call on small models)."""
+
+    def __init__(self, function: ca.Function):
+        self.input = np.zeros(function.size1_in(0))
+        self.output = np.zeros(function.size1_out(0))
+        self._buffer, self._trigger = function.buffer()
+        self._buffer.set_arg(0, memoryview(self.input))
+        self._buffer.set_res(0, memoryview(self.output))
+
+    def __call__(self) -> np.ndarray:
+        self._trigger()
+        return self.output
+
+
+def _mv_residual(hp, f, J):
+    """Moser–Veselov in Cayley form: ``h Pi + h Pi x f + h (Pi . f) f - 2 J f``."""
+    return hp + ca.cross(hp, f) + ca.dot(hp, f) * f - 2 * ca.mtimes(J, f)
+
+
+def _mv_jacobian(hp, f, J):
+    return skew(hp) + ca.mtimes(f, hp.T) + ca.dot(hp, f) * ca.DM.eye(3) - 2 * J
+
+
+def _vee(S):
+    return ca.vertcat(S[2, 1], S[0, 2], S[1, 0])
+
+
+def _force(model, q, v, laws):
+    """The force of the kicks, and whether it is conservative."""
+    drivers = {d.name for d in model.drivers}
+    if all(name in drivers for name in model.working_elements):
+        # F = -B^T dV/dq: the exact gradient of the potential along the group
+        _, potential = model.energy(q, v)
+        B = ca.jacobian(model.qdot(q, v), v)
+        return -ca.mtimes(B.T, ca.gradient(potential, q)), True
+    force = model.Q(q, v, *laws)  # without its gyroscopic terms -omega' x J omega'
+    for body in model.bodies:
+        if body.kind == "spatial":
+            rows = slice(body.v.start + 3, body.v.start + 6)
+            omega = v[rows]
+            force[rows] = force[rows] + ca.cross(omega, ca.mtimes(ca.DM(body.inertia), omega))
+    return force, False
+
+
+def _packed(name: str, inputs: list, outputs: list) -> ca.Function:
+    """A Function of one vector (the inputs stacked, matrices by columns) to one vector (the
+    outputs likewise): a call then costs one conversion each way, not one per argument."""
+    z = ca.SX.sym("z", sum(x.numel() for x in inputs))
+    parts, k = [], 0
+    for x in inputs:
+        parts.append(ca.reshape(z[k:k + x.numel()], x.shape[0], x.shape[1]))
+        k += x.numel()
+    inner = ca.Function(name + "_inner", inputs, outputs)
+    return ca.Function(name, [z], [ca.vertcat(*[ca.vec(ca.densify(x))
+                                                 for x in inner(*parts)])])
+
+
+def _functions(model):
+    """``start(q, v[, w]) -> (Phi_v, F)`` and ``stage(q0, v0, F0, Phi0, h[, w, wd], Lambda)``
+    (packed, see :func:`_packed`), built once per model, whether the force is conservative, and
+    whether it depends on ``v``.
+
+    ``stage`` forms one Newton iterate from the kick force ``F0 - Phi0^T Lambda``: the
+    positions ``q1`` and the velocities ``v^+`` after the drift, ``phi``, ``Phi_v``, ``nu`` and
+    the force at ``q1`` (at the predicted ``v_n+1``), ``S = Phi_v(q1) T Phi0^T`` and the largest
+    relative residual of the Moser–Veselov equations.
+    """
+    if "rattle" in model.derived:
+        return model.derived["rattle"]
+    n_q, n_v, n_c, n_w = model.n_q, model.n_v, model.n_c, model.n_w
+    q, v = ca.SX.sym("q", n_q), ca.SX.sym("v", n_v)
+    w, wd = ca.SX.sym("w", n_w), ca.SX.sym("wd", n_w)
+    laws = [w] if n_w else []
+    force, conservative = _force(model, q, v, laws)
+    force_at = ca.Function("rattle_force", [q, v, *laws], [force])
+    start = _packed("rattle_start", [q, v, *laws], [model.Phi_v(q, *laws), force])
+
+    force0, h = ca.SX.sym("F0", n_v), ca.SX.sym("h")
+    Phi0, lam = ca.SX.sym("Phi0", n_c, n_v), ca.SX.sym("Lambda", n_c)
+    mass_inv = ca.DM(model.mass_inv.dense())
+    kick = (h / 2) * ca.mtimes(mass_inv, force0 - ca.mtimes(Phi0.T, lam))
+    v_half = v + kick
+    q1 = q + 0  # a copy, its rows replaced below
+    v_plus = v_half + 0
+    T = ca.SX(mass_inv)
+    rotation_residual = ca.SX(0.0)
+    for body in model.bodies:
+        if body.kind != "spatial":
+            q1[body.q] = q[body.q] + h * v_half[body.v]
+            continue
+        lin_q = slice(body.q.start, body.q.start + 3)
+        lin_v = slice(body.v.start, body.v.start + 3)
+        rot_v = slice(body.v.start + 3, body.v.start + 6)
+        J = ca.DM(body.inertia)
+        J_d = 0.5 * float(np.trace(body.inertia)) * ca.DM.eye(3) - J
+        hp = h * ca.mtimes(J, v_half[rot_v])
+        cayley = 0.5 * h * v_half[rot_v]
+        for _ in range(ROTATION_ITERATIONS):
+            cayley = cayley - ca.solve(_mv_jacobian(hp, cayley, J),
+                                       _mv_residual(hp, cayley, J))
+        rotation_residual = ca.fmax(rotation_residual,
+                                    ca.norm_inf(_mv_residual(hp, cayley, J))
+                                    / ca.fmax(ca.norm_inf(hp), np.finfo(float).tiny))
+        c2 = ca.dot(cayley, cayley)
+        S = skew(cayley)
+        F = ca.DM.eye(3) + 2 / (1 + c2) * (S + ca.mtimes(S, S))
+        q1[lin_q] = q[lin_q] + h * v_half[lin_v]
+        q1[body.q.start + 3:body.q.stop] = quaternion_product(
+            q[body.q.start + 3:body.q.stop], ca.vertcat(1, cayley) / ca.sqrt(1 + c2))
+        v_plus[rot_v] = ca.solve(J, ca.mtimes(F.T, hp / h))
+        A = ca.horzcat(*[_vee(ca.mtimes([F, skew(e), J_d]) + ca.mtimes([J_d, skew(e), F.T]))
+                         for e in (ca.DM([1, 0, 0]), ca.DM([0, 1, 0]), ca.DM([0, 0, 1]))])
+        T[rot_v, rot_v] = ca.inv(A)
+    Phi1 = model.Phi_v(q1, *laws)
+    nu = model.nu(q1, *laws, *([wd] if n_w else []))
+    outputs = [q1, v_plus, model.phi(q1, *laws), Phi1, nu,
+               force_at(q1, v_plus + kick, *laws), ca.mtimes([Phi1, T, Phi0.T]),
+               rotation_residual]
+    stage = _packed("rattle_stage", [q, v, force0, Phi0, h, *laws, *([wd] if n_w else []),
+                                     lam], outputs)
+    result = (start, stage, conservative, bool(ca.depends_on(force, v)))
+    model.derived["rattle"] = result
+    return result

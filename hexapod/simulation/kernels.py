@@ -1,0 +1,262 @@
+"""Compiled kernels of the integrators: the state derivatives ``(q_dot, v_dot)``, and the
+projection of a state onto the constraints, each one CasADi call.
+
+Integrators evaluate the right-hand side many times per step and need only the accelerations
+there, not multipliers by the redundancy policy. :class:`CompiledRates` builds, once per model
+and row set, a single CasADi ``MX`` Function
+
+    rates(q, v, w, wd, wdd, alpha) -> (q_dot, v_dot, lam, residual)
+
+that forms ``Phi_v, gamma, Q`` and solves the equilibrated saddle-point system
+
+    [[I, W^T], [W, 0]] [y; mu] = [M^-1/2 Q; D^-1 gamma],   W = D^-1 Phi_v M^-1/2,
+    v_dot = M^-1/2 y
+
+with a sparse QR factorisation (CasADi's ``qr`` linear solver, symbolic analysis done once), on
+the independent rows chosen by the rank decision at a reference state. Equilibration keeps the
+conditioning that of ``W`` (not squared, as a Schur complement would); the sparse factorisation
+keeps the cost linear in the number of bodies for chains and trees. ``alpha`` is Baumgarte's
+rate (``alpha = beta``, 0 to switch it off).
+
+The fixed row set is what makes one compiled Function possible, so every call also returns the
+``residual``, ``max |D^-1 (Phi_v v_dot - gamma)|`` relative to the size of the solution, of the
+kept rows and of the rows left out: a singular configuration, or a change of rank, shows there,
+and :meth:`CompiledRates.__call__` then returns None so that the caller falls back on the exact,
+rank-deciding solve of :func:`hexapod.algorithms.dynamics.forward_dynamics`.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+from scipy import sparse
+
+from hexapod._support.fastcall import FastFunction
+from hexapod.model.model import Model
+from hexapod.spatial import quaternion_product
+
+#: relative residual above which a compiled solve is refused (the rank changed, or a
+#: configuration is singular); far above round-off, far below any integrator's tolerance
+RESIDUAL_TOLERANCE = 1e-9
+#: relative residual of the rows left out as redundant above which a compiled solve is refused.
+#: Redundancy holds exactly on the constraint manifold only: at the stage states of a step,
+#: off it by the truncation error, left-out rows (Bricard's mechanism) disagree with the kept
+#: ones by about that error and are rightly ignored (the step's end is projected); a row that
+#: has become independent (leaving a singular pose) disagrees by far more
+REDUNDANT_TOLERANCE = 1e-3
+
+
+def _sparse_dm(matrix: np.ndarray) -> ca.DM:
+    coo = sparse.csc_matrix(matrix)
+    coo.eliminate_zeros()
+    pattern = ca.Sparsity(coo.shape[0], coo.shape[1], coo.indptr.tolist(), coo.indices.tolist())
+    return ca.DM(pattern, coo.data.tolist())
+
+
+class CompiledRates:
+    """``(q_dot, v_dot)`` at a state in one call (see the module's description).
+
+    Parameters
+    ----------
+    model : Model
+    rows : ndarray of int
+        The independent constraint rows to solve with (indices into ``model.rows``); the other
+        rows are redundant and only checked.
+    """
+
+    def __init__(self, model: Model, rows: np.ndarray):
+        self.model = model
+        self.rows = np.asarray(rows, dtype=int)
+        self.function = self._build()
+        self._fast = FastFunction(self.function)
+        self._args = [n for n in ("q", "v", "w", "wd", "wdd") if n in ("q", "v") or model.n_w]
+
+    def _build(self) -> ca.Function:
+        model, rows = self.model, self.rows
+        symbols = {"q": ca.MX.sym("q", model.n_q), "v": ca.MX.sym("v", model.n_v),
+                   "w": ca.MX.sym("w", model.n_w), "wd": ca.MX.sym("wd", model.n_w),
+                   "wdd": ca.MX.sym("wdd", model.n_w)}
+        alpha = ca.MX.sym("alpha")
+        args = [n for n in ("q", "v", "w", "wd", "wdd") if n in ("q", "v") or model.n_w]
+
+        def call(function):
+            return function(*[symbols[n] for n in function.name_in()])
+
+        v = symbols["v"]
+        Phi_v, gamma, Q = call(model.dynamics_terms)
+        q_dot = call(model.qdot)
+        m_inv_sqrt = _sparse_dm(model.mass_inv_sqrt.dense())
+        y0 = ca.mtimes(m_inv_sqrt, Q)
+        if model.n_c == 0:
+            v_dot = ca.mtimes(m_inv_sqrt, y0)
+            lam = ca.MX(0, 1)
+            residual = ca.MX.zeros(2)
+        else:
+            # Baumgarte: Phi_v v_dot = gamma - 2 alpha (Phi_v v - nu) - alpha^2 phi
+            gamma = (gamma - 2 * alpha * (ca.mtimes(Phi_v, v) - call(model.nu))
+                     - alpha**2 * call(model.phi))
+            W_all = ca.mtimes(Phi_v, m_inv_sqrt)
+            d_all = ca.sqrt(ca.sum2(W_all * W_all))
+            d_all = ca.if_else(d_all > 0, d_all, 1.0)
+            W = W_all[rows.tolist(), :] / ca.repmat(d_all[rows.tolist()], 1, model.n_v)
+            n_r = rows.size
+            K = ca.vertcat(ca.horzcat(ca.MX.eye(model.n_v), W.T),
+                           ca.horzcat(W, ca.MX(n_r, n_r)))
+            rhs = ca.vertcat(y0, gamma[rows.tolist()] / d_all[rows.tolist()])
+            solution = ca.solve(K, rhs, "qr")
+            y = solution[: model.n_v]
+            # the kept rows' multipliers (lambda_I = mu / d_I); the others are zero
+            lam = ca.MX(model.n_c, 1)
+            lam[rows.tolist()] = solution[model.n_v:] / d_all[rows.tolist()]
+            v_dot = ca.mtimes(m_inv_sqrt, y)
+            scaled = ca.fabs(ca.mtimes(Phi_v, v_dot) - gamma) / d_all
+            size = ca.norm_inf(y) + ca.norm_inf(y0) + 1e-300
+            kept = set(rows.tolist())
+            others = [i for i in range(model.n_c) if i not in kept]
+            residual = ca.vertcat(
+                ca.mmax(scaled[rows.tolist()]) / size,
+                ca.mmax(scaled[others]) / size if others else ca.MX(0.0))
+        inputs = [symbols[n] for n in args] + [alpha]
+        return ca.Function("rates", inputs, [q_dot, v_dot, lam, residual], args + ["alpha"],
+                           ["q_dot", "v_dot", "lam", "residual"])
+
+    @property
+    def complete(self) -> bool:
+        """True when every row is solved with (none redundant): the multipliers are then
+        unique, and those of the compiled solve are the policy's."""
+        return self.rows.size == self.model.n_c
+
+    def __call__(self, t: float, q: np.ndarray, v: np.ndarray, alpha: float = 0.0,
+                 left_out: float = REDUNDANT_TOLERANCE) -> tuple[np.ndarray, np.ndarray] | None:
+        """``(q_dot, v_dot)``, or None (see :meth:`solve`)."""
+        solution = self.solve(t, q, v, alpha, left_out)
+        return None if solution is None else solution[:2]
+
+    def solve(self, t: float, q: np.ndarray, v: np.ndarray, alpha: float = 0.0,
+              left_out: float = REDUNDANT_TOLERANCE
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """``(q_dot, v_dot, lam)`` at ``(t, q, v)``, or None when the compiled solve cannot be
+        trusted there (non-finite, or the rows it solves with no longer span the constraints:
+        the rows left out violated by more than ``left_out``, relative). ``lam`` holds the
+        kept rows' multipliers, zero on the others."""
+        values = {"q": q, "v": v}
+        if self.model.n_w:
+            values["w"], values["wd"], values["wdd"] = self.model.law_values(t)
+        try:
+            q_dot, v_dot, lam, residual = self._fast(*[values[n] for n in self._args], alpha)
+        except RuntimeError:  # the factorisation failed: a singular matrix, or NaN in it
+            return None
+        if not (residual[0] <= RESIDUAL_TOLERANCE and residual[1] <= left_out
+                and np.all(np.isfinite(v_dot))):
+            return None
+        return q_dot, v_dot, lam
+
+
+def _exp_step(model: Model, q: ca.MX, dv: ca.MX) -> ca.MX:
+    """``q (+) dv`` as :meth:`Model.integrate` computes it, symbolically."""
+    parts = [q[i] for i in range(model.n_q)]
+    for i, j in zip(model._lin_q, model._lin_v, strict=True):
+        parts[i] = q[int(i)] + dv[int(j)]
+    for quat, omega in zip(model._quat_q, model._omega_v, strict=True):
+        theta = dv[omega.tolist()]
+        angle2 = ca.dot(theta, theta)
+        small = angle2 < 1e-16
+        angle = ca.sqrt(ca.if_else(small, 1.0, angle2))
+        # sin(x/2)/x with its series near zero (no 0/0 in the branch not taken)
+        k = ca.if_else(small, 0.5 - angle2 / 48.0, ca.sin(angle / 2) / angle)
+        c = ca.if_else(small, 1.0 - angle2 / 8.0, ca.cos(angle / 2))
+        step = ca.vertcat(c, k * theta)
+        p = ca.vertcat(*[q[int(i)] for i in quat])
+        product = quaternion_product(p, step)
+        product = product / ca.norm_2(product)
+        for n, i in enumerate(quat):
+            parts[int(i)] = product[n]
+    return ca.vertcat(*parts)
+
+
+class CompiledProjection:
+    """The nearest consistent state in the kinetic-energy norm, as :func:`assemble_positions`
+    and :func:`solve_velocities` compute it from a state near the constraints (the end of an
+    integration step): ``newton`` Newton iterations on ``phi = 0``, each the least-``M``-norm
+    correction through the equilibrated saddle-point system, then the velocities projected
+    onto ``Phi_v v = nu``, in one call. Returns None when the result cannot be trusted (the
+    largest scaled residual above ``tol``, a change of rank): the caller then projects with the
+    exact, rank-deciding functions.
+    """
+
+    def __init__(self, model: Model, rows: np.ndarray, newton: int = 2, tol: float = 1e-12):
+        self.model, self.rows, self.newton, self.tol = model, np.asarray(rows, int), newton, tol
+        self._fast = FastFunction(self._build())
+        self._args = ["q", "v"] + (["w", "wd"] if model.n_w else [])
+
+    def _build(self) -> ca.Function:
+        model, rows = self.model, self.rows.tolist()
+        q, v = ca.MX.sym("q", model.n_q), ca.MX.sym("v", model.n_v)
+        w, wd = ca.MX.sym("w", model.n_w), ca.MX.sym("wd", model.n_w)
+        laws = [w, wd] if model.n_w else []
+        symbols = {"q": q, "v": v, "w": w, "wd": wd}
+        m_inv_sqrt = _sparse_dm(model.mass_inv_sqrt.dense())
+        m_sqrt = _sparse_dm(np.linalg.inv(model.mass_inv_sqrt.dense()))
+        scale = ca.DM(model.row_scale)
+
+        def call(function, **values):
+            return function(*[values.get(n, symbols[n]) for n in function.name_in()])
+
+        if model.n_c == 0:  # nothing to project on
+            return ca.Function("project", [q, v, *laws], [q, v, ca.MX(0.0), ca.MX(0.0)])
+
+        def saddle(position, top, bottom_all):
+            """Solve [[I, W^T], [W, 0]] [y; mu] = [top; bottom / d] on the kept rows."""
+            Phi_v = call(model.Phi_v, q=position)
+            W_all = ca.mtimes(Phi_v, m_inv_sqrt)
+            d = ca.sqrt(ca.sum2(W_all * W_all))
+            d = ca.if_else(d > 0, d, 1.0)
+            W = W_all[rows, :] / ca.repmat(d[rows], 1, model.n_v)
+            K = ca.vertcat(ca.horzcat(ca.MX.eye(model.n_v), W.T),
+                           ca.horzcat(W, ca.MX(len(rows), len(rows))))
+            return ca.solve(K, ca.vertcat(top, bottom_all[rows] / d[rows]), "qr")[:model.n_v]
+
+        position = q
+        for _ in range(self.newton):
+            residual = call(model.phi, q=position)
+            y = saddle(position, ca.MX.zeros(model.n_v), -residual)
+            position = _exp_step(model, position, ca.mtimes(m_inv_sqrt, y))
+        phi_error = ca.mmax(ca.fabs(call(model.phi, q=position) / scale))
+        nu = call(model.nu, q=position)
+        y = saddle(position, ca.mtimes(m_sqrt, v), nu)
+        velocity = ca.mtimes(m_inv_sqrt, y)
+        rate_error = (ca.mtimes(call(model.Phi_v, q=position), velocity) - nu) / scale
+        size = ca.norm_inf(velocity) + ca.norm_inf(nu / scale) + 1e-300
+        return ca.Function("project", [q, v, *laws], [position, velocity, phi_error,
+                                                      ca.mmax(ca.fabs(rate_error)) / size])
+
+    def __call__(self, t: float, q: np.ndarray,
+                 v: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        values = {"q": q, "v": v}
+        if self.model.n_w:
+            values["w"], values["wd"], _ = self.model.law_values(t)
+        try:
+            position, velocity, phi_error, rate_error = self._fast(
+                *[values[n] for n in self._args])
+        except RuntimeError:  # the factorisation failed: a singular matrix, or NaN in it
+            return None
+        if not (phi_error[0] <= self.tol and rate_error[0] <= RESIDUAL_TOLERANCE):
+            return None
+        return position, velocity
+
+
+def compiled_projection(model: Model, rows: np.ndarray) -> CompiledProjection:
+    """The :class:`CompiledProjection` of ``model`` for a row set, built once."""
+    key = ("projection", tuple(int(r) for r in rows))
+    if key not in model.derived:
+        model.derived[key] = CompiledProjection(model, rows)
+    return model.derived[key]
+
+
+def compiled_rates(model: Model, rows: np.ndarray) -> CompiledRates:
+    """The :class:`CompiledRates` of ``model`` for a row set, built once and kept in
+    ``model.derived``."""
+    key = ("rates", tuple(int(r) for r in rows))
+    if key not in model.derived:
+        model.derived[key] = CompiledRates(model, rows)
+    return model.derived[key]

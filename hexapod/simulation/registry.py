@@ -1,0 +1,78 @@
+"""The integrator registry, and the defaults of a simulation, written once.
+
+==========================  =====  =====  =============================================
+name                        order  index  stabilisation
+==========================  =====  =====  =============================================
+``rk4-baumgarte``           4      1      Baumgarte, Euler parameters renormalised
+``dopri5-projection``       5      1      projection onto phi = 0 and Phi_v v = nu
+``dop853-projection``       8      1      projection onto phi = 0 and Phi_v v = nu
+``generalized-alpha``       2      3      position constraints solved (Newton)
+``rattle``                  2      3      position constraints solved (Newton), symplectic
+``radau5-ggl``              5      2      GGL: phi = 0 and Phi_v v = nu, B Phi_v^T mu
+``idas-bdf``                1-5    1      Baumgarte terms in the DAE; projection and restart
+                                          when the drift passes a tolerance
+==========================  =====  =====  =============================================
+
+Tests and studies iterate over :data:`INTEGRATORS` (name -> class, in the order studies list
+them); :func:`get_integrator` accepts a name or a class (a user's own subclass of
+:class:`~hexapod.simulation.integrators.base.Integrator`), and :func:`register` adds one.
+"""
+
+from __future__ import annotations
+
+from hexapod.simulation.integrators import (
+    DormandPrince5,
+    DormandPrince853,
+    IdasBDF,
+    Integrator,
+    LieGroupGeneralizedAlpha,
+    RadauIIA5GGL,
+    Rattle,
+    RungeKutta4Baumgarte,
+)
+
+#: The method used when none is named: adaptive, constraints held to round-off.
+DEFAULT_METHOD = "dopri5-projection"
+#: Default relative tolerance of the adaptive methods.
+DEFAULT_RTOL = 1e-6
+#: Default absolute tolerance of the adaptive methods (SI units of each coordinate).
+DEFAULT_ATOL = 1e-8
+
+#: Integrators by name, in the order studies list them.
+INTEGRATORS: dict[str, type[Integrator]] = {}
+
+
+def register(cls: type[Integrator]) -> type[Integrator]:
+    """Add an integrator class to :data:`INTEGRATORS` under ``cls.name`` (usable as a decorator).
+
+    Raises
+    ------
+    TypeError
+        ``cls`` is not a subclass of ``Integrator`` with a ``name``.
+    """
+    if not (isinstance(cls, type) and issubclass(cls, Integrator)) or not cls.name:
+        raise TypeError(f"{cls!r} is not a named subclass of Integrator")
+    INTEGRATORS[cls.name] = cls
+    return cls
+
+
+def get_integrator(method: str | type[Integrator]) -> type[Integrator]:
+    """The integrator class for a registered name, or ``method`` itself when it is a subclass of
+    ``Integrator``.
+
+    Raises
+    ------
+    ValueError
+        ``method`` is neither a registered name nor an ``Integrator`` subclass.
+    """
+    if isinstance(method, type) and issubclass(method, Integrator):
+        return method
+    if method not in INTEGRATORS:
+        raise ValueError(f"unknown integrator {method!r}: choose one of "
+                         + ", ".join(INTEGRATORS))
+    return INTEGRATORS[method]
+
+
+for _cls in (RungeKutta4Baumgarte, DormandPrince5, DormandPrince853, LieGroupGeneralizedAlpha,
+             Rattle, RadauIIA5GGL, IdasBDF):
+    register(_cls)
