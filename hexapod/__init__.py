@@ -18,7 +18,7 @@ Names are imported when first used, so ``import hexapod`` is quick.
 """
 
 from hexapod._support.lazy import attach
-from hexapod._version import __version__
+from hexapod._version import __version__ as __version__
 
 __getattr__, __dir__, __all__ = attach(__name__, {
     "hexapod.errors": ["AssemblyError", "HexapodError", "InputFileError", "IntegrationError",

@@ -582,8 +582,8 @@ def bench_problem(problem: Problem, methods: list[str], args, exudyn_ok: bool) -
     log(f"{problem.key}: {problem.title}, {problem.t_end} s")
     tic = time.process_time()
     model = hx.assemble(problem.build())
-    q, v = hx.consistent_state(model)
-    data = hx.Data()
+    data = model.create_data()
+    q, v = hx.consistent_state(model, data)
     v_dot = hx.forward_dynamics(model, data, 0.0, q, v)
     assembled = time.process_time() - tic
     tic = time.process_time()

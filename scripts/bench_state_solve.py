@@ -43,9 +43,9 @@ def measure(scene: hx.Scene, repeats: int, t: float = 0.1) -> dict:
     start = time.perf_counter()
     model = hx.assemble(scene)
     built = time.perf_counter()
-    q = hx.assemble_positions(model, t=t)
-    v = hx.solve_velocities(model, q, t)
-    data = hx.Data()
+    data = model.create_data()
+    q = hx.assemble_positions(model, data, t)
+    v = hx.solve_velocities(model, data, t, q)
     hx.forward_dynamics(model, data, t, q, v)  # warm-up: builds the CasADi Functions
     warm = time.perf_counter()
     times = []

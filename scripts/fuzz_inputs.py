@@ -652,7 +652,8 @@ def read_and_assemble(case: Case, path: Path) -> None:
         motion = read_motion(path)
         scene = apply_motion(read_urdf(case.model), motion)
         t = float(motion.times[0])
-    hx.consistent_state(hx.assemble(scene), t)
+    data = hx.assemble(scene).create_data()
+    hx.consistent_state(hx.assemble(scene), data, t)
 
 
 def check_library(case: Case, path: Path) -> Outcome:

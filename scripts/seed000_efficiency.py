@@ -95,9 +95,9 @@ def _time_chain(n: int, repeats: int) -> list[dict]:
         lambda m=method: form(chain.layout, q, q_d, m), repeats)} for method in METHODS]
     rows.append({"n": n, "method": "basic-vectorised",
                  "cpu_ms": _cpu_ms(lambda: chain.matrices(q, q_d), repeats)})
-    x = hx.assemble_positions(model, t=0.0)
-    v = hx.solve_velocities(model, x, 0.0)
-    data = hx.Data()
+    data = model.create_data()
+    x = hx.assemble_positions(model, data, 0.0)
+    v = hx.solve_velocities(model, data, 0.0, x)
     rows.append({"n": n, "method": "engine", "cpu_ms": _cpu_ms(
         lambda: hx.forward_dynamics(model, data, 0.0, x, v), repeats)})
     return rows

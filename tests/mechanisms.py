@@ -11,9 +11,9 @@ def solve_state(scene: hx.Scene, t: float = 0.0):
     """Assemble ``scene`` at ``t``: model, positions, velocities, accelerations and the workspace
     holding the multipliers."""
     model = hx.assemble(scene)
-    q = hx.assemble_positions(model, t=t)
-    v = hx.solve_velocities(model, q, t)
-    data = hx.Data()
+    data = model.create_data()
+    q = hx.assemble_positions(model, data, t)
+    v = hx.solve_velocities(model, data, t, q)
     v_dot = hx.forward_dynamics(model, data, t, q, v)
     return model, q, v, v_dot, data
 

@@ -71,7 +71,7 @@ def direct_scene():
 
 def _results(scene, t=0.4):
     model, q, _, v_dot, data = solve_state(scene, t)
-    w = hx.joint_wrenches(model, q, data.lam, data.Phi_v, data.Q_across)
+    w = hx.joint_wrenches(model, data)
     return model, q, v_dot, w
 
 
@@ -104,8 +104,9 @@ def test_six_legs_from_one_builder():
         scene.attach(leg, prefix, base="trunk", placement=placement)
     model = hx.assemble(scene)
     assert len(model.bodies) == 37 and len(model.joints) == 37 and len(model.drivers) == 36
-    q = hx.assemble_positions(model, t=0.1)
-    mobility = hx.degrees_of_freedom(model, q, 0.1)
+    data = model.create_data()
+    q = hx.assemble_positions(model, data, 0.1)
+    mobility = hx.degrees_of_freedom(model, data, 0.1, q)
     assert mobility["dof_with_drivers"] == 0 and mobility["redundant_rows"] == []
 
 

@@ -181,11 +181,10 @@ class Reference:
 
 def check_free_body_balance(scene, model, t, q, v, loads: Loads, what=""):
     """Forward dynamics at ``(t, q, v)`` and the balance of every body; returns the data."""
-    data = hx.Data()
+    data = model.create_data()
     v_dot = hx.forward_dynamics(model, data, t, q, v)
-    report = hx.joint_wrenches(model, q, data.lam, data.Phi_v, data.Q_across)
-    world = hx.joint_wrenches(model, q, data.lam, data.Phi_v, data.Q_across,
-                              frame="world")
+    report = hx.joint_wrenches(model, data)
+    world = hx.joint_wrenches(model, data, frame="world")
     ref = Reference(scene, model, q, v)
     n_bodies = len(model.bodies)
     # per body: the force terms and the moment terms (about its centre of mass), world axes
@@ -262,8 +261,9 @@ FRONT_LEG_TIMES = (0.0, 0.083, 0.2, 0.371)
 
 
 def _front_leg_state(model, t):
-    q = hx.assemble_positions(model, t=t)
-    return q, hx.solve_velocities(model, q, t)
+    data = model.create_data()
+    q = hx.assemble_positions(model, data, t)
+    return q, hx.solve_velocities(model, data, t, q)
 
 
 @pytest.mark.parametrize("t", FRONT_LEG_TIMES)
@@ -279,10 +279,10 @@ def test_front_leg_free_body_balance(front_leg, t):
 def test_front_leg_efforts_are_minus_driver_multipliers(front_leg, t):
     scene, model = front_leg
     q, v = _front_leg_state(model, t)
-    data = hx.Data()
+    data = model.create_data()
     hx.forward_dynamics(model, data, t, q, v)
-    report = hx.joint_wrenches(model, q, data.lam, data.Phi_v, data.Q_across)
-    efforts = hx.driver_efforts(model, data.lam)
+    report = hx.joint_wrenches(model, data)
+    efforts = hx.driver_efforts(model, data)
     assert len(model.drivers) == len(model.joints) == 6
     scale = np.max(np.abs(report.effort))
     assert scale > 1e-3  # N m: the gait loads the joints
@@ -365,8 +365,9 @@ def test_loaded_chain_free_body_balance(seed, reversed_root):
                                                 ()]
     for trial in range(2):
         guess = model.integrate(model.q0, rng.normal(scale=0.4, size=model.n_v))
-        q = hx.assemble_positions(model, guess)
-        v = hx.solve_velocities(model, q, 0.0, rng.normal(scale=1.5, size=model.n_v))
+        data = model.create_data()
+        q = hx.assemble_positions(model, data, q=guess)
+        v = hx.solve_velocities(model, data, 0.0, q, rng.normal(scale=1.5, size=model.n_v))
         check_free_body_balance(scene, model, 0.0, q, v, loads, f"seed {seed}, state {trial}")
 
 
@@ -408,8 +409,9 @@ def test_planar_chain_free_body_balance(seed):
     assert [j.across for j in model.joints] == [(), ("across_j1",), ("motor_j2",)]
     for trial in range(2):
         guess = model.integrate(model.q0, rng.normal(scale=0.4, size=model.n_v))
-        q = hx.assemble_positions(model, guess)
-        v = hx.solve_velocities(model, q, 0.0, rng.normal(scale=1.5, size=model.n_v))
+        data = model.create_data()
+        q = hx.assemble_positions(model, data, q=guess)
+        v = hx.solve_velocities(model, data, 0.0, q, rng.normal(scale=1.5, size=model.n_v))
         _, report = check_free_body_balance(scene, model, 0.0, q, v, loads,
                                             f"planar seed {seed}, state {trial}")
         # planar wrenches are embedded in 3-D: no out-of-plane force, no in-plane moment
@@ -440,7 +442,8 @@ def test_driven_pendulum_effort_closed_form(motor):
         theta = offset + a * np.cos(w * t) + b * np.sin(w * t)
         theta_dd = -w**2 * (a * np.cos(w * t) + b * np.sin(w * t))
         tau = (J_zz + m * l**2) * theta_dd + m * G * l * np.cos(theta)
-        q, v = hx.consistent_state(model, t)
+        data = model.create_data()
+        q, v = hx.consistent_state(model, data, t)
         r, _ = body_pose(model, q, 0)
         # the engine's joint angle is the law's (assembly converges to ~1e-12 m; setup check)
         assert np.allclose(r, l * np.array([np.cos(theta), np.sin(theta), 0.0]), atol=1e-10)
@@ -449,6 +452,6 @@ def test_driven_pendulum_effort_closed_form(motor):
         driver = model.drivers[0]
         lam_d = data.lam[driver.row]
         scale = m * G * l + abs(tau)
-        assert hx.driver_efforts(model, data.lam)["drive"] == -lam_d
+        assert hx.driver_efforts(model, data)["drive"] == -lam_d
         assert abs(report.effort[0] - tau) <= EFFORT_RTOL * scale
         assert abs(-lam_d + motor - tau) <= EFFORT_RTOL * scale

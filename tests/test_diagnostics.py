@@ -20,7 +20,8 @@ G = 9.81
 
 def state(scene):
     model = hx.assemble(scene)
-    q, v = hx.consistent_state(model)
+    data = model.create_data()
+    q, v = hx.consistent_state(model, data)
     return model, q, v
 
 
@@ -49,7 +50,7 @@ def test_pendulum_modes_are_its_small_oscillations(form):
     model, q, v = state(pendulum(form, 0.0))
     m, length, inertia = 1.3, 0.8, 0.0 if form.startswith("particle") else 0.02
     omega = np.sqrt(m * G * length / (inertia + m * length**2))
-    diagnosis = diagnose(model, 0.0, q, v)
+    diagnosis = diagnose(model, model.create_data(), 0.0, q, v)
     assert np.allclose(diagnosis.eigenvalues.real, 0.0, atol=1e-9 * omega)
     assert np.allclose(np.abs(diagnosis.eigenvalues.imag), omega, rtol=1e-10)
     assert diagnosis.stiffness_ratio == pytest.approx(1.0)
@@ -61,7 +62,7 @@ def test_inverted_pendulum_grows_and_only_its_decaying_twin_limits_the_step():
     decaying one the real-axis boundary of DOPRI5 (3.3066 / a)."""
     model, q, v = state(pendulum("planar", np.pi))
     a = np.sqrt(1.3 * G * 0.8 / (0.02 + 1.3 * 0.8**2))
-    diagnosis = diagnose(model, 0.0, q, v)
+    diagnosis = diagnose(model, model.create_data(), 0.0, q, v)
     assert diagnosis.growing_modes == 1
     assert np.allclose(np.sort(diagnosis.eigenvalues.real), [-a, a], rtol=1e-10)
     assert diagnosis.stable_steps["dopri5-projection"] == pytest.approx(3.3066 / a, rel=1e-4)
@@ -72,7 +73,7 @@ def test_spring_modes_are_the_roots_of_the_oscillator(stiffness):
     damping = 0.4 * np.sqrt(stiffness)
     model, q, v = state(block_on_spring(stiffness, damping))
     exact = np.roots([1.0, damping, stiffness])
-    found = np.sort_complex(diagnose(model, 0.0, q, v).eigenvalues)
+    found = np.sort_complex(diagnose(model, model.create_data(), 0.0, q, v).eigenvalues)
     assert np.allclose(found, np.sort_complex(exact), rtol=1e-9)
 
 
@@ -98,7 +99,7 @@ def test_stability_radii_of_the_tableaus():
 def test_baumgarte_mode_limits_the_step_of_soft_constrained_scenes():
     """RK4 with Baumgarte's alpha = 10/s cannot step past 2.785 / 10 s, however soft the scene."""
     model, q, v = state(pendulum("planar", 0.0))
-    diagnosis = diagnose(model, 0.0, q, v)
+    diagnosis = diagnose(model, model.create_data(), 0.0, q, v)
     assert diagnosis.stable_steps["rk4-baumgarte"] == pytest.approx(0.2785293563, rel=1e-6)
 
 
@@ -108,7 +109,7 @@ def test_predicted_stable_step_within_a_factor_two_of_observed(method):
     on the fixed step, or the step an adaptive controller settles on."""
     stiffness = 1e7
     model, q, v = state(block_on_spring(stiffness, 0.4 * np.sqrt(stiffness)))
-    predicted = diagnose(model, 0.0, q, v, methods=[method]).stable_steps[method]
+    predicted = diagnose(model, model.create_data(), 0.0, q, v, methods=[method]).stable_steps[method]
     observed, _ = observed_stable_step(model, method, predicted, steps=200, bisections=8)
     assert 0.5 < observed / predicted < 2.0
 
@@ -119,7 +120,7 @@ def test_distance_to_singular_configuration_vanishes_linearly():
     distances, conditions = [], []
     for theta in (0.1, 0.01, 0.001):
         model, q, v = state(parallelogram(theta))
-        diagnosis = diagnose(model, 0.0, q, v)
+        diagnosis = diagnose(model, model.create_data(), 0.0, q, v)
         assert diagnosis.dof == diagnosis.dof_counted == 1
         distances.append(diagnosis.singular_distance / theta)
         conditions.append(diagnosis.condition_number * theta**2)
@@ -130,7 +131,7 @@ def test_distance_to_singular_configuration_vanishes_linearly():
 
 def test_at_the_singular_pose_the_rank_drops_and_a_row_is_named():
     model, q, v = state(parallelogram(0.0))
-    diagnosis = diagnose(model, 0.0, q, v)
+    diagnosis = diagnose(model, model.create_data(), 0.0, q, v)
     assert diagnosis.dof == 2 and diagnosis.dof_counted == 1
     assert len(diagnosis.redundant_rows) == 1
     assert diagnosis.redundant_rows[0] in {f"{j}/x" for j in "ABCD"}
@@ -148,8 +149,8 @@ def test_mass_ratio_shows_in_the_written_condition_not_the_solved_one():
         return scene
 
     model, q, v = state(double(1.0))
-    balanced = diagnose(model, 0.0, q, v, distance=False)
+    balanced = diagnose(model, model.create_data(), 0.0, q, v, distance=False)
     model, q, v = state(double(1e-6))
-    light = diagnose(model, 0.0, q, v, distance=False)
+    light = diagnose(model, model.create_data(), 0.0, q, v, distance=False)
     assert light.condition_number_unscaled > 1e5 * balanced.condition_number_unscaled
     assert light.condition_number < 10 * balanced.condition_number

@@ -12,7 +12,7 @@ import pytest
 
 import hexapod as hx
 from hexapod.algorithms.inverse import inverse_dynamics
-from hexapod.algorithms.liaison import joint_origin
+from hexapod.algorithms.liaison import joint_origin, wrenches_from_multipliers
 from hexapod.cli import main
 from hexapod.output.vtk import PART_BAR, PART_BOX, body_shape
 from hexapod.scene.reader import read_scene
@@ -115,8 +115,8 @@ def test_joint_vectors_are_the_engine_wrenches_at_each_state(pendulum_export):
         mesh = meshio.read(cwd / "vtk" / name)
         q, lam = saved["q"][k], saved["lam"][k]
         Phi_v = model.call("Phi_v", q=q)
-        world = hx.joint_wrenches(model, q, lam, Phi_v, frame="world")
-        local = hx.joint_wrenches(model, q, lam, Phi_v)
+        world = wrenches_from_multipliers(model, q, lam, Phi_v, frame="world")
+        local = wrenches_from_multipliers(model, q, lam, Phi_v)
         data = mesh.point_data
         assert np.abs(data["force"] - world.force).max() < 1e-9
         assert np.abs(data["moment"] - world.torque).max() < 1e-9

@@ -76,7 +76,7 @@ def test_bricard_names_its_redundant_row_and_keeps_unique_constraint_forces():
     model = case.model
     result = hx.simulate(model, 0.5, rtol=1e-8, atol=1e-10)
     assert result.success
-    data = hx.Data()
+    data = model.create_data()
     for k in range(0, result.t.size, max(1, result.t.size // 5)):
         q, v = result.q[k], result.v[k]
         v_dot = hx.forward_dynamics(model, data, float(result.t[k]), q, v)
@@ -101,10 +101,11 @@ def test_stiff_spring_breaks_the_explicit_fixed_step_and_not_the_implicit_method
 def test_report_has_table_recommendation_and_figures(tmp_path):
     case = CASES["stretched-leg"]
     runs = run_suite([case], [DEFAULT_METHOD, "rk4-baumgarte"], budget=30.0)
-    q, v = hx.consistent_state(case.model)
+    data = case.model.create_data()
+    q, v = hx.consistent_state(case.model, data)
     from hexapod.simulation.diagnostics import diagnose
 
-    files = report_files([case], runs, {case.name: diagnose(case.model, 0.0, q, v)}, [],
+    files = report_files([case], runs, {case.name: diagnose(case.model, case.model.create_data(), 0.0, q, v)}, [],
                          "hexapod check")
     text = files["check.md"].decode()
     assert "## What to use" in text and "stretched-leg" in text

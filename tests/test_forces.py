@@ -12,7 +12,7 @@ G = np.array([0.0, 0.0, -9.81])
 
 
 def _fd(model, q, v, t=0.0):
-    data = hx.Data()
+    data = model.create_data()
     return hx.forward_dynamics(model, data, t, q, v), data
 
 
@@ -132,14 +132,14 @@ def test_joint_effort_drives_a_pendulum():
     model = hx.assemble(scene)
     theta = 0.0
     for t, theta_dot in ((0.2, 0.0), (1.3, 2.5)):
-        v = hx.solve_velocities(model, model.q0, t, [-l * np.sin(theta) * theta_dot,
+        data = model.create_data()
+        v = hx.solve_velocities(model, data, t, model.q0, [-l * np.sin(theta) * theta_dot,
                                                       l * np.cos(theta) * theta_dot, theta_dot])
         v_dot, data = _fd(model, model.q0, v, t)
         tau = law(t)
         assert v_dot[2] == pytest.approx((tau - m * 9.81 * l * np.cos(theta))
                                          / (Ic + m * l**2), rel=1e-12)
-        wrenches = hx.joint_wrenches(model, model.q0, data.lam, data.Phi_v,
-                                     data.Q_across)
+        wrenches = hx.joint_wrenches(model, data)
         # the joint wrench gathers the effort acting across the joint
         assert wrenches.effort[0] == pytest.approx(tau, rel=1e-12)
         assert model.joints[0].across == ("motor",)
@@ -223,6 +223,6 @@ def test_rotational_spring_damper_on_a_pendulum(build):
         tau = -k * (0.0 - free) - c * theta_dot + law(t)
         theta_dd = (tau - m * 9.81 * l) / (Ic + m * l**2)
         assert v_dot[2 if build == "planar" else 5] == pytest.approx(theta_dd, rel=1e-12)
-        wrenches = hx.joint_wrenches(model, model.q0, data.lam, data.Phi_v, data.Q_across)
+        wrenches = hx.joint_wrenches(model, data)
         axial = wrenches.torque[0] @ [0, 0, 1]
         assert axial == pytest.approx(tau, rel=1e-12)

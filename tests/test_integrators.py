@@ -347,7 +347,7 @@ def test_redundant_closed_chain_runs_and_keeps_the_policy(method):
     # second-order fixed-step methods: an energy error O(h^2)
     second_order = ("generalized-alpha", "rattle")
     assert result.energy_drift < (1e-3 if method in second_order else 1e-6)
-    data = hx.Data()
+    data = model.create_data()
     hx.forward_dynamics(model, data, result.t[-1], result.q[-1], result.v[-1])
     tolerance = {"generalized-alpha": 1e-3}.get(method, 1e-8)
     assert np.abs(result.lam[-1] - data.lam).max() < tolerance * np.abs(data.lam).max()

@@ -129,13 +129,13 @@ def test_reactions_on_the_parent():
     prismatic joint that point is apart from the child's, and the moments differ by the arm."""
     model = hx.assemble(random_tree(9, 5, prismatic=0.6))
     assert any(j.kind == "prismatic" for j in model.joints)
-    q = hx.assemble_positions(model, t=0.4)
-    v = hx.solve_velocities(model, q, 0.4)
-    data = hx.Data()
+    data = model.create_data()
+    q = hx.assemble_positions(model, data, 0.4)
+    v = hx.solve_velocities(model, data, 0.4, q)
     hx.forward_dynamics(model, data, 0.4, q, v)
-    child = hx.joint_wrenches(model, q, data.lam, data.Phi_v, frame="world")
-    parent = hx.joint_wrenches(model, q, data.lam, data.Phi_v, frame="world", on="parent")
-    local = hx.joint_wrenches(model, q, data.lam, data.Phi_v, on="parent")
+    child = hx.joint_wrenches(model, data, frame="world")
+    parent = hx.joint_wrenches(model, data, frame="world", on="parent")
+    local = hx.joint_wrenches(model, data, on="parent")
     from hexapod.algorithms.liaison import joint_origin, parent_point
     for k, joint in enumerate(model.joints):
         origin, _ = joint_origin(model, q, joint)

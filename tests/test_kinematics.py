@@ -17,7 +17,8 @@ def test_assembly_from_a_rough_guess():
     model = hx.assemble(four_bar(3, 1.05, driven=False))
     rng = np.random.default_rng(5)
     guess = model.integrate(model.q0, rng.normal(size=model.n_v) * 0.05)
-    q = hx.assemble_positions(model, guess)
+    data = model.create_data()
+    q = hx.assemble_positions(model, data, q=guess)
     w, _, _ = model.law_values(0.0)
     assert np.max(np.abs(model.call("phi", q=q, w=w) / model.row_scale)) <= 1e-12
     p = q.reshape(-1, 7)[:, 3:]
@@ -31,7 +32,8 @@ def test_assembly_of_every_joint_from_a_perturbed_pose(case):
     model = hx.assemble(case.scene(drive=False))
     rng = np.random.default_rng(6)
     guess = model.integrate(case.coordinates(model, 0.0), rng.normal(size=model.n_v) * 0.03)
-    q = hx.assemble_positions(model, guess)
+    data = model.create_data()
+    q = hx.assemble_positions(model, data, q=guess)
     w, _, _ = model.law_values(0.0)
     assert np.max(np.abs(model.call("phi", q=q, w=w) / model.row_scale)) <= 1e-12
 
@@ -45,20 +47,21 @@ def test_an_impossible_loop_names_the_violated_constraints():
     joint.child_frame = hx.Placement([0.9, 0.0])
     model = hx.assemble(scene)
     with pytest.raises(hx.AssemblyError, match=r"rocker_ground/x|rocker_pin/x"):
-        hx.assemble_positions(model)
+        data = model.create_data()
+        hx.assemble_positions(model, data)
 
 
 def test_fully_driven_kinematics_match_the_dynamics():
     """Prescribed motion: velocities and accelerations are fixed by the constraints alone."""
     model = hx.assemble(four_bar(2, 1.05))
     for t in (0.0, 0.4, 1.1):
-        q = hx.assemble_positions(model, t=t)
-        v = hx.solve_velocities(model, q, t)
+        data = model.create_data()
+        q = hx.assemble_positions(model, data, t)
+        v = hx.solve_velocities(model, data, t, q)
         w, wd, wdd = model.law_values(t)
         assert np.allclose(model.call("Phi_v", q=q, w=w) @ v, model.call("nu", q=q, w=w, wd=wd),
                            atol=1e-13)
-        a = hx.solve_accelerations(model, q, v, t)
-        data = hx.Data()
+        a = hx.solve_accelerations(model, data, t, q, v)
         assert np.allclose(hx.forward_dynamics(model, data, t, q, v), a, rtol=1e-11,
                            atol=1e-11)
         # the driver's law: crank angle from the crank's pose, rate and acceleration
@@ -69,8 +72,8 @@ def test_fully_driven_kinematics_match_the_dynamics():
 
 def test_condition_number_equals_the_direct_computation():
     model = hx.assemble(four_bar(2, 1.05, driven=False))
-    q = hx.assemble_positions(model)
-    data = hx.Data()
+    data = model.create_data()
+    q = hx.assemble_positions(model, data)
     hx.forward_dynamics(model, data, 0.0, q, model.v0, condition=True)
     W, _ = equilibrate(data.Phi_v, model.mass_inv_sqrt)
     n_v, n_c = W.shape[1], W.shape[0]

@@ -200,7 +200,8 @@ def test_the_standing_hexapod_holds_still_on_statically_indeterminate_feet(feet)
     from legs.robot import STANDING_FEET, hexapod_standing, standing_feet
 
     model = hx.assemble(hexapod_standing(feet))
-    q, v = hx.consistent_state(model)
+    data = model.create_data()
+    q, v = hx.consistent_state(model, data)
     assert np.abs(q - model.q0).max() < 1e-12  # built at the standing pose
     trunk = model.bodies[model.body_index["trunk"]]
     assert np.allclose(q[trunk.q], [0, 0, 0, 1, 0, 0, 0], atol=1e-12)
@@ -209,14 +210,12 @@ def test_the_standing_hexapod_holds_still_on_statically_indeterminate_feet(feet)
     for leg, point in standing_feet().items():
         assert point[2] == pytest.approx(ground, abs=1e-12)
         assert np.allclose(feet_at[f"{leg}/tarsus"][0], point, atol=1e-12)
-    data = hx.Data()
     v_dot = hx.forward_dynamics(model, data, 0.0, q, v)
     assert np.abs(v_dot).max() < 1e-9
     names = [model.rows[i].name for i in data.redundant_rows]
     assert len(names) == 3 * feet - 6 and all(n for n in names)
-    dof = hx.degrees_of_freedom(model, q)
+    dof = hx.degrees_of_freedom(model, data, 0.0, q)
     assert dof["dof_with_drivers"] == 0 and dof["redundant_rows"] == names
-    wrenches = hx.joint_wrenches(model, q, data.lam, data.Phi_v, data.Q_across,
-                                 frame="world").as_dict()
+    wrenches = hx.joint_wrenches(model, data, frame="world").as_dict()
     vertical = sum(wrenches[f"{leg}/ground"]["Fz"] for leg in STANDING_FEET[:feet])
     assert vertical == pytest.approx(robot_weight(), rel=1e-9)

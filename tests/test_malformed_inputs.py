@@ -214,7 +214,8 @@ def test_assembly_errors_name_the_file(tmp_path):
     path.write_text(text.replace('child = "rod4"', 'child = "rod2"', 1))
     model = hx.assemble(read_scene(path))
     with pytest.raises(hx.AssemblyError) as info:
-        hx.consistent_state(model)
+        data = model.create_data()
+        hx.consistent_state(model, data)
     assert str(path) in str(info.value) and "cannot assemble" in str(info.value)
 
 

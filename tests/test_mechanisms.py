@@ -30,8 +30,8 @@ def solved():
         if name not in out:
             case = CASES[name]
             model = hx.assemble(case.scene)
-            q, v = hx.consistent_state(model)
-            data = hx.Data()
+            data = model.create_data()
+            q, v = hx.consistent_state(model, data)
             v_dot = hx.forward_dynamics(model, data, 0.0, q, v)
             out[name] = (case, model, q, v, v_dot, data)
         return out[name]
@@ -56,7 +56,7 @@ def test_scene_is_consistent_and_its_mobility_is_as_documented(name, solved):
     case, model, q, v, _, data = solved(name)
     assert np.abs(q - model.q0).max() < 1e-12
     assert np.abs(v - model.v0).max() < 1e-12 * (1 + np.abs(model.v0).max())
-    m = mobility(model, q)
+    m = mobility(model, data, 0.0, q)
     assert (m.numerical, m.counted) == (case.dof, case.counted_dof)
     assert m.numerical_with_drivers == case.dof_with_drivers
     assert len(m.redundant_rows) == case.redundant == data.redundant_rows.size
@@ -77,7 +77,7 @@ def test_initial_accelerations_equal_the_reference(name, solved):
 
 def test_bricard_grubler_counts_zero_but_it_moves_with_one_redundant_row(solved):
     case, model, q, _, v_dot, data = solved("bricard")
-    m = mobility(model, q)
+    m = mobility(model, data, 0.0, q)
     assert m.counted == 0 and m.numerical == 1 and m.redundancy == 1
     assert [model.rows[i].name.split("/")[0] for i in data.redundant_rows] == ["P5"]
     assert np.abs(v_dot).max() > 1.0  # released at rest, it falls

@@ -283,7 +283,7 @@ def test_double_pendulum_matches_lagrange(case_name):
     case = PENDULUM_CASES[case_name]()
     p = case.params
     model = hx.assemble(case.scene)
-    data = hx.Data()
+    data = model.create_data()
     rng = np.random.default_rng(RNG_SEED)
     for _ in range(6):
         theta = rng.uniform(-np.pi, np.pi, 2)
@@ -486,9 +486,8 @@ def engine_accelerations(motion):
 def check_wrenches(model, q, data, links, tau, f, n, motion, what):
     """The engine's joint wrenches against the RNEA forces and moments about the joint
     origins, in the joint frames and in world axes; the joint frames themselves too."""
-    wrenches = hx.joint_wrenches(model, q, data.lam, data.Phi_v, data.Q_across)
-    world = hx.joint_wrenches(model, q, data.lam, data.Phi_v, data.Q_across,
-                              frame="world")
+    wrenches = hx.joint_wrenches(model, data)
+    world = hx.joint_wrenches(model, data, frame="world")
     length_scale = 1.0 + max(np.linalg.norm(m.o) for m in motion)
     f_scale = np.max(np.abs(f))
     n_scale = np.max(np.abs(n))
@@ -521,7 +520,7 @@ def test_free_chain_matches_recursive_model(n_links):
     gravity = np.array([0.0, 0.0, -G])
     efforts = rng.uniform(-2.0, 2.0, n_links)  # N m, constant actuator torques
     model = hx.assemble(chain_scene(links, gravity, efforts=efforts))
-    data = hx.Data()
+    data = model.create_data()
     for trial in range(3):
         theta = rng.uniform(-np.pi, np.pi, n_links)
         theta_d = rng.uniform(-2.0, 2.0, n_links)
@@ -579,12 +578,12 @@ def test_driven_chain_matches_recursive_model(n_links):
     waves = [Wave(rng.uniform(-0.3, 0.3), rng.uniform(0.2, 0.6), rng.uniform(2.0, 6.0),
                   rng.uniform(0, 2 * np.pi)) for _ in range(n_links)]
     model = hx.assemble(chain_scene(links, gravity, laws=[w.law() for w in waves]))
-    data = hx.Data()
+    data = model.create_data()
     for t in (0.0, 0.37, 1.21):
         theta, theta_d, theta_dd = (np.array(x) for x in zip(*(w(t) for w in waves),
                                                               strict=True))
         tau, f, n, motion = rnea(links, theta, theta_d, theta_dd, gravity)
-        q, v = hx.consistent_state(model, t)
+        q, v = hx.consistent_state(model, data, t)
         for k, m in enumerate(motion):
             body = model.bodies[k]
             assert_close(q[body.q][:3], m.r, CHAIN_RTOL, 1.0, f"t={t}: position of b{k}")
@@ -596,7 +595,7 @@ def test_driven_chain_matches_recursive_model(n_links):
         assert_close(v_dot, engine_accelerations(motion), CHAIN_RTOL, None,
                      f"t={t}: accelerations")
         wrenches = check_wrenches(model, q, data, links, tau, f, n, motion, f"t={t}")
-        efforts = hx.driver_efforts(model, data.lam)
+        efforts = hx.driver_efforts(model, data)
         for driver in model.drivers:
             joint = model.joints[driver.joint]
             assert efforts[driver.name] == -data.lam[driver.row]

@@ -17,7 +17,8 @@ def _state(form, theta, theta_dot):
     """Model, consistent q and the velocities of the given angular rate."""
     inertia = 0.0 if form.startswith("particle") else None
     model = hx.assemble(pendulum(form, theta, inertia=inertia))
-    q = hx.assemble_positions(model)
+    data = model.create_data()
+    q = hx.assemble_positions(model, data)
     l = PENDULUM["length"]
     v = np.zeros(model.n_v)
     s, c = np.sin(theta), np.cos(theta)
@@ -47,7 +48,7 @@ def _radial_tangential(form, theta):
 @pytest.mark.parametrize("theta, theta_dot", STATES)
 def test_acceleration_and_multipliers_equal_the_closed_form(form, theta, theta_dot):
     model, q, v, inertia = _state(form, theta, theta_dot)
-    data = hx.Data()
+    data = model.create_data()
     v_dot = hx.forward_dynamics(model, data, 0.0, q, v)
     theta_dd, radial, tangential = pendulum_closed_form(theta, theta_dot, inertia=inertia)
     e_r, e_t = _radial_tangential(form, theta)
@@ -78,10 +79,10 @@ def test_reported_wrench_is_the_pivot_force_in_the_joint_frame(form):
     # the joint frame is the world frame at the initial pose, fixed to the child: build the
     # scene hanging down (theta = 0) and evaluate it at theta, where the frame has turned
     model = hx.assemble(pendulum(form, 0.0, inertia=inertia))
-    data = hx.Data()
+    data = model.create_data()
     hx.forward_dynamics(model, data, 0.0, q, v)
-    world = hx.joint_wrenches(model, q, data.lam, data.Phi_v, frame="world")
-    local = hx.joint_wrenches(model, q, data.lam, data.Phi_v)
+    world = hx.joint_wrenches(model, data, frame="world")
+    local = hx.joint_wrenches(model, data)
     _, radial, tangential = pendulum_closed_form(theta, theta_dot, inertia=inertia)
     e_r, e_t = _radial_tangential(form, theta)
     force = np.zeros(3)
@@ -110,15 +111,15 @@ def test_driven_pendulum_effort():
     scene.add(hx.JointDriver("motor", "motor_pin", law))
     model = hx.assemble(scene)
     for t in np.linspace(0.0, 2.0, 9):
-        q = hx.assemble_positions(model, t=t)
-        v = hx.solve_velocities(model, q, t)
-        data = hx.Data()
+        data = model.create_data()
+        q = hx.assemble_positions(model, data, t)
+        v = hx.solve_velocities(model, data, t, q)
         hx.forward_dynamics(model, data, t, q, v)
         theta, _, theta_dd = (x.item() for x in law.evaluate(t))
         tau = (Ic + m * l**2) * theta_dd + m * 9.81 * l * np.cos(theta)
-        wrenches = hx.joint_wrenches(model, q, data.lam, data.Phi_v)
+        wrenches = hx.joint_wrenches(model, data)
         assert wrenches.effort[0] == pytest.approx(tau, rel=1e-11)
-        assert hx.driver_efforts(model, data.lam)["motor"] == pytest.approx(tau, rel=1e-11)
+        assert hx.driver_efforts(model, data)["motor"] == pytest.approx(tau, rel=1e-11)
 
 
 @pytest.mark.parametrize("unit", ["dm", "mm", "in"])
@@ -127,13 +128,13 @@ def test_length_unit_changes_no_si_result(unit):
     results = []
     for u in ("m", unit):
         model = hx.assemble(pendulum("spatial", theta, unit=u))
-        q = hx.assemble_positions(model)
+        data = model.create_data()
+        q = hx.assemble_positions(model, data)
         v = np.zeros(model.n_v)
         v[3:6] = [0.0, theta_dot, 0.0]
-        v = hx.solve_velocities(model, q, 0.0, v)
-        data = hx.Data()
+        v = hx.solve_velocities(model, data, 0.0, q, v)
         v_dot = hx.forward_dynamics(model, data, 0.0, q, v)
-        w = hx.joint_wrenches(model, q, data.lam, data.Phi_v)
+        w = hx.joint_wrenches(model, data)
         results.append((q, v, v_dot, w.force, w.torque))
     for a, b in zip(*results, strict=True):
         assert np.allclose(a, b, rtol=1e-12, atol=1e-12)

@@ -61,11 +61,11 @@ def _engine_effort(seed, n, chain, q, q_d, q_dd):
     for k in range(n):
         scene.drivers[f"d{k}"].law = hx.Polynomial([q[k], q_d[k], q_dd[k] / 2])
     model = hx.assemble(scene)
-    x = hx.assemble_positions(model, t=0.0)
-    v = hx.solve_velocities(model, x, 0.0)
-    data = hx.Data()
+    data = model.create_data()
+    x = hx.assemble_positions(model, data, 0.0)
+    v = hx.solve_velocities(model, data, 0.0, x)
     hx.forward_dynamics(model, data, 0.0, x, v)
-    return hx.joint_wrenches(model, x, data.lam, data.Phi_v, frame="world").effort
+    return hx.joint_wrenches(model, data, frame="world").effort
 
 
 @pytest.mark.parametrize("seed, n, chain", [CASES[1], CASES[2]])

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import hexapod as hx
-from hexapod.algorithms.liaison import joint_wrenches, policy_map
+from hexapod.algorithms.liaison import joint_wrenches, policy_map, wrenches_from_multipliers
 from hexapod.algorithms.linalg import solve_saddle
 
 from mechanisms import four_bar, solve_state
@@ -25,12 +25,12 @@ def test_four_bar_in_3d_names_three_redundant_rows():
     model, q, _, _, data = solve_state(four_bar(3, THETA), 0.3)
     names = [model.rows[i].name for i in data.redundant_rows]
     assert names == ["rocker_ground/z", "rocker_ground/ax1", "rocker_ground/ax2"]
-    mobility = hx.degrees_of_freedom(model, q, 0.3)
+    mobility = hx.degrees_of_freedom(model, data, 0.3, q)
     assert mobility["dof"] == 1 and mobility["dof_with_drivers"] == 0
     assert mobility["redundant_rows"] == names
     planar = hx.assemble(four_bar(2, THETA))
-    q2 = hx.assemble_positions(planar, t=0.3)
-    assert hx.degrees_of_freedom(planar, q2, 0.3) == {
+    q2 = hx.assemble_positions(planar, data, 0.3)
+    assert hx.degrees_of_freedom(planar, data, 0.3, q2) == {
         "dof": 1, "dof_with_drivers": 0, "redundant_rows": []}
 
 
@@ -50,19 +50,20 @@ def test_accelerations_equal_the_planar_model(driven):
     model2 = hx.assemble(scene2)
     model3 = hx.assemble(scene3)
     t = 0.3
-    q2 = hx.assemble_positions(model2, t=t)
-    q3 = hx.assemble_positions(model3, t=t)
+    data = model2.create_data()
+    q2 = hx.assemble_positions(model2, data, t)
+    q3 = hx.assemble_positions(model3, data, t)
     if driven:
-        v2 = hx.solve_velocities(model2, q2, t)
-        v3 = hx.solve_velocities(model3, q3, t)
+        v2 = hx.solve_velocities(model2, data, t, q2)
+        v3 = hx.solve_velocities(model3, data, t, q3)
     else:  # the same state in both: a crank rate of 3 rad/s carried through the loop
-        v2 = hx.solve_velocities(model2, q2, t, np.array([0, 0, 3.0] + [0.0] * 6))
+        v2 = hx.solve_velocities(model2, data, t, q2, np.array([0, 0, 3.0] + [0.0] * 6))
         v3 = np.zeros(model3.n_v)
         for b, b2 in zip(model3.bodies, model2.bodies, strict=True):
             v3[b.v.start:b.v.start + 2] = v2[b2.v][:2]
             v3[b.v.start + 5] = v2[b2.v][2]
     assert np.allclose(_planar_view(model3, v3), v2, atol=1e-12)
-    data2, data3 = hx.Data(), hx.Data()
+    data2, data3 = model2.create_data(), model3.create_data()
     a2 = hx.forward_dynamics(model2, data2, t, q2, v2)
     a3 = hx.forward_dynamics(model3, data3, t, q3, v3)
     assert data3.redundant_rows.size == 3 and data2.redundant_rows.size == 0
@@ -71,8 +72,8 @@ def test_accelerations_equal_the_planar_model(driven):
     assert np.abs([a3[b.v][2:5] for b in model3.bodies]).max() < 1e-10 * np.abs(a2).max()
     # in-plane wrenches are determinate and equal the planar model's; with in-plane loads the
     # policy puts nothing out of the plane
-    w2 = joint_wrenches(model2, q2, data2.lam, data2.Phi_v, frame="world")
-    w3 = joint_wrenches(model3, q3, data3.lam, data3.Phi_v, frame="world")
+    w2 = joint_wrenches(model2, data2, frame="world")
+    w3 = joint_wrenches(model3, data3, frame="world")
     size = np.abs(w2.force).max()
     assert np.allclose(w3.force[:, :2], w2.force[:, :2], atol=1e-10 * size)
     assert np.allclose(w3.torque[:, 2], w2.torque[:, 2], atol=1e-10 * size)
@@ -84,8 +85,7 @@ def test_accelerations_equal_the_planar_model(driven):
 
 def _wrenches(scene, t=0.3):
     model, q, _, _, data = solve_state(scene, t)
-    return model, q, data, joint_wrenches(model, q, data.lam, data.Phi_v,
-                                          data.Q_across, frame="world")
+    return model, q, data, joint_wrenches(model, data, frame="world")
 
 
 def test_length_unit_changes_no_reported_force():
@@ -110,7 +110,7 @@ def test_scaling_a_row_changes_no_reported_force():
         solution = solve_saddle(model.mass_inv_sqrt, Phi_v, data.Q, gamma, model.row_priority,
                                 model.rank_tolerance, wrench_map=wrench_map,
                                 wrench_offset=offset)
-        scaled = joint_wrenches(model, q, solution.lam, Phi_v, frame="world")
+        scaled = wrenches_from_multipliers(model, q, solution.lam, Phi_v, frame="world")
         size = np.abs(reference.force).max()
         assert np.allclose(scaled.force, reference.force, rtol=0, atol=1e-10 * size)
         assert np.allclose(scaled.torque, reference.torque, rtol=0, atol=1e-10 * size)
@@ -122,7 +122,7 @@ def _minimum_norm_wrenches(model, q, data, row_scale):
     Phi_v = data.Phi_v * row_scale[:, None]
     rhs = data.Q - model.mass @ data.v_dot
     lam = np.linalg.lstsq(Phi_v.T, rhs, rcond=None)[0]
-    return joint_wrenches(model, q, lam, Phi_v, frame="world")
+    return wrenches_from_multipliers(model, q, lam, Phi_v, frame="world")
 
 
 def test_plain_minimum_norm_multipliers_would_fail_these_tests():
@@ -142,6 +142,7 @@ def test_contradicting_drivers_are_named():
     scene = four_bar(2, THETA)
     scene.add(hx.JointDriver("second", "rocker_ground", hx.Polynomial([0.0, 5.0])))
     model = hx.assemble(scene)
-    q = hx.assemble_positions(model, t=0.0)
+    data = model.create_data()
+    q = hx.assemble_positions(model, data, 0.0)
     with pytest.raises(hx.SingularSystemError, match="second"):
-        hx.solve_velocities(model, q, 0.0)
+        hx.solve_velocities(model, data, 0.0, q)

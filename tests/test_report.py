@@ -164,9 +164,9 @@ def test_driver_effort_excludes_springs_across_the_joint():
     result = inverse_dynamics(model, t, method="saddle")
     driver = driver_efforts_over_time(model, result)["hinge"]
     for k, time in enumerate(t):
-        data = hx.Data()
+        data = model.create_data()
         hx.forward_dynamics(model, data, time, result.q[k], result.v[k])
-        assert driver[k] == pytest.approx(hx.driver_efforts(model, data.lam)["drive"],
+        assert driver[k] == pytest.approx(hx.driver_efforts(model, data)["drive"],
                                           rel=1e-10, abs=1e-12)
     theta, theta_dot = model.laws[0](t), model.laws[0].evaluate(t)[1]
     spring = -7.0 * (theta - 0.4) - 0.3 * theta_dot
@@ -321,10 +321,10 @@ def test_particles_balance_forces_only():
     """Seed 002's particles have no moment equation: their balance is that of forces (a
     moment built of round-off must not read as a 100 % residual)."""
     model = hx.assemble(hx.scene.reader.read_scene(SCENES / "closed_pendulum_seed002.toml"))
-    data = hx.Data()
-    q, v = hx.consistent_state(model)
+    data = model.create_data()
+    q, v = hx.consistent_state(model, data)
     v_dot = hx.forward_dynamics(model, data, 0.0, q, v)
-    wrenches = hx.joint_wrenches(model, q, data.lam, data.Phi_v)
+    wrenches = hx.joint_wrenches(model, data)
     balance = body_balance(model, np.array([0.0]), q[None], v[None], v_dot[None],
                            wrenches.force[None], wrenches.torque[None])
     assert np.all(balance.moment_scale == 0.0)

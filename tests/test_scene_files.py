@@ -41,14 +41,14 @@ def doc_examples() -> list[str]:
 
 def state_results(model: hexapod.Model, t: float) -> dict[str, np.ndarray]:
     """Positions, velocities, accelerations, joint wrenches and driver efforts at ``t`` (SI)."""
-    q = hexapod.assemble_positions(model, t=t)
-    v = hexapod.solve_velocities(model, q, t)
-    data = hexapod.Data()
+    data = model.create_data()
+    q = hexapod.assemble_positions(model, data, t)
+    v = hexapod.solve_velocities(model, data, t, q)
     v_dot = hexapod.forward_dynamics(model, data, t, q, v)
-    wrenches = hexapod.joint_wrenches(model, q, data.lam, data.Phi_v, data.Q_across)
+    wrenches = hexapod.joint_wrenches(model, data)
     return {"q": q, "v": v, "v_dot": v_dot, "force": wrenches.force,
             "torque": wrenches.torque, "effort": wrenches.effort,
-            "driver_efforts": np.array(list(hexapod.driver_efforts(model, data.lam).values())),
+            "driver_efforts": np.array(list(hexapod.driver_efforts(model, data).values())),
             "redundant": np.array(data.redundant_rows)}
 
 
@@ -108,8 +108,9 @@ def test_double_pendulum_planar():
     assert scene.dimension == 2
     assert [type(b) for b in scene.bodies.values()] == [hexapod.PlanarBody] * 2
     model = hexapod.assemble(scene)
-    q = hexapod.assemble_positions(model)
-    assert hexapod.degrees_of_freedom(model, q)["dof"] == 2
+    data = model.create_data()
+    q = hexapod.assemble_positions(model, data)
+    assert hexapod.degrees_of_freedom(model, data, 0.0, q)["dof"] == 2
 
 
 def test_four_bar_3d_has_three_redundant_rows():
@@ -120,8 +121,9 @@ def test_four_bar_3d_has_three_redundant_rows():
     assert set(scene.drivers) == {"crank_motor"}
     assert isinstance(scene.drivers["crank_motor"].law, hexapod.Harmonic)
     model = hexapod.assemble(scene)
-    q = hexapod.assemble_positions(model)
-    mobility = hexapod.degrees_of_freedom(model, q)
+    data = model.create_data()
+    q = hexapod.assemble_positions(model, data)
+    mobility = hexapod.degrees_of_freedom(model, data, 0.0, q)
     assert mobility["dof"] == 1 and mobility["dof_with_drivers"] == 0
     assert len(mobility["redundant_rows"]) == 3
     # the redundant rows belong to the loop-closing joint, the last one
@@ -159,8 +161,9 @@ def test_closed_pendulum_seed002():
     model = hexapod.assemble(scene)
     np.testing.assert_allclose(model.gravity, [0.0, 9.81], rtol=1e-15)  # SI
     np.testing.assert_allclose(model.call("phi", q=model.q0), 0.0, atol=1e-15)
-    q = hexapod.assemble_positions(model)
-    assert hexapod.degrees_of_freedom(model, q)["dof"] == 1
+    data = model.create_data()
+    q = hexapod.assemble_positions(model, data)
+    assert hexapod.degrees_of_freedom(model, data, 0.0, q)["dof"] == 1
     # released at rest with both rods at 45 degrees: each mass starts as a free pendulum
     # (a1 = a2 = g/2 (-1, 1), so the coupler carries no force) with rod tension m g cos 45
     r = state_results(model, 0.0)
@@ -655,7 +658,8 @@ def test_distance_joint_without_parent_frame_assembles(tmp_path):
     except hexapod.ModelError as error:  # a fix may as well require parent_frame
         assert [p.where.split(", ")[-1] for p in error.problems] == ["joint[0].parent_frame"]
         return
-    q = hexapod.assemble_positions(hexapod.assemble(scene))
+    data = hexapod.assemble(scene).create_data()
+    q = hexapod.assemble_positions(hexapod.assemble(scene), data)
     np.testing.assert_allclose(q, [1.0, 0.0], atol=1e-12)
 
 
@@ -674,5 +678,7 @@ def test_huge_finite_coordinates_give_hexapod_errors(tmp_path):
     text = (_PENDULUM_BODY + "[[joint]]\nname = 'pivot'\ntype = 'revolute'\nparent = 'ground'\n"
             "child = 'rod'\norigin = [1e308, 0.0, 0.0]\n")
     with np.errstate(all="ignore"), pytest.raises(hexapod.HexapodError):
+        data = hexapod.assemble(read_scene(write_scene(tmp_path, "far",
+                                                                            text))).create_data()
         hexapod.assemble_positions(hexapod.assemble(read_scene(write_scene(tmp_path, "far",
-                                                                            text))))
+                                                                            text))), data)

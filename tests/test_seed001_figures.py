@@ -159,11 +159,11 @@ def test_drawn_forces_are_the_engines_wrenches_at_single_instants(drawn, model):
     per_joint = _per_joint(drawn)
     scale = {j: np.abs(per_joint[j]["|F|"][:, 1]).max() for j in JOINTS}
     for t in INSTANTS:
-        q = hx.assemble_positions(model, t=t)
-        v = hx.solve_velocities(model, q, t)
-        data = hx.Data()
+        data = model.create_data()
+        q = hx.assemble_positions(model, data, t)
+        v = hx.solve_velocities(model, data, t, q)
         hx.forward_dynamics(model, data, t, q, v)
-        wrenches = hx.joint_wrenches(model, q, data.lam, data.Phi_v, data.Q_across).as_dict()
+        wrenches = hx.joint_wrenches(model, data).as_dict()
         for joint in JOINTS:
             curves = per_joint[joint]
             force, _ = _components(curves, _index(curves, t))

@@ -70,8 +70,9 @@ def test_andrews_mechanism_has_three_loops_and_one_dof():
     assert graph.independent_loops == 3 and len(graph.loops) == 3
     assert graph.cotree == ("E3", "E4", "E6")
     assert all(loop.joints[0] == loop.closing for loop in graph.loops)
-    q = hx.assemble_positions(model)
-    m = mobility(model, q)
+    data = model.create_data()
+    q = hx.assemble_positions(model, data)
+    m = mobility(model, data, 0.0, q)
     assert (m.counted, m.numerical, m.redundancy) == (1, 1, 0)
     network = vector_network(model)
     assert network.orthogonal()
@@ -82,10 +83,10 @@ def test_andrews_reactions_at_joint_e_equal_the_published_multipliers():
     test set's lambda1..6 at t = 0 (published to 16 digits, consistent initial values)."""
     reference = json.loads((DATA / "benchmarks" / "andrews.json").read_text())["initial"]["y"]
     model = _model("andrews.toml")
-    q = hx.assemble_positions(model)
-    data = hx.Data()
+    data = model.create_data()
+    q = hx.assemble_positions(model, data)
     v_dot = hx.forward_dynamics(model, data, 0.0, q, np.zeros(model.n_v))
-    wrenches = hx.joint_wrenches(model, q, data.lam, data.Phi_v, data.Q_across, frame="world")
+    wrenches = hx.joint_wrenches(model, data, frame="world")
     forces = np.concatenate([wrenches.force[model.joint_index[j]][:2]
                              for j in ("E3", "E4", "E6")])
     assert np.allclose(forces, reference[21:27], rtol=0, atol=1e-10 * 98.57)
@@ -98,7 +99,8 @@ def test_redundant_four_bar_counts():
     model = hx.assemble(four_bar(3, 1.05))
     graph = body_joint_graph(model)
     assert graph.independent_loops == 1 and graph.cotree == ("rocker_ground",)
-    m = mobility(model, hx.assemble_positions(model))
+    data = model.create_data()
+    m = mobility(model, data, 0.0, hx.assemble_positions(model, data))
     # Grubler-Kutzbach: 3 bodies x 6 - 4 revolutes x 5 = -2; numerically 1: 3 redundant rows
     assert (m.counted, m.numerical, m.redundancy) == (-2, 1, 3)
     assert m.redundant_rows == ("rocker_ground/z", "rocker_ground/ax1", "rocker_ground/ax2")
@@ -111,7 +113,8 @@ def test_open_chain_and_free_body():
     model = hx.assemble(scene)
     graph = body_joint_graph(model)
     assert graph.independent_loops == 0 and graph.components == 2
-    m = mobility(model, hx.assemble_positions(model))
+    data = model.create_data()
+    m = mobility(model, data, 0.0, hx.assemble_positions(model, data))
     assert m.counted == m.numerical == 6 + 6
 
 
@@ -128,6 +131,7 @@ def test_degrees_of_freedom_stated_by_the_reference(tmp_path, name, counted, wit
     path = tmp_path / f"{name}.toml"
     path.write_text(_reference_examples()[name])
     model = hx.assemble(read_scene(path))
-    m = mobility(model, hx.assemble_positions(model, t=0.3), 0.3)
+    data = model.create_data()
+    m = mobility(model, data, 0.3, hx.assemble_positions(model, data, 0.3))
     assert (m.counted, m.numerical, m.numerical_with_drivers) == (counted, counted,
                                                                    with_drivers)

@@ -67,7 +67,8 @@ def forward_dynamics(model: Model, data: Data, t: float, q: np.ndarray, v: np.nd
                             tol, row_names=[r.name for r in model.rows],
                             consistency_tol=consistency_tol,
                             wrench_map=wrench_map, wrench_offset=offset, split=split)
-    data.t, data.q, data.v, data.w, data.wd, data.wdd = t, q, v, w, wd, wdd
+    data.at(t, q, v)
+    data.w, data.wd, data.wdd = w, wd, wdd
     data.Phi_v, data.gamma, data.Q = Phi_v, gamma, Q
     data.v_dot, data.lam = solution.v_dot, solution.lam
     data.independent_rows, data.redundant_rows = split.independent, split.redundant

@@ -32,7 +32,7 @@ from hexapod.algorithms.dynamics import forward_dynamics
 from hexapod.algorithms.kinematics import assemble_positions, degrees_of_freedom, solve_velocities
 from hexapod.algorithms.liaison import joint_origin, joint_wrenches
 from hexapod.errors import HexapodError, SingularSystemError
-from hexapod.model.model import GROUND_INDEX, Data, Model
+from hexapod.model.model import GROUND_INDEX, Model
 from hexapod.spatial import (
     g_matrix,
     quaternion_product,
@@ -139,10 +139,11 @@ def _saddle(model, times, frame, progress) -> InverseResult:
     redundant: list[str] = []
     worst = 0.0
     q = model.q0
+    data = model.create_data()
     for k, t in enumerate(times):
-        q = assemble_positions(model, q, t)
+        q = assemble_positions(model, data, t, q)
         if k == 0:
-            free = degrees_of_freedom(model, q, t)["dof_with_drivers"]
+            free = degrees_of_freedom(model, data, t, q)["dof_with_drivers"]
             if free:
                 driven = {d.joint for d in model.drivers if d.kind == "joint"}
                 idle = [j.name for j in model.joints
@@ -151,10 +152,9 @@ def _saddle(model, times, frame, progress) -> InverseResult:
                 raise SingularSystemError(
                     f"model '{model.name}': the drivers leave {free} degree(s) of freedom "
                     f"free{hint}; inverse dynamics needs the motion of every degree of freedom")
-        v = solve_velocities(model, q, t)
-        data = Data()
+        v = solve_velocities(model, data, t, q)
         A[k] = forward_dynamics(model, data, t, q, v)
-        wrenches = joint_wrenches(model, q, data.lam, data.Phi_v, data.Q_across, frame)
+        wrenches = joint_wrenches(model, data, frame=frame)
         force[k], torque[k], effort[k] = wrenches.force, wrenches.torque, wrenches.effort
         Q[k], V[k] = q, v
         if model.n_c:
@@ -366,9 +366,7 @@ def tree_plan(model: Model) -> TreePlan | None:
     prismatic joint driven by exactly one joint driver, no other driver.
 
     The plan (and its compiled Function) is built once per model and kept with it."""
-    if "tree" not in model.derived:
-        model.derived["tree"] = _make_tree_plan(model)
-    return model.derived["tree"]
+    return model.built_once(("tree-plan",), _make_tree_plan)
 
 
 def _make_tree_plan(model: Model) -> TreePlan | None:

@@ -14,7 +14,7 @@ import numpy as np
 
 from hexapod.algorithms.linalg import RowSplit, check_consistency, equilibrate, split_rows
 from hexapod.errors import AssemblyError, SingularSystemError
-from hexapod.model.model import Model
+from hexapod.model.model import Data, Model
 from hexapod.spatial import rotation_from_euler_parameters
 
 
@@ -49,7 +49,7 @@ def _names(model: Model) -> list[str]:
     return [r.name for r in model.rows]
 
 
-def scaled_residual(model: Model, q: np.ndarray, t: float = 0.0) -> np.ndarray:
+def scaled_residual(model: Model, t: float, q: np.ndarray) -> np.ndarray:
     """``phi`` with length rows divided by the characteristic length (dimensionless)."""
     w, _, _ = model.law_values(t)
     return model.call("phi", q=q, w=w) / model.row_scale
@@ -62,13 +62,18 @@ def _violations(model: Model, scaled: np.ndarray, count: int = 5) -> str:
                      for i in worst if abs(scaled[i]) > 0)
 
 
-def assemble_positions(model: Model, q: np.ndarray | None = None, t: float = 0.0, *,
-                       tol: float = 1e-12, max_iterations: int = 60,
+def assemble_positions(model: Model, data: Data, t: float = 0.0, q: np.ndarray | None = None,
+                       *, tol: float = 1e-12, max_iterations: int = 60,
                        counts: dict | None = None) -> np.ndarray:
-    """A configuration satisfying every constraint at time ``t``, near the guess ``q``.
+    """A configuration satisfying every constraint at time ``t``, near the guess ``q``; left in
+    ``data.t`` and ``data.q``.
 
     Parameters
     ----------
+    model, data : Model, Data
+        The model and its workspace (``model.create_data()``).
+    t : float
+        Time in s (the drivers' laws are evaluated there).
     q : ndarray (n_q,), optional
         Rough guess (default: the scene's initial poses).
     tol : float
@@ -83,7 +88,14 @@ def assemble_positions(model: Model, q: np.ndarray | None = None, t: float = 0.0
     AssemblyError
         Naming the constraints still violated when Newton's method stalls.
     """
-    q = model.normalize(model.q0 if q is None else q)
+    q = _assemble(model, t, model.normalize(model.q0 if q is None else q), tol, max_iterations,
+                  counts)
+    data.at(t, q)
+    return q
+
+
+def _assemble(model: Model, t: float, q: np.ndarray, tol: float, max_iterations: int,
+              counts: dict | None) -> np.ndarray:
     w, _, _ = model.law_values(t)
     if model.n_c == 0:
         return q
@@ -128,10 +140,17 @@ def assemble_positions(model: Model, q: np.ndarray | None = None, t: float = 0.0
         "frames and initial poses, or the driver laws at that time")
 
 
-def solve_velocities(model: Model, q: np.ndarray, t: float = 0.0,
+def solve_velocities(model: Model, data: Data, t: float, q: np.ndarray,
                      v: np.ndarray | None = None) -> np.ndarray:
-    """Velocities satisfying ``Phi_v v = nu`` closest to ``v`` in the kinetic-energy norm."""
-    v = model.v0 if v is None else np.asarray(v, dtype=float)
+    """Velocities (n_v) satisfying ``Phi_v v = nu`` at ``(t, q)`` closest to the guess ``v``
+    (default: the scene's initial velocities) in the kinetic-energy norm; left in ``data.v``
+    (with ``data.t``, ``data.q``)."""
+    v = _project_velocities(model, t, q, model.v0 if v is None else np.asarray(v, dtype=float))
+    data.at(t, q, v)
+    return v
+
+
+def _project_velocities(model: Model, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
     if model.n_c == 0:
         return v.copy()
     w, wd, _ = model.law_values(t)
@@ -147,32 +166,39 @@ def solve_velocities(model: Model, q: np.ndarray, t: float = 0.0,
     return v + model.mass_inv_sqrt @ dy
 
 
-def solve_accelerations(model: Model, q: np.ndarray, v: np.ndarray,
-                        t: float = 0.0) -> np.ndarray:
-    """Accelerations satisfying ``Phi_v v_dot = gamma`` of least kinetic-energy norm (unique for
-    a fully driven mechanism): the acceleration analysis of prescribed motion."""
+def solve_accelerations(model: Model, data: Data, t: float, q: np.ndarray,
+                        v: np.ndarray) -> np.ndarray:
+    """Accelerations (n_v) satisfying ``Phi_v v_dot = gamma`` of least kinetic-energy norm
+    (unique for a fully driven mechanism): the acceleration analysis of prescribed motion; left
+    in ``data.v_dot`` (with ``data.t, q, v, Phi_v, gamma``)."""
     w, wd, wdd = model.law_values(t)
     Phi_v = model.call("Phi_v", q=q, w=w)
     gamma = model.call("gamma", q=q, v=v, w=w, wd=wd, wdd=wdd)
     split = rank_split(model, Phi_v)
     y = split.min_norm_correction(gamma)
     _check(model, split, y, gamma, "acceleration constraints")
-    return model.mass_inv_sqrt @ y
+    data.at(t, q, v)
+    data.Phi_v, data.gamma = Phi_v, gamma
+    data.v_dot = model.mass_inv_sqrt @ y
+    return data.v_dot
 
 
-def consistent_state(model: Model, t: float = 0.0, q: np.ndarray | None = None,
+def consistent_state(model: Model, data: Data, t: float = 0.0, q: np.ndarray | None = None,
                      v: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Positions assembled and velocities projected at time ``t`` from guesses (default: the
-    scene's initial state)."""
-    q = assemble_positions(model, q, t)
-    return q, solve_velocities(model, q, t, v)
+    scene's initial state): ``(q (n_q), v (n_v))``, also left in ``data``."""
+    q = assemble_positions(model, data, t, q)
+    return q, solve_velocities(model, data, t, q, v)
 
 
-def degrees_of_freedom(model: Model, q: np.ndarray, t: float = 0.0) -> dict:
-    """Numerical mobility at ``q``: ``n_v - rank(Phi_v)`` of the joints alone and with the
-    drivers, and the redundant rows (named)."""
+def degrees_of_freedom(model: Model, data: Data, t: float, q: np.ndarray) -> dict:
+    """Numerical mobility at ``(t, q)``: ``n_v - rank(Phi_v)`` of the joints alone (``dof``)
+    and with the drivers (``dof_with_drivers``), and the redundant rows by name
+    (``redundant_rows``); ``data`` receives ``Phi_v``."""
     w, _, _ = model.law_values(t)
     Phi_v = model.call("Phi_v", q=q, w=w)
+    data.at(t, q)
+    data.Phi_v = Phi_v
     split = rank_split(model, Phi_v)
     driver_rows = {d.row for d in model.drivers}
     joint_rows = np.array([i for i in range(model.n_c) if i not in driver_rows], dtype=int)

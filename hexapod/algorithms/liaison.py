@@ -17,7 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hexapod.model.model import GROUND_INDEX, JointInfo, Model
+from hexapod.errors import HexapodError
+from hexapod.model.model import GROUND_INDEX, Data, JointInfo, Model
 
 
 @dataclass(frozen=True)
@@ -111,19 +112,69 @@ def parent_point(model: Model, q: np.ndarray, joint: JointInfo):
     return _embed_vector(pose.position[:, None])[:, 0], _embed_rotation(pose.rotation)
 
 
-def joint_wrenches(model: Model, q: np.ndarray, lam: np.ndarray, Phi_v: np.ndarray,
-                   Q_across: np.ndarray | None = None, frame: str = "joint",
+def joint_wrenches(model: Model, data: Data, *, frame: str = "joint",
                    on: str = "child") -> JointWrenches:
-    """Wrench of every joint (report convention) from the multipliers ``lam``.
+    """Wrench of every joint at the state of ``data`` (report convention: by the parent on the
+    child, about the joint origin, in the child's joint frame).
 
-    ``Q_across`` is ``model.Q_across`` evaluated at the same state (None when the model has no
-    force element across a joint); ``frame="world"`` gives world components instead.
-    ``on="parent"`` gives the reaction on the parent: the opposite wrench, its moment about the
-    parent's joint point (which differs from the child's for prismatic and distance joints),
-    in the parent's joint frame (or world axes); ``effort`` stays that of the child.
+    Parameters
+    ----------
+    model, data : Model, Data
+        ``data`` filled at one state by :func:`~hexapod.algorithms.dynamics.forward_dynamics`
+        (or by the inverse dynamics): it supplies ``q``, the multipliers ``lam``, ``Phi_v`` and
+        the forces of the elements acting across joints ``Q_across``.
+    frame : {"joint", "world"}
+        Axes of the components.
+    on : {"child", "parent"}
+        ``"parent"`` gives the reaction on the parent: the opposite wrench, its moment about the
+        parent's joint point (which differs from the child's for prismatic and distance joints),
+        in the parent's joint frame (or world axes); ``effort`` stays that of the child.
+
+    Raises
+    ------
+    HexapodError
+        ``data`` holds no solved state of this model.
     """
+    _require_solved(model, data, "joint_wrenches")
+    return wrenches_from_multipliers(model, data.q, data.lam, data.Phi_v, data.Q_across,
+                                     frame=frame, on=on)
+
+
+def driver_efforts(model: Model, data: Data) -> dict[str, float]:
+    """The effort each driver exerts along its coordinate at the state of ``data``:
+    ``-lambda_d`` (N m about a revolute axis, N along a prismatic one), by driver name.
+
+    Raises
+    ------
+    HexapodError
+        ``data`` holds no multipliers of this model.
+    """
+    _require_solved(model, data, "driver_efforts")
+    return {d.name: float(-data.lam[d.row]) for d in model.drivers}
+
+
+def _require_solved(model: Model, data: Data, caller: str) -> None:
+    missing = [name for name in ("q", "lam", "Phi_v") if getattr(data, name) is None]
+    if model.Q_across is not None and data.Q_across is None:
+        missing.append("Q_across")
+    if missing:
+        raise HexapodError(f"{caller}: data holds no solved state ({', '.join(missing)} not "
+                           "computed): call forward_dynamics(model, data, t, q, v) first")
+    if data.lam.shape != (model.n_c,) or data.q.shape != (model.n_q,):
+        raise HexapodError(f"{caller}: data was filled by another model ({data.lam.size} "
+                           f"multipliers, model '{model.name}' has {model.n_c} rows)")
+
+
+def wrenches_from_multipliers(model: Model, q: np.ndarray, lam: np.ndarray, Phi_v: np.ndarray,
+                              Q_across: np.ndarray | None = None, *, frame: str = "joint",
+                              on: str = "child") -> JointWrenches:
+    """:func:`joint_wrenches` from explicit multipliers (n_c) at positions ``q`` (n_q), e.g.
+    those of a recorded simulation; ``Q_across`` is ``model.Q_across`` at the same state (None
+    leaves out the force elements acting across joints)."""
     if on not in ("child", "parent"):
         raise ValueError(f"on must be 'child' or 'parent', got {on!r}")
+    if frame not in ("joint", "world"):
+        raise ValueError(f"frame must be 'joint' or 'world', got {frame!r}")
     n = len(model.joints)
     force, torque, effort = np.zeros((n, 3)), np.zeros((n, 3)), np.full(n, np.nan)
     for k, joint in enumerate(model.joints):
@@ -146,11 +197,6 @@ def joint_wrenches(model: Model, q: np.ndarray, lam: np.ndarray, Phi_v: np.ndarr
             f, t = R.T @ f, R.T @ t
         force[k], torque[k] = f, t
     return JointWrenches(tuple(j.name for j in model.joints), force, torque, effort, frame)
-
-
-def driver_efforts(model: Model, lam: np.ndarray) -> dict[str, float]:
-    """The effort each driver exerts along its coordinate: ``-lambda_d`` (N m, N)."""
-    return {d.name: float(-lam[d.row]) for d in model.drivers}
 
 
 def policy_map(model: Model, q: np.ndarray, Phi_v: np.ndarray,

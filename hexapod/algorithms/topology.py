@@ -29,7 +29,7 @@ from hexapod._support.graphs import (
     spanning_forest,
 )
 from hexapod.algorithms.kinematics import degrees_of_freedom
-from hexapod.model.model import GROUND_INDEX, Model
+from hexapod.model.model import GROUND_INDEX, Data, Model
 
 GROUND = "ground"
 _BODY_FREEDOMS = {("spatial", 3): 6, ("planar", 2): 3, ("particle", 3): 3, ("particle", 2): 2}
@@ -97,11 +97,12 @@ class Mobility:
         return self.numerical - self.counted
 
 
-def mobility(model: Model, q: np.ndarray, t: float = 0.0) -> Mobility:
-    """Grubler-Kutzbach's count against the numerical ``n_v - rank(Phi_v)`` at ``q``."""
+def mobility(model: Model, data: Data, t: float, q: np.ndarray) -> Mobility:
+    """Grubler-Kutzbach's count against the numerical ``n_v - rank(Phi_v)`` at ``(t, q)``
+    (see :func:`~hexapod.algorithms.kinematics.degrees_of_freedom`, which fills ``data``)."""
     freedoms = sum(_BODY_FREEDOMS[(b.kind, model.dimension)] for b in model.bodies)
     counted = freedoms - sum(j.rows.size for j in model.joints)
-    numerical = degrees_of_freedom(model, q, t)
+    numerical = degrees_of_freedom(model, data, t, q)
     return Mobility(counted, numerical["dof"], counted - len(model.drivers),
                     numerical["dof_with_drivers"], tuple(numerical["redundant_rows"]))
 

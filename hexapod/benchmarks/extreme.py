@@ -29,7 +29,7 @@ import numpy as np
 
 from hexapod.algorithms.dynamics import forward_dynamics
 from hexapod.algorithms.kinematics import consistent_state
-from hexapod.model.model import Data, Model
+from hexapod.model.model import Model
 from hexapod.simulation.diagnostics import diagnose
 from hexapod.simulation.loop import simulate
 from hexapod.simulation.registry import DEFAULT_METHOD, INTEGRATORS
@@ -139,8 +139,9 @@ def stability_study(scene_of: Callable[[float], object], stiffnesses=(1e3, 1e5, 
     rows = []
     for k in stiffnesses:
         model = build(scene_of(k))
-        q, v = consistent_state(model)
-        diagnosis = diagnose(model, 0.0, q, v, methods=methods or explicit_methods(),
+        data = model.create_data()
+        q, v = consistent_state(model, data)
+        diagnosis = diagnose(model, data, 0.0, q, v, methods=methods or explicit_methods(),
                              distance=False)
         for method, predicted in diagnosis.stable_steps.items():
             if predicted is None or not np.isfinite(predicted):
@@ -163,12 +164,10 @@ def stability_table(rows: list[StabilityRow]) -> str:
 
 def stability_figure(rows: list[StabilityRow]):
     """Predicted (lines) and observed (markers) largest stable steps against stiffness."""
-    import matplotlib
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    figure, axis = plt.subplots(figsize=(7.0, 4.6), layout="constrained")
+    figure = Figure(figsize=(7.0, 4.6), layout="constrained")
+    axis = figure.subplots()
     methods = list(dict.fromkeys(r.method for r in rows))
     for k, method in enumerate(methods):
         mine = [r for r in rows if r.method == method]
@@ -262,7 +261,8 @@ def _standing_case(scene, t_end: float) -> SuiteCase:
     from hexapod.model.assemble import assemble
 
     model = assemble(scene)
-    q0, _ = consistent_state(model)
+    data = model.create_data()
+    q0, _ = consistent_state(model, data)
     start = body_poses(model, q0)[0][0]
 
     def error(result: SimulationResult) -> float:
@@ -320,7 +320,7 @@ def _along_run(model: Model, result: SimulationResult) -> tuple[float, float, li
     count = result.t.size
     picks = np.unique(np.linspace(0, count - 1, min(CONDITION_SAMPLES, count)).astype(int))
     worst, smallest, redundant = 1.0, np.inf, {}
-    data = Data()
+    data = model.create_data()
     for k in picks:
         q, v = result.q[k], result.v[k]
         if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
@@ -488,11 +488,8 @@ def runs_csv(runs: list[CaseRun]) -> str:
 def outcome_figure(runs: list[CaseRun]):
     """Cases against methods: green accurate, yellow finished but inaccurate, red failed or
     diverged; each cell gives the CPU time."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     from matplotlib.colors import ListedColormap
+    from matplotlib.figure import Figure
 
     def column(r):
         return r.method if r.tighter == 1.0 else f"{r.method}, tol x {r.tighter:g}"
@@ -500,8 +497,9 @@ def outcome_figure(runs: list[CaseRun]):
     cases = list(dict.fromkeys(r.case for r in runs))
     methods = list(dict.fromkeys(column(r) for r in runs))
     grid = np.full((len(cases), len(methods)), np.nan)
-    figure, axis = plt.subplots(figsize=(1.3 * len(methods) + 2.5, 0.42 * len(cases) + 1.6),
-                                layout="constrained")
+    figure = Figure(figsize=(1.3 * len(methods) + 2.5, 0.42 * len(cases) + 1.6),
+                    layout="constrained")
+    axis = figure.subplots()
     for r in runs:
         i, j = cases.index(r.case), methods.index(column(r))
         grid[i, j] = 2 if r.accurate else (1 if r.status == "finished" else 0)
@@ -520,16 +518,13 @@ def condition_figure(cases: list[SuiteCase], runs: list[CaseRun], samples: int =
     """The condition number of the equilibrated saddle-point matrix and the smallest singular
     value of the equilibrated ``Phi_v`` along the default method's run of each case (from
     ``runs``, or run here when the suite left the default method out)."""
-    import matplotlib
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    figure, (top, bottom) = plt.subplots(2, 1, figsize=(7.0, 5.6), sharex=True,
-                                         layout="constrained")
-    data = Data()
+    figure = Figure(figsize=(7.0, 5.6), layout="constrained")
+    top, bottom = figure.subplots(2, 1, sharex=True)
     kept = {r.case: r.result for r in runs if r.result is not None}
     for case in cases:
+        data = case.model.create_data()
         result = kept.get(case.name) or simulate(
             case.model, case.t_end, method=DEFAULT_METHOD, rtol=case.rtol, atol=case.atol,
             forces=False, cpu_budget=60.0)

@@ -236,11 +236,10 @@ def andrews_joint_e(model: Model, t: float, q: np.ndarray, v: np.ndarray) -> np.
     order of the Test Set's multipliers lambda1..6."""
     from hexapod.algorithms.dynamics import forward_dynamics
     from hexapod.algorithms.liaison import joint_wrenches
-    from hexapod.model.model import Data
 
-    data = Data()
+    data = model.create_data()
     forward_dynamics(model, data, t, q, v)
-    wrenches = joint_wrenches(model, q, data.lam, data.Phi_v, frame="world")
+    wrenches = joint_wrenches(model, data, frame="world")
     return np.concatenate([wrenches.force[model.joint_index[j]][:2] for j in ("E3", "E4", "E6")])
 
 
@@ -371,15 +370,12 @@ def table(runs: list[Run], targets=(1e-6, 1e-9)) -> str:
 
 def work_precision_figure(runs: list[Run], problems: list[Problem], targets=(1e-6, 1e-9)):
     """Error against CPU time, log-log, one panel per problem, one line per method."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
 
     columns = min(2, len(problems))
     rows = (len(problems) + columns - 1) // columns
-    figure, axes = plt.subplots(rows, columns, figsize=(6.2 * columns, 4.6 * rows),
-                                squeeze=False)
+    figure = Figure(figsize=(6.2 * columns, 4.6 * rows))
+    axes = figure.subplots(rows, columns, squeeze=False)
     methods = list(dict.fromkeys(r.method for r in runs))
     markers = dict(zip(methods, "os^vD<>ph*", strict=False))
     for ax, problem in zip(axes.flat, problems, strict=False):
@@ -408,13 +404,11 @@ def work_precision_figure(runs: list[Run], problems: list[Problem], targets=(1e-
 def drift_figure(problem: Problem, settings: dict[str, dict]):
     """Constraint drift and energy error against time, one run per method (``settings``: method
     -> keyword arguments of :func:`simulate`)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
 
     model = problem.model
-    figure, (top, bottom) = plt.subplots(2, 1, figsize=(7.5, 6.5), sharex=True)
+    figure = Figure(figsize=(7.5, 6.5))
+    top, bottom = figure.subplots(2, 1, sharex=True)
     for method, setting in settings.items():
         result = simulate(model, problem.t_end, method=method, forces=False, **setting)
         w = model.law_values(result.t)[0].T if model.n_w else None

@@ -246,8 +246,9 @@ def cmd_check(args) -> int:
     diagnoses = {}
     for case in cases:
         say(f"{case.name}: diagnostics at the start")
-        q, v = consistent_state(case.model)
-        diagnoses[case.name] = diagnose(case.model, 0.0, q, v)
+        data = case.model.create_data()
+        q, v = consistent_state(case.model, data)
+        diagnoses[case.name] = diagnose(case.model, data, 0.0, q, v)
     runs = run_suite(cases, args.methods, budget=args.budget, progress=say)
     stability = stability_study(stiff_spring, stiffnesses, progress=say) if stiffnesses else []
     say("figures")

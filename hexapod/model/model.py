@@ -21,6 +21,7 @@ Functions: ``phi(q, w)``, ``Phi_q(q, w)``, ``Phi_v(q, w)``, ``nu(q, w, wd)``,
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -213,9 +214,7 @@ class Model:
         self.joint_index = {j.name: j.index for j in joints}
         self.driver_index = {d.name: i for i, d in enumerate(drivers)}
         self.row_index = {r.name: i for i, r in enumerate(rows)}
-        #: objects built from the model by the algorithms, kept so that they are built once
-        #: (e.g. the compiled tree-ordered inverse dynamics)
-        self.derived: dict = {}
+        self._built: dict = {}
         self._fast: dict[str, FastFunction] = {}
         self._lie_indices()
 
@@ -294,6 +293,15 @@ class Model:
         if cycle is not None:
             return cycle, "one cycle of the scene's periodic laws"
         return 1.0, "the default duration: the scene's laws do not repeat"
+
+    def built_once(self, key: tuple, build: Callable[[Model], object]):
+        """``build(self)``, computed on the first call with ``key`` and returned again after:
+        objects that are pure functions of the frozen model and cost a compilation (the
+        tree-ordered inverse dynamics, an integrator's kernels). Nothing in the model's
+        description changes, so no result depends on whether or when they were built."""
+        if key not in self._built:
+            self._built[key] = build(self)
+        return self._built[key]
 
     def create_data(self) -> Data:
         """A new, empty :class:`Data` workspace for this model."""
@@ -550,3 +558,16 @@ class Data:
     condition_number: float | None = None
     sigma_min: float | None = None  # smallest singular value of the equilibrated Phi_v
     singular_values: np.ndarray | None = None  # all of them, of the kept rows, ascending
+
+    def at(self, t: float, q: np.ndarray, v: np.ndarray | None = None) -> None:
+        """Make ``(t, q)`` (and ``v`` when given) the state of this workspace: every field
+        computed at another state is cleared, so that nothing of an earlier state is read as
+        belonging to this one."""
+        same = (self.t == t and self.q is not None and np.array_equal(self.q, q)
+                and (v is None or self.v is not None and np.array_equal(self.v, v)))
+        if not same:
+            for name in self.__dataclass_fields__:
+                setattr(self, name, None)
+        self.t, self.q = t, q
+        if v is not None:
+            self.v = v

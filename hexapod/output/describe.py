@@ -40,15 +40,15 @@ def law_description(law: Law | None) -> dict:
 
 
 def _solved_state(model: Model, t: float, condition: bool = True):
-    q = assemble_positions(model, t=t)
-    v = solve_velocities(model, q, t)
-    data = Data()
+    data = model.create_data()
+    q = assemble_positions(model, data, t)
+    v = solve_velocities(model, data, t, q)
     forward_dynamics(model, data, t, q, v, condition=condition)
     return q, v, data
 
 
 def _pose(model: Model, q: np.ndarray, t: float, data: Data) -> dict:
-    phi = scaled_residual(model, q, t)
+    phi = scaled_residual(model, t, q)
     return {"t": t, "max_abs_phi": float(np.max(np.abs(phi))) if phi.size else 0.0,
             "condition_number": data.condition_number, "sigma_min": data.sigma_min,
             "characteristic_length_m": model.characteristic_length}
@@ -77,7 +77,7 @@ def describe_model(model: Model, t: float = 0.0, graph: bool = False) -> dict:
         f.name for f in model.forces]
     topology = body_joint_graph(model)
     q, _, data = _solved_state(model, t)
-    m = mobility(model, q, t)
+    m = mobility(model, data, t, q)
     out = {
         "scene": model.name, "dimension": model.dimension,
         "bodies": bodies, "joints": joints, "drivers": drivers, "forces": forces,
@@ -108,8 +108,8 @@ def describe_model(model: Model, t: float = 0.0, graph: bool = False) -> dict:
 def describe_state(model: Model, t: float = 0.0) -> dict:
     """Everything ``hexapod dynamics`` reports at time ``t``."""
     q, _, data = _solved_state(model, t)
-    wrenches = joint_wrenches(model, q, data.lam, data.Phi_v, data.Q_across)
-    m = mobility(model, q, t)
+    wrenches = joint_wrenches(model, data)
+    m = mobility(model, data, t, q)
     return {
         "scene": model.name, "t": t, "dimension": model.dimension,
         "counts": {"bodies": len(model.bodies), "joints": len(model.joints),
@@ -120,7 +120,7 @@ def describe_state(model: Model, t: float = 0.0) -> dict:
         "state": _pose(model, q, t, data),
         "joints": {j.name: {"type": j.kind, **values}
                    for j, values in zip(model.joints, wrenches.as_dict().values(), strict=True)},
-        "driver_efforts": driver_efforts(model, data.lam),
+        "driver_efforts": driver_efforts(model, data),
         "accelerations": dict(zip(model.velocity_names, data.v_dot.tolist(), strict=True)),
         "multipliers": {model.rows[i].name: float(data.lam[i]) for i in range(model.n_c)},
     }

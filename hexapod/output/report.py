@@ -17,7 +17,7 @@ import numpy as np
 
 from hexapod.algorithms.balance import BodyBalance
 from hexapod.algorithms.inverse import InverseResult
-from hexapod.algorithms.liaison import joint_wrenches
+from hexapod.algorithms.liaison import wrenches_from_multipliers
 from hexapod.model.model import GROUND_INDEX, JointInfo, Model
 from hexapod.output.figures import effort_figure, png_bytes, trajectory_figure, wrench_figure
 
@@ -163,7 +163,7 @@ def driver_efforts_over_time(model: Model, result: InverseResult) -> dict[str, n
         zero_lam, zero_rows = np.zeros(model.n_c), np.zeros((model.n_c, model.n_v))
         for i in range(result.times.size):
             q_across = model.call("Q_across", q=result.q[i], v=result.v[i], w=w[i])
-            passive = joint_wrenches(model, result.q[i], zero_lam, zero_rows, q_across).effort
+            passive = wrenches_from_multipliers(model, result.q[i], zero_lam, zero_rows, q_across).effort
             for j in across:
                 efforts[model.joints[j].name][i] -= passive[j]
     return efforts

@@ -20,7 +20,7 @@ simulation, the saved states. With the scene's model, :func:`vtk_files` turns it
   without an axis).
 
 A simulation's wrenches are computed here from the saved multipliers by
-:func:`hexapod.algorithms.liaison.joint_wrenches`; a report's are read from its CSV. A report does
+:func:`hexapod.algorithms.liaison.wrenches_from_multipliers`; a report's are read from its CSV. A report does
 not save positions: its scene prescribes the motion, so they are assembled again at the CSV's times.
 """
 
@@ -40,7 +40,7 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 
 from hexapod.algorithms.kinematics import assemble_positions, body_poses
-from hexapod.algorithms.liaison import joint_origin, joint_wrenches
+from hexapod.algorithms.liaison import joint_origin, wrenches_from_multipliers
 from hexapod.errors import HexapodError, InputFileError
 from hexapod.model.model import Model
 from hexapod.output.report import inverse_columns
@@ -240,7 +240,7 @@ def frames(model: Model, recording: Recording) -> Frames:
             Phi_v = model.call("Phi_v", q=q[k], w=w)
             Q_across = (model.call("Q_across", q=q[k], v=recording.v[k], w=w)
                         if model.Q_across is not None else None)
-            wrenches = joint_wrenches(model, q[k], recording.lam[k], Phi_v, Q_across)
+            wrenches = wrenches_from_multipliers(model, q[k], recording.lam[k], Phi_v, Q_across)
             force_joint[k], moment_joint[k] = wrenches.force, wrenches.torque
             effort[k] = wrenches.effort
     else:
@@ -250,8 +250,9 @@ def frames(model: Model, recording: Recording) -> Frames:
                                  "(other joints): not a report of this scene")
         q = np.zeros((n, model.n_q))
         guess = model.q0
+        data = model.create_data()
         for k, t in enumerate(recording.t):
-            guess = q[k] = assemble_positions(model, guess, float(t))
+            guess = q[k] = assemble_positions(model, data, float(t), guess)
         index = {name: c for c, name in enumerate(recording.columns)}
         for j, joint in enumerate(model.joints):
             c = index[f"Fx:{joint.name}"]

@@ -196,7 +196,7 @@ def singular_distance(model: Model, t: float, q: np.ndarray) -> tuple[float, flo
     return distance, sigma, names
 
 
-def linearised_modes(model: Model, t: float, q: np.ndarray, v: np.ndarray, data: Data,
+def linearised_modes(model: Model, data: Data, t: float, q: np.ndarray, v: np.ndarray,
                      kept: np.ndarray) -> np.ndarray:
     """Eigenvalues of the equations linearised on the constraint manifold (module
     description), from the multipliers and kept rows of a forward-dynamics solve in ``data``."""
@@ -221,26 +221,26 @@ def linearised_modes(model: Model, t: float, q: np.ndarray, v: np.ndarray, data:
     return scipy.linalg.eigvals(A)
 
 
-def diagnose(model: Model, t: float, q: np.ndarray, v: np.ndarray, *,
+def diagnose(model: Model, data: Data, t: float, q: np.ndarray, v: np.ndarray, *,
              methods=None, distance: bool | None = None) -> Diagnosis:
     """The diagnostics at ``(t, q, v)`` (a consistent state), for the explicit ``methods``
-    (default: every registered one; implicit ones report None).
+    (default: every registered one; implicit ones report None); ``data`` is left with the
+    forward dynamics at that state (with its condition number).
 
     ``distance`` computes the distance to the nearest singular configuration (default: when
     ``n_v <= DISTANCE_LIMIT``)."""
     q = np.asarray(q, dtype=float)
     v = np.asarray(v, dtype=float)
-    data = Data()
     forward_dynamics(model, data, t, q, v, condition=True)
     kept = np.sort(data.independent_rows)
     sigma = data.singular_values
-    m = mobility(model, q, t)
+    m = mobility(model, data, t, q)
     if distance is None:
         distance = model.n_v <= DISTANCE_LIMIT
     nearest, rows = None, []
     if distance:
         nearest, _, rows = singular_distance(model, t, q)
-    modes = linearised_modes(model, t, q, v, data, kept)
+    modes = linearised_modes(model, data, t, q, v, kept)
     size = np.abs(modes)
     nonzero = size[size > 1e-9 * size.max()] if size.size else size
     fastest = float(nonzero.max()) if nonzero.size else 0.0

@@ -248,15 +248,10 @@ class CompiledProjection:
 def compiled_projection(model: Model, rows: np.ndarray) -> CompiledProjection:
     """The :class:`CompiledProjection` of ``model`` for a row set, built once."""
     key = ("projection", tuple(int(r) for r in rows))
-    if key not in model.derived:
-        model.derived[key] = CompiledProjection(model, rows)
-    return model.derived[key]
+    return model.built_once(key, lambda m: CompiledProjection(m, rows))
 
 
 def compiled_rates(model: Model, rows: np.ndarray) -> CompiledRates:
-    """The :class:`CompiledRates` of ``model`` for a row set, built once and kept in
-    ``model.derived``."""
+    """The :class:`CompiledRates` of ``model`` for a row set, built once."""
     key = ("rates", tuple(int(r) for r in rows))
-    if key not in model.derived:
-        model.derived[key] = CompiledRates(model, rows)
-    return model.derived[key]
+    return model.built_once(key, lambda m: CompiledRates(m, rows))

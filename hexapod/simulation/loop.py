@@ -15,7 +15,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from hexapod.algorithms.liaison import joint_wrenches
+from hexapod.algorithms.liaison import wrenches_from_multipliers
 from hexapod.errors import HexapodError
 from hexapod.model.model import Model
 from hexapod.simulation.integrators import Integrator
@@ -158,7 +158,7 @@ def _add_wrenches(result: SimulationResult) -> None:
         Phi_v = model.call("Phi_v", q=q, w=w)
         Q_across = (model.call("Q_across", q=q, v=v, w=w) if model.Q_across is not None
                     else None)
-        wrenches = joint_wrenches(model, q, result.lam[k], Phi_v, Q_across)
+        wrenches = wrenches_from_multipliers(model, q, result.lam[k], Phi_v, Q_across)
         force[k], torque[k], effort[k] = wrenches.force, wrenches.torque, wrenches.effort
     result.force, result.torque, result.effort = force, torque, effort
 

@@ -26,7 +26,7 @@ from scipy.linalg import qr
 from hexapod.algorithms.dynamics import forward_dynamics
 from hexapod.algorithms.kinematics import assemble_positions, rank_split, solve_velocities
 from hexapod.errors import HexapodError, IntegrationError
-from hexapod.model.model import Data, Model
+from hexapod.model.model import Model
 from hexapod.simulation.kernels import compiled_projection, compiled_rates
 
 #: smallest singular value of the equilibrated ``Phi_v`` (rows of unit length, so 1 is
@@ -129,7 +129,7 @@ class Integrator:
         self.rtol, self.atol, self.max_step = float(rtol), float(atol), float(max_step)
         self.h = float(step) if step is not None else (self.t_bound - self.t0) / self.default_steps
         self.counters = Counters()
-        self.data = Data()
+        self.data = model.create_data()
         self.status = "running"
         self.message = ""
         self._crossing: float | None = None  # the raised rank tolerance, while crossing
@@ -305,8 +305,9 @@ class Integrator:
                 self.counters.factorisations += projector.newton + 1
                 return state
         counts: dict = {}
-        q = assemble_positions(self.model, q, t, counts=counts)
-        v = solve_velocities(self.model, q, t, v)
+        data = self.model.create_data()
+        q = assemble_positions(self.model, data, t, q, counts=counts)
+        v = solve_velocities(self.model, data, t, q, v)
         iterations = counts.get("newton", 0)  # each a Jacobian and a factorisation
         self.counters.newton += iterations
         self.counters.jacobians += iterations + 1

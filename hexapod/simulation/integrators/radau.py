@@ -158,13 +158,14 @@ def dexp_inverse_sx(x, u):
 
 
 def ggl_functions(model: Model) -> dict:
-    """CasADi Functions built once per model (kept in ``model.derived``): the residual ``F`` of
+    """CasADi Functions built once per model (:meth:`Model.built_once`): the residual ``F`` of
     the GGL equations in the local coordinates ``xi`` of the step, ``q = q_n (+) xi``, at one
     point and at three stages, and at ``xi = 0`` with its Jacobian in ``(xi, v, lambda, mu)``
     (exact: the Lie-group composition and ``J_r^-1`` are part of the expression)."""
-    cached = model.derived.get("radau5-ggl")
-    if cached is not None:
-        return cached
+    return model.built_once(("radau5-ggl",), _ggl_functions)
+
+
+def _ggl_functions(model: Model) -> dict:
     q0 = ca.SX.sym("q0", model.n_q)
     xi = ca.SX.sym("xi", model.n_v)
     v = ca.SX.sym("v", model.n_v)
@@ -203,7 +204,6 @@ def ggl_functions(model: Model) -> dict:
         "stages": residual.map(3),
         "start": ca.Function("ggl_start", inputs, [F, J, Phi_v], names, ["F", "J", "Phi_v"]),
     }
-    model.derived["radau5-ggl"] = functions
     return functions
 
 

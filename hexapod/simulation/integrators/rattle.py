@@ -352,8 +352,10 @@ def _functions(model):
     the force at ``q1`` (at the predicted ``v_n+1``), ``S = Phi_v(q1) T Phi0^T`` and the largest
     relative residual of the Moser–Veselov equations.
     """
-    if "rattle" in model.derived:
-        return model.derived["rattle"]
+    return model.built_once(("rattle",), _build_functions)
+
+
+def _build_functions(model):
     n_q, n_v, n_c, n_w = model.n_q, model.n_v, model.n_c, model.n_w
     q, v = ca.SX.sym("q", n_q), ca.SX.sym("v", n_v)
     w, wd = ca.SX.sym("w", n_w), ca.SX.sym("wd", n_w)
@@ -405,6 +407,4 @@ def _functions(model):
                rotation_residual]
     stage = _packed("rattle_stage", [q, v, force0, Phi0, h, *laws, *([wd] if n_w else []),
                                      lam], outputs)
-    result = (start, stage, conservative, bool(ca.depends_on(force, v)))
-    model.derived["rattle"] = result
-    return result
+    return start, stage, conservative, bool(ca.depends_on(force, v))

@@ -60,7 +60,6 @@ import numpy as np
 
 from hexapod.algorithms.dynamics import forward_dynamics
 from hexapod.errors import HexapodError, IntegrationError
-from hexapod.model.model import Data
 from hexapod.simulation.integrators.base import Counters, Integrator
 
 
@@ -232,7 +231,7 @@ class IdasBDF(Integrator):
         self.successes = 0
         self.calls = 0
         self.pending: deque = deque()
-        self.scratch = Data()  # a workspace for solves that must not overwrite ``data``
+        self.scratch = model.create_data()  # a workspace for solves that must not overwrite ``data``
         self.deferred: HexapodError | None = None  # a failure after states still to return
         self.rows = self.data.independent_rows  # the start was solved by _dynamics
 
