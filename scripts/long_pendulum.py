@@ -37,7 +37,7 @@ SETTINGS = {
 
 
 def exact_centre(t: np.ndarray) -> np.ndarray:
-    from hexapod.benchmarks.references import pendulum_exact
+    from hexapod.benchmarks import pendulum_exact
 
     psi, _ = pendulum_exact(t, PSI0, OMEGA0)
     return np.column_stack([ARM * np.sin(psi), np.zeros_like(psi), -ARM * np.cos(psi)])
@@ -76,7 +76,7 @@ def run(model, method: str, periods: int, period: float) -> dict:
 def main(argv: list[str] | None = None) -> int:
     import hexapod as hx
     from hexapod._support.files import write_directory_atomically
-    from hexapod.benchmarks.references import pendulum_period
+    from hexapod.benchmarks import pendulum_period
     from hexapod.scene.reader import read_scene
     from hexapod.simulation.registry import INTEGRATORS
 

@@ -18,9 +18,10 @@ Figures, as the captions of the paper's OCR copy name them:
 * Fig. 9: mass #2 vertical displacement (y2);
 * Fig. 10: mass #2 horizontal displacement (x2).
 
-Each is drawn as the paper draws it: the Lagrange solution (``hexapod.benchmarks.references.
-ClosedLoopPendulum``, built here from the paper's numbers in dm, DOP853 at 1e-13) as a solid
-line, the absolute-coordinate engine (``hexapod.simulation.loop`` on the scene file, default method,
+Each is drawn as the paper draws it: the Lagrange solution
+(``hexapod.benchmarks.ClosedLoopPendulum``, built here from the paper's numbers in dm, DOP853 at
+1e-13) as a solid line, the absolute-coordinate engine (``hexapod.simulation.loop`` on the scene
+file, default method,
 rtol 1e-10) as triangles, and below it a panel of the difference engine - Lagrange at every
 saved state of the engine. Fig. 6, the vector-network diagram (5 vertices, 9 elements: tree
 edges solid, cotree edges dashed) is drawn from ``hexapod.algorithms.topology.vector_network``, and
@@ -43,7 +44,7 @@ import numpy as np
 
 import hexapod as hx
 from hexapod.algorithms.topology import VectorNetwork, vector_network
-from hexapod.benchmarks.references import ClosedLoopPendulum
+from hexapod.benchmarks import ClosedLoopPendulum
 from hexapod.scene.reader import read_scene
 from hexapod.simulation.loop import simulate
 

@@ -3,7 +3,7 @@
     python scripts/singular_crossings.py            # about half a minute
     python scripts/singular_crossings.py --rtol 1e-6 1e-8 1e-10 1e-11
 
-Three cases of ``hexapod.benchmarks.mechanisms`` pass poses where ``Phi_v`` loses rank: the
+Three cases of ``hexapod.benchmarks`` pass poses where ``Phi_v`` loses rank: the
 N-four-bar of IFToMM A02 (10 windows, 10 s; every crank flat twice per turn), and the
 anti-parallelogram through its change points, free (2 s) and driven (1 s). Each runs with the
 default method at every ``rtol`` (``atol = rtol / 100``); the table gives the outcome, the error
@@ -19,7 +19,7 @@ import time
 from functools import partial
 
 import hexapod as hx
-from hexapod.benchmarks.mechanisms import four_bar_dead_points, n_four_bar
+from hexapod.benchmarks import four_bar_dead_points, n_four_bar
 from hexapod.simulation.registry import DEFAULT_METHOD
 
 CASES = {"n-four-bar-10": n_four_bar,

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import hexapod as hx
+from hexapod.benchmarks import four_bar_dead_points, n_four_bar
 from hexapod.benchmarks.extreme import (
     ACCURACY,
     build_suite,
@@ -19,7 +20,6 @@ from hexapod.benchmarks.extreme import (
     run_suite,
     scene_case,
 )
-from hexapod.benchmarks.mechanisms import four_bar_dead_points, n_four_bar
 from hexapod.cli import main
 from hexapod.simulation.registry import DEFAULT_METHOD
 
@@ -142,7 +142,7 @@ def test_where_no_run_is_accurate_the_adaptive_ones_retry_tighter():
     """Ten periods of a pendulum released 8 degrees from the top: at the suite's rtol 1e-6 the
     error grows past ACCURACY near the unstable top (measured 6e-3 with DOP853); the retry at
     1e-9 is accurate and the recommendation says at which setting."""
-    import hexapod.benchmarks.mechanisms as m
+    import hexapod.benchmarks as m
     from hexapod.benchmarks.extreme import RETRY_TIGHTER, _from_mechanism
 
     case = _from_mechanism(m.large_step_pendulum(), 100)

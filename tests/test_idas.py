@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import hexapod as hx
-from hexapod.benchmarks.references import ClosedLoopPendulum, pendulum_exact
+from hexapod.benchmarks import ClosedLoopPendulum, pendulum_exact
 from hexapod.scene.reader import read_scene
 from hexapod.simulation.integrators import IdasBDF
 from hexapod.simulation.loop import simulate

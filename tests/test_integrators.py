@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import hexapod as hx
-from hexapod.benchmarks.references import ClosedLoopPendulum, pendulum_exact
+from hexapod.benchmarks import ClosedLoopPendulum, pendulum_exact
 from hexapod.scene.laws import Polynomial
 from hexapod.scene.reader import read_scene
 from hexapod.simulation.integrators import Integrator

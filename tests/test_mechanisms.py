@@ -1,5 +1,5 @@
-"""The extreme-case mechanisms (hexapod.benchmarks.mechanisms): each scene against its own
-reference.
+"""The extreme-case mechanisms (hexapod.benchmarks: stiff, singular, redundant, mass_ratios,
+pendulums): each scene against its own reference.
 
 The references are written in minimal coordinates apart from the engine; the initial
 accelerations of the centres of mass are the cheap, strong check that a scene and its
@@ -16,9 +16,18 @@ import pytest
 
 import hexapod as hx
 from hexapod.algorithms.topology import mobility
-from hexapod.benchmarks import mechanisms as mech
+from hexapod.benchmarks import (
+    cases,
+    jets,
+    mass_ratios,
+    pendulums,
+    redundant,
+    reference,
+    singular,
+    stiff,
+)
 
-CASES = {case.name: case for case in mech.suite()}
+CASES = {case.name: case for case in cases.suite()}
 
 
 @pytest.fixture(scope="module")
@@ -40,9 +49,9 @@ def solved():
 
 
 def test_the_suite_covers_every_category_with_unique_names():
-    names = [case.name for case in mech.suite()]
+    names = [case.name for case in cases.suite()]
     assert len(set(names)) == len(names) == len(CASES)
-    assert {case.category for case in CASES.values()} == set(mech.CATEGORIES)
+    assert {case.category for case in CASES.values()} == set(reference.CATEGORIES)
     for case in CASES.values():
         assert case.description and "\n" not in case.description
         assert case.t_end > 0 and case.length > 0
@@ -103,17 +112,17 @@ def test_short_runs_follow_the_reference(name, t_end, tol):
 def test_kane_with_taylor_jets_equals_the_double_pendulum_by_hand():
     """The minimal-coordinate machinery of the references against Lagrange's equations of a
     double pendulum of uniform rods written out (mass_ratio_pendulum's, with a 0.3 kg rod)."""
-    m1, m2, l1, l2, g = 1.0, 0.3, 1.0, 0.7, mech.G
+    m1, m2, l1, l2, g = 1.0, 0.3, 1.0, 0.7, reference.G
     I1, I2 = m1 * l1**2 / 12, m2 * l2**2 / 12
 
     def kinematics(x):
-        d1 = mech._stack([mech._sin(x[0]), -mech._cos(x[0]), 0.0 * x[0]])
-        d2 = mech._stack([mech._sin(x[1]), -mech._cos(x[1]), 0.0 * x[1]])
-        frames = {"r1": (d1 * (l1 / 2), mech._rotation([0, 0, 1], x[0])),
-                  "r2": (d1 * l1 + d2 * (l2 / 2), mech._rotation([0, 0, 1], x[1]))}
+        d1 = jets.stack([jets.sin(x[0]), -jets.cos(x[0]), 0.0 * x[0]])
+        d2 = jets.stack([jets.sin(x[1]), -jets.cos(x[1]), 0.0 * x[1]])
+        frames = {"r1": (d1 * (l1 / 2), jets.rotation([0, 0, 1], x[0])),
+                  "r2": (d1 * l1 + d2 * (l2 / 2), jets.rotation([0, 0, 1], x[1]))}
         return frames, {}
 
-    model = mech._MinimalModel(kinematics, {"r1": (m1, np.diag([0, I1, I1])),
+    model = reference.MinimalModel(kinematics, {"r1": (m1, np.diag([0, I1, I1])),
                                             "r2": (m2, np.diag([0, I2, I2]))}, [0, -g, 0])
     th, thd = np.array([1.0, 2.0]), np.array([0.3, -0.7])
     c1, c2, d = l1 / 2, l2 / 2, th[0] - th[1]
@@ -128,10 +137,10 @@ def test_kane_with_taylor_jets_equals_the_double_pendulum_by_hand():
 def test_flyball_reduction_equals_the_four_coordinate_model():
     """Routh's symmetric reduction (the trajectory reference) against Kane's equations in the
     four joint coordinates (the acceleration reference) at a symmetric state."""
-    reduced = mech._Flyball()
-    full = mech._flyball_minimal(reduced.m_rod, reduced.m_sleeve, reduced.I_sleeve_z,
-                                 mech._rod_inertia(reduced.m_rod, 1.0, 2, 0.01))
-    beta0 = np.pi / 2 + mech.FLYBALL["alpha"]
+    reduced = stiff._Flyball()
+    full = stiff._flyball_minimal(reduced.m_rod, reduced.m_sleeve, reduced.I_sleeve_z,
+                                 reference.rod_inertia(reduced.m_rod, 1.0, 2, 0.01))
+    beta0 = np.pi / 2 + stiff.FLYBALL["alpha"]
     s, phi, sd, phid, psid = 0.52, 0.1, 0.3, -0.7, 5.0
     xdd = full.accelerations([0.3, s, phi, phi], [psid, sd, phid, phid])
     Iz, dIz = reduced.inertia_z(beta0 + phi)
@@ -144,30 +153,30 @@ def test_flyball_reduction_equals_the_four_coordinate_model():
 def test_bricard_configuration_curve_closes_the_loop():
     """On ``sin t + sin u + sin t sin u = 0`` the open chain's end returns to P5 with its last
     axis along x, and the joint's velocity too."""
-    model = mech._bricard_minimal()
+    model = redundant._bricard_minimal()
     for t in np.linspace(-0.5, 3.6, 9):
-        _, points = model.kinematics(mech._Jet.variables([t], [1.3], [0.4]))
+        _, points = model.kinematics(jets.Jet.variables([t], [1.3], [0.4]))
         end = points["P5"]
-        assert np.abs(end.c0 - mech.BRICARD_POINTS[5]).max() < 1e-14
+        assert np.abs(end.c0 - redundant.BRICARD_POINTS[5]).max() < 1e-14
         assert np.abs(end.c1).max() < 1e-13 and np.abs(end.c2).max() < 1e-13
 
 
 def test_anti_parallelogram_branch_keeps_the_lengths_and_meets_the_parallelogram():
-    a, d = mech.ANTI_PARALLELOGRAM["crank"], mech.ANTI_PARALLELOGRAM["ground"]
+    a, d = singular.ANTI_PARALLELOGRAM["crank"], singular.ANTI_PARALLELOGRAM["ground"]
     D = np.array([d, 0.0, 0.0])
     for theta in np.linspace(-3.0, 3.0, 13):
-        B, C = mech._anti_parallelogram_points(theta)
+        B, C = singular._anti_parallelogram_points(theta)
         assert np.linalg.norm(C - B) == pytest.approx(d, rel=1e-14)
         assert np.linalg.norm(C - D) == pytest.approx(a, rel=1e-14)
     for theta in (0.0, np.pi):
-        B, C = mech._anti_parallelogram_points(theta)
+        B, C = singular._anti_parallelogram_points(theta)
         assert np.allclose(C, B + D, atol=1e-15)  # the parallelogram's C: a change point
 
 
 def test_reference_energy_is_conserved_over_a_bricard_step():
     """The minimal model's energy along its own solution (a consistency check of Kane's
     equations with the closed-form curve), over 0.3 s."""
-    model = mech._bricard_minimal()
+    model = redundant._bricard_minimal()
     from scipy.integrate import solve_ivp
 
     solution = solve_ivp(model.rates, (0.0, 0.3), [0.0, 0.0], method="DOP853", rtol=1e-12,
@@ -176,15 +185,24 @@ def test_reference_energy_is_conserved_over_a_bricard_step():
     assert np.ptp(energies) < 1e-10 * max(abs(e) for e in energies[1:])
 
 
-def test_the_module_imports_only_numpy_scipy_and_the_scene_layer():
-    path = Path(mech.__file__)
+CASE_MODULES = (cases, jets, mass_ratios, pendulums, redundant, reference, singular, stiff)
+
+
+@pytest.mark.parametrize("module", CASE_MODULES, ids=lambda module: module.__name__)
+def test_the_module_imports_only_numpy_scipy_and_the_scene_layer(module):
+    """Each module of the cases imports the scene layer and the other case modules, nothing of
+    the engine above the scene."""
+    path = Path(module.__file__)
     allowed = ("numpy", "scipy", "hexapod.scene", "hexapod.spatial", "hexapod.errors",
                "__future__", "collections", "dataclasses")
+    siblings = {m.__name__ for m in CASE_MODULES}
     for node in ast.walk(ast.parse(path.read_text())):
         names = ([a.name for a in node.names] if isinstance(node, ast.Import)
                  else [node.module] if isinstance(node, ast.ImportFrom) else [])
+        if names == ["hexapod.benchmarks"]:  # from hexapod.benchmarks import <case module>
+            names = [f"hexapod.benchmarks.{a.name}" for a in node.names]
         for name in names:
-            assert name.startswith(allowed), name
+            assert name.startswith(allowed) or name in siblings, name
 
 
 @pytest.mark.parametrize("name", [n for n, c in CASES.items()

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import hexapod as hx
-from hexapod.benchmarks.references import pendulum_exact
+from hexapod.benchmarks import pendulum_exact
 from hexapod.scene.reader import read_scene
 from hexapod.simulation.integrators.radau import RadauIIA5GGL, dexp_inverse_sx, ggl_functions
 from hexapod.simulation.loop import simulate

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import hexapod as hx
-from hexapod.benchmarks.references import pendulum_exact, pendulum_period
+from hexapod.benchmarks import pendulum_exact, pendulum_period
 from hexapod.simulation.loop import simulate
 from hexapod.simulation.registry import get_integrator
 

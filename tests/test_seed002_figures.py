@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from script_loader import load_script
 
-from hexapod.benchmarks.references import ClosedLoopPendulum
+from hexapod.benchmarks import ClosedLoopPendulum
 
 
 @pytest.fixture(scope="module")

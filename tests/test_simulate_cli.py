@@ -12,7 +12,7 @@ import pytest
 
 import hexapod as hx
 from hexapod.algorithms.balance import body_balance
-from hexapod.benchmarks.references import ClosedLoopPendulum
+from hexapod.benchmarks import ClosedLoopPendulum
 from hexapod.scene.reader import read_scene
 from hexapod.scene.writer import scene_text
 from hexapod.simulation.registry import INTEGRATORS

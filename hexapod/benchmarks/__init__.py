@@ -1,2 +1,59 @@
 """The cases with independent references and the studies on them (layer 6): the extreme-case
-check and the work-precision study."""
+check and the work-precision study.
+
+The extreme-case suite (issue 8): every builder returns a :class:`Case` (a scene, how long to
+run it, what is extreme about it, and a reference independent of the engine;
+:mod:`hexapod.benchmarks.reference` says how the references are built), and :func:`suite`
+lists them all.
+
+====================================  ==========  =============================================
+case                                  category    reference
+====================================  ==========  =============================================
+:func:`stiff_slider` (k = 1e3..1e9)   stiff       damped oscillator, closed form
+:func:`stiff_spring_pendulum`         stiff       2-DOF Lagrange (theta, s) by hand, DOP853
+:func:`flyball_governor` (A05)        stiff       symmetric reduction (Routh), Radau at 1e-12
+:func:`n_four_bar` (A02)              singular /  1-DOF equation of the parallelogram chain,
+                                      redundant   DOP853 at 1e-12
+:func:`bricard` (A04)                 redundant   1-DOF Lagrange on the closed-form configuration
+                                                  curve ``sin t1 + sin t2 + sin t1 sin t2 = 0``
+:func:`four_bar_dead_points`          singular    1-DOF Lagrange on the anti-parallelogram's
+                                                  rational branch (free or driven)
+:func:`mass_ratio`                    mass-ratio  5-DOF joint-coordinate Lagrange (Kane)
+:func:`mass_ratio_pendulum`           mass-ratio  double pendulum, Lagrange in closed form
+:func:`stretched_leg`                 singular    1-DOF Lagrange by hand (free) or closed
+                                                  form (driven)
+:func:`long_pendulum`                 long        Jacobi elliptic functions
+:func:`large_step_pendulum`           large-step  Jacobi elliptic functions
+====================================  ==========  =============================================
+
+The modules: :mod:`~hexapod.benchmarks.reference` (the case and the minimal-coordinate
+machinery) and :mod:`~hexapod.benchmarks.jets` (Taylor jets) below the cases, one module per
+category (:mod:`~hexapod.benchmarks.stiff`, :mod:`~hexapod.benchmarks.singular`,
+:mod:`~hexapod.benchmarks.redundant`, :mod:`~hexapod.benchmarks.mass_ratios`,
+:mod:`~hexapod.benchmarks.pendulums`, which also holds the exact pendulum
+:func:`pendulum_exact` and seed 002's :class:`ClosedLoopPendulum` used by the studies), and
+:mod:`~hexapod.benchmarks.cases` for :func:`suite`. The case modules import nothing of the
+engine but the scene layer. The studies are :mod:`~hexapod.benchmarks.extreme` and
+:mod:`~hexapod.benchmarks.work_precision`.
+"""
+
+from hexapod.benchmarks.cases import suite
+from hexapod.benchmarks.mass_ratios import mass_ratio, mass_ratio_pendulum
+from hexapod.benchmarks.pendulums import (
+    ClosedLoopPendulum,
+    large_step_pendulum,
+    long_pendulum,
+    pendulum_exact,
+    pendulum_period,
+)
+from hexapod.benchmarks.redundant import bricard
+from hexapod.benchmarks.reference import CATEGORIES, Case
+from hexapod.benchmarks.singular import four_bar_dead_points, n_four_bar, stretched_leg
+from hexapod.benchmarks.stiff import flyball_governor, stiff_slider, stiff_spring_pendulum
+
+__all__ = [
+    "CATEGORIES", "Case", "ClosedLoopPendulum", "bricard", "flyball_governor",
+    "four_bar_dead_points", "large_step_pendulum", "long_pendulum", "mass_ratio",
+    "mass_ratio_pendulum", "n_four_bar", "pendulum_exact", "pendulum_period", "stiff_slider",
+    "stiff_spring_pendulum", "stretched_leg", "suite",
+]

@@ -114,9 +114,9 @@ DAMPING_RATIO = 0.2
 
 
 def stiff_spring(stiffness: float):
-    """The scene of the stability study: :func:`hexapod.benchmarks.mechanisms.stiff_slider` (1 kg,
+    """The scene of the stability study: :func:`hexapod.benchmarks.stiff.stiff_slider` (1 kg,
     released 10 mm from rest) without gravity, at damping ratio :data:`DAMPING_RATIO`."""
-    from hexapod.benchmarks.mechanisms import stiff_slider
+    from hexapod.benchmarks.stiff import stiff_slider
 
     damping = 2 * DAMPING_RATIO * np.sqrt(stiffness)
     return stiff_slider(stiffness, damping, gravity=False).scene
@@ -240,7 +240,7 @@ class CaseRun:
 
 
 def _from_mechanism(case, step_count: int | None = None, rtol: float = 1e-6) -> SuiteCase:
-    """A case of :mod:`hexapod.benchmarks.mechanisms`, assembled, judged against its reference."""
+    """A case of :mod:`hexapod.benchmarks`, assembled, judged against its reference."""
     from hexapod.model.assemble import assemble
 
     model = assemble(case.scene)
@@ -274,9 +274,9 @@ def _standing_case(scene, t_end: float) -> SuiteCase:
 
 
 def build_suite(quick: bool = False, standing=None) -> list[SuiteCase]:
-    """The extreme cases (:mod:`hexapod.benchmarks.mechanisms`), and the standing hexapod when its
+    """The extreme cases (:mod:`hexapod.benchmarks`), and the standing hexapod when its
     scene is given. ``quick``: shorter runs, one stiffness in three (for the tests)."""
-    import hexapod.benchmarks.mechanisms as m
+    import hexapod.benchmarks as m
 
     if quick:
         chosen = [(m.stiff_slider(1e3), None), (m.stiff_slider(1e9, t_end=0.02), None),

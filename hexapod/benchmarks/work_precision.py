@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from hexapod._support.files import read_text
-from hexapod.benchmarks.references import ClosedLoopPendulum, pendulum_exact, pendulum_period
+from hexapod.benchmarks.pendulums import ClosedLoopPendulum, pendulum_exact, pendulum_period
 from hexapod.errors import HexapodError, InputFileError
 from hexapod.model.assemble import assemble
 from hexapod.model.model import Model

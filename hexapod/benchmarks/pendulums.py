@@ -1,11 +1,13 @@
-"""Reference solutions the integrators are judged against, built apart from the engine.
+"""Pendulums with exact or independent references.
 
-* :func:`pendulum_exact`: the physical pendulum released from rest, in Jacobi elliptic
-  functions (exact to round-off at any time).
+* :func:`pendulum_exact` and :func:`pendulum_period`: the physical pendulum released from
+  rest, in Jacobi elliptic functions (exact to round-off at any time);
+* :func:`long_pendulum` (category "long") and :func:`large_step_pendulum` ("large-step"): the
+  extreme-case suite's pendulums, judged against that solution;
 * :class:`ClosedLoopPendulum`: seed 002's closed-loop pendulum (two particles on two rods
-  joined by a rigid coupler: a four-bar with one degree of freedom) by its one-degree-of-freedom
-  Lagrange equation in the first rod's angle, integrated by SciPy's DOP853 to 1e-12, as the
-  paper checks RESTRI (its Figs. 7-10).
+  joined by a rigid coupler: a four-bar with one degree of freedom) by its
+  one-degree-of-freedom Lagrange equation in the first rod's angle, integrated by SciPy's
+  DOP853 to 1e-12, as the paper checks RESTRI (its Figs. 7-10).
 """
 
 from __future__ import annotations
@@ -13,6 +15,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+from hexapod.benchmarks.reference import Case, G
+from hexapod.scene import PlanarBody, Revolute, Scene, SpatialBody
+
+# ------------------------------------------------------------------ the exact pendulum
 
 
 def pendulum_exact(t, psi0: float, omega0: float) -> tuple[np.ndarray, np.ndarray]:
@@ -35,9 +42,68 @@ def pendulum_exact(t, psi0: float, omega0: float) -> tuple[np.ndarray, np.ndarra
 
 
 def pendulum_period(psi0: float, omega0: float) -> float:
+    """Period (s) of the pendulum of :func:`pendulum_exact`: ``4 K(sin^2(psi0 / 2)) / omega0``."""
     from scipy.special import ellipk
 
-    return 4 * ellipk(np.sin(psi0 / 2) ** 2) / omega0
+    return float(4 * ellipk(np.sin(psi0 / 2) ** 2) / omega0)
+
+
+# ------------------------------------------------------------------ the suite's pendulums
+
+
+def long_pendulum(periods: int = 1000) -> Case:
+    """The spatial pendulum of ``data/scenes/pendulum.toml`` (a 1 m, 1 kg rod about the y axis
+    through its end, inertia (0.001, 0.0833, 0.0833) kg m^2) released horizontal, over
+    ``periods`` periods (1000: about 1700 s). Reference: Jacobi elliptic functions (exact)."""
+    inertia = (0.001, 0.0833, 0.0833)
+    arm, I_O = 0.5, inertia[1] + 0.25
+    omega0, psi0 = np.sqrt(G * arm / I_O), np.pi / 2
+    period = pendulum_period(psi0, omega0)
+    scene = Scene("long-pendulum", dimension=3)
+    scene.add(SpatialBody("rod", 1.0, list(inertia), position=[arm, 0.0, 0.0]))
+    scene.add(Revolute("pivot", "ground", "rod", origin=[0.0, 0.0, 0.0], axis=[0.0, 1.0, 0.0]))
+
+    def reference(times):
+        psi, _ = pendulum_exact(np.atleast_1d(times), psi0, omega0)
+        return np.column_stack([arm * np.sin(psi), np.zeros_like(psi), -arm * np.cos(psi)])
+
+    # released horizontal at rest: psi'' = -omega0^2, the centre of mass accelerates down
+    return Case(scene.name, scene, periods * period,
+                f"{periods} periods of a pendulum: error growth and energy drift", "long",
+                ("rod",), reference, {"rod": np.array([0.0, 0.0, -arm * omega0**2])},
+                length=arm, dof=1, counted_dof=1,
+                source="data/scenes/pendulum.toml; exact solution: "
+                       "hexapod.benchmarks.pendulum_exact")
+
+
+def large_step_pendulum(psi0: float = 3.0, periods: int = 10) -> Case:
+    """A planar pendulum (a 1 m, 1 kg rod about an end) released at rest ``psi0`` rad from the
+    downward vertical (3 rad: 8 degrees from the top): it lingers near the top and swings
+    through the bottom fast, so a step that suits one phase is far too large for the other.
+    Reference: Jacobi elliptic functions (exact)."""
+    m, l = 1.0, 1.0
+    I_c = m * l**2 / 12
+    arm, I_O = l / 2, I_c + m * l**2 / 4
+    omega0 = np.sqrt(m * G * arm / I_O)
+    period = pendulum_period(psi0, omega0)
+    scene = Scene(f"large-step-pendulum-{psi0:g}", dimension=2)
+    scene.add(PlanarBody("rod", m, I_c, position=[arm * np.sin(psi0), -arm * np.cos(psi0)],
+                         angle=psi0 - np.pi / 2))
+    scene.add(Revolute("pivot", "ground", "rod", origin=[0.0, 0.0]))
+
+    def reference(times):
+        psi, _ = pendulum_exact(np.atleast_1d(times), psi0, omega0)
+        return np.column_stack([arm * np.sin(psi), -arm * np.cos(psi)])
+
+    psi_dd = -omega0**2 * np.sin(psi0)
+    tangent = np.array([np.cos(psi0), np.sin(psi0)])
+    return Case(scene.name, scene, periods * period,
+                f"released {np.degrees(np.pi - psi0):.0f} degrees from the top: slow near the "
+                f"top, fast at the bottom (period {period:.2f} s)", "large-step", ("rod",),
+                reference, {"rod": arm * psi_dd * tangent}, length=arm, dof=1, counted_dof=1)
+
+
+# ------------------------------------------------------------------ seed 002's closed loop
 
 
 @dataclass(frozen=True)
