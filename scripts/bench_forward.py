@@ -102,10 +102,12 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 import hexapod as hx  # noqa: E402
-from hexapod._support.files import write_atomically  # noqa: E402
-from hexapod.simulation.integrators import get_integrator  # noqa: E402
-from hexapod.simulation.registry import INTEGRATORS
-from hexapod.spatial import rotation_from_euler_parameters  # noqa: E402
+from hexapod import (  # noqa: E402
+    INTEGRATORS,
+    get_integrator,
+    rotation_from_euler_parameters,
+    write_atomically,
+)
 from legs import front_leg_scene  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))

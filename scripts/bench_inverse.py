@@ -33,10 +33,16 @@ from pathlib import Path
 import numpy as np
 
 import hexapod as hx
-from hexapod.algorithms.inverse import inverse_dynamics, tree_plan
-from hexapod.output.report import agreement, inverse_columns, inverse_table
-from hexapod.scene.motion import apply_motion, read_motion
-from hexapod.scene.urdf import read_urdf, urdf_text
+from hexapod import (
+    agreement,
+    apply_motion,
+    inverse_columns,
+    inverse_dynamics,
+    inverse_table,
+    read_motion,
+    read_urdf,
+    urdf_text,
+)
 from legs import front_leg_scene
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -97,7 +103,7 @@ def time_hexapod(urdf: Path, motion: Path, repeats: int, compiled: bool) -> dict
     start = time.perf_counter()
     read = read_motion(motion)
     model = hx.assemble(apply_motion(read_urdf(urdf), read))
-    tree_plan(model).build(compiled)
+    inverse_dynamics(model, read.times[:1], compile=compiled)  # builds the tree function
     built = time.perf_counter() - start
     inverse_dynamics(model, read.times, compile=compiled)  # warm-up: maps over the samples
     costs = []

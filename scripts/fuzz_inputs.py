@@ -639,9 +639,7 @@ def _quiet():
 def read_and_assemble(case: Case, path: Path) -> None:
     """What a user's first call does: read, validate, assemble, find a consistent state."""
     import hexapod as hx
-    from hexapod.scene.motion import apply_motion, read_motion
-    from hexapod.scene.reader import read_scene
-    from hexapod.scene.urdf import read_urdf
+    from hexapod import apply_motion, read_motion, read_scene, read_urdf
 
     t = 0.0
     if case.kind == "scene":
@@ -658,7 +656,7 @@ def read_and_assemble(case: Case, path: Path) -> None:
 
 def check_library(case: Case, path: Path) -> Outcome:
     """Read and assemble in process: accepted, rejected naming the file, or a traceback."""
-    from hexapod.errors import HexapodError
+    from hexapod import HexapodError
 
     try:
         with _quiet():

@@ -19,8 +19,7 @@ import time
 import numpy as np
 
 import hexapod as hx
-from hexapod.algorithms.inverse import inverse_dynamics
-from hexapod.algorithms.kinematics import marker_trajectories
+from hexapod import inverse_dynamics, marker_trajectories
 from legs.cockroach import FOOT_LIFT_MM, GROUND_Z_MM, MODEL_SCALE, STRIDE_PERIOD
 from legs.gait import GAITS, LEG_NAMES
 from legs.robot import hexapod_scene

@@ -44,7 +44,7 @@ def exact_centre(t: np.ndarray) -> np.ndarray:
 
 
 def run(model, method: str, periods: int, period: float) -> dict:
-    from hexapod.simulation.loop import simulate
+    from hexapod import simulate
 
     settings = dict(SETTINGS.get(method, {}))
     per_period = settings.pop("steps_per_period", None)
@@ -75,10 +75,8 @@ def run(model, method: str, periods: int, period: float) -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     import hexapod as hx
-    from hexapod._support.files import write_directory_atomically
+    from hexapod import INTEGRATORS, read_scene, write_directory_atomically
     from hexapod.benchmarks import pendulum_period
-    from hexapod.scene.reader import read_scene
-    from hexapod.simulation.registry import INTEGRATORS
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--periods", type=int, default=1000)

@@ -36,8 +36,7 @@ from pathlib import Path
 import numpy as np
 
 import hexapod as hx
-from hexapod.minimal.chain import ChainModel
-from hexapod.minimal.forming import METHODS, count_operations, form
+from hexapod.minimal import METHODS, ChainModel, count_operations, form
 
 COUNT_SIZES = tuple(range(1, 31))
 TIME_SIZES = (1, 2, 3, 5, 7, 10, 15, 20, 25, 30)

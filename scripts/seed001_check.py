@@ -15,7 +15,7 @@ import argparse
 import numpy as np
 
 import hexapod as hx
-from hexapod.algorithms.inverse import inverse_dynamics
+from hexapod import inverse_dynamics
 from legs import GAITS, front_leg_scene, leg_geometry, walking_leg_scene
 from legs.cockroach import STRIDE_PERIOD
 from legs.leg import JOINTS

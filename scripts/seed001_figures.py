@@ -40,11 +40,17 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 import hexapod as hx  # noqa: E402
-from hexapod.algorithms.inverse import InverseResult, inverse_dynamics  # noqa: E402
-from hexapod.model.model import GROUND_INDEX, Model  # noqa: E402
-from hexapod.output.figures import COMPONENT_COLOURS, png_bytes  # noqa: E402
-from hexapod.output.report import wrench_label  # noqa: E402
-from hexapod.scene.builtin import DEFAULT_SCENE, load_scene  # noqa: E402
+from hexapod import (  # noqa: E402  # noqa: E402  # noqa: E402  # noqa: E402
+    COMPONENT_COLOURS,
+    DEFAULT_SCENE,
+    GROUND_INDEX,
+    InverseResult,
+    Model,
+    inverse_dynamics,
+    load_scene,
+    png_bytes,
+    wrench_label,  # noqa: E402
+)
 
 SCENE = DEFAULT_SCENE  # "front-leg": what `hexapod report` runs without a SCENE
 GAIT = "tripod"  # the built-in leg scenes are driven by the tripod gait (legs/front_leg.py)

@@ -43,10 +43,8 @@ from pathlib import Path
 import numpy as np
 
 import hexapod as hx
-from hexapod.algorithms.topology import VectorNetwork, vector_network
+from hexapod import VectorNetwork, read_scene, simulate, vector_network
 from hexapod.benchmarks import ClosedLoopPendulum
-from hexapod.scene.reader import read_scene
-from hexapod.simulation.loop import simulate
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = ROOT / "data" / "scenes" / "closed_pendulum_seed002.toml"

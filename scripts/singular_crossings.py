@@ -19,8 +19,8 @@ import time
 from functools import partial
 
 import hexapod as hx
+from hexapod import DEFAULT_METHOD
 from hexapod.benchmarks import four_bar_dead_points, n_four_bar
-from hexapod.simulation.registry import DEFAULT_METHOD
 
 CASES = {"n-four-bar-10": n_four_bar,
          "anti-parallelogram (free)": four_bar_dead_points,

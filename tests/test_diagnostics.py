@@ -8,7 +8,7 @@ import pytest
 
 import hexapod as hx
 from hexapod.benchmarks import stiff_slider
-from hexapod.benchmarks.extreme import observed_stable_step
+from hexapod.benchmarks.stable_steps import observed_stable_step
 from hexapod.simulation.diagnostics import diagnose
 from hexapod.simulation.integrators.stability import runge_kutta_stability
 from hexapod.simulation.registry import INTEGRATORS

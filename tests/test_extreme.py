@@ -11,7 +11,7 @@ import pytest
 
 import hexapod as hx
 from hexapod.benchmarks import four_bar_dead_points, n_four_bar
-from hexapod.benchmarks.extreme import (
+from hexapod.benchmarks.check import (
     ACCURACY,
     build_suite,
     recommend,
@@ -143,7 +143,7 @@ def test_where_no_run_is_accurate_the_adaptive_ones_retry_tighter():
     error grows past ACCURACY near the unstable top (measured 6e-3 with DOP853); the retry at
     1e-9 is accurate and the recommendation says at which setting."""
     import hexapod.benchmarks as m
-    from hexapod.benchmarks.extreme import RETRY_TIGHTER, _from_mechanism
+    from hexapod.benchmarks.check import RETRY_TIGHTER, _from_mechanism
 
     case = _from_mechanism(m.large_step_pendulum(), 100)
     runs = run_suite([case], ["dop853-projection"], budget=60.0)

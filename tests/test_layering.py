@@ -9,6 +9,7 @@ that every rule catches what it forbids (a rule that cannot fail checks nothing)
 from __future__ import annotations
 
 import ast
+import inspect
 import subprocess
 import sys
 from pathlib import Path
@@ -160,8 +161,12 @@ def init_logic(sources: dict[str, str], packages: set[str]) -> list[str]:
     return found
 
 
-def private_uses(sources: dict[str, str], public: set[str]) -> list[str]:
-    """Uses of the engine other than ``hexapod.<name in __all__>``."""
+def private_uses(sources: dict[str, str], public: set[str],
+                 namespaces: dict[str, set[str]] | None = None) -> list[str]:
+    """Uses of the engine other than ``hexapod.<name in __all__>`` (and ``__version__``), names of
+    a public namespace's ``__all__`` (``from hexapod.benchmarks import n_four_bar``), or the
+    command line's ``from hexapod.cli import main``."""
+    namespaces = namespaces or {}
     found = []
     for name, source in sources.items():
         tree = ast.parse(source)
@@ -174,6 +179,13 @@ def private_uses(sources: dict[str, str], public: set[str]) -> list[str]:
                     elif alias.name == "hexapod":
                         aliases.add(alias.asname or "hexapod")
             elif isinstance(node, ast.ImportFrom) and (node.module or "").startswith("hexapod"):
+                if node.module == "hexapod.cli" and [a.name for a in node.names] == ["main"]:
+                    continue
+                space = node.module.partition(".")[2]
+                if space in namespaces:
+                    found += [f"{name}: hexapod.{space}.{a.name} is not public"
+                              for a in node.names if a.name not in namespaces[space]]
+                    continue
                 if node.module != "hexapod":
                     found.append(f"{name}: from {node.module} import ...")
                     continue
@@ -181,7 +193,8 @@ def private_uses(sources: dict[str, str], public: set[str]) -> list[str]:
                           if a.name not in public]
         for node in ast.walk(tree):
             if (isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name)
-                    and node.value.id in aliases and node.attr not in public):
+                    and node.value.id in aliases and node.attr not in public
+                    and node.attr != "__version__"):
                 found.append(f"{name} line {node.lineno}: hexapod.{node.attr} is not public")
     return found
 
@@ -206,7 +219,9 @@ def test_package_init_files_only_reexport():
 
 @pytest.mark.parametrize("folder", ["legs", "scripts"])
 def test_legs_and_scripts_use_only_the_public_api(folder):
-    assert private_uses(sources_in(folder), set(hexapod.__all__)) == []
+    namespaces = {name: set(getattr(hexapod, name).__all__) for name in hexapod.__all__
+                  if inspect.ismodule(getattr(hexapod, name))}
+    assert private_uses(sources_in(folder), set(hexapod.__all__), namespaces) == []
 
 
 def test_optional_libraries_are_imported_lazily():
@@ -250,10 +265,13 @@ def test_the_rules_catch_what_they_forbid():
     assert init_logic(sources, {"hexapod.output"}) == [
         "hexapod.output/__init__.py line 1: not a re-export (Assign)"]
     script = ("import hexapod as hx\nfrom hexapod.algorithms.inverse import tree_plan\n"
-              "from hexapod import assemble, _private\nhx.secret(1)\nhx.assemble(2)\n")
-    found = private_uses({"scripts/x.py": script}, {"assemble"})
+              "from hexapod import assemble, _private\nhx.secret(1)\nhx.assemble(2)\n"
+              "from hexapod.benchmarks import suite, _jet\n")
+    found = private_uses({"scripts/x.py": script}, {"assemble", "benchmarks"},
+                         {"benchmarks": {"suite"}})
     assert found == ["scripts/x.py: from hexapod.algorithms.inverse import ...",
                      "scripts/x.py: hexapod._private is not public",
+                     "scripts/x.py: hexapod.benchmarks._jet is not public",
                      "scripts/x.py line 4: hexapod.secret is not public"]
     with pytest.raises(AssertionError, match="has no layer"):
         layer("hexapod.attic.module")

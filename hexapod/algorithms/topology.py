@@ -65,6 +65,8 @@ def _name(model: Model, body: int) -> str:
 
 
 def body_joint_graph(model: Model) -> BodyJointGraph:
+    """The body-joint graph (vertices: the ground and the bodies; edges: the joints): its
+    spanning tree, the loop-closing joints (cotree) and the independent loops they close."""
     vertices = (GROUND, *(b.name for b in model.bodies))
     edges = [(_name(model, j.parent), _name(model, j.child)) for j in model.joints]
     tree, chords = spanning_forest(vertices, edges)

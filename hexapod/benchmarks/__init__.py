@@ -33,8 +33,9 @@ category (:mod:`~hexapod.benchmarks.stiff`, :mod:`~hexapod.benchmarks.singular`,
 :mod:`~hexapod.benchmarks.pendulums`, which also holds the exact pendulum
 :func:`pendulum_exact` and seed 002's :class:`ClosedLoopPendulum` used by the studies), and
 :mod:`~hexapod.benchmarks.cases` for :func:`suite`. The case modules import nothing of the
-engine but the scene layer. The studies are :mod:`~hexapod.benchmarks.extreme` and
-:mod:`~hexapod.benchmarks.work_precision`.
+engine but the scene layer. The studies are the extreme-case check
+(:mod:`~hexapod.benchmarks.check`, with :mod:`~hexapod.benchmarks.stable_steps`) and the
+work-precision study (:mod:`~hexapod.benchmarks.work_precision`).
 """
 
 from hexapod.benchmarks.cases import suite

@@ -216,14 +216,8 @@ def cmd_bench(args) -> int:
 def cmd_check(args) -> int:
     from hexapod._support.files import write_directory_atomically
     from hexapod.algorithms.kinematics import consistent_state
-    from hexapod.benchmarks.extreme import (
-        build_suite,
-        report_files,
-        run_suite,
-        scene_case,
-        stability_study,
-        stiff_spring,
-    )
+    from hexapod.benchmarks.check import build_suite, report_files, run_suite, scene_case
+    from hexapod.benchmarks.stable_steps import stability_study, stiff_spring
     from hexapod.simulation.diagnostics import diagnose
 
     def say(line: str) -> None:

@@ -151,6 +151,7 @@ def _pose_lines(pose: dict, redundant: list[str]) -> list[str]:
 
 
 def format_model(info: dict) -> str:
+    """The text ``hexapod info`` prints, from :func:`describe_model`'s dictionary."""
     m, top, mob = info["model"], info["topology"], info["mobility"]
     out = [f"scene '{info['scene']}' ({info['dimension']}-D, SI units)", "", "bodies"]
     out += _table(["name", "kind", "mass kg", "coordinates"],
@@ -211,6 +212,7 @@ def format_network(net: dict) -> list[str]:
 
 
 def format_state(report: dict) -> str:
+    """The text ``hexapod dynamics`` prints, from :func:`describe_state`'s dictionary."""
     c = report["counts"]
     out = [f"scene '{report['scene']}' ({report['dimension']}-D): {c['bodies']} bodies, "
            f"{c['joints']} joints, {c['drivers']} drivers, {c['forces']} force elements",

@@ -45,6 +45,7 @@ def _finish_panels(axes, columns: int) -> None:
 
 
 def png_bytes(figure, dpi: int = 110) -> bytes:
+    """A :class:`matplotlib.figure.Figure` rendered as PNG bytes (at ``dpi`` dots per inch)."""
     buffer = io.BytesIO()
     figure.savefig(buffer, format="png", dpi=dpi)
     return buffer.getvalue()

@@ -45,6 +45,9 @@ def inverse_table(model: Model, result: InverseResult) -> np.ndarray:
 
 
 def inverse_csv_text(model: Model, result: InverseResult) -> str:
+    """The CSV of ``hexapod inverse``: a header of :func:`inverse_columns` (``t``, then per joint
+    ``tau`` where it has one and ``Fx .. Tz``; N, N m) and one row per sample, every number
+    written to round-trip (17 significant digits)."""
     rows = inverse_table(model, result)
     line = ",".join(["%.17g"] * rows.shape[1])
     return ",".join(inverse_columns(model)) + "\n" + "".join(
