@@ -1,16 +1,18 @@
-"""Scene descriptions: the mutable, validated input of :func:`hexapod.assemble`."""
+"""Scene descriptions: the mutable, validated input of :func:`hexapod.assemble`.
 
-from hexapod.scene.bodies import Particle, PlanarBody, SpatialBody
-from hexapod.scene.drivers import CoordinateDriver, JointDriver
-from hexapod.scene.element import GROUND
-from hexapod.scene.forces import AppliedForce, AppliedTorque, JointEffort, SpringDamper
-from hexapod.scene.joints import Distance, Fixed, Joint, Prismatic, Revolute, Spherical
-from hexapod.scene.laws import Constant, Gait, Harmonic, Hermite, Law, Polynomial, Spline
-from hexapod.scene.scene import LENGTH_UNITS, Scene
+Names are imported when first used, so that ``hexapod.scene.builtin`` (the default scene's name,
+the built-in scenes) is read without loading NumPy or CasADi.
+"""
 
-__all__ = [
-    "GROUND", "LENGTH_UNITS", "AppliedForce", "AppliedTorque", "Constant", "CoordinateDriver",
-    "Distance", "Fixed", "Gait", "Harmonic", "Hermite", "Joint", "JointDriver", "JointEffort",
-    "Law", "Particle", "PlanarBody", "Polynomial", "Prismatic", "Revolute", "Scene",
-    "SpatialBody", "Spherical", "Spline", "SpringDamper",
-]
+from hexapod._support.lazy import attach
+
+__getattr__, __dir__, __all__ = attach(__name__, {
+    "hexapod.scene.bodies": ["Particle", "PlanarBody", "SpatialBody"],
+    "hexapod.scene.drivers": ["CoordinateDriver", "JointDriver"],
+    "hexapod.scene.element": ["GROUND"],
+    "hexapod.scene.forces": ["AppliedForce", "AppliedTorque", "JointEffort", "SpringDamper"],
+    "hexapod.scene.joints": ["Distance", "Fixed", "Joint", "Prismatic", "Revolute", "Spherical"],
+    "hexapod.scene.laws": ["Constant", "Gait", "Harmonic", "Hermite", "Law", "Polynomial",
+                           "Spline"],
+    "hexapod.scene.scene": ["LENGTH_UNITS", "Scene"],
+})
