@@ -31,3 +31,11 @@ def test_defaults_are_written_once():
     assert methods.DEFAULT_METHOD in INTEGRATORS
     assert work_precision.PROBLEMS is catalogue.PROBLEMS
 
+
+def test_the_command_line_defaults_are_the_constants():
+    from hexapod.cli.main import build_parser
+
+    args = build_parser().parse_args(["simulate"])
+    assert (args.method, args.rtol, args.atol) == (methods.DEFAULT_METHOD, methods.DEFAULT_RTOL,
+                                                   methods.DEFAULT_ATOL)
+    assert build_parser().parse_args(["bench"]).problems == list(catalogue.PROBLEMS)
