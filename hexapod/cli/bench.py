@@ -12,8 +12,8 @@ from hexapod.simulation.methods import METHODS
 HELP = "work-precision study: error against CPU time of every integrator"
 DESCRIPTION = (
     "Run every integrator over a ladder of tolerances (adaptive methods) or steps (fixed-step "
-    "ones) on Andrews' squeezing mechanism, seed 002's closed-loop pendulum, a pendulum over 100 "
-    "periods and the front leg falling, each against its "
+    "ones) on Andrews' squeezing mechanism, the closed-loop pendulum of Richard, Anderson and "
+    "Andrews (1989), a pendulum over 100 periods and the front leg falling, each against its "
     "reference, and write OUT: work_precision.md (the CPU time to reach 1e-6 and 1e-9 relative "
     "error in positions, per method and problem; the check of Andrews' forces at joint E against "
     "the published multipliers), runs.csv (every run), work_precision.png (error against CPU "

@@ -16,8 +16,8 @@ DESCRIPTION = (
 def add_arguments(parser) -> None:
     _scene_arguments(parser, "print the description as JSON")
     parser.add_argument("--graph", action="store_true",
-                        help="add the vector-network graph of seed 002: its edges and its "
-                        "incidence, cutset and circuit matrices")
+                        help="add the vector-network graph of Richard, Anderson and Andrews "
+                        "(1989): its edges and its incidence, cutset and circuit matrices")
 
 
 def run(args) -> int:
