@@ -143,13 +143,68 @@ def test_console_script_if_installed(tmp_path):
     assert result.returncode == 0 and "dynamics" in result.stdout
 
 
-# ------------------------------------------------------------------ dynamics
+# ------------------------------------------------------------------ scenes
 
-def test_scenes_lists_the_default_scene(tmp_path):
+def test_scenes_lists_each_scene_with_what_it_is(tmp_path):
     result = hexapod_cli("scenes", cwd=tmp_path)
     assert result.returncode == 0, result.stderr
-    assert f"{DEFAULT_SCENE} (default)" in result.stdout
+    lines = result.stdout.splitlines()
+    scenes = builtin_scenes()
+    assert [line.split(":")[0].removesuffix(" (default)") for line in lines] == sorted(scenes)
+    assert f"{DEFAULT_SCENE} (default): " in result.stdout
+    for line, name in zip(lines, sorted(scenes), strict=True):
+        described = line.partition(": ")[2]
+        assert described and described != scenes[name].value, line  # not module:function
+        assert "``" not in described and "Built-in" not in described, line
+    standing = next(line for line in lines if line.startswith("hexapod-standing:"))
+    assert standing == ("hexapod-standing: The robot standing still on its feet, every joint "
+                        "held: redundant constraints.")
 
+
+def test_scene_summary_reads_the_docstring_without_running_the_module(tmp_path, monkeypatch):
+    from importlib.metadata import EntryPoint
+
+    from hexapod.cli.scenes import builder_summary
+
+    package = tmp_path / "fake_legs"
+    package.mkdir()
+    (package / "__init__.py").write_text("raise RuntimeError('imported')\n")
+    (package / "build.py").write_text(
+        "raise RuntimeError('imported')\n\n\n"
+        "def quiet():\n    return None\n\n\n"
+        "def walker():\n"
+        '    """Built-in ``walker``: a leg with :func:`~x.law`, ``L1``.\n\n    More."""\n')
+    monkeypatch.syspath_prepend(str(tmp_path))
+
+    def summary(value: str, name: str = "walker") -> str:
+        return builder_summary(name, EntryPoint(name, value, "hexapod.scenes"))
+
+    assert summary("fake_legs.build:walker") == "A leg with x.law, L1."
+    assert summary("fake_legs.build:walker", "other") == \
+        "Built-in walker: a leg with x.law, L1."
+    # no docstring, no such function, no such module: the builder's name
+    for value in ("fake_legs.build:quiet", "fake_legs.build:missing", "no_such_pkg.m:f",
+                  "fake_legs.nothing:f"):
+        assert summary(value) == value
+    assert "fake_legs" not in sys.modules
+
+
+def test_scenes_name_prints_the_toml_and_writes_nothing(tmp_path):
+    import tomllib
+
+    printed = hexapod_cli("scenes", DEFAULT_SCENE, cwd=tmp_path)
+    assert printed.returncode == 0, printed.stderr
+    assert list(tmp_path.iterdir()) == []
+    assert tomllib.loads(printed.stdout)["scene"]["name"] == DEFAULT_SCENE
+    written = hexapod_cli("scenes", DEFAULT_SCENE, "--write", "copy.toml", cwd=tmp_path)
+    assert written.returncode == 0 and written.stdout == "wrote copy.toml\n", written.stderr
+    text = (tmp_path / "copy.toml").read_text()
+    assert printed.stdout.splitlines()[0] == f"# Built-in scene '{DEFAULT_SCENE}', written by " \
+        f"'hexapod scenes {DEFAULT_SCENE}'."
+    assert printed.stdout.splitlines()[1:] == text.splitlines()[1:]
+
+
+# ------------------------------------------------------------------ dynamics
 
 
 @pytest.fixture(scope="module")
