@@ -130,13 +130,15 @@ def posed(scene: Scene, angles: dict[str, float]) -> Scene:
 
 def hexapod_standing(feet: int = 6, scale: float = MODEL_SCALE,
                      name: str = "hexapod-standing") -> Scene:
-    """The robot standing still: a free trunk (no hold), every joint of every leg held at
-    :func:`standing_pose` by a constant driver, and ``feet`` feet (3 to 6, in the order of
-    :data:`STANDING_FEET`: a tripod first) pinned to the ground by spherical joints at
-    :func:`standing_feet` (all on the plane ``z = GROUND_Z_MM``). With all joints held each leg
-    is rigid, three feet already fix the trunk, and every further foot adds 3 redundant rows:
-    ``3 feet - 6`` in all (12 with six feet), the feet's forces statically indeterminate (the
-    engine shares them by its least-wrench policy). Under gravity nothing moves.
+    """The robot standing still on its feet, every joint held: redundant constraints.
+
+    A free trunk (no hold), every joint of every leg held at :func:`standing_pose` by a constant
+    driver, and ``feet`` feet (3 to 6, in the order of :data:`STANDING_FEET`: a tripod first)
+    pinned to the ground by spherical joints at :func:`standing_feet` (all on the plane
+    ``z = GROUND_Z_MM``). With all joints held each leg is rigid, three feet already fix the
+    trunk, and every further foot adds 3 redundant rows: ``3 feet - 6`` in all (12 with six
+    feet), the feet's forces statically indeterminate (the engine shares them by its
+    least-wrench policy). Under gravity nothing moves.
 
     The bodies start at the standing pose (:func:`posed`); the joint angles count from the rest
     pose, as in the walking scenes."""

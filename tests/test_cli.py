@@ -18,7 +18,10 @@ ROOT = Path(__file__).resolve().parents[1]
 SCENES = ROOT / "data" / "scenes"
 MALFORMED = Path(__file__).resolve().parent / "data" / "malformed_scene.toml"
 
-SUBCOMMANDS = ("dynamics", "info", "inverse", "report", "simulate", "validate", "scenes")
+SUBCOMMANDS = ("dynamics", "info", "inverse", "report", "simulate", "check", "export", "bench",
+               "validate", "scenes")
+#: What ``--help`` must not load (NumPy: the command line limits the BLAS threads before it).
+HEAVY = ("numpy", "casadi", "scipy")
 REPORT_KEYS = {"scene", "t", "dimension", "counts", "dof", "dof_with_drivers", "redundant_rows",
                "state", "joints", "driver_efforts", "accelerations", "multipliers"}
 STATE_KEYS = {"t", "max_abs_phi", "condition_number", "sigma_min", "characteristic_length_m"}
@@ -85,6 +88,52 @@ def test_unknown_subcommand_is_a_usage_error(tmp_path):
     assert_no_traceback(result)
 
 
+def test_version(tmp_path):
+    result = hexapod_cli("--version", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout == f"hexapod {hexapod.__version__}\n" == "hexapod 0.2.0\n"
+
+
+def imported(*args: str, cwd: Path) -> set[str]:
+    """The top-level packages ``python -X importtime ARGS`` imports (every import is listed)."""
+    result = subprocess.run([sys.executable, "-X", "importtime", *args], cwd=cwd,
+                            capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0, result.stderr
+    return {line.rpartition("|")[2].strip().split(".")[0] for line in result.stderr.splitlines()
+            if line.startswith("import time:")}
+
+
+@pytest.mark.parametrize("args", [("--help",), ("--version",), ("scenes",)]
+                         + [(name, "--help") for name in SUBCOMMANDS], ids=" ".join)
+def test_help_loads_no_heavy_library(tmp_path, args):
+    loaded = imported("-m", "hexapod", *args, cwd=tmp_path)
+    assert "hexapod" in loaded
+    assert not loaded & set(HEAVY), f"hexapod {' '.join(args)} imports {loaded & set(HEAVY)}"
+
+
+def test_the_import_check_sees_a_heavy_import(tmp_path):
+    """The check above can fail: the integrator registry loads CasADi, SciPy and NumPy."""
+    loaded = imported("-c", "import hexapod.simulation.registry", cwd=tmp_path)
+    assert set(HEAVY) <= loaded
+
+
+def test_the_command_line_sets_one_blas_thread_before_numpy(tmp_path):
+    code = ("import os, sys\n"
+            "from hexapod.cli import main\n"
+            "assert 'numpy' not in sys.modules\n"
+            "assert main(['validate', sys.argv[1]]) == 0 and 'numpy' in sys.modules\n"
+            "print(os.environ['OPENBLAS_NUM_THREADS'])\n")
+    for given, expected in ((None, "1"), ("3", "3")):
+        env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
+        if given:
+            env["OPENBLAS_NUM_THREADS"] = given
+        result = subprocess.run([sys.executable, "-c", code, str(SCENES / "pendulum.toml")],
+                                cwd=tmp_path, env=env, capture_output=True, text=True,
+                                timeout=120)
+        assert result.returncode == 0, result.stderr
+        assert result.stdout.splitlines()[-1] == expected
+
+
 def test_console_script_if_installed(tmp_path):
     script = Path(sys.executable).with_name("hexapod")
     if not script.exists():
@@ -94,12 +143,68 @@ def test_console_script_if_installed(tmp_path):
     assert result.returncode == 0 and "dynamics" in result.stdout
 
 
-# ------------------------------------------------------------------ dynamics
+# ------------------------------------------------------------------ scenes
 
-def test_scenes_lists_the_default_scene(tmp_path):
+def test_scenes_lists_each_scene_with_what_it_is(tmp_path):
     result = hexapod_cli("scenes", cwd=tmp_path)
     assert result.returncode == 0, result.stderr
-    assert f"{DEFAULT_SCENE} (default)" in result.stdout
+    lines = result.stdout.splitlines()
+    scenes = builtin_scenes()
+    assert [line.split(":")[0].removesuffix(" (default)") for line in lines] == sorted(scenes)
+    assert f"{DEFAULT_SCENE} (default): " in result.stdout
+    for line, name in zip(lines, sorted(scenes), strict=True):
+        described = line.partition(": ")[2]
+        assert described and described != scenes[name].value, line  # not module:function
+        assert "``" not in described and "Built-in" not in described, line
+    standing = next(line for line in lines if line.startswith("hexapod-standing:"))
+    assert standing == ("hexapod-standing: The robot standing still on its feet, every joint "
+                        "held: redundant constraints.")
+
+
+def test_scene_summary_reads_the_docstring_without_running_the_module(tmp_path, monkeypatch):
+    from importlib.metadata import EntryPoint
+
+    from hexapod.cli.scenes import builder_summary
+
+    package = tmp_path / "fake_legs"
+    package.mkdir()
+    (package / "__init__.py").write_text("raise RuntimeError('imported')\n")
+    (package / "build.py").write_text(
+        "raise RuntimeError('imported')\n\n\n"
+        "def quiet():\n    return None\n\n\n"
+        "def walker():\n"
+        '    """Built-in ``walker``: a leg with :func:`~x.law`, ``L1``.\n\n    More."""\n')
+    monkeypatch.syspath_prepend(str(tmp_path))
+
+    def summary(value: str, name: str = "walker") -> str:
+        return builder_summary(name, EntryPoint(name, value, "hexapod.scenes"))
+
+    assert summary("fake_legs.build:walker") == "A leg with x.law, L1."
+    assert summary("fake_legs.build:walker", "other") == \
+        "Built-in walker: a leg with x.law, L1."
+    # no docstring, no such function, no such module: the builder's name
+    for value in ("fake_legs.build:quiet", "fake_legs.build:missing", "no_such_pkg.m:f",
+                  "fake_legs.nothing:f"):
+        assert summary(value) == value
+    assert "fake_legs" not in sys.modules
+
+
+def test_scenes_name_prints_the_toml_and_writes_nothing(tmp_path):
+    import tomllib
+
+    printed = hexapod_cli("scenes", DEFAULT_SCENE, cwd=tmp_path)
+    assert printed.returncode == 0, printed.stderr
+    assert list(tmp_path.iterdir()) == []
+    assert tomllib.loads(printed.stdout)["scene"]["name"] == DEFAULT_SCENE
+    written = hexapod_cli("scenes", DEFAULT_SCENE, "--write", "copy.toml", cwd=tmp_path)
+    assert written.returncode == 0 and written.stdout == "wrote copy.toml\n", written.stderr
+    text = (tmp_path / "copy.toml").read_text()
+    assert printed.stdout.splitlines()[0] == f"# Built-in scene '{DEFAULT_SCENE}', written by " \
+        f"'hexapod scenes {DEFAULT_SCENE}'."
+    assert printed.stdout.splitlines()[1:] == text.splitlines()[1:]
+
+
+# ------------------------------------------------------------------ dynamics
 
 
 @pytest.fixture(scope="module")

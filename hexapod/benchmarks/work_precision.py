@@ -35,6 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from hexapod._support.files import read_text
+from hexapod.benchmarks.catalogue import PROBLEMS
 from hexapod.benchmarks.pendulums import ClosedLoopPendulum, pendulum_exact, pendulum_period
 from hexapod.errors import HexapodError, InputFileError
 from hexapod.model.assemble import assemble
@@ -205,9 +206,6 @@ def front_leg_problem(leg: Scene, t_end: float = 0.5) -> Problem:
 
     return Problem("front-leg", f"front leg falling, six free joints ({t_end:g} s)", model,
                    t_end, error, floor=1e-11, scale=size, steps=100)
-
-
-PROBLEMS = ("andrews", "seed002", "pendulum", "front-leg")
 
 
 def build_problems(names=PROBLEMS, data_dir: str | Path = "data", quick: bool = False,

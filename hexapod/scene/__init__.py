@@ -1,35 +1,21 @@
 """Scene descriptions (layer 1): the mutable, validated input of :func:`hexapod.assemble`, their
-files (TOML scenes, URDF, motion CSV) and the built-in scenes by name."""
+files (TOML scenes, URDF, motion CSV) and the built-in scenes by name.
 
-from hexapod.scene.bodies import Particle, PlanarBody, SpatialBody
-from hexapod.scene.drivers import CoordinateDriver, JointDriver
-from hexapod.scene.element import GROUND
-from hexapod.scene.forces import (
-    AppliedForce,
-    AppliedTorque,
-    JointEffort,
-    RotationalSpringDamper,
-    SpringDamper,
-)
-from hexapod.scene.joints import (
-    Cylindrical,
-    Distance,
-    Fixed,
-    Joint,
-    PlanarJoint,
-    PointOnPlane,
-    Prismatic,
-    Revolute,
-    Spherical,
-    Universal,
-)
-from hexapod.scene.laws import Constant, Gait, Harmonic, Hermite, Law, Polynomial, Spline
-from hexapod.scene.scene import LENGTH_UNITS, Scene
+Names are imported when first used, so that ``hexapod.scene.builtin`` (the default scene's name,
+the built-in scenes) is read without loading NumPy or CasADi.
+"""
 
-__all__ = [
-    "GROUND", "LENGTH_UNITS", "AppliedForce", "AppliedTorque", "Constant", "CoordinateDriver",
-    "Cylindrical", "Distance", "Fixed", "Gait", "Harmonic", "Hermite", "Joint", "JointDriver",
-    "JointEffort", "Law", "Particle", "PlanarBody", "PlanarJoint", "PointOnPlane", "Polynomial",
-    "Prismatic", "Revolute", "RotationalSpringDamper", "Scene", "SpatialBody", "Spherical",
-    "Spline", "SpringDamper", "Universal",
-]
+from hexapod._support.lazy import attach
+
+__getattr__, __dir__, __all__ = attach(__name__, {
+    "hexapod.scene.bodies": ["Particle", "PlanarBody", "SpatialBody"],
+    "hexapod.scene.drivers": ["CoordinateDriver", "JointDriver"],
+    "hexapod.scene.element": ["GROUND"],
+    "hexapod.scene.forces": ["AppliedForce", "AppliedTorque", "JointEffort",
+                             "RotationalSpringDamper", "SpringDamper"],
+    "hexapod.scene.joints": ["Cylindrical", "Distance", "Fixed", "Joint", "PlanarJoint",
+                             "PointOnPlane", "Prismatic", "Revolute", "Spherical", "Universal"],
+    "hexapod.scene.laws": ["Constant", "Gait", "Harmonic", "Hermite", "Law", "Polynomial",
+                           "Spline"],
+    "hexapod.scene.scene": ["LENGTH_UNITS", "Scene"],
+})

@@ -2,16 +2,19 @@
 
 Built-in scenes are the entry points of the group ``hexapod.scenes`` (the leg and robot models
 of the ``legs`` package register theirs in ``pyproject.toml``), so the engine finds them without
-importing ``legs``.
+importing ``legs``. This module imports the readers only when it loads a scene, so that the
+command line's help names the default scene without loading NumPy or CasADi.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from hexapod.errors import InputFileError
-from hexapod.scene.reader import read_scene
-from hexapod.scene.scene import Scene
+
+if TYPE_CHECKING:
+    from hexapod.scene.scene import Scene
 
 #: The scene of the main job (``hexapod report`` with no SCENE).
 DEFAULT_SCENE = "front-leg"
@@ -45,6 +48,8 @@ def load_scene(name_or_path: str | Path) -> Scene:
         The file cannot be read or is malformed (the message names the file, the element and
         the problem), or there is no such file and no built-in scene of that name.
     """
+    from hexapod.scene.reader import read_scene
+
     path = Path(name_or_path)
     if path.suffix.lower() in (".urdf", ".xml"):
         from hexapod.scene.urdf import read_urdf

@@ -1,4 +1,5 @@
-"""The integrator registry, and the defaults of a simulation, written once.
+"""The integrator registry; the defaults of a simulation, written once in
+:mod:`hexapod.simulation.methods` (with the summaries the command line shows), are re-exported.
 
 ==========================  =====  =====  =============================================
 name                        order  index  stabilisation
@@ -30,13 +31,10 @@ from hexapod.simulation.integrators import (
     Rattle,
     RungeKutta4Baumgarte,
 )
+from hexapod.simulation.methods import DEFAULT_ATOL, DEFAULT_METHOD, DEFAULT_RTOL
 
-#: The method used when none is named: adaptive, constraints held to round-off.
-DEFAULT_METHOD = "dopri5-projection"
-#: Default relative tolerance of the adaptive methods.
-DEFAULT_RTOL = 1e-6
-#: Default absolute tolerance of the adaptive methods (SI units of each coordinate).
-DEFAULT_ATOL = 1e-8
+__all__ = ["DEFAULT_ATOL", "DEFAULT_METHOD", "DEFAULT_RTOL", "INTEGRATORS", "get_integrator",
+           "register"]
 
 #: Integrators by name, in the order studies list them.
 INTEGRATORS: dict[str, type[Integrator]] = {}

@@ -1,0 +1,27 @@
+"""``hexapod dynamics``: forward dynamics at one instant."""
+
+from __future__ import annotations
+
+from hexapod.cli.common import _emit, _scene_arguments
+
+HELP = ("forward dynamics at one instant: accelerations, multipliers, joint wrenches and driver "
+        "efforts")
+DESCRIPTION = (
+    "Assemble SCENE at time T (positions by Newton's method, velocities projected), solve the "
+    "saddle-point system and print the joint wrenches (exerted by the parent on the child, about "
+    "the joint origin, in the child's joint frame), the driver efforts, degrees of freedom, "
+    "redundant rows and the condition number.")
+
+
+def add_arguments(parser) -> None:
+    _scene_arguments(parser, "print the results as JSON")
+
+
+def run(args) -> int:
+    from hexapod.model.assemble import assemble
+    from hexapod.output.describe import describe_state, format_state
+    from hexapod.scene.builtin import load_scene
+
+    model = assemble(load_scene(args.scene))
+    _emit(describe_state(model, args.t), args.json, format_state)
+    return 0

@@ -1,0 +1,50 @@
+"""``hexapod inverse``: joint efforts and wrenches of a prescribed motion, as CSV."""
+
+from __future__ import annotations
+
+import sys
+
+from hexapod.cli.common import _inverse_arguments, _progress
+
+HELP = "joint efforts and wrenches of a prescribed motion, as CSV"
+DESCRIPTION = (
+    "Inverse dynamics: drive MODEL (a URDF, a scene file or a built-in scene) by MOTION.csv "
+    "(columns t, one per joint in rad or m, optional qd:<joint> and qdd:<joint>) and write "
+    "OUT.csv: t, then for every joint tau:<joint> (revolute and prismatic) and Fx, Fy, Fz, Tx, "
+    "Ty, Tz:<joint>, the wrench by the parent on the child about the joint origin in the child's "
+    "joint frame (N, N m). The file is written whole or not at all.")
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("model", help="a URDF (.urdf), a TOML scene file or a built-in scene")
+    parser.add_argument("--motion", required=True, metavar="MOTION.csv", help="the motion")
+    parser.add_argument("--out", required=True, metavar="OUT.csv", help="the CSV to write")
+    _inverse_arguments(parser, "tree-ordered solve (open trees with every joint driven) or the "
+                       "saddle-point solve per sample (any mechanism); default: the fastest that "
+                       "applies")
+
+
+def run(args) -> int:
+    import warnings
+
+    from hexapod._support.files import write_atomically
+    from hexapod.algorithms.inverse import inverse_dynamics
+    from hexapod.model.assemble import assemble
+    from hexapod.output.report import inverse_csv_text
+    from hexapod.scene.builtin import load_scene
+    from hexapod.scene.motion import MotionWarning, apply_motion, read_motion
+
+    # every estimated derivative is said, once per message (main prints the warnings caught)
+    warnings.simplefilter("always", MotionWarning)
+    motion = read_motion(args.motion)
+    model = assemble(apply_motion(load_scene(args.model), motion))
+    times = motion.times
+    progress = _progress("inverse dynamics") if sys.stderr.isatty() else None
+    result = inverse_dynamics(model, times, method=args.method, frame=args.frame,
+                              progress=progress)
+    write_atomically(args.out, inverse_csv_text(model, result))
+    if progress is not None:
+        print(file=sys.stderr)
+    print(f"wrote {args.out}: {times.size} samples, {len(model.joints)} joints "
+          f"({result.method} path)")
+    return 0

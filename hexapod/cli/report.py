@@ -1,0 +1,80 @@
+"""``hexapod report``: the liaison force report of a driven scene."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from hexapod.cli.common import (
+    _at_least,
+    _inverse_arguments,
+    _positive,
+    _progress,
+    _scene_positional,
+)
+
+HELP = "the liaison force report of a driven scene: CSV, summary, figures"
+DESCRIPTION = (
+    "Inverse dynamics of SCENE (a scene file or a built-in scene whose drivers prescribe every "
+    "degree of freedom) over a time window, written to the directory OUT: inverse.csv (the CSV "
+    "of 'hexapod inverse'), summary.md (per joint the peak and RMS force and moment magnitudes, "
+    "per driver the peak effort and RMS power, per body the residual of its equations of motion "
+    "under the reported wrenches) and the figures forces.png, torques.png, efforts.png and, when "
+    "bodies have a 'foot' marker, foot.png. The directory is written whole or not at all.")
+
+
+def add_arguments(parser) -> None:
+    _scene_positional(parser)
+    parser.add_argument("--out", metavar="DIR",
+                        help="the directory to write (default: SCENE-NAME-report); an earlier "
+                        "report there is replaced")
+    parser.add_argument("--start", type=float, default=0.0, help="first time in s (default 0)")
+    parser.add_argument("--duration", type=_positive(float), metavar="S",
+                        help="length of the window in s (default: one cycle of the scene's "
+                        "periodic laws, e.g. the gait's stride, or 1 s)")
+    parser.add_argument("--samples", type=_at_least(2), default=501,
+                        help="samples over the window, ends included (default 501)")
+    _inverse_arguments(parser, "as for 'hexapod inverse'")
+
+
+def run(args) -> int:
+    import time
+
+    import numpy as np
+
+    from hexapod._support.files import write_directory_atomically
+    from hexapod.algorithms.balance import body_balance
+    from hexapod.algorithms.inverse import inverse_dynamics
+    from hexapod.algorithms.kinematics import marker_trajectories
+    from hexapod.model.assemble import assemble
+    from hexapod.output.report import FOOT_MARKER, RunInfo, report_files
+    from hexapod.scene.builtin import load_scene
+
+    scene = load_scene(args.scene)
+    model = assemble(scene)
+    duration, why = model.time_window(args.duration)
+    times = args.start + np.linspace(0.0, duration, args.samples)
+    out = Path(args.out or f"{scene.name}-report")
+    show = sys.stderr.isatty()
+    progress = _progress("inverse dynamics") if show else None
+    started = time.perf_counter()
+    result = inverse_dynamics(model, times, method=args.method, frame=args.frame,
+                              progress=progress)
+    run_time = time.perf_counter() - started
+    if show:
+        print("\rdrawing the figures" + " " * 40, end="", file=sys.stderr, flush=True)
+    balance = body_balance(model, times, result.q, result.v, result.v_dot, result.force,
+                           result.torque, result.frame)
+    feet = marker_trajectories(model, result.q, FOOT_MARKER)
+    run = RunInfo(scene.name, args.scene, run_time, f"{why}, {duration:g} s")
+    files = report_files(model, result, balance, run, feet)
+    write_directory_atomically(out, files)
+    if show:
+        print("\r" + " " * 60 + "\r", end="", file=sys.stderr)
+    worst = int(np.argmax(np.linalg.norm(result.force, axis=2).max(axis=0)))
+    print(f"wrote {out}/: {', '.join(files)}")
+    print(f"{times.size} samples over {duration:g} s ({result.method} path, {run_time:.3g} s); "
+          f"largest joint force {np.linalg.norm(result.force[:, worst], axis=1).max():.4g} N "
+          f"at {model.joints[worst].name}; body balance within "
+          f"{balance.relative().max():.1e} (relative)")
+    return 0

@@ -1,0 +1,50 @@
+"""The integrators by name, and the defaults of a simulation, written once and importing
+nothing, so that the command line lists the methods in its help without loading CasADi or SciPy.
+
+:data:`METHODS` repeats what each class of :data:`hexapod.simulation.registry.INTEGRATORS`
+declares (order, index, adaptive, stabilisation), in the same order; a test keeps the two equal.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+#: The method used when none is named: adaptive, constraints held to round-off.
+DEFAULT_METHOD = "dopri5-projection"
+#: Default relative tolerance of the adaptive methods.
+DEFAULT_RTOL = 1e-6
+#: Default absolute tolerance of the adaptive methods (SI units of each coordinate).
+DEFAULT_ATOL = 1e-8
+
+
+class Method(NamedTuple):
+    """What an integrator class declares about itself."""
+
+    order: int
+    index: int
+    adaptive: bool
+    stabilisation: str
+
+    def summary(self) -> str:
+        """One line: order, index, step control and stabilisation."""
+        step = "adaptive" if self.adaptive else "fixed step"
+        return f"order {self.order}, index {self.index}, {step}, {self.stabilisation}"
+
+
+_PROJECTION = "projection of positions and velocities after each step"
+_NEWTON = "none needed: position constraints solved every step (Newton)"
+
+#: The registered integrators by name, in the order studies list them.
+METHODS: dict[str, Method] = {
+    "rk4-baumgarte": Method(4, 1, False,
+                            "Baumgarte (alpha = beta), Euler parameters renormalised"),
+    "dopri5-projection": Method(5, 1, True, _PROJECTION),
+    "dop853-projection": Method(8, 1, True, _PROJECTION),
+    "generalized-alpha": Method(2, 3, False, _NEWTON),
+    "rattle": Method(2, 3, False, _NEWTON + ", velocities projected onto Phi_v v = nu by the "
+                     "second half kick"),
+    "radau5-ggl": Method(5, 2, True, "GGL: position and velocity constraints, B Phi_v^T mu"),
+    "idas-bdf": Method(5, 1, True, "Baumgarte terms in the DAE (alpha = beta, 10/s by default); "
+                       "projection onto phi = 0 and Phi_v v = nu and a restart when the drift "
+                       "passes drift_tol"),
+}

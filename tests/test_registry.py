@@ -1,0 +1,41 @@
+"""The light catalogue of integrators and problems the command line reads (its help loads neither
+CasADi nor SciPy) agrees with what the classes and the studies declare."""
+
+from __future__ import annotations
+
+from hexapod.benchmarks import catalogue, work_precision
+from hexapod.simulation import methods, registry
+from hexapod.simulation.registry import INTEGRATORS
+
+
+def test_the_catalogue_is_the_registry():
+    assert list(methods.METHODS) == list(INTEGRATORS)
+    for name, cls in INTEGRATORS.items():
+        declared = methods.Method(cls.order, cls.index, cls.adaptive, cls.stabilisation)
+        assert methods.METHODS[name] == declared, name
+
+
+def test_the_summaries_say_what_the_classes_declare():
+    summary = methods.METHODS["rk4-baumgarte"].summary()
+    assert summary == ("order 4, index 1, fixed step, Baumgarte (alpha = beta), Euler parameters "
+                       "renormalised")
+    for name, cls in INTEGRATORS.items():
+        step = "adaptive" if cls.adaptive else "fixed step"
+        assert methods.METHODS[name].summary() == \
+            f"order {cls.order}, index {cls.index}, {step}, {cls.stabilisation}"
+
+
+def test_defaults_are_written_once():
+    for name in ("DEFAULT_METHOD", "DEFAULT_RTOL", "DEFAULT_ATOL"):
+        assert getattr(registry, name) is getattr(methods, name)
+    assert methods.DEFAULT_METHOD in INTEGRATORS
+    assert work_precision.PROBLEMS is catalogue.PROBLEMS
+
+
+def test_the_command_line_defaults_are_the_constants():
+    from hexapod.cli.main import build_parser
+
+    args = build_parser().parse_args(["simulate"])
+    assert (args.method, args.rtol, args.atol) == (methods.DEFAULT_METHOD, methods.DEFAULT_RTOL,
+                                                   methods.DEFAULT_ATOL)
+    assert build_parser().parse_args(["bench"]).problems == list(catalogue.PROBLEMS)
