@@ -38,23 +38,16 @@ engine but the scene layer. The studies are the extreme-case check
 work-precision study (:mod:`~hexapod.benchmarks.work_precision`).
 """
 
-from hexapod.benchmarks.cases import suite
-from hexapod.benchmarks.mass_ratios import mass_ratio, mass_ratio_pendulum
-from hexapod.benchmarks.pendulums import (
-    ClosedLoopPendulum,
-    large_step_pendulum,
-    long_pendulum,
-    pendulum_exact,
-    pendulum_period,
-)
-from hexapod.benchmarks.redundant import bricard
-from hexapod.benchmarks.reference import CATEGORIES, Case
-from hexapod.benchmarks.singular import four_bar_dead_points, n_four_bar, stretched_leg
-from hexapod.benchmarks.stiff import flyball_governor, stiff_slider, stiff_spring_pendulum
+from hexapod._support.lazy import attach
 
-__all__ = [
-    "CATEGORIES", "Case", "ClosedLoopPendulum", "bricard", "flyball_governor",
-    "four_bar_dead_points", "large_step_pendulum", "long_pendulum", "mass_ratio",
-    "mass_ratio_pendulum", "n_four_bar", "pendulum_exact", "pendulum_period", "stiff_slider",
-    "stiff_spring_pendulum", "stretched_leg", "suite",
-]
+# lazy, so that the command line reads the catalogue of studies without loading NumPy
+__getattr__, __dir__, __all__ = attach(__name__, {
+    "hexapod.benchmarks.cases": ["suite"],
+    "hexapod.benchmarks.mass_ratios": ["mass_ratio", "mass_ratio_pendulum"],
+    "hexapod.benchmarks.pendulums": ["ClosedLoopPendulum", "large_step_pendulum", "long_pendulum",
+                                     "pendulum_exact", "pendulum_period"],
+    "hexapod.benchmarks.redundant": ["bricard"],
+    "hexapod.benchmarks.reference": ["CATEGORIES", "Case"],
+    "hexapod.benchmarks.singular": ["four_bar_dead_points", "n_four_bar", "stretched_leg"],
+    "hexapod.benchmarks.stiff": ["flyball_governor", "stiff_slider", "stiff_spring_pendulum"],
+})
