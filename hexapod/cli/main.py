@@ -419,8 +419,8 @@ def build_parser() -> argparse.ArgumentParser:
         "Phi_v); the redundant rows and the condition number at the pose assembled at time T.")
     _scene_arguments(p, "print the description as JSON")
     p.add_argument("--graph", action="store_true",
-                   help="add the vector-network graph of seed 002: its edges and its incidence, "
-                   "cutset and circuit matrices")
+                   help="add the vector-network graph of Richard, Anderson and Andrews: its "
+                   "edges and its incidence, cutset and circuit matrices")
     p.set_defaults(run=cmd_info)
 
     p = sub.add_parser(
@@ -566,8 +566,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser(
         "bench", help="work-precision study: error against CPU time of every integrator",
         description="Run every integrator over a ladder of tolerances (adaptive methods) or "
-        "steps (fixed-step ones) on Andrews' squeezing mechanism, seed 002's closed-loop "
-        "pendulum, a pendulum over 100 periods and the front leg falling, each against its "
+        "steps (fixed-step ones) on Andrews' squeezing mechanism, the closed-loop pendulum "
+        "of Richard, Anderson and Andrews, a pendulum over 100 periods and the front leg "
+        "falling, each against its "
         "reference, and write OUT: work_precision.md (the CPU time to reach 1e-6 and 1e-9 "
         "relative error in positions, per method and problem; the check of Andrews' forces at "
         "joint E against the published multipliers), runs.csv (every run), work_precision.png "

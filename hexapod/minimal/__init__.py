@@ -1,1 +1,2 @@
-"""Seed 000's joint-coordinate forms ``W(q) q_dd = P + V`` of open chains (layer 3)."""
+"""The joint-coordinate forms ``W(q) q_dd = P + V`` of Vukobratović and Potkonjak for open
+chains (layer 3)."""
