@@ -18,7 +18,7 @@ runs in turn:
 
 Each writes into ``OUT/seedNNN/``; this script then writes ``OUT/README.md``, the index: every
 figure, the paper figure it reproduces, its parameters and caption. Files are written to a
-temporary directory first and moved into place when every seed has succeeded, so a failed run
+temporary directory first and moved into place when every script has succeeded, so a failed run
 leaves the previous figures as they were.
 """
 
@@ -148,7 +148,7 @@ def main(argv=None) -> int:
                 shutil.move(scratch / seed, out / seed)
         if args.only and (out / "README.md").exists():
             print("wrote the figures of " + ", ".join(args.only) + "; the index lists only "
-                  "them: run without --only to index every seed")
+                  "them: run without --only to index every paper")
         shutil.move(scratch / "README.md", out / "README.md")
     print(f"wrote {out}/README.md and {len(entries)} entries")
     return 0
