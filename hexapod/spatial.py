@@ -1,8 +1,8 @@
 """Rotations, Euler parameters and frames, written once for CasADi SX and for numbers.
 
-Conventions (DESIGN section 1): Euler parameters ``p = (e0, e1, e2, e3)`` are stored **scalar
-first**; ``A(p)`` maps body to global components; ``G(p)`` and ``E(p)`` are Haug's 3 x 4 matrices
-with ``omega' = 2 G(p) p_dot`` (body frame) and ``omega = 2 E(p) p_dot`` (global frame).
+Conventions (those of docs/scene-format.md): Euler parameters ``p = (e0, e1, e2, e3)`` are stored
+**scalar first**; ``A(p)`` maps body to global components; ``G(p)`` and ``E(p)`` are Haug's 3 x 4
+matrices with ``omega' = 2 G(p) p_dot`` (body frame) and ``omega = 2 E(p) p_dot`` (global frame).
 
 The matrix-valued functions accept a NumPy array or a CasADi SX/MX vector and return the same kind,
 so the model's residuals and the numerical helpers share one formula.

@@ -1,21 +1,23 @@
-"""Cockroach leg and body data at natural scale, and the 20:1 scaling of seed 001's robot.
+"""Cockroach leg and body data at natural scale, and the 20:1 scaling of the robot of Dumitru,
+Marin and Margine.
 
-Source: the project's research note ``insect-legs.md``. Tags as there: [S] from a cited source,
-[D] derived by a stated calculation, [E] an estimate to be replaced by measured values.
+Every value is tagged with its source: [S] from a cited source, [D] derived by a stated
+calculation, [E] an estimate to be replaced by measured values.
 
-* Segment lengths, radii and masses: section 4.2, working table ([E], built around measured
-  hind-leg masses, Kram, Wong & Full 1997, and effective leg lengths, Bender et al. 2011).
+* Segment lengths, radii and masses: a working table ([E], built around measured hind-leg masses,
+  Kram, Wong & Full 1997, and effective leg lengths, Bender et al. 2011).
   Layout A fuses trochanter and femur: length and mass add, the femur's radius is kept ([D]).
-* Segments are solid cylinders with the centre of mass at mid-length (I_t, I_a of the note).
-* Rest poses: section 6 for the front leg ([E]); the middle and hind legs' are ours ([E]).
-* Thorax-coxa points and the trunk: section 3 ([E]).
+* Segments are solid cylinders with the centre of mass at mid-length (transverse and axial
+  moments of inertia I_t, I_a).
+* Rest poses: estimated for the front leg ([E]); the middle and hind legs' are ours ([E]).
+* Thorax-coxa points and the trunk: estimates ([E]).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-#: Geometric scale of seed 001's experimental model.
+#: Geometric scale of the experimental model of Dumitru, Marin and Margine.
 MODEL_SCALE = 20.0
 
 
@@ -45,7 +47,7 @@ def _fused(trochanter: Segment, femur: Segment) -> Segment:
                    trochanter.mass_mg + femur.mass_mg)
 
 
-#: Segments of layout A (coxa, trochanter + femur, tibia, tarsus), section 4.2.
+#: Segments of layout A (coxa, trochanter + femur, tibia, tarsus), from the working table.
 SEGMENTS = {
     "front": (Segment("coxa", 5.0, 1.00, 11.98),
               _fused(Segment("trochanter", 1.5, 0.50, 1.33), Segment("femur", 6.0, 0.55, 10.12)),
@@ -60,13 +62,13 @@ SEGMENTS = {
 }
 
 #: The zero-length links of the three-axis thorax-coxa joint: 1 % of the coxa mass with the
-#: inertia of a sphere of radius 0.5 mm (natural scale), the placeholder of section 6.
+#: inertia of a sphere of radius 0.5 mm (natural scale), a placeholder.
 def bracket(leg: str) -> Segment:
     return Segment("bracket", 0.0, 0.5, 0.01 * SEGMENTS[leg][0].mass_mg)
 
 
 #: Rest poses: the leg plane turned forward of lateral by ``plane_forward`` (negative: backward),
-#: segment inclinations below the horizontal (deg). Front: section 6 [E]; the tarsus angle, the
+#: segment inclinations below the horizontal (deg). Front: an estimate [E]; the tarsus angle, the
 #: middle and the hind legs are our estimates [E] (the hind leg reaches back).
 REST_POSE_DEG = {
     "front": {"plane_forward": 40.0, "coxa": 40.0, "femur": 0.0, "tibia": 60.0, "tarsus": 20.0},
@@ -74,16 +76,16 @@ REST_POSE_DEG = {
     "hind": {"plane_forward": -40.0, "coxa": 30.0, "femur": 0.0, "tibia": 70.0, "tarsus": 20.0},
 }
 
-#: Thorax-coxa points from the body's centre of mass (x forward, y left, z up), mm at natural
-#: scale, left side (the right mirrors y): section 3 [E].
+#: Thorax-coxa points from the body's centre of mass (x forward, y left, z up), mm at natural scale,
+#: left side (the right mirrors y) [E].
 THC_POINT_MM = {"front": (12.0, 4.0, -2.0), "middle": (6.0, 4.0, -2.0), "hind": (0.0, 4.5, -2.0)}
 
-#: The trunk without legs at natural scale: mass (g) and principal moments (kg m^2) of the
-#: uniform ellipsoid of section 3 [E].
+#: The trunk without legs at natural scale: mass (g) and principal moments (kg m^2) of the uniform
+#: ellipsoid [E].
 TRUNK = {"mass_g": 2.30, "inertia": (0.218 / 3.2e6, 1.055 / 3.2e6, 1.226 / 3.2e6)}
 
-#: Tripod-gait joint laws of section 7.3 for the joints J1 ... J6 of layout A: amplitude (deg)
-#: and shape of q_i = A h(phase), phase 0 at lift-off, pi at touch-down [E]. Used for every leg.
+#: Tripod-gait joint laws for the joints J1 ... J6 of layout A: amplitude (deg) and shape of
+#: q_i = A h(phase), phase 0 at lift-off, pi at touch-down [E]. Used for every leg.
 GAIT_LAWS = (
     ("thc_protraction", 25.0, "-cos"),
     ("thc_levation", 8.0, "sin"),
@@ -93,13 +95,14 @@ GAIT_LAWS = (
     ("tita", 10.0, "-cos"),
 )
 
-#: One stride in the 0-0.5 s window of seed 001's Fig. 7 (Froude-scaled 9 Hz -> 2 Hz) [D].
+#: One stride in the 0-0.5 s window of Fig. 7 of Dumitru, Marin and Margine (Froude-scaled
+#: 9 Hz -> 2 Hz) [D].
 STRIDE_PERIOD = 0.5
 
 #: The stride seen from the trunk, natural scale (mm): the foot's travel in stance, duty factor
-#: times stride length, 11.6-13.5 mm over the speeds of section 7.2 [D]; its lift in swing,
-#: 2-3 mm (section 7.3) [E]; the ground's height in the trunk frame [E, ours: the rest poses'
-#: feet lie 11-19 mm below the centre of mass].
+#: times stride length, 11.6-13.5 mm over the range of running speeds considered [D]; its lift in
+#: swing, 2-3 mm [E]; the ground's height in the trunk frame [E, ours: the rest poses' feet lie
+#: 11-19 mm below the centre of mass].
 STANCE_LENGTH_MM = 13.0
 FOOT_LIFT_MM = 2.5
 GROUND_Z_MM = -14.0

@@ -1,9 +1,10 @@
-"""The left front leg (L1) of seed 001's hexapod, and the built-in leg scenes.
+"""The left front leg (L1) of the hexapod of Dumitru, Marin and Margine, and the built-in leg
+scenes.
 
 The leg itself is built by :mod:`legs.leg` (layout A: the numbering of elements and joints is
 documented there: ``F21`` is the wrench at joint 2, ``thc_levation``, exerted by element 1 on
-element 2). The built-in scenes drive it with the tripod gait's laws over one stride of
-0.5 s (the window of seed 001's Fig. 7) and load its foot with the ground's reaction during
+element 2). The built-in scenes drive it with the tripod gait's laws over one stride of 0.5 s (the
+window of Fig. 7 of Dumitru, Marin and Margine) and load its foot with the ground's reaction during
 stance.
 """
 

@@ -16,11 +16,11 @@ wave (ripple)     5/6   one leg at a time, back to front: L3 0, L2 1/6, L1 2/6, 
                         R2 4/6, R1 5/6
 ================  ====  ==============================================================
 
-**Stance loads** (seed 001's "variation laws of the generalized forces"): the ground's reaction
-on a foot during stance, ``sin^2`` of the stance progress times its peak, zero in swing. The
-peak makes the legs in stance carry the weight on average: ``W / (6 duty) / (1/2)``. Front legs
-brake, hind legs propel and middle legs do both (Full, Blickhan & Ting 1991): a fore-aft part of
-20 % of the vertical one [E]. The loads are periodic quintic splines through 120 samples per
+**Stance loads** (the "variation laws of the generalized forces" of Dumitru, Marin and Margine): the
+ground's reaction on a foot during stance, ``sin^2`` of the stance progress times its peak, zero in
+swing. The peak makes the legs in stance carry the weight on average: ``W / (6 duty) / (1/2)``.
+Front legs brake, hind legs propel and middle legs do both (Full, Blickhan & Ting 1991): a fore-aft
+part of 20 % of the vertical one [E]. The loads are periodic quintic splines through 120 samples per
 period (C4; a load need not be smoother than that).
 """
 

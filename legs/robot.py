@@ -1,10 +1,10 @@
 """The hexapod: six legs attached by prefix (``L1`` ... ``R3``) to a trunk fixed in the world.
 
-Each leg is :func:`legs.leg.leg_scene` placed at its thorax-coxa point (the leg note's
-section 3 [E], scaled); the trunk's reference frame is its centre of mass (x forward, y left,
-z up). With a gait, every joint is driven and each foot carries the ground's reaction during
-its stance (seed 001's prescribed generalized forces); the trunk is held, so the joints' loads
-are those of a robot walking at constant height and speed.
+Each leg is :func:`legs.leg.leg_scene` placed at its thorax-coxa point (an estimate [E], scaled);
+the trunk's reference frame is its centre of mass (x forward, y left, z up). With a gait, every
+joint is driven and each foot carries the ground's reaction during its stance (the prescribed
+generalized forces of Dumitru, Marin and Margine); the trunk is held, so the joints' loads are those
+of a robot walking at constant height and speed.
 
 :func:`hexapod_standing` is the robot standing: a free trunk, every joint held by a constant
 driver at the mid-stance pose, the feet pinned to the ground, so that the feet's forces are

@@ -1,4 +1,5 @@
-"""Seed 001's own formulation of the leg, as a cross-check of the engine (Section 3 there).
+"""Dumitru, Marin and Margine's own formulation of the leg, as a cross-check of the engine
+(Section 3 of their paper).
 
 Dumitru, Marin and Margine model the leg with **mixed coordinates**: the centre of mass
 ``x_i = (x, y, z)`` of each of the six elements and its joint angle ``q_i`` (24 unknowns), tied by
@@ -11,12 +12,11 @@ the chain's kinematics (their eqs. (24)-(25)). The equations of motion are their
   part beyond it is **minus the sum of the multipliers of elements k and beyond**;
 * the angle rows give the driving torques ``P = M_qq q_dd + h - (dc/dq)^T lambda (- external)``.
 
-Their mass matrix is diagonal and ignores the rotational coupling (noted in the seeds' README);
-here ``M_qq`` is the exact rotational inertia in joint angles, ``sum_i J_w_i^T (R_i J_i R_i^T)
-J_w_i``, and Lagrange's equations give its velocity terms, so the two formulations must agree
-exactly. The kinematics are written here from the leg's rest-pose geometry (rotations about the
-rest-pose axes through the rest-pose joint points, composed from the trunk outwards), not taken
-from the engine.
+Their mass matrix is diagonal and ignores the rotational coupling; here ``M_qq`` is the exact
+rotational inertia in joint angles, ``sum_i J_w_i^T (R_i J_i R_i^T) J_w_i``, and Lagrange's
+equations give its velocity terms, so the two formulations must agree exactly. The kinematics are
+written here from the leg's rest-pose geometry (rotations about the rest-pose axes through the
+rest-pose joint points, composed from the trunk outwards), not taken from the engine.
 """
 
 from __future__ import annotations
@@ -49,7 +49,7 @@ class MixedSolution:
 
 
 class MixedModel:
-    """Seed 001's mixed-coordinate model of a layout-A leg (elements E1 ... E6)."""
+    """Dumitru, Marin and Margine's mixed-coordinate model of a layout-A leg (elements E1-E6)."""
 
     def __init__(self, geometry: LegGeometry, gravity=GRAVITY, foot_load: bool = False):
         g = geometry

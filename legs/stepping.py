@@ -11,7 +11,7 @@ C4. Every leg walks on the same ground at the same speed, so the feet in stance 
 against each other, whatever the gait.
 
 The joints: ``thc_levation`` and ``coxa_rotation`` rise and fall with the foot's lift, ``tita``
-follows its fore-aft position, with the amplitudes of the leg note's section 7.3;
+follows its fore-aft position, with the amplitudes of ``legs.cockroach.GAIT_LAWS``;
 ``thc_protraction``, ``ctr`` and ``fti`` are solved (inverse kinematics, Newton's method for all
 samples of the cycle at once) so that the foot is on its path. Each joint's angle is then a
 periodic function of time, fitted by least squares with ``HARMONICS`` harmonics

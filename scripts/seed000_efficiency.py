@@ -1,4 +1,5 @@
-"""Efficiency of the three methods of seed 000 (basic theorems, Lagrange, Gibbs-Appell).
+"""Efficiency of the three methods of Vukobratović and Potkonjak (1979): basic theorems, Lagrange,
+Gibbs-Appell.
 
 Protocol
 --------

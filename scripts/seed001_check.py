@@ -1,4 +1,5 @@
-"""Seed 001's mixed model of the front leg against the engine over one stride (not a test).
+"""The mixed model of Dumitru, Marin and Margine of the front leg against the engine over one
+stride (not a test).
 
 The mixed formulation (legs/seed001.py: centre of mass plus joint angle per element, 24
 unknowns, 18 rows) and the engine's inverse dynamics are run on the same joint laws, with the

@@ -1,11 +1,12 @@
-"""Seed 001's Fig. 7 redrawn: the liaison force F21 of the left front leg over 0-0.5 s.
+"""Fig. 7 of Dumitru, Marin and Margine redrawn: the liaison force F21 of the left front leg over
+0-0.5 s.
 
-Dumitru, Marin and Margine (seed 001) plot, as their Fig. 7 "Liaison force variation F21",
-the components Fx, Fy, Fz of the force element 1 exerts on element 2 of the left anterior leg
-and its magnitude |F|, in N, against time from 0 to 0.5 s. No numbers of theirs survive: only
-that layout (the OCR keeps the legend "Fx Fy Fz |F|", the unit "(N)", "time (s)", the ticks
-0.1 ... 0.5 and the caption). This script computes the same quantity as ``hexapod report``
-does on its default scene, and draws it in that layout:
+Dumitru, Marin and Margine plot, as their Fig. 7 "Liaison force variation F21", the components Fx,
+Fy, Fz of the force element 1 exerts on element 2 of the left anterior leg and its magnitude |F|, in
+N, against time from 0 to 0.5 s. No numbers of theirs survive: only that layout (the OCR keeps the
+legend "Fx Fy Fz |F|", the unit "(N)", "time (s)", the ticks 0.1 ... 0.5 and the caption). This
+script computes the same quantity as ``hexapod report`` does on its default scene, and draws it in
+that layout:
 
 * the scene is the built-in ``front-leg`` (the L1 leg of ``legs``, trunk held, six revolute
   joints driven by the tripod gait's laws, the ground's reaction on the foot in stance), loaded
@@ -54,11 +55,13 @@ from hexapod import (  # noqa: E402  # noqa: E402  # noqa: E402  # noqa: E402
 
 SCENE = DEFAULT_SCENE  # "front-leg": what `hexapod report` runs without a SCENE
 GAIT = "tripod"  # the built-in leg scenes are driven by the tripod gait (legs/front_leg.py)
-LEG = "L1"  # seed 001's left anterior leg
+LEG = "L1"  # the left anterior leg of Dumitru, Marin and Margine
 SAMPLES = 501  # `hexapod report`'s default
 FRAME = "joint"  # `hexapod report`'s default: the child's joint frame
 PAPER_WRENCH = "F21"
-PAPER_FIGURE = "seed 001 Fig. 7 (Liaison force variation F21)"
+PAPER_FIGURE = "Dumitru, Marin and Margine, Fig. 7 (Liaison force variation F21)"
+#: The same figure named inside a sentence (the captions of the other joints' figures).
+PAPER_FIGURE_IN_TEXT = "Fig. 7 of Dumitru, Marin and Margine (Liaison force variation F21)"
 PAPER_LAYOUT = ("what survives of the paper's figure (OCR): the legend Fx, Fy, Fz, |F|, the "
                 "unit (N), the abscissa time (s) with ticks 0.1 ... 0.5, the caption "
                 "'Fig.7 Liaison force variation F21'; no numbers, no curve styles, no y-range")
@@ -91,7 +94,8 @@ def liaison_forces(samples: int = SAMPLES, scene: str = SCENE) -> Run:
 
 
 def _element(model: Model, index: int) -> tuple[int, str]:
-    """Seed 001's number of a body (from 1 in scene order, the ground 0) and its name."""
+    """The number Dumitru, Marin and Margine give a body (from 1 in scene order, the ground 0) and
+    its name."""
     if index == GROUND_INDEX:
         return 0, "trunk, held: the ground"
     return index + 1, model.bodies[index].name
@@ -110,9 +114,9 @@ def joint_description(model: Model, k: int) -> dict:
 
 
 def fig7_figure(times: np.ndarray, force: np.ndarray, subtitle: str, caption: str):
-    """Seed 001's Fig. 7 layout: ``force`` (N, 3) components and magnitude against time on one
-    axes, a caption under it as in the paper. Drawn on a bare matplotlib Figure (Agg canvas, no
-    pyplot, no display)."""
+    """The layout of Fig. 7 of Dumitru, Marin and Margine: ``force`` (N, 3) components and magnitude
+    against time on one axes, a caption under it as in the paper. Drawn on a bare matplotlib Figure
+    (Agg canvas, no pyplot, no display)."""
     from matplotlib.figure import Figure
 
     figure = Figure(figsize=(7.6, 4.6))
@@ -174,7 +178,7 @@ def figures(run: Run) -> list[tuple[dict, object]]:
         if is_paper:
             caption += f". Layout: {PAPER_LAYOUT}; {CHOSEN_LAYOUT}."
         else:
-            caption += (f"; the layout of {PAPER_FIGURE}"
+            caption += (f"; the layout of {PAPER_FIGURE_IN_TEXT}"
                         + (", same curves as fig7_F21.png" if k == paper else "") + ".")
         entry = {"file": name,
                  "reproduces": PAPER_FIGURE if is_paper
@@ -183,7 +187,8 @@ def figures(run: Run) -> list[tuple[dict, object]]:
                  "peak_force": float(magnitude[peak]), "peak_time": float(t[peak]),
                  "caption": caption}
         under = (f"Fig. 7  Liaison force variation {j['wrench']}" if is_paper
-                 else f"Liaison force variation {j['wrench']} (the layout of seed 001's Fig. 7)")
+                 else f"Liaison force variation {j['wrench']} (the layout of Fig. 7 of Dumitru, "
+                       "Marin and Margine)")
         out.append((entry, fig7_figure(t, force[:, k], subtitle, under)))
     return out
 

@@ -1,4 +1,5 @@
-"""Seed 002's Figs. 6-10: the closed-loop pendulum of RESTRI against its Lagrange equation.
+"""Figs. 6-10 of Richard, Anderson and Andrews (1989/90): the closed-loop pendulum of RESTRI
+against its Lagrange equation.
 
 Richard, Anderson and Andrews, "The vector-network method for the modelling of mechanical
 systems" (1989/90), Section 5: two particles, m1 = 2 kg and m2 = 1 kg, each on a rigid rod
@@ -6,10 +7,10 @@ from a fixed point, joined by a rigid coupler (one degree of freedom), released 
 simulated for 15 s. The paper checks RESTRI's output (triangles) against the solution of the
 one-degree-of-freedom Lagrange equation (solid lines) in Figs. 7-10.
 
-Reading (``shared/seeds/README.md``, row 002; ``data/scenes/closed_pendulum_seed002.toml``):
-lengths in dm; x to the right, y pointing down (gravity along +y, g = 98.1 dm/s^2); m1 hangs
-from the fixed point (0, 0) (point 4 of Fig. 5), m2 from (7, 0) (point 3); initial x1 = 4,
-y1 = 4, x2 = 12, y2 = 5 dm at rest; links 5.657, 7.071 and 8.062 dm.
+Reading of the paper (as in ``data/scenes/closed_pendulum_seed002.toml``): lengths in dm; x to the
+right, y pointing down (gravity along +y, g = 98.1 dm/s^2); m1 hangs from the fixed point (0, 0)
+(point 4 of Fig. 5), m2 from (7, 0) (point 3); initial x1 = 4, y1 = 4, x2 = 12, y2 = 5 dm at rest;
+links 5.657, 7.071 and 8.062 dm.
 
 Figures, as the captions of the paper's OCR copy name them:
 
@@ -50,11 +51,11 @@ ROOT = Path(__file__).resolve().parents[1]
 SCENE = ROOT / "data" / "scenes" / "closed_pendulum_seed002.toml"
 DM_PER_M = 10.0  # the engine's outputs are in SI (m), the paper's in dm
 
-#: The paper's Section 5, in its units (dm, kg, s), as read in shared/seeds/README.md.
+#: The paper's Section 5, in its units (dm, kg, s).
 PAPER = {"m1": 2.0, "m2": 1.0, "anchor1": (0.0, 0.0), "anchor2": (7.0, 0.0),
          "p1": (4.0, 4.0), "p2": (12.0, 5.0), "g": 98.1}
 DURATION = 15.0
-CRITERION_DM = 1e-6  # the issue's criterion: engine within 1e-6 dm of Lagrange over 15 s
+CRITERION_DM = 1e-6  # the acceptance criterion: engine within 1e-6 dm of Lagrange over 15 s
 
 #: (file, paper figure, mass, coordinate index, what the paper's caption says)
 PANELS = (
@@ -162,14 +163,17 @@ def matrices_text(net: VectorNetwork) -> str:
               if not e.tree]
     product = check_orthogonal(net.cutset, net.circuit, net.branches)
     lines = [
-        "# Seed 002, Fig. 6: the vector network of the closed-loop pendulum",
+        "# Richard, Anderson and Andrews (1989/90), Fig. 6: the vector network of the closed-loop "
+        "pendulum",
         "",
         f"Written by `scripts/seed002_figures.py` from `{SCENE.relative_to(ROOT)}` "
-        "(`hexapod.vector_network`; `hexapod info SCENE --graph` prints the same). "
+        "(`hexapod.algorithms.topology.vector_network`; `hexapod info SCENE --graph` prints "
+        "the same). "
         f"{len(net.vertices)} vertices, {len(net.edges)} elements: {len(tree)} tree branches "
         f"(solid in Fig. 6), {len(chords)} chords (cotree, dashed).",
         "",
-        "Conventions (seed 002, Section 2): the incidence matrix has +1 where a vertex is an "
+        "Conventions (Richard, Anderson and Andrews, Section 2): the incidence matrix has +1 "
+        "where a vertex is an "
         "element's initial vertex (tail) and -1 where it is its final vertex (head); the "
         "cutset matrix `[U A]` (one row per tree branch) comes from row reduction of the "
         "incidence matrix without its root row, the circuit matrix `[B U]` (one row per "
@@ -353,7 +357,8 @@ def make(out_dir="figures/seed002", duration: float = DURATION, rtol: float = 1e
             "file": file, "reproduces": f"{paper_figure} ({quantity} vs time)",
             "parameters": {**common, "quantity": f"{symbol} (dm)",
                            "max difference in this figure": f"{worst:.2e} dm"},
-            "caption": (f"{paper_figure} of seed 002 ({quantity}, the paper's caption: here "
+            "caption": (f"{paper_figure} of Richard, Anderson and Andrews ({quantity}, the "
+                        f"paper's caption: here "
                         f"{symbol}, dm, y positive down) of the closed-loop pendulum over "
                         f"{duration:g} s: the one-degree-of-freedom Lagrange solution (solid "
                         f"line) and the absolute-coordinate engine (triangles, every 0.1 s), "
@@ -366,7 +371,8 @@ def make(out_dir="figures/seed002", duration: float = DURATION, rtol: float = 1e
         "file": GRAPH_FILE, "reproduces": "Fig. 6 (vector-network diagram)",
         "parameters": {"vertices": len(net.vertices), "elements": len(net.edges),
                        "tree": net.branches, "cotree": len(net.edges) - net.branches},
-        "caption": ("Fig. 6 of seed 002: the vector-network graph of the closed-loop pendulum "
+        "caption": ("Fig. 6 of Richard, Anderson and Andrews: the vector-network graph of the "
+                    "closed-loop pendulum "
                     "as hexapod builds it (5 vertices; 9 elements: 2 masses and 2 specified "
                     "points in the tree, solid; 2 weights and 3 rigid links in the cotree, "
                     "dashed), vertices drawn where the points are at t = 0.")})

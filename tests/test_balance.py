@@ -1,9 +1,9 @@
-"""Free-body balance of the reported liaison wrenches, and actuator efforts (DESIGN section 5).
+"""Free-body balance of the reported liaison wrenches, and actuator efforts.
 
-For every body the joint wrenches of the report (DESIGN section 1: exerted by the parent on the
-child, about the joint origin, in the child's joint frame) must, once taken back to world axes
-and to the body's centre of mass, balance its motion with gravity and the loads that do not act
-across a joint:
+For every body the joint wrenches of the report (the report convention: exerted by the parent on the
+child, about the joint origin, in the child's joint frame) must, once taken back to world axes and
+to the body's centre of mass, balance its motion with gravity and the loads that do not act across a
+joint:
 
     sum_{joints, body is child} W_k  -  sum_{joints, body is parent} W_k  +  loads
         = (m a_G,  J omega_dot + omega x J omega)

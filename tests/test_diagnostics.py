@@ -105,8 +105,8 @@ def test_baumgarte_mode_limits_the_step_of_soft_constrained_scenes():
 
 @pytest.mark.parametrize("method", ["rk4-baumgarte", "dopri5-projection", "rattle"])
 def test_predicted_stable_step_within_a_factor_two_of_observed(method):
-    """The issue's criterion on a stiff spring (1e7 N/m on 1 kg, damping ratio 0.2): bisection
-    on the fixed step, or the step an adaptive controller settles on."""
+    """The acceptance criterion on a stiff spring (1e7 N/m on 1 kg, damping ratio 0.2): bisection on
+    the fixed step, or the step an adaptive controller settles on."""
     stiffness = 1e7
     model, q, v = state(block_on_spring(stiffness, 0.4 * np.sqrt(stiffness)))
     predicted = diagnose(model, model.create_data(), 0.0, q, v, methods=[method]).stable_steps[method]

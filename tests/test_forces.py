@@ -171,7 +171,7 @@ def test_planar_spring_and_torque():
 
 
 def test_gyroscopic_term_matches_skew_form():
-    """Q's rotational part for a free body is -omega' x J' omega' (DESIGN), zero without spin."""
+    """Q's rotational part for a free body is -omega' x J' omega' (body axes), zero without spin."""
     body, model = _free_model(4)
     Q = model.call("Q", q=model.q0, v=model.v0)
     omega = model.v0[3:]

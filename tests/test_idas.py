@@ -66,10 +66,10 @@ def test_error_follows_the_tolerance_on_the_exact_pendulum():
 
 
 def test_seed002_at_a_tight_tolerance():
-    """Seed 002's closed loop over 3 s (two swings) at rtol 1e-9, atol 1e-11: within 1e-7 m of
-    its Lagrange equation (measured: 2e-10 m), the drift of every returned state under the
-    stated tolerance (positions: |phi_i| / s_i <= drift_tol = rtol; velocities: per second,
-    scaled by alpha = 10/s), energy kept, and the run's statistics report its restarts."""
+    """The closed loop of Richard, Anderson and Andrews over 3 s (two swings) at rtol 1e-9, atol
+    1e-11: within 1e-7 m of its Lagrange equation (measured: 2e-10 m), the drift of every returned
+    state under the stated tolerance (positions: |phi_i| / s_i <= drift_tol = rtol; velocities: per
+    second, scaled by alpha = 10/s), energy kept, and the run's statistics report its restarts."""
     model = seed002()
     result = simulate(model, 3.0, method="idas-bdf", rtol=1e-9, atol=1e-11)
     assert result.success, result.message
@@ -86,13 +86,13 @@ def test_seed002_at_a_tight_tolerance():
 
 @pytest.mark.parametrize("alpha, drift_tol", [(0.0, 2e-10), (10.0, 5e-11)])
 def test_projection_restarts_hold_the_drift_under_its_tolerance(alpha, drift_tol):
-    """Seed 002 over 1 s at rtol 1e-9, the plain index-1 equations (alpha = 0) and the
-    Baumgarte-stabilised ones (alpha = 10/s), each with a drift tolerance below the drift it
-    reaches unprojected (measured 3.3e-10 and 8.2e-11): states are projected and IDAS
-    restarted, the drift of every returned state stays under the tolerance (positions
-    |phi_i| / s_i; velocities |Phi_v v - nu|_i / s_i over max(alpha, 1/s)), each projection is
-    followed by a restart, and the motion is still right (within 1e-7 m). The same runs
-    without projections (a tolerance of 1) pass it: the projections are what hold it."""
+    """The closed loop of Richard, Anderson and Andrews over 1 s at rtol 1e-9, the plain index-1
+    equations (alpha = 0) and the Baumgarte-stabilised ones (alpha = 10/s), each with a drift
+    tolerance below the drift it reaches unprojected (measured 3.3e-10 and 8.2e-11): states are
+    projected and IDAS restarted, the drift of every returned state stays under the tolerance
+    (positions |phi_i| / s_i; velocities |Phi_v v - nu|_i / s_i over max(alpha, 1/s)), each
+    projection is followed by a restart, and the motion is still right (within 1e-7 m). The same
+    runs without projections (a tolerance of 1) pass it: the projections are what hold it."""
     model = seed002()
     rate = max(alpha, 1.0)
     result = simulate(model, 1.0, method="idas-bdf", rtol=1e-9, atol=1e-11,

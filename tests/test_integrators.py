@@ -144,9 +144,9 @@ def test_adaptive_methods_meet_their_tolerance(method, kind, tol):
 
 @pytest.mark.parametrize("method", INTEGRATORS)
 def test_closed_loop_pendulum_of_seed002_follows_its_lagrange_equation(method):
-    """Seed 002's two particles on a four-bar (decimetres, y down), against the one-degree-of-
-    freedom Lagrange equation over 1.5 s (more than one swing). 1e-6 m with the accurate
-    settings of each method (the paper's figures resolve 1e-2 dm)."""
+    """The two particles of Richard, Anderson and Andrews on a four-bar (decimetres, y down),
+    against the one-degree-of-freedom Lagrange equation over 1.5 s (more than one swing). 1e-6 m
+    with the accurate settings of each method (the paper's figures resolve 1e-2 dm)."""
     model = hx.assemble(read_scene(SCENES / "closed_pendulum_seed002.toml"))
     settings = {"rk4-baumgarte": dict(step=1e-3), "dopri5-projection": dict(rtol=1e-9,
                 atol=1e-11), "generalized-alpha": dict(step=2.5e-4),

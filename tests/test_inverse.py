@@ -1,5 +1,5 @@
-"""Inverse dynamics of prescribed motion over a gait: the tree path, the saddle path, seed 000's
-recursive model and a virtual-power balance agree."""
+"""Inverse dynamics of prescribed motion over a gait: the tree path, the saddle path, the recursive
+model of Vukobratović and Potkonjak and a virtual-power balance agree."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The three tests every joint must pass (DESIGN section 5).
+"""The three tests every joint must pass.
 
 For each joint type, in space and in the plane, with spatial bodies, planar bodies, particles
 and the ground as parent:

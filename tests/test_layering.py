@@ -1,6 +1,6 @@
-"""The package layout of DESIGN section 3, enforced: one folder per layer, no upward import, no
-cycle, no scene below the model, ``__init__`` files that only re-export, optional libraries
-imported lazily, and ``legs/`` and ``scripts/`` on the public API alone.
+"""The package layout of the README's "Layout" section, enforced: one folder per layer, no upward
+import, no cycle, no scene below the model, ``__init__`` files that only re-export, optional
+libraries imported lazily, and ``legs/`` and ``scripts/`` on the public API alone.
 
 Each rule is a function from sources to a list of violations, so that the tests below can show
 that every rule catches what it forbids (a rule that cannot fail checks nothing).
@@ -21,7 +21,7 @@ import hexapod
 ROOT = Path(__file__).resolve().parent.parent
 PACKAGE = ROOT / "hexapod"
 
-#: Layer of each top-level module or folder of the package (DESIGN section 3).
+#: Layer of each top-level module or folder of the package (the README's "Layout" table).
 LAYERS = {
     "errors": 0, "spatial": 0, "_support": 0, "_version": 0,
     "scene": 1,
@@ -50,7 +50,7 @@ def layer(module: str) -> int:
     if parts == ["hexapod"]:
         return TOP
     assert parts[1] in LAYERS, f"{module}: hexapod.{parts[1]} has no layer: add it to LAYERS " \
-                               "(and to DESIGN section 3)"
+                               "(and to the README's Layout table)"
     return LAYERS[parts[1]]
 
 

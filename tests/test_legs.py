@@ -1,4 +1,4 @@
-"""The legs, the gaits and seed 001's formulation."""
+"""The legs, the gaits and the formulation of Dumitru, Marin and Margine."""
 
 from __future__ import annotations
 
@@ -31,7 +31,7 @@ def joint_values(laws, t):
     return tuple(np.column_stack([v[k] for v in values]) for k in range(3))
 
 
-# ------------------------------------------------------------------ seed 001
+# ------------------------------------------------------------ Dumitru, Marin and Margine
 
 @pytest.mark.parametrize("loaded", [False, True])
 def test_seed001_mixed_model_equals_the_engine(loaded):
@@ -185,7 +185,7 @@ def test_the_hexapod_is_a_tree_of_37_bodies_and_weighs_about_21_kg():
     model = hx.assemble(hexapod_scene())
     assert len(model.bodies) == 37 and len(model.drivers) == 36
     assert tree_plan(model) is not None
-    assert robot_mass() == pytest.approx(20.8, abs=0.1)  # the note's 20:1 estimate
+    assert robot_mass() == pytest.approx(20.8, abs=0.1)  # the 20:1 estimate of legs/cockroach.py
     result = inverse_dynamics(model, TIMES[:11])
     for leg in LEG_NAMES:
         assert leg_of(leg)[1] == leg[0]

@@ -1,5 +1,5 @@
 """Bad input never crashes: malformed scene, URDF and motion files give one error naming the file,
-never a traceback, and no command leaves a partial output (issue 8, part 3).
+never a traceback, and no command leaves a partial output.
 
 The mutations are those of ``scripts/fuzz_inputs.py`` (which runs thousands of them); here
 Hypothesis draws them, so that a failure is shrunk to a small input and replayed the same way on

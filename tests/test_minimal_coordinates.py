@@ -1,5 +1,4 @@
-"""Absolute coordinates against minimal coordinates (DESIGN section 5, "an independent
-formulation").
+"""Absolute coordinates against minimal coordinates (an independent formulation).
 
 The engine writes every body with its own 7 (or 3, or 2) coordinates and lets the joints remove
 the extra freedom through multipliers. Here the same systems are written in joint coordinates,
@@ -15,8 +14,8 @@ by hand and with no hexapod code in the reference:
   in world components gives the joint forces, its unit-acceleration columns the mass matrix, so
   the joint accelerations of the free chain, the body accelerations, and the force and moment
   each joint transmits from body k-1 to body k about the joint origin. The engine's
-  accelerations and its joint wrenches (report convention of DESIGN section 1) must match, for
-  free chains with actuator efforts and for chains whose joints are all driven.
+  accelerations and its joint wrenches (the report convention) must match, for free
+  chains with actuator efforts and for chains whose joints are all driven.
 """
 
 from __future__ import annotations
@@ -571,7 +570,7 @@ class Wave:
 @pytest.mark.parametrize("n_links", [2, 4])
 def test_driven_chain_matches_recursive_model(n_links):
     """All joints driven: the engine assembles the prescribed configuration, and its joint
-    wrenches (effort = -lambda of the driver, DESIGN section 1) are the RNEA forces."""
+    wrenches (effort = -lambda of the driver) are the RNEA forces."""
     rng = np.random.default_rng(RNG_SEED + 100 + n_links)
     links = random_chain(rng, n_links)
     gravity = np.array([1.2, -0.8, -G])

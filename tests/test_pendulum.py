@@ -101,8 +101,8 @@ def test_reported_wrench_is_the_pivot_force_in_the_joint_frame(form):
 
 
 def test_driven_pendulum_effort():
-    """DESIGN's check of the effort sign: tau = I_O theta_dd + m g l cos(theta), with theta
-    measured from the horizontal (+x) about +z, in the plane with gravity -y."""
+    """The check of the effort sign: tau = I_O theta_dd + m g l cos(theta), with theta measured from
+    the horizontal (+x) about +z, in the plane with gravity -y."""
     m, l, Ic = PENDULUM["mass"], PENDULUM["length"], PENDULUM["inertia"]
     law = hx.Harmonic(offset=0.4, sin=[0.9], cos=[0.3], frequency=0.7)
     scene = hx.Scene("driven", 2)

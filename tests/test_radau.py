@@ -109,8 +109,9 @@ SCENES_B = {
 
 @pytest.mark.parametrize("which", SCENES_B)
 def test_both_constraint_levels_hold_and_mu_vanishes(which):
-    """Seed 002's closed loop (three rigid links, 1.5 s) and a driven four-bar (rheonomic
-    position and velocity rows, 1 s), at rtol = atol = 1e-6 and 1e-9, at every step:
+    """The closed loop of Richard, Anderson and Andrews (three rigid links, 1.5 s) and a driven
+    four-bar (rheonomic position and velocity rows, 1 s), at rtol = atol = 1e-6 and 1e-9, at every
+    step:
 
     - ``|phi| <= tol L`` (L the characteristic length; Newton's tolerance sets it: measured
       0.01 to 0.15 tol L);

@@ -1,4 +1,5 @@
-"""Seed 000's recursive joint-coordinate model against the absolute-coordinate engine."""
+"""The recursive joint-coordinate model of Vukobratović and Potkonjak against the
+absolute-coordinate engine."""
 
 from __future__ import annotations
 

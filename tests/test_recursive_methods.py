@@ -1,5 +1,6 @@
-"""Seed 000's three methods of forming W q_dd = P + V (basic theorems, Lagrange, Gibbs-Appell):
-against each other, against the absolute-coordinate engine, and the operation counter."""
+"""The three methods of Vukobratović and Potkonjak of forming W q_dd = P + V (basic theorems,
+Lagrange, Gibbs-Appell): against each other, against the absolute-coordinate engine, and the
+operation counter."""
 
 from __future__ import annotations
 

@@ -1,8 +1,8 @@
 """Redundant constraints: a four-bar built in 3-D with four parallel revolute axes.
 
-Its 3-D model has 3 redundant rows (the loop-closing joint's out-of-plane rows); accelerations
-stay unique and equal the planar model's. The multipliers of the redundant rows follow DESIGN's
-unit-free policy, so neither the length unit nor the scaling of a row changes a reported force,
+Its 3-D model has 3 redundant rows (the loop-closing joint's out-of-plane rows); accelerations stay
+unique and equal the planar model's. The multipliers of the redundant rows follow the unit-free
+least-wrench policy, so neither the length unit nor the scaling of a row changes a reported force,
 while plain minimum-norm multipliers would (checked, so the test can tell them apart).
 """
 
@@ -118,7 +118,8 @@ def test_scaling_a_row_changes_no_reported_force():
 
 
 def _minimum_norm_wrenches(model, q, data, row_scale):
-    """What plain minimum-norm multipliers would report (DESIGN: not acceptable)."""
+    """What plain minimum-norm multipliers would report (not acceptable: they change with the length
+    unit)."""
     Phi_v = data.Phi_v * row_scale[:, None]
     rhs = data.Q - model.mass @ data.v_dot
     lam = np.linalg.lstsq(Phi_v.T, rhs, rcond=None)[0]

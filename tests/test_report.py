@@ -204,8 +204,8 @@ def test_body_balance_closes_and_catches_a_wrong_frame(method):
 
 
 def test_body_balance_of_a_planar_closed_loop():
-    """The seed 002 four-bar in 3-D (saddle path, a loop-closing joint) and a driven planar
-    double pendulum: both close to round-off."""
+    """The four-bar in 3-D (saddle path, a loop-closing joint) and a driven planar double pendulum:
+    both close to round-off."""
     scene = hx.scene.reader.read_scene(SCENES / "four_bar_3d.toml")
     model = hx.assemble(scene)
     t = np.linspace(0.0, 0.3, 4)
@@ -318,8 +318,8 @@ def test_directory_writer_leaves_nothing_when_it_fails(tmp_path):
 
 
 def test_particles_balance_forces_only():
-    """Seed 002's particles have no moment equation: their balance is that of forces (a
-    moment built of round-off must not read as a 100 % residual)."""
+    """The particles of Richard, Anderson and Andrews have no moment equation: their balance is that
+    of forces (a moment built of round-off must not read as a 100 % residual)."""
     model = hx.assemble(hx.scene.reader.read_scene(SCENES / "closed_pendulum_seed002.toml"))
     data = model.create_data()
     q, v = hx.consistent_state(model, data)

@@ -425,7 +425,8 @@ def four_bar(k: float, unit: str, gravity: bool) -> dict:
 
 
 def seed002(k: float, unit: str, gravity: bool) -> dict:
-    """Seed 002's closed-loop pendulum (y down) with a guessed initial velocity."""
+    """The closed-loop pendulum of Richard, Anderson and Andrews (y down) with a guessed initial
+    velocity."""
     assert gravity, "gravity points along +y here: it must be given"
 
     def L(*x):

@@ -1,9 +1,9 @@
-"""scripts/seed001_figures.py: seed 001's Fig. 7 (the liaison force F21 of the left front leg)
-and the same figure for every joint. The curves drawn (read back from the figures' axes) are
-checked against `hexapod report`'s CSV, against the engine's joint wrenches recomputed apart
-(the saddle-point forward dynamics at single instants), and against seed 000's recursive
-joint-coordinate model with the foot load added by hand, the last two on a scene built here
-from ``legs`` rather than loaded by name."""
+"""scripts/seed001_figures.py: Fig. 7 of Dumitru, Marin and Margine (the liaison force F21 of the
+left front leg) and the same figure for every joint. The curves drawn (read back from the figures'
+axes) are checked against `hexapod report`'s CSV, against the engine's joint wrenches recomputed
+apart (the saddle-point forward dynamics at single instants), and against the recursive
+joint-coordinate model of Vukobratović and Potkonjak with the foot load added by hand, the last two
+on a scene built here from ``legs`` rather than loaded by name."""
 
 from __future__ import annotations
 
@@ -172,9 +172,9 @@ def test_drawn_forces_are_the_engines_wrenches_at_single_instants(drawn, model):
 
 
 def test_drawn_forces_are_the_recursive_models_with_the_foot_load(drawn, model):
-    """Seed 000's recursive model in joint coordinates (its own kinematics from the joint laws):
-    the force on the part beyond a joint is the sum of m (a - g) over it, less the ground's
-    reaction on the foot; turned into the child's joint frame."""
+    """The recursive model of Vukobratović and Potkonjak in joint coordinates (its own kinematics
+    from the joint laws): the force on the part beyond a joint is the sum of m (a - g) over it, less
+    the ground's reaction on the foot; turned into the child's joint frame."""
     chain = ChainModel.from_model(model)
     assert chain.names == JOINTS
     laws = GAITS["tripod"].joint_laws("L1", PERIOD)

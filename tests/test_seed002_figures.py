@@ -1,5 +1,6 @@
-"""Seed 002's Figs. 6-10 (``scripts/seed002_figures.py``): the engine against the closed-loop
-pendulum's Lagrange equation, the vector network's matrices, and the files ``make`` writes.
+"""Figs. 6-10 of Richard, Anderson and Andrews (``scripts/seed002_figures.py``): the engine against
+the closed-loop pendulum's Lagrange equation, the vector network's matrices, and the files ``make``
+writes.
 
 The reference is built here from the paper's numbers (Section 5, in dm), apart from the script
 and from the scene file, so a wrong number in either, or a wrong engine, fails the test.
@@ -25,8 +26,8 @@ def three_seconds(script):
 
 
 def paper_lagrange(t_end: float):
-    """Seed 002, Section 5 (dm, kg, s; y down): m1 = 2 kg from (0, 0) at (4, 4), m2 = 1 kg from
-    (7, 0) at (12, 5), at rest, g = 98.1 dm/s^2."""
+    """Richard, Anderson and Andrews, Section 5 (dm, kg, s; y down): m1 = 2 kg from (0, 0) at
+    (4, 4), m2 = 1 kg from (7, 0) at (12, 5), at rest, g = 98.1 dm/s^2."""
     return ClosedLoopPendulum(m1=2.0, m2=1.0, anchor1=(0.0, 0.0), anchor2=(7.0, 0.0),
                               p1=(4.0, 4.0), p2=(12.0, 5.0), g=98.1).solve(t_end, rtol=1e-13,
                                                                           atol=1e-13)

@@ -70,7 +70,8 @@ def strict_json(text: str):
 
 @pytest.fixture(scope="module")
 def seed002_run(tmp_path_factory):
-    """Seed 002's closed pendulum over 1 s with the joint wrenches, from an empty directory."""
+    """The closed pendulum of Richard, Anderson and Andrews over 1 s with the joint wrenches, from
+    an empty directory."""
     cwd = tmp_path_factory.mktemp("simulate")
     result = run_cli("simulate", str(SEED002), "--t-end", "1", "--rtol", "1e-9", "--atol",
                      "1e-11", "--forces", "--out", "run", cwd=cwd)
@@ -92,8 +93,8 @@ def test_simulate_writes_its_files_and_says_what_it_did(seed002_run):
 
 
 def test_simulate_csv_follows_the_lagrange_equation_and_matches_the_npz(seed002_run):
-    """The documented columns; positions against seed 002's one-degree-of-freedom equation;
-    the binary file holds the same numbers."""
+    """The documented columns; positions against the one-degree-of-freedom equation of Richard,
+    Anderson and Andrews; the binary file holds the same numbers."""
     cwd, _ = seed002_run
     header, table = read_csv(cwd / "run" / "results.csv")
     model = hx.assemble(read_scene(SEED002))

@@ -1,4 +1,4 @@
-"""Euler parameters, rotations and frames (DESIGN section 1)."""
+"""Euler parameters, rotations and frames (the conventions of docs/scene-format.md)."""
 
 from __future__ import annotations
 

@@ -1,5 +1,6 @@
 """Topology: the body-joint graph, Grubler-Kutzbach against the numerical DOF, and the
-vector-network graph of seed 002 with its incidence, cutset and circuit matrices."""
+vector-network graph of Richard, Anderson and Andrews with its incidence, cutset and circuit
+matrices."""
 
 from __future__ import annotations
 

@@ -1,7 +1,8 @@
 """Graph algorithms with no mechanics in them (used by assembly and topology).
 
-Edges are oriented ``(tail, head)``. The incidence matrix has +1 where a vertex is an edge's
-initial vertex (its tail) and -1 where it is its final vertex (head), as in seed 002.
+Edges are oriented ``(tail, head)``. The incidence matrix has +1 where a vertex is an edge's initial
+vertex (its tail) and -1 where it is its final vertex (head), as in Richard, Anderson and Andrews
+(1989/90).
 """
 
 from __future__ import annotations

@@ -3,9 +3,9 @@
     [[M, Phi_v^T], [Phi_v, 0]] [v_dot; lambda] = [Q; gamma]
 
 solved on the equilibrated constraint matrix (:mod:`hexapod.algorithms.linalg`). Accelerations are
-always unique. When rows are redundant their multipliers follow DESIGN's unit-free default policy:
-among all multipliers that satisfy the equations, those minimising ``sum_k |F_k|^2 + |T_k / l|^2``
-over the joint wrenches, with ``l = model.characteristic_length``; the redundant rows are named.
+always unique. When rows are redundant their multipliers follow the unit-free default policy: among
+all multipliers that satisfy the equations, those minimising ``sum_k |F_k|^2 + |T_k / l|^2`` over
+the joint wrenches, with ``l = model.characteristic_length``; the redundant rows are named.
 """
 
 from __future__ import annotations

@@ -1,4 +1,5 @@
-"""Inverse dynamics of prescribed motion (seed 001, eqs. (12)-(16)) over a whole gait.
+"""Inverse dynamics of prescribed motion (Dumitru, Marin and Margine, eqs. (12)-(16)) over a
+whole gait.
 
 When drivers fix every degree of freedom, each sample needs position, velocity and acceleration
 analysis, then the multipliers of ``[[M, Phi_v^T], [Phi_v, 0]] [v_dot; lambda] = [Q; gamma]``,

@@ -1,4 +1,4 @@
-"""Liaison forces: the wrench each joint transmits, from the multipliers (DESIGN section 1).
+"""Liaison forces: the wrench each joint transmits, from the multipliers.
 
 **Report convention**: the wrench exerted **by the parent on the child**, **about the joint
 origin**, **in the child's joint frame**. For joint ``k`` it gathers the joint's own rows, the

@@ -198,7 +198,7 @@ def solve_saddle(mass_inv_sqrt, Phi_v: np.ndarray, Q: np.ndarray, gamma: np.ndar
     wrench_map, wrench_offset :
         When rows are redundant, multipliers are chosen to minimise
         ``|wrench_map @ lam + wrench_offset|^2`` among all that satisfy the equations (the
-        unit-free policy of DESIGN: joint wrenches, moments divided by a stated length).
+        unit-free default policy: joint wrenches, moments divided by a stated length).
         Without a map the redundant rows get zero multipliers.
     split :
         A row split computed earlier for the same ``Phi_v`` (skips the rank decision).

@@ -1,4 +1,5 @@
-"""Topology of a model: the body-joint graph and the vector-network element graph of seed 002.
+"""Topology of a model: the body-joint graph and the vector-network element graph of Richard,
+Anderson and Andrews (1989/90).
 
 **Body-joint graph**: vertices are the ground and the bodies, edges the joints. Its spanning tree
 follows the order of the joints (a joint that closes a loop formed by earlier joints is a chord,
@@ -6,12 +7,12 @@ a *loop-closing* joint); the independent loops are ``e - v + components``. Mobil
 by Grubler-Kutzbach, ``sum of body freedoms - sum of joint rows``, and compared with the
 numerical ``n_v - rank(Phi_v)``: their difference is the number of redundant rows.
 
-**Vector network** (Richard, Anderson and Andrews, seed 002): vertices are the ground, each
-centre of mass and each point of interconnection; edges are the elements. Tree branches are the
-inertial elements (ground to centre of mass), the rigid arms (centre of mass to a point of its
-body) and the specified points (ground to a fixed point); chords are everything else: joints,
-drivers, springs and dampers, force and torque drivers, weights. The cutset matrix ``[U A]``
-comes from row reduction of the incidence matrix, the circuit matrix ``[B U]`` from tree paths,
+**Vector network** (Richard, Anderson and Andrews, 1989/90): vertices are the ground, each centre of
+mass and each point of interconnection; edges are the elements. Tree branches are the inertial
+elements (ground to centre of mass), the rigid arms (centre of mass to a point of its body) and the
+specified points (ground to a fixed point); chords are everything else: joints, drivers, springs and
+dampers, force and torque drivers, weights. The cutset matrix ``[U A]`` comes from row reduction of
+the incidence matrix, the circuit matrix ``[B U]`` from tree paths,
 independently; ``A = -B^T`` checks both.
 """
 
@@ -229,5 +230,5 @@ class _NetworkBuilder:
 
 
 def vector_network(model: Model) -> VectorNetwork:
-    """The vector-network graph of the model (seed 002)."""
+    """The vector-network graph of the model (Richard, Anderson and Andrews)."""
     return _NetworkBuilder(model).build()

@@ -1,10 +1,9 @@
 """The cases with independent references and the studies on them (layer 6): the extreme-case
 check and the work-precision study.
 
-The extreme-case suite (issue 8): every builder returns a :class:`Case` (a scene, how long to
-run it, what is extreme about it, and a reference independent of the engine;
-:mod:`hexapod.benchmarks.reference` says how the references are built), and :func:`suite`
-lists them all.
+The extreme-case suite: every builder returns a :class:`Case` (a scene, how long to run it, what is
+extreme about it, and a reference independent of the engine; :mod:`hexapod.benchmarks.reference`
+says how the references are built), and :func:`suite` lists them all.
 
 ====================================  ==========  =============================================
 case                                  category    reference
@@ -26,14 +25,14 @@ case                                  category    reference
 :func:`large_step_pendulum`           large-step  Jacobi elliptic functions
 ====================================  ==========  =============================================
 
-The modules: :mod:`~hexapod.benchmarks.reference` (the case and the minimal-coordinate
-machinery) and :mod:`~hexapod.benchmarks.jets` (Taylor jets) below the cases, one module per
-category (:mod:`~hexapod.benchmarks.stiff`, :mod:`~hexapod.benchmarks.singular`,
+The modules: :mod:`~hexapod.benchmarks.reference` (the case and the minimal-coordinate machinery)
+and :mod:`~hexapod.benchmarks.jets` (Taylor jets) below the cases, one module per category
+(:mod:`~hexapod.benchmarks.stiff`, :mod:`~hexapod.benchmarks.singular`,
 :mod:`~hexapod.benchmarks.redundant`, :mod:`~hexapod.benchmarks.mass_ratios`,
-:mod:`~hexapod.benchmarks.pendulums`, which also holds the exact pendulum
-:func:`pendulum_exact` and seed 002's :class:`ClosedLoopPendulum` used by the studies), and
-:mod:`~hexapod.benchmarks.cases` for :func:`suite`. The case modules import nothing of the
-engine but the scene layer. The studies are the extreme-case check
+:mod:`~hexapod.benchmarks.pendulums`, which also holds the exact pendulum :func:`pendulum_exact`
+and the closed-loop pendulum of Richard, Anderson and Andrews, :class:`ClosedLoopPendulum`, used
+by the studies), and :mod:`~hexapod.benchmarks.cases` for :func:`suite`. The case modules import
+nothing of the engine but the scene layer. The studies are the extreme-case check
 (:mod:`~hexapod.benchmarks.check`, with :mod:`~hexapod.benchmarks.stable_steps`) and the
 work-precision study (:mod:`~hexapod.benchmarks.work_precision`).
 """

@@ -14,11 +14,10 @@ from hexapod.benchmarks import jets
 from hexapod.benchmarks.reference import Case, G, MinimalModel, Trajectory, minimal_reference
 from hexapod.scene import PlanarBody, Revolute, Scene, SpatialBody
 
-#: The front leg's segments at 20:1 (lengths m, radii m, masses kg), from the project's leg
-#: note (insect-legs.md, section 4.2, as in legs/cockroach.py: coxa 5 mm, 1 mm, 11.98 mg;
-#: trochanter + femur 7.5 mm, 0.55 mm, 11.45 mg; tibia 5 mm, 0.35 mm, 2.66 mg; lengths x 20,
-#: masses x 8000). Rest pose: coxa 40 degrees below the horizontal, femur horizontal, tibia 60
-#: degrees below, in a vertical plane along +y.
+#: The front leg's segments at 20:1 (lengths m, radii m, masses kg), from the cockroach data of
+#: legs/cockroach.py (natural scale: coxa 5 mm, 1 mm, 11.98 mg; trochanter + femur 7.5 mm, 0.55 mm,
+#: 11.45 mg; tibia 5 mm, 0.35 mm, 2.66 mg; lengths x 20, masses x 8000). Rest pose: coxa 40 degrees
+#: below the horizontal, femur horizontal, tibia 60 degrees below, in a vertical plane along +y.
 LEG_SEGMENTS = {"coxa": (0.10, 0.020, 0.09584, 40.0), "femur": (0.15, 0.011, 0.09160, 0.0),
                 "tibia": (0.10, 0.007, 0.02128, 60.0)}
 
@@ -103,7 +102,7 @@ def mass_ratio(ratio: float = 1e-6, *, t_end: float = 0.5) -> Case:
                 f"two links of {ratio:.0e} times the coxa's mass and inertia in a 3-axis "
                 "joint: a mass matrix spanning that ratio", "mass-ratio", observed, reference,
                 accelerations, length=0.35, dof=5, counted_dof=5,
-                source="cockroach front leg at 20:1 (insect-legs.md section 4.2, as "
+                source="cockroach front leg at 20:1 (the segment data of "
                        "legs/cockroach.py); layout A's zero-length links")
 
 

@@ -4,10 +4,10 @@
   rest, in Jacobi elliptic functions (exact to round-off at any time);
 * :func:`long_pendulum` (category "long") and :func:`large_step_pendulum` ("large-step"): the
   extreme-case suite's pendulums, judged against that solution;
-* :class:`ClosedLoopPendulum`: seed 002's closed-loop pendulum (two particles on two rods
-  joined by a rigid coupler: a four-bar with one degree of freedom) by its
-  one-degree-of-freedom Lagrange equation in the first rod's angle, integrated by SciPy's
-  DOP853 to 1e-12, as the paper checks RESTRI (its Figs. 7-10).
+* :class:`ClosedLoopPendulum`: the closed-loop pendulum of Richard, Anderson and Andrews
+  (1989/90; two particles on two rods joined by a rigid coupler: a four-bar with one degree of
+  freedom) by its one-degree-of-freedom Lagrange equation in the first rod's angle, integrated by
+  SciPy's DOP853 to 1e-12, as the paper checks RESTRI (its Figs. 7-10).
 """
 
 from __future__ import annotations
@@ -103,12 +103,13 @@ def large_step_pendulum(psi0: float = 3.0, periods: int = 10) -> Case:
                 reference, {"rod": arm * psi_dd * tangent}, length=arm, dof=1, counted_dof=1)
 
 
-# ------------------------------------------------------------------ seed 002's closed loop
+# ---------------------------------------- the closed loop of Richard, Anderson and Andrews
 
 
 @dataclass(frozen=True)
 class ClosedLoopPendulum:
-    """Seed 002's Section 5 pendulum in minimal coordinates (SI units).
+    """The pendulum of Section 5 of Richard, Anderson and Andrews in minimal coordinates (SI
+    units).
 
     Particle 1 (``m1``) hangs from ``anchor1`` by a rod of length ``|p1 - anchor1|``, particle 2
     from ``anchor2``; a coupler keeps ``|p2 - p1|``. Gravity ``g`` along +y (the paper's y

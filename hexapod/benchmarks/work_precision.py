@@ -6,11 +6,13 @@ problem        model                                            reference
 =============  ===============================================  ============================
 ``andrews``    Andrews' squeezing mechanism: 7 planar bodies,   the published y(0.03) of the
                10 revolute joints, a stiff spring, 0.03 s       Test Set for IVP Solvers
-``seed002``    seed 002's closed-loop pendulum (particles)      its 1-DOF Lagrange equation
+``seed002``    the closed-loop pendulum of Richard, Anderson    its 1-DOF Lagrange equation
+               and Andrews (particles)
 ``pendulum``   a spatial pendulum released horizontal, 100      the exact solution (Jacobi
                periods                                          elliptic functions)
 ``front-leg``  the front leg falling, its six joints free       the recursive joint-
-                                                                coordinate model (seed 000)
+                                                                coordinate model
+                                                                (Vukobratović and Potkonjak)
 =============  ===============================================  ============================
 
 The error is relative, in positions. For Andrews' mechanism it is the Test Set's measure at the
@@ -127,7 +129,8 @@ def andrews_problem(data_dir: Path) -> Problem:
 
 
 def seed002_problem(data_dir: Path, t_end: float = 15.0) -> Problem:
-    """Seed 002's closed-loop pendulum against its Lagrange equation (metres)."""
+    """The closed-loop pendulum of Richard, Anderson and Andrews against its Lagrange equation
+    (metres)."""
     model = assemble(read_scene(data_dir / "scenes" / "closed_pendulum_seed002.toml"))
     motion = ClosedLoopPendulum(p1=(0.4, 0.4), p2=(1.2, 0.5), anchor2=(0.7, 0.0)).solve(
         t_end, rtol=1e-13, atol=1e-13)
@@ -139,8 +142,8 @@ def seed002_problem(data_dir: Path, t_end: float = 15.0) -> Problem:
         worst = max(np.abs(result.q[:, m1] - p1).max(), np.abs(result.q[:, m2] - p2).max())
         return float(worst / size) if result.success else np.inf
 
-    return Problem("seed002", f"seed 002 closed-loop pendulum ({t_end:g} s)", model, t_end,
-                   error, floor=1e-12, scale=1.0, steps=500)
+    title = f"closed-loop pendulum of Richard, Anderson and Andrews ({t_end:g} s)"
+    return Problem("seed002", title, model, t_end, error, floor=1e-12, scale=1.0, steps=500)
 
 
 def pendulum_problem(data_dir: Path, periods: int = 100) -> Problem:

@@ -1,4 +1,5 @@
-"""Recursive joint-coordinate dynamics of open chains and trees (seed 000, Part I).
+"""Recursive joint-coordinate dynamics of open chains and trees (Vukobratović and Potkonjak (1979),
+Part I).
 
 Vukobratovic and Potkonjak form ``W(q) q_dd = P + V(q, q_d)`` by adding one member at a time
 ("circling" the chain) with recurrent relations for the angular accelerations and the
@@ -15,10 +16,11 @@ axis ``e_k`` through ``A_k``,
 
 and for a prismatic joint ``e_k . sum_{j beyond k} m_j (w_j - g) = P_k``. ``W`` collects the
 coefficients of ``q_dd`` and ``V`` minus the free terms, so ``V`` carries minus the Coriolis,
-centrifugal and gravity terms (DESIGN). The same sums without the projection on ``e_k`` are the
-force and moment the parent transmits to the part beyond joint ``k``: the joint's wrench.
+centrifugal and gravity terms (they stand on the right-hand side). The same sums without the
+projection on ``e_k`` are the force and moment the parent transmits to the part beyond joint ``k``:
+the joint's wrench.
 
-The same ``W`` and ``V`` can be formed by the Lagrange and Gibbs-Appell methods of the seed's
+The same ``W`` and ``V`` can be formed by the Lagrange and Gibbs-Appell methods of the paper's
 Part II (reconstructed from the literature: :mod:`hexapod.minimal.forming`): pass
 ``method="lagrange"`` or ``method="gibbs-appell"`` to :meth:`ChainModel.matrices`,
 :meth:`ChainModel.inverse` and :meth:`ChainModel.forward`.
@@ -140,7 +142,8 @@ class ChainModel:
 
     def kinematics(self, q: np.ndarray, q_d: np.ndarray) -> ChainState:
         """Poses, angular velocities and the acceleration coefficients of every link: the
-        recurrent relations (11)-(14) of seed 000, written as eqs. (23)-(30)."""
+        recurrent relations (11)-(14) of Vukobratović and Potkonjak (1979), written as eqs.
+        (23)-(30)."""
         n, dof = len(self.links), self.dof
         s = ChainState(np.zeros((n, 3, 3)), np.zeros((n, 3)), np.zeros((n, 3)),
                        np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3, dof)),

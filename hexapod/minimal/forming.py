@@ -1,10 +1,10 @@
-"""Three methods of forming ``W(q) q_dd = P + V(q, q_d)`` for open chains and trees (seed 000).
+"""Three methods of forming ``W(q) q_dd = P + V(q, q_d)`` for open chains and trees.
 
-Seed 000 (Vukobratovic and Potkonjak, Mech. Mach. Theory 14 (1979) 179-188) forms the model of
-an open chain by three methods and compares their efficiency. **Our copy holds Part I only**
-(the method of basic theorems, implemented in :mod:`hexapod.minimal.chain`); the Lagrange and
-Gibbs-Appell algorithms of Part II and its operation counts are missing. This module is a
-**reconstruction from the literature**, not a transcription of Part II:
+Vukobratović and Potkonjak (Mech. Mach. Theory 14 (1979) 179-188) form the model of an open chain by
+three methods and compare their efficiency. **Our copy holds Part I only** (the method of basic
+theorems, implemented in :mod:`hexapod.minimal.chain`); the Lagrange and Gibbs-Appell algorithms of
+Part II and its operation counts are missing. This module is a **reconstruction from the
+literature**, not a transcription of Part II:
 
 * M. Vukobratovic, V. Potkonjak, "Scientific Fundamentals of Robotics 1: Dynamics of
   Manipulation Robots", Springer 1982, ch. 2 (the computer-oriented methods: general theorems,
@@ -326,7 +326,7 @@ class _State:
 
 def _kinematics(lay: Layout, q, q_d=None) -> _State:
     """Poses (and, with ``q_d``, angular velocities and free terms of the accelerations) of
-    every link by the recurrent relations of seed 000, Part I."""
+    every link by the recurrent relations of Vukobratović and Potkonjak (1979), Part I."""
     n = len(lay.links)
     s = _State([None] * n, [None] * n, [None] * n, [None] * n)
     if q_d is not None:

@@ -175,7 +175,7 @@ def prismatic_displacement(g: JointGeometry) -> ca.SX:
 
 def wrapped_angle(g: JointGeometry, f) -> ca.SX:
     """``atan2(sin(theta - f), cos(theta - f))``: the joint angle minus ``f``, brought into
-    (-pi, pi]. Derivative +1 in theta, correct past +-pi (DESIGN section 1); the angle is about
+    (-pi, pi]. Derivative +1 in theta, correct past +-pi; the angle is about
     the joint axis (revolute and cylindrical joints)."""
     if g.dimension == 2:
         delta = g.relative_angle() - f

@@ -364,7 +364,7 @@ class Model:
         """``gamma(q, v, w, wd, wdd)``: right-hand side of ``Phi_v v_dot = gamma``.
 
         ``gamma = -[d(Phi_v v)/dq] B v - 2 d(Phi_v v)/dt - Phi_tt``, with ``B(q)`` inside the
-        derivative (DESIGN section 1).
+        derivative (``q_dot = B(q) v``: Euler parameters make ``n_q != n_v``).
         """
         s = self._sym
         Pv = ca.mtimes(self._Phi_v_expr, s.v)

@@ -195,7 +195,8 @@ def format_network(net: dict) -> list[str]:
     edges = net["edges"]
     labels = [f"e{k + 1}" for k in range(len(edges))]
     branches = sum(e["tree"] for e in edges)
-    out = [f"vector network (seed 002): {len(net['vertices'])} vertices, {len(edges)} edges, "
+    out = [f"vector network (Richard, Anderson and Andrews): {len(net['vertices'])} vertices, "
+           f"{len(edges)} edges, "
            f"{len(net['cutset'])} cutsets, {len(net['circuit'])} circuits; cutset and circuit "
            f"matrices orthogonal: {'yes' if net['orthogonal'] else 'NO'}", "edges"]
     out += _table(["", "name", "kind", "tail -> head", ""],

@@ -1,8 +1,9 @@
 """Figures of the liaison force report, as PNG bytes (matplotlib, imported when first drawn).
 
-The style is that of seed 001's Fig. 7: the components of a joint's force and their magnitude
-against time, one panel per joint. Figures are drawn on :class:`matplotlib.figure.Figure`
-directly (no pyplot, no display, no global state), so they render on machines without a screen.
+The style is that of Fig. 7 of Dumitru, Marin and Margine: the components of a joint's force and
+their magnitude against time, one panel per joint. Figures are drawn on
+:class:`matplotlib.figure.Figure` directly (no pyplot, no display, no global state), so they render
+on machines without a screen.
 """
 
 from __future__ import annotations

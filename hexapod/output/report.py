@@ -79,8 +79,9 @@ def agreement(columns: list[str], table: np.ndarray, reference_columns: list[str
 # ------------------------------------------------------------------ the liaison force report
 
 def wrench_label(model: Model, joint: JointInfo) -> str:
-    """Seed 001's name of a joint's wrench: ``F21`` is exerted by element 1 on element 2, with
-    the bodies numbered from 1 in model order and the ground 0 (``F12,11`` past 9)."""
+    """The name Dumitru, Marin and Margine give a joint's wrench: ``F21`` is exerted by element 1 on
+    element 2, with the bodies numbered from 1 in model order and the ground 0 (``F12,11`` past
+    9)."""
     child = joint.child + 1
     parent = 0 if joint.parent == GROUND_INDEX else joint.parent + 1
     return f"F{child}{parent}" if max(child, parent) < 10 else f"F{child},{parent}"

@@ -2,9 +2,9 @@
 
 A body has a **reference frame** (its pose in the world at the initial guess is ``position`` and
 ``rotation``), a centre of mass ``com`` given in that frame, and markers (named frames fixed to the
-body, given in that frame). The engine works with the centre of mass and the body's axes
-(DESIGN: absolute coordinates), so the reference frame is only a convenience for describing it,
-as a URDF link frame is.
+body, given in that frame). The engine works with the centre of mass and the body's axes (absolute
+coordinates), so the reference frame is only a convenience for describing it, as a URDF link frame
+is.
 """
 
 from __future__ import annotations

@@ -2,8 +2,8 @@
 
 Each joint connects a **parent** (its first body) and a **child** (its second); either may be the
 ground. It owns a **joint frame** fixed to the child, with its origin at the joint point; every
-liaison force is reported in that frame (DESIGN section 1). The matching frame on the parent
-coincides with it when the joint coordinate is zero.
+liaison force is reported in that frame (docs/scene-format.md, "Conventions"). The matching frame on
+the parent coincides with it when the joint coordinate is zero.
 
 The frames may be given in three ways:
 
@@ -153,8 +153,8 @@ class Fixed(Joint):
 class Distance(Joint):
     """A rigid link between the parent frame's origin and the child frame's origin (1 row).
 
-    ``length`` defaults to the distance at the initial pose; the rods of seed 002 are distance
-    joints between particles.
+    ``length`` defaults to the distance at the initial pose; the rods of Richard, Anderson and
+    Andrews (1989/90) are distance joints between particles.
     """
 
     length: float | None = None

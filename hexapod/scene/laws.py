@@ -1,8 +1,9 @@
 """Scalar functions of time for drivers and loads: value, first and second derivative.
 
-The model's CasADi functions never see ``t``: they take the values and derivatives of every law
-as inputs (see :mod:`hexapod.model.assemble`), so a law can be anything that returns ``f, f', f''``
-for an array of times. Drivers need laws that are at least C2 (DESIGN: prescribed motion).
+The model's CasADi functions never see ``t``: they take the values and derivatives of every law as
+inputs (see :mod:`hexapod.model.assemble`), so a law can be anything that returns ``f, f', f''`` for
+an array of times. Drivers need laws that are at least C2 (a prescribed motion enters through its
+second derivative).
 """
 
 from __future__ import annotations

@@ -38,7 +38,7 @@ from hexapod.spatial import Placement
 LENGTH_UNITS = {"m": 1.0, "dm": 0.1, "cm": 0.01, "mm": 1e-3, "um": 1e-6, "in": 0.0254,
                 "ft": 0.3048}
 
-STANDARD_GRAVITY = 9.81  # m/s^2, DESIGN's default
+STANDARD_GRAVITY = 9.81  # m/s^2, the default gravity
 
 _NAME = re.compile(r"^[A-Za-z0-9_.\-]+(/[A-Za-z0-9_.\-]+)*$")
 

@@ -144,7 +144,7 @@ class Integrator:
 
     @property
     def lam(self) -> np.ndarray:
-        """The multipliers at the current state (by the redundancy policy of DESIGN); a method
+        """The multipliers at the current state (by the least-wrench redundancy policy); a method
         that advances with the compiled right-hand side solves for them only when asked."""
         if self._lam is None:
             solution = self._compiled.solve(self.t, self.q, self.v) if (

@@ -141,7 +141,7 @@ class LieGroupGeneralizedAlpha(Integrator):
         return solution[:n], dmu
 
     def _policy(self, q, v, w, Phi_v, lam):
-        """The multipliers of redundant rows set by the redundancy policy (DESIGN section 1)."""
+        """The multipliers of redundant rows set by the redundancy policy (the least wrench)."""
         model = self.model
         W, d = equilibrate(Phi_v, model.mass_inv_sqrt)
         split = split_rows(W, d, model.row_priority, model.rank_tolerance,
