@@ -109,7 +109,8 @@ def test_predicted_stable_step_within_a_factor_two_of_observed(method):
     the fixed step, or the step an adaptive controller settles on."""
     stiffness = 1e7
     model, q, v = state(block_on_spring(stiffness, 0.4 * np.sqrt(stiffness)))
-    predicted = diagnose(model, model.create_data(), 0.0, q, v, methods=[method]).stable_steps[method]
+    diagnosis = diagnose(model, model.create_data(), 0.0, q, v, methods=[method])
+    predicted = diagnosis.stable_steps[method]
     observed, _ = observed_stable_step(model, method, predicted, steps=200, bisections=8)
     assert 0.5 < observed / predicted < 2.0
 

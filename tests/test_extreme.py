@@ -105,8 +105,8 @@ def test_report_has_table_recommendation_and_figures(tmp_path):
     q, v = hx.consistent_state(case.model, data)
     from hexapod.simulation.diagnostics import diagnose
 
-    files = report_files([case], runs, {case.name: diagnose(case.model, case.model.create_data(), 0.0, q, v)}, [],
-                         "hexapod check")
+    diagnosis = diagnose(case.model, case.model.create_data(), 0.0, q, v)
+    files = report_files([case], runs, {case.name: diagnosis}, [], "hexapod check")
     text = files["check.md"].decode()
     assert "## What to use" in text and "stretched-leg" in text
     assert text.count("| stretched-leg |") >= 3

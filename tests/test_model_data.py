@@ -89,3 +89,14 @@ def test_no_algorithm_writes_to_the_model():
     assert found == []
     # and the check sees such a write
     assert _writes_to_model("model.derived['tree'] = 1\nmodel.cache = {}\n") == [1, 2]
+
+
+def test_a_fixed_step_method_says_it_ignores_tolerances(pendulum):
+    with pytest.warns(UserWarning, match="rk4-baumgarte is a fixed-step method: it ignores"):
+        hx.simulate(pendulum, 0.01, method="rk4-baumgarte", rtol=1e-9)
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        hx.simulate(pendulum, 0.01, method="rk4-baumgarte", step=1e-3)  # nothing to say
+        hx.simulate(pendulum, 0.01, rtol=1e-9)  # an adaptive method uses it

@@ -3,8 +3,11 @@ CasADi nor SciPy) agrees with what the classes and the studies declare."""
 
 from __future__ import annotations
 
+import inspect
+
 from hexapod.benchmarks import catalogue, work_precision
 from hexapod.simulation import methods, registry
+from hexapod.simulation.integrators import Integrator
 from hexapod.simulation.registry import INTEGRATORS
 
 
@@ -30,12 +33,16 @@ def test_defaults_are_written_once():
         assert getattr(registry, name) is getattr(methods, name)
     assert methods.DEFAULT_METHOD in INTEGRATORS
     assert work_precision.PROBLEMS is catalogue.PROBLEMS
+    for parameter in ("rtol", "atol"):
+        default = inspect.signature(Integrator.__init__).parameters[parameter].default
+        assert default is getattr(methods, f"DEFAULT_{parameter.upper()}")
 
 
 def test_the_command_line_defaults_are_the_constants():
     from hexapod.cli.main import build_parser
 
     args = build_parser().parse_args(["simulate"])
-    assert (args.method, args.rtol, args.atol) == (methods.DEFAULT_METHOD, methods.DEFAULT_RTOL,
-                                                   methods.DEFAULT_ATOL)
+    # tolerances left unset, so that simulate() applies the defaults (and a fixed-step method
+    # warns only about tolerances the user gave)
+    assert (args.method, args.rtol, args.atol) == (methods.DEFAULT_METHOD, None, None)
     assert build_parser().parse_args(["bench"]).problems == list(catalogue.PROBLEMS)

@@ -53,7 +53,7 @@ ANDREWS_BODIES = ("crank", "rod2", "triangle", "rod4", "link5", "rod6", "link7")
 
 
 @dataclass
-class Problem:
+class PrecisionProblem:
     """One problem of the study.
 
     ``error(result)`` is the relative position error of a run; ``floor`` the precision of the
@@ -111,7 +111,7 @@ def andrews_angles(model: Model, q: np.ndarray) -> np.ndarray:
                             phi[:, 4], phi[:, 5] - phi[:, 6], phi[:, 6]])
 
 
-def andrews_problem(data_dir: Path) -> Problem:
+def andrews_problem(data_dir: Path) -> PrecisionProblem:
     """Andrews' squeezing mechanism over [0, 0.03] s against the published y(0.03)."""
     model = assemble(read_scene(data_dir / "scenes" / "andrews.toml"))
     benchmark = _read(data_dir / "benchmarks" / "andrews.json")
@@ -123,12 +123,12 @@ def andrews_problem(data_dir: Path) -> Problem:
         return float(np.max(np.abs(andrews_angles(model, result.q[-1])[0] - reference)
                             / np.abs(reference)))
 
-    return Problem("andrews", "Andrews' squeezing mechanism (7 bodies, 0.03 s)", model, 0.03,
-                   error, floor=3e-10, scale=1.0, steps=200,
-                   notes=["published y(0.03), correct to about 1e-10 in positions"])
+    return PrecisionProblem("andrews", "Andrews' squeezing mechanism (7 bodies, 0.03 s)", model,
+                            0.03, error, floor=3e-10, scale=1.0, steps=200,
+                            notes=["published y(0.03), correct to about 1e-10 in positions"])
 
 
-def seed002_problem(data_dir: Path, t_end: float = 15.0) -> Problem:
+def seed002_problem(data_dir: Path, t_end: float = 15.0) -> PrecisionProblem:
     """The closed-loop pendulum of Richard, Anderson and Andrews against its Lagrange equation
     (metres)."""
     model = assemble(read_scene(data_dir / "scenes" / "closed_pendulum_seed002.toml"))
@@ -143,10 +143,11 @@ def seed002_problem(data_dir: Path, t_end: float = 15.0) -> Problem:
         return float(worst / size) if result.success else np.inf
 
     title = f"closed-loop pendulum of Richard, Anderson and Andrews ({t_end:g} s)"
-    return Problem("seed002", title, model, t_end, error, floor=1e-12, scale=1.0, steps=500)
+    return PrecisionProblem("seed002", title, model, t_end, error, floor=1e-12, scale=1.0,
+                            steps=500)
 
 
-def pendulum_problem(data_dir: Path, periods: int = 100) -> Problem:
+def pendulum_problem(data_dir: Path, periods: int = 100) -> PrecisionProblem:
     """The pendulum of ``data/scenes/pendulum.toml`` released horizontal, over ``periods``
     periods, against the exact solution."""
     model = assemble(read_scene(data_dir / "scenes" / "pendulum.toml"))
@@ -160,8 +161,9 @@ def pendulum_problem(data_dir: Path, periods: int = 100) -> Problem:
         worst = np.linalg.norm(result.q[:, :3] - exact, axis=1).max()
         return float(worst / arm) if result.success else np.inf
 
-    return Problem("pendulum", f"pendulum, {periods} periods ({periods * period:.0f} s)", model,
-                   periods * period, error, floor=1e-12, scale=1.0, steps=20 * periods)
+    title = f"pendulum, {periods} periods ({periods * period:.0f} s)"
+    return PrecisionProblem("pendulum", title, model, periods * period, error, floor=1e-12,
+                            scale=1.0, steps=20 * periods)
 
 
 def released(scene: Scene) -> Scene:
@@ -173,7 +175,7 @@ def released(scene: Scene) -> Scene:
     return free
 
 
-def front_leg_problem(leg: Scene, t_end: float = 0.5) -> Problem:
+def front_leg_problem(leg: Scene, t_end: float = 0.5) -> PrecisionProblem:
     """The front leg (``leg``: the built-in scene) released from its initial pose, its six
     joints free, against the recursive joint-coordinate model integrated by SciPy's DOP853
     at 1e-12."""
@@ -207,12 +209,12 @@ def front_leg_problem(leg: Scene, t_end: float = 0.5) -> Problem:
         worst = np.abs(result.q[:, columns] - reference(result.t)).max()
         return float(worst / size) if result.success else np.inf
 
-    return Problem("front-leg", f"front leg falling, six free joints ({t_end:g} s)", model,
+    return PrecisionProblem("front-leg", f"front leg falling, six free joints ({t_end:g} s)", model,
                    t_end, error, floor=1e-11, scale=size, steps=100)
 
 
 def build_problems(names=PROBLEMS, data_dir: str | Path = "data", quick: bool = False,
-                   leg: Scene | None = None) -> list[Problem]:
+                   leg: Scene | None = None) -> list[PrecisionProblem]:
     """The problems by name; ``quick``: shorter horizons (tests and a first look). ``data_dir``
     holds ``scenes/`` and ``benchmarks/`` (the project's ``data``); ``leg`` is the scene the
     front-leg problem releases (the built-in ``front-leg``)."""
@@ -276,7 +278,7 @@ def andrews_check(data_dir: str | Path = "data", rtol: float = 1e-12) -> tuple[s
 
 # ------------------------------------------------------------------ the ladders
 
-def ladder(cls, problem: Problem, quick: bool = False) -> list[dict]:
+def ladder(cls, problem: PrecisionProblem, quick: bool = False) -> list[dict]:
     """Settings from coarse to fine: tolerances (adaptive), steps (fixed)."""
     if cls.adaptive:
         exponents = range(3, 11) if quick else range(3, 14)
@@ -291,7 +293,7 @@ def _label(setting: dict) -> str:
     return f"rtol={setting['rtol']:.0e}"
 
 
-def run_method(problem: Problem, method: str, *, quick: bool = False, budget: float = 30.0,
+def run_method(problem: PrecisionProblem, method: str, *, quick: bool = False, budget: float = 30.0,
                progress: Callable[[str], None] | None = None) -> list[Run]:
     """One method over its ladder on one problem."""
     cls = INTEGRATORS[method]
@@ -315,7 +317,7 @@ def run_method(problem: Problem, method: str, *, quick: bool = False, budget: fl
     return runs
 
 
-def run_study(problems: list[Problem], methods=None, *, quick: bool = False,
+def run_study(problems: list[PrecisionProblem], methods=None, *, quick: bool = False,
               budget: float = 30.0, progress: Callable[[str], None] | None = None) -> list[Run]:
     """Every method (default: the registry) over its ladder on every problem."""
     runs: list[Run] = []
@@ -369,7 +371,7 @@ def table(runs: list[Run], targets=(1e-6, 1e-9)) -> str:
     return "\n".join(lines) + "\n"
 
 
-def work_precision_figure(runs: list[Run], problems: list[Problem], targets=(1e-6, 1e-9)):
+def work_precision_figure(runs: list[Run], problems: list[PrecisionProblem], targets=(1e-6, 1e-9)):
     """Error against CPU time, log-log, one panel per problem, one line per method."""
     from matplotlib.figure import Figure
 
@@ -402,7 +404,7 @@ def work_precision_figure(runs: list[Run], problems: list[Problem], targets=(1e-
     return figure
 
 
-def drift_figure(problem: Problem, settings: dict[str, dict]):
+def drift_figure(problem: PrecisionProblem, settings: dict[str, dict]):
     """Constraint drift and energy error against time, one run per method (``settings``: method
     -> keyword arguments of :func:`simulate`)."""
     from matplotlib.figure import Figure

@@ -38,10 +38,10 @@ def add_arguments(parser) -> None:
                         "or 1 s)")
     parser.add_argument("--start", type=float, default=0.0, metavar="S",
                         help="start time in s (default 0)")
-    parser.add_argument("--rtol", type=_positive(float), default=DEFAULT_RTOL,
+    parser.add_argument("--rtol", type=_positive(float),
                         help="relative tolerance of adaptive methods (default "
                         f"{_short(DEFAULT_RTOL)})")
-    parser.add_argument("--atol", type=_positive(float), default=DEFAULT_ATOL,
+    parser.add_argument("--atol", type=_positive(float),
                         help="absolute tolerance of adaptive methods, SI units (default "
                         f"{_short(DEFAULT_ATOL)})")
     parser.add_argument("--step", type=_positive(float), metavar="S",

@@ -167,7 +167,8 @@ def driver_efforts_over_time(model: Model, result: InverseResult) -> dict[str, n
         zero_lam, zero_rows = np.zeros(model.n_c), np.zeros((model.n_c, model.n_v))
         for i in range(result.times.size):
             q_across = model.call("Q_across", q=result.q[i], v=result.v[i], w=w[i])
-            passive = wrenches_from_multipliers(model, result.q[i], zero_lam, zero_rows, q_across).effort
+            passive = wrenches_from_multipliers(model, result.q[i], zero_lam, zero_rows,
+                                                q_across).effort
             for j in across:
                 efforts[model.joints[j].name][i] -= passive[j]
     return efforts

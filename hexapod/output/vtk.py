@@ -20,8 +20,9 @@ simulation, the saved states. With the scene's model, :func:`vtk_files` turns it
   without an axis).
 
 A simulation's wrenches are computed here from the saved multipliers by
-:func:`hexapod.algorithms.liaison.wrenches_from_multipliers`; a report's are read from its CSV. A report does
-not save positions: its scene prescribes the motion, so they are assembled again at the CSV's times.
+:func:`hexapod.algorithms.liaison.wrenches_from_multipliers`; a report's are read from its CSV. A
+report does not save positions: its scene prescribes the motion, so they are assembled again at
+the CSV's times.
 """
 
 from __future__ import annotations

@@ -11,6 +11,7 @@ velocities and, when the scene conserves energy, the energy drift, and returns a
 from __future__ import annotations
 
 import time
+import warnings
 from collections.abc import Callable
 
 import numpy as np
@@ -19,13 +20,14 @@ from hexapod.algorithms.liaison import wrenches_from_multipliers
 from hexapod.errors import HexapodError
 from hexapod.model.model import Model
 from hexapod.simulation.integrators import Integrator
+from hexapod.simulation.methods import DEFAULT_ATOL, DEFAULT_RTOL
 from hexapod.simulation.registry import DEFAULT_METHOD, get_integrator
 from hexapod.simulation.results import SimulationResult
 
 
 def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEFAULT_METHOD,
              t0: float = 0.0, q0: np.ndarray | None = None, v0: np.ndarray | None = None,
-             rtol: float = 1e-6, atol: float = 1e-8, step: float | None = None,
+             rtol: float | None = None, atol: float | None = None, step: float | None = None,
              every: int = 1, forces: bool | None = None, max_steps: int = 10_000_000,
              cpu_budget: float | None = None,
              progress: Callable[[float, float], None] | None = None,
@@ -37,8 +39,10 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
     method :
         A registered integrator name (:data:`hexapod.simulation.integrators.INTEGRATORS`) or class.
     rtol, atol, step :
-        Tolerances of adaptive methods; the step of fixed-step methods (the first step of
-        adaptive ones). See :class:`~hexapod.simulation.integrators.Integrator`.
+        Tolerances of adaptive methods (default :data:`~hexapod.simulation.methods.DEFAULT_RTOL`
+        and ``DEFAULT_ATOL``; a fixed-step method given them warns that it ignores them); the
+        step of fixed-step methods (the first step of adaptive ones). See
+        :class:`~hexapod.simulation.integrators.Integrator`.
     every :
         Save every ``every``-th accepted step (every ``every``-th state a method returns, for
         a method that returns states at output times and counts its own steps).
@@ -61,6 +65,11 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
     if every < 1:
         raise ValueError(f"every must be at least 1, got {every}")
     cls = get_integrator(method)
+    if not cls.adaptive and (rtol is not None or atol is not None):
+        warnings.warn(f"{cls.name} is a fixed-step method: it ignores rtol and atol (set its "
+                      "step with step=)", UserWarning, stacklevel=2)
+    rtol = DEFAULT_RTOL if rtol is None else rtol
+    atol = DEFAULT_ATOL if atol is None else atol
     options = dict(options or {})
     integrator = cls(model, t0, t_end, q0, v0, rtol=rtol, atol=atol, step=step, **options)
     saved = {"t": [], "q": [], "v": [], "v_dot": [], "lam": []}

@@ -28,6 +28,7 @@ from hexapod.algorithms.kinematics import assemble_positions, rank_split, solve_
 from hexapod.errors import HexapodError, IntegrationError
 from hexapod.model.model import Model
 from hexapod.simulation.kernels import compiled_projection, compiled_rates
+from hexapod.simulation.methods import DEFAULT_ATOL, DEFAULT_RTOL
 
 #: smallest singular value of the equilibrated ``Phi_v`` (rows of unit length, so 1 is
 #: well-conditioned) below which a state counts as near a singular configuration. There the
@@ -116,7 +117,8 @@ class Integrator:
         return None
 
     def __init__(self, model: Model, t0: float, t_bound: float, q0: np.ndarray | None = None,
-                 v0: np.ndarray | None = None, *, rtol: float = 1e-6, atol: float = 1e-8,
+                 v0: np.ndarray | None = None, *, rtol: float = DEFAULT_RTOL,
+                 atol: float = DEFAULT_ATOL,
                  step: float | None = None, max_step: float = np.inf):
         if not t_bound > t0:
             raise ValueError(f"t_bound must be after t0, got {t0} and {t_bound}")

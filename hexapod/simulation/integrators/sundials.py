@@ -232,7 +232,7 @@ class IdasBDF(Integrator):
         self.successes = 0
         self.calls = 0
         self.pending: deque = deque()
-        self.scratch = model.create_data()  # a workspace for solves that must not overwrite ``data``
+        self.scratch = model.create_data()  # for solves that must not overwrite ``data``
         self.deferred: HexapodError | None = None  # a failure after states still to return
         self.rows = self.data.independent_rows  # the start was solved by _dynamics
 
