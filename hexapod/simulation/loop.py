@@ -65,13 +65,8 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
     if every < 1:
         raise ValueError(f"every must be at least 1, got {every}")
     cls = get_integrator(method)
-    if not cls.adaptive and (rtol is not None or atol is not None):
-        warnings.warn(f"{cls.name} is a fixed-step method: it ignores rtol and atol (set its "
-                      "step with step=)", UserWarning, stacklevel=2)
-    rtol = DEFAULT_RTOL if rtol is None else rtol
-    atol = DEFAULT_ATOL if atol is None else atol
-    options = dict(options or {})
-    integrator = cls(model, t0, t_end, q0, v0, rtol=rtol, atol=atol, step=step, **options)
+    options = {**_tolerances(cls, rtol, atol), "step": step, **(options or {})}
+    integrator = cls(model, t0, t_end, q0, v0, **options)
     saved = {"t": [], "q": [], "v": [], "v_dot": [], "lam": []}
     energy_saved: list[float] = []
     conserved = model.energy_conserved
@@ -144,10 +139,20 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
         energy=np.array(energy_saved) if conserved else None,
         energy_drift=(worst["drift"] / max(worst["kinetic"], np.finfo(float).tiny)
                       if conserved else None),
-        options={"rtol": rtol, "atol": atol, "step": step, **options})
+        options=options)
     if forces or (forces is None and model.report_forces):
         _add_wrenches(result)
     return result
+
+
+def _tolerances(cls: type[Integrator], rtol: float | None, atol: float | None) -> dict:
+    """The tolerances a run uses: the defaults where not given; a fixed-step method that was
+    given some says it ignores them."""
+    if not cls.adaptive and (rtol is not None or atol is not None):
+        warnings.warn(f"{cls.name} is a fixed-step method: it ignores rtol and atol (set its "
+                      "step with step=)", UserWarning, stacklevel=3)
+    return {"rtol": DEFAULT_RTOL if rtol is None else rtol,
+            "atol": DEFAULT_ATOL if atol is None else atol}
 
 
 def _energy(model: Model, q: np.ndarray, v: np.ndarray) -> tuple[float, float]:
