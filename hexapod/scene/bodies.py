@@ -64,6 +64,16 @@ class Body(Element):
                                         f"needs {self.dimension} coordinates"))
         return out
 
+    @property
+    def com_pose(self) -> Placement:
+        """Centre-of-mass frame in the world at the initial guess."""
+        return Placement(self.position + self.rotation @ self.com, self.rotation)
+
+    @property
+    def pose(self) -> Placement:
+        """Reference frame in the world at the initial guess."""
+        return Placement(self.position, self.rotation)
+
     def marker_in_com_frame(self, frame: Placement) -> Placement:
         """A frame given in the reference frame, re-expressed in the centre-of-mass frame."""
         return Placement(frame.position - self.com, frame.rotation)
@@ -138,15 +148,6 @@ class SpatialBody(Body):
         """Inertia tensor about the centre of mass in the body (reference-frame) axes."""
         R = self.inertia_rotation
         return R @ self.inertia @ R.T
-
-    @property
-    def com_pose(self) -> Placement:
-        """Centre-of-mass frame in the world at the initial guess."""
-        return Placement(self.position + self.rotation @ self.com, self.rotation)
-
-    @property
-    def pose(self) -> Placement:
-        return Placement(self.position, self.rotation)
 
     def problems(self):
         out = super().problems()
@@ -229,14 +230,6 @@ class PlanarBody(Body):
     @property
     def body_inertia(self) -> float:
         return self.inertia
-
-    @property
-    def com_pose(self) -> Placement:
-        return Placement(self.position + self.rotation @ self.com, self.rotation)
-
-    @property
-    def pose(self) -> Placement:
-        return Placement(self.position, self.rotation)
 
     def problems(self):
         out = super().problems()

@@ -10,16 +10,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from hexapod.errors import Problem
 from hexapod.scene.element import Attachment, Element
-from hexapod.scene.laws import Law, as_law
+from hexapod.scene.laws import Law, LawOnJoint, as_law
 
 #: coordinates a :class:`CoordinateDriver` may prescribe
 COORDINATES = ("x", "y", "z", "angle")
 
 
 @dataclass(eq=False)
-class JointDriver(Element):
+class JointDriver(LawOnJoint, Element):
     """Prescribes the coordinate of a revolute (rad) or prismatic (L) joint by ``law``."""
 
     name: str
@@ -28,23 +27,6 @@ class JointDriver(Element):
     source: str = ""
     family = "driver"
     kind = "joint"
-
-    def __post_init__(self):
-        self.law = as_law(self.law)
-
-    def problems(self) -> list[Problem]:
-        return [self.problem("law", message) for message in self.law.problems()]
-
-    def scaled(self, length):
-        """``length`` is 1 for angles; the scene passes the unit factor for displacements."""
-        out = super().scaled(length)
-        out.law = self.law.scaled(length)
-        return out
-
-    def attached(self, attachment: Attachment):
-        out = super().attached(attachment)
-        out.joint = attachment.name(self.joint)
-        return out
 
 
 @dataclass(eq=False)

@@ -19,7 +19,7 @@ from hexapod.scene.element import (
     ground_ref,
     scaled_ref,
 )
-from hexapod.scene.laws import Law, as_law
+from hexapod.scene.laws import Law, LawOnJoint, as_law
 
 FRAMES = ("world", "body")
 
@@ -175,7 +175,7 @@ class AppliedTorque(ForceElement):
 
 
 @dataclass(eq=False)
-class JointEffort(ForceElement):
+class JointEffort(LawOnJoint, ForceElement):
     """An actuator effort along a joint's coordinate, exerted by the parent on the child:
     a torque (N L) about a revolute axis, a force (N) along a prismatic axis."""
 
@@ -184,23 +184,6 @@ class JointEffort(ForceElement):
     law: Law
     source: str = ""
     kind = "effort"
-
-    def __post_init__(self):
-        self.law = as_law(self.law)
-
-    def problems(self):
-        return [self.problem("law", m) for m in self.law.problems()]
-
-    def scaled(self, length):
-        """``length`` is the unit factor for torques, 1 for forces (the scene decides)."""
-        out = super().scaled(length)
-        out.law = self.law.scaled(length)
-        return out
-
-    def attached(self, attachment: Attachment):
-        out = super().attached(attachment)
-        out.joint = attachment.name(self.joint)
-        return out
 
 
 @dataclass(eq=False)

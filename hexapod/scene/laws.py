@@ -520,3 +520,26 @@ def as_law(value) -> Law:
 LAW_TYPES: dict[str, type[Law]] = {
     cls.kind: cls for cls in (Constant, Polynomial, Harmonic, Spline, Hermite, Gait)
 }
+
+
+class LawOnJoint:
+    """What an element driven by one time law along one joint's coordinate shares (a joint
+    driver, a joint effort): ``law`` taken as a :class:`Law`, its problems reported under the key
+    ``law``, scaled with the element (the scene passes the unit factor of the coordinate or the
+    effort, 1 for angles and forces) and the joint's name prefixed when attached."""
+
+    def __post_init__(self):
+        self.law = as_law(self.law)
+
+    def problems(self):
+        return [self.problem("law", message) for message in self.law.problems()]
+
+    def scaled(self, length):
+        out = super().scaled(length)
+        out.law = self.law.scaled(length)
+        return out
+
+    def attached(self, attachment):
+        out = super().attached(attachment)
+        out.joint = attachment.name(self.joint)
+        return out
