@@ -48,15 +48,18 @@ def walking_leg_scene(leg: str = "L1", gait: str = "tripod", period: float = STR
 
 
 def front_leg_walking() -> Scene:
-    """Built-in ``front-leg``: L1, tripod gait, ground reaction in stance."""
+    """Built-in ``front-leg``: the left front leg (L1) of the 20:1 cockroach-like robot, six
+    driven revolute joints in a tripod gait, the ground's reaction on the foot in stance."""
     return walking_leg_scene("L1", name="front-leg")
 
 
 def middle_leg_walking() -> Scene:
-    """Built-in ``middle-leg``: L2, tripod gait, ground reaction in stance."""
+    """Built-in ``middle-leg``: the left middle leg (L2) of the 20:1 cockroach-like robot, six
+    driven revolute joints in a tripod gait, the ground's reaction on the foot in stance."""
     return walking_leg_scene("L2", name="middle-leg")
 
 
 def hind_leg_walking() -> Scene:
-    """Built-in ``hind-leg``: L3, tripod gait, ground reaction in stance."""
+    """Built-in ``hind-leg``: the left hind leg (L3) of the 20:1 cockroach-like robot, six
+    driven revolute joints in a tripod gait, the ground's reaction on the foot in stance."""
     return walking_leg_scene("L3", name="hind-leg")

@@ -70,7 +70,8 @@ def hexapod_scene(gait: str | None = "tripod", period: float = STRIDE_PERIOD,
 
 
 def hexapod_walking() -> Scene:
-    """Built-in ``hexapod``: tripod gait, ground reactions in stance."""
+    """Built-in ``hexapod``: the six-legged robot at 20:1, trunk held, 18 driven joints in a
+    tripod gait, the ground's reactions on the feet in stance."""
     return hexapod_scene()
 
 

@@ -43,7 +43,8 @@ def _module_source(module: str) -> str:
 
 
 def builder_summary(name: str, entry_point) -> str:
-    """What the built-in scene ``name`` is: the first line of its builder's docstring, as plain
+    """What the built-in scene ``name`` is: the summary (first paragraph) of its builder's
+    docstring on one line, as plain
     text and without a leading ``Built-in NAME:`` (the name is already said); the builder's
     ``module:function`` when that docstring cannot be read."""
     module, _, function = entry_point.value.partition(":")
@@ -56,7 +57,8 @@ def builder_summary(name: str, entry_point) -> str:
                 and node.name == function.strip()), None)
     if not doc:
         return entry_point.value
-    line = re.sub(r":\w+:`~?([^`]*)`", r"\1", doc.splitlines()[0]).replace("``", "").strip()
+    summary = " ".join(doc.split("\n\n")[0].split())
+    line = re.sub(r":\w+:`~?([^`]*)`", r"\1", summary).replace("``", "").strip()
     prefix = f"Built-in {name}: "
     if line.startswith(prefix):
         line = line[len(prefix):]
