@@ -122,7 +122,6 @@ from bench_forward_runs import (  # noqa: E402
     walk,
 )
 
-
 # ------------------------------------------------------------------ one problem
 
 def bench_problem(problem: Problem, methods: list[str], args, exudyn_ok: bool) -> dict:

@@ -120,7 +120,7 @@ def random_input(rng: random.Random) -> tuple[str, bytes]:
     return "random text", text.encode()
 
 
-def _byte_mutations(rng: random.Random, data: bytes, tags: bool) -> tuple[list[str], bytes]:
+def byte_mutations(rng: random.Random, data: bytes, tags: bool) -> tuple[list[str], bytes]:
     """One or two byte-level mutations; with ``tags``, half of them drop a markup character
     (``<``, ``>``, ``/``, ``"``, ``=``) to break an XML tag."""
     done, out = [], data
@@ -241,7 +241,7 @@ def mutate_urdf(rng: random.Random, data: bytes, mode: str | None = None
     if mode == "entity":
         return ["entity trick"], rng.choice(BROKEN_XML)
     if mode == "bytes":
-        return _byte_mutations(rng, data, tags=True)
+        return byte_mutations(rng, data, tags=True)
     root = ET.fromstring(data)
     done = [mutate_tree(rng, root) for _ in range(rng.randrange(1, 4))]
     return done, b'<?xml version="1.0"?>\n' + ET.tostring(root)
@@ -316,7 +316,7 @@ def mutate_motion(rng: random.Random, data: bytes, mode: str | None = None
         what, out = random_input(rng)
         return [what], out
     if mode == "bytes":
-        return _byte_mutations(rng, data, tags=False)
+        return byte_mutations(rng, data, tags=False)
     rows = list(csv.reader(io.StringIO(data.decode())))
     done = [mutate_rows(rng, rows) for _ in range(rng.randrange(1, 4))]
     buffer = io.StringIO()

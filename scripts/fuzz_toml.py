@@ -14,7 +14,7 @@ from fuzz_mutations import (
     JOINT_KINDS,
     TOML_MODES,
     UNITS,
-    _byte_mutations,
+    byte_mutations,
     nasty_value,
     pick,
     random_input,
@@ -243,7 +243,7 @@ def mutate_toml(rng: random.Random, data: bytes, mode: str | None = None
         what, tail = parser_limits(rng)
         return [what], tail + data if rng.random() < 0.5 else data + tail
     if mode == "bytes":
-        return _byte_mutations(rng, data, tags=False)
+        return byte_mutations(rng, data, tags=False)
     document = tomllib.loads(data.decode())
     done = [mutate_document(rng, document) for _ in range(rng.randrange(1, 4))]
     return done, toml_text(document).encode()
