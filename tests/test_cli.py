@@ -391,3 +391,12 @@ def test_validate_counts_in_words(capsys):
 
     assert cli_main(["validate", str(SCENES / "pendulum.toml")]) == 0
     assert "(1 body, 1 joint, 0 drivers, 0 force elements)" in capsys.readouterr().out
+
+
+def test_progress_is_drawn_when_stderr_is_a_terminal(tmp_path, monkeypatch, capsys):
+    """The progress lines (drawn only on a terminal, so no other test sees them) work."""
+    from hexapod.cli import main as cli_main
+
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    assert cli_main(["report", "--out", str(tmp_path / "report"), "--samples", "11"]) == 0
+    assert "inverse dynamics: 11/11 samples" in capsys.readouterr().err

@@ -73,8 +73,7 @@ def _writes_to_model(source: str) -> list[int]:
             [node.target] if isinstance(node, (ast.AugAssign, ast.AnnAssign)) else [])
         for target in targets:
             while isinstance(target, (ast.Subscript, ast.Attribute)):
-                if isinstance(target.value, ast.Name) and target.value.id == "model" \
-                        and isinstance(target, ast.Attribute | ast.Subscript):
+                if isinstance(target.value, ast.Name) and target.value.id == "model":
                     lines.append(node.lineno)
                     break
                 target = target.value

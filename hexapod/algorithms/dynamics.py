@@ -58,8 +58,7 @@ def forward_dynamics(model: Model, data: Data, t: float, q: np.ndarray, v: np.nd
     Q_across = model.call("Q_across", q=q, v=v, w=w) if model.Q_across is not None else None
     tol = model.rank_tolerance if rank_tolerance is None else rank_tolerance
     W, d = equilibrate(Phi_v, model.mass_inv_sqrt)
-    split = split_rows(W, d, model.row_priority, tol,
-                           groups=model.row_groups)
+    split = split_rows(W, d, model.row_priority, tol, groups=model.row_groups)
     wrench_map = offset = None
     if split.redundant.size:
         wrench_map, offset = policy_map(model, q, Phi_v, Q_across)

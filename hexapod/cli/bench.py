@@ -6,7 +6,7 @@ import sys
 from pathlib import Path
 
 from hexapod.benchmarks.catalogue import PROBLEMS
-from hexapod.cli.common import _positive
+from hexapod.cli.common import positive
 from hexapod.simulation.methods import METHODS
 
 HELP = "work-precision study: error against CPU time of every integrator"
@@ -28,7 +28,7 @@ def add_arguments(parser) -> None:
                         help="integrators (default: all)")
     parser.add_argument("--quick", action="store_true",
                         help="shorter horizons and ladders (a first look, a few minutes)")
-    parser.add_argument("--budget", type=_positive(float), default=30.0, metavar="S",
+    parser.add_argument("--budget", type=positive(float), default=30.0, metavar="S",
                         help="stop a method's ladder after a run costing more CPU than this "
                         "(default 30 s)")
     parser.add_argument("--data", default="data", metavar="DIR",

@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from hexapod.cli.common import _positive
+from hexapod.cli.common import positive
 from hexapod.simulation.methods import METHODS
 
 HELP = "where each integrator breaks, why, and what to use"
@@ -29,13 +29,13 @@ def add_arguments(parser) -> None:
                         help="a scene file or built-in scene (default: the extreme-case suite)")
     parser.add_argument("--methods", nargs="+", choices=list(METHODS), metavar="NAME",
                         help="integrators to run (default: all)")
-    parser.add_argument("--t-end", type=_positive(float), metavar="S",
+    parser.add_argument("--t-end", type=positive(float), metavar="S",
                         help="duration of the runs on SCENE in s (default: one cycle of its "
                         "periodic laws, or 1 s)")
     parser.add_argument("--quick", action="store_true",
                         help="shorter runs and fewer stiffnesses (the suite in about 25 minutes "
                         "on 2 cores, with --budget 20)")
-    parser.add_argument("--budget", type=_positive(float), default=60.0, metavar="S",
+    parser.add_argument("--budget", type=positive(float), default=60.0, metavar="S",
                         help="CPU seconds after which a run is stopped, as failed (default 60)")
     parser.add_argument("--out", metavar="DIR",
                         help="the directory to write (default: extreme-check, or "

@@ -17,7 +17,7 @@ from hexapod.scene.builtin import DEFAULT_SCENE
 # ------------------------------------------------------------------ arguments
 
 
-def _positive(kind):
+def positive(kind):
     def parse(text: str):
         try:
             value = kind(text)
@@ -29,7 +29,7 @@ def _positive(kind):
     return parse
 
 
-def _at_least(smallest: int):
+def at_least(smallest: int):
     def parse(text: str) -> int:
         try:
             value = int(text)
@@ -41,25 +41,25 @@ def _at_least(smallest: int):
     return parse
 
 
-def _short(value: float) -> str:
+def short(value: float) -> str:
     """A number as a user writes it: 1e-06 as 1e-6."""
     mantissa, e, exponent = f"{value:g}".partition("e")
     return f"{mantissa}e{int(exponent)}" if e else mantissa
 
 
-def _scene_positional(parser: argparse.ArgumentParser) -> None:
+def scene_positional(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("scene", nargs="?", default=DEFAULT_SCENE,
                         help="a TOML scene file or a built-in scene name (default: "
                         f"{DEFAULT_SCENE})")
 
 
-def _scene_arguments(parser: argparse.ArgumentParser, json_help: str) -> None:
-    _scene_positional(parser)
+def scene_arguments(parser: argparse.ArgumentParser, json_help: str) -> None:
+    scene_positional(parser)
     parser.add_argument("--t", type=float, default=0.0, help="time in s (default 0)")
     parser.add_argument("--json", action="store_true", help=json_help)
 
 
-def _inverse_arguments(parser: argparse.ArgumentParser, method_help: str) -> None:
+def inverse_arguments(parser: argparse.ArgumentParser, method_help: str) -> None:
     """``--frame`` and ``--method`` of the inverse dynamics (``inverse`` and ``report``)."""
     parser.add_argument("--frame", choices=("joint", "world"), default="joint",
                         help="axes of the wrench components (default: the child's joint frame)")
@@ -70,7 +70,7 @@ def _inverse_arguments(parser: argparse.ArgumentParser, method_help: str) -> Non
 # ------------------------------------------------------------------ progress on stderr
 
 
-def _time_progress(method: str, t0: float):
+def time_progress(method: str, t0: float):
     """A progress bar on stderr, redrawn at most ten times a second."""
     import time
 
@@ -87,7 +87,7 @@ def _time_progress(method: str, t0: float):
     return report
 
 
-def _progress(label: str):
+def sample_progress(label: str):
     def report(done: int, total: int) -> None:
         if done == total or done % max(1, total // 100) == 0:
             print(f"\r{label}: {done}/{total} samples", end="", file=sys.stderr, flush=True)
@@ -97,21 +97,21 @@ def _progress(label: str):
 # ------------------------------------------------------------------ output
 
 
-def _jsonable(value):
+def jsonable(value):
     """Plain JSON: non-finite numbers (e.g. the smallest singular value of a scene without
     constraints, infinite) written as null."""
     if isinstance(value, dict):
-        return {k: _jsonable(v) for k, v in value.items()}
+        return {k: jsonable(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
-        return [_jsonable(v) for v in value]
+        return [jsonable(v) for v in value]
     if isinstance(value, float) and not math.isfinite(value):
         return None
     return value
 
 
-def _emit(report: dict, as_json: bool, formatter) -> None:
+def emit(report: dict, as_json: bool, formatter) -> None:
     if as_json:
-        json.dump(_jsonable(report), sys.stdout, indent=2, allow_nan=False)
+        json.dump(jsonable(report), sys.stdout, indent=2, allow_nan=False)
         print()
     else:
         print(formatter(report))

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from hexapod.cli.common import _emit, _scene_arguments
+from hexapod.cli.common import emit, scene_arguments
 
 HELP = ("forward dynamics at one instant: accelerations, multipliers, joint wrenches and driver "
         "efforts")
@@ -14,7 +14,7 @@ DESCRIPTION = (
 
 
 def add_arguments(parser) -> None:
-    _scene_arguments(parser, "print the results as JSON")
+    scene_arguments(parser, "print the results as JSON")
 
 
 def run(args) -> int:
@@ -23,5 +23,5 @@ def run(args) -> int:
     from hexapod.scene.builtin import load_scene
 
     model = assemble(load_scene(args.scene))
-    _emit(describe_state(model, args.t), args.json, format_state)
+    emit(describe_state(model, args.t), args.json, format_state)
     return 0

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from hexapod.cli.common import _at_least
+from hexapod.cli.common import at_least
 
 HELP = "VTK files of a simulation or a report, for ParaView"
 DESCRIPTION = (
@@ -27,7 +27,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--scene", metavar="SCENE",
                         help="the scene the results were computed on (default: the one they "
                         "record)")
-    parser.add_argument("--every", type=_at_least(1), default=1, metavar="N",
+    parser.add_argument("--every", type=at_least(1), default=1, metavar="N",
                         help="export every N-th saved instant, and the last (default 1)")
     parser.add_argument("--mesh", action="append", metavar="BODY=FILE",
                         help="draw BODY with a mesh file meshio reads (STL, OBJ, VTU ...), given "

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from hexapod.cli.common import _emit, _scene_arguments
+from hexapod.cli.common import emit, scene_arguments
 
 HELP = ("what a scene holds and how it was built: rows, topology, degrees of freedom, "
         "redundancy, condition number")
@@ -14,7 +14,7 @@ DESCRIPTION = (
 
 
 def add_arguments(parser) -> None:
-    _scene_arguments(parser, "print the description as JSON")
+    scene_arguments(parser, "print the description as JSON")
     parser.add_argument("--graph", action="store_true",
                         help="add the vector-network graph of Richard, Anderson and Andrews "
                         "(1989): its edges and its incidence, cutset and circuit matrices")
@@ -26,5 +26,5 @@ def run(args) -> int:
     from hexapod.scene.builtin import load_scene
 
     model = assemble(load_scene(args.scene))
-    _emit(describe_model(model, args.t, graph=args.graph), args.json, format_model)
+    emit(describe_model(model, args.t, graph=args.graph), args.json, format_model)
     return 0

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sys
 
-from hexapod.cli.common import _inverse_arguments, _progress
+from hexapod.cli.common import inverse_arguments, sample_progress
 
 HELP = "joint efforts and wrenches of a prescribed motion, as CSV"
 DESCRIPTION = (
@@ -19,7 +19,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("model", help="a URDF (.urdf), a TOML scene file or a built-in scene")
     parser.add_argument("--motion", required=True, metavar="MOTION.csv", help="the motion")
     parser.add_argument("--out", required=True, metavar="OUT.csv", help="the CSV to write")
-    _inverse_arguments(parser, "tree-ordered solve (open trees with every joint driven) or the "
+    inverse_arguments(parser, "tree-ordered solve (open trees with every joint driven) or the "
                        "saddle-point solve per sample (any mechanism); default: the fastest that "
                        "applies")
 
@@ -39,7 +39,7 @@ def run(args) -> int:
     motion = read_motion(args.motion)
     model = assemble(apply_motion(load_scene(args.model), motion))
     times = motion.times
-    progress = _progress("inverse dynamics") if sys.stderr.isatty() else None
+    progress = sample_progress("inverse dynamics") if sys.stderr.isatty() else None
     result = inverse_dynamics(model, times, method=args.method, frame=args.frame,
                               progress=progress)
     write_atomically(args.out, inverse_csv_text(model, result))

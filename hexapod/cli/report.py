@@ -6,11 +6,11 @@ import sys
 from pathlib import Path
 
 from hexapod.cli.common import (
-    _at_least,
-    _inverse_arguments,
-    _positive,
-    _progress,
-    _scene_positional,
+    at_least,
+    inverse_arguments,
+    positive,
+    sample_progress,
+    scene_positional,
 )
 
 HELP = "the liaison force report of a driven scene: CSV, summary, figures"
@@ -24,17 +24,17 @@ DESCRIPTION = (
 
 
 def add_arguments(parser) -> None:
-    _scene_positional(parser)
+    scene_positional(parser)
     parser.add_argument("--out", metavar="DIR",
                         help="the directory to write (default: SCENE-NAME-report); an earlier "
                         "report there is replaced")
     parser.add_argument("--start", type=float, default=0.0, help="first time in s (default 0)")
-    parser.add_argument("--duration", type=_positive(float), metavar="S",
+    parser.add_argument("--duration", type=positive(float), metavar="S",
                         help="length of the window in s (default: one cycle of the scene's "
                         "periodic laws, e.g. the gait's stride, or 1 s)")
-    parser.add_argument("--samples", type=_at_least(2), default=501,
+    parser.add_argument("--samples", type=at_least(2), default=501,
                         help="samples over the window, ends included (default 501)")
-    _inverse_arguments(parser, "as for 'hexapod inverse'")
+    inverse_arguments(parser, "as for 'hexapod inverse'")
 
 
 def run(args) -> int:
@@ -56,7 +56,7 @@ def run(args) -> int:
     times = args.start + np.linspace(0.0, duration, args.samples)
     out = Path(args.out or f"{scene.name}-report")
     show = sys.stderr.isatty()
-    progress = _progress("inverse dynamics") if show else None
+    progress = sample_progress("inverse dynamics") if show else None
     started = time.perf_counter()
     result = inverse_dynamics(model, times, method=args.method, frame=args.frame,
                               progress=progress)

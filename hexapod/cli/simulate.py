@@ -7,12 +7,12 @@ import sys
 from pathlib import Path
 
 from hexapod.cli.common import (
-    _at_least,
-    _jsonable,
-    _positive,
-    _scene_positional,
-    _short,
-    _time_progress,
+    at_least,
+    jsonable,
+    positive,
+    scene_positional,
+    short,
+    time_progress,
 )
 from hexapod.simulation.methods import DEFAULT_ATOL, DEFAULT_METHOD, DEFAULT_RTOL, METHODS
 
@@ -29,25 +29,25 @@ DESCRIPTION = (
 
 def add_arguments(parser) -> None:
     methods = "; ".join(f"{name}: {method.summary()}" for name, method in METHODS.items())
-    _scene_positional(parser)
+    scene_positional(parser)
     parser.add_argument("--method", choices=list(METHODS), default=DEFAULT_METHOD,
                         metavar="NAME",
                         help=f"the integrator (default {DEFAULT_METHOD}): {methods}")
-    parser.add_argument("--t-end", type=_positive(float), metavar="S",
+    parser.add_argument("--t-end", type=positive(float), metavar="S",
                         help="duration in s (default: one cycle of the scene's periodic laws, "
                         "or 1 s)")
     parser.add_argument("--start", type=float, default=0.0, metavar="S",
                         help="start time in s (default 0)")
-    parser.add_argument("--rtol", type=_positive(float),
+    parser.add_argument("--rtol", type=positive(float),
                         help="relative tolerance of adaptive methods (default "
-                        f"{_short(DEFAULT_RTOL)})")
-    parser.add_argument("--atol", type=_positive(float),
+                        f"{short(DEFAULT_RTOL)})")
+    parser.add_argument("--atol", type=positive(float),
                         help="absolute tolerance of adaptive methods, SI units (default "
-                        f"{_short(DEFAULT_ATOL)})")
-    parser.add_argument("--step", type=_positive(float), metavar="S",
+                        f"{short(DEFAULT_ATOL)})")
+    parser.add_argument("--step", type=positive(float), metavar="S",
                         help="step of fixed-step methods (default: the duration / 1000), first "
                         "step of adaptive ones (default: chosen)")
-    parser.add_argument("--every", type=_at_least(1), default=1, metavar="N",
+    parser.add_argument("--every", type=at_least(1), default=1, metavar="N",
                         help="save every N-th accepted step (default 1; the last state always)")
     parser.add_argument("--forces", action="store_true",
                         help="also write every joint's wrench at the saved states")
@@ -71,13 +71,13 @@ def run(args) -> int:
     result = simulate(model, args.start + duration, t0=args.start, method=args.method,
                       rtol=args.rtol, atol=args.atol, step=args.step, every=args.every,
                       forces=True if args.forces else None,
-                      progress=_time_progress(args.method, args.start) if show else None)
+                      progress=time_progress(args.method, args.start) if show else None)
     result.source = scene_reference(args.scene)  # for 'hexapod export'
     if show:
         print("\r" + " " * 90 + "\r", end="", file=sys.stderr)
     stats = result.statistics()
     files = {"results.csv": result.csv_text().encode(), "results.npz": result.npz_bytes(),
-             "stats.json": (json.dumps(_jsonable(stats), indent=2) + "\n").encode()}
+             "stats.json": (json.dumps(jsonable(stats), indent=2) + "\n").encode()}
     write_directory_atomically(out, files)
     print(f"wrote {out}/: {', '.join(files)}")
     drift = ("" if result.energy_drift is None
