@@ -131,18 +131,11 @@ def _is_reexport(node: ast.stmt, package: str) -> bool:
         return True  # the docstring
     if isinstance(node, ast.ImportFrom):
         return node.level == 0 and (node.module or "").startswith(package.split(".")[0])
-    if isinstance(node, ast.Import):
-        return all(a.name == "typing" for a in node.names)
-    if isinstance(node, ast.ImportFrom) and node.module == "typing":
-        return True
     if isinstance(node, ast.Assign):
         names = [t.id for target in node.targets
                  for t in (target.elts if isinstance(target, ast.Tuple) else [target])
                  if isinstance(t, ast.Name)]
         return set(names) <= {"__all__", "__getattr__", "__dir__"}
-    if isinstance(node, ast.If):  # ``if TYPE_CHECKING:`` imports, for type checkers
-        return (isinstance(node.test, ast.Name) and node.test.id == "TYPE_CHECKING"
-                and all(isinstance(n, ast.ImportFrom) for n in node.body) and not node.orelse)
     return False
 
 
@@ -153,8 +146,6 @@ def init_logic(sources: dict[str, str], packages: set[str]) -> list[str]:
         if name not in packages:
             continue
         for node in ast.parse(source).body:
-            if isinstance(node, ast.ImportFrom) and node.module == "typing":
-                continue
             if not _is_reexport(node, name):
                 found.append(f"{name}/__init__.py line {node.lineno}: not a re-export "
                              f"({type(node).__name__})")
