@@ -132,6 +132,7 @@ class Integrator:
         self.h = float(step) if step is not None else (self.t_bound - self.t0) / self.default_steps
         self.counters = Counters()
         self.data = model.create_data()
+        self._kinematics = model.create_data()  # the exact projection's, apart from ``data``
         self.status = "running"
         self.message = ""
         self._crossing: float | None = None  # the raised rank tolerance, while crossing
@@ -307,9 +308,8 @@ class Integrator:
                 self.counters.factorisations += projector.newton + 1
                 return state
         counts: dict = {}
-        data = self.model.create_data()
-        q = assemble_positions(self.model, data, t, q, counts=counts)
-        v = solve_velocities(self.model, data, t, q, v)
+        q = assemble_positions(self.model, self._kinematics, t, q, counts=counts)
+        v = solve_velocities(self.model, self._kinematics, t, q, v)
         iterations = counts.get("newton", 0)  # each a Jacobian and a factorisation
         self.counters.newton += iterations
         self.counters.jacobians += iterations + 1
