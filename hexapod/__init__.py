@@ -30,7 +30,8 @@ __getattr__, __dir__, __all__ = attach(__name__, {
                         "rotation_from_euler_parameters", "rotation_from_rpy"],
     # describing a system
     "hexapod.scene": ["GROUND", "LENGTH_UNITS", "AppliedForce", "AppliedTorque", "Constant",
-                      "CoordinateDriver", "Cylindrical", "Distance", "Fixed", "Gait",
+                      "Contact", "CoordinateDriver", "Cylindrical", "Distance", "Fixed", "Gait",
+                      "GroundForces",
                       "Harmonic", "Hermite", "Joint", "JointDriver", "JointEffort", "Law",
                       "Particle", "PlanarBody", "PlanarJoint", "PointOnPlane", "Polynomial",
                       "Prismatic", "Revolute", "RotationalSpringDamper", "Scene", "SpatialBody",
@@ -52,6 +53,7 @@ __getattr__, __dir__, __all__ = attach(__name__, {
                                    "wrenches_from_multipliers"],
     "hexapod.algorithms.inverse": ["InverseResult", "inverse_dynamics"],
     "hexapod.algorithms.balance": ["BodyBalance", "body_balance"],
+    "hexapod.algorithms.ground": ["contact_weights", "ground_reactions"],
     "hexapod.algorithms.topology": ["BodyJointGraph", "Mobility", "VectorNetwork",
                                     "body_joint_graph", "mobility", "vector_network"],
     # simulation

@@ -1,10 +1,21 @@
-"""The hexapod: six legs attached by prefix (``L1`` ... ``R3``) to a trunk fixed in the world.
+"""The hexapod: six legs attached by prefix (``L1`` ... ``R3``) to a trunk.
 
 Each leg is :func:`legs.leg.leg_scene` placed at its thorax-coxa point (an estimate [E], scaled);
-the trunk's reference frame is its centre of mass (x forward, y left, z up). With a gait, every
-joint is driven and each foot carries the ground's reaction during its stance (the prescribed
-generalized forces of Dumitru, Marin and Margine); the trunk is held, so the joints' loads are those
-of a robot walking at constant height and speed.
+the trunk's reference frame is its centre of mass (x forward, y left, z up).
+
+**Walking** (``trunk="free"``, the built-in ``hexapod``): the trunk is a free body. Every joint
+is driven by the gait's exact laws (:class:`legs.stepping.Stepping`: each foot on its path to
+round-off), and each foot in stance is held at its foothold by a
+:class:`hexapod.Contact` (no slip). The footholds are where the feet touch down when the trunk
+walks straight ahead at the gait's speed, level, from the origin at ``t = 0`` at the height that
+puts the ground at ``z = 0``; the trunk's motion itself is not prescribed but follows from the
+legs and the feet in stance. Three or more feet are always down, so the ground forces are shared
+by the scene's policy (``hexapod.GroundForces``).
+
+**Bench-top** (``trunk="held"``): the trunk is welded to the world, every joint driven by the
+gait's harmonic laws and each foot in stance loaded by an invented ``sin^2`` pulse (the
+prescribed generalized forces of Dumitru, Marin and Margine): the loads of a robot walking at
+constant height and speed, as far as the pulses are right.
 
 :func:`hexapod_standing` is the robot standing: a free trunk, every joint held by a constant
 driver at the mid-stance pose, the feet pinned to the ground, so that the feet's forces are
@@ -21,17 +32,27 @@ from hexapod import (
     GROUND,
     AppliedForce,
     Constant,
+    Contact,
     Fixed,
+    GroundForces,
     Placement,
     Scene,
     SpatialBody,
     Spherical,
     rotation_about_axis,
 )
-from legs.cockroach import MODEL_SCALE, SEGMENTS, STRIDE_PERIOD, THC_POINT_MM, TRUNK, bracket
+from legs.cockroach import (
+    GROUND_Z_MM,
+    MODEL_SCALE,
+    SEGMENTS,
+    STRIDE_PERIOD,
+    THC_POINT_MM,
+    TRUNK,
+    bracket,
+)
 from legs.gait import GAITS, LEG_NAMES, leg_of
 from legs.leg import JOINTS, leg_geometry, leg_scene
-from legs.stepping import SOLVED_JOINTS, path_targets, solve_joints
+from legs.stepping import SOLVED_JOINTS, Stepping, exact_leg_motion, path_targets, solve_joints
 
 GRAVITY = 9.81
 
@@ -47,21 +68,43 @@ def robot_weight(scale: float = MODEL_SCALE) -> float:
     return robot_mass(scale) * GRAVITY
 
 
+#: The walking robot's duty factor per gait: above 1/2, so that the load passes from one set
+#: of feet to the next over a phase with more feet down (at exactly 1/2 it would jump).
+WALKING_DUTY = {"tripod": 0.6, "tetrapod": 2 / 3, "wave": 5 / 6}
+
+
 def hexapod_scene(gait: str | None = "tripod", period: float = STRIDE_PERIOD,
-                  scale: float = MODEL_SCALE, loads: bool = True, name: str = "hexapod") -> Scene:
-    """Six legs on a fixed trunk; with ``gait``, driven and (with ``loads``) loaded in stance."""
+                  scale: float = MODEL_SCALE, loads: bool = True, name: str = "hexapod",
+                  trunk: str = "held", duty: float | None = None,
+                  ground: GroundForces | None = None) -> Scene:
+    """The six-legged robot.
+
+    Parameters
+    ----------
+    gait : {"tripod", "tetrapod", "wave"} or None
+        Drives every joint (``None``: no drivers; ``trunk="held"`` only).
+    trunk : {"held", "free"}
+        ``held``: welded to the world, the feet loaded in stance by ``sin^2`` pulses (with
+        ``loads``); ``free``: the walking robot, its feet held by contacts in stance.
+    duty : float, optional
+        Stance fraction of the free robot's cycle (default :data:`WALKING_DUTY`).
+    ground : GroundForces, optional
+        The free robot's ground-force policy (default: ``min-wrench``).
+    """
+    if trunk not in ("held", "free"):
+        raise ValueError(f"trunk must be 'held' or 'free', got {trunk!r}")
+    if trunk == "free":
+        if gait is None:
+            raise ValueError("a free trunk needs a gait (its legs carry it)")
+        return _walking_scene(gait, period, scale, duty or WALKING_DUTY[gait], ground, name)
     scene = Scene(name, dimension=3, length_unit="m")
-    scene.add(SpatialBody("trunk", TRUNK["mass_g"] * 1e-3 * scale**3,
-                          np.array(TRUNK["inertia"]) * scale**5))
+    scene.add(_trunk(scale))
     scene.add(Fixed("trunk_hold", "ground", "trunk"))
     pattern = GAITS[gait] if gait else None
     for leg in LEG_NAMES:
-        position, side = leg_of(leg)
-        x, y, z = THC_POINT_MM[position]
-        point = np.array([x, y if side == "L" else -y, z]) * 1e-3 * scale
         laws = pattern.joint_laws(leg, period) if pattern else None
-        scene.attach(leg_scene(position, side, scale, laws), leg, base="trunk",
-                     placement=Placement(point))
+        scene.attach(leg_scene(leg_of(leg)[0], leg_of(leg)[1], scale, laws), leg,
+                     base="trunk", placement=Placement(_thc_point(leg, scale)))
         if pattern and loads:
             scene.add(AppliedForce(f"{leg}/ground_reaction", f"{leg}/tarsus",
                                    pattern.stance_load(leg, robot_weight(scale), period),
@@ -69,10 +112,55 @@ def hexapod_scene(gait: str | None = "tripod", period: float = STRIDE_PERIOD,
     return scene
 
 
+def _trunk(scale: float, position=(0.0, 0.0, 0.0)) -> SpatialBody:
+    return SpatialBody("trunk", TRUNK["mass_g"] * 1e-3 * scale**3,
+                       np.array(TRUNK["inertia"]) * scale**5, position=position)
+
+
+def _thc_point(leg: str, scale: float) -> np.ndarray:
+    """The leg's thorax-coxa point in the trunk frame (m)."""
+    x, y, z = THC_POINT_MM[leg_of(leg)[0]]
+    return np.array([x, y if leg_of(leg)[1] == "L" else -y, z]) * 1e-3 * scale
+
+
+def _walking_scene(gait: str, period: float, scale: float, duty: float,
+                   ground: GroundForces | None, name: str) -> Scene:
+    pattern = replace(GAITS[gait], duty=duty)
+    height = -GROUND_Z_MM * 1e-3 * scale  # the trunk's centre of mass above the ground
+    speed = pattern.walking_speed(period, scale)
+    scene = Scene(name, dimension=3, length_unit="m", ground=ground)
+    scene.add(_trunk(scale, (0.0, 0.0, height)))
+    for leg in LEG_NAMES:
+        position, side = leg_of(leg)
+        lift_off = pattern.lift_off[leg]
+        laws = {joint: Stepping(position, joint, duty, period, lift_off) for joint in JOINTS}
+        start = exact_leg_motion(position, duty, [(-lift_off) % 1.0])[0][0]
+        sub = posed(leg_scene(position, side, scale, laws), dict(zip(JOINTS, start,
+                                                                     strict=True)))
+        scene.attach(sub, leg, base="trunk", placement=Placement(_thc_point(leg, scale)))
+        # the stance that ends at lift_off * period began at (lift_off - duty) * period;
+        # the foot then touched down where its path puts it, the trunk at speed * time
+        touch_down = (lift_off - duty) * period
+        foot = pattern.foot_targets(np.array([touch_down]), period, scale)[leg][0]
+        foothold = foot + np.array([speed * touch_down, 0.0, height])
+        scene.add(Contact(f"{leg}/ground", "ground", f"{leg}/tarsus", child_frame="foot",
+                          period=period, duty=duty, lift_off=lift_off, foothold=foothold,
+                          advance=[speed * period, 0.0, 0.0]))
+    return scene
+
+
 def hexapod_walking() -> Scene:
-    """Built-in ``hexapod``: the six-legged robot at 20:1, trunk held, 18 driven joints in a
-    tripod gait, the ground's reactions on the feet in stance."""
-    return hexapod_scene()
+    """Built-in ``hexapod``: the six-legged robot at 20:1 walking in a tripod gait (duty 0.6):
+    a free trunk, 18 joints driven so that each foot follows its path exactly, the feet in
+    stance held to the ground by contacts, the ground forces shared by the least-wrench
+    policy."""
+    return hexapod_scene(trunk="free")
+
+
+def hexapod_held() -> Scene:
+    """Built-in ``hexapod-held``: the six-legged robot on a bench, trunk welded to the world,
+    18 driven joints in a tripod gait, each foot loaded by a ``sin^2`` pulse in stance."""
+    return hexapod_scene(trunk="held", name="hexapod-held")
 
 
 #: The order in which feet are put on the ground by :func:`hexapod_standing`: a tripod first.

@@ -24,9 +24,12 @@ axes mirror the left's, see :mod:`legs.leg`).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from functools import cache
 
 import numpy as np
+
+from hexapod import Law
 
 from legs.cockroach import (
     FOOT_LIFT_MM,
@@ -72,24 +75,46 @@ def _rotate(vectors: np.ndarray, axes: np.ndarray, angles: np.ndarray) -> np.nda
     return vectors * c + np.cross(axes, vectors) * s + axes * along * (1 - c)
 
 
-def foot_position(geometry: LegGeometry, angles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The foot (n, 3) at joint angles (n, 6), in the leg's frame (the thorax-coxa point, trunk
-    axes), and its Jacobian (n, 3, 6). Product of exponentials: each joint turns everything
-    beyond it about its rest-pose axis and point, the proximal joint last."""
+def chain_state(geometry: LegGeometry, angles: np.ndarray):
+    """The foot (n, 3), and every joint's axis and point (n, 6, 3) as moved by the joints
+    before it, at joint angles (n, 6), in the leg's frame (the thorax-coxa point, trunk axes).
+    Product of exponentials: each joint turns everything beyond it about its rest-pose axis
+    and point, the proximal joint last."""
     n = angles.shape[0]
     foot = np.tile(geometry.points[6], (n, 1))
     for k in reversed(range(6)):
         origin = geometry.points[k]
         foot = origin + _rotate(foot - origin, np.tile(geometry.axes[k], (n, 1)), angles[:, k])
-    # the Jacobian's columns: the joints' axes and points as moved by the joints before them
     axes = [np.tile(a, (n, 1)) for a in geometry.axes]
     points = [np.tile(p, (n, 1)) for p in geometry.points[:6]]
     for k in range(6):
         for j in range(k):
             axes[k] = _rotate(axes[k], axes[j], angles[:, j])
             points[k] = points[j] + _rotate(points[k] - points[j], axes[j], angles[:, j])
-    jacobian = np.stack([np.cross(axes[k], foot - points[k]) for k in range(6)], axis=2)
-    return foot, jacobian
+    return foot, np.stack(axes, axis=1), np.stack(points, axis=1)
+
+
+def foot_position(geometry: LegGeometry, angles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The foot (n, 3) at joint angles (n, 6), in the leg's frame, and its Jacobian (n, 3, 6):
+    column ``k`` is the moved axis of joint ``k`` crossed with the arm to the foot."""
+    foot, axes, points = chain_state(geometry, angles)
+    return foot, np.cross(axes, foot[:, None, :] - points).transpose(0, 2, 1)
+
+
+def foot_bias(geometry: LegGeometry, angles: np.ndarray, rates: np.ndarray) -> np.ndarray:
+    """The foot's acceleration (n, 3) at zero joint accelerations (the ``J_dot theta_dot``
+    term): ``sum_k theta_dot_k (theta_dot_k a_k + 2 omega_k) x c_k``, with ``c_k`` the
+    Jacobian's column ``a_k x (foot - p_k)`` and ``omega_k`` the angular velocity of the body
+    before joint ``k``."""
+    foot, axes, points = chain_state(geometry, angles)
+    columns = np.cross(axes, foot[:, None, :] - points)
+    out = np.zeros_like(foot)
+    omega = np.zeros_like(foot)
+    for k in range(6):
+        spin = rates[:, k, None] * axes[:, k]
+        out += rates[:, k, None] * np.cross(spin + 2 * omega, columns[:, k])
+        omega = omega + spin
+    return out
 
 
 def solve_joints(geometry: LegGeometry, targets: np.ndarray, angles: np.ndarray,
@@ -171,3 +196,128 @@ def stepping_harmonics(position: str, duty: float,
     return {joint: (float(c[0]), tuple(c[1:harmonics + 1].tolist()),
                     tuple(c[harmonics + 1:].tolist()))
             for joint, c in ((j, coefficients[j]) for j in JOINTS)}
+
+
+# ------------------------------------------------------------------ the exact gait
+
+_STEP9 = np.polynomial.Polynomial([0, 0, 0, 0, 0, 126, -420, 540, -315, 70])
+_BUMP = np.polynomial.Polynomial([0, 1]) ** 5 * np.polynomial.Polynomial([1, -1]) ** 5 * 1024
+
+
+def foot_path_rates(tau, duty: float, length: float, lift: float):
+    """:func:`foot_path` and its first and second derivatives in the cycle fraction ``tau``:
+    ``(fore_aft, height)`` each as a tuple (value, d/dtau, d2/dtau2)."""
+    tau = np.asarray(tau, dtype=float) % 1.0
+    a = 1.0 - duty
+    stance = tau >= a
+    u = np.where(stance, 0.0, tau / a)
+    rate = -length * a / duty
+    step = [_STEP9.deriv(m)(u) for m in range(3)]
+    bump = [_BUMP.deriv(m)(u) for m in range(3)]
+    fore_aft = (
+        np.where(stance, length / 2 - length * (tau - a) / duty,
+                 -length / 2 + rate * u + (length - rate) * step[0]),
+        np.where(stance, -length / duty, (rate + (length - rate) * step[1]) / a),
+        np.where(stance, 0.0, (length - rate) * step[2] / a**2),
+    )
+    height = tuple(np.where(stance, 0.0, lift * b / a**m) for m, b in enumerate(bump))
+    return fore_aft, height
+
+
+def exact_leg_motion(position: str, duty: float, tau) -> tuple[np.ndarray, ...]:
+    """The joint angles of a left ``position`` leg (n, 6) at cycle fractions ``tau``, and their
+    first and second derivatives in ``tau``, such that the foot is on its path to round-off:
+    the prescribed joints follow the path's lift and fore-aft position exactly, the solved
+    ones are Newton's solution of the foot's position (started from the harmonic fit of
+    :func:`stepping_harmonics`), their rates and accelerations from the foot's Jacobian."""
+    tau = np.atleast_1d(np.asarray(tau, dtype=float)) % 1.0
+    geometry = leg_geometry(position, "L", scale=1.0)
+    mm = 1e-3
+    (fa, fa1, fa2), (h, h1, h2) = foot_path_rates(tau, duty, 1.0, 1.0)  # unit shapes
+    amplitude = {joint: np.radians(a) for joint, a, _ in GAIT_LAWS}
+    prescribed = {"thc_levation": (h, h1, h2), "coxa_rotation": (h, h1, h2),
+                  "tita": (2 * fa, 2 * fa1, 2 * fa2)}
+    n = tau.size
+    angles, rates, accelerations = np.zeros((n, 6)), np.zeros((n, 6)), np.zeros((n, 6))
+    for joint, (value, d1, d2) in prescribed.items():
+        k = JOINTS.index(joint)
+        angles[:, k], rates[:, k], accelerations[:, k] = (amplitude[joint] * x
+                                                         for x in (value, d1, d2))
+    harmonics = stepping_harmonics(position, duty)
+    basis = _fourier_basis(tau, HARMONICS)
+    solved = [JOINTS.index(j) for j in SOLVED_JOINTS]
+    free = [k for k in range(6) if k not in solved]
+    for joint in SOLVED_JOINTS:
+        offset, cos, sin = harmonics[joint]
+        angles[:, JOINTS.index(joint)] = basis @ np.concatenate([[offset], cos, sin])
+    length, lift = STANCE_LENGTH_MM * mm, FOOT_LIFT_MM * mm
+    target = path_targets(position, tau, duty, scale=1.0)
+    target_rate = np.column_stack([fa1 * length, np.zeros(n), h1 * lift])
+    target_acceleration = np.column_stack([fa2 * length, np.zeros(n), h2 * lift])
+    tolerance = 1e-15 * np.linalg.norm(geometry.points[6])
+    for _ in range(8):
+        foot, jacobian = foot_position(geometry, angles)
+        residual = foot - target
+        if np.abs(residual).max() <= tolerance:
+            break
+        angles[:, solved] -= np.linalg.solve(jacobian[:, :, solved], residual[..., None])[..., 0]
+    foot, jacobian = foot_position(geometry, angles)
+    Js, Jp = jacobian[:, :, solved], jacobian[:, :, free]
+    rhs = target_rate - np.einsum("nij,nj->ni", Jp, rates[:, free])
+    rates[:, solved] = np.linalg.solve(Js, rhs[..., None])[..., 0]
+    rhs = (target_acceleration - np.einsum("nij,nj->ni", Jp, accelerations[:, free])
+           - foot_bias(geometry, angles, rates))
+    accelerations[:, solved] = np.linalg.solve(Js, rhs[..., None])[..., 0]
+    return angles, rates, accelerations
+
+
+_MOTIONS: dict = {}
+
+
+def _cached_motion(position: str, duty: float, tau: np.ndarray):
+    """:func:`exact_leg_motion`, kept for the last few requests: the six laws of a leg ask for
+    the same samples one after the other."""
+    key = (position, duty, tau.tobytes())
+    if key not in _MOTIONS:
+        if len(_MOTIONS) > 32:
+            _MOTIONS.clear()
+        _MOTIONS[key] = exact_leg_motion(position, duty, tau)
+    return _MOTIONS[key]
+
+
+@dataclass(frozen=True)
+class Stepping(Law):
+    """The law of one joint of a leg walking with its foot exactly on its path
+    (:func:`exact_leg_motion`): a ``front``, ``middle`` or ``hind`` leg, the gait's ``duty``
+    factor and ``period`` (s), the leg's ``lift_off`` (a fraction of the period). The same
+    angles serve the left and the right leg (their axes are mirror images)."""
+
+    position: str = "front"
+    joint: str = "thc_protraction"
+    duty: float = 0.5
+    period: float = 1.0
+    lift_off: float = 0.0
+    kind = "stepping"
+
+    def evaluate(self, t):
+        t = np.asarray(t, dtype=float)
+        tau = (np.atleast_1d(t) / self.period - self.lift_off) % 1.0
+        k = JOINTS.index(self.joint)
+        values = [x[:, k].reshape(t.shape) / self.period**m
+                  for m, x in enumerate(_cached_motion(self.position, self.duty, tau))]
+        return values[0], values[1], values[2]
+
+    def cycle_time(self):
+        return self.period
+
+    def problems(self):
+        out = []
+        if self.position not in ("front", "middle", "hind"):
+            out.append(f"position must be front, middle or hind, got {self.position!r}")
+        if self.joint not in JOINTS:
+            out.append(f"joint must be one of {', '.join(JOINTS)}, got {self.joint!r}")
+        if not (np.isfinite(self.period) and self.period > 0):
+            out.append(f"period must be positive, got {self.period}")
+        if not 0.5 <= self.duty < 1:
+            out.append(f"duty must be in [0.5, 1), got {self.duty}")
+        return out

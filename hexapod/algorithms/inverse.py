@@ -141,6 +141,7 @@ def _saddle(model, times, frame, progress) -> InverseResult:
     worst = 0.0
     q = model.q0
     data = model.create_data()
+    model.law_values(times)  # all samples at once: the per-sample calls below reuse them
     for k, t in enumerate(times):
         q = assemble_positions(model, data, t, q)
         if k == 0:

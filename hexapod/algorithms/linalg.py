@@ -134,7 +134,9 @@ def split_rows(W: np.ndarray, scale: np.ndarray, priority: np.ndarray, tol: floa
     # is not kept where a better one exists: in index order a standing hexapod kept drivers
     # whose smallest singular value was 5.6e-7 where 4.4e-4 was to be had
     labels = np.arange(order.size) if groups is None else np.asarray(groups)
-    kept, columns = [], []
+    kept = []
+    columns = np.zeros((n_v, min(n_c, n_v)))  # the kept rows' orthonormal basis, filled in
+    m = 0
     begin = 0
     while begin < order.size:
         end = begin
@@ -143,27 +145,28 @@ def split_rows(W: np.ndarray, scale: np.ndarray, priority: np.ndarray, tol: floa
         candidates = list(order[begin:end])
         begin = end
         residual = W[candidates].copy()
-        if columns:
-            Qb = np.column_stack(columns)
+        if m:
+            Qb = columns[:, :m]
             for _ in range(2):  # twice is enough (Giraud et al.)
                 residual -= (residual @ Qb) @ Qb.T
         while candidates:
             norms = np.linalg.norm(residual, axis=1)
             j = int(np.argmax(norms))
-            if norms[j] <= tol or len(columns) >= n_v:
+            if norms[j] <= tol or m >= n_v:
                 break
             u = residual[j] / norms[j]
-            if columns:
-                Qb = np.column_stack(columns)
+            if m:
+                Qb = columns[:, :m]
                 u -= Qb @ (Qb.T @ u)
                 u /= np.linalg.norm(u)
             kept.append(candidates.pop(j))
-            columns.append(u)
+            columns[:, m] = u
+            m += 1
             residual = np.delete(residual, j, axis=0)
             residual -= np.outer(residual @ u, u)
     taken = set(kept)
     redundant = [row for row in order if row not in taken]
-    basis = np.column_stack(columns) if columns else np.zeros((n_v, 0))
+    basis = columns[:, :m]
     R = np.triu(basis.T @ W[kept].T) if kept else np.zeros((0, 0))
     return RowSplit(np.array(kept, dtype=int), np.array(redundant, dtype=int), basis, R,
                     scale, W)
@@ -257,18 +260,24 @@ def check_consistency(split: RowSplit, y: np.ndarray, rhs: np.ndarray, size: flo
     return inconsistency
 
 
-def distribute(split: RowSplit, lam: np.ndarray, wrench_map: np.ndarray,
-               wrench_offset) -> np.ndarray:
-    """Among ``lam + N z`` (``N`` spans the null space of ``Phi_v^T``: the multipliers that
-    give the same constraint forces), those of least ``|wrench_map lam + wrench_offset|``."""
+def multiplier_null_space(split: RowSplit, n_c: int) -> np.ndarray:
+    """``N`` (n_c, n_redundant): its columns span the multipliers that change no constraint
+    force (the null space of ``Phi_v^T``), one per redundant row."""
     I, red, d = split.independent, split.redundant, split.scale
     # each redundant row k: W_k = sum_i c_ki W_Ii, so e_k - sum_i c_ki e_Ii is a null vector of
     # W^T (multiplier space scaled by d), i.e. (e_k - sum c_ki e_Ii) / d of Phi_v^T
     C = solve_triangular(split.R, split.basis.T @ split.W[red].T)  # (r, n_red)
-    N = np.zeros((lam.size, red.size))
+    N = np.zeros((n_c, red.size))
     N[red, np.arange(red.size)] = 1.0
     N[I, :] = -C
-    N /= d[:, None]
+    return N / d[:, None]
+
+
+def distribute(split: RowSplit, lam: np.ndarray, wrench_map: np.ndarray,
+               wrench_offset) -> np.ndarray:
+    """Among ``lam + N z`` (``N`` spans the null space of ``Phi_v^T``: the multipliers that
+    give the same constraint forces), those of least ``|wrench_map lam + wrench_offset|``."""
+    N = multiplier_null_space(split, lam.size)
     offset = wrench_map @ lam
     if wrench_offset is not None:
         offset = offset + wrench_offset

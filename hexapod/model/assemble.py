@@ -14,6 +14,7 @@ from hexapod._support.graphs import spanning_forest
 from hexapod.model.forces import ForceBuilder, gravity_potential, inertial_forces
 from hexapod.model.frames import BodyState
 from hexapod.model.joints import (
+    LENGTH,
     ROWS,
     JointGeometry,
     distance_rows,
@@ -25,6 +26,7 @@ from hexapod.model.model import (
     GROUND_INDEX,
     BlockDiagonal,
     BodyInfo,
+    ContactInfo,
     DriverInfo,
     ForceInfo,
     JointInfo,
@@ -42,7 +44,8 @@ from hexapod.scene.forces import (
     RotationalSpringDamper,
     SpringDamper,
 )
-from hexapod.scene.joints import Distance
+from hexapod.scene.contacts import Foothold, StanceGate
+from hexapod.scene.joints import Contact, Distance
 from hexapod.scene.laws import Constant, Law
 from hexapod.scene.scene import Scene
 from hexapod.spatial import Placement, euler_parameters_from_rotation
@@ -188,6 +191,8 @@ class _Assembly:
         self.residuals: list[ca.SX] = []
         self.geometries: dict[str, JointGeometry] = {}
         self.joint_points: list[np.ndarray] = []  # world joint origins at the initial pose
+        self.contacts: list[ContactInfo] = []
+        self.gate_law: dict[str, int] = {}  # each contact's gate: an index into the laws
 
     def _add_row(self, name: str, owner: str, unit: str, expr: ca.SX) -> int:
         self.rows.append(RowInfo(name, owner, unit))
@@ -217,16 +222,31 @@ class _Assembly:
                 if length is None:
                     length = float(np.linalg.norm(world_c - world_p))
                 joint_rows = distance_rows(g, length)
+            elif isinstance(joint, Contact):
+                joint_rows = self._contact_rows(joint, g)
             else:
                 joint_rows = ROWS[joint.kind](g)
             rows = [self._add_row(f"{joint.name}/{name}", joint.name, unit, expr)
                     for name, expr, unit in joint_rows]
+            if isinstance(joint, Contact):
+                self.contacts.append(ContactInfo(joint.name, k, np.array(rows, dtype=int),
+                                                 joint, self.gate_law[joint.name]))
             parts.append(dict(name=joint.name, kind=joint.kind, index=k,
                               parent=self.index.get(joint.parent, GROUND_INDEX),
                               child=self.index.get(joint.child, GROUND_INDEX),
                               parent_frame=frame_p, child_frame=frame_c, axis=axis,
                               rows=np.array(rows, dtype=int), loop_closing=k in chords))
         return parts
+
+    def _contact_rows(self, contact: Contact, g: JointGeometry) -> list:
+        """``gate (r_foot - foothold)`` in world axes; gate and foothold are law values, so
+        the contact set and the footholds change without rebuilding anything."""
+        gate, self.gate_law[contact.name] = self.laws.value(StanceGate(contact),
+                                                            f"{contact.name}/gate")
+        point = g.child.point(g.child_frame.position)
+        return [(axis, gate * (point[i] - self.laws.value(Foothold(contact, i),
+                                                           f"{contact.name}/{axis}0")[0]),
+                 LENGTH) for i, axis in enumerate("xyz")]
 
     def drivers(self) -> tuple[list[DriverInfo], dict[str, list[int]]]:
         """Driver rows, and the rows of the drivers acting on each joint."""
@@ -366,7 +386,8 @@ class _Assembly:
                      characteristic_length=_characteristic_length(self.si, self.joint_points),
                      q0=self.q0, v0=self.v0, mass=self.mass, symbolic=symbolic,
                      forces=tuple(forces), rank_tolerance=rank_tolerance,
-                     working_elements=tuple(working), report_forces=self.si.report_forces)
+                     working_elements=tuple(working), report_forces=self.si.report_forces,
+                     contacts=tuple(self.contacts), ground=self.si.ground)
 
 
 def assemble(scene: Scene, *, rank_tolerance: float = 1e-9) -> Model:

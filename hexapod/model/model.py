@@ -77,6 +77,33 @@ class JointInfo:
 
 
 @dataclass(frozen=True)
+class ContactInfo:
+    """A foot contact: its joint (index into ``Model.joints``), its three rows (world x, y,
+    z of ``gate (r_foot - foothold)``), its schedule (the scene's
+    :class:`~hexapod.scene.joints.Contact`, in SI) and the index of its gate in the law
+    values ``w`` (1 in stance, 0 in swing)."""
+
+    name: str
+    joint: int
+    rows: np.ndarray
+    schedule: object
+    gate: int
+
+    def in_stance(self, t) -> np.ndarray:
+        """Whether the foot is on the ground at ``t`` (touch-down included)."""
+        from hexapod.scene.contacts import in_stance
+
+        return in_stance(self.schedule, t)
+
+    def weight(self, t) -> np.ndarray:
+        """The foot's weight in the ground-force policy at ``t``
+        (:func:`hexapod.scene.contacts.stance_weight`)."""
+        from hexapod.scene.contacts import stance_weight
+
+        return stance_weight(self.schedule, t)
+
+
+@dataclass(frozen=True)
 class DriverInfo:
     """One driver row. ``joint`` for joint drivers; ``body`` and ``coordinate`` otherwise."""
 
@@ -183,8 +210,12 @@ class Model:
                  characteristic_length: float, q0: np.ndarray, v0: np.ndarray,
                  mass: BlockDiagonal, symbolic: Symbolic, forces: tuple[ForceInfo, ...],
                  rank_tolerance: float = 1e-9, working_elements: tuple[str, ...] = (),
-                 report_forces: bool = False):
+                 report_forces: bool = False, contacts: tuple[ContactInfo, ...] = (),
+                 ground=None):
         self.name = name
+        #: the feet's contacts with the ground, and the policy sharing their forces
+        self.contacts = contacts
+        self.ground = ground
         self.report_forces = report_forces
         self.dimension = dimension
         self.bodies = bodies
@@ -215,6 +246,7 @@ class Model:
         self.driver_index = {d.name: i for i, d in enumerate(drivers)}
         self.row_index = {r.name: i for i, r in enumerate(rows)}
         self._built: dict = {}
+        self._law_batch = None  # see law_values
         self._fast: dict[str, FastFunction] = {}
         self._lie_indices()
 
@@ -270,12 +302,23 @@ class Model:
     # ---------------------------------------------------------------- time laws
 
     def law_values(self, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Values and derivatives of every law at ``t``: arrays (n_w,) or (n_w, len(t))."""
+        """Values and derivatives of every law at ``t``: arrays (n_w,) or (n_w, len(t)).
+
+        The values at the times of the last call with several times are kept: an algorithm
+        that walks through samples one by one (the saddle path of the inverse dynamics) asks
+        for the same numbers again, and some laws (a gait's exact inverse kinematics) cost far
+        less per sample when evaluated together."""
         t = np.asarray(t, dtype=float)
+        if t.ndim == 0 and self._law_batch is not None:
+            column = self._law_batch[0].get(float(t))
+            if column is not None:
+                return tuple(x[:, column].copy() for x in self._law_batch[1:])
         shape = (self.n_w,) + t.shape
         w, wd, wdd = np.zeros(shape), np.zeros(shape), np.zeros(shape)
         for i, law in enumerate(self.laws):
             w[i], wd[i], wdd[i] = law.evaluate(t)
+        if t.ndim == 1 and t.size > 1:
+            self._law_batch = ({float(x): k for k, x in enumerate(t)}, w, wd, wdd)
         return w, wd, wdd
 
     def cycle_time(self) -> float | None:
@@ -558,6 +601,9 @@ class Data:
     condition_number: float | None = None
     sigma_min: float | None = None  # smallest singular value of the equilibrated Phi_v
     singular_values: np.ndarray | None = None  # all of them, of the kept rows, ascending
+    #: per contact: "swing", "ok", or where the friction policy found no admissible force,
+    #: "slip" (outside the friction cone) or "pull" (normal force below its minimum)
+    ground_status: tuple[str, ...] | None = None
 
     def at(self, t: float, q: np.ndarray, v: np.ndarray | None = None) -> None:
         """Make ``(t, q)`` (and ``v`` when given) the state of this workspace: every field

@@ -10,10 +10,11 @@ from hexapod._support.lazy import attach
 __getattr__, __dir__, __all__ = attach(__name__, {
     "hexapod.scene.bodies": ["Particle", "PlanarBody", "SpatialBody"],
     "hexapod.scene.drivers": ["CoordinateDriver", "JointDriver"],
+    "hexapod.scene.contacts": ["POLICIES", "GroundForces"],
     "hexapod.scene.element": ["GROUND"],
     "hexapod.scene.forces": ["AppliedForce", "AppliedTorque", "JointEffort",
                              "RotationalSpringDamper", "SpringDamper"],
-    "hexapod.scene.joints": ["Cylindrical", "Distance", "Fixed", "Joint", "PlanarJoint",
+    "hexapod.scene.joints": ["Contact", "Cylindrical", "Distance", "Fixed", "Joint", "PlanarJoint",
                              "PointOnPlane", "Prismatic", "Revolute", "Spherical", "Universal"],
     "hexapod.scene.laws": ["Constant", "Gait", "Harmonic", "Hermite", "Law", "Polynomial",
                            "Spline"],

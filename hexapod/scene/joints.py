@@ -232,10 +232,81 @@ class PointOnPlane(Joint):
     kind = "point-on-plane"
 
 
+@dataclass(eq=False)
+class Contact(Joint):
+    """A foot on the ground by a gait's schedule: while the foot is in **stance** its point (the
+    child frame's origin) stays at its **foothold** (3 rows, world axes: no slip); in **swing**
+    the rows vanish. The parent is the ground, whose normal is world ``z``.
+
+    The schedule repeats every ``period`` (s): the foot lifts off at ``lift_off`` (a fraction of
+    the period) and is on the ground for the fraction ``duty`` before that, so stance ``k``
+    lasts from ``(lift_off + k - duty) period`` to ``(lift_off + k) period``. Its foothold is
+    ``foothold + k advance`` (world, scene units): ``foothold`` is where the foot stands in the
+    stance that ends at ``t = lift_off period``, ``advance`` how far the footholds move each
+    cycle (the stride, for a robot walking straight).
+
+    A foot's share of the ground forces grows from zero at touch-down and falls to zero at
+    lift-off over ``ramp`` (a fraction of the stance), so the forces are continuous in time
+    (:mod:`hexapod.scene.contacts`).
+    """
+
+    period: float = 1.0
+    duty: float = 0.5
+    lift_off: float = 0.0
+    foothold: np.ndarray | None = None
+    advance: np.ndarray | None = None
+    ramp: float = 0.1
+    kind = "contact"
+
+    def __post_init__(self):
+        super().__post_init__()
+        self.foothold = np.zeros(3) if self.foothold is None else np.array(
+            self.foothold, dtype=float).reshape(-1)
+        self.advance = np.zeros(3) if self.advance is None else np.array(
+            self.advance, dtype=float).reshape(-1)
+
+    def problems(self):
+        out = super().problems()
+        if self.parent != "ground":
+            out.append(self.problem("parent", f"a contact's parent is the ground, got "
+                                    f"'{self.parent}'"))
+        for key in ("foothold", "advance"):
+            value = getattr(self, key)
+            if check_finite(self, key, value, out) and value.size != 3:
+                out.append(self.problem(key, f"needs 3 numbers, got {value.size}"))
+        numbers = {k: getattr(self, k) for k in ("period", "duty", "lift_off", "ramp")}
+        if not all(check_finite(self, k, v, out) for k, v in numbers.items()):
+            return out
+        if not self.period > 0:
+            out.append(self.problem("period", f"must be positive, got {self.period}"))
+        if not 0 < self.duty <= 1:
+            out.append(self.problem("duty", f"must be in (0, 1], got {self.duty}"))
+        if not 0 <= self.lift_off < 1:
+            out.append(self.problem("lift_off", f"must be in [0, 1), got {self.lift_off}"))
+        if not 0 < self.ramp <= 0.5:
+            out.append(self.problem("ramp", f"must be in (0, 0.5], got {self.ramp}"))
+        return out
+
+    def scaled(self, length):
+        out = super().scaled(length)
+        out.foothold = self.foothold * length
+        out.advance = self.advance * length
+        return out
+
+    def attached(self, attachment: Attachment):
+        out = super().attached(attachment)
+        if attachment.base != "ground":  # footholds are in the world
+            out.parent = "ground"
+        T = attachment.transform
+        out.foothold = T.transform_point(self.foothold)
+        out.advance = T.rotation @ self.advance
+        return out
+
+
 #: Joint classes by the ``type`` used in scene files.
 JOINT_TYPES: dict[str, type[Joint]] = {
     cls.kind: cls for cls in (Revolute, Prismatic, Spherical, Fixed, Distance, Universal,
-                              Cylindrical, PlanarJoint, PointOnPlane)
+                              Cylindrical, PlanarJoint, PointOnPlane, Contact)
 }
 
 #: Joints that exist in a planar scene.

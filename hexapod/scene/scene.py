@@ -24,6 +24,7 @@ from hexapod.scene.forces import (
     RotationalSpringDamper,
     SpringDamper,
 )
+from hexapod.scene.contacts import GroundForces
 from hexapod.scene.joints import (
     PARTICLE_ENDS,
     PLANE_JOINTS,
@@ -60,12 +61,16 @@ class Scene:
         ``sum |F|^2 + |T / l|^2`` over the joint wrenches. Default: see :func:`hexapod.assemble`.
     report_forces : bool
         Ask simulations of this scene for the joint wrenches at the saved states.
+    ground : GroundForces, optional
+        How the forces of feet on the ground are shared when they are statically indeterminate
+        (:class:`~hexapod.scene.contacts.GroundForces`; default ``min-wrench``).
     """
 
     def __init__(self, name: str = "scene", dimension: int = 3, length_unit: str = "m",
                  gravity=None, characteristic_length: float | None = None, source: str = "",
-                 *, report_forces: bool = False):
+                 *, report_forces: bool = False, ground: GroundForces | None = None):
         self.name = name
+        self.ground = ground if ground is not None else GroundForces()
         self.report_forces = bool(report_forces)
         self.dimension = dimension
         self.length_unit = length_unit
@@ -179,7 +184,7 @@ class Scene:
         out = Scene(self.name, self.dimension, "m", self.gravity * factor,
                     None if self.characteristic_length is None
                     else self.characteristic_length * factor, self.source,
-                    report_forces=self.report_forces)
+                    report_forces=self.report_forces, ground=self.ground)
         out._elements = list(self.scaled_elements(factor))
         return out
 
@@ -262,6 +267,7 @@ class Scene:
         if length is not None and not (np.isfinite(length) and length > 0):
             out.append(self._scene_problem("characteristic_length",
                                            f"must be positive, got {length}"))
+        out.extend(self.ground.problems())
         return out
 
     def _name_problems(self) -> list[Problem]:

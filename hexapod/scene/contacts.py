@@ -1,0 +1,161 @@
+"""Feet on the ground: the stance schedule of a contact, its footholds, the load-sharing
+weights, and the policy that shares the ground forces among the feet.
+
+A :class:`~hexapod.scene.joints.Contact` is in stance on ``[(lift_off + k - duty) T,
+(lift_off + k) T)`` (stance ``k``, period ``T``). Its rows are ``gate (r_foot - a_k)``: the gate
+is 1 in stance and 0 in swing, ``a_k`` the foothold of stance ``k``. Both are piecewise constant
+in time and enter the model as law values (:class:`StanceGate`, :class:`Foothold`), so one
+model serves every contact set and a change of contact set costs nothing.
+
+**Load sharing** (:func:`stance_weight`): a foot's weight in the ground-force policy is
+``S(min(s, 1 - s) / ramp)``, clipped to 1, with ``s`` the stance progress (0 at touch-down, 1 at
+lift-off) and ``S(u) = u^3 (10 - 15 u + 6 u^2)`` the quintic smooth step: 0 at touch-down and
+lift-off, 1 over the middle of the stance, C2 in time. The policies add to their objective
+``(1 / w - 1) |F / F_ref|^2`` per foot, so a foot's force grows from zero after touch-down and
+falls to zero before lift-off; a foot of weight zero carries nothing.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from hexapod.errors import Problem
+from hexapod.scene.laws import Law
+
+#: The ground-force policies (see :class:`GroundForces`).
+POLICIES = ("min-wrench", "min-effort", "friction")
+
+
+def _cycle(contact, t):
+    """Cycle fraction from lift-off (0 at lift-off, ``1 - duty`` at touch-down) and the index
+    of the stance in progress or to come."""
+    x = np.asarray(t, dtype=float) / contact.period - contact.lift_off
+    k = np.floor(x) + 1.0
+    return x - np.floor(x), k
+
+
+def in_stance(contact, t) -> np.ndarray:
+    """Whether the contact's foot is on the ground at ``t`` (touch-down included, lift-off
+    not)."""
+    tau, _ = _cycle(contact, t)
+    return tau >= 1.0 - contact.duty - 1e-12
+
+
+def stance_progress(contact, t) -> np.ndarray:
+    """0 at touch-down to 1 at lift-off in stance; NaN in swing."""
+    tau, _ = _cycle(contact, t)
+    s = (tau - (1.0 - contact.duty)) / contact.duty
+    return np.where(in_stance(contact, t), np.clip(s, 0.0, 1.0), np.nan)
+
+
+def stance_weight(contact, t) -> np.ndarray:
+    """The foot's weight in the ground-force policy: 0 in swing, at touch-down and lift-off, 1
+    over the middle of the stance, a quintic smooth step over ``ramp`` of the stance at each
+    end (C2)."""
+    s = stance_progress(contact, t)
+    if contact.duty >= 1.0:  # always on the ground
+        return np.ones_like(np.asarray(t, dtype=float))
+    u = np.clip(np.minimum(s, 1.0 - s) / contact.ramp, 0.0, 1.0)
+    return np.where(np.isnan(s), 0.0, u**3 * (10 - 15 * u + 6 * u**2))
+
+
+@dataclass(frozen=True, eq=False)
+class StanceGate(Law):
+    """1 while the contact is in stance, 0 in swing (a switch, not a motion: its derivatives
+    are zero)."""
+
+    contact: object
+    kind = "stance-gate"
+
+    def evaluate(self, t):
+        t = np.asarray(t, dtype=float)
+        gate = in_stance(self.contact, t).astype(float)
+        return gate, np.zeros_like(t), np.zeros_like(t)
+
+    def cycle_time(self):
+        return self.contact.period
+
+
+@dataclass(frozen=True, eq=False)
+class Foothold(Law):
+    """One world component of the contact's foothold in the stance in progress (or to come)."""
+
+    contact: object
+    axis: int
+    kind = "foothold"
+
+    def evaluate(self, t):
+        t = np.asarray(t, dtype=float)
+        _, k = _cycle(self.contact, t)
+        value = self.contact.foothold[self.axis] + k * self.contact.advance[self.axis]
+        return value, np.zeros_like(t), np.zeros_like(t)
+
+
+@dataclass
+class GroundForces:
+    """How the ground forces are shared among the feet when they are statically indeterminate
+    (three or more feet down).
+
+    Attributes
+    ----------
+    policy : {"min-wrench", "min-effort", "friction"}
+        ``min-wrench``: the least sum of ``|F|^2 + |T / l|^2`` over every joint's wrench, the
+        contacts' included (the engine's unit-free default); ``min-effort``: the least sum of
+        ``(tau_j / reference_effort_j)^2`` over the actuator efforts; ``friction``: the same
+        least effort with every foot's normal force at least ``weight * min_normal`` and its
+        tangential force inside the friction cone of ``mu``.
+    reference_efforts : dict
+        Reference effort per driven joint (N m, or N for a prismatic joint), by joint name;
+        ``default_reference`` for the others.
+    mu : float
+        Friction coefficient (``friction``; also the denominator of the reported friction ratio
+        ``|F_t| / (mu F_n)``).
+    faces : int
+        The friction cone as a pyramid of this many faces inscribed in it (so the pyramid never
+        leaves the cone); 0 for the exact (quadratic) cone.
+    min_normal : float
+        Least normal force of a foot in full stance (N), scaled by its weight near touch-down
+        and lift-off.
+    """
+
+    policy: str = "min-wrench"
+    reference_efforts: dict = field(default_factory=dict)
+    default_reference: float = 1.0
+    mu: float = 0.8
+    faces: int = 8
+    min_normal: float = 0.0
+    source: str = ""
+
+    def reference(self, joint: str) -> float:
+        return float(self.reference_efforts.get(joint, self.default_reference))
+
+    def problems(self) -> list[Problem]:
+        def problem(key, message):
+            return Problem("ground", message, f"{self.source}.{key}" if self.source else key)
+
+        out = []
+        if self.policy not in POLICIES:
+            out.append(problem("policy", f"must be one of {', '.join(POLICIES)}, got "
+                               f"{self.policy!r}"))
+        numbers = {"mu": self.mu, "min_normal": self.min_normal,
+                   "default_reference": self.default_reference,
+                   **{f"reference_efforts.{k}": v for k, v in self.reference_efforts.items()}}
+        for key, value in numbers.items():
+            try:
+                number = float(value)
+            except (TypeError, ValueError):
+                out.append(problem(key, f"must be a number, got {value!r}"))
+                continue
+            if not np.isfinite(number):
+                out.append(problem(key, f"must be finite, got {value!r}"))
+            elif key == "min_normal" and number < 0:
+                out.append(problem(key, f"must not be negative, got {value!r}"))
+            elif key != "min_normal" and number <= 0:
+                out.append(problem(key, f"must be positive, got {value!r}"))
+        if not isinstance(self.faces, int) or isinstance(self.faces, bool) or not (
+                self.faces == 0 or self.faces >= 3):
+            out.append(problem("faces", f"must be 0 (the exact cone) or at least 3, got "
+                               f"{self.faces!r}"))
+        return out
