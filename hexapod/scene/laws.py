@@ -522,6 +522,20 @@ LAW_TYPES: dict[str, type[Law]] = {
 }
 
 
+def law_types() -> dict[str, type[Law]]:
+    """The law classes by the ``type`` of scene files: the engine's (:data:`LAW_TYPES`), and
+    those installed packages register in the entry-point group ``hexapod.laws`` (the ``legs``
+    package registers its exact gait laws there), so that a scene written with them reads
+    back."""
+    from importlib.metadata import entry_points
+
+    out = dict(LAW_TYPES)
+    for entry in entry_points(group="hexapod.laws"):
+        if entry.name not in out:
+            out[entry.name] = entry.load()
+    return out
+
+
 class LawOnJoint:
     """What an element driven by one time law along one joint's coordinate shares (a joint
     driver, a joint effort): ``law`` taken as a :class:`Law`, its problems reported under the key

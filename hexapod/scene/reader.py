@@ -21,11 +21,12 @@ import numpy as np
 from hexapod._support.files import read_text
 from hexapod.errors import InputFileError, ModelError, Problem
 from hexapod.scene.bodies import Particle, PlanarBody, SpatialBody
+from hexapod.scene.contacts import GroundForces
 from hexapod.scene.drivers import DRIVER_TYPES
 from hexapod.scene.element import Element, quoted
 from hexapod.scene.forces import FORCE_TYPES
 from hexapod.scene.joints import JOINT_TYPES
-from hexapod.scene.laws import LAW_TYPES, Constant, Law
+from hexapod.scene.laws import Constant, Law, law_types
 from hexapod.scene.scene import Scene
 from hexapod.spatial import (
     Placement,
@@ -237,14 +238,27 @@ _LAW_KEYS = {
 }
 
 
+def _plugin_keys(cls) -> dict:
+    """The keys of a law class registered by a package: its dataclass fields, read by their
+    annotated type (``str``, ``int`` or ``float``), required when they have no default."""
+    import dataclasses
+
+    readers = {"str": _string, "int": _integer, "float": _number}
+    return {f.name: (readers.get(str(f.type), _number),
+                     f.default is dataclasses.MISSING
+                     and f.default_factory is dataclasses.MISSING)
+            for f in dataclasses.fields(cls) if f.init}
+
+
 def _law(value) -> Law:
     """A number (constant) or a table ``{type = "...", ...}``."""
     if not isinstance(value, dict):
         return Constant(_number(value))
     kind = value.get("type")
-    if not isinstance(kind, str) or kind not in LAW_TYPES:
-        raise _Invalid(f"law type must be one of {', '.join(LAW_TYPES)}, got {_shown(kind)}")
-    spec = _LAW_KEYS[kind]
+    types = law_types()
+    if not isinstance(kind, str) or kind not in types:
+        raise _Invalid(f"law type must be one of {', '.join(types)}, got {_shown(kind)}")
+    spec = _LAW_KEYS[kind] if kind in _LAW_KEYS else _plugin_keys(types[kind])
     fields = {k: v for k, v in value.items() if k != "type"}
     unknown = set(fields) - set(spec)
     if unknown:
@@ -259,7 +273,7 @@ def _law(value) -> Law:
             args[key] = spec[key][0](raw)
         except _Invalid as error:
             raise _Invalid(f"{key} {error}") from None
-    law = LAW_TYPES[kind](**args)
+    law = types[kind](**args)
     problems = law.problems()
     if problems:
         raise _Invalid("; ".join(problems))
@@ -334,6 +348,10 @@ def _joint_schema(kind: str, dimension: int) -> Schema:
         schema["axis2"] = (_vector(dimension), False)
     if kind == "distance":
         schema["length"] = (_number, False)
+    if kind == "contact":  # footholds are world points, 3 numbers (contacts exist in space only)
+        schema.update({"period": (_number, False), "duty": (_number, False),
+                       "lift_off": (_number, False), "foothold": (_vector(3), False),
+                       "advance": (_vector(3), False), "ramp": (_number, False)})
     return JOINT_TYPES[kind], schema
 
 
@@ -365,6 +383,25 @@ def _force_schema(kind: str, dimension: int) -> Schema:
                                **schemas[kind]}
 
 
+def _efforts(value) -> dict[str, float]:
+    """A table of joint names and numbers (reference efforts)."""
+    if not isinstance(value, dict):
+        raise _Invalid(f"must be a table of joint names and numbers, got {_shown(value)}")
+    out = {}
+    for name, number in value.items():
+        try:
+            out[name] = _number(number)
+        except _Invalid as error:
+            raise _Invalid(str(error), key=name) from None
+    return out
+
+
+#: keys of the [ground] table
+_GROUND_KEYS = {"policy": (_string, False), "mu": (_number, False), "faces": (_integer, False),
+                "min_normal": (_number, False), "default_reference": (_number, False),
+                "reference_efforts": (_efforts, False)}
+
+
 def _driver_kind(table: dict) -> str:
     """Drivers may state their type; otherwise a ``joint`` key makes a joint driver."""
     kind = table.get("type")
@@ -375,7 +412,8 @@ def _driver_kind(table: dict) -> str:
 
 # ------------------------------------------------------------------ the reader
 
-_SECTIONS = ("scene", "body", "joint", "driver", "force")
+_SECTIONS = ("scene", "ground", "body", "joint", "driver", "force")
+_TABLES = ("scene", "ground")  # sections written as one table, the others as arrays of tables
 
 
 class _Reader:
@@ -394,9 +432,10 @@ class _Reader:
         for key in document:
             if key not in _SECTIONS:
                 self.add("file", _key(key), f"unknown section {_shown(key)} (expected "
-                         + ", ".join(f"[{s}]" if s == "scene" else f"[[{s}]]"
+                         + ", ".join(f"[{s}]" if s in _TABLES else f"[[{s}]]"
                                      for s in _SECTIONS) + ")")
         scene = self._scene(document.get("scene", {}))
+        scene.ground = self._ground(document.get("ground", {}))
         dim = scene.dimension
         sections = {
             "body": (lambda t: t.get("type", "spatial" if dim == 3 else "planar"),
@@ -444,6 +483,14 @@ class _Reader:
             self.add("scene", "scene.dimension", f"must be 2 or 3, got {dimension}")
             values["dimension"] = 3
         return Scene(**values, source=str(self.path))
+
+    def _ground(self, table) -> GroundForces:
+        """The ground-force settings; their values are checked with the scene's."""
+        if not isinstance(table, dict):
+            self.add("ground", "ground", "must be a table, written [ground]")
+            table = {}
+        values = self._convert(table, "ground", "ground", _GROUND_KEYS)
+        return GroundForces(**values, source=self.where("ground"))
 
     def _convert(self, table: dict, key: str, label: str, spec: dict) -> dict:
         values = {}

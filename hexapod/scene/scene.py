@@ -268,6 +268,14 @@ class Scene:
             out.append(self._scene_problem("characteristic_length",
                                            f"must be positive, got {length}"))
         out.extend(self.ground.problems())
+        driven = {getattr(d, "joint", None) for d in self._elements
+                  if isinstance(d, JointDriver)}
+        for name in self.ground.reference_efforts:
+            if name not in driven:
+                out.append(self._scene_problem(
+                    f"ground.reference_efforts.{name}",
+                    f"no driven joint '{name}' (reference efforts are given per driven "
+                    "joint)"))
         return out
 
     def _name_problems(self) -> list[Problem]:
@@ -424,7 +432,8 @@ class _ReferenceCheck:
                       "child_frame (or markers), not one origin")
         if dim == 2 and joint.kind not in PLANE_JOINTS:
             hint = {"spherical": "a revolute joint", "universal": "a revolute joint",
-                    "planar": "no joint (a free planar body)"}[joint.kind]
+                    "planar": "no joint (a free planar body)",
+                    "contact": "a point-on-plane joint (contacts are spatial)"}[joint.kind]
             self._add("type", f"no {joint.kind} joint in the plane: use {hint}")
         for key in ("axis", "axis2"):
             axis = getattr(joint, key, None)

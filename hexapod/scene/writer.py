@@ -14,6 +14,7 @@ import numpy as np
 
 from hexapod._support.files import write_atomically
 from hexapod.scene.bodies import Body
+from hexapod.scene.contacts import GroundForces
 from hexapod.scene.drivers import CoordinateDriver, JointDriver
 from hexapod.scene.element import Element
 from hexapod.scene.forces import ForceElement
@@ -86,8 +87,8 @@ def _inertia(J: np.ndarray) -> str:
 def _is_default(name: str, value) -> bool:
     if value is None:
         return True
-    if name in ("com", "position", "velocity", "angular_velocity", "angle", "damping",
-                "stiffness", "free_angle") and np.all(np.asarray(value, dtype=float) == 0):
+    if name in ("com", "position", "velocity", "angular_velocity", "angle", "damping", "stiffness",
+                "free_angle", "advance") and np.all(np.asarray(value, dtype=float) == 0):
         return True
     if name in ("rotation", "inertia_rotation") and np.array_equal(
             np.asarray(value), np.eye(np.asarray(value).shape[0])):
@@ -143,6 +144,28 @@ def _table(element: Element, dimension: int) -> list[str]:
     return lines
 
 
+def _setting(value) -> str:
+    if isinstance(value, str):
+        return _string(value)
+    if isinstance(value, int):  # faces; an integer as TOML writes it
+        return str(value)
+    return _number(value)
+
+
+def _ground(ground: GroundForces) -> list[str]:
+    """The ``[ground]`` settings that differ from the defaults (no lines when none does)."""
+    default = GroundForces()
+    settings = [f"{key} = {_setting(getattr(ground, key))}"
+                for key in ("policy", "mu", "faces", "min_normal", "default_reference")
+                if getattr(ground, key) != getattr(default, key)]
+    lines = ["", "[ground]", *settings] if settings else []
+    if ground.reference_efforts:
+        lines += ["", "[ground.reference_efforts]"] + [
+            f"{_string(joint)} = {_number(value)}"
+            for joint, value in ground.reference_efforts.items()]
+    return lines
+
+
 def scene_text(scene: Scene, header: str = "") -> str:
     """The TOML text of ``scene``."""
     lines = [f"# {line}" if line else "#" for line in header.splitlines()]
@@ -153,6 +176,7 @@ def scene_text(scene: Scene, header: str = "") -> str:
         lines.append(f"characteristic_length = {_number(scene.characteristic_length)}")
     if scene.report_forces:
         lines.append("report_forces = true")
+    lines += _ground(scene.ground)
     for element in scene.elements:
         lines += [""] + _table(element, scene.dimension)
     return "\n".join(lines) + "\n"
