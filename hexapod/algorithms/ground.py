@@ -64,8 +64,12 @@ def share_ground_forces(model: Model, t: float, q: np.ndarray, Phi_v: np.ndarray
     """The multipliers chosen by the scene's ground-force policy among ``lam + N z``, and each
     contact's status (``swing``, ``ok``, ``slip``, ``pull``)."""
     weights = contact_weights(model, t)
-    status = ["ok" if w > 0 or c.in_stance(t) else "swing"
-              for c, w in zip(model.contacts, weights, strict=True)]
+    stance = np.array([bool(c.in_stance(t)) for c in model.contacts])
+    status = ["ok" if down else "swing" for down in stance]
+    if not np.any(weights > NO_LOAD):
+        # every foot down is at touch-down or lift-off (a tripod of duty 1/2 at its switch):
+        # the load passes in an instant, and the feet down share it equally
+        weights = stance.astype(float)
     N = multiplier_null_space(split, model.n_c)
     if N.shape[1] == 0:
         return lam, tuple(status)

@@ -30,9 +30,10 @@ import casadi as ca
 import numpy as np
 
 from hexapod.algorithms.dynamics import forward_dynamics
+from hexapod.algorithms.ground import ground_reactions
 from hexapod.algorithms.kinematics import assemble_positions, degrees_of_freedom, solve_velocities
 from hexapod.algorithms.liaison import joint_origin, joint_wrenches
-from hexapod.errors import HexapodError, SingularSystemError
+from hexapod.errors import AssemblyError, HexapodError, SingularSystemError
 from hexapod.model.model import GROUND_INDEX, Model
 from hexapod.spatial import (
     g_matrix,
@@ -62,6 +63,15 @@ class InverseResult:
         Largest scaled constraint residual over the samples (round-off for the tree path).
     redundant_rows : tuple of str
         Rows named redundant at some sample (saddle path).
+    contacts : tuple of str
+        The model's foot contacts (joint names), in model order.
+    ground_force : ndarray (N, C, 3)
+        The ground's force on each foot, N, world axes (zero in swing).
+    ground_status : ndarray (N, C) of str
+        ``swing``, ``ok``, or where the friction policy found no admissible force, ``slip`` or
+        ``pull`` (see :mod:`hexapod.algorithms.ground`).
+    policy : str
+        The ground-force policy of the model (empty without contacts).
     """
 
     times: np.ndarray
@@ -76,6 +86,10 @@ class InverseResult:
     method: str
     max_violation: float
     redundant_rows: tuple[str, ...] = ()
+    contacts: tuple[str, ...] = ()
+    ground_force: np.ndarray | None = None
+    ground_status: np.ndarray | None = None
+    policy: str = ""
 
 
 #: Compiling the tree path costs about 0.2 s per joint and saves about 4.4 microseconds per joint
@@ -138,12 +152,16 @@ def _saddle(model, times, frame, progress) -> InverseResult:
     force, torque, effort = np.zeros((n, J, 3)), np.zeros((n, J, 3)), np.zeros((n, J))
     Q, V, A = np.zeros((n, model.n_q)), np.zeros((n, model.n_v)), np.zeros((n, model.n_v))
     redundant: list[str] = []
+    ground = np.zeros((n, len(model.contacts), 3))
+    status = np.full((n, len(model.contacts)), "swing", dtype=object)
     worst = 0.0
     q = model.q0
     data = model.create_data()
     model.law_values(times)  # all samples at once: the per-sample calls below reuse them
+    previous = times[0]
     for k, t in enumerate(times):
-        q = assemble_positions(model, data, t, q)
+        q = _follow(model, data, previous, q, t)
+        previous = t
         if k == 0:
             free = degrees_of_freedom(model, data, t, q)["dof_with_drivers"]
             if free:
@@ -158,6 +176,9 @@ def _saddle(model, times, frame, progress) -> InverseResult:
         A[k] = forward_dynamics(model, data, t, q, v)
         wrenches = joint_wrenches(model, data, frame=frame)
         force[k], torque[k], effort[k] = wrenches.force, wrenches.torque, wrenches.effort
+        if model.contacts:
+            ground[k] = ground_reactions(model, data.lam)
+            status[k] = data.ground_status
         Q[k], V[k] = q, v
         if model.n_c:
             worst = max(worst, float(np.max(np.abs(model.call("phi", q=q, w=data.w)
@@ -166,8 +187,24 @@ def _saddle(model, times, frame, progress) -> InverseResult:
                       if model.rows[i].name not in redundant]
         if progress is not None:
             progress(k + 1, n)
+    contacts = tuple(c.name for c in model.contacts)
     return InverseResult(times, tuple(j.name for j in model.joints), force, torque, effort,
-                         Q, V, A, frame, "saddle", worst, tuple(redundant))
+                         Q, V, A, frame, "saddle", worst, tuple(redundant), contacts,
+                         ground, status.astype(str),
+                         model.ground.policy if model.contacts else "")
+
+
+def _follow(model: Model, data, t0: float, q0: np.ndarray, t: float, depth: int = 6):
+    """Positions at ``t`` from those at ``t0``: Newton's method from ``q0``, and when the
+    samples are too far apart for it (a robot's legs swing a long way between coarse samples),
+    through the time halfway first."""
+    try:
+        return assemble_positions(model, data, t, q0)
+    except AssemblyError:
+        if depth == 0 or t == t0:
+            raise
+    middle = _follow(model, data, t0, q0, (t0 + t) / 2, depth - 1)
+    return _follow(model, data, (t0 + t) / 2, middle, t, depth - 1)
 
 
 # ------------------------------------------------------------------ the tree path
