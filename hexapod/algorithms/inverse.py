@@ -160,6 +160,10 @@ def _saddle(model, times, frame, progress) -> InverseResult:
     model.law_values(times)  # all samples at once: the per-sample calls below reuse them
     previous = times[0]
     for k, t in enumerate(times):
+        if k:  # a second-order prediction: Newton then needs one or two steps, not five
+            h = t - previous
+            guess = model.integrate(q, h * V[k - 1] + h * h / 2 * A[k - 1])
+            q = guess if np.all(np.isfinite(guess)) else q
         q = _follow(model, data, previous, q, t)
         previous = t
         if k == 0:
