@@ -160,11 +160,8 @@ def _saddle(model, times, frame, progress) -> InverseResult:
     model.law_values(times)  # all samples at once: the per-sample calls below reuse them
     previous = times[0]
     for k, t in enumerate(times):
-        if k:  # a second-order prediction: Newton then needs one or two steps, not five
-            h = t - previous
-            guess = model.integrate(q, h * V[k - 1] + h * h / 2 * A[k - 1])
-            q = guess if np.all(np.isfinite(guess)) else q
-        q = _follow(model, data, previous, q, t)
+        q = _next_positions(model, data, previous, q, t,
+                            (V[k - 1], A[k - 1]) if k else None)
         previous = t
         if k == 0:
             free = degrees_of_freedom(model, data, t, q)["dof_with_drivers"]
@@ -196,6 +193,21 @@ def _saddle(model, times, frame, progress) -> InverseResult:
                          Q, V, A, frame, "saddle", worst, tuple(redundant), contacts,
                          ground, status.astype(str),
                          model.ground.policy if model.contacts else "")
+
+
+def _next_positions(model: Model, data, t0: float, q0: np.ndarray, t: float, rates):
+    """Positions at ``t`` from the solved ones at ``t0``: from a second-order prediction with
+    the velocities and accelerations ``rates`` at ``t0`` (Newton's method then needs one or two
+    steps, not five), else by :func:`_follow`."""
+    if rates is not None:
+        h = t - t0
+        guess = model.integrate(q0, h * rates[0] + h * h / 2 * rates[1])
+        if np.all(np.isfinite(guess)):
+            try:
+                return assemble_positions(model, data, t, guess)
+            except AssemblyError:
+                pass
+    return _follow(model, data, t0, q0, t)
 
 
 def _follow(model: Model, data, t0: float, q0: np.ndarray, t: float, depth: int = 6):
