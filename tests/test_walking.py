@@ -196,8 +196,9 @@ def _independent(model, data, t, cone=False):
                 return np.concatenate([faces, [F[2] - w * ground.min_normal]]) / weight
 
             constraints.append({"type": "ineq", "fun": inside})
-    solution = minimize(objective, data.lam, constraints=constraints, method="SLSQP",
-                        options={"maxiter": 500, "ftol": 1e-14})
+    start = np.linalg.lstsq(A_eq, b_eq, rcond=None)[0]  # balanced, but by no policy
+    solution = minimize(objective, start, constraints=constraints, method="SLSQP",
+                        options={"maxiter": 1000, "ftol": 1e-14})
     return solution, objective
 
 

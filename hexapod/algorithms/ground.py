@@ -81,7 +81,7 @@ def share_ground_forces(model: Model, t: float, q: np.ndarray, Phi_v: np.ndarray
     else:
         z0, K = np.zeros(N.shape[1]), np.eye(N.shape[1])
     base = lam + N @ z0  # lam + N (z0 + K y)
-    NK = N @ K
+    NK = _orthonormal(N @ K)  # the same multipliers, in directions the QP solvers handle well
     A, b = _objective(model, q, Phi_v, Q_across, weights)  # |A lam + b|^2
     AK, r = A @ NK, A @ base + b
     policy = model.ground.policy
@@ -93,6 +93,15 @@ def share_ground_forces(model: Model, t: float, q: np.ndarray, Phi_v: np.ndarray
         if flag:
             status[k] = flag
     return base + NK @ y, tuple(status)
+
+
+def _orthonormal(B: np.ndarray) -> np.ndarray:
+    """An orthonormal basis of the columns of ``B`` (the null space of ``Phi_v^T`` comes scaled
+    by the rows' norms, poorly conditioned for an active-set solver)."""
+    if B.shape[1] == 0:
+        return B
+    U, s, _ = np.linalg.svd(B, full_matrices=False)
+    return U[:, :int(np.sum(s > s[0] * 1e-12))]
 
 
 def _affine_solutions(E: np.ndarray, e: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

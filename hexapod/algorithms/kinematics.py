@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from hexapod.algorithms.ground import inactive_rows
 from hexapod.algorithms.linalg import RowSplit, check_consistency, equilibrate, split_rows
 from hexapod.errors import AssemblyError, SingularSystemError
 from hexapod.model.model import Data, Model
@@ -207,10 +208,11 @@ def degrees_of_freedom(model: Model, data: Data, t: float, q: np.ndarray) -> dic
     position = {row: k for k, row in enumerate(joint_rows)}
     joint_split = split_rows(W, d, np.array([position[i] for i in priority], dtype=int),
                              model.rank_tolerance)
+    swing = set(inactive_rows(model, w).tolist())  # feet off the ground: no rows at all
     return {
         "dof": model.n_v - joint_split.rank,
         "dof_with_drivers": model.n_v - split.rank,
-        "redundant_rows": [model.rows[i].name for i in split.redundant],
+        "redundant_rows": [model.rows[i].name for i in split.redundant if i not in swing],
     }
 
 

@@ -275,22 +275,28 @@ class Model:
     def row_priority(self) -> np.ndarray:
         """Order in which rows are kept when the constraints are redundant: tree joints first,
         then loop-closing joints, then drivers (so a redundant closure or an over-constraining
-        driver is what gets named)."""
-        tree = [j.rows for j in self.joints if not j.loop_closing]
-        loops = [j.rows for j in self.joints if j.loop_closing]
+        driver is what gets named), then the feet's contacts (with three feet or more down, the
+        contact rows beyond the six the trunk needs are what gets named)."""
+        feet = {c.joint for c in self.contacts}
+        tree = [j.rows for j in self.joints if not j.loop_closing and j.index not in feet]
+        loops = [j.rows for j in self.joints if j.loop_closing and j.index not in feet]
         drivers = [np.array([d.row]) for d in self.drivers]
-        parts = tree + loops + drivers
+        contacts = [c.rows for c in self.contacts]
+        parts = tree + loops + drivers + contacts
         return np.concatenate(parts).astype(int) if parts else np.zeros(0, dtype=int)
 
     @cached_property
     def row_groups(self) -> np.ndarray:
         """The group of each entry of :attr:`row_priority` for the rank decision: joint rows
         each on their own (taken in order), drivers together (the best-conditioned first, see
-        :func:`hexapod.algorithms.linalg.split_rows`). Which of several drivers over-constrains a
-        mechanism is a matter of conditioning; which joint row closes a loop is the policy's."""
-        joint_rows = sum(j.rows.size for j in self.joints)
-        return np.concatenate([np.arange(joint_rows),
-                               np.full(len(self.drivers), joint_rows)]).astype(int)
+        :func:`hexapod.algorithms.linalg.split_rows`), contact rows together (likewise). Which
+        of several drivers over-constrains a mechanism, and which feet's rows are beyond what
+        the trunk needs, are matters of conditioning; which joint row closes a loop is the
+        policy's."""
+        contact_rows = sum(c.rows.size for c in self.contacts)
+        joint_rows = sum(j.rows.size for j in self.joints) - contact_rows
+        return np.concatenate([np.arange(joint_rows), np.full(len(self.drivers), joint_rows),
+                               np.full(contact_rows, joint_rows + 1)]).astype(int)
 
     @cached_property
     def row_scale(self) -> np.ndarray:
