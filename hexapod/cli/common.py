@@ -41,6 +41,26 @@ def at_least(smallest: int):
     return parse
 
 
+def non_negative(kind):
+    def parse(text: str):
+        try:
+            value = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+        if not (math.isfinite(value) and value >= 0):
+            raise argparse.ArgumentTypeError(f"must be zero or positive, got {text}")
+        return value
+    return parse
+
+
+def pyramid_faces(text: str) -> int:
+    """Faces of the friction pyramid: 0 (the exact cone) or at least 3."""
+    value = at_least(0)(text)
+    if 0 < value < 3:
+        raise argparse.ArgumentTypeError(f"must be 0 (the exact cone) or at least 3, got {value}")
+    return value
+
+
 def short(value: float) -> str:
     """A number as a user writes it: 1e-06 as 1e-6."""
     mantissa, e, exponent = f"{value:g}".partition("e")
@@ -65,6 +85,54 @@ def inverse_arguments(parser: argparse.ArgumentParser, method_help: str) -> None
                         help="axes of the wrench components (default: the child's joint frame)")
     parser.add_argument("--method", choices=("auto", "tree", "saddle"), default="auto",
                         help=method_help)
+
+
+#: The ground-force policies (hexapod.scene.contacts.POLICIES, not imported: it loads NumPy).
+POLICIES = ("min-wrench", "min-effort", "friction")
+#: The ground options, each named as the GroundForces field it sets.
+GROUND_OPTIONS = ("policy", "mu", "faces", "min_normal")
+
+
+def ground_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--policy``, ``--mu``, ``--faces``, ``--min-normal``: the scene's ground-force settings
+    overridden (scenes with foot contacts)."""
+    group = parser.add_argument_group(
+        "ground forces", "override the scene's ground-force settings (scenes whose feet touch "
+        "the ground by contacts, e.g. the built-in 'hexapod')")
+    group.add_argument("--policy", choices=POLICIES,
+                       help="how the forces are shared among the feet in stance: least joint "
+                       "wrenches, least actuator efforts, or least efforts with every foot "
+                       "inside its friction cone (default: the scene's)")
+    group.add_argument("--mu", type=positive(float), metavar="MU",
+                       help="friction coefficient: the friction policy's cone and the reported "
+                       "friction ratio |F_t| / (mu F_n) (default: the scene's)")
+    group.add_argument("--faces", type=pyramid_faces, metavar="N",
+                       help="friction policy: the cone as a pyramid of N faces inscribed in it, "
+                       "0 for the exact cone (default: the scene's)")
+    group.add_argument("--min-normal", type=non_negative(float), metavar="N",
+                       help="friction policy: least normal force of a foot in full stance, in "
+                       "newtons (default: the scene's)")
+
+
+def apply_ground_options(scene, args):
+    """``scene`` with its ground-force settings (``scene.ground``) replaced by a copy that
+    takes the ground options given in ``args``; a :class:`~hexapod.errors.HexapodError` when
+    options are given for a scene without foot contacts."""
+    import dataclasses
+
+    given = {name: getattr(args, name) for name in GROUND_OPTIONS
+             if getattr(args, name, None) is not None}
+    if not given:
+        return scene
+    if not any(joint.kind == "contact" for joint in scene.joints.values()):
+        from hexapod.errors import HexapodError
+
+        options = ", ".join("--" + name.replace("_", "-") for name in given)
+        raise HexapodError(f"{options}: scene '{scene.name}' has no foot contacts, so no ground "
+                           "forces to share (these options are for walking scenes, e.g. "
+                           "'hexapod')")
+    scene.ground = dataclasses.replace(scene.ground, **given)
+    return scene
 
 
 # ------------------------------------------------------------------ progress on stderr

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from hexapod.cli.common import emit, scene_arguments
+from hexapod.cli.common import apply_ground_options, emit, ground_arguments, scene_arguments
 
 HELP = ("forward dynamics at one instant: accelerations, multipliers, joint wrenches and driver "
         "efforts")
@@ -15,6 +15,7 @@ DESCRIPTION = (
 
 def add_arguments(parser) -> None:
     scene_arguments(parser, "print the results as JSON")
+    ground_arguments(parser)
 
 
 def run(args) -> int:
@@ -22,6 +23,6 @@ def run(args) -> int:
     from hexapod.output.describe import describe_state, format_state
     from hexapod.scene.builtin import load_scene
 
-    model = assemble(load_scene(args.scene))
+    model = assemble(apply_ground_options(load_scene(args.scene), args))
     emit(describe_state(model, args.t), args.json, format_state)
     return 0

@@ -12,8 +12,11 @@ DESCRIPTION = (
     "in the directory DIR: per saved instant bodies_NNNN.vtu (each body's solid, posed: its "
     "equivalent box of inertia and bars to its joints, or the mesh its scene names or --mesh "
     "gives; cell data 'body' and 'part') and joints_NNNN.vtu (each joint origin with point data "
-    "'force' and 'moment' in world axes, the same in the child's joint frame, and 'effort'); the "
-    "time indices bodies.pvd and joints.pvd; and bodies.csv and joints.csv naming the indices. "
+    "'force' and 'moment' in world axes, the same in the child's joint frame, and 'effort'); for "
+    "a walking scene feet_NNNN.vtu (each foot's point with point data 'ground_force', the "
+    "ground's force on the foot in world axes, N, zero in swing, for ParaView's Glyph filter, "
+    "and 'stance'); the time indices bodies.pvd, joints.pvd (and feet.pvd); and bodies.csv and "
+    "joints.csv (and feet.csv) naming the indices. "
     "The scene is the one the results record (a file's path or a built-in scene), or --scene. "
     "The directory is written whole or not at all.")
 

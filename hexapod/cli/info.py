@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from hexapod.cli.common import emit, scene_arguments
+from hexapod.cli.common import apply_ground_options, emit, ground_arguments, scene_arguments
 
 HELP = ("what a scene holds and how it was built: rows, topology, degrees of freedom, "
         "redundancy, condition number")
@@ -10,7 +10,8 @@ DESCRIPTION = (
     "Describe SCENE: its bodies, joints, drivers and force elements; what the model was built "
     "with (coordinates per body, rows per joint and driver, force terms); its loops; degrees of "
     "freedom counted (Grubler-Kutzbach) and numerical (n_v - rank Phi_v); the redundant rows and "
-    "the condition number at the pose assembled at time T.")
+    "the condition number at the pose assembled at time T; its total mass; for a walking scene, "
+    "the ground-force policy.")
 
 
 def add_arguments(parser) -> None:
@@ -18,6 +19,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--graph", action="store_true",
                         help="add the vector-network graph of Richard, Anderson and Andrews "
                         "(1989): its edges and its incidence, cutset and circuit matrices")
+    ground_arguments(parser)
 
 
 def run(args) -> int:
@@ -25,6 +27,6 @@ def run(args) -> int:
     from hexapod.output.describe import describe_model, format_model
     from hexapod.scene.builtin import load_scene
 
-    model = assemble(load_scene(args.scene))
+    model = assemble(apply_ground_options(load_scene(args.scene), args))
     emit(describe_model(model, args.t, graph=args.graph), args.json, format_model)
     return 0

@@ -4,7 +4,12 @@ from __future__ import annotations
 
 import sys
 
-from hexapod.cli.common import inverse_arguments, sample_progress
+from hexapod.cli.common import (
+    apply_ground_options,
+    ground_arguments,
+    inverse_arguments,
+    sample_progress,
+)
 
 HELP = "joint efforts and wrenches of a prescribed motion, as CSV"
 DESCRIPTION = (
@@ -12,7 +17,9 @@ DESCRIPTION = (
     "(columns t, one per joint in rad or m, optional qd:<joint> and qdd:<joint>) and write "
     "OUT.csv: t, then for every joint tau:<joint> (revolute and prismatic) and Fx, Fy, Fz, Tx, "
     "Ty, Tz:<joint>, the wrench by the parent on the child about the joint origin in the child's "
-    "joint frame (N, N m). The file is written whole or not at all.")
+    "joint frame (N, N m); for a scene with foot contacts (a walking robot) then GRx, GRy, "
+    "GRz:LEG, the ground's force on each foot in world axes (N, zero in swing; LEG is the "
+    "contact's name without '/ground'). The file is written whole or not at all.")
 
 
 def add_arguments(parser) -> None:
@@ -22,6 +29,7 @@ def add_arguments(parser) -> None:
     inverse_arguments(parser, "tree-ordered solve (open trees with every joint driven) or the "
                        "saddle-point solve per sample (any mechanism); default: the fastest that "
                        "applies")
+    ground_arguments(parser)
 
 
 def run(args) -> int:
@@ -37,7 +45,10 @@ def run(args) -> int:
     # every estimated derivative is said, once per message (main prints the warnings caught)
     warnings.simplefilter("always", MotionWarning)
     motion = read_motion(args.motion)
-    model = assemble(apply_motion(load_scene(args.model), motion))
+    scene = apply_ground_options(load_scene(args.model), args)
+    driven = apply_motion(scene, motion)
+    driven.ground = scene.ground  # the driven copy keeps the scene's ground-force settings
+    model = assemble(driven)
     times = motion.times
     progress = sample_progress("inverse dynamics") if sys.stderr.isatty() else None
     result = inverse_dynamics(model, times, method=args.method, frame=args.frame,
@@ -45,6 +56,8 @@ def run(args) -> int:
     write_atomically(args.out, inverse_csv_text(model, result))
     if progress is not None:
         print(file=sys.stderr)
-    print(f"wrote {args.out}: {times.size} samples, {len(model.joints)} joints "
+    feet = (f", {len(model.contacts)} feet (ground forces by the policy {result.policy})"
+            if model.contacts else "")
+    print(f"wrote {args.out}: {times.size} samples, {len(model.joints)} joints{feet} "
           f"({result.method} path)")
     return 0

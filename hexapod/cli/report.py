@@ -6,7 +6,9 @@ import sys
 from pathlib import Path
 
 from hexapod.cli.common import (
+    apply_ground_options,
     at_least,
+    ground_arguments,
     inverse_arguments,
     positive,
     sample_progress,
@@ -20,7 +22,13 @@ DESCRIPTION = (
     "of 'hexapod inverse'), summary.md (per joint the peak and RMS force and moment magnitudes, "
     "per driver the peak effort and RMS power, per body the residual of its equations of motion "
     "under the reported wrenches) and the figures forces.png, torques.png, efforts.png and, when "
-    "bodies have a 'foot' marker, foot.png. The directory is written whole or not at all.")
+    "bodies have a 'foot' marker, foot.png; for a robot (joints named LEG/JOINT) the force, "
+    "moment and effort figures per leg (forces-L1.png ...). A walking scene (feet on the ground "
+    "by contacts) adds the ground's force on each foot to inverse.csv (GRx, GRy, GRz:LEG), "
+    "ground.csv (per foot: normal and tangential force, friction ratio, status), trunk.csv (the "
+    "trunk's pose and velocity), the policy, the feet's peaks and any slip or pull to "
+    "summary.md, and the figures ground.png, friction.png and gait.png. The directory is "
+    "written whole or not at all.")
 
 
 def add_arguments(parser) -> None:
@@ -35,6 +43,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--samples", type=at_least(2), default=501,
                         help="samples over the window, ends included (default 501)")
     inverse_arguments(parser, "as for 'hexapod inverse'")
+    ground_arguments(parser)
 
 
 def run(args) -> int:
@@ -47,10 +56,10 @@ def run(args) -> int:
     from hexapod.algorithms.inverse import inverse_dynamics
     from hexapod.algorithms.kinematics import marker_trajectories
     from hexapod.model.assemble import assemble
-    from hexapod.output.report import FOOT_MARKER, RunInfo, report_files
+    from hexapod.output.report import FOOT_MARKER, RunInfo, report_files, walking_headlines
     from hexapod.scene.builtin import load_scene
 
-    scene = load_scene(args.scene)
+    scene = apply_ground_options(load_scene(args.scene), args)
     model = assemble(scene)
     duration, why = model.time_window(args.duration)
     times = args.start + np.linspace(0.0, duration, args.samples)
@@ -77,4 +86,6 @@ def run(args) -> int:
           f"largest joint force {np.linalg.norm(result.force[:, worst], axis=1).max():.4g} N "
           f"at {model.joints[worst].name}; body balance within "
           f"{balance.relative().max():.1e} (relative)")
+    for line in walking_headlines(model, result):
+        print(line)
     return 0

@@ -7,7 +7,9 @@ import sys
 from pathlib import Path
 
 from hexapod.cli.common import (
+    apply_ground_options,
     at_least,
+    ground_arguments,
     jsonable,
     positive,
     scene_positional,
@@ -54,6 +56,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--out", metavar="DIR",
                         help="the directory to write (default: SCENE-NAME-simulation); an "
                         "earlier run there is replaced")
+    ground_arguments(parser)
 
 
 def run(args) -> int:
@@ -63,7 +66,7 @@ def run(args) -> int:
     from hexapod.simulation.loop import simulate
     from hexapod.simulation.results import scene_reference
 
-    scene = load_scene(args.scene)
+    scene = apply_ground_options(load_scene(args.scene), args)
     model = assemble(scene)
     duration, why = model.time_window(args.t_end)
     out = Path(args.out or f"{scene.name}-simulation")

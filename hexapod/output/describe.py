@@ -13,6 +13,7 @@ import dataclasses
 import numpy as np
 
 from hexapod.algorithms.dynamics import forward_dynamics
+from hexapod.algorithms.ground import ground_reactions
 from hexapod.algorithms.kinematics import assemble_positions, scaled_residual, solve_velocities
 from hexapod.algorithms.liaison import driver_efforts, joint_wrenches
 from hexapod.algorithms.topology import body_joint_graph, mobility, vector_network
@@ -20,6 +21,15 @@ from hexapod.model.model import GROUND_INDEX, Data, Model
 from hexapod.scene.laws import Law
 
 GROUND = "ground"
+
+
+def _ground_settings(model: Model) -> dict | None:
+    """The ground-force policy and its settings, for a model with foot contacts (else None)."""
+    if not model.contacts:
+        return None
+    g = model.ground
+    return {"policy": g.policy, "mu": g.mu, "faces": g.faces, "min_normal": g.min_normal,
+            "contacts": [c.name for c in model.contacts]}
 
 
 def _body(model: Model, index: int) -> str:
@@ -80,6 +90,7 @@ def describe_model(model: Model, t: float = 0.0, graph: bool = False) -> dict:
     m = mobility(model, data, t, q)
     out = {
         "scene": model.name, "dimension": model.dimension,
+        "mass": float(sum(b.mass for b in model.bodies)),
         "bodies": bodies, "joints": joints, "drivers": drivers, "forces": forces,
         "model": {"n_q": model.n_q, "n_v": model.n_v, "n_c": model.n_c,
                   "time_laws": model.n_w, "force_terms": terms,
@@ -95,6 +106,9 @@ def describe_model(model: Model, t: float = 0.0, graph: bool = False) -> dict:
                      "redundancy": m.redundancy, "redundant_rows": list(m.redundant_rows)},
         "initial_pose": _pose(model, q, t, data),
     }
+    ground = _ground_settings(model)
+    if ground is not None:
+        out["ground"] = ground
     if graph:
         network = vector_network(model)
         out["vector_network"] = {
@@ -110,7 +124,7 @@ def describe_state(model: Model, t: float = 0.0) -> dict:
     q, _, data = _solved_state(model, t)
     wrenches = joint_wrenches(model, data)
     m = mobility(model, data, t, q)
-    return {
+    out = {
         "scene": model.name, "t": t, "dimension": model.dimension,
         "counts": {"bodies": len(model.bodies), "joints": len(model.joints),
                    "drivers": len(model.drivers), "forces": len(model.forces),
@@ -124,6 +138,14 @@ def describe_state(model: Model, t: float = 0.0) -> dict:
         "accelerations": dict(zip(model.velocity_names, data.v_dot.tolist(), strict=True)),
         "multipliers": {model.rows[i].name: float(data.lam[i]) for i in range(model.n_c)},
     }
+    if model.contacts:  # each foot contact also says the ground's force on it, world axes
+        forces = ground_reactions(model, data.lam) + 0.0  # zero in swing, not -0
+        status = data.ground_status or ("",) * len(forces)
+        for k, contact in enumerate(model.contacts):
+            out["joints"][contact.name].update(
+                ground_force=forces[k].tolist(), ground_status=status[k],
+                policy=model.ground.policy, mu=model.ground.mu)
+    return out
 
 
 # ------------------------------------------------------------------ text
@@ -139,12 +161,14 @@ def _number(x) -> str:
     return "-" if x is None else f"{x:.4g}"
 
 
-def _pose_lines(pose: dict, redundant: list[str]) -> list[str]:
+def _pose_lines(pose: dict, redundant: list[str], policy: str | None = None) -> list[str]:
     lines = [f"pose at t = {pose['t']:g} s: max |phi|/s = {pose['max_abs_phi']:.1e}",
              f"condition number (equilibrated saddle-point matrix): "
              f"{_number(pose['condition_number'])}; smallest singular value of the "
              f"equilibrated Phi_v: {_number(pose['sigma_min'])}"]
-    if redundant:
+    if redundant and policy not in (None, "min-wrench"):
+        lines.append(f"multipliers of redundant rows: the ground-force policy {policy}")
+    elif redundant:
         lines.append(f"multipliers of redundant rows: least sum |F|^2 + |T/l|^2, "
                      f"l = {pose['characteristic_length_m']:.4g} m")
     return lines
@@ -153,7 +177,8 @@ def _pose_lines(pose: dict, redundant: list[str]) -> list[str]:
 def format_model(info: dict) -> str:
     """The text ``hexapod info`` prints, from :func:`describe_model`'s dictionary."""
     m, top, mob = info["model"], info["topology"], info["mobility"]
-    out = [f"scene '{info['scene']}' ({info['dimension']}-D, SI units)", "", "bodies"]
+    out = [f"scene '{info['scene']}' ({info['dimension']}-D, SI units), total mass "
+           f"{info['mass']:.6g} kg", "", "bodies"]
     out += _table(["name", "kind", "mass kg", "coordinates"],
                   [[b["name"], b["kind"], f"{b['mass']:.6g}",
                     " ".join(c.split(".")[-1] for c in b["coordinates"])]
@@ -185,10 +210,20 @@ def format_model(info: dict) -> str:
                f"{mob['numerical']} numerical (n_v - rank Phi_v); with the drivers "
                f"{mob['counted_with_drivers']} and {mob['numerical_with_drivers']}")
     out.append("redundant rows: " + (", ".join(mob["redundant_rows"]) or "none"))
-    out += _pose_lines(info["initial_pose"], mob["redundant_rows"])
+    out += _pose_lines(info["initial_pose"], mob["redundant_rows"],
+                       info["ground"]["policy"] if "ground" in info else None)
+    if "ground" in info:
+        out.append(_ground_line(info["ground"]))
     if "vector_network" in info:
         out += [""] + format_network(info["vector_network"])
     return "\n".join(out)
+
+
+def _ground_line(ground: dict) -> str:
+    cone = f"{ground['faces']}-face pyramid" if ground["faces"] else "exact cone"
+    return (f"ground forces of {len(ground['contacts'])} foot contacts: policy "
+            f"{ground['policy']}, mu = {ground['mu']:g} ({cone}), least normal force "
+            f"{ground['min_normal']:g} N")
 
 
 def format_network(net: dict) -> list[str]:
@@ -221,7 +256,17 @@ def format_state(report: dict) -> str:
            f"{c['laws']} time laws",
            f"degrees of freedom: {report['dof']} (joints), {report['dof_with_drivers']} left "
            "by the drivers; redundant rows: " + (", ".join(report["redundant_rows"]) or "none")]
-    out += _pose_lines(report["state"], report["redundant_rows"])
+    feet = {name: j for name, j in report["joints"].items() if "ground_force" in j}
+    out += _pose_lines(report["state"], report["redundant_rows"],
+                       next(iter(feet.values()))["policy"] if feet else None)
+    if feet:
+        first = next(iter(feet.values()))
+        out += ["", f"ground forces of {len(feet)} foot contacts by the policy "
+                f"{first['policy']} (mu = {first['mu']:g}): the ground's force on each foot "
+                "(world axes, N)"]
+        out += _table(["contact", "GRx", "GRy", "GRz", "status"],
+                      [[name, *(f"{x:.4g}" for x in j["ground_force"]), j["ground_status"]]
+                       for name, j in feet.items()], indent="")
     out += ["", "joint wrenches: exerted by the parent on the child, about the joint origin, "
             "in the child's joint frame (N, N m)"]
     keys = ("tau", "Fx", "Fy", "Fz", "Tx", "Ty", "Tz")

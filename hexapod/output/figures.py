@@ -121,3 +121,131 @@ def trajectory_figure(times: np.ndarray, trajectories: dict[str, np.ndarray], ti
     (timeline if len(trajectories) == 1 else top).legend(fontsize=7)
     figure.suptitle(title)
     return figure
+
+
+# ------------------------------------------------------------------ a walking robot's feet
+
+#: Shade of the stance intervals (grey, as in ground-reaction and gait diagrams).
+STANCE_SHADE = "0.85"
+
+
+def _leg_layout(legs: list[str]) -> tuple[int, int, list[tuple[int, int]]]:
+    """Rows, columns and each leg's panel: a robot's ``L1 .. L3`` down the left column and
+    ``R1 .. R3`` down the right, as the legs stand (front at the top); other names in a grid in
+    their order."""
+    places = []
+    for leg in legs:
+        side, number = leg[:1], leg[1:]
+        if side not in ("L", "R") or not number.isdigit() or int(number) < 1:
+            break
+        places.append((int(number) - 1, 0 if side == "L" else 1))
+    if len(places) == len(legs) and len(set(places)) == len(places) and places:
+        return max(r for r, _ in places) + 1, 2, places
+    columns = min(len(legs), max(1, math.ceil(math.sqrt(1.5 * len(legs)))))
+    return (math.ceil(len(legs) / columns), columns,
+            [(k // columns, k % columns) for k in range(len(legs))])
+
+
+def _leg_panels(legs: list[str], title: str):
+    """A figure with one panel per leg, placed by :func:`_leg_layout`; unused panels hidden."""
+    from matplotlib.figure import Figure
+
+    rows, columns, places = _leg_layout(legs)
+    width, height = 4.6 * columns + 0.6, 2.4 * rows + 1.0
+    figure = Figure(figsize=(width, height))
+    grid = figure.subplots(rows, columns, sharex=True, sharey=True, squeeze=False)
+    figure.subplots_adjust(left=0.8 / width, right=1 - 0.8 / width, bottom=0.55 / height,
+                           top=1 - 0.7 / height, wspace=0.35, hspace=0.4)
+    used = set(places)
+    for r in range(rows):
+        for c in range(columns):
+            if (r, c) not in used:
+                grid[r, c].set_visible(False)
+    figure.suptitle(title)
+    axes = [grid[r, c] for r, c in places]
+    for ax, (r, c) in zip(axes, places, strict=True):
+        ax.grid(True, linewidth=0.4, alpha=0.6)
+        ax.tick_params(labelsize=8)
+        if r == rows - 1 or (r + 1, c) not in used:
+            ax.set_xlabel("t (s)")
+            ax.xaxis.set_tick_params(labelbottom=True)
+    return figure, axes
+
+
+def _shade(ax, intervals) -> None:
+    for start, stop in intervals:
+        ax.axvspan(start, stop, color=STANCE_SHADE, linewidth=0, zorder=0)
+
+
+def ground_reaction_figure(times: np.ndarray, forces: np.ndarray, legs: list[str],
+                           stance: list, weight: float, title: str):
+    """The ground's force on each foot against time, one panel per foot placed as the legs
+    stand (left column ``L1 L2 L3``, right column ``R1 R2 R3``), as in the ground-reaction
+    figures of cockroach locomotion (Full and Tu 1991): vertical (``GRz``), fore-aft (``GRx``)
+    and lateral (``GRy``, to the left positive) components in N, stance shaded grey; a right
+    axis in body weights when ``weight`` (N) is positive. ``forces`` (N, feet, 3), world axes;
+    ``stance``: per foot, its (touch-down, lift-off) intervals."""
+    figure, axes = _leg_panels(legs, title)
+    for k, (ax, leg) in enumerate(zip(axes, legs, strict=True)):
+        _shade(ax, stance[k])
+        ax.axhline(0.0, color="0.4", linewidth=0.6)
+        ax.plot(times, forces[:, k, 2], color="black", linewidth=1.6, label="vertical (z)")
+        ax.plot(times, forces[:, k, 0], color="tab:red", linewidth=1.1, label="fore-aft (x)")
+        ax.plot(times, forces[:, k, 1], color="tab:blue", linewidth=1.1,
+                label="lateral (y, left +)")
+        ax.set_title(leg, fontsize=9)
+        ax.set_ylabel("N", fontsize=8)
+        if weight > 0:
+            right = ax.secondary_yaxis("right", functions=(lambda f: f / weight,
+                                                           lambda b: b * weight))
+            right.set_ylabel("body weights", fontsize=8)
+            right.tick_params(labelsize=8)
+    axes[0].legend(fontsize=7, loc="best")
+    return figure
+
+
+def friction_ratio_figure(times: np.ndarray, ratio: np.ndarray, status: np.ndarray,
+                          legs: list[str], stance: list, mu: float, title: str):
+    """Each foot's friction ratio ``|F_t| / (mu F_n)`` against time, one panel per foot placed
+    as the legs stand, with the line ratio = 1 (the edge of the friction cone), stance shaded
+    grey; samples where the policy says ``slip`` or ``pull`` marked with a red cross.
+    ``ratio`` (N, feet) is NaN where a foot carries nothing; ``status`` (N, feet)."""
+    figure, axes = _leg_panels(legs, title)
+    finite = ratio[np.isfinite(ratio)]
+    top = max(1.25, min(1.05 * float(finite.max()), 5.0)) if finite.size else 1.25
+    for k, (ax, leg) in enumerate(zip(axes, legs, strict=True)):
+        _shade(ax, stance[k])
+        ax.axhline(1.0, color="tab:red", linestyle="--", linewidth=1.0, label="ratio = 1")
+        shown = np.where(np.isinf(ratio[:, k]), top, ratio[:, k])
+        ax.plot(times, shown, color="black", linewidth=1.3, label="|F_t| / (mu F_n)")
+        bad = np.isin(status[:, k], ("slip", "pull"))
+        if bad.any():
+            ax.plot(times[bad], np.minimum(np.nan_to_num(shown[bad], nan=top), top), "x",
+                    color="tab:red", markersize=6, label="slip / pull")
+        ax.set_ylim(0.0, top)
+        ax.set_title(leg, fontsize=9)
+        ax.set_ylabel("friction ratio", fontsize=8)
+    axes[0].legend(fontsize=7, loc="upper right")
+    figure.text(0.5, 0.005, f"mu = {mu:g}; above the dashed line the foot needs more friction "
+                "than mu", ha="center", va="bottom", fontsize=8)
+    return figure
+
+
+def gait_diagram_figure(legs: list[str], stance: list, start: float, stop: float, title: str):
+    """The gait diagram: one row per leg (in ``legs``' order, the first at the top), a black
+    bar over each stance, as in insect gait diagrams."""
+    from matplotlib.figure import Figure
+
+    figure = Figure(figsize=(8.0, 0.45 * len(legs) + 1.3), layout="constrained")
+    ax = figure.subplots()
+    for row, intervals in enumerate(stance):
+        y = len(legs) - 1 - row
+        ax.broken_barh([(a, b - a) for a, b in intervals], (y - 0.35, 0.7),
+                       facecolors="black")
+    ax.set_yticks(range(len(legs)), list(reversed(legs)))
+    ax.set_ylim(-0.6, len(legs) - 0.4)
+    ax.set_xlim(start, stop)
+    ax.set_xlabel("t (s)")
+    ax.grid(True, axis="x", linewidth=0.4, alpha=0.6)
+    ax.set_title(title, fontsize=10)
+    return figure

@@ -5,8 +5,11 @@ Columns: ``t``, then for every joint in model order ``tau:<joint>`` (revolute an
 joints: N m or N), ``Fx:<joint>``, ``Fy:<joint>``, ``Fz:<joint>``, ``Tx:<joint>``,
 ``Ty:<joint>``, ``Tz:<joint>`` (N, N m): the wrench exerted by the parent on the child, about
 the joint origin, in the child's joint frame (or world axes on request). Fixed joints and the
-other joints without an axis have the force and moment columns without ``tau``. Numbers are
-written with 17 significant digits, so they read back exactly.
+other joints without an axis have the force and moment columns without ``tau``. A model with
+foot contacts (a walking robot) has, after the joints' columns, ``GRx:<leg>``, ``GRy:<leg>``,
+``GRz:<leg>`` per contact: the ground's force on the foot in world axes (N), zero in swing,
+``<leg>`` the contact's name without its ``/ground`` suffix. Numbers are written with 17
+significant digits, so they read back exactly.
 """
 
 from __future__ import annotations
@@ -18,8 +21,31 @@ import numpy as np
 from hexapod.algorithms.balance import BodyBalance
 from hexapod.algorithms.inverse import InverseResult
 from hexapod.algorithms.liaison import wrenches_from_multipliers
+from hexapod.errors import HexapodError
 from hexapod.model.model import GROUND_INDEX, JointInfo, Model
-from hexapod.output.figures import effort_figure, png_bytes, trajectory_figure, wrench_figure
+from hexapod.output.figures import (
+    effort_figure,
+    friction_ratio_figure,
+    gait_diagram_figure,
+    ground_reaction_figure,
+    png_bytes,
+    trajectory_figure,
+    wrench_figure,
+)
+from hexapod.output.ground import (
+    FootLoads,
+    TrunkMotion,
+    describe_events,
+    foot_events,
+    foot_loads,
+    ground_columns,
+    ground_csv_text,
+    joint_type,
+    leg_groups,
+    total_mass,
+    trunk_csv_text,
+    trunk_motion,
+)
 
 COMPONENTS = ("Fx", "Fy", "Fz", "Tx", "Ty", "Tz")
 
@@ -31,7 +57,7 @@ def inverse_columns(model: Model) -> list[str]:
         if joint.kind in ("revolute", "prismatic"):
             names.append(f"tau:{joint.name}")
         names += [f"{c}:{joint.name}" for c in COMPONENTS]
-    return names
+    return names + ground_columns(model)
 
 
 def inverse_table(model: Model, result: InverseResult) -> np.ndarray:
@@ -41,13 +67,19 @@ def inverse_table(model: Model, result: InverseResult) -> np.ndarray:
         if joint.kind in ("revolute", "prismatic"):
             columns.append(result.effort[:, k, None])
         columns += [result.force[:, k], result.torque[:, k]]
+    if model.contacts:
+        if result.ground_force is None:
+            raise HexapodError(f"model '{model.name}' has foot contacts but the result has no "
+                               "ground forces")
+        # + 0.0: zero in swing written 0, not -0
+        columns.append(np.asarray(result.ground_force).reshape(result.times.size, -1) + 0.0)
     return np.hstack(columns)
 
 
 def inverse_csv_text(model: Model, result: InverseResult) -> str:
     """The CSV of ``hexapod inverse``: a header of :func:`inverse_columns` (``t``, then per joint
-    ``tau`` where it has one and ``Fx .. Tz``; N, N m) and one row per sample, every number
-    written to round-trip (17 significant digits)."""
+    ``tau`` where it has one and ``Fx .. Tz``; N, N m; then per foot contact ``GRx .. GRz``, N)
+    and one row per sample, every number written to round-trip (17 significant digits)."""
     rows = inverse_table(model, result)
     line = ",".join(["%.17g"] * rows.shape[1])
     return ",".join(inverse_columns(model)) + "\n" + "".join(
@@ -66,7 +98,7 @@ def agreement(columns: list[str], table: np.ndarray, reference_columns: list[str
         if ":" not in name:
             continue
         component, joint = name.split(":", 1)
-        kind = "force" if component.startswith("F") else "moment"
+        kind = "force" if component.startswith(("F", "GR")) else "moment"
         groups.setdefault((joint, kind), []).append(k)
     worst = 0.0
     for members in groups.values():
@@ -217,21 +249,30 @@ def _markdown_table(header: list[str], rows: list[list[str]]) -> list[str]:
 
 
 def summary_markdown(model: Model, result: InverseResult, balance: BodyBalance,
-                     run: RunInfo, drivers: list[DriverStatistics], figures: list[str]) -> str:
-    """The report's summary: the run, the joints, the drivers, the bodies' balance."""
+                     run: RunInfo, drivers: list[DriverStatistics], figures: list[str],
+                     loads: FootLoads | None = None,
+                     trunks: list[TrunkMotion] | None = None) -> str:
+    """The report's summary: the run, the joints, the drivers (and their peaks per joint type
+    for a robot), the feet's ground reactions and the trunk's motion (a walking robot:
+    ``loads``, ``trunks``), the bodies' balance."""
     t = result.times
     frame = ("the child's joint frame" if result.frame == "joint" else "world axes")
+    mass = (f", total mass {total_mass(model):.4g} kg" if loads is not None else "")
     lines = [
         f"# Liaison force report: {run.scene}",
         "",
         f"Scene `{run.source}`: {_count(len(model.bodies), 'body', 'bodies')}, "
         f"{_count(len(model.joints), 'joint')}, {_count(len(model.drivers), 'driver')}, "
-        f"{_count(len(model.forces), 'force element')}.",
+        f"{_count(len(model.forces), 'force element')}{mass}.",
         f"{t.size} samples over t = {t[0]:g} ... {t[-1]:g} s ({run.window}); "
         f"{result.method} path, {run.run_time:.3g} s of inverse dynamics.",
         f"Largest constraint residual {result.max_violation:.1e} (scaled); "
         + (f"redundant rows: {', '.join(result.redundant_rows)}."
            if result.redundant_rows else "no redundant rows."),
+    ]
+    if loads is not None:
+        lines.append(f"Ground forces shared by the policy `{loads.policy}`.")
+    lines += [
         "",
         "Wrenches are exerted by the parent on the child, about the joint origin, in "
         f"{frame}; `F21` is the wrench at the joint of body 2 exerted by body 1 (bodies "
@@ -257,6 +298,11 @@ def summary_markdown(model: Model, result: InverseResult, balance: BodyBalance,
             [[f"`{d.joint}`", f"{_g(d.peak_effort.value)} {d.unit}", f"{d.peak_effort.time:.4g}",
               f"{_g(d.rms_effort)} {d.unit}", _g(d.peak_power.value),
               f"{d.peak_power.time:.4g}", _g(d.rms_power), _g(d.work)] for d in drivers])
+        lines += _effort_type_section(drivers)
+    if loads is not None:
+        lines += _ground_section(model, result, loads)
+    if trunks:
+        lines += _trunk_section(trunks)
     relative = balance.relative()
     lines += ["", "## Balance of each body", "",
               "Largest residual over the samples of each body's Newton-Euler equations under "
@@ -272,39 +318,233 @@ def summary_markdown(model: Model, result: InverseResult, balance: BodyBalance,
     return "\n".join(lines) + "\n"
 
 
+# ------------------------------------------------------------------ a robot: legs and feet
+
+@dataclass(frozen=True)
+class TypePeak:
+    """The largest effort of one joint type over the legs (``ctr`` of ``L1/ctr`` ... ``R3/ctr``)."""
+
+    joint_type: str
+    joint: str  # where it occurs
+    unit: str
+    peak: Peak
+
+
+def effort_peaks_by_type(drivers: list[DriverStatistics]) -> list[TypePeak]:
+    """Per joint type, the peak ``|effort|`` over the legs and where it occurs; empty unless
+    the driven joints belong to two legs or more (:func:`leg_groups`)."""
+    if leg_groups([d.joint for d in drivers]) is None:
+        return []
+    best: dict[str, DriverStatistics] = {}
+    for d in drivers:
+        kind = joint_type(d.joint)
+        # ties to round-off (a left leg and its mirror) go to the first leg
+        if kind not in best or d.peak_effort.value > best[kind].peak_effort.value * (1 + 1e-9):
+            best[kind] = d
+    return [TypePeak(kind, d.joint, d.unit, d.peak_effort) for kind, d in best.items()]
+
+
+def _effort_type_section(drivers: list[DriverStatistics]) -> list[str]:
+    peaks = effort_peaks_by_type(drivers)
+    if not peaks:
+        return []
+    lines = ["", "## Peak effort per joint type", "",
+             "The largest actuator effort of each joint over the legs, and where it occurs.", ""]
+    return lines + _markdown_table(
+        ["joint type", "peak \\|effort\\|", "joint", "at t (s)"],
+        [[f"`{p.joint_type}`", f"{_g(p.peak.value)} {p.unit}", f"`{p.joint}`",
+          f"{p.peak.time:.4g}"] for p in peaks])
+
+
+def policy_description(model: Model) -> str:
+    """The ground-force policy of a model with contacts, in words, with its settings."""
+    ground = model.ground
+    if ground.policy == "min-wrench":
+        return ("the least sum of |F|^2 + |T / l|^2 over every joint's wrench, the feet's "
+                f"included, l = {model.characteristic_length:.4g} m")
+    refs = ", ".join(f"`{k}` {v:g}" for k, v in ground.reference_efforts.items())
+    effort = ("the least sum of (tau / tau_ref)^2 over the actuator efforts (reference "
+              f"efforts {ground.default_reference:g}" + (f"; {refs}" if refs else "") + ")")
+    if ground.policy == "min-effort":
+        return effort
+    cone = (f"a pyramid of {ground.faces} faces inscribed in the cone" if ground.faces
+            else "the exact cone")
+    return (f"{effort}, each foot's normal force at least its load-sharing weight times "
+            f"{ground.min_normal:g} N and its tangential force inside the friction cone of "
+            f"mu = {ground.mu:g} ({cone})")
+
+
+def _ground_section(model: Model, result: InverseResult, loads: FootLoads) -> list[str]:
+    weight = loads.weight
+    lines = ["", "## Ground reactions", "",
+             f"Policy `{loads.policy}`: {policy_description(model)}. "
+             + (f"Redundant rows (their multipliers chosen by the policy): "
+                f"{', '.join(result.redundant_rows)}." if result.redundant_rows
+                else "No redundant rows."),
+             "",
+             "The ground's force on each foot, world axes (`GRx:<leg>`, `GRy:<leg>`, "
+             "`GRz:<leg>` in inverse.csv; zero in swing): normal force F_n = GRz, tangential "
+             f"force \\|F_t\\| = \\|(GRx, GRy)\\|, friction ratio \\|F_t\\| / (mu F_n) with "
+             f"mu = {loads.mu:g} (above 1 the foot needs more friction than mu). Robot weight "
+             f"m \\|g\\| = {total_mass(model):.4g} kg x {np.linalg.norm(model.gravity):.4g} "
+             f"m/s^2 = {weight:.4g} N. Per sample in ground.csv.", ""]
+    rows = []
+    t = loads.times
+    for c, leg in enumerate(loads.legs):
+        magnitude = np.linalg.norm(loads.force[:, c], axis=1)
+        peak = Peak.of(t, magnitude)
+        ratio = np.where(np.isfinite(loads.ratio[:, c]), loads.ratio[:, c], -np.inf)
+        worst = int(np.argmax(ratio))
+        stance = np.mean(loads.status[:, c] != "swing")
+        rows.append([leg, f"{100 * stance:.0f}", _g(peak.value),
+                     _g(peak.value / weight) if weight > 0 else "-", f"{peak.time:.4g}",
+                     _g(float(loads.normal[:, c].max())), _g(float(loads.tangential[:, c].max())),
+                     _g(float(ratio[worst])) if np.isfinite(ratio[worst]) else "-",
+                     f"{t[worst]:.4g}" if np.isfinite(ratio[worst]) else "-"])
+    lines += _markdown_table(
+        ["foot", "in stance (% of samples)", "peak \\|F\\| (N)", "peak \\|F\\| (body weights)",
+         "at t (s)", "peak F_n (N)", "peak \\|F_t\\| (N)", "peak friction ratio", "at t (s)"],
+        rows)
+    events = foot_events(loads)
+    lines += ["", "Slip and pull: " + ("none: every loaded foot's force is inside the friction "
+                                      "cone and presses on the ground." if not events else
+                                      f"{_count(len(events), 'run')} of samples:")]
+    if events:
+        lines += [""] + [f"- {phrase}" for phrase in describe_events(events)]
+    return lines
+
+
+def _trunk_section(trunks: list[TrunkMotion]) -> list[str]:
+    lines = ["", "## Trunk", "",
+             "Pose (centre of mass, world; Euler parameters and roll, pitch, yaw) and velocity "
+             "(centre of mass, angular; world axes) of each free body, per sample in "
+             "trunk.csv.", ""]
+    rows = []
+    for m in trunks:
+        low, high = m.position.min(axis=0), m.position.max(axis=0)
+        angles = np.degrees(np.abs(m.angles).max(axis=0))
+        rows.append([f"`{m.body}`", f"{low[0]:.4g} ... {high[0]:.4g}",
+                     f"{low[1]:.4g} ... {high[1]:.4g}", f"{low[2]:.4g} ... {high[2]:.4g}",
+                     " / ".join(f"{a:.3g}" for a in angles),
+                     f"{m.velocity[:, 0].mean():.4g}",
+                     _g(float(np.linalg.norm(m.angular_velocity, axis=1).max()))])
+    return lines + _markdown_table(
+        ["body", "x (m)", "y (m)", "z (m)", "largest \\|roll\\| / \\|pitch\\| / \\|yaw\\| (deg)",
+         "mean vx (m/s)", "largest \\|omega\\| (rad/s)"], rows)
+
+
+def walking_headlines(model: Model, result: InverseResult,
+                      drivers: list[DriverStatistics] | None = None) -> list[str]:
+    """The lines ``hexapod report`` prints for a model with foot contacts: the policy and the
+    redundant rows, each foot's peak ground reaction in body weights, the peak effort per joint
+    type, and every run of samples where a foot slips or pulls (empty without contacts)."""
+    if not model.contacts:
+        return []
+    loads = foot_loads(model, result)
+    drivers = driver_statistics(model, result) if drivers is None else drivers
+    peaks = [float(np.linalg.norm(loads.force[:, c], axis=1).max())
+             for c in range(len(loads.legs))]
+    unit = "body weights" if loads.weight > 0 else "N"
+    scale = loads.weight if loads.weight > 0 else 1.0
+    lines = [f"ground forces by the policy {loads.policy}; "
+             f"{_count(len(result.redundant_rows), 'redundant row')}",
+             f"peak ground reaction per foot ({unit}, robot weight {loads.weight:.4g} N): "
+             + ", ".join(f"{leg} {p / scale:.3g}" for leg, p in zip(loads.legs, peaks,
+                                                                   strict=True))]
+    types = effort_peaks_by_type(drivers)
+    if types:
+        lines.append("peak effort per joint type: " + ", ".join(
+            f"{p.joint_type} {p.peak.value:.4g} {p.unit} ({p.joint.partition('/')[0]})"
+            for p in types))
+    events = foot_events(loads)
+    lines.append("slip or pull: " + ("none" if not events else "; ".join(describe_events(events))))
+    return lines
+
+
 #: Name of the markers whose paths the report draws.
 FOOT_MARKER = "foot"
+
+
+def _wrench_figures(model: Model, result: InverseResult, scene: str) -> dict:
+    """``forces.png`` and ``torques.png``, or for a robot one of each per leg
+    (``forces-L1.png`` ...)."""
+    t = result.times
+    labels = [wrench_label(model, joint) for joint in model.joints]
+    names = [j.name for j in model.joints]
+    where = "joint frame" if result.frame == "joint" else "world axes"
+    groups = leg_groups(names) or {"": list(range(len(names)))}
+    figures = {}
+    for leg, index in groups.items():
+        suffix, which = (f"-{leg}", f" leg {leg}" if leg != "other" else " other joints") \
+            if leg else ("", "")
+        figures[f"forces{suffix}.png"] = wrench_figure(
+            t, result.force[:, index], [f"{labels[k]}  {names[k]}" for k in index],
+            "F", "N", f"{scene}{which}: joint forces, by parent on child ({where})")
+        figures[f"torques{suffix}.png"] = wrench_figure(
+            t, result.torque[:, index], [f"T{labels[k][1:]}  {names[k]}" for k in index],
+            "T", "N m", f"{scene}{which}: joint moments about the joint origins ({where})")
+    return dict(sorted(figures.items(), key=lambda item: not item[0].startswith("forces")))
+
+
+def _effort_figures(times: np.ndarray, drivers: list[DriverStatistics], scene: str) -> dict:
+    """``efforts.png``, or for a robot one per leg (``efforts-L1.png`` ...)."""
+    if not drivers:
+        return {}
+    groups = leg_groups([d.joint for d in drivers]) or {"": list(range(len(drivers)))}
+    out = {}
+    for leg, index in groups.items():
+        suffix, which = (f"-{leg}", f" leg {leg}" if leg != "other" else " other joints") \
+            if leg else ("", "")
+        out[f"efforts{suffix}.png"] = effort_figure(
+            times,
+            [(drivers[k].joint, drivers[k].unit, drivers[k].effort, drivers[k].power)
+             for k in index], f"{scene}{which}: actuator efforts (solid) and power (dashed)")
+    return out
+
+
+def _ground_figures(model: Model, loads: FootLoads, scene: str) -> dict:
+    legs = list(loads.legs)
+    t = loads.times
+    return {
+        "ground.png": ground_reaction_figure(
+            t, loads.force, legs, loads.stance, loads.weight,
+            f"{scene}: the ground's force on each foot (stance shaded; policy {loads.policy})"),
+        "friction.png": friction_ratio_figure(
+            t, loads.ratio, loads.status, legs, loads.stance, loads.mu,
+            f"{scene}: friction ratio |F_t| / (mu F_n) of each foot"),
+        "gait.png": gait_diagram_figure(legs, loads.stance, float(t[0]), float(t[-1]),
+                                        f"{scene}: gait diagram (black: stance)"),
+    }
 
 
 def report_files(model: Model, result: InverseResult, balance: BodyBalance, run: RunInfo,
                  feet: dict[str, np.ndarray]) -> dict[str, bytes]:
     """Every file of the report, in memory: ``inverse.csv``, ``summary.md`` and the figures
     (``forces.png``, ``torques.png``; ``efforts.png`` when there are joint drivers;
-    ``foot.png`` when there are ``feet``, paths (N, 3) by body)."""
+    ``foot.png`` when there are ``feet``, paths (N, 3) by body). For a robot (joints named
+    ``<leg>/...`` in two legs or more) the force, moment and effort figures are drawn per leg
+    (``forces-L1.png`` ...). With foot contacts (a walking robot) also ``ground.csv`` and
+    ``trunk.csv`` (:mod:`hexapod.output.ground`), and the figures ``ground.png`` (the
+    ground's force on each foot), ``friction.png`` (the friction ratio) and ``gait.png`` (the
+    gait diagram)."""
     t = result.times
-    labels = [wrench_label(model, joint) for joint in model.joints]
-    where = "joint frame" if result.frame == "joint" else "world axes"
-    figures = {
-        "forces.png": wrench_figure(
-            t, result.force, [f"{label}  {j.name}" for label, j in zip(labels, model.joints,
-                                                                      strict=True)],
-            "F", "N", f"{run.scene}: joint forces, by parent on child ({where})"),
-        "torques.png": wrench_figure(
-            t, result.torque, [f"T{label[1:]}  {j.name}" for label, j in zip(labels, model.joints,
-                                                                           strict=True)],
-            "T", "N m", f"{run.scene}: joint moments about the joint origins ({where})"),
-    }
+    figures = _wrench_figures(model, result, run.scene)
     drivers = driver_statistics(model, result)
-    if drivers:
-        figures["efforts.png"] = effort_figure(
-            t, [(d.joint, d.unit, d.effort, d.power) for d in drivers],
-            f"{run.scene}: actuator efforts (solid) and power (dashed)")
+    figures.update(_effort_figures(t, drivers, run.scene))
     if feet:
         figures["foot.png"] = trajectory_figure(
             t, feet, f"{run.scene}: {'foot' if len(feet) == 1 else 'feet'} (world frame)")
     files = {"inverse.csv": inverse_csv_text(model, result).encode()}
+    loads = trunks = None
+    if model.contacts:
+        loads = foot_loads(model, result)
+        trunks = trunk_motion(model, result.q, result.v)
+        figures.update(_ground_figures(model, loads, run.scene))
+        files["ground.csv"] = ground_csv_text(loads).encode()
+        if trunks:
+            files["trunk.csv"] = trunk_csv_text(t, trunks).encode()
     files["summary.md"] = summary_markdown(model, result, balance, run, drivers,
-                                           list(figures)).encode()
+                                           list(figures), loads, trunks).encode()
     for name, figure in figures.items():
         files[name] = png_bytes(figure)
     return files

@@ -18,9 +18,14 @@ simulation, the saved states. With the scene's model, :func:`vtk_files` turns it
   child about the joint origin, world axes), ``force_joint_frame`` and ``moment_joint_frame``
   (the same in the child's joint frame, the report convention) and ``effort`` (NaN for joints
   without an axis).
+- **feet** (a scene with foot contacts, a walking robot): one vertex per foot at its point
+  (world frame), with point data ``foot`` (the index in ``feet.csv``), ``ground_force`` (the
+  ground's force on the foot, world axes, N; zero in swing) and ``stance`` (1 in stance, 0 in
+  swing, by the gait's schedule): ParaView's Glyph filter draws the forces as arrows.
 
 A simulation's wrenches are computed here from the saved multipliers by
-:func:`hexapod.algorithms.liaison.wrenches_from_multipliers`; a report's are read from its CSV. A
+:func:`hexapod.algorithms.liaison.wrenches_from_multipliers` (and its ground forces by
+:func:`hexapod.algorithms.ground.ground_reactions`); a report's are read from its CSV. A
 report does not save positions: its scene prescribes the motion, so they are assembled again at
 the CSV's times.
 """
@@ -40,10 +45,12 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
+from hexapod.algorithms.ground import ground_reactions
 from hexapod.algorithms.kinematics import assemble_positions, body_poses
 from hexapod.algorithms.liaison import joint_origin, wrenches_from_multipliers
 from hexapod.errors import HexapodError, InputFileError
 from hexapod.model.model import Model
+from hexapod.output.ground import GROUND_COMPONENTS, leg_name
 from hexapod.output.report import inverse_columns
 
 #: Values of the cell data ``part``.
@@ -212,6 +219,7 @@ class Frames:
     force_joint: np.ndarray  # (N, J, 3) the child's joint frame
     moment_joint: np.ndarray
     effort: np.ndarray  # (N, J)
+    ground_force: np.ndarray | None = None  # (N, C, 3) world axes, per foot contact
 
 
 def frames(model: Model, recording: Recording) -> Frames:
@@ -228,6 +236,7 @@ def frames(model: Model, recording: Recording) -> Frames:
     n, J = recording.t.size, len(model.joints)
     force, moment = np.zeros((n, J, 3)), np.zeros((n, J, 3))
     force_joint, moment_joint, effort = np.zeros((n, J, 3)), np.zeros((n, J, 3)), np.zeros((n, J))
+    ground = np.zeros((n, len(model.contacts), 3))
     if recording.kind == "simulation":
         where = recording.directory / "results.npz"
         sizes = (recording.q.shape[1], recording.v.shape[1], recording.lam.shape[1])
@@ -244,11 +253,14 @@ def frames(model: Model, recording: Recording) -> Frames:
             wrenches = wrenches_from_multipliers(model, q[k], recording.lam[k], Phi_v, Q_across)
             force_joint[k], moment_joint[k] = wrenches.force, wrenches.torque
             effort[k] = wrenches.effort
+            if model.contacts:
+                ground[k] = ground_reactions(model, recording.lam[k])
     else:
         where = recording.directory / "inverse.csv"
         if recording.columns != inverse_columns(model):
             raise InputFileError(f"{where}: its columns are not those of scene '{model.name}' "
-                                 "(other joints): not a report of this scene")
+                                 "(other joints or foot contacts): not a report of this "
+                                 "scene")
         q = np.zeros((n, model.n_q))
         guess = model.q0
         data = model.create_data()
@@ -261,6 +273,9 @@ def frames(model: Model, recording: Recording) -> Frames:
             moment_joint[:, j] = recording.table[:, c + 3:c + 6]
             tau = index.get(f"tau:{joint.name}")
             effort[:, j] = recording.table[:, tau] if tau is not None else np.nan
+        for c, contact in enumerate(model.contacts):
+            first = index[f"{GROUND_COMPONENTS[0]}:{leg_name(contact.name)}"]
+            ground[:, c] = recording.table[:, first:first + 3]
     for k in range(n):
         for j, joint in enumerate(model.joints):
             _, R = joint_origin(model, q[k], joint)
@@ -269,7 +284,8 @@ def frames(model: Model, recording: Recording) -> Frames:
                 force_joint[k, j], moment_joint[k, j] = R.T @ force[k, j], R.T @ moment[k, j]
             else:
                 force[k, j], moment[k, j] = R @ force_joint[k, j], R @ moment_joint[k, j]
-    return Frames(recording.t, q, force, moment, force_joint, moment_joint, effort)
+    return Frames(recording.t, q, force, moment, force_joint, moment_joint, effort,
+                  ground if model.contacts else None)
 
 
 # ------------------------------------------------------------------ shapes in the body frames
@@ -402,7 +418,8 @@ def vtk_files(model: Model, frames: Frames, meshes: dict | None = None,
     """Every file of the export, in memory: ``bodies_NNNN.vtu`` and ``joints_NNNN.vtu`` per
     saved instant (every ``every``-th, and the last), ``bodies.pvd`` and ``joints.pvd`` (no
     joint files for a scene without joints), and the index files ``bodies.csv`` and
-    ``joints.csv``. ``meshes``: meshio Meshes by body name, drawn
+    ``joints.csv``; with foot contacts also ``feet_NNNN.vtu``, ``feet.pvd`` and ``feet.csv``
+    (the ground's force on each foot). ``meshes``: meshio Meshes by body name, drawn
     instead of the generated solids."""
     try:
         import meshio
@@ -421,7 +438,7 @@ def vtk_files(model: Model, frames: Frames, meshes: dict | None = None,
     digits = max(4, len(str(n - 1)))
     position, rotation = body_poses(model, frames.q)
     files: dict[str, bytes] = {}
-    bodies_pvd, joints_pvd = [], []
+    bodies_pvd, joints_pvd, feet_pvd = [], [], []
     with tempfile.TemporaryDirectory(prefix="hexapod-export-") as scratch:
         scratch = Path(scratch)
         for k in chosen:
@@ -454,9 +471,18 @@ def vtk_files(model: Model, frames: Frames, meshes: dict | None = None,
             name = f"joints_{k:0{digits}d}.vtu"
             files[name] = _vtu_bytes(joints, scratch)
             joints_pvd.append((float(frames.t[k]), name))
+            if model.contacts:
+                name = f"feet_{k:0{digits}d}.vtu"
+                files[name] = _vtu_bytes(_feet_mesh(model, frames, k), scratch)
+                feet_pvd.append((float(frames.t[k]), name))
     files["bodies.pvd"] = pvd_text(bodies_pvd).encode()
     if joints_pvd:
         files["joints.pvd"] = pvd_text(joints_pvd).encode()
+    if feet_pvd:
+        files["feet.pvd"] = pvd_text(feet_pvd).encode()
+        files["feet.csv"] = _csv(["foot", "contact", "leg"],
+                                 [[c, contact.name, leg_name(contact.name)]
+                                  for c, contact in enumerate(model.contacts)])
     files["bodies.csv"] = _csv(["body", "name", "kind", "mass"],
                                [[b.index, b.name, b.kind, repr(b.mass)] for b in model.bodies])
     names = ["ground"] + [b.name for b in model.bodies]
@@ -464,6 +490,23 @@ def vtk_files(model: Model, frames: Frames, meshes: dict | None = None,
                                [[j.index, j.name, j.kind, names[j.parent + 1],
                                  names[j.child + 1]] for j in model.joints])
     return files
+
+
+def _feet_mesh(model: Model, frames: Frames, k: int):
+    """The feet at saved instant ``k``: a vertex at each contact's foot point with the ground's
+    force on it (``ground_force``, world axes, N) and whether it is in stance."""
+    import meshio
+
+    C = len(model.contacts)
+    t = float(frames.t[k])
+    feet = np.array([joint_origin(model, frames.q[k], model.joints[c.joint])[0]
+                     for c in model.contacts])
+    force = (frames.ground_force[k] if frames.ground_force is not None
+             else np.zeros((C, 3))) + 0.0
+    stance = np.array([bool(c.in_stance(t)) for c in model.contacts], dtype=np.int32)
+    return meshio.Mesh(feet, [meshio.CellBlock("vertex", np.arange(C)[:, None])],
+                       point_data={"foot": np.arange(C, dtype=np.int32),
+                                   "ground_force": force, "stance": stance})
 
 
 def scene_meshes(scene) -> dict:

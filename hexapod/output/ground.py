@@ -1,0 +1,289 @@
+"""What a walking robot's report says about its feet and its trunk: the ground's force on each
+foot, split into normal and tangential parts with the friction ratio, the stance intervals of
+the gait, the trunk's pose and velocity, and their CSV tables (``ground.csv``, ``trunk.csv``).
+
+Conventions: the ground's normal is world ``z`` (a :class:`~hexapod.scene.joints.Contact`), so
+a foot's normal force is ``F_n = GRz`` and its tangential force ``|F_t| = |(GRx, GRy)|``; the
+friction ratio is ``|F_t| / (mu F_n)``, with ``mu`` the scene's friction coefficient
+(:class:`~hexapod.scene.contacts.GroundForces`), above 1 where the force needs more friction
+than ``mu``. A foot is named by its contact's name without the ``/ground`` suffix (``L1``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from hexapod.algorithms.ground import VIOLATION_TOL
+from hexapod.algorithms.inverse import InverseResult
+from hexapod.algorithms.kinematics import body_poses
+from hexapod.model.model import Model
+from hexapod.spatial import rpy_from_rotation
+
+#: The suffix of a contact's name that its leg's name leaves out.
+CONTACT_SUFFIX = "/ground"
+#: The ground-force columns of the inverse-dynamics CSV, per foot.
+GROUND_COMPONENTS = ("GRx", "GRy", "GRz")
+#: Forces below this fraction of the robot's weight count as no load (no friction ratio).
+NO_LOAD = 1e-9
+
+
+def leg_name(contact: str) -> str:
+    """The leg a contact belongs to: its name without the ``/ground`` suffix."""
+    return contact[:-len(CONTACT_SUFFIX)] if contact.endswith(CONTACT_SUFFIX) else contact
+
+
+def ground_columns(model: Model) -> list[str]:
+    """``GRx:<leg>``, ``GRy:<leg>``, ``GRz:<leg>`` per contact, in model order (none without
+    contacts)."""
+    return [f"{c}:{leg_name(contact.name)}" for contact in model.contacts
+            for c in GROUND_COMPONENTS]
+
+
+def total_mass(model: Model) -> float:
+    """The sum of the bodies' masses (kg)."""
+    return float(sum(b.mass for b in model.bodies))
+
+
+def robot_weight(model: Model) -> float:
+    """``m |g|`` (N): the total mass times the magnitude of gravity (0 without gravity)."""
+    return total_mass(model) * float(np.linalg.norm(model.gravity))
+
+
+def stance_intervals(contact, start: float, stop: float) -> list[tuple[float, float]]:
+    """The stances of a :class:`~hexapod.model.model.ContactInfo` that overlap ``[start,
+    stop]``, clipped to it, from its schedule (touch-down to lift-off)."""
+    schedule = contact.schedule
+    if schedule.duty >= 1.0:
+        return [(start, stop)]
+    period = schedule.period
+    first = int(np.floor(start / period - schedule.lift_off)) - 1
+    out = []
+    for k in range(first, first + int(np.ceil((stop - start) / period)) + 3):
+        up = (schedule.lift_off + k) * period
+        down = up - schedule.duty * period
+        if up > start and down < stop:
+            out.append((max(down, start), min(up, stop)))
+    return out
+
+
+@dataclass(frozen=True)
+class FootLoads:
+    """The ground's force on each foot at every sample, and what it means for friction.
+
+    Attributes
+    ----------
+    legs : tuple of str
+        One name per contact (``L1`` for ``L1/ground``).
+    times : ndarray (N,)
+    force : ndarray (N, C, 3)
+        The ground's force on the foot, world axes (N); zero in swing.
+    normal, tangential : ndarray (N, C)
+        ``F_n = GRz`` and ``|F_t| = |(GRx, GRy)|`` (N).
+    ratio : ndarray (N, C)
+        ``|F_t| / (mu F_n)``: NaN where the foot carries nothing (swing, touch-down,
+        lift-off), infinite where the ground would pull a loaded foot (``F_n <= 0``).
+    status : ndarray (N, C) of str
+        The policy's status: ``swing``, ``ok``, ``slip``, ``pull``.
+    stance : list of list of (float, float)
+        Per foot, its stance intervals within the samples' span.
+    mu : float
+    policy : str
+    weight : float
+        The robot's weight ``m |g|`` (N).
+    """
+
+    legs: tuple[str, ...]
+    times: np.ndarray
+    force: np.ndarray
+    normal: np.ndarray
+    tangential: np.ndarray
+    ratio: np.ndarray
+    status: np.ndarray
+    stance: list
+    mu: float
+    policy: str
+    weight: float
+
+
+def foot_loads(model: Model, result: InverseResult) -> FootLoads:
+    """The feet's loads of an inverse-dynamics ``result`` of a model with contacts."""
+    force = np.asarray(result.ground_force, dtype=float) + 0.0  # zero in swing, not -0
+    normal = force[..., 2]
+    tangential = np.hypot(force[..., 0], force[..., 1])
+    mu = float(model.ground.mu)
+    weight = robot_weight(model)
+    loaded = np.linalg.norm(force, axis=-1) > NO_LOAD * (weight if weight > 0 else 1.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(normal > 0, tangential / (mu * normal), np.inf)
+    ratio = np.where(loaded, ratio, np.nan)
+    t = result.times
+    stance = [stance_intervals(c, float(t[0]), float(t[-1])) for c in model.contacts]
+    return FootLoads(tuple(leg_name(c.name) for c in model.contacts), t, force, normal,
+                     tangential, ratio, np.asarray(result.ground_status, dtype=str), stance, mu,
+                     result.policy or model.ground.policy, weight)
+
+
+def ground_csv_text(loads: FootLoads) -> str:
+    """``ground.csv``: ``t``, then per foot ``Fn:<leg>``, ``Ft:<leg>`` (N), ``ratio:<leg>``
+    (``nan`` where the foot carries nothing) and ``status:<leg>``."""
+    header = ["t"] + [f"{c}:{leg}" for leg in loads.legs
+                      for c in ("Fn", "Ft", "ratio", "status")]
+    lines = [",".join(header)]
+    for k, t in enumerate(loads.times):
+        cells = [f"{t:.17g}"]
+        for c in range(len(loads.legs)):
+            cells += [f"{loads.normal[k, c]:.17g}", f"{loads.tangential[k, c]:.17g}",
+                      f"{loads.ratio[k, c]:.17g}", str(loads.status[k, c])]
+        lines.append(",".join(cells))
+    return "\n".join(lines) + "\n"
+
+
+@dataclass(frozen=True)
+class FootEvent:
+    """A run of consecutive samples where a foot is in one trouble: ``slip`` or ``pull`` (the
+    friction policy's status), ``outside the cone`` (friction ratio above 1) or ``pulled``
+    (the ground pulling a loaded foot, ``F_n < 0``)."""
+
+    leg: str
+    kind: str
+    start: float
+    stop: float
+    samples: int
+
+    @property
+    def when(self) -> str:
+        return (f"{self.start:.4g}" if self.samples == 1
+                else f"{self.start:.4g} ... {self.stop:.4g} ({self.samples} samples)")
+
+    def __str__(self) -> str:
+        return f"{self.leg}: {self.kind} at t = {self.when} s"
+
+
+def describe_events(events: list[FootEvent]) -> list[str]:
+    """One phrase per foot and kind of trouble, with every run of samples:
+    ``L1: slip at t = 0.3, 0.4 ... 0.45 (2 samples) s``."""
+    grouped: dict[tuple[str, str], list[str]] = {}
+    for event in events:
+        grouped.setdefault((event.leg, event.kind), []).append(event.when)
+    return [f"{leg}: {kind} at t = {', '.join(when)} s" for (leg, kind), when in grouped.items()]
+
+
+def foot_events(loads: FootLoads) -> list[FootEvent]:
+    """Every run of samples where a foot slips or pulls (policy status), or where its force
+    lies outside the friction cone or pulls it (as the forces stand, whatever the policy; by
+    more than the friction policy's own tolerance,
+    :data:`hexapod.algorithms.ground.VIOLATION_TOL` of the robot's weight), foot by foot in
+    time order."""
+    tol = VIOLATION_TOL * (loads.weight if loads.weight > 0 else 1.0)
+    flagged = np.isin(loads.status, ("slip", "pull"))  # said once, by the policy's word
+    kinds = {
+        "slip": loads.status == "slip",
+        "pull": loads.status == "pull",
+        "outside the friction cone": (loads.tangential - loads.mu * loads.normal > tol)
+        & ~flagged,
+        "pulled by the ground": (loads.normal < -tol) & ~flagged,
+    }
+    out = []
+    for c, leg in enumerate(loads.legs):
+        for kind, flags in kinds.items():
+            k = 0
+            while k < flags.shape[0]:
+                if not flags[k, c]:
+                    k += 1
+                    continue
+                end = k
+                while end + 1 < flags.shape[0] and flags[end + 1, c]:
+                    end += 1
+                out.append(FootEvent(leg, kind, float(loads.times[k]), float(loads.times[end]),
+                                     end - k + 1))
+                k = end + 1
+    return out
+
+
+# ------------------------------------------------------------------ the trunk
+
+@dataclass(frozen=True)
+class TrunkMotion:
+    """A free body's pose and velocity at every sample.
+
+    Attributes
+    ----------
+    body : str
+    position : ndarray (N, 3)
+        Its centre of mass, world (m).
+    euler_parameters : ndarray (N, 4)
+        ``e0 .. e3``, scalar first.
+    angles : ndarray (N, 3)
+        Roll, pitch, yaw (rad), ``R = Rz(yaw) Ry(pitch) Rx(roll)``.
+    velocity : ndarray (N, 3)
+        Velocity of the centre of mass, world axes (m/s).
+    angular_velocity : ndarray (N, 3)
+        World axes (rad/s).
+    """
+
+    body: str
+    position: np.ndarray
+    euler_parameters: np.ndarray
+    angles: np.ndarray
+    velocity: np.ndarray
+    angular_velocity: np.ndarray
+
+
+def free_bodies(model: Model) -> list[int]:
+    """The spatial bodies that are no joint's child: a walking robot's trunk."""
+    children = {j.child for j in model.joints}
+    return [b for b, body in enumerate(model.bodies)
+            if body.kind == "spatial" and b not in children]
+
+
+def trunk_motion(model: Model, q: np.ndarray, v: np.ndarray) -> list[TrunkMotion]:
+    """The motion of every free body (:func:`free_bodies`) over samples ``q``, ``v``."""
+    out = []
+    _, rotation = body_poses(model, q)
+    for b in free_bodies(model):
+        body = model.bodies[b]
+        qb, vb = q[:, body.q], v[:, body.v]
+        angles = np.array([rpy_from_rotation(R) for R in rotation[:, b]]).reshape(-1, 3)
+        omega = np.einsum("nab,nb->na", rotation[:, b], vb[:, 3:6])
+        out.append(TrunkMotion(body.name, qb[:, :3], qb[:, 3:7], angles, vb[:, :3], omega))
+    return out
+
+
+TRUNK_COLUMNS = ("x", "y", "z", "e0", "e1", "e2", "e3", "roll", "pitch", "yaw",
+                 "vx", "vy", "vz", "wx", "wy", "wz")
+
+
+def trunk_csv_text(times: np.ndarray, trunks: list[TrunkMotion]) -> str:
+    """``trunk.csv``: ``t``, then per free body ``<body>.x .. z`` (m), ``e0 .. e3``, ``roll,
+    pitch, yaw`` (rad), ``vx .. vz`` (m/s, world) and ``wx .. wz`` (rad/s, world axes)."""
+    header = ["t"] + [f"{m.body}.{c}" for m in trunks for c in TRUNK_COLUMNS]
+    table = np.hstack([times[:, None]] + [np.hstack([m.position, m.euler_parameters, m.angles,
+                                                      m.velocity, m.angular_velocity])
+                                          for m in trunks])
+    line = ",".join(["%.17g"] * table.shape[1])
+    return ",".join(header) + "\n" + "".join(line % tuple(row) + "\n" for row in table)
+
+
+# ------------------------------------------------------------------ grouping by leg
+
+def leg_groups(names: list[str]) -> dict[str, list[int]] | None:
+    """Indices of ``names`` grouped by the prefix before their first ``/`` (a robot's legs:
+    ``L1/ctr`` is in ``L1``), names without one in ``other``; None when there are fewer than
+    two prefixes (a single leg, a mechanism)."""
+    groups: dict[str, list[int]] = {}
+    for k, name in enumerate(names):
+        prefix, slash, _ = name.partition("/")
+        groups.setdefault(prefix if slash else "other", []).append(k)
+    prefixed = [g for g in groups if g != "other"]
+    if len(prefixed) < 2:
+        return None
+    if "other" in groups:  # last
+        groups["other"] = groups.pop("other")
+    return groups
+
+
+def joint_type(name: str) -> str:
+    """A joint's name without its leg's prefix (``L1/ctr`` -> ``ctr``)."""
+    return name.partition("/")[2] or name
