@@ -89,7 +89,7 @@ def tabulated_reactions(gait: str = "tripod") -> tuple[np.ndarray, dict[str, np.
 
 
 def ground_load_laws(leg: str, gait: str = "tripod", period: float = STRIDE_PERIOD,
-                     scale: float = MODEL_SCALE) -> tuple[Spline, Spline, Spline]:
+                     scale: float = MODEL_SCALE) -> tuple[Hermite, Hermite, Hermite]:
     """The ground's reaction on ``leg``'s foot (world x, y, z, N) as periodic laws: from the
     kept table for the built-in scale and period, else computed."""
     if period == STRIDE_PERIOD and scale == MODEL_SCALE and table_path(gait).is_file():

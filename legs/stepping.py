@@ -30,7 +30,6 @@ from functools import cache
 import numpy as np
 
 from hexapod import Law
-
 from legs.cockroach import (
     FOOT_LIFT_MM,
     GAIT_LAWS,

@@ -9,7 +9,8 @@ script computes the same quantity as ``hexapod report`` does on its default scen
 that layout:
 
 * the scene is the built-in ``front-leg`` (the L1 leg of ``legs``, trunk held, six revolute
-  joints driven by the tripod gait's laws, the ground's reaction on the foot in stance), loaded
+  joints driven by the walking robot's tripod laws, the foot loaded by the ground's reaction the
+  walking robot gives it), loaded
   by name exactly as the command line loads it;
 * the window is the command's default, one cycle of the scene's periodic laws (the 0.5 s
   stride), with 501 samples including both ends;

@@ -190,7 +190,7 @@ def _independent(model, data, t, cone=False):
             angles = 2 * np.pi * (np.arange(n) + 0.5) / n
             limit = ground.mu * np.cos(np.pi / n)
 
-            def inside(lam, r=c.rows, w=w):
+            def inside(lam, r=c.rows, w=w, angles=angles, limit=limit):
                 F = -lam[r]
                 faces = limit * F[2] - (np.cos(angles) * F[0] + np.sin(angles) * F[1])
                 return np.concatenate([faces, [F[2] - w * ground.min_normal]]) / weight

@@ -9,7 +9,7 @@ chooses ``z``:
   engine's unit-free default), a contact's term divided by the foot's weight;
 * ``min-effort``: the least ``sum_j (tau_j / tau_ref_j)^2`` over the actuator efforts;
 * ``friction``: the same least effort subject to ``F_n >= w F_min`` and ``|F_t| <= mu F_n`` for
-  every foot in stance (a pyramid of ``faces`` faces inscribed in the cone, by qpOASES, or the
+  every foot in stance (a pyramid of ``faces`` faces inscribed in the cone, by DAQP, or the
   exact cone, by IPOPT, both through CasADi). Where no force satisfies them all, the least
   violation is returned and the feet that would slip or pull are named (``data.ground_status``),
   never a silent clamp.
@@ -214,7 +214,7 @@ def _build_solver(faces: int, n: int, feet: int):
     slack = ca.SX.sym("s", 2 * feet)
     parameters = ca.vertcat(ca.vec(H), g, F0, ca.vec(G), minimum, mu)
     F = F0 + ca.mtimes(G, y)
-    constraints, slacks = [], []
+    constraints = []
     for i in range(feet):
         fx, fy, fz = F[3 * i], F[3 * i + 1], F[3 * i + 2]
         sn, st = slack[2 * i], slack[2 * i + 1]
@@ -234,10 +234,10 @@ def _build_solver(faces: int, n: int, feet: int):
     penalty = 1e6 * ca.sumsqr(slack) + ca.sum1(slack) * 1e3
     quiet = {"print_time": False}
     if faces:
-        options = {**quiet, "printLevel": "none", "error_on_fail": False}
-        strict = ca.qpsol("ground_strict", "qpoases",
+        options = {**quiet, "error_on_fail": False}
+        strict = ca.qpsol("ground_strict", "daqp",
                           {"x": y, "p": parameters, "f": objective, "g": strict_g}, options)
-        loose = ca.qpsol("ground_relaxed", "qpoases",
+        loose = ca.qpsol("ground_relaxed", "daqp",
                          {"x": ca.vertcat(y, slack), "p": parameters,
                           "f": objective + penalty, "g": relaxed_g}, options)
     else:

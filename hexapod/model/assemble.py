@@ -35,6 +35,7 @@ from hexapod.model.model import (
     Symbolic,
 )
 from hexapod.scene.bodies import Particle, PlanarBody, SpatialBody
+from hexapod.scene.contacts import Foothold, StanceGate
 from hexapod.scene.drivers import CoordinateDriver, JointDriver
 from hexapod.scene.element import GROUND
 from hexapod.scene.forces import (
@@ -44,7 +45,6 @@ from hexapod.scene.forces import (
     RotationalSpringDamper,
     SpringDamper,
 )
-from hexapod.scene.contacts import Foothold, StanceGate
 from hexapod.scene.joints import Contact, Distance
 from hexapod.scene.laws import Constant, Law
 from hexapod.scene.scene import Scene

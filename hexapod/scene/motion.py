@@ -227,7 +227,8 @@ def apply_motion(scene: Scene, motion: Motion) -> Scene:
     # both files, so that an error of the driven model (it cannot be assembled) names them
     source = ", driven by ".join(s for s in (scene.source, motion.source) if s)
     out = Scene(scene.name, scene.dimension, scene.length_unit, scene.gravity,
-                scene.characteristic_length, source, report_forces=scene.report_forces)
+                scene.characteristic_length, source, report_forces=scene.report_forces,
+                ground=scene.ground)
     out._elements = list(scene.elements)
     for joint, law in laws.items():
         out.add(JointDriver(f"motion/{joint}", joint, law, source=f"{where}, column '{joint}'"))

@@ -14,6 +14,7 @@ import numpy as np
 
 from hexapod.errors import ModelError, Problem
 from hexapod.scene.bodies import Body, Particle, PlanarBody, SpatialBody
+from hexapod.scene.contacts import GroundForces
 from hexapod.scene.drivers import COORDINATES, CoordinateDriver, JointDriver
 from hexapod.scene.element import GROUND, Attachment, Element
 from hexapod.scene.forces import (
@@ -24,7 +25,6 @@ from hexapod.scene.forces import (
     RotationalSpringDamper,
     SpringDamper,
 )
-from hexapod.scene.contacts import GroundForces
 from hexapod.scene.joints import (
     PARTICLE_ENDS,
     PLANE_JOINTS,
