@@ -17,16 +17,23 @@ from hexapod.scene.builtin import DEFAULT_SCENE
 # ------------------------------------------------------------------ arguments
 
 
-def positive(kind):
+def _number(kind, accept, condition: str):
+    """An argparse type: ``kind(text)``, finite and passing ``accept``, else the message
+    "must be <condition>"."""
     def parse(text: str):
         try:
             value = kind(text)
         except ValueError:
             raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-        if not (math.isfinite(value) and value > 0):
-            raise argparse.ArgumentTypeError(f"must be positive, got {text}")
+        if not (math.isfinite(value) and accept(value)):
+            raise argparse.ArgumentTypeError(f"must be {condition}, got {text}")
         return value
     return parse
+
+
+def positive(kind):
+    """An argparse type: a finite positive ``kind`` (int or float)."""
+    return _number(kind, lambda value: value > 0, "positive")
 
 
 def at_least(smallest: int):
@@ -42,15 +49,8 @@ def at_least(smallest: int):
 
 
 def non_negative(kind):
-    def parse(text: str):
-        try:
-            value = kind(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-        if not (math.isfinite(value) and value >= 0):
-            raise argparse.ArgumentTypeError(f"must be zero or positive, got {text}")
-        return value
-    return parse
+    """An argparse type: a finite ``kind`` (int or float), zero or positive."""
+    return _number(kind, lambda value: value >= 0, "zero or positive")
 
 
 def pyramid_faces(text: str) -> int:
