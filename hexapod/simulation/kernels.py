@@ -97,11 +97,8 @@ class CompiledRates:
                      - alpha**2 * call(model.phi))
             W_all = ca.mtimes(Phi_v, m_inv_sqrt)
             d_all = ca.sqrt(ca.sum2(W_all * W_all))
-            d_all = ca.if_else(d_all > 0, d_all, 1.0)
-            W = W_all[rows.tolist(), :] / ca.repmat(d_all[rows.tolist()], 1, model.n_v)
-            n_r = rows.size
-            K = ca.vertcat(ca.horzcat(ca.MX.eye(model.n_v), W.T),
-                           ca.horzcat(W, ca.MX(n_r, n_r)))
+            W, d_all, idle = _equilibrated(W_all, d_all, rows.tolist(), model.n_v)
+            K = ca.vertcat(ca.horzcat(ca.MX.eye(model.n_v), W.T), ca.horzcat(W, idle))
             rhs = ca.vertcat(y0, gamma[rows.tolist()] / d_all[rows.tolist()])
             solution = ca.solve(K, rhs, "qr")
             y = solution[: model.n_v]
@@ -150,6 +147,17 @@ class CompiledRates:
                 and np.all(np.isfinite(v_dot))):
             return None
         return q_dot, v_dot, lam
+
+
+def _equilibrated(W_all: ca.MX, norms: ca.MX, rows: list, n_v: int):
+    """The kept rows of ``W_all`` scaled to unit length, the row norms (1 for zero rows), and
+    the lower-right block of the saddle-point matrix: zero, except -1 for a kept row that is
+    identically zero (a foot's contact in swing), whose multiplier is then solved as zero
+    instead of leaving the matrix singular."""
+    zero = norms <= 0
+    norms = ca.if_else(zero, 1.0, norms)
+    W = W_all[rows, :] / ca.repmat(norms[rows], 1, n_v)
+    return W, norms, -ca.diag(zero[rows])
 
 
 def _exp_step(model: Model, q: ca.MX, dv: ca.MX) -> ca.MX:
@@ -209,11 +217,9 @@ class CompiledProjection:
             """Solve [[I, W^T], [W, 0]] [y; mu] = [top; bottom / d] on the kept rows."""
             Phi_v = call(model.Phi_v, q=position)
             W_all = ca.mtimes(Phi_v, m_inv_sqrt)
-            d = ca.sqrt(ca.sum2(W_all * W_all))
-            d = ca.if_else(d > 0, d, 1.0)
-            W = W_all[rows, :] / ca.repmat(d[rows], 1, model.n_v)
-            K = ca.vertcat(ca.horzcat(ca.MX.eye(model.n_v), W.T),
-                           ca.horzcat(W, ca.MX(len(rows), len(rows))))
+            W, d, idle = _equilibrated(W_all, ca.sqrt(ca.sum2(W_all * W_all)), rows,
+                                       model.n_v)
+            K = ca.vertcat(ca.horzcat(ca.MX.eye(model.n_v), W.T), ca.horzcat(W, idle))
             return ca.solve(K, ca.vertcat(top, bottom_all[rows] / d[rows]), "qr")[:model.n_v]
 
         position = q

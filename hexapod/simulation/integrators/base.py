@@ -27,7 +27,11 @@ from hexapod.algorithms.dynamics import forward_dynamics
 from hexapod.algorithms.kinematics import assemble_positions, rank_split, solve_velocities
 from hexapod.errors import HexapodError, IntegrationError
 from hexapod.model.model import Model
-from hexapod.simulation.kernels import compiled_projection, compiled_rates
+from hexapod.simulation.kernels import (
+    REDUNDANT_TOLERANCE,
+    compiled_projection,
+    compiled_rates,
+)
 from hexapod.simulation.methods import DEFAULT_ATOL, DEFAULT_RTOL
 
 #: smallest singular value of the equilibrated ``Phi_v`` (rows of unit length, so 1 is
@@ -143,6 +147,7 @@ class Integrator:
         # at the start
         self._compiled = compiled_rates(model, self.data.independent_rows)
         self._compiled_projection = compiled_projection(model, self.data.independent_rows)
+        self._feet_down = self._contact_set(self.t)
         self._start()
 
     @property
@@ -181,6 +186,7 @@ class Integrator:
         t_before = self.t
         try:
             with np.errstate(over="ignore", invalid="ignore"):  # a blow-up is reported below
+                self._follow_contacts()
                 self._step()
         except (HexapodError, np.linalg.LinAlgError) as error:
             self.status = "failed"
@@ -205,12 +211,33 @@ class Integrator:
 
     # ------------------------------------------------------------------ services
 
+    def _contact_set(self, t: float) -> tuple[bool, ...]:
+        """Which of the model's feet are on the ground at ``t`` (their gates)."""
+        if not self.model.contacts:
+            return ()
+        w = self.model.law_values(t)[0]
+        return tuple(bool(w[c.gate] > 0.5) for c in self.model.contacts)
+
+    def _follow_contacts(self) -> None:
+        """When feet have touched down or lifted off since the compiled kernels were built,
+        build them (once per contact set) for the rows independent now: a foot in swing has
+        no rows, and one that touched down has rows the old set leaves out."""
+        feet = self._contact_set(self.t)
+        if feet == self._feet_down:
+            return
+        self._feet_down = feet
+        rows = self._rank_split().independent
+        self._compiled = compiled_rates(self.model, rows)
+        self._compiled_projection = compiled_projection(self.model, rows)
+
     def _dynamics(self, t: float, q: np.ndarray, v: np.ndarray,
-                  baumgarte: tuple[float, float] | None = None) -> tuple[np.ndarray, np.ndarray]:
+                  baumgarte: tuple[float, float] | None = None,
+                  consistency_tol: float = 1e-6) -> tuple[np.ndarray, np.ndarray]:
         """Accelerations and multipliers at a state (one saddle-point solve; rows nearly
-        dependent are left out while a singular configuration is crossed)."""
+        dependent are left out while a singular configuration is crossed). Redundant rows may
+        disagree with the others by ``consistency_tol`` (relative) before the solve refuses."""
         # while crossing, the rows left out are violated by design (the projection restores them)
-        crossing = {} if self._crossing is None else {
+        crossing = {"consistency_tol": consistency_tol} if self._crossing is None else {
             "rank_tolerance": self._crossing, "consistency_tol": np.inf}
         v_dot = forward_dynamics(self.model, self.data, t, q, v, baumgarte=baumgarte,
                                  **crossing)
@@ -231,7 +258,10 @@ class Integrator:
         if rates is not None:
             self.counters.rhs += 1
             return rates
-        v_dot, _ = self._dynamics(t, q, v, (alpha, alpha) if alpha else None)
+        # a stage state is off the constraints by the step's truncation error, and redundant
+        # rows disagree with the others by as much: as far as the compiled solve allows
+        v_dot, _ = self._dynamics(t, q, v, (alpha, alpha) if alpha else None,
+                                  consistency_tol=REDUNDANT_TOLERANCE)
         return self.model.call("qdot", q=q, v=v), v_dot
 
     def _cross_singular(self) -> bool:
