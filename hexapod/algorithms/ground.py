@@ -85,8 +85,10 @@ def share_ground_forces(model: Model, t: float, q: np.ndarray, Phi_v: np.ndarray
     A, b = _objective(model, q, Phi_v, Q_across, weights)  # |A lam + b|^2
     AK, r = A @ NK, A @ base + b
     policy = model.ground.policy
-    if policy != "friction" or K.shape[1] == 0:
-        y = np.linalg.lstsq(AK, -r, rcond=None)[0] if K.shape[1] else np.zeros(0)
+    if NK.shape[1] == 0:  # the feet that carry nothing take up all the freedom
+        return base, tuple(status)
+    if policy != "friction":
+        y = np.linalg.lstsq(AK, -r, rcond=None)[0]
         return base + NK @ y, tuple(status)
     y, flags = _friction(model, weights, base, NK, AK, r)
     for k, flag in enumerate(flags):
