@@ -30,7 +30,6 @@ from hexapod.output.ground import (
     foot_loads,
     ground_csv_text,
     leg_groups,
-    stance_intervals,
     trunk_csv_text,
     trunk_motion,
 )
@@ -189,7 +188,7 @@ def test_stance_intervals_follow_the_schedule(walking):
     model, _ = walking
     t = np.linspace(0.0, 1.0, 2001)
     for contact in model.contacts:
-        intervals = stance_intervals(contact, 0.0, 1.0)
+        intervals = contact.stances(0.0, 1.0)
         inside = np.zeros(t.size, dtype=bool)
         for a, b in intervals:
             inside |= (t >= a - 1e-12) & (t < b - 1e-12)

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from hexapod.algorithms.ground import inactive_rows, share_ground_forces
+from hexapod.algorithms.ground import share_ground_forces
 from hexapod.algorithms.liaison import policy_map
 from hexapod.algorithms.linalg import equilibrate, solve_saddle, split_rows
 from hexapod.model.model import Data, Model
@@ -59,25 +59,24 @@ def forward_dynamics(model: Model, data: Data, t: float, q: np.ndarray, v: np.nd
     Q_across = model.call("Q_across", q=q, v=v, w=w) if model.Q_across is not None else None
     tol = model.rank_tolerance if rank_tolerance is None else rank_tolerance
     W, d = equilibrate(Phi_v, model.mass_inv_sqrt)
-    split = split_rows(W, d, model.row_priority, tol, groups=model.row_groups)
+    priority, groups = model.rank_order(w)  # feet in swing have no rows to decide on
+    split = split_rows(W, d, priority, tol, groups=groups)
     wrench_map = offset = None
     if split.redundant.size and not model.contacts:
         wrench_map, offset = policy_map(model, q, Phi_v, Q_across)
-    solution = solve_saddle(model.mass_inv_sqrt, Phi_v, Q, gamma, model.row_priority,
+    solution = solve_saddle(model.mass_inv_sqrt, Phi_v, Q, gamma, priority,
                             tol, row_names=[r.name for r in model.rows],
                             consistency_tol=consistency_tol,
                             wrench_map=wrench_map, wrench_offset=offset, split=split)
-    lam, redundant = solution.lam, split.redundant
-    if model.contacts:  # the scene's ground-force policy; feet in swing are not redundant
-        lam, data_status = share_ground_forces(model, t, q, Phi_v, Q_across, split, lam)
-        redundant = redundant[~np.isin(redundant, inactive_rows(model, w))]
+    lam, status = solution.lam, None
+    if model.contacts:  # the scene's ground-force policy
+        lam, status = share_ground_forces(model, t, q, Phi_v, Q_across, split, lam)
     data.at(t, q, v)
-    if model.contacts:
-        data.ground_status = data_status
+    data.ground_status = status
     data.w, data.wd, data.wdd = w, wd, wdd
     data.Phi_v, data.gamma, data.Q = Phi_v, gamma, Q
     data.v_dot, data.lam = solution.v_dot, lam
-    data.independent_rows, data.redundant_rows = split.independent, redundant
+    data.independent_rows, data.redundant_rows = split.independent, split.redundant
     data.Q_across = Q_across
     data.inconsistency = solution.inconsistency
     data.condition_number = data.sigma_min = data.singular_values = None

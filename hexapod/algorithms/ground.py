@@ -46,16 +46,9 @@ def ground_reactions(model: Model, lam: np.ndarray) -> np.ndarray:
     return np.array([-lam[c.rows] for c in model.contacts]).reshape(-1, 3)
 
 
-def inactive_rows(model: Model, w: np.ndarray) -> np.ndarray:
-    """The rows of the contacts in swing (identically zero), given the law values ``w``."""
-    rows = [c.rows for c in model.contacts if w[c.gate] < 0.5]
-    return np.concatenate(rows).astype(int) if rows else np.zeros(0, dtype=int)
-
-
 def robot_weight(model: Model) -> float:
-    """``m |g|`` of all bodies (N); 1 without gravity."""
-    weight = sum(b.mass for b in model.bodies) * float(np.linalg.norm(model.gravity))
-    return weight if weight > 0 else 1.0
+    """``m |g|`` (N): the total mass times the magnitude of gravity (0 without gravity)."""
+    return model.total_mass * float(np.linalg.norm(model.gravity))
 
 
 def share_ground_forces(model: Model, t: float, q: np.ndarray, Phi_v: np.ndarray,
@@ -133,7 +126,7 @@ def _objective(model: Model, q, Phi_v, Q_across, weights) -> tuple[np.ndarray, n
     A = np.zeros((len(rows), model.n_c))
     A[np.arange(len(rows)), rows] = scale
     parts = [A]
-    reference = robot_weight(model)
+    reference = robot_weight(model) or 1.0  # the forces' scale
     for contact, w in zip(model.contacts, weights, strict=True):
         if NO_LOAD < w < 1.0:
             block = np.zeros((3, model.n_c))
@@ -158,7 +151,7 @@ def _friction(model: Model, weights, base, NK, AK, r):
     n = NK.shape[1]
     H = AK.T @ AK
     g = AK.T @ r
-    reference = robot_weight(model)
+    reference = robot_weight(model) or 1.0  # the forces' scale
     y, violation = _solve_cone(ground, loaded, weights, F0, G, H, g, n, reference)
     flags = [""] * len(model.contacts)
     for k in loaded:

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from hexapod.algorithms.ground import inactive_rows
 from hexapod.algorithms.linalg import RowSplit, check_consistency, equilibrate, split_rows
 from hexapod.errors import AssemblyError, SingularSystemError
 from hexapod.model.model import Data, Model
@@ -25,13 +24,13 @@ def _subject(model: Model) -> str:
     return f"model '{model.name}'" + (f" ({source})" if source else "")
 
 
-def rank_split(model: Model, Phi_v: np.ndarray) -> RowSplit:
-    """The rank decision on the equilibrated ``Phi_v`` by the model's policy (its kept rows and
-    their singular values); errors name the model."""
+def rank_split(model: Model, Phi_v: np.ndarray, w: np.ndarray) -> RowSplit:
+    """The rank decision on the equilibrated ``Phi_v`` at law values ``w`` by the model's
+    policy (its kept rows and their singular values); errors name the model."""
+    priority, groups = model.rank_order(w)
     try:
         W, d = equilibrate(Phi_v, model.mass_inv_sqrt)
-        return split_rows(W, d, model.row_priority, model.rank_tolerance,
-                           groups=model.row_groups)
+        return split_rows(W, d, priority, model.rank_tolerance, groups=groups)
     except SingularSystemError as error:  # the linear algebra does not know the model
         raise SingularSystemError(f"{_subject(model)}: {error}") from None
 
@@ -114,7 +113,7 @@ def _assemble(model: Model, t: float, q: np.ndarray, tol: float, max_iterations:
             # (joint points coincide to ~1e-16 m instead of ~tol), kept only if it helps
             polished = True
         Phi_v = model.call("Phi_v", q=q, w=w)
-        split = rank_split(model, Phi_v)
+        split = rank_split(model, Phi_v, w)
         if counts is not None:
             counts["newton"] = counts.get("newton", 0) + 1
         dv = model.mass_inv_sqrt @ split.min_norm_correction(-residual * model.row_scale)
@@ -157,7 +156,7 @@ def _project_velocities(model: Model, t: float, q: np.ndarray, v: np.ndarray) ->
     w, wd, _ = model.law_values(t)
     Phi_v = model.call("Phi_v", q=q, w=w)
     nu = model.call("nu", q=q, w=w, wd=wd)
-    split = rank_split(model, Phi_v)
+    split = rank_split(model, Phi_v, w)
     residual = nu - Phi_v @ v
     dy = split.min_norm_correction(residual)
     # relative to the velocities themselves: re-projecting a consistent state makes a
@@ -175,7 +174,7 @@ def solve_accelerations(model: Model, data: Data, t: float, q: np.ndarray,
     w, wd, wdd = model.law_values(t)
     Phi_v = model.call("Phi_v", q=q, w=w)
     gamma = model.call("gamma", q=q, v=v, w=w, wd=wd, wdd=wdd)
-    split = rank_split(model, Phi_v)
+    split = rank_split(model, Phi_v, w)
     y = split.min_norm_correction(gamma)
     _check(model, split, y, gamma, "acceleration constraints")
     data.at(t, q, v)
@@ -200,19 +199,18 @@ def degrees_of_freedom(model: Model, data: Data, t: float, q: np.ndarray) -> dic
     Phi_v = model.call("Phi_v", q=q, w=w)
     data.at(t, q)
     data.Phi_v = Phi_v
-    split = rank_split(model, Phi_v)
+    split = rank_split(model, Phi_v, w)
     driver_rows = {d.row for d in model.drivers}
     joint_rows = np.array([i for i in range(model.n_c) if i not in driver_rows], dtype=int)
     W, d = split.W[joint_rows], split.scale[joint_rows]
-    priority = [i for i in model.row_priority if i not in driver_rows]
+    priority = [i for i in model.rank_order(w)[0] if i not in driver_rows]
     position = {row: k for k, row in enumerate(joint_rows)}
     joint_split = split_rows(W, d, np.array([position[i] for i in priority], dtype=int),
                              model.rank_tolerance)
-    swing = set(inactive_rows(model, w).tolist())  # feet off the ground: no rows at all
     return {
         "dof": model.n_v - joint_split.rank,
         "dof_with_drivers": model.n_v - split.rank,
-        "redundant_rows": [model.rows[i].name for i in split.redundant if i not in swing],
+        "redundant_rows": [model.rows[i].name for i in split.redundant],
     }
 
 

@@ -102,6 +102,12 @@ class ContactInfo:
 
         return stance_weight(self.schedule, t)
 
+    def stances(self, start: float, stop: float) -> list[tuple[float, float]]:
+        """The stances (touch-down to lift-off) overlapping ``[start, stop]``, clipped to it."""
+        from hexapod.scene.contacts import stance_intervals
+
+        return stance_intervals(self.schedule, start, stop)
+
 
 @dataclass(frozen=True)
 class DriverInfo:
@@ -258,6 +264,11 @@ class Model:
                 f"n_v={self.n_v}, n_c={self.n_c})")
 
     @cached_property
+    def total_mass(self) -> float:
+        """The sum of the bodies' masses (kg)."""
+        return float(sum(b.mass for b in self.bodies))
+
+    @cached_property
     def coordinate_names(self) -> tuple[str, ...]:
         names = {"spatial": ("x", "y", "z", "e0", "e1", "e2", "e3"),
                  "planar": ("x", "y", "angle"), "particle": ("x", "y", "z")}
@@ -297,6 +308,16 @@ class Model:
         joint_rows = sum(j.rows.size for j in self.joints) - contact_rows
         return np.concatenate([np.arange(joint_rows), np.full(len(self.drivers), joint_rows),
                                np.full(contact_rows, joint_rows + 1)]).astype(int)
+
+    def rank_order(self, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:attr:`row_priority` and :attr:`row_groups` for the rank decision at law values
+        ``w``: without the rows of the feet in swing, which are identically zero there,
+        constrain nothing and are neither kept nor redundant."""
+        swing = [c.rows for c in self.contacts if w[c.gate] < 0.5]
+        if not swing:
+            return self.row_priority, self.row_groups
+        keep = ~np.isin(self.row_priority, np.concatenate(swing))
+        return self.row_priority[keep], self.row_groups[keep]
 
     @cached_property
     def row_scale(self) -> np.ndarray:

@@ -90,7 +90,7 @@ def describe_model(model: Model, t: float = 0.0, graph: bool = False) -> dict:
     m = mobility(model, data, t, q)
     out = {
         "scene": model.name, "dimension": model.dimension,
-        "mass": float(sum(b.mass for b in model.bodies)),
+        "mass": model.total_mass,
         "bodies": bodies, "joints": joints, "drivers": drivers, "forces": forces,
         "model": {"n_q": model.n_q, "n_v": model.n_v, "n_c": model.n_c,
                   "time_laws": model.n_w, "force_terms": terms,

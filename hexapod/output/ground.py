@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hexapod.algorithms.ground import VIOLATION_TOL
+from hexapod.algorithms.ground import VIOLATION_TOL, robot_weight
 from hexapod.algorithms.inverse import InverseResult
 from hexapod.algorithms.kinematics import body_poses
 from hexapod.model.model import Model
@@ -39,33 +39,6 @@ def ground_columns(model: Model) -> list[str]:
     contacts)."""
     return [f"{c}:{leg_name(contact.name)}" for contact in model.contacts
             for c in GROUND_COMPONENTS]
-
-
-def total_mass(model: Model) -> float:
-    """The sum of the bodies' masses (kg)."""
-    return float(sum(b.mass for b in model.bodies))
-
-
-def robot_weight(model: Model) -> float:
-    """``m |g|`` (N): the total mass times the magnitude of gravity (0 without gravity)."""
-    return total_mass(model) * float(np.linalg.norm(model.gravity))
-
-
-def stance_intervals(contact, start: float, stop: float) -> list[tuple[float, float]]:
-    """The stances of a :class:`~hexapod.model.model.ContactInfo` that overlap ``[start,
-    stop]``, clipped to it, from its schedule (touch-down to lift-off)."""
-    schedule = contact.schedule
-    if schedule.duty >= 1.0:
-        return [(start, stop)]
-    period = schedule.period
-    first = int(np.floor(start / period - schedule.lift_off)) - 1
-    out = []
-    for k in range(first, first + int(np.ceil((stop - start) / period)) + 3):
-        up = (schedule.lift_off + k) * period
-        down = up - schedule.duty * period
-        if up > start and down < stop:
-            out.append((max(down, start), min(up, stop)))
-    return out
 
 
 @dataclass(frozen=True)
@@ -119,7 +92,7 @@ def foot_loads(model: Model, result: InverseResult) -> FootLoads:
         ratio = np.where(normal > 0, tangential / (mu * normal), np.inf)
     ratio = np.where(loaded, ratio, np.nan)
     t = result.times
-    stance = [stance_intervals(c, float(t[0]), float(t[-1])) for c in model.contacts]
+    stance = [c.stances(float(t[0]), float(t[-1])) for c in model.contacts]
     return FootLoads(tuple(leg_name(c.name) for c in model.contacts), t, force, normal,
                      tangential, ratio, np.asarray(result.ground_status, dtype=str), stance, mu,
                      result.policy or model.ground.policy, weight)

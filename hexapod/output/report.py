@@ -42,7 +42,6 @@ from hexapod.output.ground import (
     ground_csv_text,
     joint_type,
     leg_groups,
-    total_mass,
     trunk_csv_text,
     trunk_motion,
 )
@@ -257,7 +256,7 @@ def summary_markdown(model: Model, result: InverseResult, balance: BodyBalance,
     ``loads``, ``trunks``), the bodies' balance."""
     t = result.times
     frame = ("the child's joint frame" if result.frame == "joint" else "world axes")
-    mass = (f", total mass {total_mass(model):.4g} kg" if loads is not None else "")
+    mass = (f", total mass {model.total_mass:.4g} kg" if loads is not None else "")
     lines = [
         f"# Liaison force report: {run.scene}",
         "",
@@ -386,7 +385,7 @@ def _ground_section(model: Model, result: InverseResult, loads: FootLoads) -> li
              "`GRz:<leg>` in inverse.csv; zero in swing): normal force F_n = GRz, tangential "
              f"force \\|F_t\\| = \\|(GRx, GRy)\\|, friction ratio \\|F_t\\| / (mu F_n) with "
              f"mu = {loads.mu:g} (above 1 the foot needs more friction than mu). Robot weight "
-             f"m \\|g\\| = {total_mass(model):.4g} kg x {np.linalg.norm(model.gravity):.4g} "
+             f"m \\|g\\| = {model.total_mass:.4g} kg x {np.linalg.norm(model.gravity):.4g} "
              f"m/s^2 = {weight:.4g} N. Per sample in ground.csv.", ""]
     rows = []
     t = loads.times

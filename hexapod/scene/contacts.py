@@ -61,6 +61,22 @@ def stance_weight(contact, t) -> np.ndarray:
     return np.where(np.isnan(s), 0.0, u**3 * (10 - 15 * u + 6 * u**2))
 
 
+def stance_intervals(contact, start: float, stop: float) -> list[tuple[float, float]]:
+    """The contact's stances (touch-down to lift-off) that overlap ``[start, stop]``, clipped
+    to it."""
+    if contact.duty >= 1.0:
+        return [(start, stop)]
+    period = contact.period
+    first = int(np.floor(start / period - contact.lift_off)) - 1
+    out = []
+    for k in range(first, first + int(np.ceil((stop - start) / period)) + 3):
+        up = (contact.lift_off + k) * period
+        down = up - contact.duty * period
+        if up > start and down < stop:
+            out.append((max(down, start), min(up, stop)))
+    return out
+
+
 @dataclass(frozen=True, eq=False)
 class StanceGate(Law):
     """1 while the contact is in stance, 0 in swing (a switch, not a motion: its derivatives

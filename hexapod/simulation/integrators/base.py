@@ -308,7 +308,7 @@ class Integrator:
         w, _, _ = self.model.law_values(self.t)
         self.counters.jacobians += 1
         self.counters.factorisations += 1
-        return rank_split(self.model, self.model.call("Phi_v", q=self.q, w=w))
+        return rank_split(self.model, self.model.call("Phi_v", q=self.q, w=w), w)
 
     def _halving(self, attempt):
         """Take one step by ``attempt(h)``, which returns the new state or None when Newton's
