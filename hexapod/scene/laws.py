@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cache
 
 import numpy as np
 
@@ -522,11 +523,12 @@ LAW_TYPES: dict[str, type[Law]] = {
 }
 
 
+@cache
 def law_types() -> dict[str, type[Law]]:
     """The law classes by the ``type`` of scene files: the engine's (:data:`LAW_TYPES`), and
     those installed packages register in the entry-point group ``hexapod.laws`` (the ``legs``
     package registers its exact gait laws there), so that a scene written with them reads
-    back."""
+    back. Looked up once per process (a scene file has a law per driver)."""
     from importlib.metadata import entry_points
 
     out = dict(LAW_TYPES)
