@@ -15,7 +15,7 @@ calculation, [E] an estimate to be replaced by measured values.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 #: Geometric scale of the experimental model of Dumitru, Marin and Margine.
 MODEL_SCALE = 20.0
@@ -39,6 +39,13 @@ class Segment:
         transverse = mass * (3 * radius**2 + length**2) / 12.0
         axial = mass * radius**2 / 2.0
         return length, mass, transverse, axial
+
+    def stretched(self, factor: float) -> Segment:
+        """The segment with its length multiplied by ``factor``, same cross-section and density:
+        its mass follows the length (its inertias follow from :meth:`scaled`). Itself for 1."""
+        if factor == 1.0:
+            return self
+        return replace(self, length_mm=self.length_mm * factor, mass_mg=self.mass_mg * factor)
 
 
 def _fused(trochanter: Segment, femur: Segment) -> Segment:

@@ -60,29 +60,49 @@ class GaitPattern:
         """The trunk's speed over the ground, the feet's in stance relative to it (m/s)."""
         return STANCE_LENGTH_MM * 1e-3 * scale / (self.duty * period)
 
-    def foot_targets(self, t, period: float = STRIDE_PERIOD,
-                     scale: float = MODEL_SCALE) -> dict[str, np.ndarray]:
+    def period_for_speed(self, speed: float, scale: float = MODEL_SCALE) -> float:
+        """The stride period (s) at which the trunk walks at ``speed`` (m/s): the inverse of
+        :meth:`walking_speed` (inversely proportional to the period)."""
+        return self.walking_speed(1.0, scale) / speed
+
+    def least_duty(self, feet: int = 3) -> float:
+        """The smallest duty factor that keeps at least ``feet`` feet on the ground at every
+        instant (a foot touching down as another lifts off counts as down): the number of feet
+        down is least just after a lift-off."""
+        need = []
+        for leg in LEG_NAMES:
+            # leg k is in stance at leg's lift-off when (l - l_k) mod 1 >= 1 - duty
+            gaps = sorted(1.0 - (self.lift_off[leg] - self.lift_off[k]) % 1.0
+                          for k in LEG_NAMES if k != leg)
+            need.append(gaps[feet - 1])
+        return max(need)
+
+    def foot_targets(self, t, period: float = STRIDE_PERIOD, scale: float = MODEL_SCALE,
+                     lengths=None) -> dict[str, np.ndarray]:
         """Where each foot is designed to be at times ``t`` (N, 3 per leg; m, in the trunk
         frame of :func:`legs.robot.hexapod_scene`): its leg's path, mirrored on the right,
-        from its thorax-coxa point."""
+        from its thorax-coxa point; the legs' segment ``lengths`` as in
+        :func:`legs.stepping.path_targets`."""
         out = {}
         for leg in LEG_NAMES:
             position, side = leg_of(leg)
-            path = path_targets(position, self.cycle_fraction(leg, t, period), self.duty, scale)
+            path = path_targets(position, self.cycle_fraction(leg, t, period), self.duty, scale,
+                                lengths)
             thc = np.array(THC_POINT_MM[position]) * 1e-3 * scale
             if side == "R":
                 path[:, 1], thc[1] = -path[:, 1], -thc[1]
             out[leg] = path + thc
         return out
 
-    def joint_laws(self, leg: str = "L1", period: float = STRIDE_PERIOD) -> dict:
+    def joint_laws(self, leg: str = "L1", period: float = STRIDE_PERIOD, lengths=None) -> dict:
         """The drivers' laws of one leg's six joints (joint name -> law): its foot follows its
-        path (:mod:`legs.stepping`)."""
+        path (:mod:`legs.stepping`); the leg's segment ``lengths`` (a tuple of the four factors,
+        None: all 1)."""
         position, _ = leg_of(leg)
         return {joint: Harmonic(offset, cos, sin, frequency=1.0 / period,
                                 t0=self.lift_off[leg] * period)
-                for joint, (offset, cos, sin) in stepping_harmonics(position,
-                                                                    self.duty).items()}
+                for joint, (offset, cos, sin) in stepping_harmonics(position, self.duty,
+                                                                    lengths=lengths).items()}
 
     def stance_load(self, leg: str, weight: float, period: float = STRIDE_PERIOD,
                     samples: int = 120) -> tuple[Spline, Spline, Spline]:

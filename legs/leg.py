@@ -24,10 +24,16 @@ is the trunk frame at the thorax-coxa point (x forward, y left, z up); all joint
 in the rest pose. Each segment's reference frame sits at its proximal joint with x along the
 segment and z along the leg plane's normal; markers ``distal`` (the next joint) and, on the
 tarsus, ``foot``.
+
+A design may change the segments' lengths (``lengths``: factors of the coxa, femur, tibia and
+tarsus lengths, 1 for the cockroach's proportions): each segment keeps its cross-section and
+density, so its mass follows its length and its inertias follow from both; the rest pose's
+angles and the thorax-coxa brackets stay as they are.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -39,6 +45,43 @@ JOINTS = tuple(name for name, _, _ in GAIT_LAWS)
 ELEMENTS = ("thc_link_1", "thc_link_2", "coxa", "femur", "tibia", "tarsus")
 LEGS = ("front", "middle", "hind")
 SIDES = {"L": 1.0, "R": -1.0}
+#: The segments whose lengths a design may change, in the order of the length factors.
+SEGMENT_NAMES = ("coxa", "femur", "tibia", "tarsus")
+#: The cockroach's proportions: every length factor 1.
+NOMINAL_LENGTHS = (1.0, 1.0, 1.0, 1.0)
+
+
+def length_factors(lengths=None) -> tuple[float, float, float, float]:
+    """``lengths`` (factors of the coxa, femur, tibia and tarsus lengths; None: all 1) as a
+    tuple of four floats.
+
+    Raises
+    ------
+    ValueError
+        Not four finite positive numbers.
+    """
+    if lengths is None:
+        return NOMINAL_LENGTHS
+    factors = tuple(lengths)
+    if len(factors) != 4:
+        raise ValueError(f"lengths must be 4 factors ({', '.join(SEGMENT_NAMES)}), got "
+                         f"{len(factors)}")
+    out = []
+    for name, factor in zip(SEGMENT_NAMES, factors, strict=True):
+        if isinstance(factor, bool) or not isinstance(factor, (int, float, np.floating,
+                                                               np.integer)) \
+                or not (math.isfinite(factor) and factor > 0):
+            raise ValueError(f"{name}_length must be a finite number > 0 (a factor of the "
+                             f"segment's length), got {factor!r}")
+        out.append(float(factor))
+    return (out[0], out[1], out[2], out[3])
+
+
+def describe_lengths(lengths=None) -> str:
+    """``"coxa_length=1.0, femur_length=1.2, ..."``: the four factors, for messages."""
+    return ", ".join(f"{name}_length={factor!r}"
+                     for name, factor in zip(SEGMENT_NAMES, length_factors(lengths),
+                                             strict=True))
 
 
 def _frame(x, z) -> np.ndarray:
@@ -61,16 +104,20 @@ class LegGeometry:
     lengths: tuple[float, ...]
     masses: tuple[float, ...]  # E1 ... E6
     inertias: tuple[np.ndarray, ...]  # principal moments in the segment frames, E1 ... E6
+    length_factors: tuple[float, ...] = NOMINAL_LENGTHS  # coxa, femur, tibia, tarsus
 
     @property
     def axes(self) -> tuple[np.ndarray, ...]:
         return tuple(frame[:, 2] for frame in self.frames)
 
 
-def leg_geometry(leg: str = "front", side: str = "L", scale: float = MODEL_SCALE) -> LegGeometry:
-    """The rest pose of a leg (``front``, ``middle`` or ``hind``; side ``L`` or ``R``)."""
+def leg_geometry(leg: str = "front", side: str = "L", scale: float = MODEL_SCALE,
+                 lengths=None) -> LegGeometry:
+    """The rest pose of a leg (``front``, ``middle`` or ``hind``; side ``L`` or ``R``), its
+    segments' lengths multiplied by ``lengths`` (coxa, femur, tibia, tarsus; None: all 1)."""
     if leg not in LEGS or side not in SIDES:
         raise ValueError(f"leg must be one of {LEGS} and side L or R, got {leg!r}, {side!r}")
+    factors = length_factors(lengths)
     sign = SIDES[side]
     pose = {k: np.radians(v) for k, v in REST_POSE_DEG[leg].items()}
     up = np.array([0.0, 0.0, 1.0])
@@ -80,7 +127,7 @@ def leg_geometry(leg: str = "front", side: str = "L", scale: float = MODEL_SCALE
     def direction(name):
         return np.cos(pose[name]) * lateral - np.sin(pose[name]) * up
 
-    segments = SEGMENTS[leg]
+    segments = tuple(s.stretched(f) for s, f in zip(SEGMENTS[leg], factors, strict=True))
     _, m_bracket, _, _ = bracket(leg).scaled(scale)
     r_bracket = bracket(leg).radius_mm * 1e-3 * scale
     sphere = np.full(3, 0.4 * m_bracket * r_bracket**2)
@@ -103,14 +150,15 @@ def leg_geometry(leg: str = "front", side: str = "L", scale: float = MODEL_SCALE
         *segment_frames[1:],  # J4 ... J6: the femur's, tibia's and tarsus's frames
     )
     return LegGeometry(leg, side, tuple(points), tuple(frames), tuple(segment_frames),
-                       tuple(lengths), tuple(masses), tuple(inertias))
+                       tuple(lengths), tuple(masses), tuple(inertias), factors)
 
 
 def leg_scene(leg: str = "front", side: str = "L", scale: float = MODEL_SCALE,
-              laws: dict | None = None, name: str | None = None) -> Scene:
+              laws: dict | None = None, name: str | None = None, lengths=None) -> Scene:
     """A leg hanging from a fixed trunk, its joints driven by ``laws`` (joint name -> law)
-    when given (every joint, or some), otherwise free."""
-    g = leg_geometry(leg, side, scale)
+    when given (every joint, or some), otherwise free; its segments' lengths multiplied by
+    ``lengths`` (see :func:`leg_geometry`)."""
+    g = leg_geometry(leg, side, scale, lengths)
     scene = Scene(name or f"{leg}-leg", dimension=3, length_unit="m")
     for body in ELEMENTS[:2]:
         k = ELEMENTS.index(body)

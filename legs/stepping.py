@@ -18,8 +18,15 @@ periodic function of time, fitted by least squares with ``HARMONICS`` harmonics
 (:class:`hexapod.Harmonic`, C-infinity), the three prescribed ones first so that the solved
 ones compensate exactly what the fit makes of them. ``scripts/gait_paths.py`` measures how
 closely the feet then follow their paths. Angles do not depend on the scale, so the fit is done
-once per leg position and duty factor, at natural scale, and serves both sides (the right leg's
-axes mirror the left's, see :mod:`legs.leg`).
+once per leg position, duty factor and segment lengths, at natural scale, and serves both sides
+(the right leg's axes mirror the left's, see :mod:`legs.leg`).
+
+**Segment lengths** (``lengths``: factors of the coxa, femur, tibia and tarsus lengths, see
+:func:`legs.leg.leg_geometry`): the foot path keeps its definition in terms of the rest pose of
+the leg *with the new lengths*: the stance line lies ``STANCE_OFFSET_MM`` fore-aft of the new
+rest pose's foot, at its lateral distance, on the same ground (``GROUND_Z_MM`` below the
+trunk's centre of mass), with the same stride length and lift. A leg whose lengths cannot reach
+that path raises ``ValueError`` naming the leg and the factors.
 """
 
 from __future__ import annotations
@@ -38,7 +45,14 @@ from legs.cockroach import (
     STANCE_OFFSET_MM,
     THC_POINT_MM,
 )
-from legs.leg import JOINTS, LegGeometry, leg_geometry
+from legs.leg import (
+    JOINTS,
+    SEGMENT_NAMES,
+    LegGeometry,
+    describe_lengths,
+    leg_geometry,
+    length_factors,
+)
 
 #: The joints placed by inverse kinematics (protraction swings the leg, CTr and FTi set its
 #: reach and height); the others are prescribed.
@@ -126,7 +140,7 @@ def solve_joints(geometry: LegGeometry, targets: np.ndarray, angles: np.ndarray,
     Raises
     ------
     ValueError
-        When a target is out of reach.
+        When a target is out of reach (the message names the leg and its length factors).
     """
     solved = list(solved)
     fixed = [k for k in range(6) if k not in solved]
@@ -141,13 +155,24 @@ def solve_joints(geometry: LegGeometry, targets: np.ndarray, angles: np.ndarray,
             residual = foot - goal
             if np.abs(residual).max() <= tolerance:
                 break
-            step = np.linalg.solve(jacobian[:, :, solved], residual[..., None])[..., 0]
+            try:
+                step = np.linalg.solve(jacobian[:, :, solved], residual[..., None])[..., 0]
+            except np.linalg.LinAlgError:
+                raise ValueError(f"{_leg_label(geometry)}: the foot path is out of reach (the "
+                                 "leg is stretched straight)") from None
             current[:, solved] -= step
         else:
             worst = float(np.abs(residual).max() / np.linalg.norm(rest_foot))
-            raise ValueError(f"{geometry.leg} leg: the foot path is out of reach (missed by "
-                             f"{worst:.2g} of the leg's reach)")
+            raise ValueError(f"{_leg_label(geometry)}: the foot path is out of reach (missed "
+                             f"by {worst:.2g} of the leg's reach)")
     return current
+
+
+def _leg_label(geometry: LegGeometry) -> str:
+    """``"front leg"``, with its length factors when they are not all 1."""
+    if all(f == 1.0 for f in geometry.length_factors):
+        return f"{geometry.leg} leg"
+    return f"{geometry.leg} leg ({describe_lengths(geometry.length_factors)})"
 
 
 def _fourier_basis(tau: np.ndarray, harmonics: int) -> np.ndarray:
@@ -157,10 +182,11 @@ def _fourier_basis(tau: np.ndarray, harmonics: int) -> np.ndarray:
 
 
 def path_targets(position: str, tau: np.ndarray, duty: float,
-                 scale: float = 1.0) -> np.ndarray:
+                 scale: float = 1.0, lengths=None) -> np.ndarray:
     """Where the foot of a left ``position`` leg should be at cycle fractions ``tau``, in the
-    leg's frame (m at ``scale``; the right leg's is the mirror image, y negated)."""
-    geometry = leg_geometry(position, "L", scale)
+    leg's frame (m at ``scale``; the right leg's is the mirror image, y negated): the stance
+    line from the rest pose of the leg with its segment ``lengths`` (see the module's notes)."""
+    geometry = leg_geometry(position, "L", scale, lengths)
     mm = 1e-3 * scale
     fore_aft, height = foot_path(tau, duty, STANCE_LENGTH_MM * mm, FOOT_LIFT_MM * mm)
     rest_foot = geometry.points[6]
@@ -169,13 +195,26 @@ def path_targets(position: str, tau: np.ndarray, duty: float,
                             np.full_like(fore_aft, rest_foot[1]), ground + height])
 
 
-@cache
-def stepping_harmonics(position: str, duty: float,
-                       harmonics: int = HARMONICS) -> dict[str, tuple]:
+def stepping_harmonics(position: str, duty: float, harmonics: int = HARMONICS,
+                       lengths=None) -> dict[str, tuple]:
     """The harmonics ``(offset, cos, sin)`` in the cycle fraction (0 at lift-off) of every joint
-    of a ``front``, ``middle`` or ``hind`` leg walking with ``duty``, such that the foot follows
-    :func:`foot_path`."""
-    geometry = leg_geometry(position, "L", scale=1.0)
+    of a ``front``, ``middle`` or ``hind`` leg walking with ``duty``, its segments' lengths
+    multiplied by ``lengths`` (coxa, femur, tibia, tarsus; None: all 1), such that the foot
+    follows :func:`foot_path`. Computed once per leg, duty, harmonics and length factors
+    (``stepping_harmonics.cache_clear()`` forgets them).
+
+    Raises
+    ------
+    ValueError
+        The leg cannot reach its path (the message names the leg and the factors).
+    """
+    return _stepping_harmonics(position, duty, harmonics, length_factors(lengths))
+
+
+@cache
+def _stepping_harmonics(position: str, duty: float, harmonics: int,
+                        lengths: tuple[float, float, float, float]) -> dict[str, tuple]:
+    geometry = leg_geometry(position, "L", scale=1.0, lengths=lengths)
     tau = np.arange(SAMPLES) / SAMPLES
     fore_aft, height = foot_path(tau, duty, 1.0, 1.0)  # shapes: unit stride and lift
     amplitude = {joint: np.radians(a) for joint, a, _ in GAIT_LAWS}
@@ -189,12 +228,16 @@ def stepping_harmonics(position: str, duty: float,
         coefficients[joint] = np.linalg.lstsq(basis, values, rcond=None)[0]
         angles[:, JOINTS.index(joint)] = basis @ coefficients[joint]
     solved = tuple(JOINTS.index(j) for j in SOLVED_JOINTS)
-    angles = solve_joints(geometry, path_targets(position, tau, duty), angles, solved)
+    angles = solve_joints(geometry, path_targets(position, tau, duty, lengths=lengths), angles,
+                          solved)
     fitted = np.linalg.lstsq(basis, angles[:, list(solved)], rcond=None)[0]
     coefficients.update({joint: fitted[:, k] for k, joint in enumerate(SOLVED_JOINTS)})
     return {joint: (float(c[0]), tuple(c[1:harmonics + 1].tolist()),
                     tuple(c[harmonics + 1:].tolist()))
             for joint, c in ((j, coefficients[j]) for j in JOINTS)}
+
+
+stepping_harmonics.cache_clear = _stepping_harmonics.cache_clear
 
 
 # ------------------------------------------------------------------ the exact gait
@@ -223,14 +266,25 @@ def foot_path_rates(tau, duty: float, length: float, lift: float):
     return fore_aft, height
 
 
-def exact_leg_motion(position: str, duty: float, tau) -> tuple[np.ndarray, ...]:
+def exact_leg_motion(position: str, duty: float, tau,
+                     lengths=None) -> tuple[np.ndarray, ...]:
     """The joint angles of a left ``position`` leg (n, 6) at cycle fractions ``tau``, and their
     first and second derivatives in ``tau``, such that the foot is on its path to round-off:
     the prescribed joints follow the path's lift and fore-aft position exactly, the solved
     ones are Newton's solution of the foot's position (started from the harmonic fit of
-    :func:`stepping_harmonics`), their rates and accelerations from the foot's Jacobian."""
+    :func:`stepping_harmonics`), their rates and accelerations from the foot's Jacobian. The
+    leg's segments have their lengths multiplied by ``lengths`` (coxa, femur, tibia, tarsus;
+    None: all 1).
+
+    Raises
+    ------
+    ValueError
+        Newton's method does not put the foot on its path (the message names the leg and the
+        factors).
+    """
     tau = np.atleast_1d(np.asarray(tau, dtype=float)) % 1.0
-    geometry = leg_geometry(position, "L", scale=1.0)
+    lengths = length_factors(lengths)
+    geometry = leg_geometry(position, "L", scale=1.0, lengths=lengths)
     mm = 1e-3
     (fa, fa1, fa2), (h, h1, h2) = foot_path_rates(tau, duty, 1.0, 1.0)  # unit shapes
     amplitude = {joint: np.radians(a) for joint, a, _ in GAIT_LAWS}
@@ -242,7 +296,7 @@ def exact_leg_motion(position: str, duty: float, tau) -> tuple[np.ndarray, ...]:
         k = JOINTS.index(joint)
         angles[:, k], rates[:, k], accelerations[:, k] = (amplitude[joint] * x
                                                          for x in (value, d1, d2))
-    harmonics = stepping_harmonics(position, duty)
+    harmonics = stepping_harmonics(position, duty, HARMONICS, lengths)
     basis = _fourier_basis(tau, HARMONICS)
     solved = [JOINTS.index(j) for j in SOLVED_JOINTS]
     free = [k for k in range(6) if k not in solved]
@@ -250,17 +304,26 @@ def exact_leg_motion(position: str, duty: float, tau) -> tuple[np.ndarray, ...]:
         offset, cos, sin = harmonics[joint]
         angles[:, JOINTS.index(joint)] = basis @ np.concatenate([[offset], cos, sin])
     length, lift = STANCE_LENGTH_MM * mm, FOOT_LIFT_MM * mm
-    target = path_targets(position, tau, duty, scale=1.0)
+    target = path_targets(position, tau, duty, scale=1.0, lengths=lengths)
     target_rate = np.column_stack([fa1 * length, np.zeros(n), h1 * lift])
     target_acceleration = np.column_stack([fa2 * length, np.zeros(n), h2 * lift])
-    tolerance = 1e-15 * np.linalg.norm(geometry.points[6])
-    for _ in range(8):
+    reach = np.linalg.norm(geometry.points[6])
+    tolerance = 1e-15 * reach
+    try:
+        for _ in range(8):
+            foot, jacobian = foot_position(geometry, angles)
+            residual = foot - target
+            if np.abs(residual).max() <= tolerance:
+                break
+            angles[:, solved] -= np.linalg.solve(jacobian[:, :, solved],
+                                                 residual[..., None])[..., 0]
         foot, jacobian = foot_position(geometry, angles)
-        residual = foot - target
-        if np.abs(residual).max() <= tolerance:
-            break
-        angles[:, solved] -= np.linalg.solve(jacobian[:, :, solved], residual[..., None])[..., 0]
-    foot, jacobian = foot_position(geometry, angles)
+        missed = float(np.abs(foot - target).max()) / reach
+    except np.linalg.LinAlgError:
+        missed = np.inf
+    if not missed <= 1e-12:  # NaN included
+        raise ValueError(f"{_leg_label(geometry)}: the foot cannot follow its path (Newton's "
+                         f"method missed it by {missed:.2g} of the leg's reach)")
     Js, Jp = jacobian[:, :, solved], jacobian[:, :, free]
     rhs = target_rate - np.einsum("nij,nj->ni", Jp, rates[:, free])
     rates[:, solved] = np.linalg.solve(Js, rhs[..., None])[..., 0]
@@ -273,15 +336,58 @@ def exact_leg_motion(position: str, duty: float, tau) -> tuple[np.ndarray, ...]:
 _MOTIONS: dict = {}
 
 
-def _cached_motion(position: str, duty: float, tau: np.ndarray):
-    """:func:`exact_leg_motion`, kept for the last few requests: the six laws of a leg ask for
-    the same samples one after the other."""
-    key = (position, duty, tau.tobytes())
+def _cached_motion(leg: str, duty: float, tau: np.ndarray):
+    """:func:`exact_leg_motion` of a :class:`Stepping` law's ``leg`` (its position and length
+    factors), kept for the last few requests: the six laws of a leg ask for the same samples
+    one after the other."""
+    key = (leg, duty, tau.tobytes())
     if key not in _MOTIONS:
         if len(_MOTIONS) > 32:
             _MOTIONS.clear()
-        _MOTIONS[key] = exact_leg_motion(position, duty, tau)
+        position, lengths = parse_leg(leg)
+        _MOTIONS[key] = exact_leg_motion(position, duty, tau, lengths)
     return _MOTIONS[key]
+
+
+def leg_spec(position: str, lengths=None) -> str:
+    """The ``position`` of a :class:`Stepping` law: the leg (``front``, ``middle`` or
+    ``hind``), followed by those of its length factors that are not 1, as
+    ``"front femur_length=1.2 tibia_length=0.9"`` (just ``"front"`` for the cockroach's
+    proportions)."""
+    return " ".join([position] + [f"{name}_length={factor!r}" for name, factor in
+                                  zip(SEGMENT_NAMES, length_factors(lengths), strict=True)
+                                  if factor != 1.0])
+
+
+def parse_leg(spec: str) -> tuple[str, tuple[float, float, float, float]]:
+    """``"front femur_length=1.2"`` -> ``("front", (1.0, 1.2, 1.0, 1.0))``: the inverse of
+    :func:`leg_spec`.
+
+    Raises
+    ------
+    ValueError
+        Not a leg, or a malformed, unknown, repeated or non-positive factor.
+    """
+    words = str(spec).split()
+    if not words or words[0] not in ("front", "middle", "hind"):
+        raise ValueError(f"position must be front, middle or hind (then length factors such as "
+                         f"femur_length=1.2), got {spec!r}")
+    factors = dict.fromkeys(SEGMENT_NAMES, 1.0)
+    seen = set()
+    for word in words[1:]:
+        key, _, value = word.partition("=")
+        name = key.removesuffix("_length")
+        if not key.endswith("_length") or name not in factors or name in seen:
+            raise ValueError(f"position {spec!r}: {word!r} is not one of "
+                             f"{', '.join(n + '_length=<factor>' for n in SEGMENT_NAMES)} "
+                             "(each at most once)")
+        try:
+            factors[name] = float(value)
+        except ValueError:
+            raise ValueError(f"position {spec!r}: {key} must be a number, got {value!r}") \
+                from None
+        seen.add(name)
+    return words[0], length_factors(tuple(factors.values()))
 
 
 @dataclass(frozen=True)
@@ -289,7 +395,13 @@ class Stepping(Law):
     """The law of one joint of a leg walking with its foot exactly on its path
     (:func:`exact_leg_motion`): a ``front``, ``middle`` or ``hind`` leg, the gait's ``duty``
     factor and ``period`` (s), the leg's ``lift_off`` (a fraction of the period). The same
-    angles serve the left and the right leg (their axes are mirror images)."""
+    angles serve the left and the right leg (their axes are mirror images).
+
+    A leg whose segments' lengths differ from the cockroach's names its length factors in
+    ``position`` after the leg (:func:`leg_spec`: ``"front femur_length=1.2"``), so that a
+    scene file written with the cockroach's proportions has no key more than it had, and one
+    written with other proportions reads back the same law. :attr:`leg` and :attr:`lengths`
+    give the two parts."""
 
     position: str = "front"
     joint: str = "thc_protraction"
@@ -306,13 +418,25 @@ class Stepping(Law):
                   for m, x in enumerate(_cached_motion(self.position, self.duty, tau))]
         return values[0], values[1], values[2]
 
+    @property
+    def leg(self) -> str:
+        """``front``, ``middle`` or ``hind``."""
+        return parse_leg(self.position)[0]
+
+    @property
+    def lengths(self) -> tuple[float, float, float, float]:
+        """The factors of the coxa, femur, tibia and tarsus lengths."""
+        return parse_leg(self.position)[1]
+
     def cycle_time(self):
         return self.period
 
     def problems(self):
         out = []
-        if self.position not in ("front", "middle", "hind"):
-            out.append(f"position must be front, middle or hind, got {self.position!r}")
+        try:
+            parse_leg(self.position)
+        except ValueError as error:
+            out.append(str(error))
         if self.joint not in JOINTS:
             out.append(f"joint must be one of {', '.join(JOINTS)}, got {self.joint!r}")
         if not (np.isfinite(self.period) and self.period > 0):
