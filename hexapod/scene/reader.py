@@ -554,6 +554,19 @@ def read_scene(path: str | Path) -> Scene:
     except RecursionError:  # tomllib parses nested arrays and tables recursively
         raise InputFileError(f"{path}: arrays or tables nested too deeply to be a scene") \
             from None
+    return scene_from_document(document, path)
+
+
+def scene_from_document(document: dict, path: str | Path) -> Scene:
+    """The scene of a parsed TOML document (what :func:`read_scene` reads from a file);
+    ``path`` names it in messages.
+
+    Raises
+    ------
+    ModelError
+        The document describes an invalid scene; lists every problem with its key.
+    """
+    path = Path(path)
     reader = _Reader(path)
     with np.errstate(all="ignore"):  # huge values overflow in the checks, which report them
         scene = reader.read(document)
