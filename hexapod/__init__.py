@@ -71,7 +71,10 @@ __getattr__, __dir__, __all__ = attach(__name__, {
     "hexapod.output.figures": ["COMPONENT_COLOURS", "effort_figure", "png_bytes",
                                "trajectory_figure", "wrench_figure"],
     "hexapod._support.files": ["write_atomically", "write_directory_atomically"],
+    # design studies
+    "hexapod.sweeps.run": ["sweep"],
     # namespaces
     "hexapod.benchmarks": ["benchmarks"],
     "hexapod.minimal": ["minimal"],
+    "hexapod.sweeps": ["sweeps"],
 })

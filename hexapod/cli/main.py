@@ -25,12 +25,14 @@ from hexapod.cli import (
     report,
     scenes,
     simulate,
+    sweep,
     validate,
 )
 from hexapod.errors import HexapodError
 
 #: The commands, in the order ``hexapod --help`` lists them; each is named by its module.
-COMMANDS = (dynamics, info, inverse, report, simulate, check, export, bench, validate, scenes)
+COMMANDS = (dynamics, info, inverse, report, simulate, sweep, check, export, bench, validate,
+            scenes)
 
 
 def build_parser() -> argparse.ArgumentParser:

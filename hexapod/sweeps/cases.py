@@ -1,0 +1,225 @@
+"""One case of a study: its scene, its model (assembled once per process and reused), its job and
+its metrics, returned as a row that records a failure instead of raising it.
+
+A parameter is either an argument of the built-in scene's builder (its keyword parameters, found
+by introspection: ``period``, ``duty``, ``payload`` ...) or a scene key: a dotted path into the
+scene's TOML form (``ground.mu``, ``scene.gravity``, ``body.trunk.mass``, ``scene.gravity.2``),
+applied to the scene the builder made (or the scene file) and read back by the scene reader,
+which checks it as it checks any file.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import os
+import socket
+import time
+from collections import OrderedDict
+
+from hexapod.errors import HexapodError, InputFileError
+from hexapod.sweeps.spec import Case, Study, builder_parameters, spec_parameters_help
+
+#: Models kept per process (the most recently used), shared by the cases of equal structure.
+MODELS_KEPT = 4
+_models: OrderedDict = OrderedDict()
+_ARRAYS = ("body", "joint", "driver", "force")
+
+
+class StudyError(InputFileError):
+    """A study that cannot run: an unknown parameter, a scene key that leads nowhere."""
+
+
+def _builder(study: Study):
+    """The built-in scene's builder, or None for a scene file."""
+    if study.scene_digest:
+        return None
+    from hexapod.scene.builtin import builtin_scenes
+
+    scenes = builtin_scenes()
+    if study.scene not in scenes:
+        known = ", ".join(sorted(scenes)) or "none installed"
+        raise StudyError(f"{study.source}: study.scene: no built-in scene "
+                         f"'{study.scene}' and no such file (built-in: {known})")
+    return scenes[study.scene].load()
+
+
+def split_values(study: Study, builder, values: dict) -> tuple[dict, dict]:
+    """The builder's arguments and the scene keys among ``values``."""
+    arguments = builder_parameters(builder) if builder is not None else {}
+    return ({k: v for k, v in values.items() if k in arguments},
+            {k: v for k, v in values.items() if k not in arguments})
+
+
+def check_study(study: Study) -> None:
+    """Refuse, before any work, a study whose parameters name nothing: every name must be an
+    argument of the builder or a scene key that resolves in the base scene; builds the first
+    case's scene to check the keys and values as the scene reader does.
+
+    Raises
+    ------
+    StudyError
+        With one message naming the study file, the key and what is wrong.
+    """
+    builder = _builder(study)
+    names = list(study.fixed) + [p.name for p in study.parameters]
+    arguments = builder_parameters(builder) if builder is not None else {}
+    bad = [n for n in names if n not in arguments and "." not in n]
+    if bad:
+        accepted = (f"the builder of '{study.scene}' takes {', '.join(arguments)}"
+                    if arguments else f"'{study.scene}' is a scene file: no builder arguments")
+        raise StudyError(f"{study.source}: unknown parameter {', '.join(map(repr, bad))}: "
+                         f"{spec_parameters_help()}; {accepted}")
+    first = study.cases()[0] if study.cases() else Case(0, {}, "")
+    try:
+        build_scene(study, first.params, builder)
+    except StudyError:
+        raise
+    except TypeError as error:
+        raise StudyError(f"{study.source}: {error}") from None
+    except (HexapodError, ValueError) as error:
+        raise StudyError(f"{study.source}: case 0 ({_shown(first.params)}): {error}") from None
+
+
+def _shown(params: dict) -> str:
+    return ", ".join(f"{k}={v}" for k, v in params.items()) or "the base scene"
+
+
+def build_scene(study: Study, params: dict, builder=None):
+    """The scene of a case: the builder called with its arguments (or the scene file read),
+    then the scene keys applied."""
+    from hexapod.scene.builtin import load_scene
+
+    builder = builder if builder is not None else _builder(study)
+    arguments, keys = split_values(study, builder, {**study.fixed, **params})
+    scene = builder(**arguments) if builder is not None else load_scene(study.scene)
+    if not keys:
+        return scene
+    import tomllib
+
+    from hexapod.scene.reader import scene_from_document
+    from hexapod.scene.writer import scene_text
+
+    document = tomllib.loads(scene_text(scene))
+    for key, value in keys.items():
+        set_scene_key(document, key, value, study.source)
+    return scene_from_document(document, f"{scene.name} ({_shown(keys)})")
+
+
+def set_scene_key(document: dict, key: str, value, source: str = "") -> None:
+    """Set the dotted ``key`` of a scene document: ``section.key`` for the tables ``scene`` and
+    ``ground``, ``section.NAME.key`` for the arrays of elements, an integer last part for an
+    entry of a list (``scene.gravity.2``)."""
+    parts = key.split(".")
+    where = f"{source}: {key}" if source else key
+    section = parts[0]
+    if section in _ARRAYS:
+        if len(parts) < 3:
+            raise StudyError(f"{where}: name an element and its key, {section}.NAME.KEY")
+        elements = document.get(section, [])
+        names = [e.get("name") for e in elements]
+        if parts[1] not in names:
+            shown = ", ".join(map(str, names[:8])) + (", ..." if len(names) > 8 else "")
+            raise StudyError(f"{where}: the scene has no {section} named '{parts[1]}' "
+                             f"({section}s: {shown or 'none'})")
+        table, rest = elements[names.index(parts[1])], parts[2:]
+    elif section in ("scene", "ground"):
+        if len(parts) < 2:
+            raise StudyError(f"{where}: name a key of [{section}], {section}.KEY")
+        table, rest = document.setdefault(section, {}), parts[1:]
+    else:
+        raise StudyError(f"{where}: a scene key starts with scene, ground, "
+                         f"{', '.join(_ARRAYS)}; {spec_parameters_help()}")
+    if len(rest) == 2 and rest[1].isdigit():
+        current = table.get(rest[0])
+        if not isinstance(current, list) or int(rest[1]) >= len(current):
+            raise StudyError(f"{where}: '{rest[0]}' has no entry {rest[1]}")
+        current[int(rest[1])] = value
+    elif len(rest) == 1:
+        table[rest[0]] = value
+    else:
+        raise StudyError(f"{where}: too many parts after the element")
+
+
+def model_for(study: Study, params: dict, scene):
+    """The assembled model of ``scene``, from this process's cache when a case of the same
+    structure was run here before: cases whose scenes differ only in ground-force settings
+    share one model (compiled functions included), with its ground settings replaced."""
+    from hexapod.model import assemble
+
+    builder = _builder(study)
+    arguments, keys = split_values(study, builder, {**study.fixed, **params})
+    structure = json.dumps([study.scene, study.scene_digest, arguments,
+                            {k: v for k, v in keys.items() if not k.startswith("ground.")}],
+                           sort_keys=True, default=repr)
+    model = _models.get(structure)
+    if model is None:
+        model = assemble(scene)
+        _models[structure] = model
+        while len(_models) > MODELS_KEPT:
+            _models.popitem(last=False)
+    else:
+        _models.move_to_end(structure)
+    if model.ground != scene.ground:
+        model = copy.copy(model)
+        model.ground = scene.ground
+    return model
+
+
+def run_case(study: Study, case: Case) -> dict:
+    """Run one case; never raises for the case's own failure.
+
+    Returns
+    -------
+    dict
+        ``case``, ``key``, ``params``, ``status`` (``ok`` or ``failed``), ``message``,
+        ``metrics`` (column -> float), ``units`` (column -> unit), and the run's cost:
+        ``cpu_s``, ``wall_s``, ``worker``.
+    """
+    wall, cpu = time.perf_counter(), time.process_time()
+    row = {"case": case.index, "key": case.key, "params": case.params, "status": "ok",
+           "message": "", "metrics": {}, "units": {}}
+    try:
+        scene = build_scene(study, case.params)
+        model = model_for(study, case.params, scene)
+        row["status"], row["message"], row["metrics"] = _run_job(study.job, model)
+        from hexapod.sweeps.metrics import metric_unit
+
+        row["units"] = {c: metric_unit(model, c) for c in row["metrics"]}
+    except KeyboardInterrupt:
+        raise
+    except (HexapodError, ValueError) as error:
+        row["status"], row["message"] = "failed", str(error)
+    except Exception as error:  # an internal error: still a row, named as such
+        row["status"], row["message"] = "failed", f"internal error: {type(error).__name__}: {error}"
+    row["cpu_s"] = time.process_time() - cpu
+    row["wall_s"] = time.perf_counter() - wall
+    row["worker"] = f"{socket.gethostname()}:{os.getpid()}"
+    return row
+
+
+def _run_job(job: dict, model) -> tuple[str, str, dict]:
+    import numpy as np
+
+    from hexapod.sweeps.metrics import FAMILIES, inverse_metrics, simulation_metrics
+
+    families = job.get("metrics") or FAMILIES[job["kind"]]
+    cycle = model.cycle_time()
+    if job["kind"] == "inverse":
+        from hexapod.algorithms.inverse import inverse_dynamics
+
+        duration = job["duration"] or job["strides"] * (cycle or 1.0)
+        start = job["start"]
+        times = np.linspace(start, start + duration, job["samples"])
+        result = inverse_dynamics(model, times)
+        strides = duration / cycle if cycle else 1.0
+        return "ok", "", inverse_metrics(model, result, families, strides)
+    from hexapod.simulation.loop import simulate
+
+    duration = job["duration"] or cycle or 1.0
+    options = {k: job[k] for k in ("method", "rtol", "atol", "step", "cpu_budget")
+               if job.get(k) is not None}
+    result = simulate(model, duration, forces=job["forces"], **options)
+    status = "ok" if result.success else "failed"
+    return status, result.message if not result.success else "", \
+        simulation_metrics(model, result, families)
