@@ -7,9 +7,7 @@ from __future__ import annotations
 import hashlib
 import io
 import json
-import os
 import sys
-import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -143,18 +141,9 @@ class Reference:
 
 
 def write_bytes_atomically(path: Path, content: bytes) -> None:
-    """Write through a temporary file in the same folder renamed over the target (as
-    :func:`hexapod._support.files.write_atomically`, for bytes)."""
+    """:func:`hexapod.write_atomically`, making the folder first."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(handle, "wb") as stream:
-            stream.write(content)
-        os.replace(temporary, path)
-    except BaseException:
-        if os.path.exists(temporary):
-            os.unlink(temporary)
-        raise
+    hx.write_atomically(path, content)
 
 
 def model_fingerprint(model: hx.Model) -> str:

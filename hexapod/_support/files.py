@@ -44,9 +44,10 @@ def _sync(stream) -> None:
     os.fsync(stream.fileno())
 
 
-def write_atomically(path: str | Path, text: str) -> Path:
-    """Write ``text`` to ``path`` through a temporary file in the same folder, renamed over the
-    target when complete: a failure (or an interruption) never leaves a partial file.
+def write_atomically(path: str | Path, text: str | bytes) -> Path:
+    """Write ``text`` (UTF-8, or ``bytes`` as they are) to ``path`` through a temporary file in
+    the same folder, renamed over the target when complete: a failure (or an interruption)
+    never leaves a partial file.
 
     Raises
     ------
@@ -61,7 +62,9 @@ def write_atomically(path: str | Path, text: str) -> Path:
         raise InputFileError(f"{path}: cannot write the file ({error})") from None
     try:
         os.chmod(temporary, 0o666 & ~_umask())  # as open() would create it (mkstemp: 0600)
-        with os.fdopen(handle, "w", encoding="utf-8", newline="") as stream:
+        binary = isinstance(text, bytes)
+        with (os.fdopen(handle, "wb") if binary else
+              os.fdopen(handle, "w", encoding="utf-8", newline="")) as stream:
             stream.write(text)
             _sync(stream)
         os.replace(temporary, path)

@@ -10,7 +10,6 @@ case, named by the case's key), and when the study ends ``study.csv``, ``columns
 from __future__ import annotations
 
 import json
-import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -284,7 +283,7 @@ def _kept_rows(folder: Path, cases) -> dict[str, dict]:
 def _write_outputs(folder: Path, study: Study, table: SweepTable, rows: list[dict]) -> None:
     write_atomically(folder / "study.csv", table.csv_text())
     write_atomically(folder / "columns.csv", table.columns_csv_text())
-    _write_bytes(folder / "study.npz", table.npz_bytes())
+    write_atomically(folder / "study.npz", table.npz_bytes())
     timings = ["case,cpu_s,wall_s,worker"] + [
         f"{r['case']},{r.get('cpu_s', 0.0)!r},{r.get('wall_s', 0.0)!r},{r.get('worker', '')}"
         for r in sorted(rows, key=lambda r: r["case"])]
@@ -295,19 +294,5 @@ def _write_outputs(folder: Path, study: Study, table: SweepTable, rows: list[dic
     status = table.data["status"]
     for name, figure in sweep_figures(table.parameters(), table.metrics(), table.units, status,
                                       study.name):
-        _write_bytes(folder / "figures" / name, png_bytes(figure))
+        write_atomically(folder / "figures" / name, png_bytes(figure))
 
-
-def _write_bytes(path: Path, content: bytes) -> None:
-    import tempfile
-
-    handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.",
-                                         suffix=".tmp")
-    try:
-        with os.fdopen(handle, "wb") as stream:
-            stream.write(content)
-        os.replace(temporary, path)
-    except BaseException:
-        if os.path.exists(temporary):
-            os.unlink(temporary)
-        raise
