@@ -156,19 +156,28 @@ def _unique_names(names: list[str]) -> list[str]:
 
 # ------------------------------------------------------------------ a family against a parameter
 
-def _line_axes(title: str):
-    """One panel with a fixed right margin for the legend (fixed margins: fast to draw)."""
+def _axes(title: str, size: tuple[float, float], margins: tuple[float, float, float, float],
+          grid: bool = False):
+    """One panel of ``size`` (inches) with fixed ``margins`` (left, right, bottom, top; inches:
+    fixed margins are fast to draw and leave room for a legend or a colour bar)."""
     from matplotlib.figure import Figure
 
-    width, height = LINE_SIZE
-    figure = Figure(figsize=LINE_SIZE)
+    width, height = size
+    left, right, bottom, top = margins
+    figure = Figure(figsize=size)
     ax = figure.subplots()
-    figure.subplots_adjust(left=0.9 / width, right=1 - 1.9 / width, bottom=0.65 / height,
-                           top=1 - 0.75 / height)
+    figure.subplots_adjust(left=left / width, right=1 - right / width, bottom=bottom / height,
+                           top=1 - top / height)
     figure.suptitle(title, fontsize=10)
-    ax.grid(True, linewidth=0.4, alpha=0.6)
+    if grid:
+        ax.grid(True, linewidth=0.4, alpha=0.6)
     ax.tick_params(labelsize=8)
     return figure, ax
+
+
+def _line_axes(title: str):
+    """A family against a parameter: a right margin for the legend, a grid."""
+    return _axes(title, LINE_SIZE, (0.9, 1.9, 0.65, 0.75), grid=True)
 
 
 def _ranked(envelopes: np.ndarray) -> list[int]:
@@ -268,16 +277,8 @@ def _grid_cells(first: np.ndarray, second: np.ndarray, largest: np.ndarray, whic
 
 
 def _map_axes(title: str):
-    from matplotlib.figure import Figure
-
-    width, height = MAP_SIZE
-    figure = Figure(figsize=MAP_SIZE)
-    ax = figure.subplots()
-    figure.subplots_adjust(left=0.95 / width, right=1 - 0.75 / width, bottom=0.7 / height,
-                           top=1 - 0.8 / height)
-    figure.suptitle(title, fontsize=10)
-    ax.tick_params(labelsize=8)
-    return figure, ax
+    """A map of two parameters: a right margin for the colour bar."""
+    return _axes(title, MAP_SIZE, (0.95, 0.75, 0.7, 0.8))
 
 
 def _colour_map():
