@@ -44,8 +44,10 @@ def _builder(study: Study):
     return scenes[study.scene].load()
 
 
-def split_values(study: Study, builder, values: dict) -> tuple[dict, dict]:
-    """The builder's arguments and the scene keys among ``values``."""
+def case_values(study: Study, builder, params: dict) -> tuple[dict, dict]:
+    """A case's values (the study's fixed ones and its own) split into the builder's
+    arguments and the scene keys."""
+    values = {**study.fixed, **params}
     arguments = builder_parameters(builder) if builder is not None else {}
     return ({k: v for k, v in values.items() if k in arguments},
             {k: v for k, v in values.items() if k not in arguments})
@@ -70,9 +72,9 @@ def check_study(study: Study) -> None:
                     if arguments else f"'{study.scene}' is a scene file: no builder arguments")
         raise StudyError(f"{study.source}: unknown parameter {', '.join(map(repr, bad))}: "
                          f"{spec_parameters_help()}; {accepted}")
-    first = study.cases()[0] if study.cases() else Case(0, {}, "")
+    first = study.cases()[0]  # there is always one: the product of no lists is one case
     try:
-        build_scene(study, first.params, builder)
+        build_scene(study, builder, *case_values(study, builder, first.params))
     except StudyError:
         raise
     except TypeError as error:
@@ -85,13 +87,11 @@ def _shown(params: dict) -> str:
     return ", ".join(f"{k}={v}" for k, v in params.items()) or "the base scene"
 
 
-def build_scene(study: Study, params: dict, builder=None):
+def build_scene(study: Study, builder, arguments: dict, keys: dict):
     """The scene of a case: the builder called with its arguments (or the scene file read),
     then the scene keys applied."""
     from hexapod.scene.builtin import load_scene
 
-    builder = builder if builder is not None else _builder(study)
-    arguments, keys = split_values(study, builder, {**study.fixed, **params})
     scene = builder(**arguments) if builder is not None else load_scene(study.scene)
     if not keys:
         return scene
@@ -141,14 +141,12 @@ def set_scene_key(document: dict, key: str, value, source: str = "") -> None:
         raise StudyError(f"{where}: too many parts after the element")
 
 
-def model_for(study: Study, params: dict, scene):
+def model_for(study: Study, arguments: dict, keys: dict, scene):
     """The assembled model of ``scene``, from this process's cache when a case of the same
     structure was run here before: cases whose scenes differ only in ground-force settings
     share one model (compiled functions included), with its ground settings replaced."""
     from hexapod.model import assemble
 
-    builder = _builder(study)
-    arguments, keys = split_values(study, builder, {**study.fixed, **params})
     structure = json.dumps([study.scene, study.scene_digest, arguments,
                             {k: v for k, v in keys.items() if not k.startswith("ground.")}],
                            sort_keys=True, default=repr)
@@ -180,8 +178,10 @@ def run_case(study: Study, case: Case) -> dict:
     row = {"case": case.index, "key": case.key, "params": case.params, "status": "ok",
            "message": "", "metrics": {}, "units": {}}
     try:
-        scene = build_scene(study, case.params)
-        model = model_for(study, case.params, scene)
+        builder = _builder(study)
+        arguments, keys = case_values(study, builder, case.params)
+        scene = build_scene(study, builder, arguments, keys)
+        model = model_for(study, arguments, keys, scene)
         row["status"], row["message"], row["metrics"] = _run_job(study.job, model)
         from hexapod.sweeps.metrics import metric_unit
 

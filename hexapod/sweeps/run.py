@@ -110,7 +110,7 @@ def run_study(study: Study, *, client=None, workers: int | None = None,
     cluster's dashboard)."""
     check_study(study)
     cases = study.cases()
-    folder = _prepare(Path(out), study, resume) if out is not None else None
+    folder = _prepare(Path(out), study, resume, len(cases)) if out is not None else None
     kept = _kept_rows(folder, cases) if folder is not None and resume else {}
     todo = [c for c in cases if c.key not in kept]
     state = Progress(len(cases), done=len(kept), reused=len(kept), started=time.perf_counter())
@@ -227,7 +227,7 @@ class _client:
 # ------------------------------------------------------------------ the output folder
 
 
-def _prepare(folder: Path, study: Study, resume: bool) -> Path:
+def _prepare(folder: Path, study: Study, resume: bool, cases: int) -> Path:
     """Make ``folder`` ready: create it, or clear an earlier study's files (unless resuming);
     refuse a folder that holds anything else."""
     if folder.exists() or folder.is_symlink():
@@ -247,7 +247,7 @@ def _prepare(folder: Path, study: Study, resume: bool) -> Path:
             (folder / sub).mkdir(parents=True, exist_ok=True)
         except OSError as error:
             raise InputFileError(f"{folder / sub}: cannot make the folder ({error})") from None
-    write_atomically(folder / "study.json", json.dumps(_description(study), indent=1) + "\n")
+    write_atomically(folder / "study.json", json.dumps(_description(study, cases), indent=1) + "\n")
     return folder
 
 
@@ -259,10 +259,10 @@ def _clear(folder: Path) -> None:
             path.unlink()
 
 
-def _description(study: Study) -> dict:
+def _description(study: Study, cases: int) -> dict:
     return {"name": study.name, "description": study.description, "source": study.source,
             **study.identity(), "parameters": [p.name for p in study.parameters],
-            "cases": len(study.cases()), "seed": study.seed, "samples": study.samples}
+            "cases": cases, "seed": study.seed, "samples": study.samples}
 
 
 def _kept_rows(folder: Path, cases) -> dict[str, dict]:
