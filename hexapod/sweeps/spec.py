@@ -181,6 +181,9 @@ def read_study(path: str | Path) -> Study:
         document = tomllib.loads(read_text(path, "study file"))
     except ValueError as error:
         raise InputFileError(f"{path}: not valid TOML: {str(error).split(';')[0]}") from None
+    except RecursionError:  # tomllib parses nested arrays and tables recursively
+        raise InputFileError(f"{path}: arrays or tables nested too deeply to be a study") \
+            from None
     return study_from_document(document, path)
 
 
