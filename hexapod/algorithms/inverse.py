@@ -29,6 +29,7 @@ from functools import cached_property
 import casadi as ca
 import numpy as np
 
+from hexapod._support import signals
 from hexapod.algorithms.dynamics import forward_dynamics
 from hexapod.algorithms.ground import ground_reactions
 from hexapod.algorithms.kinematics import assemble_positions, degrees_of_freedom, solve_velocities
@@ -141,8 +142,24 @@ def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = 
     if plan is not None and method in ("auto", "tree"):
         if compile is None:
             compile = plan.is_compiled or times.size >= COMPILE_FROM_SAMPLES
-        return plan.solve(times, w, wd, wdd, frame, compiled=compile, progress=progress)
-    return _saddle(model, times, frame, progress)
+        result = plan.solve(times, w, wd, wdd, frame, compiled=compile, progress=progress)
+    else:
+        result = _saddle(model, times, frame, progress)
+    _check_finite(model, result)
+    return result
+
+
+def _check_finite(model: Model, result: InverseResult) -> None:
+    """A non-finite wrench or acceleration (an overflow: laws or loads too large) is an error
+    naming the first sample's time and the quantity, not numbers written as NaN."""
+    for what, values in (("acceleration", result.v_dot), ("joint force", result.force),
+                         ("joint moment", result.torque)):
+        finite = np.isfinite(values).all(axis=tuple(range(1, values.ndim)))
+        if not finite.all():
+            k = int(np.argmin(finite))
+            raise HexapodError(f"model '{model.name}': non-finite {what} at the sample t = "
+                               f"{result.times[k]:.6g} s (an overflow: the scene's laws or "
+                               "loads are too large there)")
 
 
 # ------------------------------------------------------------------ the saddle path
@@ -255,7 +272,10 @@ class TreePlan:
         options = _compiler_options()
         if not options:
             return self.function
-        return ca.Function("tree_inverse", *self._expressions, options)
+        expressions = self._expressions
+        # the compiler runs through system(), which would discard a SIGINT sent meanwhile
+        with signals.deferred():
+            return ca.Function("tree_inverse", *expressions, options)
 
     @cached_property
     def _expressions(self) -> tuple:

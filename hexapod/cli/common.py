@@ -2,7 +2,7 @@
 JSON output.
 
 Nothing here imports NumPy (nor anything that does), so that ``hexapod --help`` stays quick and
-:func:`hexapod.cli.main.main` can limit the BLAS threads before NumPy is loaded.
+:func:`hexapod.cli.app.main` can limit the BLAS threads before NumPy is loaded.
 """
 
 from __future__ import annotations
@@ -17,13 +17,29 @@ from hexapod.scene.builtin import DEFAULT_SCENE
 # ------------------------------------------------------------------ arguments
 
 
+#: The largest time, duration or step (s) an option takes. At |t| = 1e9 s (32 years) consecutive
+#: floating-point numbers are 1.2e-7 s apart, so a start plus a duration stays representable and
+#: steps down to a microsecond still advance the time by several units of the last place; no
+#: simulation or report of a legged robot spans decades.
+MAX_TIME = 1e9
+#: The largest count an option takes (samples, every N-th state): far beyond any memory, so the
+#: jobs' own weighing (hexapod._support.limits) says what is too much; this only keeps the
+#: arithmetic on counts in floating point.
+MAX_COUNT = 10**15
+#: The largest number of worker processes of a local cluster.
+MAX_WORKERS = 1024
+#: The most faces of a friction pyramid: with 1000 faces it is within 5e-6 of the cone (the
+#: exact cone, 0, is cheaper still).
+MAX_FACES = 1000
+
+
 def _number(kind, accept, condition: str):
     """An argparse type: ``kind(text)``, finite and passing ``accept``, else the message
     "must be <condition>"."""
     def parse(text: str):
         try:
             value = kind(text)
-        except ValueError:
+        except (ValueError, OverflowError):
             raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
         if not (math.isfinite(value) and accept(value)):
             raise argparse.ArgumentTypeError(f"must be {condition}, got {text}")
@@ -36,26 +52,90 @@ def positive(kind):
     return _number(kind, lambda value: value > 0, "positive")
 
 
-def at_least(smallest: int):
-    def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
-        if value < smallest:
-            raise argparse.ArgumentTypeError(f"must be at least {smallest}, got {value}")
-        return value
-    return parse
-
-
 def non_negative(kind):
     """An argparse type: a finite ``kind`` (int or float), zero or positive."""
     return _number(kind, lambda value: value >= 0, "zero or positive")
 
 
+#: An instant in s (``--t``, ``--start``): finite, within MAX_TIME of zero.
+time_value = _number(float, lambda value: abs(value) <= MAX_TIME,
+                     f"a time between -{MAX_TIME:.0e} and {MAX_TIME:.0e} s".replace("e+0", "e"))
+#: A length of time in s (``--t-end``, ``--duration``, ``--step``, ``--cpu-budget``).
+seconds = _number(float, lambda value: 0 < value <= MAX_TIME,
+                  f"positive and at most {MAX_TIME:.0e} s".replace("e+0", "e"))
+#: A relative tolerance: a fraction, strictly between 0 and 1.
+relative_tolerance = _number(float, lambda value: 0 < value < 1,
+                             "positive and below 1 (e.g. 1e-6)")
+
+
+def at_least(smallest: int, largest: int = MAX_COUNT):
+    """An argparse type: a whole number from ``smallest`` to ``largest``, written ``5000`` or
+    ``1e7``."""
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            try:
+                number = float(text)
+            except ValueError:
+                raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
+            if not (math.isfinite(number) and number == int(number)):
+                raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
+            value = int(number)
+        if value < smallest:
+            raise argparse.ArgumentTypeError(f"must be at least {smallest}, got {text}")
+        if value > largest:
+            raise argparse.ArgumentTypeError(f"must be at most {short(largest)}, got {text}")
+        return value
+    return parse
+
+
+def memory_size(text: str) -> int:
+    """An argparse type: a memory size in bytes, written ``16G``, ``512M``."""
+    from hexapod._support.limits import parse_size
+
+    try:
+        return parse_size(text)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+
+
+def limit_arguments(parser: argparse.ArgumentParser, steps: bool = False) -> None:
+    """``--max-memory`` (and with ``steps``, ``--max-steps``): the limits a job is weighed
+    against before it starts (hexapod._support.limits)."""
+    group = parser.add_argument_group(
+        "limits", "a job estimated to need more is refused before it starts")
+    group.add_argument("--max-memory", type=memory_size, metavar="SIZE",
+                       help="memory the job may use, e.g. 16G or 512M (default: "
+                       "HEXAPOD_MAX_MEMORY, else half the machine's memory, at most 8G)")
+    if steps:
+        group.add_argument("--max-steps", type=at_least(1), metavar="N",
+                           help="steps the run may take (default: HEXAPOD_MAX_STEPS, else "
+                           "1e7)")
+
+
+#: Bytes per number of a sample (positions, velocities, accelerations, law values and their
+#: rates, multipliers, joint wrenches, ground forces) that inverse dynamics and its report hold
+#: until the files are written: the peak memory of 'hexapod report' grows by 27 to 38 bytes per
+#: number and sample (front-leg, hexapod and hexapod-held, 1000 to 80,000 samples).
+INVERSE_BYTES_PER_NUMBER = 32
+
+
+def check_inverse_memory(model, samples: int, limit: int | None, lower: str) -> None:
+    """Refuse inverse dynamics of ``samples`` samples of ``model`` whose memory would pass the
+    limit (``--max-memory``, else ``HEXAPOD_MAX_MEMORY``, else the default), before any
+    work; ``lower`` says how to ask for fewer samples."""
+    from hexapod._support.limits import check_memory
+
+    numbers = (model.n_q + 2 * model.n_v + 3 * model.n_w + model.n_c + 7 * len(model.joints)
+               + 4 * len(model.contacts))
+    check_memory(float(samples) * numbers * INVERSE_BYTES_PER_NUMBER,
+                 f"inverse dynamics of {samples} samples of '{model.name}'", lower, limit)
+
+
 def pyramid_faces(text: str) -> int:
     """Faces of the friction pyramid: 0 (the exact cone) or at least 3."""
-    value = at_least(0)(text)
+    value = at_least(0, MAX_FACES)(text)
     if 0 < value < 3:
         raise argparse.ArgumentTypeError(f"must be 0 (the exact cone) or at least 3, got {value}")
     return value
@@ -75,7 +155,8 @@ def scene_positional(parser: argparse.ArgumentParser) -> None:
 
 def scene_arguments(parser: argparse.ArgumentParser, json_help: str) -> None:
     scene_positional(parser)
-    parser.add_argument("--t", type=float, default=0.0, help="time in s (default 0)")
+    parser.add_argument("--t", type=time_value, default=0.0,
+                        help="time in s, within 1e9 s of 0 (default 0)")
     parser.add_argument("--json", action="store_true", help=json_help)
 
 

@@ -55,6 +55,41 @@ def _finite(values) -> bool:
     return bool(np.all(np.isfinite(np.asarray(values, dtype=float))))
 
 
+#: The largest magnitude of a law's numbers: a force of 1e15 N, an angle of 1e15 rad or a time
+#: of 1e15 s is nothing a legged machine meets, and products of a few stay far from overflow.
+LARGEST_NUMBER = 1e15
+#: The closest two samples of a table may be, as a fraction of its span and never below a
+#: nanosecond: the derivatives are differences over the spacing (its square for accelerations),
+#: so closer samples make them 1e18 times the values, nothing but round-off.
+CLOSEST_SAMPLES = 1e-9
+#: The shortest period of a gait, s: its accelerations go as 1 / period^2.
+SHORTEST_PERIOD = 1e-6
+
+
+def _size_problem(*groups) -> str:
+    """A number of ``groups`` beyond :data:`LARGEST_NUMBER` in magnitude, or ''."""
+    largest = max(float(np.max(np.abs(np.asarray(g, dtype=float)), initial=0.0)) for g in groups)
+    return (f"holds a number of magnitude {largest:.3g}, beyond the 1e15 a law may hold"
+            if largest > LARGEST_NUMBER else "")
+
+
+def _spacing_problem(times) -> str:
+    """Samples too close together for their derivatives to mean anything, or ''."""
+    times = np.asarray(times, dtype=float)
+    if times.size < 2:
+        return ""
+    spacing = np.diff(times)
+    span = times[-1] - times[0]
+    closest = CLOSEST_SAMPLES * max(span, 1.0)
+    if spacing.min() < closest:
+        k = int(np.argmin(spacing))
+        return (f"the samples cannot be interpolated: times {float(times[k])!r} and "
+                f"{float(times[k + 1])!r} s are {spacing[k]:.3g} s apart, closer than "
+                f"{closest:.3g} s (a billionth of the span, at least a nanosecond), where the "
+                "derivatives would be meaningless")
+    return ""
+
+
 @dataclass(frozen=True)
 class Constant(Law):
     """``f(t) = value``."""
@@ -73,7 +108,10 @@ class Constant(Law):
         return Constant(self.value * factor)
 
     def problems(self):
-        return [] if math.isfinite(self.value) else [f"value is not finite: {self.value}"]
+        if not math.isfinite(self.value):
+            return [f"value is not finite: {self.value}"]
+        size = _size_problem(self.value)
+        return [size] if size else []
 
 
 @dataclass(frozen=True)
@@ -119,7 +157,9 @@ class Polynomial(Law):
             out.append("coefficients are empty")
         if not _finite(self.coefficients) or not math.isfinite(self.t0):
             out.append("coefficients or t0 are not finite")
-        return out
+        else:
+            out.append(_size_problem(self.coefficients, self.t0))
+        return [problem for problem in out if problem]
 
 
 @dataclass(frozen=True)
@@ -182,7 +222,10 @@ class Harmonic(Law):
             out.append("offset, amplitudes, frequency or t0 are not finite")
         elif self.frequency <= 0:
             out.append(f"frequency must be positive, got {self.frequency}")
-        return out
+        else:
+            out.append(_size_problem([self.offset, self.frequency, self.t0, *self.cos,
+                                      *self.sin]))
+        return [problem for problem in out if problem]
 
 
 def _harmonic_arrays(cos, sin, rate: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -279,7 +322,9 @@ class Spline(Law):
             out.append("times must be strictly increasing")
         elif self.boundary == "periodic" and self.values[0] != self.values[-1]:
             out.append("a periodic spline needs equal first and last values")
-        return out
+        else:
+            out.append(_size_problem(self.times, self.values) or _spacing_problem(self.times))
+        return [problem for problem in out if problem]
 
 
 def _smootherstep(u):
@@ -403,9 +448,11 @@ class Gait(Law):
                   *self.sin]
         if not _finite(values):
             return ["offset, amplitudes, period, duty, shift or blend are not finite"]
+        if _size_problem(values):
+            return [_size_problem(values)]
         out = []
-        if self.period <= 0:
-            out.append(f"period must be positive, got {self.period}")
+        if not self.period >= SHORTEST_PERIOD:
+            out.append(f"period must be at least {SHORTEST_PERIOD:g} s, got {self.period}")
         if not 0 < self.duty < 1:
             out.append(f"duty must be between 0 and 1, got {self.duty}")
         elif not 0 < self.blend <= min(self.duty, 1 - self.duty):
@@ -481,7 +528,9 @@ class Hermite(Law):
             return ["times, values, rates or accelerations are not finite"]
         if np.any(np.diff(self.times) <= 0):
             return ["times must be strictly increasing"]
-        return []
+        numbers = (_size_problem(self.times, self.values, self.rates, self.accelerations)
+                   or _spacing_problem(self.times))
+        return [numbers] if numbers else []
 
 
 @dataclass(frozen=True)

@@ -7,7 +7,6 @@ length, gravity included, is in that unit, and :func:`hexapod.assemble` converts
 
 from __future__ import annotations
 
-import re
 from collections.abc import Iterator
 
 import numpy as np
@@ -16,7 +15,14 @@ from hexapod.errors import ModelError, Problem
 from hexapod.scene.bodies import Body, Particle, PlanarBody, SpatialBody
 from hexapod.scene.contacts import GroundForces
 from hexapod.scene.drivers import COORDINATES, CoordinateDriver, JointDriver
-from hexapod.scene.element import GROUND, Attachment, Element
+from hexapod.scene.element import (
+    GROUND,
+    Attachment,
+    Element,
+    line_problem,
+    name_problem,
+    quoted,
+)
 from hexapod.scene.forces import (
     AppliedForce,
     AppliedTorque,
@@ -41,7 +47,25 @@ LENGTH_UNITS = {"m": 1.0, "dm": 0.1, "cm": 0.01, "mm": 1e-3, "um": 1e-6, "in": 0
 
 STANDARD_GRAVITY = 9.81  # m/s^2, the default gravity
 
-_NAME = re.compile(r"^[A-Za-z0-9_.\-]+(/[A-Za-z0-9_.\-]+)*$")
+# The largest magnitudes a scene may hold, in SI. Each is far beyond any legged machine (a body of
+# a million tonnes on a leg a thousand kilometres long), and far enough below the floating-point
+# range (1.8e308) that the products the equations form of a few of them (m g L, k L^2, I w^2, the
+# squares of a least-squares solve) stay finite: beyond them a scene fails in the arithmetic
+# (an overflow, a division by zero) instead of saying what is wrong.
+#: gravity, m/s^2: 1e5 g
+LARGEST_GRAVITY = 1e6
+#: per quantity: the largest magnitude (SI) and its unit
+LARGEST = {"length": (1e6, "m"), "speed": (1e6, "m/s"), "rate": (1e6, "rad/s"),
+           "mass": (1e9, "kg"), "inertia": (1e21, "kg m^2"), "time": (1e9, "s"),
+           "stiffness": (1e15, "N/m"), "damping": (1e15, "N s/m"),
+           "torsional stiffness": (1e15, "N m/rad"), "torsional damping": (1e15, "N m s/rad")}
+#: the quantity of each element attribute a magnitude is checked for
+_QUANTITIES = {"position": "length", "com": "length", "origin": "length", "length": "length",
+               "free_length": "length", "foothold": "length", "advance": "length",
+               "point": "length", "point_a": "length", "point_b": "length",
+               "parent_frame": "length", "child_frame": "length", "velocity": "speed",
+               "angular_velocity": "rate", "mass": "mass", "inertia": "inertia",
+               "period": "time", "stiffness": "stiffness", "damping": "damping"}
 
 
 class Scene:
@@ -141,20 +165,22 @@ class Scene:
         world); its bodies' initial poses move with it; it is converted to this scene's unit.
         Its gravity is ignored, this scene's applies.
         """
+        subject, part = f"scene {quoted(self.name)}", f"sub-model {quoted(sub.name)}"
         if sub.dimension != self.dimension:
-            raise ModelError(f"scene '{self.name}'", [Problem(
-                f"sub-model '{sub.name}'", f"is {sub.dimension}-D, the scene {self.dimension}-D")])
-        if not _NAME.match(prefix):
-            raise ModelError(f"scene '{self.name}'", [Problem(
-                f"sub-model '{sub.name}'", f"prefix {prefix!r} is not a valid name")])
+            raise ModelError(subject, [Problem(
+                part, f"is {sub.dimension}-D, the scene {self.dimension}-D")])
+        why = name_problem(prefix)
+        if why:
+            raise ModelError(subject, [Problem(
+                part, f"prefix {quoted(prefix)} is not a valid name: {why}")])
         placement = placement or Placement.identity(self.dimension)
         if base == GROUND:
             base_pose = Placement.identity(self.dimension)
         elif base in self.bodies:
             base_pose = self.bodies[base].pose
         else:
-            raise ModelError(f"scene '{self.name}'", [Problem(
-                f"sub-model '{sub.name}'", f"base body '{base}' is not in the scene")])
+            raise ModelError(subject, [Problem(
+                part, f"base body {quoted(base)} is not in the scene")])
         attachment = Attachment(prefix, base, placement, base_pose @ placement)
         for element in sub.scaled_elements(sub.unit / self.unit):
             self.add(element.attached(attachment))
@@ -234,7 +260,7 @@ class Scene:
         problems = self.problems()
         if problems:
             where = f" ({self.source})" if self.source else ""
-            raise ModelError(f"scene '{self.name}'{where}", problems)
+            raise ModelError(f"scene {quoted(self.name)}{where}", problems)
 
     def problems(self) -> list[Problem]:
         """Every problem of the scene: its own settings, each element, names and references."""
@@ -245,6 +271,8 @@ class Scene:
         bodies = self.bodies
         for element in self._elements:
             out.extend(_ReferenceCheck(self, bodies, element).problems())
+        if not out:  # in SI, which needs every element readable
+            out.extend(magnitude_problems(self))
         return out
 
     def _scene_problem(self, key: str, message: str) -> Problem:
@@ -252,6 +280,10 @@ class Scene:
 
     def _scene_problems(self) -> list[Problem]:
         out = []
+        why = line_problem(self.name)
+        if why:
+            out.append(self._scene_problem(
+                "name", f"{quoted(self.name)} is not a valid scene name: {why}"))
         if self.dimension not in (2, 3):
             out.append(self._scene_problem("dimension", f"must be 2 or 3, got {self.dimension}"))
             return out
@@ -263,6 +295,11 @@ class Scene:
         if g.size != self.dimension or not np.all(np.isfinite(g)):
             out.append(self._scene_problem(
                 "gravity", f"needs {self.dimension} finite numbers, got {g.tolist()}"))
+        elif np.abs(g).max() * LENGTH_UNITS.get(self.length_unit, 1.0) > LARGEST_GRAVITY:
+            out.append(self._scene_problem(
+                "gravity", f"has a component of {_short(np.abs(g).max())} {self.length_unit}/"
+                f"s^2, beyond the {_short(LARGEST_GRAVITY)} m/s^2 a scene may hold (1e5 g: no "
+                "legged machine)"))
         length = self.characteristic_length
         if length is not None and not (np.isfinite(length) and length > 0):
             out.append(self._scene_problem("characteristic_length",
@@ -272,9 +309,10 @@ class Scene:
                   if isinstance(d, JointDriver)}
         for name in self.ground.reference_efforts:
             if name not in driven:
+                key = name if not name_problem(name) else quoted(name)
                 out.append(self._scene_problem(
-                    f"ground.reference_efforts.{name}",
-                    f"no driven joint '{name}' (reference efforts are given per driven "
+                    f"ground.reference_efforts.{key}",
+                    f"no driven joint {quoted(name)} (reference efforts are given per driven "
                     "joint)"))
         return out
 
@@ -284,9 +322,9 @@ class Scene:
         seen_others: dict[str, Element] = {}
         for element in self._elements:
             name = element.name
-            if not isinstance(name, str) or not _NAME.match(name):
-                out.append(element.problem("name", f"{name!r} is not a valid name (letters, "
-                           "digits, '_', '-', '.', parts joined by '/')"))
+            why = name_problem(name)
+            if why:
+                out.append(element.problem("name", f"{quoted(name)} is not a valid name: {why}"))
                 continue
             if name == GROUND:
                 out.append(element.problem("name", "'ground' is reserved for the fixed frame"))
@@ -365,8 +403,9 @@ class _ReferenceCheck:
         if isinstance(body, Particle) and body.dimension != dim:
             self._add("position", f"needs {dim} coordinates in a {dim}-D scene")
         for marker in body.markers:
-            if not isinstance(marker, str) or not _NAME.match(marker):
-                self._add(f"markers.{marker}", f"{marker!r} is not a valid marker name")
+            why = name_problem(marker)
+            if why:
+                self._add("markers", f"{quoted(marker)} is not a valid marker name: {why}")
         self._computable(body)
 
     def _computable(self, body: Body):
@@ -469,3 +508,41 @@ class _ReferenceCheck:
         if driver.coordinate == "z" and self.scene.dimension == 2:
             self._add("coordinate", "no 'z' in a planar scene")
 
+
+# ------------------------------------------------------------------ magnitudes
+
+
+def magnitude_problems(scene: Scene) -> list[Problem]:
+    """Numbers beyond the magnitudes a scene may hold (:data:`LARGEST`), compared in SI (the
+    scene converted, so a length in micrometres is weighed in metres); reported at the key the
+    element was written with. The scene must be otherwise valid."""
+    out = []
+    for element in scene.in_si().elements:
+        torsional = "torsional " if element.kind == "rotational-spring" else ""
+        for key, quantity in _QUANTITIES.items():
+            value = getattr(element, key, None)
+            if isinstance(value, Placement):
+                value, key = value.position, f"{key}.position"
+            if value is None or isinstance(value, str):
+                continue
+            if quantity in ("stiffness", "damping"):
+                quantity = torsional + quantity
+            largest, unit = LARGEST[quantity]
+            size = float(np.max(np.abs(np.asarray(value, dtype=float)), initial=0.0))
+            if size > largest:
+                out.append(element.problem(key, f"is {_short(size)} {unit} in SI, beyond the "
+                                           f"{_short(largest)} {unit} a scene may hold"))
+        markers = getattr(element, "markers", {})
+        for name, frame in markers.items():
+            size = float(np.max(np.abs(frame.position), initial=0.0))
+            if size > LARGEST["length"][0]:
+                out.append(element.problem(f"markers.{name}", f"is {_short(size)} m from the "
+                                           f"body in SI, beyond the {_short(LARGEST['length'][0])}"
+                                           " m a scene may hold"))
+    return out
+
+
+def _short(value: float) -> str:
+    """A magnitude in three digits, as a person writes it: 1e6, not 1e+06."""
+    mantissa, e, exponent = f"{value:.3g}".partition("e")
+    return f"{mantissa}e{int(exponent)}" if e else mantissa

@@ -5,17 +5,21 @@ end or a failure, saves every ``every``-th accepted step (and always the first a
 state), measures at **every** accepted step the constraint residuals of positions and
 velocities and, when the scene conserves energy, the energy drift, and returns a
 :class:`~hexapod.simulation.results.SimulationResult`. A failure is a result too: ``status =
-"failed"`` with the message and the states up to it.
+"failed"`` with the message and the states up to it; so is an interruption (``status =
+"interrupted"``). The run is weighed against the limits of :mod:`hexapod._support.limits`
+(steps, memory of the saved states) before or while it runs.
 """
 
 from __future__ import annotations
 
+import math
 import time
 import warnings
 from collections.abc import Callable
 
 import numpy as np
 
+from hexapod._support import limits, signals
 from hexapod.algorithms.liaison import wrenches_from_multipliers
 from hexapod.errors import HexapodError
 from hexapod.model.model import Model
@@ -24,14 +28,30 @@ from hexapod.simulation.methods import DEFAULT_ATOL, DEFAULT_RTOL
 from hexapod.simulation.registry import DEFAULT_METHOD, get_integrator
 from hexapod.simulation.results import SimulationResult
 
+#: steps tried (accepted or rejected) after which a run's pace is measured, then weighed each
+#: time they double: the pace since the last weighing, so that the starting transient (a small
+#: first step growing, a stiff solver's first call) does not count
+WEIGH_AFTER = 20
+#: bytes a saved state costs per number until the run's files are written: the state's array,
+#: the result's copy, and its CSV text (about 24 characters per number, built in pieces and
+#: joined). The peak memory of 'hexapod simulate' (rk4-baumgarte) grows by 75 to 87 bytes per
+#: number and saved state: the pendulum with 1e5 and 2e5 states, the front leg with 5e4
+BYTES_PER_SAVED_NUMBER = 100
+#: what a user may do about a run that would take too many steps or too much memory, said by
+#: the messages of the limits (a command line says its own options instead)
+ADVICE = {"steps": "shorten the run (t_end) or take larger steps (step, or looser rtol and "
+                   "atol)",
+          "memory": "save fewer states (a larger every)"}
+
 
 def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEFAULT_METHOD,
              t0: float = 0.0, q0: np.ndarray | None = None, v0: np.ndarray | None = None,
              rtol: float | None = None, atol: float | None = None, step: float | None = None,
-             every: int = 1, forces: bool | None = None, max_steps: int = 10_000_000,
-             cpu_budget: float | None = None,
+             every: int = 1, forces: bool | None = None, max_steps: int | None = None,
+             max_memory: int | None = None, cpu_budget: float | None = None,
              progress: Callable[[float, float], None] | None = None,
-             options: dict | None = None) -> SimulationResult:
+             options: dict | None = None, advice: dict[str, str] | None = None,
+             ) -> SimulationResult:
     """Integrate the motion of ``model`` from ``t0`` to ``t_end``.
 
     Parameters
@@ -49,32 +69,124 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
     forces :
         Also compute the joint wrenches at the saved states (report convention); default: as
         the scene asks (``[scene] report_forces``).
+    max_steps, max_memory :
+        The limits the run is weighed against (default: those of
+        :mod:`hexapod._support.limits`, ``HEXAPOD_MAX_STEPS`` and ``HEXAPOD_MAX_MEMORY``): the
+        steps, and the memory of the saved states. A fixed-step run is weighed before it starts
+        (a :class:`HexapodError` refuses it); every run each time its steps tried double from
+        :data:`WEIGH_AFTER` on, by extrapolating its pace since the last weighing to ``t_end``:
+        one that would pass a limit ends as failed, its states kept. The run also stops, as
+        failed, after ``max_steps`` steps.
     cpu_budget :
         Stop the run, as failed, once its time loop has used this many CPU seconds (the states
-        up to there are kept), as ``max_steps`` stops it after that many steps.
+        up to there are kept).
     progress :
         Called as ``progress(t, t_end)`` after each accepted step.
     options :
         Further keyword arguments of the integrator (e.g. ``rho_inf``, ``alpha``).
+    advice :
+        What the messages of the limits suggest to ask for less (keys ``"steps"`` and
+        ``"memory"``; default :data:`ADVICE`): a command line names its options.
+
+    A ``KeyboardInterrupt`` during the time loop ends the run too: the result has ``status =
+    "interrupted"`` and the states saved up to there. A state, acceleration or multiplier that
+    becomes non-finite ends it as failed, with the time.
 
     Raises
     ------
     HexapodError
-        When the initial state cannot be made consistent (the run has not started).
+        When the initial state cannot be made consistent (the run has not started), or a
+        fixed-step run would pass a limit.
     """
     if every < 1:
         raise ValueError(f"every must be at least 1, got {every}")
+    if not (np.isfinite(t0) and np.isfinite(t_end) and np.isfinite(t_end - t0)):
+        raise ValueError(f"t0 and t_end must be finite and their difference too, got {t0} and "
+                         f"{t_end}")
     cls = get_integrator(method)
     options = {**_tolerances(cls, rtol, atol), "step": step, **(options or {})}
+    weigh = _Weighing(model, cls, t0, t_end, every, max_steps, max_memory,
+                      {**ADVICE, **(advice or {})})
+    weigh.before(step)
     integrator = cls(model, t0, t_end, q0, v0, **options)
-    saved = {"t": [], "q": [], "v": [], "v_dot": [], "lam": []}
-    energy_saved: list[float] = []
-    conserved = model.energy_conserved
-    energy0 = _energy(model, integrator.q, integrator.v)[1] if conserved else None
-    worst = {"phi": 0.0, "velocity": 0.0, "drift": 0.0, "kinetic": 0.0}
-    latest = {"energy": energy0}  # the energy of the state watched last, saved with it
+    watch = _Watch(model, integrator)
+    wall, cpu = time.perf_counter(), time.process_time()
+    _run(integrator, watch, weigh, every, cpu_budget, progress)
+    wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+    watch.complete()
+    arrays = {key: np.array(values) for key, values in watch.saved.items()}
+    worst = watch.worst
+    result = SimulationResult(
+        model=model, method=cls.name, t=arrays["t"], q=arrays["q"], v=arrays["v"],
+        v_dot=arrays["v_dot"], lam=arrays["lam"].reshape(len(watch.saved["t"]), model.n_c),
+        status=integrator.status, message=integrator.message, counters=integrator.counters,
+        wall_time=wall, cpu_time=cpu, max_position_violation=worst["phi"],
+        max_velocity_violation=worst["velocity"],
+        energy=np.array(watch.energy_saved) if watch.conserved else None,
+        energy_drift=(worst["drift"] / max(worst["kinetic"], np.finfo(float).tiny)
+                      if watch.conserved else None),
+        options=options, t_bound=float(t_end))
+    if forces or (forces is None and model.report_forces):
+        _add_wrenches(result)
+    return result
 
-    def watch() -> None:
+
+def _run(integrator: Integrator, watch: _Watch, weigh: _Weighing, every: int,
+         cpu_budget: float | None, progress) -> None:
+    """Step until the end, a failure, a limit or an interruption; every outcome is said by the
+    integrator's ``status`` and ``message``."""
+    name = integrator.name
+    cpu = time.process_time()
+    returned = 0
+    reached = integrator.t  # the time of the last step completed
+    try:
+        while integrator.status == "running":
+            stop = weigh.during(integrator, returned)
+            if stop is None and cpu_budget is not None and time.process_time() - cpu > cpu_budget:
+                stop = f"by the CPU budget of {cpu_budget:g} s"
+            if stop is not None:
+                integrator.status = "failed"
+                integrator.message = f"{name}: stopped at t = {integrator.t:.6g} s {stop}"
+                break
+            integrator.step()
+            if integrator.status == "failed":
+                break
+            reached = integrator.t
+            watch.watch()
+            returned += 1  # states returned, one per call (many steps for some methods)
+            if integrator.status == "finished" or returned % every == 0:
+                watch.save()
+            if progress is not None:
+                progress(integrator.t, integrator.t_bound)
+    except KeyboardInterrupt:
+        integrator.status = "interrupted"
+        integrator.message = f"{name}: interrupted at t = {reached:.6g} s"
+    except Exception:
+        # a library that turns an interruption into an error of its own (CasADi does)
+        if signals.received() is None:
+            raise
+        integrator.status = "interrupted"
+        integrator.message = f"{name}: interrupted at t = {reached:.6g} s"
+
+
+class _Watch:
+    """What the loop measures at every accepted step (constraint residuals, energy) and the
+    states it saves."""
+
+    def __init__(self, model: Model, integrator: Integrator):
+        self.model, self.integrator = model, integrator
+        self.saved: dict[str, list] = {"t": [], "q": [], "v": [], "v_dot": [], "lam": []}
+        self.energy_saved: list[float] = []
+        self.conserved = model.energy_conserved
+        self.energy0 = (_energy(model, integrator.q, integrator.v)[1] if self.conserved
+                        else None)
+        self.worst = {"phi": 0.0, "velocity": 0.0, "drift": 0.0, "kinetic": 0.0}
+        self.latest = self.energy0  # the energy of the state watched last, saved with it
+        self.watch()
+        self.save()
+
+    def watch(self) -> None:
+        model, integrator, worst = self.model, self.integrator, self.worst
         t, q, v = integrator.t, integrator.q, integrator.v
         if model.n_c:
             w, wd, _ = model.law_values(t)
@@ -83,66 +195,111 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
             worst["phi"] = max(worst["phi"], float(np.abs(phi).max()))
             worst["velocity"] = max(worst["velocity"],
                                     float(np.abs(rate / model.row_scale).max()))
-        if conserved:
+        if self.conserved:
             kinetic, total = _energy(model, q, v)
             worst["kinetic"] = max(worst["kinetic"], kinetic)
-            worst["drift"] = max(worst["drift"], abs(total - energy0))
-            latest["energy"] = total
+            worst["drift"] = max(worst["drift"], abs(total - self.energy0))
+            self.latest = total
 
-    def save() -> None:
-        # accelerations and multipliers may be solved only now (lazily): a state the solve
-        # refuses ends the run as a failure, with the states saved before it
+    def save(self) -> None:
+        """Save the current state; accelerations and multipliers may be solved only now
+        (lazily): a state the solve refuses, or one whose accelerations or multipliers are not
+        finite, ends the run as a failure, with the states saved before it."""
+        integrator = self.integrator
         try:
             values = {key: np.array(getattr(integrator, key), dtype=float, copy=True)
-                      for key in saved}
+                      for key in self.saved}
         except HexapodError as error:
             integrator.status = "failed"
-            integrator.message = (f"{cls.name}: failed at t = {integrator.t:.6g} s: {error}")
+            integrator.message = (f"{integrator.name}: failed at t = {integrator.t:.6g} s: "
+                                  f"{error}")
             return
+        for key, what in (("v_dot", "accelerations"), ("lam", "multipliers")):
+            if not np.all(np.isfinite(values[key])):
+                integrator.status = "failed"
+                integrator.message = (f"{integrator.name}: non-finite {what} at t = "
+                                      f"{integrator.t:.6g} s (an overflow: the scene's forces "
+                                      "or laws are too large, or the motion is unstable)")
+                return
         for key, value in values.items():
-            saved[key].append(value)
-        if conserved:
-            energy_saved.append(latest["energy"])
+            self.saved[key].append(value)
+        if self.conserved:
+            self.energy_saved.append(self.latest)
 
-    watch()
-    save()
-    returned = 0
-    wall, cpu = time.perf_counter(), time.process_time()
-    while integrator.status == "running":
-        if integrator.counters.steps >= max_steps:
-            integrator.status = "failed"
-            integrator.message = (f"{cls.name}: stopped after {max_steps} steps at "
-                                  f"t = {integrator.t:.6g} s (raise max_steps, or the step)")
-            break
-        if cpu_budget is not None and time.process_time() - cpu > cpu_budget:
-            integrator.status = "failed"
-            integrator.message = (f"{cls.name}: stopped by the CPU budget of {cpu_budget:g} s "
-                                  f"at t = {integrator.t:.6g} s")
-            break
-        integrator.step()
-        if integrator.status == "failed":
-            break
-        watch()
-        returned += 1  # states returned, one per call (many steps for some methods)
-        if integrator.status == "finished" or returned % every == 0:
-            save()
-        if progress is not None:
-            progress(integrator.t, t_end)
-    wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
-    arrays = {key: np.array(values) for key, values in saved.items()}
-    result = SimulationResult(
-        model=model, method=cls.name, t=arrays["t"], q=arrays["q"], v=arrays["v"],
-        v_dot=arrays["v_dot"], lam=arrays["lam"].reshape(len(saved["t"]), model.n_c),
-        status=integrator.status, message=integrator.message, counters=integrator.counters,
-        wall_time=wall, cpu_time=cpu, max_position_violation=worst["phi"],
-        max_velocity_violation=worst["velocity"],
-        energy=np.array(energy_saved) if conserved else None,
-        energy_drift=(worst["drift"] / max(worst["kinetic"], np.finfo(float).tiny)
-                      if conserved else None),
-        options=options)
-    if forces or (forces is None and model.report_forces):
-        _add_wrenches(result)
-    return result
+    def complete(self) -> None:
+        """Only whole states: an interruption inside :meth:`save` may have left one in part."""
+        count = min(len(values) for values in self.saved.values())
+        if self.conserved:
+            count = min(count, len(self.energy_saved))
+            del self.energy_saved[count:]
+        for values in self.saved.values():
+            del values[count:]
+
+
+class _Weighing:
+    """The run weighed against the limits of steps and memory: before it starts (fixed-step
+    methods, whose steps are known), and while it runs, on its pace."""
+
+    def __init__(self, model: Model, cls: type[Integrator], t0: float, t_end: float,
+                 every: int, max_steps: int | None, max_memory: int | None, advice: dict):
+        self.cls, self.t0, self.t_end, self.every = cls, t0, t_end, every
+        self.max_steps = limits.max_steps(max_steps)
+        self.max_memory = limits.max_memory(max_memory)
+        self.advice = advice
+        forces = 7 * len(model.joints) if model.report_forces else 0
+        numbers = 1 + model.n_q + 2 * model.n_v + model.n_c + forces
+        self.state_bytes = BYTES_PER_SAVED_NUMBER * numbers
+        self.next_weighing = WEIGH_AFTER
+        # steps tried, states returned and time at the last weighing
+        self.last: tuple[int, int, float] | None = None
+
+    def _check(self, steps: float, states: float, what: str) -> None:
+        limits.check_steps(steps, what, self.advice["steps"], self.max_steps)
+        saved = states / self.every + 2
+        limits.check_memory(saved * self.state_bytes, f"{what}, saving about {saved:.3g} "
+                            "states,", self.advice["memory"], self.max_memory)
+
+    def before(self, step: float | None) -> None:
+        """Refuse a run that would pass a limit (a :class:`HexapodError`): the steps and states
+        of a fixed-step method, the states of one that returns them at output times ``step``
+        apart (its steps are its own)."""
+        if self.cls.adaptive and not self.cls.counts_own_steps:
+            return
+        span = self.t_end - self.t0
+        states = self.cls.default_steps if step is None else span / step
+        states = math.ceil(states) if math.isfinite(states) else math.inf
+        what = f"{self.cls.name} from t = {self.t0:.6g} to {self.t_end:.6g} s"
+        self._check(0 if self.cls.adaptive else states, states, what)
+
+    def during(self, integrator: Integrator, returned: int) -> str | None:
+        """Why the run must stop now, or None: past the step limit, or (weighed each time the
+        steps tried double from :data:`WEIGH_AFTER` on) on a pace that would pass a limit
+        before ``t_end``."""
+        counters = integrator.counters
+        if counters.steps >= self.max_steps:
+            return (f"after {counters.steps} steps, the limit: {self.advice['steps']}, or raise "
+                    "the limit (--max-steps, HEXAPOD_MAX_STEPS)")
+        # the work: steps tried, rejected ones too (a fixed-step method halves its step when
+        # Newton's method fails, and may crawl)
+        tried = counters.steps + counters.rejected
+        if tried < self.next_weighing:
+            return None
+        self.next_weighing = 2 * tried
+        last, self.last = self.last, (tried, returned, integrator.t)
+        if last is None:  # the pace is measured from here: not over a starting transient
+            return None
+        last_tried, last_returned, last_t = last
+        elapsed = integrator.t - last_t
+        if not elapsed > 0:
+            return None
+        left = (self.t_end - integrator.t) / elapsed  # the spans of time still to go
+        try:
+            self._check(counters.steps + left * (tried - last_tried),
+                        returned + left * (returned - last_returned),
+                        f"at its pace, reaching t = {self.t_end:.6g} s")
+        except HexapodError as error:
+            return f"after {counters.steps} steps: {error}"
+        return None
 
 
 def _tolerances(cls: type[Integrator], rtol: float | None, atol: float | None) -> dict:

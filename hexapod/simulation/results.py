@@ -6,17 +6,22 @@ Columns of ``results.csv`` (names built from the elements' names; SI units):
 ``t``                time, s
 ``q:<coordinate>``   positions: ``<body>.x, .y, .z`` (m), ``.e0`` ... ``.e3`` (Euler
                      parameters), ``.angle`` (rad, planar bodies)
-``v:<velocity>``     velocities: ``<body>.vx, .vy, .vz`` (m/s), ``.wx', .wy', .wz'`` (rad/s,
-                     body axes), ``.w`` (rad/s, planar bodies)
+``v:<velocity>``     velocities: ``<body>.vx, .vy, .vz`` (m/s, world axes), ``.wx_body,
+                     .wy_body, .wz_body`` (rad/s, body axes), ``.w`` (rad/s, planar bodies)
 ``vdot:<velocity>``  their time derivatives
-``lambda:<row>``     Lagrange multipliers, one per constraint row (``<joint>/<row>``, drivers)
+``lambda:<row>``     Lagrange multipliers, one per constraint row (``<joint>/<row>``, drivers):
+                     N for a length row, N m for an angle row
 ``tau:<joint>``,     with ``forces``: each joint's wrench, exerted by the parent on the child
 ``Fx:<joint>`` ...   about the joint origin in the child's joint frame, as ``hexapod inverse``
 ===================  ===================================================================
 
-``results.npz`` holds the same arrays (``t, q, v, v_dot, lam`` and, with forces, ``force,
-torque, effort``), the column names, the run's statistics (JSON) and, when known, ``source``:
-the scene the run was made on (see :func:`scene_reference`), compressed.
+Every column's unit and meaning come from :meth:`SimulationResult.column_units`, written beside
+the CSV as ``units.json`` (:func:`units_json`; the naming scheme and the sidecar are described in
+``docs/outputs.md``). ``results.npz`` holds the same arrays (``t, q, v, v_dot, lam`` and, with
+forces, ``force, torque, effort``), the names (``coordinates``, ``velocities``, ``rows``,
+``joints``) each with its units (``coordinate_units``, ``velocity_units`` and
+``acceleration_units``, ``row_units``, ``effort_units``), the run's statistics (JSON) and, when
+known, ``source``: the scene the run was made on (see :func:`scene_reference`), compressed.
 """
 
 from __future__ import annotations
@@ -33,6 +38,78 @@ from hexapod.simulation.integrators import Counters
 
 WRENCH_COMPONENTS = ("Fx", "Fy", "Fz", "Tx", "Ty", "Tz")
 
+#: A table's columns described: name -> (unit, what it holds). Units are SI strings, ``"1"`` for
+#: a pure number, None for text; this is what ``units.json`` says of each column.
+Columns = dict[str, tuple[str | None, str]]
+
+#: The unit and meaning of each component of a body's coordinates and velocities (the names of
+#: :attr:`Model.coordinate_names` and :attr:`Model.velocity_names` after the body's name).
+COORDINATE_UNITS = {
+    **{c: ("m", f"position of the centre of mass, world {c}") for c in "xyz"},
+    **{f"e{k}": ("1", f"Euler parameter e{k} of the body's rotation (e0 the scalar part)")
+       for k in range(4)},
+    "angle": ("rad", "angle of the planar body"),
+}
+VELOCITY_UNITS = {
+    **{f"v{c}": ("m/s", f"velocity of the centre of mass, world {c}") for c in "xyz"},
+    **{f"w{c}_body": ("rad/s", f"angular velocity, body {c} axis") for c in "xyz"},
+    "w": ("rad/s", "angular velocity of the planar body"),
+}
+ACCELERATION_UNITS = {"m/s": "m/s^2", "rad/s": "rad/s^2"}
+ROW_UNITS = {"length": ("N", "Lagrange multiplier of the constraint row (a force)"),
+             "angle": ("N m", "Lagrange multiplier of the constraint row (a moment)")}
+
+
+def _component(name: str) -> str:
+    """``x`` of ``trunk.x`` (a body's name may hold dots; the component follows the last)."""
+    return name.rpartition(".")[2]
+
+
+def state_columns(model: Model) -> Columns:
+    """``q:``, ``v:``, ``vdot:`` and ``lambda:`` columns of a model, with units."""
+    out: Columns = {}
+    for name in model.coordinate_names:
+        out[f"q:{name}"] = COORDINATE_UNITS[_component(name)]
+    for name in model.velocity_names:
+        out[f"v:{name}"] = VELOCITY_UNITS[_component(name)]
+    for name in model.velocity_names:
+        unit, what = VELOCITY_UNITS[_component(name)]
+        out[f"vdot:{name}"] = (ACCELERATION_UNITS[unit], f"time derivative of the {what}")
+    for row in model.rows:
+        out[f"lambda:{row.name}"] = ROW_UNITS[row.kind]
+    return out
+
+
+def wrench_columns(model: Model, frame: str = "joint") -> Columns:
+    """Per joint in model order ``tau:<joint>`` (revolute and prismatic joints) and
+    ``Fx .. Tz:<joint>``: the wrench by the parent on the child about the joint origin, in the
+    child's joint frame (or world axes, ``frame="world"``), as ``hexapod inverse`` writes it."""
+    axes = "world axes" if frame == "world" else "the child's joint frame"
+    out: Columns = {}
+    for joint in model.joints:
+        if joint.kind == "revolute":
+            out[f"tau:{joint.name}"] = ("N m", "effort about the joint's axis, parent on child")
+        elif joint.kind == "prismatic":
+            out[f"tau:{joint.name}"] = ("N", "effort along the joint's axis, parent on child")
+        for c in WRENCH_COMPONENTS:
+            out[f"{c}:{joint.name}"] = (
+                ("N", f"force by the parent on the child, {c[1]} in {axes}") if c[0] == "F"
+                else ("N m", f"moment by the parent on the child about the joint origin, {c[1]} "
+                      f"in {axes}"))
+    return out
+
+
+def units_json(tables: dict[str, Columns]) -> str:
+    """The units sidecar of CSV files (``units.json``, or ``OUT.units.json`` beside one file):
+    per file, per column in order, ``{"unit": ..., "quantity": ...}``, a column a line."""
+    files = []
+    for name, columns in tables.items():
+        lines = [f"  {json.dumps(c)}: {json.dumps({'unit': u, 'quantity': q})}"
+                 for c, (u, q) in columns.items()]
+        body = "\n" + ",\n".join(lines) + "\n }" if lines else "}"
+        files.append(f" {json.dumps(name)}: {{{body}")
+    return "{\n" + ",\n".join(files) + "\n}\n" if files else "{}\n"
+
 
 @dataclass
 class SimulationResult:
@@ -45,8 +122,8 @@ class SimulationResult:
     force, torque, effort : ndarray (N, J, 3), (N, J, 3), (N, J), or None
         Joint wrenches (report convention), when asked for.
     status : str
-        ``"finished"`` or ``"failed"`` (then ``message`` says when and why; the states up to
-        the failure are kept).
+        ``"finished"``, ``"failed"`` or ``"interrupted"`` (then ``message`` says when and why;
+        the states up to there are kept).
     counters : Counters
     wall_time, cpu_time : float
         Seconds spent in the time loop.
@@ -85,6 +162,8 @@ class SimulationResult:
     #: the scene the run was made on, set by the caller (:func:`scene_reference`); written to
     #: ``results.npz`` as ``source`` when known, so that ``hexapod export`` can pose the bodies
     source: str = ""
+    #: the end the run was asked to reach (s); None when not known
+    t_bound: float | None = None
 
     @property
     def success(self) -> bool:
@@ -95,7 +174,12 @@ class SimulationResult:
         return {
             "scene": self.model.name, "method": self.method, "options": self.options,
             "status": self.status, "message": self.message,
-            "t_start": float(self.t[0]), "t_end": float(self.t[-1]), "saved": int(self.t.size),
+            # whether the run is complete: the end asked for, the time reached and, when it
+            # stopped short (failed or interrupted), why
+            "t_start": float(self.t[0]),
+            "t_end": float(self.t[-1] if self.t_bound is None else self.t_bound),
+            "t_reached": float(self.t[-1]), "reason": self.message or None,
+            "saved": int(self.t.size),
             **self.counters.as_dict(),
             "wall_time_s": self.wall_time, "cpu_time_s": self.cpu_time,
             "max_position_violation": self.max_position_violation,
@@ -104,18 +188,15 @@ class SimulationResult:
             "energy_drift": self.energy_drift,
         }
 
-    def columns(self) -> list[str]:
-        model = self.model
-        names = (["t"] + [f"q:{c}" for c in model.coordinate_names]
-                 + [f"v:{c}" for c in model.velocity_names]
-                 + [f"vdot:{c}" for c in model.velocity_names]
-                 + [f"lambda:{r.name}" for r in model.rows])
+    def column_units(self) -> Columns:
+        """The columns of ``results.csv`` in order, each with its unit and meaning."""
+        out: Columns = {"t": ("s", "time"), **state_columns(self.model)}
         if self.force is not None:
-            for joint in model.joints:
-                if joint.kind in ("revolute", "prismatic"):
-                    names.append(f"tau:{joint.name}")
-                names += [f"{c}:{joint.name}" for c in WRENCH_COMPONENTS]
-        return names
+            out.update(wrench_columns(self.model))
+        return out
+
+    def columns(self) -> list[str]:
+        return list(self.column_units())
 
     def table(self) -> np.ndarray:
         parts = [self.t[:, None], self.q, self.v, self.v_dot, self.lam]
@@ -136,15 +217,29 @@ class SimulationResult:
                   "coordinates": np.array(self.model.coordinate_names),
                   "velocities": np.array(self.model.velocity_names),
                   "rows": np.array([r.name for r in self.model.rows]),
+                  **self._npz_units(),
                   "statistics": np.array(json.dumps(self.statistics()))}
         if self.source:
             arrays["source"] = np.array(self.source)
         if self.force is not None:
             arrays.update(force=self.force, torque=self.torque, effort=self.effort,
-                          joints=np.array([j.name for j in self.model.joints]))
+                          joints=np.array([j.name for j in self.model.joints]),
+                          effort_units=np.array([{"revolute": "N m", "prismatic": "N"}.get(
+                              j.kind, "") for j in self.model.joints]))
         buffer = io.BytesIO()
         np.savez_compressed(buffer, **arrays)
         return buffer.getvalue()
+
+    def _npz_units(self) -> dict[str, np.ndarray]:
+        """The units of ``q``, ``v``, ``v_dot`` and ``lam``, one per column (as units.json)."""
+        model = self.model
+        velocity = [VELOCITY_UNITS[_component(n)][0] for n in model.velocity_names]
+        return {"coordinate_units": np.array([COORDINATE_UNITS[_component(n)][0]
+                                              for n in model.coordinate_names], dtype=str),
+                "velocity_units": np.array(velocity, dtype=str),
+                "acceleration_units": np.array([ACCELERATION_UNITS[u] for u in velocity],
+                                               dtype=str),
+                "row_units": np.array([ROW_UNITS[r.kind][0] for r in model.rows], dtype=str)}
 
 
 def scene_reference(name_or_path: str) -> str:

@@ -192,15 +192,45 @@ class Integrator:
             self.status = "failed"
             self.message = f"{self.name} failed after t = {t_before:.6g} s: {error}"
             return
+        except ArithmeticError as error:  # Python's floats overflow (h**2) or divide by zero
+            self.status = "failed"
+            self.message = (f"{self.name} failed after t = {t_before:.6g} s: the arithmetic "
+                            f"overflowed ({error or type(error).__name__}): the step or the "
+                            "scene's magnitudes are too large")
+            return
         if not self.counts_own_steps:
             self.counters.steps += 1
         if not np.all(np.isfinite(self.q)) or not np.all(np.isfinite(self.v)):
             self.status = "failed"
-            self.message = (f"{self.name}: the state became non-finite at t = {self.t:.6g} s "
-                            "(the step is too large for this method, or the motion is unstable)")
+            self.message = (f"{self.name}: non-finite state at t = {self.t:.6g} s (the step is "
+                            "too large for this method, or the motion is unstable)")
         elif self.t >= self.t_bound - 1e-12 * max(1.0, abs(self.t_bound)):
             self.t = self.t_bound
             self.status = "finished"
+
+    def _starting_step(self, d0: float, d1: float, rate_change, error_order: int) -> float:
+        """Hairer's starting step (*Solving ODEs I*, II.4): from the weighted norms of the state
+        ``d0`` and of its rate ``d1``, and ``rate_change(h0)``, the norm of the rate's change
+        over a trial step ``h0``; ``error_order`` that of the error estimate. Safe for zero,
+        huge and non-finite norms: it never divides by zero, and a step it cannot compute is
+        the trial step (the first step then fails, or succeeds, as data)."""
+        remaining = self.t_bound - self.t
+        with np.errstate(all="ignore"):
+            h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
+            if not (np.isfinite(h0) and h0 > 0):  # d1 infinite or NaN: an overflowing rate
+                h0 = 1e-6 * min(1.0, remaining)
+            h0 = min(h0, remaining)
+            try:
+                d2 = rate_change(h0) / h0
+            except (HexapodError, np.linalg.LinAlgError, ArithmeticError):
+                d2 = np.inf  # the trial state has no dynamics: the first step will say why
+            largest = max(d1, d2) if np.isfinite(d2) else np.inf
+            if largest <= 1e-15:
+                h1 = max(1e-6, h0 * 1e-3)
+            else:
+                h1 = (0.01 / largest) ** (1.0 / (error_order + 1))
+        h = min(100 * h0, h1, self.max_step, remaining)
+        return h if np.isfinite(h) and h > 0 else h0
 
     def next_step(self) -> float:
         """The step to take now: the method's current step, cut to end at ``t_bound`` (and a

@@ -70,18 +70,16 @@ class EmbeddedRungeKutta(Integrator):
         change over a trial Euler step."""
         y0 = np.concatenate([self.q, self.v])
         f0 = np.concatenate([self.model.call("qdot", q=self.q, v=self.v), self.v_dot])
-        d0, d1 = self._norm(y0, y0, y0), self._norm(f0, y0, y0)
-        h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
-        h0 = min(h0, self.t_bound - self.t)
         n_q = self.model.n_q
-        y1 = y0 + h0 * f0
-        f1 = self._derivative(self.t + h0, y1[:n_q], y1[n_q:])
-        d2 = self._norm(f1 - f0, y0, y0) / h0
-        if max(d1, d2) <= 1e-15:
-            h1 = max(1e-6, h0 * 1e-3)
-        else:
-            h1 = (0.01 / max(d1, d2)) ** (1.0 / (self.error_order + 1))
-        return min(100 * h0, h1, self.max_step, self.t_bound - self.t)
+
+        def rate_change(h0: float) -> float:
+            y1 = y0 + h0 * f0
+            f1 = self._derivative(self.t + h0, y1[:n_q], y1[n_q:])
+            return self._norm(f1 - f0, y0, y0)
+
+        with np.errstate(all="ignore"):
+            d0, d1 = self._norm(y0, y0, y0), self._norm(f0, y0, y0)
+        return self._starting_step(d0, d1, rate_change, self.error_order)
 
     def _step(self) -> None:
         model, n_q = self.model, self.model.n_q

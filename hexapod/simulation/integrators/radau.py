@@ -298,16 +298,14 @@ class RadauIIA5GGL(Integrator):
         def norm(x):
             return float(np.sqrt(np.mean((x / (self.atol + self.rtol * np.abs(y0))) ** 2)))
 
-        d0, d1 = norm(y0), norm(f0)
-        h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
-        h0 = min(h0, self.t_bound - self.t)
-        q1, v1 = model.integrate(self.q, h0 * self.v), self.v + h0 * self.v_dot
-        v_dot1, _ = self._dynamics(self.t + h0, q1, v1)
-        f1 = np.concatenate([model.call("qdot", q=q1, v=v1), v_dot1])
-        d2 = norm(f1 - f0) / h0
-        h1 = (max(1e-6, h0 * 1e-3) if max(d1, d2) <= 1e-15
-              else (0.01 / max(d1, d2)) ** 0.25)
-        return min(100 * h0, h1, self.max_step, self.t_bound - self.t)
+        def rate_change(h0: float) -> float:
+            q1, v1 = model.integrate(self.q, h0 * self.v), self.v + h0 * self.v_dot
+            v_dot1, _ = self._dynamics(self.t + h0, q1, v1)
+            return norm(np.concatenate([model.call("qdot", q=q1, v=v1), v_dot1]) - f0)
+
+        with np.errstate(all="ignore"):
+            d0, d1 = norm(y0), norm(f0)
+        return self._starting_step(d0, d1, rate_change, 3)
 
     # ------------------------------------------------------------------ the step
 

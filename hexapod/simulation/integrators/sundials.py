@@ -59,6 +59,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from hexapod._support import signals
 from hexapod.algorithms.dynamics import forward_dynamics
 from hexapod.errors import HexapodError, IntegrationError
 from hexapod.simulation.integrators.base import Counters, Integrator
@@ -390,6 +391,8 @@ class IdasBDF(Integrator):
                 out = solver(x0=np.concatenate([self.q, self.v]),
                              z0=np.concatenate([self.v_dot, lam]))
             except RuntimeError as error:
+                if signals.received() is not None:  # CasADi's form of an interruption
+                    raise KeyboardInterrupt from None
                 raise _Failure(_idas_reason(str(error), messages.getvalue())) from None
         self._count(solver.stats())  # (a failed call's statistics are lost with it)
         return out["xf"].full().T
