@@ -78,3 +78,75 @@ def test_failed_write_leaves_no_file(tmp_path):
         write_scene(front_leg_scene(), target)
     assert not target.exists()
     assert "[scene]" in scene_text(front_leg_scene())
+
+
+# ------------------------------------------------------------------ hostile text
+
+def test_hostile_text_is_escaped_and_reads_back(tmp_path):
+    """Quotes, backslashes, TOML's signs, control characters and text beyond ASCII: written
+    with TOML's escapes, read back exactly."""
+    scene = front_leg_scene()
+    scene.name = 'a "quoted" \\ back-slashed # [table] = {x} é ☃ 😀'
+    scene.bodies["femur"].mesh = 'meshes/"femur"\\\n\t\x00\x1f\x7f\u2028.stl'
+    path = write_scene(scene, tmp_path / "hostile.toml", header="a header\twith a tab\nline 2")
+    copy = read_scene(path)
+    assert copy.name == scene.name
+    assert copy.bodies["femur"].mesh == scene.bodies["femur"].mesh
+    assert path.read_text(encoding="utf-8").startswith("# a header\twith a tab\n# line 2\n")
+
+
+@pytest.mark.parametrize("where, name, character", [
+    ("scene", "two\nlines", "U+000A"), ("scene", "", "it is empty"),
+    ("scene", "bell\x07", "U+0007"), ("body", "femur\n", "U+000A"), ("body", "fému", "U+00E9"),
+    ("body", "a b", "U+0020"),
+    ("marker", 'tip"', "U+0022"), ("marker", "", "it is empty")])
+def test_names_the_reader_would_refuse_are_refused(tmp_path, where, name, character):
+    """One rule for names, in memory and in files: what the reader refuses, validation
+    refuses, and the writer writes nothing."""
+    scene = front_leg_scene()
+    if where == "scene":
+        scene.name = name
+    elif where == "body":
+        scene.bodies["femur"].name = name
+    else:
+        scene.bodies["femur"].markers[name] = hx.Placement([0.0, 0.0, 0.1])
+    target = tmp_path / "refused.toml"
+    with pytest.raises(hx.ModelError) as error:
+        write_scene(scene, target)
+    message = str(error.value)
+    assert message.startswith(f"{target}: not written") and character in message, message
+    assert not target.exists()
+
+
+def test_a_file_with_a_scene_name_on_two_lines_is_refused(tmp_path):
+    path = tmp_path / "two-lines.toml"
+    path.write_text('[scene]\nname = "two\\nlines"\n', encoding="utf-8")
+    with pytest.raises(hx.ModelError, match=r"scene\.name\): 'two\\nlines' is not a valid "
+                                            r"scene name: it holds '\\n' \(U\+000A\)"):
+        read_scene(path)
+
+
+@pytest.mark.parametrize("what", ["mesh", "header"])
+def test_text_no_file_can_hold_is_refused(tmp_path, what):
+    """A lone surrogate (in a mesh path) or a control character in the header (a comment):
+    refused, naming where, and no file written."""
+    scene, header = front_leg_scene(), ""
+    if what == "mesh":
+        scene.bodies["femur"].mesh = "femur\udc80.stl"
+        expected = r"body 'femur' \(spatial\), mesh: holds '\\udc80' \(U\+DC80\)"
+    else:
+        header = "line 1\nline \x1b2"
+        expected = r"header, line 2: holds '\\x1b' \(U\+001B\)"
+    target = tmp_path / "refused.toml"
+    with pytest.raises(hx.HexapodError, match=expected):
+        write_scene(scene, target, header=header)
+    assert not target.exists()
+
+
+def test_an_invalid_scene_is_not_written(tmp_path):
+    scene = front_leg_scene()
+    scene.bodies["femur"].mass = -1.0
+    target = tmp_path / "invalid.toml"
+    with pytest.raises(hx.ModelError, match=r"femur.*mass.*must be positive"):
+        write_scene(scene, target)
+    assert not target.exists()

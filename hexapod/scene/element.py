@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import copy
+import re
+import string
+import unicodedata
 from dataclasses import dataclass
 
 import numpy as np
@@ -42,6 +45,50 @@ def quoted(name) -> str:
         return f"'{name}'"
     text = repr(name)
     return text if len(text) <= 60 else text[:57] + "..."
+
+
+def character(c: str) -> str:
+    """One character as a message names it: quoted, and by its code point, e.g. ``'\\n'
+    (U+000A)``."""
+    return f"{c!r} (U+{ord(c):04X})"
+
+
+# ------------------------------------------------------------------ the rules for names
+
+#: what an element or marker name may hold (the scene file's keys and messages rely on it)
+NAME_RULE = "letters, digits, '_', '-' and '.', in parts joined by '/'"
+_NAME = re.compile(r"[A-Za-z0-9_.\-]+(/[A-Za-z0-9_.\-]+)*")
+_NAME_CHARACTERS = frozenset(string.ascii_letters + string.digits + "_.-/")
+#: Unicode categories a one-line text may not hold: control characters, lone surrogates (no
+#: UTF-8 file can hold them), line and paragraph separators
+_NOT_IN_A_LINE = ("Cc", "Cs", "Zl", "Zp")
+
+
+def name_problem(name) -> str:
+    """Why ``name`` is not a valid element or marker name, e.g. ``"it holds ' ' (U+0020); ..."``
+    (empty when it is valid)."""
+    if not isinstance(name, str):
+        return "it is not a string"
+    if _NAME.fullmatch(name):
+        return ""
+    if not name:
+        return "it is empty"
+    bad = next((c for c in name if c not in _NAME_CHARACTERS), None)
+    if bad is not None:
+        return f"it holds {character(bad)}; a name holds {NAME_RULE}"
+    return f"it has an empty part; a name holds {NAME_RULE}"
+
+
+def line_problem(text) -> str:
+    """Why ``text`` is not one non-empty line of text (a scene name), empty when it is."""
+    if not isinstance(text, str):
+        return "it is not a string"
+    if not text:
+        return "it is empty"
+    bad = next((c for c in text if unicodedata.category(c) in _NOT_IN_A_LINE), None)
+    if bad is not None:
+        return f"it holds {character(bad)}; a scene name is one line without control characters"
+    return ""
 
 
 class Element:

@@ -1,22 +1,31 @@
 """Write a scene as a TOML file that :func:`hexapod.scene.reader.read_scene` reads back.
 
-Values equal to their defaults are left out; rotations are written as ``rpy`` (URDF's
-convention) (pitch from atan2, exact to round-off even near +-90 degrees); the
-file is written atomically (a temporary file renamed), so a failure leaves no partial file.
+The scene is validated first, so that every file written reads back as the same scene: names
+follow the rules the reader applies (:func:`hexapod.scene.element.name_problem`,
+:func:`~hexapod.scene.element.line_problem`), and every string is written with TOML's escapes
+(quotes, backslashes, control characters). Only text no UTF-8 file can hold (a lone surrogate,
+in a mesh path, say) is refused, naming the element and the key. Values equal to their defaults
+are left out; numbers are written as Python's shortest repr, which reads back to the same bits;
+rotations are written as ``rpy`` (URDF's convention) (pitch from atan2, exact to round-off even
+near +-90 degrees); the file is written atomically (a temporary file renamed), so a failure
+leaves no partial file.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import re
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 
 from hexapod._support.files import write_atomically
+from hexapod.errors import HexapodError, ModelError
 from hexapod.scene.bodies import Body
 from hexapod.scene.contacts import GroundForces
 from hexapod.scene.drivers import CoordinateDriver, JointDriver
-from hexapod.scene.element import Element
+from hexapod.scene.element import Element, character, quoted
 from hexapod.scene.forces import ForceElement
 from hexapod.scene.joints import Joint
 from hexapod.scene.laws import Constant, Law, Scaled
@@ -35,8 +44,39 @@ def _array(values) -> str:
     return "[" + ", ".join(_number(x) for x in values) + "]"
 
 
+class _Unwritable(ValueError):
+    """Text that no TOML file can hold; the message grows the place it was found at."""
+
+
+@contextmanager
+def _at(where: str):
+    try:
+        yield
+    except _Unwritable as error:
+        raise _Unwritable(f"{where}: {error}") from None
+
+
+#: TOML's escapes in a basic string: its short ones, and \uXXXX for the other control characters
+_ESCAPES = {**{c: f"\\u{c:04X}" for c in (*range(0x20), 0x7F)},
+            **{ord(c): e for c, e in (("\\", "\\\\"), ('"', '\\"'), ("\b", "\\b"),
+                                      ("\t", "\\t"), ("\n", "\\n"), ("\f", "\\f"),
+                                      ("\r", "\\r"))}}
+_SURROGATE = re.compile(r"[\ud800-\udfff]")
+
+
+def _unwritable(text: str) -> str:
+    """Why ``text`` cannot be written in a UTF-8 file (empty when it can)."""
+    bad = _SURROGATE.search(text)
+    return (f"holds {character(bad.group())}, a lone surrogate, which no UTF-8 file can hold"
+            if bad else "")
+
+
 def _string(text: str) -> str:
-    return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    """A TOML basic string, every character the format forbids as it is escaped."""
+    why = _unwritable(text)
+    if why:
+        raise _Unwritable(why)
+    return '"' + text.translate(_ESCAPES) + '"'
 
 
 def _rotation(R: np.ndarray) -> str:
@@ -140,7 +180,8 @@ def _table(element: Element, dimension: int) -> list[str]:
         value = getattr(element, f.name)
         if _is_default(f.name, value) or (f.name in ("markers", "mesh") and not value):
             continue
-        lines.append(f"{f.name} = {_value(f.name, value)}")
+        with _at(f"{element.label}, {f.name}"):
+            lines.append(f"{f.name} = {_value(f.name, value)}")
     return lines
 
 
@@ -155,9 +196,10 @@ def _setting(value) -> str:
 def _ground(ground: GroundForces) -> list[str]:
     """The ``[ground]`` settings that differ from the defaults (no lines when none does)."""
     default = GroundForces()
-    settings = [f"{key} = {_setting(getattr(ground, key))}"
-                for key in ("policy", "mu", "faces", "min_normal", "default_reference")
-                if getattr(ground, key) != getattr(default, key)]
+    with _at("ground"):
+        settings = [f"{key} = {_setting(getattr(ground, key))}"
+                    for key in ("policy", "mu", "faces", "min_normal", "default_reference")
+                    if getattr(ground, key) != getattr(default, key)]
     lines = ["", "[ground]", *settings] if settings else []
     if ground.reference_efforts:
         lines += ["", "[ground.reference_efforts]"] + [
@@ -166,11 +208,44 @@ def _ground(ground: GroundForces) -> list[str]:
     return lines
 
 
+def _comments(header: str) -> list[str]:
+    """``header`` as TOML comments, one per line (a comment holds no control character but
+    tab)."""
+    lines = []
+    for number, line in enumerate(header.splitlines(), 1):
+        bad = next((c for c in line if (c < " " and c != "\t") or c == "\x7f"), None)
+        why = (f"holds {character(bad)}, which a TOML comment cannot hold" if bad
+               else _unwritable(line))
+        if why:
+            raise _Unwritable(f"header, line {number}: {why}")
+        lines.append(f"# {line}" if line else "#")
+    return lines
+
+
 def scene_text(scene: Scene, header: str = "") -> str:
-    """The TOML text of ``scene``."""
-    lines = [f"# {line}" if line else "#" for line in header.splitlines()]
-    lines += ["[scene]", f"name = {_string(scene.name)}", f"dimension = {scene.dimension}",
-              f"length_unit = {_string(scene.length_unit)}",
+    """The TOML text of ``scene``, which :func:`~hexapod.scene.reader.read_scene` reads back
+    as the same scene; ``header`` becomes a comment at the top.
+
+    Raises
+    ------
+    ModelError
+        The scene is invalid (every problem listed): it would not read back.
+    HexapodError
+        A string of the scene (or a line of the header) holds a character no TOML file can hold.
+    """
+    with np.errstate(all="ignore"):  # huge values overflow in the checks, which report them
+        scene.validate()
+    try:
+        return _text(scene, header)
+    except _Unwritable as error:
+        raise HexapodError(f"scene {quoted(scene.name)} cannot be written: {error}") from None
+
+
+def _text(scene: Scene, header: str) -> str:
+    lines = _comments(header)
+    with _at("scene.name"):
+        lines += ["[scene]", f"name = {_string(scene.name)}"]
+    lines += [f"dimension = {scene.dimension}", f"length_unit = {_string(scene.length_unit)}",
               f"gravity = {_array(scene.gravity)}"]
     if scene.characteristic_length is not None:
         lines.append(f"characteristic_length = {_number(scene.characteristic_length)}")
@@ -187,7 +262,15 @@ def write_scene(scene: Scene, path: str | Path, header: str = "") -> Path:
 
     Raises
     ------
+    ModelError, HexapodError
+        The scene cannot be written (see :func:`scene_text`); no file is written.
     InputFileError
         The file cannot be written (the target is left untouched).
     """
-    return write_atomically(path, scene_text(scene, header))
+    try:
+        text = scene_text(scene, header)
+    except ModelError as error:
+        raise ModelError(f"{path}: not written: {error.subject}", error.problems) from None
+    except HexapodError as error:
+        raise HexapodError(f"{path}: not written: {error}") from None
+    return write_atomically(path, text)
