@@ -171,7 +171,8 @@ def test_motion_without_derivatives_warns_and_uses_a_spline(tmp_path):
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         scene = apply_motion(read_urdf(FIXTURES[0] / "model.urdf"), read_motion(path))
-    assert sum(issubclass(w.category, MotionWarning) for w in caught) == 3
+    said = [str(w.message) for w in caught if issubclass(w.category, MotionWarning)]
+    assert len(said) == 1 and all(name in said[0] for name in ("j0", "j1", "j2"))  # one line
     model = hx.assemble(scene)
     _, wd, wdd = model.law_values(t[50:150])
     k = [d.name for d in model.drivers].index("motion/j0")

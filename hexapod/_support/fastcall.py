@@ -47,3 +47,46 @@ class FastFunction:
             else:
                 out.append(array.reshape((rows, columns), order="F").copy())
         return out
+
+
+class ScatteredFunction:
+    """A CasADi Function with sparse matrix outputs, called like a
+    :class:`~hexapod._support.fastcall.FastFunction` and giving the same dense arrays.
+
+    ``FastFunction`` densifies the outputs symbolically: one expression per zero, which for the
+    constraint Jacobian of a chain of a thousand bodies (30 million entries, nearly all zero)
+    takes gigabytes and many seconds to build. Here the buffers hold the nonzeros only, and each
+    call scatters them into a fresh zero array.
+    """
+
+    def __init__(self, function: ca.Function):
+        self.function = function
+        self.name_in = tuple(function.name_in())
+        self._inputs = [np.zeros(function.nnz_in(i)) for i in range(function.n_in())]
+        self._outputs = [np.zeros(function.nnz_out(i)) for i in range(function.n_out())]
+        self._shapes = [function.size_out(i) for i in range(function.n_out())]
+        self._where = []  # flat (row-major) positions of each output's nonzeros
+        for i, (_, columns) in enumerate(self._shapes):
+            row, column = function.sparsity_out(i).get_triplet()
+            self._where.append(np.asarray(row, dtype=np.int64) * columns
+                               + np.asarray(column, dtype=np.int64))
+        for i in range(function.n_in()):
+            if function.nnz_in(i) != function.numel_in(i):  # pragma: no cover - inputs are dense
+                raise ValueError(f"input {i} of {function.name()} is sparse")
+        self._buffer, self._evaluate = function.buffer()
+        for i, array in enumerate(self._inputs):
+            self._buffer.set_arg(i, memoryview(array))
+        for i, array in enumerate(self._outputs):
+            self._buffer.set_res(i, memoryview(array))
+
+    def __call__(self, *arguments) -> list[np.ndarray]:
+        for target, value in zip(self._inputs, arguments, strict=True):
+            target[:] = np.ravel(value, order="F")
+        self._evaluate()
+        out = []
+        for values, where, (rows, columns) in zip(self._outputs, self._where, self._shapes,
+                                                  strict=True):
+            dense = np.zeros(rows * columns)
+            dense[where] = values
+            out.append(dense if columns == 1 else dense.reshape(rows, columns))
+        return out

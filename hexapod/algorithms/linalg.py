@@ -18,6 +18,7 @@ principle); with ``W_I^T = Q_I R_I`` (thin QR, never the squared Schur complemen
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -81,12 +82,30 @@ class RowSplit:
         smallest = magnitudes.min()
         return float(magnitudes.max() / smallest) if smallest > 0 else float("inf")
 
+    def extreme_singular_values(self) -> tuple[float, float]:
+        """The smallest and the largest singular value of the kept rows of ``W`` (``inf`` and
+        0 when no row is kept)."""
+        s = self.singular_values()
+        return (float(s.min()), float(s.max())) if s.size else (float("inf"), 0.0)
+
     def min_norm_correction(self, residual: np.ndarray) -> np.ndarray:
         """``dy`` of least norm with ``W_I dy = residual_I / d_I`` (in ``M^1/2``-scaled space)."""
         if self.rank == 0:
             return np.zeros(self.W.shape[1])
         rhs = residual[self.independent] / self.scale[self.independent]
         return self.basis @ solve_triangular(self.R, rhs, trans="T")
+
+    def kept_solve(self, y0: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The saddle-point solve on the kept rows (rank > 0): ``y`` closest to ``y0`` with
+        ``W_I y = rhs``, and the scaled multipliers ``R^-1 (Q_I^T y0 - z)``, ``z = R^-T rhs``."""
+        z = solve_triangular(self.R, rhs, trans="T")
+        Qty0 = self.basis.T @ y0
+        y = y0 - self.basis @ Qty0 + self.basis @ z
+        return y, solve_triangular(self.R, Qty0 - z)
+
+    def redundant_coefficients(self) -> np.ndarray:
+        """``C`` (r, n_redundant): each redundant row of ``W`` as ``sum_i C_ik W_Ii``."""
+        return solve_triangular(self.R, self.basis.T @ self.W[self.redundant].T)
 
 
 def require_finite(array: np.ndarray, what: str) -> None:
@@ -103,6 +122,8 @@ def equilibrate(Phi_v: np.ndarray, mass_inv_sqrt) -> tuple[np.ndarray, np.ndarra
     Raises :class:`SingularSystemError` when ``Phi_v`` is not finite (an overflow, typically from
     coordinates or lengths far out of range: check the scene's magnitudes and unit)."""
     require_finite(Phi_v, "the constraint Jacobian Phi_v")
+    if _large_and_sparse(Phi_v) and hasattr(mass_inv_sqrt, "sparse"):
+        return _sparse_equilibrate(Phi_v, mass_inv_sqrt.sparse())
     W = Phi_v @ mass_inv_sqrt
     d = np.linalg.norm(W, axis=1)
     d[d == 0.0] = 1.0
@@ -123,6 +144,10 @@ def split_rows(W: np.ndarray, scale: np.ndarray, priority: np.ndarray, tol: floa
     order = np.asarray(priority, dtype=int)
     if n_c == 0:
         return RowSplit(order, order, np.zeros((n_v, 0)), np.zeros((0, 0)), scale, W)
+    if _sparse_form(W) is not None or _large_and_sparse(W):
+        labels = np.arange(order.size) if groups is None else np.asarray(groups)
+        return (_sparse_split(W, scale, order, labels, tol, pivoting=False)
+                or _sparse_split(W, scale, order, labels, tol, pivoting=True))
     if n_c <= n_v:
         basis, R = np.linalg.qr(W[order].T, mode="reduced")
         if np.all(np.abs(np.diag(R)) > tol):
@@ -170,6 +195,290 @@ def split_rows(W: np.ndarray, scale: np.ndarray, priority: np.ndarray, tol: floa
     R = np.triu(basis.T @ W[kept].T) if kept else np.zeros((0, 0))
     return RowSplit(np.array(kept, dtype=int), np.array(redundant, dtype=int), basis, R,
                     scale, W)
+
+
+# ------------------------------------------------------------------ large sparse matrices
+
+#: matrices of more entries than this (mostly zeros) are split by the sparse factorisation
+#: below: the dense QR of the 5000 x 6000 Jacobian of a chain of a thousand bodies takes some
+#: fifteen seconds, and its SVD longer
+SPARSE_ABOVE = 1_000_000
+SPARSE_DENSITY = 0.05  # ... and fewer nonzeros than this fraction of them
+_PANEL = 32  # rows of W factorised together
+#: ARPACK's relative tolerance on the extreme eigenvalues of R^T R and its inverse: the top of
+#: a long chain's spectrum is a near continuum, where a tighter one takes seconds more; the
+#: values come out within about 1e-7 (relative) there, to round-off where they stand apart
+_ARPACK_TOL = 1e-5
+
+
+def _large_and_sparse(A: np.ndarray) -> bool:
+    return A.size > SPARSE_ABOVE and np.count_nonzero(A) < SPARSE_DENSITY * A.size
+
+
+#: the last matrix :func:`_sparse_equilibrate` gave, and its sparse form: the split that follows
+#: takes it from here rather than scanning the dense one again
+_LAST: tuple = (lambda: None, None)
+
+
+def _sparse_equilibrate(Phi_v: np.ndarray, mass_inv_sqrt) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`equilibrate` through a sparse product (the dense one reads every zero)."""
+    from scipy.sparse import csr_array
+
+    global _LAST
+    W = csr_array(Phi_v) @ mass_inv_sqrt
+    row = np.repeat(np.arange(W.shape[0]), np.diff(W.indptr))
+    d = np.sqrt(np.bincount(row, weights=W.data**2, minlength=W.shape[0]))
+    d[d == 0.0] = 1.0
+    W.data /= d[row]
+    dense = W.toarray()
+    _LAST = (weakref.ref(dense), W)
+    return dense, d
+
+
+
+def _sparse_form(W: np.ndarray):
+    """``W`` in CSR format when it is the last matrix equilibrated, else None."""
+    reference, sparse = _LAST
+    return sparse if reference() is W else None
+
+
+class SparseRowSplit(RowSplit):
+    """A :class:`RowSplit` of a large sparse ``W``: ``R`` sparse, and ``Q_I`` kept as the
+    orthogonal transforms of the factorisation's panels (``basis`` and ``R`` are formed dense
+    only when asked). The condition number comes from the extreme singular values (ARPACK)."""
+
+    def __init__(self, independent, redundant, R, transforms, pivots, scale, W):
+        self.independent, self.redundant, self.scale, self.W = independent, redundant, scale, W
+        self.R_sparse = R  # (r, r) upper triangular, CSR
+        self.transforms = transforms  # [(slots, Q)]: W[independent].T = G[:, pivots] R,
+        self.pivots = pivots  # G the product of the Q placed on their slots
+        self._factor = None
+
+    def __repr__(self) -> str:
+        return f"SparseRowSplit(rank={self.rank}, redundant={self.redundant.tolist()})"
+
+    @property
+    def basis(self) -> np.ndarray:
+        return self.expand(np.eye(self.rank))
+
+    @property
+    def R(self) -> np.ndarray:
+        return self.R_sparse.toarray()
+
+    def expand(self, z: np.ndarray) -> np.ndarray:
+        """``Q_I z``."""
+        x = np.zeros((self.W.shape[1],) + z.shape[1:])
+        x[self.pivots] = z
+        for slots, Q in reversed(self.transforms):
+            x[slots] = Q @ x[slots]
+        return x
+
+    def project(self, y: np.ndarray) -> np.ndarray:
+        """``Q_I^T y``."""
+        x = np.array(y, dtype=float)
+        for slots, Q in self.transforms:
+            x[slots] = Q.T @ x[slots]
+        return x[self.pivots]
+
+    def solve_r(self, b: np.ndarray, trans: str = "N") -> np.ndarray:
+        """``R^-1 b`` (or ``R^-T b``) by the sparse triangular factor."""
+        if self._factor is None:
+            from scipy.sparse.linalg import splu
+
+            self._factor = splu(self.R_sparse.tocsc(), permc_spec="NATURAL",
+                                diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+        return self._factor.solve(np.asarray(b, dtype=float), trans=trans)
+
+    def extreme_singular_values(self) -> tuple[float, float]:
+        if self.rank < 3:  # too few for ARPACK
+            return super().extreme_singular_values()
+        from scipy.sparse.linalg import LinearOperator, eigsh
+
+        R, Rt, r = self.R_sparse.tocsr(), self.R_sparse.T.tocsr(), self.rank
+
+        def largest(matvec) -> float:  # the largest eigenvalue of a symmetric operator
+            operator = LinearOperator((r, r), matvec=matvec, dtype=float)
+            return float(eigsh(operator, k=1, v0=np.ones(r), tol=_ARPACK_TOL,
+                               return_eigenvectors=False)[0])
+
+        s_max = np.sqrt(largest(lambda x: Rt @ (R @ x)))  # of R^T R
+        s_min = 1.0 / np.sqrt(largest(lambda x: self.solve_r(self.solve_r(x, trans="T"))))
+        return float(s_min), float(s_max)
+
+    def condition_number(self, n_v: int) -> float:
+        if self.rank == 0:
+            return 1.0
+        s_min, s_max = self.extreme_singular_values()  # the extremes set the extremes:
+        largest = (1.0 + np.sqrt(1.0 + 4.0 * s_max**2)) / 2.0  # see RowSplit.condition_number
+        smallest = (np.sqrt(1.0 + 4.0 * s_min**2) - 1.0) / 2.0
+        if n_v > self.rank:
+            smallest = min(smallest, 1.0)
+        return float(largest / smallest) if smallest > 0 else float("inf")
+
+    def min_norm_correction(self, residual: np.ndarray) -> np.ndarray:
+        if self.rank == 0:
+            return np.zeros(self.W.shape[1])
+        I = self.independent
+        return self.expand(self.solve_r(residual[I] / self.scale[I], trans="T"))
+
+    def kept_solve(self, y0: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        z = self.solve_r(rhs, trans="T")
+        Qty0 = self.project(y0)
+        return y0 + self.expand(z - Qty0), self.solve_r(Qty0 - z)
+
+    def redundant_coefficients(self) -> np.ndarray:
+        return self.solve_r(self.project(self.W[self.redundant].T))
+
+
+class _Front:
+    """The sparse Householder QR of ``A = W[order].T`` (columns: the rows of ``W`` in priority
+    order) panel by panel. A row of ``A`` (a velocity coordinate) enters the front at the first
+    column where it is not zero and leaves it as a row of ``R`` or once it is zero beyond the
+    columns done; the front is dense over the columns it still reaches, so a chain's stays
+    small whatever its length."""
+
+    def __init__(self, Wo, tol: float):
+        self.Wo, self.tol = Wo, tol  # Wo: W[order] in CSC, indices sorted
+        n = Wo.shape[0]
+        filled = np.diff(Wo.indptr) > 0
+        first, self.last = np.full(Wo.shape[1], n), np.full(Wo.shape[1], -1)
+        first[filled] = Wo.indices[Wo.indptr[:-1][filled]]
+        self.last[filled] = Wo.indices[Wo.indptr[1:][filled] - 1]
+        self.arrivals = np.argsort(first, kind="stable")
+        self.first = first[self.arrivals]
+        self.entered = 0
+        self.values, self.slots, self.start = np.zeros((0, 0)), np.zeros(0, dtype=int), 0
+        self.transforms, self.pivots, self.kept, self.redundant = [], [], [], []
+        self.entries: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # R, as triplets
+
+    def enter(self, a: int, b: int) -> None:
+        """Move the window to start at column ``a`` and let in the rows starting before ``b``."""
+        stop = max(int(np.searchsorted(self.first, b)), self.entered)
+        new = self.arrivals[self.entered:stop]
+        self.entered = stop
+        end = max(self.start + self.values.shape[1], b,
+                  int(self.last[new].max()) + 1 if new.size else 0)
+        values = np.zeros((self.slots.size + new.size, end - a))
+        kept = self.values[:, a - self.start:]
+        values[:self.slots.size, :kept.shape[1]] = kept
+        if new.size:
+            arriving = self.Wo[:, new].tocoo()
+            values[self.slots.size + arriving.col, arriving.row - a] = arriving.data
+        self.values, self.slots, self.start = values, np.concatenate([self.slots, new]), a
+
+    def reduce(self, a: int, b: int, pivoting: bool) -> bool:
+        """Factorise columns ``a:b``: in order, refusing (False, nothing changed) when one is
+        within ``tol`` of the span of those before; or with column pivoting, the columns
+        within ``tol`` of the span of those kept being redundant."""
+        from scipy.linalg import qr
+
+        self.enter(a, b)
+        p = b - a
+        S = np.flatnonzero(np.any(self.values[:, :p] != 0, axis=1))
+        block = self.values[S]
+        if pivoting:
+            if S.size:
+                Q, Rp, P = qr(block[:, :p], pivoting=True)
+                diagonal = np.abs(np.diag(Rp))
+            else:
+                Q, Rp, P, diagonal = np.eye(0), np.zeros((0, p)), np.arange(p), np.zeros(0)
+            m = int(np.argmin(diagonal > self.tol)) if np.any(diagonal <= self.tol) \
+                else diagonal.size
+        else:
+            if S.size < p:
+                return False
+            Q, Rp = qr(block[:, :p])
+            if np.any(np.abs(np.diag(Rp)) <= self.tol):
+                return False
+            P, m = np.arange(p), p
+        signs = np.sign(np.diag(Rp)[:m])
+        Q[:, :m] *= signs
+        Rp[:m] *= signs[:, None]
+        rest = Q.T @ block[:, p:]
+        if m < S.size and rest.shape[1]:  # the rows left: triangular, the others zero and out
+            Q2, rest[m:] = qr(rest[m:])
+            Q[:, m:] = Q[:, m:] @ Q2
+        columns = a + P[:m]
+        within, beyond = np.triu_indices(m), np.nonzero(rest[:m])  # R's rows, as triplets
+        self.entries.append((len(self.kept) + np.concatenate([within[0], beyond[0]]),
+                             np.concatenate([columns[within[1]], b + beyond[1]]),
+                             np.concatenate([Rp[within], rest[beyond]])))
+        self.kept += columns.tolist()
+        self.redundant += (a + P[m:]).tolist()
+        self.transforms.append((self.slots[S], Q))
+        self.pivots += self.slots[S[:m]].tolist()
+        self.values[S[m:], p:] = rest[m:]
+        staying = np.ones(self.slots.size, dtype=bool)
+        staying[S[:m]] = False
+        values = self.values[staying, p:]
+        staying[staying] = np.any(values != 0, axis=1)  # rows done are zero from here on
+        self.values, self.slots, self.start = self.values[staying, p:], self.slots[staying], b
+        return True
+
+
+def _panels(labels: np.ndarray, pivoting: bool):
+    """Column ranges ``(a, b, pivot)``: runs of at most ``_PANEL`` columns, or with
+    ``pivoting`` each group of several rows on its own (pivoted) and runs of single rows."""
+    n, a = labels.size, 0
+    while a < n:
+        b = a + 1
+        while b < n and labels[b] == labels[a]:
+            b += 1
+        if pivoting and b - a > 1:
+            yield a, b, True
+        else:
+            b = a + 1
+            while b < min(n, a + _PANEL) and (not pivoting or (
+                    labels[b] != labels[b - 1] and (b + 1 == n or labels[b + 1] != labels[b]))):
+                b += 1
+            yield a, b, False
+        a = b
+
+
+def _ordered(W: np.ndarray, order: np.ndarray):
+    """``W[order]`` in CSC format (sorted indices): the columns of ``A = W[order].T``."""
+    from scipy.sparse import csc_array
+
+    sparse = _sparse_form(W)
+    if sparse is None:
+        rows, columns = np.nonzero(W)
+        values = W[rows, columns]
+    else:
+        rows = np.repeat(np.arange(W.shape[0]), np.diff(sparse.indptr))
+        columns, values = sparse.indices, sparse.data
+    position = np.full(W.shape[0], -1)
+    position[order] = np.arange(order.size)
+    taken = position[rows] >= 0  # rows left out of the decision (feet in swing)
+    out = csc_array((values[taken], (position[rows[taken]], columns[taken])),
+                    shape=(order.size, W.shape[1]))
+    out.sort_indices()
+    return out
+
+
+def _sparse_split(W, scale, order, labels, tol: float, pivoting: bool):
+    """:func:`split_rows` by a sparse QR; without ``pivoting`` None unless every row is kept
+    (then the rows are taken as in the dense path's first attempt)."""
+    from scipy.sparse import csr_array
+
+    front = _Front(_ordered(W, order), tol)
+    for a, b, pivot in _panels(labels, pivoting):
+        if front.reduce(a, b, pivot):
+            continue
+        if not pivoting:
+            return None
+        for k in range(a, b):  # a run of single rows with a redundant one: one by one
+            front.reduce(k, k + 1, True)
+    kept = np.array(front.kept, dtype=int)
+    rank = np.full(order.size, -1)  # each column's place among those kept
+    rank[kept] = np.arange(kept.size)
+    rows, columns, values = (np.concatenate(x) for x in zip(*front.entries, strict=True)) \
+        if front.entries else (np.zeros(0, dtype=int), np.zeros(0, dtype=int), np.zeros(0))
+    columns = rank[columns]
+    inside = columns >= 0  # entries in redundant columns are not part of R
+    R = csr_array((values[inside], (rows[inside], columns[inside])),
+                  shape=(kept.size, kept.size))
+    return SparseRowSplit(order[kept], order[np.sort(np.array(front.redundant, dtype=int))],
+                          R, front.transforms, np.array(front.pivots, dtype=int), scale, W)
 
 
 @dataclass
@@ -222,10 +531,8 @@ def solve_saddle(mass_inv_sqrt, Phi_v: np.ndarray, Q: np.ndarray, gamma: np.ndar
     y0 = mass_inv_sqrt @ Q
     lam = np.zeros(W.shape[0])
     if split.rank:
-        z = solve_triangular(split.R, gamma[I] / d[I], trans="T")
-        Qty0 = split.basis.T @ y0
-        y = y0 - split.basis @ Qty0 + split.basis @ z
-        lam[I] = solve_triangular(split.R, Qty0 - z) / d[I]
+        y, scaled = split.kept_solve(y0, gamma[I] / d[I])
+        lam[I] = scaled / d[I]
     else:
         y = y0
     inconsistency = check_consistency(split, y, gamma, np.linalg.norm(y0), row_names,
@@ -266,7 +573,7 @@ def multiplier_null_space(split: RowSplit, n_c: int) -> np.ndarray:
     I, red, d = split.independent, split.redundant, split.scale
     # each redundant row k: W_k = sum_i c_ki W_Ii, so e_k - sum_i c_ki e_Ii is a null vector of
     # W^T (multiplier space scaled by d), i.e. (e_k - sum c_ki e_Ii) / d of Phi_v^T
-    C = solve_triangular(split.R, split.basis.T @ split.W[red].T)  # (r, n_red)
+    C = split.redundant_coefficients()  # (r, n_red)
     N = np.zeros((n_c, red.size))
     N[red, np.arange(red.size)] = 1.0
     N[I, :] = -C

@@ -11,6 +11,7 @@ import casadi as ca
 import numpy as np
 
 from hexapod._support.graphs import spanning_forest
+from hexapod._support.limits import check_model_size
 from hexapod.model.forces import ForceBuilder, gravity_potential, inertial_forces
 from hexapod.model.frames import BodyState
 from hexapod.model.joints import (
@@ -125,11 +126,12 @@ def _state(info: BodyInfo, q: ca.SX, v: ca.SX) -> BodyState:
     return build(q[info.q], v[info.v])
 
 
-def _com_frame(scene: Scene, body: str, frame: Placement) -> Placement:
-    """A frame in a body's reference frame, re-expressed in its centre-of-mass frame."""
+def _com_frame(bodies: dict, body: str, frame: Placement) -> Placement:
+    """A frame in a body's reference frame (``bodies``: the scene's, by name), re-expressed in
+    its centre-of-mass frame."""
     if body == GROUND:
         return frame
-    return scene.bodies[body].marker_in_com_frame(frame)
+    return bodies[body].marker_in_com_frame(frame)
 
 
 #: default axis in the joint frame, in space and in the plane
@@ -178,6 +180,7 @@ class _Assembly:
     def __init__(self, si: Scene):
         self.si = si
         self.dim = si.dimension
+        self.scene_bodies = si.bodies  # looked up once: the scene builds the dict on each call
         self.bodies, self.q0, self.v0, self.mass = _bodies(si)
         self.index = {b.name: b.index for b in self.bodies}
         self.q = ca.SX.sym("q", self.q0.size)
@@ -208,11 +211,11 @@ class _Assembly:
         parts = []
         for k, joint in enumerate(scene_joints):
             on_parent, on_child = si.joint_frames(joint)  # reference frames of the bodies
-            world_p = si.pose(joint.parent).transform_point(on_parent.position)
-            world_c = si.pose(joint.child).transform_point(on_child.position)
+            world_p = self._pose(joint.parent).transform_point(on_parent.position)
+            world_c = self._pose(joint.child).transform_point(on_child.position)
             self.joint_points.append(world_c)
-            frame_p = _com_frame(si, joint.parent, on_parent)
-            frame_c = _com_frame(si, joint.child, on_child)
+            frame_p = _com_frame(self.scene_bodies, joint.parent, on_parent)
+            frame_c = _com_frame(self.scene_bodies, joint.child, on_child)
             axis = _joint_axis(joint, self.dim)
             g = JointGeometry(self.states[joint.parent], self.states[joint.child], frame_p,
                               frame_c, axis, self.dim, _unit(getattr(joint, "axis2", None)))
@@ -251,13 +254,14 @@ class _Assembly:
     def drivers(self) -> tuple[list[DriverInfo], dict[str, list[int]]]:
         """Driver rows, and the rows of the drivers acting on each joint."""
         si = self.si
-        joint_index = {name: k for k, name in enumerate(si.joints)}
+        joints = si.joints
+        joint_index = {name: k for k, name in enumerate(joints)}
         offset = {"x": 0, "y": 1, "z": 2, "angle": 2}
         drivers, on_joint = [], {}
         for driver in si.drivers.values():
             f, law = self.laws.value(driver.law, driver.name)
             if isinstance(driver, JointDriver):
-                joint = si.joints[driver.joint]
+                joint = joints[driver.joint]
                 unit = "length" if joint.kind == "prismatic" else "angle"
                 row = self._add_row(driver.name, driver.name, unit,
                                     driver_row(joint.kind, self.geometries[joint.name], f))
@@ -277,8 +281,14 @@ class _Assembly:
     def _point(self, body: str, ref) -> tuple[np.ndarray, np.ndarray]:
         """A point reference: in the body's centre-of-mass frame, and in the world initially."""
         local = self.si.point(body, ref)
-        return (_com_frame(self.si, body, Placement(local)).position,
-                self.si.pose(body).transform_point(local))
+        return (_com_frame(self.scene_bodies, body, Placement(local)).position,
+                self._pose(body).transform_point(local))
+
+    def _pose(self, body: str) -> Placement:
+        """The initial pose of a body's reference frame (``Scene.pose``, without its lookup)."""
+        if body == GROUND:
+            return Placement.identity(self.dim)
+        return self.scene_bodies[body].pose
 
     def _components(self, name: str, laws) -> ca.SX:
         return ca.vertcat(*[self.laws.value(law, f"{name}[{i}]")[0]
@@ -292,13 +302,14 @@ class _Assembly:
         builder = ForceBuilder(self.q, self.v, self.qdot)
         across: dict[str, list[str]] = {}
         infos: list[ForceInfo] = []
-        joint_index = {name: k for k, name in enumerate(si.joints)}
+        joints = si.joints
+        joint_index = {name: k for k, name in enumerate(joints)}
 
         def body(name):
             return self.index.get(name, GROUND_INDEX)
 
         def on_joint(element):
-            joint = si.joints[element.joint]
+            joint = joints[element.joint]
             infos.append(ForceInfo(element.name, element.kind,
                                    (body(joint.parent), body(joint.child)),
                                    joint=joint_index[joint.name]))
@@ -404,7 +415,12 @@ def assemble(scene: Scene, *, rank_tolerance: float = 1e-9) -> Model:
     ------
     ModelError
         Listing every problem of the scene.
+    HexapodError
+        When the scene has more bodies or joints than the limit
+        (:func:`hexapod._support.limits.max_bodies`, ``HEXAPOD_MAX_BODIES``).
     """
+    where = f" ({scene.source})" if scene.source else ""
+    check_model_size(len(scene.bodies), len(scene.joints), f"scene '{scene.name}'{where}")
     scene.validate()
     model = _Assembly(scene.in_si()).model(rank_tolerance)
     model.source = scene.source  # the file the scene was read from, named by later errors

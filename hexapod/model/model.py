@@ -28,7 +28,7 @@ from functools import cached_property
 import casadi as ca
 import numpy as np
 
-from hexapod._support.fastcall import FastFunction
+from hexapod._support.fastcall import FastFunction, ScatteredFunction
 from hexapod.scene.laws import Law
 from hexapod.spatial import (
     Placement,
@@ -40,6 +40,8 @@ from hexapod.spatial import (
 
 GROUND_INDEX = -1
 _MATRIX_OUTPUTS = frozenset({"Phi_q", "Phi_v", "M", "Q_across"})
+#: outputs with more entries than this are evaluated on their nonzeros (ScatteredFunction)
+_DENSE_OUTPUT_ENTRIES = 100_000
 
 
 @dataclass(frozen=True)
@@ -161,12 +163,14 @@ class BlockDiagonal:
         self._block_columns = self.block_index.reshape(-1)
 
     def map_blocks(self, fn) -> BlockDiagonal:
-        """Apply a matrix function (inverse, square root ...) to every block and scalar."""
+        """Apply a matrix function (inverse, square root ...) to every block and scalar; ``fn``
+        takes a stack of matrices (k, n, n), as NumPy's linear algebra does."""
         diagonal = self.diagonal.copy()
         scalar = np.ones(diagonal.size, dtype=bool)
         scalar[self._block_columns] = False
-        diagonal[scalar] = [fn(np.array([[d]]))[0, 0] for d in diagonal[scalar]]
-        blocks = np.array([fn(b) for b in self.blocks]).reshape(-1, 3, 3)
+        if scalar.any():
+            diagonal[scalar] = fn(diagonal[scalar][:, None, None])[:, 0, 0]
+        blocks = fn(self.blocks) if self.blocks.size else self.blocks.copy()
         return BlockDiagonal(diagonal, blocks, self.block_index)
 
     def __matmul__(self, x: np.ndarray) -> np.ndarray:
@@ -185,10 +189,25 @@ class BlockDiagonal:
     def dense(self) -> np.ndarray:
         return self @ np.eye(self.diagonal.size)
 
+    def sparse(self):
+        """The matrix in SciPy's CSR format (for products with large sparse matrices)."""
+        from scipy.sparse import csr_array
+
+        n = self.diagonal.size
+        scalar = np.ones(n, dtype=bool)
+        scalar[self._block_columns] = False
+        index = np.flatnonzero(scalar)
+        rows = np.broadcast_to(self.block_index[:, :, None], self.blocks.shape).reshape(-1)
+        columns = np.broadcast_to(self.block_index[:, None, :], self.blocks.shape).reshape(-1)
+        return csr_array((np.concatenate([self.diagonal[index], self.blocks.reshape(-1)]),
+                          (np.concatenate([index, rows]), np.concatenate([index, columns]))),
+                         shape=(n, n))
+
 
 def _sym_sqrt(J: np.ndarray, power: float) -> np.ndarray:
+    """``J**power`` of symmetric positive definite matrices (a stack of them)."""
     values, vectors = np.linalg.eigh(J)
-    return (vectors * values**power) @ vectors.T
+    return (vectors * values[..., None, :]**power) @ np.swapaxes(vectors, -1, -2)
 
 
 @dataclass
@@ -253,7 +272,7 @@ class Model:
         self.row_index = {r.name: i for i, r in enumerate(rows)}
         self._built: dict = {}
         self._law_batch = None  # see law_values
-        self._fast: dict[str, FastFunction] = {}
+        self._fast: dict[str, FastFunction | ScatteredFunction] = {}
         self._lie_indices()
 
     # ---------------------------------------------------------------- descriptions
@@ -277,7 +296,9 @@ class Model:
 
     @cached_property
     def velocity_names(self) -> tuple[str, ...]:
-        names = {"spatial": ("vx", "vy", "vz", "wx'", "wy'", "wz'"),
+        # spatial: the centre of mass's velocity in world axes, the angular velocity in body
+        # axes (``wx_body``; the world-axes ``wx`` is what the report's trunk.csv writes)
+        names = {"spatial": ("vx", "vy", "vz", "wx_body", "wy_body", "wz_body"),
                  "planar": ("vx", "vy", "w"), "particle": ("vx", "vy", "vz")}
         return tuple(f"{b.name}.{c}" for b in self.bodies
                      for c in names[b.kind][: b.v.stop - b.v.start])
@@ -523,11 +544,15 @@ class Model:
             return array.reshape(getattr(self, name).size_out(0))
         return array.reshape(-1)
 
-    def fast(self, name: str) -> FastFunction:
+    def fast(self, name: str) -> FastFunction | ScatteredFunction:
         """The Function ``name`` evaluated through buffers (:mod:`hexapod._support.fastcall`): the
-        same numbers, without the cost of converting arguments; built once."""
+        same numbers, without the cost of converting arguments; built once. Large matrix
+        outputs are evaluated on their nonzeros only (:class:`ScatteredFunction`)."""
         if name not in self._fast:
-            self._fast[name] = FastFunction(getattr(self, name))
+            function = getattr(self, name)
+            large = any(function.numel_out(i) > _DENSE_OUTPUT_ENTRIES
+                        for i in range(function.n_out()))
+            self._fast[name] = (ScatteredFunction if large else FastFunction)(function)
         return self._fast[name]
 
     def call_samples(self, name: str, **values) -> np.ndarray:

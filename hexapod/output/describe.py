@@ -14,7 +14,12 @@ import numpy as np
 
 from hexapod.algorithms.dynamics import forward_dynamics
 from hexapod.algorithms.ground import ground_reactions
-from hexapod.algorithms.kinematics import assemble_positions, scaled_residual, solve_velocities
+from hexapod.algorithms.kinematics import (
+    assemble_positions,
+    rank_split,
+    scaled_residual,
+    solve_velocities,
+)
 from hexapod.algorithms.liaison import driver_efforts, joint_wrenches
 from hexapod.algorithms.topology import body_joint_graph, mobility, vector_network
 from hexapod.model.model import GROUND_INDEX, Data, Model
@@ -49,11 +54,20 @@ def law_description(law: Law | None) -> dict:
     return out
 
 
-def _solved_state(model: Model, t: float, condition: bool = True):
+def _solved_state(model: Model, t: float):
+    """Positions, velocities and the workspace after forward dynamics at ``t``, with the
+    condition number and the smallest singular value of the kept rows.
+
+    Only the extreme singular values are computed (as ``forward_dynamics(condition=True)``
+    would give them, without all the others): a large model's rank decision is a sparse QR
+    whose extremes ARPACK finds in milliseconds where a dense SVD takes minutes."""
     data = model.create_data()
     q = assemble_positions(model, data, t)
     v = solve_velocities(model, data, t, q)
-    forward_dynamics(model, data, t, q, v, condition=condition)
+    forward_dynamics(model, data, t, q, v)
+    split = rank_split(model, data.Phi_v, data.w)
+    data.condition_number = split.condition_number(model.n_v)
+    data.sigma_min = split.extreme_singular_values()[0]
     return q, v, data
 
 

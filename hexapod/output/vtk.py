@@ -1,11 +1,11 @@
 """VTK files of a simulation or a liaison force report, for ParaView (``hexapod export``).
 
 A result directory of ``hexapod simulate`` (``results.npz``) or ``hexapod report``
-(``inverse.csv`` and ``summary.md``) is read back into a :class:`Recording`: the scene it was
-run on (a scene file's absolute path or a built-in scene's name), the saved times and, for a
-simulation, the saved states. With the scene's model, :func:`vtk_files` turns it into one
-``bodies_NNNN.vtu`` and one ``joints_NNNN.vtu`` per saved instant and the time indices
-``bodies.pvd`` and ``joints.pvd`` (ParaView Collection files):
+(``inverse.csv`` and ``summary.md``) is read back (:mod:`hexapod.output.recording`) into the
+scene it was run on, the saved times and, for a simulation, the saved states. With the
+scene's model, :func:`vtk_files` turns it into one ``bodies_NNNN.vtu`` and one
+``joints_NNNN.vtu`` per saved instant and the time indices ``bodies.pvd`` and
+``joints.pvd`` (ParaView Collection files):
 
 - **bodies**: every body's solid, posed: a box centred on the centre of mass along the principal
   axes of inertia with the body's mass and moments of inertia (the equivalent box; a flat plate
@@ -32,177 +32,30 @@ the CSV's times.
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
-import json
-import re
+import os
 import tempfile
 import warnings
-import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
+from hexapod._support.limits import parse_size, size_text
 from hexapod.algorithms.ground import ground_reactions
 from hexapod.algorithms.kinematics import assemble_positions, body_poses
 from hexapod.algorithms.liaison import joint_origin, wrenches_from_multipliers
 from hexapod.errors import HexapodError, InputFileError
 from hexapod.model.model import Model
 from hexapod.output.ground import GROUND_COMPONENTS, leg_name
+from hexapod.output.recording import Recording
 from hexapod.output.report import inverse_columns
 
 #: Values of the cell data ``part``.
 PART_BOX, PART_BAR, PART_PARTICLE, PART_MESH = 0, 1, 2, 3
-
-
-# ------------------------------------------------------------------ reading a result directory
-
-@dataclass
-class Recording:
-    """What a result directory holds.
-
-    Attributes
-    ----------
-    kind : str
-        ``"simulation"`` or ``"report"``.
-    directory : Path
-    scene : str or None
-        The scene it was run on (a file's path or a built-in scene's name), when it says.
-    scene_file : str
-        The file that says it (for messages).
-    t : ndarray (N,)
-    q, v, lam : ndarray or None
-        Saved states of a simulation (None for a report).
-    coordinates : list of str or None
-        The coordinate names of a simulation.
-    columns : list of str or None
-        The CSV header of a report.
-    table : ndarray or None
-        The CSV rows of a report.
-    frame : str
-        Axes of a report's wrenches, ``"joint"`` or ``"world"``.
-    """
-
-    kind: str
-    directory: Path
-    scene: str | None
-    scene_file: str
-    t: np.ndarray
-    q: np.ndarray | None = None
-    v: np.ndarray | None = None
-    lam: np.ndarray | None = None
-    coordinates: list[str] | None = None
-    columns: list[str] | None = None
-    table: np.ndarray | None = None
-    frame: str = "joint"
-
-
-def read_recording(directory: str | Path) -> Recording:
-    """Read the result directory of ``hexapod simulate`` or ``hexapod report``.
-
-    Raises
-    ------
-    InputFileError
-        The directory is missing, is not such a result, or a file in it cannot be read; the
-        message names the file and the problem.
-    """
-    directory = Path(directory)
-    if not directory.exists():
-        raise InputFileError(f"{directory}: no such directory")
-    if not directory.is_dir():
-        raise InputFileError(f"{directory}: is a file, not a result directory of 'hexapod "
-                             "simulate' or 'hexapod report'")
-    if (directory / "results.npz").exists():
-        return _read_simulation(directory)
-    if (directory / "inverse.csv").exists():
-        return _read_report(directory)
-    raise InputFileError(f"{directory}: not a result directory of 'hexapod simulate' "
-                         "(results.npz) or 'hexapod report' (inverse.csv)")
-
-
-def _read_simulation(directory: Path) -> Recording:
-    path = directory / "results.npz"
-    try:
-        with np.load(path, allow_pickle=False) as saved:
-            arrays = {key: saved[key] for key in saved.files}
-    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as error:
-        raise InputFileError(f"{path}: cannot read the file ({error})") from None
-    for key in ("t", "q", "v", "lam", "coordinates"):
-        if key not in arrays:
-            raise InputFileError(f"{path}: no array '{key}': not written by 'hexapod simulate'")
-    t = np.asarray(arrays["t"])
-    n = t.shape[0] if t.ndim == 1 else -1
-    for key in ("t", "q", "v", "lam"):
-        array = arrays[key]
-        if array.dtype.kind not in "fi" or array.ndim != (1 if key == "t" else 2) \
-                or array.shape[0] != n:
-            raise InputFileError(f"{path}: array '{key}' has shape {array.shape} "
-                                 f"({array.dtype}), not one row per saved time")
-        if not np.all(np.isfinite(array)):
-            raise InputFileError(f"{path}: array '{key}' holds non-finite numbers")
-    if n == 0:
-        raise InputFileError(f"{path}: no saved state")
-    scene, said_by = None, str(path)
-    if "source" in arrays and arrays["source"].ndim == 0:
-        scene = str(arrays["source"])
-    else:  # written before results recorded their scene: a built-in scene's name may do
-        stats = directory / "stats.json"
-        try:
-            name = json.loads(stats.read_text(encoding="utf-8")).get("scene")
-        except (OSError, ValueError, AttributeError):
-            name = None
-        if isinstance(name, str) and name:
-            scene, said_by = name, str(stats)
-    return Recording("simulation", directory, scene, said_by, t.astype(float),
-                     q=arrays["q"].astype(float), v=arrays["v"].astype(float),
-                     lam=arrays["lam"].astype(float),
-                     coordinates=[str(c) for c in arrays["coordinates"]])
-
-
-_SCENE_LINE = re.compile(r"^Scene `([^`]*)`", re.M)
-
-
-def _read_report(directory: Path) -> Recording:
-    from hexapod._support.files import read_text
-
-    path = directory / "inverse.csv"
-    rows = list(csv.reader(io.StringIO(read_text(path, "report CSV"))))
-    if not rows or not rows[0] or rows[0][0] != "t":
-        raise InputFileError(f"{path}: line 1: the header does not start with 't': not the CSV "
-                             "of 'hexapod report'")
-    header = rows[0]
-    table = []
-    for number, row in enumerate(rows[1:], start=2):
-        if not row:
-            continue
-        if len(row) != len(header):
-            raise InputFileError(f"{path}: line {number}: {len(row)} values for "
-                                 f"{len(header)} columns")
-        try:
-            table.append([float(x) for x in row])
-        except ValueError:
-            raise InputFileError(f"{path}: line {number}: not a number in the row") from None
-    if not table:
-        raise InputFileError(f"{path}: no sample")
-    values = np.array(table)
-    if not np.all(np.isfinite(values[:, 0])):
-        raise InputFileError(f"{path}: non-finite times")
-    summary = directory / "summary.md"
-    text = read_text(summary, "report summary")
-    match = _SCENE_LINE.search(text)
-    if match is None:
-        raise InputFileError(f"{summary}: no line 'Scene `...`' naming the scene: not the "
-                             "summary of 'hexapod report'")
-    if "in world axes;" in text:
-        frame = "world"
-    elif "in the child's joint frame;" in text:
-        frame = "joint"
-    else:
-        raise InputFileError(f"{summary}: does not say in which axes the wrenches are given")
-    return Recording("report", directory, match.group(1), str(summary), values[:, 0],
-                     columns=header, table=values, frame=frame)
 
 
 # ------------------------------------------------------------------ states and wrenches
@@ -509,15 +362,35 @@ def _feet_mesh(model: Model, frames: Frames, k: int):
                                    "ground_force": force, "stance": stance})
 
 
-def scene_meshes(scene) -> dict:
+#: the largest mesh file read for a body by default: some million triangles, far more than a
+#: picture of a leg needs, and read into a few times as much memory
+DEFAULT_MAX_MESH_BYTES = 256 * 1024**2
+
+
+def max_mesh_bytes(given: int | None = None) -> int:
+    """The size limit of a body's mesh file: ``given``, else the environment variable
+    ``HEXAPOD_MAX_MESH_BYTES`` (``512M``, ``1G`` ...), else :data:`DEFAULT_MAX_MESH_BYTES`."""
+    if given is not None:
+        return int(given)
+    text = os.environ.get("HEXAPOD_MAX_MESH_BYTES", "").strip()
+    if not text:
+        return DEFAULT_MAX_MESH_BYTES
+    try:
+        return parse_size(text)
+    except ValueError as error:
+        raise HexapodError(f"environment variable HEXAPOD_MAX_MESH_BYTES: {error}") from None
+
+
+def scene_meshes(scene, limit: int | None = None) -> dict:
     """The meshes the scene's bodies name (their ``mesh`` key), by body name: read, moved from
-    the body's reference frame to its centre-of-mass frame and converted to metres."""
+    the body's reference frame to its centre-of-mass frame and converted to metres. ``limit``:
+    see :func:`read_mesh`."""
     base = Path(scene.source).parent if scene.source else Path.cwd()
     meshes = {}
     for name, body in scene.bodies.items():
         if body.mesh:
             try:
-                mesh = read_mesh(base / body.mesh)
+                mesh = read_mesh(base / body.mesh, limit)
             except InputFileError as error:
                 raise InputFileError(f"{scene.source or scene.name}: body '{name}', mesh: "
                                      f"{error}") from None
@@ -531,20 +404,48 @@ def scene_meshes(scene) -> dict:
     return meshes
 
 
-def read_mesh(path: str | Path):
-    """A mesh file (any format meshio reads), or an :class:`InputFileError`."""
+def _check_mesh_size(path: Path, limit: int) -> None:
+    """Refuse a mesh file above ``limit`` bytes, or a binary STL whose header declares more
+    triangles than the file holds, before meshio reads any of it."""
+    size = path.stat().st_size
+    if size > limit:
+        said = (size_text(size), size_text(limit))
+        if said[0] == said[1]:  # just above: in bytes
+            said = (f"{size} bytes", f"{limit} bytes")
+        raise InputFileError(f"{path}: {said[0]}, above the limit of {said[1]} for a body's "
+                             "mesh (raise it with --max-mesh-size or HEXAPOD_MAX_MESH_BYTES)")
+    if path.suffix.lower() == ".stl" and size >= 84:
+        with path.open("rb") as stream:
+            head = stream.read(84)
+        triangles = int.from_bytes(head[80:84], "little")
+        needed = 84 + 50 * triangles
+        if not head.lstrip().startswith(b"solid") and needed != size:
+            raise InputFileError(f"{path}: a binary STL whose header declares {triangles} "
+                                 f"triangles ({size_text(needed)}) in {size_text(size)}")
+
+
+def read_mesh(path: str | Path, limit: int | None = None):
+    """A mesh file (any format meshio reads), or an :class:`InputFileError`.
+
+    ``limit``: the largest file read, in bytes (default :func:`max_mesh_bytes`); its size is
+    checked first (and a binary STL's triangle count against it). What meshio prints about a
+    file it cannot read, and its ``sys.exit``, become the error's message.
+    """
     import meshio
 
     path = Path(path)
     if not path.is_file():
         raise InputFileError(f"{path}: no such mesh file")
+    _check_mesh_size(path, max_mesh_bytes(limit))
+    said = io.StringIO()
     try:
-        with warnings.catch_warnings():  # numpy's, on reading garbage as a binary file
-            warnings.simplefilter("ignore")
+        with warnings.catch_warnings(), contextlib.redirect_stdout(said), \
+                contextlib.redirect_stderr(said):
+            warnings.simplefilter("ignore")  # numpy's, on reading garbage as a binary file
             mesh = meshio.read(path)
-    except Exception as error:  # meshio raises many kinds for a bad file
-        raise InputFileError(f"{path}: cannot read the mesh ({type(error).__name__}: "
-                             f"{error})") from None
+    except (Exception, SystemExit) as error:  # meshio raises many kinds, or exits
+        what = " ".join(said.getvalue().split()) or f"{type(error).__name__}: {error}"
+        raise InputFileError(f"{path}: cannot read the mesh ({what[:300]})") from None
     if mesh.points.ndim != 2 or mesh.points.shape[1] not in (2, 3) or not mesh.cells:
         raise InputFileError(f"{path}: no points in 2-D or 3-D with cells")
     return mesh

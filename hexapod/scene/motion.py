@@ -9,7 +9,8 @@ joint becomes a driver whose law passes through the samples:
 * with ``qd`` only: the same, with ``qdd`` the derivative of a C2 spline through ``qd``;
 * with neither: a C2 (cubic, not-a-knot) interpolating spline, whose derivatives are used.
 
-The last two warn (:class:`MotionWarning`), since the derivatives are then estimated.
+The last two warn (:class:`MotionWarning`, one warning naming every such joint), since the
+derivatives are then estimated.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import csv
 import io
 import math
 import warnings
+from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -30,6 +32,9 @@ from hexapod.scene.element import quoted
 from hexapod.scene.joints import Prismatic
 from hexapod.scene.laws import Hermite, Law, Spline
 from hexapod.scene.scene import Scene
+
+#: problems of a motion file listed one by one; beyond, they are counted
+_SHOWN = 20
 
 
 class MotionWarning(UserWarning):
@@ -104,6 +109,15 @@ def read_motion(path: str | Path) -> Motion:
     return _motion(path, header, data, problems)
 
 
+def _error(path, problems: list[Problem]) -> ModelError:
+    """The error of a motion file; beyond :data:`_SHOWN` problems (a file of 100,000 wrong
+    columns, say), the first ones say enough and the others are counted."""
+    if len(problems) > _SHOWN:
+        problems = problems[:_SHOWN] + [Problem("motion", f"and {len(problems) - _SHOWN} more "
+                                                "problems of the same file", str(path))]
+    return ModelError(f"motion file {path}", problems)
+
+
 def _motion(path: Path, header: list[str], data: np.ndarray, problems: list) -> Motion:
     """Check the columns and times of a parsed table and build the motion."""
 
@@ -112,10 +126,11 @@ def _motion(path: Path, header: list[str], data: np.ndarray, problems: list) -> 
 
     if not header or header[0] != "t":
         problem("line 1", f"the first column must be 't', got {header[0]!r}")
-    for name in sorted({n for n in header if header.count(n) > 1}):
-        problem("line 1", f"column {name!r} appears twice")
+    counts = Counter(header)  # in linear time: a file may have 100,000 columns
+    for name in sorted(name for name, count in counts.items() if count > 1):
+        problem("line 1", f"column {name!r} appears {_times(counts[name])}")
     if problems:
-        raise ModelError(f"motion file {path}", problems)
+        raise _error(path, problems)
     times = data[:, 0]
     steps = np.diff(times)
     if np.any(steps <= 0):
@@ -137,7 +152,7 @@ def _motion(path: Path, header: list[str], data: np.ndarray, problems: list) -> 
     if not values:
         problem("line 1", "no joint columns")
     if problems:
-        raise ModelError(f"motion file {path}", problems)
+        raise _error(path, problems)
     return Motion(times, values, rates, accelerations, str(path))
 
 
@@ -174,15 +189,29 @@ def _law(motion: Motion, joint: str, factor: float) -> tuple[Law | None, str]:
     return (None, "; ".join(problems)) if problems else (law, "")
 
 
-def _estimated(motion: Motion, joint: str) -> str:
-    """The warning for derivatives of a joint that were estimated rather than given."""
-    if joint not in motion.rates:
-        return (f"{motion.source}: no 'qd:{joint}'/'qdd:{joint}' columns: the derivatives of "
-                f"'{joint}' come from a C2 interpolating spline")
-    if joint not in motion.accelerations:
-        return (f"{motion.source}: no 'qdd:{joint}' column: accelerations of '{joint}' are "
-                "the derivative of a C2 spline through its rates")
-    return ""
+def _times(count: int) -> str:
+    return "twice" if count == 2 else f"{count} times"
+
+
+def _listed(names: list[str], limit: int = 12) -> str:
+    """Names for a message, the first ``limit`` of them when there are many."""
+    shown = ", ".join(names[:limit])
+    return shown + (f" and {len(names) - limit} more" if len(names) > limit else "")
+
+
+def _estimated(motion: Motion) -> str:
+    """One warning for every joint whose derivatives are estimated rather than given ('' when
+    none is): which joints, which derivatives, and how to give them."""
+    both = [j for j in motion.joints if j not in motion.rates]
+    second = [j for j in motion.joints if j in motion.rates and j not in motion.accelerations]
+    parts = [f"{what} of {len(joints)} joint{'s' * (len(joints) > 1)} estimated by C2 "
+             f"interpolating splines (columns {absent} absent): {_listed(joints)}"
+             for what, absent, joints in (("velocities and accelerations", "qd: and qdd:", both),
+                                          ("accelerations", "qdd:", second)) if joints]
+    if not parts:
+        return ""
+    return (f"{motion.source or 'motion'}: {'; '.join(parts)} (give qd:<joint> and "
+            "qdd:<joint> for exact derivatives)")
 
 
 def _column_problems(scene: Scene, motion: Motion) -> list[tuple[str, str]]:
@@ -192,8 +221,7 @@ def _column_problems(scene: Scene, motion: Motion) -> list[tuple[str, str]]:
     out = []
     for joint in motion.joints:
         if joint not in joints:
-            out.append((joint, "is not a joint of the model (joints: " + ", ".join(joints)
-                        + ")"))
+            out.append((joint, f"is not a joint of the model (joints: {_listed(list(joints))})"))
         elif not joints[joint].drivable:
             out.append((joint, f"joint '{joint}' is {joints[joint].kind}: only revolute and "
                         "prismatic joints can be driven"))
@@ -216,14 +244,15 @@ def apply_motion(scene: Scene, motion: Motion) -> Scene:
 
     problems = [problem(joint, message) for joint, message in _column_problems(scene, motion)]
     laws = {}
+    joints = scene.joints
     if not problems:
         for joint in motion.joints:
-            factor = 1.0 / scene.unit if isinstance(scene.joints[joint], Prismatic) else 1.0
+            factor = 1.0 / scene.unit if isinstance(joints[joint], Prismatic) else 1.0
             laws[joint], trouble = _law(motion, joint, factor)
             if trouble:
                 problems.append(problem(joint, trouble))
     if problems:
-        raise ModelError(f"motion file {where}", problems)
+        raise _error(where, problems)
     # both files, so that an error of the driven model (it cannot be assembled) names them
     source = ", driven by ".join(s for s in (scene.source, motion.source) if s)
     out = Scene(scene.name, scene.dimension, scene.length_unit, scene.gravity,
@@ -232,6 +261,6 @@ def apply_motion(scene: Scene, motion: Motion) -> Scene:
     out._elements = list(scene.elements)
     for joint, law in laws.items():
         out.add(JointDriver(f"motion/{joint}", joint, law, source=f"{where}, column '{joint}'"))
-        if _estimated(motion, joint):
-            warnings.warn(_estimated(motion, joint), MotionWarning, stacklevel=2)
+    if _estimated(motion):
+        warnings.warn(_estimated(motion), MotionWarning, stacklevel=2)
     return out

@@ -167,15 +167,17 @@ class _UrdfReader:
             else:
                 links[name] = self.link(node)
         joints: list[_Joint] = []
+        named = set()  # the names of the joints read
         for node in root_node.findall("joint"):
             if not node.get("name"):
                 self.add("<joint>", "has no name")
                 continue
-            if node.get("name") in {j.name for j in joints}:
+            if node.get("name") in named:
                 self.add(_tag("joint", node.get("name")), "is defined twice")
             joint = self.joint(node, links)
             if joint is not None:
                 joints.append(joint)
+                named.add(joint.name)
         scene = Scene(root_node.get("name") or self.path.stem, 3, "m", source=str(self.path))
         if not links:
             self.add("<robot>", "has no links")
@@ -199,18 +201,22 @@ class _UrdfReader:
         # link frames at zero joint coordinates, and the body (or ground) each link belongs to
         pose = {root: Placement.identity()}
         owner = {root: (GROUND, Placement.identity())}  # (body, link frame in body frame)
-        pending = list(joints)
-        ordered = []
-        while pending:
-            ready = [j for j in pending if j.parent in pose]
-            if not ready:
-                self.add("<robot>", "some links are not connected to the root: "
-                         + ", ".join(sorted({j.child for j in pending})))
-                raise ModelError(f"URDF file {self.path}", self.problems)
-            for joint in ready:
-                pending.remove(joint)
+        below: dict[str, list[int]] = {}  # the joints hanging from each link, by file order
+        for k, joint in enumerate(joints):
+            below.setdefault(joint.parent, []).append(k)
+        ordered, done = [], set()
+        layer = below.get(root, [])  # link by link outwards from the root, each layer in file
+        while layer:  # order (in linear time: a chain of 20,000 links has 20,000 layers)
+            for k in layer:
+                joint = joints[k]
                 pose[joint.child] = pose[joint.parent] @ joint.origin
                 ordered.append(joint)
+            done.update(layer)
+            layer = sorted({k for j in layer for k in below.get(joints[j].child, [])} - done)
+        if len(ordered) < len(joints):
+            self.add("<robot>", "some links are not connected to the root: "
+                     + ", ".join(sorted({j.child for j in joints if j.child not in pose})))
+            raise ModelError(f"URDF file {self.path}", self.problems)
         merged = set()
         for joint in ordered:  # parents first: a merged link's owner is known before its children
             link = links[joint.child]
