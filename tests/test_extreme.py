@@ -4,6 +4,7 @@ must break, and the report of ``hexapod check``."""
 
 from __future__ import annotations
 
+import json
 from functools import partial
 
 import numpy as np
@@ -121,7 +122,12 @@ def test_check_command_on_a_scene_writes_its_report(tmp_path, capsys):
                  DEFAULT_METHOD, "rattle", "--out", str(out)])
     assert code == 0
     assert sorted(p.name for p in out.iterdir()) == [
-        "check.md", "condition.png", "diagnostics.json", "outcomes.png", "runs.csv"]
+        "check.md", "condition.png", "diagnostics.json", "outcomes.png", "runs.csv",
+        "units.json"]
+    units = json.loads((out / "units.json").read_text())  # the columns of runs.csv, in order
+    header = (out / "runs.csv").read_text().splitlines()[0].split(",")
+    assert list(units) == ["runs.csv"] and list(units["runs.csv"]) == header
+    assert units["runs.csv"]["cpu_time"] == {"unit": "s", "quantity": "CPU time of the time loop"}
     printed = capsys.readouterr().out
     assert "largest stable step" in printed and "What to use" in printed
 

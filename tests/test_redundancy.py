@@ -35,7 +35,8 @@ def test_four_bar_in_3d_names_three_redundant_rows():
 
 
 def _planar_view(model3, v3):
-    """Map spatial velocities (vx, vy, vz, wx', wy', wz') of z-axis rotations to (vx, vy, w)."""
+    """Map spatial velocities (vx, vy, vz, wx_body, wy_body, wz_body) of z-axis rotations to
+    (vx, vy, w)."""
     out = []
     for b in model3.bodies:
         x = v3[b.v]

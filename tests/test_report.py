@@ -30,7 +30,8 @@ from legs import front_leg_scene, walking_leg_scene
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ROOT / "data" / "scenes"
 MALFORMED = Path(__file__).resolve().parent / "data" / "malformed_scene.toml"
-FILES = {"inverse.csv", "summary.md", "forces.png", "torques.png", "efforts.png", "foot.png"}
+FIGURES = {"forces.png", "torques.png", "efforts.png", "foot.png"}
+FILES = {"inverse.csv", "units.json", "summary.md"} | FIGURES
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 
@@ -104,7 +105,7 @@ def test_report_summary_matches_the_csv(default_report):
                            summary.split("## Balance")[1], re.M)
     assert len(residuals) == len(model.bodies)
     assert max(float(r[2]) for r in residuals) < 1e-12
-    for name in sorted(FILES - {"inverse.csv", "summary.md"}):
+    for name in sorted(FIGURES):
         assert f"]({name})" in summary
 
 
@@ -116,7 +117,7 @@ def test_report_figures_are_drawn(default_report):
 
     cwd, _ = default_report
     out = cwd / f"{DEFAULT_SCENE}-report"
-    for name in sorted(FILES - {"inverse.csv", "summary.md"}):
+    for name in sorted(FIGURES):
         assert (out / name).read_bytes().startswith(PNG_SIGNATURE), name
         image = imread(out / name)[..., :3]
         height, width = image.shape[:2]

@@ -19,8 +19,9 @@ from hexapod.simulation.registry import INTEGRATORS
 
 ROOT = Path(__file__).resolve().parents[1]
 SEED002 = ROOT / "data" / "scenes" / "closed_pendulum_seed002.toml"
-FILES = {"results.csv", "results.npz", "stats.json"}
-STATISTICS = {"scene", "method", "options", "status", "message", "t_start", "t_end", "saved",
+FILES = {"results.csv", "results.npz", "units.json", "stats.json"}
+STATISTICS = {"scene", "method", "options", "status", "message", "reason", "t_start", "t_end",
+              "t_reached", "saved",
               "steps", "rejected", "rhs", "jacobians", "factorisations", "newton", "crossings",
               "wall_time_s", "cpu_time_s", "max_position_violation", "max_velocity_violation_per_s",
               "energy_conserved", "energy_drift"}
@@ -168,9 +169,9 @@ def test_a_failed_run_writes_the_states_up_to_it_and_says_why(tmp_path):
     assert len(errors) == 1 and errors[0].startswith("hexapod: error: dopri5-projection failed")
     stats = strict_json((tmp_path / "run" / "stats.json").read_text())
     # the reach is exhausted at 0.5 s; a step may end past it by the assembly tolerance
-    assert stats["status"] == "failed" and 0.49 < stats["t_end"] <= 0.5 + 1e-9
+    assert stats["status"] == "failed" and 0.49 < stats["t_reached"] <= 0.5 + 1e-9
     _, table = read_csv(tmp_path / "run" / "results.csv")
-    assert table[-1, 0] == stats["t_end"] and np.all(np.isfinite(table))
+    assert table[-1, 0] == stats["t_reached"] and np.all(np.isfinite(table))
 
 
 def test_bad_options_and_occupied_output_are_one_clear_error(tmp_path):

@@ -87,7 +87,7 @@ def test_bench_writes_its_table_and_figures(tmp_path, capsys):
                  "--budget", "0.2", "--data", str(DATA), "--out", str(out)])
     assert code == 0
     names = {p.name for p in out.iterdir()}
-    assert names == {"work_precision.md", "runs.csv", "work_precision.png",
+    assert names == {"work_precision.md", "runs.csv", "units.json", "work_precision.png",
                      "drift_seed002.png"}
     assert "| seed002 | dop853-projection |" in (out / "work_precision.md").read_text()
 

@@ -33,6 +33,7 @@ from hexapod.output.ground import (
     trunk_csv_text,
     trunk_motion,
 )
+from hexapod.output.recording import read_recording
 from hexapod.output.report import (
     RunInfo,
     _wrench_figures,
@@ -41,7 +42,7 @@ from hexapod.output.report import (
     summary_markdown,
     walking_headlines,
 )
-from hexapod.output.vtk import frames, read_recording, vtk_files
+from hexapod.output.vtk import frames, vtk_files
 from hexapod.scene.builtin import load_scene
 from hexapod.scene.contacts import POLICIES as ENGINE_POLICIES
 from hexapod.scene.drivers import JointDriver
@@ -174,8 +175,10 @@ def test_trunk_csv_is_the_free_trunk_pose_and_velocity(walking):
     assert [m.body for m in trunks] == ["trunk"]
     header, rows = parse_csv(trunk_csv_text(result.times, trunks))
     trunk = model.bodies[model.body_index["trunk"]]
-    coordinates = columns(header, rows, "trunk.")
-    assert header[1:8] == [f"trunk.{c}" for c in ("x", "y", "z", "e0", "e1", "e2", "e3")]
+    coordinates = columns(header, rows, "")[:, 1:]
+    assert header[1:8] == [f"q:trunk.{c}" for c in ("x", "y", "z", "e0", "e1", "e2", "e3")]
+    assert header[8:11] == [f"angle:trunk.{c}" for c in ("roll", "pitch", "yaw")]
+    assert header[11:] == [f"v:trunk.{c}" for c in ("vx", "vy", "vz", "wx", "wy", "wz")]
     assert np.array_equal(coordinates[:, :7], result.q[:, trunk.q])
     assert np.array_equal(coordinates[:, 10:13], result.v[:, trunk.v][:, :3])
     # level walking straight ahead at the gait's speed: the stride's length over the period

@@ -21,11 +21,16 @@ import numpy as np
 
 from hexapod.algorithms.dynamics import forward_dynamics
 from hexapod.algorithms.kinematics import consistent_state
-from hexapod.benchmarks.stable_steps import StabilityRow, stability_figure, stability_table
+from hexapod.benchmarks.stable_steps import (
+    STABILITY_COLUMNS,
+    StabilityRow,
+    stability_figure,
+    stability_table,
+)
 from hexapod.model.model import Model
 from hexapod.simulation.loop import simulate
 from hexapod.simulation.registry import DEFAULT_METHOD, INTEGRATORS
-from hexapod.simulation.results import SimulationResult
+from hexapod.simulation.results import Columns, SimulationResult, units_json
 
 #: where no run of a case is accurate, its adaptive methods run again at tolerances this much
 #: smaller (a long horizon or a motion near an unstable equilibrium needs them)
@@ -37,6 +42,10 @@ ACCURACY = 1e-3
 DRIFT_LIMIT = 1e-6
 #: saved states at which the condition number is evaluated along a run
 CONDITION_SAMPLES = 25
+#: CPU seconds after which a run is stopped (reported as stopped by the budget): the whole
+#: suite, and ``--quick``, whose runs are short enough to need no more where they work
+BUDGET = 60.0
+QUICK_BUDGET = 5.0
 
 
 # ------------------------------------------------------------------ every method on every case
@@ -66,12 +75,13 @@ class CaseRun:
     category: str
     method: str
     setting: str
-    status: str  # "finished", "failed", "diverged"
+    status: str  # "finished", "failed", "diverged", "stopped" (by the CPU budget)
     reason: str
     steps: int
     rejected: int
     crossings: int  # singular configurations crossed with nearly dependent rows left out
-    cpu_time: float
+    cpu_time: float  # of the time loop, s
+    wall_time: float  # of the time loop, s
     position_drift: float
     velocity_drift: float
     energy_error: float | None
@@ -104,7 +114,7 @@ def _from_mechanism(case, step_count: int | None = None, rtol: float = 1e-6) -> 
                      step=step, rtol=rtol, atol=rtol * 1e-2 * case.length, notes=case.notes)
 
 
-def _standing_case(scene, t_end: float) -> SuiteCase:
+def _standing_case(scene, t_end: float, step: float | None = None) -> SuiteCase:
     """The hexapod standing on its feet: its exact motion is rest (the pose is an equilibrium:
     gravity is vertical and the feet carry it); the error is the largest displacement of any
     body's centre of mass relative to the legs' size."""
@@ -121,20 +131,23 @@ def _standing_case(scene, t_end: float) -> SuiteCase:
         return float(moved / model.characteristic_length)
 
     return SuiteCase(scene.name, "redundant", "six feet on the ground, every joint held: "
-                     "the foot forces are statically indeterminate", model, t_end, error)
+                     "the foot forces are statically indeterminate", model, t_end, error,
+                     step=step)
 
 
 def build_suite(quick: bool = False, standing=None) -> list[SuiteCase]:
     """The extreme cases (:mod:`hexapod.benchmarks`), and the standing hexapod when its
-    scene is given. ``quick``: shorter runs, one stiffness in three (for the tests)."""
+    scene is given. ``quick``: the same kinds of case with shorter horizons and fewer fixed
+    steps (at the same step size where that matters), one stiffness in two (a smoke test of
+    about a minute, and the cases of the tests)."""
     import hexapod.benchmarks as m
 
     if quick:
         chosen = [(m.stiff_slider(1e3), None), (m.stiff_slider(1e9, t_end=0.02), None),
                   (m.flyball_governor(t_end=1.0), None), (m.n_four_bar(t_end=2.0), None),
-                  (m.bricard(t_end=2.0), None), (m.four_bar_dead_points(), None),
+                  (m.bricard(t_end=1.0), 500), (m.four_bar_dead_points(), None),
                   (m.mass_ratio(t_end=0.2), None), (m.stretched_leg(), None),
-                  (m.long_pendulum(periods=20), 2000), (m.large_step_pendulum(periods=2), 20)]
+                  (m.long_pendulum(periods=10), 1000), (m.large_step_pendulum(periods=2), 20)]
     else:
         chosen = [(m.stiff_slider(k), None) for k in (1e3, 1e5, 1e7, 1e9)] + [
             (m.stiff_spring_pendulum(), None), (m.flyball_governor(), None),
@@ -145,8 +158,9 @@ def build_suite(quick: bool = False, standing=None) -> list[SuiteCase]:
             # the long horizon: 1e5 fixed steps; very large steps: 10 per period
             (m.long_pendulum(), 100_000), (m.large_step_pendulum(), 100)]
     cases = [_from_mechanism(case, steps) for case, steps in chosen]
-    if standing is not None:
-        cases.append(_standing_case(standing, 0.5 if quick else 2.0))
+    if standing is not None:  # quick: 100 steps of the full suite's 2e-3 s
+        cases.append(_standing_case(standing, 0.2, 2e-3) if quick
+                     else _standing_case(standing, 2.0))
     return cases
 
 
@@ -205,16 +219,18 @@ def _diverged(result: SimulationResult) -> str:
     return ""
 
 
-def run_case(case: SuiteCase, method: str, *, budget: float = 60.0,
+def run_case(case: SuiteCase, method: str, *, budget: float = BUDGET,
              tighter: float = 1.0) -> CaseRun:
     """One method on one case, at the case's setting for it (an adaptive method's tolerances
-    multiplied by ``tighter``)."""
+    multiplied by ``tighter``); stopped after ``budget`` CPU seconds of its time loop."""
     setting = _setting(case, method)
     if "rtol" in setting:
         setting = {name: value * tighter for name, value in setting.items()}
     result = simulate(case.model, case.t_end, method=method, forces=False, cpu_budget=budget,
                       **setting)
     status, reason = result.status, result.message
+    if status == "failed" and "CPU budget" in reason:  # the loop's words when it stops a run
+        status = "stopped"
     if result.success:
         why = _diverged(result)
         if why:
@@ -235,18 +251,20 @@ def run_case(case: SuiteCase, method: str, *, budget: float = 60.0,
                     and (conserved is None or conserved <= ACCURACY))
     return CaseRun(case.name, case.category, method, _label(setting), status, reason,
                    result.counters.steps, result.counters.rejected,
-                   result.counters.crossings, result.cpu_time,
+                   result.counters.crossings, result.cpu_time, result.wall_time,
                    result.max_position_violation, result.max_velocity_violation, conserved,
                    error, condition, sigma, redundant, accurate,
                    tighter=tighter,
                    result=result if method == DEFAULT_METHOD else None)
 
 
-def run_suite(cases: list[SuiteCase], methods=None, *, budget: float = 60.0,
+def run_suite(cases: list[SuiteCase], methods=None, *, budget: float = BUDGET,
               progress: Callable[[str], None] | None = None) -> list[CaseRun]:
     """Every method (default: the registry) on every case. Where no run is accurate, the
     adaptive methods that finished run again with tolerances ``RETRY_TIGHTER`` times smaller,
-    so that the recommendation names a setting that works when one does."""
+    so that the recommendation names a setting that works when one does. ``progress`` hears of
+    each run as it starts and ends (its time loop's wall and CPU time, and the whole run's wall
+    time with the error and condition numbers evaluated after it)."""
     runs = []
 
     def run(case, method, tighter=1.0):
@@ -256,9 +274,11 @@ def run_suite(cases: list[SuiteCase], methods=None, *, budget: float = 60.0,
         runs.append(run_case(case, method, budget=budget, tighter=tighter))
         if progress:
             done = runs[-1]
-            progress(f"{case.name}: {method} ({done.setting}) {done.status}"
-                     f"{' (accurate)' if done.accurate else ''} in "
-                     f"{time.perf_counter() - started:.1f} s")
+            outcome = ("stopped by the CPU budget" if done.status == "stopped" else done.status)
+            progress(f"{case.name}: {method} ({done.setting}) {outcome}"
+                     f"{' (accurate)' if done.accurate else ''}: time loop "
+                     f"{done.wall_time:.1f} s wall, {done.cpu_time:.1f} s CPU "
+                     f"({time.perf_counter() - started:.1f} s wall in all)")
 
     for case in cases:
         first = len(runs)
@@ -300,21 +320,33 @@ def _number(x, digits: int = 2) -> str:
 def suite_table(runs: list[CaseRun]) -> str:
     """Markdown: one row per run, the recommendation after each case."""
     lines = ["| case | method | setting | outcome | steps | rejected | crossings | CPU (s) | "
-             "drift | energy error | error | max cond | min sigma |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "wall (s) | drift | energy error | error | max cond | min sigma |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for case in dict.fromkeys(r.case for r in runs):
         mine = [r for r in runs if r.case == case]
         for r in mine:
             outcome = r.status + (", accurate" if r.accurate else "")
-            if r.status != "finished":
+            if r.status == "stopped":  # the reason says by what: "stopped by the CPU budget"
+                outcome = r.reason.split(": ", 1)[-1][:90]
+            elif r.status != "finished":
                 outcome += ": " + r.reason.split(": ", 1)[-1][:90]
             lines.append(
                 f"| {case} | {r.method} | {r.setting} | {outcome} | {r.steps} | {r.rejected} | "
-                f"{r.crossings} | {r.cpu_time:.3g} | {_number(r.position_drift)} | "
+                f"{r.crossings} | {r.cpu_time:.3g} | {r.wall_time:.3g} | "
+                f"{_number(r.position_drift)} | "
                 f"{_number(r.energy_error)} | "
                 f"{_number(r.error)} | {_number(r.condition_max)} | {_number(r.sigma_min)} |")
-        lines.append(f"| **{case}** | **use** | | {recommend(mine)} | | | | | | | | | |")
+        lines.append(f"| **{case}** | **use** | | {recommend(mine)} | | | | | | | | | | |")
     return "\n".join(lines)
+
+
+def time_total(runs: list[CaseRun]) -> str:
+    """The time of every run's time loop added up, CPU and wall, and the runs the budget
+    stopped."""
+    stopped = sum(r.status == "stopped" for r in runs)
+    return (f"{len(runs)} runs: {sum(r.cpu_time for r in runs):.1f} s CPU, "
+            f"{sum(r.wall_time for r in runs):.1f} s wall in their time loops"
+            + (f"; {stopped} stopped by the CPU budget" if stopped else ""))
 
 
 def recommendations(runs: list[CaseRun], cases: list[SuiteCase]) -> str:
@@ -331,14 +363,45 @@ def recommendations(runs: list[CaseRun], cases: list[SuiteCase]) -> str:
     return "\n".join(lines)
 
 
+#: ``runs.csv``: one row per run, a column per field of :class:`CaseRun` (unit, meaning).
+RUN_COLUMNS: Columns = {
+    "case": (None, "the case"), "category": (None, "what kind of case"),
+    "method": (None, "the integrator"), "setting": (None, "its tolerances or step"),
+    "status": (None, "finished, failed, diverged or stopped (by the CPU budget)"),
+    "reason": (None, "why it stopped"),
+    "steps": ("1", "accepted steps"), "rejected": ("1", "rejected steps"),
+    "crossings": ("1", "singular poses crossed"), "cpu_time": ("s", "CPU time of the time loop"),
+    "wall_time": ("s", "wall-clock time of the time loop"),
+    "position_drift": ("1", "largest scaled constraint residual |phi_i| / s_i"),
+    "velocity_drift": ("1/s", "largest scaled velocity residual |Phi_v v - nu|_i / s_i"),
+    "energy_error": ("1", "largest energy error relative to the largest kinetic energy"),
+    "error": ("1", "relative error against the case's reference"),
+    "condition_max": ("1", "largest condition number along the run (equilibrated)"),
+    "sigma_min": ("1", "smallest singular value of the equilibrated Phi_v along the run"),
+    "redundant_rows": (None, "redundant constraint rows met, space-separated"),
+    "accurate": (None, "True or False: within the accuracy of the check"),
+    "tighter": ("1", "factor on the case's tolerances (below 1: a retry)"),
+}
+
+
 def runs_csv(runs: list[CaseRun]) -> str:
     rows = [{**r.as_dict(), "redundant_rows": " ".join(r.redundant_rows)} for r in runs]
     return _rows_csv(rows) if rows else ""
 
 
+def units_json_text(runs: list[CaseRun], stability: list[StabilityRow]) -> str:
+    """``units.json`` of ``hexapod check``: every column of ``runs.csv`` (and of
+    ``stability.csv``) with its unit and meaning."""
+    fields = [n for n in CaseRun.__dataclass_fields__ if n != "result"]
+    tables = {"runs.csv": {n: RUN_COLUMNS[n] for n in fields} if runs else {}}
+    if stability:
+        tables["stability.csv"] = STABILITY_COLUMNS
+    return units_json(tables)
+
+
 def outcome_figure(runs: list[CaseRun]):
     """Cases against methods: green accurate, yellow finished but inaccurate, red failed or
-    diverged; each cell gives the CPU time."""
+    diverged, grey stopped by the CPU budget; each cell gives the CPU time."""
     from matplotlib.colors import ListedColormap
     from matplotlib.figure import Figure
 
@@ -353,15 +416,16 @@ def outcome_figure(runs: list[CaseRun]):
     axis = figure.subplots()
     for r in runs:
         i, j = cases.index(r.case), methods.index(column(r))
-        grid[i, j] = 2 if r.accurate else (1 if r.status == "finished" else 0)
+        grid[i, j] = (2 if r.accurate else 1 if r.status == "finished"
+                      else 3 if r.status == "stopped" else 0)
         axis.text(j, i, f"{r.cpu_time:.2g} s" if r.status == "finished" else r.status,
                   ha="center", va="center", fontsize=7)
-    axis.imshow(grid, cmap=ListedColormap(["#f4a6a6", "#f6e3a1", "#b7e4b0"]), vmin=0, vmax=2,
-                aspect="auto")
+    axis.imshow(grid, cmap=ListedColormap(["#f4a6a6", "#f6e3a1", "#b7e4b0", "#d9d9d9"]),
+                vmin=0, vmax=3, aspect="auto")
     axis.set_xticks(range(len(methods)), methods, rotation=30, ha="right", fontsize=8)
     axis.set_yticks(range(len(cases)), cases, fontsize=8)
-    axis.set_title("green: accurate; yellow: finished, not accurate; red: failed or diverged "
-                   "(CPU time in the cell)", fontsize=9)
+    axis.set_title("green: accurate; yellow: finished, not accurate; red: failed or diverged; "
+                   "grey: stopped by the CPU budget (CPU time in the cell)", fontsize=9)
     return figure
 
 
@@ -425,13 +489,14 @@ def diagnosis_table(diagnoses: dict) -> str:
 def report_files(cases: list[SuiteCase], runs: list[CaseRun], diagnoses: dict,
                  stability: list[StabilityRow], command: str) -> dict[str, bytes]:
     """The files of ``hexapod check``: ``check.md``, ``runs.csv``, ``diagnostics.json``,
-    ``stability.csv`` and the figures (written together, atomically, by the caller)."""
+    ``stability.csv``, ``units.json`` and the figures (written together, atomically, by the
+    caller)."""
     import json
 
     from hexapod.output.figures import png_bytes
 
-    text = ["# Extreme-case check", "", f"Command: `{command}`. CPU time of each run's time "
-            "loop. An accurate run is within "
+    text = ["# Extreme-case check", "", f"Command: `{command}`. CPU and wall time of each "
+            "run's time loop. An accurate run is within "
             f"{ACCURACY:g} of the case's independent reference (relative), or, without one, "
             f"holds the constraints to {DRIFT_LIMIT:g} and the energy to {ACCURACY:g}.", "",
             "## What to use", "", recommendations(runs, cases), "",
@@ -439,11 +504,13 @@ def report_files(cases: list[SuiteCase], runs: list[CaseRun], diagnoses: dict,
     if stability:
         text += ["## Largest stable step of the explicit methods on stiff springs", "",
                  stability_table(stability), ""]
-    text += ["## Every method on every case", "", suite_table(runs), ""]
+    text += ["## Every method on every case", "", time_total(runs) + ".", "",
+             suite_table(runs), ""]
     files = {"check.md": "\n".join(text).encode(), "runs.csv": runs_csv(runs).encode(),
              "diagnostics.json": json.dumps(
                  {name: _finite(d.as_dict()) for name, d in diagnoses.items()},
                  indent=1).encode(),
+             "units.json": units_json_text(runs, stability).encode(),
              "outcomes.png": png_bytes(outcome_figure(runs))}
     if stability:
         files["stability.csv"] = _rows_csv([r.as_dict() for r in stability]).encode()

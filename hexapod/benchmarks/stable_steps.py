@@ -41,6 +41,15 @@ class StabilityRow:
         return {**asdict(self), "ratio": self.ratio}
 
 
+#: ``stability.csv``: one row per :class:`StabilityRow` (``as_dict``), column -> (unit, meaning).
+STABILITY_COLUMNS = {"stiffness": ("N/m", "stiffness of the spring"),
+                     "method": (None, "the explicit integrator"),
+                     "predicted": ("s", "largest stable step predicted"),
+                     "observed": ("s", "largest stable step observed"),
+                     "how": (None, "bisection (fixed step) or median step (adaptive)"),
+                     "ratio": ("1", "observed over predicted")}
+
+
 def _energy(model: Model, q: np.ndarray, v: np.ndarray) -> float:
     kinetic, potential = model.energy(q, v)
     return float(kinetic) + float(potential)

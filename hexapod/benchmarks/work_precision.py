@@ -29,6 +29,8 @@ in a row (a coarse step may be unstable where a finer one is not).
 
 from __future__ import annotations
 
+import csv
+import io
 import json
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -46,6 +48,7 @@ from hexapod.scene import Scene
 from hexapod.scene.reader import read_scene
 from hexapod.simulation.loop import simulate
 from hexapod.simulation.registry import INTEGRATORS
+from hexapod.simulation.results import units_json
 
 #: the angles of Andrews' mechanism from the bodies' absolute angles, in the Test Set's order
 #: (beta, Theta, gamma, Phi, delta, Omega, epsilon)
@@ -91,6 +94,35 @@ class Run:
 
     def as_dict(self) -> dict:
         return dict(self.__dict__)
+
+
+#: ``runs.csv`` of ``hexapod bench``: a column per field of :class:`Run` (unit, meaning).
+RUN_COLUMNS = {
+    "problem": (None, "the problem"), "method": (None, "the integrator"),
+    "setting": (None, "its tolerance (rtol=...) or step (h=...)"),
+    "status": (None, "finished or failed"), "cpu_time": ("s", "CPU time of the time loop"),
+    "steps": ("1", "accepted steps"), "rhs": ("1", "right-hand side evaluations"),
+    "error": ("1", "relative error in positions against the reference"),
+    "max_position_violation": ("1", "largest scaled constraint residual |phi_i| / s_i"),
+    "max_velocity_violation": ("1/s", "largest scaled velocity residual"),
+    "energy_drift": ("1", "energy drift relative to the largest kinetic energy (empty when "
+                     "energy is not conserved)"),
+    "message": (None, "why a run failed"),
+}
+
+
+def runs_csv_text(runs: list[Run]) -> str:
+    """``runs.csv``: one row per run, the columns of :data:`RUN_COLUMNS`."""
+    buffer = io.StringIO()
+    writer = csv.DictWriter(buffer, fieldnames=list(RUN_COLUMNS), lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(r.as_dict() for r in runs)
+    return buffer.getvalue()
+
+
+def units_json_text() -> str:
+    """``units.json`` of ``hexapod bench``: every column of ``runs.csv``, unit and meaning."""
+    return units_json({"runs.csv": RUN_COLUMNS})
 
 
 # ------------------------------------------------------------------ the problems

@@ -19,6 +19,7 @@ from hexapod.algorithms.ground import VIOLATION_TOL, robot_weight
 from hexapod.algorithms.inverse import InverseResult
 from hexapod.algorithms.kinematics import body_poses
 from hexapod.model.model import Model
+from hexapod.simulation.results import COORDINATE_UNITS, VELOCITY_UNITS, Columns
 from hexapod.spatial import rpy_from_rotation
 
 #: The suffix of a contact's name that its leg's name leaves out.
@@ -34,11 +35,12 @@ def leg_name(contact: str) -> str:
     return contact[:-len(CONTACT_SUFFIX)] if contact.endswith(CONTACT_SUFFIX) else contact
 
 
-def ground_columns(model: Model) -> list[str]:
+def ground_columns(model: Model) -> Columns:
     """``GRx:<leg>``, ``GRy:<leg>``, ``GRz:<leg>`` per contact, in model order (none without
-    contacts)."""
-    return [f"{c}:{leg_name(contact.name)}" for contact in model.contacts
-            for c in GROUND_COMPONENTS]
+    contacts), with their unit and meaning."""
+    return {f"{c}:{leg_name(contact.name)}": ("N", f"the ground's force on the foot, world "
+                                                   f"{c[-1]} (zero in swing)")
+            for contact in model.contacts for c in GROUND_COMPONENTS}
 
 
 @dataclass(frozen=True)
@@ -98,12 +100,25 @@ def foot_loads(model: Model, result: InverseResult) -> FootLoads:
                      result.policy or model.ground.policy, weight)
 
 
+#: The columns of ``ground.csv`` per foot: quantity -> (unit, meaning).
+GROUND_CSV_QUANTITIES = {
+    "Fn": ("N", "normal force of the ground on the foot (GRz)"),
+    "Ft": ("N", "tangential force of the ground on the foot, |(GRx, GRy)|"),
+    "ratio": ("1", "friction ratio |F_t| / (mu F_n); nan where the foot carries nothing"),
+    "status": (None, "the friction policy's status: swing, ok, slip or pull"),
+}
+
+
+def ground_csv_columns(legs: tuple[str, ...]) -> Columns:
+    """The columns of ``ground.csv`` in order, each with its unit and meaning."""
+    return {"t": ("s", "time"), **{f"{c}:{leg}": described for leg in legs
+                                   for c, described in GROUND_CSV_QUANTITIES.items()}}
+
+
 def ground_csv_text(loads: FootLoads) -> str:
     """``ground.csv``: ``t``, then per foot ``Fn:<leg>``, ``Ft:<leg>`` (N), ``ratio:<leg>``
     (``nan`` where the foot carries nothing) and ``status:<leg>``."""
-    header = ["t"] + [f"{c}:{leg}" for leg in loads.legs
-                      for c in ("Fn", "Ft", "ratio", "status")]
-    lines = [",".join(header)]
+    lines = [",".join(ground_csv_columns(loads.legs))]
     for k, t in enumerate(loads.times):
         cells = [f"{t:.17g}"]
         for c in range(len(loads.legs)):
@@ -224,14 +239,30 @@ def trunk_motion(model: Model, q: np.ndarray, v: np.ndarray) -> list[TrunkMotion
     return out
 
 
-TRUNK_COLUMNS = ("x", "y", "z", "e0", "e1", "e2", "e3", "roll", "pitch", "yaw",
-                 "vx", "vy", "vz", "wx", "wy", "wz")
+#: The columns of ``trunk.csv`` per free body, in order: (quantity, component) -> (unit,
+#: meaning). Positions and velocities are named as in ``results.csv`` (``q:trunk.x``,
+#: ``v:trunk.vx``); the angular velocity is in world axes here (``v:trunk.wx``), in body axes
+#: there (``v:trunk.wx_body``).
+TRUNK_COLUMNS = {
+    **{("q", c): COORDINATE_UNITS[c] for c in ("x", "y", "z", "e0", "e1", "e2", "e3")},
+    **{("angle", c): ("rad", f"{c} angle of the body, R = Rz(yaw) Ry(pitch) Rx(roll)")
+       for c in ("roll", "pitch", "yaw")},
+    **{("v", f"v{c}"): VELOCITY_UNITS[f"v{c}"] for c in "xyz"},
+    **{("v", f"w{c}"): ("rad/s", f"angular velocity, world {c} axis") for c in "xyz"},
+}
+
+
+def trunk_csv_columns(bodies: list[str]) -> Columns:
+    """The columns of ``trunk.csv`` in order, each with its unit and meaning."""
+    return {"t": ("s", "time"), **{f"{quantity}:{body}.{c}": described for body in bodies
+                                   for (quantity, c), described in TRUNK_COLUMNS.items()}}
 
 
 def trunk_csv_text(times: np.ndarray, trunks: list[TrunkMotion]) -> str:
-    """``trunk.csv``: ``t``, then per free body ``<body>.x .. z`` (m), ``e0 .. e3``, ``roll,
-    pitch, yaw`` (rad), ``vx .. vz`` (m/s, world) and ``wx .. wz`` (rad/s, world axes)."""
-    header = ["t"] + [f"{m.body}.{c}" for m in trunks for c in TRUNK_COLUMNS]
+    """``trunk.csv``: ``t``, then per free body ``q:<body>.x .. z`` (m), ``q:<body>.e0 .. e3``,
+    ``angle:<body>.roll, pitch, yaw`` (rad), ``v:<body>.vx .. vz`` (m/s, world) and
+    ``v:<body>.wx .. wz`` (rad/s, world axes)."""
+    header = list(trunk_csv_columns([m.body for m in trunks]))
     table = np.hstack([times[:, None]] + [np.hstack([m.position, m.euler_parameters, m.angles,
                                                       m.velocity, m.angular_velocity])
                                           for m in trunks])

@@ -9,15 +9,20 @@ other joints without an axis have the force and moment columns without ``tau``. 
 foot contacts (a walking robot) has, after the joints' columns, ``GRx:<leg>``, ``GRy:<leg>``,
 ``GRz:<leg>`` per contact: the ground's force on the foot in world axes (N), zero in swing,
 ``<leg>`` the contact's name without its ``/ground`` suffix. Numbers are written with 17
-significant digits, so they read back exactly.
+significant digits, so they read back exactly. Each column's unit and meaning
+(:func:`inverse_column_units`) are written beside the CSV: ``OUT.units.json`` for ``hexapod
+inverse``, ``units.json`` in the report's directory (``docs/outputs.md``).
 """
 
 from __future__ import annotations
 
+import contextlib
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
+from hexapod._support.files import write_atomically
 from hexapod.algorithms.balance import BodyBalance
 from hexapod.algorithms.inverse import InverseResult
 from hexapod.algorithms.liaison import wrenches_from_multipliers
@@ -39,24 +44,26 @@ from hexapod.output.ground import (
     foot_events,
     foot_loads,
     ground_columns,
+    ground_csv_columns,
     ground_csv_text,
     joint_type,
     leg_groups,
+    trunk_csv_columns,
     trunk_csv_text,
     trunk_motion,
 )
+from hexapod.simulation.results import Columns, units_json, wrench_columns
 
-COMPONENTS = ("Fx", "Fy", "Fz", "Tx", "Ty", "Tz")
+
+def inverse_column_units(model: Model, frame: str = "joint") -> Columns:
+    """The columns of the inverse-dynamics CSV in order, each with its unit and meaning (the
+    wrenches in the child's joint frame, or world axes for ``frame="world"``)."""
+    return {"t": ("s", "time"), **wrench_columns(model, frame), **ground_columns(model)}
 
 
 def inverse_columns(model: Model) -> list[str]:
     """The header of the inverse-dynamics CSV."""
-    names = ["t"]
-    for joint in model.joints:
-        if joint.kind in ("revolute", "prismatic"):
-            names.append(f"tau:{joint.name}")
-        names += [f"{c}:{joint.name}" for c in COMPONENTS]
-    return names + ground_columns(model)
+    return list(inverse_column_units(model))
 
 
 def inverse_table(model: Model, result: InverseResult) -> np.ndarray:
@@ -83,6 +90,27 @@ def inverse_csv_text(model: Model, result: InverseResult) -> str:
     line = ",".join(["%.17g"] * rows.shape[1])
     return ",".join(inverse_columns(model)) + "\n" + "".join(
         line % tuple(row) + "\n" for row in rows)
+
+
+def units_path(csv_path: str | Path) -> Path:
+    """Where the units of a CSV written alone go: ``OUT.units.json`` beside ``OUT.csv``."""
+    return Path(csv_path).with_suffix(".units.json")
+
+
+def write_inverse_files(out: str | Path, model: Model, result: InverseResult) -> None:
+    """Write ``hexapod inverse --out OUT.csv``: the units sidecar ``OUT.units.json`` first, so
+    that the CSV never stands without it, then the CSV, each atomically; a CSV that cannot be
+    written (an interruption, a full disk) takes its sidecar with it."""
+    text = inverse_csv_text(model, result)
+    sidecar = units_path(out)
+    write_atomically(sidecar, units_json({Path(out).name: inverse_column_units(model,
+                                                                             result.frame)}))
+    try:
+        write_atomically(out, text)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            sidecar.unlink()
+        raise
 
 
 def agreement(columns: list[str], table: np.ndarray, reference_columns: list[str],
@@ -518,7 +546,8 @@ def _ground_figures(model: Model, loads: FootLoads, scene: str) -> dict:
 
 def report_files(model: Model, result: InverseResult, balance: BodyBalance, run: RunInfo,
                  feet: dict[str, np.ndarray]) -> dict[str, bytes]:
-    """Every file of the report, in memory: ``inverse.csv``, ``summary.md`` and the figures
+    """Every file of the report, in memory: ``inverse.csv``, ``units.json`` (the unit and
+    meaning of every column of every CSV), ``summary.md`` and the figures
     (``forces.png``, ``torques.png``; ``efforts.png`` when there are joint drivers;
     ``foot.png`` when there are ``feet``, paths (N, 3) by body). For a robot (joints named
     ``<leg>/...`` in two legs or more) the force, moment and effort figures are drawn per leg
@@ -534,14 +563,18 @@ def report_files(model: Model, result: InverseResult, balance: BodyBalance, run:
         figures["foot.png"] = trajectory_figure(
             t, feet, f"{run.scene}: {'foot' if len(feet) == 1 else 'feet'} (world frame)")
     files = {"inverse.csv": inverse_csv_text(model, result).encode()}
+    units = {"inverse.csv": inverse_column_units(model, result.frame)}
     loads = trunks = None
     if model.contacts:
         loads = foot_loads(model, result)
         trunks = trunk_motion(model, result.q, result.v)
         figures.update(_ground_figures(model, loads, run.scene))
         files["ground.csv"] = ground_csv_text(loads).encode()
+        units["ground.csv"] = ground_csv_columns(loads.legs)
         if trunks:
             files["trunk.csv"] = trunk_csv_text(t, trunks).encode()
+            units["trunk.csv"] = trunk_csv_columns([m.body for m in trunks])
+    files["units.json"] = units_json(units).encode()
     files["summary.md"] = summary_markdown(model, result, balance, run, drivers,
                                            list(figures), loads, trunks).encode()
     for name, figure in figures.items():

@@ -4,7 +4,7 @@ that an interrupted study resumes where it stopped.
 
 The output folder holds ``study.json`` (what was run), ``cases/`` (one JSON file per finished
 case, named by the case's key), and when the study ends ``study.csv``, ``columns.csv``,
-``study.npz``, ``timings.csv`` and ``figures/``; every file is written atomically.
+``study.npz``, ``timings.csv``, ``units.json`` and ``figures/``; every file is written atomically.
 """
 
 from __future__ import annotations
@@ -19,10 +19,11 @@ from hexapod._support.files import write_atomically
 from hexapod.errors import InputFileError
 from hexapod.sweeps.cases import StudyError, check_study, run_case
 from hexapod.sweeps.spec import Study, read_study, study_from_document
-from hexapod.sweeps.table import SweepTable
+from hexapod.sweeps.table import SweepTable, timings_csv_text
 
 #: The files a study writes in its output folder (anything else there is not ours).
-OUTPUT_FILES = ("study.json", "study.csv", "columns.csv", "study.npz", "timings.csv")
+OUTPUT_FILES = ("study.json", "study.csv", "columns.csv", "study.npz", "timings.csv",
+                "units.json")
 OUTPUT_FOLDERS = ("cases", "figures")
 #: Seconds to wait for a scheduler named by address.
 CONNECT_TIMEOUT = 10
@@ -284,10 +285,8 @@ def _write_outputs(folder: Path, study: Study, table: SweepTable, rows: list[dic
     write_atomically(folder / "study.csv", table.csv_text())
     write_atomically(folder / "columns.csv", table.columns_csv_text())
     write_atomically(folder / "study.npz", table.npz_bytes())
-    timings = ["case,cpu_s,wall_s,worker"] + [
-        f"{r['case']},{r.get('cpu_s', 0.0)!r},{r.get('wall_s', 0.0)!r},{r.get('worker', '')}"
-        for r in sorted(rows, key=lambda r: r["case"])]
-    write_atomically(folder / "timings.csv", "\n".join(timings) + "\n")
+    write_atomically(folder / "timings.csv", timings_csv_text(rows))
+    write_atomically(folder / "units.json", table.units_json())
     from hexapod.output.figures import png_bytes
     from hexapod.output.sweep_figures import sweep_figures
 

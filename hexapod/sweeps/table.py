@@ -6,6 +6,11 @@ and element (first appearance). The table is a function of the cases' results al
 case: it does not depend on the number of workers or the order in which cases finished. What a
 run cost (CPU and wall seconds, the worker) is kept beside it (``timings.csv``), since it
 differs from run to run.
+
+Units: ``columns.csv`` and ``study.npz`` give each column's unit as the study knows it (empty
+for text and pure numbers); ``units.json`` (:meth:`SweepTable.units_json`) states them for
+every file of the study as every command's sidecar does (``docs/outputs.md``): ``1`` for a pure
+number, null for text.
 """
 
 from __future__ import annotations
@@ -16,11 +21,23 @@ import math
 
 import numpy as np
 
+from hexapod.simulation.results import Columns, units_json
 from hexapod.sweeps.metrics import FAMILIES
 from hexapod.sweeps.spec import parameter_unit
 
 #: Columns that are not results: the case and its outcome.
 CASE_COLUMNS = ("case", "status", "message")
+#: ``timings.csv``: what each case cost, column -> (unit, meaning).
+TIMINGS_COLUMNS: Columns = {"case": (None, "the case's number"),
+                            "cpu_s": ("s", "CPU time of the case"),
+                            "wall_s": ("s", "wall-clock time of the case"),
+                            "worker": (None, "the worker that ran it")}
+#: ``columns.csv``: the columns of ``study.csv`` described (as text).
+COLUMNS_CSV_COLUMNS: Columns = {"column": (None, "a column of study.csv"),
+                                "kind": (None, "case, parameter, status or metric"),
+                                "unit": (None, "its unit (empty: text or a pure number)")}
+_MEANINGS = {"case": "the case's number", "status": "ok or failed",
+             "message": "why the case failed (empty when it did not)"}
 
 
 class SweepTable:
@@ -108,6 +125,30 @@ class SweepTable:
             writer.writerow([c, self.kinds[c], self.units[c]])
         return stream.getvalue()
 
+    def column_units(self) -> Columns:
+        """The columns of ``study.csv`` in order, each with its unit (``1`` a pure number, None
+        text) and meaning."""
+        out: Columns = {}
+        for c in self.columns:
+            kind, unit = self.kinds[c], self.units[c]
+            if kind == "metric":
+                out[c] = (unit or "1", f"metric {c.partition(':')[0]}")
+            elif kind == "parameter":
+                text = self.data[c].dtype.kind == "U"
+                # a builder argument the study has no unit for is a factor or a fraction
+                # (docs/sweeps.md); a scene key's unit is the scene's, not known here ("")
+                out[c] = (None if text else unit or ("" if "." in c else "1"),
+                          "varied parameter")
+            else:
+                out[c] = (None, _MEANINGS.get(c, c))  # a label or text
+        return out
+
+    def units_json(self) -> str:
+        """``units.json``: every column of ``study.csv``, ``timings.csv`` and ``columns.csv``
+        with its unit and meaning."""
+        return units_json({"study.csv": self.column_units(), "timings.csv": TIMINGS_COLUMNS,
+                           "columns.csv": COLUMNS_CSV_COLUMNS})
+
     def npz_bytes(self) -> bytes:
         """``study.npz``: ``table`` (the structured array), ``units`` and ``kinds`` (one per
         column, in order); loads without pickles."""
@@ -139,3 +180,12 @@ def _cell(value) -> str:
     if isinstance(value, np.integer | int):
         return str(int(value))
     return str(value)
+
+
+def timings_csv_text(rows: list[dict]) -> str:
+    """``timings.csv``: each case's CPU and wall seconds and its worker (columns as
+    :data:`TIMINGS_COLUMNS`), by case."""
+    lines = [",".join(TIMINGS_COLUMNS)] + [
+        f"{r['case']},{r.get('cpu_s', 0.0)!r},{r.get('wall_s', 0.0)!r},{r.get('worker', '')}"
+        for r in sorted(rows, key=lambda r: r["case"])]
+    return "\n".join(lines) + "\n"
