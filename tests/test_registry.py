@@ -39,7 +39,7 @@ def test_defaults_are_written_once():
 
 
 def test_the_command_line_defaults_are_the_constants():
-    from hexapod.cli.main import build_parser
+    from hexapod.cli.app import build_parser
 
     args = build_parser().parse_args(["simulate"])
     # tolerances left unset, so that simulate() applies the defaults (and a fixed-step method

@@ -2,8 +2,13 @@
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
+import errno
 import os
 import shutil
+import stat
+import sys
 import tempfile
 from pathlib import Path
 
@@ -44,20 +49,178 @@ def _sync(stream) -> None:
     os.fsync(stream.fileno())
 
 
-def write_atomically(path: str | Path, text: str | bytes) -> Path:
-    """Write ``text`` (UTF-8, or ``bytes`` as they are) to ``path`` through a temporary file in
-    the same folder, renamed over the target when complete: a failure (or an interruption)
-    never leaves a partial file.
+# ------------------------------------------------------------------ outputs checked before work
+
+_KINDS = ((stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+          (stat.S_ISFIFO, "a named pipe"), (stat.S_ISSOCK, "a socket"),
+          (stat.S_ISLNK, "a symbolic link"), (stat.S_ISDIR, "a directory"),
+          (stat.S_ISREG, "a regular file"))
+#: Characters the temporary names add to an output's name (``.NAME.PID.XXXXXXXX.tmp``).
+_TEMPORARY_EXTRA = 40
+
+
+def _kind(mode: int) -> str:
+    return next((name for test, name in _KINDS if test(mode)), "a special file")
+
+
+def _inside(path: Path, folder: Path) -> bool:
+    try:
+        path.resolve().relative_to(folder.resolve())
+    except (ValueError, OSError, RuntimeError):
+        return False
+    return True
+
+
+def check_output(path: str | Path, *, option: str, inputs=(), directory: bool = False,
+                 ours=None) -> Path:
+    """``path`` as an output, checked before any work: writing it must harm nothing.
+
+    A file output may replace only a regular file, a directory output only a directory the
+    project wrote (every entry a regular file that ``ours(name)`` accepts; see
+    :func:`write_directory_atomically`; ``ours=None`` leaves its contents to the caller).
+    Neither may be, or hold, one of ``inputs`` (files the command reads). The folder it goes in
+    must exist, and its name must leave room for the temporary name it is written under. A
+    directory left half-swapped by an earlier run that was killed is put right first
+    (:func:`recover_directory`).
 
     Raises
     ------
     InputFileError
-        The file cannot be written; the target is left as it was.
+        What is wrong, with ``option`` and the path; nothing is touched.
+    """
+    path = Path(path)
+    said = f"{option} {path}"
+    if not str(path) or path.name in ("", ".", ".."):
+        raise InputFileError(f"{said}: not a file name")
+    parent = path.parent
+    try:
+        if not parent.is_dir():
+            raise InputFileError(f"{said}: no folder {parent} to write into")
+        name_max = os.pathconf(parent, "PC_NAME_MAX")
+    except OSError as error:
+        raise InputFileError(f"{said}: cannot use the path ({error.strerror})") from None
+    if len(os.fsencode(path.name)) + _TEMPORARY_EXTRA > name_max:
+        raise InputFileError(f"{said}: the name is too long for the file system (at most "
+                             f"{name_max - _TEMPORARY_EXTRA} bytes here, to leave room for the "
+                             "temporary name it is written under)")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise InputFileError(f"{said}: cannot write in the folder {parent} (permission denied)")
+    if directory:
+        recover_directory(path)
+    try:
+        mode = os.lstat(path).st_mode
+    except FileNotFoundError:
+        return path
+    except OSError as error:
+        raise InputFileError(f"{said}: cannot use the path ({error.strerror})") from None
+    wanted = stat.S_ISDIR if directory else stat.S_ISREG
+    if not wanted(mode):
+        expected = "a directory" if directory else "a regular file"
+        raise InputFileError(f"{said}: exists and is {_kind(mode)}, not {expected}; nothing "
+                             "but " + ("a directory this program wrote" if directory else
+                                       "a regular file") + " is ever replaced: choose another "
+                             "output")
+    for given in inputs:
+        given = Path(given)
+        if not given.exists():
+            continue
+        same = (_inside(given, path) if directory else os.path.samefile(given, path))
+        if same:
+            where = "holds" if directory else "is"
+            raise InputFileError(f"{said}: {where} the input {given}; writing it would destroy "
+                                 "what the command reads: choose another output")
+    if directory and ours is not None:
+        _check_ours(path, said, ours)
+    return path
+
+
+def _check_ours(path: Path, said: str, ours) -> None:
+    foreign = []
+    with os.scandir(path) as entries:
+        for entry in entries:
+            if not entry.is_file(follow_symlinks=False) or not ours(entry.name):
+                foreign.append(entry.name)
+                if len(foreign) > 3:
+                    break
+    if foreign:
+        shown = ", ".join(sorted(foreign)[:3]) + (", ..." if len(foreign) > 3 else "")
+        raise InputFileError(f"{said}: exists and holds other files ({shown}) than this "
+                             "command writes; choose another output directory or empty this one")
+
+
+def default_output(name: str, option: str = "--out") -> Path:
+    """The output a command writes when ``option`` is not given: ``name`` in the current folder,
+    said in one line on stderr."""
+    print(f"hexapod: no {option} given: writing {name} in the current folder", file=sys.stderr)
+    return Path(name)
+
+
+# ------------------------------------------------------------------ files written whole
+
+
+def _temporary_prefix(path: Path) -> str:
+    """Temporary names carry the writer's process id, so that the next writer of the same
+    output can tell the leftovers of a killed run (their process gone) from a live one's."""
+    return f".{path.name}.{os.getpid()}."
+
+
+def _remove_leftovers(path: Path) -> None:
+    """Remove the temporary files and folders of ``path`` left by writers that were killed."""
+    parent = path.parent if str(path.parent) else Path(".")
+    head = f".{path.name}."
+    try:
+        entries = [e for e in os.scandir(parent) if e.name.startswith(head)
+                   and e.name.endswith(".tmp")]
+    except OSError:
+        return
+    for entry in entries:
+        pid = entry.name[len(head):].split(".", 1)[0]
+        if not pid.isdigit() or _alive(int(pid)):
+            continue
+        if entry.is_dir(follow_symlinks=False):
+            shutil.rmtree(entry.path, ignore_errors=True)
+        else:
+            with contextlib.suppress(OSError):
+                os.unlink(entry.path)
+
+
+def _alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # someone else's process, alive
+        return True
+    return True
+
+
+def write_atomically(path: str | Path, text: str | bytes) -> Path:
+    """Write ``text`` (UTF-8, or ``bytes`` as they are) to ``path`` through a temporary file in
+    the same folder, renamed over the target when complete: a failure (or an interruption)
+    never leaves a partial file. Only a regular file is ever replaced.
+
+    Raises
+    ------
+    InputFileError
+        The file cannot be written, or ``path`` is not a regular file; the target is left as
+        it was.
     """
     path = Path(path)
     try:
-        handle, temporary = tempfile.mkstemp(dir=path.parent or ".", prefix=f".{path.name}.",
-                                             suffix=".tmp")
+        mode = os.lstat(path).st_mode
+    except FileNotFoundError:
+        mode = None
+    except OSError as error:
+        raise InputFileError(f"{path}: cannot write the file ({error.strerror})") from None
+    if mode is not None and not stat.S_ISREG(mode):
+        raise InputFileError(f"{path}: exists and is {_kind(mode)}, not a regular file; it is "
+                             "not replaced: choose another output")
+    _remove_leftovers(path)
+    try:
+        handle, temporary = tempfile.mkstemp(dir=path.parent or ".",
+                                             prefix=_temporary_prefix(path), suffix=".tmp")
     except OSError as error:
         raise InputFileError(f"{path}: cannot write the file ({error})") from None
     try:
@@ -77,11 +240,74 @@ def write_atomically(path: str | Path, text: str | bytes) -> Path:
     return path
 
 
+# ------------------------------------------------------------------ directories written whole
+
+
+def _backup(path: Path) -> Path:
+    """Where the earlier output waits while the new one is moved in (when the system cannot
+    exchange two names at once)."""
+    return path.with_name(f".{path.name}.old")
+
+
+def recover_directory(path: str | Path) -> None:
+    """Put right what a writer of the directory ``path`` killed mid-way left: the earlier output
+    moved aside but the new one not yet in (it is moved back), or both in place (the earlier one
+    is removed); and temporary folders of writers no longer running."""
+    path = Path(path)
+    backup = _backup(path)
+    if backup.is_dir() and not backup.is_symlink():
+        if path.exists() or path.is_symlink():
+            shutil.rmtree(backup, ignore_errors=True)
+        else:
+            with contextlib.suppress(OSError):
+                os.replace(backup, path)
+    _remove_leftovers(path)
+
+
+def _exchange(first: Path, second: Path) -> bool:
+    """Swap two names in one atomic step (Linux ``renameat2`` with ``RENAME_EXCHANGE``); False
+    where the system or the file system cannot."""
+    if not sys.platform.startswith("linux"):
+        return False
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        renameat2 = libc.renameat2
+    except (OSError, AttributeError):
+        return False
+    renameat2.argtypes = [ctypes.c_int, ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p,
+                          ctypes.c_uint]
+    at_cwd, exchange = -100, 2  # AT_FDCWD, RENAME_EXCHANGE
+    if renameat2(at_cwd, os.fsencode(first), at_cwd, os.fsencode(second), exchange) == 0:
+        return True
+    code = ctypes.get_errno()
+    if code in (errno.EINVAL, errno.ENOSYS, errno.ENOTSUP, errno.EOPNOTSUPP):
+        return False
+    raise OSError(code, os.strerror(code), str(second))
+
+
+def _swap_in(staging: Path, path: Path) -> None:
+    """Move the complete ``staging`` directory to ``path``, which holds an earlier output: one
+    atomic exchange where the system offers it, else two renames through :func:`_backup`, which
+    :func:`recover_directory` completes or undoes if the process dies between them."""
+    if _exchange(staging, path):
+        shutil.rmtree(staging, ignore_errors=True)  # now the earlier output
+        return
+    backup = _backup(path)
+    os.replace(path, backup)
+    try:
+        os.replace(staging, path)
+    except BaseException:
+        os.replace(backup, path)  # put the earlier output back
+        raise
+    shutil.rmtree(backup, ignore_errors=True)
+
+
 def write_directory_atomically(path: str | Path, files: dict[str, bytes]) -> Path:
     """Write ``files`` (name -> content) as the directory ``path``: a temporary directory
-    beside it, filled and then renamed to ``path``, so that the directory appears complete or
-    not at all. An existing ``path`` is replaced only when it holds nothing but files of those
-    names (an earlier run's output); anything else is an error and is left untouched.
+    beside it, filled and then swapped with ``path``, so that the directory appears complete or
+    not at all, and the earlier output stays whole until the new one is complete. An existing
+    ``path`` is replaced only when it holds nothing but files of those names (an earlier run's
+    output); anything else is an error and is left untouched.
 
     Raises
     ------
@@ -89,20 +315,17 @@ def write_directory_atomically(path: str | Path, files: dict[str, bytes]) -> Pat
         The directory cannot be written, or ``path`` holds something else.
     """
     path = Path(path)
+    recover_directory(path)
     if path.exists() or path.is_symlink():
         if not path.is_dir() or path.is_symlink():
             raise InputFileError(f"{path}: exists and is not a directory; choose another output")
-        foreign = sorted(p.name for p in path.iterdir() if p.name not in files or not p.is_file())
-        if foreign:
-            shown = ", ".join(foreign[:3]) + (", ..." if len(foreign) > 3 else "")
-            raise InputFileError(f"{path}: exists and holds other files ({shown}); choose "
-                                 "another output directory or empty this one")
+        _check_ours(path, str(path), lambda name: name in files)
     parent = path.parent if str(path.parent) else Path(".")
     try:
-        staging = Path(tempfile.mkdtemp(dir=parent, prefix=f".{path.name}.", suffix=".tmp"))
+        staging = Path(tempfile.mkdtemp(dir=parent, prefix=_temporary_prefix(path),
+                                        suffix=".tmp"))
     except OSError as error:
         raise InputFileError(f"{path}: cannot write the directory ({error})") from None
-    retired = None
     try:
         os.chmod(staging, 0o777 & ~_umask())  # as mkdir would make it (mkdtemp: 0700)
         for name, content in files.items():
@@ -110,17 +333,12 @@ def write_directory_atomically(path: str | Path, files: dict[str, bytes]) -> Pat
                 stream.write(content)
                 _sync(stream)
         if path.exists():
-            retired = Path(tempfile.mkdtemp(dir=parent, prefix=f".{path.name}.", suffix=".old"))
-            os.rmdir(retired)
-            os.replace(path, retired)
-        os.replace(staging, path)
+            _swap_in(staging, path)
+        else:
+            os.replace(staging, path)
     except BaseException as error:
-        if retired is not None and retired.exists() and not path.exists():
-            os.replace(retired, path)  # put the earlier output back
         shutil.rmtree(staging, ignore_errors=True)
         if isinstance(error, OSError):
             raise InputFileError(f"{path}: cannot write the directory ({error})") from None
         raise
-    if retired is not None:
-        shutil.rmtree(retired, ignore_errors=True)
     return path

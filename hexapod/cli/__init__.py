@@ -1,5 +1,5 @@
 """The ``hexapod`` command (layer 7)."""
 
-from hexapod.cli.main import main
+from hexapod.cli.entry import main
 
 __all__ = ["main"]

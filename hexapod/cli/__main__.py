@@ -1,5 +1,5 @@
 import sys
 
-from hexapod.cli.main import main
+from hexapod.cli.entry import main
 
 sys.exit(main())

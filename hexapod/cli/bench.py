@@ -6,7 +6,8 @@ import sys
 from pathlib import Path
 
 from hexapod.benchmarks.catalogue import PROBLEMS
-from hexapod.cli.common import positive
+from hexapod.cli.common import seconds
+from hexapod.cli.outputs import output_directory, suffixes
 from hexapod.simulation.methods import METHODS
 
 HELP = "work-precision study: error against CPU time of every integrator"
@@ -28,18 +29,16 @@ def add_arguments(parser) -> None:
                         help="integrators (default: all)")
     parser.add_argument("--quick", action="store_true",
                         help="shorter horizons and ladders (a first look, a few minutes)")
-    parser.add_argument("--budget", type=positive(float), default=30.0, metavar="S",
+    parser.add_argument("--budget", type=seconds, default=30.0, metavar="S",
                         help="stop a method's ladder after a run costing more CPU than this "
                         "(default 30 s)")
     parser.add_argument("--data", default="data", metavar="DIR",
                         help="the project's data directory (default: data)")
-    parser.add_argument("--out", default="work-precision", metavar="DIR",
+    parser.add_argument("--out", metavar="DIR",
                         help="the directory to write (default: work-precision)")
 
 
 def run(args) -> int:
-    import csv
-    import io
 
     from hexapod._support.files import write_directory_atomically
     from hexapod.benchmarks.work_precision import (
@@ -47,7 +46,9 @@ def run(args) -> int:
         build_problems,
         drift_figure,
         run_study,
+        runs_csv_text,
         table,
+        units_json_text,
         work_precision_figure,
     )
     from hexapod.errors import InputFileError
@@ -59,6 +60,8 @@ def run(args) -> int:
     if not (data_dir / "scenes").is_dir() or not (data_dir / "benchmarks").is_dir():
         raise InputFileError(f"{data_dir}: not the project's data directory (it needs scenes/ "
                              "and benchmarks/): run from a checkout, or pass --data DIR")
+    out = output_directory(args.out, "work-precision", inputs=[data_dir],
+                           ours=suffixes(".md", ".csv", ".json", ".png"))
     leg = load_scene("front-leg") if "front-leg" in args.problems else None
 
     def say(line: str) -> None:
@@ -75,12 +78,8 @@ def run(args) -> int:
         check, _ = andrews_check(data_dir)
         text += ["## Andrews' mechanism: our reference and the forces at joint E", "", check]
     files = {"work_precision.md": "\n".join(text).encode()}
-    buffer = io.StringIO()
-    fields = list(runs[0].as_dict()) if runs else ["problem"]
-    writer = csv.DictWriter(buffer, fieldnames=fields, lineterminator="\n")
-    writer.writeheader()
-    writer.writerows(r.as_dict() for r in runs)
-    files["runs.csv"] = buffer.getvalue().encode()
+    files["runs.csv"] = runs_csv_text(runs).encode()
+    files["units.json"] = units_json_text().encode()
     files["work_precision.png"] = png_bytes(work_precision_figure(runs, problems))
     for problem in problems:
         settings = {}
@@ -90,7 +89,6 @@ def run(args) -> int:
                                 else {"step": problem.t_end / (4 * problem.steps)})
         say(f"{problem.name}: drift and energy along one run per method")
         files[f"drift_{problem.name}.png"] = png_bytes(drift_figure(problem, settings))
-    out = Path(args.out)
     write_directory_atomically(out, files)
     print(files["work_precision.md"].decode())
     print(f"wrote {out}/: {', '.join(files)}")

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
-from pathlib import Path
+import argparse
 
+from hexapod._support.limits import parse_size
 from hexapod.cli.common import at_least
+from hexapod.cli.outputs import given_files, output_directory, suffixes
 
 HELP = "VTK files of a simulation or a report, for ParaView"
 DESCRIPTION = (
@@ -35,15 +37,31 @@ def add_arguments(parser) -> None:
     parser.add_argument("--mesh", action="append", metavar="BODY=FILE",
                         help="draw BODY with a mesh file meshio reads (STL, OBJ, VTU ...), given "
                         "in the body's centre-of-mass frame in metres; repeatable")
+    parser.add_argument("--max-mesh-size", type=mesh_size, metavar="SIZE",
+                        help="the largest mesh file read for a body, e.g. 512M or 2G (default: "
+                        "the environment variable HEXAPOD_MAX_MESH_BYTES, else 256M)")
+
+
+def mesh_size(text: str) -> int:
+    """An argparse type: a size in bytes, written 512M, 2G or 1000000."""
+    try:
+        return parse_size(text)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
 
 
 def run(args) -> int:
     from hexapod._support.files import write_directory_atomically
     from hexapod.errors import InputFileError
     from hexapod.model.assemble import assemble
-    from hexapod.output.vtk import frames, read_mesh, read_recording, scene_meshes, vtk_files
+    from hexapod.output.recording import read_recording
+    from hexapod.output.vtk import frames, read_mesh, scene_meshes, vtk_files
     from hexapod.scene.builtin import load_scene
 
+    out = output_directory(args.vtk, "", option="--vtk",
+                           inputs=given_files(args.results, args.scene, *(
+                               item.partition("=")[2] for item in args.mesh or [])),
+                           ours=suffixes(".vtu", ".pvd"))
     recording = read_recording(args.results)
     source = args.scene or recording.scene
     if not source:
@@ -55,15 +73,17 @@ def run(args) -> int:
         said = "given with --scene" if args.scene else f"named in {recording.scene_file}"
         hint = "" if args.scene else "; give it with --scene SCENE if it has moved"
         raise InputFileError(f"{error} (the scene {said}{hint})") from None
-    meshes = scene_meshes(scene)
+    meshes = scene_meshes(scene, args.max_mesh_size)
     for item in args.mesh or []:
         body, sep, path = item.partition("=")
         if not sep or not body or not path:
             raise InputFileError(f"--mesh {item}: expected BODY=FILE")
-        meshes[body] = read_mesh(path)
+        try:
+            meshes[body] = read_mesh(path, args.max_mesh_size)
+        except InputFileError as error:
+            raise InputFileError(f"--mesh, body '{body}': {error}") from None
     model = assemble(scene)
     files = vtk_files(model, frames(model, recording), meshes, every=args.every)
-    out = Path(args.vtk)
     write_directory_atomically(out, files)
     count = sum(name.startswith("bodies_") for name in files)
     indices = [name for name in files if name.endswith(".pvd")]

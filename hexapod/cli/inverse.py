@@ -6,10 +6,13 @@ import sys
 
 from hexapod.cli.common import (
     apply_ground_options,
+    check_inverse_memory,
     ground_arguments,
     inverse_arguments,
+    limit_arguments,
     sample_progress,
 )
+from hexapod.cli.outputs import given_files, output_file
 
 HELP = "joint efforts and wrenches of a prescribed motion, as CSV"
 DESCRIPTION = (
@@ -19,7 +22,8 @@ DESCRIPTION = (
     "Ty, Tz:<joint>, the wrench by the parent on the child about the joint origin in the child's "
     "joint frame (N, N m); for a scene with foot contacts (a walking robot) then GRx, GRy, "
     "GRz:LEG, the ground's force on each foot in world axes (N, zero in swing; LEG is the "
-    "contact's name without '/ground'). The file is written whole or not at all.")
+    "contact's name without '/ground'). Each column's unit is in OUT.units.json, written "
+    "beside it. The files are written whole or not at all.")
 
 
 def add_arguments(parser) -> None:
@@ -29,19 +33,22 @@ def add_arguments(parser) -> None:
     inverse_arguments(parser, "tree-ordered solve (open trees with every joint driven) or the "
                        "saddle-point solve per sample (any mechanism); default: the fastest that "
                        "applies")
+    limit_arguments(parser)
     ground_arguments(parser)
 
 
 def run(args) -> int:
     import warnings
 
-    from hexapod._support.files import write_atomically
     from hexapod.algorithms.inverse import inverse_dynamics
     from hexapod.model.assemble import assemble
-    from hexapod.output.report import inverse_csv_text
+    from hexapod.output.report import units_path, write_inverse_files
     from hexapod.scene.builtin import load_scene
     from hexapod.scene.motion import MotionWarning, apply_motion, read_motion
 
+    inputs = given_files(args.model, args.motion)
+    out = output_file(args.out, inputs=inputs)
+    output_file(units_path(out), inputs=inputs)  # the units sidecar written beside it
     # every estimated derivative is said, once per message (main prints the warnings caught)
     warnings.simplefilter("always", MotionWarning)
     motion = read_motion(args.motion)
@@ -50,10 +57,12 @@ def run(args) -> int:
     driven.ground = scene.ground  # the driven copy keeps the scene's ground-force settings
     model = assemble(driven)
     times = motion.times
+    check_inverse_memory(model, times.size, args.max_memory,
+                         f"give a motion of fewer samples than {args.motion}'s")
     progress = sample_progress("inverse dynamics") if sys.stderr.isatty() else None
     result = inverse_dynamics(model, times, method=args.method, frame=args.frame,
                               progress=progress)
-    write_atomically(args.out, inverse_csv_text(model, result))
+    write_inverse_files(out, model, result)  # OUT.units.json, then OUT.csv
     if progress is not None:
         print(file=sys.stderr)
     feet = (f", {len(model.contacts)} feet (ground forces by the policy {result.policy})"

@@ -3,17 +3,21 @@
 from __future__ import annotations
 
 import sys
-from pathlib import Path
 
 from hexapod.cli.common import (
+    MAX_TIME,
     apply_ground_options,
     at_least,
+    check_inverse_memory,
     ground_arguments,
     inverse_arguments,
-    positive,
+    limit_arguments,
     sample_progress,
     scene_positional,
+    seconds,
+    time_value,
 )
+from hexapod.cli.outputs import given_files, output_directory, suffixes
 
 HELP = "the liaison force report of a driven scene: CSV, summary, figures"
 DESCRIPTION = (
@@ -36,13 +40,15 @@ def add_arguments(parser) -> None:
     parser.add_argument("--out", metavar="DIR",
                         help="the directory to write (default: SCENE-NAME-report); an earlier "
                         "report there is replaced")
-    parser.add_argument("--start", type=float, default=0.0, help="first time in s (default 0)")
-    parser.add_argument("--duration", type=positive(float), metavar="S",
+    parser.add_argument("--start", type=time_value, default=0.0, metavar="S",
+                        help="first time in s (default 0)")
+    parser.add_argument("--duration", type=seconds, metavar="S",
                         help="length of the window in s (default: one cycle of the scene's "
                         "periodic laws, e.g. the gait's stride, or 1 s)")
     parser.add_argument("--samples", type=at_least(2), default=501,
                         help="samples over the window, ends included (default 501)")
     inverse_arguments(parser, "as for 'hexapod inverse'")
+    limit_arguments(parser)
     ground_arguments(parser)
 
 
@@ -55,15 +61,21 @@ def run(args) -> int:
     from hexapod.algorithms.balance import body_balance
     from hexapod.algorithms.inverse import inverse_dynamics
     from hexapod.algorithms.kinematics import marker_trajectories
+    from hexapod.errors import HexapodError
     from hexapod.model.assemble import assemble
     from hexapod.output.report import FOOT_MARKER, RunInfo, report_files, walking_headlines
     from hexapod.scene.builtin import load_scene
 
     scene = apply_ground_options(load_scene(args.scene), args)
+    out = output_directory(args.out, f"{scene.name}-report", inputs=given_files(args.scene),
+                           ours=suffixes(".csv", ".md", ".png", ".json"))
     model = assemble(scene)
     duration, why = model.time_window(args.duration)
+    if duration > MAX_TIME:
+        raise HexapodError(f"the scene's cycle, {duration:g} s, is longer than the {MAX_TIME:g}"
+                           " s a report may span: give a shorter --duration")
+    check_inverse_memory(model, args.samples, args.max_memory, "ask for fewer --samples")
     times = args.start + np.linspace(0.0, duration, args.samples)
-    out = Path(args.out or f"{scene.name}-report")
     show = sys.stderr.isatty()
     progress = sample_progress("inverse dynamics") if show else None
     started = time.perf_counter()

@@ -73,6 +73,10 @@ def run(args) -> int:
         from hexapod.scene.builtin import load_scene
         from hexapod.scene.writer import scene_text, write_scene
 
+        if args.write:
+            from hexapod.cli.outputs import given_files, output_file
+
+            output_file(args.write, option="--write", inputs=given_files(args.name))
         scene = load_scene(args.name)
         if not args.write:
             sys.stdout.write(scene_text(scene, header=f"Built-in scene '{args.name}', written by "

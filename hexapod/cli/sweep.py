@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import sys
 
-from hexapod.cli.common import at_least
+from hexapod.cli.common import MAX_WORKERS, at_least
+from hexapod.cli.outputs import given_files, output_directory
 
 HELP = "a design study: many gaits, robots or settings, one table and its figures"
 DESCRIPTION = (
@@ -29,7 +30,7 @@ def add_arguments(parser) -> None:
                         help="the output folder (default: the study's name + '-sweep'); an "
                         "earlier study's output there is replaced, unless --resume")
     where = parser.add_mutually_exclusive_group()
-    where.add_argument("--workers", type=at_least(1), metavar="N",
+    where.add_argument("--workers", type=at_least(1, MAX_WORKERS), metavar="N",
                        help="worker processes of the local Dask cluster (default: one per "
                        "core)")
     where.add_argument("--scheduler", metavar="ADDRESS",
@@ -50,7 +51,9 @@ def run(args) -> int:
     from hexapod.sweeps.spec import read_study
 
     study = read_study(args.spec)
-    out = args.out or f"{_safe(study.name)}-sweep"
+    # the study's own reader of the folder checks its contents (cases/, figures/, --resume)
+    out = output_directory(args.out, f"{_safe(study.name)}-sweep",
+                           inputs=given_files(args.spec, study.scene))
     workers = args.workers
     if not args.in_process and args.scheduler is None and workers is None:
         workers = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") \
@@ -70,7 +73,8 @@ def run(args) -> int:
     headline = _headline(run.table)
     if headline:
         print(headline)
-    print(f"wrote {run.out}/study.csv, columns.csv, study.npz, timings.csv and figures/")
+    print(f"wrote {run.out}/study.csv, columns.csv, study.npz, timings.csv, units.json and "
+          "figures/")
     return 0
 
 

@@ -1,0 +1,84 @@
+"""How a run ends on a signal: SIGINT and SIGTERM interrupt it, and are remembered.
+
+The command line installs :func:`handle_signals` before anything else. Both signals then raise
+``KeyboardInterrupt`` in the main thread, so that whatever is being written is removed (or, for
+a simulation, what was computed is written, marked interrupted), and the process ends with the
+conventional status 128 + the signal's number (130, 143). The signal is also remembered: a
+library may swallow the ``KeyboardInterrupt`` (CasADi turns an interrupt inside its own code into
+an error of its own), and the command line still ends as interrupted.
+
+A C compiler started by CasADi runs through ``system()``, which ignores SIGINT in the calling
+process: a signal sent to this process alone would be lost. :func:`deferred` blocks the signals
+around such calls instead, so that one arriving meanwhile is delivered as soon as the call
+returns. Outside the command line (the library used from Python) nothing here changes any
+process state.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import signal
+import threading
+
+#: The signals that end a run.
+ENDING = (signal.SIGINT, signal.SIGTERM)
+
+_received: list[int] = []
+
+
+def _handler(number, frame) -> None:
+    _received.append(number)
+    raise KeyboardInterrupt
+
+
+def handle_signals():
+    """SIGINT and SIGTERM raise ``KeyboardInterrupt`` and are remembered (main thread only);
+    returns a function that puts back the handlers found."""
+    if threading.current_thread() is not threading.main_thread():
+        return lambda: None
+    _received.clear()
+    earlier = {number: signal.signal(number, _handler) for number in ENDING}
+
+    def restore() -> None:
+        for number, handler in earlier.items():
+            signal.signal(number, handler)
+    return restore
+
+
+def ignore_signals() -> None:
+    """SIGINT and SIGTERM ignored from now on: for a process whose work is done and whose
+    status is set, so that a signal arriving while it exits cannot change that status."""
+    if threading.current_thread() is threading.main_thread():
+        for number in ENDING:
+            signal.signal(number, signal.SIG_IGN)
+
+
+def received() -> int | None:
+    """The first ending signal received since :func:`handle_signals`, or None."""
+    return _received[0] if _received else None
+
+
+def exit_status() -> int:
+    """The conventional status of a process ended by the signal received (130 for SIGINT, 143
+    for SIGTERM); 130 when the interruption came otherwise (a ``KeyboardInterrupt``)."""
+    number = received()
+    return 128 + (number if number is not None else signal.SIGINT)
+
+
+def signal_name() -> str:
+    number = received()
+    return signal.Signals(number).name if number is not None else "SIGINT"
+
+
+@contextlib.contextmanager
+def deferred():
+    """Hold SIGINT and SIGTERM back while the block runs (a call into C code that cannot be
+    interrupted safely, e.g. a compiler); one that arrived is delivered when it ends."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    blocked = signal.pthread_sigmask(signal.SIG_BLOCK, ENDING)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, blocked)

@@ -1,0 +1,130 @@
+"""The ``hexapod`` command: the parser of every command, and the one way errors end.
+
+Every error a user can cause ends with one message on stderr and a non-zero exit, never a
+traceback (set ``HEXAPOD_DEBUG=1`` to see one for an internal error). Each command is a module of
+this folder with ``HELP``, ``DESCRIPTION``, ``add_arguments(parser)`` and ``run(args)``; the
+modules import NumPy, CasADi and the engine only in ``run``, so that ``--help`` and a short job do
+not pay for the others' imports.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import warnings
+
+from hexapod._version import __version__
+from hexapod.cli import (
+    bench,
+    check,
+    dynamics,
+    export,
+    info,
+    inverse,
+    report,
+    scenes,
+    simulate,
+    sweep,
+    validate,
+)
+from hexapod.errors import HexapodError
+
+#: The commands, in the order ``hexapod --help`` lists them; each is named by its module.
+COMMANDS = (dynamics, info, inverse, report, simulate, sweep, check, export, bench, validate,
+            scenes)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="hexapod",
+        description="Constrained multibody dynamics in absolute coordinates for legged robots.")
+    parser.add_argument("--version", action="version", version=f"hexapod {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    sub.required = True
+    for command in COMMANDS:
+        name = command.__name__.rpartition(".")[2]
+        p = sub.add_parser(name, help=command.HELP, description=command.DESCRIPTION)
+        command.add_arguments(p)
+        p.set_defaults(run=command.run)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Parse ``argv`` and run its command; every way it can end is one line on stderr and a
+    status (see :func:`hexapod.cli.entry.main`, which handles the signals before this runs)."""
+    from hexapod._support import signals
+
+    # One BLAS thread, set before anything imports NumPy: the matrices of a mechanism are small,
+    # and OpenBLAS threads cost more in start-up and synchronisation than they save. The library
+    # itself changes no process state; the test session sets the same (tests/conftest.py).
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+    try:
+        args = build_parser().parse_args(argv)
+        _check_address_space()
+        status = _run(args)
+    except HexapodError as error:
+        print(f"hexapod: error: {error}", file=sys.stderr)
+        status = 1
+    except KeyboardInterrupt:
+        status = None
+    except MemoryError:
+        print("hexapod: error: out of memory; ask for less (fewer samples, a shorter run, a "
+              "smaller model) or run where there is more memory", file=sys.stderr)
+        status = 1
+    except ImportError as error:  # NumPy, CasADi... cannot load: too little memory, or broken
+        last = (str(error).strip().splitlines() or [""])[-1]  # NumPy's is a page long
+        print(f"hexapod: error: cannot load {error.name or 'a library'}: {last} (too little "
+              "memory, e.g. under 'ulimit -v', or a broken installation)", file=sys.stderr)
+        status = 1
+    except BrokenPipeError:  # output piped into a reader that stopped (e.g. head): not an error
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        status = 0
+    except Exception as error:  # an internal error: still one line unless debugging
+        if signals.received() is None and os.environ.get("HEXAPOD_DEBUG"):
+            raise
+        status = None if signals.received() is not None else 3
+        if status is not None:
+            print(f"hexapod: internal error: {type(error).__name__}: {error} "
+                  "(set HEXAPOD_DEBUG=1 for the traceback)", file=sys.stderr)
+    # a signal a library swallowed (turned into an error of its own, or ignored) still ends the
+    # run as interrupted
+    if status in (130, 143):  # the command said how it was interrupted (simulate)
+        return signals.exit_status()
+    if status is None or signals.received() is not None:
+        print(f"hexapod: interrupted ({signals.signal_name()})" if signals.received()
+              else "hexapod: interrupted", file=sys.stderr)
+        return signals.exit_status()
+    return status
+
+
+#: Address space the commands need to load NumPy, SciPy and CasADi (about 360 MiB measured for
+#: a report with one BLAS thread), with a margin. Below it, OpenBLAS's start-up retries its
+#: allocation forever rather than failing, so the limit is checked before anything is loaded.
+ADDRESS_SPACE_NEEDED = 512 * 2**20
+
+
+def _check_address_space() -> None:
+    try:
+        import resource
+    except ImportError:  # not a POSIX system: no such limit
+        return
+    limit = resource.getrlimit(resource.RLIMIT_AS)[0]
+    if limit != resource.RLIM_INFINITY and limit < ADDRESS_SPACE_NEEDED:
+        raise HexapodError(f"the address-space limit (ulimit -v) is {limit / 2**20:.0f} MiB; "
+                           f"hexapod needs at least {ADDRESS_SPACE_NEEDED / 2**20:.0f} MiB to "
+                           "load NumPy, SciPy and CasADi: raise it")
+
+
+def _run(args) -> int:
+    """Run the command, its warnings said once each after it; a library that ends the process
+    (``sys.exit``) ends the command with an error instead."""
+    with warnings.catch_warnings(record=True) as caught:
+        try:
+            return args.run(args)
+        except SystemExit as ended:
+            raise HexapodError(f"a library tried to end the process (exit status {ended.code!r})"
+                               " during the command") from None
+        finally:
+            for message in dict.fromkeys(str(w.message) for w in caught):
+                print(f"hexapod: warning: {message}", file=sys.stderr)

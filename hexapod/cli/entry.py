@@ -1,0 +1,46 @@
+"""The first code the ``hexapod`` command runs: signals handled, then the command loaded.
+
+Everything a user can cause ends with one line on stderr and a conventional status, from the
+first line on: the signals are handled before anything else is imported, and a failure to load
+the command (an interruption during the imports, too little memory for NumPy or CasADi, a broken
+installation) is said in one line too. :mod:`hexapod.cli.app` does the rest.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the ``hexapod`` command with ``argv`` (default: the process's arguments); the exit
+    status: 0 done, 1 an error of the input or the run, 2 a wrong command line, 3 an internal
+    error, 130/143 interrupted by SIGINT/SIGTERM."""
+    from hexapod._support import signals
+
+    restore = signals.handle_signals()
+    try:
+        try:
+            from hexapod.cli import app
+        except KeyboardInterrupt:
+            print(f"hexapod: interrupted ({signals.signal_name()})", file=sys.stderr)
+            status = signals.exit_status()
+        except (MemoryError, ImportError, OSError) as error:
+            print(f"hexapod: error: cannot start: {type(error).__name__}: {error} (too little "
+                  "memory, e.g. under 'ulimit -v', or a broken installation)", file=sys.stderr)
+            return 1
+        else:
+            status = app.main(argv)
+    finally:
+        if argv is None:  # the process itself: its work is done, a late signal changes nothing
+            signals.ignore_signals()
+        else:
+            restore()
+    if argv is None and signals.received() is not None:
+        # The process itself: end it with the status now. CPython would end a process whose
+        # interruption went through its parser (a module compiled on import) by the signal
+        # itself (status -2 to a caller) whatever status is returned.
+        for stream in (sys.stdout, sys.stderr):
+            stream.flush()
+        os._exit(status)
+    return status
