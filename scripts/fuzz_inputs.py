@@ -37,6 +37,10 @@ errors of the computation after the files were read and assembled (the forward d
 ``info``, a diverging ``simulate``), which name what failed but not the file. They are not
 failures (the readers' own errors always name the file: the library path checks it).
 
+Then come the hostile command lines and the fault trials of ``scripts/fuzz_hostile.py`` (devices
+and inputs as outputs, non-finite and absurd numbers, huge requests, broken meshes; signals at
+random moments of ``simulate``, ``report`` and ``inverse``), each a subprocess with a 30 s limit.
+
 Progress goes to stderr, a summary table to stdout; the exit status is 1 when any traceback or
 partial file was seen, else 0. Every failing input is saved in ``--failures DIR`` (default
 ``fuzz-failures``) as ``NNNN-KIND/`` with the input, the file it needs (the URDF of a motion) and
@@ -59,6 +63,7 @@ from pathlib import Path
 
 # ``X as X``: names this script does not use, re-exported for the tests (tests/fuzzer.py loads
 # this script as the module they share)
+import fuzz_hostile
 from fuzz_mutations import BROKEN_XML as BROKEN_XML
 from fuzz_mutations import mutate_motion as mutate_motion
 from fuzz_mutations import mutate_urdf as mutate_urdf
@@ -191,6 +196,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--failures", type=Path, default=Path("fuzz-failures"),
                         help="where failing inputs are saved (default fuzz-failures)")
     parser.add_argument("--replay", type=Path, metavar="DIR", help="run one saved failure")
+    parser.add_argument("--trials", type=int, default=60,
+                        help="fault trials after the hostile command lines (default 60; see "
+                        "scripts/fuzz_hostile.py)")
     args = parser.parse_args(argv)
     if args.replay:
         return replay(args.replay)
@@ -208,7 +216,9 @@ def main(argv: list[str] | None = None) -> int:
     tracebacks = sum(v for (_, _, s), v in tally.counts.items() if s == "traceback")
     print(f"\ntracebacks: {tracebacks}, partial files: {partial}"
           + (f" (inputs saved in {args.failures}/)" if tally.failures else ""))
-    return 1 if tally.failures else 0
+    print()
+    hostile = fuzz_hostile.main(["--trials", str(args.trials), "--seed", str(args.seed)])
+    return 1 if tally.failures or hostile else 0
 
 
 if __name__ == "__main__":

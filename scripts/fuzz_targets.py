@@ -159,7 +159,8 @@ def expected_outputs(argv: list[str], status: int, stderr: str) -> set[str]:
         return set()
     name = Path(argv[argv.index("--out") + 1]).name
     if status == 0 or (argv[0] == "simulate" and "the states up to it are in" in stderr):
-        return {name}
+        # inverse writes its units beside its CSV (OUT.units.json)
+        return {name, Path(name).stem + ".units.json"} if argv[0] == "inverse" else {name}
     return set()
 
 
