@@ -3,6 +3,7 @@ against the engine's poses and joint wrenches."""
 
 from __future__ import annotations
 
+import json
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -74,7 +75,11 @@ def test_one_vtu_per_saved_instant_and_the_pvd_lists_them_with_their_times(pendu
     joints = sorted(f for f in files if f.startswith("joints_") and f.endswith(".vtu"))
     assert len(bodies) == len(joints) == t.size > 2
     assert files == set(bodies) | set(joints) | {"bodies.pvd", "joints.pvd", "bodies.csv",
-                                                 "joints.csv"}
+                                                 "joints.csv", "units.json"}
+    units = json.loads((cwd / "vtk" / "units.json").read_text())
+    assert set(units) == {"bodies.csv", "joints.csv", "bodies_*.vtu", "joints_*.vtu"}
+    assert units["joints_*.vtu"]["force"]["unit"] == "N"
+    assert units["bodies.csv"]["mass"]["unit"] == "kg"
     assert read_pvd(cwd / "vtk" / "bodies.pvd") == list(zip(t.tolist(), bodies, strict=True))
     assert read_pvd(cwd / "vtk" / "joints.pvd") == list(zip(t.tolist(), joints, strict=True))
     assert (cwd / "vtk" / "bodies.csv").read_text().splitlines()[1].startswith("0,rod,spatial")

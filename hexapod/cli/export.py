@@ -61,7 +61,7 @@ def run(args) -> int:
     out = output_directory(args.vtk, "", option="--vtk",
                            inputs=given_files(args.results, args.scene, *(
                                item.partition("=")[2] for item in args.mesh or [])),
-                           ours=suffixes(".vtu", ".pvd"))
+                           ours=suffixes(".vtu", ".pvd", ".csv", ".json"))
     recording = read_recording(args.results)
     source = args.scene or recording.scene
     if not source:

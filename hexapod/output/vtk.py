@@ -53,6 +53,7 @@ from hexapod.model.model import Model
 from hexapod.output.ground import GROUND_COMPONENTS, leg_name
 from hexapod.output.recording import Recording
 from hexapod.output.report import inverse_columns
+from hexapod.simulation.results import units_json
 
 #: Values of the cell data ``part``.
 PART_BOX, PART_BAR, PART_PARTICLE, PART_MESH = 0, 1, 2, 3
@@ -342,7 +343,38 @@ def vtk_files(model: Model, frames: Frames, meshes: dict | None = None,
     files["joints.csv"] = _csv(["joint", "name", "kind", "parent", "child"],
                                [[j.index, j.name, j.kind, names[j.parent + 1],
                                  names[j.child + 1]] for j in model.joints])
+    tables = {name: columns for name, columns in TABLE_UNITS.items()
+              if name in files or any(f.startswith(name.partition("*")[0]) for f in files)}
+    files["units.json"] = units_json(tables).encode()
     return files
+
+
+#: The units of the index tables and of the VTK files' data arrays (``bodies_*.vtu`` cell data,
+#: ``joints_*.vtu`` and ``feet_*.vtu`` point data): SI, ``1`` for an index or a pure number,
+#: ``None`` for text.
+TABLE_UNITS = {
+    "bodies.csv": {"body": ("1", "index of the body (cell data 'body')"),
+                   "name": (None, "the body's name"), "kind": (None, "spatial, planar, particle"),
+                   "mass": ("kg", "the body's mass")},
+    "joints.csv": {"joint": ("1", "index of the joint (point data 'joint')"),
+                   "name": (None, "the joint's name"), "kind": (None, "the joint's type"),
+                   "parent": (None, "the parent body"), "child": (None, "the child body")},
+    "feet.csv": {"foot": ("1", "index of the foot (point data 'foot')"),
+                 "contact": (None, "the contact's name"), "leg": (None, "the leg")},
+    "bodies_*.vtu": {"body": ("1", "index in bodies.csv"),
+                     "part": ("1", "0 box, 1 bar, 2 particle, 3 mesh"), "points": ("m", "")},
+    "joints_*.vtu": {"joint": ("1", "index in joints.csv"),
+                     "force": ("N", "by the parent on the child, world axes"),
+                     "moment": ("N m", "about the joint origin, world axes"),
+                     "force_joint_frame": ("N", "the same in the child's joint frame"),
+                     "moment_joint_frame": ("N m", "the same in the child's joint frame"),
+                     "effort": ("N m or N", "the joint's driver effort (revolute, prismatic)"),
+                     "points": ("m", "joint origins, world frame")},
+    "feet_*.vtu": {"foot": ("1", "index in feet.csv"),
+                   "ground_force": ("N", "the ground's force on the foot, world axes"),
+                   "stance": ("1", "1 in stance, 0 in swing"),
+                   "points": ("m", "foot points, world frame")},
+}
 
 
 def _feet_mesh(model: Model, frames: Frames, k: int):
