@@ -203,6 +203,8 @@ def _saddle(model, times, frame, progress) -> InverseResult:
                                                    / model.row_scale))))
         redundant += [model.rows[i].name for i in data.redundant_rows
                       if model.rows[i].name not in redundant]
+        if signals.received() is not None:  # an interruption a library call swallowed
+            raise KeyboardInterrupt
         if progress is not None:
             progress(k + 1, n)
     contacts = tuple(c.name for c in model.contacts)

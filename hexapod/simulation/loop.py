@@ -141,6 +141,8 @@ def _run(integrator: Integrator, watch: _Watch, weigh: _Weighing, every: int,
     reached = integrator.t  # the time of the last step completed
     try:
         while integrator.status == "running":
+            if signals.received() is not None:  # an interruption a library call swallowed
+                raise KeyboardInterrupt
             stop = weigh.during(integrator, returned)
             if stop is None and cpu_budget is not None and time.process_time() - cpu > cpu_budget:
                 stop = f"by the CPU budget of {cpu_budget:g} s"
