@@ -30,11 +30,7 @@ class FastFunction:
         self._inputs = [np.zeros(function.numel_in(i)) for i in range(function.n_in())]
         self._outputs = [np.zeros(function.numel_out(i)) for i in range(function.n_out())]
         self._shapes = [function.size_out(i) for i in range(function.n_out())]
-        self._buffer, self._evaluate = self.function.buffer()
-        for i, array in enumerate(self._inputs):
-            self._buffer.set_arg(i, memoryview(array))
-        for i, array in enumerate(self._outputs):
-            self._buffer.set_res(i, memoryview(array))
+        self._buffer, self._evaluate = _bound(self.function, self._inputs, self._outputs)
 
     def __call__(self, *arguments) -> list[np.ndarray]:
         for target, value in zip(self._inputs, arguments, strict=True):
@@ -73,11 +69,7 @@ class ScatteredFunction:
         for i in range(function.n_in()):
             if function.nnz_in(i) != function.numel_in(i):  # pragma: no cover - inputs are dense
                 raise ValueError(f"input {i} of {function.name()} is sparse")
-        self._buffer, self._evaluate = function.buffer()
-        for i, array in enumerate(self._inputs):
-            self._buffer.set_arg(i, memoryview(array))
-        for i, array in enumerate(self._outputs):
-            self._buffer.set_res(i, memoryview(array))
+        self._buffer, self._evaluate = _bound(function, self._inputs, self._outputs)
 
     def __call__(self, *arguments) -> list[np.ndarray]:
         for target, value in zip(self._inputs, arguments, strict=True):
@@ -90,3 +82,14 @@ class ScatteredFunction:
             dense[where] = values
             out.append(dense if columns == 1 else dense.reshape(rows, columns))
         return out
+
+
+def _bound(function: ca.Function, inputs: list[np.ndarray], outputs: list[np.ndarray]):
+    """``function``'s evaluation buffer reading ``inputs`` and writing ``outputs`` in place:
+    (the buffer, which must be kept alive, and its evaluate function)."""
+    buffer, evaluate = function.buffer()
+    for i, array in enumerate(inputs):
+        buffer.set_arg(i, memoryview(array))
+    for i, array in enumerate(outputs):
+        buffer.set_res(i, memoryview(array))
+    return buffer, evaluate
