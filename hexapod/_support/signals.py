@@ -65,9 +65,12 @@ def exit_status() -> int:
     return 128 + (number if number is not None else signal.SIGINT)
 
 
-def signal_name() -> str:
+def interruption() -> str:
+    """The line that ends an interrupted command: ``hexapod: interrupted (SIGTERM)``, without
+    the name when the interruption came otherwise (a ``KeyboardInterrupt`` raised in code)."""
     number = received()
-    return signal.Signals(number).name if number is not None else "SIGINT"
+    return ("hexapod: interrupted" if number is None
+            else f"hexapod: interrupted ({signal.Signals(number).name})")
 
 
 @contextlib.contextmanager

@@ -80,20 +80,21 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # output piped into a reader that stopped (e.g. head): not an error
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         status = 0
-    except Exception as error:  # an internal error: still one line unless debugging
-        if signals.received() is None and os.environ.get("HEXAPOD_DEBUG"):
+    except Exception as error:
+        if signals.received() is not None:  # an interruption a library turned into an error
+            status = None
+        elif os.environ.get("HEXAPOD_DEBUG"):
             raise
-        status = None if signals.received() is not None else 3
-        if status is not None:
+        else:  # an internal error: still one line unless debugging
             print(f"hexapod: internal error: {type(error).__name__}: {error} "
                   "(set HEXAPOD_DEBUG=1 for the traceback)", file=sys.stderr)
-    # a signal a library swallowed (turned into an error of its own, or ignored) still ends the
-    # run as interrupted
+            status = 3
     if status in (130, 143):  # the command said how it was interrupted (simulate)
         return signals.exit_status()
+    # a signal a library swallowed (turned into an error of its own, or ignored) still ends the
+    # run as interrupted
     if status is None or signals.received() is not None:
-        print(f"hexapod: interrupted ({signals.signal_name()})" if signals.received()
-              else "hexapod: interrupted", file=sys.stderr)
+        print(signals.interruption(), file=sys.stderr)
         return signals.exit_status()
     return status
 

@@ -23,7 +23,7 @@ def main(argv: list[str] | None = None) -> int:
         try:
             from hexapod.cli import app
         except KeyboardInterrupt:
-            print(f"hexapod: interrupted ({signals.signal_name()})", file=sys.stderr)
+            print(signals.interruption(), file=sys.stderr)
             status = signals.exit_status()
         except (MemoryError, ImportError, OSError) as error:
             print(f"hexapod: error: cannot start: {type(error).__name__}: {error} (too little "
