@@ -30,8 +30,8 @@ __getattr__, __dir__, __all__ = attach(__name__, {
                         "rotation_from_euler_parameters", "rotation_from_rpy"],
     # describing a system
     "hexapod.scene": ["GROUND", "LENGTH_UNITS", "AppliedForce", "AppliedTorque", "Constant",
-                      "Contact", "CoordinateDriver", "Cylindrical", "Distance", "Fixed", "Gait",
-                      "GroundForces",
+                      "Contact", "CoordinateDriver", "Cylindrical", "Distance", "Expression",
+                      "Fixed", "Gait", "GroundForces",
                       "Harmonic", "Hermite", "Joint", "JointDriver", "JointEffort", "Law",
                       "Particle", "PlanarBody", "PlanarJoint", "PointOnPlane", "Polynomial",
                       "Prismatic", "Revolute", "RotationalSpringDamper", "Scene", "SpatialBody",

@@ -16,7 +16,7 @@ __getattr__, __dir__, __all__ = attach(__name__, {
                              "RotationalSpringDamper", "SpringDamper"],
     "hexapod.scene.joints": ["Contact", "Cylindrical", "Distance", "Fixed", "Joint", "PlanarJoint",
                              "PointOnPlane", "Prismatic", "Revolute", "Spherical", "Universal"],
-    "hexapod.scene.laws": ["Constant", "Gait", "Harmonic", "Hermite", "Law", "Polynomial",
-                           "Spline"],
+    "hexapod.scene.laws": ["Constant", "Expression", "Gait", "Harmonic", "Hermite", "Law",
+                           "Polynomial", "Spline"],
     "hexapod.scene.scene": ["LENGTH_UNITS", "Scene"],
 })

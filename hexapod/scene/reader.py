@@ -221,6 +221,19 @@ def _point(dimension: int) -> Callable:
     return convert
 
 
+def _constants(value) -> dict[str, float]:
+    """A table of names and numbers (the constants of an expression law)."""
+    if not isinstance(value, dict):
+        raise _Invalid(f"must be a table of names and numbers, got {_shown(value)}")
+    out = {}
+    for name, number in value.items():
+        try:
+            out[name] = _number(number)
+        except _Invalid as error:
+            raise _Invalid(f"entry {_key(name)} {error}") from None
+    return out
+
+
 #: keys of each law table: converter and whether it is required
 _LAW_KEYS = {
     "constant": {"value": (_number, True)},
@@ -235,6 +248,8 @@ _LAW_KEYS = {
     "gait": {"offset": (_number, False), "cos": (_amplitudes, False),
              "sin": (_amplitudes, False), "period": (_number, True), "duty": (_number, False),
              "shift": (_number, False), "blend": (_number, False)},
+    "expression": {"expression": (_string, True), "constants": (_constants, False),
+                   "period": (_number, False)},
 }
 
 
@@ -260,13 +275,14 @@ def _law(value) -> Law:
         raise _Invalid(f"law type must be one of {', '.join(types)}, got {_shown(kind)}")
     spec = _LAW_KEYS[kind] if kind in _LAW_KEYS else _plugin_keys(types[kind])
     fields = {k: v for k, v in value.items() if k != "type"}
+    article = "an" if kind[:1] in tuple("aeiou") else "a"
     unknown = set(fields) - set(spec)
     if unknown:
-        raise _Invalid(f"unknown key(s) {', '.join(map(_key, sorted(unknown)))} for a {kind} law "
-                       f"(expected {', '.join(spec)})")
+        raise _Invalid(f"unknown key(s) {', '.join(map(_key, sorted(unknown)))} for {article} "
+                       f"{kind} law (expected {', '.join(spec)})")
     missing = [k for k, (_, required) in spec.items() if required and k not in fields]
     if missing:
-        raise _Invalid(f"a {kind} law needs {', '.join(missing)}")
+        raise _Invalid(f"{article} {kind} law needs {', '.join(missing)}")
     args = {}
     for key, raw in fields.items():
         try:

@@ -79,6 +79,11 @@ def _string(text: str) -> str:
     return '"' + text.translate(_ESCAPES) + '"'
 
 
+def _table_key(name: str) -> str:
+    """A key of a TOML table: bare when TOML allows it, else a quoted string."""
+    return name if re.fullmatch(r"[A-Za-z0-9_-]+", name) else _string(name)
+
+
 def _rotation(R: np.ndarray) -> str:
     R = np.asarray(R, dtype=float)
     if R.shape == (2, 2):
@@ -105,7 +110,13 @@ def _law(law: Law) -> str:
         if f.name.startswith("_"):
             continue
         value = getattr(law, f.name)
-        if isinstance(value, (tuple, np.ndarray)):
+        if value is None:  # an optional key left out
+            continue
+        if isinstance(value, tuple) and value and isinstance(value[0], tuple):
+            # (name, number) pairs, an expression law's constants: a table
+            parts.append(f"{f.name} = {{ " + ", ".join(
+                f"{_table_key(name)} = {_number(number)}" for name, number in value) + " }")
+        elif isinstance(value, (tuple, np.ndarray)):
             if len(value):
                 parts.append(f"{f.name} = {_array(value)}")
         elif isinstance(value, str):
