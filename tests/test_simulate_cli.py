@@ -184,3 +184,26 @@ def test_bad_options_and_occupied_output_are_one_clear_error(tmp_path):
     result = run_cli("simulate", str(SEED002), "--t-end", "0.01", "--out", "busy", cwd=tmp_path)
     assert result.returncode == 1 and "holds other files (notes.txt)" in result.stderr
     assert [p.name for p in (tmp_path / "busy").iterdir()] == ["notes.txt"]
+
+
+def test_help_names_the_short_names_and_the_output_options(tmp_path):
+    from hexapod.simulation.methods import ALIASES
+
+    result = run_cli("simulate", "--help", cwd=tmp_path)
+    text = " ".join(result.stdout.split())
+    for alias, name in ALIASES.items():
+        assert f"(short name {alias})" in text and name in text
+    for option in ("--t-eval", "--dt-out", "--atol-position", "--atol-angle", "--atol-velocity",
+                   "--atol-angular-velocity"):
+        assert option in text
+
+
+def test_short_name_runs_and_is_recorded_by_its_full_name(tmp_path):
+    result = run_cli("simulate", str(SEED002), "--method", "radau", "--t-end", "0.05",
+                     "--dt-out", "0.01", "--out", "run", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert "radau5-ggl over 0.05 s" in result.stdout
+    stats = strict_json((tmp_path / "run" / "stats.json").read_text())
+    assert stats["method"] == "radau5-ggl" and stats["saved"] == 6
+    _, table = read_csv(tmp_path / "run" / "results.csv")
+    assert np.allclose(table[:, 0], np.linspace(0.0, 0.05, 6), rtol=0, atol=1e-15)

@@ -590,3 +590,29 @@ def distribute(split: RowSplit, lam: np.ndarray, wrench_map: np.ndarray,
         offset = offset + wrench_offset
     z = np.linalg.lstsq(wrench_map @ N, -offset, rcond=None)[0]
     return lam + N @ z
+
+
+def solve_or_least_squares(A: np.ndarray, b: np.ndarray, pivot_ratio: float = 1e-10,
+                           rcond: float = 1e-12) -> np.ndarray | None:
+    """``A x = b`` for a square ``A`` that may be nearly singular (the iteration matrix of an
+    implicit method near a singular configuration): the rows are equilibrated, then LU with
+    partial pivoting when its smallest pivot is above ``pivot_ratio`` times the largest, else
+    the least-squares solution of least norm (singular values below ``rcond`` of the largest
+    dropped), which moves along the nearly dependent directions no more than ``b`` asks.
+    None when neither gives finite numbers."""
+    from scipy.linalg import lu_factor, lu_solve
+
+    scale = np.abs(A).max(axis=1) if A.size else np.ones(0)
+    scale[~(scale > 0)] = 1.0
+    A, b = A / scale[:, None], b / scale
+    if not (np.all(np.isfinite(A)) and np.all(np.isfinite(b))):
+        return None
+    x = None
+    if A.size:
+        lu, pivots = lu_factor(A, check_finite=False)
+        diagonal = np.abs(np.diag(lu))
+        if diagonal.min() > pivot_ratio * diagonal.max():
+            x = lu_solve((lu, pivots), b, check_finite=False)
+    if x is None or not np.all(np.isfinite(x)):
+        x = np.linalg.lstsq(A, b, rcond=rcond)[0]
+    return x if np.all(np.isfinite(x)) else None

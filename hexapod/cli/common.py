@@ -68,6 +68,73 @@ relative_tolerance = _number(float, lambda value: 0 < value < 1,
                              "positive and below 1 (e.g. 1e-6)")
 
 
+def _increasing(times, where: str = ""):
+    """``times`` (finite numbers) unchanged when they increase, else a ValueError."""
+    for k in range(1, len(times)):
+        if not times[k] > times[k - 1]:
+            raise ValueError(f"the times must increase: {times[k]:g} after {times[k - 1]:g}"
+                             + where)
+    return times
+
+
+def _time(text: str, where: str = "") -> float:
+    try:
+        value = float(text)
+    except (ValueError, OverflowError):
+        raise ValueError(f"not a number: {text.strip()!r}{where}") from None
+    if not math.isfinite(value):
+        raise ValueError(f"the times must be finite, got {text.strip()}{where}")
+    return value
+
+
+class TimesFile(str):
+    """The path of a file of output times, one a line (``--t-eval @FILE``), read by
+    :func:`read_times` once the run's limits are known."""
+
+
+def output_times(text: str):
+    """An argparse type: output times in s, ``T0,T1,...`` (finite, increasing: a tuple of
+    floats) or ``@FILE`` (a :class:`TimesFile`, read later). Whether they lie within the run is
+    checked once its duration is known."""
+    if text.startswith("@"):
+        if not text[1:].strip():
+            raise argparse.ArgumentTypeError("@FILE: name a file of times, one a line")
+        return TimesFile(text[1:])
+    try:
+        times = tuple(_time(part) for part in text.split(","))
+        return _increasing(times)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+
+
+def read_times(path: str, limit: int):
+    """The output times of a file, one a line (blank lines and ``#`` comments skipped): an
+    ``array('d')`` of at most ``limit`` finite, increasing times; a ValueError saying what is
+    wrong (and where), or that the file cannot be read."""
+    from array import array
+
+    times = array("d")
+    try:
+        with open(path, encoding="utf-8") as lines:
+            for number, line in enumerate(lines, 1):
+                text = line.split("#", 1)[0].strip()
+                if not text:
+                    continue
+                where = f" (line {number} of {path})"
+                times.append(_time(text, where))
+                if len(times) > 1 and not times[-1] > times[-2]:
+                    _increasing(times[-2:], where)
+                if len(times) > limit:
+                    raise ValueError(f"{path} holds more than {limit:,} times, the limit of "
+                                     "steps (--max-steps)")
+    except (OSError, UnicodeDecodeError) as error:
+        raise ValueError(f"cannot read {path}: {getattr(error, 'strerror', None) or error}") \
+            from None
+    if not times:
+        raise ValueError(f"{path} holds no time (write one time in s a line)")
+    return times
+
+
 def at_least(smallest: int, largest: int = MAX_COUNT):
     """An argparse type: a whole number from ``smallest`` to ``largest``, written ``5000`` or
     ``1e7``."""

@@ -12,6 +12,7 @@ from hexapod.cli.common import (
     ground_arguments,
     jsonable,
     limit_arguments,
+    output_times,
     positive,
     relative_tolerance,
     scene_positional,
@@ -21,7 +22,15 @@ from hexapod.cli.common import (
     time_value,
 )
 from hexapod.cli.outputs import given_files, output_directory, suffixes
-from hexapod.simulation.methods import DEFAULT_ATOL, DEFAULT_METHOD, DEFAULT_RTOL, METHODS
+from hexapod.simulation.methods import (
+    ATOL_KINDS,
+    DEFAULT_ATOL,
+    DEFAULT_METHOD,
+    DEFAULT_RTOL,
+    METHODS,
+    aliases_of,
+    resolve_method,
+)
 
 HELP = "forward dynamics over time: states, multipliers, statistics"
 DESCRIPTION = (
@@ -30,18 +39,31 @@ DESCRIPTION = (
     "vdot:<velocity>, lambda:<row> and, with --forces or when the scene sets report_forces, "
     "tau/Fx..Tz:<joint> as in 'hexapod inverse'; SI units), units.json (each column's unit), "
     "results.npz (the same arrays, compressed) and stats.json (status, time reached, counters, "
-    "times, largest constraint violations, energy drift). A run that fails, passes "
+    "times, largest constraint violations, energy drift). With --t-eval or --dt-out the "
+    "states are saved at those times only, from each method's own dense output. A run that "
+    "fails, passes "
     "--cpu-budget or is interrupted (Ctrl-C, SIGTERM) still writes the states up to there, "
     "marked so in stats.json, says why and exits with status 1 (130, 143 when interrupted). The "
     "directory is written whole or not at all.")
 
 
+#: the per-kind absolute tolerances' options: kind -> (unit, what)
+ATOL_OPTIONS = {"position": ("m", "positions of centres of mass and particles"),
+                "angle": ("rad", "angles of planar bodies and Euler parameters"),
+                "velocity": ("m/s", "velocities of centres of mass and particles"),
+                "angular_velocity": ("rad/s", "angular velocities")}
+
+
 def add_arguments(parser) -> None:
-    methods = "; ".join(f"{name}: {method.summary()}" for name, method in METHODS.items())
+    methods = "; ".join(
+        f"{name}: {method.summary()}"
+        + "".join(f" (short name {alias})" for alias in aliases_of(name))
+        for name, method in METHODS.items())
     scene_positional(parser)
-    parser.add_argument("--method", choices=list(METHODS), default=DEFAULT_METHOD,
-                        metavar="NAME",
-                        help=f"the integrator (default {DEFAULT_METHOD}): {methods}")
+    parser.add_argument("--method", type=resolve_method, choices=list(METHODS),
+                        default=DEFAULT_METHOD, metavar="NAME",
+                        help=f"the integrator, by name or short name (default {DEFAULT_METHOD}):"
+                        f" {methods}")
     parser.add_argument("--t-end", type=seconds, metavar="S",
                         help="duration in s (default: one cycle of the scene's periodic laws, "
                         "or 1 s)")
@@ -51,13 +73,32 @@ def add_arguments(parser) -> None:
                         help="relative tolerance of adaptive methods (default "
                         f"{short(DEFAULT_RTOL)})")
     parser.add_argument("--atol", type=positive(float),
-                        help="absolute tolerance of adaptive methods, SI units (default "
-                        f"{short(DEFAULT_ATOL)})")
+                        help="absolute tolerance of adaptive methods, SI units, for every kind "
+                        f"of coordinate (default {short(DEFAULT_ATOL)})")
+    kinds = parser.add_argument_group(
+        "absolute tolerances per kind",
+        "each overrides --atol for one kind of coordinate; the kinds not given take --atol or, "
+        f"without it, their defaults: {short(DEFAULT_ATOL)} L for positions (L the scene's "
+        f"characteristic length), {short(DEFAULT_ATOL)} rad for angles, and their rates the "
+        "same per characteristic time sqrt(L / g) (1 s without gravity)")
+    for kind, (unit, what) in ATOL_OPTIONS.items():
+        kinds.add_argument("--atol-" + kind.replace("_", "-"), type=positive(float),
+                           metavar=unit.upper().replace("/", "_PER_"),
+                           help=f"absolute tolerance of the {what}, {unit}")
     parser.add_argument("--step", type=seconds, metavar="S",
                         help="step of fixed-step methods (default: the duration / 1000), first "
                         "step of adaptive ones (default: chosen)")
-    parser.add_argument("--every", type=at_least(1), default=1, metavar="N",
-                        help="save every N-th accepted step (default 1; the last state always)")
+    saved = parser.add_mutually_exclusive_group()
+    saved.add_argument("--every", type=at_least(1), metavar="N",
+                       help="save every N-th accepted step (default 1; the last state always)")
+    saved.add_argument("--t-eval", type=output_times, metavar="T0,T1,...",
+                       help="save the states at these times only (s, increasing, within the "
+                       "run; @FILE: one time a line), each from the method's own dense output "
+                       "over the step that holds it, projected onto the constraints; the steps "
+                       "are not changed")
+    saved.add_argument("--dt-out", type=seconds, metavar="S",
+                       help="save the states every S seconds from the start (the end too when "
+                       "the duration is a multiple of S), as --t-eval does")
     parser.add_argument("--forces", action="store_true",
                         help="also write every joint's wrench at the saved states")
     parser.add_argument("--out", metavar="DIR",
@@ -83,9 +124,15 @@ def run(args) -> int:
     model = assemble(scene)
     duration, why = model.time_window(args.t_end)
     _check_step(args, duration)
+    try:
+        grid = _output_grid(args, model, duration)
+    except _OptionError as error:
+        print(f"hexapod simulate: error: {error}", file=sys.stderr)
+        return 2
     show = sys.stderr.isatty()
     result = simulate(model, args.start + duration, t0=args.start, method=args.method,
-                      rtol=args.rtol, atol=args.atol, step=args.step, every=args.every,
+                      rtol=args.rtol, atol=_absolute_tolerance(args), step=args.step,
+                      every=args.every or 1, t_eval=grid,
                       forces=True if args.forces else None,
                       progress=time_progress(args.method, args.start) if show else None,
                       max_steps=args.max_steps, max_memory=args.max_memory,
@@ -136,6 +183,56 @@ def _check_step(args, duration: float) -> None:
                            "shorter step or a longer --t-end")
 
 
+class _OptionError(Exception):
+    """A value of an option that does not fit the run (status 2, as argparse's errors)."""
+
+
+def _output_grid(args, model, duration: float):
+    """The output times of ``--t-eval`` or ``--dt-out`` (None without either), checked against
+    the run (within it, at most the limits of steps and memory) before any array of them is
+    made; an :class:`_OptionError` naming the option."""
+    from hexapod.cli.common import TimesFile, read_times
+    from hexapod.errors import HexapodError
+    from hexapod.simulation.loop import (
+        output_times,
+        uniform_count,
+        uniform_times,
+        weigh_output_times,
+    )
+
+    if args.t_eval is None and args.dt_out is None:
+        return None
+    option = "--t-eval" if args.t_eval is not None else "--dt-out"
+    start, end = args.start, args.start + duration
+    try:
+        if args.dt_out is not None:
+            if args.dt_out > duration:
+                raise ValueError(f"{args.dt_out:g} s is longer than the run ({duration:g} s)")
+            count = uniform_count(start, end, args.dt_out)
+            weigh_output_times(model, count, args.max_steps, args.max_memory, _advice(args))
+            return uniform_times(start, end, args.dt_out)
+        times = args.t_eval
+        if isinstance(times, TimesFile):
+            from hexapod._support.limits import max_steps
+
+            times = read_times(times, max_steps(args.max_steps))
+        weigh_output_times(model, len(times), args.max_steps, args.max_memory, _advice(args))
+        return output_times(times, start, end)
+    except (ValueError, HexapodError) as error:
+        raise _OptionError(f"argument {option}: {error}") from None
+
+
+def _absolute_tolerance(args):
+    """``--atol`` (a number, or None), or with options per kind the mapping of the kinds
+    given: those not given take ``--atol`` when it is, else their own defaults."""
+    given = {kind: getattr(args, "atol_" + kind) for kind in ATOL_KINDS
+             if getattr(args, "atol_" + kind, None) is not None}
+    if not given:
+        return args.atol
+    base = dict.fromkeys(ATOL_KINDS, args.atol) if args.atol is not None else {}
+    return {**base, **given}
+
+
 def _advice(args) -> dict[str, str]:
     """What the messages of the limits suggest, in this command's options."""
     from hexapod.simulation.methods import METHODS
@@ -144,4 +241,5 @@ def _advice(args) -> dict[str, str]:
         steps = "shorten --t-end, or loosen --rtol and --atol"
     else:
         steps = "shorten --t-end, or give a larger --step"
-    return {"steps": steps, "memory": "save fewer states with a larger --every N"}
+    return {"steps": steps, "memory": "save fewer states with a larger --every N",
+            "output": "give fewer times with --t-eval, or a larger --dt-out"}

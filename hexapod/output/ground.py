@@ -19,7 +19,8 @@ from hexapod.algorithms.ground import VIOLATION_TOL, robot_weight
 from hexapod.algorithms.inverse import InverseResult
 from hexapod.algorithms.kinematics import body_poses
 from hexapod.model.model import Model
-from hexapod.simulation.results import COORDINATE_UNITS, VELOCITY_UNITS, Columns
+from hexapod.model.units import COORDINATE_UNITS, VELOCITY_UNITS
+from hexapod.simulation.results import Columns
 from hexapod.spatial import rpy_from_rotation
 
 #: The suffix of a contact's name that its leg's name leaves out.

@@ -2,7 +2,9 @@
 
 :func:`simulate` makes the initial state consistent (through the integrator), steps until the
 end or a failure, saves every ``every``-th accepted step (and always the first and the last
-state), measures at **every** accepted step the constraint residuals of positions and
+state) or, given output times (``t_eval``), the states at those times from the method's own
+continuous extension of the step that holds each (:meth:`Integrator.dense_output`), put back
+on the constraints; it measures at **every** accepted step the constraint residuals of positions and
 velocities and, when the scene conserves energy, the energy drift, and returns a
 :class:`~hexapod.simulation.results.SimulationResult`. A failure is a result too: ``status =
 "failed"`` with the message and the states up to it; so is an interruption (``status =
@@ -15,13 +17,13 @@ from __future__ import annotations
 import math
 import time
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 
 import numpy as np
 
 from hexapod._support import limits, signals
 from hexapod.algorithms.liaison import wrenches_from_multipliers
-from hexapod.errors import HexapodError
+from hexapod.errors import HexapodError, IntegrationError
 from hexapod.model.model import Model
 from hexapod.simulation.integrators import Integrator
 from hexapod.simulation.methods import DEFAULT_ATOL, DEFAULT_RTOL
@@ -30,7 +32,10 @@ from hexapod.simulation.results import SimulationResult
 
 #: steps tried (accepted or rejected) after which a run's pace is measured, then weighed each
 #: time they double: the pace since the last weighing, so that the starting transient (a small
-#: first step growing, a stiff solver's first call) does not count
+#: first step growing, a stiff solver's first call) does not count. A run is stopped when two
+#: weighings in a row find it over a limit: a passing slowness (the short steps near a singular
+#: pose: one window of the N-four-bar's extrapolated to 1e8 steps a run that takes 3000) does
+#: not stop it
 WEIGH_AFTER = 20
 #: bytes a saved state costs per number until the run's files are written: the state's array,
 #: the result's copy, and its CSV text (about 24 characters per number, built in pieces and
@@ -41,13 +46,18 @@ BYTES_PER_SAVED_NUMBER = 100
 #: the messages of the limits (a command line says its own options instead)
 ADVICE = {"steps": "shorten the run (t_end) or take larger steps (step, or looser rtol and "
                    "atol)",
-          "memory": "save fewer states (a larger every)"}
+          "memory": "save fewer states (a larger every)",
+          "output": "give fewer output times (t_eval)"}
+#: what :class:`_Weighing` is told of ``every`` when output times are given: the states saved
+#: are then those times (weighed before the run by :func:`weigh_output_times`), not the steps
+_NO_STEP_SAVED = 2**62
 
 
 def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEFAULT_METHOD,
              t0: float = 0.0, q0: np.ndarray | None = None, v0: np.ndarray | None = None,
-             rtol: float | None = None, atol: float | None = None, step: float | None = None,
-             every: int = 1, forces: bool | None = None, max_steps: int | None = None,
+             rtol: float | None = None, atol: float | Mapping[str, float] | None = None,
+             step: float | None = None, every: int = 1, t_eval=None,
+             forces: bool | None = None, max_steps: int | None = None,
              max_memory: int | None = None, cpu_budget: float | None = None,
              progress: Callable[[float, float], None] | None = None,
              options: dict | None = None, advice: dict[str, str] | None = None,
@@ -57,15 +67,33 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
     Parameters
     ----------
     method :
-        A registered integrator name (:data:`hexapod.simulation.integrators.INTEGRATORS`) or class.
+        A registered integrator name (:data:`hexapod.simulation.integrators.INTEGRATORS`), its
+        short name (:data:`~hexapod.simulation.methods.ALIASES`: ``rk4``, ``dopri5``,
+        ``dop853``, ``radau``, ``idas``, ``gen-alpha``) or class; the result records the
+        registered name.
     rtol, atol, step :
         Tolerances of adaptive methods (default :data:`~hexapod.simulation.methods.DEFAULT_RTOL`
         and ``DEFAULT_ATOL``; a fixed-step method given them warns that it ignores them); the
         step of fixed-step methods (the first step of adaptive ones). See
-        :class:`~hexapod.simulation.integrators.Integrator`.
+        :class:`~hexapod.simulation.integrators.Integrator`. ``atol`` is a number (SI units of
+        every coordinate) or a mapping per kind of coordinate, keys ``position`` (m),
+        ``angle`` (rad, and the Euler parameters), ``velocity`` (m/s) and
+        ``angular_velocity`` (rad/s), each weighing its coordinates in the error norm; the
+        kinds it leaves out take the defaults of
+        :func:`~hexapod.simulation.integrators.base.default_tolerances` (scaled by the
+        scene's characteristic length and time). The result's ``options["atol"]`` holds the
+        tolerance used per kind.
     every :
         Save every ``every``-th accepted step (every ``every``-th state a method returns, for
-        a method that returns states at output times and counts its own steps).
+        a method that returns states at output times and counts its own steps). Not with
+        ``t_eval``.
+    t_eval :
+        Output times (s, increasing, within ``[t0, t_end]``): the states saved are those at
+        these times (``t0`` and ``t_end`` only when they are among them), each from the
+        method's own continuous extension of the step that holds it (for ``idas-bdf``, IDAS's
+        interpolation at its output times), positions and velocities projected onto the
+        constraints and the accelerations and multipliers solved there. The steps are not
+        changed by them. See :func:`output_times` and :func:`uniform_times`.
     forces :
         Also compute the joint wrenches at the saved states (report convention); default: as
         the scene asks (``[scene] report_forces``).
@@ -96,45 +124,68 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
     ------
     HexapodError
         When the initial state cannot be made consistent (the run has not started), or a
-        fixed-step run would pass a limit.
+        fixed-step run, or the states at the output times, would pass a limit.
+    ValueError
+        Bad arguments: ``every`` below 1, or with ``t_eval``; output times not finite, not
+        increasing or outside the run; ``t_eval`` for a method without dense output.
     """
     if every < 1:
         raise ValueError(f"every must be at least 1, got {every}")
     if not (np.isfinite(t0) and np.isfinite(t_end) and np.isfinite(t_end - t0)):
         raise ValueError(f"t0 and t_end must be finite and their difference too, got {t0} and "
                          f"{t_end}")
+    grid = None if t_eval is None else output_times(t_eval, t0, t_end)
+    if grid is not None and every != 1:
+        raise ValueError("every and t_eval cannot be given together: with output times the "
+                         "states saved are those at the times")
     cls = get_integrator(method)
+    if grid is not None and not cls.has_dense_output():
+        raise ValueError(f"{cls.name} has no dense output: it cannot save states at t_eval")
     options = {**_tolerances(cls, rtol, atol), "step": step, **(options or {})}
-    weigh = _Weighing(model, cls, t0, t_end, every, max_steps, max_memory,
-                      {**ADVICE, **(advice or {})})
+    advice = {**ADVICE, **(advice or {})}
+    weigh = _Weighing(model, cls, t0, t_end, every if grid is None else _NO_STEP_SAVED,
+                      max_steps, max_memory, advice)
+    if grid is not None:
+        weigh_output_times(model, grid.size, max_steps, max_memory, advice)
     weigh.before(step)
     integrator = cls(model, t0, t_end, q0, v0, **options)
-    watch = _Watch(model, integrator)
+    if grid is not None and cls.counts_own_steps:
+        integrator.set_output_times(grid)
+    watch = _Watch(model, integrator, grid)
     wall, cpu = time.perf_counter(), time.process_time()
-    _run(integrator, watch, weigh, every, cpu_budget, progress)
+    reached = _run(integrator, watch, weigh, every, cpu_budget, progress)
     wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
     watch.complete()
-    arrays = {key: np.array(values) for key, values in watch.saved.items()}
+    count = len(watch.saved["t"])
+    sizes = {"t": (count,), "q": (count, model.n_q), "v": (count, model.n_v),
+             "v_dot": (count, model.n_v), "lam": (count, model.n_c)}
+    arrays = {key: np.array(values, dtype=float).reshape(sizes[key])
+              for key, values in watch.saved.items()}
     worst = watch.worst
+    # the tolerances used, per kind (a fixed-step method ignores them)
+    options = {**options, "atol": dict(integrator.atol_kinds)}
+    if grid is not None:
+        options["output_times"] = int(grid.size)
     result = SimulationResult(
         model=model, method=cls.name, t=arrays["t"], q=arrays["q"], v=arrays["v"],
-        v_dot=arrays["v_dot"], lam=arrays["lam"].reshape(len(watch.saved["t"]), model.n_c),
+        v_dot=arrays["v_dot"], lam=arrays["lam"],
         status=integrator.status, message=integrator.message, counters=integrator.counters,
         wall_time=wall, cpu_time=cpu, max_position_violation=worst["phi"],
         max_velocity_violation=worst["velocity"],
         energy=np.array(watch.energy_saved) if watch.conserved else None,
         energy_drift=(worst["drift"] / max(worst["kinetic"], np.finfo(float).tiny)
                       if watch.conserved else None),
-        options=options, t_bound=float(t_end))
+        options=options, t_bound=float(t_end), t_start=float(t0),
+        t_reached=float(reached) if grid is not None else None)
     if forces or (forces is None and model.report_forces):
         _add_wrenches(result)
     return result
 
 
 def _run(integrator: Integrator, watch: _Watch, weigh: _Weighing, every: int,
-         cpu_budget: float | None, progress) -> None:
+         cpu_budget: float | None, progress) -> float:
     """Step until the end, a failure, a limit or an interruption; every outcome is said by the
-    integrator's ``status`` and ``message``."""
+    integrator's ``status`` and ``message``. Returns the time of the last step completed."""
     name = integrator.name
     cpu = time.process_time()
     returned = 0
@@ -156,7 +207,9 @@ def _run(integrator: Integrator, watch: _Watch, weigh: _Weighing, every: int,
             reached = integrator.t
             watch.watch()
             returned += 1  # states returned, one per call (many steps for some methods)
-            if integrator.status == "finished" or returned % every == 0:
+            if watch.grid is not None:
+                watch.save_grid()
+            elif integrator.status == "finished" or returned % every == 0:
                 watch.save()
             if progress is not None:
                 progress(integrator.t, integrator.t_bound)
@@ -169,14 +222,17 @@ def _run(integrator: Integrator, watch: _Watch, weigh: _Weighing, every: int,
             raise
         integrator.status = "interrupted"
         integrator.message = f"{name}: interrupted at t = {reached:.6g} s"
+    return reached
 
 
 class _Watch:
     """What the loop measures at every accepted step (constraint residuals, energy) and the
     states it saves."""
 
-    def __init__(self, model: Model, integrator: Integrator):
+    def __init__(self, model: Model, integrator: Integrator, grid: np.ndarray | None = None):
         self.model, self.integrator = model, integrator
+        self.grid = grid  # the output times, if given
+        self.next = 0  # the output time to save next
         self.saved: dict[str, list] = {"t": [], "q": [], "v": [], "v_dot": [], "lam": []}
         self.energy_saved: list[float] = []
         self.conserved = model.energy_conserved
@@ -185,7 +241,9 @@ class _Watch:
         self.worst = {"phi": 0.0, "velocity": 0.0, "drift": 0.0, "kinetic": 0.0}
         self.latest = self.energy0  # the energy of the state watched last, saved with it
         self.watch()
-        self.save()
+        if grid is None or grid[0] == integrator.t:
+            self.save()
+            self.next = 1
 
     def watch(self) -> None:
         model, integrator, worst = self.model, self.integrator, self.worst
@@ -216,17 +274,54 @@ class _Watch:
             integrator.message = (f"{integrator.name}: failed at t = {integrator.t:.6g} s: "
                                   f"{error}")
             return
+        self._keep(values, self.latest)
+
+    def save_grid(self) -> None:
+        """Save the states at the output times the last step passed, each from the method's
+        continuous extension of the step (or, for a method that counts its own steps, the
+        state it returned there), made consistent (:meth:`Integrator.dense_state`). A state
+        that cannot be made consistent ends the run as a failure."""
+        integrator, grid = self.integrator, self.grid
+        t = integrator.t
+        interpolant = None
+        while self.next < grid.size and grid[self.next] <= t:
+            at = float(grid[self.next])
+            try:
+                if not integrator.counts_own_steps:
+                    interpolant = interpolant or integrator.dense_output()
+                    q, v = interpolant(at)
+                elif at == t or abs(at - t) <= 1e-12 * max(1.0, abs(t)):
+                    q, v = integrator.q, integrator.v
+                else:
+                    raise IntegrationError(f"the method returned no state at {at:.10g} s")
+                q, v, v_dot, lam = integrator.dense_state(at, q, v)
+            except (HexapodError, np.linalg.LinAlgError) as error:
+                integrator.status = "failed"
+                integrator.message = (f"{integrator.name}: failed at the output time t = "
+                                      f"{at:.6g} s: {error}")
+                return
+            self.next += 1
+            energy = _energy(self.model, q, v)[1] if self.conserved else None
+            self._keep({"t": at, "q": q, "v": v, "v_dot": v_dot, "lam": lam}, energy)
+            if integrator.status == "failed":
+                return
+
+    def _keep(self, values: dict, energy: float | None) -> None:
+        """Append a state, unless its accelerations or multipliers are not finite (then the run
+        ends as a failure)."""
+        integrator = self.integrator
         for key, what in (("v_dot", "accelerations"), ("lam", "multipliers")):
             if not np.all(np.isfinite(values[key])):
                 integrator.status = "failed"
                 integrator.message = (f"{integrator.name}: non-finite {what} at t = "
-                                      f"{integrator.t:.6g} s (an overflow: the scene's forces "
-                                      "or laws are too large, or the motion is unstable)")
+                                      f"{float(values['t']):.6g} s (an overflow: the scene's "
+                                      "forces or laws are too large, or the motion is "
+                                      "unstable)")
                 return
         for key, value in values.items():
             self.saved[key].append(value)
         if self.conserved:
-            self.energy_saved.append(self.latest)
+            self.energy_saved.append(energy)
 
     def complete(self) -> None:
         """Only whole states: an interruption inside :meth:`save` may have left one in part."""
@@ -254,6 +349,7 @@ class _Weighing:
         self.next_weighing = WEIGH_AFTER
         # steps tried, states returned and time at the last weighing
         self.last: tuple[int, int, float] | None = None
+        self.over = False  # the last weighing found the run over a limit
 
     def _check(self, steps: float, states: float, what: str) -> None:
         limits.check_steps(steps, what, self.advice["steps"], self.max_steps)
@@ -300,11 +396,80 @@ class _Weighing:
                         returned + left * (returned - last_returned),
                         f"at its pace, reaching t = {self.t_end:.6g} s")
         except HexapodError as error:
-            return f"after {counters.steps} steps: {error}"
+            over, self.over = self.over, True
+            return f"after {counters.steps} steps: {error}" if over else None
+        self.over = False
         return None
 
 
-def _tolerances(cls: type[Integrator], rtol: float | None, atol: float | None) -> dict:
+def output_times(t_eval, t0: float, t_end: float) -> np.ndarray:
+    """The output times of a run from ``t0`` to ``t_end``, checked: at least one, finite,
+    increasing, within ``[t0, t_end]`` (a time past an end by round-off, 1e-12 relative, is
+    taken as that end).
+
+    Raises
+    ------
+    ValueError
+        Saying which time is wrong and why.
+    """
+    try:
+        times = np.array(t_eval, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError("the output times must be numbers") from None
+    if times.ndim != 1:
+        raise ValueError("the output times must be a sequence of numbers")
+    if not times.size:
+        raise ValueError("no output time given")
+    bad = np.flatnonzero(~np.isfinite(times))
+    if bad.size:
+        raise ValueError(f"the output times must be finite, got {times[bad[0]]}")
+    slack = 1e-12 * max(1.0, abs(t0), abs(t_end))
+    outside = np.flatnonzero((times < t0 - slack) | (times > t_end + slack))
+    if outside.size:
+        raise ValueError(f"{times[outside[0]]:.10g} s is outside the run, from {t0:.10g} to "
+                         f"{t_end:.10g} s")
+    times = np.clip(times, t0, t_end)
+    back = np.flatnonzero(np.diff(times) <= 0)
+    if back.size:
+        raise ValueError(f"the output times must increase: {times[back[0] + 1]:.10g} s after "
+                         f"{times[back[0]]:.10g} s")
+    return times
+
+
+def uniform_count(t0: float, t_end: float, dt: float) -> int:
+    """How many times ``t0, t0 + dt, ...`` fall within ``[t0, t_end]`` (one past ``t_end`` by
+    round-off counts), computed before any array is made."""
+    return math.floor((t_end - t0) / dt * (1 + 1e-12)) + 1
+
+
+def uniform_times(t0: float, t_end: float, dt: float) -> np.ndarray:
+    """The output times ``t0, t0 + dt, ...`` up to ``t_end`` (which is among them when the
+    duration is a multiple of ``dt``, to round-off)."""
+    times = t0 + dt * np.arange(uniform_count(t0, t_end, dt))
+    if abs(times[-1] - t_end) <= 1e-9 * dt:
+        times[-1] = t_end
+    return np.minimum(times, t_end)
+
+
+def weigh_output_times(model: Model, count: int, max_steps: int | None = None,
+                       max_memory: int | None = None, advice: dict | None = None) -> None:
+    """Refuse (:class:`HexapodError`), before any work, more output times than the limit of
+    steps allows, or whose states would pass the memory limit (a state weighed as
+    :class:`_Weighing` weighs one)."""
+    advice = {**ADVICE, **(advice or {})}
+    bound = limits.max_steps(max_steps)
+    if count > bound:
+        raise HexapodError(f"{count:,} output times are more than the limit of steps "
+                           f"({bound:,}), which bounds them too: {advice['output']}, or raise "
+                           "the limit with --max-steps (or HEXAPOD_MAX_STEPS)")
+    forces = 7 * len(model.joints) if model.report_forces else 0
+    numbers = 1 + model.n_q + 2 * model.n_v + model.n_c + forces
+    limits.check_memory(float(count) * BYTES_PER_SAVED_NUMBER * numbers,
+                        f"saving the states at {count:,} output times", advice["output"],
+                        max_memory)
+
+
+def _tolerances(cls: type[Integrator], rtol: float | None, atol) -> dict:
     """The tolerances a run uses: the defaults where not given; a fixed-step method that was
     given some says it ignores them."""
     if not cls.adaptive and (rtol is not None or atol is not None):

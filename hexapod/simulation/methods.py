@@ -1,5 +1,6 @@
-"""The integrators by name, and the defaults of a simulation, written once and importing
-nothing, so that the command line lists the methods in its help without loading CasADi or SciPy.
+"""The integrators by name (and short name), and the defaults of a simulation, written once and
+importing nothing, so that the command line lists the methods in its help without loading CasADi
+or SciPy.
 
 :data:`METHODS` repeats what each class of :data:`hexapod.simulation.registry.INTEGRATORS`
 declares (order, index, adaptive, stabilisation), in the same order; a test keeps the two equal.
@@ -15,6 +16,16 @@ DEFAULT_METHOD = "dopri5-projection"
 DEFAULT_RTOL = 1e-6
 #: Default absolute tolerance of the adaptive methods (SI units of each coordinate).
 DEFAULT_ATOL = 1e-8
+
+#: The kinds of coordinates an absolute tolerance per kind names (``atol`` as a mapping), each
+#: with the units of its coordinates. Euler parameters (unit 1) count as angles: a change ``d``
+#: of them turns the body by about ``2 d`` rad.
+ATOL_KINDS: dict[str, tuple[str, ...]] = {
+    "position": ("m",), "angle": ("rad", "1"), "velocity": ("m/s",),
+    "angular_velocity": ("rad/s",)}
+#: The characteristic time (s) of a scene without gravity, which divides the default tolerances
+#: per kind of positions and angles into those of their rates (with gravity: ``sqrt(L / g)``).
+CHARACTERISTIC_TIME = 1.0
 
 
 class Method(NamedTuple):
@@ -40,7 +51,8 @@ METHODS: dict[str, Method] = {
                             "Baumgarte (alpha = beta), Euler parameters renormalised"),
     "dopri5-projection": Method(5, 1, True, _PROJECTION),
     "dop853-projection": Method(8, 1, True, _PROJECTION),
-    "generalized-alpha": Method(2, 3, False, _NEWTON),
+    "generalized-alpha": Method(2, 3, False, "none needed: position and velocity constraints "
+                                "solved every step (Newton, GGL)"),
     "rattle": Method(2, 3, False, _NEWTON + ", velocities projected onto Phi_v v = nu by the "
                      "second half kick"),
     "radau5-ggl": Method(5, 2, True, "GGL: position and velocity constraints, B Phi_v^T mu"),
@@ -48,3 +60,25 @@ METHODS: dict[str, Method] = {
                        "projection onto phi = 0 and Phi_v v = nu and a restart when the drift "
                        "passes drift_tol"),
 }
+
+#: Short names accepted wherever a method is named (``--method``, ``simulate(method=...)``,
+#: ``get_integrator``); a run records the registered name. ``rattle`` is its own short name.
+ALIASES: dict[str, str] = {
+    "rk4": "rk4-baumgarte",
+    "dopri5": "dopri5-projection",
+    "dop853": "dop853-projection",
+    "radau": "radau5-ggl",
+    "idas": "idas-bdf",
+    "gen-alpha": "generalized-alpha",
+}
+
+
+def resolve_method(name: str) -> str:
+    """The registered name of a method named by its name or its short name (an unknown name is
+    returned as it is, for the caller to refuse)."""
+    return ALIASES.get(name, name)
+
+
+def aliases_of(name: str) -> list[str]:
+    """The short names of a registered method."""
+    return [alias for alias, full in ALIASES.items() if full == name]

@@ -15,7 +15,8 @@ name                        order  index  stabilisation
 ==========================  =====  =====  =============================================
 
 Tests and studies iterate over :data:`INTEGRATORS` (name -> class, in the order studies list
-them); :func:`get_integrator` accepts a name or a class (a user's own subclass of
+them); :func:`get_integrator` accepts a name, a short name (:data:`ALIASES`: ``rk4``,
+``dopri5``, ``dop853``, ``radau``, ``idas``, ``gen-alpha``) or a class (a user's own subclass of
 :class:`~hexapod.simulation.integrators.base.Integrator`), and :func:`register` adds one.
 """
 
@@ -31,10 +32,16 @@ from hexapod.simulation.integrators import (
     Rattle,
     RungeKutta4Baumgarte,
 )
-from hexapod.simulation.methods import DEFAULT_ATOL, DEFAULT_METHOD, DEFAULT_RTOL
+from hexapod.simulation.methods import (
+    ALIASES,
+    DEFAULT_ATOL,
+    DEFAULT_METHOD,
+    DEFAULT_RTOL,
+    resolve_method,
+)
 
-__all__ = ["DEFAULT_ATOL", "DEFAULT_METHOD", "DEFAULT_RTOL", "INTEGRATORS", "get_integrator",
-           "register"]
+__all__ = ["ALIASES", "DEFAULT_ATOL", "DEFAULT_METHOD", "DEFAULT_RTOL", "INTEGRATORS",
+           "get_integrator", "register"]
 
 #: Integrators by name, in the order studies list them.
 INTEGRATORS: dict[str, type[Integrator]] = {}
@@ -55,20 +62,23 @@ def register(cls: type[Integrator]) -> type[Integrator]:
 
 
 def get_integrator(method: str | type[Integrator]) -> type[Integrator]:
-    """The integrator class for a registered name, or ``method`` itself when it is a subclass of
-    ``Integrator``.
+    """The integrator class for a registered name or its short name (:data:`ALIASES`:
+    ``rk4``, ``dopri5``, ``dop853``, ``radau``, ``idas``, ``gen-alpha``), or ``method`` itself
+    when it is a subclass of ``Integrator``.
 
     Raises
     ------
     ValueError
-        ``method`` is neither a registered name nor an ``Integrator`` subclass.
+        ``method`` is neither a registered name, a short name nor an ``Integrator`` subclass.
     """
     if isinstance(method, type) and issubclass(method, Integrator):
         return method
-    if method not in INTEGRATORS:
+    name = resolve_method(method) if isinstance(method, str) else method
+    if name not in INTEGRATORS:
         raise ValueError(f"unknown integrator {method!r}: choose one of "
-                         + ", ".join(INTEGRATORS))
-    return INTEGRATORS[method]
+                         + ", ".join(INTEGRATORS) + " (or a short name: "
+                         + ", ".join(ALIASES) + ")")
+    return INTEGRATORS[name]
 
 
 for _cls in (RungeKutta4Baumgarte, DormandPrince5, DormandPrince853, LieGroupGeneralizedAlpha,

@@ -34,6 +34,13 @@ from pathlib import Path
 import numpy as np
 
 from hexapod.model.model import Model
+from hexapod.model.units import (
+    ACCELERATION_UNITS,
+    COORDINATE_UNITS,
+    ROW_UNITS,
+    VELOCITY_UNITS,
+    component,
+)
 from hexapod.simulation.integrators import Counters
 
 WRENCH_COMPONENTS = ("Fx", "Fy", "Fz", "Tx", "Ty", "Tz")
@@ -42,38 +49,17 @@ WRENCH_COMPONENTS = ("Fx", "Fy", "Fz", "Tx", "Ty", "Tz")
 #: a pure number, None for text; this is what ``units.json`` says of each column.
 Columns = dict[str, tuple[str | None, str]]
 
-#: The unit and meaning of each component of a body's coordinates and velocities (the names of
-#: :attr:`Model.coordinate_names` and :attr:`Model.velocity_names` after the body's name).
-COORDINATE_UNITS = {
-    **{c: ("m", f"position of the centre of mass, world {c}") for c in "xyz"},
-    **{f"e{k}": ("1", f"Euler parameter e{k} of the body's rotation (e0 the scalar part)")
-       for k in range(4)},
-    "angle": ("rad", "angle of the planar body"),
-}
-VELOCITY_UNITS = {
-    **{f"v{c}": ("m/s", f"velocity of the centre of mass, world {c}") for c in "xyz"},
-    **{f"w{c}_body": ("rad/s", f"angular velocity, body {c} axis") for c in "xyz"},
-    "w": ("rad/s", "angular velocity of the planar body"),
-}
-ACCELERATION_UNITS = {"m/s": "m/s^2", "rad/s": "rad/s^2"}
-ROW_UNITS = {"length": ("N", "Lagrange multiplier of the constraint row (a force)"),
-             "angle": ("N m", "Lagrange multiplier of the constraint row (a moment)")}
-
-
-def _component(name: str) -> str:
-    """``x`` of ``trunk.x`` (a body's name may hold dots; the component follows the last)."""
-    return name.rpartition(".")[2]
 
 
 def state_columns(model: Model) -> Columns:
     """``q:``, ``v:``, ``vdot:`` and ``lambda:`` columns of a model, with units."""
     out: Columns = {}
     for name in model.coordinate_names:
-        out[f"q:{name}"] = COORDINATE_UNITS[_component(name)]
+        out[f"q:{name}"] = COORDINATE_UNITS[component(name)]
     for name in model.velocity_names:
-        out[f"v:{name}"] = VELOCITY_UNITS[_component(name)]
+        out[f"v:{name}"] = VELOCITY_UNITS[component(name)]
     for name in model.velocity_names:
-        unit, what = VELOCITY_UNITS[_component(name)]
+        unit, what = VELOCITY_UNITS[component(name)]
         out[f"vdot:{name}"] = (ACCELERATION_UNITS[unit], f"time derivative of the {what}")
     for row in model.rows:
         out[f"lambda:{row.name}"] = ROW_UNITS[row.kind]
@@ -137,6 +123,11 @@ class SimulationResult:
     energy_drift : float or None
         Largest ``|E(t) - E(0)|`` over all accepted steps relative to the largest kinetic
         energy reached (so a pendulum released at rest, ``E = 0``, has a meaningful drift).
+    options : dict
+        The run's settings: ``rtol``, ``atol`` (the absolute tolerance used per kind of
+        coordinate: ``position`` m, ``angle`` rad, ``velocity`` m/s, ``angular_velocity``
+        rad/s), ``step``, the method's own options and, with output times, ``output_times``
+        (how many were asked).
     """
 
     model: Model
@@ -164,6 +155,11 @@ class SimulationResult:
     source: str = ""
     #: the end the run was asked to reach (s); None when not known
     t_bound: float | None = None
+    #: the start of the run (s); None: the first saved time
+    t_start: float | None = None
+    #: the time the run reached (s), when it may differ from the last saved time (states saved
+    #: at output times only); None: the last saved time
+    t_reached: float | None = None
 
     @property
     def success(self) -> bool:
@@ -176,9 +172,10 @@ class SimulationResult:
             "status": self.status, "message": self.message,
             # whether the run is complete: the end asked for, the time reached and, when it
             # stopped short (failed or interrupted), why
-            "t_start": float(self.t[0]),
+            "t_start": float(self.t[0] if self.t_start is None else self.t_start),
             "t_end": float(self.t[-1] if self.t_bound is None else self.t_bound),
-            "t_reached": float(self.t[-1]), "reason": self.message or None,
+            "t_reached": float(self.t[-1] if self.t_reached is None else self.t_reached),
+            "reason": self.message or None,
             "saved": int(self.t.size),
             **self.counters.as_dict(),
             "wall_time_s": self.wall_time, "cpu_time_s": self.cpu_time,
@@ -233,8 +230,8 @@ class SimulationResult:
     def _npz_units(self) -> dict[str, np.ndarray]:
         """The units of ``q``, ``v``, ``v_dot`` and ``lam``, one per column (as units.json)."""
         model = self.model
-        velocity = [VELOCITY_UNITS[_component(n)][0] for n in model.velocity_names]
-        return {"coordinate_units": np.array([COORDINATE_UNITS[_component(n)][0]
+        velocity = [VELOCITY_UNITS[component(n)][0] for n in model.velocity_names]
+        return {"coordinate_units": np.array([COORDINATE_UNITS[component(n)][0]
                                               for n in model.coordinate_names], dtype=str),
                 "velocity_units": np.array(velocity, dtype=str),
                 "acceleration_units": np.array([ACCELERATION_UNITS[u] for u in velocity],

@@ -17,7 +17,9 @@ escaping :meth:`step`.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass
+from functools import cached_property
 from typing import ClassVar
 
 import numpy as np
@@ -27,21 +29,32 @@ from hexapod.algorithms.dynamics import forward_dynamics
 from hexapod.algorithms.kinematics import assemble_positions, rank_split, solve_velocities
 from hexapod.errors import HexapodError, IntegrationError
 from hexapod.model.model import Model
+from hexapod.model.units import COORDINATE_UNITS, VELOCITY_UNITS, component
 from hexapod.simulation.kernels import (
     REDUNDANT_TOLERANCE,
     compiled_projection,
     compiled_rates,
 )
-from hexapod.simulation.methods import DEFAULT_ATOL, DEFAULT_RTOL
+from hexapod.simulation.methods import (
+    ATOL_KINDS,
+    CHARACTERISTIC_TIME,
+    DEFAULT_ATOL,
+    DEFAULT_RTOL,
+)
 
 #: smallest singular value of the equilibrated ``Phi_v`` (rows of unit length, so 1 is
-#: well-conditioned) below which a state counts as near a singular configuration. There the
-#: accelerations in the nearly dependent directions are solved with an error of about
-#: ``eps |gamma| / sigma^2``: at tight tolerances the error test then fails at every step
-#: (the N-four-bar at rtol 1e-10 stalled 3e-7 from its flat pose, the step at 7e-15 s)
+#: well-conditioned) below which a state counts as near a singular configuration. Approaching
+#: such a pose, the motion's derivatives off the constraints grow as ``1 / sigma`` and the error
+#: test lets steps shrink with the distance to it, never reaching it (the N-four-bar at rtol
+#: 1e-10 stalled 3e-7 from its flat pose, the step at 7e-15 s); so the crossing leaves the
+#: nearly dependent rows out there
 SINGULAR_BAND = 1e-4
 #: the crossing's tolerance over the smallest singular value where it begins (or widens)
 CROSSING_FACTOR = 10.0
+#: the largest singular value a crossing leaves out with a cluster of smaller ones (rows of
+#: unit length: a well-posed row's are of order 0.1 to 1); the N-four-bar's 40 windows spread
+#: theirs over a factor 26, 8e-5 to 2e-3 where DOPRI5 at rtol 1e-9 begins to cross
+CLUSTER_CEILING = 1e-2
 
 
 @dataclass
@@ -128,6 +141,10 @@ class Integrator:
             raise ValueError(f"t_bound must be after t0, got {t0} and {t_bound}")
         if step is not None and not step > 0:
             raise ValueError(f"step must be positive, got {step}")
+        # a mapping gives each kind of coordinate its own (see absolute_tolerances); the scalar
+        # ``atol`` is then the smallest of them
+        self.atol_kinds = absolute_tolerances(model, atol)
+        atol = min(self.atol_kinds.values())
         if not (rtol > 0 and atol > 0):
             raise ValueError(f"rtol and atol must be positive, got {rtol} and {atol}")
         self.model = model
@@ -294,9 +311,13 @@ class Integrator:
                                   consistency_tol=REDUNDANT_TOLERANCE)
         return self.model.call("qdot", q=q, v=v), v_dot
 
-    def _cross_singular(self) -> bool:
+    def _cross_singular(self, ahead: np.ndarray | None = None) -> bool:
         """Begin crossing a singular configuration if the state is near one (see
-        :data:`SINGULAR_BAND`), or widen the crossing under way; returns whether it did.
+        :data:`SINGULAR_BAND`) and, when the positions ``ahead`` (a rejected step's end) are
+        given, moving towards it; or widen the crossing under way; returns whether it did.
+        Moving away from a singular pose, the rows are all kept: the steps then grow back as
+        the distance to the pose does, and a crossing begun there would leave rows out over a
+        band ten times as wide as the state's, for nothing.
 
         While crossing, the rows nearly dependent on the others (as many as there are singular
         values of the equilibrated ``Phi_v`` below the crossing's tolerance, ``CROSSING_FACTOR``
@@ -314,15 +335,22 @@ class Integrator:
         base = smallest if self._crossing is None else self._crossing
         if base >= SINGULAR_BAND:
             return False  # as wide as it goes
+        if self._crossing is None and ahead is not None:
+            w, _, _ = self.model.law_values(self.t)
+            further = rank_split(self.model, self.model.call("Phi_v", q=ahead, w=w), w)
+            self.counters.jacobians += 1
+            self.counters.factorisations += 1
+            if further.singular_values().min(initial=np.inf) > smallest:
+                return False  # moving away
         if self._crossing is None:
             self.counters.crossings += 1
         self._crossing = CROSSING_FACTOR * base
         # the rows left out: those a rank-revealing (column-pivoted) QR factorisation takes last
         rows = split.independent
-        dependent = int(np.sum(sigma < self._crossing))
+        dependent = _collapsing(sigma, self._crossing)
         pivots = qr(split.W[rows].T, mode="r", pivoting=True)[1]
-        self._crossing_rates = compiled_rates(self.model,
-                                              np.sort(rows[pivots[:rows.size - dependent]]))
+        kept = np.sort(rows[pivots[:rows.size - dependent]])
+        self._crossing_rates = compiled_rates(self.model, kept)
         return True
 
     def _end_crossing(self) -> None:
@@ -347,8 +375,11 @@ class Integrator:
         while True:
             h = self.next_step()
             if h < 1e-12 * max(1.0, self.t_bound - self.t0):
+                why = getattr(self, "failure", "")  # the attempt's own words, when it has some
+                where = self._singular_pose()
                 raise IntegrationError(f"Newton's method does not converge even with a step of "
-                                       f"{h:.3g} s")
+                                       f"{h:.3g} s" + (f" ({why})" if why else "")
+                                       + (f": {where}" if where else ""))
             result = attempt(h)
             if result is not None:
                 return h, result
@@ -381,3 +412,283 @@ class Integrator:
         return {"name": cls.name, "order": cls.order, "index": cls.index,
                 "stabilisation": cls.stabilisation, "adaptive": cls.adaptive,
                 "description": cls.description}
+
+    # ------------------------------------------------------------------ dense output
+
+    def dense_output(self) -> Interpolant:
+        """The method's own continuous extension over its last accepted step ``[t_old, t]``
+        (an :class:`Interpolant`), valid from the end of :meth:`step` until the next call.
+        A method that counts its own steps returns states at output times instead
+        (:meth:`set_output_times`).
+
+        Raises
+        ------
+        NotImplementedError
+            The method has none (:meth:`has_dense_output`).
+        """
+        raise NotImplementedError(f"{self.name or type(self).__name__} has no dense output: it "
+                                  "cannot give states between its steps")
+
+    def set_output_times(self, times: np.ndarray) -> None:
+        """A method that counts its own steps (:attr:`counts_own_steps`) returns its states at
+        ``times`` (increasing, after ``t0``, at most ``t_bound``; ``t_bound`` is added),
+        interpolated by its solver, instead of at its own output times. Call before the first
+        :meth:`step`.
+
+        Raises
+        ------
+        NotImplementedError
+            The method cannot (:meth:`has_dense_output`).
+        """
+        raise NotImplementedError(f"{self.name or type(self).__name__} cannot return states "
+                                  "at given output times")
+
+    @classmethod
+    def has_dense_output(cls) -> bool:
+        """Whether the method gives states at any time of the run: by its continuous extension
+        (:meth:`dense_output`), or for one that counts its own steps, at output times
+        (:meth:`set_output_times`)."""
+        name = "set_output_times" if cls.counts_own_steps else "dense_output"
+        return getattr(cls, name) is not getattr(Integrator, name)
+
+    def dense_state(self, t: float, q: np.ndarray,
+                    v: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """A state of the dense output made consistent: positions onto ``phi = 0`` and
+        velocities onto ``Phi_v v = nu`` (:meth:`_project`), then the accelerations and
+        multipliers there (:meth:`_dense_dynamics`). Counted as those services count."""
+        q, v = self._project(t, self.model.normalize(q), v)
+        return (q, v, *self._dense_dynamics(t, q, v))
+
+    def _dense_dynamics(self, t: float, q: np.ndarray,
+                        v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`_dynamics` on data of its own (``data`` holds the method's current state,
+        which some methods read again in their next step)."""
+        data = self.data
+        if getattr(self, "_dense_data", None) is None:
+            self._dense_data = self.model.create_data()
+        self.data = self._dense_data
+        try:
+            v_dot, lam = self._dynamics(t, q, v)
+        finally:
+            self.data = data
+        return np.array(v_dot, dtype=float), np.array(lam, dtype=float)
+
+    def _hermite(self, start: tuple) -> HermiteInterpolant:
+        """The quintic Hermite interpolant (:class:`HermiteInterpolant`) of the last step from
+        its start ``(t, q, v, v_dot)`` to the current state (second-order methods)."""
+        return HermiteInterpolant(self.model, start, (self.t, self.q, self.v, self.v_dot))
+
+    # ------------------------------------------------------------------ tolerances per kind
+
+    @cached_property
+    def atol_vector(self) -> np.ndarray:
+        """The absolute tolerance of each component of the state ``(q, v)`` (n_q + n_v), by
+        its kind (:attr:`atol_kinds`, see :func:`absolute_tolerances`)."""
+        columns = _state_units(self.model)
+        return np.array([self.atol_kinds[_KIND_OF_UNIT[unit]] for unit in columns])
+
+    @cached_property
+    def atol_tangent(self) -> np.ndarray:
+        """The absolute tolerance of each component of ``(dq, v)`` (2 n_v), ``dq`` an increment
+        of the positions in the velocity space (:meth:`Model.integrate`): lengths for the
+        translations, angles for the rotations."""
+        n_q = self.model.n_q
+        rates = self.atol_vector[n_q:]
+        units = _state_units(self.model)[n_q:]
+        increments = np.array([self.atol_kinds["position" if unit == "m/s" else "angle"]
+                               for unit in units])
+        return np.concatenate([increments, rates])
+
+    # ------------------------------------------------------------------ singular poses
+
+    #: smallest singular value of the equilibrated ``Phi_v`` (rows of unit length) below which
+    #: a failure is reported as one at a singular configuration (:meth:`_singular_pose`)
+    near_singular = 1e-2
+    #: the methods that cross singular configurations (the crossing of :meth:`_cross_singular`)
+    crossing_methods = ("dopri5-projection", "dop853-projection")
+
+    def _singular_pose(self) -> str:
+        """When the current positions are near a singular configuration (the smallest singular
+        value of the equilibrated ``Phi_v``, 1 for well-conditioned rows, below
+        :attr:`near_singular`), a sentence that names it (time, singular value) and the methods
+        that cross it; else the empty string. For the messages of failures."""
+        if not self.model.n_c:
+            return ""
+        try:
+            sigma = self._rank_split().singular_values()
+        except (HexapodError, np.linalg.LinAlgError, ValueError):
+            return ""
+        if not (sigma.size and sigma.min() < self.near_singular):
+            return ""
+        return (f"the mechanism is at a singular configuration at t = {self.t:.6g} s (smallest "
+                f"singular value of the equilibrated constraint Jacobian {sigma.min():.2g}, 1 "
+                f"for independent rows), which {self.name} cannot pass; "
+                f"{' and '.join(self.crossing_methods)} cross such poses")
+
+
+def _collapsing(sigma: np.ndarray, tolerance: float) -> int:
+    """How many rows a crossing leaves out: the singular values below ``tolerance`` and those
+    just above that belong to the same cluster (each within :data:`CROSSING_FACTOR` of the
+    next smaller, below :data:`CLUSTER_CEILING`). Identical loops flattening at
+    once (the N-four-bar's N windows) make such a cluster, spread over decades by their places
+    in the chain: leaving out only its smallest members left the others to fail the error test
+    one by one, each failure widening the crossing tenfold."""
+    ordered = np.sort(sigma)
+    count = int(np.sum(ordered < tolerance))
+    while (0 < count < ordered.size and ordered[count] < CROSSING_FACTOR * ordered[count - 1]
+           and ordered[count] < CLUSTER_CEILING):
+        count += 1
+    return count
+
+
+# ---------------------------------------------------------------------- tolerances per kind
+
+#: the kind of tolerance of a coordinate, by the coordinate's unit
+_KIND_OF_UNIT = {unit: kind for kind, units in ATOL_KINDS.items() for unit in units}
+
+
+def _state_units(model: Model) -> list[str]:
+    """The unit of each component of ``(q, v)``, as the results' columns say it."""
+    return ([COORDINATE_UNITS[component(name)][0] for name in model.coordinate_names]
+            + [VELOCITY_UNITS[component(name)][0] for name in model.velocity_names])
+
+
+def characteristic_time(model: Model) -> float:
+    """``sqrt(L / |g|)`` (s), ``L`` the scene's characteristic length: the time over which
+    gravity moves a body of the scene by about its size (a pendulum of length ``L`` swings
+    through a radian in about that time), so that a velocity error ``e`` makes a position error
+    of about ``e sqrt(L / |g|)``; without gravity :data:`CHARACTERISTIC_TIME`."""
+    gravity = float(np.linalg.norm(model.gravity))
+    length = float(model.characteristic_length)
+    if not (gravity > 0 and np.isfinite(gravity) and length > 0):
+        return CHARACTERISTIC_TIME
+    return float(np.sqrt(length / gravity))
+
+
+def default_tolerances(model: Model) -> dict[str, float]:
+    """The absolute tolerances per kind when a mapping leaves a kind out: positions
+    ``DEFAULT_ATOL L`` (m), angles and Euler parameters ``DEFAULT_ATOL`` (rad), their rates the
+    same over :func:`characteristic_time` (m/s, rad/s)."""
+    length, time = float(model.characteristic_length), characteristic_time(model)
+    return {"position": DEFAULT_ATOL * length, "angle": DEFAULT_ATOL,
+            "velocity": DEFAULT_ATOL * length / time, "angular_velocity": DEFAULT_ATOL / time}
+
+
+def absolute_tolerances(model: Model, atol) -> dict[str, float]:
+    """The absolute tolerance of each kind of coordinate (:data:`ATOL_KINDS`: ``position`` m,
+    ``angle`` rad and Euler parameters, ``velocity`` m/s, ``angular_velocity`` rad/s).
+
+    Parameters
+    ----------
+    atol : float, mapping or None
+        None: :data:`DEFAULT_ATOL` for every kind; a number: that for every kind (SI units); a
+        mapping of kinds to numbers: those, and :func:`default_tolerances` for the kinds it
+        leaves out.
+
+    Raises
+    ------
+    ValueError
+        A mapping names an unknown kind, or gives a value that is not a positive number.
+    """
+    if atol is None:
+        return dict.fromkeys(ATOL_KINDS, DEFAULT_ATOL)
+    if not isinstance(atol, Mapping):
+        return dict.fromkeys(ATOL_KINDS, float(atol))
+    unknown = set(atol) - set(ATOL_KINDS)
+    if unknown:
+        raise ValueError(f"atol: unknown kind {sorted(unknown)[0]!r}: choose among "
+                         + ", ".join(ATOL_KINDS))
+    kinds = default_tolerances(model)
+    for kind, value in atol.items():
+        try:
+            value = float(value)
+        except (TypeError, ValueError):
+            raise ValueError(f"atol[{kind!r}] must be a positive number, got {value!r}") from None
+        if not (np.isfinite(value) and value > 0):
+            raise ValueError(f"atol[{kind!r}] must be a positive number, got {value}")
+        kinds[kind] = value
+    return kinds
+
+
+# ---------------------------------------------------------------------- interpolants
+
+class Interpolant:
+    """A method's continuous extension over one accepted step ``[t_old, t_new]``: called at a
+    time of the step, it returns the positions and velocities there, ``(q, v)``, as the
+    method's own polynomial gives them, Euler parameters renormalised (not yet on the
+    constraints: :meth:`Integrator.dense_state` puts them there). Subclasses implement
+    :meth:`_evaluate` of ``theta = (t - t_old) / h``; ``order`` is the interpolation's (its
+    error is ``O(h^(order + 1))`` over a step).
+    """
+
+    order: int = 0
+
+    def __init__(self, model: Model, t_old: float, t_new: float):
+        self.model, self.t_old, self.t_new = model, float(t_old), float(t_new)
+        self.h = self.t_new - self.t_old
+
+    def __call__(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        theta = (float(t) - self.t_old) / self.h
+        if not -1e-9 <= theta <= 1 + 1e-9:
+            raise ValueError(f"t = {t:.10g} s is outside the step [{self.t_old:.10g}, "
+                             f"{self.t_new:.10g}] s")
+        q, v = self._evaluate(theta)
+        return self.model.normalize(q), np.array(v, dtype=float)
+
+    def _evaluate(self, theta: float) -> tuple[np.ndarray, np.ndarray]:
+        raise NotImplementedError
+
+
+class PolynomialInterpolant(Interpolant):
+    """``y(t_old + theta h) = y_old + h Q [theta, theta^2, ...]`` on the state ``y = (q, v)``
+    of a Runge-Kutta method integrating the ODE ``y' = (B(q) v, v_dot)`` (SciPy's
+    ``RkDenseOutput``): ``Q = K^T P``, the stages ``K`` weighed by the polynomials of the
+    method's continuous extension, ``P`` their coefficients (rows: stages; columns: powers)."""
+
+    def __init__(self, model: Model, t_old: float, h: float, y_old: np.ndarray,
+                 K: np.ndarray, P: np.ndarray):
+        super().__init__(model, t_old, t_old + h)
+        self.y_old, self.Q = y_old, np.asarray(K).T @ P
+        self.order = P.shape[1]  # the polynomial's degree
+
+    def _evaluate(self, theta):
+        y = self.y_old + self.h * (self.Q @ np.cumprod(np.full(self.Q.shape[1], theta)))
+        return y[:self.model.n_q], y[self.model.n_q:]
+
+
+class HermiteInterpolant(Interpolant):
+    """Quintic Hermite interpolation of the positions from ``(q, q', q'')`` at both ends of a
+    step, cubic Hermite interpolation of the velocities from ``(v, v_dot)``: for the
+    second-order methods, whose steps carry no continuous extension of their own. ``q' = B(q)
+    v`` and ``q'' = B(q) v_dot + B(q') v`` on Euler parameters (``B`` is linear in them), ``v_dot``
+    on the others; the positions are interpolated as coordinates, Euler parameters then
+    renormalised. Order 5 on positions, 3 on velocities (the methods' own error is of order 2).
+
+    ``start`` and ``end`` are ``(t, q, v, v_dot)``.
+    """
+
+    order = 3
+
+    def __init__(self, model: Model, start: tuple, end: tuple):
+        super().__init__(model, start[0], end[0])
+        units = _state_units(model)[:model.n_q]
+        euler = np.array([unit == "1" for unit in units])
+        self.ends = []
+        for _, q, v, v_dot in (start, end):
+            q_dot = model.call("qdot", q=q, v=v)
+            q_ddot = model.call("qdot", q=q, v=v_dot)
+            q_ddot[euler] += model.call("qdot", q=q_dot, v=v)[euler]
+            self.ends.append((np.asarray(q, dtype=float), q_dot, q_ddot,
+                              np.asarray(v, dtype=float), np.asarray(v_dot, dtype=float)))
+
+    def _evaluate(self, theta):
+        (q0, dq0, ddq0, v0, a0), (q1, dq1, ddq1, v1, a1) = self.ends
+        h, s = self.h, theta
+        s2, s3 = s * s, s * s * s
+        s4, s5 = s3 * s, s3 * s2
+        q = ((1 - 10 * s3 + 15 * s4 - 6 * s5) * q0 + (10 * s3 - 15 * s4 + 6 * s5) * q1
+             + h * ((s - 6 * s3 + 8 * s4 - 3 * s5) * dq0 + (-4 * s3 + 7 * s4 - 3 * s5) * dq1)
+             + h * h * ((s2 - 3 * s3 + 3 * s4 - s5) / 2 * ddq0 + (s3 - 2 * s4 + s5) / 2 * ddq1))
+        v = ((2 * s3 - 3 * s2 + 1) * v0 + (3 * s2 - 2 * s3) * v1
+             + h * ((s3 - 2 * s2 + s) * a0 + (s3 - s2) * a1))
+        return q, v

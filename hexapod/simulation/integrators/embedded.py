@@ -14,9 +14,10 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.integrate._ivp import dop853_coefficients as dop853
+from scipy.integrate._ivp.rk import RK45
 
 from hexapod.errors import IntegrationError
-from hexapod.simulation.integrators.base import Integrator
+from hexapod.simulation.integrators.base import Integrator, Interpolant, PolynomialInterpolant
 from hexapod.simulation.integrators.stability import largest_stable_step, runge_kutta_stability
 
 #: rejections in a row after which a step checks whether it is at a singular configuration
@@ -58,7 +59,7 @@ class EmbeddedRungeKutta(Integrator):
         return np.concatenate(self._rates(t, q, v))
 
     def _norm(self, x: np.ndarray, y0: np.ndarray, y1: np.ndarray) -> float:
-        weight = self.atol + self.rtol * np.maximum(np.abs(y0), np.abs(y1))
+        weight = self.atol_vector + self.rtol * np.maximum(np.abs(y0), np.abs(y1))
         return float(np.sqrt(np.mean((x / weight) ** 2)))
 
     def _error(self, h: float, K: np.ndarray, y0: np.ndarray, y1: np.ndarray) -> float:
@@ -105,12 +106,14 @@ class EmbeddedRungeKutta(Integrator):
                 break
             self.counters.rejected += 1
             rejected += 1
-            if rejected % CROSSING_REJECTIONS == 0 and self._cross_singular():
+            if rejected % CROSSING_REJECTIONS == 0 and self._cross_singular(
+                    y1[:n_q] if np.all(np.isfinite(y1)) else None):
                 f0 = np.concatenate(self._rates(self.t, self.q, self.v))
                 continue
             factor = self.min_factor if not np.isfinite(error) else max(
                 self.min_factor, self.safety * error ** (-1.0 / (self.error_order + 1)))
             self.h = h * factor
+        self._dense_step = (self.t, h, y0, K, y1)  # for dense_output
         self.t += h
         self.q, self.v = self._project(self.t, model.normalize(y1[:n_q]), y1[n_q:])
         self._end_crossing()
@@ -139,6 +142,13 @@ class DormandPrince5(EmbeddedRungeKutta):
     b_hat = np.array([5179 / 57600, 0, 7571 / 16695, 393 / 640, -92097 / 339200, 187 / 2100,
                       1 / 40])
 
+    def dense_output(self) -> Interpolant:
+        """The classical continuous extension of DOPRI5, of order 4 (Shampine's coefficients,
+        SciPy's ``RK45.P``), from the step's seven stages; exact at both ends of the step (at
+        its end, the state before the projection)."""
+        t_old, h, y0, K, _ = self._dense_step
+        return PolynomialInterpolant(self.model, t_old, h, y0, K, RK45.P)
+
 
 class DormandPrince853(EmbeddedRungeKutta):
     """Dormand and Prince's 8(5,3) pair (DOP853, Hairer, Norsett and Wanner, *Solving ODEs I*,
@@ -160,9 +170,54 @@ class DormandPrince853(EmbeddedRungeKutta):
     def _error(self, h, K, y0, y1):
         n_q = self.model.n_q
         K = np.vstack([K, self._derivative(self.t + h, y1[:n_q], y1[n_q:])])
-        weight = self.atol + self.rtol * np.maximum(np.abs(y0), np.abs(y1))
+        self._stages_at_end = K  # with the rate at y1: the dense output's too
+        weight = self.atol_vector + self.rtol * np.maximum(np.abs(y0), np.abs(y1))
         err5 = np.sum((dop853.E5 @ K / weight) ** 2)
         err3 = np.sum((dop853.E3 @ K / weight) ** 2)
         if err5 == 0.0 and err3 == 0.0:
             return 0.0
         return float(h * err5 / np.sqrt((err5 + 0.01 * err3) * y0.size))
+
+    def dense_output(self) -> Interpolant:
+        """DOP853's continuous extension of order 7 (Hairer, Norsett and Wanner, II.6), as
+        ``scipy.integrate.DOP853`` builds it: three more stages and SciPy's coefficients
+        (its ``A_EXTRA, C_EXTRA``, the rows of ``A`` and ``C`` after the twelve stages and the
+        rate at the new state, and ``D``); exact at both ends of the step (at its end, the
+        state before the projection)."""
+        t_old, h, y0, K, y1 = self._dense_step
+        n_q, n = self.model.n_q, dop853.N_STAGES
+        stages = getattr(self, "_stages_at_end", None)
+        if stages is None or not np.array_equal(stages[:n], K):  # not the accepted step's
+            stages = np.vstack([K, self._derivative(t_old + h, y1[:n_q], y1[n_q:])])
+        extended = np.empty((dop853.N_STAGES_EXTENDED, y0.size))
+        extended[:n + 1] = stages
+        for s, (a, c) in enumerate(zip(dop853.A[n + 1:], dop853.C[n + 1:], strict=True),
+                                   start=n + 1):
+            y = y0 + h * (a[:s] @ extended[:s])
+            extended[s] = self._derivative(t_old + c * h, y[:n_q], y[n_q:])
+        return _Dop853Interpolant(self.model, t_old, h, y0, y1, extended)
+
+
+class _Dop853Interpolant(Interpolant):
+    """``scipy.integrate._ivp.rk.Dop853DenseOutput``: ``y_old`` plus nested products of
+    ``F_k`` with ``theta`` and ``1 - theta`` in turn."""
+
+    order = 7
+
+    def __init__(self, model, t_old, h, y0, y1, K):
+        super().__init__(model, t_old, t_old + h)
+        F = np.empty((dop853.INTERPOLATOR_POWER, y0.size))
+        delta = y1 - y0
+        F[0] = delta
+        F[1] = h * K[0] - delta
+        F[2] = 2 * delta - h * (K[dop853.N_STAGES] + K[0])
+        F[3:] = h * (dop853.D @ K)
+        self.y0, self.F = y0, F
+
+    def _evaluate(self, theta):
+        y = np.zeros_like(self.y0)
+        for i, f in enumerate(self.F[::-1]):
+            y += f
+            y *= theta if i % 2 == 0 else 1 - theta
+        y += self.y0
+        return y[:self.model.n_q], y[self.model.n_q:]

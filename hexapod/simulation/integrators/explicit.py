@@ -15,13 +15,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from hexapod.simulation.integrators.base import Integrator
+from hexapod.simulation.integrators.base import Integrator, Interpolant, PolynomialInterpolant
 from hexapod.simulation.integrators.stability import largest_stable_step, runge_kutta_stability
 
 #: the classical tableau, for the stability function
 _A = np.array([[0, 0, 0, 0], [0.5, 0, 0, 0], [0, 0.5, 0, 0], [0, 0, 1, 0]], dtype=float)
 _B = np.array([1, 2, 2, 1], dtype=float) / 6
 _R = runge_kutta_stability(_A, _B)
+#: the continuous extension of order 3 (Hairer, Norsett and Wanner, *Solving ODEs I*, II.6):
+#: the weights ``b_i(theta)`` of the four stages, coefficients of theta, theta^2 and theta^3
+_DENSE = np.array([[1, -3 / 2, 2 / 3], [0, 1, -2 / 3], [0, 1, -2 / 3], [0, -1 / 2, 2 / 3]])
 
 
 class RungeKutta4Baumgarte(Integrator):
@@ -67,7 +70,16 @@ class RungeKutta4Baumgarte(Integrator):
         dq2, dv2 = self._rates(t + h / 2, q + h / 2 * dq1, v + h / 2 * dv1, self.alpha)
         dq3, dv3 = self._rates(t + h / 2, q + h / 2 * dq2, v + h / 2 * dv2, self.alpha)
         dq4, dv4 = self._rates(t + h, q + h * dq3, v + h * dv3, self.alpha)
+        self._dense_step = (t, h, q, v, (dq1, dq2, dq3, dq4), (dv1, dv2, dv3, dv4))
         self.q = self.model.normalize(q + h / 6 * (dq1 + 2 * dq2 + 2 * dq3 + dq4))
         self.v = v + h / 6 * (dv1 + 2 * dv2 + 2 * dv3 + dv4)
         self.t = t + h
         self.v_dot, self.lam = self._dynamics(self.t, self.q, self.v, (self.alpha, self.alpha))
+
+    def dense_output(self) -> Interpolant:
+        """RK4's continuous extension of order 3 from the step's four stages (Baumgarte terms
+        included); at the step's end it is the state before the Euler parameters are
+        renormalised."""
+        t, h, q, v, dq, dv = self._dense_step
+        K = np.hstack([np.array(dq), np.array(dv)])
+        return PolynomialInterpolant(self.model, t, h, np.concatenate([q, v]), K, _DENSE)

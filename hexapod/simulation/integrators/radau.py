@@ -75,13 +75,14 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 from scipy import sparse
+from scipy.integrate._ivp.radau import P as COLLOCATION
 from scipy.linalg import lu_factor, lu_solve
 from scipy.sparse.linalg import splu
 
 from hexapod.algorithms.linalg import equilibrate, split_rows
 from hexapod.errors import IntegrationError
 from hexapod.model.model import Model
-from hexapod.simulation.integrators.base import Integrator
+from hexapod.simulation.integrators.base import Integrator, Interpolant
 from hexapod.spatial import quaternion_exp, quaternion_log, quaternion_product
 
 # ---------------------------------------------------------------- Radau IIA, three stages
@@ -94,6 +95,11 @@ A = np.array([[(88 - 7 * _S6) / 360, (296 - 169 * _S6) / 1800, (-2 + 3 * _S6) / 
 C = np.array([(4 - _S6) / 10, (4 + _S6) / 10, 1.0])
 #: weights of the stage increments in RADAU5's error estimate (its DD1, DD2, DD3)
 E = np.array([-(13 + 7 * _S6), -13 + 7 * _S6, -1.0]) / 3
+
+
+#: the rank decision's tolerance at a state off the constraints by ``e`` (scaled) is at least
+#: this times ``e``: a redundant row's distance from the others' span grows like ``e`` there
+RANK_MARGIN = 10.0
 
 
 def _transformation() -> tuple[np.ndarray, np.ndarray, float, float, float]:
@@ -296,7 +302,7 @@ class RadauIIA5GGL(Integrator):
         f0 = np.concatenate([model.call("qdot", q=self.q, v=self.v), self.v_dot])
 
         def norm(x):
-            return float(np.sqrt(np.mean((x / (self.atol + self.rtol * np.abs(y0))) ** 2)))
+            return float(np.sqrt(np.mean((x / (self.atol_vector + self.rtol * np.abs(y0))) ** 2)))
 
         def rate_change(h0: float) -> float:
             q1, v1 = model.integrate(self.q, h0 * self.v), self.v + h0 * self.v_dot
@@ -320,7 +326,10 @@ class RadauIIA5GGL(Integrator):
         F0 = F0[sel]
         y0 = np.concatenate([np.zeros(n_v), v0, self.lam_ggl[kept], self.mu[kept]])
         magnitude = np.where(self._q_of_v >= 0, np.abs(q0[np.maximum(self._q_of_v, 0)]), 1.0)
-        base_scale = self._atol + self._rtol * np.abs(np.concatenate([magnitude, y0[n_v:]]))
+        # each coordinate's own atol (translations, rotations and their rates), mapped as _atol
+        atol = (np.concatenate([self.atol_tangent, np.full(2 * kept.size, self.atol)])
+                * self._rtol / self.rtol)
+        base_scale = atol + self._rtol * np.abs(np.concatenate([magnitude, y0[n_v:]]))
         step = _Step(t0, q0, y0, kept, sel)
         first = self.counters.steps == 0
         rejected = False
@@ -328,7 +337,11 @@ class RadauIIA5GGL(Integrator):
         while True:
             h = self.next_step()
             if h < 1e-14 * max(1.0, abs(self.t_bound), abs(t0)):
-                raise IntegrationError(f"the step size fell to {h:.3g} s ({reason})")
+                # near a singular configuration the iteration matrix is nearly singular: Newton's
+                # method fails there at every step size (the N-four-bar lying flat)
+                where = self._singular_pose()
+                raise IntegrationError(f"the step size fell to {h:.3g} s ({reason})"
+                                       + (f": {where}" if where else ""))
             scale = base_scale.copy()
             scale[2 * n_v:] /= h  # index-2 components weighted by h, as in RADAU5
             try:
@@ -370,9 +383,17 @@ class RadauIIA5GGL(Integrator):
         F0, J, Phi_v = self._evaluate_start(q, v, w, wd)
         kept = np.arange(n_c)
         if n_c:
+            # the rank is decided to the accuracy of the state: off the constraints by e (the
+            # Newton iterations' stopping error, 7e-7 on Bricard's mechanism at rtol 1e-6), a
+            # redundant row stands about e away from the span of the others (1.8e-9 there, with
+            # the model's tolerance 1e-9): kept, it made the iteration matrix singular to
+            # within e, and Newton's method diverged at every step size
+            n_v = model.n_v
+            violation = np.abs(F0[2 * n_v:2 * n_v + n_c] / model.row_scale).max()
             W, d = equilibrate(Phi_v, model.mass_inv_sqrt)
-            split = split_rows(W, d, model.row_priority, model.rank_tolerance,
-                           groups=model.row_groups)
+            split = split_rows(W, d, model.row_priority,
+                               max(model.rank_tolerance, RANK_MARGIN * violation),
+                               groups=model.row_groups)
             self.counters.factorisations += 1
             kept = np.sort(split.independent)
             dropped = np.setdiff1d(np.arange(n_c), kept)
@@ -545,12 +566,36 @@ class RadauIIA5GGL(Integrator):
         full[:, step.sel] = Z
         self._previous = (h, full)
         y = step.y0 + Z[2]  # stiffly accurate: the last stage is the new state
+        self._collocation = (step.t0, h, step.q0, step.y0[:2 * n_v], Z[:, :2 * n_v])
         self.t = step.t0 + h
         self.q = model.integrate(step.q0, y[:n_v])
         self.v = y[n_v:2 * n_v]
         self.lam_ggl, self.mu = np.zeros(n_c), np.zeros(n_c)
         self.lam_ggl[step.kept], self.mu[step.kept] = y[2 * n_v:2 * n_v + m], y[2 * n_v + m:]
         self.v_dot, self.lam = self._dynamics(self.t, self.q, self.v)
+
+    def dense_output(self) -> Interpolant:
+        """The collocation polynomial of the last step (order 3, the stage order): the cubic
+        through the start and the three Radau IIA stages at ``c = (4 - sqrt 6)/10, (4 + sqrt
+        6)/10, 1``, in the step's local coordinates ``(xi, v)``, the positions ``q_n (+) xi``
+        (SciPy's ``Radau`` dense output, its matrix ``P``)."""
+        return _CollocationInterpolant(self.model, *self._collocation)
+
+
+class _CollocationInterpolant(Interpolant):
+    """``y(t_old + theta h) = y_old + Z^T P [theta, theta^2, theta^3]`` on ``y = (xi, v)``,
+    ``Z`` the stage increments (SciPy's ``RadauDenseOutput``), ``q = q_old (+) xi``."""
+
+    order = 3
+
+    def __init__(self, model, t_old, h, q_old, y_old, Z):
+        super().__init__(model, t_old, t_old + h)
+        self.q_old, self.y_old, self.Q = q_old, y_old, Z.T @ COLLOCATION
+
+    def _evaluate(self, theta):
+        y = self.y_old + self.Q @ np.array([theta, theta**2, theta**3])
+        n_v = self.model.n_v
+        return self.model.integrate(self.q_old, y[:n_v]), y[n_v:]
 
 
 @dataclass(frozen=True)

@@ -60,8 +60,13 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from hexapod.algorithms.linalg import check_consistency, equilibrate, split_rows
-from hexapod.simulation.integrators.base import Integrator
+from hexapod.algorithms.linalg import (
+    check_consistency,
+    equilibrate,
+    solve_or_least_squares,
+    split_rows,
+)
+from hexapod.simulation.integrators.base import Integrator, Interpolant
 from hexapod.simulation.integrators.stability import largest_stable_step, oscillator_parameters
 from hexapod.spatial import quaternion_product, skew
 
@@ -103,6 +108,9 @@ class Rattle(Integrator):
     description = ("RATTLE in Lie-group form (Moser-Veselov rotations): symplectic and "
                    "time-reversible, index 3")
     max_iterations = 25
+    #: how far the rows left out by the rank decision may be violated after a step (as
+    #: ``newton_tol``) before the step is refused: they follow the kept rows to round-off
+    redundant_tol = 1e-8
 
     _stale = False  # True when v_dot and lam are not yet those of the current state
 
@@ -161,6 +169,7 @@ class Rattle(Integrator):
         self.row_names = [r.name for r in model.rows]
         self.history: list[np.ndarray] = []  # Lambda of the last steps
         self.cache = None  # (q, Phi_v, F, rank decision) at the current state
+        self.failure = ""  # why the last attempt failed
 
     def _laws(self, t: float, derivative: bool) -> list[np.ndarray]:
         if not self.model.n_w:
@@ -194,6 +203,8 @@ class Rattle(Integrator):
     # ------------------------------------------------------------ the step
 
     def _step(self) -> None:
+        # for dense_output: the accelerations at the start only if they were solved already
+        self._dense_start = (self.t, self.q, self.v, None if self._stale else self._v_dot)
         h, result = self._halving(self._attempt_or_forget)
         self.t, self.q, self.v = result
         self._stale = True
@@ -239,9 +250,15 @@ class Rattle(Integrator):
             self.counters.rhs += 1
             self.counters.jacobians += 1
             phi = out[layout["phi"]]
-            residual = np.abs(phi / model.row_scale).max(initial=0.0)
-            if not (residual < np.inf and out[-1] <= ROTATION_TOL):  # NaN fails both
+            scaled = np.abs(phi / model.row_scale)
+            if not (np.all(scaled < np.inf) and out[-1] <= ROTATION_TOL):  # NaN fails both
+                self.failure = (f"non-finite constraints or unsolved rotations at h = {h:.3g} s"
+                                f" (rotation residual {out[-1]:.1e})")
                 return None
+            # Newton's method moves the kept rows only: the others follow from them (checked
+            # below), to the kept rows' residual over the smallest singular value and to the
+            # round-off of the unit Euler parameters, which the tolerance need not see
+            residual = scaled[I].max(initial=0.0)
             # converged after one correction at least: a predictor within the tolerance still
             # leaves an O(tolerance) offset from the constraints, which the potential of the
             # forces they balance would see at first order (one correction takes it to
@@ -249,17 +266,27 @@ class Rattle(Integrator):
             if residual <= self.newton_tol and (iteration or I.size == 0):
                 break
             if iteration == self.max_iterations or I.size == 0:
+                self.failure = (f"Newton's method does not converge at h = {h:.3g} s "
+                                f"(scaled residual {residual:.1e})")
                 return None
             self.counters.newton += 1
             self.counters.factorisations += 1
             S = out[layout["S"]].reshape(n_c, n_c, order="F")
-            try:  # on the rows scaled as the equilibrated Phi_v: S / (d d^T) ~ W W^T
-                step = np.linalg.solve(S[block] / dd, phi[I] / d) / d
-            except np.linalg.LinAlgError:  # a singular iteration matrix: as a failed Newton
+            # on the rows scaled as the equilibrated Phi_v: S / (d d^T) ~ W W^T
+            step = solve_or_least_squares(S[block] / dd, phi[I] / d)
+            if step is None:
+                self.failure = f"the iteration matrix is singular at h = {h:.3g} s"
                 return None
-            lam = lam + (2 / h**2) * step
+            lam = lam + (2 / h**2) * (step / d)
+        left_out = scaled[split0.redundant].max(initial=0.0)
+        if left_out > self.redundant_tol:
+            names = ", ".join(self.row_names[i] for i in split0.redundant[:5])
+            self.failure = (f"the rows left out by the rank decision ({names}) are violated by "
+                            f"{left_out:.1e} at h = {h:.3g} s")
+            return None
         # copies: the stage's output is overwritten by its next call
         q1, v_plus, nu, force1 = (out[layout[k]].copy() for k in ("q", "v", "nu", "F"))
+        q1 = model.normalize(q1)  # Euler parameters: their round-off would add up over steps
         Phi1 = out[layout["Phi_v"]].reshape(n_c, model.n_v, order="F").copy()
         self.history = [*self.history[-1:], lam]
         # the second half kick, and the velocities onto Phi_v v = nu (kinetic-energy norm)
@@ -267,11 +294,23 @@ class Rattle(Integrator):
         split1 = self._split(Phi1)
         gap = nu - Phi1 @ v_star
         dy = split1.min_norm_correction(gap)
-        check_consistency(split1, dy, gap, row_names=self.row_names,
+        # relative to the velocities themselves (at rest the gap is round-off)
+        size = np.linalg.norm(model.mass @ (model.mass_inv_sqrt @ v_star))  # |M^1/2 v|
+        check_consistency(split1, dy, gap, size, row_names=self.row_names,
                           what="velocity constraints")
         v1 = v_star + model.mass_inv_sqrt @ dy
         self.cache = (q1, Phi1, force1, split1)
         return t1, q1, v1
+
+    def dense_output(self) -> Interpolant:
+        """Quintic Hermite interpolation of the positions from ``(q, v, v_dot)`` at both ends of
+        the step, cubic of the velocities (:class:`~.base.HermiteInterpolant`); the
+        accelerations at its ends are solved now if they were not (one solve each, counted),
+        and those at its end are then the reported ones."""
+        t, q, v, v_dot = self._dense_start
+        if v_dot is None:
+            v_dot = self._dense_dynamics(t, q, v)[0]
+        return self._hermite((t, q, v, v_dot))
 
 
 # ---------------------------------------------------------------- the CasADi Functions

@@ -203,8 +203,18 @@ class IdasBDF(Integrator):
     description = ("variable-order BDF (SUNDIALS IDAS through CasADi), index 1, Baumgarte-"
                    "stabilised, projection restarts")
     tolerance_factor = 0.03
+    #: the caller's output times, when given (:meth:`set_output_times`)
+    output_times: np.ndarray | None = None
     #: the solver's steps per call before it gives up (the call is then retried shorter)
     max_num_steps = 500_000
+    #: a call may take this many times the steps its interval took at the run's pace so far
+    #: (at least ``min_call_steps``; ``first_call_steps`` before any call succeeded): towards a
+    #: singular configuration IDAS creeps on in ever smaller steps (the spatial N-four-bar:
+    #: 16 to 52 s in one call before its corrector gave up), which then ends in a fraction of
+    #: a second
+    pace_factor = 20.0
+    min_call_steps = 2000
+    first_call_steps = 20_000
 
     def __init__(self, *args, alpha: float = 10.0, drift_tol: float | None = None, **kwargs):
         if not alpha >= 0:
@@ -232,6 +242,8 @@ class IdasBDF(Integrator):
         self.min_reach = 1e-9 * max(1.0, span)
         self.successes = 0
         self.calls = 0
+        self.covered = 0.0  # the time IDAS covered in successful calls, and its steps there
+        self.covered_steps = 0
         self.pending: deque = deque()
         self.scratch = model.create_data()  # for solves that must not overwrite ``data``
         self.deferred: HexapodError | None = None  # a failure after states still to return
@@ -272,12 +284,16 @@ class IdasBDF(Integrator):
     def _times(self) -> np.ndarray:
         """The output times of the next call: the grid times after ``t`` (at most ``window``
         of them, none past ``reach``), or ``t + reach`` when no grid time is that close."""
-        first = int(np.floor((self.t - self.t0) / self.h + 1e-9)) + 1
-        last = min(self.n_out, first + self.window - 1)
-        times = self.t0 + self.h * np.arange(first, last + 1)
-        times[times > self.t_bound] = self.t_bound
-        if last == self.n_out:
-            times[-1] = self.t_bound
+        if self.output_times is not None:  # the caller's (set_output_times)
+            first = int(np.searchsorted(self.output_times, self.t, side="right"))
+            times = self.output_times[first:first + self.window].copy()
+        else:
+            first = int(np.floor((self.t - self.t0) / self.h + 1e-9)) + 1
+            last = min(self.n_out, first + self.window - 1)
+            times = self.t0 + self.h * np.arange(first, last + 1)
+            times[times > self.t_bound] = self.t_bound
+            if last == self.n_out:
+                times[-1] = self.t_bound
         times = times[times <= self.t + self.reach]
         self.off_grid = not times.size
         if self.off_grid:
@@ -302,7 +318,9 @@ class IdasBDF(Integrator):
                 self.reach = (times[0] - self.t) / 4
                 self.successes = 0
             else:
-                raise IntegrationError(f"IDAS stopped ({failure.reason})") from None
+                where = self._singular_pose()
+                raise IntegrationError(f"IDAS stopped ({failure.reason})"
+                                       + (f": {where}" if where else "")) from None
             return self._window()
         n_q = model.n_q
         Q = np.array([model.normalize(x[:n_q]) for x in X])
@@ -378,8 +396,12 @@ class IdasBDF(Integrator):
         options = {"abstol": self.tolerance_factor * self.atol,
                    "reltol": self.tolerance_factor * self.rtol,
                    "calc_ic": False, "init_xdot": xdot.tolist(), "suppress_algebraic": True,
-                   "max_num_steps": self.max_num_steps,
+                   "max_num_steps": self._call_steps(times[-1] - self.t),
                    "expand": self.equations.callback is None}
+        if np.any(self.atol_vector != self.atol):  # per kind: a vector over x and z (which the
+            # error test leaves out: at the smallest), taken before abstol
+            options["abstolv"] = (self.tolerance_factor * np.concatenate(
+                [self.atol_vector, np.full(model.n_v + lam.size, self.atol)])).tolist()
         if np.isfinite(self.max_step):
             options["max_step_size"] = self.max_step
         options["step0"] = self._first_step(xdot, times[0] - self.t)
@@ -394,8 +416,18 @@ class IdasBDF(Integrator):
                 if signals.received() is not None:  # CasADi's form of an interruption
                     raise KeyboardInterrupt from None
                 raise _Failure(_idas_reason(str(error), messages.getvalue())) from None
-        self._count(solver.stats())  # (a failed call's statistics are lost with it)
+        stats = solver.stats()  # (a failed call's statistics are lost with it)
+        self._count(stats)
+        self.covered += times[-1] - self.t
+        self.covered_steps += int(stats.get("nsteps", 0))
         return out["xf"].full().T
+
+    def _call_steps(self, interval: float) -> int:
+        """The most steps a call over ``interval`` may take (see :attr:`pace_factor`)."""
+        if not self.covered > 0:
+            return min(self.max_num_steps, self.first_call_steps)
+        expected = self.covered_steps / self.covered * interval
+        return int(min(self.max_num_steps, max(self.min_call_steps, self.pace_factor * expected)))
 
     def _first_step(self, xdot: np.ndarray, interval: float) -> float:
         """A first step for BDF at order 1 (IDAS's own guess, from ``x'`` alone, is far too
@@ -404,7 +436,7 @@ class IdasBDF(Integrator):
         ``x'`` along the motion over 1e-6 s (one more solve of the dynamics)."""
         model, delta = self.model, 1e-6
         x = np.concatenate([self.q, self.v])
-        weights = 1.0 / (self.tolerance_factor * (self.rtol * np.abs(x) + self.atol))
+        weights = 1.0 / (self.tolerance_factor * (self.rtol * np.abs(x) + self.atol_vector))
         q1 = model.normalize(self.q + delta * xdot[:model.n_q])
         v1 = self.v + delta * xdot[model.n_q:]
         v_dot1 = forward_dynamics(model, self.scratch, self.t + delta, q1, v1,
@@ -426,6 +458,14 @@ class IdasBDF(Integrator):
         c.jacobians += int(stats.get("nlinsetups", 0))
         c.factorisations += int(stats.get("nlinsetups", 0))
         c.newton += int(stats.get("nniters", 0))
+
+    def set_output_times(self, times: np.ndarray) -> None:
+        """Return the states at ``times`` (and at ``t_bound``) instead of every ``step``: they
+        are IDAS's output times, where it interpolates its own BDF polynomial (IDAGetDky)."""
+        times = np.asarray(times, dtype=float)
+        times = times[(times > self.t0) & (times < self.t_bound)]
+        self.output_times = np.append(times, self.t_bound)
+        self.n_out = self.window = self.output_times.size
 
 
 class _Failure(Exception):
