@@ -279,19 +279,20 @@ class Integrator:
 
     def _dynamics(self, t: float, q: np.ndarray, v: np.ndarray,
                   baumgarte: tuple[float, float] | None = None,
-                  consistency_tol: float = 1e-6) -> tuple[np.ndarray, np.ndarray]:
+                  consistency_tol: float = 1e-6, data=None) -> tuple[np.ndarray, np.ndarray]:
         """Accelerations and multipliers at a state (one saddle-point solve; rows nearly
         dependent are left out while a singular configuration is crossed). Redundant rows may
-        disagree with the others by ``consistency_tol`` (relative) before the solve refuses."""
+        disagree with the others by ``consistency_tol`` (relative) before the solve refuses.
+        ``data``: where the solve works (default ``self.data``, the method's current state)."""
+        data = self.data if data is None else data
         # while crossing, the rows left out are violated by design (the projection restores them)
         crossing = {"consistency_tol": consistency_tol} if self._crossing is None else {
             "rank_tolerance": self._crossing, "consistency_tol": np.inf}
-        v_dot = forward_dynamics(self.model, self.data, t, q, v, baumgarte=baumgarte,
-                                 **crossing)
+        v_dot = forward_dynamics(self.model, data, t, q, v, baumgarte=baumgarte, **crossing)
         self.counters.rhs += 1
         self.counters.jacobians += 1
         self.counters.factorisations += 1
-        return v_dot, self.data.lam
+        return v_dot, data.lam
 
     def _rates(self, t: float, q: np.ndarray, v: np.ndarray,
                alpha: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
@@ -336,11 +337,7 @@ class Integrator:
         if base >= SINGULAR_BAND:
             return False  # as wide as it goes
         if self._crossing is None and ahead is not None:
-            w, _, _ = self.model.law_values(self.t)
-            further = rank_split(self.model, self.model.call("Phi_v", q=ahead, w=w), w)
-            self.counters.jacobians += 1
-            self.counters.factorisations += 1
-            if further.singular_values().min(initial=np.inf) > smallest:
+            if self._rank_split(ahead).singular_values().min(initial=np.inf) > smallest:
                 return False  # moving away
         if self._crossing is None:
             self.counters.crossings += 1
@@ -361,12 +358,14 @@ class Integrator:
         if not sigma.size or sigma.min() > self._crossing:
             self._crossing = None
 
-    def _rank_split(self):
-        """The rank decision on the equilibrated ``Phi_v`` at the current positions."""
+    def _rank_split(self, q: np.ndarray | None = None):
+        """The rank decision on the equilibrated ``Phi_v`` at positions ``q`` (default the
+        current ones), with the laws at the current time."""
         w, _, _ = self.model.law_values(self.t)
         self.counters.jacobians += 1
         self.counters.factorisations += 1
-        return rank_split(self.model, self.model.call("Phi_v", q=self.q, w=w), w)
+        return rank_split(self.model, self.model.call("Phi_v", q=self.q if q is None else q, w=w),
+                          w)
 
     def _halving(self, attempt):
         """Take one step by ``attempt(h)``, which returns the new state or None when Newton's
@@ -463,15 +462,13 @@ class Integrator:
                         v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`_dynamics` on data of its own (``data`` holds the method's current state,
         which some methods read again in their next step)."""
-        data = self.data
-        if getattr(self, "_dense_data", None) is None:
-            self._dense_data = self.model.create_data()
-        self.data = self._dense_data
-        try:
-            v_dot, lam = self._dynamics(t, q, v)
-        finally:
-            self.data = data
+        v_dot, lam = self._dynamics(t, q, v, data=self._dense_data)
         return np.array(v_dot, dtype=float), np.array(lam, dtype=float)
+
+    @cached_property
+    def _dense_data(self):
+        """The data the dense output's solves work in, made when first needed."""
+        return self.model.create_data()
 
     def _hermite(self, start: tuple) -> HermiteInterpolant:
         """The quintic Hermite interpolant (:class:`HermiteInterpolant`) of the last step from
