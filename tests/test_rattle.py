@@ -203,3 +203,45 @@ def test_time_reversible(which):
         q, v, _ = run(model, h, steps, method="generalized-alpha")
         q_back, _, _ = run(model, h, steps, method="generalized-alpha", q0=q[-1], v0=-v[-1])
         assert np.abs(model.difference(q_back[-1], q[0])).max() > 1e-8
+
+
+# ------------------------------------------------------------------ redundant rows
+
+def test_newton_judges_the_rows_it_solves_with_and_checks_the_redundant_ones():
+    """Bricard's mechanism has a redundant row at every pose. Newton's method moves the 29
+    independent rows only; the last follows them, to the round-off of the unit Euler
+    parameters, which left it at 1e-13 after a few thousand steps. Judged on every row,
+    Newton's method then stalled and the step halved to nothing (at 2.5 s with h = 1e-3 s).
+    Here the redundant row's residual is offset by 5e-13 (five times Newton's tolerance) in
+    every evaluation of the step: the steps go on, the kept rows at round-off; offset by 1e-6,
+    far beyond the round-off it can hold, the step is refused and the row named."""
+    import hexapod.benchmarks as m
+
+    model = hx.assemble(m.bricard(t_end=1.0).scene)
+
+    def offset_run(offset: float):
+        integrator = get_integrator("rattle")(model, 0.0, 0.003, step=1e-3)
+        split = integrator._start_state()[2]
+        (row,) = split.redundant
+        stage, where = integrator.stage, integrator.layout["phi"]
+
+        class Offset:  # the step's Function, its redundant row's residual moved by ``offset``
+            input = stage.input
+
+            def __call__(self):
+                out = stage()
+                out[where.start + row] += offset * model.row_scale[row]
+                return out
+
+        integrator.stage = Offset()
+        while integrator.status == "running":
+            integrator.step()
+        return integrator, row
+
+    integrator, row = offset_run(5e-13)
+    assert integrator.status == "finished", integrator.message
+    phi = model.call("phi", q=integrator.q, w=np.zeros(0)) / model.row_scale
+    assert np.abs(np.delete(phi, row)).max() <= 1e-13
+    integrator, row = offset_run(1e-6)
+    assert integrator.status == "failed"
+    assert model.rows[row].name in integrator.message, integrator.message

@@ -49,4 +49,5 @@ __getattr__, __dir__, __all__ = attach(__name__, {
     "hexapod.benchmarks.reference": ["CATEGORIES", "Case"],
     "hexapod.benchmarks.singular": ["four_bar_dead_points", "n_four_bar", "stretched_leg"],
     "hexapod.benchmarks.stiff": ["flyball_governor", "stiff_slider", "stiff_spring_pendulum"],
+    "hexapod.benchmarks.work_precision": ["andrews_problem"],
 })

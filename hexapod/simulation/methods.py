@@ -51,7 +51,7 @@ METHODS: dict[str, Method] = {
                             "Baumgarte (alpha = beta), Euler parameters renormalised"),
     "dopri5-projection": Method(5, 1, True, _PROJECTION),
     "dop853-projection": Method(8, 1, True, _PROJECTION),
-    "generalized-alpha": Method(2, 3, False, "none needed: position and velocity constraints "
+    "generalized-alpha": Method(2, 2, False, "none needed: position and velocity constraints "
                                 "solved every step (Newton, GGL)"),
     "rattle": Method(2, 3, False, _NEWTON + ", velocities projected onto Phi_v v = nu by the "
                      "second half kick"),

@@ -498,29 +498,44 @@ class Integrator:
 
     # ------------------------------------------------------------------ singular poses
 
-    #: smallest singular value of the equilibrated ``Phi_v`` (rows of unit length) below which
-    #: a failure is reported as one at a singular configuration (:meth:`_singular_pose`)
-    near_singular = 1e-2
+    #: a failure is reported as one at a singular configuration (:meth:`_singular_pose`) where
+    #: the smallest singular value of the equilibrated ``Phi_v`` has fallen below this fraction
+    #: of its value at the start (:meth:`_note_conditioning`; of 1 when it was not noted): its
+    #: value away from such poses depends on the mechanism and its masses (5e-5 on a hexapod,
+    #: 0.08 on the N-four-bar standing up), so only its fall tells one
+    near_singular = 0.05
     #: the methods that cross singular configurations (the crossing of :meth:`_cross_singular`)
     crossing_methods = ("dopri5-projection", "dop853-projection")
 
-    def _singular_pose(self) -> str:
-        """When the current positions are near a singular configuration (the smallest singular
-        value of the equilibrated ``Phi_v``, 1 for well-conditioned rows, below
-        :attr:`near_singular`), a sentence that names it (time, singular value) and the methods
-        that cross it; else the empty string. For the messages of failures."""
+    def _smallest_singular_value(self) -> float:
+        """Of the kept rows of the equilibrated ``Phi_v`` at the current positions (``inf``
+        without rows)."""
         if not self.model.n_c:
-            return ""
+            return np.inf
+        sigma = self._rank_split().singular_values()
+        return float(sigma.min()) if sigma.size else np.inf
+
+    def _note_conditioning(self) -> None:
+        """Keep the smallest singular value at the current state (the start) for
+        :meth:`_singular_pose`."""
+        self._conditioning_start = self._smallest_singular_value()
+
+    def _singular_pose(self) -> str:
+        """When the current positions are near a singular configuration (see
+        :attr:`near_singular`), a sentence that names it (time, smallest singular value) and the
+        methods that cross it; else the empty string. For the messages of failures."""
         try:
-            sigma = self._rank_split().singular_values()
+            sigma = self._smallest_singular_value()
         except (HexapodError, np.linalg.LinAlgError, ValueError):
             return ""
-        if not (sigma.size and sigma.min() < self.near_singular):
+        start = getattr(self, "_conditioning_start", None)
+        reference = start if start is not None and np.isfinite(start) and start > 0 else 1.0
+        if not sigma < self.near_singular * reference:
             return ""
         return (f"the mechanism is at a singular configuration at t = {self.t:.6g} s (smallest "
-                f"singular value of the equilibrated constraint Jacobian {sigma.min():.2g}, 1 "
-                f"for independent rows), which {self.name} cannot pass; "
-                f"{' and '.join(self.crossing_methods)} cross such poses")
+                f"singular value of the equilibrated constraint Jacobian {sigma:.2g}, "
+                f"{sigma / reference:.2g} of its value at the start), which {self.name} cannot "
+                f"pass; {' and '.join(self.crossing_methods)} cross such poses")
 
 
 def _collapsing(sigma: np.ndarray, tolerance: float) -> int:

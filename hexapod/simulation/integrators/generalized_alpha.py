@@ -62,17 +62,14 @@ ask.
 
 from __future__ import annotations
 
-import warnings
-
 import casadi as ca
 import numpy as np
-from scipy.linalg import LinAlgWarning, lu_factor, lu_solve
 
 from hexapod._support.fastcall import ScatteredFunction
 from hexapod.algorithms.dynamics import forward_dynamics
 from hexapod.algorithms.kinematics import rank_split
 from hexapod.algorithms.liaison import policy_map
-from hexapod.algorithms.linalg import distribute
+from hexapod.algorithms.linalg import distribute, solve_or_least_squares
 from hexapod.errors import HexapodError
 from hexapod.simulation.integrators.base import Integrator, Interpolant
 from hexapod.spatial import quaternion_product, rotation_from_euler_parameters
@@ -244,7 +241,7 @@ class LieGroupGeneralizedAlpha(Integrator):
 
     name = "generalized-alpha"
     order = 2
-    index = 3
+    index = 2
     stabilisation = ("none needed: position and velocity constraints solved every step "
                      "(Newton, GGL)")
     adaptive = False
@@ -277,6 +274,7 @@ class LieGroupGeneralizedAlpha(Integrator):
         self.failure = ""  # why the last attempt failed
         self.decision = None  # (q, Phi_v, rank decision) at the last state decided
         self.kept = None  # (rows kept, their multipliers) of the last step
+        self._note_conditioning()
         V = self.frames.to_body(self.q, self.v)
         rate = self._twist_rate(self.q, V, self.v_dot)
         self.a = rate + (self.alpha_m - self.alpha_f) * self.h * self._rate_change(V, rate)
@@ -372,11 +370,13 @@ class LieGroupGeneralizedAlpha(Integrator):
             S[:n, n + m:] = r_xi[dyn] @ P / beta_p
             S[n:n + m, :n] = r_xi[pos] / d[:, None]
             S[n:n + m, n + m:] = r_xi[pos] @ P / d[:, None]
-            J_vel = (r_xi[vel] + gamma_p * r_V[vel]) / (gamma_p * d[:, None])
-            S[n + m:, :n] = J_vel
+            S[n + m:, :n] = (r_xi[vel] + gamma_p * r_V[vel]) / (gamma_p * d[:, None])
             S[n + m:, n + m:] = r_xi[vel] @ P / (gamma_p * d[:, None])
             rhs = -np.concatenate([r[dyn] / beta_p, r[pos] / d, r[vel] / (gamma_p * d)])
-            solution = self._solve(S, rhs)
+            # LU, or where the matrix is nearly singular (near a singular configuration) the
+            # least-squares correction of least norm
+            solution = solve_or_least_squares(S, rhs)
+            self.counters.factorisations += 1
             if solution is None:
                 self.failure = f"the iteration matrix is singular at h = {h:.3g} s"
                 return None
@@ -426,24 +426,6 @@ class LieGroupGeneralizedAlpha(Integrator):
         residuals = r[n + n_c:] / model.row_scale
         size = (np.abs(Phi_V) @ speeds + np.abs(r[n + n_c:])) / model.row_scale
         return float(np.abs(residuals[rows]).max() / max(size.max(), np.finfo(float).tiny))
-
-    def _solve(self, S: np.ndarray, rhs: np.ndarray) -> np.ndarray | None:
-        """The iteration's linear system, rows equilibrated: LU, or where the factorisation
-        cannot be trusted (a nearly singular matrix, near a singular configuration) the
-        least-squares solution of least norm; None when neither gives finite numbers."""
-        scale = np.abs(S).max(axis=1)
-        scale[scale == 0] = 1.0
-        S, rhs = S / scale[:, None], rhs / scale
-        self.counters.factorisations += 1
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", LinAlgWarning)
-            lu = lu_factor(S, check_finite=False)
-        pivots = np.abs(np.diag(lu[0]))
-        if np.all(np.isfinite(lu[0])) and pivots.min() > 1e-10 * pivots.max():
-            solution = lu_solve(lu, rhs, check_finite=False)
-        else:
-            solution = np.linalg.lstsq(S, rhs, rcond=1e-12)[0]
-        return solution if np.all(np.isfinite(solution)) else None
 
     def _rank_decision(self, t: float, q: np.ndarray):
         """``Phi_v`` and the rank decision at ``(t, q)`` (kept for the next step's start)."""

@@ -57,9 +57,17 @@ many Newton iterations, and Gustafsson's predictive controller after accepted st
 
 **Redundant constraints** make the iteration matrix singular: the rank decision of
 :mod:`hexapod.algorithms.linalg` at the start of each step keeps the independent rows of both
-constraint levels (with their ``lambda``, ``mu``) and drops the others. The multipliers
+constraint levels (with their ``lambda``, ``mu``) and drops the others. The rank is decided to
+the accuracy of the state: off the constraints by Newton's stopping error ``e``, a redundant row
+stands about ``e`` from the others' span, so the tolerance is at least :data:`RANK_MARGIN` times
+``e`` (with the model's 1e-9 alone, Bricard's mechanism at rtol = atol = 1e-6 kept its redundant
+row, 1.8e-9 from the span, and Newton's method diverged at every step size). The multipliers
 reported at an accepted state are those of the dynamics there (:meth:`Integrator._dynamics`,
 redundancy policy included); those of the method are kept in ``lam_ggl`` and ``mu``.
+
+**Singular configurations** (the N-four-bar lying flat): the index-2 iteration matrix becomes
+singular with ``Phi_v`` and Newton's method fails at every step size; the run stops there with a
+message naming the pose (time, smallest singular value) and the methods that cross it.
 
 Work counted: ``rhs`` one per stage residual (three per Newton iteration) and per residual at
 the start of a step, ``jacobians`` one per step (plus those of the dynamics at accepted
@@ -291,6 +299,7 @@ class RadauIIA5GGL(Integrator):
         self._kappa = None  # Newton's contraction over h^2, measured last
         self._previous = None  # (h, stage increments) of the last accepted step
         self._h_acc = self._err_acc = None
+        self._note_conditioning()
         if self._given_step is None:
             self.h = self._initial_step()
 

@@ -43,10 +43,18 @@ Newton's method for ``Lambda`` on the independent rows (the rank decision of
 :mod:`hexapod.algorithms.linalg` at ``q_n``) uses the exact Jacobian
 ``d phi / d Lambda = -(h^2 / 2) G_n+1 T G_n^T``, ``T`` equal to ``M^-1`` on flat coordinates and,
 per spatial body, to ``A_F^-1`` with ``A_F x = vee(F_k hat(x) J_d + J_d hat(x) F_k^T)`` (the
-derivative of the Moser–Veselov equation along ``F_k exp(hat(dpsi'))``). The velocity stage is
-the projection of the kicked velocities onto ``G v = nu`` in the kinetic-energy norm, redundant
-rows dropped by the same rank decision. When Newton's method does not converge the step is
-halved and retried, then grown back, as in :mod:`hexapod.simulation.integrators.generalized_alpha`.
+derivative of the Moser–Veselov equation along ``F_k exp(hat(dpsi'))``). Its convergence is
+judged on those rows, the only ones it moves; the rows left out follow from them (to their
+residual over the smallest singular value, and to the round-off of the unit Euler parameters,
+renormalised after every step) and are checked afterwards to ``redundant_tol``. Judged on every
+row, Newton's method stalled on Bricard's mechanism once the redundant row's round-off had grown
+past its tolerance (after 2.5 s at h = 1e-3 s). Near a singular configuration, where the
+iteration matrix is nearly singular, the correction is the least-squares one of least norm.
+The velocity stage is the projection of the kicked velocities onto ``G v = nu`` in the
+kinetic-energy norm, redundant rows dropped by the same rank decision. When Newton's method does
+not converge the step is halved and retried, then grown back, as in
+:mod:`hexapod.simulation.integrators.generalized_alpha`; a failure names a singular
+configuration when the run stands at one.
 
 One CasADi Function, built once per model, forms a whole iterate (kick, Moser–Veselov solves,
 drift, constraints, forces and the Newton matrix); NumPy keeps the rank decisions and the small
@@ -170,6 +178,7 @@ class Rattle(Integrator):
         self.history: list[np.ndarray] = []  # Lambda of the last steps
         self.cache = None  # (q, Phi_v, F, rank decision) at the current state
         self.failure = ""  # why the last attempt failed
+        self._note_conditioning()
 
     def _laws(self, t: float, derivative: bool) -> list[np.ndarray]:
         if not self.model.n_w:

@@ -45,8 +45,19 @@ multipliers of the returned states are solved at those states (one saddle-point 
 redundancy policy), not taken from IDAS's algebraic states, which are interpolated between its steps
 without error control. A failed call of IDAS is retried over
 fewer output times, then over shorter intervals, so that a run ends close to the time it
-cannot pass (a singular configuration); the work of the failed calls is not counted (CasADi
-does not report it).
+cannot pass; the work of the failed calls is not counted (CasADi does not report it). Between
+two output times IDAS may take ten times the steps the run's pace so far gives them (IDAS's
+``mxstep``; 5000 before any call succeeded): towards a singular configuration it creeps on in
+ever smaller and dearer steps, and a call there took 16 to 52 s before its corrector gave up.
+
+**Singular configurations.** Where ``Phi_v`` loses rank (the N-four-bar lying flat) the algebraic
+part of the index-1 equations is singular, and BDF steps across onto either branch of the
+motion: on the N-four-bar it came out on the other one at the first flat pose (0.18 of the
+motion's size off the reference) and stopped four passages later. The smallest singular value of
+the equilibrated ``Phi_v`` is watched at every output state: when it falls below a hundredth of
+its largest over the last 20 states the run stops there, with a message naming the pose and the
+methods that cross it (below a quarter, the output times are brought eight times closer so that
+the fall is seen).
 """
 
 from __future__ import annotations
@@ -61,6 +72,7 @@ import numpy as np
 
 from hexapod._support import signals
 from hexapod.algorithms.dynamics import forward_dynamics
+from hexapod.algorithms.kinematics import rank_split
 from hexapod.errors import HexapodError, IntegrationError
 from hexapod.simulation.integrators.base import Counters, Integrator
 
@@ -207,14 +219,25 @@ class IdasBDF(Integrator):
     output_times: np.ndarray | None = None
     #: the solver's steps per call before it gives up (the call is then retried shorter)
     max_num_steps = 500_000
-    #: a call may take this many times the steps its interval took at the run's pace so far
-    #: (at least ``min_call_steps``; ``first_call_steps`` before any call succeeded): towards a
-    #: singular configuration IDAS creeps on in ever smaller steps (the spatial N-four-bar:
-    #: 16 to 52 s in one call before its corrector gave up), which then ends in a fraction of
-    #: a second
-    pace_factor = 20.0
-    min_call_steps = 2000
-    first_call_steps = 20_000
+    #: IDAS may take this many times the steps that the run's pace so far gives an interval
+    #: between output times (at least ``min_interval_steps``; ``first_interval_steps`` before
+    #: any call succeeded): towards a singular configuration it creeps on in ever smaller
+    #: steps, each dearer than the last (the spatial N-four-bar: 16 to 52 s in one call before
+    #: its corrector gave up), and such a call then ends within a second; a call that merely
+    #: needs more steps than that is retried over fewer output times
+    pace_factor = 10.0
+    min_interval_steps = 1000
+    first_interval_steps = 5000
+    #: a singular configuration: the smallest singular value of the equilibrated ``Phi_v`` at
+    #: an output state falls below ``singular_drop`` times the largest of the last
+    #: ``singular_memory`` states (below ``singular_approach`` times it, the output times are
+    #: brought closer, so that the passage is seen). The index-1 equations' algebraic part is
+    #: singular there and BDF steps across it onto whichever branch: on the N-four-bar it
+    #: came out on the wrong one at the first flat pose (0.18 of the motion's size off the
+    #: reference) and stopped four passages later
+    singular_drop = 1e-2
+    singular_approach = 0.25
+    singular_memory = 20
 
     def __init__(self, *args, alpha: float = 10.0, drift_tol: float | None = None, **kwargs):
         if not alpha >= 0:
@@ -248,6 +271,12 @@ class IdasBDF(Integrator):
         self.scratch = model.create_data()  # for solves that must not overwrite ``data``
         self.deferred: HexapodError | None = None  # a failure after states still to return
         self.rows = self.data.independent_rows  # the start was solved by _dynamics
+        # the smallest singular values at the last output states, and the feet down then
+        self.conditioning: deque = deque([self._conditioning_at(self.t, self.q)],
+                                         maxlen=self.singular_memory)
+        self.conditioning_feet = self._contact_set(self.t)
+        self.approaching = False
+        self._conditioning_start = self.conditioning[0]
 
     @property
     def _baumgarte(self):
@@ -333,9 +362,10 @@ class IdasBDF(Integrator):
             *[values[n] for n in self.drift_function.name_in()]))
         drifted = np.flatnonzero(np.maximum(position, velocity) > self.drift_tol)
         count = drifted[0] + 1 if drifted.size else times.size
+        count = self._watch_conditioning(times[:count], Q[:count], count)
         for k in range(count):
             t, q, v = times[k], Q[k], V[k]
-            if k == count - 1 and drifted.size:
+            if drifted.size and k == drifted[0]:
                 try:
                     q, v = self._project(t, q, v)
                 except HexapodError as error:  # no consistent state: the states before first
@@ -360,6 +390,44 @@ class IdasBDF(Integrator):
             self.reach, self.successes = 2 * self.reach, 0
         if self.reach >= self.h or not self.off_grid:
             self.reach = np.inf
+        if self.approaching:  # a singular configuration ahead: seen at eight times the rate
+            self.reach, self.successes, self.approaching = min(self.reach, self.h / 8), 0, False
+
+    def _conditioning_at(self, t: float, q: np.ndarray) -> float:
+        """Of the kept rows of the equilibrated ``Phi_v`` at ``(t, q)`` (``inf`` without rows)."""
+        model = self.model
+        if not model.n_c:
+            return np.inf
+        w, _, _ = model.law_values(t)
+        sigma = rank_split(model, model.call("Phi_v", q=q, w=w), w).singular_values()
+        self.counters.jacobians += 1
+        self.counters.factorisations += 1
+        return float(sigma.min()) if sigma.size else np.inf
+
+    def _watch_conditioning(self, times: np.ndarray, Q: np.ndarray, count: int) -> int:
+        """How many of the window's states to keep: all of them, or those up to a singular
+        configuration (see :attr:`singular_drop`), after which the run stops with a message
+        naming it. Brings the output times closer when one is approached."""
+        if not self.model.n_c:
+            return count
+        feet = self._contact_set(times[0])
+        if feet != self.conditioning_feet:  # other rows now: their own conditioning
+            self.conditioning.clear()
+            self.conditioning_feet = feet
+        for k, (t, q) in enumerate(zip(times, Q, strict=True)):
+            sigma = self._conditioning_at(t, q)
+            recent = max(self.conditioning, default=sigma)
+            if sigma < self.singular_drop * recent:
+                self.deferred = IntegrationError(
+                    f"IDAS stopped at a singular configuration at t = {t:.6g} s (smallest "
+                    f"singular value of the equilibrated constraint Jacobian {sigma:.2g}, "
+                    f"{sigma / recent:.1g} of its value just before): the index-1 equations' "
+                    "algebraic part is singular there and BDF steps across onto either branch "
+                    f"of the motion; {' and '.join(self.crossing_methods)} cross such poses")
+                return k + 1
+            self.approaching |= sigma < self.singular_approach * recent
+            self.conditioning.append(sigma)
+        return count
 
     def _solve_state(self, t: float, q: np.ndarray, v: np.ndarray):
         """The stabilised accelerations and the multipliers at a state: the compiled solve when
@@ -396,7 +464,7 @@ class IdasBDF(Integrator):
         options = {"abstol": self.tolerance_factor * self.atol,
                    "reltol": self.tolerance_factor * self.rtol,
                    "calc_ic": False, "init_xdot": xdot.tolist(), "suppress_algebraic": True,
-                   "max_num_steps": self._call_steps(times[-1] - self.t),
+                   "max_num_steps": self._interval_steps(times),
                    "expand": self.equations.callback is None}
         if np.any(self.atol_vector != self.atol):  # per kind: a vector over x and z (which the
             # error test leaves out: at the smallest), taken before abstol
@@ -422,12 +490,15 @@ class IdasBDF(Integrator):
         self.covered_steps += int(stats.get("nsteps", 0))
         return out["xf"].full().T
 
-    def _call_steps(self, interval: float) -> int:
-        """The most steps a call over ``interval`` may take (see :attr:`pace_factor`)."""
+    def _interval_steps(self, times: np.ndarray) -> int:
+        """The most steps IDAS may take between two output times of a call over ``times``
+        (IDAS's ``mxstep``, see :attr:`pace_factor`)."""
         if not self.covered > 0:
-            return min(self.max_num_steps, self.first_call_steps)
+            return min(self.max_num_steps, self.first_interval_steps)
+        interval = float(np.max(np.diff(np.concatenate([[self.t], times]))))
         expected = self.covered_steps / self.covered * interval
-        return int(min(self.max_num_steps, max(self.min_call_steps, self.pace_factor * expected)))
+        return int(min(self.max_num_steps,
+                       max(self.min_interval_steps, self.pace_factor * expected)))
 
     def _first_step(self, xdot: np.ndarray, interval: float) -> float:
         """A first step for BDF at order 1 (IDAS's own guess, from ``x'`` alone, is far too
