@@ -9,13 +9,26 @@ so that the drift of the positions and velocities away from the constraints deca
 critically damped oscillator of rate ``alpha = beta`` instead of growing. The Euler parameters
 are renormalised after each step. Fourth order, fixed step; the constraints hold to the
 method's truncation error, not to round-off.
+
+Redundant rows: every stage, the first included (the accelerations at the end of the previous
+step), is solved on the rows independent at the start (the compiled kernel); the multipliers of
+the saved states, and the stages the compiled solve refuses, by the exact solve with the rank
+and the redundant rows' agreement decided to the accuracy of the state, which is off the
+constraints by the drift (:meth:`RungeKutta4Baumgarte._dynamics`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from hexapod.simulation.integrators.base import Integrator, Interpolant, PolynomialInterpolant
+from hexapod.algorithms.dynamics import forward_dynamics
+from hexapod.errors import IntegrationError
+from hexapod.simulation.integrators.base import (
+    Integrator,
+    Interpolant,
+    PolynomialInterpolant,
+    characteristic_time,
+)
 from hexapod.simulation.integrators.stability import largest_stable_step, runge_kutta_stability
 
 #: the classical tableau, for the stability function
@@ -25,6 +38,17 @@ _R = runge_kutta_stability(_A, _B)
 #: the continuous extension of order 3 (Hairer, Norsett and Wanner, *Solving ODEs I*, II.6):
 #: the weights ``b_i(theta)`` of the four stages, coefficients of theta, theta^2 and theta^3
 _DENSE = np.array([[1, -3 / 2, 2 / 3], [0, 1, -2 / 3], [0, 1, -2 / 3], [0, -1 / 2, 2 / 3]])
+#: the rank decision's tolerance at a state off the constraints by ``e`` (scaled) is at least
+#: this times ``e`` (as Radau's, :data:`hexapod.simulation.integrators.radau.RANK_MARGIN`)
+RANK_MARGIN = 10.0
+#: the position drift (relative to the row scales) past which a state is no longer a motion
+#: of the mechanism and the run fails: healthy runs of the extreme-case suite drift by 1e-7 to
+#: 7e-5 (6e-4 on the anti-parallelogram's dead points), a pendulum at a coarse 20 steps per
+#: period over 100 periods to 1e-2; the flyball governor at 30 times its stable step drifted
+#: to 4e7 and once ended "finished", 6e11 off
+DRIFT_LIMIT = 0.1
+#: the drift is checked every this many steps (one evaluation of ``phi``)
+DRIFT_CHECK_EVERY = 10
 
 
 class RungeKutta4Baumgarte(Integrator):
@@ -74,7 +98,67 @@ class RungeKutta4Baumgarte(Integrator):
         self.q = self.model.normalize(q + h / 6 * (dq1 + 2 * dq2 + 2 * dq3 + dq4))
         self.v = v + h / 6 * (dv1 + 2 * dv2 + 2 * dv3 + dv4)
         self.t = t + h
-        self.v_dot, self.lam = self._dynamics(self.t, self.q, self.v, (self.alpha, self.alpha))
+        # the first stage of the next step: the same stabilised equations, on the same rows,
+        # as the stages (the compiled kernel); the multipliers are solved when asked. An exact
+        # solve here decided the rank afresh with the model's tolerance: on Bricard's mechanism
+        # at h = 1e-2 the drift (phi 4e-8) set the redundant row more than 1e-9 from the
+        # others' span at t = 1.47 s, it was kept in a system singular to within the drift, the
+        # accelerations came out 10 to 700 off, and the mechanism swung on at another energy
+        # (an error of 1.3 of the motion at 10 s, the run "finished")
+        self.v_dot, self.lam = self._rates(self.t, self.q, self.v, self.alpha)[1], None
+        self._steps_taken += 1
+        if self._steps_taken % DRIFT_CHECK_EVERY == 0:
+            self._check_drift()
+
+    _steps_taken = 0
+
+    def _check_drift(self) -> None:
+        """Fail past :data:`DRIFT_LIMIT` of position drift (relative to the scene's size)."""
+        model = self.model
+        if not model.n_c:
+            return
+        w, _, _ = model.law_values(self.t)
+        drift = float(np.abs(model.call("phi", q=self.q, w=w) / model.row_scale).max())
+        if not drift <= DRIFT_LIMIT:
+            raise IntegrationError(
+                f"the constraints drifted by {drift:.2g} of the scene's size by t = "
+                f"{self.t:.6g} s: the step h = {self.h:.3g} s is too large for Baumgarte's "
+                "stabilisation here (take a smaller step, or a projection method)")
+
+    def _dynamics(self, t: float, q: np.ndarray, v: np.ndarray,
+                  baumgarte: tuple[float, float] | None = None,
+                  consistency_tol: float = 1e-6, data=None) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`Integrator._dynamics` to the accuracy of the state, which Baumgarte's
+        stabilisation leaves off the constraints by its drift: positions by ``e`` (``phi``
+        scaled by the row scales), velocities by ``e_v`` (``Phi_v v - nu`` so scaled, times
+        :func:`characteristic_time`). There a redundant row stands about ``e`` from the span
+        of the others, so the rank decision's tolerance is at least :data:`RANK_MARGIN` times
+        ``e`` (the model's 1e-9 alone kept Bricard's redundant row at a drift of 4e-8, in a
+        system singular to within it: multipliers of 5e9 to 7e9); and the redundant rows disagree
+        with the others by about ``max(e, e_v)``, so they are checked to at least
+        :data:`RANK_MARGIN` times that (Bricard's redundant row disagreed by 1e-6 at h = 0.05
+        s, ``e = 1e-5``, and the multipliers of the saved states were refused as those of
+        contradicting constraints). At a consistent state both are the model's. Used by the
+        multipliers of the saved states and where the compiled solve is refused."""
+        model = self.model
+        if self._crossing is not None or not model.n_c:
+            return super()._dynamics(t, q, v, baumgarte, consistency_tol, data)
+        data = self.data if data is None else data
+        w, wd, _ = model.law_values(t)
+        scale = model.row_scale
+        e = float(np.abs(model.call("phi", q=q, w=w) / scale).max())
+        rates = model.call("Phi_v", q=q, w=w) @ v - model.call("nu", q=q, w=w, wd=wd)
+        e_v = float(np.abs(rates / scale).max()) * characteristic_time(model)
+        rank_tolerance, tol = model.rank_tolerance, consistency_tol
+        if np.isfinite(e) and np.isfinite(e_v):  # else the solve says what is wrong
+            rank_tolerance = max(rank_tolerance, RANK_MARGIN * e)
+            tol = max(tol, RANK_MARGIN * max(e, e_v))
+        v_dot = forward_dynamics(model, data, t, q, v, baumgarte=baumgarte,
+                                 rank_tolerance=rank_tolerance, consistency_tol=tol)
+        self.counters.rhs += 1
+        self.counters.jacobians += 1
+        self.counters.factorisations += 1
+        return v_dot, data.lam
 
     def dense_output(self) -> Interpolant:
         """RK4's continuous extension of order 3 from the step's four stages (Baumgarte terms
