@@ -51,6 +51,10 @@ from hexapod.simulation.methods import (
 SINGULAR_BAND = 1e-4
 #: the crossing's tolerance over the smallest singular value where it begins (or widens)
 CROSSING_FACTOR = 10.0
+#: the rank decision's tolerance at a state off the constraints by ``e`` (scaled by the row
+#: scales) is at least this times ``e``: a redundant row's distance from the others' span grows
+#: like ``e`` there (the methods that leave the constraints by a drift or a Newton error)
+RANK_MARGIN = 10.0
 #: the largest singular value a crossing leaves out with a cluster of smaller ones (rows of
 #: unit length: a well-posed row's are of order 0.1 to 1); the N-four-bar's 40 windows spread
 #: theirs over a factor 26, 8e-5 to 2e-3 where DOPRI5 at rtol 1e-9 begins to cross
@@ -279,16 +283,19 @@ class Integrator:
 
     def _dynamics(self, t: float, q: np.ndarray, v: np.ndarray,
                   baumgarte: tuple[float, float] | None = None,
-                  consistency_tol: float = 1e-6, data=None) -> tuple[np.ndarray, np.ndarray]:
+                  consistency_tol: float = 1e-6, data=None,
+                  rank_tolerance: float | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Accelerations and multipliers at a state (one saddle-point solve; rows nearly
         dependent are left out while a singular configuration is crossed). Redundant rows may
         disagree with the others by ``consistency_tol`` (relative) before the solve refuses.
-        ``data``: where the solve works (default ``self.data``, the method's current state)."""
+        ``data``: where the solve works (default ``self.data``, the method's current state).
+        ``rank_tolerance``: the rank decision's (default the model's)."""
         data = self.data if data is None else data
         # while crossing, the rows left out are violated by design (the projection restores them)
-        crossing = {"consistency_tol": consistency_tol} if self._crossing is None else {
-            "rank_tolerance": self._crossing, "consistency_tol": np.inf}
-        v_dot = forward_dynamics(self.model, data, t, q, v, baumgarte=baumgarte, **crossing)
+        options = ({"rank_tolerance": rank_tolerance, "consistency_tol": consistency_tol}
+                   if self._crossing is None else
+                   {"rank_tolerance": self._crossing, "consistency_tol": np.inf})
+        v_dot = forward_dynamics(self.model, data, t, q, v, baumgarte=baumgarte, **options)
         self.counters.rhs += 1
         self.counters.jacobians += 1
         self.counters.factorisations += 1

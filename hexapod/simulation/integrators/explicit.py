@@ -21,9 +21,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from hexapod.algorithms.dynamics import forward_dynamics
 from hexapod.errors import IntegrationError
 from hexapod.simulation.integrators.base import (
+    RANK_MARGIN,
     Integrator,
     Interpolant,
     PolynomialInterpolant,
@@ -38,9 +38,6 @@ _R = runge_kutta_stability(_A, _B)
 #: the continuous extension of order 3 (Hairer, Norsett and Wanner, *Solving ODEs I*, II.6):
 #: the weights ``b_i(theta)`` of the four stages, coefficients of theta, theta^2 and theta^3
 _DENSE = np.array([[1, -3 / 2, 2 / 3], [0, 1, -2 / 3], [0, 1, -2 / 3], [0, -1 / 2, 2 / 3]])
-#: the rank decision's tolerance at a state off the constraints by ``e`` (scaled) is at least
-#: this times ``e`` (as Radau's, :data:`hexapod.simulation.integrators.radau.RANK_MARGIN`)
-RANK_MARGIN = 10.0
 #: the position drift (relative to the row scales) past which a state is no longer a motion
 #: of the mechanism and the run fails: healthy runs of the extreme-case suite drift by 1e-7 to
 #: 7e-5 (6e-4 on the anti-parallelogram's dead points), a pendulum at a coarse 20 steps per
@@ -106,19 +103,20 @@ class RungeKutta4Baumgarte(Integrator):
         # accelerations came out 10 to 700 off, and the mechanism swung on at another energy
         # (an error of 1.3 of the motion at 10 s, the run "finished")
         self.v_dot, self.lam = self._rates(self.t, self.q, self.v, self.alpha)[1], None
-        self._steps_taken += 1
-        if self._steps_taken % DRIFT_CHECK_EVERY == 0:
+        if (self.counters.steps + 1) % DRIFT_CHECK_EVERY == 0:  # this step is counted after
             self._check_drift()
 
-    _steps_taken = 0
+    def _position_drift(self, t: float, q: np.ndarray) -> float:
+        """``max |phi|`` scaled by the row scales (0 without rows)."""
+        model = self.model
+        if not model.n_c:
+            return 0.0
+        w, _, _ = model.law_values(t)
+        return float(np.abs(model.call("phi", q=q, w=w) / model.row_scale).max())
 
     def _check_drift(self) -> None:
         """Fail past :data:`DRIFT_LIMIT` of position drift (relative to the scene's size)."""
-        model = self.model
-        if not model.n_c:
-            return
-        w, _, _ = model.law_values(self.t)
-        drift = float(np.abs(model.call("phi", q=self.q, w=w) / model.row_scale).max())
+        drift = self._position_drift(self.t, self.q)
         if not drift <= DRIFT_LIMIT:
             raise IntegrationError(
                 f"the constraints drifted by {drift:.2g} of the scene's size by t = "
@@ -143,22 +141,15 @@ class RungeKutta4Baumgarte(Integrator):
         model = self.model
         if self._crossing is not None or not model.n_c:
             return super()._dynamics(t, q, v, baumgarte, consistency_tol, data)
-        data = self.data if data is None else data
         w, wd, _ = model.law_values(t)
-        scale = model.row_scale
-        e = float(np.abs(model.call("phi", q=q, w=w) / scale).max())
+        e = self._position_drift(t, q)
         rates = model.call("Phi_v", q=q, w=w) @ v - model.call("nu", q=q, w=w, wd=wd)
-        e_v = float(np.abs(rates / scale).max()) * characteristic_time(model)
+        e_v = float(np.abs(rates / model.row_scale).max()) * characteristic_time(model)
         rank_tolerance, tol = model.rank_tolerance, consistency_tol
         if np.isfinite(e) and np.isfinite(e_v):  # else the solve says what is wrong
             rank_tolerance = max(rank_tolerance, RANK_MARGIN * e)
             tol = max(tol, RANK_MARGIN * max(e, e_v))
-        v_dot = forward_dynamics(model, data, t, q, v, baumgarte=baumgarte,
-                                 rank_tolerance=rank_tolerance, consistency_tol=tol)
-        self.counters.rhs += 1
-        self.counters.jacobians += 1
-        self.counters.factorisations += 1
-        return v_dot, data.lam
+        return super()._dynamics(t, q, v, baumgarte, tol, data, rank_tolerance=rank_tolerance)
 
     def dense_output(self) -> Interpolant:
         """RK4's continuous extension of order 3 from the step's four stages (Baumgarte terms

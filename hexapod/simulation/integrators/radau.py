@@ -90,7 +90,7 @@ from scipy.sparse.linalg import splu
 from hexapod.algorithms.linalg import equilibrate, split_rows
 from hexapod.errors import IntegrationError
 from hexapod.model.model import Model
-from hexapod.simulation.integrators.base import Integrator, Interpolant
+from hexapod.simulation.integrators.base import RANK_MARGIN, Integrator, Interpolant
 from hexapod.spatial import quaternion_exp, quaternion_log, quaternion_product
 
 # ---------------------------------------------------------------- Radau IIA, three stages
@@ -104,10 +104,6 @@ C = np.array([(4 - _S6) / 10, (4 + _S6) / 10, 1.0])
 #: weights of the stage increments in RADAU5's error estimate (its DD1, DD2, DD3)
 E = np.array([-(13 + 7 * _S6), -13 + 7 * _S6, -1.0]) / 3
 
-
-#: the rank decision's tolerance at a state off the constraints by ``e`` (scaled) is at least
-#: this times ``e``: a redundant row's distance from the others' span grows like ``e`` there
-RANK_MARGIN = 10.0
 
 
 def _transformation() -> tuple[np.ndarray, np.ndarray, float, float, float]:
