@@ -30,7 +30,6 @@ import re
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
 
 import hexapod.benchmarks as m
 from hexapod.algorithms.kinematics import rank_split
@@ -90,47 +89,23 @@ def test_bricard_mechanism(bricard, method, setting):
 THETA0 = 3 * np.pi / 4  # the crank 45 degrees from hanging straight down
 
 
-def four_bar_pose(model, theta: float) -> np.ndarray:
-    """Positions of :func:`n_four_bar` with every crank at ``theta`` (clockwise from straight
-    up): crank ``i`` centred at ``(i + sin(theta)/2, cos(theta)/2)``, coupler ``i`` at
-    ``(i + 1/2 + sin(theta), cos(theta))``, turned about z (rods 1 m)."""
-    q = model.q0.copy()
-    for body in model.bodies:
-        kind, i = body.name.split("_")
-        i = int(i)
-        if kind == "crank":
-            centre, turn = [i + 0.5 * np.sin(theta), 0.5 * np.cos(theta)], np.pi / 2 - theta
-        else:
-            centre, turn = [i + 0.5 + np.sin(theta), np.cos(theta)], 0.0
-        q[body.q] = [*centre, 0.0, np.cos(turn / 2), 0.0, 0.0, np.sin(turn / 2)]
-    return q
-
-
 @pytest.fixture(scope="module")
 def hanging_four_bar():
-    n, t_end = 1, 1.0
-    case = m.n_four_bar(n, t_end=t_end, dimension=3)
-    model = assemble(case.scene)
-    # the crank angle's equation, as n_four_bar writes it
-    rate = ((n + 1) * G / 2 + n * G) / ((n + 1) / 3 + n)
-    angle = solve_ivp(lambda _t, y: [y[1], rate * np.sin(y[0])], [0.0, t_end], [THETA0, 0.0],
-                      method="DOP853", rtol=1e-12, atol=1e-12, dense_output=True).sol
-    return case, model, angle
+    case = m.n_four_bar(1, t_end=1.0, dimension=3, start_angle=THETA0, start_rate=0.0)
+    return case, assemble(case.scene)
 
 
 @pytest.mark.parametrize("method", list(INTEGRATORS))
 def test_spatial_four_bar_released_from_rest(hanging_four_bar, method):
-    case, model, angle = hanging_four_bar
+    case, model = hanging_four_bar
     assert model.n_c - np.linalg.matrix_rank(
-        model.call("Phi_v", q=four_bar_pose(model, THETA0))) == 3  # three redundant rows
-    result = simulate(model, case.t_end, method=method, q0=four_bar_pose(model, THETA0),
-                      v0=np.zeros(model.n_v), forces=False)
+        model.call("Phi_v", q=model.q0)) == 3  # three redundant rows
+    result = simulate(model, case.t_end, method=method, forces=False)
     level, tau = error_level(model, method, {}, case.t_end)
-    reference = np.array([case.observable(model, four_bar_pose(model, theta))
-                          for theta in angle(result.t)[0]])
-    distance = np.abs(case.observable(model, result.q) - reference).max()
+    distance = np.abs(case.observable(model, result.q) - case.reference(result.t)).max()
     check_run(model, result, level, tau, distance / model.characteristic_length)
-    assert np.all(np.abs(angle(result.t)[0] - np.pi) < np.pi / 2)  # never flat
+    angle = case.reference.states(result.t)[:, 0]
+    assert np.all(np.abs(angle - np.pi) < np.pi / 2)  # never flat
 
 
 # ------------------------------------------------------------ the N-four-bar lying flat

@@ -36,7 +36,8 @@ from hexapod.spatial import rotation_about_axis
 # ------------------------------------------------------------------ singular: N four-bar
 
 
-def n_four_bar(n: int = 10, *, t_end: float = 10.0, dimension: int = 2) -> Case:
+def n_four_bar(n: int = 10, *, t_end: float = 10.0, dimension: int = 2,
+               start_angle: float = 0.0, start_rate: float = 1.0) -> Case:
     """IFToMM benchmark A02, the N-four-bar mechanism: ``n`` parallelogram windows in a row,
     2 n + 1 uniform rods of 1 m and 1 kg (n + 1 cranks hinged to the ground 1 m apart, n
     couplers joining their tips), gravity 9.81 along -y. Initially the cranks are vertical
@@ -51,7 +52,11 @@ def n_four_bar(n: int = 10, *, t_end: float = 10.0, dimension: int = 2) -> Case:
     ``[(n + 1) m l^2 / 3 + n m l^2] theta'' = [(n + 1) m g l / 2 + n m g l] sin theta``,
     integrated by DOP853 at 1e-12. The observable is every rod's centre of mass, which shows
     a jump to another branch. The benchmark library's A02 has 40 windows (``n_four_bar(40)``),
-    the OpenSim implementation 2; 10 s as there."""
+    the OpenSim implementation 2; 10 s as there.
+
+    ``start_angle`` and ``start_rate`` (rad, rad/s) start the mechanism elsewhere on the same
+    motion's family: every crank at ``theta = start_angle`` turning at ``start_rate`` (the
+    benchmark: 0 and 1, ``B0`` at 1 m/s)."""
     m, l = 1.0, 1.0
     scene = Scene(f"n-four-bar-{n}" + ("-3d" if dimension == 3 else ""), dimension=dimension)
     scene.gravity = np.array([0.0, -G] + ([0.0] if dimension == 3 else []))
@@ -70,14 +75,21 @@ def n_four_bar(n: int = 10, *, t_end: float = 10.0, dimension: int = 2) -> Case:
     def at(p):
         return [*p, 0.0] if dimension == 3 else list(p)
 
+    # every crank at theta clockwise from straight up, the couplers level: a point at r along a
+    # crank sits at (r sin theta, r cos theta) from its hinge and moves at r theta' (cos, -sin)
+    s0, c0, w0 = np.sin(start_angle), np.cos(start_angle), start_rate
     for i in range(n + 1):
-        add_rod(f"crank_{i}", [i, 0.5], np.pi / 2, [0.5, 0.0], -1.0)
+        add_rod(f"crank_{i}", [i + 0.5 * l * s0, 0.5 * l * c0], np.pi / 2 - start_angle,
+                [0.5 * l * w0 * c0, -0.5 * l * w0 * s0], -w0)
         if i < n:
-            add_rod(f"coupler_{i}", [i + 0.5, 1.0], 0.0, [1.0, 0.0], 0.0)
+            add_rod(f"coupler_{i}", [i + 0.5 + l * s0, l * c0], 0.0,
+                    [l * w0 * c0, -l * w0 * s0], 0.0)
     scene.add(Revolute("A_0", "ground", "crank_0", origin=at([0.0, 0.0])))
     for i in range(n):
-        scene.add(Revolute(f"B_{i}", f"crank_{i}", f"coupler_{i}", origin=at([i, 1.0])))
-        scene.add(Revolute(f"C_{i}", f"coupler_{i}", f"crank_{i + 1}", origin=at([i + 1, 1.0])))
+        scene.add(Revolute(f"B_{i}", f"crank_{i}", f"coupler_{i}",
+                           origin=at([i + l * s0, l * c0])))
+        scene.add(Revolute(f"C_{i}", f"coupler_{i}", f"crank_{i + 1}",
+                           origin=at([i + 1 + l * s0, l * c0])))
         scene.add(Revolute(f"A_{i + 1}", "ground", f"crank_{i + 1}", origin=at([i + 1, 0.0])))
     inertia_total = (n + 1) * m * l**2 / 3 + n * m * l**2
     torque = (n + 1) * m * G * l / 2 + n * m * G * l
@@ -98,16 +110,18 @@ def n_four_bar(n: int = 10, *, t_end: float = 10.0, dimension: int = 2) -> Case:
             out.extend(point + [0.0] * (width - 2))
         return np.array(out)
 
-    reference = Trajectory(lambda _t, y: np.array([y[1], rate * np.sin(y[0])]), [0.0, 1.0],
-                            t_end, lambda y: positions(y[0]))
+    reference = Trajectory(lambda _t, y: np.array([y[1], rate * np.sin(y[0])]),
+                           [start_angle, start_rate], t_end, lambda y: positions(y[0]))
     accelerations = {}
-    theta_dd = 0.0  # sin(0) = 0: only the centripetal part at the start
+    theta_dd = rate * s0
     for name in observed:
         kind, _ = name.split("_")
         r = 0.5 * l if kind == "crank" else l
         # position (i + r sin theta, r cos theta): acceleration r (theta'' cos - theta'^2 sin,
-        # -theta'' sin - theta'^2 cos) at theta = 0, theta' = 1
-        accelerations[name] = np.array([r * theta_dd, -r] + [0.0] * (width - 2))
+        # -theta'' sin - theta'^2 cos)
+        accelerations[name] = np.array([r * (theta_dd * c0 - w0**2 * s0),
+                                        -r * (theta_dd * s0 + w0**2 * c0)]
+                                       + [0.0] * (width - 2))
     counted = 1 if dimension == 2 else 6 * (2 * n + 1) - 5 * (3 * n + 1)
     return Case(scene.name, scene, t_end,
                 f"{n} parallelogram windows pass through the flat pose where the Jacobian "
