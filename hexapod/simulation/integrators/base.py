@@ -365,10 +365,10 @@ class Integrator:
         if not sigma.size or sigma.min() > self._crossing:
             self._crossing = None
 
-    def _rank_split(self, q: np.ndarray | None = None):
+    def _rank_split(self, q: np.ndarray | None = None, t: float | None = None):
         """The rank decision on the equilibrated ``Phi_v`` at positions ``q`` (default the
-        current ones), with the laws at the current time."""
-        w, _, _ = self.model.law_values(self.t)
+        current ones), with the laws at ``t`` (default the current time)."""
+        w, _, _ = self.model.law_values(self.t if t is None else t)
         self.counters.jacobians += 1
         self.counters.factorisations += 1
         return rank_split(self.model, self.model.call("Phi_v", q=self.q if q is None else q, w=w),
@@ -514,12 +514,13 @@ class Integrator:
     #: the methods that cross singular configurations (the crossing of :meth:`_cross_singular`)
     crossing_methods = ("dopri5-projection", "dop853-projection")
 
-    def _smallest_singular_value(self) -> float:
-        """Of the kept rows of the equilibrated ``Phi_v`` at the current positions (``inf``
-        without rows)."""
+    def _smallest_singular_value(self, q: np.ndarray | None = None,
+                                 t: float | None = None) -> float:
+        """Of the kept rows of the equilibrated ``Phi_v`` at ``(t, q)`` (default the current
+        state; ``inf`` without rows)."""
         if not self.model.n_c:
             return np.inf
-        sigma = self._rank_split().singular_values()
+        sigma = self._rank_split(q, t).singular_values()
         return float(sigma.min()) if sigma.size else np.inf
 
     def _note_conditioning(self) -> None:

@@ -72,7 +72,6 @@ import numpy as np
 
 from hexapod._support import signals
 from hexapod.algorithms.dynamics import forward_dynamics
-from hexapod.algorithms.kinematics import rank_split
 from hexapod.errors import HexapodError, IntegrationError
 from hexapod.simulation.integrators.base import Counters, Integrator
 
@@ -272,7 +271,7 @@ class IdasBDF(Integrator):
         self.deferred: HexapodError | None = None  # a failure after states still to return
         self.rows = self.data.independent_rows  # the start was solved by _dynamics
         # the smallest singular values at the last output states, and the feet down then
-        self.conditioning: deque = deque([self._conditioning_at(self.t, self.q)],
+        self.conditioning: deque = deque([self._smallest_singular_value()],
                                          maxlen=self.singular_memory)
         self.conditioning_feet = self._contact_set(self.t)
         self.approaching = False
@@ -393,17 +392,6 @@ class IdasBDF(Integrator):
         if self.approaching:  # a singular configuration ahead: seen at eight times the rate
             self.reach, self.successes, self.approaching = min(self.reach, self.h / 8), 0, False
 
-    def _conditioning_at(self, t: float, q: np.ndarray) -> float:
-        """Of the kept rows of the equilibrated ``Phi_v`` at ``(t, q)`` (``inf`` without rows)."""
-        model = self.model
-        if not model.n_c:
-            return np.inf
-        w, _, _ = model.law_values(t)
-        sigma = rank_split(model, model.call("Phi_v", q=q, w=w), w).singular_values()
-        self.counters.jacobians += 1
-        self.counters.factorisations += 1
-        return float(sigma.min()) if sigma.size else np.inf
-
     def _watch_conditioning(self, times: np.ndarray, Q: np.ndarray, count: int) -> int:
         """How many of the window's states to keep: all of them, or those up to a singular
         configuration (see :attr:`singular_drop`), after which the run stops with a message
@@ -415,7 +403,7 @@ class IdasBDF(Integrator):
             self.conditioning.clear()
             self.conditioning_feet = feet
         for k, (t, q) in enumerate(zip(times, Q, strict=True)):
-            sigma = self._conditioning_at(t, q)
+            sigma = self._smallest_singular_value(q, t)
             recent = max(self.conditioning, default=sigma)
             if sigma < self.singular_drop * recent:
                 self.deferred = IntegrationError(
