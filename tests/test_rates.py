@@ -85,6 +85,26 @@ def test_fast_function_equals_the_casadi_call():
         assert b.shape == (3,) and np.array_equal(b, b_ref.reshape(-1))
 
 
+@pytest.mark.parametrize("kind", ["FastFunction", "ScatteredFunction"])
+def test_a_failed_fast_evaluation_raises_instead_of_returning_the_last_results(kind):
+    # a linear solve of a singular matrix fails inside CasADi; through the buffers the outputs
+    # were then left as the previous call wrote them, and a projection near a singular pose
+    # silently returned the state before the step (the N-four-bar stood still, its steps
+    # accepted, until the run's budget ran out)
+    import casadi as ca
+
+    from hexapod._support import fastcall
+
+    A, b = ca.MX.sym("A", 2, 2), ca.MX.sym("b", 2)
+    fast = getattr(fastcall, kind)(ca.Function("solve", [A, b], [ca.solve(A, b, "qr")]))
+    (x,) = fast(np.array([[2.0, 0.0], [0.0, 4.0]]), np.array([2.0, 2.0]))
+    assert np.allclose(x, [1.0, 0.5])
+    with pytest.raises(RuntimeError, match="solve"):
+        fast(np.zeros((2, 2)), np.array([1.0, 3.0]))
+    with pytest.raises(RuntimeError):
+        ca.Function("solve", [A, b], [ca.solve(A, b, "qr")])(np.zeros((2, 2)), [1.0, 3.0])
+
+
 @pytest.mark.parametrize("case", ["front_leg", "four-bar-3d", "driven-tree"])
 def test_compiled_projection_equals_the_exact_one(case):
     from hexapod.simulation.kernels import compiled_projection

@@ -17,8 +17,8 @@ class FastFunction:
     """``function`` with dense outputs, evaluated through preallocated buffers.
 
     A call takes the inputs positionally (arrays of any shape holding the input's entries, in
-    CasADi's column-major order) and returns fresh arrays: vectors 1-D, matrices 2-D.
-    Not reentrant (one set of buffers): build one per user if threads share a model.
+    CasADi's column-major order) and returns fresh arrays: vectors 1-D, matrices 2-D; raises
+    ``RuntimeError`` when the evaluation fails, as a plain call does. Not reentrant (one set of buffers): build one per user if threads share a model.
     """
 
     def __init__(self, function: ca.Function):
@@ -35,7 +35,7 @@ class FastFunction:
     def __call__(self, *arguments) -> list[np.ndarray]:
         for target, value in zip(self._inputs, arguments, strict=True):
             target[:] = np.ravel(value, order="F")
-        self._evaluate()
+        _evaluate(self.function, self._buffer, self._evaluate)
         out = []
         for array, (rows, columns) in zip(self._outputs, self._shapes, strict=True):
             if columns == 1:
@@ -74,7 +74,7 @@ class ScatteredFunction:
     def __call__(self, *arguments) -> list[np.ndarray]:
         for target, value in zip(self._inputs, arguments, strict=True):
             target[:] = np.ravel(value, order="F")
-        self._evaluate()
+        _evaluate(self.function, self._buffer, self._evaluate)
         out = []
         for values, where, (rows, columns) in zip(self._outputs, self._where, self._shapes,
                                                   strict=True):
@@ -93,3 +93,12 @@ def _bound(function: ca.Function, inputs: list[np.ndarray], outputs: list[np.nda
     for i, array in enumerate(outputs):
         buffer.set_res(i, memoryview(array))
     return buffer, evaluate
+
+
+def _evaluate(function: ca.Function, buffer, evaluate) -> None:
+    """Evaluate through the buffer; raise ``RuntimeError`` as a plain call of ``function``
+    does when the evaluation fails (a linear solve of a singular matrix): the outputs are then
+    not written, and would be the last call's results."""
+    evaluate()
+    if buffer.ret():
+        raise RuntimeError(f"evaluation of {function.name()} failed")
