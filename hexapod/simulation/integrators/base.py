@@ -59,6 +59,9 @@ RANK_MARGIN = 10.0
 #: unit length: a well-posed row's are of order 0.1 to 1); the N-four-bar's 40 windows spread
 #: theirs over a factor 26, 8e-5 to 2e-3 where DOPRI5 at rtol 1e-9 begins to cross
 CLUSTER_CEILING = 1e-2
+#: a crossing's step may not end nearer the pose than where the smallest singular value is
+#: this fraction of the one where the crossing began (see :meth:`Integrator._lands_on_pose`)
+POSE_CLEARANCE = 0.1
 
 
 @dataclass
@@ -161,6 +164,7 @@ class Integrator:
         self.status = "running"
         self.message = ""
         self._crossing: float | None = None  # the raised rank tolerance, while crossing
+        self._crossing_from = np.inf  # the smallest singular value where the crossing began
         q, v = self._project(self.t0, q0, v0)  # guesses of None: the scene's initial state
         self.t, self.q, self.v = self.t0, q, v
         self.v_dot, self.lam = self._dynamics(self.t, q, v)
@@ -319,13 +323,12 @@ class Integrator:
                                   consistency_tol=REDUNDANT_TOLERANCE)
         return self.model.call("qdot", q=q, v=v), v_dot
 
-    def _cross_singular(self, ahead: np.ndarray | None = None) -> bool:
+    def _cross_singular(self) -> bool:
         """Begin crossing a singular configuration if the state is near one (see
-        :data:`SINGULAR_BAND`) and, when the positions ``ahead`` (a rejected step's end) are
-        given, moving towards it; or widen the crossing under way; returns whether it did.
-        Moving away from a singular pose, the rows are all kept: the steps then grow back as
-        the distance to the pose does, and a crossing begun there would leave rows out over a
-        band ten times as wide as the state's, for nothing.
+        :data:`SINGULAR_BAND`) and moving towards it, or widen the crossing under way; returns
+        whether it did. Moving away from a singular pose, the rows are all kept: the steps then
+        grow back as the distance to the pose does, and a crossing begun there would leave rows
+        out over a band ten times as wide as the state's, for nothing.
 
         While crossing, the rows nearly dependent on the others (as many as there are singular
         values of the equilibrated ``Phi_v`` below the crossing's tolerance, ``CROSSING_FACTOR``
@@ -343,11 +346,15 @@ class Integrator:
         base = smallest if self._crossing is None else self._crossing
         if base >= SINGULAR_BAND:
             return False  # as wide as it goes
-        if self._crossing is None and ahead is not None:
-            if self._rank_split(ahead).singular_values().min(initial=np.inf) > smallest:
-                return False  # moving away
         if self._crossing is None:
+            rate = self._singular_rate(smallest)
+            if not rate < 0:
+                return False  # moving away
             self.counters.crossings += 1
+            self._crossing_from = smallest
+            # a step as long as the way to the pose and as far again: one left much longer
+            # lands far out of the band on the rows it leaves out
+            self.h = min(self.h, 2 * smallest / -rate)
         self._crossing = CROSSING_FACTOR * base
         # the rows left out: those a rank-revealing (column-pivoted) QR factorisation takes last
         rows = split.independent
@@ -358,12 +365,36 @@ class Integrator:
         return True
 
     def _end_crossing(self) -> None:
-        """End the crossing once the state has left the band it began in."""
+        """End the crossing once the state has left the band it began in, or has passed the
+        pose and is as far from it as where the crossing began (the steps that follow keep
+        every row and grow back with the distance to the pose; steps leaving rows out further
+        on, long ones especially, let the state leave the constraints they hold by more than
+        the projection puts right without a loss of energy)."""
         if self._crossing is None:
             return
         sigma = self._rank_split().singular_values()
-        if not sigma.size or sigma.min() > self._crossing:
+        smallest = sigma.min() if sigma.size else np.inf
+        if not smallest <= self._crossing or (smallest >= self._crossing_from
+                                              and self._singular_rate(smallest) > 0):
             self._crossing = None
+
+    def _lands_on_pose(self, q: np.ndarray) -> bool:
+        """Whether a crossing's step ending at positions ``q`` ends near the pose: the smallest
+        singular value there below :data:`POSE_CLEARANCE` times the one where it began."""
+        if self._crossing is None:
+            return False
+        return bool(self._smallest_singular_value(self.model.normalize(q))
+                    < POSE_CLEARANCE * self._crossing_from)
+
+    def _singular_rate(self, smallest: float) -> float:
+        """The rate of change along the motion of the smallest singular value of the
+        equilibrated ``Phi_v`` (``smallest`` at the current state), negative approaching a
+        singular pose: a difference over a thousandth of the step, close enough never to jump
+        over the pose."""
+        q_dot = self.model.call("qdot", q=self.q, v=self.v)
+        delta = 1e-3 * self.h
+        ahead = self.model.normalize(self.q + delta * q_dot)
+        return (self._rank_split(ahead).singular_values().min(initial=np.inf) - smallest) / delta
 
     def _rank_split(self, q: np.ndarray | None = None, t: float | None = None):
         """The rank decision on the equilibrated ``Phi_v`` at positions ``q`` (default the

@@ -20,10 +20,6 @@ from hexapod.errors import IntegrationError
 from hexapod.simulation.integrators.base import Integrator, Interpolant, PolynomialInterpolant
 from hexapod.simulation.integrators.stability import largest_stable_step, runge_kutta_stability
 
-#: rejections in a row after which a step checks whether it is at a singular configuration
-#: (then it crosses it, see :meth:`Integrator._cross_singular`)
-CROSSING_REJECTIONS = 2
-
 
 class EmbeddedRungeKutta(Integrator):
     """An explicit embedded pair ``(A, b, b_hat, c)`` with error-per-step control; subclasses
@@ -86,7 +82,7 @@ class EmbeddedRungeKutta(Integrator):
         model, n_q = self.model, self.model.n_q
         y0 = np.concatenate([self.q, self.v])
         f0 = np.concatenate([model.call("qdot", q=self.q, v=self.v), self.v_dot])
-        rejected = 0
+        nudged = False
         while True:
             h = self.next_step()
             if h < 1e-14 * max(1.0, abs(self.t)):
@@ -100,14 +96,21 @@ class EmbeddedRungeKutta(Integrator):
             K = np.array(stages)
             y1 = y0 + h * (self.b @ K)
             error = self._error(h, K, y0, y1) if np.all(np.isfinite(y1)) else np.inf
+            if error <= 1.0 and not nudged and self._lands_on_pose(y1[:n_q]):
+                # a crossing's step ending at the pose: the projection there is as badly
+                # conditioned as the pose (2e-4 J of 620 lost at once); half as long again
+                nudged, self.h = True, 1.5 * h
+                self.counters.rejected += 1
+                continue
             if error <= 1.0:
                 factor = self.max_factor if error == 0 else min(
                     self.max_factor, self.safety * error ** (-1.0 / (self.error_order + 1)))
                 break
             self.counters.rejected += 1
-            rejected += 1
-            if rejected % CROSSING_REJECTIONS == 0 and self._cross_singular(
-                    y1[:n_q] if np.all(np.isfinite(y1)) else None):
+            # a rejection near a singular configuration, approaching it, begins its crossing
+            # (see Integrator._cross_singular): waiting for more, the steps crept towards the
+            # pose, each one's projection costing energy
+            if self._cross_singular():
                 f0 = np.concatenate(self._rates(self.t, self.q, self.v))
                 continue
             factor = self.min_factor if not np.isfinite(error) else max(
@@ -119,7 +122,8 @@ class EmbeddedRungeKutta(Integrator):
         self._end_crossing()
         # the accelerations start the next step; the multipliers are solved when asked
         self.v_dot, self.lam = self._rates(self.t, self.q, self.v)[1], None
-        self.h = h * factor
+        # a crossing's steps do not grow: it was sized to pass the pose (Integrator._cross_singular)
+        self.h = h * (factor if self._crossing is None else min(factor, 1.0))
 
 
 class DormandPrince5(EmbeddedRungeKutta):
