@@ -18,7 +18,8 @@ class FastFunction:
 
     A call takes the inputs positionally (arrays of any shape holding the input's entries, in
     CasADi's column-major order) and returns fresh arrays: vectors 1-D, matrices 2-D; raises
-    ``RuntimeError`` when the evaluation fails, as a plain call does. Not reentrant (one set of buffers): build one per user if threads share a model.
+    ``RuntimeError`` when the evaluation fails, as a plain call does. Not reentrant (one set
+    of buffers): build one per user if threads share a model.
     """
 
     def __init__(self, function: ca.Function):
