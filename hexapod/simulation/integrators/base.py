@@ -372,8 +372,7 @@ class Integrator:
         the projection puts right without a loss of energy)."""
         if self._crossing is None:
             return
-        sigma = self._rank_split().singular_values()
-        smallest = sigma.min() if sigma.size else np.inf
+        smallest = self._smallest_singular_value()
         if not smallest <= self._crossing or (smallest >= self._crossing_from
                                               and self._singular_rate(smallest) > 0):
             self._crossing = None
@@ -394,7 +393,7 @@ class Integrator:
         q_dot = self.model.call("qdot", q=self.q, v=self.v)
         delta = 1e-3 * self.h
         ahead = self.model.normalize(self.q + delta * q_dot)
-        return (self._rank_split(ahead).singular_values().min(initial=np.inf) - smallest) / delta
+        return (self._smallest_singular_value(ahead) - smallest) / delta
 
     def _rank_split(self, q: np.ndarray | None = None, t: float | None = None):
         """The rank decision on the equilibrated ``Phi_v`` at positions ``q`` (default the

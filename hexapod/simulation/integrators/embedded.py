@@ -96,13 +96,13 @@ class EmbeddedRungeKutta(Integrator):
             K = np.array(stages)
             y1 = y0 + h * (self.b @ K)
             error = self._error(h, K, y0, y1) if np.all(np.isfinite(y1)) else np.inf
-            if error <= 1.0 and not nudged and self._lands_on_pose(y1[:n_q]):
-                # a crossing's step ending at the pose: the projection there is as badly
-                # conditioned as the pose (2e-4 J of 620 lost at once); half as long again
-                nudged, self.h = True, 1.5 * h
-                self.counters.rejected += 1
-                continue
             if error <= 1.0:
+                if not nudged and self._lands_on_pose(y1[:n_q]):
+                    # a crossing's step ending at the pose: the projection there is as badly
+                    # conditioned as the pose (2e-4 J of 620 lost at once); half as long again
+                    nudged, self.h = True, 1.5 * h
+                    self.counters.rejected += 1
+                    continue
                 factor = self.max_factor if error == 0 else min(
                     self.max_factor, self.safety * error ** (-1.0 / (self.error_order + 1)))
                 break
