@@ -214,6 +214,36 @@ def test_simulate_to_a_billion_seconds_stops_within_seconds(tmp_path, capsys):
     assert 0 < stats["t_reached"] < 10 and "would take about" in stats["reason"]
 
 
+def _weighed(pace: list[tuple[int, float]], max_steps: int) -> list[str | None]:
+    """What the pace weighing of a run from 0 to 20 s says at each of ``pace``'s (steps, time),
+    with a step limit (states are saved too seldom to count)."""
+    from types import SimpleNamespace
+
+    from hexapod.simulation.loop import _Weighing
+
+    weighing = _Weighing(hx.assemble(planar_pendulum()), RungeKutta4Baumgarte, 0.0, 20.0,
+                         every=10**9, max_steps=max_steps, max_memory=None,
+                         advice={"steps": "advice", "memory": "advice"})
+    said = []
+    for steps, t in pace:
+        run = SimpleNamespace(counters=SimpleNamespace(steps=steps, rejected=0), t=t)
+        said.append(weighing.during(run, returned=steps))
+    return said
+
+
+def test_a_burst_of_short_steps_is_not_taken_for_the_pace_of_the_run():
+    """The N-four-bar with 40 windows at rtol 1e-10 reached its first flat pose after 14 steps
+    (t = 0.72 s of 20) and crossed it in hundreds of short ones: weighed since the weighing
+    before, the burst was extrapolated to 500 GiB, and the run (0.3 GiB) was stopped. A
+    burst doubles the estimate at each weighing; a steady pace keeps it, and is stopped."""
+    burst = [(20, 0.70), (40, 0.7205), (80, 0.7210), (160, 0.7212), (320, 0.7214),
+             (640, 8.0), (1280, 19.0)]
+    assert _weighed(burst, max_steps=100_000) == [None] * len(burst)
+    steady = [(20, 0.0020), (40, 0.0040), (80, 0.0080)]  # 2e5 steps to 20 s
+    said = _weighed(steady, max_steps=100_000)
+    assert said[:2] == [None, None] and "at its pace" in said[2]
+
+
 def test_the_step_limit_comes_from_the_option_then_the_environment(monkeypatch):
     model = hx.assemble(planar_pendulum())
     monkeypatch.setenv("HEXAPOD_MAX_STEPS", "100")
