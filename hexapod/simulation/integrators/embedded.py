@@ -97,10 +97,10 @@ class EmbeddedRungeKutta(Integrator):
             y1 = y0 + h * (self.b @ K)
             error = self._error(h, K, y0, y1) if np.all(np.isfinite(y1)) else np.inf
             if error <= 1.0:
-                if not nudged and self._lands_on_pose(y1[:n_q]):
+                if not nudged and self._lands_on_pose(self.t + h, y1[:n_q]):
                     # a crossing's step ending at the pose: the projection there is as badly
-                    # conditioned as the pose (2e-4 J of 620 lost at once); half as long again
-                    nudged, self.h = True, 1.5 * h
+                    # conditioned as the pose (2e-4 J of 620 lost at once); one past it instead
+                    nudged, self.h = True, self._over_pose(h)
                     self.counters.rejected += 1
                     continue
                 factor = self.max_factor if error == 0 else min(
@@ -122,8 +122,9 @@ class EmbeddedRungeKutta(Integrator):
         self._end_crossing()
         # the accelerations start the next step; the multipliers are solved when asked
         self.v_dot, self.lam = self._rates(self.t, self.q, self.v)[1], None
-        # a crossing's steps do not grow: it was sized to pass the pose (Integrator._cross_singular)
-        self.h = h * (factor if self._crossing is None else min(factor, 1.0))
+        # a crossing's steps stay within its cap (Integrator._cross_singular), the one that
+        # jumped over the pose too
+        self.h = h * factor if self._crossing is None else min(h * factor, self._crossing_cap)
 
 
 class DormandPrince5(EmbeddedRungeKutta):
