@@ -45,14 +45,16 @@ BUILDERS = {"hexapod": hexapod_walking, "hexapod-held": hexapod_held,
             "middle-leg": middle_leg_walking, "hind-leg": hind_leg_walking}
 
 
-def same_numbers(a: str, b: str, rel: float = 1e-13) -> bool:
-    """Two scene texts alike but for round-off in their numbers."""
+def same_numbers(a: str, b: str, rel: float = 1e-13, floor: float = 1e-15) -> bool:
+    """Two scene texts alike but for round-off in their numbers: relative ``rel``, and
+    ``floor`` absolute for the numbers that are zero but for round-off (their lengths and angles
+    are of order 0.1 to 1 m and rad)."""
     number = r"[-+]?(?:\d+\.?\d*(?:[eE][-+]?\d+)?|inf|nan)"
     if re.split(number, a) != re.split(number, b):
         return False
     x = np.array([float(s) for s in re.findall(number, a)])
     y = np.array([float(s) for s in re.findall(number, b)])
-    return x.shape == y.shape and bool(np.all(np.abs(x - y) <= rel * np.abs(y)))
+    return x.shape == y.shape and bool(np.all(np.abs(x - y) <= rel * np.abs(y) + floor))
 
 
 def body_motion_balance(model, result):
@@ -113,10 +115,12 @@ def test_every_option_has_a_default_is_documented_and_is_keyword_only(name):
 
 
 @pytest.mark.parametrize("name", ["front-leg", "middle-leg", "hind-leg", "hexapod"])
-def test_no_arguments_give_the_committed_scene_files_exactly(name):
+def test_no_arguments_give_the_committed_scene_files(name):
     committed = (ROOT / "data" / "scenes" / f"{name.replace('-', '_')}.toml").read_text()
     header = f"Built-in scene '{name}', written by 'hexapod scenes {name} --write'."
-    assert hx.scene_text(BUILDERS[name](), header=header) == committed
+    # alike to round-off: the builders' trigonometry goes through NumPy and SciPy, whose last
+    # bits differ between releases
+    assert same_numbers(hx.scene_text(BUILDERS[name](), header=header), committed)
 
 
 def test_explicit_default_values_give_the_built_in_scenes():
