@@ -59,8 +59,10 @@ configuration when the run stands at one.
 One CasADi Function, built once per model, forms a whole iterate (kick, Moser–Veselov solves,
 drift, constraints, forces and the Newton matrix); NumPy keeps the rank decisions and the small
 linear solves. The accelerations and multipliers reported at a state (``v_dot``, ``lam``) are
-those of the dynamics there, redundancy policy included, solved when they are first read: the
-method itself does not need them, and the time loop reads them only at the states it saves.
+those of the dynamics there, redundancy policy included, solved at the end of every step: the
+kicks do not need them, but a step whose velocities change by more than its accelerations at
+both ends explain is refused and halved (Newton's method found a solution on another branch of
+the constraints, see :meth:`Integrator._jumps_branch`).
 """
 
 from __future__ import annotations
@@ -120,8 +122,6 @@ class Rattle(Integrator):
     #: ``newton_tol``) before the step is refused: they follow the kept rows to round-off
     redundant_tol = 1e-8
 
-    _stale = False  # True when v_dot and lam are not yet those of the current state
-
     @classmethod
     def largest_stable_step(cls, eigenvalues, constrained: bool = False,
                             **options) -> float | None:
@@ -134,32 +134,6 @@ class Rattle(Integrator):
             raise ValueError(f"newton_tol must be positive, got {newton_tol}")
         self.newton_tol = float(newton_tol)
         super().__init__(*args, **kwargs)
-
-    # ------------------------------------------------------------ reported accelerations
-
-    @property
-    def v_dot(self) -> np.ndarray:
-        if self._stale:
-            self._refresh()
-        return self._v_dot
-
-    @v_dot.setter
-    def v_dot(self, value: np.ndarray) -> None:
-        self._v_dot = value
-
-    @property
-    def lam(self) -> np.ndarray:
-        if self._stale:
-            self._refresh()
-        return self._lam
-
-    @lam.setter
-    def lam(self, value: np.ndarray) -> None:
-        self._lam = value
-
-    def _refresh(self) -> None:
-        self._stale = False
-        self._v_dot, self._lam = self._dynamics(self.t, self.q, self.v)
 
     # ------------------------------------------------------------ set-up
 
@@ -212,11 +186,9 @@ class Rattle(Integrator):
     # ------------------------------------------------------------ the step
 
     def _step(self) -> None:
-        # for dense_output: the accelerations at the start only if they were solved already
-        self._dense_start = (self.t, self.q, self.v, None if self._stale else self._v_dot)
+        self._dense_start = (self.t, self.q, self.v, self.v_dot)  # for dense_output
         h, result = self._halving(self._attempt_or_forget)
-        self.t, self.q, self.v = result
-        self._stale = True
+        self.t, self.q, self.v, self.v_dot, self.lam = result
         self.h = min(self.nominal, 2 * h) if h < self.nominal else self.h
 
     def _attempt_or_forget(self, h: float):
@@ -309,17 +281,19 @@ class Rattle(Integrator):
                           what="velocity constraints")
         v1 = v_star + model.mass_inv_sqrt @ dy
         self.cache = (q1, Phi1, force1, split1)
-        return t1, q1, v1
+        # the dynamics at the step's end: the accelerations the loop reports there, and the
+        # check that Newton's method has not landed on another branch of the constraints
+        v_dot1, lam1 = self._dynamics(t1, q1, v1)
+        if self._jumps_branch(h, self.v, self.v_dot, v1, v_dot1):
+            self.failure = (f"the velocities changed by more than the accelerations explain at "
+                            f"h = {h:.3g} s: Newton's method found a solution on another branch")
+            return None
+        return t1, q1, v1, v_dot1, lam1
 
     def dense_output(self) -> Interpolant:
         """Quintic Hermite interpolation of the positions from ``(q, v, v_dot)`` at both ends of
-        the step, cubic of the velocities (:class:`~.base.HermiteInterpolant`); the
-        accelerations at its ends are solved now if they were not (one solve each, counted),
-        and those at its end are then the reported ones."""
-        t, q, v, v_dot = self._dense_start
-        if v_dot is None:
-            v_dot = self._dense_dynamics(t, q, v)[0]
-        return self._hermite((t, q, v, v_dot))
+        the step, cubic of the velocities (:class:`~.base.HermiteInterpolant`)."""
+        return self._hermite(self._dense_start)
 
 
 # ---------------------------------------------------------------- the CasADi Functions
