@@ -100,6 +100,23 @@ def test_tight_tolerances_cross_singular_poses(build, t_end, tol):
         assert result.energy_drift < 1e-6
 
 
+def test_a_fixed_step_that_leaves_the_branch_at_a_change_point_fails_and_says_where():
+    """RK4 at the check's step (2e-3 s) reaches the free anti-parallelogram's change point at
+    0.822 s, where one step changes the velocities 4.4 times as much as the accelerations at its
+    ends explain, and went on along the other branch to finish 0.54 off, reported finished.
+    Now the run stops there and names the pose and the methods that cross it; before the pose
+    every step stays within the bound (ratio 1.00 on this motion), and the state it reached is
+    still the reference's."""
+    case = four_bar_dead_points()
+    model = hx.assemble(case.scene)
+    result = hx.simulate(model, case.t_end, method="rk4", step=case.t_end / 1000)
+    assert result.status == "failed"
+    assert "left the motion's branch" in result.message
+    assert "singular configuration" in result.message and "dopri5" in result.message
+    assert 0.8 < result.t[-1] < 0.83
+    assert case.error(model, result.t, result.q) < 1e-2
+
+
 def test_bricard_names_its_redundant_row_and_keeps_unique_constraint_forces():
     """Grubler counts 0 DOF, the mechanism has 1: one row is redundant all along. The
     constraint forces -Phi_v^T lambda are unique (they balance M v_dot - Q); the multipliers

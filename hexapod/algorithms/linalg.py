@@ -599,7 +599,7 @@ def solve_or_least_squares(A: np.ndarray, b: np.ndarray, pivot_ratio: float = 1e
     partial pivoting when its smallest pivot is above ``pivot_ratio`` times the largest, else
     the least-squares solution of least norm (singular values below ``rcond`` of the largest
     dropped), which moves along the nearly dependent directions no more than ``b`` asks.
-    None when neither gives finite numbers."""
+    None when neither gives finite numbers, or LAPACK fails."""
     import warnings
 
     from scipy.linalg import LinAlgWarning, lu_factor, lu_solve
@@ -618,5 +618,8 @@ def solve_or_least_squares(A: np.ndarray, b: np.ndarray, pivot_ratio: float = 1e
         if diagonal.min() > pivot_ratio * diagonal.max():
             x = lu_solve((lu, pivots), b, check_finite=False)
     if x is None or not np.all(np.isfinite(x)):
-        x = np.linalg.lstsq(A, b, rcond=rcond)[0]
+        try:
+            x = np.linalg.lstsq(A, b, rcond=rcond)[0]
+        except np.linalg.LinAlgError:  # LAPACK's SVD fails on finite entries of extreme range
+            return None
     return x if np.all(np.isfinite(x)) else None

@@ -76,7 +76,7 @@ from hexapod.algorithms.linalg import (
     solve_or_least_squares,
     split_rows,
 )
-from hexapod.simulation.integrators.base import Integrator, Interpolant
+from hexapod.simulation.integrators.base import ENERGY_JUMP, Integrator, Interpolant
 from hexapod.simulation.integrators.stability import largest_stable_step, oscillator_parameters
 from hexapod.spatial import quaternion_product, skew
 
@@ -149,7 +149,8 @@ class Rattle(Integrator):
         self.layout = _layout({"q": n_q, "v": n_v, "phi": n_c, "Phi_v": n_c * n_v, "nu": n_c,
                                "F": n_v, "S": n_c * n_c, "rotation": 1})
         self.row_names = [r.name for r in model.rows]
-        self.history: list[np.ndarray] = []  # Lambda of the last steps
+        # (rows, Lambda) of the last steps: Lambda on the rows kept at each
+        self.history: list[tuple[np.ndarray, np.ndarray]] = []
         self.cache = None  # (q, Phi_v, F, rank decision) at the current state
         self.failure = ""  # why the last attempt failed
         self._note_conditioning()
@@ -200,10 +201,12 @@ class Rattle(Integrator):
         return result
 
     def _predict(self, Phi_v: np.ndarray, rows: np.ndarray) -> np.ndarray:
-        """Starting multipliers: extrapolated from the last two steps (``O(h^2)``), else those
-        of the dynamics at the start mapped onto the independent rows (``O(h)``)."""
-        if len(self.history) == 2 and self.history[-1].shape == rows.shape:
-            return 2 * self.history[-1] - self.history[-2]
+        """Starting multipliers: extrapolated from the last two steps when they kept the same
+        rows (``O(h^2)``), else those of the dynamics at the start mapped onto the independent
+        rows (``O(h)``)."""
+        if len(self.history) == 2 and all(np.array_equal(kept, rows)
+                                          for kept, _ in self.history):
+            return 2 * self.history[-1][1] - self.history[-2][1]
         return np.linalg.lstsq(Phi_v[rows].T, Phi_v.T @ self.lam, rcond=None)[0]
 
     def _attempt(self, h: float):
@@ -269,7 +272,7 @@ class Rattle(Integrator):
         q1, v_plus, nu, force1 = (out[layout[k]].copy() for k in ("q", "v", "nu", "F"))
         q1 = model.normalize(q1)  # Euler parameters: their round-off would add up over steps
         Phi1 = out[layout["Phi_v"]].reshape(n_c, model.n_v, order="F").copy()
-        self.history = [*self.history[-1:], lam]
+        self.history = [*self.history[-1:], (I, lam)]
         # the second half kick, and the velocities onto Phi_v v = nu (kinetic-energy norm)
         v_star = v_plus + (h / 2) * (self.mass_inv @ force1)
         split1 = self._split(Phi1)
@@ -287,6 +290,11 @@ class Rattle(Integrator):
         if self._jumps_branch(h, self.v, self.v_dot, v1, v_dot1):
             self.failure = (f"the velocities changed by more than the accelerations explain at "
                             f"h = {h:.3g} s: Newton's method found a solution on another branch")
+            return None
+        jump = self._energy_jump(self.q, self.v, q1, v1)
+        if jump > ENERGY_JUMP:
+            self.failure = (f"the energy changed by {jump:.2g} of the largest kinetic energy at "
+                            f"h = {h:.3g} s")
             return None
         return t1, q1, v1, v_dot1, lam1
 
