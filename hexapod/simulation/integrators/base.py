@@ -89,6 +89,10 @@ BRANCH_JUMP = 1.5
 #: it in one step at a flat pose and ended 45 % off, at ten steps per period on the pendulum two
 #: thirds, reported finished
 ENERGY_JUMP = 5e-2
+#: the relative size of round-off below which the two tests above see nothing: on a scene at
+#: rest (the hexapod standing) the accelerations and the energy's changes are round-off, and
+#: measured against themselves they refused every step
+ROUND_OFF = 1e-9
 
 
 @dataclass
@@ -248,6 +252,9 @@ class Integrator:
         except (HexapodError, np.linalg.LinAlgError) as error:
             self.status = "failed"
             self.message = f"{self.name} failed after t = {t_before:.6g} s: {error}"
+            where = "" if "singular configuration" in str(error) else self._singular_pose()
+            if where:  # the cause behind the symptom
+                self.message += f"; {where}"
             return
         except ArithmeticError as error:  # Python's floats overflow (h**2) or divide by zero
             self.status = "failed"
@@ -515,8 +522,10 @@ class Integrator:
         def size(x):
             return float(np.sqrt(max(float(x @ (mass @ x)), 0.0)))
 
-        allowed = (BRANCH_JUMP * h * max(size(a0), size(a1))
-                   + 1e-9 * max(size(v0), size(v1)) + 1e-300)
+        # round-off of a scene at rest (its accelerations are that of its forces' balance)
+        floor = ROUND_OFF * self._scales[1]
+        allowed = (BRANCH_JUMP * h * max(size(a0), size(a1), floor)
+                   + ROUND_OFF * max(size(v0), size(v1)))
         return not size(v1 - v0) <= allowed  # NaN jumps
 
     def _energy_jump(self, q0: np.ndarray, v0: np.ndarray, q1: np.ndarray,
@@ -528,9 +537,20 @@ class Integrator:
             return 0.0
         kinetic0, potential0 = (float(x) for x in self.model.energy(q0, v0))
         kinetic1, potential1 = (float(x) for x in self.model.energy(q1, v1))
-        peak = max(self._kinetic_peak, kinetic0, kinetic1)
-        change = abs(kinetic1 + potential1 - kinetic0 - potential0)
-        return change / peak if peak > 0 else (0.0 if change == 0 else np.inf)
+        # at rest the energy's round-off, not the kinetic energy, sets the scale
+        peak = max(self._kinetic_peak, kinetic0, kinetic1, ROUND_OFF * self._scales[2])
+        return abs(kinetic1 + potential1 - kinetic0 - potential0) / peak
+
+    @cached_property
+    def _scales(self) -> tuple[float, float, float]:
+        """The scene's characteristic speed, acceleration and energy in the kinetic-energy
+        norm (``sqrt(m_total) L / tau``, ``sqrt(m_total) L / tau^2``, ``m_total L^2 / tau^2``;
+        ``L`` the characteristic length, ``tau`` :func:`characteristic_time`): what a motion of
+        the whole scene by its own size in its own time is, to measure round-off against."""
+        mass = max(self.model.total_mass, np.finfo(float).tiny)
+        length, time = float(self.model.characteristic_length), characteristic_time(self.model)
+        return (np.sqrt(mass) * length / time, np.sqrt(mass) * length / time**2,
+                mass * length**2 / time**2)
 
     def _halving(self, attempt):
         """Take one step by ``attempt(h)``, which returns the new state or None when Newton's

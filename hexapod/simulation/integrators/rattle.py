@@ -149,8 +149,8 @@ class Rattle(Integrator):
         self.layout = _layout({"q": n_q, "v": n_v, "phi": n_c, "Phi_v": n_c * n_v, "nu": n_c,
                                "F": n_v, "S": n_c * n_c, "rotation": 1})
         self.row_names = [r.name for r in model.rows]
-        # (rows, Lambda) of the last steps: Lambda on the rows kept at each
-        self.history: list[tuple[np.ndarray, np.ndarray]] = []
+        # the constraint forces Phi_v^T Lambda of the last steps
+        self.history: list[np.ndarray] = []
         self.cache = None  # (q, Phi_v, F, rank decision) at the current state
         self.failure = ""  # why the last attempt failed
         self._note_conditioning()
@@ -201,13 +201,17 @@ class Rattle(Integrator):
         return result
 
     def _predict(self, Phi_v: np.ndarray, rows: np.ndarray) -> np.ndarray:
-        """Starting multipliers: extrapolated from the last two steps when they kept the same
-        rows (``O(h^2)``), else those of the dynamics at the start mapped onto the independent
-        rows (``O(h)``)."""
-        if len(self.history) == 2 and all(np.array_equal(kept, rows)
-                                          for kept, _ in self.history):
-            return 2 * self.history[-1][1] - self.history[-2][1]
-        return np.linalg.lstsq(Phi_v[rows].T, Phi_v.T @ self.lam, rcond=None)[0]
+        """Starting multipliers on the independent rows: those whose constraint force
+        ``Phi_v^T Lambda`` is the one extrapolated from the last two steps (``O(h^2)``), else
+        that of the dynamics at the start (``O(h)``). Extrapolated as forces, not multipliers:
+        near a singular pose the rank decision may keep other rows from one step to the next,
+        and the starting guess decides which root Newton's method finds there (the driven
+        stretched leg's knee flips through its straight pose, or bounces back)."""
+        if len(self.history) == 2:
+            force = 2 * self.history[-1] - self.history[-2]
+        else:
+            force = Phi_v.T @ self.lam
+        return np.linalg.lstsq(Phi_v[rows].T, force, rcond=None)[0]
 
     def _attempt(self, h: float):
         """One step of length ``h``: ``(t, q, v)``, or None when Newton's method fails."""
@@ -272,7 +276,7 @@ class Rattle(Integrator):
         q1, v_plus, nu, force1 = (out[layout[k]].copy() for k in ("q", "v", "nu", "F"))
         q1 = model.normalize(q1)  # Euler parameters: their round-off would add up over steps
         Phi1 = out[layout["Phi_v"]].reshape(n_c, model.n_v, order="F").copy()
-        self.history = [*self.history[-1:], (I, lam)]
+        self.history = [*self.history[-1:], Phi0[I].T @ lam]
         # the second half kick, and the velocities onto Phi_v v = nu (kinetic-energy norm)
         v_star = v_plus + (h / 2) * (self.mass_inv @ force1)
         split1 = self._split(Phi1)
