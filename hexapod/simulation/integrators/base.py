@@ -203,6 +203,7 @@ class Integrator:
         self._kinetic_peak = 0.0  # the largest kinetic energy of the run so far (J)
         q, v = self._project(self.t0, q0, v0)  # guesses of None: the scene's initial state
         self.t, self.q, self.v = self.t0, q, v
+        self._q_start = q
         self.v_dot, self.lam = self._dynamics(self.t, q, v)
         # the stages' right-hand sides and the projection, compiled for the rows independent
         # at the start
@@ -252,8 +253,11 @@ class Integrator:
         except (HexapodError, np.linalg.LinAlgError) as error:
             self.status = "failed"
             self.message = f"{self.name} failed after t = {t_before:.6g} s: {error}"
-            where = "" if "singular configuration" in str(error) else self._singular_pose()
-            if where:  # the cause behind the symptom
+            # the cause behind the symptom, unless the state itself blew up (its pose is noise)
+            blew_up = "non-finite" in str(error) or not np.all(np.isfinite(self.q))
+            known = "singular configuration" in str(error)
+            where = "" if blew_up or known else self._singular_pose()
+            if where:
                 self.message += f"; {where}"
             return
         except ArithmeticError as error:  # Python's floats overflow (h**2) or divide by zero
@@ -685,7 +689,7 @@ class Integrator:
 
     #: a failure is reported as one at a singular configuration (:meth:`_singular_pose`) where
     #: the smallest singular value of the equilibrated ``Phi_v`` has fallen below this fraction
-    #: of its value at the start (:meth:`_note_conditioning`; of 1 when it was not noted): its
+    #: of its value at the start (:attr:`_conditioning_start`): its
     #: value away from such poses depends on the mechanism and its masses (5e-5 on a hexapod,
     #: 0.08 on the N-four-bar standing up), so only its fall tells one
     near_singular = 0.05
@@ -701,10 +705,12 @@ class Integrator:
         sigma = self._rank_split(q, t).singular_values()
         return float(sigma.min()) if sigma.size else np.inf
 
-    def _note_conditioning(self) -> None:
-        """Keep the smallest singular value at the current state (the start) for
-        :meth:`_singular_pose`."""
-        self._conditioning_start = self._smallest_singular_value()
+    @cached_property
+    def _conditioning_start(self) -> float:
+        """The smallest singular value at the start (for :meth:`_singular_pose`), computed
+        when a failure first needs it: the flyball governor's is 9e-4 where nothing is
+        singular, and measured against 1 its failures were blamed on a singular pose."""
+        return self._smallest_singular_value(self._q_start, self.t0)
 
     def _singular_pose(self) -> str:
         """When the current positions are near a singular configuration (see
@@ -714,8 +720,8 @@ class Integrator:
             sigma = self._smallest_singular_value()
         except (HexapodError, np.linalg.LinAlgError, ValueError):
             return ""
-        start = getattr(self, "_conditioning_start", None)
-        reference = start if start is not None and np.isfinite(start) and start > 0 else 1.0
+        start = self._conditioning_start
+        reference = start if np.isfinite(start) and start > 0 else 1.0
         if not sigma < self.near_singular * reference:
             return ""
         return (f"the mechanism is at a singular configuration at t = {self.t:.6g} s (smallest "

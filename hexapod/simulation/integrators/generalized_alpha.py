@@ -274,7 +274,6 @@ class LieGroupGeneralizedAlpha(Integrator):
         self.failure = ""  # why the last attempt failed
         self.decision = None  # (q, Phi_v, rank decision) at the last state decided
         self.kept = None  # (rows kept, their multipliers) of the last step
-        self._note_conditioning()
         V = self.frames.to_body(self.q, self.v)
         rate = self._twist_rate(self.q, V, self.v_dot)
         self.a = rate + (self.alpha_m - self.alpha_f) * self.h * self._rate_change(V, rate)

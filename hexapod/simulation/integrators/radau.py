@@ -295,7 +295,6 @@ class RadauIIA5GGL(Integrator):
         self._kappa = None  # Newton's contraction over h^2, measured last
         self._previous = None  # (h, stage increments) of the last accepted step
         self._h_acc = self._err_acc = None
-        self._note_conditioning()
         if self._given_step is None:
             self.h = self._initial_step()
 
