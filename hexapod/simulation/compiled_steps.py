@@ -1,0 +1,200 @@
+"""The compiled loop on the integrator's side: an embedded Runge-Kutta run advanced in batches
+of steps by :class:`~hexapod.simulation.compiled_loop.LoopKernel`, its state written back after
+each call, the steps it accepted handed to the time loop as a :class:`Batch`.
+
+:class:`CompiledStepper` sizes each call to last about :data:`CALL_SECONDS`, so that progress,
+the CPU budget, the limits and signals, checked between calls, stay responsive; after a
+handover it lets the integrator take the next step in Python (then twice as many each time the
+kernel hands over again at once, so that a model the kernel cannot serve for a while, a rank
+changed for good, does not pay for a refused attempt at every step); and in mode ``"auto"`` it
+compiles the kernel to C once its pace foresees more than :data:`COMPILE_AFTER` seconds in the
+virtual machine.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from hexapod._support import signals
+from hexapod.simulation.compiled_loop import (
+    ATTEMPTS,
+    COUNTERS,
+    FINISHED,
+    HANDOVER,
+    HEAD,
+    Layout,
+    LoopKernel,
+    compiler,
+)
+from hexapod.simulation.integrators.base import SINGULAR_BAND
+
+
+@dataclass
+class Batch:
+    """The steps one call of the compiled loop accepted, in order (``k`` of them, possibly
+    none), with what the time loop watches at each.
+
+    Attributes
+    ----------
+    t : ndarray (k,)
+    q, v, v_dot : ndarray (k, n_q), (k, n_v), (k, n_v)
+    lam : ndarray (k, n_c) or None
+        The multipliers of the compiled solve at each state, when every row is kept (they
+        are then unique, the policy's); None otherwise (the saved states solve theirs).
+    phi, velocity : ndarray (k,)
+        The largest scaled residuals of ``phi`` and ``Phi_v v - nu`` at each state.
+    kinetic, energy : ndarray (k,)
+        Kinetic and total energy (J; zero when the scene does not conserve energy).
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    v: np.ndarray
+    v_dot: np.ndarray
+    lam: np.ndarray | None
+    phi: np.ndarray
+    velocity: np.ndarray
+    kinetic: np.ndarray
+    energy: np.ndarray
+
+    def __len__(self) -> int:
+        return self.t.size
+
+
+#: a call of the kernel should last about this long (s of CPU), so that progress, the CPU
+#: budget and signals, checked between calls, stay responsive
+CALL_SECONDS = 0.05
+#: in mode ``"auto"``, the kernel is compiled to C once its virtual machine is foreseen to need
+#: more than this many CPU seconds to the end of the run (a compilation costs about one)
+COMPILE_AFTER = 2.0
+
+
+class CompiledStepper:
+    """The compiled loop of one integrator run: builds its kernel, runs it for a batch of
+    steps from the integrator's state and writes the state back.
+
+    Parameters
+    ----------
+    integrator : EmbeddedRungeKutta
+    mode : str
+        ``"c"``: the kernel compiled to C at once; ``"vm"``: evaluated by CasADi's virtual
+        machine; ``"auto"``: the virtual machine, then C once the run is foreseen to need more
+        than :data:`COMPILE_AFTER` seconds of it (see :data:`hexapod.simulation.methods.LOOPS`).
+    """
+
+    def __init__(self, integrator, mode: str):
+        self.integrator, self.mode = integrator, mode
+        self.compile = mode == "c" and compiler() is not None
+        self.per_call = 16  # attempts asked of the next call, then set by the pace
+        self.streak = 0  # handovers in a row without a step accepted in between
+        self.python_steps = 0  # steps to take in Python before the next call
+        self.work = [0.0, 0.0]  # CPU seconds in the kernel and simulated seconds it advanced
+        #: what the compiled loop did: the kernels it ran (``"vm"``, ``"c"``, in order), its
+        #: calls, the steps it accepted, its handovers to Python
+        self.statistics = {"kernels": [], "calls": 0, "steps": 0, "handovers": 0}
+
+    def kernel(self) -> LoopKernel:
+        """The kernel for the integrator's kept rows (built once per model)."""
+        it = self.integrator
+        rows = np.asarray(it._compiled.rows, dtype=int)
+        key = ("loop", it.name, tuple(int(r) for r in rows), self.compile)
+        return it.model.built_once(key, lambda m: LoopKernel(
+            m, type(it), rows, singular_band=SINGULAR_BAND, compile=self.compile))
+
+    def advance(self, t_stop: float, steps_cap: float, tried_cap: float) -> Batch | None:
+        """Accepted steps from the integrator's state until the end of the run, a step past
+        ``t_stop``, ``steps_cap`` steps or ``tried_cap`` steps tried (accepted or rejected);
+        None when the next step is Python's (after a handover, see the module)."""
+        it = self.integrator
+        if self.python_steps > 0 or it._crossing is not None:
+            self.python_steps = max(0, self.python_steps - 1)
+            return None
+        kernel = self.kernel()
+        kind = "c" if kernel.compiled else "vm"
+        if kind not in self.statistics["kernels"]:
+            self.statistics["kernels"].append(kind)
+        counters = it.counters
+        tried = counters.steps + counters.rejected
+        settings = np.concatenate([[it.t_bound, it.max_step, it.rtol, t_stop, steps_cap,
+                                    min(tried_cap, tried + self.per_call)], it.atol_vector])
+        before = (it.t, it.q, it.v, it.v_dot)
+        # the call and the writing back whole: a signal is delivered after them
+        with signals.deferred():
+            cpu = time.process_time()
+            try:
+                out, trace = kernel.run(self._carry(kernel.layout), settings)
+            except RuntimeError:  # the virtual machine's factorisation failed: Python's step
+                return self._handed_over(0)
+            self._pace(time.process_time() - cpu, out, tried, it.t_bound - it.t)
+            return self._write_back(kernel.layout, out, trace, before)
+
+    def _carry(self, L: Layout) -> np.ndarray:
+        """The carried vector from the integrator's state, step and counters."""
+        it = self.integrator
+        carry = np.zeros(L.carry)
+        for name in COUNTERS:
+            carry[HEAD[name]] = getattr(it.counters, name)
+        carry[HEAD["t"]], carry[HEAD["h"]] = it.t, it.h
+        carry[HEAD["accepted_step"]] = it._accepted_step
+        carry[L.q], carry[L.v], carry[L.v_dot] = it.q, it.v, it.v_dot
+        return carry
+
+    def _pace(self, seconds: float, out: np.ndarray, tried: int, span: float) -> None:
+        """Size the next call to last about :data:`CALL_SECONDS`; in mode ``"auto"``, compile
+        the kernel once the virtual machine's pace foresees more than :data:`COMPILE_AFTER`
+        seconds to the end of the run."""
+        attempts = out[HEAD["steps"]] + out[HEAD["rejected"]] - tried
+        if attempts > 0 and seconds > 0:
+            self.per_call = int(min(ATTEMPTS, max(1, CALL_SECONDS * attempts / seconds)))
+        it = self.integrator
+        self.statistics["calls"] += 1
+        self.work[0] += seconds
+        self.work[1] += span - (it.t_bound - out[HEAD["t"]])
+        if self.mode != "auto" or self.compile or not self.work[1] > 0:
+            return
+        foreseen = self.work[0] / self.work[1] * (it.t_bound - out[HEAD["t"]])
+        if foreseen > COMPILE_AFTER and compiler() is not None:
+            self.compile = True
+
+    def _write_back(self, L: Layout, out: np.ndarray, trace: np.ndarray,
+                    before: tuple) -> Batch | None:
+        """The integrator's state, step and counters from the carry; the accepted steps as a
+        :class:`Batch` (None when the first attempt was handed over: Python takes it)."""
+        it = self.integrator
+        for name in COUNTERS:
+            setattr(it.counters, name, int(out[HEAD[name]]))
+        it.h = float(out[HEAD["h"]])
+        rows = trace[trace[:, 0] == 1.0]
+        if rows.shape[0]:
+            it.t = float(out[HEAD["t"]])
+            it.q, it.v, it.v_dot = out[L.q].copy(), out[L.v].copy(), out[L.v_dot].copy()
+            it.lam = None
+            it._accepted_step = float(out[HEAD["accepted_step"]])
+            # the last step's start, from which its dense output is built when asked
+            start = before if rows.shape[0] == 1 else (
+                rows[-2, 1], rows[-2, L.row_q], rows[-2, L.row_v], rows[-2, L.row_v_dot])
+            it._dense_from(start, it._accepted_step)
+            self.statistics["steps"] += rows.shape[0]
+        code = int(out[HEAD["code"]])
+        if code == FINISHED:
+            it.status = "finished"
+        elif code == HANDOVER:
+            self._handed_over(rows.shape[0])
+            if not rows.shape[0]:
+                return None
+        watched = rows[:, L.row_watch]
+        return Batch(rows[:, 1], rows[:, L.row_q], rows[:, L.row_v], rows[:, L.row_v_dot],
+                     rows[:, L.row_lam] if it._compiled.complete else None,
+                     watched[:, 0], watched[:, 1], watched[:, 2], watched[:, 3])
+
+    def _handed_over(self, accepted: int) -> None:
+        """After a handover, with ``accepted`` steps before it in the call: Python takes the
+        next step, and twice as many each time the kernel hands over again at once."""
+        self.statistics["handovers"] += 1
+        self.streak = self.streak + 1 if not accepted else 1
+        self.python_steps = 2 ** min(self.streak - 1, 10)
+        if not accepted:  # the step about to be taken in Python is the first of them
+            self.python_steps -= 1
