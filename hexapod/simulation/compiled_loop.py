@@ -72,6 +72,9 @@ _HEAD = ("t", "h", "code", "steps", "rejected", "rhs", "jacobians", "factorisati
 HEAD = {name: i for i, name in enumerate(_HEAD)}
 #: the counters among them
 COUNTERS = _HEAD[3:9]
+#: the C compiler's options. DOP853's kernel of the pendulum: -O2 compiles in 1.1 s of CPU, its
+#: steps take 22 us; -O1 in 0.7 s, 25 us; -O0 in 0.24 s
+FLAGS = ("-O2",)
 #: entries of ``settings`` before the absolute tolerances
 _SETTINGS = ("t_bound", "max_step", "rtol", "t_stop", "steps_cap", "tried_cap")
 
@@ -424,7 +427,7 @@ def compile_function(function: ca.Function) -> ca.Function:
         generator = ca.CodeGenerator(f"{name}.c", {"with_header": False})
         generator.add(function)
         generator.generate(directory + os.sep)
-        options = {"compiler": program, "flags": ["-O2"], "directory": directory + os.sep,
+        options = {"compiler": program, "flags": list(FLAGS), "directory": directory + os.sep,
                    "cleanup": False}
         with signals.deferred():
             importer = ca.Importer(os.path.join(directory, f"{name}.c"), "shell", options)
