@@ -95,6 +95,7 @@ def test_the_kernel_compiled_to_c_computes_what_the_virtual_machine_does(monkeyp
     model, t_end, tol = CASES["pendulum"]
     vm = run(model, t_end, "dop853-projection", tol, "vm")
     monkeypatch.setattr(compiled_steps, "COMPILE_AFTER", 0.0)
+    monkeypatch.setattr(compiled_steps, "COMPILE_PAYOFF", 0.0)
     auto = run(model, t_end, "dop853-projection", tol, "auto")
     assert auto.options["loop"]["kernels"] == ["vm", "c"]
     c = run(model, t_end, "dop853-projection", tol, "c")

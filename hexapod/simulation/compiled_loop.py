@@ -39,10 +39,12 @@ None) and models with feet switching contacts keep the Python loop (:func:`unsup
 
 from __future__ import annotations
 
+import copy
 import os
 import shutil
 import tempfile
 from dataclasses import dataclass
+from functools import cached_property
 
 import casadi as ca
 import numpy as np
@@ -61,17 +63,28 @@ from hexapod.simulation.kernels import (
 #: when its steps are slow: :class:`~hexapod.simulation.compiled_steps.CompiledStepper`)
 ATTEMPTS = 256
 #: why the loop stopped: still running (all attempts made), the end of the run reached, an
-#: accepted step reached the output time, a cap on the counters reached, or the next attempt
-#: handed over to Python
-RUNNING, FINISHED, OUTPUT, PAUSED, HANDOVER = 0, 1, 2, 3, 4
-#: the head of the carried vector: the time, the step to try next, the code, the counters and
-#: the last accepted step's length; the state ``(q, v, v_dot)`` follows
+#: accepted step reached the output time, a cap on the counters reached, the next attempt
+#: handed over to Python, or a step rejected whose state Python must weigh (its smallest
+#: singular value, with more than :data:`GRAM_ROWS` rows kept)
+RUNNING, FINISHED, OUTPUT, PAUSED, HANDOVER, CHECK = 0, 1, 2, 3, 4, 5
+#: the head of the carried vector: the time, the step to try next, the code, the counters, the
+#: last accepted step's length and the last rejected one's; the state ``(q, v, v_dot)`` follows
 _HEAD = ("t", "h", "code", "steps", "rejected", "rhs", "jacobians", "factorisations", "newton",
-         "accepted_step")
+         "accepted_step", "h_rejected")
 #: where each of them sits in the carried vector
 HEAD = {name: i for i, name in enumerate(_HEAD)}
 #: the counters among them
 COUNTERS = _HEAD[3:9]
+#: a rejected step stays in the kernel, the rank decision that may begin a crossing replaced by
+#: a bound of the smallest singular value from the Gram matrix of the kept rows, when they are
+#: at most this many; with more, the bound (a factorisation of that matrix and as many solves
+#: as rows) costs more than the Python loop's rank decision (the N-four-bar with 40 windows,
+#: 242 rows: 40 ms per rejection in the virtual machine), and the kernel returns after each
+#: rejected step for Python to weigh its state (:data:`CHECK`)
+GRAM_ROWS = 40
+#: bytes of generated C the compiler takes per CPU second, about (gcc -O2: 1.2 s for DOP853's
+#: kernel of the pendulum, 144 kB; 13 s for a chain of 18 spatial bodies, 1.7 MB)
+COMPILE_RATE = 130e3
 #: the C compiler's options. DOP853's kernel of the pendulum: -O2 compiles in 1.1 s of CPU, its
 #: steps take 22 us; -O1 in 0.7 s, 25 us; -O0 in 0.24 s
 FLAGS = ("-O2",)
@@ -223,29 +236,46 @@ class LoopKernel:
         The kept rows the compiled solves work with.
     singular_band : float
         A rejected step hands over when the smallest singular value may be below this.
-    compile : bool
-        Generate C and compile it (when a C compiler is found); otherwise CasADi's virtual
-        machine evaluates the same Function.
+
+    The kernel is evaluated by CasADi's virtual machine; :meth:`compiled_copy` is the same
+    compiled to C.
     """
 
-    def __init__(self, model: Model, method: type, rows: np.ndarray, *, singular_band: float,
-                 compile: bool = True):
+    def __init__(self, model: Model, method: type, rows: np.ndarray, *, singular_band: float):
         self.model, self.method = model, method
         self.layout = Layout(model.n_q, model.n_v, model.n_c)
         self.pieces = _Pieces(model, np.asarray(rows, dtype=int))
         self.singular_band = float(singular_band)
         self.stage_count = len(method.c) + (1 if method.error_estimate == "dop853" else 0)
-        loop = self._loop()
+        self.function = self._loop()
         self.compiled, self.compile_error = False, ""
-        if compile:
-            try:
-                compiled = compile_function(loop)
-            except RuntimeError as error:  # the compiler failed: the virtual machine serves
-                compiled, self.compile_error = loop, str(error)
-            self.compiled = compiled is not loop
-            loop = compiled
-        self.function = loop
-        self._fast = FastFunction(loop)
+        self._fast = FastFunction(self.function)
+
+    @cached_property
+    def source(self) -> str:
+        """The kernel as C (CasADi's code generator)."""
+        generator = ca.CodeGenerator(f"{self.function.name()}.c", {"with_header": False})
+        generator.add(self.function)
+        return generator.dump()
+
+    def compile_seconds(self) -> float:
+        """The CPU seconds the compiler is foreseen to take (:data:`COMPILE_RATE`)."""
+        return len(self.source) / COMPILE_RATE
+
+    def compiled_copy(self) -> LoopKernel:
+        """The kernel compiled to C (:func:`compile_c`); itself, with ``compile_error`` saying
+        why, when no compiler is found or it fails."""
+        try:
+            function = compile_c(self.function.name(), self.source)
+        except RuntimeError as error:  # the compiler failed: the virtual machine serves
+            self.compile_error = str(error)
+            return self
+        if function is None:
+            self.compile_error = "no C compiler found (or HEXAPOD_NO_JIT is set)"
+            return self
+        twin = copy.copy(self)
+        twin.function, twin.compiled, twin._fast = function, True, FastFunction(function)
+        return twin
 
     # ------------------------------------------------------------------ the attempt
 
@@ -332,8 +362,13 @@ class LoopKernel:
             counts.update(jacobians=1, factorisations=1)
         head = [carry[L.index[name]] + counts.get(name, 0) for name in _HEAD]
         head[L.index["h"]] = h * factor
+        head[L.index["h_rejected"]] = h
         taken = ca.vertcat(*head, carry[L.state])
-        if model.n_c:
+        kept = pieces.projection.rows.size
+        if kept > GRAM_ROWS:  # the bound costs more than Python's rank decision: Python's
+            head[L.index["code"]] = ca.MX(CHECK)
+            taken = ca.vertcat(*head, carry[L.state])
+        elif kept:
             bound = pieces.singular_bound(carry[L.index["t"]], carry[L.q])
             near = ca.logic_not(bound * self.singular_band**2 <= 1.0)
             taken = ca.if_else(near, _handed_over(L, carry), taken)
@@ -415,22 +450,26 @@ def compiler() -> str | None:
     return shutil.which("gcc") or shutil.which("cc")
 
 
-def compile_function(function: ca.Function) -> ca.Function:
-    """``function`` generated as C, compiled (``-O2``) and loaded; the function itself when no
-    compiler is found. The files are made in a temporary directory, removed once loaded;
-    SIGINT and SIGTERM are held back while the compiler runs (see :func:`signals.deferred`)."""
+def compile_c(name: str, source: str) -> ca.Function | None:
+    """The Function ``name`` of the C ``source``, compiled (:data:`FLAGS`) and loaded; None
+    when no compiler is found. The files are made in a temporary directory, removed once
+    loaded; SIGINT and SIGTERM are held back while the compiler runs (see
+    :func:`signals.deferred`).
+
+    Raises
+    ------
+    RuntimeError
+        The compiler failed, or its library could not be loaded.
+    """
     program = compiler()
     if program is None:
-        return function
-    name = function.name()
+        return None
     with tempfile.TemporaryDirectory(prefix="hexapod-") as directory:
-        generator = ca.CodeGenerator(f"{name}.c", {"with_header": False})
-        generator.add(function)
-        generator.generate(directory + os.sep)
+        path = os.path.join(directory, f"{name}.c")
+        with open(path, "w", encoding="utf-8") as stream:
+            stream.write(source)
         options = {"compiler": program, "flags": list(FLAGS), "directory": directory + os.sep,
                    "cleanup": False}
         with signals.deferred():
-            importer = ca.Importer(os.path.join(directory, f"{name}.c"), "shell", options)
-            loaded = ca.external(name, importer)
-    return loaded
-
+            importer = ca.Importer(path, "shell", options)
+            return ca.external(name, importer)

@@ -21,6 +21,7 @@ import numpy as np
 from hexapod._support import signals
 from hexapod.simulation.compiled_loop import (
     ATTEMPTS,
+    CHECK,
     COUNTERS,
     FINISHED,
     HANDOVER,
@@ -68,8 +69,12 @@ class Batch:
 #: budget and signals, checked between calls, stay responsive
 CALL_SECONDS = 0.05
 #: in mode ``"auto"``, the kernel is compiled to C once its virtual machine is foreseen to need
-#: more than this many CPU seconds to the end of the run (a compilation costs about one)
+#: more than this many CPU seconds to the end of the run, and more than :data:`COMPILE_PAYOFF`
+#: times what the compiler is foreseen to take (:meth:`LoopKernel.compile_seconds`: about a
+#: second for a small mechanism, 13 s for a chain of 18 spatial bodies). C runs the steps of
+#: the one-body pendulum 3.5 times as fast as the virtual machine, those of the chain 2.4 times
 COMPILE_AFTER = 2.0
+COMPILE_PAYOFF = 2.0
 
 
 class CompiledStepper:
@@ -87,22 +92,27 @@ class CompiledStepper:
 
     def __init__(self, integrator, mode: str):
         self.integrator, self.mode = integrator, mode
-        self.compile = mode == "c" and compiler() is not None
+        self.compile = mode == "c"
+        self.decided = mode != "auto"  # whether to compile, in mode "auto"
         self.per_call = 16  # attempts asked of the next call, then set by the pace
         self.streak = 0  # handovers in a row without a step accepted in between
         self.python_steps = 0  # steps to take in Python before the next call
         self.work = [0.0, 0.0]  # CPU seconds in the kernel and simulated seconds it advanced
         #: what the compiled loop did: the kernels it ran (``"vm"``, ``"c"``, in order), its
-        #: calls, the steps it accepted, its handovers to Python
-        self.statistics = {"kernels": [], "calls": 0, "steps": 0, "handovers": 0}
+        #: calls, the steps it accepted, its handovers to Python, the CPU seconds of its calls
+        self.statistics = {"kernels": [], "calls": 0, "steps": 0, "handovers": 0, "cpu_s": 0.0}
 
     def kernel(self) -> LoopKernel:
-        """The kernel for the integrator's kept rows (built once per model)."""
+        """The kernel for the integrator's kept rows, compiled to C when decided (each built
+        once per model)."""
         it = self.integrator
         rows = np.asarray(it._compiled.rows, dtype=int)
-        key = ("loop", it.name, tuple(int(r) for r in rows), self.compile)
-        return it.model.built_once(key, lambda m: LoopKernel(
-            m, type(it), rows, singular_band=SINGULAR_BAND, compile=self.compile))
+        key = ("loop", it.name, tuple(int(r) for r in rows))
+        kernel = it.model.built_once(key, lambda m: LoopKernel(
+            m, type(it), rows, singular_band=SINGULAR_BAND))
+        if not self.compile:
+            return kernel
+        return it.model.built_once(("compiled", *key), lambda m: kernel.compiled_copy())
 
     def advance(self, t_stop: float, steps_cap: float, tried_cap: float) -> Batch | None:
         """Accepted steps from the integrator's state until the end of the run, a step past
@@ -151,13 +161,16 @@ class CompiledStepper:
             self.per_call = int(min(ATTEMPTS, max(1, CALL_SECONDS * attempts / seconds)))
         it = self.integrator
         self.statistics["calls"] += 1
+        self.statistics["cpu_s"] += seconds
         self.work[0] += seconds
         self.work[1] += span - (it.t_bound - out[HEAD["t"]])
-        if self.mode != "auto" or self.compile or not self.work[1] > 0:
+        if self.decided or not self.work[1] > 0:
             return
         foreseen = self.work[0] / self.work[1] * (it.t_bound - out[HEAD["t"]])
-        if foreseen > COMPILE_AFTER and compiler() is not None:
-            self.compile = True
+        if foreseen > COMPILE_AFTER:  # decided once: the pace hardly changes
+            self.decided = True
+            self.compile = compiler() is not None and (
+                foreseen > COMPILE_PAYOFF * self.kernel().compile_seconds())
 
     def _write_back(self, L: Layout, out: np.ndarray, trace: np.ndarray,
                     before: tuple) -> Batch | None:
@@ -179,6 +192,8 @@ class CompiledStepper:
             it._dense_from(start, it._accepted_step)
             self.statistics["steps"] += rows.shape[0]
         code = int(out[HEAD["code"]])
+        if code == CHECK and not self._far_from_singular(out):
+            code = HANDOVER
         if code == FINISHED:
             it.status = "finished"
         elif code == HANDOVER:
@@ -189,6 +204,27 @@ class CompiledStepper:
         return Batch(rows[:, 1], rows[:, L.row_q], rows[:, L.row_v], rows[:, L.row_v_dot],
                      rows[:, L.row_lam] if it._compiled.complete else None,
                      watched[:, 0], watched[:, 1], watched[:, 2], watched[:, 3])
+
+    def _far_from_singular(self, out: np.ndarray) -> bool:
+        """After a step rejected by a kernel that leaves the rank decision to Python
+        (:data:`~hexapod.simulation.compiled_loop.CHECK`): whether the state is clear of
+        singular poses, as :meth:`Integrator._cross_singular` decides first (its smallest
+        singular value not below ``SINGULAR_BAND``; its rank decision was counted by the
+        kernel). If not, the rejection is undone, for Python to take the step again and decide
+        on a crossing."""
+        it = self.integrator
+        counted = (it.counters.jacobians, it.counters.factorisations)
+        sigma = it._smallest_singular_value()
+        it.counters.jacobians, it.counters.factorisations = counted
+        if sigma >= SINGULAR_BAND:
+            return True
+        counters, stages = it.counters, self.kernel().stage_count
+        counters.rejected -= 1
+        counters.rhs -= stages - 1
+        counters.jacobians -= 1
+        counters.factorisations -= 1
+        it.h = float(out[HEAD["h_rejected"]])
+        return False
 
     def _handed_over(self, accepted: int) -> None:
         """After a handover, with ``accepted`` steps before it in the call: Python takes the

@@ -114,11 +114,11 @@ class EmbeddedRungeKutta(Integrator):
         """How the steps were taken, for the result's ``options["loop"]``: the mode asked
         (:data:`~hexapod.simulation.methods.LOOPS`), the kernels the compiled loop ran
         (``"vm"``, ``"c"``), its calls, the steps it accepted (the others were taken in Python:
-        the handovers and the crossings of singular poses), its handovers, and why the steps
-        ran in Python when they all did (``reason``)."""
+        the handovers and the crossings of singular poses), its handovers, the CPU seconds of
+        its calls (``cpu_s``) and why the steps ran in Python when they all did (``reason``)."""
         if self._stepper is None:
             return {"mode": self._loop_mode, "kernels": [], "calls": 0, "steps": 0,
-                    "handovers": 0, "reason": self.loop_reason}
+                    "handovers": 0, "cpu_s": 0.0, "reason": self.loop_reason}
         return {"mode": self._loop_mode, **self._stepper.statistics, "reason": ""}
 
     def _stages(self, t: float, h: float, y0: np.ndarray,
