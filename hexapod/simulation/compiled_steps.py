@@ -94,7 +94,7 @@ class CompiledStepper:
         self.integrator, self.mode = integrator, mode
         self.compile = mode == "c"
         self.decided = mode != "auto"  # whether to compile, in mode "auto"
-        self.per_call = 16  # attempts asked of the next call, then set by the pace
+        self.per_call = 4  # attempts asked of the first call, then set by the pace
         self.streak = 0  # handovers in a row without a step accepted in between
         self.python_steps = 0  # steps to take in Python before the next call
         self.work = [0.0, 0.0]  # CPU seconds in the kernel and simulated seconds it advanced
