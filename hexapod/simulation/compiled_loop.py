@@ -51,6 +51,7 @@ import numpy as np
 
 from hexapod._support import signals
 from hexapod._support.fastcall import FastFunction
+from hexapod._support.files import write_atomically
 from hexapod.model.model import Model
 from hexapod.simulation.kernels import (
     REDUNDANT_TOLERANCE,
@@ -465,9 +466,7 @@ def compile_c(name: str, source: str) -> ca.Function | None:
     if program is None:
         return None
     with tempfile.TemporaryDirectory(prefix="hexapod-") as directory:
-        path = os.path.join(directory, f"{name}.c")
-        with open(path, "w", encoding="utf-8") as stream:
-            stream.write(source)
+        path = str(write_atomically(os.path.join(directory, f"{name}.c"), source))
         options = {"compiler": program, "flags": list(FLAGS), "directory": directory + os.sep,
                    "cleanup": False}
         with signals.deferred():
