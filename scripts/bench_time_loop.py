@@ -5,7 +5,8 @@
     python scripts/bench_time_loop.py --part step      # CPU per step only
     python scripts/bench_time_loop.py --part iftomm --python   # also the Python loop (slow)
 
-Part ``step``: CPU per step over ``--horizon`` seconds (100 by default), every loop in one run
+Part ``step``: CPU per step over ``--horizon`` seconds (100 by default) of DOPRI5, DOP853 and
+RK4 with Baumgarte's stabilisation (fixed steps of 0.01 s), every loop in one run
 (``python``: one step per Python call; ``vm``: the compiled loop evaluated by CasADi's virtual
 machine; ``c``: the same compiled to C before the run, its compilation not counted), with the
 part of it spent inside the kernel's calls and per right-hand side.
@@ -33,8 +34,11 @@ import hexapod as hx
 from hexapod.benchmarks import long_pendulum
 
 ROOT = Path(__file__).resolve().parents[1]
-#: each method's tolerance in part ``step`` (those near 1e-6 m over 2000 s)
-STEP_SETTINGS = {"dopri5-projection": 1e-10, "dop853-projection": 1e-12}
+#: each method's setting in part ``step``: the adaptive ones' tolerances near 1e-6 m over
+#: 2000 s, RK4's step (about 190 per period)
+STEP_SETTINGS = {"dopri5-projection": {"rtol": 1e-10, "atol": 1e-10},
+                 "dop853-projection": {"rtol": 1e-12, "atol": 1e-12},
+                 "rk4-baumgarte": {"step": 0.01}}
 #: the ladders of part ``iftomm``
 LADDERS = {"dop853-projection": (1e-10, 1e-11, 1e-12, 1e-13),
            "dopri5-projection": (1e-10, 1e-11, 1e-12)}
@@ -47,13 +51,14 @@ def per_step(horizon: float, loops: tuple[str, ...]) -> list[dict]:
     case = long_pendulum(duration=horizon)
     model = hx.assemble(case.scene)
     rows = []
-    for method, tol in STEP_SETTINGS.items():
+    for method, settings in STEP_SETTINGS.items():
         for loop in loops:
-            result = hx.simulate(model, horizon, method=method, rtol=tol, atol=tol,
-                                 every=10**9, options={"loop": loop})
+            result = hx.simulate(model, horizon, method=method, every=10**9,
+                                 options={"loop": loop}, **settings)
             steps, rhs = result.counters.steps, result.counters.rhs
             inside = result.options["loop"]["cpu_s"]
-            rows.append({"part": "step", "method": method, "loop": loop, "rtol": tol,
+            rows.append({"part": "step", "method": method, "loop": loop,
+                         "setting": " ".join(f"{k} {v:g}" for k, v in settings.items()),
                          "t_end_s": horizon, "status": result.status, "steps": steps,
                          "rhs": rhs, "cpu_s": result.cpu_time,
                          "us_per_step": 1e6 * result.cpu_time / steps,
@@ -101,11 +106,11 @@ def _line(row: dict) -> str:
 
 
 def step_table(rows: list[dict]) -> str:
-    lines = ["| method | rtol = atol | loop | steps | CPU s | CPU per step (us) | in the kernel "
+    lines = ["| method | setting | loop | steps | CPU s | CPU per step (us) | in the kernel "
              "(us per step) | per right-hand side (us) |", "|---|---|---|---|---|---|---|---|"]
     for r in rows:
         per_rhs = "-" if r["kernel_us_per_rhs"] is None else f"{r['kernel_us_per_rhs']:.2f}"
-        lines.append(f"| {r['method']} | {r['rtol']:g} | {r['loop']} | {r['steps']} | "
+        lines.append(f"| {r['method']} | {r['setting']} | {r['loop']} | {r['steps']} | "
                      f"{r['cpu_s']:.3f} | {r['us_per_step']:.1f} | "
                      f"{r['kernel_us_per_step']:.1f} | {per_rhs} |")
     return "\n".join(lines)

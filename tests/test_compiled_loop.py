@@ -128,6 +128,41 @@ def test_singular_poses_are_handed_over_and_crossed_in_python(method):
     assert errors["vm"] <= max(1e-8, 3 * errors["python"])
 
 
+#: fixed steps of rk4-baumgarte per case
+RK4_STEPS = {"pendulum": 0.01, "seed002-closed-loop": 1e-3, "andrews": 1e-5,
+             "spatial-chain": 1e-3, "bricard-redundant": 1e-2, "four-bar-3d-harmonic-law": 1e-3}
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_rk4_baumgarte_in_the_compiled_loop_is_the_python_loop(case):
+    """Fixed steps and no error test: the same arithmetic in the same order, so the same
+    numbers; the multipliers saved are those of the unstabilised solve, as in Python."""
+    model, t_end, _ = CASES[case]
+    results = [hx.simulate(model, t_end, method="rk4-baumgarte", step=RK4_STEPS[case],
+                           options={"loop": loop}) for loop in ("python", "vm")]
+    python, compiled = results
+    assert python.status == compiled.status == "finished"
+    assert compiled.options["loop"]["steps"] == compiled.counters.steps
+    assert compiled.counters == python.counters
+    np.testing.assert_allclose(compiled.q, python.q, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(compiled.v_dot, python.v_dot, rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(compiled.lam, python.lam, rtol=1e-9, atol=1e-9)
+    assert compiled.max_position_violation == pytest.approx(python.max_position_violation,
+                                                            rel=1e-6, abs=1e-15)
+
+
+def test_rk4_baumgarte_drifting_too_far_fails_in_python_with_its_message():
+    """A step too large for Baumgarte's stabilisation: the kernel hands the step where the
+    drift check fails over, and Python fails it, as the Python loop does."""
+    model, _, _ = CASES["pendulum"]
+    results = [hx.simulate(model, 20.0, method="rk4-baumgarte", step=0.15,
+                           options={"loop": loop}) for loop in ("python", "vm")]
+    assert results[0].status == results[1].status == "failed"
+    assert results[1].message == results[0].message
+    assert "drifted" in results[0].message
+    assert results[1].counters == results[0].counters
+
+
 def test_laws_without_a_closed_form_keep_the_python_loop():
     scene = four_bar(2, 0.8, law=hx.Spline((0.0, 0.5, 1.0, 1.5), (0.8, 1.0, 1.5, 2.2)))
     result = run(hx.assemble(scene), 1.0, "dopri5-projection", 1e-8, "auto")
@@ -148,10 +183,16 @@ def test_laws_with_a_closed_form_are_compiled(law):
     assert compiled.max_velocity_violation <= 1e-11
 
 
-@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("method", [*METHODS, "rk4-baumgarte"])
 def test_output_times_and_every_through_batches(method):
     model, _, tol = CASES["pendulum"]
     times = np.linspace(0.0, 2.0, 41)
+    settings = {"step": 0.01} if method == "rk4-baumgarte" else {"rtol": tol, "atol": tol}
+
+    def run(model, t_end, method, tol, loop, **kwargs):
+        return hx.simulate(model, t_end, method=method, options={"loop": loop},
+                           **settings, **kwargs)
+
     python = run(model, 2.0, method, tol, "python", t_eval=times)
     compiled = run(model, 2.0, method, tol, "vm", t_eval=times)
     np.testing.assert_array_equal(compiled.t, times)

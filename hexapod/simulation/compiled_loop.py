@@ -1,20 +1,24 @@
-"""A compiled time loop for the embedded Runge-Kutta pairs with projection (DOPRI5, DOP853).
+"""A compiled time loop for the explicit methods: the embedded Runge-Kutta pairs with projection
+(DOPRI5, DOP853) and classical Runge-Kutta with Baumgarte's stabilisation (RK4).
 
 The Python loop of :class:`~hexapod.simulation.integrators.embedded.EmbeddedRungeKutta` spends
 about 0.3 ms of CPU per step on a one-body pendulum, nearly all of it in Python around compiled
-calls of a few microseconds. :class:`LoopKernel` builds, once per model, method and row set,
+calls of a few microseconds. A :class:`LoopKernel` is built once per model, method and row set:
 one CasADi Function
 
     loop(carry, settings) -> (carry, trace)
 
-that attempts up to :data:`ATTEMPTS` steps in one call, each exactly as
-:meth:`EmbeddedRungeKutta._step` takes it: the step cut at the end of the run, the stages
-through the compiled saddle-point solve of :class:`~hexapod.simulation.kernels.CompiledRates`
-on the kept rows, the error in the same weighted RMS norm, accept or reject with the same
-controller, on acceptance the Euler parameters normalised, the projection of
+that attempts up to :data:`ATTEMPTS` steps in one call, each exactly as the method's Python
+step takes it. For DOPRI5 and DOP853 (:class:`EmbeddedKernel`, as
+:meth:`EmbeddedRungeKutta._step`): the step cut at the end of the run, the stages through the
+compiled saddle-point solve of :class:`~hexapod.simulation.kernels.CompiledRates` on the kept
+rows, the error in the same weighted RMS norm, accept or reject with the same controller, on
+acceptance the Euler parameters normalised, the projection of
 :class:`~hexapod.simulation.kernels.CompiledProjection` and the accelerations at the projected
-state. It counts the work as the Python loop counts it, and at every accepted step measures
-what the time loop watches (the largest scaled constraint residuals, the energy).
+state. For ``rk4-baumgarte`` (:class:`BaumgarteKernel`): fixed steps, no error test, the same
+numbers as its Python loop to the last bit on the cases tested. Each counts the work as the
+Python loop counts it, and at every accepted step measures what the time loop watches (the
+largest scaled constraint residuals, the energy).
 
 ``carry`` holds the time, the step, a code saying why the loop stopped (:data:`RUNNING` while
 it runs), the counters and the state ``(q, v, v_dot)``; ``settings`` the end of the run, the
@@ -148,10 +152,10 @@ class _Pieces:
         forms = [law.symbolic(t) for law in self.model.laws]
         return [ca.vertcat(*[form[k] for form in forms]) for k in range(3)]
 
-    def rates(self, t, q, v):
-        """``(q_dot, v_dot, lam, ok)``: ``ok`` when the compiled solve passes the checks of
-        :meth:`CompiledRates.solve`."""
-        q_dot, v_dot, lam, residual = self.rates_function(q, v, *self.laws(t), 0.0)
+    def rates(self, t, q, v, alpha: float = 0.0):
+        """``(q_dot, v_dot, lam, ok)``, with Baumgarte's rate ``alpha``: ``ok`` when the
+        compiled solve passes the checks of :meth:`CompiledRates.solve`."""
+        q_dot, v_dot, lam, residual = self.rates_function(q, v, *self.laws(t), alpha)
         ok = ca.logic_and(ca.logic_and(residual[0] <= RESIDUAL_TOLERANCE,
                                        residual[1] <= REDUNDANT_TOLERANCE), _finite(v_dot))
         return q_dot, v_dot, lam, ok
@@ -222,32 +226,21 @@ def _combination(weights, stages):
 
 
 class LoopKernel:
-    """Up to :data:`ATTEMPTS` attempts of an embedded pair's step in one call (see the
-    module's description).
-
-    Parameters
-    ----------
-    model : Model
-    method : type
-        The integrator class: its tableau ``A, b, b_hat, c``, ``error_order``,
-        ``error_estimate`` (``"difference"`` of the pair's two solutions, or ``"dop853"``:
-        the combined 5th and 3rd order estimates and one more stage at the step's end) and its
-        controller's ``safety, min_factor, max_factor``.
-    rows : ndarray of int
-        The kept rows the compiled solves work with.
-    singular_band : float
-        A rejected step hands over when the smallest singular value may be below this.
+    """Up to :data:`ATTEMPTS` attempts of a method's step in one call (see the module's
+    description); a subclass builds the attempt (:meth:`_attempt`) and names the kernel.
 
     The kernel is evaluated by CasADi's virtual machine; :meth:`compiled_copy` is the same
     compiled to C.
     """
 
-    def __init__(self, model: Model, method: type, rows: np.ndarray, *, singular_band: float):
-        self.model, self.method = model, method
+    name = "loop"
+    #: right-hand sides an attempt evaluates (those a rejection undoes, see ``CHECK``)
+    stage_count = 0
+
+    def __init__(self, model: Model, rows: np.ndarray):
+        self.model = model
         self.layout = Layout(model.n_q, model.n_v, model.n_c)
         self.pieces = _Pieces(model, np.asarray(rows, dtype=int))
-        self.singular_band = float(singular_band)
-        self.stage_count = len(method.c) + (1 if method.error_estimate == "dop853" else 0)
         self.function = self._loop()
         self.compiled, self.compile_error = False, ""
         self._fast = FastFunction(self.function)
@@ -278,6 +271,94 @@ class LoopKernel:
         twin.function, twin.compiled, twin._fast = function, True, FastFunction(function)
         return twin
 
+    def run(self, carry: np.ndarray, settings: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """One call: the carry after it and the trace (one row per attempt)."""
+        out, trace = self._fast(carry, settings)
+        return out, trace.T
+
+    # ------------------------------------------------------------------ building blocks
+
+    def _attempt(self) -> ca.Function:
+        """``(carry, settings) -> (carry, row)``: one attempt of a step."""
+        raise NotImplementedError
+
+    def _symbols(self):
+        L = self.layout
+        return ca.MX.sym("carry", L.carry), ca.MX.sym("settings", L.settings)
+
+    def _loop(self) -> ca.Function:
+        """``(carry, settings) -> (carry, trace)``: :data:`ATTEMPTS` attempts, those after the
+        loop stopped idle."""
+        L = self.layout
+        carry, settings = self._symbols()
+        idle = ca.Function("idle", [carry, settings], [carry, ca.MX.zeros(L.row)])
+        switch = ca.Function.if_else("running", self._attempt(), idle)
+        step = ca.Function("step", [carry, settings],
+                           switch(carry[L.index["code"]] == RUNNING, carry, settings))
+        loop = step.mapaccum("attempts", ATTEMPTS)
+        states, trace = loop(carry, ca.repmat(settings, 1, ATTEMPTS))
+        return ca.Function(f"loop_{self.name}", [carry, settings], [states[:, -1], trace],
+                           ["carry", "settings"], ["carry_out", "trace"])
+
+    @staticmethod
+    def _next_step(carry, settings, L: Layout):
+        """The step to take, as :meth:`Integrator.next_step` cuts it at the end of the run."""
+        t, remaining = carry[L.index["t"]], settings[0] - carry[L.index["t"]]
+        h = ca.fmin(carry[L.index["h"]], settings[1])
+        return t, ca.if_else(h >= 0.99 * remaining, remaining, h)
+
+    def _taken(self, carry, settings, step: dict, counts: dict, check=None):
+        """``(carry, row)`` of an accepted step: ``step`` holds its length ``h``, its end
+        ``t, q, v, v_dot, lam``, the step to try next ``h_next`` and ``ok`` (its compiled
+        solves passed); ``counts`` what to add to the counters; ``check(watched, steps)``
+        further conditions on what the loop watches at the end. The end time is snapped to the
+        end of the run as :meth:`Integrator.step` snaps it; the code says why to stop; the carry
+        is handed over when a check fails."""
+        L = self.layout
+        t_bound = settings[0]
+        finished = step["t"] >= t_bound - 1e-12 * ca.fmax(1.0, ca.fabs(t_bound))
+        t_new = ca.if_else(finished, t_bound, step["t"])
+        head = [carry[L.index[name]] + counts.get(name, 0) for name in _HEAD]
+        head[L.index["t"]], head[L.index["h"]] = t_new, step["h_next"]
+        head[L.index["accepted_step"]] = step["h"]
+        steps = head[L.index["steps"]]
+        tried = steps + head[L.index["rejected"]]
+        head[L.index["code"]] = ca.if_else(finished, FINISHED, ca.if_else(
+            t_new >= settings[3], OUTPUT,
+            ca.if_else(ca.logic_or(steps >= settings[4], tried >= settings[5]), PAUSED,
+                       RUNNING)))
+        q, v, v_dot = step["q"], step["v"], step["v_dot"]
+        watched = self.pieces.watched(t_new, q, v)
+        ok = step["ok"] if check is None else ca.logic_and(step["ok"], check(watched, steps))
+        taken = ca.vertcat(*head, q, v, v_dot)
+        row = ca.vertcat(1.0, t_new, q, v, v_dot, step["lam"], watched)
+        return (ca.if_else(ok, taken, _handed_over(L, carry)),
+                ca.if_else(ok, row, ca.MX.zeros(L.row)))
+
+
+class EmbeddedKernel(LoopKernel):
+    """The compiled loop of an embedded pair with projection (DOPRI5, DOP853).
+
+    Parameters
+    ----------
+    model : Model
+    method : type
+        The integrator class: its tableau ``A, b, b_hat, c``, ``error_order``,
+        ``error_estimate`` (``"difference"`` of the pair's two solutions, or ``"dop853"``:
+        the combined 5th and 3rd order estimates and one more stage at the step's end) and its
+        controller's ``safety, min_factor, max_factor``.
+    rows : ndarray of int
+        The kept rows the compiled solves work with.
+    singular_band : float
+        A rejected step hands over when the smallest singular value may be below this.
+    """
+
+    def __init__(self, model: Model, method: type, rows: np.ndarray, *, singular_band: float):
+        self.method, self.singular_band = method, float(singular_band)
+        self.name = method.__name__.lower()
+        self.stage_count = len(method.c) + (1 if method.error_estimate == "dop853" else 0)
+        super().__init__(model, rows)
+
     # ------------------------------------------------------------------ the attempt
 
     def _stages(self, carry, settings):
@@ -285,11 +366,8 @@ class LoopKernel:
         error, ok)``, ``ok`` when every compiled solve passed its checks and the step is not
         below the smallest the method takes."""
         L, method, pieces, n_q = self.layout, self.method, self.pieces, self.model.n_q
-        t, h_current = carry[L.index["t"]], carry[L.index["h"]]
-        t_bound, max_step, rtol = settings[0], settings[1], settings[2]
-        remaining = t_bound - t
-        h = ca.fmin(h_current, max_step)
-        h = ca.if_else(h >= 0.99 * remaining, remaining, h)
+        t, h = self._next_step(carry, settings, L)
+        rtol = settings[2]
         ok = h >= 1e-14 * ca.fmax(1.0, ca.fabs(t))
         q, v = carry[L.q], carry[L.v]
         y0 = ca.vertcat(q, v)
@@ -321,32 +399,16 @@ class LoopKernel:
         solve refuses."""
         L, method, pieces, model = self.layout, self.method, self.pieces, self.model
         carry, settings, h, y1, error = self._branch_symbols()
-        t = carry[L.index["t"]]
-        t_bound = settings[0]
         factor = ca.if_else(error == 0, method.max_factor, ca.fmin(
             method.max_factor, method.safety * error ** (-1.0 / (method.error_order + 1))))
-        t_new = t + h
+        t_new = carry[L.index["t"]] + h
         q, v, ok = pieces.project(t_new, _normalised(model, y1[:model.n_q]), y1[model.n_q:])
         _, v_dot, lam, ok_rates = pieces.rates(t_new, q, v)
-        ok = ca.logic_and(ok, ok_rates)
-        finished = t_new >= t_bound - 1e-12 * ca.fmax(1.0, ca.fabs(t_bound))
-        t_new = ca.if_else(finished, t_bound, t_new)
+        step = {"h": h, "t": t_new, "q": q, "v": v, "v_dot": v_dot, "lam": lam,
+                "h_next": h * factor, "ok": ca.logic_and(ok, ok_rates)}
         counts = {"steps": 1, "rhs": self.stage_count, "newton": pieces.newton,
                   "jacobians": pieces.newton + 1, "factorisations": pieces.newton + 1}
-        head = [carry[L.index[name]] + counts.get(name, 0) for name in _HEAD]
-        head[L.index["t"]], head[L.index["h"]] = t_new, h * factor
-        head[L.index["accepted_step"]] = h
-        steps = head[L.index["steps"]]
-        tried = steps + head[L.index["rejected"]]
-        code = ca.if_else(finished, FINISHED, ca.if_else(
-            t_new >= settings[3], OUTPUT,
-            ca.if_else(ca.logic_or(steps >= settings[4], tried >= settings[5]), PAUSED,
-                       RUNNING)))
-        head[L.index["code"]] = code
-        taken = ca.vertcat(*head, q, v, v_dot)
-        row = ca.vertcat(1.0, t_new, q, v, v_dot, lam, pieces.watched(t_new, q, v))
-        out = ca.if_else(ok, taken, _handed_over(L, carry))
-        row = ca.if_else(ok, row, ca.MX.zeros(L.row))
+        out, row = self._taken(carry, settings, step, counts)
         return ca.Function("accepted", [carry, settings, h, y1, error], [out, row])
 
     def _rejected(self) -> ca.Function:
@@ -377,16 +439,13 @@ class LoopKernel:
                            [taken, ca.MX.zeros(L.row)])
 
     def _branch_symbols(self):
-        L = self.layout
-        return (ca.MX.sym("carry", L.carry), ca.MX.sym("settings", L.settings),
-                ca.MX.sym("h"), ca.MX.sym("y1", self.model.n_q + self.model.n_v),
-                ca.MX.sym("error"))
+        return (*self._symbols(), ca.MX.sym("h"),
+                ca.MX.sym("y1", self.model.n_q + self.model.n_v), ca.MX.sym("error"))
 
     def _attempt(self) -> ca.Function:
         """``(carry, settings) -> (carry, row)``: one attempt, its branch (handed over,
         accepted, rejected) evaluated alone."""
-        L = self.layout
-        carry, settings = ca.MX.sym("carry", L.carry), ca.MX.sym("settings", L.settings)
+        carry, settings = self._symbols()
         h, y1, error, ok = self._stages(carry, settings)
         branches = [self._handover(), self._accepted()]
         branch = ca.Function.conditional("branch", branches, self._rejected())
@@ -399,27 +458,57 @@ class LoopKernel:
         return ca.Function("handover", [carry, settings, h, y1, error],
                            [_handed_over(self.layout, carry), ca.MX.zeros(self.layout.row)])
 
-    def _loop(self) -> ca.Function:
-        """``(carry, settings) -> (carry, trace)``: :data:`ATTEMPTS` attempts, those after the
-        loop stopped idle."""
-        L = self.layout
-        carry, settings = ca.MX.sym("carry", L.carry), ca.MX.sym("settings", L.settings)
-        idle = ca.Function("idle", [carry, settings], [carry, ca.MX.zeros(L.row)])
-        attempt = self._attempt()
-        switch = ca.Function.if_else("running", attempt, idle)
-        step = ca.Function("step", [carry, settings],
-                           switch(carry[L.index["code"]] == RUNNING, carry, settings))
-        loop = step.mapaccum("attempts", ATTEMPTS)
-        states, trace = loop(carry, ca.repmat(settings, 1, ATTEMPTS))
-        return ca.Function(f"loop_{self.method.__name__.lower()}", [carry, settings],
-                           [states[:, -1], trace], ["carry", "settings"], ["carry_out", "trace"])
 
-    # ------------------------------------------------------------------ calls
+class BaumgarteKernel(LoopKernel):
+    """The compiled loop of classical Runge-Kutta with Baumgarte stabilisation
+    (``rk4-baumgarte``), each step as :meth:`RungeKutta4Baumgarte._step` takes it: three new
+    stages with the stabilisation's rate ``alpha``, the Euler parameters normalised, the
+    accelerations at the end with the same stabilisation and, when every row is kept, the
+    multipliers there without it (those the saved states have); the position drift checked every
+    ``drift_every`` steps against ``drift_limit`` (past it, Python takes the step and fails).
 
-    def run(self, carry: np.ndarray, settings: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """One call: the carry after it and the trace (one row per attempt)."""
-        out, trace = self._fast(carry, settings)
-        return out, trace.T
+    Parameters
+    ----------
+    model : Model
+    rows : ndarray of int
+        The kept rows the compiled solves work with.
+    alpha, drift_limit : float
+    drift_every : int
+    """
+
+    name = "rk4_baumgarte"
+    stage_count = 4
+
+    def __init__(self, model: Model, rows: np.ndarray, *, alpha: float, drift_limit: float,
+                 drift_every: int):
+        self.alpha, self.drift_limit, self.drift_every = alpha, drift_limit, drift_every
+        super().__init__(model, rows)
+
+    def _attempt(self) -> ca.Function:
+        L, pieces, model, alpha = self.layout, self.pieces, self.model, self.alpha
+        carry, settings = self._symbols()
+        t, h = self._next_step(carry, settings, L)
+        q, v = carry[L.q], carry[L.v]
+        dq1, dv1 = model.qdot(q, v), carry[L.v_dot]
+        dq2, dv2, _, ok2 = pieces.rates(t + h / 2, q + h / 2 * dq1, v + h / 2 * dv1, alpha)
+        dq3, dv3, _, ok3 = pieces.rates(t + h / 2, q + h / 2 * dq2, v + h / 2 * dv2, alpha)
+        dq4, dv4, _, ok4 = pieces.rates(t + h, q + h * dq3, v + h * dv3, alpha)
+        q = _normalised(model, q + h / 6 * (dq1 + 2 * dq2 + 2 * dq3 + dq4))
+        v = v + h / 6 * (dv1 + 2 * dv2 + 2 * dv3 + dv4)
+        _, v_dot, lam, ok5 = pieces.rates(t + h, q, v, alpha)
+        ok = ca.logic_and(ca.logic_and(ok2, ok3), ca.logic_and(ok4, ok5))
+        if pieces.projection.rows.size == model.n_c:  # unique multipliers: the saved ones
+            _, _, lam, ok_lam = pieces.rates(t + h, q, v)
+            ok = ca.logic_and(ok, ok_lam)
+        step = {"h": h, "t": t + h, "q": q, "v": v, "v_dot": v_dot, "lam": lam,
+                "h_next": carry[L.index["h"]], "ok": ok}
+
+        def check(watched, steps):
+            due = ca.fmod(steps, self.drift_every) == 0
+            return ca.logic_or(ca.logic_not(due), watched[0] <= self.drift_limit)
+
+        out, row = self._taken(carry, settings, step, {"steps": 1, "rhs": 4}, check)
+        return ca.Function("attempt", [carry, settings], [out, row])
 
 
 def _handed_over(L: Layout, carry):

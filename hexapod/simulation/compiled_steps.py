@@ -1,6 +1,7 @@
-"""The compiled loop on the integrator's side: an embedded Runge-Kutta run advanced in batches
-of steps by :class:`~hexapod.simulation.compiled_loop.LoopKernel`, its state written back after
-each call, the steps it accepted handed to the time loop as a :class:`Batch`.
+"""The compiled loop on the integrator's side: a run of DOPRI5, DOP853 or RK4 advanced in batches
+of steps by a :class:`~hexapod.simulation.compiled_loop.LoopKernel`, its state written back
+after each call, the steps it accepted handed to the time loop as a :class:`Batch`;
+:class:`CompiledLoop`, what such an integrator adds to the contract.
 
 :class:`CompiledStepper` sizes each call to last about :data:`CALL_SECONDS`, so that progress,
 the CPU budget, the limits and signals, checked between calls, stay responsive; after a
@@ -29,8 +30,9 @@ from hexapod.simulation.compiled_loop import (
     Layout,
     LoopKernel,
     compiler,
+    unsupported,
 )
-from hexapod.simulation.integrators.base import SINGULAR_BAND
+from hexapod.simulation.integrators.base import SINGULAR_BAND, Counters
 
 
 @dataclass
@@ -83,7 +85,8 @@ class CompiledStepper:
 
     Parameters
     ----------
-    integrator : EmbeddedRungeKutta
+    integrator : Integrator
+        One with a compiled loop (:class:`CompiledLoop`).
     mode : str
         ``"c"``: the kernel compiled to C at once; ``"vm"``: evaluated by CasADi's virtual
         machine; ``"auto"``: the virtual machine, then C once the run is foreseen to need more
@@ -107,9 +110,8 @@ class CompiledStepper:
         once per model)."""
         it = self.integrator
         rows = np.asarray(it._compiled.rows, dtype=int)
-        key = ("loop", it.name, tuple(int(r) for r in rows))
-        kernel = it.model.built_once(key, lambda m: LoopKernel(
-            m, type(it), rows, singular_band=SINGULAR_BAND))
+        key = ("loop", it.name, tuple(int(r) for r in rows), *it._kernel_options())
+        kernel = it.model.built_once(key, lambda m: it._loop_kernel(rows))
         if not self.compile:
             return kernel
         return it.model.built_once(("compiled", *key), lambda m: kernel.compiled_copy())
@@ -234,3 +236,69 @@ class CompiledStepper:
         self.python_steps = 2 ** min(self.streak - 1, 10)
         if not accepted:  # the step about to be taken in Python is the first of them
             self.python_steps -= 1
+
+
+class CompiledLoop:
+    """What an integrator with a compiled time loop adds to the contract (a mixin, before
+    :class:`Integrator` in the bases): the option ``loop``, :meth:`advance`,
+    :meth:`loop_statistics`. It implements :meth:`_loop_kernel` (its kernel for a row set),
+    :meth:`_kernel_options` (what else the kernel depends on) and, for its dense output after
+    a batch, :meth:`_rebuild_dense_step`."""
+
+    def _setup_loop(self, loop: str) -> None:
+        """Choose the loop (after the integrator's consistent start) and build its kernel
+        before the run, as the other kernels are."""
+        #: why the steps run in Python ("" when they run in the compiled loop)
+        self.loop_reason = "asked for" if loop == "python" else unsupported(self.model)
+        self._loop_mode = loop
+        self._stepper = None if self.loop_reason else CompiledStepper(self, loop)
+        if self._stepper is not None:
+            self._stepper.kernel()  # compiled to C now for loop="c"
+        self._dense_step = self._dense_start = None
+
+    def advance(self, *, t_stop: float = np.inf, steps_cap: float = np.inf,
+                tried_cap: float = np.inf) -> Batch | None:
+        """Many accepted steps in one call of the compiled loop (see :class:`CompiledStepper`):
+        until the end, the first step past ``t_stop``, ``steps_cap`` accepted steps, or
+        ``tried_cap`` steps tried (accepted or rejected, counted from the start of the run).
+        None when the next step is to be taken by :meth:`step` (the compiled loop handed it
+        over, or the model keeps the Python loop: :attr:`loop_reason`)."""
+        if self._stepper is None or self.status != "running":
+            return None
+        return self._stepper.advance(t_stop, steps_cap, tried_cap)
+
+    def loop_statistics(self) -> dict:
+        """How the steps were taken, for the result's ``options["loop"]``: the mode asked
+        (:data:`~hexapod.simulation.methods.LOOPS`), the kernels the compiled loop ran
+        (``"vm"``, ``"c"``), its calls, the steps it accepted (the others were taken in Python:
+        the handovers and the crossings of singular poses), its handovers, the CPU seconds of
+        its calls (``cpu_s``) and why the steps ran in Python when they all did (``reason``)."""
+        if self._stepper is None:
+            return {"mode": self._loop_mode, "kernels": [], "calls": 0, "steps": 0,
+                    "handovers": 0, "cpu_s": 0.0, "reason": self.loop_reason}
+        return {"mode": self._loop_mode, **self._stepper.statistics, "reason": ""}
+
+    def _kernel_options(self) -> tuple:
+        """What the kernel depends on besides the model, the method and the rows."""
+        return ()
+
+    def _loop_kernel(self, rows: np.ndarray) -> LoopKernel:
+        raise NotImplementedError
+
+    def _dense_from(self, start: tuple, h: float) -> None:
+        """The last step was taken by the compiled loop from ``start = (t, q, v, v_dot)`` over
+        ``h``: its dense output is built from there when asked (:meth:`_last_step`)."""
+        self._dense_step, self._dense_start = None, (start, h)
+
+    def _last_step(self) -> tuple:
+        """The last accepted step as the dense output reads it (``_dense_step``); after the
+        compiled loop, its stages evaluated again, not counted (the loop counted them when it
+        took the step)."""
+        if self._dense_step is None:
+            counters = Counters(**self.counters.as_dict())
+            self._dense_step = self._rebuild_dense_step(*self._dense_start)
+            self.counters = counters
+        return self._dense_step
+
+    def _rebuild_dense_step(self, start: tuple, h: float) -> tuple:
+        raise NotImplementedError

@@ -117,12 +117,12 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
         up to there are kept).
     progress :
         Called as ``progress(t, t_end)`` after each accepted step, or, for a method whose time
-        loop runs in compiled code (DOPRI5 and DOP853, see
+        loop runs in compiled code (DOPRI5, DOP853 and RK4, see
         :mod:`hexapod.simulation.compiled_loop`), after each call of it (many steps, at most
         about 0.05 s of CPU).
     options :
         Further keyword arguments of the integrator (e.g. ``rho_inf``, ``alpha``; ``loop`` for
-        DOPRI5 and DOP853, :data:`~hexapod.simulation.methods.LOOPS`). The result's
+        DOPRI5, DOP853 and RK4, :data:`~hexapod.simulation.methods.LOOPS`). The result's
         ``options["loop"]`` says how their steps were taken.
     advice :
         What the messages of the limits suggest to ask for less (keys ``"steps"`` and

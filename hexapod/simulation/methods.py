@@ -17,10 +17,10 @@ DEFAULT_RTOL = 1e-6
 #: Default absolute tolerance of the adaptive methods (SI units of each coordinate).
 DEFAULT_ATOL = 1e-8
 
-#: How the adaptive explicit methods (``dopri5-projection``, ``dop853-projection``) run their
-#: steps: ``"auto"`` in a compiled loop (CasADi's virtual machine, then C once the run is
-#: foreseen to be long), ``"c"`` compiled to C at once, ``"vm"`` in the virtual machine only,
-#: ``"python"`` one step per Python call (see :mod:`hexapod.simulation.compiled_loop`).
+#: How the explicit methods (``dopri5-projection``, ``dop853-projection``, ``rk4-baumgarte``)
+#: run their steps: ``"auto"`` in a compiled loop (CasADi's virtual machine, then C once the
+#: run is foreseen to be long), ``"c"`` compiled to C at once, ``"vm"`` in the virtual machine
+#: only, ``"python"`` one step per Python call (see :mod:`hexapod.simulation.compiled_loop`).
 LOOPS = ("auto", "c", "vm", "python")
 DEFAULT_LOOP = "auto"
 

@@ -17,10 +17,10 @@ from scipy.integrate._ivp import dop853_coefficients as dop853
 from scipy.integrate._ivp.rk import RK45
 
 from hexapod.errors import IntegrationError
-from hexapod.simulation.compiled_loop import unsupported
-from hexapod.simulation.compiled_steps import Batch, CompiledStepper
+from hexapod.simulation.compiled_loop import EmbeddedKernel
+from hexapod.simulation.compiled_steps import CompiledLoop
 from hexapod.simulation.integrators.base import (
-    Counters,
+    SINGULAR_BAND,
     Integrator,
     Interpolant,
     PolynomialInterpolant,
@@ -29,7 +29,7 @@ from hexapod.simulation.integrators.stability import largest_stable_step, runge_
 from hexapod.simulation.methods import DEFAULT_LOOP, LOOPS
 
 
-class EmbeddedRungeKutta(Integrator):
+class EmbeddedRungeKutta(CompiledLoop, Integrator):
     """An explicit embedded pair ``(A, b, b_hat, c)`` with error-per-step control; subclasses
     give the tableau, ``order`` (that of the propagated solution) and ``error_order`` (that of
     the embedded one, which sets the step controller's exponent)."""
@@ -59,25 +59,10 @@ class EmbeddedRungeKutta(Integrator):
             raise ValueError(f"loop must be one of {', '.join(LOOPS)}, got {loop!r}")
         self._given_step = step
         super().__init__(*args, step=step, **kwargs)
-        #: why the steps run in Python ("" when they run in the compiled loop)
-        self.loop_reason = "asked for" if loop == "python" else unsupported(self.model)
-        self._loop_mode = loop
-        self._stepper = None if self.loop_reason else CompiledStepper(self, loop)
-        if self._stepper is not None:
-            self._stepper.kernel()  # built (compiled, for loop="c") before the run, as the others
-        self._dense_step = self._dense_start = None
+        self._setup_loop(loop)
 
-    def advance(self, *, t_stop: float = np.inf, steps_cap: float = np.inf,
-                tried_cap: float = np.inf) -> Batch | None:
-        """Many accepted steps in one call of the compiled loop (see
-        :class:`~hexapod.simulation.compiled_steps.CompiledStepper`): until the end, the first
-        step past ``t_stop``, ``steps_cap`` accepted steps, or ``tried_cap`` steps tried
-        (accepted or rejected, counted from the start of the run). None when the next step is
-        to be taken by :meth:`step` (the compiled loop handed it over, or the model keeps the
-        Python loop: :attr:`loop_reason`)."""
-        if self._stepper is None or self.status != "running":
-            return None
-        return self._stepper.advance(t_stop, steps_cap, tried_cap)
+    def _loop_kernel(self, rows: np.ndarray) -> EmbeddedKernel:
+        return EmbeddedKernel(self.model, type(self), rows, singular_band=SINGULAR_BAND)
 
     def _start(self) -> None:
         if self._given_step is None:
@@ -110,17 +95,6 @@ class EmbeddedRungeKutta(Integrator):
             d0, d1 = self._norm(y0, y0, y0), self._norm(f0, y0, y0)
         return self._starting_step(d0, d1, rate_change, self.error_order)
 
-    def loop_statistics(self) -> dict:
-        """How the steps were taken, for the result's ``options["loop"]``: the mode asked
-        (:data:`~hexapod.simulation.methods.LOOPS`), the kernels the compiled loop ran
-        (``"vm"``, ``"c"``), its calls, the steps it accepted (the others were taken in Python:
-        the handovers and the crossings of singular poses), its handovers, the CPU seconds of
-        its calls (``cpu_s``) and why the steps ran in Python when they all did (``reason``)."""
-        if self._stepper is None:
-            return {"mode": self._loop_mode, "kernels": [], "calls": 0, "steps": 0,
-                    "handovers": 0, "cpu_s": 0.0, "reason": self.loop_reason}
-        return {"mode": self._loop_mode, **self._stepper.statistics, "reason": ""}
-
     def _stages(self, t: float, h: float, y0: np.ndarray,
                 f0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The stages ``K`` of a step ``h`` from ``(t, y0)``, ``f0`` the rate there, and the
@@ -133,27 +107,17 @@ class EmbeddedRungeKutta(Integrator):
         K = np.array(stages)
         return K, y0 + h * (self.b @ K)
 
-    def _dense_from(self, start: tuple, h: float) -> None:
-        """The last step was taken by the compiled loop from ``start = (t, q, v, v_dot)`` over
-        ``h``: its dense output is built from there when asked (:meth:`_last_step`)."""
-        self._dense_step, self._dense_start = None, (start, h)
-
-    def _last_step(self) -> tuple:
-        """``(t_old, h, y0, K, y1)`` of the last accepted step; after the compiled loop, its
-        stages evaluated again (not counted: the loop counted them when it took the step)."""
-        if self._dense_step is None:
-            (t_old, q, v, v_dot), h = self._dense_start
-            y0 = np.concatenate([q, v])
-            f0 = np.concatenate([self.model.call("qdot", q=q, v=v), v_dot])
-            counters = Counters(**self.counters.as_dict())
-            K, y1 = self._stages(t_old, h, y0, f0)
-            if self.error_estimate == "dop853":  # with the rate at y1, as _error keeps it
-                n_q = self.model.n_q
-                self._stages_at_end = np.vstack([K, self._derivative(t_old + h, y1[:n_q],
-                                                                     y1[n_q:])])
-            self.counters = counters
-            self._dense_step = (t_old, h, y0, K, y1)
-        return self._dense_step
+    def _rebuild_dense_step(self, start: tuple, h: float) -> tuple:
+        """``(t_old, h, y0, K, y1)`` of a step the compiled loop took from ``start``."""
+        t_old, q, v, v_dot = start
+        y0 = np.concatenate([q, v])
+        f0 = np.concatenate([self.model.call("qdot", q=q, v=v), v_dot])
+        K, y1 = self._stages(t_old, h, y0, f0)
+        if self.error_estimate == "dop853":  # with the rate at y1, as _error keeps it
+            n_q = self.model.n_q
+            self._stages_at_end = np.vstack([K, self._derivative(t_old + h, y1[:n_q],
+                                                                 y1[n_q:])])
+        return t_old, h, y0, K, y1
 
     def _step(self) -> None:
         model, n_q = self.model, self.model.n_q
