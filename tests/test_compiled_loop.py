@@ -265,3 +265,15 @@ def test_an_unknown_loop_is_refused():
     model, _, _ = CASES["pendulum"]
     with pytest.raises(ValueError, match="loop must be one of"):
         get_integrator("dopri5")(model, 0.0, 1.0, loop="fortran")
+
+
+def test_a_subclass_that_may_step_otherwise_keeps_the_python_loop():
+    from hexapod.simulation.integrators.embedded import DormandPrince5
+
+    class Tweaked(DormandPrince5):
+        name = "tweaked"
+
+    model, t_end, tol = CASES["pendulum"]
+    result = hx.simulate(model, t_end, method=Tweaked, rtol=tol, atol=tol)
+    assert result.status == "finished" and result.options["loop"]["steps"] == 0
+    assert "Tweaked is not a class" in result.options["loop"]["reason"]

@@ -247,9 +247,15 @@ class CompiledLoop:
 
     def _setup_loop(self, loop: str) -> None:
         """Choose the loop (after the integrator's consistent start) and build its kernel
-        before the run, as the other kernels are."""
+        before the run, as the other kernels are. Only the classes whose steps the kernel
+        reproduces run in it (those that set ``kernel_reproduces`` in their own body): a
+        subclass may take its steps otherwise (a test's integrator that spoils its
+        accelerations), and keeps the Python loop."""
         #: why the steps run in Python ("" when they run in the compiled loop)
         self.loop_reason = "asked for" if loop == "python" else unsupported(self.model)
+        if not self.loop_reason and not type(self).__dict__.get("kernel_reproduces"):
+            self.loop_reason = (f"{type(self).__name__} is not a class whose steps the "
+                                "compiled loop reproduces")
         self._loop_mode = loop
         self._stepper = None if self.loop_reason else CompiledStepper(self, loop)
         if self._stepper is not None:

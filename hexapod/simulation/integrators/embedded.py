@@ -167,6 +167,7 @@ class DormandPrince5(EmbeddedRungeKutta):
     """Dormand and Prince's 5(4) pair (DOPRI5), the solution propagated at order 5."""
 
     name = "dopri5-projection"
+    kernel_reproduces = True  # its steps are EmbeddedKernel's (see CompiledLoop._setup_loop)
     order, error_order = 5, 4
     description = "Dormand-Prince 5(4), adaptive step, acceleration level"
     c = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0, 1.0])
@@ -201,6 +202,7 @@ class DormandPrince853(EmbeddedRungeKutta):
     """
 
     name = "dop853-projection"
+    kernel_reproduces = True
     order, error_order = 8, 7
     description = "Dormand-Prince 8(5,3), adaptive step, acceleration level"
     c = dop853.C[:dop853.N_STAGES]

@@ -61,6 +61,7 @@ class RungeKutta4Baumgarte(CompiledLoop, Integrator):
     """
 
     name = "rk4-baumgarte"
+    kernel_reproduces = True  # its steps are BaumgarteKernel's (see CompiledLoop._setup_loop)
     order = 4
     index = 1
     stabilisation = "Baumgarte (alpha = beta), Euler parameters renormalised"
