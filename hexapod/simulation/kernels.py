@@ -194,7 +194,8 @@ class CompiledProjection:
 
     def __init__(self, model: Model, rows: np.ndarray, newton: int = 2, tol: float = 1e-12):
         self.model, self.rows, self.newton, self.tol = model, np.asarray(rows, int), newton, tol
-        self._fast = FastFunction(self._build())
+        self.function = self._build()
+        self._fast = FastFunction(self.function)
         self._args = ["q", "v"] + (["w", "wd"] if model.n_w else [])
 
     def _build(self) -> ca.Function:

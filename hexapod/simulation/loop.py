@@ -15,6 +15,7 @@ velocities and, when the scene conserves energy, the energy drift, and returns a
 from __future__ import annotations
 
 import math
+import os
 import time
 import warnings
 from collections.abc import Callable, Mapping
@@ -23,12 +24,13 @@ import numpy as np
 
 from hexapod._support import limits, signals
 from hexapod.algorithms.liaison import wrenches_from_multipliers
-from hexapod.errors import HexapodError, IntegrationError
+from hexapod.errors import HexapodError
 from hexapod.model.model import Model
 from hexapod.simulation.integrators import Integrator
 from hexapod.simulation.methods import DEFAULT_ATOL, DEFAULT_RTOL
 from hexapod.simulation.registry import DEFAULT_METHOD, get_integrator
 from hexapod.simulation.results import SimulationResult
+from hexapod.simulation.watch import Watch
 
 #: steps tried (accepted or rejected) after which a run's pace is measured, then weighed each
 #: time they double: the pace since this first weighing, so that the starting transient (a
@@ -114,9 +116,14 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
         Stop the run, as failed, once its time loop has used this many CPU seconds (the states
         up to there are kept).
     progress :
-        Called as ``progress(t, t_end)`` after each accepted step.
+        Called as ``progress(t, t_end)`` after each accepted step, or, for a method whose time
+        loop runs in compiled code (DOPRI5, DOP853 and RK4, see
+        :mod:`hexapod.simulation.compiled_loop`), after each call of it (many steps, at most
+        about 0.05 s of CPU).
     options :
-        Further keyword arguments of the integrator (e.g. ``rho_inf``, ``alpha``).
+        Further keyword arguments of the integrator (e.g. ``rho_inf``, ``alpha``; ``loop`` for
+        DOPRI5, DOP853 and RK4, :data:`~hexapod.simulation.methods.LOOPS`). The result's
+        ``options["loop"]`` says how their steps were taken.
     advice :
         What the messages of the limits suggest to ask for less (keys ``"steps"`` and
         ``"memory"``; default :data:`ADVICE`): a command line names its options.
@@ -156,28 +163,26 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
     integrator = cls(model, t0, t_end, q0, v0, **options)
     if grid is not None and cls.counts_own_steps:
         integrator.set_output_times(grid)
-    watch = _Watch(model, integrator, grid)
-    wall, cpu = time.perf_counter(), time.process_time()
+    watch = Watch(model, integrator, grid)
+    wall, cpu = time.perf_counter(), cpu_seconds()
     reached = _run(integrator, watch, weigh, every, cpu_budget, progress)
-    wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+    wall, cpu = time.perf_counter() - wall, cpu_seconds() - cpu
     watch.complete()
-    count = len(watch.saved["t"])
-    sizes = {"t": (count,), "q": (count, model.n_q), "v": (count, model.n_v),
-             "v_dot": (count, model.n_v), "lam": (count, model.n_c)}
-    arrays = {key: np.array(values, dtype=float).reshape(sizes[key])
-              for key, values in watch.saved.items()}
+    arrays, levels = watch.arrays()
     worst = watch.worst
     # the tolerances used, per kind (a fixed-step method ignores them)
     options = {**options, "atol": dict(integrator.atol_kinds)}
     if grid is not None:
         options["output_times"] = int(grid.size)
+    if integrator.loop_statistics() is not None:
+        options["loop"] = integrator.loop_statistics()
     result = SimulationResult(
         model=model, method=cls.name, t=arrays["t"], q=arrays["q"], v=arrays["v"],
         v_dot=arrays["v_dot"], lam=arrays["lam"],
         status=integrator.status, message=integrator.message, counters=integrator.counters,
         wall_time=wall, cpu_time=cpu, max_position_violation=worst["phi"],
         max_velocity_violation=worst["velocity"],
-        energy=np.array(watch.energy_saved) if watch.conserved else None,
+        energy=levels,
         energy_drift=(worst["drift"] / max(worst["kinetic"], np.finfo(float).tiny)
                       if watch.conserved else None),
         options=options, t_bound=float(t_end), t_start=float(t0),
@@ -187,35 +192,42 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
     return result
 
 
-def _run(integrator: Integrator, watch: _Watch, weigh: _Weighing, every: int,
+def _run(integrator: Integrator, watch: Watch, weigh: _Weighing, every: int,
          cpu_budget: float | None, progress) -> float:
     """Step until the end, a failure, a limit or an interruption; every outcome is said by the
-    integrator's ``status`` and ``message``. Returns the time of the last step completed."""
+    integrator's ``status`` and ``message``. Returns the time of the last step completed.
+
+    A method whose loop runs in compiled code (:meth:`Integrator.advance`) takes many steps per
+    call, each call ending where this loop must look: at a step past the next output time, at
+    the step limit, where the pace is weighed next, or after about a twentieth of a second;
+    progress is then reported once per call."""
     name = integrator.name
-    cpu = time.process_time()
-    returned = 0
+    cpu = cpu_seconds()
+    returned = 0  # states returned (one per step, or per call for some methods)
     reached = integrator.t  # the time of the last step completed
     try:
         while integrator.status == "running":
             if signals.received() is not None:  # an interruption a library call swallowed
                 raise KeyboardInterrupt
             stop = weigh.during(integrator, returned)
-            if stop is None and cpu_budget is not None and time.process_time() - cpu > cpu_budget:
+            if stop is None and cpu_budget is not None and cpu_seconds() - cpu > cpu_budget:
                 stop = f"by the CPU budget of {cpu_budget:g} s"
             if stop is not None:
                 integrator.status = "failed"
                 integrator.message = f"{name}: stopped at t = {integrator.t:.6g} s {stop}"
                 break
-            integrator.step()
-            if integrator.status == "failed":
-                break
+            batch = integrator.advance(t_stop=watch.t_next, steps_cap=weigh.max_steps,
+                                       tried_cap=weigh.next_weighing)
+            if batch is None:
+                integrator.step()
+                if integrator.status == "failed":
+                    break
+                returned += 1
+                _take_step(watch, integrator, returned, every)
+            else:
+                _take_batch(watch, integrator, batch, returned, every)
+                returned += len(batch)
             reached = integrator.t
-            watch.watch()
-            returned += 1  # states returned, one per call (many steps for some methods)
-            if watch.grid is not None:
-                watch.save_grid()
-            elif integrator.status == "finished" or returned % every == 0:
-                watch.save()
             if progress is not None:
                 progress(integrator.t, integrator.t_bound)
     except KeyboardInterrupt:
@@ -230,112 +242,29 @@ def _run(integrator: Integrator, watch: _Watch, weigh: _Weighing, every: int,
     return reached
 
 
-class _Watch:
-    """What the loop measures at every accepted step (constraint residuals, energy) and the
-    states it saves."""
+def _take_step(watch: Watch, integrator: Integrator, returned: int, every: int) -> None:
+    """Watch the state one step returned, and save it when it is due."""
+    watch.watch()
+    if watch.grid is not None:
+        watch.save_grid()
+    elif integrator.status == "finished" or returned % every == 0:
+        watch.save()
 
-    def __init__(self, model: Model, integrator: Integrator, grid: np.ndarray | None = None):
-        self.model, self.integrator = model, integrator
-        self.grid = grid  # the output times, if given
-        self.next = 0  # the output time to save next
-        self.saved: dict[str, list] = {"t": [], "q": [], "v": [], "v_dot": [], "lam": []}
-        self.energy_saved: list[float] = []
-        self.conserved = model.energy_conserved
-        self.energy0 = (_energy(model, integrator.q, integrator.v)[1] if self.conserved
-                        else None)
-        self.worst = {"phi": 0.0, "velocity": 0.0, "drift": 0.0, "kinetic": 0.0}
-        self.latest = self.energy0  # the energy of the state watched last, saved with it
-        self.watch()
-        if grid is None or grid[0] == integrator.t:
-            self.save()
-            self.next = 1
 
-    def watch(self) -> None:
-        model, integrator, worst = self.model, self.integrator, self.worst
-        t, q, v = integrator.t, integrator.q, integrator.v
-        if model.n_c:
-            w, wd, _ = model.law_values(t)
-            phi = model.call("phi", q=q, w=w) / model.row_scale
-            rate = (model.call("Phi_v", q=q, w=w) @ v - model.call("nu", q=q, w=w, wd=wd))
-            worst["phi"] = max(worst["phi"], float(np.abs(phi).max()))
-            worst["velocity"] = max(worst["velocity"],
-                                    float(np.abs(rate / model.row_scale).max()))
-        if self.conserved:
-            kinetic, total = _energy(model, q, v)
-            worst["kinetic"] = max(worst["kinetic"], kinetic)
-            worst["drift"] = max(worst["drift"], abs(total - self.energy0))
-            self.latest = total
-
-    def save(self) -> None:
-        """Save the current state; accelerations and multipliers may be solved only now
-        (lazily): a state the solve refuses, or one whose accelerations or multipliers are not
-        finite, ends the run as a failure, with the states saved before it."""
-        integrator = self.integrator
-        try:
-            values = {key: np.array(getattr(integrator, key), dtype=float, copy=True)
-                      for key in self.saved}
-        except HexapodError as error:
-            integrator.status = "failed"
-            integrator.message = (f"{integrator.name}: failed at t = {integrator.t:.6g} s: "
-                                  f"{error}")
-            return
-        self._keep(values, self.latest)
-
-    def save_grid(self) -> None:
-        """Save the states at the output times the last step passed, each from the method's
-        continuous extension of the step (or, for a method that counts its own steps, the
-        state it returned there), made consistent (:meth:`Integrator.dense_state`). A state
-        that cannot be made consistent ends the run as a failure."""
-        integrator, grid = self.integrator, self.grid
-        t = integrator.t
-        interpolant = None
-        while self.next < grid.size and grid[self.next] <= t:
-            at = float(grid[self.next])
-            try:
-                if not integrator.counts_own_steps:
-                    interpolant = interpolant or integrator.dense_output()
-                    q, v = interpolant(at)
-                elif at == t or abs(at - t) <= 1e-12 * max(1.0, abs(t)):
-                    q, v = integrator.q, integrator.v
-                else:
-                    raise IntegrationError(f"the method returned no state at {at:.10g} s")
-                q, v, v_dot, lam = integrator.dense_state(at, q, v)
-            except (HexapodError, np.linalg.LinAlgError) as error:
-                integrator.status = "failed"
-                integrator.message = (f"{integrator.name}: failed at the output time t = "
-                                      f"{at:.6g} s: {error}")
-                return
-            self.next += 1
-            energy = _energy(self.model, q, v)[1] if self.conserved else None
-            self._keep({"t": at, "q": q, "v": v, "v_dot": v_dot, "lam": lam}, energy)
-            if integrator.status == "failed":
-                return
-
-    def _keep(self, values: dict, energy: float | None) -> None:
-        """Append a state, unless its accelerations or multipliers are not finite (then the run
-        ends as a failure)."""
-        integrator = self.integrator
-        for key, what in (("v_dot", "accelerations"), ("lam", "multipliers")):
-            if not np.all(np.isfinite(values[key])):
-                integrator.status = "failed"
-                integrator.message = (f"{integrator.name}: non-finite {what} at t = "
-                                      f"{float(values['t']):.6g} s (an overflow: the scene's "
-                                      "forces or laws are too large, or the motion is "
-                                      "unstable)")
-                return
-        for key, value in values.items():
-            self.saved[key].append(value)
-        if self.conserved:
-            self.energy_saved.append(energy)
-
-    def complete(self) -> None:
-        """Only whole states: an interruption inside :meth:`save` may have left one in part."""
-        count = min(len(values) for values in self.saved.values())
-        if self.conserved:
-            count = min(count, len(self.energy_saved))
-            del self.energy_saved[count:]
-        for values in self.saved.values():
-            del values[count:]
+def _take_batch(watch: Watch, integrator: Integrator, batch, returned: int,
+                every: int) -> None:
+    """Watch the steps of a batch of the compiled loop, and save those due: every ``every``-th
+    state counted on from ``returned``, the last when the run finished; or the output times
+    its last step passed (the earlier ones pass none)."""
+    watch.watch_batch(batch)
+    if watch.grid is not None:
+        if len(batch):
+            watch.save_grid()
+        return
+    due = (returned + 1 + np.arange(len(batch))) % every == 0
+    if integrator.status == "finished" and len(batch):
+        due[-1] = True
+    watch.save_batch(batch, np.flatnonzero(due))
 
 
 class _Weighing:
@@ -415,6 +344,13 @@ class _Weighing:
         return None
 
 
+def cpu_seconds() -> float:
+    """CPU seconds of this process and of the children it has waited for: a compiler that
+    builds a kernel during the time loop counts in its time."""
+    times = os.times()
+    return time.process_time() + times.children_user + times.children_system
+
+
 def output_times(t_eval, t0: float, t_end: float) -> np.ndarray:
     """The output times of a run from ``t0`` to ``t_end``, checked: at least one, finite,
     increasing, within ``[t0, t_end]`` (a time past an end by round-off, 1e-12 relative, is
@@ -490,12 +426,6 @@ def _tolerances(cls: type[Integrator], rtol: float | None, atol) -> dict:
                       "step with step=)", UserWarning, stacklevel=3)
     return {"rtol": DEFAULT_RTOL if rtol is None else rtol,
             "atol": DEFAULT_ATOL if atol is None else atol}
-
-
-def _energy(model: Model, q: np.ndarray, v: np.ndarray) -> tuple[float, float]:
-    """Kinetic and total energy (J)."""
-    kinetic, potential = model.energy(q, v)
-    return float(kinetic), float(kinetic) + float(potential)
 
 
 def _add_wrenches(result: SimulationResult) -> None:

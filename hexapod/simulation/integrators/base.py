@@ -217,14 +217,22 @@ class Integrator:
         """The multipliers at the current state (by the least-wrench redundancy policy); a method
         that advances with the compiled right-hand side solves for them only when asked."""
         if self._lam is None:
-            solution = self._compiled.solve(self.t, self.q, self.v) if (
-                self._compiled.complete) else None
-            if solution is not None:  # no redundant row: the multipliers are unique
-                self.counters.rhs += 1
-                self._lam = solution[2]
-            else:
-                self._lam = self._dynamics(self.t, self.q, self.v)[1]
+            self._lam = self.multipliers(self.t, self.q, self.v)
         return self._lam
+
+    def multipliers(self, t: float, q: np.ndarray, v: np.ndarray,
+                    known: np.ndarray | None = None) -> np.ndarray:
+        """The multipliers at a state by the redundancy policy, counted as a solve: the
+        compiled solve's when every row is kept (they are then unique), else the exact solve's.
+        ``known``: those the compiled solve gave at this state already (the compiled loop's),
+        used instead of solving again when every row is kept."""
+        if self._compiled.complete:
+            solution = (None, None, known) if known is not None else self._compiled.solve(
+                t, q, v)
+            if solution is not None:
+                self.counters.rhs += 1
+                return np.asarray(solution[2], dtype=float)
+        return self._dynamics(t, q, v)[1]
 
     @lam.setter
     def lam(self, value: np.ndarray | None) -> None:
@@ -298,6 +306,20 @@ class Integrator:
         if self.model.energy_conserved:
             self._kinetic_peak = max(self._kinetic_peak,
                                      float(self.model.energy(self.q, self.v)[0]))
+
+    def advance(self, *, t_stop: float = np.inf, steps_cap: float = np.inf,
+                tried_cap: float = np.inf):
+        """Many accepted steps in one call, for a method whose time loop runs in compiled code:
+        a :class:`~hexapod.simulation.compiled_steps.Batch` of them (until the end, the first
+        step past ``t_stop``, ``steps_cap`` accepted steps or ``tried_cap`` steps tried, counted
+        from the start of the run), its own state at the last. None (this default): the next
+        step is taken by :meth:`step`."""
+        return None
+
+    def loop_statistics(self) -> dict | None:
+        """How the steps were taken, for a method with a compiled time loop (see
+        :meth:`advance`); None (this default) for the others."""
+        return None
 
     def _starting_step(self, d0: float, d1: float, rate_change, error_order: int) -> float:
         """Hairer's starting step (*Solving ODEs I*, II.4): from the weighted norms of the state
@@ -547,14 +569,7 @@ class Integrator:
 
     @cached_property
     def _scales(self) -> tuple[float, float, float]:
-        """The scene's characteristic speed, acceleration and energy in the kinetic-energy
-        norm (``sqrt(m_total) L / tau``, ``sqrt(m_total) L / tau^2``, ``m_total L^2 / tau^2``;
-        ``L`` the characteristic length, ``tau`` :func:`characteristic_time`): what a motion of
-        the whole scene by its own size in its own time is, to measure round-off against."""
-        mass = max(self.model.total_mass, np.finfo(float).tiny)
-        length, time = float(self.model.characteristic_length), characteristic_time(self.model)
-        return (np.sqrt(mass) * length / time, np.sqrt(mass) * length / time**2,
-                mass * length**2 / time**2)
+        return motion_scales(self.model)
 
     def _halving(self, attempt):
         """Take one step by ``attempt(h)``, which returns the new state or None when Newton's
@@ -767,6 +782,17 @@ def characteristic_time(model: Model) -> float:
     if not (gravity > 0 and np.isfinite(gravity) and length > 0):
         return CHARACTERISTIC_TIME
     return float(np.sqrt(length / gravity))
+
+
+def motion_scales(model: Model) -> tuple[float, float, float]:
+    """The scene's characteristic speed, acceleration and energy in the kinetic-energy norm
+    (``sqrt(m_total) L / tau``, ``sqrt(m_total) L / tau^2``, ``m_total L^2 / tau^2``; ``L`` the
+    characteristic length, ``tau`` :func:`characteristic_time`): what a motion of the whole
+    scene by its own size in its own time is, to measure round-off against."""
+    mass = max(model.total_mass, np.finfo(float).tiny)
+    length, time = float(model.characteristic_length), characteristic_time(model)
+    return (np.sqrt(mass) * length / time, np.sqrt(mass) * length / time**2,
+            mass * length**2 / time**2)
 
 
 def default_tolerances(model: Model) -> dict[str, float]:

@@ -17,11 +17,19 @@ from scipy.integrate._ivp import dop853_coefficients as dop853
 from scipy.integrate._ivp.rk import RK45
 
 from hexapod.errors import IntegrationError
-from hexapod.simulation.integrators.base import Integrator, Interpolant, PolynomialInterpolant
+from hexapod.simulation.compiled_loop import EmbeddedKernel
+from hexapod.simulation.compiled_steps import CompiledLoop
+from hexapod.simulation.integrators.base import (
+    SINGULAR_BAND,
+    Integrator,
+    Interpolant,
+    PolynomialInterpolant,
+)
 from hexapod.simulation.integrators.stability import largest_stable_step, runge_kutta_stability
+from hexapod.simulation.methods import DEFAULT_LOOP, LOOPS
 
 
-class EmbeddedRungeKutta(Integrator):
+class EmbeddedRungeKutta(CompiledLoop, Integrator):
     """An explicit embedded pair ``(A, b, b_hat, c)`` with error-per-step control; subclasses
     give the tableau, ``order`` (that of the propagated solution) and ``error_order`` (that of
     the embedded one, which sets the step controller's exponent)."""
@@ -34,6 +42,9 @@ class EmbeddedRungeKutta(Integrator):
     b_hat: np.ndarray
     c: np.ndarray
     error_order: int
+    #: how the local error is estimated: ``"difference"`` of the pair's two solutions, or
+    #: ``"dop853"`` (:meth:`DormandPrince853._error`); the compiled loop reads it
+    error_estimate = "difference"
     safety, min_factor, max_factor = 0.9, 0.2, 10.0
 
     @classmethod
@@ -43,9 +54,15 @@ class EmbeddedRungeKutta(Integrator):
         R = runge_kutta_stability(cls.A, cls.b)
         return largest_stable_step(lambda z: abs(R(z)), eigenvalues)
 
-    def __init__(self, *args, step: float | None = None, **kwargs):
+    def __init__(self, *args, step: float | None = None, loop: str = DEFAULT_LOOP, **kwargs):
+        if loop not in LOOPS:
+            raise ValueError(f"loop must be one of {', '.join(LOOPS)}, got {loop!r}")
         self._given_step = step
         super().__init__(*args, step=step, **kwargs)
+        self._setup_loop(loop)
+
+    def _loop_kernel(self, rows: np.ndarray) -> EmbeddedKernel:
+        return EmbeddedKernel(self.model, type(self), rows, singular_band=SINGULAR_BAND)
 
     def _start(self) -> None:
         if self._given_step is None:
@@ -78,6 +95,30 @@ class EmbeddedRungeKutta(Integrator):
             d0, d1 = self._norm(y0, y0, y0), self._norm(f0, y0, y0)
         return self._starting_step(d0, d1, rate_change, self.error_order)
 
+    def _stages(self, t: float, h: float, y0: np.ndarray,
+                f0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The stages ``K`` of a step ``h`` from ``(t, y0)``, ``f0`` the rate there, and the
+        propagated solution ``y1``."""
+        n_q = self.model.n_q
+        stages = [f0]
+        for i in range(1, len(self.c)):
+            y = y0 + h * sum(a * k for a, k in zip(self.A[i, :i], stages, strict=True))
+            stages.append(self._derivative(t + self.c[i] * h, y[:n_q], y[n_q:]))
+        K = np.array(stages)
+        return K, y0 + h * (self.b @ K)
+
+    def _rebuild_dense_step(self, start: tuple, h: float) -> tuple:
+        """``(t_old, h, y0, K, y1)`` of a step the compiled loop took from ``start``."""
+        t_old, q, v, v_dot = start
+        y0 = np.concatenate([q, v])
+        f0 = np.concatenate([self.model.call("qdot", q=q, v=v), v_dot])
+        K, y1 = self._stages(t_old, h, y0, f0)
+        if self.error_estimate == "dop853":  # with the rate at y1, as _error keeps it
+            n_q = self.model.n_q
+            self._stages_at_end = np.vstack([K, self._derivative(t_old + h, y1[:n_q],
+                                                                 y1[n_q:])])
+        return t_old, h, y0, K, y1
+
     def _step(self) -> None:
         model, n_q = self.model, self.model.n_q
         y0 = np.concatenate([self.q, self.v])
@@ -89,12 +130,7 @@ class EmbeddedRungeKutta(Integrator):
                 raise IntegrationError(f"the step size fell to {h:.3g} s (the error test cannot be "
                                   "met: the motion may be singular or too stiff for an "
                                   "explicit method)")
-            stages = [f0]
-            for i in range(1, len(self.c)):
-                y = y0 + h * sum(a * k for a, k in zip(self.A[i, :i], stages, strict=True))
-                stages.append(self._derivative(self.t + self.c[i] * h, y[:n_q], y[n_q:]))
-            K = np.array(stages)
-            y1 = y0 + h * (self.b @ K)
+            K, y1 = self._stages(self.t, h, y0, f0)
             error = self._error(h, K, y0, y1) if np.all(np.isfinite(y1)) else np.inf
             if error <= 1.0:
                 if not nudged and self._lands_on_pose(self.t + h, y1[:n_q]):
@@ -131,6 +167,7 @@ class DormandPrince5(EmbeddedRungeKutta):
     """Dormand and Prince's 5(4) pair (DOPRI5), the solution propagated at order 5."""
 
     name = "dopri5-projection"
+    kernel_reproduces = True  # its steps are EmbeddedKernel's (see CompiledLoop._setup_loop)
     order, error_order = 5, 4
     description = "Dormand-Prince 5(4), adaptive step, acceleration level"
     c = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0, 1.0])
@@ -151,7 +188,7 @@ class DormandPrince5(EmbeddedRungeKutta):
         """The classical continuous extension of DOPRI5, of order 4 (Shampine's coefficients,
         SciPy's ``RK45.P``), from the step's seven stages; exact at both ends of the step (at
         its end, the state before the projection)."""
-        t_old, h, y0, K, _ = self._dense_step
+        t_old, h, y0, K, _ = self._last_step()
         return PolynomialInterpolant(self.model, t_old, h, y0, K, RK45.P)
 
 
@@ -165,20 +202,23 @@ class DormandPrince853(EmbeddedRungeKutta):
     """
 
     name = "dop853-projection"
+    kernel_reproduces = True
     order, error_order = 8, 7
     description = "Dormand-Prince 8(5,3), adaptive step, acceleration level"
     c = dop853.C[:dop853.N_STAGES]
     A = dop853.A[:dop853.N_STAGES, :dop853.N_STAGES]
     b = dop853.B
     b_hat = dop853.B  # unused: the error comes from the embedded 5th and 3rd order solutions
+    error_estimate = "dop853"
+    E3, E5 = dop853.E3, dop853.E5
 
     def _error(self, h, K, y0, y1):
         n_q = self.model.n_q
         K = np.vstack([K, self._derivative(self.t + h, y1[:n_q], y1[n_q:])])
         self._stages_at_end = K  # with the rate at y1: the dense output's too
         weight = self.atol_vector + self.rtol * np.maximum(np.abs(y0), np.abs(y1))
-        err5 = np.sum((dop853.E5 @ K / weight) ** 2)
-        err3 = np.sum((dop853.E3 @ K / weight) ** 2)
+        err5 = np.sum((self.E5 @ K / weight) ** 2)
+        err3 = np.sum((self.E3 @ K / weight) ** 2)
         if err5 == 0.0 and err3 == 0.0:
             return 0.0
         return float(h * err5 / np.sqrt((err5 + 0.01 * err3) * y0.size))
@@ -189,7 +229,7 @@ class DormandPrince853(EmbeddedRungeKutta):
         (its ``A_EXTRA, C_EXTRA``, the rows of ``A`` and ``C`` after the twelve stages and the
         rate at the new state, and ``D``); exact at both ends of the step (at its end, the
         state before the projection)."""
-        t_old, h, y0, K, y1 = self._dense_step
+        t_old, h, y0, K, y1 = self._last_step()
         n_q, n = self.model.n_q, dop853.N_STAGES
         stages = getattr(self, "_stages_at_end", None)
         if stages is None or not np.array_equal(stages[:n], K):  # not the accepted step's

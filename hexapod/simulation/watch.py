@@ -1,0 +1,218 @@
+"""What the time loop measures at every accepted step (constraint residuals, energy) and the
+states it saves, one step at a time or a batch of steps from the compiled loop at once.
+
+The saved states are kept as blocks of rows (a state a block of one), joined once the run is
+over (:meth:`Watch.arrays`): a batch of thousands of steps is saved in a few array operations.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from hexapod.errors import HexapodError, IntegrationError
+from hexapod.model.model import Model
+from hexapod.simulation.integrators import Integrator
+
+#: what is saved of each state, with its size per state (None: a scalar)
+_KEYS = ("t", "q", "v", "v_dot", "lam")
+
+
+def energy(model: Model, q: np.ndarray, v: np.ndarray) -> tuple[float, float]:
+    """Kinetic and total energy (J)."""
+    kinetic, potential = model.energy(q, v)
+    return float(kinetic), float(kinetic) + float(potential)
+
+
+class Watch:
+    """What the loop measures at every accepted step and the states it saves.
+
+    Parameters
+    ----------
+    model, integrator :
+        The run's; the initial state is watched, and saved unless output times are given
+        that do not begin there.
+    grid : ndarray, optional
+        The output times.
+    """
+
+    def __init__(self, model: Model, integrator: Integrator, grid: np.ndarray | None = None):
+        self.model, self.integrator = model, integrator
+        self.grid = grid  # the output times, if given
+        self.next = 0  # the output time to save next
+        self.saved: dict[str, list[np.ndarray]] = {key: [] for key in _KEYS}
+        self.energy_saved: list[np.ndarray] = []
+        self.conserved = model.energy_conserved
+        self.energy0 = (energy(model, integrator.q, integrator.v)[1] if self.conserved
+                        else None)
+        self.worst = {"phi": 0.0, "velocity": 0.0, "drift": 0.0, "kinetic": 0.0}
+        self.latest = self.energy0  # the energy of the state watched last, saved with it
+        self.watch()
+        if grid is None or grid[0] == integrator.t:
+            self.save()
+            self.next = 1
+
+    @property
+    def t_next(self) -> float:
+        """The next output time (``inf`` without output times, or past the last)."""
+        if self.grid is None or self.next >= self.grid.size:
+            return np.inf
+        return float(self.grid[self.next])
+
+    def watch(self) -> None:
+        """Measure the integrator's current state."""
+        model, integrator, worst = self.model, self.integrator, self.worst
+        t, q, v = integrator.t, integrator.q, integrator.v
+        if model.n_c:
+            w, wd, _ = model.law_values(t)
+            phi = model.call("phi", q=q, w=w) / model.row_scale
+            rate = (model.call("Phi_v", q=q, w=w) @ v - model.call("nu", q=q, w=w, wd=wd))
+            worst["phi"] = max(worst["phi"], float(np.abs(phi).max()))
+            worst["velocity"] = max(worst["velocity"],
+                                    float(np.abs(rate / model.row_scale).max()))
+        if self.conserved:
+            kinetic, total = energy(model, q, v)
+            worst["kinetic"] = max(worst["kinetic"], kinetic)
+            worst["drift"] = max(worst["drift"], abs(total - self.energy0))
+            self.latest = total
+
+    def watch_batch(self, batch) -> None:
+        """Take in what the compiled loop measured at each step of ``batch``
+        (:class:`~hexapod.simulation.compiled_steps.Batch`), as :meth:`watch` would have."""
+        if not len(batch):
+            return
+        worst = self.worst
+        if self.model.n_c:
+            worst["phi"] = max(worst["phi"], float(batch.phi.max()))
+            worst["velocity"] = max(worst["velocity"], float(batch.velocity.max()))
+        if self.conserved:
+            worst["kinetic"] = max(worst["kinetic"], float(batch.kinetic.max()))
+            worst["drift"] = max(worst["drift"],
+                                 float(np.abs(batch.energy - self.energy0).max()))
+            self.latest = float(batch.energy[-1])
+
+    def save(self) -> None:
+        """Save the current state; accelerations and multipliers may be solved only now
+        (lazily): a state the solve refuses, or one whose accelerations or multipliers are not
+        finite, ends the run as a failure, with the states saved before it."""
+        integrator = self.integrator
+        try:
+            values = {key: np.array(getattr(integrator, key), dtype=float, copy=True)[None]
+                      for key in _KEYS}
+        except HexapodError as error:
+            integrator.status = "failed"
+            integrator.message = (f"{integrator.name}: failed at t = {integrator.t:.6g} s: "
+                                  f"{error}")
+            return
+        self._keep(values, np.array([self.latest if self.conserved else np.nan]))
+
+    def save_batch(self, batch, chosen: np.ndarray) -> None:
+        """Save the states ``chosen`` (indices, increasing) of ``batch``; their multipliers
+        are solved now when the batch has none (:meth:`Integrator.multipliers`). A state the
+        solve refuses ends the run as a failure, with the states before it saved."""
+        if not chosen.size:
+            return
+        integrator = self.integrator
+        values = {"t": batch.t[chosen], "q": batch.q[chosen], "v": batch.v[chosen],
+                  "v_dot": batch.v_dot[chosen]}
+        lam = np.zeros((chosen.size, self.model.n_c))
+        for row, i in enumerate(chosen):
+            known = None if batch.lam is None else batch.lam[i]
+            try:
+                lam[row] = integrator.multipliers(batch.t[i], batch.q[i], batch.v[i], known)
+            except HexapodError as error:
+                integrator.status = "failed"
+                integrator.message = (f"{integrator.name}: failed at t = {batch.t[i]:.6g} s: "
+                                      f"{error}")
+                values = {key: value[:row] for key, value in values.items()}
+                lam, chosen = lam[:row], chosen[:row]
+                break
+        values["lam"] = lam
+        self._keep(values, batch.energy[chosen] if self.conserved else np.full(chosen.size,
+                                                                               np.nan))
+
+    def save_grid(self) -> None:
+        """Save the states at the output times the last step passed, each from the method's
+        continuous extension of the step (or, for a method that counts its own steps, the
+        state it returned there), made consistent (:meth:`Integrator.dense_state`). A state
+        that cannot be made consistent ends the run as a failure."""
+        integrator, grid = self.integrator, self.grid
+        t = integrator.t
+        interpolant = None
+        while self.next < grid.size and grid[self.next] <= t:
+            at = float(grid[self.next])
+            try:
+                if not integrator.counts_own_steps:
+                    interpolant = interpolant or integrator.dense_output()
+                    q, v = interpolant(at)
+                elif at == t or abs(at - t) <= 1e-12 * max(1.0, abs(t)):
+                    q, v = integrator.q, integrator.v
+                else:
+                    raise IntegrationError(f"the method returned no state at {at:.10g} s")
+                q, v, v_dot, lam = integrator.dense_state(at, q, v)
+            except (HexapodError, np.linalg.LinAlgError) as error:
+                integrator.status = "failed"
+                integrator.message = (f"{integrator.name}: failed at the output time t = "
+                                      f"{at:.6g} s: {error}")
+                return
+            self.next += 1
+            level = energy(self.model, q, v)[1] if self.conserved else np.nan
+            self._keep({"t": np.array([at]), "q": q[None], "v": v[None], "v_dot": v_dot[None],
+                        "lam": np.asarray(lam, dtype=float)[None]}, np.array([level]))
+            if integrator.status == "failed":
+                return
+
+    def _keep(self, values: dict, levels: np.ndarray) -> None:
+        """Append states (rows), up to the first whose accelerations or multipliers are not
+        finite (then the run ends as a failure)."""
+        integrator = self.integrator
+        count = values["t"].shape[0]
+        for key, what in (("v_dot", "accelerations"), ("lam", "multipliers")):
+            bad = np.flatnonzero(~np.all(np.isfinite(values[key]), axis=1))
+            if bad.size and bad[0] < count:
+                count = int(bad[0])
+                integrator.status = "failed"
+                integrator.message = (f"{integrator.name}: non-finite {what} at t = "
+                                      f"{float(values['t'][count]):.6g} s (an overflow: the "
+                                      "scene's forces or laws are too large, or the motion is "
+                                      "unstable)")
+        if not count:
+            return
+        for key in _KEYS:
+            self.saved[key].append(values[key][:count])
+        if self.conserved:
+            self.energy_saved.append(levels[:count])
+
+    def complete(self) -> None:
+        """Only whole states: an interruption inside a save may have left one in part."""
+        rows = [sum(block.shape[0] for block in self.saved[key]) for key in _KEYS]
+        if self.conserved:
+            rows.append(sum(block.shape[0] for block in self.energy_saved))
+        count = min(rows)
+        for blocks in [*self.saved.values(), self.energy_saved]:
+            _truncate(blocks, count)
+
+    def arrays(self) -> tuple[dict[str, np.ndarray], np.ndarray | None]:
+        """The saved states as arrays (``t`` (n,), the others (n, size)), and their energies
+        when the scene conserves it."""
+        model = self.model
+        sizes = {"t": (), "q": (model.n_q,), "v": (model.n_v,), "v_dot": (model.n_v,),
+                 "lam": (model.n_c,)}
+        out = {}
+        for key, blocks in self.saved.items():
+            out[key] = (np.concatenate(blocks).astype(float) if blocks
+                        else np.zeros((0, *sizes[key])))
+        levels = None
+        if self.conserved:
+            levels = np.concatenate(self.energy_saved) if self.energy_saved else np.zeros(0)
+        return out, levels
+
+
+def _truncate(blocks: list[np.ndarray], count: int) -> None:
+    """Keep the first ``count`` rows of a list of blocks."""
+    kept = 0
+    for i, block in enumerate(blocks):
+        if kept + block.shape[0] >= count:
+            blocks[i] = block[:count - kept]
+            del blocks[i + 1:]
+            return
+        kept += block.shape[0]
