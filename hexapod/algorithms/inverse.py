@@ -14,14 +14,14 @@ results:
   body's pose from its parent's and its driver's value (exactly: no Newton iterations), CasADi
   differentiates it for velocities and accelerations, and a backward pass from the leaves gives
   each joint's wrench from its child's Newton-Euler equations. The whole pass is one CasADi
-  Function, compiled to C when a compiler is present and mapped over all samples in one call;
-  its cost grows linearly with the number of bodies.
+  Function, mapped over all samples in one call; its cost grows linearly with the number of
+  bodies. It is kept in the cache on disk under the model's content hash
+  (:mod:`hexapod._support.compiled`): serialized, so that another run of the same model does not
+  build its graph again, and compiled to C once compiling has paid (:func:`compile_pays`).
 """
 
 from __future__ import annotations
 
-import os
-import shutil
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
@@ -30,6 +30,7 @@ import casadi as ca
 import numpy as np
 
 from hexapod._support import signals
+from hexapod._support.compiled import compiled, find_compiled, interpreted_samples, serialized
 from hexapod.algorithms.dynamics import forward_dynamics
 from hexapod.algorithms.ground import ground_reactions
 from hexapod.algorithms.kinematics import assemble_positions, degrees_of_freedom, solve_velocities
@@ -93,8 +94,10 @@ class InverseResult:
     policy: str = ""
 
 
-#: Compiling the tree path costs about 0.2 s per joint and saves about 4.4 microseconds per joint
-#: and sample (scripts/bench_inverse.py): it pays from some 50 000 samples on.
+#: Compiling the tree path costs about 0.07 s per joint (0.4 s for the front leg, 1.0 s for 18
+#: joints, 11 s for 100 links with gcc -O2) and saves about 2 microseconds per joint and sample
+#: (12 for the front leg, 14 for 18 joints: scripts/bench_inverse.py): it pays from some 30 000
+#: to 50 000 samples on, counted over every run of the model (:func:`compile_pays`).
 COMPILE_FROM_SAMPLES = 50_000
 #: Samples per call of the tree path when progress is reported.
 PROGRESS_CHUNK = 2_000
@@ -116,8 +119,8 @@ def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = 
         ``"joint"`` (the report convention) or ``"world"``.
     compile :
         Tree path: evaluate compiled C code (True) or CasADi's interpreter (False); by default
-        compile when there are at least :data:`COMPILE_FROM_SAMPLES` samples, or when the
-        model's tree path was compiled before (compilation is kept with the model).
+        compiled code when it is at hand (compiled before, in this process or in the cache on
+        disk) or when compiling pays (:func:`compile_pays`), else the interpreter.
     progress :
         Called as ``progress(done, total)`` as samples are done (by chunks of
         :data:`PROGRESS_CHUNK` on the tree path).
@@ -141,12 +144,31 @@ def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = 
         raise ValueError(f"method must be 'auto', 'tree' or 'saddle', got {method!r}")
     if plan is not None and method in ("auto", "tree"):
         if compile is None:
-            compile = plan.is_compiled or times.size >= COMPILE_FROM_SAMPLES
+            compile = compile_pays(plan, times.size)
         result = plan.solve(times, w, wd, wdd, frame, compiled=compile, progress=progress)
+        if not compile:  # counted over runs, until compiling pays
+            interpreted_samples(plan.key, times.size)
     else:
         result = _saddle(model, times, frame, progress)
     _check_finite(model, result)
     return result
+
+
+def compile_pays(plan: TreePlan, samples: int) -> bool:
+    """Whether to evaluate ``samples`` samples of the tree path compiled: when it was compiled
+    before (in this process, or in the cache on disk: loaded), or when the samples evaluated
+    interpreted so far, over every run of this model the cache remembers, and these reach
+    :data:`COMPILE_FROM_SAMPLES`. The rule of renting skis until their price is spent: the
+    interpreter's time spent first never passes the time compiling costs, so the total is at
+    most twice what the best choice in hindsight would cost; short runs never wait for a
+    compiler, and a model used often is compiled once and for all."""
+    if plan.is_compiled or samples >= COMPILE_FROM_SAMPLES:
+        return True
+    library = find_compiled(plan.key)
+    if library is not None:
+        plan.__dict__["compiled"] = library  # the cached_property, filled from the cache
+        return True
+    return interpreted_samples(plan.key) + samples >= COMPILE_FROM_SAMPLES
 
 
 def _check_finite(model: Model, result: InverseResult) -> None:
@@ -244,14 +266,6 @@ def _follow(model: Model, data, t0: float, q0: np.ndarray, t: float, depth: int 
 
 # ------------------------------------------------------------------ the tree path
 
-def _compiler_options() -> dict:
-    """JIT options for CasADi when a C compiler is present (``HEXAPOD_NO_JIT=1`` disables)."""
-    if os.environ.get("HEXAPOD_NO_JIT") or not (shutil.which("gcc") or shutil.which("cc")):
-        return {}
-    return {"jit": True, "compiler": "shell",
-            "jit_options": {"flags": ["-O2"], "verbose": False}}
-
-
 class TreePlan:
     """The tree-ordered inverse dynamics of one model (built once, evaluated on many samples)."""
 
@@ -260,24 +274,32 @@ class TreePlan:
         self.order = order  # joints, parents first
         self.driver_of = driver_of  # joint index -> driver index
 
+    @property
+    def key(self) -> str | None:
+        """The key of the plan's Functions in the cache: the model's content hash and the
+        plan's name (None for a model without a content hash: nothing is cached)."""
+        return f"{self.model.digest}/tree-inverse" if self.model.digest else None
+
+    @property
+    def _what(self) -> str:
+        return (f"tree-ordered inverse dynamics of '{self.model.name}' "
+                f"({len(self.model.joints)} joints)")
+
     @cached_property
     def function(self) -> ca.Function:
         """``(w, wd, wdd) -> (q, v, v_dot, wrench, rotation)`` for one sample: the joint wrenches
         (6 x J: force then moment about the joint origin, joint frame) and the joint frames'
-        rotations (9 x J, column-major). Interpreted by CasADi's virtual machine."""
-        return ca.Function("tree_inverse", *self._expressions)
+        rotations (9 x J, column-major). Interpreted by CasADi's virtual machine; read from the
+        cache when it holds it (no graph to build), else built and stored there."""
+        return serialized(self.key, lambda: ca.Function("tree_inverse", *self._expressions),
+                          what=self._what)
 
     @cached_property
     def compiled(self) -> ca.Function:
-        """The same Function compiled to C (JIT), or the interpreted one when no compiler is
-        present or ``HEXAPOD_NO_JIT`` is set."""
-        options = _compiler_options()
-        if not options:
-            return self.function
-        expressions = self._expressions
-        # the compiler runs through system(), which would discard a SIGINT sent meanwhile
-        with signals.deferred():
-            return ca.Function("tree_inverse", *expressions, options)
+        """The same Function compiled to C: from the cache when it holds it, else compiled and
+        stored there; the interpreted one when no compiler is present or ``HEXAPOD_NO_JIT`` is
+        set."""
+        return compiled(self.key, lambda: self.function, what=self._what)
 
     @cached_property
     def _expressions(self) -> tuple:

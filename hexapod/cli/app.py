@@ -17,6 +17,7 @@ import warnings
 from hexapod._version import __version__
 from hexapod.cli import (
     bench,
+    cache,
     check,
     dynamics,
     export,
@@ -32,7 +33,7 @@ from hexapod.errors import HexapodError
 
 #: The commands, in the order ``hexapod --help`` lists them; each is named by its module.
 COMMANDS = (dynamics, info, inverse, report, simulate, sweep, check, export, bench, validate,
-            scenes)
+            scenes, cache)
 
 
 def build_parser() -> argparse.ArgumentParser:

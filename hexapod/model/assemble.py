@@ -12,6 +12,7 @@ import numpy as np
 
 from hexapod._support.graphs import spanning_forest
 from hexapod._support.limits import check_model_size
+from hexapod.model.digest import scene_digest
 from hexapod.model.forces import ForceBuilder, gravity_potential, inertial_forces
 from hexapod.model.frames import BodyState
 from hexapod.model.joints import (
@@ -368,7 +369,7 @@ class _Assembly:
                 builder.effort(name, rate, torque)
         return builder, across, infos
 
-    def model(self, rank_tolerance: float) -> Model:
+    def model(self, rank_tolerance: float, digest: str = "") -> Model:
         parts = self.joints()
         drivers, on_joint = self.drivers()
         builder, across, forces = self.forces()
@@ -398,7 +399,7 @@ class _Assembly:
                      q0=self.q0, v0=self.v0, mass=self.mass, symbolic=symbolic,
                      forces=tuple(forces), rank_tolerance=rank_tolerance,
                      working_elements=tuple(working), report_forces=self.si.report_forces,
-                     contacts=tuple(self.contacts), ground=self.si.ground)
+                     contacts=tuple(self.contacts), ground=self.si.ground, digest=digest)
 
 
 def assemble(scene: Scene, *, rank_tolerance: float = 1e-9) -> Model:
@@ -422,6 +423,7 @@ def assemble(scene: Scene, *, rank_tolerance: float = 1e-9) -> Model:
     where = f" ({scene.source})" if scene.source else ""
     check_model_size(len(scene.bodies), len(scene.joints), f"scene '{scene.name}'{where}")
     scene.validate()
-    model = _Assembly(scene.in_si()).model(rank_tolerance)
+    si = scene.in_si()
+    model = _Assembly(si).model(rank_tolerance, scene_digest(si, rank_tolerance))
     model.source = scene.source  # the file the scene was read from, named by later errors
     return model

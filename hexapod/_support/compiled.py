@@ -1,0 +1,160 @@
+"""CasADi Functions built once and kept in the cache on disk (:mod:`hexapod._support.cache`):
+compiled to C as shared libraries, or serialized as they are.
+
+One small API for every compiled kernel::
+
+    function = compiled(key, build)      # a shared library: compiled in the first process only
+    function = serialized(key, build)    # the Function itself: its graph built once
+    function = find_compiled(key)        # the library when one is cached, else None
+
+``key`` says everything the Function depends on beyond hexapod's own sources (which every key
+includes): typically the model's content hash and the kernel's name and options, e.g.
+``f"{model.digest}/tree-inverse"``. ``build()`` makes the Function (an ``SX`` or ``MX``
+Function), and is called only when the cache has none. A compiled library's key also holds the
+CasADi version, the compiler and its flags, and the machine.
+
+Compiling: CasADi generates C (``CodeGenerator``), the system's C compiler (``gcc``, else
+``cc``) makes a shared library of it, and ``casadi.external`` loads it. Without a compiler, or
+with ``HEXAPOD_NO_JIT=1``, :func:`compiled` returns the interpreted Function; a compiler that
+fails is said in a :class:`CompilerWarning` and the interpreted Function is used.
+"""
+
+from __future__ import annotations
+
+import os
+import platform
+import shutil
+import subprocess
+import sys
+import warnings
+from collections.abc import Callable
+from pathlib import Path
+
+import casadi as ca
+
+from hexapod._support import cache
+
+#: Flags of the C compiler: -O2 runs the tree-ordered inverse dynamics of a leg about 8 times
+#: faster than CasADi's interpreter; -O3 buys nothing more and compiles longer.
+COMPILER_FLAGS = ("-O2",)
+#: The files of a compiled entry: the library and the name of the Function it holds.
+LIBRARY, NAME = "library" + (".dll" if sys.platform == "win32" else
+                             ".dylib" if sys.platform == "darwin" else ".so"), "name.txt"
+#: The file of a serialized entry.
+SERIALIZED = "function.casadi"
+
+
+class CompilerWarning(UserWarning):
+    """The C compiler failed: the interpreted Function is used (same numbers, slower)."""
+
+
+def compiler() -> str | None:
+    """The C compiler used (a path), or None: none found, or ``HEXAPOD_NO_JIT`` set."""
+    if os.environ.get("HEXAPOD_NO_JIT"):
+        return None
+    return shutil.which("gcc") or shutil.which("cc")
+
+
+def compiled_key(key: str, command: str) -> str:
+    """The cache key of ``key``'s library, compiled by ``command`` (a compiler's path)."""
+    return cache.key("compiled", key, f"casadi {ca.__version__}", command,
+                     " ".join(COMPILER_FLAGS), sys.platform, platform.machine())
+
+
+def serialized_key(key: str) -> str:
+    """The cache key of ``key``'s serialized Function."""
+    return cache.key("serialized", key, f"casadi {ca.__version__}")
+
+
+def find_compiled(key: str | None) -> ca.Function | None:
+    """The compiled library of ``key`` when the cache holds one (loaded), else None."""
+    command = compiler()
+    if command is None or key is None:
+        return None
+    entry_key = compiled_key(key, command)
+    found = cache.load(entry_key)
+    if found is None:
+        return None
+    path, files = found
+    try:
+        return ca.external(files[NAME].decode("utf-8").strip(), str(path / LIBRARY))
+    except (KeyError, UnicodeDecodeError, RuntimeError):  # not a library CasADi can load
+        cache.discard(entry_key)
+        return None
+
+
+def compiled(key: str | None, build: Callable[[], ca.Function], *,
+             what: str = "") -> ca.Function:
+    """The Function ``build()`` makes, compiled to C: loaded from the cache when it holds the
+    library of ``key``, else built, compiled and stored there (``what`` says what it is, for
+    ``hexapod cache info``); with ``key=None``, compiled and not stored. The interpreted
+    Function when there is no compiler."""
+    found = find_compiled(key)
+    if found is not None:
+        return found
+    function = build()
+    command = compiler()
+    if command is None:
+        return function
+    entry_key = compiled_key(key, command) if key is not None else None
+    try:
+        with cache.writing(entry_key, f"{what or function.name()}, compiled") as folder:
+            library = _compile(function, folder, command)
+            # loaded before the folder is published or removed: the library stays mapped
+            return ca.external(function.name(), str(library))
+    except CompileError as error:  # nothing was stored
+        warnings.warn(str(error), CompilerWarning, stacklevel=2)
+        return function
+
+
+class CompileError(Exception):
+    """The C compiler failed (its last lines of output in the message)."""
+
+
+def _compile(function: ca.Function, folder: Path, command: str) -> Path:
+    """Generate ``function``'s C code in ``folder`` and compile it to a shared library there;
+    the source is removed (only the library is kept)."""
+    generator = ca.CodeGenerator("source.c", {"with_header": False})
+    generator.add(function)
+    generator.generate(str(folder) + os.sep)
+    source, library = folder / "source.c", folder / LIBRARY
+    # the compiler is a child process, not system(): an interruption stops it and reaches us
+    done = subprocess.run([command, *COMPILER_FLAGS, "-shared", "-fPIC", str(source), "-o",
+                           str(library)], capture_output=True, text=True, errors="replace")
+    source.unlink()
+    if done.returncode != 0 or not library.is_file():
+        said = (done.stderr or done.stdout).strip().splitlines()[-3:]
+        raise CompileError(f"{command} could not compile {function.name()} (status "
+                           f"{done.returncode}: {' / '.join(said)}): CasADi's interpreter is "
+                           "used instead (same numbers, slower)")
+    (folder / NAME).write_text(function.name(), encoding="utf-8")
+    return library
+
+
+def serialized(key: str | None, build: Callable[[], ca.Function], *,
+               what: str = "") -> ca.Function:
+    """The Function ``build()`` makes, loaded from the cache when it holds the serialized
+    Function of ``key`` (no graph to build), else built and stored there; with ``key=None``,
+    ``build()`` alone."""
+    if key is None:
+        return build()
+    entry_key = serialized_key(key)
+    found = cache.load(entry_key)
+    if found is not None:
+        try:
+            return ca.Function.deserialize(found[1][SERIALIZED].decode("ascii"))
+        except (KeyError, UnicodeDecodeError, RuntimeError):
+            cache.discard(entry_key)
+    function = build()
+    if cache.folder() is not None:  # nothing to write when there is no cache
+        with cache.writing(entry_key, f"{what or function.name()}, serialized") as folder:
+            (folder / SERIALIZED).write_text(function.serialize(), encoding="ascii")
+    return function
+
+
+def interpreted_samples(key: str | None, samples: int = 0) -> int:
+    """Add ``samples`` to the count of samples the serialized Function of ``key`` evaluated
+    interpreted, over every run that used it, and return the count (0 when there is no such
+    entry): what a kernel weighs against the cost of compiling
+    (:func:`hexapod._support.cache.tally`)."""
+    return 0 if key is None else cache.tally(serialized_key(key), samples)

@@ -1,0 +1,100 @@
+"""``hexapod cache``: what the cache holds and cleaning it, each run in a cache folder of the
+test's own; and ``hexapod inverse`` filling it."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+FIXTURE = ROOT / "tests" / "data" / "pinocchio" / "chain-3"
+
+
+def run(*args: str, cache: Path, cwd: Path, **settings: str) -> subprocess.CompletedProcess:
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("HEXAPOD_DEBUG", "HEXAPOD_CACHE", "HEXAPOD_CACHE_SIZE")}
+    env.update(HEXAPOD_CACHE_DIR=str(cache), **settings)
+    return subprocess.run([sys.executable, "-m", "hexapod", *args], cwd=cwd, env=env,
+                          capture_output=True, text=True, timeout=120)
+
+
+def inverse(tmp_path: Path, cache: Path, out: str = "out.csv") -> None:
+    done = run("inverse", str(FIXTURE / "model.urdf"), "--motion", str(FIXTURE / "motion.csv"),
+               "--out", out, cache=cache, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+
+
+def test_info_on_an_empty_cache(tmp_path):
+    cache = tmp_path / "cache"
+    done = run("cache", cache=cache, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines() == [f"cache folder: {cache} (HEXAPOD_CACHE_DIR)",
+                                        "entries: 0, 0 bytes of at most 1 GiB"]
+    assert not cache.exists()  # looking writes nothing
+
+
+def test_inverse_fills_the_cache_and_info_lists_it(tmp_path):
+    cache = tmp_path / "cache"
+    inverse(tmp_path, cache)
+    first = (tmp_path / "out.csv").read_text()
+    done = run("cache", "info", cache=cache, cwd=tmp_path, HEXAPOD_CACHE_SIZE="2G")
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.splitlines()
+    assert lines[1].startswith("entries: 1, ") and lines[1].endswith("of at most 2 GiB")
+    assert "tree-ordered inverse dynamics of 'random-11' (3 joints), serialized" in lines[2]
+    report = json.loads(run("cache", "info", "--json", cache=cache, cwd=tmp_path).stdout)
+    assert report["folder"] == str(cache) and report["entries"] == 1
+    assert report["size"] == report["items"][0]["size"] > 0
+    inverse(tmp_path, cache, "again.csv")  # from the cache: the same numbers
+    assert (tmp_path / "again.csv").read_text() == first
+    assert json.loads(run("cache", "info", "--json", cache=cache,
+                          cwd=tmp_path).stdout)["entries"] == 1
+
+
+def test_clean(tmp_path):
+    cache = tmp_path / "cache"
+    inverse(tmp_path, cache)
+    kept = run("cache", "clean", "--older-than", "1", cache=cache, cwd=tmp_path)
+    assert kept.returncode == 0 and kept.stdout.startswith("removed 0 entries (0 bytes)")
+    trimmed = run("cache", "clean", "--max-size", "1K", cache=cache, cwd=tmp_path)
+    assert trimmed.stdout.startswith("removed 1 entry (") and "0 left" in trimmed.stdout
+    inverse(tmp_path, cache)
+    emptied = run("cache", "clean", cache=cache, cwd=tmp_path)
+    assert emptied.stdout.startswith("removed 1 entry") and "; 0 left (0 bytes)" in emptied.stdout
+    assert (cache / "CACHEDIR.TAG").exists()
+
+
+def test_the_cache_turned_off(tmp_path):
+    cache = tmp_path / "cache"
+    inverse_off = run("inverse", str(FIXTURE / "model.urdf"), "--motion",
+                      str(FIXTURE / "motion.csv"), "--out", "out.csv", cache=cache,
+                      cwd=tmp_path, HEXAPOD_CACHE="0")
+    assert inverse_off.returncode == 0, inverse_off.stderr
+    assert not cache.exists()
+    for action in ("info", "clean"):
+        done = run("cache", action, cache=cache, cwd=tmp_path, HEXAPOD_CACHE="off")
+        assert done.returncode == 0 and "the cache is off (turned off by HEXAPOD_CACHE=off)" \
+            in done.stdout
+
+
+@pytest.mark.parametrize("args", [("cache", "info"), ("cache", "--help")], ids=" ".join)
+def test_the_cache_command_loads_no_heavy_library(tmp_path, args):
+    env = dict(os.environ, HEXAPOD_CACHE_DIR=str(tmp_path / "cache"))
+    done = subprocess.run([sys.executable, "-X", "importtime", "-m", "hexapod", *args],
+                          cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    loaded = {line.rpartition("|")[2].strip().split(".")[0]
+              for line in done.stderr.splitlines() if line.startswith("import time:")}
+    assert "hexapod" in loaded and not loaded & {"numpy", "casadi", "scipy"}
+
+
+def test_a_bad_size_setting_is_one_error_line(tmp_path):
+    done = run("cache", cache=tmp_path / "cache", cwd=tmp_path, HEXAPOD_CACHE_SIZE="huge")
+    assert done.returncode == 1 and done.stdout == ""
+    assert done.stderr.strip() == ("hexapod: error: HEXAPOD_CACHE_SIZE='huge': not a memory "
+                                   "size: 'huge' (write e.g. 16G, 512M)")
