@@ -22,9 +22,7 @@ fails is said in a :class:`CompilerWarning` and the interpreted Function is used
 from __future__ import annotations
 
 import os
-import platform
 import shutil
-import subprocess
 import sys
 import warnings
 from collections.abc import Callable
@@ -58,7 +56,16 @@ def compiler() -> str | None:
 def compiled_key(key: str, command: str) -> str:
     """The cache key of ``key``'s library, compiled by ``command`` (a compiler's path)."""
     return cache.key("compiled", key, f"casadi {ca.__version__}", command,
-                     " ".join(COMPILER_FLAGS), sys.platform, platform.machine())
+                     " ".join(COMPILER_FLAGS), sys.platform, _machine())
+
+
+def _machine() -> str:
+    """The processor's architecture (``os.uname``: without loading ``platform``, 1 ms)."""
+    if hasattr(os, "uname"):
+        return os.uname().machine
+    import platform
+
+    return platform.machine()
 
 
 def serialized_key(key: str) -> str:
@@ -118,6 +125,8 @@ def _compile(function: ca.Function, folder: Path, command: str) -> Path:
     generator.add(function)
     generator.generate(str(folder) + os.sep)
     source, library = folder / "source.c", folder / LIBRARY
+    import subprocess  # only to compile: 2 ms of every run's start otherwise
+
     # the compiler is a child process, not system(): an interruption stops it and reaches us
     done = subprocess.run([command, *COMPILER_FLAGS, "-shared", "-fPIC", str(source), "-o",
                            str(library)], capture_output=True, text=True, errors="replace")
