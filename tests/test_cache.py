@@ -439,3 +439,29 @@ def test_a_tally_counts_over_runs(folder):
     assert cache.tally(key, 7) == 7
     assert cache.tally(serialized_key("no such entry"), 5) == 5
     assert cache.load(key) is not None  # the count is not part of the entry's checked files
+
+
+def test_the_cache_never_waits_for_the_disk(folder, monkeypatch):
+    """Its files are written whole (renamed into place) but not flushed: an entry lost or
+    damaged by a crash of the machine fails its checksums and is built again."""
+    def no_sync(descriptor):
+        raise AssertionError("the cache flushed a file to the disk")
+
+    monkeypatch.setattr(os, "fsync", no_sync)
+    build = Builder()
+    serialized("k13", build)
+    assert cache.tally(serialized_key("k13"), 3) == 3
+    assert serialized("k13", build) is not None and build.calls == 1
+
+
+def test_a_full_disk_while_storing_is_a_warning_and_the_function_is_returned(folder,
+                                                                             monkeypatch):
+    def full(*args):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(cache, "_publish", full)
+    build = Builder()
+    with pytest.warns(cache.CacheWarning, match="No space left on device"):
+        function = serialized("k14", build)
+    assert values(function)[1] == pytest.approx(4.17) and cache.entries() == []
+    assert not [p for p in (folder / cache.LAYOUT).iterdir() if p.name.startswith(".")]

@@ -46,6 +46,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
+from hexapod._support.files import write_atomically
 from hexapod._support.limits import GIB, parse_size, size_text
 from hexapod.errors import HexapodError
 
@@ -296,7 +297,11 @@ def writing(entry_key: str | None, what: str) -> Iterator[Path]:
                                     dir=_entries_folder(root)))
     try:
         yield staging
-        _publish(staging, entry_key, what)
+        try:
+            _publish(staging, entry_key, what)
+        except (OSError, HexapodError) as error:  # a full disk: the work is done, not kept
+            _warn_once(f"cannot keep {what} in the cache folder {root} ({error}): it will be "
+                       "built again in the next run")
     finally:
         shutil.rmtree(staging, ignore_errors=True)  # dropped, or left by a failed build
     _evict(root, limit, keep=entry_key)
@@ -312,8 +317,8 @@ def _prepared(root: Path | None) -> Path | None:
         entries_folder.mkdir(mode=0o700, parents=True, exist_ok=True)
         tag = root / "CACHEDIR.TAG"  # backup tools skip folders so tagged
         if not tag.exists():
-            with contextlib.suppress(OSError):
-                tag.write_text(_TAG, encoding="utf-8")
+            with contextlib.suppress(HexapodError):
+                write_atomically(tag, _TAG, durable=False)
     except OSError as error:
         _warn_once(f"cannot write in the cache folder {root} ({error.strerror or error}): "
                    f"everything is built again in each run; set {FOLDER_VARIABLE} to a folder "
@@ -336,7 +341,7 @@ def _publish(staging: Path, entry_key: str, what: str) -> None:
 
     meta = {"what": what, "files": files, "created": int(time.time()), "hexapod": __version__,
             "python": sys.version.split()[0]}
-    (staging / META).write_text(json.dumps(meta, indent=1) + "\n", encoding="utf-8")
+    write_atomically(staging / META, json.dumps(meta, indent=1) + "\n", durable=False)
     try:
         os.rename(staging, staging.with_name(entry_key))
     except OSError:  # published meanwhile by another process: that entry is kept
@@ -361,13 +366,8 @@ def tally(entry_key: str, amount: int = 0) -> int:
         before = 0
     if amount == 0:
         return before
-    temporary = path / f".tally-{os.getpid()}-{os.urandom(4).hex()}"
-    try:
-        temporary.write_text(str(before + amount), encoding="ascii")
-        os.replace(temporary, count_file)  # whole or not at all: never a half-written count
-    except OSError:
-        with contextlib.suppress(OSError):
-            temporary.unlink()
+    with contextlib.suppress(HexapodError):  # a count not kept is a count lost, no more
+        write_atomically(count_file, str(before + amount), durable=False)
     return before + amount
 
 

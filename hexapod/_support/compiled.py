@@ -31,6 +31,8 @@ from pathlib import Path
 import casadi as ca
 
 from hexapod._support import cache
+from hexapod._support.files import write_atomically
+from hexapod.errors import HexapodError
 
 #: Flags of the C compiler: -O2 runs the tree-ordered inverse dynamics of a leg about 8 times
 #: faster than CasADi's interpreter; -O3 buys nothing more and compiles longer.
@@ -109,7 +111,7 @@ def compiled(key: str | None, build: Callable[[], ca.Function], *,
             library = _compile(function, folder, command)
             # loaded before the folder is published or removed: the library stays mapped
             return ca.external(function.name(), str(library))
-    except CompileError as error:  # nothing was stored
+    except (CompileError, HexapodError) as error:  # nothing was stored
         warnings.warn(str(error), CompilerWarning, stacklevel=2)
         return function
 
@@ -123,7 +125,10 @@ def _compile(function: ca.Function, folder: Path, command: str) -> Path:
     the source is removed (only the library is kept)."""
     generator = ca.CodeGenerator("source.c", {"with_header": False})
     generator.add(function)
-    generator.generate(str(folder) + os.sep)
+    try:
+        generator.generate(str(folder) + os.sep)
+    except RuntimeError as error:  # the folder cannot be written (a full disk)
+        raise CompileError(f"cannot write the C code of {function.name()} ({error})") from None
     source, library = folder / "source.c", folder / LIBRARY
     import subprocess  # only to compile: 2 ms of every run's start otherwise
 
@@ -136,7 +141,7 @@ def _compile(function: ca.Function, folder: Path, command: str) -> Path:
         raise CompileError(f"{command} could not compile {function.name()} (status "
                            f"{done.returncode}: {' / '.join(said)}): CasADi's interpreter is "
                            "used instead (same numbers, slower)")
-    (folder / NAME).write_text(function.name(), encoding="utf-8")
+    write_atomically(folder / NAME, function.name(), durable=False)
     return library
 
 
@@ -156,8 +161,11 @@ def serialized(key: str | None, build: Callable[[], ca.Function], *,
             cache.discard(entry_key)
     function = build()
     if cache.folder() is not None:  # nothing to write when there is no cache
-        with cache.writing(entry_key, f"{what or function.name()}, serialized") as folder:
-            (folder / SERIALIZED).write_text(function.serialize(), encoding="ascii")
+        try:
+            with cache.writing(entry_key, f"{what or function.name()}, serialized") as folder:
+                write_atomically(folder / SERIALIZED, function.serialize(), durable=False)
+        except HexapodError as error:  # a full disk: the Function is built, not kept
+            warnings.warn(f"{error}: not kept in the cache", cache.CacheWarning, stacklevel=2)
     return function
 
 
