@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import hexapod as hx
+from hexapod.algorithms.inverse import tree_plan
 from hexapod.model.digest import describe, scene_digest
 from hexapod.scene.builtin import builtin_scenes
 from legs import front_leg_scene
@@ -123,6 +124,14 @@ def test_every_builtin_scene_is_described(name):
     assert len(digest(scene)) == 64
     for law in {id(e.law): e.law for e in scene.elements if hasattr(e, "law")}.values():
         describe(law, time_laws=True)  # a kernel that compiles laws in can key on them
+
+
+def test_a_scene_holding_a_value_of_an_unknown_kind_has_no_digest_and_is_not_cached():
+    scene = random_tree(3, 5)
+    _first(scene, "bodies").mesh = object()  # no description: no digest, nothing cached
+    model = hx.assemble(scene)
+    assert model.digest == "" and tree_plan(model).key is None
+    assert np.isfinite(hx.inverse_dynamics(model, np.linspace(0, 0.1, 3)).effort).all()
 
 
 def test_a_value_of_an_unknown_kind_is_an_error_not_an_unstable_description():

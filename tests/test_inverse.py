@@ -144,25 +144,28 @@ def test_another_model_of_the_same_scene_reads_the_tree_function_from_the_cache(
                     is None, reason="no C compiler")
 def test_the_tree_path_is_compiled_once_compiling_has_paid(tmp_path, monkeypatch):
     """Short runs are interpreted until the samples interpreted over the runs reach
-    COMPILE_FROM_SAMPLES (here 60: three runs of 25 samples); then the run compiles, and every
-    later model of the scene (a later run) finds the library in the cache."""
+    COMPILE_FROM_SAMPLES (here 60: three runs of 25 samples); then the run compiles quick code,
+    and every later model of the scene (a later run) finds it in the cache. A run of
+    OPTIMIZE_FROM_SAMPLES samples compiles optimized code, which later runs then prefer."""
     from hexapod.algorithms import inverse
 
     monkeypatch.setenv("HEXAPOD_CACHE_DIR", str(tmp_path / "cache"))
     monkeypatch.setattr(inverse, "COMPILE_FROM_SAMPLES", 60)
-    compiled_runs = []
-    for _ in range(4):
-        model = hx.assemble(front_leg_scene())
-        inverse_dynamics(model, TIMES)
-        compiled_runs.append(tree_plan(model).is_compiled)
-    assert compiled_runs == [False, False, True, True]
-    model = hx.assemble(front_leg_scene())  # asked for the interpreter: it is given
-    inverse_dynamics(model, TIMES, compile=False)
-    assert not tree_plan(model).is_compiled
+    monkeypatch.setattr(inverse, "OPTIMIZE_FROM_SAMPLES", 100)
+    runs = []
+    for times in (TIMES, TIMES, TIMES, TIMES, np.linspace(0.0, 1.2, 100), TIMES):
+        plan = tree_plan(hx.assemble(front_leg_scene()))
+        inverse_dynamics(plan.model, times)
+        runs.append((plan.is_compiled, plan.optimized))
+    assert runs == [(False, False), (False, False), (True, False), (True, False), (True, True),
+                    (True, True)]
+    plan = tree_plan(hx.assemble(front_leg_scene()))  # asked for the interpreter: it is given
+    inverse_dynamics(plan.model, TIMES, compile=False)
+    assert not plan.is_compiled
     monkeypatch.setenv("HEXAPOD_CACHE", "0")  # without a cache, only one run's samples count
-    model = hx.assemble(front_leg_scene())
-    inverse_dynamics(model, TIMES)
-    assert not tree_plan(model).is_compiled
+    plan = tree_plan(hx.assemble(front_leg_scene()))
+    inverse_dynamics(plan.model, TIMES)
+    assert not plan.is_compiled
 
 
 def test_reactions_on_the_parent():

@@ -31,7 +31,14 @@ import casadi as ca
 import numpy as np
 
 from hexapod._support import signals
-from hexapod._support.compiled import compiled, find_compiled, interpreted_samples, serialized
+from hexapod._support.compiled import (
+    COMPILER_FLAGS,
+    QUICK_FLAGS,
+    compiled,
+    find_compiled,
+    interpreted_samples,
+    serialized,
+)
 from hexapod.errors import AssemblyError, HexapodError, SingularSystemError
 from hexapod.model.model import GROUND_INDEX, Model
 from hexapod.spatial import (
@@ -91,11 +98,15 @@ class InverseResult:
     policy: str = ""
 
 
-#: Compiling the tree path costs about 0.07 s per joint (0.4 s for the front leg, 1.0 s for 18
-#: joints, 11 s for 100 links with gcc -O2) and saves about 2 microseconds per joint and sample
-#: (12 for the front leg, 14 for 18 joints: scripts/bench_inverse.py): it pays from some 30 000
-#: to 50 000 samples on, counted over every run of the model (:func:`compile_pays`).
-COMPILE_FROM_SAMPLES = 50_000
+#: Quick code (gcc -O0) of the tree path costs 0.13 s of CPU to compile for the front leg and
+#: 0.23 s for 18 joints, and evaluates a sample in 3.3 and 7.3 us against the interpreter's 12.8
+#: and 24.7 us: it pays from some 14 000 samples on, counted over every run of the model
+#: (:func:`compile_pays`; scripts/bench_inverse.py).
+COMPILE_FROM_SAMPLES = 15_000
+#: Optimized code (gcc -O2) costs 0.39 and 0.91 s to compile and evaluates a sample in 1.8 and
+#: 5.0 us: it pays over the quick code from 180 000 to 300 000 samples, compiled for a run of
+#: that many.
+OPTIMIZE_FROM_SAMPLES = 200_000
 #: CasADi's map of a Function over ``b`` samples costs about 4 microseconds per sample to build
 #: (once per size), and each call of it about 50 microseconds of Python: the tree path calls
 #: maps over blocks of about sqrt(12 N) of the N samples (at least 64), which keeps both small.
@@ -157,20 +168,24 @@ def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = 
 
 
 def compile_pays(plan: TreePlan, samples: int) -> bool:
-    """Whether to evaluate ``samples`` samples of the tree path compiled: when it was compiled
-    before (in this process, or in the cache on disk: loaded), or when the samples evaluated
-    interpreted so far, over every run of this model the cache remembers, and these reach
-    :data:`COMPILE_FROM_SAMPLES`. The rule of renting skis until their price is spent: the
-    interpreter's time spent first never passes the time compiling costs, so the total is at
-    most twice what the best choice in hindsight would cost; short runs never wait for a
-    compiler, and a model used often is compiled once and for all."""
-    if plan.is_compiled or samples >= COMPILE_FROM_SAMPLES:
+    """Whether to evaluate ``samples`` samples of the tree path compiled, compiling when it
+    pays. A library compiled before (in this process, or in the cache on disk) is used; a run
+    of :data:`OPTIMIZE_FROM_SAMPLES` samples or more compiles optimized code if there is none.
+    Otherwise quick code is compiled once the samples interpreted so far, over every run of the
+    model the cache remembers, and this run's reach :data:`COMPILE_FROM_SAMPLES`: the rule of
+    renting skis until their price is spent. The interpreter's time spent first never passes
+    what compiling costs, so the total is at most twice what the best choice in hindsight would
+    cost; short runs never wait for a compiler, and a model used often is compiled once for all
+    its later runs."""
+    long = samples >= OPTIMIZE_FROM_SAMPLES
+    if not plan.is_compiled:
+        plan.find_library()
+    if plan.is_compiled and (plan.optimized or not long):
         return True
-    library = find_compiled(plan.key)
-    if library is not None:
-        plan.__dict__["compiled"] = library  # the cached_property, filled from the cache
+    if long or interpreted_samples(plan.key) + samples >= COMPILE_FROM_SAMPLES:
+        plan.compile(optimized=long)
         return True
-    return interpreted_samples(plan.key) + samples >= COMPILE_FROM_SAMPLES
+    return False
 
 
 def _check_finite(model: Model, result: InverseResult) -> None:
@@ -286,6 +301,9 @@ class TreePlan:
         self.model = model
         self.order = order  # joints, parents first
         self.driver_of = driver_of  # joint index -> driver index
+        #: the compiled Function in use (None before any), and whether it is optimized code
+        self.library: ca.Function | None = None
+        self.optimized = False
 
     @property
     def key(self) -> str | None:
@@ -307,12 +325,32 @@ class TreePlan:
         return serialized(self.key, lambda: ca.Function("tree_inverse", *self._expressions),
                           what=self._what)
 
-    @cached_property
+    @property
     def compiled(self) -> ca.Function:
-        """The same Function compiled to C: from the cache when it holds it, else compiled and
-        stored there; the interpreted one when no compiler is present or ``HEXAPOD_NO_JIT`` is
-        set."""
-        return compiled(self.key, lambda: self.function, what=self._what)
+        """The same Function compiled to C: the library in use, else optimized code from the
+        cache, or compiled now and stored there; the interpreted one when no compiler is present
+        or ``HEXAPOD_NO_JIT`` is set."""
+        if self.library is None:
+            self.compile(optimized=True)
+        return self.library
+
+    def compile(self, optimized: bool) -> ca.Function:
+        """Use code compiled with :data:`~hexapod._support.compiled.COMPILER_FLAGS` (optimized)
+        or :data:`~hexapod._support.compiled.QUICK_FLAGS`: from the cache, else compiled now
+        and stored there."""
+        flags = COMPILER_FLAGS if optimized else QUICK_FLAGS
+        self.library = compiled(self.key, lambda: self.function, what=self._what, flags=flags)
+        self.optimized = optimized
+        return self.library
+
+    def find_library(self) -> bool:
+        """Use the library the cache holds, optimized code first; False when it holds none."""
+        for optimized, flags in ((True, COMPILER_FLAGS), (False, QUICK_FLAGS)):
+            found = find_compiled(self.key, flags)
+            if found is not None:
+                self.library, self.optimized = found, optimized
+                return True
+        return False
 
     @cached_property
     def _expressions(self) -> tuple:
@@ -401,7 +439,8 @@ class TreePlan:
 
     @property
     def is_compiled(self) -> bool:
-        return "compiled" in self.__dict__ and self.compiled is not self.function
+        """Whether compiled code is in use (not the interpreter)."""
+        return self.library is not None and self.library is not self.__dict__.get("function")
 
     def _driver_value(self, joint: int, w: ca.SX):
         if joint not in self.driver_of:
@@ -422,11 +461,12 @@ class TreePlan:
     def _evaluator(self, n: int, compiled: bool):
         """The Function mapped over ``n`` samples and its buffer, built once per ``n``."""
         cache = self.__dict__.setdefault("_evaluators", {})
-        if (n, compiled) not in cache:
+        key = (n, compiled, compiled and self.optimized)  # quick code may give way to optimized
+        if key not in cache:
             function = self.compiled if compiled else self.function
             mapped = function.map(n, "serial") if n > 1 else function
-            cache[n, compiled] = (mapped, *mapped.buffer())
-        return cache[n, compiled]
+            cache[key] = (mapped, *mapped.buffer())
+        return cache[key]
 
     def solve(self, times, w, wd, wdd, frame, compiled: bool,
               progress: Callable[[int, int], None] | None = None) -> InverseResult:

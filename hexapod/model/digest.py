@@ -36,7 +36,16 @@ _WHERE = frozenset({"source"})
 
 def scene_digest(scene: Scene, rank_tolerance: float) -> str:
     """The content hash (64 hexadecimal digits) of the model :func:`hexapod.assemble` builds
-    from ``scene`` (in SI units, as assembly sees it) with ``rank_tolerance``."""
+    from ``scene`` (in SI units, as assembly sees it) with ``rank_tolerance``; empty when an
+    element holds a value :func:`describe` does not know (an element class of the user's):
+    such a model is built in each process, never taken from the cache."""
+    try:
+        return _digest(scene, rank_tolerance)
+    except TypeError:
+        return ""
+
+
+def _digest(scene: Scene, rank_tolerance: float) -> str:
     description = {
         "format": FORMAT,
         "dimension": scene.dimension,
