@@ -300,7 +300,7 @@ WORKER = textwrap.dedent("""
 @pytest.mark.parametrize("kind", ["serialized",
                                   pytest.param("compiled", marks=needs_compiler)])
 def test_processes_building_the_same_entry_at_once_all_succeed(folder, kind):
-    start = time.time() + 1.5  # every process has loaded CasADi by then
+    start = time.time() + 1.0  # every process has loaded CasADi by then, most likely
     workers = [subprocess.Popen([sys.executable, "-c", WORKER, kind, str(start)], cwd=ROOT,
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
                for _ in range(4)]
@@ -362,10 +362,10 @@ def test_readers_never_see_half_an_entry_while_others_write_and_remove_it(folder
     serialized("churn", Builder())  # makes the folder; the writers replace the entry
     key = serialized_key("churn")
     entry = folder / cache.LAYOUT / key
-    readers = [subprocess.Popen([sys.executable, "-c", READER, str(entry), "4"], cwd=ROOT,
+    readers = [subprocess.Popen([sys.executable, "-c", READER, str(entry), "2.5"], cwd=ROOT,
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
                for _ in range(2)]
-    writers = [subprocess.Popen([sys.executable, "-c", WRITER, "60"], cwd=ROOT,
+    writers = [subprocess.Popen([sys.executable, "-c", WRITER, "40"], cwd=ROOT,
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
                for _ in range(2)]
     seen = []
