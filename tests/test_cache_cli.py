@@ -45,15 +45,17 @@ def test_inverse_fills_the_cache_and_info_lists_it(tmp_path):
     done = run("cache", "info", cache=cache, cwd=tmp_path, HEXAPOD_CACHE_SIZE="2G")
     assert done.returncode == 0, done.stderr
     lines = done.stdout.splitlines()
-    assert lines[1].startswith("entries: 1, ") and lines[1].endswith("of at most 2 GiB")
-    assert "tree-ordered inverse dynamics of 'random-11' (3 joints), serialized" in lines[2]
+    assert lines[1].startswith("entries: 2, ") and lines[1].endswith("of at most 2 GiB")
+    held = sorted(line.split("  ")[-1] for line in lines[2:])
+    assert held == ["the model 'random-11'",
+                    "tree-ordered inverse dynamics of 'random-11' (3 joints), serialized"]
     report = json.loads(run("cache", "info", "--json", cache=cache, cwd=tmp_path).stdout)
-    assert report["folder"] == str(cache) and report["entries"] == 1
-    assert report["size"] == report["items"][0]["size"] > 0
+    assert report["folder"] == str(cache) and report["entries"] == 2
+    assert report["size"] == sum(item["size"] for item in report["items"]) > 0
     inverse(tmp_path, cache, "again.csv")  # from the cache: the same numbers
     assert (tmp_path / "again.csv").read_text() == first
     assert json.loads(run("cache", "info", "--json", cache=cache,
-                          cwd=tmp_path).stdout)["entries"] == 1
+                          cwd=tmp_path).stdout)["entries"] == 2
 
 
 def test_clean(tmp_path):
@@ -62,8 +64,13 @@ def test_clean(tmp_path):
     kept = run("cache", "clean", "--older-than", "1", cache=cache, cwd=tmp_path)
     assert kept.returncode == 0 and kept.stdout.startswith("removed 0 entries (0 bytes)")
     trimmed = run("cache", "clean", "--max-size", "1K", cache=cache, cwd=tmp_path)
-    assert trimmed.stdout.startswith("removed 1 entry (") and "0 left" in trimmed.stdout
+    assert trimmed.stdout.startswith("removed 2 entries (") and "0 left" in trimmed.stdout
     inverse(tmp_path, cache)
+    items = json.loads(run("cache", "info", "--json", cache=cache, cwd=tmp_path).stdout)["items"]
+    oldest, newest = items  # least recently used first: the model, then the tree Function
+    assert oldest["what"].startswith("the model")
+    one = run("cache", "clean", "--max-size", str(newest["size"]), cache=cache, cwd=tmp_path)
+    assert one.stdout.startswith("removed 1 entry (") and "; 1 left (" in one.stdout
     emptied = run("cache", "clean", cache=cache, cwd=tmp_path)
     assert emptied.stdout.startswith("removed 1 entry") and "; 0 left (0 bytes)" in emptied.stdout
     assert (cache / "CACHEDIR.TAG").exists()
