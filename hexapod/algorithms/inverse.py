@@ -14,8 +14,8 @@ results:
   body's pose from its parent's and its driver's value (exactly: no Newton iterations), CasADi
   differentiates it for velocities and accelerations, and a backward pass from the leaves gives
   each joint's wrench from its child's Newton-Euler equations. The whole pass is one CasADi
-  Function, mapped over all samples in one call; its cost grows linearly with the number of
-  bodies. It is kept in the cache on disk under the model's content hash
+  Function, mapped over blocks of samples; its cost grows linearly with the number of bodies.
+  It is kept in the cache on disk under the model's content hash
   (:mod:`hexapod._support.compiled`): serialized, so that another run of the same model does not
   build its graph again, and compiled to C once compiling has paid (:func:`compile_pays`).
 """
