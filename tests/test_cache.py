@@ -465,3 +465,46 @@ def test_a_full_disk_while_storing_is_a_warning_and_the_function_is_returned(fol
         function = serialized("k14", build)
     assert values(function)[1] == pytest.approx(4.17) and cache.entries() == []
     assert not [p for p in (folder / cache.LAYOUT).iterdir() if p.name.startswith(".")]
+
+
+INTERRUPTED = textwrap.dedent("""
+    import signal, sys
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    import casadi as ca
+    from hexapod._support.compiled import compiled
+    x = ca.SX.sym("x")
+    print("compiling", flush=True)
+    compiled("interrupted", lambda: ca.Function("slow", [x], [2 * x]))
+""")
+
+
+@pytest.mark.skipif(not hasattr(os, "killpg"), reason="POSIX process groups")
+def test_an_interrupted_compilation_leaves_no_compiler_running_and_nothing_behind(
+        folder, tmp_path):
+    """The compiler (here a script that starts a long child, as gcc starts cc1) is stopped with
+    every process it started; the staging folder goes."""
+    import signal
+
+    marker = f"0.{os.getpid()}{time.time_ns() % 10**6}"  # sleep adds it: 20 s and a little
+    fake = tmp_path / "bin" / "gcc"
+    fake.parent.mkdir()
+    fake.write_text(f"#!/bin/sh\nsleep 20 {marker} &\nwait\n")
+    fake.chmod(0o755)
+    env = dict(os.environ, PATH=f"{fake.parent}{os.pathsep}{os.environ['PATH']}")
+    process = subprocess.Popen([sys.executable, "-c", INTERRUPTED], cwd=ROOT, env=env,
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert process.stdout.readline().strip() == "compiling"
+
+    def sleeping() -> bool:
+        return any(f"sleep 20 {marker}" in p.read_text(errors="replace").replace("\0", " ")
+                   for p in Path("/proc").glob("[0-9]*/cmdline") if p.exists())
+
+    deadline = time.time() + 30
+    while not sleeping() and time.time() < deadline:  # the compiler's child has started
+        time.sleep(0.05)
+    process.send_signal(signal.SIGINT)
+    _, err = process.communicate(timeout=60)
+    assert "KeyboardInterrupt" in err
+    time.sleep(0.2)
+    assert not sleeping()
+    assert not list((folder / cache.LAYOUT).iterdir())

@@ -21,6 +21,7 @@ fails is said in a :class:`CompilerWarning` and the interpreted Function is used
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
 import sys
@@ -137,19 +138,40 @@ def _compile(function: ca.Function, folder: Path, command: str, flags: tuple[str
     except RuntimeError as error:  # the folder cannot be written (a full disk)
         raise CompileError(f"cannot write the C code of {function.name()} ({error})") from None
     source, library = folder / "source.c", folder / LIBRARY
-    import subprocess  # only to compile: 2 ms of every run's start otherwise
-
-    # the compiler is a child process, not system(): an interruption stops it and reaches us
-    done = subprocess.run([command, *flags, "-shared", "-fPIC", str(source), "-o",
-                           str(library)], capture_output=True, text=True, errors="replace")
+    status, said = _run_compiler([command, *flags, "-shared", "-fPIC", str(source), "-o",
+                                  str(library)])
     source.unlink()
-    if done.returncode != 0 or not library.is_file():
-        said = (done.stderr or done.stdout).strip().splitlines()[-3:]
-        raise CompileError(f"{command} could not compile {function.name()} (status "
-                           f"{done.returncode}: {' / '.join(said)}): CasADi's interpreter is "
-                           "used instead (same numbers, slower)")
+    if status != 0 or not library.is_file():
+        said = " / ".join(said.strip().splitlines()[-3:])
+        raise CompileError(f"{command} could not compile {function.name()} (status {status}: "
+                           f"{said}): CasADi's interpreter is used instead (same numbers, "
+                           "slower)")
     write_atomically(folder / NAME, function.name(), durable=False)
     return library
+
+
+def _run_compiler(arguments: list[str]) -> tuple[int, str]:
+    """Run the compiler; its status and what it said. A child process in a process group of its
+    own, not ``system()`` (which would ignore an interruption): an interruption or any other
+    exception here ends the whole group (the driver and the compiler proper it starts, which
+    would go on alone otherwise) and is raised again."""
+    import signal
+    import subprocess  # only to compile: 2 ms of every run's start otherwise
+
+    group = hasattr(os, "killpg")
+    process = subprocess.Popen(arguments, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                               text=True, errors="replace", start_new_session=group)
+    try:
+        said, _ = process.communicate()
+    except BaseException:
+        if group:
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(process.pid, signal.SIGKILL)
+        else:  # pragma: no cover - not a POSIX system
+            process.kill()
+        process.wait()
+        raise
+    return process.returncode, said
 
 
 def serialized(key: str | None, build: Callable[[], ca.Function], *,
