@@ -105,3 +105,24 @@ def test_a_bad_size_setting_is_one_error_line(tmp_path):
     assert done.returncode == 1 and done.stdout == ""
     assert done.stderr.strip() == ("hexapod: error: HEXAPOD_CACHE_SIZE='huge': not a memory "
                                    "size: 'huge' (write e.g. 16G, 512M)")
+
+
+def test_a_script_keeps_the_cache_in_a_folder_of_its_own(tmp_path):
+    """scripts/scratch_cache.py: a temporary folder, removed when the script ends; a folder the
+    user names is kept as named."""
+    code = ("import os, sys; sys.path.insert(0, 'scripts'); "
+            "from scratch_cache import use_scratch_cache; use_scratch_cache(); "
+            "import hexapod as hx; from legs import front_leg_scene; "
+            "hx.assemble(front_leg_scene()); print(os.environ['HEXAPOD_CACHE_DIR'])")
+    env = {k: v for k, v in os.environ.items() if k != "HEXAPOD_CACHE_DIR"}
+    env["HOME"] = str(tmp_path / "home")  # where the user's cache would be
+    done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True,
+                          text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    used = Path(done.stdout.strip())
+    assert used.name.startswith("hexapod-script-cache-") and not used.exists()
+    assert not (tmp_path / "home").exists()
+    env["HEXAPOD_CACHE_DIR"] = str(tmp_path / "named")
+    done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True,
+                          text=True, timeout=120)
+    assert done.stdout.strip() == str(tmp_path / "named") and (tmp_path / "named").is_dir()
