@@ -283,9 +283,10 @@ def writing(entry_key: str | None, what: str) -> Iterator[Path]:
 
     Without a usable cache (turned off, or its folder cannot be written: a
     :class:`CacheWarning` says so once), or with ``entry_key=None`` (nothing to keep), the
-    folder is a temporary one, removed at the end: the
-    caller must have loaded what it built before the block ends. When another process
-    published the same entry first, its entry is kept and this one dropped.
+    folder is a temporary one, removed at the end: the caller must have loaded what it built
+    before the block ends. When another process published the same entry first, its entry is
+    kept and this one dropped. Then the entries used least recently are removed beyond the size
+    limit.
     """
     limit = size_limit()  # a bad setting is said before the build, not after it
     root = _prepared(folder()) if entry_key is not None else None
