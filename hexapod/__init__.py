@@ -64,8 +64,8 @@ __getattr__, __dir__, __all__ = attach(__name__, {
     "hexapod.simulation.integrators": ["Integrator"],
     "hexapod.simulation.diagnostics": ["Diagnosis", "diagnose"],
     # what users read
-    "hexapod.output.report": ["RunInfo", "agreement", "inverse_columns", "inverse_csv_text",
-                              "inverse_table", "report_files", "wrench_label"],
+    "hexapod.output.report": ["RunInfo", "agreement", "report_files", "wrench_label"],
+    "hexapod.output.inverse_csv": ["inverse_columns", "inverse_csv_text", "inverse_table"],
     "hexapod.output.describe": ["describe_model", "describe_state", "format_model",
                                 "format_state"],
     "hexapod.output.figures": ["COMPONENT_COLOURS", "effort_figure", "png_bytes",

@@ -121,6 +121,7 @@ from bench_forward_runs import (  # noqa: E402
     time_to_target,
     walk,
 )
+from scratch_cache import use_scratch_cache  # noqa: E402
 
 # ------------------------------------------------------------------ one problem
 
@@ -254,4 +255,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
+    use_scratch_cache()  # never the user's cache
     main()

@@ -19,18 +19,51 @@ Protocol
 * Growth exponent: slope of log(cost) against log(links) over the chains.
 
     python3 scripts/bench_inverse.py [--samples 1000] [--repeats 5] [--chains 10 30 100 300]
+
+Whole commands (``--whole-command``)
+------------------------------------
+What a user waits for, start-up included: ``hexapod inverse MODEL.urdf --motion MOTION.csv
+--out OUT.csv`` as a fresh process, against Pinocchio's equivalent whole script
+(``scripts/pinocchio_inverse.py``: the same files in, the same CSV out), on the front leg and the
+18-joint hexapod (``--samples`` samples, default 1000), timed in the same run:
+
+* ``first``: an empty cache (a new cache folder each time): the graphs are built, the tree
+  Function is serialized into the cache;
+* ``cached``: the cache the first run left: the tree Function read back (no graph built),
+  evaluated by CasADi's interpreter, as the runs of a model are until compiling has paid;
+* ``quick``: the cache holding the quick (``-O0``) library that runs of the model compile by
+  themselves once compiling has paid (put there beforehand by as many runs as that takes), as
+  every later run;
+* ``compiled``: the cache holding the optimized (``-O2``) library (put there beforehand by
+  ``inverse_dynamics(..., compile=True)``), as after a long run;
+* ``off``: ``HEXAPOD_CACHE=0``, everything built in the process (hexapod without a cache);
+* Pinocchio's script.
+
+Each is run ``--runs`` times (default 7), interleaved, after one warm-up run of each; the table
+gives the minimum and the median wall time of the processes, the minimum of their CPU time
+(user and system: the steadier figure on a machine other work shares), and their ratios to
+Pinocchio's.
+Everything is written in a temporary folder: the models, the outputs, the caches, and Python's
+bytecode of both programs (``PYTHONPYCACHEPREFIX``, so that neither recompiles its modules on
+each run, whatever ``PYTHONDONTWRITEBYTECODE`` says). Target: the cached runs at most 1.0x.
+POSIX only (the CPU time of child processes).
+
+    python3 scripts/bench_inverse.py --whole-command [--samples 1000] [--runs 7]
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
+import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
+from scratch_cache import use_scratch_cache
 
 import hexapod as hx
 from hexapod import (
@@ -157,16 +190,140 @@ def run(name: str, scene: hx.Scene, folder: Path, args) -> dict:
     return row
 
 
+# ------------------------------------------------------------------ whole commands
+
+SCRIPTS = Path(__file__).resolve().parent
+WHOLE_MODELS = ("front leg", "hexapod 18 joints")
+#: Fills a cache as runs of the model would: with quick code (runs until compiling has paid,
+#: as the tree path decides by itself), or with optimized code (compiled on request).
+PRIME = """
+import sys, hexapod as hx
+motion = hx.read_motion(sys.argv[2])
+driven = hx.apply_motion(hx.read_urdf(sys.argv[1]), motion)
+if sys.argv[3] == "optimized":
+    hx.inverse_dynamics(hx.assemble(driven), motion.times, compile=True)
+else:
+    from hexapod.algorithms.inverse import tree_plan
+    for _ in range(1000):
+        plan = tree_plan(hx.assemble(driven))
+        hx.inverse_dynamics(plan.model, motion.times)
+        if plan.is_compiled:
+            break
+"""
+
+
+def _children_cpu() -> float:
+    """CPU seconds (user and system) of the finished child processes so far."""
+    import resource
+
+    used = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return used.ru_utime + used.ru_stime
+
+
+def _wall(command: list[str], env: dict, cwd: Path) -> tuple[float, float]:
+    """The wall time of one process, launch to exit, and its CPU time; a failure ends the
+    study."""
+    cpu, start = _children_cpu(), time.perf_counter()
+    done = subprocess.run(command, env=env, cwd=cwd, capture_output=True, text=True)
+    seconds = time.perf_counter() - start
+    if done.returncode != 0:
+        raise SystemExit(f"{' '.join(command)} failed ({done.returncode}):\n{done.stderr}")
+    return seconds, _children_cpu() - cpu
+
+
+def whole_commands(name: str, folder: Path, args) -> dict:
+    """Wall times of the whole ``hexapod inverse`` process in each cache state, and of
+    Pinocchio's script, on one model (see the module docstring)."""
+    base = folder / name.replace(" ", "_")
+    urdf, motion = base.with_suffix(".urdf"), base.with_suffix(".csv")
+    urdf.write_text(urdf_text(MODELS[name]()))
+    joints = [j.name for j in read_urdf(urdf).joints.values() if j.kind != "fixed"]
+    write_motion(motion, joints, args.samples)
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("PYTHONDONTWRITEBYTECODE", "HEXAPOD_CACHE", "HEXAPOD_CACHE_SIZE")}
+    env.update(PYTHONPYCACHEPREFIX=str(folder / "bytecode"), OPENBLAS_NUM_THREADS="1")
+    inverse = [sys.executable, "-m", "hexapod", "inverse", str(urdf), "--motion", str(motion),
+               "--out"]
+    kept = dict(env, HEXAPOD_CACHE_DIR=str(base) + "-cache")
+    quick = dict(env, HEXAPOD_CACHE_DIR=str(base) + "-quick")
+    compiled = dict(env, HEXAPOD_CACHE_DIR=str(base) + "-compiled")
+    for primed, level in ((quick, "quick"), (compiled, "optimized")):
+        subprocess.run([sys.executable, "-c", PRIME, str(urdf), str(motion), level],
+                       env=primed, check=True)
+    commands = {
+        "first": lambda k: (inverse + [f"{base}-first.csv"],
+                            dict(env, HEXAPOD_CACHE_DIR=f"{base}-empty-{k}")),
+        "cached": lambda k: (inverse + [f"{base}-cached.csv"], kept),
+        "quick": lambda k: (inverse + [f"{base}-quick.csv"], quick),
+        "compiled": lambda k: (inverse + [f"{base}-compiled.csv"], compiled),
+        "off": lambda k: (inverse + [f"{base}-off.csv"], dict(env, HEXAPOD_CACHE="0")),
+        "pinocchio": lambda k: ([sys.executable, str(SCRIPTS / "pinocchio_inverse.py"),
+                                 str(urdf), str(motion), f"{base}-pinocchio.csv"], env),
+    }
+    times: dict[str, list[tuple[float, float]]] = {mode: [] for mode in commands}
+    for k in range(args.runs + 1):  # the first round warms up (bytecode, the first cache)
+        for mode, command in commands.items():
+            measured = _wall(*command(k), folder)
+            if k:
+                times[mode].append(measured)
+    ours = read_csv_table(f"{base}-compiled.csv")
+    theirs = read_csv_table(f"{base}-pinocchio.csv")
+    row = {"model": name, "joints": len(joints), "agreement": agreement(*ours, *theirs)}
+    for mode, measured in times.items():
+        wall, cpu = ([m[i] for m in measured] for i in (0, 1))
+        row[mode] = (min(wall), statistics.median(wall), min(cpu))
+    print(f"  {name}: done", file=sys.stderr, flush=True)
+    return row
+
+
+def read_csv_table(path: str) -> tuple[list[str], np.ndarray]:
+    with open(path) as stream:
+        header = stream.readline().strip().split(",")
+    return header, np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+
+
+def whole_command_study(args) -> None:
+    try:
+        import pinocchio  # noqa: F401
+    except ImportError:
+        raise SystemExit("--whole-command compares with Pinocchio: pip install '.[compare]'") \
+            from None
+    with tempfile.TemporaryDirectory(prefix="hexapod-whole-") as scratch:
+        rows = [whole_commands(name, Path(scratch), args) for name in WHOLE_MODELS]
+    modes = ("pinocchio", "first", "cached", "quick", "compiled", "off")
+    print(f"whole processes, {args.samples} samples, {args.runs} runs each. Seconds: wall "
+          "time min / median, CPU time min; ratios to Pinocchio's script: wall min / wall "
+          "median / CPU min (CPU time is the steadier on a shared machine)")
+    for row in rows:
+        pin = row["pinocchio"]
+        print(f"{row['model']} ({row['joints']} joints; largest difference from Pinocchio "
+              f"{row['agreement']:.1e})")
+        for mode in modes:
+            wall_min, wall_median, cpu = row[mode]
+            ratio = ("" if mode == "pinocchio" else
+                     f"   ratio {wall_min / pin[0]:5.2f} / {wall_median / pin[1]:5.2f} / "
+                     f"{cpu / pin[2]:5.2f}")
+            print(f"  {mode:<10} {wall_min:6.3f} / {wall_median:6.3f} / {cpu:6.3f}{ratio}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--samples", type=int, default=1000)
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--chains", type=int, nargs="*", default=[10, 30, 100, 300])
     parser.add_argument("--vm", action="store_true", help="also time the interpreted path")
+    parser.add_argument("--whole-command", action="store_true", help="time whole processes "
+                        "of 'hexapod inverse' (first run, cached runs) against Pinocchio's "
+                        "whole script instead (see the module docstring)")
+    parser.add_argument("--runs", type=int, default=7, help="--whole-command: processes per "
+                        "mode (default 7)")
     parser.add_argument("--keep", metavar="DIR", help="keep the URDFs and motions in DIR (to "
                         "time whole commands, e.g. hexapod inverse against "
                         "scripts/pinocchio_inverse.py)")
     args = parser.parse_args()
+    if args.whole_command:
+        whole_command_study(args)
+        return
     rows = []
     with tempfile.TemporaryDirectory() as scratch:
         folder = Path(args.keep or scratch)
@@ -203,4 +360,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
+    use_scratch_cache()  # never the user's cache
     main()

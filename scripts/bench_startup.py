@@ -26,6 +26,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from scratch_cache import use_scratch_cache
+
 #: (label, arguments after ``python3``, checked against the target)
 COMMANDS = [
     ("python3 -c 'import argparse'", ["-c", "import argparse"], False),
@@ -84,4 +86,5 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
+    use_scratch_cache()  # never the user's cache
     sys.exit(main())

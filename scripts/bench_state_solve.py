@@ -24,6 +24,7 @@ from legs import front_leg_scene
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_inverse import chain_scene  # noqa: E402  (the same chains in both benchmarks)
+from scratch_cache import use_scratch_cache  # noqa: E402
 
 
 def hexapod_robot() -> hx.Scene:
@@ -78,4 +79,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
+    use_scratch_cache()  # never the user's cache
     main()

@@ -28,6 +28,8 @@ import tempfile  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
+from scratch_cache import use_scratch_cache  # noqa: E402
+
 from hexapod.sweeps import run_study, study_from_document  # noqa: E402
 
 
@@ -88,4 +90,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
+    use_scratch_cache()  # never the user's cache
     main()

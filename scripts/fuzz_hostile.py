@@ -37,6 +37,8 @@ from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 
+from scratch_cache import use_scratch_cache
+
 ROOT = Path(__file__).resolve().parents[1]
 CHAIN = ROOT / "tests" / "data" / "pinocchio" / "chain-3"
 PENDULUM = ROOT / "data" / "scenes" / "pendulum.toml"
@@ -331,4 +333,5 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
+    use_scratch_cache()  # never the user's cache
     sys.exit(main())

@@ -86,6 +86,7 @@ from fuzz_targets import URDFS as URDFS
 from fuzz_targets import read_and_assemble as read_and_assemble
 from fuzz_toml import mutate_toml as mutate_toml
 from fuzz_toml import toml_text as toml_text
+from scratch_cache import use_scratch_cache
 
 # ------------------------------------------------------------------ the run
 
@@ -222,5 +223,6 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
+    use_scratch_cache()  # never the user's cache
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     sys.exit(main())

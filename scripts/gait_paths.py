@@ -17,6 +17,7 @@ import argparse
 import time
 
 import numpy as np
+from scratch_cache import use_scratch_cache
 
 import hexapod as hx
 from hexapod import inverse_dynamics, marker_trajectories
@@ -109,4 +110,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
+    use_scratch_cache()  # never the user's cache
     main()

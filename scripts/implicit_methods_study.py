@@ -30,6 +30,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from scratch_cache import use_scratch_cache
 
 import hexapod as hx
 from hexapod import INTEGRATORS, body_poses, consistent_state, load_scene
@@ -161,4 +162,5 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
+    use_scratch_cache()  # never the user's cache
     raise SystemExit(main())

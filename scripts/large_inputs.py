@@ -41,6 +41,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from scratch_cache import use_scratch_cache
 
 ROOT = Path(__file__).resolve().parents[1]
 INERTIA = 'ixx="0.001" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"'
@@ -243,4 +244,5 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
+    use_scratch_cache()  # never the user's cache
     sys.exit(main())

@@ -15,6 +15,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+from scratch_cache import use_scratch_cache
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -100,4 +101,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
+    use_scratch_cache()  # never the user's cache
     main()

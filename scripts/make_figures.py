@@ -42,6 +42,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from scratch_cache import use_scratch_cache
+
 import hexapod as hx
 
 HERE = Path(__file__).resolve().parent
@@ -234,4 +236,5 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
+    use_scratch_cache()  # never the user's cache
     raise SystemExit(main())

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from scratch_cache import use_scratch_cache
 
 import hexapod as hx
 
@@ -295,4 +296,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
+    use_scratch_cache()  # never the user's cache
     main()

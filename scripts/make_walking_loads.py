@@ -6,9 +6,12 @@ import time
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # small matrices: threads only cost
 
+from scratch_cache import use_scratch_cache  # noqa: E402
+
 from legs.loads import write_table  # noqa: E402
 
 if __name__ == "__main__":
+    use_scratch_cache()  # never the user's cache
     for gait in ("tripod",):
         start = time.perf_counter()
         path = write_table(gait)

@@ -35,6 +35,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from scratch_cache import use_scratch_cache
 
 import hexapod as hx
 from hexapod.minimal import METHODS, ChainModel, count_operations, form
@@ -200,4 +201,5 @@ def main(argv=None) -> dict:
 
 
 if __name__ == "__main__":
+    use_scratch_cache()  # never the user's cache
     main()

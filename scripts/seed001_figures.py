@@ -40,6 +40,7 @@ from dataclasses import dataclass  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
+from scratch_cache import use_scratch_cache  # noqa: E402
 
 import hexapod as hx  # noqa: E402
 from hexapod import (  # noqa: E402  # noqa: E402  # noqa: E402  # noqa: E402
@@ -221,4 +222,5 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
+    use_scratch_cache()  # never the user's cache
     sys.exit(main())

@@ -42,6 +42,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from scratch_cache import use_scratch_cache
 
 import hexapod as hx
 from hexapod import VectorNetwork, read_scene, simulate, vector_network
@@ -408,4 +409,5 @@ def main(argv=None) -> list[dict]:
 
 
 if __name__ == "__main__":
+    use_scratch_cache()  # never the user's cache
     main()

@@ -20,6 +20,8 @@ import argparse
 import time
 from functools import partial
 
+from scratch_cache import use_scratch_cache
+
 import hexapod as hx
 from hexapod import DEFAULT_METHOD
 from hexapod.benchmarks import four_bar_dead_points, n_four_bar
@@ -60,4 +62,5 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
+    use_scratch_cache()  # never the user's cache
     raise SystemExit(main())

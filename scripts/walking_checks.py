@@ -25,6 +25,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # as the command line: small
 import time  # noqa: E402
 
 import numpy as np  # noqa: E402
+from scratch_cache import use_scratch_cache  # noqa: E402
 
 import hexapod as hx  # noqa: E402
 from legs.robot import hexapod_scene  # noqa: E402
@@ -103,4 +104,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
+    use_scratch_cache()  # never the user's cache
     main()

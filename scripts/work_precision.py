@@ -16,9 +16,12 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from scratch_cache import use_scratch_cache
+
 ROOT = Path(__file__).resolve().parents[1]
 
 if __name__ == "__main__":
+    use_scratch_cache()  # never the user's cache
     from hexapod.cli import main
 
     arguments = sys.argv[1:]

@@ -13,9 +13,9 @@ from hexapod.benchmarks import ClosedLoopPendulum, pendulum_exact
 from hexapod.scene.laws import Polynomial
 from hexapod.scene.reader import read_scene
 from hexapod.simulation.integrators import Integrator
-from hexapod.simulation.integrators.base import ENERGY_JUMP
 from hexapod.simulation.loop import simulate
 from hexapod.simulation.registry import INTEGRATORS, get_integrator, register
+from hexapod.simulation.scales import ENERGY_JUMP
 
 from mechanisms import four_bar, sprung_top
 

@@ -145,16 +145,16 @@ def test_inverse_writes_its_units_beside_the_csv(tmp_path, capsys):
 
 
 def test_an_inverse_csv_that_fails_takes_its_sidecar_with_it(tmp_path, capsys, monkeypatch):
-    import hexapod.output.report as report
+    import hexapod.output.inverse_csv as inverse_csv
 
-    real = report.write_atomically
+    real = inverse_csv.write_atomically
 
     def failing(path, content):
         if str(path).endswith(".csv"):
             raise KeyboardInterrupt
         return real(path, content)
 
-    monkeypatch.setattr(report, "write_atomically", failing)
+    monkeypatch.setattr(inverse_csv, "write_atomically", failing)
     code = main(["inverse", str(CHAIN / "model.urdf"), "--motion", str(CHAIN / "motion.csv"),
                  "--out", str(tmp_path / "X.csv")])
     assert code == 130 and list(tmp_path.iterdir()) == []

@@ -207,14 +207,14 @@ def test_body_balance_closes_and_catches_a_wrong_frame(method):
 def test_body_balance_of_a_planar_closed_loop():
     """The four-bar in 3-D (saddle path, a loop-closing joint) and a driven planar double pendulum:
     both close to round-off."""
-    scene = hx.scene.reader.read_scene(SCENES / "four_bar_3d.toml")
+    scene = hx.read_scene(SCENES / "four_bar_3d.toml")
     model = hx.assemble(scene)
     t = np.linspace(0.0, 0.3, 4)
     result = inverse_dynamics(model, t)
     balance = body_balance(model, t, result.q, result.v, result.v_dot, result.force,
                            result.torque)
     assert balance.relative().max() < 1e-11
-    planar = hx.scene.reader.read_scene(SCENES / "double_pendulum_planar.toml")
+    planar = hx.read_scene(SCENES / "double_pendulum_planar.toml")
     for joint in list(planar.joints):
         planar.add(hx.JointDriver(f"drive_{joint}", joint,
                                   hx.Harmonic(offset=0.3, sin=[0.4], frequency=0.7)))
@@ -321,7 +321,7 @@ def test_directory_writer_leaves_nothing_when_it_fails(tmp_path):
 def test_particles_balance_forces_only():
     """The particles of Richard, Anderson and Andrews have no moment equation: their balance is that
     of forces (a moment built of round-off must not read as a 100 % residual)."""
-    model = hx.assemble(hx.scene.reader.read_scene(SCENES / "closed_pendulum_seed002.toml"))
+    model = hx.assemble(hx.read_scene(SCENES / "closed_pendulum_seed002.toml"))
     data = model.create_data()
     q, v = hx.consistent_state(model, data)
     v_dot = hx.forward_dynamics(model, data, 0.0, q, v)

@@ -14,14 +14,15 @@ results:
   body's pose from its parent's and its driver's value (exactly: no Newton iterations), CasADi
   differentiates it for velocities and accelerations, and a backward pass from the leaves gives
   each joint's wrench from its child's Newton-Euler equations. The whole pass is one CasADi
-  Function, compiled to C when a compiler is present and mapped over all samples in one call;
-  its cost grows linearly with the number of bodies.
+  Function, mapped over blocks of samples; its cost grows linearly with the number of bodies.
+  It is kept in the cache on disk under the model's content hash
+  (:mod:`hexapod._support.compiled`): serialized, so that another run of the same model does not
+  build its graph again, and compiled to C once compiling has paid (:func:`compile_pays`).
 """
 
 from __future__ import annotations
 
-import os
-import shutil
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
@@ -30,10 +31,14 @@ import casadi as ca
 import numpy as np
 
 from hexapod._support import signals
-from hexapod.algorithms.dynamics import forward_dynamics
-from hexapod.algorithms.ground import ground_reactions
-from hexapod.algorithms.kinematics import assemble_positions, degrees_of_freedom, solve_velocities
-from hexapod.algorithms.liaison import joint_origin, joint_wrenches
+from hexapod._support.compiled import (
+    COMPILER_FLAGS,
+    QUICK_FLAGS,
+    compiled,
+    find_compiled,
+    interpreted_samples,
+    serialized,
+)
 from hexapod.errors import AssemblyError, HexapodError, SingularSystemError
 from hexapod.model.model import GROUND_INDEX, Model
 from hexapod.spatial import (
@@ -93,11 +98,22 @@ class InverseResult:
     policy: str = ""
 
 
-#: Compiling the tree path costs about 0.2 s per joint and saves about 4.4 microseconds per joint
-#: and sample (scripts/bench_inverse.py): it pays from some 50 000 samples on.
-COMPILE_FROM_SAMPLES = 50_000
-#: Samples per call of the tree path when progress is reported.
-PROGRESS_CHUNK = 2_000
+#: Quick code (gcc -O0) of the tree path costs 0.13 s of CPU to compile for the front leg and
+#: 0.23 s for 18 joints, and evaluates a sample in 3.3 and 7.3 us against the interpreter's 12.8
+#: and 24.7 us: it pays from some 14 000 samples on, counted over every run of the model
+#: (:func:`compile_pays`; scripts/bench_inverse.py).
+COMPILE_FROM_SAMPLES = 15_000
+#: Optimized code (gcc -O2) costs 0.39 and 0.91 s to compile and evaluates a sample in 1.8 and
+#: 5.0 us: it pays over the quick code from 180 000 to 300 000 samples, compiled for a run of
+#: that many.
+OPTIMIZE_FROM_SAMPLES = 200_000
+#: CasADi's map of a Function over ``b`` samples costs about 4 microseconds per sample to build
+#: (once per size), and each call of it about 50 microseconds of Python: the tree path calls
+#: maps over blocks of about sqrt(12 N) of the N samples (at least 64), which keeps both small.
+#: One map over all the samples costs more to build than the compiled code takes to evaluate
+#: them: for the front leg, 4.9 ms against 1.5 ms in blocks at 1000 samples, 194 ms against
+#: 25 ms at 20 000.
+BLOCK_FACTOR, SMALLEST_BLOCK = 12, 64
 
 
 def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = "joint",
@@ -116,11 +132,11 @@ def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = 
         ``"joint"`` (the report convention) or ``"world"``.
     compile :
         Tree path: evaluate compiled C code (True) or CasADi's interpreter (False); by default
-        compile when there are at least :data:`COMPILE_FROM_SAMPLES` samples, or when the
-        model's tree path was compiled before (compilation is kept with the model).
+        compiled code when it is at hand (compiled before, in this process or in the cache on
+        disk) or when compiling pays (:func:`compile_pays`), else the interpreter.
     progress :
-        Called as ``progress(done, total)`` as samples are done (by chunks of
-        :data:`PROGRESS_CHUNK` on the tree path).
+        Called as ``progress(done, total)`` as samples are done (after each block of samples
+        on the tree path, see :data:`BLOCK_FACTOR`).
 
     Raises
     ------
@@ -141,12 +157,35 @@ def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = 
         raise ValueError(f"method must be 'auto', 'tree' or 'saddle', got {method!r}")
     if plan is not None and method in ("auto", "tree"):
         if compile is None:
-            compile = plan.is_compiled or times.size >= COMPILE_FROM_SAMPLES
+            compile = compile_pays(plan, times.size)
         result = plan.solve(times, w, wd, wdd, frame, compiled=compile, progress=progress)
+        if not compile:  # counted over runs, until compiling pays
+            interpreted_samples(plan.key, times.size)
     else:
         result = _saddle(model, times, frame, progress)
     _check_finite(model, result)
     return result
+
+
+def compile_pays(plan: TreePlan, samples: int) -> bool:
+    """Whether to evaluate ``samples`` samples of the tree path compiled, compiling when it
+    pays. A library compiled before (in this process, or in the cache on disk) is used; a run
+    of :data:`OPTIMIZE_FROM_SAMPLES` samples or more compiles optimized code if there is none.
+    Otherwise quick code is compiled once the samples interpreted so far, over every run of the
+    model the cache remembers, and this run's reach :data:`COMPILE_FROM_SAMPLES`: the rule of
+    renting skis until their price is spent. The interpreter's time spent first never passes
+    what compiling costs, so the total is at most twice what the best choice in hindsight would
+    cost; short runs never wait for a compiler, and a model used often is compiled once for all
+    its later runs."""
+    long = samples >= OPTIMIZE_FROM_SAMPLES
+    if not plan.is_compiled:
+        plan.find_library()
+    if plan.is_compiled and (plan.optimized or not long):
+        return True
+    if long or interpreted_samples(plan.key) + samples >= COMPILE_FROM_SAMPLES:
+        plan.compile(optimized=long)
+        return True
+    return False
 
 
 def _check_finite(model: Model, result: InverseResult) -> None:
@@ -165,6 +204,13 @@ def _check_finite(model: Model, result: InverseResult) -> None:
 # ------------------------------------------------------------------ the saddle path
 
 def _saddle(model, times, frame, progress) -> InverseResult:
+    # the saddle path's algorithms, loaded when it runs: the tree path (and 'hexapod inverse'
+    # on a leg or a URDF robot) starts without them
+    from hexapod.algorithms.dynamics import forward_dynamics
+    from hexapod.algorithms.ground import ground_reactions
+    from hexapod.algorithms.kinematics import degrees_of_freedom, solve_velocities
+    from hexapod.algorithms.liaison import joint_wrenches
+
     n, J = times.size, len(model.joints)
     force, torque, effort = np.zeros((n, J, 3)), np.zeros((n, J, 3)), np.zeros((n, J))
     Q, V, A = np.zeros((n, model.n_q)), np.zeros((n, model.n_v)), np.zeros((n, model.n_v))
@@ -218,6 +264,8 @@ def _next_positions(model: Model, data, t0: float, q0: np.ndarray, t: float, rat
     """Positions at ``t`` from the solved ones at ``t0``: from a second-order prediction with
     the velocities and accelerations ``rates`` at ``t0`` (Newton's method then needs one or two
     steps, not five), else by :func:`_follow`."""
+    from hexapod.algorithms.kinematics import assemble_positions
+
     if rates is not None:
         h = t - t0
         guess = model.integrate(q0, h * rates[0] + h * h / 2 * rates[1])
@@ -233,6 +281,8 @@ def _follow(model: Model, data, t0: float, q0: np.ndarray, t: float, depth: int 
     """Positions at ``t`` from those at ``t0``: Newton's method from ``q0``, and when the
     samples are too far apart for it (a robot's legs swing a long way between coarse samples),
     through the time halfway first."""
+    from hexapod.algorithms.kinematics import assemble_positions
+
     try:
         return assemble_positions(model, data, t, q0)
     except AssemblyError:
@@ -244,14 +294,6 @@ def _follow(model: Model, data, t0: float, q0: np.ndarray, t: float, depth: int 
 
 # ------------------------------------------------------------------ the tree path
 
-def _compiler_options() -> dict:
-    """JIT options for CasADi when a C compiler is present (``HEXAPOD_NO_JIT=1`` disables)."""
-    if os.environ.get("HEXAPOD_NO_JIT") or not (shutil.which("gcc") or shutil.which("cc")):
-        return {}
-    return {"jit": True, "compiler": "shell",
-            "jit_options": {"flags": ["-O2"], "verbose": False}}
-
-
 class TreePlan:
     """The tree-ordered inverse dynamics of one model (built once, evaluated on many samples)."""
 
@@ -259,25 +301,56 @@ class TreePlan:
         self.model = model
         self.order = order  # joints, parents first
         self.driver_of = driver_of  # joint index -> driver index
+        #: the compiled Function in use (None before any), and whether it is optimized code
+        self.library: ca.Function | None = None
+        self.optimized = False
+
+    @property
+    def key(self) -> str | None:
+        """The key of the plan's Functions in the cache: the model's content hash and the
+        plan's name (None for a model without a content hash: nothing is cached)."""
+        return f"{self.model.digest}/tree-inverse" if self.model.digest else None
+
+    @property
+    def _what(self) -> str:
+        return (f"tree-ordered inverse dynamics of '{self.model.name}' "
+                f"({len(self.model.joints)} joints)")
 
     @cached_property
     def function(self) -> ca.Function:
         """``(w, wd, wdd) -> (q, v, v_dot, wrench, rotation)`` for one sample: the joint wrenches
         (6 x J: force then moment about the joint origin, joint frame) and the joint frames'
-        rotations (9 x J, column-major). Interpreted by CasADi's virtual machine."""
-        return ca.Function("tree_inverse", *self._expressions)
+        rotations (9 x J, column-major). Interpreted by CasADi's virtual machine; read from the
+        cache when it holds it (no graph to build), else built and stored there."""
+        return serialized(self.key, lambda: ca.Function("tree_inverse", *self._expressions),
+                          what=self._what)
 
-    @cached_property
+    @property
     def compiled(self) -> ca.Function:
-        """The same Function compiled to C (JIT), or the interpreted one when no compiler is
-        present or ``HEXAPOD_NO_JIT`` is set."""
-        options = _compiler_options()
-        if not options:
-            return self.function
-        expressions = self._expressions
-        # the compiler runs through system(), which would discard a SIGINT sent meanwhile
-        with signals.deferred():
-            return ca.Function("tree_inverse", *expressions, options)
+        """The same Function compiled to C: the library in use, else optimized code from the
+        cache, or compiled now and stored there; the interpreted one when no compiler is present
+        or ``HEXAPOD_NO_JIT`` is set."""
+        if self.library is None:
+            self.compile(optimized=True)
+        return self.library
+
+    def compile(self, optimized: bool) -> ca.Function:
+        """Use code compiled with :data:`~hexapod._support.compiled.COMPILER_FLAGS` (optimized)
+        or :data:`~hexapod._support.compiled.QUICK_FLAGS`: from the cache, else compiled now
+        and stored there."""
+        flags = COMPILER_FLAGS if optimized else QUICK_FLAGS
+        self.library = compiled(self.key, lambda: self.function, what=self._what, flags=flags)
+        self.optimized = optimized
+        return self.library
+
+    def find_library(self) -> bool:
+        """Use the library the cache holds, optimized code first; False when it holds none."""
+        for optimized, flags in ((True, COMPILER_FLAGS), (False, QUICK_FLAGS)):
+            found = find_compiled(self.key, flags)
+            if found is not None:
+                self.library, self.optimized = found, optimized
+                return True
+        return False
 
     @cached_property
     def _expressions(self) -> tuple:
@@ -366,7 +439,8 @@ class TreePlan:
 
     @property
     def is_compiled(self) -> bool:
-        return "compiled" in self.__dict__ and self.compiled is not self.function
+        """Whether compiled code is in use (not the interpreter)."""
+        return self.library is not None and self.library is not self.__dict__.get("function")
 
     def _driver_value(self, joint: int, w: ca.SX):
         if joint not in self.driver_of:
@@ -387,11 +461,12 @@ class TreePlan:
     def _evaluator(self, n: int, compiled: bool):
         """The Function mapped over ``n`` samples and its buffer, built once per ``n``."""
         cache = self.__dict__.setdefault("_evaluators", {})
-        if (n, compiled) not in cache:
+        key = (n, compiled, compiled and self.optimized)  # quick code may give way to optimized
+        if key not in cache:
             function = self.compiled if compiled else self.function
             mapped = function.map(n, "serial") if n > 1 else function
-            cache[n, compiled] = (mapped, *mapped.buffer())
-        return cache[n, compiled]
+            cache[key] = (mapped, *mapped.buffer())
+        return cache[key]
 
     def solve(self, times, w, wd, wdd, frame, compiled: bool,
               progress: Callable[[int, int], None] | None = None) -> InverseResult:
@@ -400,10 +475,9 @@ class TreePlan:
         inputs = [np.ascontiguousarray(x.T) for x in (w, wd, wdd)]
         q, v, v_dot = np.empty((n, model.n_q)), np.empty((n, model.n_v)), np.empty((n, model.n_v))
         wrench, rotation = np.empty((n, J, 6)), np.empty((n, J, 9))
-        # one call for all samples, or calls over chunks of samples to report progress
-        chunk = max(1, n if progress is None else min(n, PROGRESS_CHUNK))
-        for start in range(0, n, chunk):
-            stop = min(n, start + chunk)
+        block = min(n, max(SMALLEST_BLOCK, round(math.sqrt(BLOCK_FACTOR * n))))
+        for start in range(0, n, block):
+            stop = min(n, start + block)
             _, buffer, evaluate = self._evaluator(stop - start, compiled)
             for i, x in enumerate(inputs):
                 buffer.set_arg(i, memoryview(x[start:stop]))
@@ -479,4 +553,6 @@ def _make_tree_plan(model: Model) -> TreePlan | None:
 
 def joint_frames_world(model: Model, q: np.ndarray) -> list:
     """World origin and rotation of every joint frame at ``q`` (for reports)."""
+    from hexapod.algorithms.liaison import joint_origin
+
     return [joint_origin(model, q, joint) for joint in model.joints]

@@ -17,6 +17,7 @@ import warnings
 from hexapod._version import __version__
 from hexapod.cli import (
     bench,
+    cache,
     check,
     dynamics,
     export,
@@ -32,22 +33,36 @@ from hexapod.errors import HexapodError
 
 #: The commands, in the order ``hexapod --help`` lists them; each is named by its module.
 COMMANDS = (dynamics, info, inverse, report, simulate, sweep, check, export, bench, validate,
-            scenes)
+            scenes, cache)
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
+    """The parser of every command; given the arguments ``argv`` it will parse, only the
+    command they name gets its arguments (the others' are not needed, and building them all
+    costs 4 ms of every run)."""
     parser = argparse.ArgumentParser(
         prog="hexapod",
         description="Constrained multibody dynamics in absolute coordinates for legged robots.")
     parser.add_argument("--version", action="version", version=f"hexapod {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
-    for command in COMMANDS:
-        name = command.__name__.rpartition(".")[2]
+    names = [command.__name__.rpartition(".")[2] for command in COMMANDS]
+    chosen = _command_named(argv, names)
+    for name, command in zip(names, COMMANDS, strict=True):
         p = sub.add_parser(name, help=command.HELP, description=command.DESCRIPTION)
-        command.add_arguments(p)
+        if chosen is None or name == chosen:
+            command.add_arguments(p)
         p.set_defaults(run=command.run)
     return parser
+
+
+def _command_named(argv: list[str] | None, names: list[str]) -> str | None:
+    """The command ``argv`` runs: its first argument when it names one (the options before it
+    are the program's own: --help, --version), else None (every command's arguments built)."""
+    if argv is None:
+        return None
+    first = next((a for a in argv if not a.startswith("-")), None)
+    return first if first in names else None
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -60,7 +75,7 @@ def main(argv: list[str] | None = None) -> int:
     # itself changes no process state; the test session sets the same (tests/conftest.py).
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     try:
-        args = build_parser().parse_args(argv)
+        args = build_parser(sys.argv[1:] if argv is None else argv).parse_args(argv)
         _check_address_space()
         status = _run(args)
     except HexapodError as error:

@@ -42,7 +42,7 @@ def run(args) -> int:
 
     from hexapod.algorithms.inverse import inverse_dynamics
     from hexapod.model.assemble import assemble
-    from hexapod.output.report import units_path, write_inverse_files
+    from hexapod.output.inverse_csv import units_path, write_inverse_files
     from hexapod.scene.builtin import load_scene
     from hexapod.scene.motion import MotionWarning, apply_motion, read_motion
 

@@ -12,6 +12,7 @@ import numpy as np
 
 from hexapod._support.graphs import spanning_forest
 from hexapod._support.limits import check_model_size
+from hexapod.model.digest import scene_digest
 from hexapod.model.forces import ForceBuilder, gravity_potential, inertial_forces
 from hexapod.model.frames import BodyState
 from hexapod.model.joints import (
@@ -35,6 +36,7 @@ from hexapod.model.model import (
     RowInfo,
     Symbolic,
 )
+from hexapod.model.stored import restore, store
 from hexapod.scene.bodies import Particle, PlanarBody, SpatialBody
 from hexapod.scene.contacts import Foothold, StanceGate
 from hexapod.scene.drivers import CoordinateDriver, JointDriver
@@ -59,18 +61,22 @@ class _Laws:
 
     def __init__(self):
         self.laws: list[Law] = []
+        self.where: list[tuple] = []  # where each law is found in the scene (model/stored.py)
         self.w: list[ca.SX] = []
         self.wd: list[ca.SX] = []
         self.wdd: list[ca.SX] = []
 
-    def value(self, law: Law, label: str) -> tuple[ca.SX, int]:
-        """The law's value as an expression, and its index (-1 for a constant)."""
+    def value(self, law: Law, label: str, where: tuple) -> tuple[ca.SX, int]:
+        """The law's value as an expression, and its index (-1 for a constant). ``where`` says
+        where the law is found in the scene (:func:`hexapod.model.stored.find_law`), so that a
+        model read from the cache takes the laws of the scene at hand."""
         if isinstance(law, Constant):
             return ca.SX(law.value), -1
         index = len(self.laws)
         self.laws.append(law)
-        for store, suffix in ((self.w, ""), (self.wd, "_d"), (self.wdd, "_dd")):
-            store.append(ca.SX.sym(f"{label}{suffix}"))
+        self.where.append(where)
+        for symbols, suffix in ((self.w, ""), (self.wd, "_d"), (self.wdd, "_dd")):
+            symbols.append(ca.SX.sym(f"{label}{suffix}"))
         return self.w[index], index
 
     def symbols(self) -> tuple[ca.SX, ca.SX, ca.SX]:
@@ -244,11 +250,11 @@ class _Assembly:
     def _contact_rows(self, contact: Contact, g: JointGeometry) -> list:
         """``gate (r_foot - foothold)`` in world axes; gate and foothold are law values, so
         the contact set and the footholds change without rebuilding anything."""
-        gate, self.gate_law[contact.name] = self.laws.value(StanceGate(contact),
-                                                            f"{contact.name}/gate")
+        gate, self.gate_law[contact.name] = self.laws.value(
+            StanceGate(contact), f"{contact.name}/gate", ("gate", contact.name))
         point = g.child.point(g.child_frame.position)
-        return [(axis, gate * (point[i] - self.laws.value(Foothold(contact, i),
-                                                           f"{contact.name}/{axis}0")[0]),
+        return [(axis, gate * (point[i] - self.laws.value(
+            Foothold(contact, i), f"{contact.name}/{axis}0", ("foothold", contact.name, i))[0]),
                  LENGTH) for i, axis in enumerate("xyz")]
 
     def drivers(self) -> tuple[list[DriverInfo], dict[str, list[int]]]:
@@ -259,7 +265,7 @@ class _Assembly:
         offset = {"x": 0, "y": 1, "z": 2, "angle": 2}
         drivers, on_joint = [], {}
         for driver in si.drivers.values():
-            f, law = self.laws.value(driver.law, driver.name)
+            f, law = self.laws.value(driver.law, driver.name, ("driver", driver.name))
             if isinstance(driver, JointDriver):
                 joint = joints[driver.joint]
                 unit = "length" if joint.kind == "prismatic" else "angle"
@@ -290,8 +296,8 @@ class _Assembly:
             return Placement.identity(self.dim)
         return self.scene_bodies[body].pose
 
-    def _components(self, name: str, laws) -> ca.SX:
-        return ca.vertcat(*[self.laws.value(law, f"{name}[{i}]")[0]
+    def _components(self, name: str, attribute: str, laws) -> ca.SX:
+        return ca.vertcat(*[self.laws.value(law, f"{name}[{i}]", ("force", name, attribute, i))[0]
                             for i, law in enumerate(laws)])
 
     def forces(self) -> tuple[ForceBuilder, dict[str, list[str]], list[ForceInfo]]:
@@ -326,8 +332,8 @@ class _Assembly:
                 free = element.free_length
                 if free is None:
                     free = float(np.linalg.norm(world_b - world_a))
-                force = None if element.force is None else self.laws.value(element.force,
-                                                                           name)[0]
+                force = None if element.force is None else self.laws.value(
+                    element.force, name, ("force", name, "force", None))[0]
                 builder.spring_damper(name, self.states[a], pa, self.states[b], pb,
                                       element.stiffness, element.damping, free, force)
                 if frozenset((a, b)) in pairs:
@@ -335,7 +341,7 @@ class _Assembly:
                 infos.append(ForceInfo(name, element.kind, (body(a), body(b)), (pa, pb)))
             elif isinstance(element, AppliedForce):
                 state = self.states[element.body]
-                components = self._components(name, element.force)
+                components = self._components(name, "force", element.force)
                 if element.frame == "body":
                     components = ca.mtimes(state.R, components)
                 point = self._point(element.body, element.point)[0]
@@ -344,7 +350,7 @@ class _Assembly:
                 infos.append(ForceInfo(name, element.kind, (body(element.body),), (point,)))
             elif isinstance(element, AppliedTorque):
                 state = self.states[element.body]
-                components = self._components(name, element.torque)
+                components = self._components(name, "torque", element.torque)
                 if element.frame == "body" and self.dim == 3:
                     components = ca.mtimes(state.R, components)
                 builder.torque_on(name, state, components)
@@ -353,7 +359,8 @@ class _Assembly:
             elif isinstance(element, JointEffort):
                 joint, g = on_joint(element)
                 rate = joint_rate(joint.kind, g, self.q, self.qdot)
-                builder.effort(name, rate, self.laws.value(element.law, name)[0])
+                builder.effort(name, rate, self.laws.value(element.law, name,
+                                                           ("force", name, "law", None))[0])
                 builder.nonconservative.append(name)
             elif isinstance(element, RotationalSpringDamper):
                 _, g = on_joint(element)
@@ -362,13 +369,14 @@ class _Assembly:
                 torque = -element.stiffness * twist - element.damping * rate
                 builder.potential = builder.potential + element.stiffness * twist**2 / 2
                 if element.torque is not None:
-                    torque = torque + self.laws.value(element.torque, name)[0]
+                    torque = torque + self.laws.value(element.torque, name,
+                                                      ("force", name, "torque", None))[0]
                 if element.damping or element.torque is not None:
                     builder.nonconservative.append(name)
                 builder.effort(name, rate, torque)
         return builder, across, infos
 
-    def model(self, rank_tolerance: float) -> Model:
+    def model(self, rank_tolerance: float, digest: str = "") -> Model:
         parts = self.joints()
         drivers, on_joint = self.drivers()
         builder, across, forces = self.forces()
@@ -398,11 +406,13 @@ class _Assembly:
                      q0=self.q0, v0=self.v0, mass=self.mass, symbolic=symbolic,
                      forces=tuple(forces), rank_tolerance=rank_tolerance,
                      working_elements=tuple(working), report_forces=self.si.report_forces,
-                     contacts=tuple(self.contacts), ground=self.si.ground)
+                     contacts=tuple(self.contacts), ground=self.si.ground, digest=digest)
 
 
 def assemble(scene: Scene, *, rank_tolerance: float = 1e-9) -> Model:
-    """Validate ``scene`` and build its :class:`~hexapod.model.model.Model` (SI units).
+    """Validate ``scene`` and build its :class:`~hexapod.model.model.Model` (SI units): read
+    back from the cache on disk when a scene of the same content was assembled before
+    (:mod:`hexapod.model.stored`), with this scene's laws.
 
     Parameters
     ----------
@@ -422,6 +432,12 @@ def assemble(scene: Scene, *, rank_tolerance: float = 1e-9) -> Model:
     where = f" ({scene.source})" if scene.source else ""
     check_model_size(len(scene.bodies), len(scene.joints), f"scene '{scene.name}'{where}")
     scene.validate()
-    model = _Assembly(scene.in_si()).model(rank_tolerance)
+    si = scene.in_si()
+    digest = scene_digest(si, rank_tolerance)
+    model = restore(si, digest) if digest else None  # built before: from the cache on disk
+    if model is None:
+        assembly = _Assembly(si)
+        model = assembly.model(rank_tolerance, digest)
+        store(model, assembly.laws.where)
     model.source = scene.source  # the file the scene was read from, named by later errors
     return model

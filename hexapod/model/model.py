@@ -236,8 +236,12 @@ class Model:
                  mass: BlockDiagonal, symbolic: Symbolic, forces: tuple[ForceInfo, ...],
                  rank_tolerance: float = 1e-9, working_elements: tuple[str, ...] = (),
                  report_forces: bool = False, contacts: tuple[ContactInfo, ...] = (),
-                 ground=None):
+                 ground=None, digest: str = ""):
         self.name = name
+        #: the content hash of what the model was built from (:mod:`hexapod.model.digest`):
+        #: equal for models whose Functions are the same, the key of their cached code; empty
+        #: for a model built otherwise than by :func:`hexapod.assemble` (nothing is cached)
+        self.digest = digest
         #: the feet's contacts with the ground, and the policy sharing their forces
         self.contacts = contacts
         self.ground = ground

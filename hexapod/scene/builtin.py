@@ -48,14 +48,14 @@ def load_scene(name_or_path: str | Path) -> Scene:
         The file cannot be read or is malformed (the message names the file, the element and
         the problem), or there is no such file and no built-in scene of that name.
     """
-    from hexapod.scene.reader import read_scene
-
     path = Path(name_or_path)
     if path.suffix.lower() in (".urdf", ".xml"):
         from hexapod.scene.urdf import read_urdf
 
         return read_urdf(path)
     if path.suffix == ".toml" or path.is_file():
+        from hexapod.scene.reader import read_scene  # with TOML's parser: not for a URDF
+
         return read_scene(path)
     scenes = builtin_scenes()
     if str(name_or_path) in scenes:

@@ -57,12 +57,6 @@ from hexapod._support import signals
 from hexapod._support.fastcall import FastFunction
 from hexapod._support.files import write_atomically
 from hexapod.model.model import Model
-from hexapod.simulation.integrators.base import (
-    BRANCH_JUMP,
-    ENERGY_JUMP,
-    ROUND_OFF,
-    motion_scales,
-)
 from hexapod.simulation.kernels import (
     REDUNDANT_TOLERANCE,
     RESIDUAL_TOLERANCE,
@@ -70,6 +64,7 @@ from hexapod.simulation.kernels import (
     compiled_projection,
     compiled_rates,
 )
+from hexapod.simulation.scales import BRANCH_JUMP, ENERGY_JUMP, ROUND_OFF, motion_scales
 
 #: attempts of a step per call of the kernel, at most (the integrator's side asks for fewer
 #: when its steps are slow: :class:`~hexapod.simulation.compiled_steps.CompiledStepper`)

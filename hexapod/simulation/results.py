@@ -30,6 +30,7 @@ import io
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -41,7 +42,9 @@ from hexapod.model.units import (
     VELOCITY_UNITS,
     component,
 )
-from hexapod.simulation.integrators import Counters
+
+if TYPE_CHECKING:  # the integrators load SciPy: 'hexapod inverse' writes results without them
+    from hexapod.simulation.integrators import Counters
 
 WRENCH_COMPONENTS = ("Fx", "Fy", "Fz", "Tx", "Ty", "Tz")
 

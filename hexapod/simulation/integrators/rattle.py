@@ -76,8 +76,9 @@ from hexapod.algorithms.linalg import (
     solve_or_least_squares,
     split_rows,
 )
-from hexapod.simulation.integrators.base import ENERGY_JUMP, Integrator, Interpolant
+from hexapod.simulation.integrators.base import Integrator, Interpolant
 from hexapod.simulation.integrators.stability import largest_stable_step, oscillator_parameters
+from hexapod.simulation.scales import ENERGY_JUMP
 from hexapod.spatial import quaternion_product, skew
 
 #: Newton iterations of each Moser–Veselov equation, unrolled in the step Function: from the

@@ -1,0 +1,471 @@
+"""A cache on disk of what is slow to build (compiled code, serialized CasADi Functions), kept
+under content hashes, so that the second run of the same model builds nothing.
+
+Where, and how large
+--------------------
+=====================  ======================================================================
+``HEXAPOD_CACHE_DIR``  the cache folder; else ``$XDG_CACHE_HOME/hexapod``, else
+                       ``~/.cache/hexapod``
+``HEXAPOD_CACHE``      ``0`` (or ``off``, ``no``, ``false``): no cache; nothing is read or
+                       written, everything is built in each process
+``HEXAPOD_CACHE_SIZE`` the most the entries may hold, e.g. ``2G`` (default 1 GiB); beyond it
+                       the entries used least recently are removed
+=====================  ======================================================================
+
+Layout
+------
+``FOLDER/v1/KEY/`` holds one entry: its files and ``meta.json`` (what it is, when and by which
+versions it was made, the SHA-256 of every file). ``KEY`` is a SHA-256 of what the entry was
+built from (:func:`key`). An entry is written in a staging folder (``FOLDER/v1/.staging-PID-*``)
+and renamed into place in one step, so that no process ever sees half of one; when two
+processes build the same entry at once, both succeed and the first one renamed is kept. An
+entry whose files do not match their checksums (corrupted, truncated, written by something
+else) is removed and built again; the cache never makes a computation fail. The last use of an
+entry is its folder's modification time, set at each use. Only folders it made itself are ever
+removed (``FOLDER`` may be shared with other files), and only a folder owned by the user and
+writable by nobody else is used (a cached library is code that runs).
+
+Nothing here imports CasADi: :mod:`hexapod._support.compiled` puts CasADi Functions in the
+cache, and ``hexapod cache`` lists and cleans it.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import hashlib
+import json
+import os
+import re
+import shutil
+import sys
+import tempfile
+import time
+import warnings
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+from hexapod._support.files import write_atomically
+from hexapod._support.limits import GIB, parse_size, size_text
+from hexapod.errors import HexapodError
+
+#: The environment variables (see the module docstring).
+FOLDER_VARIABLE = "HEXAPOD_CACHE_DIR"
+SWITCH_VARIABLE = "HEXAPOD_CACHE"
+SIZE_VARIABLE = "HEXAPOD_CACHE_SIZE"
+#: The default size limit of the entries.
+DEFAULT_LIMIT = GIB
+#: The layout version: the folder of the entries under the cache folder.
+LAYOUT = "v1"
+#: An entry's description of itself.
+META = "meta.json"
+#: Staging and trash folders of processes that are gone, or older than this (s), are removed.
+LEFTOVER_AGE = 24 * 3600.0
+
+_KEY = re.compile(r"[0-9a-f]{64}")
+_OFF = ("0", "off", "no", "false")
+_TAG = ("Signature: 8a477f597d28d172789f06886806bc55\n"
+        "# This file is a cache directory tag created by hexapod (compiled code and\n"
+        "# serialized functions, rebuilt when missing): see 'hexapod cache --help'.\n")
+
+
+class CacheWarning(UserWarning):
+    """The cache cannot be used (a folder that cannot be written, a bad setting): everything is
+    then built in the process, as without a cache."""
+
+
+# ------------------------------------------------------------------ settings
+
+
+def folder(environ=None) -> Path | None:
+    """The cache folder, or None when the cache is turned off (``HEXAPOD_CACHE=0``)."""
+    environ = os.environ if environ is None else environ
+    if environ.get(SWITCH_VARIABLE, "").strip().lower() in _OFF:
+        return None
+    given = environ.get(FOLDER_VARIABLE, "").strip()
+    if given:
+        return Path(given).expanduser()
+    xdg = environ.get("XDG_CACHE_HOME", "").strip()
+    if xdg and Path(xdg).is_absolute():  # the XDG rule: a relative value is ignored
+        return Path(xdg) / "hexapod"
+    return Path.home() / ".cache" / "hexapod"
+
+
+def size_limit(environ=None) -> int:
+    """The most the entries may hold, in bytes (``HEXAPOD_CACHE_SIZE``, default 1 GiB).
+
+    Raises
+    ------
+    HexapodError
+        When the variable is not a size.
+    """
+    environ = os.environ if environ is None else environ
+    text = environ.get(SIZE_VARIABLE, "").strip()
+    if not text:
+        return DEFAULT_LIMIT
+    try:
+        return parse_size(text)
+    except ValueError as error:
+        raise HexapodError(f"{SIZE_VARIABLE}={text!r}: {error}") from None
+
+
+def key(*parts: str) -> str:
+    """The key of an entry built from ``parts`` (strings saying everything the entry depends
+    on), with the version and the sources of hexapod: a SHA-256, 64 hexadecimal digits. The
+    same parts give the same key in every process; an edited source file gives new keys."""
+    digest = hashlib.sha256()
+    for part in (LAYOUT, _code_identity(), *parts):
+        data = str(part).encode("utf-8")
+        digest.update(len(data).to_bytes(8, "little"))  # unambiguous: ("ab", "c") != ("a", "bc")
+        digest.update(data)
+    return digest.hexdigest()
+
+
+@functools.cache
+def _code_identity() -> str:
+    """hexapod's version, and the path, size and modification time of each of its source files
+    (a stat of each, not a read: half a millisecond): code built from other sources is never
+    taken for this one's."""
+    from hexapod._version import __version__
+
+    package = Path(__file__).resolve().parent.parent
+    files: list[str] = []
+
+    def walk(path: str, prefix: str) -> None:
+        with contextlib.suppress(OSError), os.scandir(path) as listing:
+            for item in listing:
+                if item.is_dir(follow_symlinks=False):
+                    if item.name != "__pycache__":
+                        walk(item.path, f"{prefix}{item.name}/")
+                elif item.name.endswith(".py"):
+                    with contextlib.suppress(OSError):
+                        status = item.stat()
+                        files.append(f"{prefix}{item.name}:{status.st_size}:"
+                                     f"{status.st_mtime_ns}")
+
+    walk(str(package), "")
+    digest = hashlib.sha256("\n".join(sorted(files)).encode("utf-8")).hexdigest()
+    return f"hexapod {__version__} {digest}"
+
+
+# ------------------------------------------------------------------ the entries
+
+
+@dataclass(frozen=True)
+class Entry:
+    """One entry: its key, folder, size (bytes), last use (seconds since the epoch) and what it
+    holds (from its ``meta.json``; empty when not read)."""
+
+    key: str
+    path: Path
+    size: int
+    used: float
+    what: str = ""
+
+
+def _entries_folder(root: Path) -> Path:
+    return root / LAYOUT
+
+
+def _folder_size(path: Path) -> int:
+    size = 0
+    with contextlib.suppress(OSError), os.scandir(path) as files:
+        for entry in files:
+            with contextlib.suppress(OSError):
+                size += entry.stat(follow_symlinks=False).st_size
+    return size
+
+
+def entries(root: Path | None = None, *, describe: bool = False) -> list[Entry]:
+    """The entries of the cache folder ``root`` (default: :func:`folder`), least recently used
+    first; with ``describe``, each with what it holds. Empty when there is no cache."""
+    root = folder() if root is None else root
+    if root is None:
+        return []
+    out = []
+    try:
+        listing = list(os.scandir(_entries_folder(root)))
+    except OSError:
+        return []
+    for item in listing:
+        if not (_KEY.fullmatch(item.name) and item.is_dir(follow_symlinks=False)):
+            continue
+        try:
+            used = item.stat(follow_symlinks=False).st_mtime
+        except OSError:  # removed meanwhile
+            continue
+        what = _read_meta(Path(item.path)).get("what", "?") if describe else ""
+        out.append(Entry(item.name, Path(item.path), _folder_size(Path(item.path)), used,
+                         str(what)))
+    out.sort(key=lambda e: (e.used, e.key))
+    return out
+
+
+def _read_meta(path: Path) -> dict:
+    try:
+        meta = json.loads((path / META).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return meta if isinstance(meta, dict) else {}
+
+
+def _usable(root: Path) -> bool:
+    """Whether the entries' folder exists, belongs to this user and nobody else may write in
+    it (``os.getuid`` missing: not a POSIX system, nothing to check)."""
+    try:
+        status = os.stat(_entries_folder(root))
+    except OSError:
+        return False
+    if hasattr(os, "getuid") and (status.st_uid != os.getuid() or status.st_mode & 0o022):
+        _warn_once(f"{_entries_folder(root)}: not used as hexapod's cache: it belongs to "
+                   "another user or others may write in it (a cached library is code that "
+                   f"runs); set {FOLDER_VARIABLE} to a folder of your own")
+        return False
+    return True
+
+
+def load(entry_key: str) -> tuple[Path, dict[str, bytes]] | None:
+    """The folder and files (name -> content) of the entry ``entry_key``, checked against their
+    checksums and marked as used now; None when there is none (or no cache). An entry that
+    fails its check is removed."""
+    root = folder()
+    if root is None or not _usable(root):
+        return None
+    path = _entries_folder(root) / entry_key
+    meta = _read_meta(path)
+    if not meta:
+        if path.exists():
+            discard(entry_key)
+        return None
+    files = {}
+    listed = meta.get("files")
+    try:
+        if not isinstance(listed, dict) or not listed:
+            raise ValueError("no files listed")
+        for name, checksum in listed.items():
+            if not isinstance(name, str) or "/" in name or name in ("", ".", "..", META):
+                raise ValueError(f"bad file name {name!r}")
+            data = (path / name).read_bytes()
+            if hashlib.sha256(data).hexdigest() != checksum:
+                raise ValueError(f"{name} does not match its checksum")
+            files[name] = data
+    except (OSError, ValueError):
+        discard(entry_key)
+        return None
+    with contextlib.suppress(OSError):
+        os.utime(path)  # used now: the last to be evicted
+    return path, files
+
+
+def discard(entry_key: str) -> None:
+    """Remove the entry ``entry_key`` (when there is one): renamed away in one step, then
+    deleted, so that no process finds half of it."""
+    root = folder()
+    if root is not None and _KEY.fullmatch(entry_key):
+        _remove(_entries_folder(root) / entry_key)
+
+
+def _remove(path: Path) -> bool:
+    trash = path.with_name(f".trash-{os.getpid()}-{os.urandom(4).hex()}")
+    try:
+        os.rename(path, trash)
+    except OSError:
+        return False
+    shutil.rmtree(trash, ignore_errors=True)
+    return True
+
+
+@contextlib.contextmanager
+def writing(entry_key: str | None, what: str) -> Iterator[Path]:
+    """A folder to build the entry ``entry_key`` in, published as that entry when the block
+    ends without error (``what`` says what it holds, for ``hexapod cache info``).
+
+    Without a usable cache (turned off, or its folder cannot be written: a
+    :class:`CacheWarning` says so once), or with ``entry_key=None`` (nothing to keep), the
+    folder is a temporary one, removed at the end: the caller must have loaded what it built
+    before the block ends. When another process published the same entry first, its entry is
+    kept and this one dropped. Then the entries used least recently are removed beyond the size
+    limit.
+    """
+    limit = size_limit()  # a bad setting is said before the build, not after it
+    root = _prepared(folder()) if entry_key is not None else None
+    if root is None:
+        with tempfile.TemporaryDirectory(prefix="hexapod-build-") as scratch:
+            yield Path(scratch)
+        return
+    staging = Path(tempfile.mkdtemp(prefix=f".staging-{os.getpid()}-",
+                                    dir=_entries_folder(root)))
+    try:
+        yield staging
+        try:
+            _publish(staging, entry_key, what)
+        except (OSError, HexapodError) as error:  # a full disk: the work is done, not kept
+            _warn_once(f"cannot keep {what} in the cache folder {root} ({error}): it will be "
+                       "built again in the next run")
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)  # dropped, or left by a failed build
+    _evict(root, limit, keep=entry_key)
+
+
+def _prepared(root: Path | None) -> Path | None:
+    """``root`` with its entries' folder made (mode 0700) and tagged, or None (with a warning
+    once) when it cannot be used."""
+    if root is None:
+        return None
+    entries_folder = _entries_folder(root)
+    try:
+        entries_folder.mkdir(mode=0o700, parents=True, exist_ok=True)
+        tag = root / "CACHEDIR.TAG"  # backup tools skip folders so tagged
+        if not tag.exists():
+            with contextlib.suppress(HexapodError):
+                write_atomically(tag, _TAG, durable=False)
+    except OSError as error:
+        _warn_once(f"cannot write in the cache folder {root} ({error.strerror or error}): "
+                   f"everything is built again in each run; set {FOLDER_VARIABLE} to a folder "
+                   f"you can write, or {SWITCH_VARIABLE}=0")
+        return None
+    if not _usable(root):
+        return None
+    _remove_leftovers(entries_folder)
+    return root
+
+
+def _publish(staging: Path, entry_key: str, what: str) -> None:
+    """Write the staging folder's ``meta.json`` and rename the folder to the entry's name."""
+    files = {}
+    for item in sorted(os.scandir(staging), key=lambda e: e.name):
+        if item.is_file(follow_symlinks=False):
+            with open(item.path, "rb") as stream:
+                files[item.name] = hashlib.file_digest(stream, "sha256").hexdigest()
+    from hexapod._version import __version__
+
+    meta = {"what": what, "files": files, "created": int(time.time()), "hexapod": __version__,
+            "python": sys.version.split()[0]}
+    write_atomically(staging / META, json.dumps(meta, indent=1) + "\n", durable=False)
+    try:
+        os.rename(staging, staging.with_name(entry_key))
+    except OSError:  # published meanwhile by another process: that entry is kept
+        pass
+
+
+def tally(entry_key: str, amount: int = 0) -> int:
+    """Add ``amount`` to a count kept with the entry ``entry_key`` (e.g. samples evaluated by
+    a Function the entry holds, over many runs) and return the new count (0 plus ``amount``
+    when there is no such entry, or no cache). Counts of processes running at once may be
+    lost: a count is an estimate for deciding what to build, never a result."""
+    root = folder()
+    if root is None or not _KEY.fullmatch(entry_key):
+        return amount
+    path = _entries_folder(root) / entry_key
+    if not (path / META).is_file():
+        return amount
+    count_file = path / "tally"
+    try:
+        before = max(int(count_file.read_text(encoding="ascii")), 0)
+    except (OSError, ValueError):  # none yet, or garbled
+        before = 0
+    if amount == 0:
+        return before
+    with contextlib.suppress(HexapodError):  # a count not kept is a count lost, no more
+        write_atomically(count_file, str(before + amount), durable=False)
+    return before + amount
+
+
+# ------------------------------------------------------------------ size and cleaning
+
+
+def _evict(root: Path, limit: int, keep: str = "") -> None:
+    """Remove the entries used least recently until the rest hold at most ``limit`` bytes
+    (``keep``, the entry just written, goes last)."""
+    listed = entries(root)
+    total = sum(e.size for e in listed)
+    if total <= limit:
+        return
+    listed.sort(key=lambda e: e.key == keep)  # stable: least recently used first otherwise
+    for entry in listed:
+        if total <= limit:
+            break
+        if _remove(entry.path):
+            total -= entry.size
+
+
+def _pid_alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # another user's process, alive
+        return True
+    return True
+
+
+def _remove_leftovers(entries_folder: Path) -> None:
+    """Remove the staging and trash folders of processes that are gone (killed while writing
+    or removing an entry), and any older than :data:`LEFTOVER_AGE`."""
+    now = time.time()
+    with contextlib.suppress(OSError), os.scandir(entries_folder) as listing:
+        for item in listing:
+            kind, _, rest = item.name.partition("-")
+            if kind not in (".staging", ".trash"):
+                continue
+            pid = rest.partition("-")[0]
+            with contextlib.suppress(OSError):
+                old = now - item.stat(follow_symlinks=False).st_mtime > LEFTOVER_AGE
+                if old or not pid.isdigit() or not _pid_alive(int(pid)):
+                    shutil.rmtree(item.path, ignore_errors=True)
+
+
+def clean(root: Path | None = None, *, unused_for: float | None = None,
+          keep_size: int | None = None) -> tuple[int, int]:
+    """Remove entries of the cache folder ``root`` (default: :func:`folder`): every one, or
+    those not used for ``unused_for`` seconds, or the least recently used until the rest hold
+    at most ``keep_size`` bytes (both given: both rules). Returns the number of entries removed
+    and the bytes freed. Only entries and the leftovers of processes that are gone are removed:
+    nothing else in the folder is touched."""
+    root = folder() if root is None else root
+    if root is None:
+        return 0, 0
+    listed = entries(root)
+    doomed = set()
+    if unused_for is None and keep_size is None:
+        doomed = {e.key for e in listed}
+    if unused_for is not None:
+        doomed |= {e.key for e in listed if time.time() - e.used > unused_for}
+    if keep_size is not None:
+        total = sum(e.size for e in listed if e.key not in doomed)
+        for entry in listed:
+            if total <= keep_size:
+                break
+            if entry.key not in doomed:
+                doomed.add(entry.key)
+                total -= entry.size
+    removed = freed = 0
+    for entry in listed:
+        if entry.key in doomed and _remove(entry.path):
+            removed += 1
+            freed += entry.size
+    if _entries_folder(root).is_dir():
+        _remove_leftovers(_entries_folder(root))
+    return removed, freed
+
+
+def summary() -> dict:
+    """What ``hexapod cache info`` says: the folder (None when the cache is off), its entries
+    (count and bytes) and the size limit (bytes, and as a person reads it)."""
+    root = folder()
+    listed = entries(root) if root is not None else []
+    limit = size_limit()
+    return {"folder": None if root is None else str(root), "entries": len(listed),
+            "size": sum(e.size for e in listed), "limit": limit, "limit_text": size_text(limit)}
+
+
+_warned: set[str] = set()
+
+
+def _warn_once(message: str) -> None:
+    if message not in _warned:
+        _warned.add(message)
+        warnings.warn(message, CacheWarning, stacklevel=3)

@@ -1,0 +1,510 @@
+"""The cache on disk (hexapod._support.cache) and the CasADi Functions kept in it
+(hexapod._support.compiled): where it is, entries whole or absent, concurrent processes,
+corrupted entries, the size limit, cleaning, and nothing written when it is off.
+
+Every test points the cache at a folder of its own (``HEXAPOD_CACHE_DIR``)."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from hexapod._support import cache
+from hexapod._support.compiled import (
+    LIBRARY,
+    SERIALIZED,
+    compiled,
+    compiled_key,
+    compiler,
+    find_compiled,
+    serialized,
+    serialized_key,
+)
+from hexapod.errors import HexapodError
+
+ROOT = Path(__file__).resolve().parents[1]
+needs_compiler = pytest.mark.skipif(compiler() is None, reason="no C compiler")
+
+
+@pytest.fixture
+def folder(tmp_path, monkeypatch) -> Path:
+    """A cache folder of the test's own, the cache on, the default size limit."""
+    path = tmp_path / "cache"
+    monkeypatch.setenv("HEXAPOD_CACHE_DIR", str(path))
+    monkeypatch.delenv("HEXAPOD_CACHE", raising=False)
+    monkeypatch.delenv("HEXAPOD_CACHE_SIZE", raising=False)
+    monkeypatch.delenv("HEXAPOD_NO_JIT", raising=False)
+    monkeypatch.setattr(cache, "_warned", set())
+    return path
+
+
+class Builder:
+    """A small Function's builder that counts its calls."""
+
+    def __init__(self, name: str = "f", scale: float = 2.0):
+        self.name, self.scale, self.calls = name, scale, 0
+
+    def __call__(self) -> ca.Function:
+        self.calls += 1
+        x = ca.SX.sym("x", 3)
+        return ca.Function(self.name, [x], [self.scale * ca.sin(x), ca.sumsqr(x)], ["x"],
+                           ["y", "n"])
+
+
+def values(function: ca.Function) -> list[np.ndarray]:
+    return [np.asarray(y).ravel() for y in function([0.1, -0.4, 2.0])]
+
+
+def entry_folders(root: Path) -> list[Path]:
+    return sorted(p for p in (root / cache.LAYOUT).iterdir() if not p.name.startswith("."))
+
+
+# ------------------------------------------------------------------ where it is
+
+
+def test_the_folder_follows_the_settings(tmp_path):
+    home = Path.home()
+    assert cache.folder({}) == home / ".cache" / "hexapod"
+    assert cache.folder({"XDG_CACHE_HOME": "/x/cache"}) == Path("/x/cache/hexapod")
+    assert cache.folder({"XDG_CACHE_HOME": "relative"}) == home / ".cache" / "hexapod"
+    assert cache.folder({"XDG_CACHE_HOME": "/x", "HEXAPOD_CACHE_DIR": str(tmp_path)}) == tmp_path
+    for off in ("0", "off", "No", "false"):
+        assert cache.folder({"HEXAPOD_CACHE": off, "HEXAPOD_CACHE_DIR": str(tmp_path)}) is None
+    assert cache.folder({"HEXAPOD_CACHE": "1"}) == home / ".cache" / "hexapod"
+
+
+def test_the_size_limit_follows_its_setting():
+    assert cache.size_limit({}) == cache.DEFAULT_LIMIT == 1024**3
+    assert cache.size_limit({"HEXAPOD_CACHE_SIZE": "2G"}) == 2 * 1024**3
+    assert cache.size_limit({"HEXAPOD_CACHE_SIZE": "300K"}) == 300 * 1024
+    with pytest.raises(HexapodError, match="HEXAPOD_CACHE_SIZE='lots'"):
+        cache.size_limit({"HEXAPOD_CACHE_SIZE": "lots"})
+
+
+def test_keys_are_stable_across_processes_and_tell_their_parts_apart():
+    here = cache.key("model", "tree")
+    there = subprocess.run([sys.executable, "-c", "from hexapod._support import cache; "
+                            "print(cache.key('model', 'tree'))"], capture_output=True,
+                           text=True, check=True, cwd=ROOT).stdout.strip()
+    assert here == there and len(here) == 64
+    assert cache.key("model", "tree") != cache.key("model", "tree2")
+    assert cache.key("ab", "c") != cache.key("a", "bc")
+
+
+def test_keys_change_with_the_version_of_hexapod_and_of_casadi(monkeypatch):
+    import hexapod._version
+
+    key, library = cache.key("m"), compiled_key("m", "/usr/bin/gcc")
+    monkeypatch.setattr(hexapod._version, "__version__", "99.0")
+    cache._code_identity.cache_clear()
+    try:
+        assert cache.key("m") != key
+    finally:
+        cache._code_identity.cache_clear()
+    monkeypatch.undo()
+    assert cache.key("m") == key
+    assert compiled_key("m", "/usr/bin/clang") != library
+    monkeypatch.setattr(ca, "__version__", "0.0.1")
+    assert compiled_key("m", "/usr/bin/gcc") != library
+    assert serialized_key("m") != compiled_key("m", "/usr/bin/gcc")
+
+
+# ------------------------------------------------------------------ entries
+
+
+def test_a_serialized_function_is_built_once(folder):
+    build = Builder()
+    first = serialized("k1", build, what="a test function")
+    second = serialized("k1", build)
+    assert build.calls == 1
+    for a, b in zip(values(first), values(second), strict=True):
+        assert np.array_equal(a, b)
+    (entry,) = cache.entries(folder, describe=True)
+    assert entry.what == "a test function, serialized"
+    meta = json.loads((entry.path / cache.META).read_text())
+    assert set(meta["files"]) == {SERIALIZED}
+    assert (folder / "CACHEDIR.TAG").read_text().startswith("Signature: 8a477f597d28d172789f")
+    assert not [p for p in (folder / cache.LAYOUT).iterdir() if p.name.startswith(".")]
+
+
+@needs_compiler
+def test_a_compiled_function_is_compiled_once(folder):
+    build = Builder("g")
+    first = compiled("k2", build)
+    assert first.is_a("External") and build.calls == 1
+    again = find_compiled("k2")
+    assert again is not None and again.is_a("External")
+    assert compiled("k2", build).is_a("External") and build.calls == 1
+    for a, b in zip(values(first), values(Builder("g")()), strict=True):
+        assert np.allclose(a, b, rtol=1e-15, atol=0)
+    assert [p.name for p in (entry_folders(folder)[0]).iterdir()].count(LIBRARY) == 1
+    assert find_compiled("other key") is None
+
+
+def test_without_a_compiler_the_function_is_interpreted(folder, monkeypatch):
+    monkeypatch.setenv("HEXAPOD_NO_JIT", "1")
+    build = Builder()
+    function = compiled("k3", build)
+    assert function.is_a("SXFunction") and build.calls == 1
+    assert not (folder / cache.LAYOUT).exists() or not entry_folders(folder)
+
+
+@needs_compiler
+def test_a_compiler_that_fails_is_a_warning_and_nothing_is_stored(folder, monkeypatch,
+                                                                   tmp_path):
+    broken = tmp_path / "bin" / "gcc"
+    broken.parent.mkdir()
+    broken.write_text("#!/bin/sh\necho 'gcc: fatal error: no space left' >&2\nexit 1\n")
+    broken.chmod(0o755)
+    monkeypatch.setenv("PATH", str(broken.parent))
+    with pytest.warns(UserWarning, match="could not compile f .*no space left"):
+        function = compiled("k4", Builder())
+    assert function.is_a("SXFunction")
+    assert not entry_folders(folder)
+
+
+def test_when_the_cache_is_off_nothing_is_written(tmp_path, monkeypatch):
+    target, scratch = tmp_path / "cache", tmp_path / "tmp"
+    scratch.mkdir()
+    monkeypatch.setenv("HEXAPOD_CACHE_DIR", str(target))
+    monkeypatch.setenv("HEXAPOD_CACHE", "0")
+    monkeypatch.setenv("TMPDIR", str(scratch))
+    monkeypatch.setattr("tempfile.tempdir", None)  # TMPDIR read again
+    build = Builder()
+    serialized("k5", build)
+    serialized("k5", build)
+    compiled("k5", build)
+    assert build.calls == 3
+    assert cache.tally(serialized_key("k5"), 10) == 10
+    assert cache.entries() == [] and cache.clean() == (0, 0)
+    assert not target.exists()
+    assert list(scratch.iterdir()) == []  # the compiler's scratch folder is gone too
+
+
+# ------------------------------------------------------------------ damaged entries
+
+
+def _damage(path: Path, how: str) -> None:
+    meta = path / cache.META
+    payload = next(p for p in path.iterdir() if p.name != cache.META)
+    if how == "garbage":
+        payload.write_bytes(b"\x7fELF not at all" * 50)
+    elif how == "truncated":
+        payload.write_bytes(payload.read_bytes()[: payload.stat().st_size // 2])
+    elif how == "meta garbled":
+        meta.write_text("{ not json")
+    elif how == "meta missing":
+        meta.unlink()
+    elif how == "foreign but consistent":  # the checksum matches, the content is not ours
+        payload.write_bytes(b"something else entirely")
+        listed = json.loads(meta.read_text())
+        listed["files"][payload.name] = __import__("hashlib").sha256(
+            b"something else entirely").hexdigest()
+        meta.write_text(json.dumps(listed))
+    elif how == "file listed outside":
+        listed = json.loads(meta.read_text())
+        listed["files"] = {"../escape": "0" * 64}
+        meta.write_text(json.dumps(listed))
+
+
+DAMAGES = ("garbage", "truncated", "meta garbled", "meta missing", "foreign but consistent",
+           "file listed outside")
+
+
+@pytest.mark.parametrize("how", DAMAGES)
+def test_a_damaged_serialized_entry_is_built_again(folder, how):
+    build = Builder()
+    expected = values(serialized("k6", build))
+    _damage(entry_folders(folder)[0], how)
+    function = serialized("k6", build)
+    assert build.calls == 2
+    for a, b in zip(values(function), expected, strict=True):
+        assert np.array_equal(a, b)
+    serialized("k6", build)  # the entry was written again, whole
+    assert build.calls == 2
+
+
+@needs_compiler
+@pytest.mark.parametrize("how", ["garbage", "truncated", "foreign but consistent"])
+def test_a_damaged_library_is_compiled_again(folder, how):
+    build = Builder("h")
+    compiled("k7", build)
+    _damage(entry_folders(folder)[0], how)
+    function = compiled("k7", build)
+    assert build.calls == 2 and function.is_a("External")
+    for a, b in zip(values(function), values(Builder("h")()), strict=True):
+        assert np.allclose(a, b, rtol=1e-15, atol=0)
+
+
+def test_a_foreign_folder_or_file_in_the_cache_is_left_alone(folder):
+    serialized("k8", Builder())
+    layout = folder / cache.LAYOUT
+    (layout / "notes.txt").write_text("mine")
+    (layout / "photos").mkdir()
+    (folder / "elsewhere.txt").write_text("mine too")
+    assert len(cache.entries()) == 1
+    assert cache.clean() == (1, pytest.approx(1, abs=10**7))
+    assert (layout / "notes.txt").exists() and (layout / "photos").is_dir()
+    assert (folder / "elsewhere.txt").exists()
+
+
+@pytest.mark.skipif(not hasattr(os, "getuid"), reason="POSIX permissions")
+def test_a_folder_others_may_write_in_is_not_used(folder):
+    serialized("k9", Builder())
+    (folder / cache.LAYOUT).chmod(0o777)
+    build = Builder()
+    with pytest.warns(cache.CacheWarning, match="others may write in it"):
+        serialized("k9", build)
+    assert build.calls == 1  # not read from there: built
+
+
+def test_a_folder_that_cannot_be_written_is_a_warning_and_the_work_goes_on(tmp_path,
+                                                                           monkeypatch):
+    blocker = tmp_path / "file"
+    blocker.write_text("not a folder")
+    monkeypatch.setenv("HEXAPOD_CACHE_DIR", str(blocker / "cache"))
+    monkeypatch.delenv("HEXAPOD_CACHE", raising=False)
+    monkeypatch.setattr(cache, "_warned", set())
+    build = Builder()
+    with pytest.warns(cache.CacheWarning, match="cannot write in the cache folder"):
+        function = serialized("k10", build)
+    assert values(function)[1] == pytest.approx(4.17)
+
+
+# ------------------------------------------------------------------ processes at once
+
+WORKER = textwrap.dedent("""
+    import sys, time
+    import casadi as ca
+    from hexapod._support.compiled import compiled, serialized
+    start = float(sys.argv[2])
+    while time.time() < start:
+        time.sleep(0.001)
+    x = ca.SX.sym("x", 3)
+    build = lambda: ca.Function("w", [x], [2 * ca.sin(x), ca.sumsqr(x)], ["x"], ["y", "n"])
+    kind = sys.argv[1]
+    function = (compiled if kind == "compiled" else serialized)("shared", build)
+    print(kind, function.is_a("External"), float(function([0.1, -0.4, 2.0])[1]))
+""")
+
+
+@pytest.mark.parametrize("kind", ["serialized",
+                                  pytest.param("compiled", marks=needs_compiler)])
+def test_processes_building_the_same_entry_at_once_all_succeed(folder, kind):
+    start = time.time() + 1.0  # every process has loaded CasADi by then, most likely
+    workers = [subprocess.Popen([sys.executable, "-c", WORKER, kind, str(start)], cwd=ROOT,
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+               for _ in range(4)]
+    outputs = [w.communicate(timeout=120) for w in workers]
+    for worker, (out, err) in zip(workers, outputs, strict=True):
+        assert worker.returncode == 0, err
+        assert out.split()[2] == repr(0.1**2 + 0.4**2 + 4.0)
+        assert out.split()[1] == str(kind == "compiled")
+    (entry,) = entry_folders(folder)
+    assert cache.load(entry.name) is not None
+    assert not [p for p in (folder / cache.LAYOUT).iterdir() if p.name.startswith(".")]
+
+
+READER = textwrap.dedent("""
+    import hashlib, json, os, sys, time
+    entry = sys.argv[1]
+    seen = 0
+    stop = time.time() + float(sys.argv[2])
+    while time.time() < stop:
+        try:
+            folder = os.open(entry, os.O_RDONLY)  # this folder, even if renamed meanwhile
+        except FileNotFoundError:  # not written yet, or removed
+            continue
+        try:
+            def read(name):
+                handle = os.open(name, os.O_RDONLY, dir_fd=folder)
+                with os.fdopen(handle, "rb") as stream:
+                    return stream.read()
+            try:
+                meta = json.loads(read("meta.json"))
+                for name, checksum in meta["files"].items():
+                    assert hashlib.sha256(read(name)).hexdigest() == checksum, "half an entry"
+                seen += 1
+            except FileNotFoundError:  # fine if the folder is no longer the entry (removed)
+                try:
+                    same = os.stat(entry).st_ino == os.fstat(folder).st_ino
+                except FileNotFoundError:
+                    same = False
+                assert not same, "an entry without all its files was seen"
+        finally:
+            os.close(folder)
+    print(seen)
+""")
+
+WRITER = textwrap.dedent("""
+    import sys
+    import casadi as ca
+    from hexapod._support import cache
+    from hexapod._support.compiled import serialized, serialized_key
+    x = ca.SX.sym("x", 40)
+    big = ca.Function("big", [x], [ca.cumsum(ca.sin(x) * ca.cos(x.T @ x))])
+    for _ in range(int(sys.argv[1])):
+        cache.discard(serialized_key("churn"))
+        serialized("churn", lambda: big)
+""")
+
+
+def test_readers_never_see_half_an_entry_while_others_write_and_remove_it(folder):
+    serialized("churn", Builder())  # makes the folder; the writers replace the entry
+    key = serialized_key("churn")
+    entry = folder / cache.LAYOUT / key
+    readers = [subprocess.Popen([sys.executable, "-c", READER, str(entry), "2.5"], cwd=ROOT,
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+               for _ in range(2)]
+    writers = [subprocess.Popen([sys.executable, "-c", WRITER, "40"], cwd=ROOT,
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+               for _ in range(2)]
+    seen = []
+    for process in readers + writers:
+        out, err = process.communicate(timeout=120)
+        assert process.returncode == 0, err
+        seen.append(out)
+    assert all(int(count) > 0 for count in seen[:2])  # the readers did read whole entries
+    assert cache.load(key) is not None
+
+
+# ------------------------------------------------------------------ size and cleaning
+
+
+def _fill(folder: Path, count: int) -> list[str]:
+    """``count`` entries, each used one minute after the one before."""
+    keys = []
+    for k in range(count):
+        serialized(f"fill{k}", Builder(f"f{k}"))  # all of the same size
+        keys.append(serialized_key(f"fill{k}"))
+        os.utime(folder / cache.LAYOUT / keys[-1], (1e9 + 60 * k, 1e9 + 60 * k))
+    return keys
+
+
+def test_beyond_the_size_limit_the_least_recently_used_entries_go(folder, monkeypatch):
+    keys = _fill(folder, 4)
+    size = cache.entries()[0].size
+    assert cache.load(keys[0]) is not None  # the oldest is used now: it stays
+    monkeypatch.setenv("HEXAPOD_CACHE_SIZE", str(4 * size + size // 2))  # room for 4
+    serialized("fill4", Builder("f4"))
+    left = {e.key for e in cache.entries()}
+    assert left == {keys[0], keys[2], keys[3], serialized_key("fill4")}
+    monkeypatch.setenv("HEXAPOD_CACHE_SIZE", "1")  # smaller than any entry: the limit holds
+    function = serialized("fill5", Builder("f5"))
+    assert cache.entries() == [] and values(function)[1] == pytest.approx(4.17)
+
+
+def test_clean_removes_everything_or_the_old_or_down_to_a_size(folder):
+    keys = _fill(folder, 4)
+    size = cache.entries()[0].size
+    assert cache.clean(keep_size=2 * size) == (2, 2 * size)
+    assert {e.key for e in cache.entries()} == set(keys[2:])
+    os.utime(folder / cache.LAYOUT / keys[3])  # used now
+    assert cache.clean(unused_for=3600) == (1, size)
+    assert [e.key for e in cache.entries()] == [keys[3]]
+    assert cache.clean() == (1, size)
+    assert cache.entries() == []
+
+
+def test_leftovers_of_processes_that_are_gone_are_removed(folder):
+    serialized("k11", Builder())
+    layout = folder / cache.LAYOUT
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True).stdout.strip()
+    (layout / f".staging-{dead}-abc").mkdir()
+    (layout / f".staging-{dead}-abc" / "library.so").write_bytes(b"half")
+    (layout / f".trash-{dead}-def").mkdir()
+    (layout / f".staging-{os.getpid()}-live").mkdir()  # a build in progress: kept
+    cache.clean(unused_for=10**6)
+    names = {p.name for p in layout.iterdir() if p.name.startswith(".")}
+    assert names == {f".staging-{os.getpid()}-live"}
+
+
+def test_a_tally_counts_over_runs(folder):
+    serialized("k12", Builder())
+    key = serialized_key("k12")
+    assert cache.tally(key) == 0
+    assert cache.tally(key, 300) == 300
+    assert cache.tally(key, 200) == 500
+    (folder / cache.LAYOUT / key / "tally").write_text("garbled")
+    assert cache.tally(key, 7) == 7
+    assert cache.tally(serialized_key("no such entry"), 5) == 5
+    assert cache.load(key) is not None  # the count is not part of the entry's checked files
+
+
+def test_the_cache_never_waits_for_the_disk(folder, monkeypatch):
+    """Its files are written whole (renamed into place) but not flushed: an entry lost or
+    damaged by a crash of the machine fails its checksums and is built again."""
+    def no_sync(descriptor):
+        raise AssertionError("the cache flushed a file to the disk")
+
+    monkeypatch.setattr(os, "fsync", no_sync)
+    build = Builder()
+    serialized("k13", build)
+    assert cache.tally(serialized_key("k13"), 3) == 3
+    assert serialized("k13", build) is not None and build.calls == 1
+
+
+def test_a_full_disk_while_storing_is_a_warning_and_the_function_is_returned(folder,
+                                                                             monkeypatch):
+    def full(*args):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(cache, "_publish", full)
+    build = Builder()
+    with pytest.warns(cache.CacheWarning, match="No space left on device"):
+        function = serialized("k14", build)
+    assert values(function)[1] == pytest.approx(4.17) and cache.entries() == []
+    assert not [p for p in (folder / cache.LAYOUT).iterdir() if p.name.startswith(".")]
+
+
+INTERRUPTED = textwrap.dedent("""
+    import signal, sys
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    import casadi as ca
+    from hexapod._support.compiled import compiled
+    x = ca.SX.sym("x")
+    print("compiling", flush=True)
+    compiled("interrupted", lambda: ca.Function("slow", [x], [2 * x]))
+""")
+
+
+@pytest.mark.skipif(not hasattr(os, "killpg"), reason="POSIX process groups")
+def test_an_interrupted_compilation_leaves_no_compiler_running_and_nothing_behind(
+        folder, tmp_path):
+    """The compiler (here a script that starts a long child, as gcc starts cc1) is stopped with
+    every process it started; the staging folder goes."""
+    import signal
+
+    marker = f"0.{os.getpid()}{time.time_ns() % 10**6}"  # sleep adds it: 20 s and a little
+    fake = tmp_path / "bin" / "gcc"
+    fake.parent.mkdir()
+    fake.write_text(f"#!/bin/sh\nsleep 20 {marker} &\nwait\n")
+    fake.chmod(0o755)
+    env = dict(os.environ, PATH=f"{fake.parent}{os.pathsep}{os.environ['PATH']}")
+    process = subprocess.Popen([sys.executable, "-c", INTERRUPTED], cwd=ROOT, env=env,
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert process.stdout.readline().strip() == "compiling"
+
+    def sleeping() -> bool:
+        return any(f"sleep 20 {marker}" in p.read_text(errors="replace").replace("\0", " ")
+                   for p in Path("/proc").glob("[0-9]*/cmdline") if p.exists())
+
+    deadline = time.time() + 30
+    while not sleeping() and time.time() < deadline:  # the compiler's child has started
+        time.sleep(0.05)
+    process.send_signal(signal.SIGINT)
+    _, err = process.communicate(timeout=60)
+    assert "KeyboardInterrupt" in err
+    time.sleep(0.2)
+    assert not sleeping()
+    assert not list((folder / cache.LAYOUT).iterdir())

@@ -1,0 +1,128 @@
+"""``hexapod cache``: what the cache holds and cleaning it, each run in a cache folder of the
+test's own; and ``hexapod inverse`` filling it."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+FIXTURE = ROOT / "tests" / "data" / "pinocchio" / "chain-3"
+
+
+def run(*args: str, cache: Path, cwd: Path, **settings: str) -> subprocess.CompletedProcess:
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("HEXAPOD_DEBUG", "HEXAPOD_CACHE", "HEXAPOD_CACHE_SIZE")}
+    env.update(HEXAPOD_CACHE_DIR=str(cache), **settings)
+    return subprocess.run([sys.executable, "-m", "hexapod", *args], cwd=cwd, env=env,
+                          capture_output=True, text=True, timeout=120)
+
+
+def inverse(tmp_path: Path, cache: Path, out: str = "out.csv") -> None:
+    done = run("inverse", str(FIXTURE / "model.urdf"), "--motion", str(FIXTURE / "motion.csv"),
+               "--out", out, cache=cache, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+
+
+def test_info_on_an_empty_cache(tmp_path):
+    cache = tmp_path / "cache"
+    done = run("cache", cache=cache, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines() == [f"cache folder: {cache} (HEXAPOD_CACHE_DIR)",
+                                        "entries: 0, 0 bytes of at most 1 GiB"]
+    assert not cache.exists()  # looking writes nothing
+
+
+def test_inverse_fills_the_cache_and_info_lists_it(tmp_path):
+    cache = tmp_path / "cache"
+    inverse(tmp_path, cache)
+    first = (tmp_path / "out.csv").read_text()
+    done = run("cache", "info", cache=cache, cwd=tmp_path, HEXAPOD_CACHE_SIZE="2G")
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.splitlines()
+    assert lines[1].startswith("entries: 2, ") and lines[1].endswith("of at most 2 GiB")
+    held = sorted(line.split("  ")[-1] for line in lines[2:])
+    assert held == ["the model 'random-11'",
+                    "tree-ordered inverse dynamics of 'random-11' (3 joints), serialized"]
+    report = json.loads(run("cache", "info", "--json", cache=cache, cwd=tmp_path).stdout)
+    assert report["folder"] == str(cache) and report["entries"] == 2
+    assert report["size"] == sum(item["size"] for item in report["items"]) > 0
+    inverse(tmp_path, cache, "again.csv")  # from the cache: the same numbers
+    assert (tmp_path / "again.csv").read_text() == first
+    assert json.loads(run("cache", "info", "--json", cache=cache,
+                          cwd=tmp_path).stdout)["entries"] == 2
+
+
+def test_clean(tmp_path):
+    cache = tmp_path / "cache"
+    inverse(tmp_path, cache)
+    kept = run("cache", "clean", "--older-than", "1", cache=cache, cwd=tmp_path)
+    assert kept.returncode == 0 and kept.stdout.startswith("removed 0 entries (0 bytes)")
+    trimmed = run("cache", "clean", "--max-size", "1K", cache=cache, cwd=tmp_path)
+    assert trimmed.stdout.startswith("removed 2 entries (") and "0 left" in trimmed.stdout
+    inverse(tmp_path, cache)
+    items = json.loads(run("cache", "info", "--json", cache=cache, cwd=tmp_path).stdout)["items"]
+    oldest, newest = items  # least recently used first: the model, then the tree Function
+    assert oldest["what"].startswith("the model")
+    one = run("cache", "clean", "--max-size", str(newest["size"]), cache=cache, cwd=tmp_path)
+    assert one.stdout.startswith("removed 1 entry (") and "; 1 left (" in one.stdout
+    emptied = run("cache", "clean", cache=cache, cwd=tmp_path)
+    assert emptied.stdout.startswith("removed 1 entry") and "; 0 left (0 bytes)" in emptied.stdout
+    assert (cache / "CACHEDIR.TAG").exists()
+
+
+def test_the_cache_turned_off(tmp_path):
+    cache = tmp_path / "cache"
+    inverse_off = run("inverse", str(FIXTURE / "model.urdf"), "--motion",
+                      str(FIXTURE / "motion.csv"), "--out", "out.csv", cache=cache,
+                      cwd=tmp_path, HEXAPOD_CACHE="0")
+    assert inverse_off.returncode == 0, inverse_off.stderr
+    assert not cache.exists()
+    for action in ("info", "clean"):
+        done = run("cache", action, cache=cache, cwd=tmp_path, HEXAPOD_CACHE="off")
+        assert done.returncode == 0 and "the cache is off (turned off by HEXAPOD_CACHE=off)" \
+            in done.stdout
+
+
+@pytest.mark.parametrize("args", [("cache", "info"), ("cache", "--help")], ids=" ".join)
+def test_the_cache_command_loads_no_heavy_library(tmp_path, args):
+    env = dict(os.environ, HEXAPOD_CACHE_DIR=str(tmp_path / "cache"))
+    done = subprocess.run([sys.executable, "-X", "importtime", "-m", "hexapod", *args],
+                          cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    loaded = {line.rpartition("|")[2].strip().split(".")[0]
+              for line in done.stderr.splitlines() if line.startswith("import time:")}
+    assert "hexapod" in loaded and not loaded & {"numpy", "casadi", "scipy"}
+
+
+def test_a_bad_size_setting_is_one_error_line(tmp_path):
+    done = run("cache", cache=tmp_path / "cache", cwd=tmp_path, HEXAPOD_CACHE_SIZE="huge")
+    assert done.returncode == 1 and done.stdout == ""
+    assert done.stderr.strip() == ("hexapod: error: HEXAPOD_CACHE_SIZE='huge': not a memory "
+                                   "size: 'huge' (write e.g. 16G, 512M)")
+
+
+def test_a_script_keeps_the_cache_in_a_folder_of_its_own(tmp_path):
+    """scripts/scratch_cache.py: a temporary folder, removed when the script ends; a folder the
+    user names is kept as named."""
+    code = ("import os, sys; sys.path.insert(0, 'scripts'); "
+            "from scratch_cache import use_scratch_cache; use_scratch_cache(); "
+            "import hexapod as hx; from legs import front_leg_scene; "
+            "hx.assemble(front_leg_scene()); print(os.environ['HEXAPOD_CACHE_DIR'])")
+    env = {k: v for k, v in os.environ.items() if k != "HEXAPOD_CACHE_DIR"}
+    env["HOME"] = str(tmp_path / "home")  # where the user's cache would be
+    done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True,
+                          text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    used = Path(done.stdout.strip())
+    assert used.name.startswith("hexapod-script-cache-") and not used.exists()
+    assert not (tmp_path / "home").exists()
+    env["HEXAPOD_CACHE_DIR"] = str(tmp_path / "named")
+    done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True,
+                          text=True, timeout=120)
+    assert done.stdout.strip() == str(tmp_path / "named") and (tmp_path / "named").is_dir()
