@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 
 import hexapod as hx
+from hexapod._support.compiled import compiler
 from hexapod.benchmarks import bricard, n_four_bar
 from hexapod.scene.reader import read_scene
-from hexapod.simulation.compiled_loop import compiler
 from hexapod.simulation.registry import get_integrator
 
 from mechanisms import four_bar, random_tree

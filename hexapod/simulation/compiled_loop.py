@@ -44,18 +44,14 @@ None) and models with feet switching contacts keep the Python loop (:func:`unsup
 from __future__ import annotations
 
 import copy
-import os
-import shutil
-import tempfile
 from dataclasses import dataclass
 from functools import cached_property
 
 import casadi as ca
 import numpy as np
 
-from hexapod._support import signals
+from hexapod._support.compiled import compiled
 from hexapod._support.fastcall import FastFunction
-from hexapod._support.files import write_atomically
 from hexapod.model.model import Model
 from hexapod.simulation.kernels import (
     REDUNDANT_TOLERANCE,
@@ -246,6 +242,9 @@ class LoopKernel:
         self.function = self._loop()
         self.compiled, self.compile_error = False, ""
         self._fast = FastFunction(self.function)
+        #: the key of its compiled library in the cache on disk (set by the integrator's
+        #: side: the model's content hash, the method, the rows and the options), or None
+        self.cache_key: str | None = None
 
     @cached_property
     def source(self) -> str:
@@ -259,15 +258,14 @@ class LoopKernel:
         return len(self.source) / COMPILE_RATE
 
     def compiled_copy(self) -> LoopKernel:
-        """The kernel compiled to C (:func:`compile_c`); itself, with ``compile_error`` saying
-        why, when no compiler is found or it fails."""
-        try:
-            function = compile_c(self.function.name(), self.source)
-        except RuntimeError as error:  # the compiler failed: the virtual machine serves
-            self.compile_error = str(error)
-            return self
-        if function is None:
-            self.compile_error = "no C compiler found (or HEXAPOD_NO_JIT is set)"
+        """The kernel compiled to C (:data:`FLAGS`), from the cache on disk when a run of the
+        same model compiled it before (:attr:`cache_key`); itself, with ``compile_error``
+        saying why, when no compiler is found or it fails (a warning says how)."""
+        function = compiled(self.cache_key, lambda: self.function, flags=FLAGS,
+                            what=f"compiled time loop ({self.name}) of {self.model.name}")
+        if function is self.function:  # the interpreted Function: the virtual machine serves
+            self.compile_error = ("no C compiler found (or HEXAPOD_NO_JIT is set), or it "
+                                  "failed")
             return self
         twin = copy.copy(self)
         twin.function, twin.compiled, twin._fast = function, True, FastFunction(function)
@@ -561,32 +559,3 @@ def _normalised(model: Model, q):
 
 
 # ---------------------------------------------------------------------- compilation
-
-def compiler() -> str | None:
-    """The C compiler to build kernels with, or None (none found, or ``HEXAPOD_NO_JIT`` set)."""
-    if os.environ.get("HEXAPOD_NO_JIT"):
-        return None
-    return shutil.which("gcc") or shutil.which("cc")
-
-
-def compile_c(name: str, source: str) -> ca.Function | None:
-    """The Function ``name`` of the C ``source``, compiled (:data:`FLAGS`) and loaded; None
-    when no compiler is found. The files are made in a temporary directory, removed once
-    loaded; SIGINT and SIGTERM are held back while the compiler runs (see
-    :func:`signals.deferred`).
-
-    Raises
-    ------
-    RuntimeError
-        The compiler failed, or its library could not be loaded.
-    """
-    program = compiler()
-    if program is None:
-        return None
-    with tempfile.TemporaryDirectory(prefix="hexapod-") as directory:
-        path = str(write_atomically(os.path.join(directory, f"{name}.c"), source))
-        options = {"compiler": program, "flags": list(FLAGS), "directory": directory + os.sep,
-                   "cleanup": False}
-        with signals.deferred():
-            importer = ca.Importer(path, "shell", options)
-            return ca.external(name, importer)

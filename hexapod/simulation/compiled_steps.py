@@ -20,16 +20,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from hexapod._support import signals
+from hexapod._support.compiled import compiler, find_compiled
 from hexapod.simulation.compiled_loop import (
     ATTEMPTS,
     CHECK,
     COUNTERS,
     FINISHED,
+    FLAGS,
     HANDOVER,
     HEAD,
     Layout,
     LoopKernel,
-    compiler,
     unsupported,
 )
 from hexapod.simulation.integrators.base import SINGULAR_BAND, Counters
@@ -97,6 +98,7 @@ class CompiledStepper:
         self.integrator, self.mode = integrator, mode
         self.compile = mode == "c"
         self.decided = mode != "auto"  # whether to compile, in mode "auto"
+        self.looked = False  # whether the cache on disk was searched for the compiled kernel
         self.per_call = 4  # attempts asked of the first call, then set by the pace
         self.streak = 0  # handovers in a row without a step accepted in between
         self.python_steps = 0  # steps to take in Python before the next call
@@ -112,6 +114,12 @@ class CompiledStepper:
         rows = np.asarray(it._compiled.rows, dtype=int)
         key = ("loop", it.name, tuple(int(r) for r in rows), *it._kernel_options())
         kernel = it.model.built_once(key, lambda m: it._loop_kernel(rows))
+        if kernel.cache_key is None and it.model.digest:
+            kernel.cache_key = "/".join([it.model.digest, *map(str, key)])
+        if not (self.decided or self.looked):  # a run of this model compiled it before?
+            self.looked = True
+            if find_compiled(kernel.cache_key, FLAGS) is not None:
+                self.compile = self.decided = True
         if not self.compile:
             return kernel
         return it.model.built_once(("compiled", *key), lambda m: kernel.compiled_copy())
