@@ -30,11 +30,9 @@ import casadi as ca
 import numpy as np
 
 from hexapod._support import signals
-from hexapod.algorithms.dynamics import forward_dynamics
-from hexapod.algorithms.ground import ground_reactions
-from hexapod.algorithms.kinematics import assemble_positions, degrees_of_freedom, solve_velocities
-from hexapod.algorithms.liaison import joint_origin, joint_wrenches
-from hexapod.errors import AssemblyError, HexapodError, SingularSystemError
+from hexapod.algorithms.liaison import joint_origin
+from hexapod.algorithms.sample_inverse import exact_sample
+from hexapod.errors import HexapodError
 from hexapod.model.model import GROUND_INDEX, Model
 from hexapod.spatial import (
     g_matrix,
@@ -172,37 +170,18 @@ def _saddle(model, times, frame, progress) -> InverseResult:
     ground = np.zeros((n, len(model.contacts), 3))
     status = np.full((n, len(model.contacts)), "swing", dtype=object)
     worst = 0.0
-    q = model.q0
     data = model.create_data()
     model.law_values(times)  # all samples at once: the per-sample calls below reuse them
-    previous = times[0]
     for k, t in enumerate(times):
-        q = _next_positions(model, data, previous, q, t,
-                            (V[k - 1], A[k - 1]) if k else None)
-        previous = t
-        if k == 0:
-            free = degrees_of_freedom(model, data, t, q)["dof_with_drivers"]
-            if free:
-                driven = {d.joint for d in model.drivers if d.kind == "joint"}
-                idle = [j.name for j in model.joints
-                        if j.kind in ("revolute", "prismatic") and j.index not in driven]
-                hint = f" (joints without a driver: {', '.join(idle)})" if idle else ""
-                raise SingularSystemError(
-                    f"model '{model.name}': the drivers leave {free} degree(s) of freedom "
-                    f"free{hint}; inverse dynamics needs the motion of every degree of freedom")
-        v = solve_velocities(model, data, t, q)
-        A[k] = forward_dynamics(model, data, t, q, v)
-        wrenches = joint_wrenches(model, data, frame=frame)
-        force[k], torque[k], effort[k] = wrenches.force, wrenches.torque, wrenches.effort
+        sample = exact_sample(model, data, times[k - 1] if k else t,
+                              Q[k - 1] if k else model.q0, t,
+                              (V[k - 1], A[k - 1]) if k else None, frame=frame, first=k == 0)
+        Q[k], V[k], A[k] = sample.q, sample.v, sample.v_dot
+        force[k], torque[k], effort[k] = sample.force, sample.torque, sample.effort
         if model.contacts:
-            ground[k] = ground_reactions(model, data.lam)
-            status[k] = data.ground_status
-        Q[k], V[k] = q, v
-        if model.n_c:
-            worst = max(worst, float(np.max(np.abs(model.call("phi", q=q, w=data.w)
-                                                   / model.row_scale))))
-        redundant += [model.rows[i].name for i in data.redundant_rows
-                      if model.rows[i].name not in redundant]
+            ground[k], status[k] = sample.ground, sample.status
+        worst = max(worst, sample.violation)
+        redundant += [name for name in sample.redundant if name not in redundant]
         if signals.received() is not None:  # an interruption a library call swallowed
             raise KeyboardInterrupt
         if progress is not None:
@@ -212,34 +191,6 @@ def _saddle(model, times, frame, progress) -> InverseResult:
                          Q, V, A, frame, "saddle", worst, tuple(redundant), contacts,
                          ground, status.astype(str),
                          model.ground.policy if model.contacts else "")
-
-
-def _next_positions(model: Model, data, t0: float, q0: np.ndarray, t: float, rates):
-    """Positions at ``t`` from the solved ones at ``t0``: from a second-order prediction with
-    the velocities and accelerations ``rates`` at ``t0`` (Newton's method then needs one or two
-    steps, not five), else by :func:`_follow`."""
-    if rates is not None:
-        h = t - t0
-        guess = model.integrate(q0, h * rates[0] + h * h / 2 * rates[1])
-        if np.all(np.isfinite(guess)):
-            try:
-                return assemble_positions(model, data, t, guess)
-            except AssemblyError:
-                pass
-    return _follow(model, data, t0, q0, t)
-
-
-def _follow(model: Model, data, t0: float, q0: np.ndarray, t: float, depth: int = 6):
-    """Positions at ``t`` from those at ``t0``: Newton's method from ``q0``, and when the
-    samples are too far apart for it (a robot's legs swing a long way between coarse samples),
-    through the time halfway first."""
-    try:
-        return assemble_positions(model, data, t, q0)
-    except AssemblyError:
-        if depth == 0 or t == t0:
-            raise
-    middle = _follow(model, data, t0, q0, (t0 + t) / 2, depth - 1)
-    return _follow(model, data, (t0 + t) / 2, middle, t, depth - 1)
 
 
 # ------------------------------------------------------------------ the tree path
