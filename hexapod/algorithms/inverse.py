@@ -31,6 +31,7 @@ import numpy as np
 
 from hexapod._support import signals
 from hexapod.algorithms.liaison import joint_origin
+from hexapod.algorithms.phase_inverse import phase_inverse
 from hexapod.algorithms.sample_inverse import exact_sample
 from hexapod.errors import HexapodError
 from hexapod.model.model import GROUND_INDEX, Model
@@ -57,11 +58,12 @@ class InverseResult:
         ``tau`` of revolute and prismatic joints (NaN for the others).
     q, v, v_dot : ndarray (N, n_q), (N, n_v), (N, n_v)
     method : str
-        ``"tree"`` or ``"saddle"``.
+        ``"tree"``, ``"phase"`` or ``"saddle"``.
     max_violation : float
         Largest scaled constraint residual over the samples (round-off for the tree path).
     redundant_rows : tuple of str
-        Rows named redundant at some sample (saddle path).
+        Rows named redundant at some sample (saddle path), or by the rank decisions of the
+        phase path (one per phase, and at the samples it solved exactly).
     contacts : tuple of str
         The model's foot contacts (joint names), in model order.
     ground_force : ndarray (N, C, 3)
@@ -96,6 +98,13 @@ class InverseResult:
 COMPILE_FROM_SAMPLES = 50_000
 #: Samples per call of the tree path when progress is reported.
 PROGRESS_CHUNK = 2_000
+#: ``method="auto"`` takes the phase path for closed loops and contacts from this many samples
+#: (below, building its Functions costs about as much as the saddle path's samples: some two
+#: seconds for the walking hexapod, whose samples cost 70 ms each on the saddle path).
+PHASE_FROM_SAMPLES = 32
+#: The phase path compiles its Functions to C from this many samples (compiling the walking
+#: hexapod's takes some tens of seconds and saves about a millisecond per sample).
+PHASE_COMPILE_FROM_SAMPLES = 50_000
 
 
 def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = "joint",
@@ -109,16 +118,20 @@ def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = 
     Parameters
     ----------
     method :
-        ``"auto"`` (the tree path when the model allows it), ``"tree"`` or ``"saddle"``.
+        ``"auto"`` (the tree path when the model allows it, else the phase path from
+        :data:`PHASE_FROM_SAMPLES` samples, else the saddle path), ``"tree"``, ``"phase"``
+        (closed loops and contacts, compiled: :mod:`hexapod.algorithms.phase_inverse`) or
+        ``"saddle"`` (any mechanism, every sample solved exactly in Python: the reference).
     frame :
         ``"joint"`` (the report convention) or ``"world"``.
     compile :
-        Tree path: evaluate compiled C code (True) or CasADi's interpreter (False); by default
-        compile when there are at least :data:`COMPILE_FROM_SAMPLES` samples, or when the
-        model's tree path was compiled before (compilation is kept with the model).
+        Tree and phase paths: evaluate compiled C code (True) or CasADi's interpreter
+        (False); by default compile when there are at least :data:`COMPILE_FROM_SAMPLES`
+        (tree) or :data:`PHASE_COMPILE_FROM_SAMPLES` (phase) samples, or when the model's
+        path was compiled before (compilation is kept with the model).
     progress :
         Called as ``progress(done, total)`` as samples are done (by chunks of
-        :data:`PROGRESS_CHUNK` on the tree path).
+        :data:`PROGRESS_CHUNK` on the tree and phase paths).
 
     Raises
     ------
@@ -135,12 +148,17 @@ def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = 
     if method == "tree" and plan is None:
         raise HexapodError(f"model '{model.name}' is not an open tree with every joint driven, "
                          "which the tree method needs: use the saddle method")
-    if method not in ("auto", "tree", "saddle"):
-        raise ValueError(f"method must be 'auto', 'tree' or 'saddle', got {method!r}")
+    if method not in ("auto", "tree", "phase", "saddle"):
+        raise ValueError(f"method must be 'auto', 'tree', 'phase' or 'saddle', got {method!r}")
     if plan is not None and method in ("auto", "tree"):
         if compile is None:
             compile = plan.is_compiled or times.size >= COMPILE_FROM_SAMPLES
         result = plan.solve(times, w, wd, wdd, frame, compiled=compile, progress=progress)
+    elif method == "phase" or (method == "auto" and times.size >= PHASE_FROM_SAMPLES):
+        if compile is None:
+            compile = (model.was_built(("phase-terms", True))
+                       or times.size >= PHASE_COMPILE_FROM_SAMPLES)
+        result = _phase(model, times, w, wd, wdd, frame, compile, progress)
     else:
         result = _saddle(model, times, frame, progress)
     _check_finite(model, result)
@@ -161,6 +179,17 @@ def _check_finite(model: Model, result: InverseResult) -> None:
 
 
 # ------------------------------------------------------------------ the saddle path
+
+def _phase(model, times, w, wd, wdd, frame, compile, progress) -> InverseResult:
+    fields = phase_inverse(model, times, w, wd, wdd, frame,
+                           options=_compiler_options() if compile else {}, progress=progress)
+    return InverseResult(times, tuple(j.name for j in model.joints), fields["force"],
+                         fields["torque"], fields["effort"], fields["q"], fields["v"],
+                         fields["v_dot"], frame, "phase", fields["max_violation"],
+                         fields["redundant_rows"], tuple(c.name for c in model.contacts),
+                         fields["ground"], fields["status"],
+                         model.ground.policy if model.contacts else "")
+
 
 def _saddle(model, times, frame, progress) -> InverseResult:
     n, J = times.size, len(model.joints)
