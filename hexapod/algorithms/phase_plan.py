@@ -19,7 +19,8 @@ before). One sample:
    ``|A (lam0 + N z) + b|^2`` (the least joint wrenches, each foot's block over the square root
    of its weight, or the least actuator efforts; see :mod:`hexapod.algorithms.ground`), with
    the entries of ``z`` of idle rows (``mask``: feet that carry nothing) held at zero; solved by
-   the normal equations, scaled and refined once (corrected semi-normal equations);
+   the normal equations, scaled, and with feet on the ground refined once (corrected
+   semi-normal equations);
 4. the joint wrenches in the joint frames;
 5. ``checks``: the largest scaled position residual, the relative residuals of the velocity and
    acceleration constraints on the kept rows and on the rows left out, the size of the rows

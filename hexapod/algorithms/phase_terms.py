@@ -264,8 +264,9 @@ class PhaseTerms:
         """``(q, Phi, offset, feet, lam, N, mask) -> lam``: among ``lam + N z`` (``N``, n_c x
         m, spanning the multipliers that change no constraint force), the one of least
         objective, the entries of ``z`` where ``mask`` is 0 held at zero; by the normal
-        equations, scaled to unit diagonal, refined once (corrected semi-normal equations).
-        Built once per ``m``."""
+        equations, scaled to unit diagonal, and with feet on the ground (whose small weights
+        near touch-down and lift-off make the problem ill-conditioned) refined once (corrected
+        semi-normal equations). Built once per ``m``."""
         cache = self.__dict__.setdefault("_policies", {})
         if m in cache:
             return cache[m]
@@ -284,7 +285,8 @@ class PhaseTerms:
         solve = ca.Function("normal_solve", *_normal_solve(m))
         g = ca.mtimes(A, lam) + b
         z = solve(H, ca.mtimes(G.T, g), mask)
-        z = z + solve(H, ca.mtimes(G.T, ca.mtimes(G, z) + g), mask)
+        if model.contacts:  # feet of small weight make G ill-conditioned: refine once
+            z = z + solve(H, ca.mtimes(G.T, ca.mtimes(G, z) + g), mask)
         cache[m] = self._function(f"phase_policy_{m}",
                                   [self.q, Phi_nz, offset, feet, lam, N, mask],
                                   [lam + ca.mtimes(N, z)],
