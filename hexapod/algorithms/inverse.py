@@ -3,12 +3,17 @@ whole gait.
 
 When drivers fix every degree of freedom, each sample needs position, velocity and acceleration
 analysis, then the multipliers of ``[[M, Phi_v^T], [Phi_v, 0]] [v_dot; lambda] = [Q; gamma]``,
-and from them the joint wrenches (:mod:`hexapod.algorithms.liaison`). Two ways, with the same
-results:
+and from them the joint wrenches (:mod:`hexapod.algorithms.liaison`). Three ways, with the
+same results:
 
-* **saddle** (any mechanism, closed loops included): per sample, Newton's method warm-started
-  from the previous sample, velocity projection, and the saddle-point solve of
-  :mod:`hexapod.algorithms.dynamics` (rank decision and redundancy policy included);
+* **saddle** (any mechanism, closed loops included; the reference): per sample in Python,
+  Newton's method warm-started from the previous sample, velocity projection, and the
+  saddle-point solve of :mod:`hexapod.algorithms.dynamics` (rank decision and redundancy policy
+  included), one sample at a time by :mod:`hexapod.algorithms.sample_inverse`;
+* **phase** (closed loops and feet on the ground): the same work in CasADi Functions mapped
+  over the samples of each contact phase, the rank decision taken once per contact set and
+  every sample checked, any sample that fails its checks redone by the saddle path's exact
+  solve (:mod:`hexapod.algorithms.phase_inverse`);
 * **tree** (an open tree of spatial bodies whose revolute and prismatic joints are all driven,
   the legs of this project): the same system solved in tree order. A forward pass composes each
   body's pose from its parent's and its driver's value (exactly: no Newton iterations), CasADi
