@@ -110,22 +110,22 @@ class _Results:
     """The arrays of an :class:`~hexapod.algorithms.inverse.InverseResult`, filled sample by
     sample or by runs of samples."""
 
-    def __init__(self, model: Model, n: int):
+    def __init__(self, model: Model, n: int, world: bool):
         self.model = model
         J, C = len(model.joints), len(model.contacts)
         self.q, self.v = np.zeros((n, model.n_q)), np.zeros((n, model.n_v))
-        self.v_dot, self.lam = np.zeros((n, model.n_v)), np.zeros((n, model.n_c))
+        self.v_dot = np.zeros((n, model.n_v))
         self.force, self.torque = np.zeros((n, J, 3)), np.zeros((n, J, 3))
         self.effort, self.ground = np.zeros((n, J)), np.zeros((n, C, 3))
         self.status = np.full((n, C), "swing", dtype=object)
         self.violation = np.zeros(n)
-        self.frames = np.zeros((n, J, 9))  # the joint frames of the compiled samples
+        # the joint frames of the compiled samples, kept for world axes only
+        self.frames = np.zeros((n, J, 9)) if world else None
         self.redundant: list[str] = []
         self.exact = np.zeros(n, dtype=bool)
 
     def store(self, k: int, sample: SampleResult) -> None:
-        self.q[k], self.v[k], self.v_dot[k], self.lam[k] = (sample.q, sample.v, sample.v_dot,
-                                                           sample.lam)
+        self.q[k], self.v[k], self.v_dot[k] = sample.q, sample.v, sample.v_dot
         self.force[k], self.torque[k], self.effort[k] = (sample.force, sample.torque,
                                                          sample.effort)
         if sample.ground.size:
@@ -153,7 +153,8 @@ def phase_inverse(model: Model, times: np.ndarray, w, wd, wdd, frame: str, *,
     :class:`~hexapod.algorithms.inverse.InverseResult` as a dict, with ``exact_samples``, the
     number of samples solved by the exact path."""
     n = times.size
-    out, feet, data = _Results(model, n), _Feet(model, times), model.create_data()
+    out, data = _Results(model, n, frame == "world"), model.create_data()
+    feet = _Feet(model, times)
     out.store(0, exact_sample(model, data, times[0], model.q0, times[0], frame=frame,
                               first=True))
     decisions = _Decisions(model, phase_terms(model, options), feet, options)
@@ -305,9 +306,10 @@ def _run(plan: PhasePlan, newton: int, out: _Results, feet: _Feet, times, w, wd,
     n_q, n_v = model.n_q, model.n_v
     done = slice(k, k + count)
     out.q[done], out.v[done] = state[:count, :n_q], state[:count, n_q:n_q + n_v]
-    out.v_dot[done], out.lam[done] = state[:count, n_q + n_v:], lam[:count]
+    out.v_dot[done] = state[:count, n_q + n_v:]
     out.force[done], out.torque[done] = wrench[:count, :, :3], wrench[:count, :, 3:]
-    out.frames[done] = frames[:count]
+    if out.frames is not None:
+        out.frames[done] = frames[:count]
     out.violation[done] = checks[:count, 0]
     for c, contact in enumerate(model.contacts):
         out.ground[done, c] = -lam[:count][:, contact.rows]
