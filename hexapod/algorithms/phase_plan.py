@@ -231,11 +231,17 @@ class PhasePlan:
         return policy(q, Phi, offset, feet, lam0, self.null_space(F, Phi), mask)
 
 
-def plan_for(model: Model, terms: PhaseTerms, kept, left_out, lu: StaticLU, scale,
+def plan_for(model: Model, terms: PhaseTerms, kept, left_out, make, generation: int = 0,
              options: dict | None = None) -> PhasePlan:
-    """The :class:`PhasePlan` of a rank decision, built once per model (``scale``: that of its
-    first use)."""
+    """The :class:`PhasePlan` of a rank decision, built once per model and ``generation``:
+    ``make()`` gives the factorisation's pivots and the rows' scales (:class:`StaticLU`, an
+    array) when it is built. A later decision with the same rows reuses it, whatever the
+    positions it was taken at (its pivots are checked at every sample); a new ``generation``
+    takes new pivots."""
     key = ("phase-plan", tuple(int(r) for r in kept), tuple(int(r) for r in left_out),
-           tuple(lu.row_order.tolist()), tuple(lu.column_order.tolist()), bool(options))
-    return model.built_once(key, lambda m: PhasePlan(terms, kept, left_out, lu, scale,
-                                                     options))
+           generation, bool(options))
+
+    def build(m: Model) -> PhasePlan:
+        lu, scale = make()
+        return PhasePlan(terms, kept, left_out, lu, scale, options)
+    return model.built_once(key, build)
