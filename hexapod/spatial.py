@@ -111,6 +111,30 @@ def quaternion_product(p, q):
     return np.concatenate([s[..., None], v], axis=-1)
 
 
+def retract_symbolic(q, dv, lin_q, lin_v, quat_q, omega_v):
+    """``q (+) dv`` on CasADi symbols (SX or MX), as :meth:`hexapod.model.model.Model.integrate`
+    computes it on numbers: coordinates ``lin_q`` move by the velocity-space entries ``lin_v``,
+    and each spatial body's Euler parameters (the rows of ``quat_q``) turn by the body-frame
+    rotation vector at ``omega_v``, ``p <- p * exp(dpi'/2)``, renormalised."""
+    parts = [q[i] for i in range(q.numel())]
+    for i, j in zip(lin_q, lin_v, strict=True):
+        parts[int(i)] = q[int(i)] + dv[int(j)]
+    for quat, omega in zip(quat_q, omega_v, strict=True):
+        theta = dv[[int(j) for j in omega]]
+        angle2 = ca.dot(theta, theta)
+        small = angle2 < 1e-16
+        angle = ca.sqrt(ca.if_else(small, 1.0, angle2))
+        # sin(x/2)/x with its series near zero (no 0/0 in the branch not taken)
+        k = ca.if_else(small, 0.5 - angle2 / 48.0, ca.sin(angle / 2) / angle)
+        c = ca.if_else(small, 1.0 - angle2 / 8.0, ca.cos(angle / 2))
+        p = ca.vertcat(*[q[int(i)] for i in quat])
+        product = quaternion_product(p, ca.vertcat(c, k * theta))
+        product = product / ca.norm_2(product)
+        for n, i in enumerate(quat):
+            parts[int(i)] = product[n]
+    return ca.vertcat(*parts)
+
+
 # ---------------------------------------------------------------- numbers only
 
 def quaternion_exp(rotation_vector) -> np.ndarray:

@@ -3,12 +3,17 @@ whole gait.
 
 When drivers fix every degree of freedom, each sample needs position, velocity and acceleration
 analysis, then the multipliers of ``[[M, Phi_v^T], [Phi_v, 0]] [v_dot; lambda] = [Q; gamma]``,
-and from them the joint wrenches (:mod:`hexapod.algorithms.liaison`). Two ways, with the same
-results:
+and from them the joint wrenches (:mod:`hexapod.algorithms.liaison`). Three ways, with the
+same results:
 
-* **saddle** (any mechanism, closed loops included): per sample, Newton's method warm-started
-  from the previous sample, velocity projection, and the saddle-point solve of
-  :mod:`hexapod.algorithms.dynamics` (rank decision and redundancy policy included);
+* **saddle** (any mechanism, closed loops included; the reference): per sample in Python,
+  Newton's method warm-started from the previous sample, velocity projection, and the
+  saddle-point solve of :mod:`hexapod.algorithms.dynamics` (rank decision and redundancy policy
+  included), one sample at a time by :mod:`hexapod.algorithms.sample_inverse`;
+* **phase** (closed loops and feet on the ground): the same work in CasADi Functions mapped
+  over the samples of each contact phase, the rank decision taken once per contact set and
+  every sample checked, any sample that fails its checks redone by the saddle path's exact
+  solve (:mod:`hexapod.algorithms.phase_inverse`);
 * **tree** (an open tree of spatial bodies whose revolute and prismatic joints are all driven,
   the legs of this project): the same system solved in tree order. A forward pass composes each
   body's pose from its parent's and its driver's value (exactly: no Newton iterations), CasADi
@@ -39,7 +44,7 @@ from hexapod._support.compiled import (
     interpreted_samples,
     serialized,
 )
-from hexapod.errors import AssemblyError, HexapodError, SingularSystemError
+from hexapod.errors import HexapodError
 from hexapod.model.model import GROUND_INDEX, Model
 from hexapod.spatial import (
     g_matrix,
@@ -64,11 +69,12 @@ class InverseResult:
         ``tau`` of revolute and prismatic joints (NaN for the others).
     q, v, v_dot : ndarray (N, n_q), (N, n_v), (N, n_v)
     method : str
-        ``"tree"`` or ``"saddle"``.
+        ``"tree"``, ``"phase"`` or ``"saddle"``.
     max_violation : float
         Largest scaled constraint residual over the samples (round-off for the tree path).
     redundant_rows : tuple of str
-        Rows named redundant at some sample (saddle path).
+        Rows named redundant at some sample (saddle path), or by the rank decisions of the
+        phase path (one per phase, and at the samples it solved exactly).
     contacts : tuple of str
         The model's foot contacts (joint names), in model order.
     ground_force : ndarray (N, C, 3)
@@ -114,6 +120,13 @@ OPTIMIZE_FROM_SAMPLES = 200_000
 #: them: for the front leg, 4.9 ms against 1.5 ms in blocks at 1000 samples, 194 ms against
 #: 25 ms at 20 000.
 BLOCK_FACTOR, SMALLEST_BLOCK = 12, 64
+#: ``method="auto"`` takes the phase path for closed loops and contacts from this many samples
+#: (below, building its Functions costs about as much as the saddle path's samples: some two
+#: seconds for the walking hexapod, whose samples cost 70 ms each on the saddle path).
+PHASE_FROM_SAMPLES = 32
+#: The phase path compiles its Functions to C from this many samples (compiling the walking
+#: hexapod's takes some tens of seconds and saves about a millisecond per sample).
+PHASE_COMPILE_FROM_SAMPLES = 50_000
 
 
 def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = "joint",
@@ -127,16 +140,23 @@ def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = 
     Parameters
     ----------
     method :
-        ``"auto"`` (the tree path when the model allows it), ``"tree"`` or ``"saddle"``.
+        ``"auto"`` (the tree path when the model allows it, else the phase path from
+        :data:`PHASE_FROM_SAMPLES` samples, else the saddle path), ``"tree"``, ``"phase"``
+        (closed loops and contacts, compiled: :mod:`hexapod.algorithms.phase_inverse`) or
+        ``"saddle"`` (any mechanism, every sample solved exactly in Python: the reference).
     frame :
         ``"joint"`` (the report convention) or ``"world"``.
     compile :
-        Tree path: evaluate compiled C code (True) or CasADi's interpreter (False); by default
-        compiled code when it is at hand (compiled before, in this process or in the cache on
-        disk) or when compiling pays (:func:`compile_pays`), else the interpreter.
+        Tree and phase paths: evaluate compiled C code (True) or CasADi's interpreter
+        (False). Tree path, by default: compiled code when it is at hand (compiled before, in
+        this process or in the cache on disk) or when compiling pays (:func:`compile_pays`),
+        else the interpreter. Phase path, by default: compiled from
+        :data:`PHASE_COMPILE_FROM_SAMPLES` samples, or when this process compiled the model's
+        phase path before (the libraries are kept in the cache on disk).
     progress :
         Called as ``progress(done, total)`` as samples are done (after each block of samples
-        on the tree path, see :data:`BLOCK_FACTOR`).
+        on the tree path, see :data:`BLOCK_FACTOR`; after each run of samples sharing one
+        rank decision on the phase path).
 
     Raises
     ------
@@ -153,14 +173,19 @@ def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = 
     if method == "tree" and plan is None:
         raise HexapodError(f"model '{model.name}' is not an open tree with every joint driven, "
                          "which the tree method needs: use the saddle method")
-    if method not in ("auto", "tree", "saddle"):
-        raise ValueError(f"method must be 'auto', 'tree' or 'saddle', got {method!r}")
+    if method not in ("auto", "tree", "phase", "saddle"):
+        raise ValueError(f"method must be 'auto', 'tree', 'phase' or 'saddle', got {method!r}")
     if plan is not None and method in ("auto", "tree"):
         if compile is None:
             compile = compile_pays(plan, times.size)
         result = plan.solve(times, w, wd, wdd, frame, compiled=compile, progress=progress)
         if not compile:  # counted over runs, until compiling pays
             interpreted_samples(plan.key, times.size)
+    elif method == "phase" or (method == "auto" and times.size >= PHASE_FROM_SAMPLES):
+        if compile is None:
+            compile = (model.was_built(("phase-terms", True))
+                       or times.size >= PHASE_COMPILE_FROM_SAMPLES)
+        result = _phase(model, times, w, wd, wdd, frame, compile, progress)
     else:
         result = _saddle(model, times, frame, progress)
     _check_finite(model, result)
@@ -203,13 +228,22 @@ def _check_finite(model: Model, result: InverseResult) -> None:
 
 # ------------------------------------------------------------------ the saddle path
 
+def _phase(model, times, w, wd, wdd, frame, compile, progress) -> InverseResult:
+    from hexapod.algorithms.phase_inverse import phase_inverse  # loaded when it runs, as below
+
+    fields = phase_inverse(model, times, w, wd, wdd, frame, to_c=compile, progress=progress)
+    return InverseResult(times, tuple(j.name for j in model.joints), fields["force"],
+                         fields["torque"], fields["effort"], fields["q"], fields["v"],
+                         fields["v_dot"], frame, "phase", fields["max_violation"],
+                         fields["redundant_rows"], tuple(c.name for c in model.contacts),
+                         fields["ground"], fields["status"],
+                         model.ground.policy if model.contacts else "")
+
+
 def _saddle(model, times, frame, progress) -> InverseResult:
     # the saddle path's algorithms, loaded when it runs: the tree path (and 'hexapod inverse'
     # on a leg or a URDF robot) starts without them
-    from hexapod.algorithms.dynamics import forward_dynamics
-    from hexapod.algorithms.ground import ground_reactions
-    from hexapod.algorithms.kinematics import degrees_of_freedom, solve_velocities
-    from hexapod.algorithms.liaison import joint_wrenches
+    from hexapod.algorithms.sample_inverse import exact_sample
 
     n, J = times.size, len(model.joints)
     force, torque, effort = np.zeros((n, J, 3)), np.zeros((n, J, 3)), np.zeros((n, J))
@@ -218,37 +252,18 @@ def _saddle(model, times, frame, progress) -> InverseResult:
     ground = np.zeros((n, len(model.contacts), 3))
     status = np.full((n, len(model.contacts)), "swing", dtype=object)
     worst = 0.0
-    q = model.q0
     data = model.create_data()
     model.law_values(times)  # all samples at once: the per-sample calls below reuse them
-    previous = times[0]
     for k, t in enumerate(times):
-        q = _next_positions(model, data, previous, q, t,
-                            (V[k - 1], A[k - 1]) if k else None)
-        previous = t
-        if k == 0:
-            free = degrees_of_freedom(model, data, t, q)["dof_with_drivers"]
-            if free:
-                driven = {d.joint for d in model.drivers if d.kind == "joint"}
-                idle = [j.name for j in model.joints
-                        if j.kind in ("revolute", "prismatic") and j.index not in driven]
-                hint = f" (joints without a driver: {', '.join(idle)})" if idle else ""
-                raise SingularSystemError(
-                    f"model '{model.name}': the drivers leave {free} degree(s) of freedom "
-                    f"free{hint}; inverse dynamics needs the motion of every degree of freedom")
-        v = solve_velocities(model, data, t, q)
-        A[k] = forward_dynamics(model, data, t, q, v)
-        wrenches = joint_wrenches(model, data, frame=frame)
-        force[k], torque[k], effort[k] = wrenches.force, wrenches.torque, wrenches.effort
+        sample = exact_sample(model, data, times[k - 1] if k else t,
+                              Q[k - 1] if k else model.q0, t,
+                              (V[k - 1], A[k - 1]) if k else None, frame=frame, first=k == 0)
+        Q[k], V[k], A[k] = sample.q, sample.v, sample.v_dot
+        force[k], torque[k], effort[k] = sample.force, sample.torque, sample.effort
         if model.contacts:
-            ground[k] = ground_reactions(model, data.lam)
-            status[k] = data.ground_status
-        Q[k], V[k] = q, v
-        if model.n_c:
-            worst = max(worst, float(np.max(np.abs(model.call("phi", q=q, w=data.w)
-                                                   / model.row_scale))))
-        redundant += [model.rows[i].name for i in data.redundant_rows
-                      if model.rows[i].name not in redundant]
+            ground[k], status[k] = sample.ground, sample.status
+        worst = max(worst, sample.violation)
+        redundant += [name for name in sample.redundant if name not in redundant]
         if signals.received() is not None:  # an interruption a library call swallowed
             raise KeyboardInterrupt
         if progress is not None:
@@ -258,38 +273,6 @@ def _saddle(model, times, frame, progress) -> InverseResult:
                          Q, V, A, frame, "saddle", worst, tuple(redundant), contacts,
                          ground, status.astype(str),
                          model.ground.policy if model.contacts else "")
-
-
-def _next_positions(model: Model, data, t0: float, q0: np.ndarray, t: float, rates):
-    """Positions at ``t`` from the solved ones at ``t0``: from a second-order prediction with
-    the velocities and accelerations ``rates`` at ``t0`` (Newton's method then needs one or two
-    steps, not five), else by :func:`_follow`."""
-    from hexapod.algorithms.kinematics import assemble_positions
-
-    if rates is not None:
-        h = t - t0
-        guess = model.integrate(q0, h * rates[0] + h * h / 2 * rates[1])
-        if np.all(np.isfinite(guess)):
-            try:
-                return assemble_positions(model, data, t, guess)
-            except AssemblyError:
-                pass
-    return _follow(model, data, t0, q0, t)
-
-
-def _follow(model: Model, data, t0: float, q0: np.ndarray, t: float, depth: int = 6):
-    """Positions at ``t`` from those at ``t0``: Newton's method from ``q0``, and when the
-    samples are too far apart for it (a robot's legs swing a long way between coarse samples),
-    through the time halfway first."""
-    from hexapod.algorithms.kinematics import assemble_positions
-
-    try:
-        return assemble_positions(model, data, t, q0)
-    except AssemblyError:
-        if depth == 0 or t == t0:
-            raise
-    middle = _follow(model, data, t0, q0, (t0 + t) / 2, depth - 1)
-    return _follow(model, data, (t0 + t) / 2, middle, t, depth - 1)
 
 
 # ------------------------------------------------------------------ the tree path

@@ -231,7 +231,7 @@ def inverse_arguments(parser: argparse.ArgumentParser, method_help: str) -> None
     """``--frame`` and ``--method`` of the inverse dynamics (``inverse`` and ``report``)."""
     parser.add_argument("--frame", choices=("joint", "world"), default="joint",
                         help="axes of the wrench components (default: the child's joint frame)")
-    parser.add_argument("--method", choices=("auto", "tree", "saddle"), default="auto",
+    parser.add_argument("--method", choices=("auto", "tree", "phase", "saddle"), default="auto",
                         help=method_help)
 
 

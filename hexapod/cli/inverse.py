@@ -30,7 +30,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("model", help="a URDF (.urdf), a TOML scene file or a built-in scene")
     parser.add_argument("--motion", required=True, metavar="MOTION.csv", help="the motion")
     parser.add_argument("--out", required=True, metavar="OUT.csv", help="the CSV to write")
-    inverse_arguments(parser, "tree-ordered solve (open trees with every joint driven) or the "
+    inverse_arguments(parser, "tree-ordered solve (open trees with every joint driven), the "
+                       "compiled phase path (closed loops and feet on the ground) or the exact "
                        "saddle-point solve per sample (any mechanism); default: the fastest that "
                        "applies")
     limit_arguments(parser)

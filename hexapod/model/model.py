@@ -398,6 +398,11 @@ class Model:
             self._built[key] = build(self)
         return self._built[key]
 
+    def was_built(self, key: tuple) -> bool:
+        """Whether :meth:`built_once` has built ``key`` (e.g. compiled code kept with the
+        model)."""
+        return key in self._built
+
     def create_data(self) -> Data:
         """A new, empty :class:`Data` workspace for this model."""
         return Data()

@@ -33,7 +33,7 @@ from scipy import sparse
 
 from hexapod._support.fastcall import FastFunction
 from hexapod.model.model import Model
-from hexapod.spatial import quaternion_product
+from hexapod.spatial import retract_symbolic
 
 #: relative residual above which a compiled solve is refused (the rank changed, or a
 #: configuration is singular); far above round-off, far below any integrator's tolerance
@@ -162,24 +162,7 @@ def _equilibrated(W_all: ca.MX, norms: ca.MX, rows: list, n_v: int):
 
 def _exp_step(model: Model, q: ca.MX, dv: ca.MX) -> ca.MX:
     """``q (+) dv`` as :meth:`Model.integrate` computes it, symbolically."""
-    parts = [q[i] for i in range(model.n_q)]
-    for i, j in zip(model._lin_q, model._lin_v, strict=True):
-        parts[i] = q[int(i)] + dv[int(j)]
-    for quat, omega in zip(model._quat_q, model._omega_v, strict=True):
-        theta = dv[omega.tolist()]
-        angle2 = ca.dot(theta, theta)
-        small = angle2 < 1e-16
-        angle = ca.sqrt(ca.if_else(small, 1.0, angle2))
-        # sin(x/2)/x with its series near zero (no 0/0 in the branch not taken)
-        k = ca.if_else(small, 0.5 - angle2 / 48.0, ca.sin(angle / 2) / angle)
-        c = ca.if_else(small, 1.0 - angle2 / 8.0, ca.cos(angle / 2))
-        step = ca.vertcat(c, k * theta)
-        p = ca.vertcat(*[q[int(i)] for i in quat])
-        product = quaternion_product(p, step)
-        product = product / ca.norm_2(product)
-        for n, i in enumerate(quat):
-            parts[int(i)] = product[n]
-    return ca.vertcat(*parts)
+    return retract_symbolic(q, dv, model._lin_q, model._lin_v, model._quat_q, model._omega_v)
 
 
 class CompiledProjection:

@@ -1,0 +1,383 @@
+"""Compiled inverse dynamics of closed loops and feet on the ground: the phase path.
+
+The saddle path solves every sample in Python (Newton's method, a rank decision, the saddle-point
+solve, the policy, the wrenches: some 70 ms a sample for the walking hexapod). The phase path
+does the same work in CasADi Functions evaluated over many samples in one call:
+
+* **phases**: runs of samples with one contact set (the gates of ``model.contacts``; one run for
+  a mechanism without contacts). Each contact set gets one rank decision (kept rows ``I``, as
+  many as velocities, left-out rows ``R``) with the pivots of the factorisation of
+  ``Phi_v[I]``, and a :class:`~hexapod.algorithms.phase_plan.PhasePlan` for it (built once per
+  model and decision), mapped over the phase with ``mapaccum``: each sample starts from the
+  positions predicted by the one before. The decision is the exact solve's at the first sample
+  (and wherever the exact solve redid a sample because the decision had stopped holding); for a
+  new contact set the joints' and drivers' rows are kept as decided and the feet's chosen as
+  the exact decision chooses them (the farthest from the span of those kept first), the feet
+  that carry nothing at that sample last, so that their multipliers can be held at zero.
+* **checks**: each sample comes with its position residual, the residuals of its kept and
+  left-out rows, the size of the rows its decision did not weigh (the feet in swing: zero) and
+  an estimate of its smallest singular value. A sample that fails them (Newton did not
+  converge: the later samples then take more Newton steps; the rows left out no longer follow
+  from those kept; a foot touched down unweighed; a singular pose), or one whose kept rows
+  belong to a foot that carries nothing, is redone by the exact path
+  (:func:`~hexapod.algorithms.sample_inverse.exact_sample`), and the phase goes on from it
+  with the exact solve's decision when the failure was the decision's.
+* **the first sample** is always exact: it finds the positions from the scene's guess and checks
+  that the drivers fix every degree of freedom.
+* **friction** (a QP): the plan gives the least-effort forces without the cones; a sample where
+  they leave a pyramid (or fall below the least normal force), and every sample of the exact
+  cone (``faces = 0``, IPOPT), gets its forces from the exact per-sample solve, QP included, at
+  the compiled positions and velocities. (The walking hexapod's least-effort forces push its
+  feet inwards: with ``mu = 0.8`` they leave the pyramids almost everywhere, so that its
+  friction policy gains only the compiled kinematics.)
+
+Same numbers as the saddle path to round-off (tests: the walking hexapod across a touch-down,
+the standing one, the four-bars, friction). What differs: ``redundant_rows`` names the rows
+left out by the decisions taken (one per contact set) and at the exact samples, where the
+saddle path names those of every sample's own decision (which, among equivalent rows, pivots
+by conditioning).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from hexapod._support import signals
+from hexapod.algorithms.ground import NO_LOAD
+from hexapod.algorithms.linalg import equilibrate
+from hexapod.algorithms.phase_plan import MORE_NEWTON_STEPS, NEWTON_STEPS, PhasePlan, plan_for
+from hexapod.algorithms.phase_terms import PhaseTerms
+from hexapod.algorithms.sample_inverse import SampleResult, exact_forces, exact_sample
+from hexapod.algorithms.static_lu import StaticLU
+from hexapod.model.model import Model
+
+#: A sample is redone exactly when its scaled position residual is above this (a tenth of the
+#: exact path's Newton tolerance, which then takes one more step) ...
+POSITION_TOL = 1e-13
+#: ... or the relative residual of its kept or left-out rows above this ...
+RESIDUAL_TOL = 1e-9
+#: ... or the estimated smallest singular value of its equilibrated kept rows below this
+#: (an estimate from above: at most about sqrt(n_v) times the true value, so that the exact
+#: rank decision, with its tolerance of 1e-9, keeps every row whenever this one passes).
+SIGMA_TOL = 1e-6
+#: Samples per call when progress is reported, and the most per call.
+CHUNK = 2_000
+
+
+def phase_terms(model: Model, to_c: bool) -> PhaseTerms:
+    """The model's Functions of the phase path, built (and compiled to C when ``to_c``) once."""
+    return model.built_once(("phase-terms", to_c), lambda m: PhaseTerms(m, to_c))
+
+
+class _Feet:
+    """The per-sample inputs of the contacts: stance, weights, idle feet and the policy's
+    per-foot values (see :meth:`PhasePlan._objective`)."""
+
+    def __init__(self, model: Model, times: np.ndarray):
+        contacts = model.contacts
+        n = times.size
+        self.stance = np.array([c.in_stance(times) for c in contacts], dtype=bool).reshape(-1, n)
+        weights = np.array([c.weight(times) for c in contacts], dtype=float).reshape(-1, n)
+        unloaded = ~np.any(weights > NO_LOAD, axis=0)  # every foot down at touch-down or lift-off
+        weights[:, unloaded] = self.stance[:, unloaded]
+        self.weights = weights
+        self.idle = self.stance & (weights <= NO_LOAD)
+        safe = np.where(weights > NO_LOAD, weights, 1.0)
+        policy = model.ground.policy if contacts else "min-wrench"
+        if policy == "min-wrench":
+            self.values = np.where(weights > NO_LOAD, 1.0 / np.sqrt(safe), 1.0)
+        else:
+            self.values = np.where((weights > NO_LOAD) & (weights < 1.0),
+                                   np.sqrt(np.maximum(1.0 / safe - 1.0, 0.0)), 0.0)
+        self.owner = np.full(model.n_c, -1)  # the contact of each row
+        for k, c in enumerate(contacts):
+            self.owner[c.rows] = k
+
+    def contact_set(self, k: int) -> tuple[bool, ...]:
+        return tuple(bool(x) for x in self.stance[:, k])
+
+    def rows_idle(self, rows: np.ndarray, k: int) -> np.ndarray:
+        """Which of ``rows`` belong to a foot that carries nothing at sample ``k``."""
+        owner = self.owner[rows]
+        if not self.idle.size:
+            return np.zeros(owner.size, dtype=bool)
+        return (owner >= 0) & self.idle[np.maximum(owner, 0), k]
+
+
+class _Results:
+    """The arrays of an :class:`~hexapod.algorithms.inverse.InverseResult`, filled sample by
+    sample or by runs of samples."""
+
+    def __init__(self, model: Model, n: int, world: bool):
+        self.model = model
+        J, C = len(model.joints), len(model.contacts)
+        self.q, self.v = np.zeros((n, model.n_q)), np.zeros((n, model.n_v))
+        self.v_dot = np.zeros((n, model.n_v))
+        self.force, self.torque = np.zeros((n, J, 3)), np.zeros((n, J, 3))
+        self.effort, self.ground = np.zeros((n, J)), np.zeros((n, C, 3))
+        self.status = np.full((n, C), "swing", dtype=object)
+        self.violation = np.zeros(n)
+        # the joint frames of the compiled samples, kept for world axes only
+        self.frames = np.zeros((n, J, 9)) if world else None
+        self.redundant: list[str] = []
+        self.exact = np.zeros(n, dtype=bool)
+
+    def store(self, k: int, sample: SampleResult) -> None:
+        self.q[k], self.v[k], self.v_dot[k] = sample.q, sample.v, sample.v_dot
+        self.force[k], self.torque[k], self.effort[k] = (sample.force, sample.torque,
+                                                         sample.effort)
+        if sample.ground.size:
+            self.ground[k], self.status[k] = sample.ground, sample.status
+        self.violation[k] = sample.violation
+        self.name(sample.redundant)
+        self.exact[k] = True
+
+    def name(self, rows) -> None:
+        self.redundant += [r for r in rows if r not in self.redundant]
+
+    def state(self, k: int) -> np.ndarray:
+        return np.concatenate([self.q[k], self.v[k], self.v_dot[k]])
+
+    def predicted(self, k: int, times) -> np.ndarray:
+        """The positions at sample ``k`` predicted from ``k - 1``."""
+        h = times[k] - times[k - 1]
+        return self.model.integrate(self.q[k - 1],
+                                    h * self.v[k - 1] + h * h / 2 * self.v_dot[k - 1])
+
+
+def phase_inverse(model: Model, times: np.ndarray, w, wd, wdd, frame: str, *,
+                  to_c: bool, progress: Callable[[int, int], None] | None = None) -> dict:
+    """The phase path over ``times`` (laws ``w, wd, wdd`` given, n_w x N): the fields of an
+    :class:`~hexapod.algorithms.inverse.InverseResult` as a dict, with ``exact_samples``, the
+    number of samples solved by the exact path."""
+    n = times.size
+    out, data = _Results(model, n, frame == "world"), model.create_data()
+    feet = _Feet(model, times)
+    out.store(0, exact_sample(model, data, times[0], model.q0, times[0], frame=frame,
+                              first=True))
+    decisions = _Decisions(model, phase_terms(model, to_c), feet, to_c)
+    decisions.adopt(0, data, w[:, 0])
+    newton = NEWTON_STEPS  # Newton steps per sample: more once samples prove far apart
+    k, chunk = 1, CHUNK
+    while k < n:
+        plan = decisions.plan(k, out.predicted(k, times), w[:, k])
+        stop = k + 1
+        while stop < n and stop - k < chunk and feet.contact_set(stop) == feet.contact_set(k):
+            stop += 1
+        failed = None
+        if plan is not None:
+            failed = _run(plan, newton, out, feet, times, w, wd, wdd, k, stop)
+        if plan is None or failed is not None:
+            bad, blame = (k, "rank") if plan is None else failed
+            out.store(bad, exact_sample(model, data, times[bad - 1], out.q[bad - 1],
+                                        times[bad], (out.v[bad - 1], out.v_dot[bad - 1]),
+                                        frame=frame))
+            if blame == "rank":  # the decision no longer holds: take the exact solve's
+                decisions.adopt(bad, data, w[:, bad], plan)
+            elif blame == "newton":  # samples too far apart for the Newton steps taken
+                newton = MORE_NEWTON_STEPS
+            k, chunk = bad + 1, 1  # short runs after a failure, growing again
+        else:
+            k, chunk = stop, min(2 * chunk, CHUNK)
+        if signals.received() is not None:  # an interruption a library call swallowed
+            raise KeyboardInterrupt
+        if progress is not None:
+            progress(k, n)
+    _frames(model, out, frame)
+    if model.contacts and model.ground.policy == "friction":
+        _friction(model, out, feet, times, frame)
+    return {"q": out.q, "v": out.v, "v_dot": out.v_dot, "force": out.force,
+            "torque": out.torque, "effort": out.effort, "ground": out.ground,
+            "status": out.status.astype(str), "max_violation": float(out.violation.max()),
+            "redundant_rows": tuple(out.redundant), "exact_samples": int(out.exact.sum())}
+
+
+class _Decisions:
+    """The rank decisions of a run, one per contact set, and their plans.
+
+    A decision is the exact solve's where it has one (the first sample, and where it redid a
+    sample because the decision had stopped holding); for a new contact set, the rows of the
+    joints and drivers are kept as decided and those of the feet are chosen among the feet on
+    the ground as the exact decision chooses them (the farthest from the span of those kept
+    first), the feet that carry nothing last, so that their multipliers can be held at zero."""
+
+    def __init__(self, model: Model, terms: PhaseTerms, feet: _Feet, to_c: bool):
+        self.model, self.terms, self.feet, self.to_c = model, terms, feet, to_c
+        self.plans: dict = {}
+        self.base = None  # the kept and left-out rows that are no foot's
+        self.generation: dict = {}  # per kept and left-out rows: plans whose pivots failed
+
+    def adopt(self, k: int, data, w_k, failed: PhasePlan | None = None) -> None:
+        """The exact solve's decision at sample ``k`` (held in ``data``); when it keeps the
+        rows of the plan that ``failed`` there, new pivots for them."""
+        kept, left = np.sort(data.independent_rows), np.sort(data.redundant_rows)
+        if failed is not None and np.array_equal(failed.kept, kept) and np.array_equal(
+                failed.left_out, left):
+            key = (tuple(kept.tolist()), tuple(left.tolist()))
+            self.generation[key] = self.generation.get(key, 0) + 1
+        foot = self.feet.owner >= 0
+        self.base = (kept[~foot[kept]], left[~foot[left]])
+        key = self.feet.contact_set(k)
+        idle = self.feet.rows_idle(kept, k)
+        if kept.size != self.model.n_v:
+            self.plans.pop(key, None)
+        elif idle.any():
+            self.plans[key] = self._select(k, data.q, w_k)
+        else:
+            self.plans[key] = self._plan(data.q, w_k, kept, left)
+
+    def plan(self, k: int, q, w_k) -> PhasePlan | None:
+        """The plan of sample ``k``'s contact set (decided at ``q`` when it has none yet, or
+        when its kept rows hold a foot that carries nothing at ``k``)."""
+        key = self.feet.contact_set(k)
+        plan = self.plans.get(key)
+        if plan is None or self.feet.rows_idle(plan.kept, k).any():
+            plan = self.plans[key] = self._select(k, q, w_k)
+        return plan
+
+    def _select(self, k: int, q, w_k) -> PhasePlan | None:
+        """The feet's rows to keep at sample ``k`` with the joints' and drivers' as decided."""
+        model = self.model
+        if self.base is None or not model.contacts:
+            return None
+        kept, left = self.base
+        Phi = model.call("Phi_v", q=q, w=w_k)
+        W, _ = equilibrate(Phi, model.mass_inv_sqrt)
+        basis, _ = np.linalg.qr(W[kept].T)
+        priority, _ = model.rank_order(w_k)
+        feet = priority[self.feet.owner[priority] >= 0]
+        idle = self.feet.rows_idle(feet, k)
+        chosen = []
+        for group in (feet[~idle], feet[idle]):
+            rows = list(group)
+            residual = W[rows] - (W[rows] @ basis) @ basis.T
+            residual -= (residual @ basis) @ basis.T  # twice is enough
+            while rows and basis.shape[1] < model.n_v:
+                norms = np.linalg.norm(residual, axis=1)
+                j = int(np.argmax(norms))
+                if norms[j] <= model.rank_tolerance:
+                    break
+                u = residual[j] / norms[j]
+                u -= basis @ (basis.T @ u)
+                u /= np.linalg.norm(u)
+                chosen.append(rows.pop(j))
+                basis = np.column_stack([basis, u])
+                residual = np.delete(residual, j, axis=0)
+                residual -= np.outer(residual @ u, u)
+        if basis.shape[1] != model.n_v:
+            return None
+        kept = np.concatenate([kept, chosen]).astype(int)
+        left = np.concatenate([left, np.setdiff1d(feet, chosen)]).astype(int)
+        return self._plan(q, w_k, kept, left)
+
+    def _plan(self, q, w_k, kept, left) -> PhasePlan | None:
+        """The plan of a decision (for a new one, the pivots of ``Phi_v[kept]`` at ``q``). The
+        rows are sorted: a decision that keeps the same rows in another order (the exact one
+        orders drivers and feet by their conditioning) is the same plan."""
+        model, terms = self.model, self.terms
+        kept, left = np.sort(kept), np.sort(left)
+
+        def make():
+            Phi = model.call("Phi_v", q=q, w=w_k)
+            where = np.full(model.n_c, -1)
+            where[kept] = np.arange(kept.size)
+            entries = np.flatnonzero(where[terms.pattern_rows] >= 0)
+            rows, columns = where[terms.pattern_rows[entries]], terms.pattern_columns[entries]
+            lu = StaticLU.pivoted(rows, columns, model.n_v, Phi[kept[rows], columns])
+            return lu, equilibrate(Phi, model.mass_inv_sqrt)[1]
+
+        key = (tuple(kept.tolist()), tuple(left.tolist()))
+        try:
+            return plan_for(model, terms, kept, left, make, self.generation.get(key, 0),
+                            self.to_c)
+        except RuntimeError:  # exactly singular there
+            return None
+
+
+def _run(plan: PhasePlan, newton: int, out: _Results, feet: _Feet, times, w, wd, wdd,
+         k: int, stop: int):
+    """Samples ``k`` to ``stop - 1`` by the plan; results kept up to the first that fails.
+    Returns None, or that sample and what failed: ``"newton"`` (its positions did not
+    converge), ``"rank"`` (its rows left out no longer follow from those kept, or rows the
+    decision did not weigh constrain it, or it is near a singular pose, or its kept rows hold a
+    foot that carries nothing)."""
+    model = plan.model
+    span = slice(k, stop)
+    mask = np.array([~feet.rows_idle(plan.left_out, j) for j in range(k, stop)],
+                    dtype=float).T.reshape(plan.left_out.size, stop - k)
+    state, lam, wrench, frames, checks = plan.evaluate(
+        out.state(k - 1), np.diff(times[k - 1:stop]), w[:, span], wd[:, span], wdd[:, span],
+        feet.values[:, span], mask, newton)
+    checks = np.nan_to_num(checks, nan=np.inf)
+    finite = np.all(np.isfinite(state), axis=1) & np.all(np.isfinite(wrench), axis=(1, 2))
+    idle_kept = np.array([feet.rows_idle(plan.kept, j).any() for j in range(k, stop)])
+    rank_ok = (finite & (checks[:, 1:5].max(axis=1) <= RESIDUAL_TOL) & (checks[:, 5] == 0)
+               & (checks[:, 6] < np.inf) & (checks[:, 6] >= SIGMA_TOL) & ~idle_kept)
+    good = rank_ok & (checks[:, 0] <= POSITION_TOL)
+    count = stop - k if good.all() else int(np.argmin(good))
+    n_q, n_v = model.n_q, model.n_v
+    done = slice(k, k + count)
+    out.q[done], out.v[done] = state[:count, :n_q], state[:count, n_q:n_q + n_v]
+    out.v_dot[done] = state[:count, n_q + n_v:]
+    out.force[done], out.torque[done] = wrench[:count, :, :3], wrench[:count, :, 3:]
+    if out.frames is not None:
+        out.frames[done] = frames[:count]
+    out.violation[done] = checks[:count, 0]
+    for c, contact in enumerate(model.contacts):
+        out.ground[done, c] = -lam[:count][:, contact.rows]
+        out.status[done, c] = np.where(feet.stance[c, done], "ok", "swing")
+    if count:
+        out.name([model.rows[i].name for i in plan.left_out])
+    if count == stop - k:
+        return None
+    return k + count, ("newton" if rank_ok[count] else "rank")
+
+
+def _frames(model: Model, out: _Results, frame: str) -> None:
+    """Efforts from the joint-frame wrenches of the compiled samples, and world axes when
+    asked (the exact samples are already in the frame asked)."""
+    compiled = np.flatnonzero(~out.exact)
+    if compiled.size == 0:
+        return
+    for j, joint in enumerate(model.joints):
+        axis = np.array([0.0, 0.0, 1.0]) if joint.axis is None else np.asarray(joint.axis)
+        axis = np.concatenate([axis, np.zeros(3 - axis.size)])
+        if joint.kind == "revolute":
+            out.effort[compiled, j] = out.torque[compiled, j] @ axis
+        elif joint.kind == "prismatic":
+            out.effort[compiled, j] = out.force[compiled, j] @ axis
+        else:
+            out.effort[compiled, j] = np.nan
+    if frame == "world":
+        R = out.frames[compiled].reshape(-1, len(model.joints), 3, 3)
+        R = R.transpose(0, 1, 3, 2)  # column-major blocks
+        out.force[compiled] = np.einsum("njab,njb->nja", R, out.force[compiled])
+        out.torque[compiled] = np.einsum("njab,njb->nja", R, out.torque[compiled])
+
+
+def _friction(model: Model, out: _Results, feet: _Feet, times, frame: str) -> None:
+    """Samples where the least-effort forces leave a friction cone (or the exact cone is
+    asked): forces by the exact per-sample solve, QP included."""
+    ground = model.ground
+    data = model.create_data()
+    for k in np.flatnonzero(~out.exact):
+        if ground.faces and _inside_cones(ground, feet, out.ground[k], k):
+            continue
+        sample = exact_forces(model, data, times[k], out.q[k], out.v[k], frame=frame)
+        out.store(k, sample)
+
+
+def _inside_cones(ground, feet: _Feet, forces: np.ndarray, k: int) -> bool:
+    """Whether every loaded foot's force is inside its pyramid and above its least normal
+    force (then the least-effort forces are the QP's solution)."""
+    angles = 2 * np.pi * (np.arange(ground.faces) + 0.5) / ground.faces
+    for c in np.flatnonzero(feet.weights[:, k] > NO_LOAD):
+        fx, fy, fz = forces[c]
+        if fz < feet.weights[c, k] * ground.min_normal:
+            return False
+        limit = ground.mu * np.cos(np.pi / ground.faces) * fz
+        if np.max(np.cos(angles) * fx + np.sin(angles) * fy) > limit:
+            return False
+    return True

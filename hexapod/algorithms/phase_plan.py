@@ -1,0 +1,247 @@
+"""One sample of the compiled closed-loop inverse dynamics, for one rank decision.
+
+A :class:`PhasePlan` holds a rank decision (the kept rows ``I``, square and independent since
+the drivers fix every degree of freedom, and the rows left out ``R``) and builds one CasADi
+Function per sample,
+
+    step(x, h, w, wd, wdd, feet, mask) -> (x, lam, wrench, frames, checks),  x = [q; v; v_dot]
+
+evaluated over the samples of a phase with ``mapaccum`` (each sample starts from the one
+before). One sample:
+
+1. positions: ``q_p = q (+) (h v + h^2/2 v_dot)`` predicted from the sample before, then
+   :data:`NEWTON_STEPS` Newton steps on ``phi_I = 0`` with the Jacobian of ``q_p`` (one
+   factorisation), each step applied with the retraction;
+2. ``J = Phi_v[I]`` at the positions found, factorised once (:class:`StaticLU`):
+   ``v = J^-1 nu_I``, ``v_dot = J^-1 gamma_I``, ``lam_I = J^-T (Q - M v_dot)``;
+3. the redundancy policy (when rows are left out): every multiplier vector that balances the
+   bodies is ``lam0 + N z`` with ``N = [e_R - L_I J^-T Phi_R^T]``; ``z`` minimises the policy's
+   ``|A (lam0 + N z) + b|^2`` (the least joint wrenches, each foot's block over the square root
+   of its weight, or the least actuator efforts; see :mod:`hexapod.algorithms.ground`), with
+   the entries of ``z`` of idle rows (``mask``: feet that carry nothing) held at zero; solved by
+   the normal equations, scaled, and with feet on the ground refined once (corrected
+   semi-normal equations);
+4. the joint wrenches in the joint frames;
+5. ``checks``: the largest scaled position residual, the relative residuals of the velocity and
+   acceleration constraints on the kept rows and on the rows left out, the size of the rows
+   the decision has neither kept nor left out (those of feet in swing: zero), and an estimate
+   (from above) of the smallest singular value of the equilibrated kept rows. A sample whose
+   checks fail is redone by the exact path (:mod:`hexapod.algorithms.phase_inverse`).
+
+The model's Functions (``phi``, ``Phi_v``, ``gamma``...) come from
+:class:`hexapod.algorithms.phase_terms.PhaseTerms`, built once per model; a plan adds only the
+linear algebra of its row set (a few thousand operations), so a new rank decision costs little
+to build or compile.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from hexapod.algorithms.phase_terms import PhaseTerms, sparse_dm, sx_function
+from hexapod.algorithms.static_lu import StaticLU
+from hexapod.model.model import Model
+
+#: Newton steps on the positions per sample, from the positions predicted by the sample before
+#: (enough for samples up to a few milliseconds apart on the walking hexapod) ...
+NEWTON_STEPS = 3
+#: ... and the steps taken instead once a sample's positions did not converge in those (samples
+#: a hundredth of a second apart); each step contracts the error by a factor of about 100 there.
+MORE_NEWTON_STEPS = 6
+#: ``checks`` entries, in order.
+CHECKS = ("position", "kept_velocity", "kept_acceleration", "left_velocity",
+          "left_acceleration", "outside", "sigma")
+
+
+class PhasePlan:
+    """The compiled inverse dynamics of one sample for one rank decision.
+
+    Parameters
+    ----------
+    terms : PhaseTerms
+        The model's Functions.
+    kept, left_out : sequence of int
+        The rows ``I`` (``len(kept) == n_v``) and the redundant rows ``R``.
+    lu : StaticLU
+        The factorisation's pattern and pivots for ``Phi_v[kept]``.
+    scale : ndarray (n_c,)
+        The rows' scales for the checks: the norms of the rows of ``Phi_v M^-1/2`` at the
+        decision (1 for zero rows).
+    to_c : bool
+        Compile the plan's own SX Functions to C (kept in the cache on disk).
+    """
+
+    def __init__(self, terms: PhaseTerms, kept, left_out, lu: StaticLU, scale,
+                 to_c: bool = False):
+        self.terms, self.model = terms, terms.model
+        self.kept = np.asarray(kept, dtype=int)
+        self.left_out = np.asarray(left_out, dtype=int)
+        self.lu, self.to_c = lu, to_c
+        self.scale = np.asarray(scale, dtype=float)
+        position = {(int(r), int(c)): k for k, (r, c) in enumerate(
+            zip(terms.pattern_rows, terms.pattern_columns, strict=True))}
+        self._J_entries = [position[int(self.kept[r]), int(c)]
+                           for r, c in zip(lu.rows, lu.columns, strict=True)]
+        left = set(self.left_out.tolist())
+        self._left_entries = [k for k, r in enumerate(terms.pattern_rows) if int(r) in left]
+        self._build_linear_algebra()
+
+    # ---------------------------------------------------------------- the plan's SX Functions
+
+    def _sx(self, name, inputs, outputs):
+        return sx_function(name, inputs, outputs, self.to_c)
+
+    def _build_linear_algebra(self) -> None:
+        """The plan's own Functions: the factorisation of ``Phi_v[I]`` and its solves, the
+        coefficients of the left-out rows, the policy's small solve and the checks."""
+        lu, model, terms = self.lu, self.model, self.terms
+        n_v, n_c = model.n_v, model.n_c
+        Phi = ca.SX.sym("Phi", terms.pattern.nnz())
+        rows = lu.factor(Phi[self._J_entries])
+        factors = lu.pack(rows)
+        self.factor = self._sx("phase_lu", [Phi], [factors])
+        packed = ca.SX.sym("F", factors.numel())
+        rows = lu.unpack(packed)
+        b, Q, a = ca.SX.sym("b", n_c), ca.SX.sym("Q", n_v), ca.SX.sym("a", n_v)
+        y = ca.SX.sym("y", n_v)
+        # the transposed solve, formed once and called (inlined) where needed
+        solve_t = ca.Function("solve_t", [packed, y], [lu.solve(rows, y, True)])
+        self.solve = self._sx("phase_solve", [packed, b], [lu.solve(rows, b[self.kept])])
+        lam = ca.SX(n_c, 1)
+        lam[self.kept.tolist()] = solve_t(packed, Q - ca.mtimes(sparse_dm(model.mass.dense()), a))
+        self.multipliers = self._sx("phase_multipliers", [packed, Q, a], [lam])
+        if self.left_out.size:
+            place = {int(r): i for i, r in enumerate(self.left_out)}
+            Phi_R = ca.SX(self.left_out.size, n_v)
+            for k in self._left_entries:
+                Phi_R[place[int(terms.pattern_rows[k])], int(terms.pattern_columns[k])] = Phi[k]
+            C = ca.horzcat(*[solve_t(packed, Phi_R[i, :].T)
+                             for i in range(self.left_out.size)])
+            N = ca.SX(n_c, self.left_out.size)
+            N[self.kept.tolist(), :] = -C
+            for i, row in enumerate(self.left_out):
+                N[int(row), i] = 1.0
+            self.null_space = self._sx("phase_null_space", [packed, Phi], [N])
+        self._probe = np.zeros(n_c)
+        probe = np.random.default_rng(0).standard_normal(n_v)
+        self._probe[self.kept] = probe / np.linalg.norm(probe)
+        x = ca.SX.sym("x", n_v)
+        velocity, acceleration = ca.SX.sym("velocity", n_c), ca.SX.sym("acceleration", n_c)
+        position, presence = ca.SX.sym("position"), ca.SX.sym("presence", n_c)
+        root_mass = sparse_dm(np.linalg.inv(model.mass_inv_sqrt.dense()))
+        I, R = self.kept.tolist(), self.left_out.tolist()
+        outside = sorted(set(range(n_c)) - set(I) - set(R))  # feet in swing: zero rows
+
+        def largest(r, rows_):
+            return ca.mmax(r[rows_]) if rows_ else ca.SX(0.0)
+        checks = ca.vertcat(position, largest(velocity, I), largest(acceleration, I),
+                            largest(velocity, R), largest(acceleration, R),
+                            largest(presence, outside),
+                            1.0 / ca.norm_2(ca.mtimes(root_mass, x)))
+        self.checks = self._sx("phase_checks",
+                               [x, velocity, acceleration, position, presence], [checks])
+
+    # ---------------------------------------------------------------- one sample
+
+    def step(self, newton: int = NEWTON_STEPS) -> ca.Function:
+        """The Function of one sample with ``newton`` Newton steps (built once per count)."""
+        cache = self.__dict__.setdefault("_steps", {})
+        if newton not in cache:
+            cache[newton] = self._build_step(newton)
+        return cache[newton]
+
+    @property
+    def function(self) -> ca.Function:
+        return self.step()
+
+    def _build_step(self, newton: int) -> ca.Function:
+        model, terms = self.model, self.terms
+        n_q, n_v, n_w = model.n_q, model.n_v, model.n_w
+        x = ca.MX.sym("x", n_q + 2 * n_v)
+        h, w, wd, wdd = ca.MX.sym("h"), *(ca.MX.sym(n, n_w) for n in ("w", "wd", "wdd"))
+        feet = ca.MX.sym("feet", len(model.contacts))
+        mask = ca.MX.sym("mask", self.left_out.size)
+        q = terms.predict(x[:n_q], x[n_q:n_q + n_v], x[n_q + n_v:], h)
+        phi, Phi = terms.jacobian(q, w)
+        F = self.factor(Phi)
+        for step in range(newton):
+            if step:
+                phi = terms.residual(q, w)
+            q = terms.correct(q, self.solve(F, phi))
+        phi, Phi = terms.jacobian(q, w)
+        F = self.factor(Phi)
+        nu = terms.rates(q, w, wd)
+        v = self.solve(F, nu)
+        gamma, Q, offset = terms.forces(q, v, w, wd, wdd)
+        a = self.solve(F, gamma)
+        lam = self.multipliers(F, Q, a)
+        if self.left_out.size:
+            lam = self._policy(q, F, Phi, offset, lam, feet, mask)
+        wrench, frames = terms.report(q, Phi, lam, offset)
+        d = ca.DM(self.scale)
+        velocity, acceleration, position, presence = terms.residuals(Phi, phi, v, nu, a,
+                                                                     gamma, d)
+        checks = self.checks(self.solve(F, ca.DM(self.scale * self._probe)), velocity,
+                             acceleration, position, presence)
+        outputs = [ca.densify(y) for y in (ca.vertcat(q, v, a), lam, wrench, frames, checks)]
+        return ca.Function("phase_step", [x, h, w, wd, wdd, feet, mask], outputs,
+                           ["x", "h", "w", "wd", "wdd", "feet", "mask"],
+                           ["x_next", "lam", "wrench", "frames", "checks"])
+
+    # ---------------------------------------------------------------- evaluation
+
+    def _evaluator(self, n: int, newton: int):
+        """The step mapped over ``n`` samples (each from the one before) and its buffer."""
+        cache = self.__dict__.setdefault("_evaluators", {})
+        if (n, newton) not in cache:
+            mapped = self.step(newton).mapaccum("phase_steps", n)
+            cache[n, newton] = (mapped, *mapped.buffer())
+        return cache[n, newton]
+
+    def evaluate(self, x0, h, w, wd, wdd, feet, mask, newton: int = NEWTON_STEPS):
+        """The samples of one run: ``x0`` the state ``[q; v; v_dot]`` of the sample before,
+        ``h`` (N,) the time steps, laws and per-foot inputs (rows x N). Returns arrays with the
+        samples first: states (N, n_q + 2 n_v), multipliers (N, n_c), wrenches (N, J, 6) in
+        the joint frames, the joint frames' rotations (N, J, 9, column-major) and the checks
+        (N, 6), all NaN when the evaluation fails."""
+        model, n = self.model, h.size
+        mapped, buffer, run = self._evaluator(n, newton)
+        # CasADi's column-major (rows x n) is NumPy's C-order (n x rows)
+        inputs = [np.ascontiguousarray(x0, dtype=float),
+                  np.ascontiguousarray(np.reshape(h, (n, 1)), dtype=float)]
+        inputs += [np.ascontiguousarray(np.asarray(x, dtype=float).T)
+                   for x in (w, wd, wdd, feet, mask)]
+        J = len(model.joints)
+        outputs = [np.empty((n, model.n_q + 2 * model.n_v)), np.empty((n, model.n_c)),
+                   np.empty((n, J, 6)), np.empty((n, J, 9)), np.empty((n, len(CHECKS)))]
+        for i, x in enumerate(inputs):
+            buffer.set_arg(i, memoryview(x))
+        for i, y in enumerate(outputs):
+            buffer.set_res(i, memoryview(y))
+        run()
+        if buffer.ret():
+            for y in outputs:
+                y[...] = np.nan
+        return outputs
+
+    def _policy(self, q, F, Phi, offset, lam0, feet, mask):
+        """``lam0 + N z`` of least policy objective, ``z`` zero where ``mask`` is."""
+        policy = self.terms.policy(self.left_out.size)
+        return policy(q, Phi, offset, feet, lam0, self.null_space(F, Phi), mask)
+
+
+def plan_for(model: Model, terms: PhaseTerms, kept, left_out, make, generation: int = 0,
+             to_c: bool = False) -> PhasePlan:
+    """The :class:`PhasePlan` of a rank decision, built once per model and ``generation``:
+    ``make()`` gives the factorisation's pivots and the rows' scales (:class:`StaticLU`, an
+    array) when it is built. A later decision with the same rows reuses it, whatever the
+    positions it was taken at (its pivots are checked at every sample); a new ``generation``
+    takes new pivots."""
+    key = ("phase-plan", tuple(int(r) for r in kept), tuple(int(r) for r in left_out),
+           generation, to_c)
+
+    def build(m: Model) -> PhasePlan:
+        lu, scale = make()
+        return PhasePlan(terms, kept, left_out, lu, scale, to_c)
+    return model.built_once(key, build)

@@ -1,0 +1,365 @@
+"""The model's part of the compiled closed-loop inverse dynamics: CasADi SX Functions that do not
+depend on which rows are kept, built (and compiled) once per model.
+
+:mod:`hexapod.algorithms.phase_plan` composes them, with the linear algebra of one row set, into
+one Function per sample. Here:
+
+* ``predict(q, v, a, h)``: ``q (+) (h v + h^2/2 a)``, the positions a sample ahead;
+* ``correct(q, dq)``: ``q (+) (-dq)`` (a Newton step; :func:`hexapod.spatial.retract_symbolic`);
+* ``residual(q, w)``: ``phi``; ``jacobian(q, w)``: ``phi`` and the nonzeros of ``Phi_v``;
+* ``rates(q, w, wd)``: ``nu``; ``forces(q, v, w, wd, wdd)``: ``gamma``, ``Q`` and the wrenches
+  of the force elements acting across joints;
+* ``policy(m)(q, Phi, offset, feet, lam, N, mask)``: the redundancy policy, among ``lam + N
+  z`` the least ``|A (lam + N z) + b|^2`` (``m`` the columns of ``N``, one Function per
+  ``m``): for ``min-wrench`` ``A`` maps multipliers to the joint wrenches
+  (:func:`hexapod.algorithms.liaison.policy_map`: force and moment about the joint origin over
+  the characteristic length, world axes, one block of 6 rows per joint and per coordinate
+  driver), each foot's block times ``feet`` (one over the square root of its weight); for
+  ``min-effort`` to the actuator efforts over their references and the feet's load-sharing
+  terms (coefficients ``feet``), as in :mod:`hexapod.algorithms.ground`;
+* ``report(q, Phi, lam, offset)``: the joint wrenches in the report convention (joint frames)
+  and the joint frames' rotations;
+* ``residuals(Phi, phi, v, nu, a, gamma, d)``: what the checks need: the velocity and
+  acceleration residuals per row, over the row scales ``d`` (the norms of the rows of
+  ``Phi_v M^-1/2`` at the rank decision, the equilibration of :mod:`hexapod.algorithms.linalg`)
+  and relative to the solution's size, the largest scaled position residual, and per row
+  ``|Phi_v row|_1 + |phi|``, zero for the rows of feet in swing.
+
+``gamma`` is formed as ``-d/dq (Phi_v v) B v - 2 d/dt (Phi_v v) - Phi_tt`` through directional
+derivatives of ``phi`` (``Phi_v v`` by one forward derivative along ``B(q) v``), the same
+derivatives as :attr:`hexapod.model.model.Model.gamma` (equal to round-off) in about a quarter
+of the operations.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from functools import cached_property
+
+import casadi as ca
+import numpy as np
+
+from hexapod._support.compiled import compiled
+from hexapod.model.model import GROUND_INDEX, Model
+from hexapod.spatial import retract_symbolic, rotation_from_euler_parameters
+
+
+def _call(function: ca.Function, **values):
+    """Call a model Function with the inputs it has (law inputs are absent without laws)."""
+    return function(*[values[name] for name in function.name_in()])
+
+
+def _embed_rotation(R):
+    if R.shape == (3, 3):
+        return R
+    out = ca.SX.eye(3)
+    out[:2, :2] = R
+    return out
+
+
+class PhaseTerms:
+    """The model-level SX Functions of the compiled closed-loop inverse dynamics.
+
+    Parameters
+    ----------
+    model : Model
+    to_c : bool
+        Compile the Functions to C (kept in the cache on disk); else CasADi's
+        interpreter evaluates them.
+    """
+
+    def __init__(self, model: Model, to_c: bool = False):
+        self.model = model
+        self.to_c = to_c
+        s = model._sym
+        self.q, self.v, self.w, self.wd, self.wdd = s.q, s.v, s.w, s.wd, s.wdd
+        self.pattern = model._Phi_v_expr.sparsity()  # of Phi_v, fixed
+        self.pattern_rows, self.pattern_columns = (np.asarray(x, dtype=int) for x in
+                                                   self.pattern.get_triplet())
+
+    def _function(self, name, inputs, outputs, names_in, names_out, cse=True):
+        outputs = ca.cse(outputs) if cse else outputs
+        return sx_function(name, inputs, outputs, self.to_c, names_in, names_out)
+
+    def _retract(self, q, dv):
+        m = self.model
+        return retract_symbolic(q, dv, m._lin_q, m._lin_v, m._quat_q, m._omega_v)
+
+    @cached_property
+    def predict(self) -> ca.Function:
+        model = self.model
+        q, v, a = (ca.SX.sym(n, size) for n, size in (("q", model.n_q), ("v", model.n_v),
+                                                      ("a", model.n_v)))
+        h = ca.SX.sym("h")
+        return self._function("phase_predict", [q, v, a, h],
+                              [self._retract(q, h * v + h * h / 2 * a)],
+                              ["q", "v", "a", "h"], ["q_predicted"], cse=False)
+
+    @cached_property
+    def correct(self) -> ca.Function:
+        model = self.model
+        q, dq = ca.SX.sym("q", model.n_q), ca.SX.sym("dq", model.n_v)
+        return self._function("phase_correct", [q, dq], [self._retract(q, -dq)],
+                              ["q", "dq"], ["q_corrected"], cse=False)
+
+    @cached_property
+    def residual(self) -> ca.Function:
+        return self._function("phase_residual", [self.q, self.w], [self.model._sym.phi],
+                              ["q", "w"], ["phi"])
+
+    @cached_property
+    def jacobian(self) -> ca.Function:
+        Phi = self.model._Phi_v_expr
+        return self._function("phase_jacobian", [self.q, self.w],
+                              [self.model._sym.phi, Phi.nz[:]], ["q", "w"], ["phi", "Phi"])
+
+    @cached_property
+    def residuals(self) -> ca.Function:
+        model = self.model
+        n_c, n_v = model.n_c, model.n_v
+        Phi_nz = ca.SX.sym("Phi", self.pattern.nnz())
+        phi, nu, gamma, d = (ca.SX.sym(n, n_c) for n in ("phi", "nu", "gamma", "d"))
+        v, a = ca.SX.sym("v", n_v), ca.SX.sym("a", n_v)
+        Phi = ca.SX(self.pattern, Phi_nz)
+        root_mass = sparse_dm(np.linalg.inv(model.mass_inv_sqrt.dense()))
+
+        def relative(x, rhs):
+            size = (ca.norm_inf(ca.mtimes(root_mass, x)) + ca.norm_inf(rhs / d) + 1e-300)
+            return ca.fabs(ca.mtimes(Phi, x) - rhs) / d / size
+
+        position = ca.mmax(ca.fabs(phi / ca.DM(model.row_scale))) if n_c else ca.SX(0)
+        presence = ca.sum2(ca.fabs(Phi)) + ca.fabs(phi)
+        return self._function("phase_residuals", [Phi_nz, phi, v, nu, a, gamma, d],
+                              [relative(v, nu), relative(a, gamma), position, presence],
+                              ["Phi", "phi", "v", "nu", "a", "gamma", "d"],
+                              ["velocity", "acceleration", "position", "presence"])
+
+    @cached_property
+    def rates(self) -> ca.Function:
+        nu = _call(self.model.nu, q=self.q, w=self.w, wd=self.wd)
+        return self._function("phase_rates", [self.q, self.w, self.wd], [nu],
+                              ["q", "w", "wd"], ["nu"])
+
+    @cached_property
+    def forces(self) -> ca.Function:
+        """``(q, v, w, wd, wdd) -> (gamma, Q, offset)``: ``offset`` is the policy's constant
+        term, the wrenches of the force elements acting across joints (6 per block)."""
+        model, s = self.model, self.model._sym
+        q, v, w, wd, wdd = self.q, self.v, self.w, self.wd, self.wdd
+        Pv = ca.jtimes(s.phi, q, s.qdot)  # Phi_v v, with B(q) inside
+        gamma = -ca.jtimes(Pv, q, s.qdot)
+        if model.n_w:
+            Phi_t = ca.jtimes(s.phi, w, wd)
+            gamma = (gamma - 2 * ca.jtimes(Pv, w, wd) - ca.jtimes(Phi_t, w, wd)
+                     - ca.jtimes(s.phi, w, wdd))
+        Q = _call(model.Q, q=q, v=v, w=w)
+        offset = ca.SX.zeros(6 * self.owners)
+        if model.Q_across is not None:
+            across = _call(model.Q_across, q=q, v=v, w=w)
+            for k, joint in enumerate(model.joints):
+                if joint.across_column >= 0:
+                    offset[6 * k:6 * k + 6] = self._on_child(
+                        joint, across[:, joint.across_column])
+        return self._function("phase_forces", [q, v, w, wd, wdd], [gamma, Q, offset],
+                              ["q", "v", "w", "wd", "wdd"], ["gamma", "Q", "offset"])
+
+    @property
+    def owners(self) -> int:
+        """Blocks of the wrench map: one per joint, one per coordinate driver."""
+        return len(self.model.joints) + sum(d.kind == "coordinate" for d in self.model.drivers)
+
+    # ---------------------------------------------------------------- poses and wrenches
+
+    def _pose(self, body: int):
+        """World position (3) and rotation (3 x 3) of a body's centre-of-mass frame."""
+        if body == GROUND_INDEX:
+            return ca.SX.zeros(3), ca.SX.eye(3)
+        info = self.model.bodies[body]
+        qb = self.q[info.q.start:info.q.stop]
+        if info.kind == "spatial":
+            return qb[:3], rotation_from_euler_parameters(qb[3:7])
+        if info.kind == "planar":
+            c, s = ca.cos(qb[2]), ca.sin(qb[2])
+            R = ca.vertcat(ca.horzcat(c, -s, 0), ca.horzcat(s, c, 0), ca.horzcat(0, 0, 1))
+            return ca.vertcat(qb[:2], 0), R
+        return ca.vertcat(qb, ca.SX.zeros(3 - qb.numel())), ca.SX.eye(3)
+
+    def _frame(self, joint):
+        """World origin and rotation of the joint frame (fixed to the child)."""
+        r, R = self._pose(joint.child)
+        frame = joint.child_frame
+        position = np.concatenate([frame.position, np.zeros(3 - frame.position.size)])
+        rotation = frame.rotation if frame.rotation.shape == (3, 3) else np.pad(
+            frame.rotation, ((0, 1), (0, 1)))
+        if frame.rotation.shape != (3, 3):
+            rotation[2, 2] = 1.0
+        return r + ca.mtimes(R, ca.DM(position)), ca.mtimes(R, ca.DM(rotation))
+
+    def _wrench(self, body: int, g, point):
+        """Force and moment about ``point`` (world) of generalized forces ``g`` (n_v x m) on a
+        body, as a (6 x m) block with the moment over the characteristic length."""
+        info = self.model.bodies[body]
+        r, R = self._pose(body)
+        gb = g[info.v.start:info.v.stop, :]
+        m = g.shape[1]
+        if info.kind == "spatial":
+            force, moment = gb[:3, :], ca.mtimes(R, gb[3:, :])
+        elif info.kind == "planar":
+            force = ca.vertcat(gb[:2, :], ca.SX.zeros(1, m))
+            moment = ca.vertcat(ca.SX.zeros(2, m), gb[2:3, :])
+        else:
+            force = ca.vertcat(gb, ca.SX.zeros(3 - gb.shape[0], m))
+            moment = ca.SX.zeros(3, m)
+        arm = ca.repmat(r - point, 1, m)
+        moment = moment + ca.cross(arm, force)
+        return ca.vertcat(force, moment / self.model.characteristic_length)
+
+    def _on_child(self, joint, g):
+        origin, _ = self._frame(joint)
+        if joint.child != GROUND_INDEX:
+            return self._wrench(joint.child, g, origin)
+        return -self._wrench(joint.parent, g, origin)
+
+    def _wrench_map(self, Phi):
+        """The (6 owners x n_c) map from multipliers to the policy's wrenches, and the joint
+        frames' rotations (9 x J, column-major)."""
+        model = self.model
+        A = ca.SX(6 * self.owners, model.n_c)
+        frames = []
+        for k, joint in enumerate(model.joints):
+            rows = np.concatenate([joint.rows, joint.driver_rows]).astype(int).tolist()
+            if rows:
+                A[6 * k:6 * k + 6, rows] = self._on_child(joint, -Phi[rows, :].T)
+            frames.append(ca.reshape(self._frame(joint)[1], 9, 1))
+        block = len(model.joints)
+        for driver in model.drivers:
+            if driver.kind == "coordinate":
+                centre, _ = self._pose(driver.body)
+                A[6 * block:6 * block + 6, driver.row] = self._wrench(
+                    driver.body, -Phi[driver.row, :].T, centre)
+                block += 1
+        return A, (ca.horzcat(*frames) if frames else ca.SX(9, 0))
+
+    def _objective(self, Phi, offset, feet):
+        """``A, b`` of the policy's objective ``|A lam + b|^2`` (SX)."""
+        model = self.model
+        policy = model.ground.policy if model.contacts else "min-wrench"
+        if policy == "min-wrench":
+            A, _ = self._wrench_map(Phi)
+            scale = ca.SX.ones(A.shape[0])
+            for k, contact in enumerate(model.contacts):
+                scale[6 * contact.joint:6 * contact.joint + 6] = feet[k]
+            return ca.mtimes(ca.diag(scale), A), scale * offset
+        # min-effort, and friction's objective
+        efforts = [d for d in model.drivers if d.kind == "joint"]
+        A = ca.SX(len(efforts) + 3 * len(model.contacts), model.n_c)
+        for i, driver in enumerate(efforts):
+            A[i, driver.row] = 1.0 / model.ground.reference(model.joints[driver.joint].name)
+        weight = model.total_mass * float(np.linalg.norm(model.gravity)) or 1.0
+        for k, contact in enumerate(model.contacts):
+            for i, row in enumerate(contact.rows):
+                A[len(efforts) + 3 * k + i, int(row)] = feet[k] / weight
+        return A, ca.SX.zeros(A.shape[0])
+
+    def policy(self, m: int) -> ca.Function:
+        """``(q, Phi, offset, feet, lam, N, mask) -> lam``: among ``lam + N z`` (``N``, n_c x
+        m, spanning the multipliers that change no constraint force), the one of least
+        objective, the entries of ``z`` where ``mask`` is 0 held at zero; by the normal
+        equations, scaled to unit diagonal, and with feet on the ground (whose small weights
+        near touch-down and lift-off make the problem ill-conditioned) refined once (corrected
+        semi-normal equations). Built once per ``m``."""
+        cache = self.__dict__.setdefault("_policies", {})
+        if m in cache:
+            return cache[m]
+        model = self.model
+        Phi_nz = ca.SX.sym("Phi", self.pattern.nnz())
+        offset, feet = ca.SX.sym("offset", 6 * self.owners), ca.SX.sym("feet",
+                                                                        len(model.contacts))
+        lam, N, mask = ca.SX.sym("lam", model.n_c), ca.SX.sym("N", model.n_c, m), \
+            ca.SX.sym("mask", m)
+        A, b = self._objective(ca.SX(self.pattern, Phi_nz), offset, feet)
+        G = ca.mtimes(A, N)
+        H = ca.SX(m, m)
+        for i in range(m):
+            for j in range(i, m):
+                H[i, j] = H[j, i] = ca.dot(G[:, i], G[:, j])
+        solve = ca.Function("normal_solve", *_normal_solve(m))
+        g = ca.mtimes(A, lam) + b
+        z = solve(H, ca.mtimes(G.T, g), mask)
+        if model.contacts:  # feet of small weight make G ill-conditioned: refine once
+            z = z + solve(H, ca.mtimes(G.T, ca.mtimes(G, z) + g), mask)
+        cache[m] = self._function(f"phase_policy_{m}",
+                                  [self.q, Phi_nz, offset, feet, lam, N, mask],
+                                  [lam + ca.mtimes(N, z)],
+                                  ["q", "Phi", "offset", "feet", "lam", "N", "mask"],
+                                  ["lam_policy"], cse=False)  # it would save 2 %
+        return cache[m]
+
+    @cached_property
+    def report(self) -> ca.Function:
+        """``(q, Phi, lam, offset) -> (wrench, frames)``: every joint's wrench in the report
+        convention (6 x J: force, then moment about the joint origin, in the joint frame) and
+        the joint frames' rotations (9 x J)."""
+        model = self.model
+        J = len(model.joints)
+        Phi_nz = ca.SX.sym("Phi", self.pattern.nnz())
+        lam, offset = ca.SX.sym("lam", model.n_c), ca.SX.sym("offset", 6 * self.owners)
+        A, frames = self._wrench_map(ca.SX(self.pattern, Phi_nz))
+        world = ca.mtimes(A, lam) + offset
+        length = model.characteristic_length
+        out = []
+        for k in range(J):
+            R = ca.reshape(frames[:, k], 3, 3)
+            force, moment = world[6 * k:6 * k + 3], world[6 * k + 3:6 * k + 6] * length
+            out.append(ca.vertcat(ca.mtimes(R.T, force), ca.mtimes(R.T, moment)))
+        return self._function("phase_report", [self.q, Phi_nz, lam, offset],
+                              [ca.horzcat(*out) if out else ca.SX(6, 0), frames],
+                              ["q", "Phi", "lam", "offset"], ["wrench", "frames"])
+
+
+def sx_function(name: str, inputs, outputs, to_c: bool, *names) -> ca.Function:
+    """``ca.Function(name, inputs, outputs, *names)``, compiled to C when ``to_c``: the library
+    is kept in the cache on disk under the hash of the Function's serialized graph (a plan's
+    Functions depend on its rows and pivots as well as on the model), so a later process
+    building the same Function loads it."""
+    function = ca.Function(name, inputs, outputs, *names)
+    if not to_c:
+        return function
+    graph = hashlib.sha256(function.serialize().encode("utf-8")).hexdigest()
+    return compiled(f"phase/{name}/{graph}", lambda: function, what=f"phase path {name}")
+
+
+def sparse_dm(matrix: np.ndarray) -> ca.DM:
+    """A CasADi DM with the nonzeros of ``matrix`` only (products with it skip the zeros)."""
+    from scipy.sparse import csc_array
+
+    sparse = csc_array(matrix)
+    sparse.eliminate_zeros()
+    pattern = ca.Sparsity(sparse.shape[0], sparse.shape[1], sparse.indptr.tolist(),
+                          sparse.indices.tolist())
+    return ca.DM(pattern, sparse.data.tolist())
+
+
+def _normal_solve(m: int):
+    """``(H, r, mask) -> z``: ``z = -H^-1 r`` on the entries where ``mask`` is 1, zero on the
+    others, with ``H`` symmetric positive definite there: scaled to unit diagonal, then
+    Cholesky."""
+    H, r, mask = ca.SX.sym("H", m, m), ca.SX.sym("r", m), ca.SX.sym("mask", m)
+    Hm = ca.diag(mask) @ H @ ca.diag(mask) + ca.diag(1 - mask)
+    s = 1 / ca.sqrt(ca.diag(Hm))
+    Hs = ca.diag(s) @ Hm @ ca.diag(s)
+    L = [[None] * m for _ in range(m)]
+    for j in range(m):
+        diagonal = Hs[j, j] - sum((L[j][k] ** 2 for k in range(j)), ca.SX(0))
+        L[j][j] = ca.sqrt(diagonal)
+        for i in range(j + 1, m):
+            L[i][j] = (Hs[i, j] - sum((L[i][k] * L[j][k] for k in range(j)), ca.SX(0))) \
+                / L[j][j]
+    y = [None] * m
+    rhs = -s * mask * r
+    for i in range(m):
+        y[i] = (rhs[i] - sum((L[i][k] * y[k] for k in range(i)), ca.SX(0))) / L[i][i]
+    z = [None] * m
+    for i in reversed(range(m)):
+        z[i] = (y[i] - sum((L[k][i] * z[k] for k in range(i + 1, m)), ca.SX(0))) / L[i][i]
+    return [H, r, mask], [s * ca.vertcat(*z)]

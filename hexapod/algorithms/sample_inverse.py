@@ -1,0 +1,119 @@
+"""The exact inverse dynamics of one sample: the reference the other paths are measured against.
+
+Positions by Newton's method warm-started from the sample before (:func:`next_positions`),
+velocities by projection, then the saddle-point solve with its rank decision and the scene's
+redundancy policy (:func:`hexapod.algorithms.dynamics.forward_dynamics`) and the joint wrenches
+(:func:`hexapod.algorithms.liaison.joint_wrenches`). The saddle path of
+:func:`hexapod.algorithms.inverse.inverse_dynamics` runs it at every sample; the compiled phase
+path (:mod:`hexapod.algorithms.phase_inverse`) at the first sample and wherever its own result
+cannot be trusted.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from hexapod.algorithms.dynamics import forward_dynamics
+from hexapod.algorithms.ground import ground_reactions
+from hexapod.algorithms.kinematics import assemble_positions, degrees_of_freedom, solve_velocities
+from hexapod.algorithms.liaison import joint_wrenches
+from hexapod.errors import AssemblyError, SingularSystemError
+from hexapod.model.model import Data, Model
+
+
+@dataclass
+class SampleResult:
+    """The exact inverse dynamics at one sample (arrays of one sample, as in
+    :class:`hexapod.algorithms.inverse.InverseResult`)."""
+
+    q: np.ndarray
+    v: np.ndarray
+    v_dot: np.ndarray
+    lam: np.ndarray
+    force: np.ndarray
+    torque: np.ndarray
+    effort: np.ndarray
+    ground: np.ndarray
+    status: tuple[str, ...]
+    violation: float
+    redundant: tuple[str, ...]
+
+
+def exact_sample(model: Model, data: Data, t0: float, q0: np.ndarray, t: float,
+                 rates=None, *, frame: str = "joint", first: bool = False) -> SampleResult:
+    """The sample at ``t`` from the solved positions ``q0`` at ``t0`` (and their velocities
+    and accelerations ``rates``, for a second-order prediction); ``first`` checks that the
+    drivers leave no degree of freedom free.
+
+    Raises
+    ------
+    SingularSystemError
+        When ``first`` and the drivers leave degrees of freedom free.
+    AssemblyError
+        When the positions cannot be found.
+    """
+    q = next_positions(model, data, t0, q0, t, rates)
+    if first:
+        require_prescribed(model, data, t, q)
+    v = solve_velocities(model, data, t, q)
+    return exact_forces(model, data, t, q, v, frame=frame)
+
+
+def exact_forces(model: Model, data: Data, t: float, q: np.ndarray, v: np.ndarray, *,
+                 frame: str = "joint") -> SampleResult:
+    """Accelerations, multipliers by the scene's policy, joint wrenches and ground forces at a
+    consistent state ``(t, q, v)``."""
+    v_dot = forward_dynamics(model, data, t, q, v)
+    wrenches = joint_wrenches(model, data, frame=frame)
+    ground = (ground_reactions(model, data.lam) if model.contacts
+              else np.zeros((0, 3)))
+    status = data.ground_status if model.contacts else ()
+    violation = 0.0
+    if model.n_c:
+        violation = float(np.max(np.abs(model.call("phi", q=q, w=data.w) / model.row_scale)))
+    redundant = tuple(model.rows[i].name for i in data.redundant_rows)
+    return SampleResult(q, v, v_dot, data.lam, wrenches.force, wrenches.torque,
+                        wrenches.effort, ground, tuple(status), violation, redundant)
+
+
+def require_prescribed(model: Model, data: Data, t: float, q: np.ndarray) -> None:
+    """Raise when the drivers leave degrees of freedom free at ``(t, q)``."""
+    free = degrees_of_freedom(model, data, t, q)["dof_with_drivers"]
+    if free:
+        driven = {d.joint for d in model.drivers if d.kind == "joint"}
+        idle = [j.name for j in model.joints
+                if j.kind in ("revolute", "prismatic") and j.index not in driven]
+        hint = f" (joints without a driver: {', '.join(idle)})" if idle else ""
+        raise SingularSystemError(
+            f"model '{model.name}': the drivers leave {free} degree(s) of freedom "
+            f"free{hint}; inverse dynamics needs the motion of every degree of freedom")
+
+
+def next_positions(model: Model, data, t0: float, q0: np.ndarray, t: float, rates):
+    """Positions at ``t`` from the solved ones at ``t0``: from a second-order prediction with
+    the velocities and accelerations ``rates`` at ``t0`` (Newton's method then needs one or two
+    steps, not five), else by :func:`follow`."""
+    if rates is not None:
+        h = t - t0
+        guess = model.integrate(q0, h * rates[0] + h * h / 2 * rates[1])
+        if np.all(np.isfinite(guess)):
+            try:
+                return assemble_positions(model, data, t, guess)
+            except AssemblyError:
+                pass
+    return follow(model, data, t0, q0, t)
+
+
+def follow(model: Model, data, t0: float, q0: np.ndarray, t: float, depth: int = 6):
+    """Positions at ``t`` from those at ``t0``: Newton's method from ``q0``, and when the
+    samples are too far apart for it (a robot's legs swing a long way between coarse samples),
+    through the time halfway first."""
+    try:
+        return assemble_positions(model, data, t, q0)
+    except AssemblyError:
+        if depth == 0 or t == t0:
+            raise
+    middle = follow(model, data, t0, q0, (t0 + t) / 2, depth - 1)
+    return follow(model, data, (t0 + t) / 2, middle, t, depth - 1)

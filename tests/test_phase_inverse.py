@@ -1,0 +1,163 @@
+"""The compiled closed-loop inverse dynamics (the phase path) gives the exact saddle path's numbers:
+on four-bars (planar, and spatial with three redundant rows), the standing hexapod (twelve
+redundant drivers), the walking hexapod across a touch-down (a change of contact set, feet that
+carry nothing at that instant) and with the friction policy; and where its own result cannot be
+trusted (Newton's method cannot follow samples far apart, the rows it was built for no longer
+hold) it redoes the sample exactly and still agrees."""
+
+from __future__ import annotations
+
+import copy
+from functools import cache
+
+import numpy as np
+import pytest
+
+import hexapod as hx
+from hexapod.algorithms import phase_inverse
+from hexapod.algorithms.inverse import inverse_dynamics
+
+from mechanisms import four_bar
+
+QUANTITIES = ("force", "torque", "effort", "ground_force", "q", "v", "v_dot")
+#: across a touch-down of the walking robot (at t = 0.2 s, sampled)
+TOUCH_DOWN = (0.194, 0.206, 7)
+
+
+@cache
+def scene(name: str):
+    return hx.load_scene(name)
+
+
+@cache
+def scene_model(name: str, policy: str | None = None, mu: float | None = None):
+    """A built-in scene's model, with another ground-force policy when given."""
+    if policy is None:
+        return hx.assemble(scene(name))
+    changed = copy.deepcopy(scene(name))
+    changed.ground.policy, changed.ground.mu = policy, mu
+    return hx.assemble(changed)
+
+
+@cache
+def saddle(name: str, start: float, stop: float, count: int):
+    """The exact saddle path's result on a built-in scene (computed once per module)."""
+    return inverse_dynamics(scene_model(name), np.linspace(start, stop, count),
+                            method="saddle")
+
+
+def four_bar_model(dimension: int):
+    law = hx.Harmonic(offset=1.05, sin=[0.6], frequency=0.8)
+    return hx.assemble(four_bar(dimension, 1.05, law=law))
+
+
+def phase(model, times, frame="joint"):
+    """The phase path's fields and the number of samples it solved exactly."""
+    w, wd, wdd = (x.reshape(model.n_w, times.size) for x in model.law_values(times))
+    return phase_inverse.phase_inverse(model, times, w, wd, wdd, frame, to_c=False)
+
+
+def assert_agree(fields, exact, rel=1e-9):
+    """Every quantity within ``rel`` of its largest magnitude (positions, velocities and
+    accelerations: of one, in SI, when they are smaller: the standing robot's are round-off)."""
+    names = {"ground_force": "ground"}
+    for key in QUANTITIES:
+        mine, theirs = fields[names.get(key, key)], getattr(exact, key)
+        if theirs.size == 0:
+            continue
+        floor = 1.0 if key in ("q", "v", "v_dot") else 1e-12
+        scale = max(np.nanmax(np.abs(theirs)), floor)
+        assert np.array_equal(np.isnan(mine), np.isnan(theirs)), key
+        assert np.nanmax(np.abs(mine - theirs)) <= rel * scale, key
+    assert np.array_equal(fields["status"], exact.ground_status)
+    assert fields["max_violation"] < 1e-12
+
+
+@pytest.mark.parametrize("dimension", [2, 3])
+def test_four_bars_agree_with_the_saddle_path(dimension):
+    model = four_bar_model(dimension)
+    times = np.linspace(0.0, 1.2, 25)
+    for frame in ("joint", "world"):
+        exact = inverse_dynamics(model, times, method="saddle", frame=frame)
+        fields = phase(model, times, frame)
+        assert_agree(fields, exact)
+        assert fields["exact_samples"] == 1  # the first sample only: the rest compiled
+    # the spatial four-bar's loop closure is named redundant, as by the saddle path
+    assert fields["redundant_rows"] == exact.redundant_rows
+    assert len(exact.redundant_rows) == (3 if dimension == 3 else 0)
+    result = inverse_dynamics(model, times, method="phase")
+    assert result.method == "phase" and result.redundant_rows == exact.redundant_rows
+
+
+def test_the_standing_hexapod_agrees_with_the_saddle_path():
+    """Six feet pinned, every joint held: twelve redundant drivers, forces by the least-wrench
+    policy."""
+    model = scene_model("hexapod-standing")
+    times = np.linspace(0.0, 0.1, 4)
+    exact = inverse_dynamics(model, times, method="saddle")
+    fields = phase(model, times)
+    assert_agree(fields, exact)
+    assert fields["exact_samples"] == 1
+    assert set(fields["redundant_rows"]) == set(exact.redundant_rows)
+    assert len(exact.redundant_rows) == 12
+
+
+def test_the_walking_hexapod_agrees_across_a_touch_down():
+    """Three feet down, then six: a new contact set, whose new feet carry nothing at the
+    touch-down itself (their multipliers held at zero); the ground forces by the least-wrench
+    policy with the feet's load-sharing weights."""
+    model, exact = scene_model("hexapod"), saddle("hexapod", *TOUCH_DOWN)
+    fields = phase(model, exact.times)
+    assert_agree(fields, exact)
+    assert fields["exact_samples"] == 1
+    stance = exact.ground_status != "swing"
+    assert stance.sum(axis=1)[0] == 3 and stance.sum(axis=1)[-1] == 6
+
+
+def test_a_change_of_rank_is_redone_exactly(monkeypatch):
+    """Told that the contact set does not change, the driver keeps the three-feet decision past
+    the touch-down: the new feet's rows, neither kept nor left out, show in the checks, the
+    sample is redone exactly, the exact decision taken over, and the numbers still agree."""
+    model, exact = scene_model("hexapod"), saddle("hexapod", *TOUCH_DOWN)
+    first = tuple(bool(x) for x in exact.ground_status[0] != "swing")
+    monkeypatch.setattr(phase_inverse._Feet, "contact_set", lambda self, k: first)
+    fields = phase(model, exact.times)
+    assert_agree(fields, exact)
+    assert fields["exact_samples"] >= 2
+
+
+def test_samples_too_far_apart_for_newton_are_redone_exactly():
+    """A four-bar sampled coarsely: the predicted positions are too far off for the Newton
+    steps, those samples are redone exactly (and later ones take more steps), and the numbers
+    agree."""
+    model = four_bar_model(3)
+    times = np.linspace(0.0, 1.2, 9)
+    exact = inverse_dynamics(model, times, method="saddle")
+    fields = phase(model, times)
+    assert_agree(fields, exact)
+    assert 1 < fields["exact_samples"] < times.size
+
+
+def test_friction_keeps_the_exact_qp_where_a_cone_binds():
+    """The least-effort forces leave the friction pyramids (mu = 2) before t = 0.07 s, not
+    after: the first samples get the exact per-sample QP, the others the compiled least-effort
+    forces, and all agree with the saddle path."""
+    model = scene_model("hexapod", "friction", 2.0)
+    times = np.linspace(0.05, 0.09, 9)
+    exact = inverse_dynamics(model, times, method="saddle")
+    fields = phase(model, times)
+    assert_agree(fields, exact)
+    assert 1 < fields["exact_samples"] < times.size
+
+
+def test_compiled_and_interpreted_phase_paths_agree():
+    """The phase path compiled to C gives the interpreter's numbers (the planar four-bar:
+    small Functions, quick to compile); the model keeps its compiled code."""
+    model = four_bar_model(2)
+    times = np.linspace(0.0, 1.2, 9)
+    interpreted = inverse_dynamics(model, times, method="phase", compile=False)
+    compiled = inverse_dynamics(model, times, method="phase", compile=True)
+    for key in ("force", "torque", "effort", "q", "v_dot"):
+        a, b = getattr(interpreted, key), getattr(compiled, key)
+        assert np.nanmax(np.abs(a - b)) <= 1e-12 * np.nanmax(np.abs(a)), key
+    assert model.was_built(("phase-terms", True))
