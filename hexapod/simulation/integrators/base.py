@@ -27,6 +27,8 @@ from scipy.linalg import qr
 
 from hexapod.algorithms.dynamics import forward_dynamics
 from hexapod.algorithms.kinematics import assemble_positions, rank_split, solve_velocities
+from hexapod.algorithms.linalg import as_dense
+from hexapod.algorithms.saddle import constraint_jacobian
 from hexapod.errors import HexapodError, IntegrationError
 from hexapod.model.model import Model
 from hexapod.model.units import COORDINATE_UNITS, VELOCITY_UNITS, component
@@ -394,8 +396,9 @@ class Integrator:
         if not self.model.n_c:
             return False
         split = self._rank_split()
-        sigma = split.singular_values()
-        smallest = sigma.min() if sigma.size else np.inf
+        # the smallest singular value alone (ARPACK on a large model's sparse factor) decides
+        # whether to go on: all of them (a dense SVD, cubic in the bodies) only near a pose
+        smallest = split.smallest_singular_value()
         if not smallest < SINGULAR_BAND:
             return False
         base = smallest if self._crossing is None else self._crossing
@@ -416,8 +419,8 @@ class Integrator:
         self._crossing = CROSSING_FACTOR * base
         # the rows left out: those a rank-revealing (column-pivoted) QR factorisation takes last
         rows = split.independent
-        dependent = _collapsing(sigma, self._crossing)
-        pivots = qr(split.W[rows].T, mode="r", pivoting=True)[1]
+        dependent = _collapsing(split.singular_values(), self._crossing)
+        pivots = qr(as_dense(split.W[rows]).T, mode="r", pivoting=True)[1]
         kept = np.sort(rows[pivots[:rows.size - dependent]])
         self._crossing_rates = compiled_rates(self.model, kept)
         if starting:
@@ -501,8 +504,8 @@ class Integrator:
         w, _, _ = self.model.law_values(self.t if t is None else t)
         self.counters.jacobians += 1
         self.counters.factorisations += 1
-        return rank_split(self.model, self.model.call("Phi_v", q=self.q if q is None else q, w=w),
-                          w)
+        return rank_split(self.model,
+                          constraint_jacobian(self.model, self.q if q is None else q, w), w)
 
     def _jumps_branch(self, h: float, v0: np.ndarray, a0: np.ndarray, v1: np.ndarray,
                       a1: np.ndarray) -> bool:
@@ -678,8 +681,7 @@ class Integrator:
         state; ``inf`` without rows)."""
         if not self.model.n_c:
             return np.inf
-        sigma = self._rank_split(q, t).singular_values()
-        return float(sigma.min()) if sigma.size else np.inf
+        return self._rank_split(q, t).smallest_singular_value()
 
     def _note_conditioning(self) -> None:
         """Keep the smallest singular value at the current state (the start) for

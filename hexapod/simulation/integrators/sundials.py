@@ -72,6 +72,7 @@ import numpy as np
 
 from hexapod._support import signals
 from hexapod.algorithms.dynamics import forward_dynamics
+from hexapod.algorithms.linalg import as_dense
 from hexapod.errors import HexapodError, IntegrationError
 from hexapod.simulation.integrators.base import Counters, Integrator
 
@@ -445,7 +446,7 @@ class IdasBDF(Integrator):
         rows = self.rows
         lam = self.lam[rows]
         if rows.size < model.n_c and rows.size:  # the multipliers of the rows IDAS solves with
-            Phi = self.data.Phi_v[rows]
+            Phi = as_dense(self.data.Phi_v[rows])
             rhs = self.data.Q - model.mass @ self.v_dot
             lam = np.linalg.lstsq(Phi.T, rhs, rcond=None)[0]
         xdot = np.concatenate([model.call("qdot", q=self.q, v=self.v), self.v_dot])
