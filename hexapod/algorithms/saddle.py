@@ -90,7 +90,7 @@ def dynamics_terms(model: Model, values: dict) -> tuple:
 
 # ---------------------------------------------------------------------- symbolic (kernels)
 
-def _sparse_dm(matrix) -> ca.DM:
+def sparse_dm(matrix) -> ca.DM:
     """A SciPy sparse matrix as a CasADi DM of the same pattern (explicit zeros dropped)."""
     csc = matrix.tocsc()
     csc.eliminate_zeros()
@@ -105,7 +105,7 @@ def mass_factors(model: Model) -> tuple[ca.DM, ca.DM]:
     from the blocks and built once per model."""
     def build(m: Model) -> tuple[ca.DM, ca.DM]:
         half = m.mass_inv_sqrt
-        return _sparse_dm(half.sparse()), _sparse_dm(half.map_blocks(np.linalg.inv).sparse())
+        return sparse_dm(half.sparse()), sparse_dm(half.map_blocks(np.linalg.inv).sparse())
 
     return model.built_once(("mass factors",), build)
 
@@ -138,3 +138,52 @@ def kept_matrix(W_all: ca.MX, d: ca.MX, zero: ca.MX, rows: list[int]) -> ca.MX:
     n_v = W_all.size2()
     W = ca.mtimes(ca.diag(1.0 / d[rows]), W_all[rows, :])  # sparse: never a dense node
     return ca.vertcat(ca.horzcat(ca.MX.eye(n_v), W.T), ca.horzcat(W, -ca.diag(zero[rows])))
+
+
+# ---------------------------------------------------------------------- numeric (implicit methods)
+
+def kept_multipliers(split: linalg.RowSplit, Phi_v, lam: np.ndarray,
+                     mass_inv_sqrt) -> np.ndarray:
+    """Multipliers on the kept rows ``split.independent`` that exert the forces ``Phi_v^T lam``
+    of multipliers on all rows (the redundant rows' forces are the kept rows' combinations).
+    A dense split: NumPy's least squares on ``Phi_v[kept]^T``; a sparse one (a large model):
+    its QR, ``W_I^T = Q_I R``, so that ``lam_I = R^-1 Q_I^T M^-1/2 Phi_v^T lam / d_I`` (the same
+    solution when the forces are the kept rows', which they are to the rank tolerance)."""
+    I = split.independent
+    if not isinstance(split, linalg.SparseRowSplit):
+        Phi_v = linalg.as_dense(Phi_v)
+        return np.linalg.lstsq(Phi_v[I].T, Phi_v.T @ lam, rcond=None)[0]
+    if not I.size:
+        return np.zeros(0)
+    y = mass_inv_sqrt @ (Phi_v.T @ lam)
+    return split.solve_r(split.project(y)) / split.scale[I]
+
+
+def solve_sparse(A, b: np.ndarray, pivot_ratio: float = 1e-10) -> np.ndarray | None:
+    """``A x = b`` for a square sparse ``A`` (the iteration matrix of an implicit method on a
+    large model) by SuperLU, columns ordered by COLAMD, after the rows are equilibrated: the
+    factors of a matrix on the body-joint graph stay as sparse as it. Where the smallest pivot
+    falls below ``pivot_ratio`` times the largest (near a singular configuration) the dense
+    :func:`~hexapod.algorithms.linalg.solve_or_least_squares` decides, as for a small model.
+    None when neither gives finite numbers."""
+    from scipy.sparse import diags
+    from scipy.sparse.linalg import splu
+
+    A = A.tocsr()
+    scale = (np.asarray(abs(A).max(axis=1).todense(), dtype=float).reshape(-1) if A.shape[0]
+             else np.ones(0))
+    scale[~(scale > 0)] = 1.0
+    As, bs = (diags(1.0 / scale) @ A).tocsc(), b / scale
+    if not (np.all(np.isfinite(As.data)) and np.all(np.isfinite(bs))):
+        return None
+    try:
+        lu = splu(As, permc_spec="COLAMD")
+    except RuntimeError:  # exactly singular
+        lu = None
+    if lu is not None:
+        pivots = np.abs(lu.U.diagonal())
+        if pivots.size and pivots.min() > pivot_ratio * pivots.max():
+            x = lu.solve(bs)
+            if np.all(np.isfinite(x)):
+                return x
+    return linalg.solve_or_least_squares(A.toarray(), b, pivot_ratio)

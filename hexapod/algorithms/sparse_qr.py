@@ -48,9 +48,12 @@ class FrontalQR:
         values = np.zeros((self.slots.size + new.size, end - a))
         kept = self.values[:, a - self.start:]
         values[:self.slots.size, :kept.shape[1]] = kept
-        if new.size:
-            arriving = self.Wo[:, new].tocoo()
-            values[self.slots.size + arriving.col, arriving.row - a] = arriving.data
+        if new.size:  # the arriving columns' entries, read from the CSC arrays directly
+            starts, counts = self.Wo.indptr[new], self.Wo.indptr[new + 1] - self.Wo.indptr[new]
+            column = np.repeat(np.arange(new.size), counts)
+            before = np.cumsum(counts) - counts  # the entries of the columns before each
+            where = np.arange(counts.sum()) + (starts - before)[column]
+            values[self.slots.size + column, self.Wo.indices[where] - a] = self.Wo.data[where]
         self.values, self.slots, self.start = values, np.concatenate([self.slots, new]), a
 
     def reduce(self, a: int, b: int, pivoting: bool) -> bool:

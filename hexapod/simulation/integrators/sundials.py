@@ -73,6 +73,7 @@ import numpy as np
 from hexapod._support import signals
 from hexapod.algorithms.dynamics import forward_dynamics
 from hexapod.algorithms.linalg import as_dense
+from hexapod.algorithms.saddle import sparse_dm
 from hexapod.errors import HexapodError, IntegrationError
 from hexapod.simulation.integrators.base import Counters, Integrator
 
@@ -166,7 +167,7 @@ class _Equations:
                 qdot[index] = qdot[index] + alpha / 2 * (1 - ca.dot(p, p)) * p
         self.qdot = qdot
         self.alpha = alpha
-        self.mass = ca.DM(model.mass.dense())
+        self.mass = sparse_dm(model.mass.sparse())  # a dense one: n_v^2 products per call
         self._daes: dict = {}
 
     def dae(self, rows: np.ndarray) -> dict:
