@@ -113,7 +113,7 @@ def test_the_smallest_singular_value_of_a_sparse_split_is_the_dense_one(name, sp
 
 def test_near_a_singular_pose_the_smallest_singular_value_is_found_to_round_off(sparse_path):
     """The integrators take differences of it along the motion there: ARPACK's value is
-    refined below 1e-2."""
+    refined below 1e-3."""
     model = hx.assemble(n_four_bar(4, start_angle=np.pi / 2 - 1e-4, start_rate=0.0).scene)
     q, _ = _state(model, 0.0)
     w = model.law_values(0.0)[0]

@@ -87,9 +87,11 @@ class CompiledRates:
             lam = ca.MX(0, 1)
             residual = ca.MX.zeros(2)
         else:
-            # Baumgarte: Phi_v v_dot = gamma - 2 alpha (Phi_v v - nu) - alpha^2 phi
-            gamma = (gamma - 2 * alpha * (ca.mtimes(Phi_v, v) - call(model.nu))
-                     - alpha**2 * call(model.phi))
+            # Baumgarte: Phi_v v_dot = gamma - 2 alpha (Phi_v v - nu) - alpha^2 phi, its terms
+            # evaluated only when alpha is not 0 (phi alone is a tenth of the call's cost)
+            drift = (2 * alpha * (ca.mtimes(Phi_v, v) - call(model.nu))
+                     + alpha**2 * call(model.phi))
+            gamma = gamma - ca.if_else(alpha == 0, ca.MX.zeros(model.n_c), drift, True)
             W_all, d_all, zero = equilibrated(Phi_v, m_inv_sqrt)
             y, mu = solve_kept(W_all, d_all, zero, rows.tolist(), y0, gamma)
             # the kept rows' multipliers (lambda_I = mu / d_I); the others are zero
