@@ -31,15 +31,28 @@ Two forms, one for each kind of caller:
   3 x 3 blocks (a dense ``n_v x n_v`` one, and its inverse, cost ``O(n^2)`` and ``O(n^3)`` to
   build), :func:`equilibrated` scales the rows by a sparse diagonal product (scaling by a
   repeated matrix of the row norms made a dense ``n_c x n_v`` node: 2.7 million entries per
-  call for 300 bodies, the kernels' largest cost there), and :func:`solve_kept` factorises
-  the saddle-point matrix by CasADi's sparse QR. That QR orders the columns by approximate
-  minimum degree of ``K^T K``, which on the body-joint graph's matrix finds the tree order:
-  its factors hold 25 nonzeros per row of ``K`` for chains of 30, 100 and 300 bodies (83
-  thousand at 300, where a dense factor would hold 1650 per row). An ``LDL^T``
-  factorisation in tree order (leaves first, each body then the joint to its parent) has a
-  quarter of the fill, but its pivots follow the mass ratios of neighbouring bodies rather
-  than the geometry, and CasADi's sparse ``LDL^T`` breaks down on the zero diagonal of the
-  multipliers' block (measured: NaN); the QR is kept.
+  call for 300 bodies, the kernels' largest cost there), and :func:`solve_kept` eliminates
+  the identity block: ``(W W^T) mu = W y0 - D^-1 gamma``, ``y = y0 - W^T mu``. ``W W^T``
+  couples two joints' rows only when they share a body: block-tridiagonal for a chain, as
+  sparse as the tree for a tree, with a loop-closing joint's rows coupled along the loop.
+  CasADi's sparse Cholesky (CSparse, rows in approximate-minimum-degree order, which on this
+  graph is the tree order, leaves first) fills 7 nonzeros per row of a chain's factor at 30,
+  100 and 300 bodies and 13 for a tree (a dense factor: 750 per row at 300 bodies).
+
+  The Schur complement squares the conditioning of ``W`` -- but so does the saddle-point
+  matrix itself, whose smallest eigenvalue is ``sigma^2`` for a small singular value
+  ``sigma`` of ``W`` (:meth:`hexapod.algorithms.linalg.RowSplit.condition_number`), and its
+  sparse QR, used before, was no more accurate. Measured on the N-four-bar (10 windows) near
+  its flat pose against the closed-form accelerations: at ``sigma = 1.3e-4`` the sparse QR of
+  the saddle-point matrix was 3.5e-11 off and the Cholesky of ``W W^T`` 1.5e-11; at 1.3e-5,
+  1.5e-9 and 1.9e-9; the dense QR of ``W_I^T`` of the exact solve 8.8e-13 and 3.0e-12 (below
+  ``sigma = 1e-4`` the integrators cross with the nearly dependent rows left out, or refuse
+  the compiled solve by its residual). The Cholesky costs a fifth of a call less (the
+  300-body chain's rates 3.26 -> 2.62 ms). A matrix that is not positive definite fails the
+  evaluation, and the caller falls back on the exact solve, as the QR's zero pivot did.
+  ``LDL^T`` of the saddle-point matrix itself in tree order (each body, then the joint to its
+  parent) would need no product ``W W^T``, but CasADi's sparse ``LDL^T`` breaks down on the
+  zero diagonal of the multipliers' block (measured: NaN).
 """
 
 from __future__ import annotations
@@ -121,23 +134,24 @@ def equilibrated(Phi_v: ca.MX, m_inv_sqrt: ca.DM) -> tuple[ca.MX, ca.MX, ca.MX]:
 
 def solve_kept(W_all: ca.MX, d: ca.MX, zero: ca.MX, rows: list[int], top: ca.MX,
                bottom: ca.MX) -> tuple[ca.MX, ca.MX]:
-    """``(y, mu)`` solving ``[[I, W^T], [W, Z]] [y; mu] = [top; bottom / d]`` on the kept
-    ``rows``, ``W = D^-1 W_all`` there, by CasADi's sparse QR (see the module's description).
-    ``Z`` is zero, except -1 for a kept row that is identically zero, whose multiplier is then
-    solved as zero instead of leaving the matrix singular. ``bottom``: all rows' right-hand
-    sides (those of the kept rows are used)."""
-    n_v = W_all.size2()
-    K = kept_matrix(W_all, d, zero, rows)
-    solution = ca.solve(K, ca.vertcat(top, bottom[rows] / d[rows]), "qr")
-    return solution[:n_v], solution[n_v:]
+    """``(y, mu)`` solving ``[[I, W^T], [W, -Z]] [y; mu] = [top; bottom / d]`` on the kept
+    ``rows``, ``W = D^-1 W_all`` there, through the Schur complement of the identity block:
+    ``(W W^T + Z) mu = W top - bottom / d``, ``y = top - W^T mu``, by CasADi's sparse Cholesky
+    (see the module's description). ``Z`` is zero, except 1 for a kept row that is
+    identically zero (a foot's contact in swing), whose multiplier is then solved as zero
+    instead of leaving the matrix singular. ``bottom``: all rows' right-hand sides (those of
+    the kept rows are used). A matrix that is not positive definite (a singular
+    configuration) fails the evaluation: the caller falls back on the exact solve."""
+    W, S = schur_matrix(W_all, d, zero, rows)
+    mu = ca.solve(S, ca.mtimes(W, top) - bottom[rows] / d[rows], "csparsecholesky")
+    return top - ca.mtimes(W.T, mu), mu
 
 
-def kept_matrix(W_all: ca.MX, d: ca.MX, zero: ca.MX, rows: list[int]) -> ca.MX:
-    """The saddle-point matrix ``[[I, W^T], [W, Z]]`` of :func:`solve_kept`, as sparse as
-    ``Phi_v``."""
-    n_v = W_all.size2()
+def schur_matrix(W_all: ca.MX, d: ca.MX, zero: ca.MX, rows: list[int]) -> tuple[ca.MX, ca.MX]:
+    """``W = D^-1 W_all`` on the kept ``rows`` and the Schur complement ``W W^T + Z`` of
+    :func:`solve_kept`, as sparse as the body-joint graph (block-tridiagonal for a chain)."""
     W = ca.mtimes(ca.diag(1.0 / d[rows]), W_all[rows, :])  # sparse: never a dense node
-    return ca.vertcat(ca.horzcat(ca.MX.eye(n_v), W.T), ca.horzcat(W, -ca.diag(zero[rows])))
+    return W, ca.mtimes(W, W.T) + ca.diag(zero[rows])
 
 
 # ---------------------------------------------------------------------- numeric (implicit methods)

@@ -12,13 +12,16 @@ that forms ``Phi_v, gamma, Q`` and solves the equilibrated saddle-point system
     [[I, W^T], [W, 0]] [y; mu] = [M^-1/2 Q; D^-1 gamma],   W = D^-1 Phi_v M^-1/2,
     v_dot = M^-1/2 y
 
-with a sparse QR factorisation (CasADi's ``qr`` linear solver, symbolic analysis done once), on
+through its Schur complement ``(W W^T) mu = W y0 - D^-1 gamma``, ``y = y0 - W^T mu`` (``y0 =
+M^-1/2 Q``), by a
+sparse Cholesky factorisation (CasADi's ``csparsecholesky``, symbolic analysis done once), on
 the independent rows chosen by the rank decision at a reference state. Equilibration makes the
 rows dimensionless and of unit length, so that the conditioning is the mechanism's, not its
-units'. The matrix and every node of the Function are as sparse as ``Phi_v`` and the
+units'. The matrices and every node of the Function are as sparse as ``Phi_v`` and the
 factorisation follows the body-joint graph, so a call costs time linear in the number of
-bodies (:mod:`hexapod.algorithms.saddle` builds them and says how). ``alpha`` is Baumgarte's
-rate (``alpha = beta``, 0 to switch it off).
+bodies (:mod:`hexapod.algorithms.saddle` builds them, and says how and why; it is as accurate
+near singular poses as the sparse QR of the saddle-point matrix it replaced). ``alpha`` is
+Baumgarte's rate (``alpha = beta``, 0 to switch it off).
 
 The fixed row set is what makes one compiled Function possible, so every call also returns the
 ``residual``, ``max |D^-1 (Phi_v v_dot - gamma)|`` relative to the size of the solution, of the
