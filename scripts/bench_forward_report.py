@@ -10,18 +10,30 @@ from bench_forward_runs import REPRESENTATIVE_RTOL, REPRESENTATIVE_STEP, TARGET
 
 # ------------------------------------------------------------------ summaries
 
-def growth_exponents(results: list[dict]) -> dict[str, float]:
+def _chain_costs(results: list[dict]) -> dict[str, np.ndarray]:
+    """Per method, (bodies, CPU per step ms) over the chains where it was measured."""
     chains = [r for r in results if r["problem"]["chain"]]
     out = {}
-    methods = {m for r in chains for m in r["methods"]}
-    for method in sorted(methods):
+    for method in sorted({m for r in chains for m in r["methods"]}):
         points = [(r["bodies"], r["methods"][method]["cpu_per_step_ms"]) for r in chains
                   if method in r["methods"]
                   and np.isfinite(r["methods"][method]["cpu_per_step_ms"])]
         if len(points) >= 2:
-            n, cost = np.log(np.array(points)).T
-            out[method] = float(np.polyfit(n, cost, 1)[0])
+            out[method] = np.array(sorted(points))
     return out
+
+
+def growth_exponents(results: list[dict]) -> dict[str, float]:
+    """The least-squares slope of log(CPU per step) against log(bodies) over the chains."""
+    return {method: float(np.polyfit(*np.log(points).T, 1)[0])
+            for method, points in _chain_costs(results).items()}
+
+
+def local_slopes(results: list[dict]) -> dict[str, list[tuple[int, int, float]]]:
+    """The slopes between consecutive chain sizes: ``(bodies, next bodies, slope)``."""
+    return {method: [(int(a[0]), int(b[0]), float(np.log(b[1] / a[1]) / np.log(b[0] / a[0])))
+                     for a, b in zip(points[:-1], points[1:], strict=True)]
+            for method, points in _chain_costs(results).items()}
 
 
 def fmt(x: float, digits: int = 3) -> str:
@@ -102,6 +114,9 @@ def markdown(results: list[dict], exponents: dict, args) -> str:
     if exponents:
         lines += ["", "Growth exponent of CPU per step against bodies over the chains: "
                   + ", ".join(f"{m} {p:.2f}" for m, p in exponents.items())]
+        lines += ["", "Slopes between consecutive sizes: " + "; ".join(
+            f"{m} " + ", ".join(f"{a}-{b}: {slope:.2f}" for a, b, slope in slopes)
+            for m, slopes in local_slopes(results).items())]
     return "\n".join(lines) + "\n"
 
 

@@ -1,26 +1,36 @@
 """Cost of one forward-dynamics solve at a state against the number of bodies (not a test).
 
-Protocol: for serial chains of N spatial bodies joined by revolute joints (alternating axes),
-the model is built once (assembly and first Function evaluation reported apart), one solve is
-run as warm-up, then the median of REPEATS solves is taken. The growth exponent is the slope of
-log(time) against log(N) fitted over the chain lengths. The front leg and the six-legged robot
-are timed the same way.
+Protocol: for serial chains of N spatial bodies joined by revolute joints (random axes, the
+chains of ``bench_inverse.py`` and ``bench_forward.py``), the model is built once (assembly and
+first solve reported apart, wall time), one solve is run as warm-up, then the median CPU time
+(``time.process_time``, one BLAS thread: a shared machine's load does not count) of REPEATS
+solves is taken. The solve is ``hexapod.forward_dynamics``: the exact, rank-deciding one (the
+sparse path of ``hexapod.algorithms.saddle`` above 1e5 entries of ``Phi_v``). The growth
+exponent is the slope of log(time) against log(N) fitted over the chain lengths, and the slopes
+between consecutive lengths are printed too. The front leg and the six-legged robot are timed
+the same way.
 
     python3 scripts/bench_state_solve.py [--sizes 10 30 100] [--repeats 7]
 """
 
 from __future__ import annotations
 
-import argparse
-import statistics
-import sys
-import time
-from pathlib import Path
+import os
 
-import numpy as np
+# one BLAS thread, before NumPy loads (see bench_forward.py): process_time counts every thread
+for _variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_variable, "1")
 
-import hexapod as hx
-from legs import front_leg_scene
+import argparse  # noqa: E402
+import statistics  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+import hexapod as hx  # noqa: E402
+from legs import front_leg_scene  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_inverse import chain_scene  # noqa: E402  (the same chains in both benchmarks)
@@ -51,9 +61,9 @@ def measure(scene: hx.Scene, repeats: int, t: float = 0.1) -> dict:
     warm = time.perf_counter()
     times = []
     for _ in range(repeats):
-        tic = time.perf_counter()
+        tic = time.process_time()
         hx.forward_dynamics(model, data, t, q, v)
-        times.append(time.perf_counter() - tic)
+        times.append(time.process_time() - tic)
     return {"bodies": len(model.bodies), "n_v": model.n_v, "n_c": model.n_c,
             "assemble_s": built - start, "first_solve_s": warm - built,
             "solve_ms": 1e3 * statistics.median(times)}
@@ -68,7 +78,7 @@ def main() -> None:
             ("six legs on a trunk", measure(hexapod_robot(), args.repeats))]
     chains = [(f"chain of {n}", measure(chain_scene(n), args.repeats)) for n in args.sizes]
     print(f"{'scene':<22}{'bodies':>7}{'n_v':>6}{'n_c':>6}{'assemble s':>12}"
-          f"{'1st solve s':>12}{'solve ms':>10}")
+          f"{'1st solve s':>12}{'solve ms':>10}")  # solve: CPU, the others wall
     for name, r in rows + chains:
         print(f"{name:<22}{r['bodies']:>7}{r['n_v']:>6}{r['n_c']:>6}{r['assemble_s']:>12.3f}"
               f"{r['first_solve_s']:>12.3f}{r['solve_ms']:>10.2f}")
@@ -76,6 +86,10 @@ def main() -> None:
         n = np.log([r["bodies"] for _, r in chains])
         cost = np.log([r["solve_ms"] for _, r in chains])
         print(f"growth exponent of the solve over the chains: {np.polyfit(n, cost, 1)[0]:.2f}")
+        print("slopes between consecutive lengths: " + ", ".join(
+            f"{a['bodies']}-{b['bodies']}: "
+            f"{np.log(b['solve_ms'] / a['solve_ms']) / np.log(b['bodies'] / a['bodies']):.2f}"
+            for (_, a), (_, b) in zip(chains[:-1], chains[1:], strict=True)))
 
 
 if __name__ == "__main__":

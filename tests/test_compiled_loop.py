@@ -106,14 +106,20 @@ def test_the_kernel_compiled_to_c_computes_what_the_virtual_machine_does(monkeyp
         np.testing.assert_allclose(result.lam, vm.lam, rtol=0, atol=1e-10)
 
 
+#: tolerances at which each method needs a crossing of the N-four-bar's flat pose (DOP853 at
+#: 1e-10 and 1e-11 passes it with every row kept)
+CROSSING_RTOL = {"dopri5-projection": 1e-10, "dop853-projection": 1e-12}
+
+
 @pytest.mark.parametrize("method", METHODS)
 def test_singular_poses_are_handed_over_and_crossed_in_python(method):
-    """The N-four-bar lying flat (its Jacobian losing 10 ranks) at rtol 1e-10: the kernel hands
-    the steps near the pose over, Python crosses it, the kernel resumes; the error against the
-    reference stays that of the Python loop."""
+    """The N-four-bar lying flat (its Jacobian losing 10 ranks) at a tolerance where the
+    method must cross it: the kernel hands the steps near the pose over, Python crosses it, the
+    kernel resumes; the error against the reference stays that of the Python loop."""
     case = n_four_bar(10, t_end=3.0)
     model = hx.assemble(case.scene)
-    results = {loop: run(model, 3.0, method, 1e-10, loop) for loop in ("python", "vm")}
+    results = {loop: run(model, 3.0, method, CROSSING_RTOL[method], loop)
+               for loop in ("python", "vm")}
     errors = {}
     for loop, result in results.items():
         assert result.status == "finished", result.message
@@ -124,7 +130,9 @@ def test_singular_poses_are_handed_over_and_crossed_in_python(method):
         assert result.max_position_violation <= 1e-13
     loop = results["vm"].options["loop"]
     assert loop["handovers"] >= 1
-    assert 0.5 * results["vm"].counters.steps < loop["steps"] < results["vm"].counters.steps
+    # the kernel resumes after each crossing: a good part of the steps are its (the crossings'
+    # short steps, Python's, are most of them at 1e-12)
+    assert 0.3 * results["vm"].counters.steps < loop["steps"] < results["vm"].counters.steps
     assert errors["vm"] <= max(1e-8, 3 * errors["python"])
 
 

@@ -226,7 +226,8 @@ def _weighed(pace: list[tuple[int, float]], max_steps: int) -> list[str | None]:
                          advice={"steps": "advice", "memory": "advice"})
     said = []
     for steps, t in pace:
-        run = SimpleNamespace(counters=SimpleNamespace(steps=steps, rejected=0), t=t)
+        run = SimpleNamespace(counters=SimpleNamespace(steps=steps, rejected=0), t=t,
+                              crossing=False)
         said.append(weighing.during(run, returned=steps))
     return said
 

@@ -71,6 +71,7 @@ class ScatteredFunction:
             if function.nnz_in(i) != function.numel_in(i):  # pragma: no cover - inputs are dense
                 raise ValueError(f"input {i} of {function.name()} is sparse")
         self._buffer, self._evaluate = _bound(function, self._inputs, self._outputs)
+        self._compressed: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 
     def __call__(self, *arguments) -> list[np.ndarray]:
         for target, value in zip(self._inputs, arguments, strict=True):
@@ -82,6 +83,31 @@ class ScatteredFunction:
             dense = np.zeros(rows * columns)
             dense[where] = values
             out.append(dense if columns == 1 else dense.reshape(rows, columns))
+        return out
+
+    def sparse(self, *arguments) -> list:
+        """As a call, but the matrix outputs as SciPy CSR arrays built from their nonzeros
+        (vectors stay dense 1-D arrays): no entry of a zero is written, so the cost is that of
+        the nonzeros whatever the size of the matrix."""
+        from scipy.sparse import csc_array
+
+        for target, value in zip(self._inputs, arguments, strict=True):
+            target[:] = np.ravel(value, order="F")
+        _evaluate(self.function, self._buffer, self._evaluate)
+        out = []
+        for i, (values, (rows, columns)) in enumerate(zip(self._outputs, self._shapes,
+                                                            strict=True)):
+            if columns == 1:
+                dense = np.zeros(rows)
+                dense[self._where[i]] = values
+                out.append(dense)
+                continue
+            if i not in self._compressed:  # CasADi's compressed columns, read once
+                pattern = self.function.sparsity_out(i)
+                self._compressed[i] = (np.asarray(pattern.row(), dtype=np.int64),
+                                       np.asarray(pattern.colind(), dtype=np.int64))
+            out.append(csc_array((values.copy(), *self._compressed[i]),
+                                 shape=(rows, columns)).tocsr())
         return out
 
 

@@ -14,7 +14,8 @@ import numpy as np
 
 from hexapod.algorithms.ground import share_ground_forces
 from hexapod.algorithms.liaison import policy_map
-from hexapod.algorithms.linalg import equilibrate, solve_saddle, split_rows
+from hexapod.algorithms.linalg import as_dense, equilibrate, solve_saddle, split_rows
+from hexapod.algorithms.saddle import dynamics_terms
 from hexapod.model.model import Data, Model
 
 
@@ -39,6 +40,8 @@ def forward_dynamics(model: Model, data: Data, t: float, q: np.ndarray, v: np.nd
     ``condition`` is true, ``condition_number`` (2-norm, of the equilibrated saddle-point matrix
     of the independent rows), ``singular_values`` (of the equilibrated kept rows of ``Phi_v``,
     ascending) and ``sigma_min``, the smallest (the distance to a singular configuration).
+    ``Phi_v`` is a NumPy array, or for a large model a SciPy CSR array: the whole solve is
+    then sparse, its cost linear in the number of bodies (:mod:`hexapod.algorithms.saddle`).
 
     Raises
     ------
@@ -48,10 +51,7 @@ def forward_dynamics(model: Model, data: Data, t: float, q: np.ndarray, v: np.nd
     q = np.asarray(q, dtype=float)
     v = np.asarray(v, dtype=float)
     w, wd, wdd = model.law_values(t)
-    values = {"q": q, "v": v, "w": w, "wd": wd, "wdd": wdd}
-    terms = model.fast("dynamics_terms")
-    Phi_v, gamma, Q = terms(*[values[n] for n in terms.name_in])
-    Phi_v = Phi_v.reshape(model.n_c, model.n_v)
+    Phi_v, gamma, Q = dynamics_terms(model, {"q": q, "v": v, "w": w, "wd": wd, "wdd": wdd})
     if baumgarte is not None and model.n_c:
         alpha, beta = baumgarte
         velocity_error = Phi_v @ v - model.call("nu", q=q, w=w, wd=wd)
@@ -63,14 +63,14 @@ def forward_dynamics(model: Model, data: Data, t: float, q: np.ndarray, v: np.nd
     split = split_rows(W, d, priority, tol, groups=groups)
     wrench_map = offset = None
     if split.redundant.size and not model.contacts:
-        wrench_map, offset = policy_map(model, q, Phi_v, Q_across)
+        wrench_map, offset = policy_map(model, q, as_dense(Phi_v), Q_across)
     solution = solve_saddle(model.mass_inv_sqrt, Phi_v, Q, gamma, priority,
                             tol, row_names=[r.name for r in model.rows],
                             consistency_tol=consistency_tol,
                             wrench_map=wrench_map, wrench_offset=offset, split=split)
     lam, status = solution.lam, None
     if model.contacts:  # the scene's ground-force policy
-        lam, status = share_ground_forces(model, t, q, Phi_v, Q_across, split, lam)
+        lam, status = share_ground_forces(model, t, q, as_dense(Phi_v), Q_across, split, lam)
     data.at(t, q, v)
     data.ground_status = status
     data.w, data.wd, data.wdd = w, wd, wdd

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from hexapod.algorithms.linalg import RowSplit, check_consistency, equilibrate, split_rows
+from hexapod.algorithms.saddle import constraint_jacobian
 from hexapod.errors import AssemblyError, SingularSystemError
 from hexapod.model.model import Data, Model
 from hexapod.spatial import rotation_from_euler_parameters
@@ -112,8 +113,7 @@ def _assemble(model: Model, t: float, q: np.ndarray, tol: float, max_iterations:
             # Newton converges quadratically: one more step takes the residual to round-off
             # (joint points coincide to ~1e-16 m instead of ~tol), kept only if it helps
             polished = True
-        Phi_v = model.call("Phi_v", q=q, w=w)
-        split = rank_split(model, Phi_v, w)
+        split = rank_split(model, constraint_jacobian(model, q, w), w)
         if counts is not None:
             counts["newton"] = counts.get("newton", 0) + 1
         dv = model.mass_inv_sqrt @ split.min_norm_correction(-residual * model.row_scale)
@@ -154,7 +154,7 @@ def _project_velocities(model: Model, t: float, q: np.ndarray, v: np.ndarray) ->
     if model.n_c == 0:
         return v.copy()
     w, wd, _ = model.law_values(t)
-    Phi_v = model.call("Phi_v", q=q, w=w)
+    Phi_v = constraint_jacobian(model, q, w)
     nu = model.call("nu", q=q, w=w, wd=wd)
     split = rank_split(model, Phi_v, w)
     residual = nu - Phi_v @ v
@@ -172,7 +172,7 @@ def solve_accelerations(model: Model, data: Data, t: float, q: np.ndarray,
     (unique for a fully driven mechanism): the acceleration analysis of prescribed motion; left
     in ``data.v_dot`` (with ``data.t, q, v, Phi_v, gamma``)."""
     w, wd, wdd = model.law_values(t)
-    Phi_v = model.call("Phi_v", q=q, w=w)
+    Phi_v = constraint_jacobian(model, q, w)
     gamma = model.call("gamma", q=q, v=v, w=w, wd=wd, wdd=wdd)
     split = rank_split(model, Phi_v, w)
     y = split.min_norm_correction(gamma)
@@ -196,7 +196,7 @@ def degrees_of_freedom(model: Model, data: Data, t: float, q: np.ndarray) -> dic
     and with the drivers (``dof_with_drivers``), and the redundant rows by name
     (``redundant_rows``); ``data`` receives ``Phi_v``."""
     w, _, _ = model.law_values(t)
-    Phi_v = model.call("Phi_v", q=q, w=w)
+    Phi_v = constraint_jacobian(model, q, w)
     data.at(t, q)
     data.Phi_v = Phi_v
     split = rank_split(model, Phi_v, w)

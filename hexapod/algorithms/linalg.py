@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hexapod.algorithms.sparse_qr import FrontalQR, ordered_columns, panel_ranges
 from hexapod.errors import SingularSystemError
 
 
@@ -64,10 +65,16 @@ class RowSplit:
         return int(self.independent.size)
 
     def singular_values(self) -> np.ndarray:
-        """Singular values of the kept rows of ``W`` (those of ``R``)."""
-        if self.rank == 0:
-            return np.zeros(0)
-        return np.linalg.svd(self.R, compute_uv=False)
+        """Singular values of the kept rows of ``W`` (those of ``R``), computed once."""
+        if "_sigma" not in self.__dict__:
+            self._sigma = (np.linalg.svd(self.R, compute_uv=False) if self.rank
+                           else np.zeros(0))
+        return self._sigma
+
+    def smallest_singular_value(self) -> float:
+        """The smallest singular value of the kept rows of ``W`` (``inf`` when none is kept)."""
+        s = self.singular_values()
+        return float(s.min()) if s.size else float("inf")
 
     def condition_number(self, n_v: int) -> float:
         """2-norm condition number of the equilibrated saddle-point matrix
@@ -108,20 +115,34 @@ class RowSplit:
         return solve_triangular(self.R, self.basis.T @ self.W[self.redundant].T)
 
 
+def is_sparse(A) -> bool:
+    """Whether ``A`` is a SciPy sparse array (the constraint Jacobian of a large model)."""
+    return hasattr(A, "tocsr")
+
+
+def as_dense(A) -> np.ndarray:
+    """``A`` as a NumPy array (a sparse one densified: for the few dense uses of a large model's
+    matrices, such as diagnostics, or the rows of a redundancy)."""
+    return A.toarray() if is_sparse(A) else A
+
+
 def require_finite(array: np.ndarray, what: str) -> None:
     """Raise a clear error instead of letting NaN or infinity into a factorisation."""
-    if not np.all(np.isfinite(array)):
+    if not np.all(np.isfinite(array.data if is_sparse(array) else array)):
         raise SingularSystemError(
             f"{what} has non-finite entries (an overflow or NaN: check the scene's magnitudes, "
             "its length unit and the state)")
 
 
 def equilibrate(Phi_v: np.ndarray, mass_inv_sqrt) -> tuple[np.ndarray, np.ndarray]:
-    """``W = D^-1 Phi_v M^-1/2`` and the row norms ``d`` (zero rows keep ``d = 1``).
+    """``W = D^-1 Phi_v M^-1/2`` and the row norms ``d`` (zero rows keep ``d = 1``); a sparse
+    ``Phi_v`` (a large model's) gives a sparse ``W`` in CSR format, never densified.
 
     Raises :class:`SingularSystemError` when ``Phi_v`` is not finite (an overflow, typically from
     coordinates or lengths far out of range: check the scene's magnitudes and unit)."""
     require_finite(Phi_v, "the constraint Jacobian Phi_v")
+    if is_sparse(Phi_v):
+        return _scaled_rows(Phi_v.tocsr() @ mass_inv_sqrt.sparse())
     if _large_and_sparse(Phi_v) and hasattr(mass_inv_sqrt, "sparse"):
         return _sparse_equilibrate(Phi_v, mass_inv_sqrt.sparse())
     W = Phi_v @ mass_inv_sqrt
@@ -144,7 +165,7 @@ def split_rows(W: np.ndarray, scale: np.ndarray, priority: np.ndarray, tol: floa
     order = np.asarray(priority, dtype=int)
     if n_c == 0:
         return RowSplit(order, order, np.zeros((n_v, 0)), np.zeros((0, 0)), scale, W)
-    if _sparse_form(W) is not None or _large_and_sparse(W):
+    if is_sparse(W) or _sparse_form(W) is not None or _large_and_sparse(W):
         labels = np.arange(order.size) if groups is None else np.asarray(groups)
         return (_sparse_split(W, scale, order, labels, tol, pivoting=False)
                 or _sparse_split(W, scale, order, labels, tol, pivoting=True))
@@ -201,14 +222,21 @@ def split_rows(W: np.ndarray, scale: np.ndarray, priority: np.ndarray, tol: floa
 
 #: matrices of more entries than this (mostly zeros) are split by the sparse factorisation
 #: below: the dense QR of the 5000 x 6000 Jacobian of a chain of a thousand bodies takes some
-#: fifteen seconds, and its SVD longer
-SPARSE_ABOVE = 1_000_000
+#: fifteen seconds, and its SVD longer. The two cost the same near 1e5 entries (a forward solve
+#: of a chain of 50 bodies, 75,000 entries: 3.2 ms dense, 4.1 ms sparse; of 100 bodies, 300,000
+#: entries: 21 ms and 7.6 ms), and the sparse one grows linearly with the bodies
+SPARSE_ABOVE = 100_000
 SPARSE_DENSITY = 0.05  # ... and fewer nonzeros than this fraction of them
-_PANEL = 32  # rows of W factorised together
 #: ARPACK's relative tolerance on the extreme eigenvalues of R^T R and its inverse: the top of
 #: a long chain's spectrum is a near continuum, where a tighter one takes seconds more; the
 #: values come out within about 1e-7 (relative) there, to round-off where they stand apart
 _ARPACK_TOL = 1e-5
+#: a smallest singular value below this is found again to ``_REFINED_TOL``: near singular poses
+#: (below 1e-4, the integrators' SINGULAR_BAND) they difference it along the motion, over a
+#: thousandth of a step. Long chains stand above it where nothing is singular (1.1e-2 at 100
+#: bodies, 3.7e-3 at 300, 1.1e-3 at 1000)
+_REFINE_BELOW = 1e-3
+_REFINED_TOL = 1e-12
 
 
 def _large_and_sparse(A: np.ndarray) -> bool:
@@ -220,20 +248,25 @@ def _large_and_sparse(A: np.ndarray) -> bool:
 _LAST: tuple = (lambda: None, None)
 
 
-def _sparse_equilibrate(Phi_v: np.ndarray, mass_inv_sqrt) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`equilibrate` through a sparse product (the dense one reads every zero)."""
-    from scipy.sparse import csr_array
-
-    global _LAST
-    W = csr_array(Phi_v) @ mass_inv_sqrt
+def _scaled_rows(W):
+    """``D^-1 W`` and ``d`` for a CSR ``W`` (scaled in place), zero rows keeping ``d = 1``."""
     row = np.repeat(np.arange(W.shape[0]), np.diff(W.indptr))
     d = np.sqrt(np.bincount(row, weights=W.data**2, minlength=W.shape[0]))
     d[d == 0.0] = 1.0
     W.data /= d[row]
+    return W, d
+
+
+def _sparse_equilibrate(Phi_v: np.ndarray, mass_inv_sqrt) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`equilibrate` of a dense ``Phi_v`` through a sparse product (the dense one reads
+    every zero)."""
+    from scipy.sparse import csr_array
+
+    global _LAST
+    W, d = _scaled_rows(csr_array(Phi_v) @ mass_inv_sqrt)
     dense = W.toarray()
     _LAST = (weakref.ref(dense), W)
     return dense, d
-
 
 
 def _sparse_form(W: np.ndarray):
@@ -253,6 +286,7 @@ class SparseRowSplit(RowSplit):
         self.transforms = transforms  # [(slots, Q)]: W[independent].T = G[:, pivots] R,
         self.pivots = pivots  # G the product of the Q placed on their slots
         self._factor = None
+        self._smallest: dict[float, float] = {}  # by ARPACK's tolerance
 
     def __repr__(self) -> str:
         return f"SparseRowSplit(rank={self.rank}, redundant={self.redundant.tolist()})"
@@ -302,8 +336,27 @@ class SparseRowSplit(RowSplit):
                                return_eigenvectors=False)[0])
 
         s_max = np.sqrt(largest(lambda x: Rt @ (R @ x)))  # of R^T R
-        s_min = 1.0 / np.sqrt(largest(lambda x: self.solve_r(self.solve_r(x, trans="T"))))
-        return float(s_min), float(s_max)
+        return self.smallest_singular_value(), float(s_max)
+
+    def smallest_singular_value(self, tol: float = _ARPACK_TOL) -> float:
+        """By ARPACK, from the largest eigenvalue of ``(R^T R)^-1`` (two sparse triangular
+        solves a product): linear in the number of bodies where the dense SVD of ``R`` is
+        cubic (1.4 s for a chain of 300 bodies). ``tol``: ARPACK's relative tolerance; a
+        value below :data:`_REFINE_BELOW` (near a singular pose, where the integrators take
+        differences of it along the motion) is found again to :data:`_REFINED_TOL`."""
+        if self.rank < 3:  # too few for ARPACK
+            return super().smallest_singular_value()
+        if tol not in self._smallest:
+            from scipy.sparse.linalg import LinearOperator, eigsh
+
+            r = self.rank
+            operator = LinearOperator(
+                (r, r), matvec=lambda x: self.solve_r(self.solve_r(x, trans="T")), dtype=float)
+            largest = eigsh(operator, k=1, v0=np.ones(r), tol=tol, return_eigenvectors=False)
+            self._smallest[tol] = float(1.0 / np.sqrt(largest[0]))
+        if self._smallest[tol] < _REFINE_BELOW and tol > _REFINED_TOL:
+            return self.smallest_singular_value(_REFINED_TOL)
+        return self._smallest[tol]
 
     def condition_number(self, n_v: int) -> float:
         if self.rank == 0:
@@ -327,132 +380,7 @@ class SparseRowSplit(RowSplit):
         return y0 + self.expand(z - Qty0), self.solve_r(Qty0 - z)
 
     def redundant_coefficients(self) -> np.ndarray:
-        return self.solve_r(self.project(self.W[self.redundant].T))
-
-
-class _Front:
-    """The sparse Householder QR of ``A = W[order].T`` (columns: the rows of ``W`` in priority
-    order) panel by panel. A row of ``A`` (a velocity coordinate) enters the front at the first
-    column where it is not zero and leaves it as a row of ``R`` or once it is zero beyond the
-    columns done; the front is dense over the columns it still reaches, so a chain's stays
-    small whatever its length."""
-
-    def __init__(self, Wo, tol: float):
-        self.Wo, self.tol = Wo, tol  # Wo: W[order] in CSC, indices sorted
-        n = Wo.shape[0]
-        filled = np.diff(Wo.indptr) > 0
-        first, self.last = np.full(Wo.shape[1], n), np.full(Wo.shape[1], -1)
-        first[filled] = Wo.indices[Wo.indptr[:-1][filled]]
-        self.last[filled] = Wo.indices[Wo.indptr[1:][filled] - 1]
-        self.arrivals = np.argsort(first, kind="stable")
-        self.first = first[self.arrivals]
-        self.entered = 0
-        self.values, self.slots, self.start = np.zeros((0, 0)), np.zeros(0, dtype=int), 0
-        self.transforms, self.pivots, self.kept, self.redundant = [], [], [], []
-        self.entries: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # R, as triplets
-
-    def enter(self, a: int, b: int) -> None:
-        """Move the window to start at column ``a`` and let in the rows starting before ``b``."""
-        stop = max(int(np.searchsorted(self.first, b)), self.entered)
-        new = self.arrivals[self.entered:stop]
-        self.entered = stop
-        end = max(self.start + self.values.shape[1], b,
-                  int(self.last[new].max()) + 1 if new.size else 0)
-        values = np.zeros((self.slots.size + new.size, end - a))
-        kept = self.values[:, a - self.start:]
-        values[:self.slots.size, :kept.shape[1]] = kept
-        if new.size:
-            arriving = self.Wo[:, new].tocoo()
-            values[self.slots.size + arriving.col, arriving.row - a] = arriving.data
-        self.values, self.slots, self.start = values, np.concatenate([self.slots, new]), a
-
-    def reduce(self, a: int, b: int, pivoting: bool) -> bool:
-        """Factorise columns ``a:b``: in order, refusing (False, nothing changed) when one is
-        within ``tol`` of the span of those before; or with column pivoting, the columns
-        within ``tol`` of the span of those kept being redundant."""
-        from scipy.linalg import qr
-
-        self.enter(a, b)
-        p = b - a
-        S = np.flatnonzero(np.any(self.values[:, :p] != 0, axis=1))
-        block = self.values[S]
-        if pivoting:
-            if S.size:
-                Q, Rp, P = qr(block[:, :p], pivoting=True)
-                diagonal = np.abs(np.diag(Rp))
-            else:
-                Q, Rp, P, diagonal = np.eye(0), np.zeros((0, p)), np.arange(p), np.zeros(0)
-            m = int(np.argmin(diagonal > self.tol)) if np.any(diagonal <= self.tol) \
-                else diagonal.size
-        else:
-            if S.size < p:
-                return False
-            Q, Rp = qr(block[:, :p])
-            if np.any(np.abs(np.diag(Rp)) <= self.tol):
-                return False
-            P, m = np.arange(p), p
-        signs = np.sign(np.diag(Rp)[:m])
-        Q[:, :m] *= signs
-        Rp[:m] *= signs[:, None]
-        rest = Q.T @ block[:, p:]
-        if m < S.size and rest.shape[1]:  # the rows left: triangular, the others zero and out
-            Q2, rest[m:] = qr(rest[m:])
-            Q[:, m:] = Q[:, m:] @ Q2
-        columns = a + P[:m]
-        within, beyond = np.triu_indices(m), np.nonzero(rest[:m])  # R's rows, as triplets
-        self.entries.append((len(self.kept) + np.concatenate([within[0], beyond[0]]),
-                             np.concatenate([columns[within[1]], b + beyond[1]]),
-                             np.concatenate([Rp[within], rest[beyond]])))
-        self.kept += columns.tolist()
-        self.redundant += (a + P[m:]).tolist()
-        self.transforms.append((self.slots[S], Q))
-        self.pivots += self.slots[S[:m]].tolist()
-        self.values[S[m:], p:] = rest[m:]
-        staying = np.ones(self.slots.size, dtype=bool)
-        staying[S[:m]] = False
-        values = self.values[staying, p:]
-        staying[staying] = np.any(values != 0, axis=1)  # rows done are zero from here on
-        self.values, self.slots, self.start = self.values[staying, p:], self.slots[staying], b
-        return True
-
-
-def _panels(labels: np.ndarray, pivoting: bool):
-    """Column ranges ``(a, b, pivot)``: runs of at most ``_PANEL`` columns, or with
-    ``pivoting`` each group of several rows on its own (pivoted) and runs of single rows."""
-    n, a = labels.size, 0
-    while a < n:
-        b = a + 1
-        while b < n and labels[b] == labels[a]:
-            b += 1
-        if pivoting and b - a > 1:
-            yield a, b, True
-        else:
-            b = a + 1
-            while b < min(n, a + _PANEL) and (not pivoting or (
-                    labels[b] != labels[b - 1] and (b + 1 == n or labels[b + 1] != labels[b]))):
-                b += 1
-            yield a, b, False
-        a = b
-
-
-def _ordered(W: np.ndarray, order: np.ndarray):
-    """``W[order]`` in CSC format (sorted indices): the columns of ``A = W[order].T``."""
-    from scipy.sparse import csc_array
-
-    sparse = _sparse_form(W)
-    if sparse is None:
-        rows, columns = np.nonzero(W)
-        values = W[rows, columns]
-    else:
-        rows = np.repeat(np.arange(W.shape[0]), np.diff(sparse.indptr))
-        columns, values = sparse.indices, sparse.data
-    position = np.full(W.shape[0], -1)
-    position[order] = np.arange(order.size)
-    taken = position[rows] >= 0  # rows left out of the decision (feet in swing)
-    out = csc_array((values[taken], (position[rows[taken]], columns[taken])),
-                    shape=(order.size, W.shape[1]))
-    out.sort_indices()
-    return out
+        return self.solve_r(self.project(as_dense(self.W[self.redundant]).T))
 
 
 def _sparse_split(W, scale, order, labels, tol: float, pivoting: bool):
@@ -460,8 +388,8 @@ def _sparse_split(W, scale, order, labels, tol: float, pivoting: bool):
     (then the rows are taken as in the dense path's first attempt)."""
     from scipy.sparse import csr_array
 
-    front = _Front(_ordered(W, order), tol)
-    for a, b, pivot in _panels(labels, pivoting):
+    front = FrontalQR(ordered_columns(W, order, _sparse_form(W)), tol)
+    for a, b, pivot in panel_ranges(labels, pivoting):
         if front.reduce(a, b, pivot):
             continue
         if not pivoting:

@@ -46,7 +46,7 @@ import numpy as np
 
 from hexapod._support import signals
 from hexapod.algorithms.ground import NO_LOAD
-from hexapod.algorithms.linalg import equilibrate
+from hexapod.algorithms.linalg import as_dense, equilibrate
 from hexapod.algorithms.phase_plan import MORE_NEWTON_STEPS, NEWTON_STEPS, PhasePlan, plan_for
 from hexapod.algorithms.phase_terms import PhaseTerms
 from hexapod.algorithms.sample_inverse import SampleResult, exact_forces, exact_sample
@@ -244,7 +244,7 @@ class _Decisions:
             return None
         kept, left = self.base
         Phi = model.call("Phi_v", q=q, w=w_k)
-        W, _ = equilibrate(Phi, model.mass_inv_sqrt)
+        W = as_dense(equilibrate(Phi, model.mass_inv_sqrt)[0])  # sparse on a large model
         basis, _ = np.linalg.qr(W[kept].T)
         priority, _ = model.rank_order(w_k)
         feet = priority[self.feet.owner[priority] >= 0]

@@ -650,7 +650,7 @@ class Data:
     w: np.ndarray | None = None
     wd: np.ndarray | None = None
     wdd: np.ndarray | None = None
-    Phi_v: np.ndarray | None = None
+    Phi_v: np.ndarray | None = None  # a SciPy CSR array for a large model (algorithms.saddle)
     gamma: np.ndarray | None = None
     Q: np.ndarray | None = None
     v_dot: np.ndarray | None = None

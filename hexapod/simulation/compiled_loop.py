@@ -52,11 +52,11 @@ import numpy as np
 
 from hexapod._support.compiled import compiled
 from hexapod._support.fastcall import FastFunction
+from hexapod.algorithms.saddle import sparse_dm
 from hexapod.model.model import Model
 from hexapod.simulation.kernels import (
     REDUNDANT_TOLERANCE,
     RESIDUAL_TOLERANCE,
-    _sparse_dm,
     compiled_projection,
     compiled_rates,
 )
@@ -520,7 +520,7 @@ def _plausible_step(model: Model, h, q0, v0, a0, q1, v1, a1) -> ca.MX:
     held (:data:`~.integrators.base.BRANCH_JUMP`, :data:`~.integrators.base.ENERGY_JUMP`),
     the energy measured against the kinetic energy at both ends instead of the run's largest,
     which is stricter: a step that fails here is handed over, and Python judges it."""
-    mass = _sparse_dm(model.mass.dense())
+    mass = sparse_dm(model.mass.sparse())
     _, acceleration, energy = motion_scales(model)
 
     def size(x):

@@ -37,7 +37,7 @@ import numpy as np
 import scipy.linalg
 
 from hexapod.algorithms.dynamics import forward_dynamics
-from hexapod.algorithms.linalg import equilibrate, split_rows
+from hexapod.algorithms.linalg import as_dense, equilibrate, split_rows
 from hexapod.algorithms.topology import mobility
 from hexapod.model.model import Data, Model
 from hexapod.simulation.registry import INTEGRATORS
@@ -207,7 +207,7 @@ def linearised_modes(model: Model, data: Data, t: float, q: np.ndarray, v: np.nd
     K, C = np.array(K), np.array(C)
     half = model.mass_inv_sqrt
     if kept.size:
-        W, _ = equilibrate(data.Phi_v[kept], half)
+        W, _ = equilibrate(as_dense(data.Phi_v[kept]), half)
         basis = _null_space(W, kept.size)
     else:
         basis = np.eye(model.n_v)
@@ -254,7 +254,7 @@ def diagnose(model: Model, data: Data, t: float, q: np.ndarray, v: np.ndarray, *
         dof_counted=m.counted, dof_with_drivers=m.numerical_with_drivers,
         redundant_rows=[model.rows[i].name for i in data.redundant_rows],
         condition_number=float(data.condition_number),
-        condition_number_unscaled=_saddle_condition(model, data.Phi_v[kept]),
+        condition_number_unscaled=_saddle_condition(model, as_dense(data.Phi_v[kept])),
         singular_values=sigma, sigma_min=float(sigma[0]) if sigma.size else float("inf"),
         singular_distance=nearest, singular_rows=rows, eigenvalues=modes,
         stiffness_ratio=fastest / slowest if slowest > 0 else 1.0,

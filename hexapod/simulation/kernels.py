@@ -13,9 +13,11 @@ that forms ``Phi_v, gamma, Q`` and solves the equilibrated saddle-point system
     v_dot = M^-1/2 y
 
 with a sparse QR factorisation (CasADi's ``qr`` linear solver, symbolic analysis done once), on
-the independent rows chosen by the rank decision at a reference state. Equilibration keeps the
-conditioning that of ``W`` (not squared, as a Schur complement would); the sparse factorisation
-keeps the cost linear in the number of bodies for chains and trees. ``alpha`` is Baumgarte's
+the independent rows chosen by the rank decision at a reference state. Equilibration makes the
+rows dimensionless and of unit length, so that the conditioning is the mechanism's, not its
+units'. The matrix and every node of the Function are as sparse as ``Phi_v`` and the
+factorisation follows the body-joint graph, so a call costs time linear in the number of
+bodies (:mod:`hexapod.algorithms.saddle` builds them and says how). ``alpha`` is Baumgarte's
 rate (``alpha = beta``, 0 to switch it off).
 
 The fixed row set is what makes one compiled Function possible, so every call also returns the
@@ -29,9 +31,9 @@ from __future__ import annotations
 
 import casadi as ca
 import numpy as np
-from scipy import sparse
 
 from hexapod._support.fastcall import FastFunction
+from hexapod.algorithms.saddle import equilibrated, mass_factors, solve_kept
 from hexapod.model.model import Model
 from hexapod.spatial import retract_symbolic
 
@@ -44,13 +46,6 @@ RESIDUAL_TOLERANCE = 1e-9
 #: ones by about that error and are rightly ignored (the step's end is projected); a row that
 #: has become independent (leaving a singular pose) disagrees by far more
 REDUNDANT_TOLERANCE = 1e-3
-
-
-def _sparse_dm(matrix: np.ndarray) -> ca.DM:
-    coo = sparse.csc_matrix(matrix)
-    coo.eliminate_zeros()
-    pattern = ca.Sparsity(coo.shape[0], coo.shape[1], coo.indptr.tolist(), coo.indices.tolist())
-    return ca.DM(pattern, coo.data.tolist())
 
 
 class CompiledRates:
@@ -85,26 +80,23 @@ class CompiledRates:
         v = symbols["v"]
         Phi_v, gamma, Q = call(model.dynamics_terms)
         q_dot = call(model.qdot)
-        m_inv_sqrt = _sparse_dm(model.mass_inv_sqrt.dense())
+        m_inv_sqrt, _ = mass_factors(model)
         y0 = ca.mtimes(m_inv_sqrt, Q)
         if model.n_c == 0:
             v_dot = ca.mtimes(m_inv_sqrt, y0)
             lam = ca.MX(0, 1)
             residual = ca.MX.zeros(2)
         else:
-            # Baumgarte: Phi_v v_dot = gamma - 2 alpha (Phi_v v - nu) - alpha^2 phi
-            gamma = (gamma - 2 * alpha * (ca.mtimes(Phi_v, v) - call(model.nu))
-                     - alpha**2 * call(model.phi))
-            W_all = ca.mtimes(Phi_v, m_inv_sqrt)
-            d_all = ca.sqrt(ca.sum2(W_all * W_all))
-            W, d_all, idle = _equilibrated(W_all, d_all, rows.tolist(), model.n_v)
-            K = ca.vertcat(ca.horzcat(ca.MX.eye(model.n_v), W.T), ca.horzcat(W, idle))
-            rhs = ca.vertcat(y0, gamma[rows.tolist()] / d_all[rows.tolist()])
-            solution = ca.solve(K, rhs, "qr")
-            y = solution[: model.n_v]
+            # Baumgarte: Phi_v v_dot = gamma - 2 alpha (Phi_v v - nu) - alpha^2 phi, its terms
+            # evaluated only when alpha is not 0 (phi alone is a tenth of the call's cost)
+            drift = (2 * alpha * (ca.mtimes(Phi_v, v) - call(model.nu))
+                     + alpha**2 * call(model.phi))
+            gamma = gamma - ca.if_else(alpha == 0, ca.MX.zeros(model.n_c), drift, True)
+            W_all, d_all, zero = equilibrated(Phi_v, m_inv_sqrt)
+            y, mu = solve_kept(W_all, d_all, zero, rows.tolist(), y0, gamma)
             # the kept rows' multipliers (lambda_I = mu / d_I); the others are zero
             lam = ca.MX(model.n_c, 1)
-            lam[rows.tolist()] = solution[model.n_v:] / d_all[rows.tolist()]
+            lam[rows.tolist()] = mu / d_all[rows.tolist()]
             v_dot = ca.mtimes(m_inv_sqrt, y)
             scaled = ca.fabs(ca.mtimes(Phi_v, v_dot) - gamma) / d_all
             size = ca.norm_inf(y) + ca.norm_inf(y0) + 1e-300
@@ -149,17 +141,6 @@ class CompiledRates:
         return q_dot, v_dot, lam
 
 
-def _equilibrated(W_all: ca.MX, norms: ca.MX, rows: list, n_v: int):
-    """The kept rows of ``W_all`` scaled to unit length, the row norms (1 for zero rows), and
-    the lower-right block of the saddle-point matrix: zero, except -1 for a kept row that is
-    identically zero (a foot's contact in swing), whose multiplier is then solved as zero
-    instead of leaving the matrix singular."""
-    zero = norms <= 0
-    norms = ca.if_else(zero, 1.0, norms)
-    W = W_all[rows, :] / ca.repmat(norms[rows], 1, n_v)
-    return W, norms, -ca.diag(zero[rows])
-
-
 def _exp_step(model: Model, q: ca.MX, dv: ca.MX) -> ca.MX:
     """``q (+) dv`` as :meth:`Model.integrate` computes it, symbolically."""
     return retract_symbolic(q, dv, model._lin_q, model._lin_v, model._quat_q, model._omega_v)
@@ -187,8 +168,7 @@ class CompiledProjection:
         w, wd = ca.MX.sym("w", model.n_w), ca.MX.sym("wd", model.n_w)
         laws = [w, wd] if model.n_w else []
         symbols = {"q": q, "v": v, "w": w, "wd": wd}
-        m_inv_sqrt = _sparse_dm(model.mass_inv_sqrt.dense())
-        m_sqrt = _sparse_dm(np.linalg.inv(model.mass_inv_sqrt.dense()))
+        m_inv_sqrt, m_sqrt = mass_factors(model)
         scale = ca.DM(model.row_scale)
 
         def call(function, **values):
@@ -199,12 +179,8 @@ class CompiledProjection:
 
         def saddle(position, top, bottom_all):
             """Solve [[I, W^T], [W, 0]] [y; mu] = [top; bottom / d] on the kept rows."""
-            Phi_v = call(model.Phi_v, q=position)
-            W_all = ca.mtimes(Phi_v, m_inv_sqrt)
-            W, d, idle = _equilibrated(W_all, ca.sqrt(ca.sum2(W_all * W_all)), rows,
-                                       model.n_v)
-            K = ca.vertcat(ca.horzcat(ca.MX.eye(model.n_v), W.T), ca.horzcat(W, idle))
-            return ca.solve(K, ca.vertcat(top, bottom_all[rows] / d[rows]), "qr")[:model.n_v]
+            W_all, d, zero = equilibrated(call(model.Phi_v, q=position), m_inv_sqrt)
+            return solve_kept(W_all, d, zero, rows, top, bottom_all)[0]
 
         position = q
         for _ in range(self.newton):

@@ -325,6 +325,9 @@ class _Weighing:
         if self.first is None:  # the pace is measured from here: not over a starting transient
             self.first = (tried, returned, integrator.t)
             return None
+        if integrator.crossing:  # short steps for a while, not the run's pace: weighed later
+            self.over = None
+            return None
         first_tried, first_returned, first_t = self.first
         elapsed = integrator.t - first_t
         if not elapsed > 0:

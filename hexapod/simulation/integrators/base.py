@@ -27,6 +27,8 @@ from scipy.linalg import qr
 
 from hexapod.algorithms.dynamics import forward_dynamics
 from hexapod.algorithms.kinematics import assemble_positions, rank_split, solve_velocities
+from hexapod.algorithms.linalg import as_dense
+from hexapod.algorithms.saddle import constraint_jacobian
 from hexapod.errors import HexapodError, IntegrationError
 from hexapod.model.model import Model
 from hexapod.model.units import COORDINATE_UNITS, VELOCITY_UNITS, component
@@ -196,6 +198,12 @@ class Integrator:
         self._compiled_projection = compiled_projection(model, self.data.independent_rows)
         self._feet_down = self._contact_set(self.t)
         self._start()
+
+    @property
+    def crossing(self) -> bool:
+        """Whether a crossing of a singular configuration is under way (its steps are short for
+        a while: :meth:`_cross_singular`)."""
+        return self._crossing is not None
 
     @property
     def lam(self) -> np.ndarray:
@@ -412,8 +420,9 @@ class Integrator:
         if not self.model.n_c:
             return False
         split = self._rank_split()
-        sigma = split.singular_values()
-        smallest = sigma.min() if sigma.size else np.inf
+        # the smallest singular value alone (ARPACK on a large model's sparse factor) decides
+        # whether to go on: all of them (a dense SVD, cubic in the bodies) only near a pose
+        smallest = split.smallest_singular_value()
         if not smallest < SINGULAR_BAND:
             return False
         base = smallest if self._crossing is None else self._crossing
@@ -434,8 +443,8 @@ class Integrator:
         self._crossing = CROSSING_FACTOR * base
         # the rows left out: those a rank-revealing (column-pivoted) QR factorisation takes last
         rows = split.independent
-        dependent = _collapsing(sigma, self._crossing)
-        pivots = qr(split.W[rows].T, mode="r", pivoting=True)[1]
+        dependent = _collapsing(split.singular_values(), self._crossing)
+        pivots = qr(as_dense(split.W[rows]).T, mode="r", pivoting=True)[1]
         kept = np.sort(rows[pivots[:rows.size - dependent]])
         self._crossing_rates = compiled_rates(self.model, kept)
         if starting:
@@ -519,8 +528,8 @@ class Integrator:
         w, _, _ = self.model.law_values(self.t if t is None else t)
         self.counters.jacobians += 1
         self.counters.factorisations += 1
-        return rank_split(self.model, self.model.call("Phi_v", q=self.q if q is None else q, w=w),
-                          w)
+        return rank_split(self.model,
+                          constraint_jacobian(self.model, self.q if q is None else q, w), w)
 
     def _jumps_branch(self, h: float, v0: np.ndarray, a0: np.ndarray, v1: np.ndarray,
                       a1: np.ndarray) -> bool:
@@ -702,8 +711,7 @@ class Integrator:
         state; ``inf`` without rows)."""
         if not self.model.n_c:
             return np.inf
-        sigma = self._rank_split(q, t).singular_values()
-        return float(sigma.min()) if sigma.size else np.inf
+        return self._rank_split(q, t).smallest_singular_value()
 
     @cached_property
     def _conditioning_start(self) -> float:

@@ -88,6 +88,7 @@ from scipy.linalg import lu_factor, lu_solve
 from scipy.sparse.linalg import splu
 
 from hexapod.algorithms.linalg import equilibrate, split_rows
+from hexapod.algorithms.saddle import is_large, kept_multipliers
 from hexapod.errors import IntegrationError
 from hexapod.model.model import Model
 from hexapod.simulation.integrators.base import RANK_MARGIN, Integrator, Interpolant
@@ -282,8 +283,11 @@ class RadauIIA5GGL(Integrator):
                 q_of_v[v_idx] = q_idx
         self._rot = np.array(rotations, dtype=int).reshape(-1, 3)
         self._q_of_v = q_of_v
-        self._mass = model.mass.dense()
         self._sparse = self._n_full > self.sparse_above
+        # sparse: M x and the iteration matrices cost O(n), not O(n^2); a large model's Phi_v
+        # stays sparse too (its rank decision: hexapod.algorithms.saddle)
+        self._mass = model.mass.sparse() if self._sparse else model.mass.dense()
+        self._large = is_large(model)
         # RADAU5's map of the tolerances (its estimate is of order 3, the solution of order 5)
         self._rtol = 0.1 * self.rtol ** (2.0 / 3.0)
         self._atol = self.atol * self._rtol / self.rtol
@@ -404,9 +408,9 @@ class RadauIIA5GGL(Integrator):
             if dropped.size and (np.any(self.lam_ggl[dropped]) or np.any(self.mu[dropped])):
                 # the same forces Phi_v^T lam and rates Phi_v^T mu from the kept rows alone
                 for values in (self.lam_ggl, self.mu):
-                    target = Phi_v.T @ values
+                    on_kept = kept_multipliers(split, Phi_v, values, model.mass_inv_sqrt)
                     values[:] = 0.0
-                    values[kept] = np.linalg.lstsq(Phi_v[kept].T, target, rcond=None)[0]
+                    values[split.independent] = on_kept
                 F0, J, Phi_v = self._evaluate_start(q, v, w, wd)
         return F0, J, kept
 
@@ -418,6 +422,10 @@ class RadauIIA5GGL(Integrator):
         self.counters.rhs += 1
         self.counters.jacobians += 1
         J = J.sparse().tocsr() if self._sparse else J.full()
+        if self._large:
+            from scipy.sparse import csr_array
+
+            return F.full().reshape(-1), J, csr_array(Phi_v.sparse())
         return F.full().reshape(-1), J, Phi_v.full()
 
     def _mass_times(self, x: np.ndarray) -> np.ndarray:
@@ -436,7 +444,7 @@ class RadauIIA5GGL(Integrator):
         rows = np.concatenate([np.full(2 * n_v, h), np.ones(2 * m)])
         columns = np.concatenate([np.ones(2 * n_v), np.full(2 * m, 1.0 / h)])
         if self._sparse:
-            My = sparse.block_diag([sparse.identity(n_v), sparse.csr_matrix(self._mass),
+            My = sparse.block_diag([sparse.identity(n_v), self._mass,
                                     sparse.csr_matrix((2 * m, 2 * m))], format="csr")
             R, C_ = sparse.diags(rows), sparse.diags(columns)
         else:

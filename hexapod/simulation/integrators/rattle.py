@@ -76,6 +76,7 @@ from hexapod.algorithms.linalg import (
     solve_or_least_squares,
     split_rows,
 )
+from hexapod.algorithms.saddle import force_multipliers, is_large, solve_sparse, sparse_dm
 from hexapod.simulation.integrators.base import Integrator, Interpolant
 from hexapod.simulation.integrators.stability import largest_stable_step, oscillator_parameters
 from hexapod.simulation.scales import ENERGY_JUMP
@@ -141,18 +142,22 @@ class Rattle(Integrator):
     def _start(self) -> None:
         model = self.model
         self.nominal = self.h
-        self.mass_inv = model.mass_inv.dense()
-        start, stage, self.conservative, self.velocity_forces = _functions(model)
+        # a large model's matrices stay sparse (Phi_v and the Newton matrix travel as their
+        # nonzeros; see hexapod.algorithms.saddle), a small one's are made dense as before
+        self.large = is_large(model)
+        start, stage, self.conservative, self.velocity_forces, self.patterns = \
+            _functions(model)
         self.start_terms, self.stage = _Buffered(start), _Buffered(stage)
         n_q, n_v, n_c, n_w = model.n_q, model.n_v, model.n_c, model.n_w
-        self.inputs = _layout({"q": n_q, "v": n_v, "F": n_v, "Phi_v": n_c * n_v, "h": 1,
+        nnz = {name: pattern.nnz() for name, pattern in self.patterns.items()}
+        self.inputs = _layout({"q": n_q, "v": n_v, "F": n_v, "Phi_v": nnz["Phi_v"], "h": 1,
                                "w": n_w, "wd": n_w, "lam": n_c})
-        self.layout = _layout({"q": n_q, "v": n_v, "phi": n_c, "Phi_v": n_c * n_v, "nu": n_c,
-                               "F": n_v, "S": n_c * n_c, "rotation": 1})
+        self.layout = _layout({"q": n_q, "v": n_v, "phi": n_c, "Phi_v": nnz["Phi_v"],
+                               "nu": n_c, "F": n_v, "S": nnz["S"], "rotation": 1})
         self.row_names = [r.name for r in model.rows]
         # the constraint forces Phi_v^T Lambda of the last steps
         self.history: list[np.ndarray] = []
-        self.cache = None  # (q, Phi_v, F, rank decision) at the current state
+        self.cache = None  # (q, (Phi_v, its nonzeros), F, rank decision) at the current state
         self.failure = ""  # why the last attempt failed
 
     def _laws(self, t: float, derivative: bool) -> list[np.ndarray]:
@@ -160,6 +165,16 @@ class Rattle(Integrator):
             return []
         w, wd, _ = self.model.law_values(t)
         return [w, wd] if derivative else [w]
+
+    def _matrix(self, name: str, values: np.ndarray):
+        """The matrix ``name`` (``Phi_v`` or ``S``) from its nonzeros: SciPy CSR for a large
+        model, else a NumPy array."""
+        from scipy.sparse import csc_array
+
+        pattern = self.patterns[name]
+        matrix = csc_array((np.array(values), np.asarray(pattern.row()),
+                            np.asarray(pattern.colind())), shape=pattern.shape).tocsr()
+        return matrix if self.large else matrix.toarray()
 
     def _split(self, Phi_v: np.ndarray):
         W, d = equilibrate(Phi_v, self.model.mass_inv_sqrt)
@@ -173,15 +188,14 @@ class Rattle(Integrator):
         cache = self.cache
         if cache is not None and cache[0] is self.q and not self.velocity_forces:
             return cache[1:]
-        model = self.model
         self.start_terms.input[:] = np.concatenate([self.q, self.v, *self._laws(self.t, False)])
         out = self.start_terms()
         self.counters.rhs += 1
         self.counters.jacobians += 1
-        size = model.n_c * model.n_v
-        Phi_v = out[:size].reshape(model.n_c, model.n_v, order="F")
+        size = self.patterns["Phi_v"].nnz()
+        Phi_v = self._matrix("Phi_v", out[:size])
         split = self._split(Phi_v)
-        self.cache = (self.q, Phi_v, out[size:].copy(), split)
+        self.cache = (self.q, (Phi_v, out[:size].copy()), out[size:].copy(), split)
         return self.cache[1:]
 
     # ------------------------------------------------------------ the step
@@ -200,7 +214,7 @@ class Rattle(Integrator):
             self.history.clear()
         return result
 
-    def _predict(self, Phi_v: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    def _predict(self, Phi_v, split) -> np.ndarray:
         """Starting multipliers on the independent rows: those whose constraint force
         ``Phi_v^T Lambda`` is the one extrapolated from the last two steps (``O(h^2)``), else
         that of the dynamics at the start (``O(h)``). Extrapolated as forces, not multipliers:
@@ -214,27 +228,25 @@ class Rattle(Integrator):
         if len(self.history) == 2:
             force = 2 * self.history[-1] - self.history[-2]
         else:
-            force = Phi_v.T @ self.lam
-        return np.linalg.lstsq(Phi_v[rows].T, force, rcond=None)[0]
+            force = np.asarray(Phi_v.T @ self.lam)
+        return force_multipliers(split, Phi_v, force, self.model.mass_inv_sqrt)
 
     def _attempt(self, h: float):
         """One step of length ``h``: ``(t, q, v)``, or None when Newton's method fails."""
         model = self.model
-        n_c = model.n_c
         t1 = self.t + h
-        Phi0, force0, split0 = self._start_state()
+        (Phi0, Phi0_values), force0, split0 = self._start_state()
         I = split0.independent
         d = split0.scale[I]
-        lam = self._predict(Phi0, I)
+        lam = self._predict(Phi0, split0)
         # the stage's input; only the multipliers change below
         z, where = self.stage.input, self.inputs
         z[where["q"]], z[where["v"]], z[where["F"]] = self.q, self.v, force0
-        z[where["Phi_v"]], z[where["h"]] = Phi0.ravel(order="F"), h
+        z[where["Phi_v"]], z[where["h"]] = Phi0_values, h
         if model.n_w:
             z[where["w"]], z[where["wd"]] = self._laws(t1, True)
         multipliers = z[where["lam"]]
         multipliers[:] = 0.0
-        block, dd = np.ix_(I, I), np.outer(d, d)
         layout = self.layout
         for iteration in range(self.max_iterations + 1):
             multipliers[I] = lam
@@ -263,9 +275,7 @@ class Rattle(Integrator):
                 return None
             self.counters.newton += 1
             self.counters.factorisations += 1
-            S = out[layout["S"]].reshape(n_c, n_c, order="F")
-            # on the rows scaled as the equilibrated Phi_v: S / (d d^T) ~ W W^T
-            step = solve_or_least_squares(S[block] / dd, phi[I] / d)
+            step = self._newton_step(out[layout["S"]], I, d, phi[I] / d)
             if step is None:
                 self.failure = f"the iteration matrix is singular at h = {h:.3g} s"
                 return None
@@ -279,10 +289,11 @@ class Rattle(Integrator):
         # copies: the stage's output is overwritten by its next call
         q1, v_plus, nu, force1 = (out[layout[k]].copy() for k in ("q", "v", "nu", "F"))
         q1 = model.normalize(q1)  # Euler parameters: their round-off would add up over steps
-        Phi1 = out[layout["Phi_v"]].reshape(n_c, model.n_v, order="F").copy()
-        self.history = [*self.history[-1:], Phi0[I].T @ lam]
+        Phi1_values = out[layout["Phi_v"]].copy()
+        Phi1 = self._matrix("Phi_v", Phi1_values)
+        self.history = [*self.history[-1:], np.asarray(Phi0[I].T @ lam)]
         # the second half kick, and the velocities onto Phi_v v = nu (kinetic-energy norm)
-        v_star = v_plus + (h / 2) * (self.mass_inv @ force1)
+        v_star = v_plus + (h / 2) * (model.mass_inv @ force1)
         split1 = self._split(Phi1)
         gap = nu - Phi1 @ v_star
         dy = split1.min_norm_correction(gap)
@@ -291,7 +302,7 @@ class Rattle(Integrator):
         check_consistency(split1, dy, gap, size, row_names=self.row_names,
                           what="velocity constraints")
         v1 = v_star + model.mass_inv_sqrt @ dy
-        self.cache = (q1, Phi1, force1, split1)
+        self.cache = (q1, (Phi1, Phi1_values), force1, split1)
         # the dynamics at the step's end: the accelerations the loop reports there, and the
         # check that Newton's method has not landed on another branch of the constraints
         v_dot1, lam1 = self._dynamics(t1, q1, v1)
@@ -305,6 +316,19 @@ class Rattle(Integrator):
                             f"h = {h:.3g} s")
             return None
         return t1, q1, v1, v_dot1, lam1
+
+    def _newton_step(self, S_values: np.ndarray, I: np.ndarray, d: np.ndarray,
+                     rhs: np.ndarray) -> np.ndarray | None:
+        """Newton's correction on the kept rows ``I``, scaled as the equilibrated ``Phi_v`` (``S /
+        (d d^T) ~ W W^T``): LU, or near a singular configuration the least-squares correction of
+        least norm; a large model's ``S``, sparse along the body-joint graph, by a sparse LU."""
+        S = self._matrix("S", S_values)
+        if self.large:
+            from scipy.sparse import diags
+
+            scale = diags(1.0 / d)
+            return solve_sparse(scale @ S[I][:, I] @ scale, rhs)
+        return solve_or_least_squares(S[np.ix_(I, I)] / np.outer(d, d), rhs)
 
     def dense_output(self) -> Interpolant:
         """Quintic Hermite interpolation of the positions from ``(q, v, v_dot)`` at both ends of
@@ -368,15 +392,21 @@ def _force(model, q, v, laws):
 
 
 def _packed(name: str, inputs: list, outputs: list) -> ca.Function:
-    """A Function of one vector (the inputs stacked, matrices by columns) to one vector (the
-    outputs likewise): a call then costs one conversion each way, not one per argument."""
-    z = ca.SX.sym("z", sum(x.numel() for x in inputs))
+    """A Function of one vector (the inputs stacked) to one vector (the outputs likewise): a
+    call then costs one conversion each way, not one per argument. Vectors are stacked whole,
+    matrices by their nonzeros (in CasADi's column order): ``Phi_v`` and the Newton matrix of
+    a large model would otherwise be written densely, ``O(n^2)`` entries per call."""
+    def size(x):
+        return x.numel() if x.size2() == 1 else x.nnz()
+
+    z = ca.SX.sym("z", sum(size(x) for x in inputs))
     parts, k = [], 0
     for x in inputs:
-        parts.append(ca.reshape(z[k:k + x.numel()], x.shape[0], x.shape[1]))
-        k += x.numel()
+        chunk = z[k:k + size(x)]
+        parts.append(chunk if x.size2() == 1 else ca.SX(x.sparsity(), chunk))
+        k += size(x)
     inner = ca.Function(name + "_inner", inputs, outputs)
-    return ca.Function(name, [z], [ca.vertcat(*[ca.vec(ca.densify(x))
+    return ca.Function(name, [z], [ca.vertcat(*[ca.densify(x) if x.size2() == 1 else x.nz[:]
                                                  for x in inner(*parts)])])
 
 
@@ -388,7 +418,8 @@ def _functions(model):
     ``stage`` forms one Newton iterate from the kick force ``F0 - Phi0^T Lambda``: the
     positions ``q1`` and the velocities ``v^+`` after the drift, ``phi``, ``Phi_v``, ``nu`` and
     the force at ``q1`` (at the predicted ``v_n+1``), ``S = Phi_v(q1) T Phi0^T`` and the largest
-    relative residual of the Moser–Veselov equations.
+    relative residual of the Moser–Veselov equations. The matrices travel as their nonzeros;
+    their patterns are returned last, ``{"Phi_v": ..., "S": ...}``.
     """
     return model.built_once(("rattle",), _build_functions)
 
@@ -403,8 +434,8 @@ def _build_functions(model):
     start = _packed("rattle_start", [q, v, *laws], [model.Phi_v(q, *laws), force])
 
     force0, h = ca.SX.sym("F0", n_v), ca.SX.sym("h")
-    Phi0, lam = ca.SX.sym("Phi0", n_c, n_v), ca.SX.sym("Lambda", n_c)
-    mass_inv = ca.DM(model.mass_inv.dense())
+    Phi0, lam = ca.SX.sym("Phi0", model.Phi_v.sparsity_out(0)), ca.SX.sym("Lambda", n_c)
+    mass_inv = sparse_dm(model.mass_inv.sparse())
     kick = (h / 2) * ca.mtimes(mass_inv, force0 - ca.mtimes(Phi0.T, lam))
     v_half = v + kick
     q1 = q + 0  # a copy, its rows replaced below
@@ -440,9 +471,10 @@ def _build_functions(model):
         T[rot_v, rot_v] = ca.inv(A)
     Phi1 = model.Phi_v(q1, *laws)
     nu = model.nu(q1, *laws, *([wd] if n_w else []))
+    S = ca.mtimes([Phi1, T, Phi0.T])
     outputs = [q1, v_plus, model.phi(q1, *laws), Phi1, nu,
-               force_at(q1, v_plus + kick, *laws), ca.mtimes([Phi1, T, Phi0.T]),
-               rotation_residual]
+               force_at(q1, v_plus + kick, *laws), S, rotation_residual]
     stage = _packed("rattle_stage", [q, v, force0, Phi0, h, *laws, *([wd] if n_w else []),
                                      lam], outputs)
-    return start, stage, conservative, bool(ca.depends_on(force, v))
+    patterns = {"Phi_v": model.Phi_v.sparsity_out(0), "S": S.sparsity()}
+    return start, stage, conservative, bool(ca.depends_on(force, v)), patterns

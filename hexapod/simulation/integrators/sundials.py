@@ -72,6 +72,8 @@ import numpy as np
 
 from hexapod._support import signals
 from hexapod.algorithms.dynamics import forward_dynamics
+from hexapod.algorithms.linalg import as_dense
+from hexapod.algorithms.saddle import sparse_dm
 from hexapod.errors import HexapodError, IntegrationError
 from hexapod.simulation.integrators.base import Counters, Integrator
 
@@ -165,7 +167,7 @@ class _Equations:
                 qdot[index] = qdot[index] + alpha / 2 * (1 - ca.dot(p, p)) * p
         self.qdot = qdot
         self.alpha = alpha
-        self.mass = ca.DM(model.mass.dense())
+        self.mass = sparse_dm(model.mass.sparse())  # a dense one: n_v^2 products per call
         self._daes: dict = {}
 
     def dae(self, rows: np.ndarray) -> dict:
@@ -445,7 +447,7 @@ class IdasBDF(Integrator):
         rows = self.rows
         lam = self.lam[rows]
         if rows.size < model.n_c and rows.size:  # the multipliers of the rows IDAS solves with
-            Phi = self.data.Phi_v[rows]
+            Phi = as_dense(self.data.Phi_v[rows])
             rhs = self.data.Q - model.mass @ self.v_dot
             lam = np.linalg.lstsq(Phi.T, rhs, rcond=None)[0]
         xdot = np.concatenate([model.call("qdot", q=self.q, v=self.v), self.v_dot])
