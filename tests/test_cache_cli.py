@@ -5,10 +5,12 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -56,6 +58,31 @@ def test_inverse_fills_the_cache_and_info_lists_it(tmp_path):
     assert (tmp_path / "again.csv").read_text() == first
     assert json.loads(run("cache", "info", "--json", cache=cache,
                           cwd=tmp_path).stdout)["entries"] == 2
+
+
+@pytest.mark.skipif(not (shutil.which("gcc") or shutil.which("cc")), reason="no C compiler")
+def test_compile_yes_leaves_compiled_code_that_the_next_run_loads(tmp_path):
+    """--compile yes compiles the tree path in the first run and keeps the library; the next
+    run (--compile auto) loads it, compiles nothing, and writes the interpreter's numbers (run
+    --compile no) to round-off."""
+    cache = tmp_path / "cache"
+    for out, choice in (("interpreted.csv", "no"), ("compiled.csv", "yes"), ("again.csv", "auto")):
+        done = run("inverse", str(FIXTURE / "model.urdf"), "--motion",
+                   str(FIXTURE / "motion.csv"), "--out", out, "--compile", choice, cache=cache,
+                   cwd=tmp_path)
+        assert done.returncode == 0, done.stderr
+        if choice == "yes":
+            entries = json.loads(run("cache", "info", "--json", cache=cache,
+                                     cwd=tmp_path).stdout)["entries"]
+            assert any("compiled -O2" in line for line in
+                       run("cache", "info", cache=cache, cwd=tmp_path).stdout.splitlines())
+    assert json.loads(run("cache", "info", "--json", cache=cache,
+                          cwd=tmp_path).stdout)["entries"] == entries  # nothing built again
+    tables = [np.loadtxt(tmp_path / name, delimiter=",", skiprows=1)
+              for name in ("interpreted.csv", "compiled.csv", "again.csv")]
+    scale = np.abs(tables[0]).max()
+    for table in tables[1:]:
+        assert np.abs(table - tables[0]).max() <= 1e-12 * scale
 
 
 def test_clean(tmp_path):

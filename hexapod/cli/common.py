@@ -233,6 +233,16 @@ def inverse_arguments(parser: argparse.ArgumentParser, method_help: str) -> None
                         help="axes of the wrench components (default: the child's joint frame)")
     parser.add_argument("--method", choices=("auto", "tree", "phase", "saddle"), default="auto",
                         help=method_help)
+    parser.add_argument("--compile", choices=("auto", "yes", "no"), default="auto",
+                        help="evaluate the tree or phase path as compiled C code: yes compiles "
+                        "it now if the cache on disk does not hold it (every later run of the "
+                        "model loads it), no keeps CasADi's interpreter; auto (default) uses "
+                        "compiled code the cache holds, and compiles once it pays over the "
+                        "model's runs (see docs/cache.md)")
+
+
+#: ``--compile`` as the ``compile`` argument of inverse_dynamics.
+COMPILE_CHOICES = {"auto": None, "yes": True, "no": False}
 
 
 #: The ground-force policies (hexapod.scene.contacts.POLICIES, not imported: it loads NumPy).

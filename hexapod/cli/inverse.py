@@ -5,6 +5,7 @@ from __future__ import annotations
 import sys
 
 from hexapod.cli.common import (
+    COMPILE_CHOICES,
     apply_ground_options,
     check_inverse_memory,
     ground_arguments,
@@ -62,6 +63,7 @@ def run(args) -> int:
                          f"give a motion of fewer samples than {args.motion}'s")
     progress = sample_progress("inverse dynamics") if sys.stderr.isatty() else None
     result = inverse_dynamics(model, times, method=args.method, frame=args.frame,
+                              compile=COMPILE_CHOICES[args.compile],
                               progress=progress)
     write_inverse_files(out, model, result)  # OUT.units.json, then OUT.csv
     if progress is not None:

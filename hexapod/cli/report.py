@@ -5,6 +5,7 @@ from __future__ import annotations
 import sys
 
 from hexapod.cli.common import (
+    COMPILE_CHOICES,
     MAX_TIME,
     apply_ground_options,
     at_least,
@@ -80,6 +81,7 @@ def run(args) -> int:
     progress = sample_progress("inverse dynamics") if show else None
     started = time.perf_counter()
     result = inverse_dynamics(model, times, method=args.method, frame=args.frame,
+                              compile=COMPILE_CHOICES[args.compile],
                               progress=progress)
     run_time = time.perf_counter() - started
     if show:
