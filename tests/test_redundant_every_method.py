@@ -147,3 +147,24 @@ def test_n_four_bar_flat_poses_crossed_or_named(n_four_bar, method):
                             r"([0-9.e+-]+)", message).group(1))
     assert abs(when - result.t[-1]) <= 1e-5 * case.t_end, (when, result.t[-1])
     assert value == pytest.approx(sigma_end, rel=0.05), (value, sigma_end)
+
+
+def test_the_spatial_n_four_bar_is_named_where_radau_stops():
+    """The spatial N-four-bar (three redundant rows a window): its smallest singular value
+    stands near 1.4e-4 from the start, and at the flat pose ten others fall to 0.06-0.08 of
+    theirs. Radau5 stops there (its Newton iteration fails at every step size), and its message
+    names the pose and the methods that cross it; the states up to it are on the reference.
+    At rtol 1e-6, as 'hexapod check' runs it: at 1e-8 Radau5 stops 1.6e-4 s before the pose,
+    where the ten have not yet fallen tenfold, and its message does not name it."""
+    case = m.n_four_bar(10, t_end=1.0, dimension=3)
+    model = assemble(case.scene)
+    result = simulate(model, case.t_end, method="radau5-ggl", rtol=1e-6, atol=1e-6,
+                      forces=False, cpu_budget=60)
+    if result.status == "finished":  # crossed: then on the reference's branch
+        assert case.error(model, result.t, result.q) <= 1e-2
+        return
+    assert result.status == "failed"
+    assert "singular configuration at t = " in result.message, result.message
+    assert "dopri5-projection and dop853-projection cross" in result.message, result.message
+    assert 0.7 < result.t[-1] < 0.75  # the flat pose, at 0.72 s
+    assert case.error(model, result.t, result.q) <= 1e-5

@@ -28,7 +28,7 @@ from scipy.linalg import qr
 from hexapod.algorithms.dynamics import forward_dynamics
 from hexapod.algorithms.kinematics import assemble_positions, rank_split, solve_velocities
 from hexapod.algorithms.linalg import as_dense
-from hexapod.algorithms.saddle import constraint_jacobian
+from hexapod.algorithms.saddle import constraint_jacobian, is_large
 from hexapod.errors import HexapodError, IntegrationError
 from hexapod.model.model import Model
 from hexapod.model.units import COORDINATE_UNITS, VELOCITY_UNITS, component
@@ -697,10 +697,10 @@ class Integrator:
     # ------------------------------------------------------------------ singular poses
 
     #: a failure is reported as one at a singular configuration (:meth:`_singular_pose`) where
-    #: the smallest singular value of the equilibrated ``Phi_v`` has fallen below this fraction
-    #: of its value at the start (:attr:`_conditioning_start`): its
-    #: value away from such poses depends on the mechanism and its masses (5e-5 on a hexapod,
-    #: 0.08 on the N-four-bar standing up), so only its fall tells one
+    #: a singular value of the equilibrated ``Phi_v`` has fallen below this fraction of its
+    #: value at the start (:attr:`_spectrum_start`, the singular values compared in sorted
+    #: order): their values away from such poses depend on the mechanism and its masses (5e-5
+    #: on a hexapod, 0.08 on the N-four-bar standing up), so only their fall tells one
     near_singular = 0.05
     #: the methods that cross singular configurations (the crossing of :meth:`_cross_singular`)
     crossing_methods = ("dopri5-projection", "dop853-projection")
@@ -715,27 +715,59 @@ class Integrator:
 
     @cached_property
     def _conditioning_start(self) -> float:
-        """The smallest singular value at the start (for :meth:`_singular_pose`), computed
-        when a failure first needs it: the flyball governor's is 9e-4 where nothing is
-        singular, and measured against 1 its failures were blamed on a singular pose."""
-        return self._smallest_singular_value(self._q_start, self.t0)
+        """The smallest singular value at the start, computed when a failure first needs it:
+        the flyball governor's is 9e-4 where nothing is singular, and measured against 1 its
+        failures were blamed on a singular pose."""
+        start = self._spectrum_start
+        return float(start[0]) if start.size else np.inf
+
+    @cached_property
+    def _spectrum_start(self) -> np.ndarray:
+        """The singular values of the kept rows of the equilibrated ``Phi_v`` at the start, in
+        increasing order (a large model's smallest alone: a dense SVD is cubic in the
+        bodies)."""
+        return self._spectrum(self._q_start, self.t0)
+
+    def _spectrum(self, q: np.ndarray | None = None, t: float | None = None) -> np.ndarray:
+        if not self.model.n_c:
+            return np.zeros(0)
+        split = self._rank_split(q, t)
+        if is_large(self.model):
+            return np.array([split.smallest_singular_value()])
+        return np.sort(split.singular_values())
 
     def _singular_pose(self) -> str:
         """When the current positions are near a singular configuration (see
-        :attr:`near_singular`), a sentence that names it (time, smallest singular value) and the
-        methods that cross it; else the empty string. For the messages of failures."""
+        :attr:`near_singular`), a sentence that names it (time, the singular value that fell)
+        and the methods that cross it; else the empty string. For the messages of failures.
+
+        The smallest singular value is compared first; where it has not fallen, the others in
+        sorted order (the k-th smallest falls only where k values do): the spatial
+        N-four-bar's smallest stands near 1.4e-4 all along, and the ten that collapse at its
+        flat pose are the next ten (to 0.06 to 0.08 of their values at the start, which is
+        near the pose already, where Radau5 fails)."""
         try:
-            sigma = self._smallest_singular_value()
+            now = self._spectrum()
+            start = self._spectrum_start
         except (HexapodError, np.linalg.LinAlgError, ValueError):
             return ""
-        start = self._conditioning_start
-        reference = start if np.isfinite(start) and start > 0 else 1.0
-        if not sigma < self.near_singular * reference:
+        n = min(now.size, start.size)
+        if n == 0:
             return ""
-        return (f"the mechanism is at a singular configuration at t = {self.t:.6g} s (smallest "
-                f"singular value of the equilibrated constraint Jacobian {sigma:.2g}, "
-                f"{sigma / reference:.2g} of its value at the start), which {self.name} cannot "
-                f"pass; {' and '.join(self.crossing_methods)} cross such poses")
+        reference = np.where(np.isfinite(start[:n]) & (start[:n] > 0), start[:n], 1.0)
+        ratios = now[:n] / reference
+        k = 0 if ratios[0] < self.near_singular else int(np.argmin(ratios))
+        # the smallest fallen, or within the band where crossings begin with others fallen
+        # tenfold (the spatial N-four-bar: its smallest 1.1e-4, ten more fallen 12 to 16 times)
+        if not (ratios[0] < self.near_singular
+                or (now[0] < CROSSING_FACTOR * SINGULAR_BAND
+                    and ratios[k] < 1.0 / CROSSING_FACTOR)):
+            return ""
+        which = "smallest singular value" if k == 0 else "a singular value"
+        return (f"the mechanism is at a singular configuration at t = {self.t:.6g} s ({which} "
+                f"of the equilibrated constraint Jacobian {now[k]:.2g}, {ratios[k]:.2g} of its "
+                f"value at the start), which {self.name} cannot pass; "
+                f"{' and '.join(self.crossing_methods)} cross such poses")
 
 
 def _collapsing(sigma: np.ndarray, tolerance: float) -> int:
