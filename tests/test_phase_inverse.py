@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import hexapod as hx
+from hexapod._support.compiled import compiler
 from hexapod.algorithms import phase_inverse
 from hexapod.algorithms.inverse import inverse_dynamics
 
@@ -161,3 +162,19 @@ def test_compiled_and_interpreted_phase_paths_agree():
         a, b = getattr(interpreted, key), getattr(compiled, key)
         assert np.nanmax(np.abs(a - b)) <= 1e-12 * np.nanmax(np.abs(a)), key
     assert model.was_built(("phase-terms", True))
+
+
+def test_a_later_model_loads_the_phase_libraries_an_earlier_one_compiled():
+    """The phase path's libraries are kept in the cache on disk by the hash of each Function's
+    graph: the same mechanism assembled again (as a later process would) and run with
+    compile=False loads them instead of interpreting, and gives the same numbers."""
+    times = np.linspace(0.0, 1.2, 9)
+    compiled = inverse_dynamics(four_bar_model(2), times, method="phase", compile=True)
+    model = four_bar_model(2)
+    again = inverse_dynamics(model, times, method="phase", compile=False)
+    terms = model.built_once(("phase-terms", False), lambda m: None)
+    if compiler() is not None:
+        assert terms.predict.class_name() != "SXFunction"  # a library, loaded
+    for key in ("force", "torque", "q", "v_dot"):
+        a, b = getattr(compiled, key), getattr(again, key)
+        assert np.nanmax(np.abs(a - b)) <= 1e-12 * np.nanmax(np.abs(a)), key

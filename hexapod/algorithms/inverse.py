@@ -152,7 +152,8 @@ def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = 
         this process or in the cache on disk) or when compiling pays (:func:`compile_pays`),
         else the interpreter. Phase path, by default: compiled from
         :data:`PHASE_COMPILE_FROM_SAMPLES` samples, or when this process compiled the model's
-        phase path before (the libraries are kept in the cache on disk).
+        phase path before; libraries the cache on disk holds (an earlier run compiled them)
+        are used in any case.
     progress :
         Called as ``progress(done, total)`` as samples are done (after each block of samples
         on the tree path, see :data:`BLOCK_FACTOR`; after each run of samples sharing one

@@ -39,7 +39,7 @@ from functools import cached_property
 import casadi as ca
 import numpy as np
 
-from hexapod._support.compiled import compiled
+from hexapod._support.compiled import compiled, find_compiled
 from hexapod.model.model import GROUND_INDEX, Model
 from hexapod.spatial import retract_symbolic, rotation_from_euler_parameters
 
@@ -320,13 +320,16 @@ class PhaseTerms:
 def sx_function(name: str, inputs, outputs, to_c: bool, *names) -> ca.Function:
     """``ca.Function(name, inputs, outputs, *names)``, compiled to C when ``to_c``: the library
     is kept in the cache on disk under the hash of the Function's serialized graph (a plan's
-    Functions depend on its rows and pivots as well as on the model), so a later process
-    building the same Function loads it."""
+    Functions depend on its rows and pivots as well as on the model). A library the cache
+    holds is used even when ``to_c`` is false: a later run of the same model, short or long,
+    loads what an earlier one compiled."""
     function = ca.Function(name, inputs, outputs, *names)
-    if not to_c:
-        return function
     graph = hashlib.sha256(function.serialize().encode("utf-8")).hexdigest()
-    return compiled(f"phase/{name}/{graph}", lambda: function, what=f"phase path {name}")
+    key = f"phase/{name}/{graph}"
+    if not to_c:
+        found = find_compiled(key)
+        return function if found is None else found
+    return compiled(key, lambda: function, what=f"phase path {name}")
 
 
 def sparse_dm(matrix: np.ndarray) -> ca.DM:
