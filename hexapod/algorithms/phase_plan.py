@@ -90,7 +90,7 @@ class PhasePlan:
     # ---------------------------------------------------------------- the plan's SX Functions
 
     def _sx(self, name, inputs, outputs):
-        return sx_function(name, inputs, outputs, self.to_c)
+        return sx_function(name, inputs, outputs, self.to_c, look_up=self.terms.look_up)
 
     def _build_linear_algebra(self) -> None:
         """The plan's own Functions: the factorisation of ``Phi_v[I]`` and its solves, the

@@ -39,7 +39,8 @@ from functools import cached_property
 import casadi as ca
 import numpy as np
 
-from hexapod._support.compiled import compiled, find_compiled
+from hexapod._support import cache
+from hexapod._support.compiled import compiled, compiler, find_compiled
 from hexapod.model.model import GROUND_INDEX, Model
 from hexapod.spatial import retract_symbolic, rotation_from_euler_parameters
 
@@ -71,6 +72,11 @@ class PhaseTerms:
     def __init__(self, model: Model, to_c: bool = False):
         self.model = model
         self.to_c = to_c
+        # the cache is searched for libraries (each Function's graph serialized and hashed:
+        # some 0.3 s for the walking hexapod's) only for a model an earlier run compiled
+        self.look_up = to_c or libraries_marked(model)
+        if to_c:
+            mark_libraries(model)
         s = model._sym
         self.q, self.v, self.w, self.wd, self.wdd = s.q, s.v, s.w, s.wd, s.wdd
         self.pattern = model._Phi_v_expr.sparsity()  # of Phi_v, fixed
@@ -79,7 +85,8 @@ class PhaseTerms:
 
     def _function(self, name, inputs, outputs, names_in, names_out, cse=True):
         outputs = ca.cse(outputs) if cse else outputs
-        return sx_function(name, inputs, outputs, self.to_c, names_in, names_out)
+        return sx_function(name, inputs, outputs, self.to_c, names_in, names_out,
+                           look_up=self.look_up)
 
     def _retract(self, q, dv):
         m = self.model
@@ -317,19 +324,40 @@ class PhaseTerms:
                               ["q", "Phi", "lam", "offset"], ["wrench", "frames"])
 
 
-def sx_function(name: str, inputs, outputs, to_c: bool, *names) -> ca.Function:
+def sx_function(name: str, inputs, outputs, to_c: bool, *names,
+                look_up: bool = True) -> ca.Function:
     """``ca.Function(name, inputs, outputs, *names)``, compiled to C when ``to_c``: the library
     is kept in the cache on disk under the hash of the Function's serialized graph (a plan's
-    Functions depend on its rows and pivots as well as on the model). A library the cache
-    holds is used even when ``to_c`` is false: a later run of the same model, short or long,
-    loads what an earlier one compiled."""
+    Functions depend on its rows and pivots as well as on the model). With ``look_up``, a
+    library the cache holds is used even when ``to_c`` is false: a later run of the same
+    model, short or long, loads what an earlier one compiled."""
     function = ca.Function(name, inputs, outputs, *names)
+    if not (to_c or look_up):
+        return function
     graph = hashlib.sha256(function.serialize().encode("utf-8")).hexdigest()
     key = f"phase/{name}/{graph}"
     if not to_c:
         found = find_compiled(key)
         return function if found is None else found
     return compiled(key, lambda: function, what=f"phase path {name}")
+
+
+def _mark_key(model: Model) -> str:
+    return cache.key("phase-libraries", model.digest)
+
+
+def libraries_marked(model: Model) -> bool:
+    """Whether an earlier run compiled ``model``'s phase path (its mark in the cache)."""
+    return compiler() is not None and cache.load(_mark_key(model)) is not None
+
+
+def mark_libraries(model: Model) -> None:
+    """Leave the mark of :func:`libraries_marked` in the cache (once)."""
+    if compiler() is None or libraries_marked(model):
+        return
+    with cache.writing(_mark_key(model), f"mark: the phase path of '{model.name}' compiled") \
+            as folder:
+        (folder / "mark").write_text(model.digest, encoding="ascii")
 
 
 def sparse_dm(matrix: np.ndarray) -> ca.DM:
