@@ -41,6 +41,7 @@ import numpy as np
 
 from hexapod._support import cache
 from hexapod._support.compiled import compiled, compiler, find_compiled
+from hexapod._support.files import write_atomically
 from hexapod.model.model import GROUND_INDEX, Model
 from hexapod.spatial import retract_symbolic, rotation_from_euler_parameters
 
@@ -357,7 +358,7 @@ def mark_libraries(model: Model) -> None:
         return
     with cache.writing(_mark_key(model), f"mark: the phase path of '{model.name}' compiled") \
             as folder:
-        (folder / "mark").write_text(model.digest, encoding="ascii")
+        write_atomically(folder / "mark", model.digest, durable=False)
 
 
 def sparse_dm(matrix: np.ndarray) -> ca.DM:
