@@ -81,11 +81,22 @@ def foot_path(tau, duty: float, length: float, lift: float) -> tuple[np.ndarray,
     return fore_aft, height
 
 
-def _rotate(vectors: np.ndarray, axes: np.ndarray, angles: np.ndarray) -> np.ndarray:
-    """Rodrigues' rotation of ``vectors`` (n, 3) about unit ``axes`` (n, 3) by ``angles``."""
-    c, s = np.cos(angles)[:, None], np.sin(angles)[:, None]
-    along = np.sum(axes * vectors, axis=1, keepdims=True)
-    return vectors * c + np.cross(axes, vectors) * s + axes * along * (1 - c)
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise cross products of (n, 3) arrays (NumPy's cross costs several times more on
+    these shapes: it moves axes and checks them at every call)."""
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
+    out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
+    out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    return out
+
+
+def _rotate(vectors: np.ndarray, axes: np.ndarray, c: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """Rodrigues' rotation of ``vectors`` (n, 3) about unit ``axes`` (n, 3 or 3) by the angles
+    whose cosines and sines are ``c`` and ``s`` (n, 1)."""
+    along = (vectors @ axes)[:, None] if axes.ndim == 1 else \
+        np.einsum("ij,ij->i", axes, vectors)[:, None]
+    return vectors * c + _cross(axes, vectors) * s + axes * (along * (1 - c))
 
 
 def chain_state(geometry: LegGeometry, angles: np.ndarray):
@@ -94,16 +105,19 @@ def chain_state(geometry: LegGeometry, angles: np.ndarray):
     Product of exponentials: each joint turns everything beyond it about its rest-pose axis
     and point, the proximal joint last."""
     n = angles.shape[0]
+    cosines, sines = np.cos(angles), np.sin(angles)
+    c = [cosines[:, k, None] for k in range(6)]
+    s = [sines[:, k, None] for k in range(6)]
     foot = np.tile(geometry.points[6], (n, 1))
     for k in reversed(range(6)):
         origin = geometry.points[k]
-        foot = origin + _rotate(foot - origin, np.tile(geometry.axes[k], (n, 1)), angles[:, k])
+        foot = origin + _rotate(foot - origin, geometry.axes[k], c[k], s[k])
     axes = [np.tile(a, (n, 1)) for a in geometry.axes]
     points = [np.tile(p, (n, 1)) for p in geometry.points[:6]]
     for k in range(6):
         for j in range(k):
-            axes[k] = _rotate(axes[k], axes[j], angles[:, j])
-            points[k] = points[j] + _rotate(points[k] - points[j], axes[j], angles[:, j])
+            axes[k] = _rotate(axes[k], axes[j], c[j], s[j])
+            points[k] = points[j] + _rotate(points[k] - points[j], axes[j], c[j], s[j])
     return foot, np.stack(axes, axis=1), np.stack(points, axis=1)
 
 
@@ -111,7 +125,7 @@ def foot_position(geometry: LegGeometry, angles: np.ndarray) -> tuple[np.ndarray
     """The foot (n, 3) at joint angles (n, 6), in the leg's frame, and its Jacobian (n, 3, 6):
     column ``k`` is the moved axis of joint ``k`` crossed with the arm to the foot."""
     foot, axes, points = chain_state(geometry, angles)
-    return foot, np.cross(axes, foot[:, None, :] - points).transpose(0, 2, 1)
+    return foot, _cross(axes, foot[:, None, :] - points).transpose(0, 2, 1)
 
 
 def foot_bias(geometry: LegGeometry, angles: np.ndarray, rates: np.ndarray) -> np.ndarray:
@@ -120,12 +134,12 @@ def foot_bias(geometry: LegGeometry, angles: np.ndarray, rates: np.ndarray) -> n
     Jacobian's column ``a_k x (foot - p_k)`` and ``omega_k`` the angular velocity of the body
     before joint ``k``."""
     foot, axes, points = chain_state(geometry, angles)
-    columns = np.cross(axes, foot[:, None, :] - points)
+    columns = _cross(axes, foot[:, None, :] - points)
     out = np.zeros_like(foot)
     omega = np.zeros_like(foot)
     for k in range(6):
         spin = rates[:, k, None] * axes[:, k]
-        out += rates[:, k, None] * np.cross(spin + 2 * omega, columns[:, k])
+        out += rates[:, k, None] * _cross(spin + 2 * omega, columns[:, k])
         omega = omega + spin
     return out
 
