@@ -91,12 +91,14 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return out
 
 
-def _rotate(vectors: np.ndarray, axes: np.ndarray, c: np.ndarray, s: np.ndarray) -> np.ndarray:
-    """Rodrigues' rotation of ``vectors`` (n, 3) about unit ``axes`` (n, 3 or 3) by the angles
-    whose cosines and sines are ``c`` and ``s`` (n, 1)."""
-    along = (vectors @ axes)[:, None] if axes.ndim == 1 else \
-        np.einsum("ij,ij->i", axes, vectors)[:, None]
-    return vectors * c + _cross(axes, vectors) * s + axes * (along * (1 - c))
+def _rotate(v: np.ndarray, axis: np.ndarray, c: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """Rodrigues' rotation of the vectors ``v`` (3, n: one row a component, so that each is
+    contiguous) about the unit ``axis`` (3, n, or 3, 1 for one axis) by the angles whose
+    cosines and sines are ``c`` and ``s`` (n,)."""
+    along = (axis[0] * v[0] + axis[1] * v[1] + axis[2] * v[2]) * (1 - c)
+    return np.stack([v[0] * c + (axis[1] * v[2] - axis[2] * v[1]) * s + axis[0] * along,
+                     v[1] * c + (axis[2] * v[0] - axis[0] * v[2]) * s + axis[1] * along,
+                     v[2] * c + (axis[0] * v[1] - axis[1] * v[0]) * s + axis[2] * along])
 
 
 def chain_state(geometry: LegGeometry, angles: np.ndarray):
@@ -105,20 +107,19 @@ def chain_state(geometry: LegGeometry, angles: np.ndarray):
     Product of exponentials: each joint turns everything beyond it about its rest-pose axis
     and point, the proximal joint last."""
     n = angles.shape[0]
-    cosines, sines = np.cos(angles), np.sin(angles)
-    c = [cosines[:, k, None] for k in range(6)]
-    s = [sines[:, k, None] for k in range(6)]
-    foot = np.tile(geometry.points[6], (n, 1))
+    c, s = np.cos(angles).T, np.sin(angles).T  # (6, n)
+    column = [p[:, None] for p in geometry.points]  # (3, 1)
+    foot = np.repeat(column[6], n, axis=1)
     for k in reversed(range(6)):
-        origin = geometry.points[k]
-        foot = origin + _rotate(foot - origin, geometry.axes[k], c[k], s[k])
-    axes = [np.tile(a, (n, 1)) for a in geometry.axes]
-    points = [np.tile(p, (n, 1)) for p in geometry.points[:6]]
+        foot = column[k] + _rotate(foot - column[k], geometry.axes[k][:, None], c[k], s[k])
+    axes = [np.repeat(a[:, None], n, axis=1) for a in geometry.axes]
+    points = [np.repeat(p, n, axis=1) for p in column[:6]]
     for k in range(6):
         for j in range(k):
             axes[k] = _rotate(axes[k], axes[j], c[j], s[j])
             points[k] = points[j] + _rotate(points[k] - points[j], axes[j], c[j], s[j])
-    return foot, np.stack(axes, axis=1), np.stack(points, axis=1)
+    return (np.ascontiguousarray(foot.T), np.stack(axes, axis=2).transpose(1, 2, 0),
+            np.stack(points, axis=2).transpose(1, 2, 0))
 
 
 def foot_position(geometry: LegGeometry, angles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -189,10 +190,17 @@ def _leg_label(geometry: LegGeometry) -> str:
     return f"{geometry.leg} leg ({describe_lengths(geometry.length_factors)})"
 
 
-def _fourier_basis(tau: np.ndarray, harmonics: int) -> np.ndarray:
-    k = np.arange(1, harmonics + 1)
-    x = 2 * np.pi * tau
-    return np.hstack([np.ones((tau.size, 1)), np.cos(np.outer(x, k)), np.sin(np.outer(x, k))])
+def _fourier_basis(tau: np.ndarray, harmonics: int, *, exact: bool = True) -> np.ndarray:
+    """Columns 1, cos(2 pi k tau), sin(2 pi k tau) for k = 1 ... ``harmonics``. Not
+    ``exact``: the powers of ``exp(2 pi i tau)`` by repeated products, a few times faster and
+    off by about ``k`` units of round-off (for a starting guess of Newton's method)."""
+    if exact:
+        k = np.arange(1, harmonics + 1)
+        x = 2 * np.pi * tau
+        return np.hstack([np.ones((tau.size, 1)), np.cos(np.outer(x, k)),
+                          np.sin(np.outer(x, k))])
+    powers = np.cumprod(np.repeat(np.exp(2j * np.pi * tau)[:, None], harmonics, axis=1), axis=1)
+    return np.hstack([np.ones((tau.size, 1)), powers.real, powers.imag])
 
 
 def path_targets(position: str, tau: np.ndarray, duty: float,
@@ -311,7 +319,7 @@ def exact_leg_motion(position: str, duty: float, tau,
         angles[:, k], rates[:, k], accelerations[:, k] = (amplitude[joint] * x
                                                          for x in (value, d1, d2))
     harmonics = stepping_harmonics(position, duty, HARMONICS, lengths)
-    basis = _fourier_basis(tau, HARMONICS)
+    basis = _fourier_basis(tau, HARMONICS, exact=False)  # Newton's start only
     solved = [JOINTS.index(j) for j in SOLVED_JOINTS]
     free = [k for k in range(6) if k not in solved]
     for joint in SOLVED_JOINTS:
