@@ -94,16 +94,28 @@ class _Feet:
         self.owner = np.full(model.n_c, -1)  # the contact of each row
         for k, c in enumerate(contacts):
             self.owner[c.rows] = k
+        # runs of samples with one contact set, numbered: a phase ends where the number changes
+        changes = np.any(self.stance[:, 1:] != self.stance[:, :-1], axis=0)
+        self.run = np.concatenate([[0], np.cumsum(changes)])
 
     def contact_set(self, k: int) -> tuple[bool, ...]:
         return tuple(bool(x) for x in self.stance[:, k])
 
+    def run_end(self, k: int) -> int:
+        """The first sample after ``k`` whose contact set is not that of ``k`` (or the end)."""
+        return int(np.searchsorted(self.run, self.run[k], side="right"))
+
     def rows_idle(self, rows: np.ndarray, k: int) -> np.ndarray:
         """Which of ``rows`` belong to a foot that carries nothing at sample ``k``."""
+        return self.rows_idle_over(rows, k, k + 1)[0]
+
+    def rows_idle_over(self, rows: np.ndarray, start: int, stop: int) -> np.ndarray:
+        """Which of ``rows`` belong to a foot that carries nothing, at each sample from
+        ``start`` to ``stop - 1`` (samples x rows)."""
         owner = self.owner[rows]
         if not self.idle.size:
-            return np.zeros(owner.size, dtype=bool)
-        return (owner >= 0) & self.idle[np.maximum(owner, 0), k]
+            return np.zeros((stop - start, owner.size), dtype=bool)
+        return ((owner >= 0)[:, None] & self.idle[np.maximum(owner, 0), start:stop]).T
 
 
 class _Results:
@@ -163,9 +175,7 @@ def phase_inverse(model: Model, times: np.ndarray, w, wd, wdd, frame: str, *,
     k, chunk = 1, CHUNK
     while k < n:
         plan = decisions.plan(k, out.predicted(k, times), w[:, k])
-        stop = k + 1
-        while stop < n and stop - k < chunk and feet.contact_set(stop) == feet.contact_set(k):
-            stop += 1
+        stop = min(n, k + chunk, feet.run_end(k))
         failed = None
         if plan is not None:
             failed = _run(plan, newton, out, feet, times, w, wd, wdd, k, stop)
@@ -305,14 +315,13 @@ def _run(plan: PhasePlan, newton: int, out: _Results, feet: _Feet, times, w, wd,
     foot that carries nothing)."""
     model = plan.model
     span = slice(k, stop)
-    mask = np.array([~feet.rows_idle(plan.left_out, j) for j in range(k, stop)],
-                    dtype=float).T.reshape(plan.left_out.size, stop - k)
+    mask = (~feet.rows_idle_over(plan.left_out, k, stop)).astype(float).T
     state, lam, wrench, frames, checks = plan.evaluate(
         out.state(k - 1), np.diff(times[k - 1:stop]), w[:, span], wd[:, span], wdd[:, span],
         feet.values[:, span], mask, newton)
     checks = np.nan_to_num(checks, nan=np.inf)
     finite = np.all(np.isfinite(state), axis=1) & np.all(np.isfinite(wrench), axis=(1, 2))
-    idle_kept = np.array([feet.rows_idle(plan.kept, j).any() for j in range(k, stop)])
+    idle_kept = feet.rows_idle_over(plan.kept, k, stop).any(axis=1)
     rank_ok = (finite & (checks[:, 1:5].max(axis=1) <= RESIDUAL_TOL) & (checks[:, 5] == 0)
                & (checks[:, 6] < np.inf) & (checks[:, 6] >= SIGMA_TOL) & ~idle_kept)
     good = rank_ok & (checks[:, 0] <= POSITION_TOL)
