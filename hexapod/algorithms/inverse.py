@@ -152,8 +152,8 @@ def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = 
         this process or in the cache on disk) or when compiling pays (:func:`compile_pays`),
         else the interpreter. Phase path, by default: compiled from
         :data:`PHASE_COMPILE_FROM_SAMPLES` samples, or when this process compiled the model's
-        phase path before; libraries the cache on disk holds (an earlier run compiled them)
-        are used in any case.
+        phase path before, and otherwise the libraries the cache on disk holds (an earlier
+        run compiled them) where it holds them. ``False``: the interpreter only.
     progress :
         Called as ``progress(done, total)`` as samples are done (after each block of samples
         on the tree path, see :data:`BLOCK_FACTOR`; after each run of samples sharing one
@@ -183,10 +183,11 @@ def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = 
         if not compile:  # counted over runs, until compiling pays
             interpreted_samples(plan.key, times.size)
     elif method == "phase" or (method == "auto" and times.size >= PHASE_FROM_SAMPLES):
+        use_cached = compile is None  # compile=False: the interpreter only
         if compile is None:
-            compile = (model.was_built(("phase-terms", True))
+            compile = (model.was_built(("phase-terms", True, True))
                        or times.size >= PHASE_COMPILE_FROM_SAMPLES)
-        result = _phase(model, times, w, wd, wdd, frame, compile, progress)
+        result = _phase(model, times, w, wd, wdd, frame, compile, use_cached, progress)
     else:
         result = _saddle(model, times, frame, progress)
     _check_finite(model, result)
@@ -229,10 +230,11 @@ def _check_finite(model: Model, result: InverseResult) -> None:
 
 # ------------------------------------------------------------------ the saddle path
 
-def _phase(model, times, w, wd, wdd, frame, compile, progress) -> InverseResult:
+def _phase(model, times, w, wd, wdd, frame, compile, use_cached, progress) -> InverseResult:
     from hexapod.algorithms.phase_inverse import phase_inverse  # loaded when it runs, as below
 
-    fields = phase_inverse(model, times, w, wd, wdd, frame, to_c=compile, progress=progress)
+    fields = phase_inverse(model, times, w, wd, wdd, frame, to_c=compile, use_cached=use_cached,
+                           progress=progress)
     return InverseResult(times, tuple(j.name for j in model.joints), fields["force"],
                          fields["torque"], fields["effort"], fields["q"], fields["v"],
                          fields["v_dot"], frame, "phase", fields["max_violation"],

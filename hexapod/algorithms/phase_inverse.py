@@ -66,9 +66,12 @@ SIGMA_TOL = 1e-6
 CHUNK = 2_000
 
 
-def phase_terms(model: Model, to_c: bool) -> PhaseTerms:
-    """The model's Functions of the phase path, built (and compiled to C when ``to_c``) once."""
-    return model.built_once(("phase-terms", to_c), lambda m: PhaseTerms(m, to_c))
+def phase_terms(model: Model, to_c: bool, use_cached: bool = True) -> PhaseTerms:
+    """The model's Functions of the phase path, built (and compiled to C when ``to_c``) once
+    (see :class:`PhaseTerms` for ``use_cached``)."""
+    use_cached = use_cached or to_c
+    return model.built_once(("phase-terms", to_c, use_cached),
+                            lambda m: PhaseTerms(m, to_c, use_cached))
 
 
 class _Feet:
@@ -160,7 +163,8 @@ class _Results:
 
 
 def phase_inverse(model: Model, times: np.ndarray, w, wd, wdd, frame: str, *,
-                  to_c: bool, progress: Callable[[int, int], None] | None = None) -> dict:
+                  to_c: bool, use_cached: bool = True,
+                  progress: Callable[[int, int], None] | None = None) -> dict:
     """The phase path over ``times`` (laws ``w, wd, wdd`` given, n_w x N): the fields of an
     :class:`~hexapod.algorithms.inverse.InverseResult` as a dict, with ``exact_samples``, the
     number of samples solved by the exact path."""
@@ -169,7 +173,7 @@ def phase_inverse(model: Model, times: np.ndarray, w, wd, wdd, frame: str, *,
     feet = _Feet(model, times)
     out.store(0, exact_sample(model, data, times[0], model.q0, times[0], frame=frame,
                               first=True))
-    decisions = _Decisions(model, phase_terms(model, to_c), feet, to_c)
+    decisions = _Decisions(model, phase_terms(model, to_c, use_cached), feet, to_c)
     decisions.adopt(0, data, w[:, 0])
     newton = NEWTON_STEPS  # Newton steps per sample: more once samples prove far apart
     k, chunk = 1, CHUNK

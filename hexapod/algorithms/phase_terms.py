@@ -67,15 +67,18 @@ class PhaseTerms:
     model : Model
     to_c : bool
         Compile the Functions to C (kept in the cache on disk); else CasADi's
-        interpreter evaluates them.
+        interpreter evaluates them, unless ``use_cached`` and the cache holds their libraries.
+    use_cached : bool
+        Without ``to_c``, load the libraries an earlier run compiled (the default rule of
+        ``inverse_dynamics``); False: the interpreter only (``compile=False``).
     """
 
-    def __init__(self, model: Model, to_c: bool = False):
+    def __init__(self, model: Model, to_c: bool = False, use_cached: bool = True):
         self.model = model
         self.to_c = to_c
         # the cache is searched for libraries (each Function's graph serialized and hashed:
         # some 0.3 s for the walking hexapod's) only for a model an earlier run compiled
-        self.look_up = to_c or libraries_marked(model)
+        self.look_up = to_c or (use_cached and libraries_marked(model))
         if to_c:
             mark_libraries(model)
         s = model._sym
