@@ -46,7 +46,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
-from hexapod._support.files import write_atomically
+from hexapod._support.files import process_alive, write_atomically
 from hexapod._support.limits import GIB, parse_size, size_text
 from hexapod.errors import HexapodError
 
@@ -390,18 +390,6 @@ def _evict(root: Path, limit: int, keep: str = "") -> None:
             total -= entry.size
 
 
-def _pid_alive(pid: int) -> bool:
-    if pid == os.getpid():
-        return True
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except OSError:  # another user's process, alive
-        return True
-    return True
-
-
 def _remove_leftovers(entries_folder: Path) -> None:
     """Remove the staging and trash folders of processes that are gone (killed while writing
     or removing an entry), and any older than :data:`LEFTOVER_AGE`."""
@@ -414,7 +402,7 @@ def _remove_leftovers(entries_folder: Path) -> None:
             pid = rest.partition("-")[0]
             with contextlib.suppress(OSError):
                 old = now - item.stat(follow_symlinks=False).st_mtime > LEFTOVER_AGE
-                if old or not pid.isdigit() or not _pid_alive(int(pid)):
+                if old or not pid.isdigit() or not process_alive(int(pid)):
                     shutil.rmtree(item.path, ignore_errors=True)
 
 

@@ -174,7 +174,7 @@ def _remove_leftovers(path: Path) -> None:
         return
     for entry in entries:
         pid = entry.name[len(head):].split(".", 1)[0]
-        if not pid.isdigit() or _alive(int(pid)):
+        if not pid.isdigit() or process_alive(int(pid)):
             continue
         if entry.is_dir(follow_symlinks=False):
             shutil.rmtree(entry.path, ignore_errors=True)
@@ -183,7 +183,9 @@ def _remove_leftovers(path: Path) -> None:
                 os.unlink(entry.path)
 
 
-def _alive(pid: int) -> bool:
+def process_alive(pid: int) -> bool:
+    """Whether the process ``pid`` exists (one of another user's counts as alive): the owner of
+    a leftover temporary file or folder, which is removed only once its writer is gone."""
     if pid == os.getpid():
         return True
     try:

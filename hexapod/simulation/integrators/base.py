@@ -714,18 +714,12 @@ class Integrator:
         return self._rank_split(q, t).smallest_singular_value()
 
     @cached_property
-    def _conditioning_start(self) -> float:
-        """The smallest singular value at the start, computed when a failure first needs it:
-        the flyball governor's is 9e-4 where nothing is singular, and measured against 1 its
-        failures were blamed on a singular pose."""
-        start = self._spectrum_start
-        return float(start[0]) if start.size else np.inf
-
-    @cached_property
     def _spectrum_start(self) -> np.ndarray:
         """The singular values of the kept rows of the equilibrated ``Phi_v`` at the start, in
-        increasing order (a large model's smallest alone: a dense SVD is cubic in the
-        bodies)."""
+        increasing order (a large model's smallest alone: a dense SVD is cubic in the bodies),
+        computed when a failure first needs them. Measured against the start, not against 1:
+        the flyball governor's smallest is 9e-4 where nothing is singular, and measured
+        against 1 its failures were blamed on a singular pose."""
         return self._spectrum(self._q_start, self.t0)
 
     def _spectrum(self, q: np.ndarray | None = None, t: float | None = None) -> np.ndarray:

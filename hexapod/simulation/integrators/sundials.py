@@ -277,7 +277,6 @@ class IdasBDF(Integrator):
                                          maxlen=self.singular_memory)
         self.conditioning_feet = self._contact_set(self.t)
         self.approaching = False
-        self._conditioning_start = self.conditioning[0]
 
     @property
     def _baumgarte(self):
