@@ -10,8 +10,10 @@ Protocol
 * hexapod: ``inverse_dynamics`` on the model driven by the motion (the tree-ordered path). The
   build (reading, assembly, the CasADi Function and its compilation) is reported apart; one
   call warms up; the per-sample cost is the median of ``--repeats`` calls divided by the
-  number of samples. Run with compiled code (``jit``), and interpreted by CasADi's virtual
-  machine too (``vm``) when ``--vm`` is given.
+  number of samples. Run with compiled code (``jit``) and, when ``--vm`` is given,
+  interpreted too: as an array program (``arr``: one NumPy operation per instruction over a
+  block of samples, whatever their number; by default from 500 samples) and by
+  CasADi's virtual machine (``vm``).
 * Pinocchio (optional extra ``compare``): in the same process, ``pinocchio.rnea`` then reading
   ``data.f`` and ``tau`` into one array per sample, the job the CSV needs; median of repeats.
   Agreement (``hexapod.output.report.agreement``): the largest difference, relative to the largest
@@ -28,14 +30,13 @@ What a user waits for, start-up included: ``hexapod inverse MODEL.urdf --motion 
 18-joint hexapod (``--samples`` samples, default 1000), timed in the same run:
 
 * ``first``: an empty cache (a new cache folder each time): the graphs are built, the tree
-  Function is serialized into the cache;
-* ``cached``: the cache the first run left: the tree Function read back (no graph built),
-  evaluated by CasADi's interpreter, as the runs of a model are until compiling has paid;
-* ``quick``: the cache holding the quick (``-O0``) library that runs of the model compile by
-  themselves once compiling has paid (put there beforehand by as many runs as that takes), as
-  every later run;
+  Function is serialized into the cache and, the run being long enough, read into an array
+  program (kept there too) that evaluates it;
+* ``cached``: the cache the first run left: the array program read back (no graph built, no
+  Function read), as every later run of the model;
 * ``compiled``: the cache holding the optimized (``-O2``) library (put there beforehand by
-  ``inverse_dynamics(..., compile=True)``), as after a long run;
+  ``inverse_dynamics(..., compile=True)``, or ``hexapod inverse --compile yes``), which later
+  runs then use;
 * ``off``: ``HEXAPOD_CACHE=0``, everything built in the process (hexapod without a cache);
 * Pinocchio's script.
 
@@ -132,17 +133,20 @@ def write_motion(path: Path, joints: list[str], samples: int) -> None:
                header=",".join(header), comments="", fmt="%.17g")
 
 
-def time_hexapod(urdf: Path, motion: Path, repeats: int, compiled: bool) -> dict:
+def time_hexapod(urdf: Path, motion: Path, repeats: int, mode: str) -> dict:
+    """Build and per-sample cost, compiled (``jit``), as an array program (``arr``, whatever
+    the number of samples) or in CasADi's virtual machine (``vm``)."""
+    compiled, arrays = mode == "jit", {"arr": True, "vm": False}.get(mode)
     start = time.perf_counter()
     read = read_motion(motion)
     model = hx.assemble(apply_motion(read_urdf(urdf), read))
-    inverse_dynamics(model, read.times[:1], compile=compiled)  # builds the tree function
+    inverse_dynamics(model, read.times[:1], compile=compiled, arrays=arrays)  # the build
     built = time.perf_counter() - start
-    inverse_dynamics(model, read.times, compile=compiled)  # warm-up: maps over the samples
+    inverse_dynamics(model, read.times, compile=compiled, arrays=arrays)  # warm-up
     costs = []
     for _ in range(repeats):
         tic = time.perf_counter()
-        result = inverse_dynamics(model, read.times, compile=compiled)
+        result = inverse_dynamics(model, read.times, compile=compiled, arrays=arrays)
         costs.append(time.perf_counter() - tic)
     return {"build_s": built, "per_sample_us": 1e6 * statistics.median(costs) / read.times.size,
             "table": (inverse_columns(model), inverse_table(model, result))}
@@ -173,9 +177,9 @@ def run(name: str, scene: hx.Scene, folder: Path, args) -> dict:
     motion = folder / f"{name.replace(' ', '_')}.csv"
     write_motion(motion, joints, args.samples)
     row = {"model": name, "joints": len(joints)}
-    modes = ["jit", "vm"] if args.vm else ["jit"]
+    modes = ["jit", "arr", "vm"] if args.vm else ["jit"]
     for mode in modes:
-        result = time_hexapod(urdf, motion, args.repeats, compiled=mode == "jit")
+        result = time_hexapod(urdf, motion, args.repeats, mode)
         row[f"{mode}_build_s"] = result["build_s"]
         row[f"{mode}_us"] = result["per_sample_us"]
         row["table"] = result["table"]
@@ -183,8 +187,9 @@ def run(name: str, scene: hx.Scene, folder: Path, args) -> dict:
     if pin is not None:
         row["pin_us"] = pin["per_sample_us"]
         row["ratio"] = row["jit_us"] / pin["per_sample_us"]
-        if "vm_us" in row:
-            row["vm_ratio"] = row["vm_us"] / pin["per_sample_us"]
+        for mode in ("arr", "vm"):
+            if f"{mode}_us" in row:
+                row[f"{mode}_ratio"] = row[f"{mode}_us"] / pin["per_sample_us"]
         row["agreement"] = agreement(*row["table"], *pin["table"])
     print(f"  {name}: done", file=sys.stderr, flush=True)
     return row
@@ -194,21 +199,12 @@ def run(name: str, scene: hx.Scene, folder: Path, args) -> dict:
 
 SCRIPTS = Path(__file__).resolve().parent
 WHOLE_MODELS = ("front leg", "hexapod 18 joints")
-#: Fills a cache as runs of the model would: with quick code (runs until compiling has paid,
-#: as the tree path decides by itself), or with optimized code (compiled on request).
+#: Fills a cache with the optimized library, as a run asked to compile does.
 PRIME = """
 import sys, hexapod as hx
 motion = hx.read_motion(sys.argv[2])
 driven = hx.apply_motion(hx.read_urdf(sys.argv[1]), motion)
-if sys.argv[3] == "optimized":
-    hx.inverse_dynamics(hx.assemble(driven), motion.times, compile=True)
-else:
-    from hexapod.algorithms.inverse import tree_plan
-    for _ in range(1000):
-        plan = tree_plan(hx.assemble(driven))
-        hx.inverse_dynamics(plan.model, motion.times)
-        if plan.is_compiled:
-            break
+hx.inverse_dynamics(hx.assemble(driven), motion.times, compile=True)
 """
 
 
@@ -245,16 +241,13 @@ def whole_commands(name: str, folder: Path, args) -> dict:
     inverse = [sys.executable, "-m", "hexapod", "inverse", str(urdf), "--motion", str(motion),
                "--out"]
     kept = dict(env, HEXAPOD_CACHE_DIR=str(base) + "-cache")
-    quick = dict(env, HEXAPOD_CACHE_DIR=str(base) + "-quick")
     compiled = dict(env, HEXAPOD_CACHE_DIR=str(base) + "-compiled")
-    for primed, level in ((quick, "quick"), (compiled, "optimized")):
-        subprocess.run([sys.executable, "-c", PRIME, str(urdf), str(motion), level],
-                       env=primed, check=True)
+    subprocess.run([sys.executable, "-c", PRIME, str(urdf), str(motion)], env=compiled,
+                   check=True)
     commands = {
         "first": lambda k: (inverse + [f"{base}-first.csv"],
                             dict(env, HEXAPOD_CACHE_DIR=f"{base}-empty-{k}")),
         "cached": lambda k: (inverse + [f"{base}-cached.csv"], kept),
-        "quick": lambda k: (inverse + [f"{base}-quick.csv"], quick),
         "compiled": lambda k: (inverse + [f"{base}-compiled.csv"], compiled),
         "off": lambda k: (inverse + [f"{base}-off.csv"], dict(env, HEXAPOD_CACHE="0")),
         "pinocchio": lambda k: ([sys.executable, str(SCRIPTS / "pinocchio_inverse.py"),
@@ -290,7 +283,7 @@ def whole_command_study(args) -> None:
             from None
     with tempfile.TemporaryDirectory(prefix="hexapod-whole-") as scratch:
         rows = [whole_commands(name, Path(scratch), args) for name in WHOLE_MODELS]
-    modes = ("pinocchio", "first", "cached", "quick", "compiled", "off")
+    modes = ("pinocchio", "first", "cached", "compiled", "off")
     print(f"whole processes, {args.samples} samples, {args.runs} runs each. Seconds: wall "
           "time min / median, CPU time min; ratios to Pinocchio's script: wall min / wall "
           "median / CPU min (CPU time is the steadier on a shared machine)")
@@ -333,8 +326,9 @@ def main() -> None:
         for n in args.chains:
             rows.append(run(f"chain {n}", chain_scene(n), folder, args))
     columns = [("model", "{:<18}"), ("joints", "{:>6}"), ("jit_build_s", "{:>9.2f}"),
-               ("jit_us", "{:>9.2f}"), ("vm_build_s", "{:>9.2f}"), ("vm_us", "{:>9.2f}"),
-               ("pin_us", "{:>9.2f}"), ("ratio", "{:>7.2f}"), ("vm_ratio", "{:>8.2f}"),
+               ("jit_us", "{:>9.2f}"), ("arr_build_s", "{:>9.2f}"), ("arr_us", "{:>9.2f}"),
+               ("vm_build_s", "{:>9.2f}"), ("vm_us", "{:>9.2f}"), ("pin_us", "{:>9.2f}"),
+               ("ratio", "{:>7.2f}"), ("arr_ratio", "{:>8.2f}"), ("vm_ratio", "{:>8.2f}"),
                ("agreement", "{:>10.1e}")]
     print(f"samples per call: {args.samples}; costs in microseconds per sample (median of "
           f"{args.repeats}); build in seconds")
@@ -347,12 +341,12 @@ def main() -> None:
             cells.append(fmt.format(row[name]) if name in row else f"{'-':>{width}}")
         print(" ".join(cells))
     chains = [r for r in rows if r["model"].startswith("chain")]
-    for mode, label in (("jit", "compiled"), ("vm", "interpreted")):
+    for mode, label in (("jit", "compiled"), ("arr", "array program"), ("vm", "interpreted")):
         if len(chains) >= 2 and f"{mode}_us" in chains[0]:
             slope = np.polyfit(np.log([r["joints"] for r in chains]),
                                np.log([r[f"{mode}_us"] for r in chains]), 1)[0]
             print(f"growth exponent over the chains ({label}): {slope:.2f}")
-        key = "ratio" if mode == "jit" else "vm_ratio"
+        key = "ratio" if mode == "jit" else f"{mode}_ratio"
         ratios = [r[key] for r in rows if key in r]
         if ratios:
             print(f"time ratio hexapod ({label}) / Pinocchio: {min(ratios):.2f} to "

@@ -22,7 +22,9 @@ same results:
   Function, mapped over blocks of samples; its cost grows linearly with the number of bodies.
   It is kept in the cache on disk under the model's content hash
   (:mod:`hexapod._support.compiled`): serialized, so that another run of the same model does not
-  build its graph again, and compiled to C once compiling has paid (:func:`compile_pays`).
+  build its graph again, as an array program that evaluates long runs with one NumPy operation
+  per instruction over many samples (:mod:`hexapod._support.array_program`), and compiled to C
+  once compiling has paid (:func:`compile_pays`).
 """
 
 from __future__ import annotations
@@ -36,6 +38,7 @@ import casadi as ca
 import numpy as np
 
 from hexapod._support import signals
+from hexapod._support.array_program import BlockEvaluator, Program, block_size, cached_program
 from hexapod._support.compiled import (
     COMPILER_FLAGS,
     QUICK_FLAGS,
@@ -104,14 +107,23 @@ class InverseResult:
     policy: str = ""
 
 
+#: From this many samples a block, the tree path evaluates its Function uncompiled as an
+#: array program (:mod:`hexapod._support.array_program`: one NumPy operation per instruction over
+#: the block's samples) rather than in CasADi's virtual machine, sample by sample. At 1000
+#: samples it costs 2.1 against 14.9 us a sample for the front leg, 4.1 against 15.7 us for 18
+#: joints; reading the program from the Function (once, then kept in the cache) costs 8 and
+#: 14 ms (scripts/bench_inverse.py --vm). It is as fast as optimized C code there (1.8 and
+#: 5.0 us), so runs this long never wait for a compiler.
+ARRAY_FROM_SAMPLES = 500
 #: Quick code (gcc -O0) of the tree path costs 0.13 s of CPU to compile for the front leg and
-#: 0.23 s for 18 joints, and evaluates a sample in 3.3 and 7.3 us against the interpreter's 12.8
-#: and 24.7 us: it pays from some 14 000 samples on, counted over every run of the model
-#: (:func:`compile_pays`; scripts/bench_inverse.py).
+#: 0.23 s for 18 joints, and evaluates a sample in 3.3 and 7.3 us against the virtual machine's
+#: 12.8 and 24.7 us: for runs too short for the array program, it pays from some 14 000
+#: samples on, counted over every run of the model (:func:`compile_pays`).
 COMPILE_FROM_SAMPLES = 15_000
 #: Optimized code (gcc -O2) costs 0.39 and 0.91 s to compile and evaluates a sample in 1.8 and
-#: 5.0 us: it pays over the quick code from 180 000 to 300 000 samples, compiled for a run of
-#: that many.
+#: 5.0 us: where the array program does not apply (a model whose work rows are too large for
+#: blocks of ARRAY_FROM_SAMPLES samples), it pays over the quick code from 180 000 to 300 000
+#: samples, compiled for a run of that many.
 OPTIMIZE_FROM_SAMPLES = 200_000
 #: CasADi's map of a Function over ``b`` samples costs about 4 microseconds per sample to build
 #: (once per size), and each call of it about 50 microseconds of Python: the tree path calls
@@ -130,7 +142,7 @@ PHASE_COMPILE_FROM_SAMPLES = 50_000
 
 
 def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = "joint",
-                     compile: bool | None = None,
+                     compile: bool | None = None, arrays: bool | None = None,
                      progress: Callable[[int, int], None] | None = None) -> InverseResult:
     """Joint wrenches and driver efforts of the prescribed motion at ``times``.
 
@@ -147,13 +159,20 @@ def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = 
     frame :
         ``"joint"`` (the report convention) or ``"world"``.
     compile :
-        Tree and phase paths: evaluate compiled C code (True) or CasADi's interpreter
-        (False). Tree path, by default: compiled code when it is at hand (compiled before, in
-        this process or in the cache on disk) or when compiling pays (:func:`compile_pays`),
-        else the interpreter. Phase path, by default: compiled from
-        :data:`PHASE_COMPILE_FROM_SAMPLES` samples, or when this process compiled the model's
-        phase path before, and otherwise the libraries the cache on disk holds (an earlier
-        run compiled them) where it holds them. ``False``: the interpreter only.
+        Tree and phase paths: evaluate compiled C code (True) or interpret (False: on the tree
+        path, as ``arrays`` says). Tree path, by default: optimized code when it is at hand
+        (compiled before, in this process or in the cache on disk), else the array program
+        when the run is long enough, else quick code when it is at hand or compiling pays
+        (:func:`compile_pays`), else CasADi's virtual machine. Phase path, by default:
+        compiled from :data:`PHASE_COMPILE_FROM_SAMPLES` samples, or when this process
+        compiled the model's phase path before, and otherwise the libraries the cache on disk
+        holds (an earlier run compiled them) where it holds them. ``False``: the interpreter
+        only.
+    arrays :
+        Tree path, when not compiled: evaluate the array program (True, whatever the number of
+        samples; :mod:`hexapod._support.array_program`), CasADi's virtual machine (False: the
+        reference interpreter, sample by sample), or the array program from
+        :data:`ARRAY_FROM_SAMPLES` samples and the virtual machine below (None).
     progress :
         Called as ``progress(done, total)`` as samples are done (after each block of samples
         on the tree path, see :data:`BLOCK_FACTOR`; after each run of samples sharing one
@@ -178,10 +197,12 @@ def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = 
         raise ValueError(f"method must be 'auto', 'tree', 'phase' or 'saddle', got {method!r}")
     if plan is not None and method in ("auto", "tree"):
         if compile is None:
-            compile = compile_pays(plan, times.size)
-        result = plan.solve(times, w, wd, wdd, frame, compiled=compile, progress=progress)
-        if not compile:  # counted over runs, until compiling pays
-            interpreted_samples(plan.key, times.size)
+            compile = False if arrays else compile_pays(plan, times.size, arrays)
+        as_arrays = not compile and plan.evaluates_arrays(times.size, arrays)
+        result = plan.solve(times, w, wd, wdd, frame, compiled=compile, as_arrays=as_arrays,
+                            progress=progress)
+        if not compile and not as_arrays:
+            interpreted_samples(plan.key, times.size)  # counted over runs, until compiling pays
     elif method == "phase" or (method == "auto" and times.size >= PHASE_FROM_SAMPLES):
         use_cached = compile is None  # compile=False: the interpreter only
         if compile is None:
@@ -194,20 +215,27 @@ def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = 
     return result
 
 
-def compile_pays(plan: TreePlan, samples: int) -> bool:
+def compile_pays(plan: TreePlan, samples: int, arrays: bool | None = None) -> bool:
     """Whether to evaluate ``samples`` samples of the tree path compiled, compiling when it
-    pays. A library compiled before (in this process, or in the cache on disk) is used; a run
-    of :data:`OPTIMIZE_FROM_SAMPLES` samples or more compiles optimized code if there is none.
-    Otherwise quick code is compiled once the samples interpreted so far, over every run of the
-    model the cache remembers, and this run's reach :data:`COMPILE_FROM_SAMPLES`: the rule of
-    renting skis until their price is spent. The interpreter's time spent first never passes
-    what compiling costs, so the total is at most twice what the best choice in hindsight would
-    cost; short runs never wait for a compiler, and a model used often is compiled once for all
-    its later runs."""
+    pays. A library compiled before (in this process, or in the cache on disk) is used, unless
+    it is quick code and the run is long enough for the array program, which is faster. A run
+    long enough for the array program (:data:`ARRAY_FROM_SAMPLES`) is not compiled: the array
+    program is as fast as optimized code. Shorter runs are interpreted by CasADi's virtual
+    machine until the samples it evaluated, over every run of the model the cache remembers,
+    and this run's reach :data:`COMPILE_FROM_SAMPLES`; then quick code is compiled: the rule
+    of renting skis until their price is spent. The interpreter's time spent first never
+    passes what compiling costs, so the total is at most twice what the best choice in
+    hindsight would cost; short runs never wait for a compiler, and a model used often is
+    compiled once for all its later runs. A run of :data:`OPTIMIZE_FROM_SAMPLES` samples or
+    more that the array program cannot take compiles optimized code."""
     long = samples >= OPTIMIZE_FROM_SAMPLES
     if not plan.is_compiled:
         plan.find_library()
-    if plan.is_compiled and (plan.optimized or not long):
+    if plan.is_compiled and plan.optimized:
+        return True
+    if plan.evaluates_arrays(samples, arrays):
+        return False
+    if plan.is_compiled and not long:
         return True
     if long or interpreted_samples(plan.key) + samples >= COMPILE_FROM_SAMPLES:
         plan.compile(optimized=long)
@@ -290,6 +318,8 @@ class TreePlan:
         #: the compiled Function in use (None before any), and whether it is optimized code
         self.library: ca.Function | None = None
         self.optimized = False
+        #: the array program: None before it is sought, False when there is none
+        self._program: Program | bool | None = None
 
     @property
     def key(self) -> str | None:
@@ -454,24 +484,50 @@ class TreePlan:
             cache[key] = (mapped, *mapped.buffer())
         return cache[key]
 
-    def solve(self, times, w, wd, wdd, frame, compiled: bool,
+    def evaluates_arrays(self, samples: int, arrays: bool | None = None) -> bool:
+        """Whether ``samples`` samples are evaluated, uncompiled, as an array program rather
+        than by CasADi's virtual machine: never with ``arrays=False``; with ``arrays=True``
+        whenever the Function has a program; by default from :data:`ARRAY_FROM_SAMPLES`
+        samples, when the Function has a program and blocks that long fit in its memory
+        bound. The program is read from the cache, or from the Function (and kept there)
+        once."""
+        least = 1 if arrays else ARRAY_FROM_SAMPLES
+        if arrays is False or samples < least:
+            return False
+        if self._program is None:
+            asked = []
+
+            def source() -> ca.Function | None:  # not read when its blocks would be too short
+                if not _long_blocks(self.function.sz_w(), least):
+                    return None
+                asked.append(True)
+                return self.function
+
+            program = cached_program(self.key, source, what=self._what)
+            if program is None and not asked:
+                return False  # declined for blocks this long, not known to have no program
+            self._program = program or False  # False: the Function has none
+        return bool(self._program) and _long_blocks(self._program.work_size, least)
+
+    def _array_evaluator(self, block: int) -> BlockEvaluator:
+        evaluators = self.__dict__.setdefault("_array_evaluators", {})
+        if block not in evaluators:
+            evaluators[block] = BlockEvaluator(self._program, block)
+        return evaluators[block]
+
+    def solve(self, times, w, wd, wdd, frame, compiled: bool, as_arrays: bool = False,
               progress: Callable[[int, int], None] | None = None) -> InverseResult:
+        """The result at ``times`` (laws' values ``w``, ``wd``, ``wdd``: one column per
+        sample): the Function compiled (``compiled``), as an array program (``as_arrays``,
+        after :meth:`evaluates_arrays` said yes) or in CasADi's virtual machine."""
         model, n, J = self.model, times.size, len(self.model.joints)
-        # CasADi's column-major (rows x n) is NumPy's C-order (n x rows): no conversion
-        inputs = [np.ascontiguousarray(x.T) for x in (w, wd, wdd)]
         q, v, v_dot = np.empty((n, model.n_q)), np.empty((n, model.n_v)), np.empty((n, model.n_v))
         wrench, rotation = np.empty((n, J, 6)), np.empty((n, J, 9))
-        block = min(n, max(SMALLEST_BLOCK, round(math.sqrt(BLOCK_FACTOR * n))))
-        for start in range(0, n, block):
-            stop = min(n, start + block)
-            _, buffer, evaluate = self._evaluator(stop - start, compiled)
-            for i, x in enumerate(inputs):
-                buffer.set_arg(i, memoryview(x[start:stop]))
-            for i, y in enumerate((q, v, v_dot, wrench, rotation)):
-                buffer.set_res(i, memoryview(y[start:stop]))
-            evaluate()
-            if progress is not None:
-                progress(stop, n)
+        results = (q, v, v_dot, wrench, rotation)
+        if as_arrays and not compiled:
+            self._solve_arrays((w, wd, wdd), results, progress)
+        else:
+            self._solve_mapped((w, wd, wdd), results, compiled, progress)
         force, torque = wrench[..., :3], wrench[..., 3:]
         effort = np.full((n, J), np.nan)
         for j, joint in enumerate(model.joints):
@@ -489,6 +545,50 @@ class TreePlan:
             phi_max = float(np.max(np.abs(rows)))
         return InverseResult(times, tuple(j.name for j in model.joints), force, torque, effort,
                              q, v, v_dot, frame, "tree", phi_max)
+
+    def _solve_mapped(self, inputs, results, compiled: bool, progress) -> None:
+        """Evaluate the Function, compiled or in CasADi's virtual machine, mapped over blocks of
+        samples (:data:`BLOCK_FACTOR`)."""
+        n = inputs[0].shape[1]
+        # CasADi's column-major (rows x n) is NumPy's C-order (n x rows): no conversion
+        inputs = [np.ascontiguousarray(x.T) for x in inputs]
+        block = min(n, max(SMALLEST_BLOCK, round(math.sqrt(BLOCK_FACTOR * n))))
+        for start in range(0, n, block):
+            stop = min(n, start + block)
+            _, buffer, evaluate = self._evaluator(stop - start, compiled)
+            for i, x in enumerate(inputs):
+                buffer.set_arg(i, memoryview(x[start:stop]))
+            for i, y in enumerate(results):
+                buffer.set_res(i, memoryview(y[start:stop]))
+            evaluate()
+            if progress is not None:
+                progress(stop, n)
+
+    def _solve_arrays(self, inputs, results, progress) -> None:
+        """Evaluate the array program over blocks of samples as equal as the memory bound
+        allows (:data:`~hexapod._support.array_program.WORK_BYTES`)."""
+        n = inputs[0].shape[1]
+        largest = block_size(self._program.work_size, n)
+        blocks = -(-n // largest)
+        block = -(-n // blocks)
+        evaluate = self._array_evaluator(block)
+        flat = [y.reshape(n, -1) for y in results]  # views: (n, entries), entries column-major
+        with np.errstate(all="ignore"):  # an overflow is reported by _check_finite, by name
+            for start in range(0, n, block):
+                stop = min(n, start + block)
+                for buffer, x in zip(evaluate.inputs, inputs, strict=True):
+                    buffer[:, :stop - start] = x[:, start:stop]
+                evaluate()
+                for y, buffer in zip(flat, evaluate.outputs, strict=True):
+                    y[start:stop] = buffer[:, :stop - start].T
+                if progress is not None:
+                    progress(stop, n)
+
+
+def _long_blocks(work_size: int, least: int) -> bool:
+    """Whether blocks of ``least`` samples fit in an array program's memory bound, for work
+    rows of ``work_size``."""
+    return block_size(work_size, least) >= least
 
 
 def _quaternion(R: np.ndarray) -> np.ndarray:

@@ -16,14 +16,6 @@ from functools import cache
 
 import numpy as np
 
-from hexapod.scene.expression import (
-    MOST_CONSTANTS,
-    ExpressionError,
-    constant_problem,
-    parse,
-    to_casadi,
-)
-
 
 class Law:
     """Base class: a scalar function of time, C2 at least."""
@@ -615,6 +607,8 @@ class Expression(Law):
                 raise ValueError("expression law is invalid: " + "; ".join(problems))
             import casadi as ca
 
+            from hexapod.scene.expression import parse, to_casadi
+
             constants = dict(self.constants)
             t = ca.SX.sym("t")
             f = to_casadi(parse(self.expression, constants), t, constants)
@@ -649,6 +643,15 @@ class Expression(Law):
         return list(self._problems)
 
     def _find_problems(self) -> list[str]:
+        # the parser is loaded by the scenes that use it: a leg driven by a motion file starts
+        # without it
+        from hexapod.scene.expression import (
+            MOST_CONSTANTS,
+            ExpressionError,
+            constant_problem,
+            parse,
+        )
+
         out = []
         if len(self.constants) > MOST_CONSTANTS:
             out.append(f"constants: {len(self.constants)} given, at most {MOST_CONSTANTS}")
