@@ -401,3 +401,21 @@ def test_progress_is_drawn_when_stderr_is_a_terminal(tmp_path, monkeypatch, caps
     monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
     assert cli_main(["report", "--out", str(tmp_path / "report"), "--samples", "11"]) == 0
     assert "inverse dynamics: 11/11 samples" in capsys.readouterr().err
+
+
+def test_long_lived_holds_the_collector_and_gives_it_back_even_on_an_error():
+    """The commands make their long-lived objects with the cyclic collector held
+    (``long_lived``); it is running again after the block, also when the block fails, and
+    what the block made is frozen out of later collections."""
+    import gc
+
+    from hexapod.cli.common import long_lived
+
+    assert gc.isenabled()
+    frozen = gc.get_freeze_count()
+    with pytest.raises(RuntimeError), long_lived():
+        assert not gc.isenabled()
+        made = [[] for _ in range(100)]
+        raise RuntimeError("a failed read")
+    assert gc.isenabled() and gc.get_freeze_count() >= frozen + len(made)
+    gc.unfreeze()  # the test session's objects back under collection

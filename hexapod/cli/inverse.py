@@ -11,6 +11,7 @@ from hexapod.cli.common import (
     ground_arguments,
     inverse_arguments,
     limit_arguments,
+    long_lived,
     sample_progress,
 )
 from hexapod.cli.outputs import given_files, output_file
@@ -42,22 +43,23 @@ def add_arguments(parser) -> None:
 def run(args) -> int:
     import warnings
 
-    from hexapod.algorithms.inverse import inverse_dynamics
-    from hexapod.model.assemble import assemble
-    from hexapod.output.inverse_csv import units_path, write_inverse_files
-    from hexapod.scene.builtin import load_scene
-    from hexapod.scene.motion import MotionWarning, apply_motion, read_motion
+    with long_lived():
+        from hexapod.algorithms.inverse import inverse_dynamics
+        from hexapod.model.assemble import assemble
+        from hexapod.output.inverse_csv import units_path, write_inverse_files
+        from hexapod.scene.builtin import load_scene
+        from hexapod.scene.motion import MotionWarning, apply_motion, read_motion
 
-    inputs = given_files(args.model, args.motion)
-    out = output_file(args.out, inputs=inputs)
-    output_file(units_path(out), inputs=inputs)  # the units sidecar written beside it
-    # every estimated derivative is said, once per message (main prints the warnings caught)
-    warnings.simplefilter("always", MotionWarning)
-    motion = read_motion(args.motion)
-    scene = apply_ground_options(load_scene(args.model), args)
-    driven = apply_motion(scene, motion)
-    driven.ground = scene.ground  # the driven copy keeps the scene's ground-force settings
-    model = assemble(driven)
+        inputs = given_files(args.model, args.motion)
+        out = output_file(args.out, inputs=inputs)
+        output_file(units_path(out), inputs=inputs)  # the units sidecar written beside it
+        # every estimated derivative is said, once per message (main prints the warnings)
+        warnings.simplefilter("always", MotionWarning)
+        motion = read_motion(args.motion)
+        scene = apply_ground_options(load_scene(args.model), args)
+        driven = apply_motion(scene, motion)
+        driven.ground = scene.ground  # the driven copy keeps the scene's ground-force settings
+        model = assemble(driven)
     times = motion.times
     check_inverse_memory(model, times.size, args.max_memory,
                          f"give a motion of fewer samples than {args.motion}'s")
