@@ -107,23 +107,22 @@ class InverseResult:
     policy: str = ""
 
 
-#: From this many samples a block, the tree path evaluates its Function uncompiled as an
-#: array program (:mod:`hexapod._support.array_program`: one NumPy operation per instruction over
-#: the block's samples) rather than in CasADi's virtual machine, sample by sample. At 1000
-#: samples it costs 2.1 against 14.9 us a sample for the front leg, 4.1 against 15.7 us for 18
-#: joints; reading the program from the Function (once, then kept in the cache) costs 8 and
-#: 14 ms (scripts/bench_inverse.py --vm). It is as fast as optimized C code there (1.8 and
-#: 5.0 us), so runs this long never wait for a compiler.
+#: From this many samples, the tree path evaluates its Function uncompiled as an array program
+#: (:mod:`hexapod._support.array_program`: one NumPy operation per instruction over a block of
+#: samples) rather than in CasADi's virtual machine, sample by sample. Over 1000 samples, the
+#: laws' evaluation included, a sample costs 3.8 against 21 us for the front leg and 10.0
+#: against 22.6 us for 18 joints, and 2.8 and 6.6 us with optimized C code
+#: (scripts/bench_inverse.py --vm); reading the program from the Function (once, then kept in
+#: the cache) costs 8 and 18 ms. Below some hundreds of samples, NumPy's half microsecond per
+#: call makes the virtual machine the faster.
 ARRAY_FROM_SAMPLES = 500
 #: Quick code (gcc -O0) of the tree path costs 0.13 s of CPU to compile for the front leg and
 #: 0.23 s for 18 joints, and evaluates a sample in 3.3 and 7.3 us against the virtual machine's
 #: 12.8 and 24.7 us: for runs too short for the array program, it pays from some 14 000
 #: samples on, counted over every run of the model (:func:`compile_pays`).
 COMPILE_FROM_SAMPLES = 15_000
-#: Optimized code (gcc -O2) costs 0.39 and 0.91 s to compile and evaluates a sample in 1.8 and
-#: 5.0 us: where the array program does not apply (a model whose work rows are too large for
-#: blocks of ARRAY_FROM_SAMPLES samples), it pays over the quick code from 180 000 to 300 000
-#: samples, compiled for a run of that many.
+#: Optimized code (gcc -O2) costs 0.39 and 0.91 s to compile and saves 1 to 3 us a sample over
+#: the array program (more over quick code): a run of this many samples compiles it.
 OPTIMIZE_FROM_SAMPLES = 200_000
 #: CasADi's map of a Function over ``b`` samples costs about 4 microseconds per sample to build
 #: (once per size), and each call of it about 50 microseconds of Python: the tree path calls
@@ -161,13 +160,13 @@ def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = 
     compile :
         Tree and phase paths: evaluate compiled C code (True) or interpret (False: on the tree
         path, as ``arrays`` says). Tree path, by default: optimized code when it is at hand
-        (compiled before, in this process or in the cache on disk), else the array program
-        when the run is long enough, else quick code when it is at hand or compiling pays
-        (:func:`compile_pays`), else CasADi's virtual machine. Phase path, by default:
-        compiled from :data:`PHASE_COMPILE_FROM_SAMPLES` samples, or when this process
-        compiled the model's phase path before, and otherwise the libraries the cache on disk
-        holds (an earlier run compiled them) where it holds them. ``False``: the interpreter
-        only.
+        (compiled before, in this process or in the cache on disk) or the run is very long,
+        else the array program when the run is long enough, else quick code when it is at
+        hand or compiling pays, else CasADi's virtual machine (:func:`compile_pays`). Phase
+        path, by default: compiled from :data:`PHASE_COMPILE_FROM_SAMPLES` samples, or when
+        this process compiled the model's phase path before, and otherwise the libraries the
+        cache on disk holds (an earlier run compiled them) where it holds them. ``False``: the
+        interpreter only.
     arrays :
         Tree path, when not compiled: evaluate the array program (True, whatever the number of
         samples; :mod:`hexapod._support.array_program`), CasADi's virtual machine (False: the
@@ -217,28 +216,30 @@ def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = 
 
 def compile_pays(plan: TreePlan, samples: int, arrays: bool | None = None) -> bool:
     """Whether to evaluate ``samples`` samples of the tree path compiled, compiling when it
-    pays. A library compiled before (in this process, or in the cache on disk) is used, unless
-    it is quick code and the run is long enough for the array program, which is faster. A run
-    long enough for the array program (:data:`ARRAY_FROM_SAMPLES`) is not compiled: the array
-    program is as fast as optimized code. Shorter runs are interpreted by CasADi's virtual
-    machine until the samples it evaluated, over every run of the model the cache remembers,
-    and this run's reach :data:`COMPILE_FROM_SAMPLES`; then quick code is compiled: the rule
-    of renting skis until their price is spent. The interpreter's time spent first never
-    passes what compiling costs, so the total is at most twice what the best choice in
-    hindsight would cost; short runs never wait for a compiler, and a model used often is
-    compiled once for all its later runs. A run of :data:`OPTIMIZE_FROM_SAMPLES` samples or
-    more that the array program cannot take compiles optimized code."""
-    long = samples >= OPTIMIZE_FROM_SAMPLES
+    pays. Optimized code compiled before (in this process, or in the cache on disk) is used; a
+    run of :data:`OPTIMIZE_FROM_SAMPLES` samples or more compiles it if there is none. A run
+    long enough for the array program (:data:`ARRAY_FROM_SAMPLES`; ``arrays`` as
+    :func:`inverse_dynamics` takes it) is evaluated so, faster than quick code and without a
+    compiler. Shorter runs use quick code compiled before, else are interpreted by CasADi's
+    virtual machine until the samples it evaluated, over every run of the model the cache
+    remembers, and this run's reach :data:`COMPILE_FROM_SAMPLES`; then quick code is
+    compiled: the rule of renting skis until their price is spent. The interpreter's time
+    spent first never passes what compiling costs, so the total is at most twice what the
+    best choice in hindsight would cost; short runs never wait for a compiler, and a model
+    used often is compiled once for all its later runs."""
     if not plan.is_compiled:
         plan.find_library()
     if plan.is_compiled and plan.optimized:
         return True
+    if samples >= OPTIMIZE_FROM_SAMPLES:
+        plan.compile(optimized=True)
+        return True
     if plan.evaluates_arrays(samples, arrays):
         return False
-    if plan.is_compiled and not long:
+    if plan.is_compiled:
         return True
-    if long or interpreted_samples(plan.key) + samples >= COMPILE_FROM_SAMPLES:
-        plan.compile(optimized=long)
+    if interpreted_samples(plan.key) + samples >= COMPILE_FROM_SAMPLES:
+        plan.compile(optimized=False)
         return True
     return False
 
