@@ -117,7 +117,7 @@ def test_the_tree_path_evaluates_long_runs_as_arrays_with_the_virtual_machines_n
     monkeypatch.setattr(inverse, "ARRAY_FROM_SAMPLES", 200)
     arrays = inverse_dynamics(model, times, compile=False)
     assert plan.evaluates_arrays(times.size) and plan._program
-    assert set(plan._array_evaluators) == {234}  # three blocks of 234, 234 and 232 samples
+    assert plan._array_evaluator_kept.block == 234  # three blocks of 234, 234 and 232 samples
     machine = inverse_dynamics(hx.assemble(front_leg_scene()), times, compile=False,
                                arrays=False)
     for key in ("force", "torque", "effort", "q", "v", "v_dot"):
@@ -144,8 +144,23 @@ def test_arrays_can_be_asked_for_or_refused():
     many = np.linspace(0.0, 1.2, 601)
     plan = tree_plan(hx.assemble(front_leg_scene()))
     asked = inverse_dynamics(plan.model, many[::15], arrays=True)
-    assert set(plan._array_evaluators) == {41} and not plan.is_compiled
+    assert plan._array_evaluator_kept.block == 41 and not plan.is_compiled
     plan = tree_plan(hx.assemble(front_leg_scene()))
     refused = inverse_dynamics(plan.model, many, compile=False, arrays=False)
-    assert "_array_evaluators" not in plan.__dict__
+    assert "_array_evaluator_kept" not in plan.__dict__
     assert np.allclose(refused.force[::15], asked.force, rtol=0, atol=1e-12)
+
+
+def test_runs_of_many_sizes_keep_one_evaluator_and_the_same_numbers():
+    """A run reuses the kept evaluator when it is at most twice as wide as its blocks (the
+    extra columns hold another run's samples: they change nothing), else makes a new one."""
+    many = np.linspace(0.0, 1.2, 1201)
+    plan = tree_plan(hx.assemble(front_leg_scene()))
+    whole = inverse_dynamics(plan.model, many, arrays=True)
+    first = plan._array_evaluator_kept
+    half = inverse_dynamics(plan.model, many[::2], arrays=True)  # 601 samples: reused
+    assert plan._array_evaluator_kept is first
+    inverse_dynamics(plan.model, many[::3], arrays=True)  # 401 samples: a new one
+    assert plan._array_evaluator_kept is not first and plan._array_evaluator_kept.block == 401
+    for key in ("force", "torque", "effort"):
+        assert np.array_equal(getattr(half, key), getattr(whole, key)[::2]), key

@@ -511,10 +511,13 @@ class TreePlan:
         return bool(self._program) and _long_blocks(self._program.work_size, least)
 
     def _array_evaluator(self, block: int) -> BlockEvaluator:
-        evaluators = self.__dict__.setdefault("_array_evaluators", {})
-        if block not in evaluators:
-            evaluators[block] = BlockEvaluator(self._program, block)
-        return evaluators[block]
+        """An evaluator of at least ``block`` samples: the one kept when it is at most twice as
+        wide (its extra columns computed for nothing), else a new one, which is kept instead
+        (one evaluator at a time: runs of many sizes do not pile up buffers)."""
+        kept = self.__dict__.get("_array_evaluator_kept")
+        if kept is None or not block <= kept.block <= 2 * block:
+            kept = self.__dict__["_array_evaluator_kept"] = BlockEvaluator(self._program, block)
+        return kept
 
     def solve(self, times, w, wd, wdd, frame, compiled: bool, as_arrays: bool = False,
               progress: Callable[[int, int], None] | None = None) -> InverseResult:
