@@ -206,7 +206,8 @@ def test_a_looser_angle_tolerance_takes_fewer_steps(method):
 
 
 def test_tolerances_per_kind_and_their_defaults(pendulum):
-    from hexapod.simulation.integrators.base import absolute_tolerances, characteristic_time
+    from hexapod.simulation.integrators.tolerances import absolute_tolerances
+    from hexapod.simulation.scales import characteristic_time
 
     length = pendulum.characteristic_length
     time = np.sqrt(length / 9.81)

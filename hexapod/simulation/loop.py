@@ -87,7 +87,7 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
         ``angle`` (rad, and the Euler parameters), ``velocity`` (m/s) and
         ``angular_velocity`` (rad/s), each weighing its coordinates in the error norm; the
         kinds it leaves out take the defaults of
-        :func:`~hexapod.simulation.integrators.base.default_tolerances` (scaled by the
+        :func:`~hexapod.simulation.integrators.tolerances.default_tolerances` (scaled by the
         scene's characteristic length and time). The result's ``options["atol"]`` holds the
         tolerance used per kind.
     every :

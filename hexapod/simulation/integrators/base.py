@@ -17,7 +17,6 @@ escaping :meth:`step`.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import asdict, dataclass
 from functools import cached_property
 from typing import ClassVar
@@ -31,14 +30,18 @@ from hexapod.algorithms.linalg import as_dense
 from hexapod.algorithms.saddle import constraint_jacobian, is_large
 from hexapod.errors import HexapodError, IntegrationError
 from hexapod.model.model import Model
-from hexapod.model.units import COORDINATE_UNITS, VELOCITY_UNITS, component
+from hexapod.simulation.integrators.interpolants import HermiteInterpolant, Interpolant
+from hexapod.simulation.integrators.tolerances import (
+    KIND_OF_UNIT,
+    absolute_tolerances,
+    state_units,
+)
 from hexapod.simulation.kernels import (
     REDUNDANT_TOLERANCE,
     compiled_projection,
     compiled_rates,
 )
 from hexapod.simulation.methods import (
-    ATOL_KINDS,
     DEFAULT_ATOL,
     DEFAULT_RTOL,
 )
@@ -679,8 +682,8 @@ class Integrator:
     def atol_vector(self) -> np.ndarray:
         """The absolute tolerance of each component of the state ``(q, v)`` (n_q + n_v), by
         its kind (:attr:`atol_kinds`, see :func:`absolute_tolerances`)."""
-        columns = _state_units(self.model)
-        return np.array([self.atol_kinds[_KIND_OF_UNIT[unit]] for unit in columns])
+        columns = state_units(self.model)
+        return np.array([self.atol_kinds[KIND_OF_UNIT[unit]] for unit in columns])
 
     @cached_property
     def atol_tangent(self) -> np.ndarray:
@@ -689,7 +692,7 @@ class Integrator:
         translations, angles for the rotations."""
         n_q = self.model.n_q
         rates = self.atol_vector[n_q:]
-        units = _state_units(self.model)[n_q:]
+        units = state_units(self.model)[n_q:]
         increments = np.array([self.atol_kinds["position" if unit == "m/s" else "angle"]
                                for unit in units])
         return np.concatenate([increments, rates])
@@ -777,144 +780,3 @@ def _collapsing(sigma: np.ndarray, tolerance: float) -> int:
            and ordered[count] < CLUSTER_CEILING):
         count += 1
     return count
-
-
-# ---------------------------------------------------------------------- tolerances per kind
-
-#: the kind of tolerance of a coordinate, by the coordinate's unit
-_KIND_OF_UNIT = {unit: kind for kind, units in ATOL_KINDS.items() for unit in units}
-
-
-def _state_units(model: Model) -> list[str]:
-    """The unit of each component of ``(q, v)``, as the results' columns say it."""
-    return ([COORDINATE_UNITS[component(name)][0] for name in model.coordinate_names]
-            + [VELOCITY_UNITS[component(name)][0] for name in model.velocity_names])
-
-
-def default_tolerances(model: Model) -> dict[str, float]:
-    """The absolute tolerances per kind when a mapping leaves a kind out: positions
-    ``DEFAULT_ATOL L`` (m), angles and Euler parameters ``DEFAULT_ATOL`` (rad), their rates the
-    same over :func:`characteristic_time` (m/s, rad/s)."""
-    length, time = float(model.characteristic_length), characteristic_time(model)
-    return {"position": DEFAULT_ATOL * length, "angle": DEFAULT_ATOL,
-            "velocity": DEFAULT_ATOL * length / time, "angular_velocity": DEFAULT_ATOL / time}
-
-
-def absolute_tolerances(model: Model, atol) -> dict[str, float]:
-    """The absolute tolerance of each kind of coordinate (:data:`ATOL_KINDS`: ``position`` m,
-    ``angle`` rad and Euler parameters, ``velocity`` m/s, ``angular_velocity`` rad/s).
-
-    Parameters
-    ----------
-    atol : float, mapping or None
-        None: :data:`DEFAULT_ATOL` for every kind; a number: that for every kind (SI units); a
-        mapping of kinds to numbers: those, and :func:`default_tolerances` for the kinds it
-        leaves out.
-
-    Raises
-    ------
-    ValueError
-        A mapping names an unknown kind, or gives a value that is not a positive number.
-    """
-    if atol is None:
-        return dict.fromkeys(ATOL_KINDS, DEFAULT_ATOL)
-    if not isinstance(atol, Mapping):
-        return dict.fromkeys(ATOL_KINDS, float(atol))
-    unknown = set(atol) - set(ATOL_KINDS)
-    if unknown:
-        raise ValueError(f"atol: unknown kind {sorted(unknown)[0]!r}: choose among "
-                         + ", ".join(ATOL_KINDS))
-    kinds = default_tolerances(model)
-    for kind, value in atol.items():
-        try:
-            value = float(value)
-        except (TypeError, ValueError):
-            raise ValueError(f"atol[{kind!r}] must be a positive number, got {value!r}") from None
-        if not (np.isfinite(value) and value > 0):
-            raise ValueError(f"atol[{kind!r}] must be a positive number, got {value}")
-        kinds[kind] = value
-    return kinds
-
-
-# ---------------------------------------------------------------------- interpolants
-
-class Interpolant:
-    """A method's continuous extension over one accepted step ``[t_old, t_new]``: called at a
-    time of the step, it returns the positions and velocities there, ``(q, v)``, as the
-    method's own polynomial gives them, Euler parameters renormalised (not yet on the
-    constraints: :meth:`Integrator.dense_state` puts them there). Subclasses implement
-    :meth:`_evaluate` of ``theta = (t - t_old) / h``; ``order`` is the interpolation's (its
-    error is ``O(h^(order + 1))`` over a step).
-    """
-
-    order: int = 0
-
-    def __init__(self, model: Model, t_old: float, t_new: float):
-        self.model, self.t_old, self.t_new = model, float(t_old), float(t_new)
-        self.h = self.t_new - self.t_old
-
-    def __call__(self, t: float) -> tuple[np.ndarray, np.ndarray]:
-        theta = (float(t) - self.t_old) / self.h
-        if not -1e-9 <= theta <= 1 + 1e-9:
-            raise ValueError(f"t = {t:.10g} s is outside the step [{self.t_old:.10g}, "
-                             f"{self.t_new:.10g}] s")
-        q, v = self._evaluate(theta)
-        return self.model.normalize(q), np.array(v, dtype=float)
-
-    def _evaluate(self, theta: float) -> tuple[np.ndarray, np.ndarray]:
-        raise NotImplementedError
-
-
-class PolynomialInterpolant(Interpolant):
-    """``y(t_old + theta h) = y_old + h Q [theta, theta^2, ...]`` on the state ``y = (q, v)``
-    of a Runge-Kutta method integrating the ODE ``y' = (B(q) v, v_dot)`` (SciPy's
-    ``RkDenseOutput``): ``Q = K^T P``, the stages ``K`` weighed by the polynomials of the
-    method's continuous extension, ``P`` their coefficients (rows: stages; columns: powers)."""
-
-    def __init__(self, model: Model, t_old: float, h: float, y_old: np.ndarray,
-                 K: np.ndarray, P: np.ndarray):
-        super().__init__(model, t_old, t_old + h)
-        self.y_old, self.Q = y_old, np.asarray(K).T @ P
-        self.order = P.shape[1]  # the polynomial's degree
-
-    def _evaluate(self, theta):
-        y = self.y_old + self.h * (self.Q @ np.cumprod(np.full(self.Q.shape[1], theta)))
-        return y[:self.model.n_q], y[self.model.n_q:]
-
-
-class HermiteInterpolant(Interpolant):
-    """Quintic Hermite interpolation of the positions from ``(q, q', q'')`` at both ends of a
-    step, cubic Hermite interpolation of the velocities from ``(v, v_dot)``: for the
-    second-order methods, whose steps carry no continuous extension of their own. ``q' = B(q)
-    v`` and ``q'' = B(q) v_dot + B(q') v`` on Euler parameters (``B`` is linear in them), ``v_dot``
-    on the others; the positions are interpolated as coordinates, Euler parameters then
-    renormalised. Order 5 on positions, 3 on velocities (the methods' own error is of order 2).
-
-    ``start`` and ``end`` are ``(t, q, v, v_dot)``.
-    """
-
-    order = 3
-
-    def __init__(self, model: Model, start: tuple, end: tuple):
-        super().__init__(model, start[0], end[0])
-        units = _state_units(model)[:model.n_q]
-        euler = np.array([unit == "1" for unit in units])
-        self.ends = []
-        for _, q, v, v_dot in (start, end):
-            q_dot = model.call("qdot", q=q, v=v)
-            q_ddot = model.call("qdot", q=q, v=v_dot)
-            q_ddot[euler] += model.call("qdot", q=q_dot, v=v)[euler]
-            self.ends.append((np.asarray(q, dtype=float), q_dot, q_ddot,
-                              np.asarray(v, dtype=float), np.asarray(v_dot, dtype=float)))
-
-    def _evaluate(self, theta):
-        (q0, dq0, ddq0, v0, a0), (q1, dq1, ddq1, v1, a1) = self.ends
-        h, s = self.h, theta
-        s2, s3 = s * s, s * s * s
-        s4, s5 = s3 * s, s3 * s2
-        q = ((1 - 10 * s3 + 15 * s4 - 6 * s5) * q0 + (10 * s3 - 15 * s4 + 6 * s5) * q1
-             + h * ((s - 6 * s3 + 8 * s4 - 3 * s5) * dq0 + (-4 * s3 + 7 * s4 - 3 * s5) * dq1)
-             + h * h * ((s2 - 3 * s3 + 3 * s4 - s5) / 2 * ddq0 + (s3 - 2 * s4 + s5) / 2 * ddq1))
-        v = ((2 * s3 - 3 * s2 + 1) * v0 + (3 * s2 - 2 * s3) * v1
-             + h * ((s3 - 2 * s2 + s) * a0 + (s3 - s2) * a1))
-        return q, v

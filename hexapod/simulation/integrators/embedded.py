@@ -19,12 +19,8 @@ from scipy.integrate._ivp.rk import RK45
 from hexapod.errors import IntegrationError
 from hexapod.simulation.compiled_loop import EmbeddedKernel
 from hexapod.simulation.compiled_steps import CompiledLoop
-from hexapod.simulation.integrators.base import (
-    SINGULAR_BAND,
-    Integrator,
-    Interpolant,
-    PolynomialInterpolant,
-)
+from hexapod.simulation.integrators.base import SINGULAR_BAND, Integrator
+from hexapod.simulation.integrators.interpolants import Interpolant, PolynomialInterpolant
 from hexapod.simulation.integrators.stability import largest_stable_step, runge_kutta_stability
 from hexapod.simulation.methods import DEFAULT_LOOP, LOOPS
 

@@ -24,15 +24,11 @@ import numpy as np
 from hexapod.errors import IntegrationError
 from hexapod.simulation.compiled_loop import BaumgarteKernel
 from hexapod.simulation.compiled_steps import CompiledLoop
-from hexapod.simulation.integrators.base import (
-    RANK_MARGIN,
-    Integrator,
-    Interpolant,
-    PolynomialInterpolant,
-    characteristic_time,
-)
+from hexapod.simulation.integrators.base import RANK_MARGIN, Integrator
+from hexapod.simulation.integrators.interpolants import Interpolant, PolynomialInterpolant
 from hexapod.simulation.integrators.stability import largest_stable_step, runge_kutta_stability
 from hexapod.simulation.methods import DEFAULT_LOOP, LOOPS
+from hexapod.simulation.scales import characteristic_time
 
 #: the classical tableau, for the stability function
 _A = np.array([[0, 0, 0, 0], [0.5, 0, 0, 0], [0, 0.5, 0, 0], [0, 0, 1, 0]], dtype=float)

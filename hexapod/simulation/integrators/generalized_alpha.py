@@ -78,7 +78,8 @@ from hexapod.algorithms.saddle import (
     sparse_dm,
 )
 from hexapod.errors import HexapodError
-from hexapod.simulation.integrators.base import Integrator, Interpolant
+from hexapod.simulation.integrators.base import Integrator
+from hexapod.simulation.integrators.interpolants import Interpolant
 from hexapod.spatial import quaternion_product, rotation_from_euler_parameters
 
 # ---------------------------------------------------------------- the groups, for CasADi
@@ -508,7 +509,7 @@ class LieGroupGeneralizedAlpha(Integrator):
 
     def dense_output(self) -> Interpolant:
         """Quintic Hermite interpolation of the positions from ``(q, v, v_dot)`` at both ends of
-        the step, cubic of the velocities (:class:`~.base.HermiteInterpolant`), the
+        the step, cubic of the velocities (:class:`~.interpolants.HermiteInterpolant`), the
         accelerations those of the equations of motion there (not the method's
         pseudo-accelerations ``a``)."""
         return self._hermite(self._dense_start)

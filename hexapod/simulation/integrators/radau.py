@@ -91,7 +91,8 @@ from hexapod.algorithms.linalg import equilibrate, split_rows
 from hexapod.algorithms.saddle import is_large, kept_multipliers
 from hexapod.errors import IntegrationError
 from hexapod.model.model import Model
-from hexapod.simulation.integrators.base import RANK_MARGIN, Integrator, Interpolant
+from hexapod.simulation.integrators.base import RANK_MARGIN, Integrator
+from hexapod.simulation.integrators.interpolants import Interpolant
 from hexapod.spatial import quaternion_exp, quaternion_log, quaternion_product
 
 # ---------------------------------------------------------------- Radau IIA, three stages

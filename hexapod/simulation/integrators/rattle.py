@@ -77,7 +77,8 @@ from hexapod.algorithms.linalg import (
     split_rows,
 )
 from hexapod.algorithms.saddle import force_multipliers, is_large, solve_sparse, sparse_dm
-from hexapod.simulation.integrators.base import Integrator, Interpolant
+from hexapod.simulation.integrators.base import Integrator
+from hexapod.simulation.integrators.interpolants import Interpolant
 from hexapod.simulation.integrators.stability import largest_stable_step, oscillator_parameters
 from hexapod.simulation.scales import ENERGY_JUMP
 from hexapod.spatial import quaternion_product, skew
@@ -332,7 +333,7 @@ class Rattle(Integrator):
 
     def dense_output(self) -> Interpolant:
         """Quintic Hermite interpolation of the positions from ``(q, v, v_dot)`` at both ends of
-        the step, cubic of the velocities (:class:`~.base.HermiteInterpolant`)."""
+        the step, cubic of the velocities (:class:`~.interpolants.HermiteInterpolant`)."""
         return self._hermite(self._dense_start)
 
 
