@@ -11,7 +11,7 @@ import pytest
 
 import hexapod as hx
 from hexapod._support import array_program
-from hexapod._support.array_program import BlockEvaluator, cached_program, program_of
+from hexapod._support.array_program import BlockEvaluator, Program, cached_program, program_of
 from hexapod.algorithms import inverse
 from hexapod.algorithms.inverse import inverse_dynamics, tree_plan
 from legs import front_leg_scene
@@ -103,6 +103,22 @@ def test_the_program_is_kept_in_the_cache_and_read_back(tmp_path, monkeypatch):
     assert cached_program("test/every", lambda: function) is not None  # read again
     assert cached_program("test/none", lambda: None) is None  # not asked for now: not kept
     assert not (tmp_path / "cache" / "v1" / array_program.program_key("test/none")).exists()
+
+
+@pytest.mark.parametrize("column, value", [(2, 10**6), (3, -1), (1, ca.OP_CALL)])
+def test_a_program_read_back_must_name_rows_and_operations_that_exist(column, value):
+    """A program's files that pass their checksums but name a row out of its buffers or an
+    operation of no kind are refused (the cache then reads the program again), never
+    evaluated out of bounds."""
+    program = program_of(_every_operation())
+    files = program.files()
+    assert Program.from_files(files).code.shape == program.code.shape
+    code = program.code.copy()
+    k = int(np.flatnonzero(code[:, 0] == array_program._BINARY)[0])
+    code[k, column] = value
+    damaged = {**files, array_program.CODE: array_program._npy(code)}
+    with pytest.raises(ValueError, match=f"instruction {k} "):
+        Program.from_files(damaged)
 
 
 def test_the_tree_path_evaluates_long_runs_as_arrays_with_the_virtual_machines_numbers(

@@ -101,12 +101,42 @@ class Program:
         layout = json.loads(files[LAYOUT])
         code = np.lib.format.read_array(io.BytesIO(files[CODE]), allow_pickle=False)
         constants = np.lib.format.read_array(io.BytesIO(files[CONSTANTS]), allow_pickle=False)
-        if code.ndim != 2 or code.shape[1] != 5 or constants.shape != code.shape[:1]:
+        if (code.ndim != 2 or code.shape[1] != 5 or code.dtype != np.int64
+                or constants.shape != code.shape[:1]):
             raise ValueError("instructions and constants do not match")
-        return cls(code, constants, int(layout["work_size"]),
-                   tuple(int(n) for n in layout["inputs"]),
-                   tuple((int(r), int(c)) for r, c in layout["outputs"]),
-                   tuple(tuple(int(e) for e in entries) for entries in layout["output_entries"]))
+        program = cls(code, constants, int(layout["work_size"]),
+                      tuple(int(n) for n in layout["inputs"]),
+                      tuple((int(r), int(c)) for r, c in layout["outputs"]),
+                      tuple(tuple(int(e) for e in entries)
+                            for entries in layout["output_entries"]))
+        program._check()
+        return program
+
+    def _check(self) -> None:
+        """ValueError unless every instruction names an operation of its kind and rows that
+        exist (a program read back must not index out of its buffers)."""
+        kind, op, out, a, b = self.code.T
+        size = max(self.work_size, 1)
+
+        def slot(x):
+            return (0 <= x) & (x < size)
+
+        inputs, entries = np.array(self.inputs, dtype=np.int64), self.output_entries
+        ok = np.zeros(kind.size, dtype=bool)
+        for k in np.flatnonzero(kind == _INPUT):
+            ok[k] = slot(out[k]) and 0 <= a[k] < inputs.size and 0 <= b[k] < inputs[a[k]]
+        for k in np.flatnonzero(kind == _OUTPUT):
+            ok[k] = (0 <= out[k] < len(entries) and 0 <= a[k] < len(entries[out[k]])
+                     and slot(b[k]))
+        ok |= (kind == _CONSTANT) & slot(out)
+        ok |= ((kind == _UNARY) & np.isin(op, list(_UNARY_OPS)) & slot(out) & slot(a))
+        ok |= ((kind == _BINARY) & np.isin(op, list(_BINARY_OPS)) & slot(out) & slot(a)
+               & slot(b))
+        for (rows, columns), listed in zip(self.outputs, entries, strict=True):
+            if any(not 0 <= e < rows * columns for e in listed):
+                ok[:] = False
+        if not ok.all():
+            raise ValueError(f"instruction {int(np.argmin(ok))} names no row or operation")
 
 
 def _npy(array: np.ndarray) -> bytes:
