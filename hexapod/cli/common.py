@@ -41,7 +41,8 @@ def long_lived():
     model) in this block: the cyclic garbage collector is held while it runs, and what it made
     is then frozen out of later collections (``gc.freeze``). Walking those objects over and
     over finds nothing to free and cost 'hexapod inverse' some 8 ms of its 210 on the front
-    leg."""
+    leg. The commands that build a model start so (inverse, report, simulate, dynamics, info);
+    their work after it (a simulation's time loop) runs with the collector as usual."""
     enabled = gc.isenabled()
     gc.disable()
     try:

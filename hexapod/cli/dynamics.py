@@ -2,7 +2,13 @@
 
 from __future__ import annotations
 
-from hexapod.cli.common import apply_ground_options, emit, ground_arguments, scene_arguments
+from hexapod.cli.common import (
+    apply_ground_options,
+    emit,
+    ground_arguments,
+    long_lived,
+    scene_arguments,
+)
 
 HELP = ("forward dynamics at one instant: accelerations, multipliers, joint wrenches and driver "
         "efforts")
@@ -19,10 +25,11 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
-    from hexapod.model.assemble import assemble
-    from hexapod.output.describe import describe_state, format_state
-    from hexapod.scene.builtin import load_scene
+    with long_lived():
+        from hexapod.model.assemble import assemble
+        from hexapod.output.describe import describe_state, format_state
+        from hexapod.scene.builtin import load_scene
 
-    model = assemble(apply_ground_options(load_scene(args.scene), args))
+        model = assemble(apply_ground_options(load_scene(args.scene), args))
     emit(describe_state(model, args.t), args.json, format_state)
     return 0

@@ -2,7 +2,13 @@
 
 from __future__ import annotations
 
-from hexapod.cli.common import apply_ground_options, emit, ground_arguments, scene_arguments
+from hexapod.cli.common import (
+    apply_ground_options,
+    emit,
+    ground_arguments,
+    long_lived,
+    scene_arguments,
+)
 
 HELP = ("what a scene holds and how it was built: rows, topology, degrees of freedom, "
         "redundancy, condition number")
@@ -23,10 +29,11 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
-    from hexapod.model.assemble import assemble
-    from hexapod.output.describe import describe_model, format_model
-    from hexapod.scene.builtin import load_scene
+    with long_lived():
+        from hexapod.model.assemble import assemble
+        from hexapod.output.describe import describe_model, format_model
+        from hexapod.scene.builtin import load_scene
 
-    model = assemble(apply_ground_options(load_scene(args.scene), args))
+        model = assemble(apply_ground_options(load_scene(args.scene), args))
     emit(describe_model(model, args.t, graph=args.graph), args.json, format_model)
     return 0
