@@ -405,17 +405,40 @@ def test_progress_is_drawn_when_stderr_is_a_terminal(tmp_path, monkeypatch, caps
 
 def test_long_lived_holds_the_collector_and_gives_it_back_even_on_an_error():
     """The commands make their long-lived objects with the cyclic collector held
-    (``long_lived``); it is running again after the block, also when the block fails, and
-    what the block made is frozen out of later collections."""
+    (``long_lived``) when the process is theirs; it is running again after the block, also
+    when the block fails, and what the block made is frozen out of later collections. Run
+    inside another program (here the tests), a command leaves its collector alone."""
+    import argparse
     import gc
 
     from hexapod.cli.common import long_lived
 
     assert gc.isenabled()
     frozen = gc.get_freeze_count()
-    with pytest.raises(RuntimeError), long_lived():
+    with long_lived(argparse.Namespace()):  # in-process, as main(argv) runs a command
+        assert gc.isenabled()
+    assert gc.get_freeze_count() == frozen
+    with pytest.raises(RuntimeError), long_lived(argparse.Namespace(whole_process=True)):
         assert not gc.isenabled()
         made = [[] for _ in range(100)]
         raise RuntimeError("a failed read")
     assert gc.isenabled() and gc.get_freeze_count() >= frozen + len(made)
     gc.unfreeze()  # the test session's objects back under collection
+
+
+def test_a_command_of_its_own_process_says_so_and_one_in_process_does_not():
+    """``hexapod`` as a process marks its arguments ``whole_process`` (the collector may be
+    held at its start); ``main(argv)`` inside another program does not."""
+    import gc
+
+    from hexapod.cli import main as cli_main
+
+    frozen = gc.get_freeze_count()
+    assert cli_main(["info", "front-leg"]) == 0
+    assert gc.get_freeze_count() == frozen and gc.isenabled()
+    probe = ("import gc, sys; from hexapod.cli.app import main; sys.argv = ['hexapod', 'info', "
+             "'front-leg']; status = main(); print(gc.get_freeze_count() > 0, gc.isenabled())")
+    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                          env={**os.environ, "OPENBLAS_NUM_THREADS": "1"}, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip().splitlines()[-1] == "True True"

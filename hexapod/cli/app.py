@@ -76,6 +76,7 @@ def main(argv: list[str] | None = None) -> int:
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     try:
         args = build_parser(sys.argv[1:] if argv is None else argv).parse_args(argv)
+        args.whole_process = argv is None  # the process is the command's (see long_lived)
         _check_address_space()
         status = _run(args)
     except HexapodError as error:

@@ -36,13 +36,19 @@ MAX_FACES = 1000
 
 
 @contextlib.contextmanager
-def long_lived():
+def long_lived(args):
     """Make the objects that live as long as the process (the modules imported, the scene, the
     model) in this block: the cyclic garbage collector is held while it runs, and what it made
     is then frozen out of later collections (``gc.freeze``). Walking those objects over and
     over finds nothing to free and cost 'hexapod inverse' some 8 ms of its 210 on the front
     leg. The commands that build a model start so (inverse, report, simulate, dynamics, info);
-    their work after it (a simulation's time loop) runs with the collector as usual."""
+    their work after it (a simulation's time loop) runs with the collector as usual. Only
+    where the process is the command's (``args.whole_process``, set by
+    :func:`hexapod.cli.app.main`): a command run inside another Python program (the tests, a
+    caller's script) leaves that program's collector alone."""
+    if not getattr(args, "whole_process", False):
+        yield
+        return
     enabled = gc.isenabled()
     gc.disable()
     try:

@@ -25,7 +25,7 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
-    with long_lived():
+    with long_lived(args):
         from hexapod.model.assemble import assemble
         from hexapod.output.describe import describe_state, format_state
         from hexapod.scene.builtin import load_scene

@@ -29,7 +29,7 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
-    with long_lived():
+    with long_lived(args):
         from hexapod.model.assemble import assemble
         from hexapod.output.describe import describe_model, format_model
         from hexapod.scene.builtin import load_scene

@@ -43,7 +43,7 @@ def add_arguments(parser) -> None:
 def run(args) -> int:
     import warnings
 
-    with long_lived():
+    with long_lived(args):
         from hexapod.algorithms.inverse import inverse_dynamics
         from hexapod.model.assemble import assemble
         from hexapod.output.inverse_csv import units_path, write_inverse_files

@@ -57,7 +57,7 @@ def add_arguments(parser) -> None:
 def run(args) -> int:
     import time
 
-    with long_lived():
+    with long_lived(args):
         import numpy as np
 
         from hexapod._support.files import write_directory_atomically

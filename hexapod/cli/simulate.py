@@ -113,7 +113,7 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
-    with long_lived():
+    with long_lived(args):
         from hexapod._support.files import write_directory_atomically
         from hexapod.model.assemble import assemble
         from hexapod.scene.builtin import load_scene
