@@ -262,9 +262,10 @@ def inverse_arguments(parser: argparse.ArgumentParser, method_help: str) -> None
     parser.add_argument("--compile", choices=("auto", "yes", "no"), default="auto",
                         help="evaluate the tree or phase path as compiled C code: yes compiles "
                         "it now if the cache on disk does not hold it (every later run of the "
-                        "model loads it), no keeps CasADi's interpreter; auto (default) uses "
-                        "compiled code the cache holds, and compiles once it pays over the "
-                        "model's runs (see docs/cache.md)")
+                        "model loads it), no keeps the interpreters (on the tree path NumPy "
+                        "over blocks of samples from 500 samples, else CasADi's virtual "
+                        "machine); auto (default) uses compiled code the cache holds, and "
+                        "compiles once it pays over the model's runs (see docs/cache.md)")
 
 
 #: ``--compile`` as the ``compile`` argument of inverse_dynamics.
