@@ -467,6 +467,21 @@ def test_a_full_disk_while_storing_is_a_warning_and_the_function_is_returned(fol
     assert not [p for p in (folder / cache.LAYOUT).iterdir() if p.name.startswith(".")]
 
 
+
+def test_a_file_that_cannot_be_written_is_a_warning_at_the_callers_line(folder, monkeypatch):
+    """A write that fails inside an entry (write_atomically's error, a full disk) is a
+    CacheWarning attributed to the code that asked for the Function, and the Function is
+    returned, not kept."""
+    def refused(path, *args, **kwargs):
+        raise HexapodError(f"{path}: no space left on device")
+
+    monkeypatch.setattr(cache, "write_atomically", refused)
+    build = Builder()
+    with pytest.warns(cache.CacheWarning, match="not kept in the cache") as caught:
+        function = serialized("k15", build)
+    assert caught[0].filename == __file__
+    assert values(function)[1] == pytest.approx(4.17) and cache.entries() == []
+
 INTERRUPTED = textwrap.dedent("""
     import signal, sys
     signal.signal(signal.SIGINT, signal.default_int_handler)

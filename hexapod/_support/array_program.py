@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import io
 import json
-import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
@@ -30,8 +29,6 @@ import casadi as ca
 import numpy as np
 
 from hexapod._support import cache
-from hexapod._support.files import write_atomically
-from hexapod.errors import HexapodError
 
 #: Bytes of the work rows of one block (sets the block's size: the rows stay in the processor's
 #: caches, and a large graph does not take gigabytes of memory).
@@ -231,18 +228,18 @@ def program_key(key: str) -> str:
 
 
 def cached_program(key: str | None, function: Callable[[], ca.Function | None], *,
-                   what: str = "") -> Program | None:
+                   what: str = "") -> Program | bool | None:
     """The program of ``key``'s Function: read from the cache when it holds it (``function`` is
     then not called), else read from the Function ``function()`` gives and kept there (``what``
-    says what it is, for ``hexapod cache info``). None when the Function has no program (also
-    remembered), or when ``function()`` gives None (the caller does not want the program read
+    says what it is, for ``hexapod cache info``). False when the Function has no program (also
+    remembered); None when ``function()`` gives None (the caller does not want the program read
     now; nothing is kept)."""
     entry_key = program_key(key) if key is not None else None
     found = cache.load(entry_key) if entry_key is not None else None
     if found is not None:
         try:
             if json.loads(found[1][LAYOUT]).get("unsupported"):
-                return None
+                return False
             return Program.from_files(found[1])
         except (KeyError, TypeError, ValueError):
             cache.discard(entry_key)
@@ -250,14 +247,9 @@ def cached_program(key: str | None, function: Callable[[], ca.Function | None], 
     if source is None:
         return None
     program = program_of(source)
-    if entry_key is not None and cache.folder() is not None:
+    if entry_key is not None:
         files = program.files() if program is not None else {
             LAYOUT: json.dumps({"unsupported": True}).encode("utf-8")}
-        try:
-            with cache.writing(entry_key, f"{what or source.name()}, as an array program") \
-                    as folder:
-                for name, data in files.items():
-                    write_atomically(folder / name, data, durable=False)
-        except HexapodError as error:  # a full disk: the program is read, not kept
-            warnings.warn(f"{error}: not kept in the cache", cache.CacheWarning, stacklevel=2)
-    return program
+        cache.keep(entry_key, f"{what or source.name()}, as an array program", files,
+                   stacklevel=2)
+    return program if program is not None else False

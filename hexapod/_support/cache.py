@@ -308,6 +308,22 @@ def writing(entry_key: str | None, what: str) -> Iterator[Path]:
     _evict(root, limit, keep=entry_key)
 
 
+def keep(entry_key: str, what: str, files: dict[str, bytes | str], *,
+         stacklevel: int = 1) -> None:
+    """Publish ``files`` (name -> content) as the entry ``entry_key`` (see :func:`writing`);
+    where they cannot be written (a full disk), a :class:`CacheWarning` says so (attributed as
+    the caller's own ``warnings.warn(..., stacklevel=stacklevel)`` would be), and the run goes
+    on: what was built is used, only not kept. Nothing is written when there is no cache."""
+    if folder() is None:
+        return
+    try:
+        with writing(entry_key, what) as staging:
+            for name, data in files.items():
+                write_atomically(staging / name, data, durable=False)
+    except HexapodError as error:
+        warnings.warn(f"{error}: not kept in the cache", CacheWarning, stacklevel=stacklevel + 1)
+
+
 def _prepared(root: Path | None) -> Path | None:
     """``root`` with its entries' folder made (mode 0700) and tagged, or None (with a warning
     once) when it cannot be used."""

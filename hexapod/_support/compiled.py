@@ -189,12 +189,9 @@ def serialized(key: str | None, build: Callable[[], ca.Function], *,
         except (KeyError, UnicodeDecodeError, RuntimeError):
             cache.discard(entry_key)
     function = build()
-    if cache.folder() is not None:  # nothing to write when there is no cache
-        try:
-            with cache.writing(entry_key, f"{what or function.name()}, serialized") as folder:
-                write_atomically(folder / SERIALIZED, function.serialize(), durable=False)
-        except HexapodError as error:  # a full disk: the Function is built, not kept
-            warnings.warn(f"{error}: not kept in the cache", cache.CacheWarning, stacklevel=2)
+    if cache.folder() is not None:  # nothing to serialize when there is no cache
+        cache.keep(entry_key, f"{what or function.name()}, serialized",
+                   {SERIALIZED: function.serialize()}, stacklevel=2)
     return function
 
 

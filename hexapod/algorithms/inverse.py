@@ -496,18 +496,12 @@ class TreePlan:
         if arrays is False or samples < least:
             return False
         if self._program is None:
-            asked = []
-
-            def source() -> ca.Function | None:  # not read when its blocks would be too short
-                if not _long_blocks(self.function.sz_w(), least):
-                    return None
-                asked.append(True)
-                return self.function
-
-            program = cached_program(self.key, source, what=self._what)
-            if program is None and not asked:
-                return False  # declined for blocks this long, not known to have no program
-            self._program = program or False  # False: the Function has none
+            program = cached_program(  # not read from a Function whose blocks are too short
+                self.key, lambda: self.function
+                if _long_blocks(self.function.sz_w(), least) else None, what=self._what)
+            if program is None:
+                return False  # not read for blocks this long: sought again for shorter ones
+            self._program = program  # False: the Function has none
         return bool(self._program) and _long_blocks(self._program.work_size, least)
 
     def _array_evaluator(self, block: int) -> BlockEvaluator:

@@ -20,13 +20,10 @@ from __future__ import annotations
 
 import dataclasses
 import pickle
-import warnings
 
 import casadi as ca
 
 from hexapod._support import cache
-from hexapod._support.files import write_atomically
-from hexapod.errors import HexapodError
 from hexapod.model.model import Model, Symbolic
 from hexapod.scene.contacts import Foothold, StanceGate
 from hexapod.scene.laws import Law
@@ -77,12 +74,9 @@ def store(model: Model, where: list[tuple]) -> None:
         drivers=tuple(dataclasses.replace(d, spec=None) for d in model.drivers),
         contacts=tuple(dataclasses.replace(c, schedule=None) for c in model.contacts),
         where=list(where), across=s.Q_across is not None, potential=s.potential is not None)
-    try:
-        with cache.writing(_key(model.digest), f"the model '{model.name}'") as folder:
-            write_atomically(folder / DESCRIPTION, pickle.dumps(description), durable=False)
-            write_atomically(folder / EXPRESSIONS, expressions.serialize(), durable=False)
-    except HexapodError as error:  # a full disk: the model is built, not kept
-        warnings.warn(f"{error}: not kept in the cache", cache.CacheWarning, stacklevel=3)
+    cache.keep(_key(model.digest), f"the model '{model.name}'",
+               {DESCRIPTION: pickle.dumps(description), EXPRESSIONS: expressions.serialize()},
+               stacklevel=3)
 
 
 def restore(scene: Scene, digest: str) -> Model | None:
