@@ -520,10 +520,14 @@ class Integrator:
         equilibrated ``Phi_v`` (``smallest`` at the current state), negative approaching a
         singular pose: a difference over a thousandth of the step, close enough never to jump
         over the pose."""
-        q_dot = self.model.call("qdot", q=self.q, v=self.v)
         delta = 1e-3 * self.h
-        ahead = self.model.normalize(self.q + delta * q_dot)
-        return (self._smallest_singular_value(ahead) - smallest) / delta
+        return (self._smallest_singular_value(self._positions_ahead(delta)) - smallest) / delta
+
+    def _positions_ahead(self, delta: float) -> np.ndarray:
+        """The positions ``delta`` seconds along the current motion, to first order (for the
+        rates of singular values, as differences)."""
+        q_dot = self.model.call("qdot", q=self.q, v=self.v)
+        return self.model.normalize(self.q + delta * q_dot)
 
     def _rank_split(self, q: np.ndarray | None = None, t: float | None = None):
         """The rank decision on the equilibrated ``Phi_v`` at positions ``q`` (default the
@@ -787,8 +791,7 @@ class Integrator:
         delta = 1e-3 * self._accepted_step
         if not delta > 0 or not now[0] < CLUSTER_CEILING:
             return None
-        q_dot = self.model.call("qdot", q=self.q, v=self.v)
-        ahead = self._spectrum(self.model.normalize(self.q + delta * q_dot))[:now.size]
+        ahead = self._spectrum(self._positions_ahead(delta))[:now.size]
         rates = (ahead - now) / delta
         falling = (rates < 0) & (now < CLUSTER_CEILING)
         seconds = np.where(falling, now / -np.minimum(rates, -1e-300), np.inf)
