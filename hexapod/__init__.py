@@ -24,6 +24,7 @@ from hexapod._support.lazy import attach
 from hexapod._version import __version__ as __version__
 
 __getattr__, __dir__, __all__ = attach(__name__, {
+    "hexapod._support.execution": ["Execution", "executing"],
     "hexapod.errors": ["AssemblyError", "HexapodError", "InputFileError", "IntegrationError",
                        "ModelError", "SingularSystemError"],
     "hexapod.spatial": ["Placement", "euler_parameters_from_rotation", "rotation_about_axis",

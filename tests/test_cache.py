@@ -2,7 +2,8 @@
 (hexapod._support.compiled): where it is, entries whole or absent, concurrent processes,
 corrupted entries, the size limit, cleaning, and nothing written when it is off.
 
-Every test points the cache at a folder of its own (``HEXAPOD_CACHE_DIR``)."""
+Every test turns the cache on in a folder of its own (the execution setting, and
+``HEXAPOD_CACHE_DIR`` for the processes it starts)."""
 
 from __future__ import annotations
 
@@ -29,6 +30,7 @@ from hexapod._support.compiled import (
     serialized,
     serialized_key,
 )
+from hexapod._support.execution import executing
 from hexapod.errors import HexapodError
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -44,7 +46,8 @@ def folder(tmp_path, monkeypatch) -> Path:
     monkeypatch.delenv("HEXAPOD_CACHE_SIZE", raising=False)
     monkeypatch.delenv("HEXAPOD_NO_JIT", raising=False)
     monkeypatch.setattr(cache, "_warned", set())
-    return path
+    with executing(cache=path):
+        yield path
 
 
 class Builder:
@@ -71,23 +74,31 @@ def entry_folders(root: Path) -> list[Path]:
 # ------------------------------------------------------------------ where it is
 
 
-def test_the_folder_follows_the_settings(tmp_path):
+def test_the_library_uses_no_cache_unless_asked(tmp_path):
+    assert cache.folder() is None
+    with executing(cache=tmp_path):
+        assert cache.folder() == tmp_path
+    assert cache.folder() is None
+
+
+def test_the_folder_the_environment_configures(tmp_path):
     home = Path.home()
-    assert cache.folder({}) == home / ".cache" / "hexapod"
-    assert cache.folder({"XDG_CACHE_HOME": "/x/cache"}) == Path("/x/cache/hexapod")
-    assert cache.folder({"XDG_CACHE_HOME": "relative"}) == home / ".cache" / "hexapod"
-    assert cache.folder({"XDG_CACHE_HOME": "/x", "HEXAPOD_CACHE_DIR": str(tmp_path)}) == tmp_path
+    folder = cache.configured_folder
+    assert folder({}) == home / ".cache" / "hexapod"
+    assert folder({"XDG_CACHE_HOME": "/x/cache"}) == Path("/x/cache/hexapod")
+    assert folder({"XDG_CACHE_HOME": "relative"}) == home / ".cache" / "hexapod"
+    assert folder({"XDG_CACHE_HOME": "/x", "HEXAPOD_CACHE_DIR": str(tmp_path)}) == tmp_path
     for off in ("0", "off", "No", "false"):
-        assert cache.folder({"HEXAPOD_CACHE": off, "HEXAPOD_CACHE_DIR": str(tmp_path)}) is None
-    assert cache.folder({"HEXAPOD_CACHE": "1"}) == home / ".cache" / "hexapod"
+        assert folder({"HEXAPOD_CACHE": off, "HEXAPOD_CACHE_DIR": str(tmp_path)}) is None
+    assert folder({"HEXAPOD_CACHE": "1"}) == home / ".cache" / "hexapod"
 
 
-def test_the_size_limit_follows_its_setting():
-    assert cache.size_limit({}) == cache.DEFAULT_LIMIT == 1024**3
-    assert cache.size_limit({"HEXAPOD_CACHE_SIZE": "2G"}) == 2 * 1024**3
-    assert cache.size_limit({"HEXAPOD_CACHE_SIZE": "300K"}) == 300 * 1024
+def test_the_size_limit_the_environment_configures():
+    assert cache.configured_size({}) == cache.size_limit() == 1024**3
+    assert cache.configured_size({"HEXAPOD_CACHE_SIZE": "2G"}) == 2 * 1024**3
+    assert cache.configured_size({"HEXAPOD_CACHE_SIZE": "300K"}) == 300 * 1024
     with pytest.raises(HexapodError, match="HEXAPOD_CACHE_SIZE='lots'"):
-        cache.size_limit({"HEXAPOD_CACHE_SIZE": "lots"})
+        cache.configured_size({"HEXAPOD_CACHE_SIZE": "lots"})
 
 
 def test_keys_are_stable_across_processes_and_tell_their_parts_apart():
@@ -173,10 +184,11 @@ def test_a_compiler_that_fails_is_a_warning_and_nothing_is_stored(folder, monkey
 
 
 def test_when_the_cache_is_off_nothing_is_written(tmp_path, monkeypatch):
+    """Without a cache in the execution setting (the library's default), whatever the
+    environment says."""
     target, scratch = tmp_path / "cache", tmp_path / "tmp"
     scratch.mkdir()
     monkeypatch.setenv("HEXAPOD_CACHE_DIR", str(target))
-    monkeypatch.setenv("HEXAPOD_CACHE", "0")
     monkeypatch.setenv("TMPDIR", str(scratch))
     monkeypatch.setattr("tempfile.tempdir", None)  # TMPDIR read again
     build = Builder()
@@ -184,7 +196,6 @@ def test_when_the_cache_is_off_nothing_is_written(tmp_path, monkeypatch):
     serialized("k5", build)
     compiled("k5", build)
     assert build.calls == 3
-    assert cache.tally(serialized_key("k5"), 10) == 10
     assert cache.entries() == [] and cache.clean() == (0, 0)
     assert not target.exists()
     assert list(scratch.iterdir()) == []  # the compiler's scratch folder is gone too
@@ -271,11 +282,10 @@ def test_a_folder_that_cannot_be_written_is_a_warning_and_the_work_goes_on(tmp_p
                                                                            monkeypatch):
     blocker = tmp_path / "file"
     blocker.write_text("not a folder")
-    monkeypatch.setenv("HEXAPOD_CACHE_DIR", str(blocker / "cache"))
-    monkeypatch.delenv("HEXAPOD_CACHE", raising=False)
     monkeypatch.setattr(cache, "_warned", set())
     build = Builder()
-    with pytest.warns(cache.CacheWarning, match="cannot write in the cache folder"):
+    with pytest.warns(cache.CacheWarning, match="cannot write in the cache folder"), \
+            executing(cache=blocker / "cache"):
         function = serialized("k10", build)
     assert values(function)[1] == pytest.approx(4.17)
 
@@ -285,7 +295,11 @@ def test_a_folder_that_cannot_be_written_is_a_warning_and_the_work_goes_on(tmp_p
 WORKER = textwrap.dedent("""
     import sys, time
     import casadi as ca
+    from hexapod._support import cache
     from hexapod._support.compiled import compiled, serialized
+    from hexapod._support.execution import executing
+    setting = executing(**cache.configured())
+    setting.__enter__()
     start = float(sys.argv[2])
     while time.time() < start:
         time.sleep(0.001)
@@ -350,6 +364,9 @@ WRITER = textwrap.dedent("""
     import casadi as ca
     from hexapod._support import cache
     from hexapod._support.compiled import serialized, serialized_key
+    from hexapod._support.execution import executing
+    setting = executing(**cache.configured())
+    setting.__enter__()
     x = ca.SX.sym("x", 40)
     big = ca.Function("big", [x], [ca.cumsum(ca.sin(x) * ca.cos(x.T @ x))])
     for _ in range(int(sys.argv[1])):
@@ -390,16 +407,16 @@ def _fill(folder: Path, count: int) -> list[str]:
     return keys
 
 
-def test_beyond_the_size_limit_the_least_recently_used_entries_go(folder, monkeypatch):
+def test_beyond_the_size_limit_the_least_recently_used_entries_go(folder):
     keys = _fill(folder, 4)
     size = cache.entries()[0].size
     assert cache.load(keys[0]) is not None  # the oldest is used now: it stays
-    monkeypatch.setenv("HEXAPOD_CACHE_SIZE", str(4 * size + size // 2))  # room for 4
-    serialized("fill4", Builder("f4"))
+    with executing(cache_size=4 * size + size // 2):  # room for 4
+        serialized("fill4", Builder("f4"))
     left = {e.key for e in cache.entries()}
     assert left == {keys[0], keys[2], keys[3], serialized_key("fill4")}
-    monkeypatch.setenv("HEXAPOD_CACHE_SIZE", "1")  # smaller than any entry: the limit holds
-    function = serialized("fill5", Builder("f5"))
+    with executing(cache_size=1):  # smaller than any entry: the limit holds
+        function = serialized("fill5", Builder("f5"))
     assert cache.entries() == [] and values(function)[1] == pytest.approx(4.17)
 
 
@@ -429,18 +446,6 @@ def test_leftovers_of_processes_that_are_gone_are_removed(folder):
     assert names == {f".staging-{os.getpid()}-live"}
 
 
-def test_a_tally_counts_over_runs(folder):
-    serialized("k12", Builder())
-    key = serialized_key("k12")
-    assert cache.tally(key) == 0
-    assert cache.tally(key, 300) == 300
-    assert cache.tally(key, 200) == 500
-    (folder / cache.LAYOUT / key / "tally").write_text("garbled")
-    assert cache.tally(key, 7) == 7
-    assert cache.tally(serialized_key("no such entry"), 5) == 5
-    assert cache.load(key) is not None  # the count is not part of the entry's checked files
-
-
 def test_the_cache_never_waits_for_the_disk(folder, monkeypatch):
     """Its files are written whole (renamed into place) but not flushed: an entry lost or
     damaged by a crash of the machine fails its checksums and is built again."""
@@ -450,7 +455,6 @@ def test_the_cache_never_waits_for_the_disk(folder, monkeypatch):
     monkeypatch.setattr(os, "fsync", no_sync)
     build = Builder()
     serialized("k13", build)
-    assert cache.tally(serialized_key("k13"), 3) == 3
     assert serialized("k13", build) is not None and build.calls == 1
 
 
@@ -486,7 +490,11 @@ INTERRUPTED = textwrap.dedent("""
     import signal, sys
     signal.signal(signal.SIGINT, signal.default_int_handler)
     import casadi as ca
+    from hexapod._support import cache
     from hexapod._support.compiled import compiled
+    from hexapod._support.execution import executing
+    setting = executing(**cache.configured())
+    setting.__enter__()
     x = ca.SX.sym("x")
     print("compiling", flush=True)
     compiled("interrupted", lambda: ca.Function("slow", [x], [2 * x]))

@@ -111,61 +111,33 @@ def test_hermite_law_is_exact_at_samples_and_smooth():
 
 
 def test_compiled_and_interpreted_tree_paths_agree():
-    """The tree path compiled to C (once compiling pays, see test_the_tree_path_is_compiled_
-    once_compiling_has_paid) gives the interpreter's numbers; once compiled, the model keeps
-    using the compiled code."""
+    """The tree path compiled to C (the execution setting ``compiled``) gives the
+    interpreter's numbers."""
     model = hx.assemble(front_leg_scene())
     plan = tree_plan(model)
-    interpreted = inverse_dynamics(model, TIMES, compile=False)
-    assert not plan.is_compiled
-    compiled = inverse_dynamics(model, TIMES, compile=True)
+    interpreted = inverse_dynamics(model, TIMES)
+    with hx.executing(compiled=True):
+        compiled = inverse_dynamics(model, TIMES)
     for key in ("force", "torque", "effort", "q", "v_dot"):
         assert _close(getattr(interpreted, key), getattr(compiled, key), 1e-13), key
-    if plan.compiled is not plan.function:  # a C compiler was found
-        assert plan.is_compiled
+    if __import__("hexapod._support.compiled", fromlist=["compiler"]).compiler() is not None:
+        assert plan.compiled.class_name() != "SXFunction"  # a library, loaded
 
 
-def test_another_model_of_the_same_scene_reads_the_tree_function_from_the_cache(
-        tmp_path, monkeypatch):
-    """The second model of a scene (as in a second run) builds no graph: its tree Function is
-    the serialized one of the cache, with the same numbers to the last bit."""
+def test_another_model_of_the_same_scene_reads_the_tree_function_from_the_cache(tmp_path,
+                                                                                monkeypatch):
+    """With a cache, the second model of a scene (as in a second run) builds no graph: its
+    tree Function is the serialized one of the cache, with the same numbers to the last
+    bit."""
     from hexapod.algorithms import inverse
 
-    monkeypatch.setenv("HEXAPOD_CACHE_DIR", str(tmp_path / "cache"))
-    first = inverse_dynamics(hx.assemble(front_leg_scene()), TIMES, compile=False)
-    monkeypatch.setattr(inverse.TreePlan, "_expressions",
-                        property(lambda plan: pytest.fail("the graph was built again")))
-    second = inverse_dynamics(hx.assemble(front_leg_scene()), TIMES, compile=False)
+    with hx.executing(cache=tmp_path / "cache"):
+        first = inverse_dynamics(hx.assemble(front_leg_scene()), TIMES)
+        monkeypatch.setattr(inverse.TreePlan, "_expressions",
+                            property(lambda plan: pytest.fail("the graph was built again")))
+        second = inverse_dynamics(hx.assemble(front_leg_scene()), TIMES)
     for key in ("force", "torque", "effort", "q", "v", "v_dot"):
         assert np.array_equal(getattr(first, key), getattr(second, key)), key
-
-
-@pytest.mark.skipif(__import__("hexapod._support.compiled", fromlist=["compiler"]).compiler()
-                    is None, reason="no C compiler")
-def test_the_tree_path_is_compiled_once_compiling_has_paid(tmp_path, monkeypatch):
-    """Short runs are interpreted until the samples interpreted over the runs reach
-    COMPILE_FROM_SAMPLES (here 60: three runs of 25 samples); then the run compiles quick code,
-    and every later model of the scene (a later run) finds it in the cache. A run of
-    OPTIMIZE_FROM_SAMPLES samples compiles optimized code, which later runs then prefer."""
-    from hexapod.algorithms import inverse
-
-    monkeypatch.setenv("HEXAPOD_CACHE_DIR", str(tmp_path / "cache"))
-    monkeypatch.setattr(inverse, "COMPILE_FROM_SAMPLES", 60)
-    monkeypatch.setattr(inverse, "OPTIMIZE_FROM_SAMPLES", 100)
-    runs = []
-    for times in (TIMES, TIMES, TIMES, TIMES, np.linspace(0.0, 1.2, 100), TIMES):
-        plan = tree_plan(hx.assemble(front_leg_scene()))
-        inverse_dynamics(plan.model, times)
-        runs.append((plan.is_compiled, plan.optimized))
-    assert runs == [(False, False), (False, False), (True, False), (True, False), (True, True),
-                    (True, True)]
-    plan = tree_plan(hx.assemble(front_leg_scene()))  # asked for the interpreter: it is given
-    inverse_dynamics(plan.model, TIMES, compile=False)
-    assert not plan.is_compiled
-    monkeypatch.setenv("HEXAPOD_CACHE", "0")  # without a cache, only one run's samples count
-    plan = tree_plan(hx.assemble(front_leg_scene()))
-    inverse_dynamics(plan.model, TIMES)
-    assert not plan.is_compiled
 
 
 def test_reactions_on_the_parent():
@@ -196,9 +168,10 @@ def test_reactions_on_the_parent():
 def test_without_a_compiler_the_interpreter_is_used(monkeypatch):
     monkeypatch.setenv("HEXAPOD_NO_JIT", "1")
     model = hx.assemble(front_leg_scene())
-    result = inverse_dynamics(model, TIMES, compile=True)
+    with hx.executing(compiled=True):
+        result = inverse_dynamics(model, TIMES)
     plan = tree_plan(model)
-    assert plan.compiled is plan.function and not plan.is_compiled
+    assert plan.compiled is plan.function
     assert np.all(np.isfinite(result.effort))
 
 

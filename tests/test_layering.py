@@ -23,7 +23,7 @@ PACKAGE = ROOT / "hexapod"
 
 #: Layer of each top-level module or folder of the package (the README's "Layout" table).
 LAYERS = {
-    "errors": 0, "spatial": 0, "_support": 0, "_version": 0,
+    "errors": 0, "spatial": 0, "_support": 0, "_version": 0, "catalog": 0,
     "scene": 1,
     "model": 2,
     "algorithms": 3, "minimal": 3,

@@ -55,7 +55,7 @@ def four_bar_model(dimension: int):
 def phase(model, times, frame="joint"):
     """The phase path's fields and the number of samples it solved exactly."""
     w, wd, wdd = (x.reshape(model.n_w, times.size) for x in model.law_values(times))
-    return phase_inverse.phase_inverse(model, times, w, wd, wdd, frame, to_c=False)
+    return phase_inverse.phase_inverse(model, model.create_data(), times, w, wd, wdd, frame)
 
 
 def assert_agree(fields, exact, rel=1e-9):
@@ -153,34 +153,30 @@ def test_friction_keeps_the_exact_qp_where_a_cone_binds():
 
 def test_compiled_and_interpreted_phase_paths_agree():
     """The phase path compiled to C gives the interpreter's numbers (the planar four-bar:
-    small Functions, quick to compile); the model keeps its compiled code."""
+    small Functions, quick to compile)."""
     model = four_bar_model(2)
     times = np.linspace(0.0, 1.2, 9)
-    interpreted = inverse_dynamics(model, times, method="phase", compile=False)
-    compiled = inverse_dynamics(model, times, method="phase", compile=True)
+    interpreted = inverse_dynamics(model, times, method="phase")
+    with hx.executing(compiled=True):
+        compiled = inverse_dynamics(model, times, method="phase")
     for key in ("force", "torque", "effort", "q", "v_dot"):
         a, b = getattr(interpreted, key), getattr(compiled, key)
         assert np.nanmax(np.abs(a - b)) <= 1e-12 * np.nanmax(np.abs(a)), key
-    assert model.was_built(("phase-terms", True, True))
 
 
-def test_a_later_model_loads_the_phase_libraries_an_earlier_one_compiled():
-    """The phase path's libraries are kept in the cache on disk by the hash of each Function's
-    graph: the same mechanism assembled again (as a later process would) and run by the
-    default rule loads them instead of interpreting, and gives the same numbers; with
-    compile=False it interprets."""
+def test_a_later_model_loads_the_phase_libraries_an_earlier_one_compiled(tmp_path):
+    """With a cache, the phase path's libraries are kept by the hash of each Function's graph:
+    the same mechanism assembled again (as a later process would) and run compiled loads them
+    instead of compiling, and gives the same numbers."""
+    from hexapod._support import cache
+
     times = np.linspace(0.0, 1.2, 9)
-    compiled = inverse_dynamics(four_bar_model(2), times, method="phase", compile=True)
-    model = four_bar_model(2)
-    again = inverse_dynamics(model, times, method="phase")
-    interpreted = inverse_dynamics(model, times, method="phase", compile=False)
-    loaded = model.built_once(("phase-terms", False, True), lambda m: None)
-    kept_out = model.built_once(("phase-terms", False, False), lambda m: None)
-    assert kept_out.predict.class_name() == "SXFunction"
+    with hx.executing(compiled=True, cache=tmp_path / "cache"):
+        compiled = inverse_dynamics(four_bar_model(2), times, method="phase")
+        kept = {e.key for e in cache.entries()}
+        again = inverse_dynamics(four_bar_model(2), times, method="phase")
+        assert {e.key for e in cache.entries()} == kept  # nothing compiled again
     if compiler() is not None:
-        assert loaded.predict.class_name() != "SXFunction"  # a library, loaded
+        assert kept
     for key in ("force", "torque", "q", "v_dot"):
-        a = getattr(compiled, key)
-        for other in (again, interpreted):
-            b = getattr(other, key)
-            assert np.nanmax(np.abs(a - b)) <= 1e-12 * np.nanmax(np.abs(a)), key
+        assert np.array_equal(getattr(compiled, key), getattr(again, key)), key

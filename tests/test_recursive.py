@@ -67,7 +67,7 @@ def test_forward_dynamics_agree(seed, n, chain):
     data = twin.create_data()
     q = hx.assemble_positions(twin, data, 0.0)
     v = hx.solve_velocities(twin, data, 0.0, q)
-    v_dot = hx.forward_dynamics(model, data, 0.0, q, v)
+    v_dot = hx.forward_dynamics(model, model.create_data(), 0.0, q, v)
     qj_dd = recursive.forward(qj, qj_d, np.zeros(recursive.dof))
     state = recursive.kinematics(qj, qj_d)
     for k, name in enumerate(recursive.names):

@@ -29,8 +29,9 @@ def test_four_bar_in_3d_names_three_redundant_rows():
     assert mobility["dof"] == 1 and mobility["dof_with_drivers"] == 0
     assert mobility["redundant_rows"] == names
     planar = hx.assemble(four_bar(2, THETA))
-    q2 = hx.assemble_positions(planar, data, 0.3)
-    assert hx.degrees_of_freedom(planar, data, 0.3, q2) == {
+    planar_data = planar.create_data()
+    q2 = hx.assemble_positions(planar, planar_data, 0.3)
+    assert hx.degrees_of_freedom(planar, planar_data, 0.3, q2) == {
         "dof": 1, "dof_with_drivers": 0, "redundant_rows": []}
 
 
@@ -51,14 +52,14 @@ def test_accelerations_equal_the_planar_model(driven):
     model2 = hx.assemble(scene2)
     model3 = hx.assemble(scene3)
     t = 0.3
-    data = model2.create_data()
-    q2 = hx.assemble_positions(model2, data, t)
-    q3 = hx.assemble_positions(model3, data, t)
+    data2, data3 = model2.create_data(), model3.create_data()
+    q2 = hx.assemble_positions(model2, data2, t)
+    q3 = hx.assemble_positions(model3, data3, t)
     if driven:
-        v2 = hx.solve_velocities(model2, data, t, q2)
-        v3 = hx.solve_velocities(model3, data, t, q3)
+        v2 = hx.solve_velocities(model2, data2, t, q2)
+        v3 = hx.solve_velocities(model3, data3, t, q3)
     else:  # the same state in both: a crank rate of 3 rad/s carried through the loop
-        v2 = hx.solve_velocities(model2, data, t, q2, np.array([0, 0, 3.0] + [0.0] * 6))
+        v2 = hx.solve_velocities(model2, data2, t, q2, np.array([0, 0, 3.0] + [0.0] * 6))
         v3 = np.zeros(model3.n_v)
         for b, b2 in zip(model3.bodies, model2.bodies, strict=True):
             v3[b.v.start:b.v.start + 2] = v2[b2.v][:2]

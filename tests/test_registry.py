@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import inspect
 
-from hexapod.benchmarks import catalogue, work_precision
+from hexapod import catalog
+from hexapod.benchmarks import work_precision
 from hexapod.simulation import methods, registry
 from hexapod.simulation.integrators import Integrator
 from hexapod.simulation.registry import INTEGRATORS
@@ -32,7 +33,7 @@ def test_defaults_are_written_once():
     for name in ("DEFAULT_METHOD", "DEFAULT_RTOL", "DEFAULT_ATOL"):
         assert getattr(registry, name) is getattr(methods, name)
     assert methods.DEFAULT_METHOD in INTEGRATORS
-    assert work_precision.PROBLEMS is catalogue.PROBLEMS
+    assert work_precision.PROBLEMS is catalog.PROBLEMS
     for parameter in ("rtol", "atol"):
         default = inspect.signature(Integrator.__init__).parameters[parameter].default
         assert default is getattr(methods, f"DEFAULT_{parameter.upper()}")
@@ -45,4 +46,4 @@ def test_the_command_line_defaults_are_the_constants():
     # tolerances left unset, so that simulate() applies the defaults (and a fixed-step method
     # warns only about tolerances the user gave)
     assert (args.method, args.rtol, args.atol) == (methods.DEFAULT_METHOD, None, None)
-    assert build_parser().parse_args(["bench"]).problems == list(catalogue.PROBLEMS)
+    assert build_parser().parse_args(["bench"]).problems == list(catalog.PROBLEMS)

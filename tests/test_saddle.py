@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import hexapod as hx
-from hexapod.algorithms import linalg, saddle
+from hexapod.algorithms import linalg, saddle, step
 from hexapod.algorithms.kinematics import rank_split
 from hexapod.benchmarks import n_four_bar
 from hexapod.benchmarks.redundant import bricard
@@ -204,10 +204,10 @@ def test_the_kernels_factors_hold_a_constant_per_row(name):
     q = ca.MX.sym("q", model.n_q)
     w = ca.MX.sym("w", model.n_w)
     Phi_v = model.Phi_v(*([q, w] if model.n_w else [q]))
-    m_inv_sqrt, m_sqrt = saddle.mass_factors(model)
+    m_inv_sqrt, m_sqrt = step.mass_factors(model)
     assert np.allclose((m_inv_sqrt @ m_sqrt).full(), np.eye(model.n_v))
-    W_all, d, zero = saddle.equilibrated(Phi_v, m_inv_sqrt)
-    K = saddle.kept_matrix(W_all, d, zero, list(range(model.n_c)))
+    W_all, d, zero = step.equilibrated(Phi_v, m_inv_sqrt)
+    K = step.kept_matrix(W_all, d, zero, list(range(model.n_c)))
     V, R, _, _ = K.sparsity().qr_sparse(True)
     assert (V.nnz() + R.nnz()) / K.size1() < 40
 

@@ -1,8 +1,13 @@
 """A cache on disk of what is slow to build (compiled code, serialized CasADi Functions), kept
 under content hashes, so that the second run of the same model builds nothing.
 
-Where, and how large
---------------------
+Off unless asked
+----------------
+The library uses the cache only when its caller turns it on (the ``cache`` of
+:class:`hexapod._support.execution.Execution`): a library call never reads or writes a file
+its caller did not ask for. The command line turns it on for its own runs, in the folder the
+environment names:
+
 =====================  ======================================================================
 ``HEXAPOD_CACHE_DIR``  the cache folder; else ``$XDG_CACHE_HOME/hexapod``, else
                        ``~/.cache/hexapod``
@@ -46,16 +51,15 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
+from hexapod._support.execution import DEFAULT_CACHE_SIZE, current
 from hexapod._support.files import process_alive, write_atomically
-from hexapod._support.limits import GIB, parse_size, size_text
+from hexapod._support.limits import parse_size, size_text
 from hexapod.errors import HexapodError
 
 #: The environment variables (see the module docstring).
 FOLDER_VARIABLE = "HEXAPOD_CACHE_DIR"
 SWITCH_VARIABLE = "HEXAPOD_CACHE"
 SIZE_VARIABLE = "HEXAPOD_CACHE_SIZE"
-#: The default size limit of the entries.
-DEFAULT_LIMIT = GIB
 #: The layout version: the folder of the entries under the cache folder.
 LAYOUT = "v1"
 #: An entry's description of itself.
@@ -78,8 +82,28 @@ class CacheWarning(UserWarning):
 # ------------------------------------------------------------------ settings
 
 
-def folder(environ=None) -> Path | None:
-    """The cache folder, or None when the cache is turned off (``HEXAPOD_CACHE=0``)."""
+def folder() -> Path | None:
+    """The cache folder of the current execution setting (:mod:`hexapod._support.execution`),
+    or None: the library reads and writes nothing unless its caller turned the cache on."""
+    return current().cache
+
+
+def size_limit() -> int:
+    """The most the entries may hold, in bytes (the current execution setting's)."""
+    return current().cache_size
+
+
+def configured(environ=None) -> dict:
+    """The cache the environment configures for the command line (and for scripts), as the
+    keyword arguments of :func:`hexapod._support.execution.executing`: ``cache`` and
+    ``cache_size``."""
+    return {"cache": configured_folder(environ), "cache_size": configured_size(environ)}
+
+
+def configured_folder(environ=None) -> Path | None:
+    """The cache folder the environment configures for the command line: ``HEXAPOD_CACHE_DIR``,
+    else ``$XDG_CACHE_HOME/hexapod``, else ``~/.cache/hexapod``; None when ``HEXAPOD_CACHE=0``
+    turns it off."""
     environ = os.environ if environ is None else environ
     if environ.get(SWITCH_VARIABLE, "").strip().lower() in _OFF:
         return None
@@ -92,8 +116,8 @@ def folder(environ=None) -> Path | None:
     return Path.home() / ".cache" / "hexapod"
 
 
-def size_limit(environ=None) -> int:
-    """The most the entries may hold, in bytes (``HEXAPOD_CACHE_SIZE``, default 1 GiB).
+def configured_size(environ=None) -> int:
+    """The size limit the environment configures (``HEXAPOD_CACHE_SIZE``, default 1 GiB).
 
     Raises
     ------
@@ -103,7 +127,7 @@ def size_limit(environ=None) -> int:
     environ = os.environ if environ is None else environ
     text = environ.get(SIZE_VARIABLE, "").strip()
     if not text:
-        return DEFAULT_LIMIT
+        return DEFAULT_CACHE_SIZE
     try:
         return parse_size(text)
     except ValueError as error:
@@ -363,29 +387,6 @@ def _publish(staging: Path, entry_key: str, what: str) -> None:
         os.rename(staging, staging.with_name(entry_key))
     except OSError:  # published meanwhile by another process: that entry is kept
         pass
-
-
-def tally(entry_key: str, amount: int = 0) -> int:
-    """Add ``amount`` to a count kept with the entry ``entry_key`` (e.g. samples evaluated by
-    a Function the entry holds, over many runs) and return the new count (0 plus ``amount``
-    when there is no such entry, or no cache). Counts of processes running at once may be
-    lost: a count is an estimate for deciding what to build, never a result."""
-    root = folder()
-    if root is None or not _KEY.fullmatch(entry_key):
-        return amount
-    path = _entries_folder(root) / entry_key
-    if not (path / META).is_file():
-        return amount
-    count_file = path / "tally"
-    try:
-        before = max(int(count_file.read_text(encoding="ascii")), 0)
-    except (OSError, ValueError):  # none yet, or garbled
-        before = 0
-    if amount == 0:
-        return before
-    with contextlib.suppress(HexapodError):  # a count not kept is a count lost, no more
-        write_atomically(count_file, str(before + amount), durable=False)
-    return before + amount
 
 
 # ------------------------------------------------------------------ size and cleaning

@@ -7,6 +7,8 @@ One small API for every compiled kernel::
     function = serialized(key, build)    # the Function itself: its graph built once
     function = find_compiled(key)        # the library when one is cached, else None
 
+The cache is the execution setting's (:mod:`hexapod._support.execution`): without one, a
+library is compiled in a temporary folder, loaded and the folder removed, and nothing is kept.
 ``key`` says everything the Function depends on beyond hexapod's own sources (which every key
 includes): typically the model's content hash and the kernel's name and options, e.g.
 ``f"{model.digest}/tree-inverse"``. ``build()`` makes the Function (an ``SX`` or ``MX``
@@ -35,12 +37,9 @@ from hexapod._support import cache
 from hexapod._support.files import write_atomically
 from hexapod.errors import HexapodError
 
-#: Flags of the C compiler for optimized code (the default): the tree-ordered inverse dynamics
-#: runs 5 to 7 times faster than in CasADi's interpreter.
+#: Flags of the C compiler: the tree-ordered inverse dynamics runs 5 to 7 times faster than in
+#: CasADi's interpreter.
 COMPILER_FLAGS = ("-O2",)
-#: Flags for quick code: compiled 3 to 4 times faster than with -O2, and running 1.5 to 1.8
-#: times slower than -O2's (still 3.4 to 4 times faster than the interpreter).
-QUICK_FLAGS = ("-O0",)
 #: The files of a compiled entry: the library and the name of the Function it holds.
 LIBRARY, NAME = "library" + (".dll" if sys.platform == "win32" else
                              ".dylib" if sys.platform == "darwin" else ".so"), "name.txt"
@@ -100,9 +99,9 @@ def find_compiled(key: str | None, flags: tuple[str, ...] = COMPILER_FLAGS) -> c
 
 def compiled(key: str | None, build: Callable[[], ca.Function], *, what: str = "",
              flags: tuple[str, ...] = COMPILER_FLAGS) -> ca.Function:
-    """The Function ``build()`` makes, compiled to C with ``flags`` (:data:`COMPILER_FLAGS`, or
-    :data:`QUICK_FLAGS`): loaded from the cache when it holds the library of ``key``, else
-    built, compiled and stored there (``what`` says what it is, for ``hexapod cache info``);
+    """The Function ``build()`` makes, compiled to C with ``flags`` (:data:`COMPILER_FLAGS`):
+    loaded from the cache when it holds the library of ``key``, else built, compiled and stored
+    there (``what`` says what it is, for ``hexapod cache info``);
     with ``key=None``, compiled and not stored. The interpreted Function when there is no
     compiler."""
     found = find_compiled(key, flags)
@@ -193,11 +192,3 @@ def serialized(key: str | None, build: Callable[[], ca.Function], *,
         cache.keep(entry_key, f"{what or function.name()}, serialized",
                    {SERIALIZED: function.serialize()}, stacklevel=2)
     return function
-
-
-def interpreted_samples(key: str | None, samples: int = 0) -> int:
-    """Add ``samples`` to the count of samples the serialized Function of ``key`` evaluated
-    interpreted, over every run that used it, and return the count (0 when there is no such
-    entry): what a kernel weighs against the cost of compiling
-    (:func:`hexapod._support.cache.tally`)."""
-    return 0 if key is None else cache.tally(serialized_key(key), samples)

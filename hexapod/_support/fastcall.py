@@ -4,7 +4,11 @@ Calling a CasADi Function from Python converts every argument to a ``DM`` and ev
 about 40 microseconds a call whatever the Function computes: more than the whole right-hand side
 of a small mechanism. :class:`FastFunction` evaluates through CasADi's buffer interface
 (``Function.buffer()``): the inputs and outputs live in NumPy arrays allocated once, and a call
-copies the arguments in and the results out, about a microsecond of overhead.
+copies the arguments in and the results out, about a microsecond of overhead. Where the installed
+CasADi has no buffer interface, a plain call gives the same numbers, more slowly.
+
+The buffers belong to one user (a :class:`hexapod.model.model.Data`): an evaluator is not
+reentrant. The Functions themselves (:func:`dense_outputs`) are immutable and shared.
 """
 
 from __future__ import annotations
@@ -13,30 +17,39 @@ import casadi as ca
 import numpy as np
 
 
+def dense_outputs(function: ca.Function) -> ca.Function:
+    """``function`` with every output densified (one expression per zero: for small and
+    moderately large outputs; see :class:`ScatteredFunction` for the others)."""
+    symbols = function.sx_in() if function.is_a("SXFunction") else function.mx_in()
+    outputs = [ca.densify(x) for x in function.call(symbols)]
+    return ca.Function(function.name(), symbols, outputs, function.name_in(),
+                       function.name_out())
+
+
 class FastFunction:
-    """``function`` with dense outputs, evaluated through preallocated buffers.
+    """A Function evaluated through preallocated buffers, its outputs dense (a Function with
+    sparse outputs is densified first: give one made by :func:`dense_outputs` to build that
+    once).
 
     A call takes the inputs positionally (arrays of any shape holding the input's entries, in
     CasADi's column-major order) and returns fresh arrays: vectors 1-D, matrices 2-D; raises
-    ``RuntimeError`` when the evaluation fails, as a plain call does. Not reentrant (one set
-    of buffers): build one per user if threads share a model.
+    ``RuntimeError`` when the evaluation fails, as a plain call does.
     """
 
     def __init__(self, function: ca.Function):
-        symbols = function.sx_in() if function.is_a("SXFunction") else function.mx_in()
-        outputs = [ca.densify(x) for x in function.call(symbols)]
-        self.function = ca.Function(function.name(), symbols, outputs, function.name_in(),
-                                    function.name_out())
+        if not all(function.sparsity_out(i).is_dense() for i in range(function.n_out())):
+            function = dense_outputs(function)
+        self.function = function
         self.name_in = tuple(function.name_in())
         self._inputs = [np.zeros(function.numel_in(i)) for i in range(function.n_in())]
         self._outputs = [np.zeros(function.numel_out(i)) for i in range(function.n_out())]
         self._shapes = [function.size_out(i) for i in range(function.n_out())]
-        self._buffer, self._evaluate = _bound(self.function, self._inputs, self._outputs)
+        self._bound = _bound(function, self._inputs, self._outputs)
 
     def __call__(self, *arguments) -> list[np.ndarray]:
         for target, value in zip(self._inputs, arguments, strict=True):
             target[:] = np.ravel(value, order="F")
-        _evaluate(self.function, self._buffer, self._evaluate)
+        _evaluate(self.function, self._bound, self._inputs, self._outputs)
         out = []
         for array, (rows, columns) in zip(self._outputs, self._shapes, strict=True):
             if columns == 1:
@@ -47,8 +60,8 @@ class FastFunction:
 
 
 class ScatteredFunction:
-    """A CasADi Function with sparse matrix outputs, called like a
-    :class:`~hexapod._support.fastcall.FastFunction` and giving the same dense arrays.
+    """A CasADi Function with sparse matrix outputs, called like a :class:`FastFunction` and
+    giving the same dense arrays.
 
     ``FastFunction`` densifies the outputs symbolically: one expression per zero, which for the
     constraint Jacobian of a chain of a thousand bodies (30 million entries, nearly all zero)
@@ -70,13 +83,16 @@ class ScatteredFunction:
         for i in range(function.n_in()):
             if function.nnz_in(i) != function.numel_in(i):  # pragma: no cover - inputs are dense
                 raise ValueError(f"input {i} of {function.name()} is sparse")
-        self._buffer, self._evaluate = _bound(function, self._inputs, self._outputs)
+        self._bound = _bound(function, self._inputs, self._outputs)
         self._compressed: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 
-    def __call__(self, *arguments) -> list[np.ndarray]:
+    def _run(self, arguments) -> None:
         for target, value in zip(self._inputs, arguments, strict=True):
             target[:] = np.ravel(value, order="F")
-        _evaluate(self.function, self._buffer, self._evaluate)
+        _evaluate(self.function, self._bound, self._inputs, self._outputs)
+
+    def __call__(self, *arguments) -> list[np.ndarray]:
+        self._run(arguments)
         out = []
         for values, where, (rows, columns) in zip(self._outputs, self._where, self._shapes,
                                                   strict=True):
@@ -91,9 +107,7 @@ class ScatteredFunction:
         the nonzeros whatever the size of the matrix."""
         from scipy.sparse import csc_array
 
-        for target, value in zip(self._inputs, arguments, strict=True):
-            target[:] = np.ravel(value, order="F")
-        _evaluate(self.function, self._buffer, self._evaluate)
+        self._run(arguments)
         out = []
         for i, (values, (rows, columns)) in enumerate(zip(self._outputs, self._shapes,
                                                             strict=True)):
@@ -113,7 +127,10 @@ class ScatteredFunction:
 
 def _bound(function: ca.Function, inputs: list[np.ndarray], outputs: list[np.ndarray]):
     """``function``'s evaluation buffer reading ``inputs`` and writing ``outputs`` in place:
-    (the buffer, which must be kept alive, and its evaluate function)."""
+    (the buffer, which must be kept alive, and its evaluate function); None where CasADi has
+    no buffer interface."""
+    if not hasattr(function, "buffer"):
+        return None
     buffer, evaluate = function.buffer()
     for i, array in enumerate(inputs):
         buffer.set_arg(i, memoryview(array))
@@ -122,10 +139,18 @@ def _bound(function: ca.Function, inputs: list[np.ndarray], outputs: list[np.nda
     return buffer, evaluate
 
 
-def _evaluate(function: ca.Function, buffer, evaluate) -> None:
-    """Evaluate through the buffer; raise ``RuntimeError`` as a plain call of ``function``
-    does when the evaluation fails (a linear solve of a singular matrix): the outputs are then
-    not written, and would be the last call's results."""
+def _evaluate(function: ca.Function, bound, inputs: list[np.ndarray],
+              outputs: list[np.ndarray]) -> None:
+    """Evaluate ``function`` on ``inputs`` into ``outputs``; raise ``RuntimeError`` as a plain
+    call does when the evaluation fails (a linear solve of a singular matrix): the outputs are
+    then not written, and would be the last call's results."""
+    if bound is None:  # a plain call: its results copied into the outputs (nonzeros only)
+        results = function.call([ca.reshape(ca.DM(x), *function.size_in(i))
+                                 for i, x in enumerate(inputs)])
+        for target, result in zip(outputs, results, strict=True):
+            target[:] = np.asarray(result.nonzeros(), dtype=float)
+        return
+    buffer, evaluate = bound
     evaluate()
     if buffer.ret():
         raise RuntimeError(f"evaluation of {function.name()} failed")

@@ -13,8 +13,9 @@ from __future__ import annotations
 import numpy as np
 
 from hexapod.algorithms.ground import share_ground_forces
+from hexapod.algorithms.kinematics import state_split
 from hexapod.algorithms.liaison import policy_map
-from hexapod.algorithms.linalg import as_dense, equilibrate, solve_saddle, split_rows
+from hexapod.algorithms.linalg import solve_saddle
 from hexapod.algorithms.saddle import dynamics_terms
 from hexapod.model.model import Data, Model
 
@@ -48,29 +49,31 @@ def forward_dynamics(model: Model, data: Data, t: float, q: np.ndarray, v: np.nd
     SingularSystemError
         When redundant constraints contradict each other.
     """
+    model.check(data)
     q = np.asarray(q, dtype=float)
     v = np.asarray(v, dtype=float)
-    w, wd, wdd = model.law_values(t)
-    Phi_v, gamma, Q = dynamics_terms(model, {"q": q, "v": v, "w": w, "wd": wd, "wdd": wdd})
+    w, wd, wdd = model.law_values(t, data)
+    Phi_v, gamma, Q = dynamics_terms(model, {"q": q, "v": v, "w": w, "wd": wd, "wdd": wdd},
+                                     data)
     if baumgarte is not None and model.n_c:
         alpha, beta = baumgarte
-        velocity_error = Phi_v @ v - model.call("nu", q=q, w=w, wd=wd)
-        gamma = gamma - 2 * alpha * velocity_error - beta**2 * model.call("phi", q=q, w=w)
-    Q_across = model.call("Q_across", q=q, v=v, w=w) if model.Q_across is not None else None
+        velocity_error = Phi_v @ v - model.call("nu", data, q=q, w=w, wd=wd)
+        gamma = gamma - 2 * alpha * velocity_error - beta**2 * model.call("phi", data, q=q, w=w)
+    Q_across = (model.call("Q_across", data, q=q, v=v, w=w) if model.Q_across is not None
+                else None)
     tol = model.rank_tolerance if rank_tolerance is None else rank_tolerance
-    W, d = equilibrate(Phi_v, model.mass_inv_sqrt)
-    priority, groups = model.rank_order(w)  # feet in swing have no rows to decide on
-    split = split_rows(W, d, priority, tol, groups=groups)
+    split = state_split(model, data, q, w, Phi_v, tol)  # shared with the velocity analysis
+    priority, _ = model.rank_order(w)  # feet in swing have no rows to decide on
     wrench_map = offset = None
     if split.redundant.size and not model.contacts:
-        wrench_map, offset = policy_map(model, q, as_dense(Phi_v), Q_across)
+        wrench_map, offset = policy_map(model, q, Phi_v, Q_across, data)
     solution = solve_saddle(model.mass_inv_sqrt, Phi_v, Q, gamma, priority,
                             tol, row_names=[r.name for r in model.rows],
                             consistency_tol=consistency_tol,
                             wrench_map=wrench_map, wrench_offset=offset, split=split)
     lam, status = solution.lam, None
     if model.contacts:  # the scene's ground-force policy
-        lam, status = share_ground_forces(model, t, q, as_dense(Phi_v), Q_across, split, lam)
+        lam, status = share_ground_forces(model, data, t, q, Phi_v, Q_across, split, lam)
     data.at(t, q, v)
     data.ground_status = status
     data.w, data.wd, data.wdd = w, wd, wdd

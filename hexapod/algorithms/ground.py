@@ -25,8 +25,8 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from hexapod.algorithms.liaison import policy_map
 from hexapod.algorithms.linalg import RowSplit, multiplier_null_space
+from hexapod.algorithms.phase_terms import terms_of
 from hexapod.model.model import Model
 
 #: Below this weight a foot carries nothing.
@@ -51,18 +51,48 @@ def robot_weight(model: Model) -> float:
     return model.total_mass * float(np.linalg.norm(model.gravity))
 
 
-def share_ground_forces(model: Model, t: float, q: np.ndarray, Phi_v: np.ndarray,
+def sharing_weights(weights: np.ndarray, stance: np.ndarray) -> np.ndarray:
+    """The feet's weights in the policy (contacts first; samples along a second axis, if
+    any): their load-sharing weights, except where every foot down is at touch-down or
+    lift-off (a tripod of duty 1/2 at its switch): the load then passes in an instant, and the
+    feet down share it equally."""
+    weights = np.array(weights, dtype=float)
+    unloaded = ~np.any(weights > NO_LOAD, axis=0)
+    weights[..., unloaded] = np.asarray(stance, dtype=float)[..., unloaded]
+    return weights
+
+
+def foot_values(policy: str, weights: np.ndarray) -> np.ndarray:
+    """The ``feet`` input of the policy's objective for the feet's weights ``w``: for
+    ``min-wrench`` the factor of each foot's wrench block, ``1 / sqrt(w)`` (1 where the foot
+    carries nothing: its force is held at zero); for the effort policies the factor of its
+    load-sharing term, ``sqrt(1 / w - 1)`` (0 where ``w`` is 1 or the foot carries nothing)."""
+    safe = np.where(weights > NO_LOAD, weights, 1.0)
+    if policy == "min-wrench":
+        return np.where(weights > NO_LOAD, 1.0 / np.sqrt(safe), 1.0)
+    return np.where((weights > NO_LOAD) & (weights < 1.0),
+                    np.sqrt(np.maximum(1.0 / safe - 1.0, 0.0)), 0.0)
+
+
+def policy_objective(model: Model, data, q: np.ndarray, Phi_v, Q_across,
+                     feet: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``A, b`` of the policy's objective ``|A lam + b|^2`` at a state, from its one
+    definition (:meth:`hexapod.algorithms.phase_terms.PhaseTerms.objective`); ``feet`` as
+    :func:`foot_values` gives them."""
+    terms = terms_of(model)
+    offset = (terms.evaluate(data, "across", q, Q_across)[0] if Q_across is not None
+              else np.zeros(6 * terms.owners))
+    return tuple(terms.evaluate(data, "objective", q, terms.nonzeros(Phi_v), offset, feet))
+
+
+def share_ground_forces(model: Model, data, t: float, q: np.ndarray, Phi_v: np.ndarray,
                         Q_across: np.ndarray | None, split: RowSplit,
                         lam: np.ndarray) -> tuple[np.ndarray, tuple[str, ...]]:
     """The multipliers chosen by the scene's ground-force policy among ``lam + N z``, and each
     contact's status (``swing``, ``ok``, ``slip``, ``pull``)."""
-    weights = contact_weights(model, t)
     stance = np.array([bool(c.in_stance(t)) for c in model.contacts])
     status = ["ok" if down else "swing" for down in stance]
-    if not np.any(weights > NO_LOAD):
-        # every foot down is at touch-down or lift-off (a tripod of duty 1/2 at its switch):
-        # the load passes in an instant, and the feet down share it equally
-        weights = stance.astype(float)
+    weights = sharing_weights(contact_weights(model, t), stance)
     N = multiplier_null_space(split, model.n_c)
     if N.shape[1] == 0:
         return lam, tuple(status)
@@ -75,7 +105,8 @@ def share_ground_forces(model: Model, t: float, q: np.ndarray, Phi_v: np.ndarray
         z0, K = np.zeros(N.shape[1]), np.eye(N.shape[1])
     base = lam + N @ z0  # lam + N (z0 + K y)
     NK = _orthonormal(N @ K)  # the same multipliers, in directions the QP solvers handle well
-    A, b = _objective(model, q, Phi_v, Q_across, weights)  # |A lam + b|^2
+    A, b = policy_objective(model, data, q, Phi_v, Q_across,
+                            foot_values(model.ground.policy, weights))
     AK, r = A @ NK, A @ base + b
     policy = model.ground.policy
     if NK.shape[1] == 0:  # the feet that carry nothing take up all the freedom
@@ -105,35 +136,6 @@ def _affine_solutions(E: np.ndarray, e: np.ndarray) -> tuple[np.ndarray, np.ndar
     rank = int(np.sum(s > s.max(initial=0.0) * 1e-12)) if s.size else 0
     z0 = Vt[:rank].T @ ((U[:, :rank].T @ e) / s[:rank])
     return z0, Vt[rank:].T
-
-
-def _objective(model: Model, q, Phi_v, Q_across, weights) -> tuple[np.ndarray, np.ndarray]:
-    """``A, b`` of the policy's objective ``|A lam + b|^2``, load-sharing terms included."""
-    ground = model.ground
-    if ground.policy == "min-wrench":
-        A, b = policy_map(model, q, Phi_v, Q_across)
-        for contact, w in zip(model.contacts, weights, strict=True):
-            if w > NO_LOAD:  # the foot's wrench block (6 rows per joint, in joint order)
-                block = slice(6 * contact.joint, 6 * contact.joint + 6)
-                A[block] /= np.sqrt(w)
-                b[block] /= np.sqrt(w)
-        return A, b
-    rows, scale = [], []
-    for driver in model.drivers:
-        if driver.kind == "joint":
-            rows.append(driver.row)
-            scale.append(1.0 / ground.reference(model.joints[driver.joint].name))
-    A = np.zeros((len(rows), model.n_c))
-    A[np.arange(len(rows)), rows] = scale
-    parts = [A]
-    reference = robot_weight(model) or 1.0  # the forces' scale
-    for contact, w in zip(model.contacts, weights, strict=True):
-        if NO_LOAD < w < 1.0:
-            block = np.zeros((3, model.n_c))
-            block[np.arange(3), contact.rows] = np.sqrt(1.0 / w - 1.0) / reference
-            parts.append(block)
-    A = np.vstack(parts)
-    return A, np.zeros(A.shape[0])
 
 
 # ------------------------------------------------------------------ the friction policy

@@ -20,11 +20,9 @@ same results:
   differentiates it for velocities and accelerations, and a backward pass from the leaves gives
   each joint's wrench from its child's Newton-Euler equations. The whole pass is one CasADi
   Function, mapped over blocks of samples; its cost grows linearly with the number of bodies.
-  It is kept in the cache on disk under the model's content hash
-  (:mod:`hexapod._support.compiled`): serialized, so that another run of the same model does not
-  build its graph again, as an array program that evaluates long runs with one NumPy operation
-  per instruction over many samples (:mod:`hexapod._support.array_program`), and compiled to C
-  once compiling has paid (:func:`compile_pays`).
+  When the execution setting has a cache (:mod:`hexapod._support.execution`), it is kept
+  there under the model's content hash, serialized (another run of the same model does not
+  build its graph again) and, when compiled, as a library.
 """
 
 from __future__ import annotations
@@ -38,17 +36,10 @@ import casadi as ca
 import numpy as np
 
 from hexapod._support import signals
-from hexapod._support.array_program import BlockEvaluator, Program, block_size, cached_program
-from hexapod._support.compiled import (
-    COMPILER_FLAGS,
-    QUICK_FLAGS,
-    compiled,
-    find_compiled,
-    interpreted_samples,
-    serialized,
-)
+from hexapod._support.compiled import compiled, serialized
+from hexapod._support.execution import current
 from hexapod.errors import HexapodError
-from hexapod.model.model import GROUND_INDEX, Model
+from hexapod.model.model import GROUND_INDEX, Data, Model
 from hexapod.spatial import (
     g_matrix,
     quaternion_product,
@@ -107,23 +98,6 @@ class InverseResult:
     policy: str = ""
 
 
-#: From this many samples, the tree path evaluates its Function uncompiled as an array program
-#: (:mod:`hexapod._support.array_program`: one NumPy operation per instruction over a block of
-#: samples) rather than in CasADi's virtual machine, sample by sample. Over 1000 samples, the
-#: laws' evaluation included, a sample costs 3.8 against 21 us for the front leg and 10.0
-#: against 22.6 us for 18 joints, and 2.8 and 6.6 us with optimized C code
-#: (scripts/bench_inverse.py --vm); reading the program from the Function (once, then kept in
-#: the cache) costs 8 and 18 ms. Below some hundreds of samples, NumPy's half microsecond per
-#: call makes the virtual machine the faster.
-ARRAY_FROM_SAMPLES = 500
-#: Quick code (gcc -O0) of the tree path costs 0.13 s of CPU to compile for the front leg and
-#: 0.23 s for 18 joints, and evaluates a sample in 3.3 and 7.3 us against the virtual machine's
-#: 12.8 and 24.7 us: for runs too short for the array program, it pays from some 14 000
-#: samples on, counted over every run of the model (:func:`compile_pays`).
-COMPILE_FROM_SAMPLES = 15_000
-#: Optimized code (gcc -O2) costs 0.39 and 0.91 s to compile and saves 1 to 3 us a sample over
-#: the array program (more over quick code): a run of this many samples compiles it.
-OPTIMIZE_FROM_SAMPLES = 200_000
 #: CasADi's map of a Function over ``b`` samples costs about 4 microseconds per sample to build
 #: (once per size), and each call of it about 50 microseconds of Python: the tree path calls
 #: maps over blocks of about sqrt(12 N) of the N samples (at least 64), which keeps both small.
@@ -135,47 +109,41 @@ BLOCK_FACTOR, SMALLEST_BLOCK = 12, 64
 #: (below, building its Functions costs about as much as the saddle path's samples: some two
 #: seconds for the walking hexapod, whose samples cost 70 ms each on the saddle path).
 PHASE_FROM_SAMPLES = 32
-#: The phase path compiles its Functions to C from this many samples (compiling the walking
-#: hexapod's takes some tens of seconds and saves about a millisecond per sample).
-PHASE_COMPILE_FROM_SAMPLES = 50_000
 
 
 def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = "joint",
-                     compile: bool | None = None, arrays: bool | None = None,
+                     data: Data | None = None,
                      progress: Callable[[int, int], None] | None = None) -> InverseResult:
     """Joint wrenches and driver efforts of the prescribed motion at ``times``.
 
     The drivers' laws give the motion (a motion file becomes laws exact at its samples, see
-    :mod:`hexapod.motion`).
+    :mod:`hexapod.scene.motion`). How the Functions are evaluated (CasADi's virtual machine, or
+    compiled C) is the execution setting's (:func:`hexapod.executing`), never this call's.
 
     Parameters
     ----------
+    model : Model
+    times : array_like (N,)
+        Sample times, s.
     method :
         ``"auto"`` (the tree path when the model allows it, else the phase path from
         :data:`PHASE_FROM_SAMPLES` samples, else the saddle path), ``"tree"``, ``"phase"``
-        (closed loops and contacts, compiled: :mod:`hexapod.algorithms.phase_inverse`) or
-        ``"saddle"`` (any mechanism, every sample solved exactly in Python: the reference).
+        (closed loops and contacts, batched: :mod:`hexapod.algorithms.phase_inverse`) or
+        ``"saddle"`` (any mechanism, every sample solved exactly: the reference).
     frame :
         ``"joint"`` (the report convention) or ``"world"``.
-    compile :
-        Tree and phase paths: evaluate compiled C code (True) or interpret (False: on the tree
-        path, as ``arrays`` says). Tree path, by default: optimized code when it is at hand
-        (compiled before, in this process or in the cache on disk) or the run is very long,
-        else the array program when the run is long enough, else quick code when it is at
-        hand or compiling pays, else CasADi's virtual machine (:func:`compile_pays`). Phase
-        path, by default: compiled from :data:`PHASE_COMPILE_FROM_SAMPLES` samples, or when
-        this process compiled the model's phase path before, and otherwise the libraries the
-        cache on disk holds (an earlier run compiled them) where it holds them. ``False``: the
-        interpreter only.
-    arrays :
-        Tree path, when not compiled: evaluate the array program (True, whatever the number of
-        samples; :mod:`hexapod._support.array_program`), CasADi's virtual machine (False: the
-        reference interpreter, sample by sample), or the array program from
-        :data:`ARRAY_FROM_SAMPLES` samples and the virtual machine below (None).
+    data : Data, optional
+        A workspace of ``model`` to run in (default: a new one). A run leaves there what it
+        built for its samples (call buffers, rank decisions and their plans), which a later
+        run with the same workspace reuses.
     progress :
         Called as ``progress(done, total)`` as samples are done (after each block of samples
         on the tree path, see :data:`BLOCK_FACTOR`; after each run of samples sharing one
         rank decision on the phase path).
+
+    Returns
+    -------
+    InverseResult
 
     Raises
     ------
@@ -185,9 +153,12 @@ def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = 
         When ``method="tree"`` and the model is not an open tree with every joint driven.
     """
     times = np.atleast_1d(np.asarray(times, dtype=float))
+    if data is None:
+        data = model.create_data()
+    model.check(data)
     if frame not in ("joint", "world"):
         raise ValueError(f"frame must be 'joint' or 'world', got {frame!r}")
-    w, wd, wdd = (x.reshape(model.n_w, times.size) for x in model.law_values(times))
+    w, wd, wdd = (x.reshape(model.n_w, times.size) for x in model.law_values(times, data))
     plan = tree_plan(model)
     if method == "tree" and plan is None:
         raise HexapodError(f"model '{model.name}' is not an open tree with every joint driven, "
@@ -195,53 +166,13 @@ def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = 
     if method not in ("auto", "tree", "phase", "saddle"):
         raise ValueError(f"method must be 'auto', 'tree', 'phase' or 'saddle', got {method!r}")
     if plan is not None and method in ("auto", "tree"):
-        if compile is None:
-            compile = False if arrays else compile_pays(plan, times.size, arrays)
-        as_arrays = not compile and plan.evaluates_arrays(times.size, arrays)
-        result = plan.solve(times, w, wd, wdd, frame, compiled=compile, as_arrays=as_arrays,
-                            progress=progress)
-        if not compile and not as_arrays:
-            interpreted_samples(plan.key, times.size)  # counted over runs, until compiling pays
+        result = plan.solve(data, times, w, wd, wdd, frame, progress=progress)
     elif method == "phase" or (method == "auto" and times.size >= PHASE_FROM_SAMPLES):
-        use_cached = compile is None  # compile=False: the interpreter only
-        if compile is None:
-            compile = (model.was_built(("phase-terms", True, True))
-                       or times.size >= PHASE_COMPILE_FROM_SAMPLES)
-        result = _phase(model, times, w, wd, wdd, frame, compile, use_cached, progress)
+        result = _phase(model, data, times, w, wd, wdd, frame, progress)
     else:
-        result = _saddle(model, times, frame, progress)
+        result = _saddle(model, data, times, frame, progress)
     _check_finite(model, result)
     return result
-
-
-def compile_pays(plan: TreePlan, samples: int, arrays: bool | None = None) -> bool:
-    """Whether to evaluate ``samples`` samples of the tree path compiled, compiling when it
-    pays. Optimized code compiled before (in this process, or in the cache on disk) is used; a
-    run of :data:`OPTIMIZE_FROM_SAMPLES` samples or more compiles it if there is none. A run
-    long enough for the array program (:data:`ARRAY_FROM_SAMPLES`; ``arrays`` as
-    :func:`inverse_dynamics` takes it) is evaluated so, faster than quick code and without a
-    compiler. Shorter runs use quick code compiled before, else are interpreted by CasADi's
-    virtual machine until the samples it evaluated, over every run of the model the cache
-    remembers, and this run's reach :data:`COMPILE_FROM_SAMPLES`; then quick code is
-    compiled: the rule of renting skis until their price is spent. The interpreter's time
-    spent first never passes what compiling costs, so the total is at most twice what the
-    best choice in hindsight would cost; short runs never wait for a compiler, and a model
-    used often is compiled once for all its later runs."""
-    if not plan.is_compiled:
-        plan.find_library()
-    if plan.is_compiled and plan.optimized:
-        return True
-    if samples >= OPTIMIZE_FROM_SAMPLES:
-        plan.compile(optimized=True)
-        return True
-    if plan.evaluates_arrays(samples, arrays):
-        return False
-    if plan.is_compiled:
-        return True
-    if interpreted_samples(plan.key) + samples >= COMPILE_FROM_SAMPLES:
-        plan.compile(optimized=False)
-        return True
-    return False
 
 
 def _check_finite(model: Model, result: InverseResult) -> None:
@@ -259,11 +190,10 @@ def _check_finite(model: Model, result: InverseResult) -> None:
 
 # ------------------------------------------------------------------ the saddle path
 
-def _phase(model, times, w, wd, wdd, frame, compile, use_cached, progress) -> InverseResult:
+def _phase(model, data, times, w, wd, wdd, frame, progress) -> InverseResult:
     from hexapod.algorithms.phase_inverse import phase_inverse  # loaded when it runs, as below
 
-    fields = phase_inverse(model, times, w, wd, wdd, frame, to_c=compile, use_cached=use_cached,
-                           progress=progress)
+    fields = phase_inverse(model, data, times, w, wd, wdd, frame, progress=progress)
     return InverseResult(times, tuple(j.name for j in model.joints), fields["force"],
                          fields["torque"], fields["effort"], fields["q"], fields["v"],
                          fields["v_dot"], frame, "phase", fields["max_violation"],
@@ -272,7 +202,7 @@ def _phase(model, times, w, wd, wdd, frame, compile, use_cached, progress) -> In
                          model.ground.policy if model.contacts else "")
 
 
-def _saddle(model, times, frame, progress) -> InverseResult:
+def _saddle(model, data, times, frame, progress) -> InverseResult:
     # the saddle path's algorithms, loaded when it runs: the tree path (and 'hexapod inverse'
     # on a leg or a URDF robot) starts without them
     from hexapod.algorithms.sample_inverse import exact_sample
@@ -284,8 +214,6 @@ def _saddle(model, times, frame, progress) -> InverseResult:
     ground = np.zeros((n, len(model.contacts), 3))
     status = np.full((n, len(model.contacts)), "swing", dtype=object)
     worst = 0.0
-    data = model.create_data()
-    model.law_values(times)  # all samples at once: the per-sample calls below reuse them
     for k, t in enumerate(times):
         sample = exact_sample(model, data, times[k - 1] if k else t,
                               Q[k - 1] if k else model.q0, t,
@@ -316,11 +244,6 @@ class TreePlan:
         self.model = model
         self.order = order  # joints, parents first
         self.driver_of = driver_of  # joint index -> driver index
-        #: the compiled Function in use (None before any), and whether it is optimized code
-        self.library: ca.Function | None = None
-        self.optimized = False
-        #: the array program: None before it is sought, False when there is none
-        self._program: Program | bool | None = None
 
     @property
     def key(self) -> str | None:
@@ -337,37 +260,16 @@ class TreePlan:
     def function(self) -> ca.Function:
         """``(w, wd, wdd) -> (q, v, v_dot, wrench, rotation)`` for one sample: the joint wrenches
         (6 x J: force then moment about the joint origin, joint frame) and the joint frames'
-        rotations (9 x J, column-major). Interpreted by CasADi's virtual machine; read from the
-        cache when it holds it (no graph to build), else built and stored there."""
+        rotations (9 x J, column-major). Read from the cache when the execution setting has
+        one and it holds the Function (no graph to build), else built (and kept there)."""
         return serialized(self.key, lambda: ca.Function("tree_inverse", *self._expressions),
                           what=self._what)
 
-    @property
+    @cached_property
     def compiled(self) -> ca.Function:
-        """The same Function compiled to C: the library in use, else optimized code from the
-        cache, or compiled now and stored there; the interpreted one when no compiler is present
-        or ``HEXAPOD_NO_JIT`` is set."""
-        if self.library is None:
-            self.compile(optimized=True)
-        return self.library
-
-    def compile(self, optimized: bool) -> ca.Function:
-        """Use code compiled with :data:`~hexapod._support.compiled.COMPILER_FLAGS` (optimized)
-        or :data:`~hexapod._support.compiled.QUICK_FLAGS`: from the cache, else compiled now
-        and stored there."""
-        flags = COMPILER_FLAGS if optimized else QUICK_FLAGS
-        self.library = compiled(self.key, lambda: self.function, what=self._what, flags=flags)
-        self.optimized = optimized
-        return self.library
-
-    def find_library(self) -> bool:
-        """Use the library the cache holds, optimized code first; False when it holds none."""
-        for optimized, flags in ((True, COMPILER_FLAGS), (False, QUICK_FLAGS)):
-            found = find_compiled(self.key, flags)
-            if found is not None:
-                self.library, self.optimized = found, optimized
-                return True
-        return False
+        """The same Function compiled to C (from the cache when it holds the library); the
+        interpreted one when no compiler is present."""
+        return compiled(self.key, lambda: self.function, what=self._what)
 
     @cached_property
     def _expressions(self) -> tuple:
@@ -450,15 +352,6 @@ class TreePlan:
         return ([w, wd, wdd], outputs, ["w", "wd", "wdd"],
                 ["q", "v", "v_dot", "wrench", "rotation"])
 
-    def build(self, compiled: bool = False) -> ca.Function:
-        """Build (and compile, when ``compiled``) the Function now rather than at a solve."""
-        return self.compiled if compiled else self.function
-
-    @property
-    def is_compiled(self) -> bool:
-        """Whether compiled code is in use (not the interpreter)."""
-        return self.library is not None and self.library is not self.__dict__.get("function")
-
     def _driver_value(self, joint: int, w: ca.SX):
         if joint not in self.driver_of:
             return 0.0
@@ -475,57 +368,25 @@ class TreePlan:
             out[index.tolist()] = ca.mtimes(ca.DM(block), a[index.tolist()])
         return out
 
-    def _evaluator(self, n: int, compiled: bool):
-        """The Function mapped over ``n`` samples and its buffer, built once per ``n``."""
-        cache = self.__dict__.setdefault("_evaluators", {})
-        key = (n, compiled, compiled and self.optimized)  # quick code may give way to optimized
-        if key not in cache:
+    def _evaluator(self, data: Data, n: int, compiled: bool):
+        """The Function mapped over ``n`` samples and its buffer, built once per ``n`` and
+        workspace."""
+        key = ("tree-evaluator", n, compiled)
+        if key not in data.built:
             function = self.compiled if compiled else self.function
             mapped = function.map(n, "serial") if n > 1 else function
-            cache[key] = (mapped, *mapped.buffer())
-        return cache[key]
+            data.built[key] = (mapped, *mapped.buffer())
+        return data.built[key]
 
-    def evaluates_arrays(self, samples: int, arrays: bool | None = None) -> bool:
-        """Whether ``samples`` samples are evaluated, uncompiled, as an array program rather
-        than by CasADi's virtual machine: never with ``arrays=False``; with ``arrays=True``
-        whenever the Function has a program; by default from :data:`ARRAY_FROM_SAMPLES`
-        samples, when the Function has a program and blocks that long fit in its memory
-        bound. The program is read from the cache, or from the Function (and kept there)
-        once."""
-        least = 1 if arrays else ARRAY_FROM_SAMPLES
-        if arrays is False or samples < least:
-            return False
-        if self._program is None:
-            program = cached_program(  # not read from a Function whose blocks are too short
-                self.key, lambda: self.function
-                if _long_blocks(self.function.sz_w(), least) else None, what=self._what)
-            if program is None:
-                return False  # not read for blocks this long: sought again for shorter ones
-            self._program = program  # False: the Function has none
-        return bool(self._program) and _long_blocks(self._program.work_size, least)
-
-    def _array_evaluator(self, block: int) -> BlockEvaluator:
-        """An evaluator of at least ``block`` samples: the one kept when it is at most twice as
-        wide (its extra columns computed for nothing), else a new one, which is kept instead
-        (one evaluator at a time: runs of many sizes do not pile up buffers)."""
-        kept = self.__dict__.get("_array_evaluator_kept")
-        if kept is None or not block <= kept.block <= 2 * block:
-            kept = self.__dict__["_array_evaluator_kept"] = BlockEvaluator(self._program, block)
-        return kept
-
-    def solve(self, times, w, wd, wdd, frame, compiled: bool, as_arrays: bool = False,
+    def solve(self, data: Data, times, w, wd, wdd, frame,
               progress: Callable[[int, int], None] | None = None) -> InverseResult:
         """The result at ``times`` (laws' values ``w``, ``wd``, ``wdd``: one column per
-        sample): the Function compiled (``compiled``), as an array program (``as_arrays``,
-        after :meth:`evaluates_arrays` said yes) or in CasADi's virtual machine."""
+        sample), the Function compiled or interpreted as the execution setting says."""
         model, n, J = self.model, times.size, len(self.model.joints)
         q, v, v_dot = np.empty((n, model.n_q)), np.empty((n, model.n_v)), np.empty((n, model.n_v))
         wrench, rotation = np.empty((n, J, 6)), np.empty((n, J, 9))
         results = (q, v, v_dot, wrench, rotation)
-        if as_arrays and not compiled:
-            self._solve_arrays((w, wd, wdd), results, progress)
-        else:
-            self._solve_mapped((w, wd, wdd), results, compiled, progress)
+        self._solve_mapped(data, (w, wd, wdd), results, current().compiled, progress)
         force, torque = wrench[..., :3], wrench[..., 3:]
         effort = np.full((n, J), np.nan)
         for j, joint in enumerate(model.joints):
@@ -544,7 +405,7 @@ class TreePlan:
         return InverseResult(times, tuple(j.name for j in model.joints), force, torque, effort,
                              q, v, v_dot, frame, "tree", phi_max)
 
-    def _solve_mapped(self, inputs, results, compiled: bool, progress) -> None:
+    def _solve_mapped(self, data: Data, inputs, results, compiled: bool, progress) -> None:
         """Evaluate the Function, compiled or in CasADi's virtual machine, mapped over blocks of
         samples (:data:`BLOCK_FACTOR`)."""
         n = inputs[0].shape[1]
@@ -553,7 +414,7 @@ class TreePlan:
         block = min(n, max(SMALLEST_BLOCK, round(math.sqrt(BLOCK_FACTOR * n))))
         for start in range(0, n, block):
             stop = min(n, start + block)
-            _, buffer, evaluate = self._evaluator(stop - start, compiled)
+            _, buffer, evaluate = self._evaluator(data, stop - start, compiled)
             for i, x in enumerate(inputs):
                 buffer.set_arg(i, memoryview(x[start:stop]))
             for i, y in enumerate(results):
@@ -561,32 +422,6 @@ class TreePlan:
             evaluate()
             if progress is not None:
                 progress(stop, n)
-
-    def _solve_arrays(self, inputs, results, progress) -> None:
-        """Evaluate the array program over blocks of samples as equal as the memory bound
-        allows (:data:`~hexapod._support.array_program.WORK_BYTES`)."""
-        n = inputs[0].shape[1]
-        largest = block_size(self._program.work_size, n)
-        blocks = -(-n // largest)
-        block = -(-n // blocks)
-        evaluate = self._array_evaluator(block)
-        flat = [y.reshape(n, -1) for y in results]  # views: (n, entries), entries column-major
-        with np.errstate(all="ignore"):  # an overflow is reported by _check_finite, by name
-            for start in range(0, n, block):
-                stop = min(n, start + block)
-                for buffer, x in zip(evaluate.inputs, inputs, strict=True):
-                    buffer[:, :stop - start] = x[:, start:stop]
-                evaluate()
-                for y, buffer in zip(flat, evaluate.outputs, strict=True):
-                    y[start:stop] = buffer[:, :stop - start].T
-                if progress is not None:
-                    progress(stop, n)
-
-
-def _long_blocks(work_size: int, least: int) -> bool:
-    """Whether blocks of ``least`` samples fit in an array program's memory bound, for work
-    rows of ``work_size``."""
-    return block_size(work_size, least) >= least
 
 
 def _quaternion(R: np.ndarray) -> np.ndarray:

@@ -12,28 +12,67 @@ from __future__ import annotations
 
 import numpy as np
 
-from hexapod.algorithms.linalg import RowSplit, check_consistency, equilibrate, split_rows
+from hexapod.algorithms.linalg import (
+    RowSplit,
+    check_consistency,
+    equilibrate,
+    hold_rows,
+    split_rows,
+)
 from hexapod.algorithms.saddle import constraint_jacobian
 from hexapod.errors import AssemblyError, SingularSystemError
 from hexapod.model.model import Data, Model
 from hexapod.spatial import rotation_from_euler_parameters
 
+#: The largest scaled residual of a guess from which Newton's method starts with the rank
+#: decision of the last state it solved (a guess predicted from the sample before: some
+#: 1e-9 for the walking robot's samples a millisecond apart) instead of deciding again.
+HOLD_BELOW = 1e-6
+#: A Newton step keeps the factorisation of the one before when it reduced the largest scaled
+#: residual by at least this factor (as Newton's method proper does near the solution);
+#: a slower step factorises again.
+CHORD_RATE = 0.1
+
 
 def _subject(model: Model) -> str:
     """How messages name a model: with the file it was read from, when there is one."""
-    source = getattr(model, "source", "")
-    return f"model '{model.name}'" + (f" ({source})" if source else "")
+    return f"model '{model.name}'" + (f" ({model.source})" if model.source else "")
 
 
-def rank_split(model: Model, Phi_v: np.ndarray, w: np.ndarray) -> RowSplit:
+def rank_split(model: Model, Phi_v: np.ndarray, w: np.ndarray, *,
+               held: RowSplit | None = None, tol: float | None = None) -> RowSplit:
     """The rank decision on the equilibrated ``Phi_v`` at law values ``w`` by the model's
-    policy (its kept rows and their singular values); errors name the model."""
-    priority, groups = model.rank_order(w)
+    policy (its kept rows and their singular values), with the model's rank tolerance or
+    ``tol``; the decision ``held`` (taken at a nearby state) when its kept rows are still
+    independent there. Errors name the model."""
+    tol = model.rank_tolerance if tol is None else tol
     try:
         W, d = equilibrate(Phi_v, model.mass_inv_sqrt)
-        return split_rows(W, d, priority, model.rank_tolerance, groups=groups)
+        priority, groups = model.rank_order(w)
+        split = None
+        if held is not None and held.independent.size + held.redundant.size == priority.size \
+                and np.array_equal(np.sort(np.concatenate([held.independent, held.redundant])),
+                                   np.sort(priority)):  # the same rows to decide on
+            split = hold_rows(W, d, held, tol)
+        if split is None:
+            split = split_rows(W, d, priority, tol, groups=groups)
+        return split
     except SingularSystemError as error:  # the linear algebra does not know the model
         raise SingularSystemError(f"{_subject(model)}: {error}") from None
+
+
+def state_split(model: Model, data: Data, q: np.ndarray, w: np.ndarray, Phi_v,
+                tol: float | None = None) -> RowSplit:
+    """The rank decision at the state ``(q, w)``, taken once per state and workspace: the
+    velocity analysis and the dynamics at the same state share it."""
+    tol = model.rank_tolerance if tol is None else tol
+    kept = data.built.get("state decision")
+    if kept is not None and kept[2] == tol and np.array_equal(kept[0], q) \
+            and np.array_equal(kept[1], w):
+        return kept[3]
+    split = rank_split(model, Phi_v, w, tol=tol)
+    data.built["state decision"] = (np.array(q), np.array(w), tol, split)
+    return split
 
 
 def _check(model: Model, split: RowSplit, y: np.ndarray, rhs: np.ndarray, what: str,
@@ -89,23 +128,29 @@ def assemble_positions(model: Model, data: Data, t: float = 0.0, q: np.ndarray |
     AssemblyError
         Naming the constraints still violated when Newton's method stalls.
     """
-    q = _assemble(model, t, model.normalize(model.q0 if q is None else q), tol, max_iterations,
-                  counts)
+    model.check(data)
+    q = _assemble(model, data, t, model.normalize(model.q0 if q is None else q), tol,
+                  max_iterations, counts)
     data.at(t, q)
     return q
 
 
-def _assemble(model: Model, t: float, q: np.ndarray, tol: float, max_iterations: int,
-              counts: dict | None) -> np.ndarray:
-    w, _, _ = model.law_values(t)
+def _assemble(model: Model, data: Data, t: float, q: np.ndarray, tol: float,
+              max_iterations: int, counts: dict | None) -> np.ndarray:
+    w, _, _ = model.law_values(t, data)
     if model.n_c == 0:
         return q
-    residual = model.call("phi", q=q, w=w) / model.row_scale
+    residual = model.call("phi", data, q=q, w=w) / model.row_scale
     if not np.all(np.isfinite(residual)) or not np.all(np.isfinite(q)):
         raise AssemblyError(f"{_subject(model)}: the constraint residuals are not finite at "
                             "the initial guess (check the scene's magnitudes and length unit)")
     merit = float(np.max(np.abs(residual)))
-    polished = False
+    # near the solution (a guess predicted from the sample before), the decision of the last
+    # state this workspace saw, held while its rows stay independent; else decided here. Its
+    # factorisation is kept over the iterations (a chord method) until a step fails to
+    # reduce the residual, then decided again where that step started
+    held = data.built.get("state decision", (None,) * 4)[3] if merit <= HOLD_BELOW else None
+    polished, split, factorised_at = False, None, None
     for _ in range(max_iterations):
         if merit <= tol:
             if polished:
@@ -113,24 +158,23 @@ def _assemble(model: Model, t: float, q: np.ndarray, tol: float, max_iterations:
             # Newton converges quadratically: one more step takes the residual to round-off
             # (joint points coincide to ~1e-16 m instead of ~tol), kept only if it helps
             polished = True
-        split = rank_split(model, constraint_jacobian(model, q, w), w)
+        if factorised_at is None:
+            split = rank_split(model, constraint_jacobian(model, q, w, data), w, held=held)
+            factorised_at, held = q, None
         if counts is not None:
             counts["newton"] = counts.get("newton", 0) + 1
         dv = model.mass_inv_sqrt @ split.min_norm_correction(-residual * model.row_scale)
-        step = 1.0
-        while True:  # backtracking line search on the largest scaled residual
-            trial = model.integrate(q, step * dv)
-            trial_residual = model.call("phi", q=trial, w=w) / model.row_scale
-            trial_merit = float(np.max(np.abs(trial_residual)))
-            if trial_merit < merit or (trial_merit <= tol and not polished):
-                break
-            step *= 0.5
-            if polished or step < 1e-4:
-                break
+        trial, trial_residual, trial_merit = _line_search(model, data, w, q, dv, merit, tol,
+                                                          polished)
         if trial_merit >= merit and (polished or trial_merit > tol):
+            if factorised_at is not q:  # a chord step that failed: the Jacobian here, again
+                factorised_at = None
+                continue
             if polished:
                 return q
             break
+        if trial_merit > CHORD_RATE * merit:  # too slow for a chord: the Jacobian again
+            factorised_at = None
         q, residual, merit = trial, trial_residual, trial_merit
     if merit <= tol:
         return q
@@ -140,23 +184,43 @@ def _assemble(model: Model, t: float, q: np.ndarray, tol: float, max_iterations:
         "frames and initial poses, or the driver laws at that time")
 
 
+def _line_search(model: Model, data: Data, w, q, dv, merit: float, tol: float,
+                 polished: bool):
+    """Backtracking on the largest scaled residual: the first of ``q (+) s dv``, ``s`` = 1,
+    1/2, ..., that lowers ``merit`` (or meets ``tol`` unless ``polished``): the trial
+    position, its scaled residual and its merit."""
+    step = 1.0
+    while True:
+        trial = model.integrate(q, step * dv)
+        trial_residual = model.call("phi", data, q=trial, w=w) / model.row_scale
+        trial_merit = float(np.max(np.abs(trial_residual)))
+        if trial_merit < merit or (trial_merit <= tol and not polished):
+            return trial, trial_residual, trial_merit
+        step *= 0.5
+        if polished or step < 1e-4:
+            return trial, trial_residual, trial_merit
+
+
 def solve_velocities(model: Model, data: Data, t: float, q: np.ndarray,
                      v: np.ndarray | None = None) -> np.ndarray:
     """Velocities (n_v) satisfying ``Phi_v v = nu`` at ``(t, q)`` closest to the guess ``v``
     (default: the scene's initial velocities) in the kinetic-energy norm; left in ``data.v``
     (with ``data.t``, ``data.q``)."""
-    v = _project_velocities(model, t, q, model.v0 if v is None else np.asarray(v, dtype=float))
+    model.check(data)
+    v = _project_velocities(model, data, t, q,
+                            model.v0 if v is None else np.asarray(v, dtype=float))
     data.at(t, q, v)
     return v
 
 
-def _project_velocities(model: Model, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+def _project_velocities(model: Model, data: Data, t: float, q: np.ndarray,
+                        v: np.ndarray) -> np.ndarray:
     if model.n_c == 0:
         return v.copy()
-    w, wd, _ = model.law_values(t)
-    Phi_v = constraint_jacobian(model, q, w)
-    nu = model.call("nu", q=q, w=w, wd=wd)
-    split = rank_split(model, Phi_v, w)
+    w, wd, _ = model.law_values(t, data)
+    Phi_v = constraint_jacobian(model, q, w, data)
+    nu = model.call("nu", data, q=q, w=w, wd=wd)
+    split = state_split(model, data, q, w, Phi_v)
     residual = nu - Phi_v @ v
     dy = split.min_norm_correction(residual)
     # relative to the velocities themselves: re-projecting a consistent state makes a
@@ -171,9 +235,9 @@ def solve_accelerations(model: Model, data: Data, t: float, q: np.ndarray,
     """Accelerations (n_v) satisfying ``Phi_v v_dot = gamma`` of least kinetic-energy norm
     (unique for a fully driven mechanism): the acceleration analysis of prescribed motion; left
     in ``data.v_dot`` (with ``data.t, q, v, Phi_v, gamma``)."""
-    w, wd, wdd = model.law_values(t)
-    Phi_v = constraint_jacobian(model, q, w)
-    gamma = model.call("gamma", q=q, v=v, w=w, wd=wd, wdd=wdd)
+    w, wd, wdd = model.law_values(t, data)
+    Phi_v = constraint_jacobian(model, q, w, data)
+    gamma = model.call("gamma", data, q=q, v=v, w=w, wd=wd, wdd=wdd)
     split = rank_split(model, Phi_v, w)
     y = split.min_norm_correction(gamma)
     _check(model, split, y, gamma, "acceleration constraints")
@@ -195,8 +259,8 @@ def degrees_of_freedom(model: Model, data: Data, t: float, q: np.ndarray) -> dic
     """Numerical mobility at ``(t, q)``: ``n_v - rank(Phi_v)`` of the joints alone (``dof``)
     and with the drivers (``dof_with_drivers``), and the redundant rows by name
     (``redundant_rows``); ``data`` receives ``Phi_v``."""
-    w, _, _ = model.law_values(t)
-    Phi_v = constraint_jacobian(model, q, w)
+    w, _, _ = model.law_values(t, data)
+    Phi_v = constraint_jacobian(model, q, w, data)
     data.at(t, q)
     data.Phi_v = Phi_v
     split = rank_split(model, Phi_v, w)

@@ -17,8 +17,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hexapod.algorithms.phase_terms import terms_of
 from hexapod.errors import HexapodError
-from hexapod.model.model import GROUND_INDEX, Data, JointInfo, Model
+from hexapod.model.model import Data, JointInfo, Model
 
 
 @dataclass(frozen=True)
@@ -72,38 +73,6 @@ def joint_origin(model: Model, q: np.ndarray, joint: JointInfo):
     """World position (3-D) and rotation (3 x 3) of the joint frame, which is fixed to the child."""
     pose = model.body_pose(q, joint.child) @ joint.child_frame
     return _embed_vector(pose.position[:, None])[:, 0], _embed_rotation(pose.rotation)
-
-
-def body_wrench(model: Model, q: np.ndarray, body: int, G: np.ndarray,
-                point: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Force and moment about ``point`` (world, 3-D) of generalized forces ``G`` (n_v, m) acting
-    on ``body``: arrays (3, m) in world axes."""
-    info = model.bodies[body]
-    pose = model.body_pose(q, body)
-    g = G[info.v]
-    r = _embed_vector(pose.position[:, None])[:, 0]
-    if info.kind == "spatial":
-        force = g[:3]
-        moment = pose.rotation @ g[3:]
-    elif info.kind == "planar":
-        force = _embed_vector(g[:2])
-        moment = np.vstack([np.zeros((2, g.shape[1])), g[2:3]])
-    else:
-        force = _embed_vector(g)
-        moment = np.zeros_like(force)
-    arm = (r - point)[:, None]
-    return force, moment + np.cross(arm, force, axis=0)
-
-
-def _on_child(model: Model, q: np.ndarray, joint: JointInfo, G: np.ndarray, point: np.ndarray):
-    if joint.child != GROUND_INDEX:
-        return body_wrench(model, q, joint.child, G, point)
-    force, moment = body_wrench(model, q, joint.parent, G, point)
-    return -force, -moment
-
-
-def _joint_rows(joint: JointInfo) -> np.ndarray:
-    return np.concatenate([joint.rows, joint.driver_rows]).astype(int)
 
 
 def parent_point(model: Model, q: np.ndarray, joint: JointInfo):
@@ -165,32 +134,38 @@ def _require_solved(model: Model, data: Data, caller: str) -> None:
                            f"multipliers, model '{model.name}' has {model.n_c} rows)")
 
 
-def wrenches_from_multipliers(model: Model, q: np.ndarray, lam: np.ndarray, Phi_v: np.ndarray,
+def wrenches_from_multipliers(model: Model, q: np.ndarray, lam: np.ndarray, Phi_v,
                               Q_across: np.ndarray | None = None, *, frame: str = "joint",
-                              on: str = "child") -> JointWrenches:
+                              on: str = "child", data: Data | None = None) -> JointWrenches:
     """:func:`joint_wrenches` from explicit multipliers (n_c) at positions ``q`` (n_q), e.g.
     those of a recorded simulation; ``Q_across`` is ``model.Q_across`` at the same state (None
-    leaves out the force elements acting across joints)."""
+    leaves out the force elements acting across joints). The wrenches come from their one
+    definition (:meth:`hexapod.algorithms.phase_terms.PhaseTerms.report`), evaluated through
+    the call buffers of ``data`` when it is given."""
     if on not in ("child", "parent"):
         raise ValueError(f"on must be 'child' or 'parent', got {on!r}")
     if frame not in ("joint", "world"):
         raise ValueError(f"frame must be 'joint' or 'world', got {frame!r}")
+    terms = terms_of(model)
     n = len(model.joints)
+    offset = (terms.evaluate(data, "across", q, Q_across)[0] if Q_across is not None
+              else np.zeros(6 * terms.owners))
+    wrench, frames = terms.evaluate(data, "report", q, terms.nonzeros(Phi_v), lam, offset)
+    wrench, frames = wrench.reshape(6, n), frames.reshape(9, n)
     force, torque, effort = np.zeros((n, 3)), np.zeros((n, 3)), np.full(n, np.nan)
     for k, joint in enumerate(model.joints):
-        rows = _joint_rows(joint)
-        g = -Phi_v[rows].T @ lam[rows]
-        if joint.across_column >= 0 and Q_across is not None:
-            g = g + Q_across[:, joint.across_column]
-        origin, R = joint_origin(model, q, joint)
-        f, t = _on_child(model, q, joint, g[:, None], origin)
-        f, t = f[:, 0], t[:, 0]
+        f, t = wrench[:3, k], wrench[3:, k]  # joint frame, about the joint origin
         if joint.kind == "prismatic":
-            effort[k] = f @ (R @ _embed_vector(np.asarray(joint.axis, float)[:, None])[:, 0])
+            effort[k] = f @ _embed_vector(np.asarray(joint.axis, float)[:, None])[:, 0]
         elif joint.kind == "revolute":  # about the axis; in the plane, about its normal
-            axis = np.array([0.0, 0.0, 1.0]) if joint.axis is None else joint.axis
-            effort[k] = t @ (R @ axis)
+            effort[k] = t @ (np.array([0.0, 0.0, 1.0]) if joint.axis is None else joint.axis)
+        if frame == "joint" and on == "child":
+            force[k], torque[k] = f, t
+            continue
+        R = frames[:, k].reshape(3, 3, order="F")
+        f, t = R @ f, R @ t
         if on == "parent":
+            origin = joint_origin(model, q, joint)[0]
             point, R = parent_point(model, q, joint)
             f, t = -f, -t + np.cross(origin - point, -f)
         if frame == "joint":
@@ -199,38 +174,17 @@ def wrenches_from_multipliers(model: Model, q: np.ndarray, lam: np.ndarray, Phi_
     return JointWrenches(tuple(j.name for j in model.joints), force, torque, effort, frame)
 
 
-def policy_map(model: Model, q: np.ndarray, Phi_v: np.ndarray,
-               Q_across: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """The linear map from multipliers to the wrenches of the redundancy policy, and its offset.
-
-    One block of 6 rows per joint (force, moment about the joint origin divided by the
-    characteristic length ``l``; world axes, since norms do not depend on axes) and per
+def policy_map(model: Model, q: np.ndarray, Phi_v, Q_across: np.ndarray | None = None,
+               data: Data | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The linear map from multipliers to the wrenches of the least-wrench redundancy policy,
+    and its offset: one block of 6 rows per joint (force, moment about the joint origin divided
+    by the characteristic length ``l``; world axes, since norms do not depend on axes) and per
     coordinate driver (force and moment about the body's centre of mass). The policy minimises
-    ``|map @ lam + offset|^2``.
-    """
-    length = model.characteristic_length
-    owners = len(model.joints) + sum(d.kind == "coordinate" for d in model.drivers)
-    A = np.zeros((6 * owners, model.n_c))
-    offset = np.zeros(6 * owners)
-    block = 0
-    for joint in model.joints:
-        rows = _joint_rows(joint)
-        origin, _ = joint_origin(model, q, joint)
-        f, t = _on_child(model, q, joint, -Phi_v[rows].T, origin)
-        A[6 * block:6 * block + 3, rows] = f
-        A[6 * block + 3:6 * block + 6, rows] = t / length
-        if joint.across_column >= 0 and Q_across is not None:
-            g = Q_across[:, joint.across_column][:, None]
-            f0, t0 = _on_child(model, q, joint, g, origin)
-            offset[6 * block:6 * block + 6] = np.concatenate([f0[:, 0], t0[:, 0] / length])
-        block += 1
-    for driver in model.drivers:
-        if driver.kind != "coordinate":
-            continue
-        pose = model.body_pose(q, driver.body)
-        centre = _embed_vector(pose.position[:, None])[:, 0]
-        f, t = body_wrench(model, q, driver.body, -Phi_v[[driver.row]].T, centre)
-        A[6 * block:6 * block + 3, driver.row] = f[:, 0]
-        A[6 * block + 3:6 * block + 6, driver.row] = t[:, 0] / length
-        block += 1
+    ``|map @ lam + offset|^2``. Written once, as CasADi expressions
+    (:meth:`hexapod.algorithms.phase_terms.PhaseTerms.wrench_map`), evaluated here on numbers
+    (through the call buffers of ``data``, when given)."""
+    terms = terms_of(model)
+    (A,) = terms.evaluate(data, "wrench_map", q, terms.nonzeros(Phi_v))
+    offset = (terms.evaluate(data, "across", q, Q_across)[0] if Q_across is not None
+              else np.zeros(A.shape[0]))
     return A, offset

@@ -155,11 +155,14 @@ def split_rows(W: np.ndarray, scale: np.ndarray, priority: np.ndarray, tol: floa
                groups: np.ndarray | None = None) -> RowSplit:
     """Decide the rank of ``W`` (rows of unit length) and which rows are redundant.
 
-    A single QR factorisation in priority order settles the usual full-rank case; when some
-    diagonal entry falls below ``tol`` the rows are taken one by one (Gram-Schmidt, twice), so
-    a redundant row never leaves a spurious direction in the basis. ``groups`` (a label per
-    entry of ``priority``, equal within consecutive runs) lets rows of one group be taken in the
-    order of their distance from the span already kept (default: each row its own group).
+    Rows are taken in ``priority`` order, group by group (``groups``: a label per entry of
+    ``priority``, equal within consecutive runs; default each row its own group). A row is
+    redundant when its distance to the span of the rows kept before it is at most ``tol``.
+    Runs of one-row groups are taken in order and rows of one group the farthest from the span
+    already kept first (column pivoting), each run by one LAPACK QR of its rows' components
+    off that span (:func:`_take_ordered`, :func:`_take_pivoted`), so that the usual case, every
+    row kept, costs one factorisation. A redundant row never leaves a spurious direction in the
+    basis: the rows after it are taken again against the span of the kept rows alone.
     """
     n_c, n_v = W.shape
     order = np.asarray(priority, dtype=int)
@@ -169,53 +172,124 @@ def split_rows(W: np.ndarray, scale: np.ndarray, priority: np.ndarray, tol: floa
         labels = np.arange(order.size) if groups is None else np.asarray(groups)
         return (_sparse_split(W, scale, order, labels, tol, pivoting=False)
                 or _sparse_split(W, scale, order, labels, tol, pivoting=True))
-    if n_c <= n_v:
+    if n_c <= n_v:  # the usual case first: every row kept, in priority order
         basis, R = np.linalg.qr(W[order].T, mode="reduced")
         if np.all(np.abs(np.diag(R)) > tol):
             signs = np.sign(np.diag(R))
             return RowSplit(order, np.zeros(0, dtype=int), basis * signs, signs[:, None] * R,
                             scale, W)
-    # rows are taken group by group (see Model.row_groups); within a group the row farthest
-    # from the span of those kept comes first (column pivoting), so that a nearly dependent row
-    # is not kept where a better one exists: in index order a standing hexapod kept drivers
-    # whose smallest singular value was 5.6e-7 where 4.4e-4 was to be had
     labels = np.arange(order.size) if groups is None else np.asarray(groups)
-    kept = []
-    columns = np.zeros((n_v, min(n_c, n_v)))  # the kept rows' orthonormal basis, filled in
-    m = 0
-    begin = 0
-    while begin < order.size:
-        end = begin
-        while end < order.size and labels[end] == labels[begin]:
-            end += 1
-        candidates = list(order[begin:end])
-        begin = end
-        residual = W[candidates].copy()
-        if m:
-            Qb = columns[:, :m]
-            for _ in range(2):  # twice is enough (Giraud et al.)
-                residual -= (residual @ Qb) @ Qb.T
-        while candidates:
-            norms = np.linalg.norm(residual, axis=1)
-            j = int(np.argmax(norms))
-            if norms[j] <= tol or m >= n_v:
-                break
-            u = residual[j] / norms[j]
-            if m:
-                Qb = columns[:, :m]
-                u -= Qb @ (Qb.T @ u)
-                u /= np.linalg.norm(u)
-            kept.append(candidates.pop(j))
-            columns[:, m] = u
-            m += 1
-            residual = np.delete(residual, j, axis=0)
-            residual -= np.outer(residual @ u, u)
+    basis, kept = np.zeros((n_v, 0)), []
+    for rows, pivoted in _runs(order, labels):
+        take = _take_pivoted if pivoted else _take_ordered
+        chosen, basis = take(W, rows, basis, tol)
+        kept += chosen
     taken = set(kept)
     redundant = [row for row in order if row not in taken]
-    basis = columns[:, :m]
     R = np.triu(basis.T @ W[kept].T) if kept else np.zeros((0, 0))
     return RowSplit(np.array(kept, dtype=int), np.array(redundant, dtype=int), basis, R,
                     scale, W)
+
+
+def hold_rows(W: np.ndarray, scale: np.ndarray, split: RowSplit, tol: float
+              ) -> RowSplit | None:
+    """The decision ``split`` held at another ``W`` (the next Newton iterate): its kept rows
+    factorised again, in one QR, the same rows left out; None when a kept row has come within
+    ``tol`` of the span of those before it (then decide again), or for a large sparse ``W``."""
+    if is_sparse(W) or _sparse_form(W) is not None or not split.rank:
+        return None
+    I = split.independent
+    basis, R = np.linalg.qr(W[I].T, mode="reduced")
+    if not np.all(np.abs(np.diag(R)) > tol):
+        return None
+    signs = np.sign(np.diag(R))
+    return RowSplit(I, split.redundant, basis * signs, signs[:, None] * R, scale, W)
+
+
+def _runs(order: np.ndarray, labels: np.ndarray):
+    """``(rows, pivoted)``: each group of several rows (pivoted), and each run of consecutive
+    one-row groups (in order)."""
+    begin = 0
+    while begin < order.size:
+        end = begin + 1
+        while end < order.size and labels[end] == labels[begin]:
+            end += 1
+        if end - begin > 1:
+            yield order[begin:end], True
+        else:
+            while end < order.size and labels[end] != labels[end - 1] and (
+                    end + 1 == order.size or labels[end + 1] != labels[end]):
+                end += 1
+            yield order[begin:end], False
+        begin = end
+
+
+def _off_span(W: np.ndarray, rows, basis: np.ndarray) -> np.ndarray:
+    """The rows' components off the span of ``basis`` (as columns), projected twice (twice is
+    enough: Giraud et al.)."""
+    A = W[rows].T
+    for _ in range(2 if basis.shape[1] else 0):
+        A = A - basis @ (basis.T @ A)
+    return A
+
+
+def _extended(basis: np.ndarray, Q: np.ndarray, separation: float) -> np.ndarray:
+    """``basis`` with the orthonormal columns ``Q`` (nearly orthogonal to it) appended. The
+    components of nearly dependent rows lose their orthogonality to the span in the
+    factorisation, by the ratio of their size to their distance (``separation``, the smallest
+    such ratio's inverse): below 1e-3, the columns are made orthogonal to it again and
+    orthonormal."""
+    if Q.shape[1] and basis.shape[1] and separation < 1e-3:
+        Q = Q - basis @ (basis.T @ Q)
+        Q, R = np.linalg.qr(Q)
+        Q = Q * np.sign(np.diag(R))
+    return np.hstack([basis, Q])
+
+
+def _take_ordered(W: np.ndarray, rows, basis: np.ndarray, tol: float):
+    """Rows taken in order: the first whose distance to the span of those kept is at most
+    ``tol`` is redundant, and the rows after it are taken again. Returns the rows kept and the
+    extended basis."""
+    from scipy.linalg import qr
+
+    kept, rows = [], list(rows)
+    while rows and basis.shape[1] < W.shape[1]:
+        Q, R = qr(_off_span(W, rows, basis), mode="economic", check_finite=False)
+        distance = np.abs(np.diag(R))
+        room = W.shape[1] - basis.shape[1]
+        small = np.flatnonzero(distance <= tol)
+        first = int(small[0]) if small.size else distance.size
+        first = min(first, room)
+        signs = np.sign(np.diag(R)[:first])
+        basis = _extended(basis, Q[:, :first] * signs, _separation(distance, first))
+        kept += rows[:first]
+        # the row at ``first`` is redundant (or no room is left): the rest again, without it
+        rows = rows[first + 1:] if first < room else []
+    return kept, basis
+
+
+def _take_pivoted(W: np.ndarray, rows, basis: np.ndarray, tol: float):
+    """Rows of one group, the farthest from the span of those kept first (QR with column
+    pivoting), until the farthest left is within ``tol`` of it. Returns the rows kept and the
+    extended basis."""
+    from scipy.linalg import qr
+
+    room = W.shape[1] - basis.shape[1]
+    if room == 0:
+        return [], basis
+    Q, R, P = qr(_off_span(W, rows, basis), mode="economic", pivoting=True, check_finite=False)
+    distance = np.abs(np.diag(R))
+    small = np.flatnonzero(distance <= tol)
+    count = min(int(small[0]) if small.size else distance.size, room)
+    signs = np.sign(np.diag(R)[:count])
+    chosen = [int(rows[i]) for i in P[:count]]
+    return chosen, _extended(basis, Q[:, :count] * signs, _separation(distance, count))
+
+
+def _separation(distance: np.ndarray, count: int) -> float:
+    """The smallest distance of the ``count`` rows taken to the span before them, over their
+    size (rows of unit length: the distance itself); 1 when none is taken."""
+    return float(distance[:count].min()) if count else 1.0
 
 
 # ------------------------------------------------------------------ large sparse matrices

@@ -45,13 +45,13 @@ from collections.abc import Callable
 import numpy as np
 
 from hexapod._support import signals
-from hexapod.algorithms.ground import NO_LOAD
-from hexapod.algorithms.linalg import as_dense, equilibrate
+from hexapod._support.execution import current
+from hexapod.algorithms.ground import NO_LOAD, foot_values, sharing_weights
+from hexapod.algorithms.linalg import as_dense, equilibrate, split_rows
 from hexapod.algorithms.phase_plan import MORE_NEWTON_STEPS, NEWTON_STEPS, PhasePlan, plan_for
-from hexapod.algorithms.phase_terms import PhaseTerms
+from hexapod.algorithms.phase_terms import PhaseTerms, terms_of
 from hexapod.algorithms.sample_inverse import SampleResult, exact_forces, exact_sample
-from hexapod.algorithms.static_lu import StaticLU
-from hexapod.model.model import Model
+from hexapod.model.model import Data, Model
 
 #: A sample is redone exactly when its scaled position residual is above this (a tenth of the
 #: exact path's Newton tolerance, which then takes one more step) ...
@@ -66,14 +66,6 @@ SIGMA_TOL = 1e-6
 CHUNK = 2_000
 
 
-def phase_terms(model: Model, to_c: bool, use_cached: bool = True) -> PhaseTerms:
-    """The model's Functions of the phase path, built (and compiled to C when ``to_c``) once
-    (see :class:`PhaseTerms` for ``use_cached``)."""
-    use_cached = use_cached or to_c
-    return model.built_once(("phase-terms", to_c, use_cached),
-                            lambda m: PhaseTerms(m, to_c, use_cached))
-
-
 class _Feet:
     """The per-sample inputs of the contacts: stance, weights, idle feet and the policy's
     per-foot values (see :meth:`PhasePlan._objective`)."""
@@ -83,17 +75,9 @@ class _Feet:
         n = times.size
         self.stance = np.array([c.in_stance(times) for c in contacts], dtype=bool).reshape(-1, n)
         weights = np.array([c.weight(times) for c in contacts], dtype=float).reshape(-1, n)
-        unloaded = ~np.any(weights > NO_LOAD, axis=0)  # every foot down at touch-down or lift-off
-        weights[:, unloaded] = self.stance[:, unloaded]
-        self.weights = weights
+        self.weights = weights = sharing_weights(weights, self.stance)
         self.idle = self.stance & (weights <= NO_LOAD)
-        safe = np.where(weights > NO_LOAD, weights, 1.0)
-        policy = model.ground.policy if contacts else "min-wrench"
-        if policy == "min-wrench":
-            self.values = np.where(weights > NO_LOAD, 1.0 / np.sqrt(safe), 1.0)
-        else:
-            self.values = np.where((weights > NO_LOAD) & (weights < 1.0),
-                                   np.sqrt(np.maximum(1.0 / safe - 1.0, 0.0)), 0.0)
+        self.values = foot_values(model.ground.policy if contacts else "min-wrench", weights)
         self.owner = np.full(model.n_c, -1)  # the contact of each row
         for k, c in enumerate(contacts):
             self.owner[c.rows] = k
@@ -162,18 +146,19 @@ class _Results:
                                     h * self.v[k - 1] + h * h / 2 * self.v_dot[k - 1])
 
 
-def phase_inverse(model: Model, times: np.ndarray, w, wd, wdd, frame: str, *,
-                  to_c: bool, use_cached: bool = True,
+def phase_inverse(model: Model, data: Data, times: np.ndarray, w, wd, wdd, frame: str, *,
                   progress: Callable[[int, int], None] | None = None) -> dict:
     """The phase path over ``times`` (laws ``w, wd, wdd`` given, n_w x N): the fields of an
     :class:`~hexapod.algorithms.inverse.InverseResult` as a dict, with ``exact_samples``, the
-    number of samples solved by the exact path."""
+    number of samples solved by the exact path. Compiled or interpreted as the execution
+    setting says (:mod:`hexapod._support.execution`)."""
+    to_c = current().compiled
     n = times.size
-    out, data = _Results(model, n, frame == "world"), model.create_data()
+    out = _Results(model, n, frame == "world")
     feet = _Feet(model, times)
     out.store(0, exact_sample(model, data, times[0], model.q0, times[0], frame=frame,
                               first=True))
-    decisions = _Decisions(model, phase_terms(model, to_c, use_cached), feet, to_c)
+    decisions = _Decisions(model, data, terms_of(model), feet, to_c)
     decisions.adopt(0, data, w[:, 0])
     newton = NEWTON_STEPS  # Newton steps per sample: more once samples prove far apart
     k, chunk = 1, CHUNK
@@ -189,7 +174,7 @@ def phase_inverse(model: Model, times: np.ndarray, w, wd, wdd, frame: str, *,
                                         times[bad], (out.v[bad - 1], out.v_dot[bad - 1]),
                                         frame=frame))
             if blame == "rank":  # the decision no longer holds: take the exact solve's
-                decisions.adopt(bad, data, w[:, bad], plan)
+                decisions.adopt(bad, data, w[:, bad])
             elif blame == "newton":  # samples too far apart for the Newton steps taken
                 newton = MORE_NEWTON_STEPS
             k, chunk = bad + 1, 1  # short runs after a failure, growing again
@@ -201,7 +186,7 @@ def phase_inverse(model: Model, times: np.ndarray, w, wd, wdd, frame: str, *,
             progress(k, n)
     _frames(model, out, frame)
     if model.contacts and model.ground.policy == "friction":
-        _friction(model, out, feet, times, frame)
+        _friction(model, data, out, feet, times, frame)
     return {"q": out.q, "v": out.v, "v_dot": out.v_dot, "force": out.force,
             "torque": out.torque, "effort": out.effort, "ground": out.ground,
             "status": out.status.astype(str), "max_violation": float(out.violation.max()),
@@ -217,20 +202,14 @@ class _Decisions:
     the ground as the exact decision chooses them (the farthest from the span of those kept
     first), the feet that carry nothing last, so that their multipliers can be held at zero."""
 
-    def __init__(self, model: Model, terms: PhaseTerms, feet: _Feet, to_c: bool):
-        self.model, self.terms, self.feet, self.to_c = model, terms, feet, to_c
+    def __init__(self, model: Model, data: Data, terms: PhaseTerms, feet: _Feet, to_c: bool):
+        self.model, self.data, self.terms, self.feet, self.to_c = model, data, terms, feet, to_c
         self.plans: dict = {}
         self.base = None  # the kept and left-out rows that are no foot's
-        self.generation: dict = {}  # per kept and left-out rows: plans whose pivots failed
 
-    def adopt(self, k: int, data, w_k, failed: PhasePlan | None = None) -> None:
-        """The exact solve's decision at sample ``k`` (held in ``data``); when it keeps the
-        rows of the plan that ``failed`` there, new pivots for them."""
+    def adopt(self, k: int, data, w_k) -> None:
+        """The exact solve's decision at sample ``k`` (held in ``data``)."""
         kept, left = np.sort(data.independent_rows), np.sort(data.redundant_rows)
-        if failed is not None and np.array_equal(failed.kept, kept) and np.array_equal(
-                failed.left_out, left):
-            key = (tuple(kept.tolist()), tuple(left.tolist()))
-            self.generation[key] = self.generation.get(key, 0) + 1
         foot = self.feet.owner >= 0
         self.base = (kept[~foot[kept]], left[~foot[left]])
         key = self.feet.contact_set(k)
@@ -252,62 +231,39 @@ class _Decisions:
         return plan
 
     def _select(self, k: int, q, w_k) -> PhasePlan | None:
-        """The feet's rows to keep at sample ``k`` with the joints' and drivers' as decided."""
+        """The feet's rows to keep at sample ``k`` with the joints' and drivers' as decided:
+        the rank decision (:func:`~hexapod.algorithms.linalg.split_rows`) on those rows, then
+        the feet that carry load, then the others."""
         model = self.model
         if self.base is None or not model.contacts:
             return None
-        kept, left = self.base
-        Phi = model.call("Phi_v", q=q, w=w_k)
-        W = as_dense(equilibrate(Phi, model.mass_inv_sqrt)[0])  # sparse on a large model
-        basis, _ = np.linalg.qr(W[kept].T)
+        base, left = self.base
+        Phi = model.call("Phi_v", self.data, q=q, w=w_k)
+        W, d = equilibrate(Phi, model.mass_inv_sqrt)
         priority, _ = model.rank_order(w_k)
         feet = priority[self.feet.owner[priority] >= 0]
         idle = self.feet.rows_idle(feet, k)
-        chosen = []
-        for group in (feet[~idle], feet[idle]):
-            rows = list(group)
-            residual = W[rows] - (W[rows] @ basis) @ basis.T
-            residual -= (residual @ basis) @ basis.T  # twice is enough
-            while rows and basis.shape[1] < model.n_v:
-                norms = np.linalg.norm(residual, axis=1)
-                j = int(np.argmax(norms))
-                if norms[j] <= model.rank_tolerance:
-                    break
-                u = residual[j] / norms[j]
-                u -= basis @ (basis.T @ u)
-                u /= np.linalg.norm(u)
-                chosen.append(rows.pop(j))
-                basis = np.column_stack([basis, u])
-                residual = np.delete(residual, j, axis=0)
-                residual -= np.outer(residual @ u, u)
-        if basis.shape[1] != model.n_v:
+        order = np.concatenate([base, feet[~idle], feet[idle]]).astype(int)
+        groups = np.concatenate([np.arange(base.size), np.full((~idle).sum(), base.size),
+                                 np.full(idle.sum(), base.size + 1)])
+        split = split_rows(as_dense(W), d, order, model.rank_tolerance, groups=groups)
+        if split.rank != model.n_v:
             return None
-        kept = np.concatenate([kept, chosen]).astype(int)
-        left = np.concatenate([left, np.setdiff1d(feet, chosen)]).astype(int)
-        return self._plan(q, w_k, kept, left)
+        return self._plan(q, w_k, split.independent,
+                          np.concatenate([left, split.redundant]).astype(int))
 
     def _plan(self, q, w_k, kept, left) -> PhasePlan | None:
-        """The plan of a decision (for a new one, the pivots of ``Phi_v[kept]`` at ``q``). The
-        rows are sorted: a decision that keeps the same rows in another order (the exact one
-        orders drivers and feet by their conditioning) is the same plan."""
+        """The plan of a decision. The rows are sorted: a decision that keeps the same rows in
+        another order (the exact one orders drivers and feet by their conditioning) is the same
+        plan."""
         model, terms = self.model, self.terms
         kept, left = np.sort(kept), np.sort(left)
 
-        def make():
-            Phi = model.call("Phi_v", q=q, w=w_k)
-            where = np.full(model.n_c, -1)
-            where[kept] = np.arange(kept.size)
-            entries = np.flatnonzero(where[terms.pattern_rows] >= 0)
-            rows, columns = where[terms.pattern_rows[entries]], terms.pattern_columns[entries]
-            lu = StaticLU.pivoted(rows, columns, model.n_v, Phi[kept[rows], columns])
-            return lu, equilibrate(Phi, model.mass_inv_sqrt)[1]
+        def make():  # the rows' scales at the decision
+            Phi = model.call("Phi_v", self.data, q=q, w=w_k)
+            return equilibrate(Phi, model.mass_inv_sqrt)[1]
 
-        key = (tuple(kept.tolist()), tuple(left.tolist()))
-        try:
-            return plan_for(model, terms, kept, left, make, self.generation.get(key, 0),
-                            self.to_c)
-        except RuntimeError:  # exactly singular there
-            return None
+        return plan_for(self.data, terms, kept, left, make, self.to_c)
 
 
 def _run(plan: PhasePlan, newton: int, out: _Results, feet: _Feet, times, w, wd, wdd,
@@ -370,11 +326,10 @@ def _frames(model: Model, out: _Results, frame: str) -> None:
         out.torque[compiled] = np.einsum("njab,njb->nja", R, out.torque[compiled])
 
 
-def _friction(model: Model, out: _Results, feet: _Feet, times, frame: str) -> None:
+def _friction(model: Model, data: Data, out: _Results, feet: _Feet, times, frame: str) -> None:
     """Samples where the least-effort forces leave a friction cone (or the exact cone is
     asked): forces by the exact per-sample solve, QP included."""
     ground = model.ground
-    data = model.create_data()
     for k in np.flatnonzero(~out.exact):
         if ground.faces and _inside_cones(ground, feet, out.ground[k], k):
             continue

@@ -12,8 +12,10 @@ before). One sample:
 1. positions: ``q_p = q (+) (h v + h^2/2 v_dot)`` predicted from the sample before, then
    :data:`NEWTON_STEPS` Newton steps on ``phi_I = 0`` with the Jacobian of ``q_p`` (one
    factorisation), each step applied with the retraction;
-2. ``J = Phi_v[I]`` at the positions found, factorised once (:class:`StaticLU`):
-   ``v = J^-1 nu_I``, ``v_dot = J^-1 gamma_I``, ``lam_I = J^-T (Q - M v_dot)``;
+2. ``J = Phi_v[I]`` at the positions found, factorised once by CasADi's sparse QR
+   (:class:`~hexapod.algorithms.step.KeptFactor`: the square case of the kept-row solve of
+   :mod:`hexapod.algorithms.step`): ``v = J^-1 nu_I``, ``v_dot = J^-1 gamma_I``,
+   ``lam_I = J^-T (Q - M v_dot)``;
 3. the redundancy policy (when rows are left out): every multiplier vector that balances the
    bodies is ``lam0 + N z`` with ``N = [e_R - L_I J^-T Phi_R^T]``; ``z`` minimises the policy's
    ``|A (lam0 + N z) + b|^2`` (the least joint wrenches, each foot's block over the square root
@@ -30,8 +32,8 @@ before). One sample:
 
 The model's Functions (``phi``, ``Phi_v``, ``gamma``...) come from
 :class:`hexapod.algorithms.phase_terms.PhaseTerms`, built once per model; a plan adds only the
-linear algebra of its row set (a few thousand operations), so a new rank decision costs little
-to build or compile.
+linear algebra of its row set (some tens of thousands of operations), so a new rank decision
+costs little to build or compile.
 """
 
 from __future__ import annotations
@@ -39,9 +41,9 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from hexapod.algorithms.phase_terms import PhaseTerms, sparse_dm, sx_function
-from hexapod.algorithms.static_lu import StaticLU
-from hexapod.model.model import Model
+from hexapod.algorithms.phase_terms import PhaseTerms, sx_function
+from hexapod.algorithms.step import KeptFactor, sparse_dm
+from hexapod.model.model import Data
 
 #: Newton steps on the positions per sample, from the positions predicted by the sample before
 #: (enough for samples up to a few milliseconds apart on the walking hexapod) ...
@@ -63,26 +65,19 @@ class PhasePlan:
         The model's Functions.
     kept, left_out : sequence of int
         The rows ``I`` (``len(kept) == n_v``) and the redundant rows ``R``.
-    lu : StaticLU
-        The factorisation's pattern and pivots for ``Phi_v[kept]``.
     scale : ndarray (n_c,)
         The rows' scales for the checks: the norms of the rows of ``Phi_v M^-1/2`` at the
         decision (1 for zero rows).
     to_c : bool
-        Compile the plan's own SX Functions to C (kept in the cache on disk).
+        Compile the plan's own SX Functions to C (kept in the execution setting's cache).
     """
 
-    def __init__(self, terms: PhaseTerms, kept, left_out, lu: StaticLU, scale,
-                 to_c: bool = False):
+    def __init__(self, terms: PhaseTerms, kept, left_out, scale, to_c: bool = False):
         self.terms, self.model = terms, terms.model
         self.kept = np.asarray(kept, dtype=int)
         self.left_out = np.asarray(left_out, dtype=int)
-        self.lu, self.to_c = lu, to_c
+        self.to_c = to_c
         self.scale = np.asarray(scale, dtype=float)
-        position = {(int(r), int(c)): k for k, (r, c) in enumerate(
-            zip(terms.pattern_rows, terms.pattern_columns, strict=True))}
-        self._J_entries = [position[int(self.kept[r]), int(c)]
-                           for r, c in zip(lu.rows, lu.columns, strict=True)]
         left = set(self.left_out.tolist())
         self._left_entries = [k for k, r in enumerate(terms.pattern_rows) if int(r) in left]
         self._build_linear_algebra()
@@ -90,24 +85,22 @@ class PhasePlan:
     # ---------------------------------------------------------------- the plan's SX Functions
 
     def _sx(self, name, inputs, outputs):
-        return sx_function(name, inputs, outputs, self.to_c, look_up=self.terms.look_up)
+        return sx_function(name, inputs, outputs, self.to_c)
 
     def _build_linear_algebra(self) -> None:
         """The plan's own Functions: the factorisation of ``Phi_v[I]`` and its solves, the
         coefficients of the left-out rows, the policy's small solve and the checks."""
-        lu, model, terms = self.lu, self.model, self.terms
+        model, terms = self.model, self.terms
         n_v, n_c = model.n_v, model.n_c
         Phi = ca.SX.sym("Phi", terms.pattern.nnz())
-        rows = lu.factor(Phi[self._J_entries])
-        factors = lu.pack(rows)
-        self.factor = self._sx("phase_lu", [Phi], [factors])
-        packed = ca.SX.sym("F", factors.numel())
-        rows = lu.unpack(packed)
+        factor = KeptFactor(ca.SX(terms.pattern, Phi)[self.kept.tolist(), :])
+        self.factor = self._sx("phase_factor", [Phi], [factor.packed])
+        packed = ca.SX.sym("F", factor.packed.numel())
         b, Q, a = ca.SX.sym("b", n_c), ca.SX.sym("Q", n_v), ca.SX.sym("a", n_v)
         y = ca.SX.sym("y", n_v)
         # the transposed solve, formed once and called (inlined) where needed
-        solve_t = ca.Function("solve_t", [packed, y], [lu.solve(rows, y, True)])
-        self.solve = self._sx("phase_solve", [packed, b], [lu.solve(rows, b[self.kept])])
+        solve_t = ca.Function("solve_t", [packed, y], [factor.solve(packed, y, True)])
+        self.solve = self._sx("phase_solve", [packed, b], [factor.solve(packed, b[self.kept])])
         lam = ca.SX(n_c, 1)
         lam[self.kept.tolist()] = solve_t(packed, Q - ca.mtimes(sparse_dm(model.mass.dense()), a))
         self.multipliers = self._sx("phase_multipliers", [packed, Q, a], [lam])
@@ -231,17 +224,12 @@ class PhasePlan:
         return policy(q, Phi, offset, feet, lam0, self.null_space(F, Phi), mask)
 
 
-def plan_for(model: Model, terms: PhaseTerms, kept, left_out, make, generation: int = 0,
+def plan_for(data: Data, terms: PhaseTerms, kept, left_out, make,
              to_c: bool = False) -> PhasePlan:
-    """The :class:`PhasePlan` of a rank decision, built once per model and ``generation``:
-    ``make()`` gives the factorisation's pivots and the rows' scales (:class:`StaticLU`, an
-    array) when it is built. A later decision with the same rows reuses it, whatever the
-    positions it was taken at (its pivots are checked at every sample); a new ``generation``
-    takes new pivots."""
-    key = ("phase-plan", tuple(int(r) for r in kept), tuple(int(r) for r in left_out),
-           generation, to_c)
-
-    def build(m: Model) -> PhasePlan:
-        lu, scale = make()
-        return PhasePlan(terms, kept, left_out, lu, scale, to_c)
-    return model.built_once(key, build)
+    """The :class:`PhasePlan` of a rank decision, built once per workspace ``data`` (a run's):
+    ``make()`` gives the rows' scales when it is built. A later decision with the same rows
+    reuses it, whatever the positions it was taken at (every sample is checked)."""
+    key = ("phase-plan", tuple(int(r) for r in kept), tuple(int(r) for r in left_out), to_c)
+    if key not in data.built:
+        data.built[key] = PhasePlan(terms, kept, left_out, make(), to_c)
+    return data.built[key]

@@ -39,9 +39,9 @@ from functools import cached_property
 import casadi as ca
 import numpy as np
 
-from hexapod._support import cache
-from hexapod._support.compiled import compiled, compiler, find_compiled
-from hexapod._support.files import write_atomically
+from hexapod._support.compiled import compiled
+from hexapod._support.fastcall import FastFunction
+from hexapod.algorithms.step import sparse_dm
 from hexapod.model.model import GROUND_INDEX, Model
 from hexapod.spatial import retract_symbolic, rotation_from_euler_parameters
 
@@ -66,21 +66,13 @@ class PhaseTerms:
     ----------
     model : Model
     to_c : bool
-        Compile the Functions to C (kept in the cache on disk); else CasADi's
-        interpreter evaluates them, unless ``use_cached`` and the cache holds their libraries.
-    use_cached : bool
-        Without ``to_c``, load the libraries an earlier run compiled (the default rule of
-        ``inverse_dynamics``); False: the interpreter only (``compile=False``).
+        Compile the Functions to C (kept in the execution setting's cache, when it has one);
+        else CasADi's virtual machine evaluates them.
     """
 
-    def __init__(self, model: Model, to_c: bool = False, use_cached: bool = True):
+    def __init__(self, model: Model, to_c: bool = False):
         self.model = model
         self.to_c = to_c
-        # the cache is searched for libraries (each Function's graph serialized and hashed:
-        # some 0.3 s for the walking hexapod's) only for a model an earlier run compiled
-        self.look_up = to_c or (use_cached and libraries_marked(model))
-        if to_c:
-            mark_libraries(model)
         s = model._sym
         self.q, self.v, self.w, self.wd, self.wdd = s.q, s.v, s.w, s.wd, s.wdd
         self.pattern = model._Phi_v_expr.sparsity()  # of Phi_v, fixed
@@ -89,8 +81,7 @@ class PhaseTerms:
 
     def _function(self, name, inputs, outputs, names_in, names_out, cse=True):
         outputs = ca.cse(outputs) if cse else outputs
-        return sx_function(name, inputs, outputs, self.to_c, names_in, names_out,
-                           look_up=self.look_up)
+        return sx_function(name, inputs, outputs, self.to_c, names_in, names_out)
 
     def _retract(self, q, dv):
         m = self.model
@@ -166,13 +157,66 @@ class PhaseTerms:
         Q = _call(model.Q, q=q, v=v, w=w)
         offset = ca.SX.zeros(6 * self.owners)
         if model.Q_across is not None:
-            across = _call(model.Q_across, q=q, v=v, w=w)
-            for k, joint in enumerate(model.joints):
-                if joint.across_column >= 0:
-                    offset[6 * k:6 * k + 6] = self._on_child(
-                        joint, across[:, joint.across_column])
+            offset = self._across(_call(model.Q_across, q=q, v=v, w=w))
         return self._function("phase_forces", [q, v, w, wd, wdd], [gamma, Q, offset],
                               ["q", "v", "w", "wd", "wdd"], ["gamma", "Q", "offset"])
+
+    def _across(self, across):
+        """The wrenches (6 per block, the wrench map's blocks) of the generalized forces of the
+        force elements acting across joints (``n_v x k``, the columns of ``Q_across``)."""
+        offset = ca.SX.zeros(6 * self.owners)
+        for k, joint in enumerate(self.model.joints):
+            if joint.across_column >= 0:
+                offset[6 * k:6 * k + 6] = self._on_child(joint, across[:, joint.across_column])
+        return offset
+
+    @cached_property
+    def across(self) -> ca.Function:
+        """``(q, Q_across) -> offset``: the policy's constant term from the forces of the
+        elements acting across joints (the numbers of ``Model.Q_across``)."""
+        across = ca.SX.sym("Q_across", self.model.Q_across.size_out(0))
+        return self._function("phase_across", [self.q, across], [self._across(across)],
+                              ["q", "Q_across"], ["offset"])
+
+    @cached_property
+    def wrench_map(self) -> ca.Function:
+        """``(q, Phi) -> A``: the map from multipliers to the wrenches of the least-wrench policy
+        (see :meth:`_wrench_map`; world axes, moments over the characteristic length)."""
+        Phi_nz = ca.SX.sym("Phi", self.pattern.nnz())
+        A, _ = self._wrench_map(ca.SX(self.pattern, Phi_nz))
+        return self._function("phase_wrench_map", [self.q, Phi_nz], [ca.densify(A)],
+                              ["q", "Phi"], ["A"])
+
+    @cached_property
+    def objective(self) -> ca.Function:
+        """``(q, Phi, offset, feet) -> (A, b)``: the redundancy policy's objective
+        ``|A lam + b|^2`` (see :meth:`_objective`), ``Phi`` the nonzeros of ``Phi_v``."""
+        Phi_nz = ca.SX.sym("Phi", self.pattern.nnz())
+        offset = ca.SX.sym("offset", 6 * self.owners)
+        feet = ca.SX.sym("feet", len(self.model.contacts))
+        A, b = self._objective(ca.SX(self.pattern, Phi_nz), offset, feet)
+        return self._function("phase_objective", [self.q, Phi_nz, offset, feet],
+                              [ca.densify(A), b], ["q", "Phi", "offset", "feet"], ["A", "b"])
+
+    def evaluate(self, data, name: str, *arguments) -> list[np.ndarray]:
+        """The Function ``name`` on numbers, through call buffers kept in the workspace
+        ``data`` (fresh ones without it): ``evaluate(data, "objective", q, Phi, offset,
+        feet)``."""
+        key = ("terms", self.to_c, name)
+        fast = data.calls.get(key) if data is not None else None
+        if fast is None:
+            fast = FastFunction(getattr(self, name))
+            if data is not None:
+                data.calls[key] = fast
+        return fast(*arguments)
+
+    def nonzeros(self, Phi_v) -> np.ndarray:
+        """The entries of a numeric ``Phi_v`` (dense, or SciPy sparse) at the pattern's
+        nonzeros, in CasADi's order: the ``Phi`` input of the Functions above."""
+        if hasattr(Phi_v, "tocsr"):
+            Phi_v = Phi_v.tocsr()
+            return np.asarray(Phi_v[self.pattern_rows, self.pattern_columns]).reshape(-1)
+        return Phi_v[self.pattern_rows, self.pattern_columns]
 
     @property
     def owners(self) -> int:
@@ -328,51 +372,25 @@ class PhaseTerms:
                               ["q", "Phi", "lam", "offset"], ["wrench", "frames"])
 
 
-def sx_function(name: str, inputs, outputs, to_c: bool, *names,
-                look_up: bool = True) -> ca.Function:
+def terms_of(model: Model) -> PhaseTerms:
+    """The model's :class:`PhaseTerms`, built once per model and execution (compiled to C when
+    the execution setting says so)."""
+    from hexapod._support.execution import current
+
+    to_c = current().compiled
+    return model.built_once(("phase-terms", to_c), lambda m: PhaseTerms(m, to_c))
+
+
+def sx_function(name: str, inputs, outputs, to_c: bool, *names) -> ca.Function:
     """``ca.Function(name, inputs, outputs, *names)``, compiled to C when ``to_c``: the library
-    is kept in the cache on disk under the hash of the Function's serialized graph (a plan's
-    Functions depend on its rows and pivots as well as on the model). With ``look_up``, a
-    library the cache holds is used even when ``to_c`` is false: a later run of the same
-    model, short or long, loads what an earlier one compiled."""
+    is kept in the cache (when the execution setting has one) under the hash of the Function's
+    serialized graph (a plan's Functions depend on its rows and pivots as well as on the
+    model)."""
     function = ca.Function(name, inputs, outputs, *names)
-    if not (to_c or look_up):
+    if not to_c:
         return function
     graph = hashlib.sha256(function.serialize().encode("utf-8")).hexdigest()
-    key = f"phase/{name}/{graph}"
-    if not to_c:
-        found = find_compiled(key)
-        return function if found is None else found
-    return compiled(key, lambda: function, what=f"phase path {name}")
-
-
-def _mark_key(model: Model) -> str:
-    return cache.key("phase-libraries", model.digest)
-
-
-def libraries_marked(model: Model) -> bool:
-    """Whether an earlier run compiled ``model``'s phase path (its mark in the cache)."""
-    return compiler() is not None and cache.load(_mark_key(model)) is not None
-
-
-def mark_libraries(model: Model) -> None:
-    """Leave the mark of :func:`libraries_marked` in the cache (once)."""
-    if compiler() is None or libraries_marked(model):
-        return
-    with cache.writing(_mark_key(model), f"mark: the phase path of '{model.name}' compiled") \
-            as folder:
-        write_atomically(folder / "mark", model.digest, durable=False)
-
-
-def sparse_dm(matrix: np.ndarray) -> ca.DM:
-    """A CasADi DM with the nonzeros of ``matrix`` only (products with it skip the zeros)."""
-    from scipy.sparse import csc_array
-
-    sparse = csc_array(matrix)
-    sparse.eliminate_zeros()
-    pattern = ca.Sparsity(sparse.shape[0], sparse.shape[1], sparse.indptr.tolist(),
-                          sparse.indices.tolist())
-    return ca.DM(pattern, sparse.data.tolist())
+    return compiled(f"phase/{name}/{graph}", lambda: function, what=f"phase path {name}")
 
 
 def _normal_solve(m: int):

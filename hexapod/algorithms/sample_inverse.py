@@ -72,7 +72,8 @@ def exact_forces(model: Model, data: Data, t: float, q: np.ndarray, v: np.ndarra
     status = data.ground_status if model.contacts else ()
     violation = 0.0
     if model.n_c:
-        violation = float(np.max(np.abs(model.call("phi", q=q, w=data.w) / model.row_scale)))
+        violation = float(np.max(np.abs(model.call("phi", data, q=q, w=data.w)
+                                         / model.row_scale)))
     redundant = tuple(model.rows[i].name for i in data.redundant_rows)
     return SampleResult(q, v, v_dot, data.lam, wrenches.force, wrenches.torque,
                         wrenches.effort, ground, tuple(status), violation, redundant)

@@ -39,8 +39,8 @@ from pathlib import Path
 import numpy as np
 
 from hexapod._support.files import read_text
-from hexapod.benchmarks.catalogue import PROBLEMS
 from hexapod.benchmarks.pendulums import ClosedLoopPendulum, pendulum_exact, pendulum_period
+from hexapod.catalog import PROBLEMS
 from hexapod.errors import HexapodError, InputFileError
 from hexapod.model.assemble import assemble
 from hexapod.model.model import Model

@@ -76,7 +76,6 @@ def main(argv: list[str] | None = None) -> int:
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     try:
         args = build_parser(sys.argv[1:] if argv is None else argv).parse_args(argv)
-        args.whole_process = argv is None  # the process is the command's (see long_lived)
         _check_address_space()
         status = _run(args)
     except HexapodError as error:
@@ -135,8 +134,14 @@ def _check_address_space() -> None:
 
 def _run(args) -> int:
     """Run the command, its warnings said once each after it; a library that ends the process
-    (``sys.exit``) ends the command with an error instead."""
-    with warnings.catch_warnings(record=True) as caught:
+    (``sys.exit``) ends the command with an error instead. The command runs with the cache on
+    disk turned on (in the folder the environment names, see ``hexapod cache --help``), and
+    compiled when it asks for it (``--compile yes``)."""
+    from hexapod._support import cache
+    from hexapod._support.execution import executing
+
+    with warnings.catch_warnings(record=True) as caught, executing(
+            compiled=getattr(args, "compile", "no") == "yes", **cache.configured()):
         try:
             return args.run(args)
         except SystemExit as ended:

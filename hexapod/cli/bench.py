@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from hexapod.benchmarks.catalogue import PROBLEMS
+from hexapod.catalog import PROBLEMS
 from hexapod.cli.common import seconds
 from hexapod.cli.outputs import output_directory, suffixes
 from hexapod.simulation.methods import METHODS

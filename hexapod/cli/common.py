@@ -8,12 +8,11 @@ Nothing here imports NumPy (nor anything that does), so that ``hexapod --help`` 
 from __future__ import annotations
 
 import argparse
-import contextlib
-import gc
 import json
 import math
 import sys
 
+from hexapod.catalog import POLICIES
 from hexapod.scene.builtin import DEFAULT_SCENE
 
 # ------------------------------------------------------------------ arguments
@@ -33,30 +32,6 @@ MAX_WORKERS = 1024
 #: The most faces of a friction pyramid: with 1000 faces it is within 5e-6 of the cone (the
 #: exact cone, 0, is cheaper still).
 MAX_FACES = 1000
-
-
-@contextlib.contextmanager
-def long_lived(args):
-    """Make the objects that live as long as the process (the modules imported, the scene, the
-    model) in this block: the cyclic garbage collector is held while it runs, and what it made
-    is then frozen out of later collections (``gc.freeze``). Walking those objects over and
-    over finds nothing to free and cost 'hexapod inverse' some 8 ms of its 210 on the front
-    leg. The commands that build a model start so (inverse, report, simulate, dynamics, info);
-    their work after it (a simulation's time loop) runs with the collector as usual. Only
-    where the process is the command's (``args.whole_process``, set by
-    :func:`hexapod.cli.app.main`): a command run inside another Python program (the tests, a
-    caller's script) leaves that program's collector alone."""
-    if not getattr(args, "whole_process", False):
-        yield
-        return
-    enabled = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        gc.freeze()
-        if enabled:
-            gc.enable()
 
 
 def _number(kind, accept, condition: str):
@@ -259,21 +234,13 @@ def inverse_arguments(parser: argparse.ArgumentParser, method_help: str) -> None
                         help="axes of the wrench components (default: the child's joint frame)")
     parser.add_argument("--method", choices=("auto", "tree", "phase", "saddle"), default="auto",
                         help=method_help)
-    parser.add_argument("--compile", choices=("auto", "yes", "no"), default="auto",
-                        help="evaluate the tree or phase path as compiled C code: yes compiles "
-                        "it now if the cache on disk does not hold it (every later run of the "
-                        "model loads it), no keeps the interpreters (on the tree path NumPy "
-                        "over blocks of samples from 500 samples, else CasADi's virtual "
-                        "machine); auto (default) uses compiled code the cache holds, and "
-                        "compiles once it pays over the model's runs (see docs/cache.md)")
+    parser.add_argument("--compile", choices=("yes", "no"), default="no",
+                        help="evaluate the inverse dynamics as C code compiled by the system's C "
+                        "compiler (kept in the cache, so later runs of the model load it) "
+                        "rather than by CasADi's virtual machine (default no: the same numbers; "
+                        "compiled code pays on long runs, see docs/cache.md)")
 
 
-#: ``--compile`` as the ``compile`` argument of inverse_dynamics.
-COMPILE_CHOICES = {"auto": None, "yes": True, "no": False}
-
-
-#: The ground-force policies (hexapod.scene.contacts.POLICIES, not imported: it loads NumPy).
-POLICIES = ("min-wrench", "min-effort", "friction")
 #: The ground options, each named as the GroundForces field it sets.
 GROUND_OPTIONS = ("policy", "mu", "faces", "min_normal")
 

@@ -6,7 +6,6 @@ from hexapod.cli.common import (
     apply_ground_options,
     emit,
     ground_arguments,
-    long_lived,
     scene_arguments,
 )
 
@@ -29,11 +28,10 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
-    with long_lived(args):
-        from hexapod.model.assemble import assemble
-        from hexapod.output.describe import describe_model, format_model
-        from hexapod.scene.builtin import load_scene
+    from hexapod.model.assemble import assemble
+    from hexapod.output.describe import describe_model, format_model
+    from hexapod.scene.builtin import load_scene
 
-        model = assemble(apply_ground_options(load_scene(args.scene), args))
+    model = assemble(apply_ground_options(load_scene(args.scene), args))
     emit(describe_model(model, args.t, graph=args.graph), args.json, format_model)
     return 0

@@ -5,13 +5,11 @@ from __future__ import annotations
 import sys
 
 from hexapod.cli.common import (
-    COMPILE_CHOICES,
     apply_ground_options,
     check_inverse_memory,
     ground_arguments,
     inverse_arguments,
     limit_arguments,
-    long_lived,
     sample_progress,
 )
 from hexapod.cli.outputs import given_files, output_file
@@ -43,29 +41,27 @@ def add_arguments(parser) -> None:
 def run(args) -> int:
     import warnings
 
-    with long_lived(args):
-        from hexapod.algorithms.inverse import inverse_dynamics
-        from hexapod.model.assemble import assemble
-        from hexapod.output.inverse_csv import units_path, write_inverse_files
-        from hexapod.scene.builtin import load_scene
-        from hexapod.scene.motion import MotionWarning, apply_motion, read_motion
+    from hexapod.algorithms.inverse import inverse_dynamics
+    from hexapod.model.assemble import assemble
+    from hexapod.output.inverse_csv import units_path, write_inverse_files
+    from hexapod.scene.builtin import load_scene
+    from hexapod.scene.motion import MotionWarning, apply_motion, read_motion
 
-        inputs = given_files(args.model, args.motion)
-        out = output_file(args.out, inputs=inputs)
-        output_file(units_path(out), inputs=inputs)  # the units sidecar written beside it
-        # every estimated derivative is said, once per message (main prints the warnings)
-        warnings.simplefilter("always", MotionWarning)
-        motion = read_motion(args.motion)
-        scene = apply_ground_options(load_scene(args.model), args)
-        driven = apply_motion(scene, motion)
-        driven.ground = scene.ground  # the driven copy keeps the scene's ground-force settings
-        model = assemble(driven)
+    inputs = given_files(args.model, args.motion)
+    out = output_file(args.out, inputs=inputs)
+    output_file(units_path(out), inputs=inputs)  # the units sidecar written beside it
+    # every estimated derivative is said, once per message (main prints the warnings)
+    warnings.simplefilter("always", MotionWarning)
+    motion = read_motion(args.motion)
+    scene = apply_ground_options(load_scene(args.model), args)
+    driven = apply_motion(scene, motion)
+    driven.ground = scene.ground  # the driven copy keeps the scene's ground-force settings
+    model = assemble(driven)
     times = motion.times
     check_inverse_memory(model, times.size, args.max_memory,
                          f"give a motion of fewer samples than {args.motion}'s")
     progress = sample_progress("inverse dynamics") if sys.stderr.isatty() else None
     result = inverse_dynamics(model, times, method=args.method, frame=args.frame,
-                              compile=COMPILE_CHOICES[args.compile],
                               progress=progress)
     write_inverse_files(out, model, result)  # OUT.units.json, then OUT.csv
     if progress is not None:

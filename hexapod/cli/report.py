@@ -5,7 +5,6 @@ from __future__ import annotations
 import sys
 
 from hexapod.cli.common import (
-    COMPILE_CHOICES,
     MAX_TIME,
     apply_ground_options,
     at_least,
@@ -13,7 +12,6 @@ from hexapod.cli.common import (
     ground_arguments,
     inverse_arguments,
     limit_arguments,
-    long_lived,
     sample_progress,
     scene_positional,
     seconds,
@@ -57,22 +55,21 @@ def add_arguments(parser) -> None:
 def run(args) -> int:
     import time
 
-    with long_lived(args):
-        import numpy as np
+    import numpy as np
 
-        from hexapod._support.files import write_directory_atomically
-        from hexapod.algorithms.balance import body_balance
-        from hexapod.algorithms.inverse import inverse_dynamics
-        from hexapod.algorithms.kinematics import marker_trajectories
-        from hexapod.errors import HexapodError
-        from hexapod.model.assemble import assemble
-        from hexapod.output.report import FOOT_MARKER, RunInfo, report_files, walking_headlines
-        from hexapod.scene.builtin import load_scene
+    from hexapod._support.files import write_directory_atomically
+    from hexapod.algorithms.balance import body_balance
+    from hexapod.algorithms.inverse import inverse_dynamics
+    from hexapod.algorithms.kinematics import marker_trajectories
+    from hexapod.errors import HexapodError
+    from hexapod.model.assemble import assemble
+    from hexapod.output.report import FOOT_MARKER, RunInfo, report_files, walking_headlines
+    from hexapod.scene.builtin import load_scene
 
-        scene = apply_ground_options(load_scene(args.scene), args)
-        out = output_directory(args.out, f"{scene.name}-report", inputs=given_files(args.scene),
-                               ours=suffixes(".csv", ".md", ".png", ".json"))
-        model = assemble(scene)
+    scene = apply_ground_options(load_scene(args.scene), args)
+    out = output_directory(args.out, f"{scene.name}-report", inputs=given_files(args.scene),
+                           ours=suffixes(".csv", ".md", ".png", ".json"))
+    model = assemble(scene)
     duration, why = model.time_window(args.duration)
     if duration > MAX_TIME:
         raise HexapodError(f"the scene's cycle, {duration:g} s, is longer than the {MAX_TIME:g}"
@@ -83,7 +80,6 @@ def run(args) -> int:
     progress = sample_progress("inverse dynamics") if show else None
     started = time.perf_counter()
     result = inverse_dynamics(model, times, method=args.method, frame=args.frame,
-                              compile=COMPILE_CHOICES[args.compile],
                               progress=progress)
     run_time = time.perf_counter() - started
     if show:

@@ -12,7 +12,6 @@ from hexapod.cli.common import (
     ground_arguments,
     jsonable,
     limit_arguments,
-    long_lived,
     output_times,
     positive,
     relative_tolerance,
@@ -113,18 +112,17 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
-    with long_lived(args):
-        from hexapod._support.files import write_directory_atomically
-        from hexapod.model.assemble import assemble
-        from hexapod.scene.builtin import load_scene
-        from hexapod.simulation.loop import simulate
-        from hexapod.simulation.results import scene_reference, units_json
+    from hexapod._support.files import write_directory_atomically
+    from hexapod.model.assemble import assemble
+    from hexapod.scene.builtin import load_scene
+    from hexapod.simulation.loop import simulate
+    from hexapod.simulation.results import scene_reference, units_json
 
-        scene = apply_ground_options(load_scene(args.scene), args)
-        out = output_directory(args.out, f"{scene.name}-simulation",
-                               inputs=given_files(args.scene),
-                               ours=suffixes(".csv", ".npz", ".json"))
-        model = assemble(scene)
+    scene = apply_ground_options(load_scene(args.scene), args)
+    out = output_directory(args.out, f"{scene.name}-simulation",
+                           inputs=given_files(args.scene),
+                           ours=suffixes(".csv", ".npz", ".json"))
+    model = assemble(scene)
     duration, why = model.time_window(args.t_end)
     _check_step(args, duration)
     try:

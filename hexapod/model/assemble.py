@@ -36,7 +36,6 @@ from hexapod.model.model import (
     RowInfo,
     Symbolic,
 )
-from hexapod.model.stored import restore, store
 from hexapod.scene.bodies import Particle, PlanarBody, SpatialBody
 from hexapod.scene.contacts import Foothold, StanceGate
 from hexapod.scene.drivers import CoordinateDriver, JointDriver
@@ -61,20 +60,16 @@ class _Laws:
 
     def __init__(self):
         self.laws: list[Law] = []
-        self.where: list[tuple] = []  # where each law is found in the scene (model/stored.py)
         self.w: list[ca.SX] = []
         self.wd: list[ca.SX] = []
         self.wdd: list[ca.SX] = []
 
-    def value(self, law: Law, label: str, where: tuple) -> tuple[ca.SX, int]:
-        """The law's value as an expression, and its index (-1 for a constant). ``where`` says
-        where the law is found in the scene (:func:`hexapod.model.stored.find_law`), so that a
-        model read from the cache takes the laws of the scene at hand."""
+    def value(self, law: Law, label: str, where: tuple = ()) -> tuple[ca.SX, int]:
+        """The law's value as an expression, and its index (-1 for a constant)."""
         if isinstance(law, Constant):
             return ca.SX(law.value), -1
         index = len(self.laws)
         self.laws.append(law)
-        self.where.append(where)
         for symbols, suffix in ((self.w, ""), (self.wd, "_d"), (self.wdd, "_dd")):
             symbols.append(ca.SX.sym(f"{label}{suffix}"))
         return self.w[index], index
@@ -376,7 +371,7 @@ class _Assembly:
                 builder.effort(name, rate, torque)
         return builder, across, infos
 
-    def model(self, rank_tolerance: float, digest: str = "") -> Model:
+    def model(self, rank_tolerance: float, digest: str = "", source: str = "") -> Model:
         parts = self.joints()
         drivers, on_joint = self.drivers()
         builder, across, forces = self.forces()
@@ -406,13 +401,12 @@ class _Assembly:
                      q0=self.q0, v0=self.v0, mass=self.mass, symbolic=symbolic,
                      forces=tuple(forces), rank_tolerance=rank_tolerance,
                      working_elements=tuple(working), report_forces=self.si.report_forces,
-                     contacts=tuple(self.contacts), ground=self.si.ground, digest=digest)
+                     contacts=tuple(self.contacts), ground=self.si.ground, digest=digest,
+                     source=source)
 
 
 def assemble(scene: Scene, *, rank_tolerance: float = 1e-9) -> Model:
-    """Validate ``scene`` and build its :class:`~hexapod.model.model.Model` (SI units): read
-    back from the cache on disk when a scene of the same content was assembled before
-    (:mod:`hexapod.model.stored`), with this scene's laws.
+    """Validate ``scene`` and build its :class:`~hexapod.model.model.Model` (SI units).
 
     Parameters
     ----------
@@ -433,11 +427,4 @@ def assemble(scene: Scene, *, rank_tolerance: float = 1e-9) -> Model:
     check_model_size(len(scene.bodies), len(scene.joints), f"scene '{scene.name}'{where}")
     scene.validate()
     si = scene.in_si()
-    digest = scene_digest(si, rank_tolerance)
-    model = restore(si, digest) if digest else None  # built before: from the cache on disk
-    if model is None:
-        assembly = _Assembly(si)
-        model = assembly.model(rank_tolerance, digest)
-        store(model, assembly.laws.where)
-    model.source = scene.source  # the file the scene was read from, named by later errors
-    return model
+    return _Assembly(si).model(rank_tolerance, scene_digest(si, rank_tolerance), scene.source)

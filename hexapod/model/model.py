@@ -21,6 +21,7 @@ Functions: ``phi(q, w)``, ``Phi_q(q, w)``, ``Phi_v(q, w)``, ``nu(q, w, wd)``,
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -28,7 +29,8 @@ from functools import cached_property
 import casadi as ca
 import numpy as np
 
-from hexapod._support.fastcall import FastFunction, ScatteredFunction
+from hexapod._support.fastcall import FastFunction, ScatteredFunction, dense_outputs
+from hexapod.errors import HexapodError
 from hexapod.scene.laws import Law
 from hexapod.spatial import (
     Placement,
@@ -146,6 +148,11 @@ class RowInfo:
     kind: str  # "length" | "angle"
 
 
+def _large(function: ca.Function) -> bool:
+    """Whether an output of ``function`` has too many entries to be densified."""
+    return any(function.numel_out(i) > _DENSE_OUTPUT_ENTRIES for i in range(function.n_out()))
+
+
 class BlockDiagonal:
     """A symmetric block-diagonal matrix: scalar entries plus 3 x 3 blocks (spatial rotations).
 
@@ -227,7 +234,44 @@ class Symbolic:
 
 
 class Model:
-    """A frozen multibody model. Build it with :func:`hexapod.assemble`."""
+    """A frozen multibody model: sizes, index maps, the constant mass matrix and named CasADi
+    Functions. Build it with :func:`hexapod.assemble`; run the algorithms on it with a
+    workspace from :meth:`create_data`.
+
+    Nothing in a model changes after it is built: its attributes cannot be set, and what it
+    derives on first use (its CasADi Functions, and objects built from them alone such as the
+    tree path's Function) is a pure function of what it was built from, the same whenever and
+    in whichever thread it is derived. Everything that belongs to a run (call buffers, law
+    values, rank decisions and the plans built for them) lives in a :class:`Data`, so that
+    threads with their own ``Data`` share a model safely.
+
+    Attributes
+    ----------
+    name : str
+    dimension : int
+        3 (space) or 2 (plane).
+    bodies, joints, drivers, rows, forces, contacts : tuple
+        :class:`BodyInfo`, :class:`JointInfo`, :class:`DriverInfo`, :class:`RowInfo`,
+        :class:`ForceInfo`, :class:`ContactInfo`, in model order.
+    laws : tuple of Law
+        The time laws whose values are the Functions' inputs ``w, wd, wdd``.
+    n_q, n_v, n_c, n_w : int
+        Numbers of coordinates, velocities, constraint rows and time laws.
+    q0, v0 : ndarray (n_q,), (n_v,)
+        The scene's initial positions and velocities (guesses; not necessarily consistent).
+    mass : BlockDiagonal
+        The constant mass matrix ``M`` (n_v x n_v), kg and kg m^2.
+    gravity : ndarray (3,) or (2,)
+        m/s^2.
+    characteristic_length : float
+        m: divides moments in the unit-free redundancy policy and scales length rows.
+    rank_tolerance : float
+        Of the rank decision on the equilibrated constraint matrix.
+    digest : str
+        The content hash of what the model was built from (:mod:`hexapod.model.digest`).
+    source : str
+        The file the scene was read from (empty for a scene built in Python).
+    """
 
     def __init__(self, *, name: str, dimension: int, bodies: tuple[BodyInfo, ...],
                  joints: tuple[JointInfo, ...], drivers: tuple[DriverInfo, ...],
@@ -236,8 +280,9 @@ class Model:
                  mass: BlockDiagonal, symbolic: Symbolic, forces: tuple[ForceInfo, ...],
                  rank_tolerance: float = 1e-9, working_elements: tuple[str, ...] = (),
                  report_forces: bool = False, contacts: tuple[ContactInfo, ...] = (),
-                 ground=None, digest: str = ""):
+                 ground=None, digest: str = "", source: str = ""):
         self.name = name
+        self.source = source
         #: the content hash of what the model was built from (:mod:`hexapod.model.digest`):
         #: equal for models whose Functions are the same, the key of their cached code; empty
         #: for a model built otherwise than by :func:`hexapod.assemble` (nothing is cached)
@@ -274,10 +319,16 @@ class Model:
         self.joint_index = {j.name: j.index for j in joints}
         self.driver_index = {d.name: i for i, d in enumerate(drivers)}
         self.row_index = {r.name: i for i, r in enumerate(rows)}
-        self._built: dict = {}
-        self._law_batch = None  # see law_values
-        self._fast: dict[str, FastFunction | ScatteredFunction] = {}
+        self._built: dict = {}  # see built_once
+        self._lock = threading.RLock()
         self._lie_indices()
+        self._frozen = True
+
+    def __setattr__(self, name: str, value) -> None:
+        if getattr(self, "_frozen", False):
+            raise AttributeError(f"a Model is frozen: '{name}' cannot be set (assemble a new "
+                                 "model from a changed scene)")
+        object.__setattr__(self, name, value)
 
     # ---------------------------------------------------------------- descriptions
 
@@ -353,24 +404,26 @@ class Model:
 
     # ---------------------------------------------------------------- time laws
 
-    def law_values(self, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def law_values(self, t, data: Data | None = None
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Values and derivatives of every law at ``t``: arrays (n_w,) or (n_w, len(t)).
 
-        The values at the times of the last call with several times are kept: an algorithm
-        that walks through samples one by one (the saddle path of the inverse dynamics) asks
-        for the same numbers again, and some laws (a gait's exact inverse kinematics) cost far
-        less per sample when evaluated together."""
+        With ``data``, the values at the times of the last call with several times are kept
+        there: an algorithm that walks through samples one by one (the saddle path of the
+        inverse dynamics) asks for the same numbers again, and some laws (a gait's inverse
+        kinematics) cost far less per sample when evaluated together."""
         t = np.asarray(t, dtype=float)
-        if t.ndim == 0 and self._law_batch is not None:
-            column = self._law_batch[0].get(float(t))
+        batch = data.laws if data is not None else None
+        if t.ndim == 0 and batch is not None:
+            column = batch[0].get(float(t))
             if column is not None:
-                return tuple(x[:, column].copy() for x in self._law_batch[1:])
+                return tuple(x[:, column].copy() for x in batch[1:])
         shape = (self.n_w,) + t.shape
         w, wd, wdd = np.zeros(shape), np.zeros(shape), np.zeros(shape)
         for i, law in enumerate(self.laws):
             w[i], wd[i], wdd[i] = law.evaluate(t)
-        if t.ndim == 1 and t.size > 1:
-            self._law_batch = ({float(x): k for k, x in enumerate(t)}, w, wd, wdd)
+        if data is not None and t.ndim == 1 and t.size > 1:
+            data.laws = ({float(x): k for k, x in enumerate(t)}, w, wd, wdd)
         return w, wd, wdd
 
     def cycle_time(self) -> float | None:
@@ -391,21 +444,34 @@ class Model:
 
     def built_once(self, key: tuple, build: Callable[[Model], object]):
         """``build(self)``, computed on the first call with ``key`` and returned again after:
-        objects that are pure functions of the frozen model and cost a compilation (the
-        tree-ordered inverse dynamics, an integrator's kernels). Nothing in the model's
-        description changes, so no result depends on whether or when they were built."""
-        if key not in self._built:
-            self._built[key] = build(self)
-        return self._built[key]
-
-    def was_built(self, key: tuple) -> bool:
-        """Whether :meth:`built_once` has built ``key`` (e.g. compiled code kept with the
-        model)."""
-        return key in self._built
+        immutable objects that are pure functions of the frozen model and cost a build (the
+        tree path's Function, an integrator's Functions). Nothing of a run may go here (it goes
+        in a :class:`Data`): no result depends on whether or when they were built."""
+        with self._lock:
+            if key not in self._built:
+                self._built[key] = build(self)
+            return self._built[key]
 
     def create_data(self) -> Data:
         """A new, empty :class:`Data` workspace for this model."""
-        return Data()
+        return Data(model_sizes=self._sizes)
+
+    @property
+    def _sizes(self) -> tuple:
+        return (self.name, self.n_q, self.n_v, self.n_c, self.n_w, self.digest)
+
+    def check(self, data: Data) -> None:
+        """Raise when ``data`` was not made by this model's :meth:`create_data` (or by a model
+        of the same sizes and content).
+
+        Raises
+        ------
+        HexapodError
+        """
+        if not isinstance(data, Data) or data.model_sizes != self._sizes:
+            made = getattr(data, "model_sizes", None)
+            raise HexapodError(f"this Data was made for another model ({made}), not for model "
+                               f"'{self.name}': use model.create_data()")
 
     # ---------------------------------------------------------------- CasADi Functions
 
@@ -541,28 +607,38 @@ class Model:
         """``qdot(q, v) = B(q) v``."""
         return self._function("qdot", ["q", "v"], [("qdot", self._sym.qdot)])
 
-    def call(self, name: str, **values) -> np.ndarray:
+    def call(self, name: str, data: Data | None = None, /, **values) -> np.ndarray:
         """Evaluate the Function ``name`` on numbers given by input name; vectors come back 1-D,
-        matrices (``Phi_q``, ``Phi_v``, ``M``, ``Q_across``) 2-D.
+        matrices (``Phi_q``, ``Phi_v``, ``M``, ``Q_across``) 2-D. With ``data``, through call
+        buffers kept in that workspace (about a microsecond of overhead instead of tens).
 
         >>> model.call("phi", q=q, w=w)      # doctest: +SKIP
         """
-        function = self.fast(name)
+        function = self.fast(name, data)
         (array,) = function(*[values[n] for n in function.name_in])
         if name in _MATRIX_OUTPUTS:
             return array.reshape(getattr(self, name).size_out(0))
         return array.reshape(-1)
 
-    def fast(self, name: str) -> FastFunction | ScatteredFunction:
-        """The Function ``name`` evaluated through buffers (:mod:`hexapod._support.fastcall`): the
-        same numbers, without the cost of converting arguments; built once. Large matrix
-        outputs are evaluated on their nonzeros only (:class:`ScatteredFunction`)."""
-        if name not in self._fast:
-            function = getattr(self, name)
-            large = any(function.numel_out(i) > _DENSE_OUTPUT_ENTRIES
-                        for i in range(function.n_out()))
-            self._fast[name] = (ScatteredFunction if large else FastFunction)(function)
-        return self._fast[name]
+    def fast(self, name: str, data: Data | None = None) -> FastFunction | ScatteredFunction:
+        """The Function ``name`` evaluated through buffers (:mod:`hexapod._support.fastcall`):
+        the same numbers, without the cost of converting arguments. The buffers are those of
+        ``data`` (made once per workspace), or fresh ones without it. Large matrix outputs
+        are evaluated on their nonzeros only (:class:`ScatteredFunction`)."""
+        if data is not None and name in data.calls:
+            return data.calls[name]
+        function = self._evaluated(name)
+        made = (ScatteredFunction if _large(function) else FastFunction)(function)
+        if data is not None:
+            data.calls[name] = made
+        return made
+
+    def _evaluated(self, name: str) -> ca.Function:
+        """The Function ``name`` as its buffers evaluate it: outputs densified, unless large."""
+        def build(model: Model) -> ca.Function:
+            function = getattr(model, name)
+            return function if _large(function) else dense_outputs(function)
+        return self.built_once(("evaluated", name), build)
 
     def call_samples(self, name: str, **values) -> np.ndarray:
         """Evaluate the Function ``name`` at N samples in one call: inputs by name with the
@@ -639,9 +715,39 @@ class Model:
 
 @dataclass
 class Data:
-    """Workspace of one model: the numbers of the last state an algorithm saw.
+    """The workspace of one model (:meth:`Model.create_data`): the numbers of the last state an
+    algorithm saw, and what belongs to a run rather than to the model.
 
-    Algorithms fill the fields they compute; ``None`` means not computed at this state.
+    Algorithms fill the state fields they compute; ``None`` means not computed at this state
+    (:meth:`at` clears them when the state changes). Besides them a workspace keeps the call
+    buffers of the model's Functions (``calls``), the law values of the last run of samples
+    (``laws``) and the objects a run builds and reuses (``built``: rank decisions and their
+    plans). Each thread uses a workspace of its own; :meth:`Model.check` tells whether one was
+    made for a given model.
+
+    Attributes
+    ----------
+    t : float
+    q, v, v_dot : ndarray (n_q,), (n_v,), (n_v,)
+    w, wd, wdd : ndarray (n_w,)
+        The laws' values and derivatives at ``t``.
+    Phi_v : ndarray (n_c, n_v)
+        A SciPy CSR array for a large model (:mod:`hexapod.algorithms.saddle`).
+    gamma, Q, lam : ndarray (n_c,), (n_v,), (n_c,)
+    Q_across : ndarray (n_v, k)
+        Generalized forces of the force elements acting across joints.
+    independent_rows, redundant_rows : ndarray of int
+        The rank decision's rows (indices into ``Model.rows``).
+    inconsistency : float
+        The relative violation of the redundant rows.
+    condition_number, sigma_min : float
+        Of the equilibrated saddle-point matrix; the smallest singular value of the
+        equilibrated kept rows.
+    singular_values : ndarray
+        All of them, ascending.
+    ground_status : tuple of str
+        Per contact: ``swing``, ``ok``, or where the friction policy found no admissible force,
+        ``slip`` (outside the friction cone) or ``pull`` (normal force below its minimum).
     """
 
     t: float | None = None
@@ -650,21 +756,27 @@ class Data:
     w: np.ndarray | None = None
     wd: np.ndarray | None = None
     wdd: np.ndarray | None = None
-    Phi_v: np.ndarray | None = None  # a SciPy CSR array for a large model (algorithms.saddle)
+    Phi_v: np.ndarray | None = None
     gamma: np.ndarray | None = None
     Q: np.ndarray | None = None
     v_dot: np.ndarray | None = None
     lam: np.ndarray | None = None
-    Q_across: np.ndarray | None = None  # forces of the elements acting across joints
+    Q_across: np.ndarray | None = None
     independent_rows: np.ndarray | None = None
     redundant_rows: np.ndarray | None = None
-    inconsistency: float | None = None  # relative violation of the redundant rows
+    inconsistency: float | None = None
     condition_number: float | None = None
-    sigma_min: float | None = None  # smallest singular value of the equilibrated Phi_v
-    singular_values: np.ndarray | None = None  # all of them, of the kept rows, ascending
-    #: per contact: "swing", "ok", or where the friction policy found no admissible force,
-    #: "slip" (outside the friction cone) or "pull" (normal force below its minimum)
+    sigma_min: float | None = None
+    singular_values: np.ndarray | None = None
     ground_status: tuple[str, ...] | None = None
+    #: what the workspace was made for (:meth:`Model.check`), and what belongs to a run
+    model_sizes: tuple = field(default=(), repr=False, compare=False)
+    calls: dict = field(default_factory=dict, repr=False, compare=False)
+    laws: tuple | None = field(default=None, repr=False, compare=False)
+    built: dict = field(default_factory=dict, repr=False, compare=False)
+
+    #: the fields :meth:`at` clears (those of a state)
+    _RUN = frozenset({"model_sizes", "calls", "laws", "built"})
 
     def at(self, t: float, q: np.ndarray, v: np.ndarray | None = None) -> None:
         """Make ``(t, q)`` (and ``v`` when given) the state of this workspace: every field
@@ -674,7 +786,8 @@ class Data:
                 and (v is None or self.v is not None and np.array_equal(self.v, v)))
         if not same:
             for name in self.__dataclass_fields__:
-                setattr(self, name, None)
+                if name not in self._RUN:
+                    setattr(self, name, None)
         self.t, self.q = t, q
         if v is not None:
             self.v = v

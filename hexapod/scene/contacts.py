@@ -21,11 +21,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from hexapod.catalog import POLICIES
 from hexapod.errors import Problem
 from hexapod.scene.laws import Law
-
-#: The ground-force policies (see :class:`GroundForces`).
-POLICIES = ("min-wrench", "min-effort", "friction")
 
 
 def _cycle(contact, t):

@@ -33,9 +33,8 @@ import casadi as ca
 import numpy as np
 
 from hexapod._support.fastcall import FastFunction
-from hexapod.algorithms.saddle import equilibrated, mass_factors, solve_kept
+from hexapod.algorithms.step import equilibrated, mass_factors, newton, solve_kept
 from hexapod.model.model import Model
-from hexapod.spatial import retract_symbolic
 
 #: relative residual above which a compiled solve is refused (the rank changed, or a
 #: configuration is singular); far above round-off, far below any integrator's tolerance
@@ -141,11 +140,6 @@ class CompiledRates:
         return q_dot, v_dot, lam
 
 
-def _exp_step(model: Model, q: ca.MX, dv: ca.MX) -> ca.MX:
-    """``q (+) dv`` as :meth:`Model.integrate` computes it, symbolically."""
-    return retract_symbolic(q, dv, model._lin_q, model._lin_v, model._quat_q, model._omega_v)
-
-
 class CompiledProjection:
     """The nearest consistent state in the kinetic-energy norm, as :func:`assemble_positions`
     and :func:`solve_velocities` compute it from a state near the constraints (the end of an
@@ -183,10 +177,9 @@ class CompiledProjection:
             return solve_kept(W_all, d, zero, rows, top, bottom_all)[0]
 
         position = q
-        for _ in range(self.newton):
-            residual = call(model.phi, q=position)
-            y = saddle(position, ca.MX.zeros(model.n_v), -residual)
-            position = _exp_step(model, position, ca.mtimes(m_inv_sqrt, y))
+        for _ in range(self.newton):  # the Jacobian at each iterate: Newton's method proper
+            position = newton(model, position, lambda x: call(model.phi, q=x),
+                              lambda x: call(model.Phi_v, q=x), rows, m_inv_sqrt, 1)
         phi_error = ca.mmax(ca.fabs(call(model.phi, q=position) / scale))
         nu = call(model.nu, q=position)
         y = saddle(position, ca.mtimes(m_sqrt, v), nu)

@@ -1,0 +1,132 @@
+"""The constrained step of a row set, written once as CasADi expressions.
+
+Every symbolic solve of the package works on the rows ``I`` a rank decision kept
+(:func:`hexapod.algorithms.linalg.split_rows` decides them numerically; the batched drivers
+hold them while their checks pass), equilibrated as the rank decision sees them:
+
+    [[I, W_I^T], [W_I, Z]] [y; mu] = [top; bottom_I / d_I],   W = D^-1 Phi_v M^-1/2,
+
+``y`` the velocity-space unknown in ``M^1/2``-scaled units (``v = M^-1/2 y``) and
+``mu = D_I lambda_I`` the scaled multipliers. ``Z`` is zero, except -1 for a kept row that is
+identically zero (a foot's contact in swing), whose multiplier is then solved as zero instead
+of leaving the matrix singular. The same solve gives
+
+* a Newton correction on the positions: ``top = 0``, ``bottom = -phi`` (the least-``M``-norm
+  step onto the kept rows, applied with the Lie-group retraction);
+* the velocities closest to a guess: ``top = M^1/2 v``, ``bottom = nu``;
+* the accelerations and multipliers: ``top = M^-1/2 Q``, ``bottom = gamma``.
+
+When the rows kept are as many as the velocities (a fully driven mechanism: inverse
+dynamics), ``W_I`` is square and the system splits into ``y = W_I^-1 (bottom_I / d_I)`` and
+``mu = W_I^-T (top - y)``: the same solve on half the unknowns. Both forms are factorised by
+CasADi's sparse QR (the ``qr`` linear solver: backward stable without pivoting, its symbolic
+analysis done once per row set, its factors as sparse as the body-joint graph allows), so a
+row set held over many samples needs no pivots of its own; what can go wrong as the state
+moves (a row that becomes dependent, a singular pose) shows in the residual checks the
+callers evaluate.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from hexapod.model.model import Model
+from hexapod.spatial import retract_symbolic
+
+
+def equilibrated(Phi_v: ca.MX, m_inv_sqrt: ca.DM) -> tuple[ca.MX, ca.MX, ca.MX]:
+    """``(W_all, d, zero)``: ``Phi_v M^-1/2`` (unscaled), its row norms ``d`` (1 for a zero
+    row) and which rows are zero (a foot's contact in swing)."""
+    W_all = ca.mtimes(Phi_v, m_inv_sqrt)
+    norms = ca.sqrt(ca.sum2(W_all * W_all))
+    zero = norms <= 0
+    return W_all, ca.if_else(zero, 1.0, norms), zero
+
+
+def kept_matrix(W_all: ca.MX, d: ca.MX, zero: ca.MX, rows: list[int]) -> ca.MX:
+    """The saddle-point matrix ``[[I, W^T], [W, Z]]`` of the kept ``rows``, as sparse as
+    ``Phi_v``."""
+    n_v = W_all.size2()
+    W = ca.mtimes(ca.diag(1.0 / d[rows]), W_all[rows, :])  # sparse: never a dense node
+    return ca.vertcat(ca.horzcat(ca.MX.eye(n_v), W.T), ca.horzcat(W, -ca.diag(zero[rows])))
+
+
+def solve_kept(W_all: ca.MX, d: ca.MX, zero: ca.MX, rows: list[int], top: ca.MX,
+               bottom: ca.MX) -> tuple[ca.MX, ca.MX]:
+    """``(y, mu)`` of the kept ``rows`` (see the module's description); ``bottom``: all rows'
+    right-hand sides (those of the kept rows are used), ``top`` and ``bottom`` with as many
+    columns as there are systems to solve with one factorisation."""
+    n_v = W_all.size2()
+    if len(rows) == n_v:
+        W = ca.mtimes(ca.diag(1.0 / d[rows]), W_all[rows, :])
+        y = ca.solve(W, bottom[rows, :] / ca.repmat(d[rows], 1, bottom.size2()), "qr")
+        return y, ca.solve(W.T, top - y, "qr")
+    K = kept_matrix(W_all, d, zero, rows)
+    rhs = ca.vertcat(top, bottom[rows, :] / ca.repmat(d[rows], 1, bottom.size2()))
+    solution = ca.solve(K, rhs, "qr")
+    return solution[:n_v, :], solution[n_v:, :]
+
+
+class KeptFactor:
+    """The sparse QR factorisation of a square matrix of kept rows ``J`` (SX, one sparsity
+    pattern), as SX expressions: CasADi's ``qr_sparse`` (Householder, columns in a
+    fill-reducing order chosen once from the pattern) and ``qr_solve``. Its factors travel
+    between Functions as one vector (:attr:`packed`), so a sample factorises once and solves
+    as often as it needs, with ``J`` or its transpose.
+    """
+
+    def __init__(self, J: ca.SX):
+        V, R, beta, self.prinv, self.pc = ca.qr_sparse(J)
+        self.V, self.R = V.sparsity(), R.sparsity()
+        #: the factors' nonzeros in one column: V's, R's, then the reflectors' scales
+        self.packed = ca.vertcat(V.nz[:], R.nz[:], beta)
+        self._beta = beta.numel()
+
+    def solve(self, packed: ca.SX, b: ca.SX, transpose: bool = False) -> ca.SX:
+        """``J^-1 b`` (or ``J^-T b``) from the factors ``packed``."""
+        nv, nr = self.V.nnz(), self.R.nnz()
+        V = ca.SX(self.V, packed[:nv])
+        R = ca.SX(self.R, packed[nv:nv + nr])
+        beta = packed[nv + nr:nv + nr + self._beta]
+        return ca.qr_solve(b, V, R, beta, self.prinv, self.pc, transpose)
+
+
+def retract(model: Model, q, dv):
+    """``q (+) dv`` as :meth:`Model.integrate` computes it, on CasADi symbols."""
+    return retract_symbolic(q, dv, model._lin_q, model._lin_v, model._quat_q, model._omega_v)
+
+
+def newton(model: Model, position: ca.MX, residual, jacobian, rows: list[int],
+           m_inv_sqrt: ca.DM, steps: int) -> ca.MX:
+    """``steps`` Newton corrections of ``position`` onto the kept ``rows``: each the least
+    ``M``-norm step with ``Phi_v dv = -phi`` on those rows (:func:`solve_kept`), applied with
+    the retraction. ``residual(q)`` gives ``phi``, ``jacobian(q)`` ``Phi_v``; the Jacobian is
+    taken at the first position only (a chord method: the corrections are small)."""
+    W_all, d, zero = equilibrated(jacobian(position), m_inv_sqrt)
+    for _ in range(steps):
+        y, _ = solve_kept(W_all, d, zero, rows, ca.MX.zeros(model.n_v), -residual(position))
+        position = retract(model, position, ca.mtimes(m_inv_sqrt, y))
+    return position
+
+
+def sparse_dm(matrix) -> ca.DM:
+    """A matrix (NumPy or SciPy sparse) as a CasADi DM with its nonzeros only, explicit zeros
+    dropped: products with it skip the zeros."""
+    from scipy.sparse import csc_array
+
+    csc = csc_array(matrix)
+    csc.eliminate_zeros()
+    csc.sort_indices()
+    pattern = ca.Sparsity(csc.shape[0], csc.shape[1], csc.indptr.tolist(), csc.indices.tolist())
+    return ca.DM(pattern, csc.data.tolist())
+
+
+def mass_factors(model: Model) -> tuple[ca.DM, ca.DM]:
+    """``M^-1/2`` and ``M^1/2`` as sparse DMs (block-diagonal: scalars and 3 x 3 blocks), built
+    from the blocks and built once per model."""
+    def build(m: Model) -> tuple[ca.DM, ca.DM]:
+        half = m.mass_inv_sqrt
+        return sparse_dm(half.sparse()), sparse_dm(half.map_blocks(np.linalg.inv).sparse())
+
+    return model.built_once(("mass factors",), build)

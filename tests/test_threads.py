@@ -1,0 +1,77 @@
+"""A frozen model, a workspace per thread: two threads running the same model with their own
+``Data`` compute what one thread alone computes, and a workspace of another model is refused."""
+
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+import pytest
+
+import hexapod as hx
+from hexapod.errors import HexapodError
+
+from mechanisms import four_bar
+
+
+def _in_threads(work, count: int = 2) -> list:
+    """``work(k)`` in ``count`` threads started together; their results, in order."""
+    results, errors = [None] * count, []
+    start = threading.Barrier(count)
+
+    def run(k):
+        try:
+            start.wait()
+            results[k] = work(k)
+        except BaseException as error:  # noqa: BLE001 (reported below)
+            errors.append(error)
+
+    threads = [threading.Thread(target=run, args=(k,)) for k in range(count)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    if errors:
+        raise errors[0]
+    return results
+
+
+def test_two_threads_with_their_own_data_compute_the_same_inverse_dynamics():
+    model = hx.assemble(hx.load_scene("front-leg"))
+    times = np.linspace(0.0, 0.5, 101)
+    alone = hx.inverse_dynamics(model, times)
+    together = _in_threads(lambda k: hx.inverse_dynamics(model, times,
+                                                         data=model.create_data()))
+    for result in together:
+        for key in ("force", "torque", "effort", "q", "v_dot"):
+            assert np.array_equal(getattr(result, key), getattr(alone, key)), key
+
+
+def test_two_threads_with_their_own_data_compute_the_same_forward_dynamics():
+    """The exact path (rank decision, redundancy policy, wrenches) on a redundant 3-D four-bar,
+    each thread at its own states, both through the same model's Functions."""
+    model = hx.assemble(four_bar(3, 0.6))
+    times = np.linspace(0.0, 1.0, 12)
+
+    def states(data):
+        out = []
+        for t in times:
+            q, v = hx.consistent_state(model, data, t)
+            a = hx.forward_dynamics(model, data, t, q, v)
+            out.append(np.concatenate([q, v, a, data.lam,
+                                       hx.joint_wrenches(model, data).force.ravel()]))
+        return np.array(out)
+
+    alone = states(model.create_data())
+    for result in _in_threads(lambda k: states(model.create_data())):
+        assert np.array_equal(result, alone)
+
+
+def test_a_model_is_frozen_and_refuses_another_models_data():
+    model = hx.assemble(hx.load_scene("front-leg"))
+    other = hx.assemble(four_bar(2, 0.6))
+    with pytest.raises(AttributeError, match="frozen"):
+        model.name = "changed"
+    model.check(model.create_data())
+    with pytest.raises(HexapodError, match="another model"):
+        hx.forward_dynamics(model, other.create_data(), 0.0, model.q0, model.v0)
