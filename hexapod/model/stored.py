@@ -18,6 +18,7 @@ restored model is the assembled one to the last bit (``tests/test_cache_models.p
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import pickle
 
@@ -32,8 +33,8 @@ from hexapod.scene.scene import Scene
 #: The files of an entry: the description (pickled) and the expressions (serialized).
 DESCRIPTION, EXPRESSIONS = "model.pickle", "expressions.casadi"
 #: The Model's fields kept as they are (the others: its laws, expressions, name and ground come
-#: from the scene at hand).
-_KEPT = ("dimension", "bodies", "joints", "rows", "gravity", "characteristic_length", "q0", "v0",
+#: from the scene at hand, and so do its joints' types: a type of a user's own need not pickle).
+_KEPT = ("dimension", "bodies", "rows", "gravity", "characteristic_length", "q0", "v0",
          "mass", "forces", "rank_tolerance", "working_elements", "report_forces")
 
 
@@ -71,6 +72,7 @@ def store(model: Model, where: list[tuple]) -> None:
         return
     description = {name: getattr(model, name) for name in _KEPT}
     description.update(
+        joints=tuple(dataclasses.replace(j, type=None) for j in model.joints),
         drivers=tuple(dataclasses.replace(d, spec=None) for d in model.drivers),
         contacts=tuple(dataclasses.replace(c, schedule=None) for c in model.contacts),
         where=list(where), across=s.Q_across is not None, potential=s.potential is not None)
@@ -103,11 +105,13 @@ def _model(scene: Scene, digest: str, folder, files: dict[str, bytes]) -> Model:
     phi, qdot, Q = outputs[:3]
     across = outputs.pop(3) if description.pop("across") else None
     potential = outputs[3] if description.pop("potential") else None
+    joints = tuple(dataclasses.replace(j, type=copy.deepcopy(scene.joints[j.name]))
+                   for j in description.pop("joints"))
     drivers = tuple(dataclasses.replace(d, spec=scene.drivers[d.name].law)
                     for d in description.pop("drivers"))
     contacts = tuple(dataclasses.replace(c, schedule=scene.joints[c.name])
                      for c in description.pop("contacts"))
     symbolic = Symbolic(q=q, v=v, w=w, wd=wd, wdd=wdd, qdot=qdot, phi=phi, Q=Q,
                         Q_across=across, potential=potential)
-    return Model(name=scene.name, laws=laws, drivers=drivers, contacts=contacts,
+    return Model(name=scene.name, laws=laws, joints=joints, drivers=drivers, contacts=contacts,
                  symbolic=symbolic, ground=scene.ground, digest=digest, **description)
