@@ -69,7 +69,8 @@ class InverseResult:
         N and N m: by the parent on the child, about the joint origin, in the child's joint
         frame (``frame="joint"``) or in world axes (``frame="world"``).
     effort : ndarray (N, J)
-        ``tau`` of revolute and prismatic joints (NaN for the others).
+        ``tau`` of the joints with a coordinate (revolute and prismatic: torque about the axis,
+        force along it), NaN for the others.
     q, v, v_dot : ndarray (N, n_q), (N, n_v), (N, n_v)
     method : str
         ``"tree"``, ``"phase"`` or ``"saddle"``.
@@ -529,10 +530,7 @@ class TreePlan:
         force, torque = wrench[..., :3], wrench[..., 3:]
         effort = np.full((n, J), np.nan)
         for j, joint in enumerate(model.joints):
-            if joint.kind == "revolute":
-                effort[:, j] = torque[:, j] @ joint.axis
-            elif joint.kind == "prismatic":
-                effort[:, j] = force[:, j] @ joint.axis
+            effort[:, j] = joint.type.effort(force[:, j], torque[:, j], model.dimension)
         if frame == "world":
             R = rotation.reshape(n, J, 3, 3).transpose(0, 1, 3, 2)  # column-major blocks
             force = np.einsum("njab,njb->nja", R, force)

@@ -32,9 +32,10 @@ class JointWrenches:
         N and N m, about the joint origin, in the child's joint frame (or world axes when
         computed with ``frame="world"``).
     effort : ndarray (n_joints,)
-        The axial component ``tau`` of revolute and prismatic joints (torque about the axis,
-        force along it), NaN for the other joints. Equals ``-lambda`` of a driver on the joint
-        plus the efforts and torsion springs acting across it.
+        The effort ``tau`` along the coordinate of the joints that have one (a revolute joint's
+        torque about its axis, a prismatic joint's force along it: the wrench dotted with the
+        joint type's twist), NaN for the other joints. Equals ``-lambda`` of a driver on the
+        joint plus the efforts and torsion springs acting across it.
     frame : str
     """
 
@@ -185,11 +186,7 @@ def wrenches_from_multipliers(model: Model, q: np.ndarray, lam: np.ndarray, Phi_
         origin, R = joint_origin(model, q, joint)
         f, t = _on_child(model, q, joint, g[:, None], origin)
         f, t = f[:, 0], t[:, 0]
-        if joint.kind == "prismatic":
-            effort[k] = f @ (R @ _embed_vector(np.asarray(joint.axis, float)[:, None])[:, 0])
-        elif joint.kind == "revolute":  # about the axis; in the plane, about its normal
-            axis = np.array([0.0, 0.0, 1.0]) if joint.axis is None else joint.axis
-            effort[k] = t @ (R @ axis)
+        effort[k] = joint.type.effort(R.T @ f, R.T @ t, model.dimension)  # joint frame
         if on == "parent":
             point, R = parent_point(model, q, joint)
             f, t = -f, -t + np.cross(origin - point, -f)
