@@ -7,8 +7,6 @@ the law inputs ``w, wd, wdd`` carry only the laws that change with time.
 
 from __future__ import annotations
 
-import copy
-
 import casadi as ca
 import numpy as np
 
@@ -212,7 +210,7 @@ class _Assembly:
                               child=self.index.get(joint.child, GROUND_INDEX),
                               parent_frame=frame_p, child_frame=frame_c, axis=axis,
                               rows=np.array(rows, dtype=int), loop_closing=k in chords,
-                              type=copy.deepcopy(joint)))
+                              type=joint))
         return parts
 
     def drivers(self) -> tuple[list[DriverInfo], dict[str, list[int]]]:

@@ -64,10 +64,10 @@ class BodyInfo:
 class JointInfo:
     """One joint. Frames are given in the centre-of-mass frames of the bodies (world: ground).
 
-    ``type`` is the joint itself: a copy of the scene's joint in SI units, which the model never
-    changes, and which answers the algorithms' questions about its type (whether it is
-    ``drivable``, its ``twist`` and ``effort``, its ``tree_step``, its ``effort_unit``:
-    :class:`hexapod.scene.joints.Joint`); ``kind`` is its type's name.
+    ``type`` is the joint itself, in SI units (the copy of the scene :meth:`Scene.in_si` made
+    for the assembly, which nothing changes), and answers the algorithms' questions about its
+    type (whether it is ``drivable``, its ``twist`` and ``effort``, its ``tree_step``, its
+    ``effort_unit``: :class:`hexapod.scene.joints.Joint`); ``kind`` is its type's name.
     """
 
     name: str

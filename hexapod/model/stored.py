@@ -18,7 +18,6 @@ restored model is the assembled one to the last bit (``tests/test_cache_models.p
 
 from __future__ import annotations
 
-import copy
 import dataclasses
 import pickle
 
@@ -105,7 +104,8 @@ def _model(scene: Scene, digest: str, folder, files: dict[str, bytes]) -> Model:
     phi, qdot, Q = outputs[:3]
     across = outputs.pop(3) if description.pop("across") else None
     potential = outputs[3] if description.pop("potential") else None
-    joints = tuple(dataclasses.replace(j, type=copy.deepcopy(scene.joints[j.name]))
+    scene_joints = scene.joints  # built on each call
+    joints = tuple(dataclasses.replace(j, type=scene_joints[j.name])
                    for j in description.pop("joints"))
     drivers = tuple(dataclasses.replace(d, spec=scene.drivers[d.name].law)
                     for d in description.pop("drivers"))
