@@ -69,7 +69,6 @@ from hexapod import (
     Law,
     Particle,
     PlanarBody,
-    Revolute,
     Scene,
     SpatialBody,
 )
@@ -385,7 +384,7 @@ def replay_scene(scene: Scene, result, *, breaks=None, degree: int = EFFORT_DEGR
     unit = scene.unit
     joints = scene.joints
     # a torque is N L in the scene's unit; a force stays N
-    factors = np.array([1.0 / unit if isinstance(joints[j], Revolute) else 1.0
+    factors = np.array([1.0 / unit if joints[j].effort_unit == "N m" else 1.0
                         for j in drivers])
     table = EffortTable(times, result.effort[:, [columns[j] for j in drivers]] * factors,
                         breaks, degree)

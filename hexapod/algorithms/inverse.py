@@ -14,9 +14,10 @@ same results:
   over the samples of each contact phase, the rank decision taken once per contact set and
   every sample checked, any sample that fails its checks redone by the saddle path's exact
   solve (:mod:`hexapod.algorithms.phase_inverse`);
-* **tree** (an open tree of spatial bodies whose revolute and prismatic joints are all driven,
-  the legs of this project): the same system solved in tree order. A forward pass composes each
-  body's pose from its parent's and its driver's value (exactly: no Newton iterations), CasADi
+* **tree** (an open tree of spatial bodies whose joints the tree path follows, revolute,
+  prismatic and fixed ones, every drivable one driven: the legs of this project): the same
+  system solved in tree order. A forward pass composes each body's pose from its parent's and
+  its joint's step for its driver's value (exactly: no Newton iterations), CasADi
   differentiates it for velocities and accelerations, and a backward pass from the leaves gives
   each joint's wrench from its child's Newton-Euler equations. The whole pass is one CasADi
   Function, mapped over blocks of samples; its cost grows linearly with the number of bodies.
@@ -60,7 +61,8 @@ class InverseResult:
         N and N m: by the parent on the child, about the joint origin, in the child's joint
         frame (``frame="joint"``) or in world axes (``frame="world"``).
     effort : ndarray (N, J)
-        ``tau`` of revolute and prismatic joints (NaN for the others).
+        ``tau`` of the joints with a coordinate (revolute and prismatic: torque about the axis,
+        force along it), NaN for the others.
     q, v, v_dot : ndarray (N, n_q), (N, n_v), (N, n_v)
     method : str
         ``"tree"``, ``"phase"`` or ``"saddle"``.
@@ -290,18 +292,11 @@ class TreePlan:
             A_p = rotation_from_euler_parameters(p_p)
             frame_p = quaternion_product(p_p, ca.DM(_quaternion(joint.parent_frame.rotation)))
             point = r_p + ca.mtimes(A_p, ca.DM(joint.parent_frame.position))
-            value = self._driver_value(j, w)
-            axis = np.asarray(joint.axis if joint.axis is not None else np.zeros(3), float)
-            if joint.kind == "revolute":
-                half = value / 2
-                frame_c = quaternion_product(frame_p, ca.vertcat(ca.cos(half),
-                                                                 ca.sin(half) * ca.DM(axis)))
-                origin = point
-            else:
-                frame_c = frame_p
-                origin = point + (value * ca.mtimes(rotation_from_euler_parameters(frame_p),
-                                                    ca.DM(axis)) if joint.kind == "prismatic"
-                                  else 0)
+            # the joint's step: the child frame's rotation and translation on the parent's
+            turn, shift = joint.type.tree_step(self._driver_value(j, w))
+            frame_c = frame_p if turn is None else quaternion_product(frame_p, turn)
+            origin = point if shift is None else point + ca.mtimes(
+                rotation_from_euler_parameters(frame_p), shift)
             inverse_child = _quaternion(joint.child_frame.rotation) * np.array([1, -1, -1, -1])
             p_c = quaternion_product(frame_c, ca.DM(inverse_child))
             R_c = rotation_from_euler_parameters(p_c)
@@ -390,10 +385,7 @@ class TreePlan:
         force, torque = wrench[..., :3], wrench[..., 3:]
         effort = np.full((n, J), np.nan)
         for j, joint in enumerate(model.joints):
-            if joint.kind == "revolute":
-                effort[:, j] = torque[:, j] @ joint.axis
-            elif joint.kind == "prismatic":
-                effort[:, j] = force[:, j] @ joint.axis
+            effort[:, j] = joint.type.effort(force[:, j], torque[:, j], model.dimension)
         if frame == "world":
             R = rotation.reshape(n, J, 3, 3).transpose(0, 1, 3, 2)  # column-major blocks
             force = np.einsum("njab,njb->nja", R, force)
@@ -432,8 +424,9 @@ def _quaternion(R: np.ndarray) -> np.ndarray:
 
 def tree_plan(model: Model) -> TreePlan | None:
     """The tree path for ``model``, or None when it does not apply: an open tree of spatial
-    bodies hanging from the ground, revolute, prismatic and fixed joints, every revolute and
-    prismatic joint driven by exactly one joint driver, no other driver.
+    bodies hanging from the ground, joints whose type has a ``tree_step`` (revolute, prismatic
+    and fixed joints), every drivable joint driven by exactly one joint driver, no other
+    driver.
 
     The plan (and its compiled Function) is built once per model and kept with it."""
     return model.built_once(("tree-plan",), _make_tree_plan)
@@ -451,12 +444,12 @@ def _make_tree_plan(model: Model) -> TreePlan | None:
         driver_of[driver.joint] = k
     children = set()
     for joint in model.joints:
-        if joint.kind not in ("revolute", "prismatic", "fixed") or joint.loop_closing:
+        if joint.type.tree_step is None or joint.loop_closing:
             return None
         if joint.child == GROUND_INDEX or joint.child in children:
             return None
         children.add(joint.child)
-        if joint.kind != "fixed" and joint.index not in driver_of:
+        if joint.type.drivable and joint.index not in driver_of:
             return None
     if len(children) != len(model.bodies):
         return None

@@ -33,9 +33,10 @@ class JointWrenches:
         N and N m, about the joint origin, in the child's joint frame (or world axes when
         computed with ``frame="world"``).
     effort : ndarray (n_joints,)
-        The axial component ``tau`` of revolute and prismatic joints (torque about the axis,
-        force along it), NaN for the other joints. Equals ``-lambda`` of a driver on the joint
-        plus the efforts and torsion springs acting across it.
+        The effort ``tau`` along the coordinate of the joints that have one (a revolute joint's
+        torque about its axis, a prismatic joint's force along it: the wrench dotted with the
+        joint type's twist), NaN for the other joints. Equals ``-lambda`` of a driver on the
+        joint plus the efforts and torsion springs acting across it.
     frame : str
     """
 
@@ -155,10 +156,7 @@ def wrenches_from_multipliers(model: Model, q: np.ndarray, lam: np.ndarray, Phi_
     force, torque, effort = np.zeros((n, 3)), np.zeros((n, 3)), np.full(n, np.nan)
     for k, joint in enumerate(model.joints):
         f, t = wrench[:3, k], wrench[3:, k]  # joint frame, about the joint origin
-        if joint.kind == "prismatic":
-            effort[k] = f @ _embed_vector(np.asarray(joint.axis, float)[:, None])[:, 0]
-        elif joint.kind == "revolute":  # about the axis; in the plane, about its normal
-            effort[k] = t @ (np.array([0.0, 0.0, 1.0]) if joint.axis is None else joint.axis)
+        effort[k] = joint.type.effort(f, t, model.dimension)
         if frame == "joint" and on == "child":
             force[k], torque[k] = f, t
             continue

@@ -311,14 +311,8 @@ def _frames(model: Model, out: _Results, frame: str) -> None:
     if compiled.size == 0:
         return
     for j, joint in enumerate(model.joints):
-        axis = np.array([0.0, 0.0, 1.0]) if joint.axis is None else np.asarray(joint.axis)
-        axis = np.concatenate([axis, np.zeros(3 - axis.size)])
-        if joint.kind == "revolute":
-            out.effort[compiled, j] = out.torque[compiled, j] @ axis
-        elif joint.kind == "prismatic":
-            out.effort[compiled, j] = out.force[compiled, j] @ axis
-        else:
-            out.effort[compiled, j] = np.nan
+        out.effort[compiled, j] = joint.type.effort(out.force[compiled, j],
+                                                    out.torque[compiled, j], model.dimension)
     if frame == "world":
         R = out.frames[compiled].reshape(-1, len(model.joints), 3, 3)
         R = R.transpose(0, 1, 3, 2)  # column-major blocks

@@ -85,7 +85,7 @@ def require_prescribed(model: Model, data: Data, t: float, q: np.ndarray) -> Non
     if free:
         driven = {d.joint for d in model.drivers if d.kind == "joint"}
         idle = [j.name for j in model.joints
-                if j.kind in ("revolute", "prismatic") and j.index not in driven]
+                if j.type.drivable and j.index not in driven]
         hint = f" (joints without a driver: {', '.join(idle)})" if idle else ""
         raise SingularSystemError(
             f"model '{model.name}': the drivers leave {free} degree(s) of freedom "

@@ -276,7 +276,9 @@ def apply_ground_options(scene, args):
              if getattr(args, name, None) is not None}
     if not given:
         return scene
-    if not any(joint.kind == "contact" for joint in scene.joints.values()):
+    from hexapod.scene.joints import Contact
+
+    if not any(isinstance(joint, Contact) for joint in scene.joints.values()):
         from hexapod.errors import HexapodError
 
         options = ", ".join("--" + name.replace("_", "-") for name in given)

@@ -72,6 +72,20 @@ class ChainState:
     theta: np.ndarray  # (n, 3)
 
 
+def _link_kind(joint) -> str | None:
+    """What a model's joint is to the chain, asked of its type: ``"fixed"`` (a tree step and no
+    coordinate), ``"revolute"`` (its twist a rotation about its axis), ``"prismatic"`` (a
+    translation along it); None for any other."""
+    if joint.type.tree_step is None:
+        return None
+    if not joint.type.drivable:
+        return "fixed"
+    linear, angular = joint.type.twist(3)
+    if not np.any(linear):
+        return "revolute"
+    return "prismatic" if not np.any(angular) else None
+
+
 class ChainModel:
     """An open chain or tree in joint coordinates (one coordinate per revolute or prismatic
     joint, in the model's joint order)."""
@@ -96,8 +110,9 @@ class ChainModel:
         if model.dimension != 3 or any(b.kind != "spatial" for b in model.bodies):
             problems.append(Problem("model", "the recursive model takes spatial bodies only"))
         child_of: dict[int, int] = {}
+        kinds = [_link_kind(joint) for joint in model.joints]
         for joint in model.joints:
-            if joint.kind not in ("revolute", "prismatic", "fixed"):
+            if kinds[joint.index] is None:
                 problems.append(Problem(f"joint '{joint.name}'", f"a {joint.kind} joint: the "
                                         "recursive model takes revolute, prismatic and fixed"))
             if joint.child == GROUND_INDEX or joint.child in child_of:
@@ -125,14 +140,14 @@ class ChainModel:
         link_of_body = {model.joints[j].child: k for k, j in enumerate(order)}
         coordinate = {}
         for j in sorted(order):  # coordinates in the model's joint order
-            if model.joints[j].kind != "fixed":
+            if kinds[j] != "fixed":
                 coordinate[j] = len(coordinate)
         links = []
         for j in order:
             joint = model.joints[j]
             body = model.bodies[joint.child]
             axis = np.zeros(3) if joint.axis is None else np.asarray(joint.axis, dtype=float)
-            links.append(ChainLink(joint.name, joint.kind, link_of_body.get(joint.parent, -1),
+            links.append(ChainLink(joint.name, kinds[j], link_of_body.get(joint.parent, -1),
                                    joint.parent_frame, joint.child_frame, axis, body.mass,
                                    np.asarray(body.inertia, dtype=float),
                                    coordinate.get(j, -1)))

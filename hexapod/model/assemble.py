@@ -15,15 +15,6 @@ from hexapod._support.limits import check_model_size
 from hexapod.model.digest import scene_digest
 from hexapod.model.forces import ForceBuilder, gravity_potential, inertial_forces
 from hexapod.model.frames import BodyState
-from hexapod.model.joints import (
-    LENGTH,
-    ROWS,
-    JointGeometry,
-    distance_rows,
-    driver_row,
-    joint_rate,
-    wrapped_angle,
-)
 from hexapod.model.model import (
     GROUND_INDEX,
     BlockDiagonal,
@@ -37,7 +28,6 @@ from hexapod.model.model import (
     Symbolic,
 )
 from hexapod.scene.bodies import Particle, PlanarBody, SpatialBody
-from hexapod.scene.contacts import Foothold, StanceGate
 from hexapod.scene.drivers import CoordinateDriver, JointDriver
 from hexapod.scene.element import GROUND
 from hexapod.scene.forces import (
@@ -47,7 +37,8 @@ from hexapod.scene.forces import (
     RotationalSpringDamper,
     SpringDamper,
 )
-from hexapod.scene.joints import Contact, Distance
+from hexapod.scene.joints import Contact, JointGeometry
+from hexapod.scene.joints.geometry import angle_rate, wrapped_angle
 from hexapod.scene.laws import Constant, Law
 from hexapod.scene.scene import Scene
 from hexapod.spatial import Placement, euler_parameters_from_rotation
@@ -60,16 +51,19 @@ class _Laws:
 
     def __init__(self):
         self.laws: list[Law] = []
+        self.where: list[tuple] = []  # what each law is in the scene: ("gate", contact)...
         self.w: list[ca.SX] = []
         self.wd: list[ca.SX] = []
         self.wdd: list[ca.SX] = []
 
     def value(self, law: Law, label: str, where: tuple = ()) -> tuple[ca.SX, int]:
-        """The law's value as an expression, and its index (-1 for a constant)."""
+        """The law's value as an expression, and its index (-1 for a constant); ``where`` says
+        what it is in the scene (``("gate", contact)`` finds a foot's gate again)."""
         if isinstance(law, Constant):
             return ca.SX(law.value), -1
         index = len(self.laws)
         self.laws.append(law)
+        self.where.append(where)
         for symbols, suffix in ((self.w, ""), (self.wd, "_d"), (self.wdd, "_dd")):
             symbols.append(ca.SX.sym(f"{label}{suffix}"))
         return self.w[index], index
@@ -135,27 +129,8 @@ def _com_frame(bodies: dict, body: str, frame: Placement) -> Placement:
     return bodies[body].marker_in_com_frame(frame)
 
 
-#: default axis in the joint frame, in space and in the plane
-_DEFAULT_AXES = {
-    "prismatic": ([0.0, 0.0, 1.0], [1.0, 0.0]),
-    "cylindrical": ([0.0, 0.0, 1.0], [1.0, 0.0]),
-    "planar": ([0.0, 0.0, 1.0], None),
-    "point-on-plane": ([0.0, 0.0, 1.0], [0.0, 1.0]),
-    "universal": ([1.0, 0.0, 0.0], None),
-    "revolute": ([0.0, 0.0, 1.0], None),  # in the plane: the plane's normal, not stored
-}
-
-
 def _unit(axis) -> np.ndarray | None:
     return None if axis is None else np.asarray(axis, dtype=float) / np.linalg.norm(axis)
-
-
-def _joint_axis(joint, dimension: int) -> np.ndarray | None:
-    """The joint's unit axis in the joint frame (None for joints without one)."""
-    if joint.kind not in _DEFAULT_AXES or (joint.kind == "revolute" and dimension == 2):
-        return None
-    default = _DEFAULT_AXES[joint.kind][0 if dimension == 3 else 1]
-    return _unit(joint.axis if joint.axis is not None else default)
 
 
 def _characteristic_length(scene: Scene, joint_points: list[np.ndarray]) -> float:
@@ -196,7 +171,6 @@ class _Assembly:
         self.geometries: dict[str, JointGeometry] = {}
         self.joint_points: list[np.ndarray] = []  # world joint origins at the initial pose
         self.contacts: list[ContactInfo] = []
-        self.gate_law: dict[str, int] = {}  # each contact's gate: an index into the laws
 
     def _add_row(self, name: str, owner: str, unit: str, expr: ca.SX) -> int:
         self.rows.append(RowInfo(name, owner, unit))
@@ -204,7 +178,8 @@ class _Assembly:
         return len(self.rows) - 1
 
     def joints(self) -> list[dict]:
-        """Rows of every joint; the spanning tree decides which joints close loops."""
+        """Rows of every joint (its type writes them); the spanning tree decides which joints
+        close loops."""
         si = self.si
         scene_joints = list(si.joints.values())
         _, chords = spanning_forest([GROUND, *self.index],
@@ -217,40 +192,24 @@ class _Assembly:
             self.joint_points.append(world_c)
             frame_p = _com_frame(self.scene_bodies, joint.parent, on_parent)
             frame_c = _com_frame(self.scene_bodies, joint.child, on_child)
-            axis = _joint_axis(joint, self.dim)
+            axis = joint.unit_axis(self.dim)
             g = JointGeometry(self.states[joint.parent], self.states[joint.child], frame_p,
-                              frame_c, axis, self.dim, _unit(getattr(joint, "axis2", None)))
+                              frame_c, axis, self.dim, _unit(getattr(joint, "axis2", None)),
+                              (world_p, world_c))
             self.geometries[joint.name] = g
-            if isinstance(joint, Distance):
-                length = joint.length
-                if length is None:
-                    length = float(np.linalg.norm(world_c - world_p))
-                joint_rows = distance_rows(g, length)
-            elif isinstance(joint, Contact):
-                joint_rows = self._contact_rows(joint, g)
-            else:
-                joint_rows = ROWS[joint.kind](g)
             rows = [self._add_row(f"{joint.name}/{name}", joint.name, unit, expr)
-                    for name, expr, unit in joint_rows]
-            if isinstance(joint, Contact):
+                    for name, expr, unit in joint.rows(g, self.laws)]
+            if isinstance(joint, Contact):  # a foot: its gate's index among the laws
+                gate = self.laws.where.index(("gate", joint.name))
                 self.contacts.append(ContactInfo(joint.name, k, np.array(rows, dtype=int),
-                                                 joint, self.gate_law[joint.name]))
+                                                 joint, gate))
             parts.append(dict(name=joint.name, kind=joint.kind, index=k,
                               parent=self.index.get(joint.parent, GROUND_INDEX),
                               child=self.index.get(joint.child, GROUND_INDEX),
                               parent_frame=frame_p, child_frame=frame_c, axis=axis,
-                              rows=np.array(rows, dtype=int), loop_closing=k in chords))
+                              rows=np.array(rows, dtype=int), loop_closing=k in chords,
+                              type=joint))
         return parts
-
-    def _contact_rows(self, contact: Contact, g: JointGeometry) -> list:
-        """``gate (r_foot - foothold)`` in world axes; gate and foothold are law values, so
-        the contact set and the footholds change without rebuilding anything."""
-        gate, self.gate_law[contact.name] = self.laws.value(
-            StanceGate(contact), f"{contact.name}/gate", ("gate", contact.name))
-        point = g.child.point(g.child_frame.position)
-        return [(axis, gate * (point[i] - self.laws.value(
-            Foothold(contact, i), f"{contact.name}/{axis}0", ("foothold", contact.name, i))[0]),
-                 LENGTH) for i, axis in enumerate("xyz")]
 
     def drivers(self) -> tuple[list[DriverInfo], dict[str, list[int]]]:
         """Driver rows, and the rows of the drivers acting on each joint."""
@@ -263,9 +222,8 @@ class _Assembly:
             f, law = self.laws.value(driver.law, driver.name, ("driver", driver.name))
             if isinstance(driver, JointDriver):
                 joint = joints[driver.joint]
-                unit = "length" if joint.kind == "prismatic" else "angle"
-                row = self._add_row(driver.name, driver.name, unit,
-                                    driver_row(joint.kind, self.geometries[joint.name], f))
+                row = self._add_row(driver.name, driver.name, joint.coordinate_unit,
+                                    joint.driver_row(self.geometries[joint.name], f))
                 on_joint.setdefault(joint.name, []).append(row)
                 drivers.append(DriverInfo(driver.name, "joint", row, law, driver.law,
                                           joint=joint_index[joint.name]))
@@ -353,13 +311,13 @@ class _Assembly:
                 infos.append(ForceInfo(name, element.kind, (body(element.body),)))
             elif isinstance(element, JointEffort):
                 joint, g = on_joint(element)
-                rate = joint_rate(joint.kind, g, self.q, self.qdot)
+                rate = joint.rate(g, self.q, self.qdot)
                 builder.effort(name, rate, self.laws.value(element.law, name,
                                                            ("force", name, "law", None))[0])
                 builder.nonconservative.append(name)
             elif isinstance(element, RotationalSpringDamper):
                 _, g = on_joint(element)
-                rate = joint_rate("revolute", g, self.q, self.qdot)
+                rate = angle_rate(g)  # about the axis of a joint that turns
                 twist = wrapped_angle(g, element.free_angle)
                 torque = -element.stiffness * twist - element.damping * rate
                 builder.potential = builder.potential + element.stiffness * twist**2 / 2

@@ -31,6 +31,7 @@ import numpy as np
 
 from hexapod._support.fastcall import FastFunction, ScatteredFunction, dense_outputs
 from hexapod.errors import HexapodError
+from hexapod.scene.joints import Joint
 from hexapod.scene.laws import Law
 from hexapod.spatial import (
     Placement,
@@ -63,7 +64,13 @@ class BodyInfo:
 
 @dataclass(frozen=True)
 class JointInfo:
-    """One joint. Frames are given in the centre-of-mass frames of the bodies (world: ground)."""
+    """One joint. Frames are given in the centre-of-mass frames of the bodies (world: ground).
+
+    ``type`` is the joint itself, in SI units (the copy of the scene :meth:`Scene.in_si` made
+    for the assembly, which nothing changes), and answers the algorithms' questions about its
+    type (whether it is ``drivable``, its ``twist`` and ``effort``, its ``tree_step``, its
+    ``effort_unit``: :class:`hexapod.scene.joints.Joint`); ``kind`` is its type's name.
+    """
 
     name: str
     kind: str
@@ -72,10 +79,11 @@ class JointInfo:
     child: int
     parent_frame: Placement
     child_frame: Placement
-    axis: np.ndarray | None  # unit, in the joint frame (revolute, prismatic)
+    axis: np.ndarray | None  # unit, in the joint frame (the type's unit_axis)
     rows: np.ndarray  # the joint's own constraint rows
     driver_rows: np.ndarray  # rows of the drivers acting on this joint
     loop_closing: bool
+    type: Joint
     across: tuple[str, ...] = ()  # force elements acting across the joint
     across_column: int = -1  # column of Q_across holding them, -1 when none
 

@@ -54,7 +54,7 @@ def inverse_table(model: Model, result: InverseResult) -> np.ndarray:
     """The rows of the CSV: one per sample, columns as :func:`inverse_columns`."""
     columns = [result.times[:, None]]
     for k, joint in enumerate(model.joints):
-        if joint.kind in ("revolute", "prismatic"):
+        if joint.type.drivable:
             columns.append(result.effort[:, k, None])
         columns += [result.force[:, k], result.torque[:, k]]
     if model.contacts:

@@ -182,7 +182,7 @@ def driver_statistics(model: Model, result: InverseResult) -> list[DriverStatist
         rate = wd[driver.law] if driver.law >= 0 else np.zeros_like(t)
         power = effort * rate
         work = time_integral(t, power)
-        out.append(DriverStatistics(joint.name, "N" if joint.kind == "prismatic" else "N m",
+        out.append(DriverStatistics(joint.name, joint.type.effort_unit,
                                     effort, power, Peak.of(t, effort), time_rms(t, effort),
                                     Peak.of(t, power), time_rms(t, power), work))
     return out

@@ -29,7 +29,7 @@ from hexapod._support.files import read_text
 from hexapod.errors import InputFileError, ModelError, Problem
 from hexapod.scene.drivers import JointDriver
 from hexapod.scene.element import quoted
-from hexapod.scene.joints import Prismatic
+from hexapod.scene.joints import kinds_that
 from hexapod.scene.laws import Hermite, Law, Spline
 from hexapod.scene.scene import Scene
 
@@ -223,8 +223,8 @@ def _column_problems(scene: Scene, motion: Motion) -> list[tuple[str, str]]:
         if joint not in joints:
             out.append((joint, f"is not a joint of the model (joints: {_listed(list(joints))})"))
         elif not joints[joint].drivable:
-            out.append((joint, f"joint '{joint}' is {joints[joint].kind}: only revolute and "
-                        "prismatic joints can be driven"))
+            out.append((joint, f"joint '{joint}' is {joints[joint].kind}: only "
+                        f"{kinds_that(lambda t: t.drivable)} joints can be driven"))
         elif joint in driven:
             out.append((joint, f"joint '{joint}' is already driven by '{driven[joint]}'"))
         elif joint not in motion.rates and motion.times.size < 4:
@@ -247,7 +247,8 @@ def apply_motion(scene: Scene, motion: Motion) -> Scene:
     joints = scene.joints
     if not problems:
         for joint in motion.joints:
-            factor = 1.0 / scene.unit if isinstance(joints[joint], Prismatic) else 1.0
+            length = joints[joint].coordinate_unit == "length"  # in metres in the file
+            factor = 1.0 / scene.unit if length else 1.0
             laws[joint], trouble = _law(motion, joint, factor)
             if trouble:
                 problems.append(problem(joint, trouble))

@@ -26,6 +26,7 @@ from hexapod.scene.drivers import DRIVER_TYPES
 from hexapod.scene.element import Element, quoted
 from hexapod.scene.forces import FORCE_TYPES
 from hexapod.scene.joints import JOINT_TYPES
+from hexapod.scene.joints.base import NUMBER, VECTOR, VECTOR3
 from hexapod.scene.laws import Constant, Law, law_types
 from hexapod.scene.scene import Scene
 from hexapod.spatial import (
@@ -357,18 +358,11 @@ def _joint_schema(kind: str, dimension: int) -> Schema:
               "child": (_string, True), "parent_frame": (_frame(dimension), False),
               "child_frame": (_frame(dimension), False), "origin": (_vector(dimension), False),
               "rotation": (_rotation(dimension), False)}
-    if kind in ("prismatic", "cylindrical", "planar", "point-on-plane", "universal") or (
-            kind == "revolute" and dimension == 3):
-        schema["axis"] = (_vector(dimension), False)
-    if kind == "universal":
-        schema["axis2"] = (_vector(dimension), False)
-    if kind == "distance":
-        schema["length"] = (_number, False)
-    if kind == "contact":  # footholds are world points, 3 numbers (contacts exist in space only)
-        schema.update({"period": (_number, False), "duty": (_number, False),
-                       "lift_off": (_number, False), "foothold": (_vector(3), False),
-                       "advance": (_vector(3), False), "ramp": (_number, False)})
-    return JOINT_TYPES[kind], schema
+    cls = JOINT_TYPES[kind]
+    readers = {NUMBER: _number, VECTOR: _vector(dimension), VECTOR3: _vector(3)}
+    schema.update({key: (readers[value], required)
+                   for key, (value, required) in cls.file_keys(dimension).items()})
+    return cls, schema
 
 
 def _driver_schema(kind: str, dimension: int) -> Schema:

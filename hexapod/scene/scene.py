@@ -31,14 +31,7 @@ from hexapod.scene.forces import (
     RotationalSpringDamper,
     SpringDamper,
 )
-from hexapod.scene.joints import (
-    PARTICLE_ENDS,
-    PLANE_JOINTS,
-    Distance,
-    Joint,
-    Prismatic,
-    Revolute,
-)
+from hexapod.scene.joints import JOINT_TYPES, Joint, kinds_that
 from hexapod.spatial import Placement
 
 #: Length units a scene may use, in metres.
@@ -191,16 +184,19 @@ class Scene:
         """Copies of the elements with lengths multiplied by ``factor``.
 
         Driver laws and actuator efforts are lengths (or torques) only on some joint types,
-        so the scene, which knows the joints, decides their factor.
+        so the scene, which knows the joints, decides their factor: the joint's coordinate
+        unit (a length) and its effort unit (a torque, N L).
         """
         joints = self.joints
         for element in self._elements:
             if isinstance(element, JointDriver):
                 joint = joints.get(element.joint)
-                yield element.scaled(factor if isinstance(joint, Prismatic) else 1.0)
+                yield element.scaled(factor if getattr(joint, "coordinate_unit", None)
+                                     == "length" else 1.0)
             elif isinstance(element, JointEffort):
                 joint = joints.get(element.joint)
-                yield element.scaled(factor if isinstance(joint, Revolute) else 1.0)
+                yield element.scaled(factor if getattr(joint, "effort_unit", None) == "N m"
+                                     else 1.0)
             else:
                 yield element.scaled(factor)
 
@@ -240,7 +236,7 @@ class Scene:
             return (self.pose(joint.parent).inverse() @ world,
                     self.pose(joint.child).inverse() @ world)
         child = self.frame(joint.child, joint.child_frame)
-        if joint.parent_frame is not None or isinstance(joint, Distance):
+        if joint.parent_frame is not None or joint.joins_two_points:
             # a distance joint's two points are apart: each defaults to its body's origin
             return self.frame(joint.parent, joint.parent_frame), child
         world = self.pose(joint.child) @ child
@@ -383,9 +379,9 @@ class _ReferenceCheck:
             joint = self.scene.joints.get(e.joint)
             if joint is None:
                 self._add("joint", f"unknown joint '{e.joint}'")
-            elif joint.kind not in ("revolute", "cylindrical"):
+            elif not joint.turns:
                 self._add("joint", f"a {joint.kind} joint has no axis to turn about "
-                          "(revolute and cylindrical joints have)")
+                          f"({kinds_that(lambda t: t.turns)} joints have)")
             elif any(isinstance(self.bodies.get(b), Particle)
                      for b in (joint.parent, joint.child)):
                 self._add("joint", f"joint '{e.joint}' joins a particle, which has no angle")
@@ -466,24 +462,22 @@ class _ReferenceCheck:
             self._add("origin", f"needs {dim} coordinates")
         if joint.rotation is not None and joint.rotation.shape != (dim, dim):
             self._add("rotation", f"needs a {dim} x {dim} matrix")
-        if isinstance(joint, Distance) and joint.origin is not None:
-            self._add("origin", "a distance joint joins two points: give parent_frame and "
+        if joint.joins_two_points and joint.origin is not None:
+            self._add("origin", f"a {joint.kind} joint joins two points: give parent_frame and "
                       "child_frame (or markers), not one origin")
-        if dim == 2 and joint.kind not in PLANE_JOINTS:
-            hint = {"spherical": "a revolute joint", "universal": "a revolute joint",
-                    "planar": "no joint (a free planar body)",
-                    "contact": "a point-on-plane joint (contacts are spatial)"}[joint.kind]
-            self._add("type", f"no {joint.kind} joint in the plane: use {hint}")
+        if dim == 2 and not joint.exists_in_plane:
+            self._add("type", f"no {joint.kind} joint in the plane: use {joint.plane_hint}")
         for key in ("axis", "axis2"):
             axis = getattr(joint, key, None)
-            if axis is None or (dim == 2 and isinstance(joint, Revolute)):
+            if axis is None or key not in joint.file_keys(dim):
                 continue  # a planar revolute turns about the plane's normal
             if axis.size != dim:
                 self._add(key, f"needs {dim} components in a {dim}-D scene")
-        ends = PARTICLE_ENDS[dim].get(joint.kind, "")
+        ends = joint.particle_ends.get(dim, "")
         for key, name in (("parent", joint.parent), ("child", joint.child)):
             if isinstance(self.bodies.get(name), Particle) and key[0] not in ends:
-                allowed = ", ".join(k for k, e in PARTICLE_ENDS[dim].items() if key[0] in e)
+                allowed = ", ".join(k for k, t in JOINT_TYPES.items()
+                                    if key[0] in t.particle_ends.get(dim, ""))
                 self._add(key, f"particle '{name}' has no orientation: as {key} of a joint "
                           f"it needs one of: {allowed}")
 
@@ -492,10 +486,10 @@ class _ReferenceCheck:
         if joint is None:
             self._add(key, f"unknown joint '{name}'")
         elif not joint.drivable:
-            self._add(key, f"a {joint.kind} joint cannot take {what} (revolute and prismatic "
-                      "joints can)")
-        elif joint.kind == "revolute" and any(isinstance(self.bodies.get(b), Particle)
-                                              for b in (joint.parent, joint.child)):
+            self._add(key, f"a {joint.kind} joint cannot take {what} "
+                      f"({kinds_that(lambda t: t.drivable)} joints can)")
+        elif joint.coordinate_unit == "angle" and any(isinstance(self.bodies.get(b), Particle)
+                                                      for b in (joint.parent, joint.child)):
             self._add(key, f"joint '{name}' joins a particle, which has no angle to drive")
 
     def _coordinate_driver(self, driver: CoordinateDriver):

@@ -34,12 +34,14 @@ from hexapod._support.files import read_text
 from hexapod.errors import InputFileError, ModelError, Problem
 from hexapod.scene.bodies import SpatialBody
 from hexapod.scene.element import GROUND
-from hexapod.scene.joints import Fixed, Prismatic, Revolute
+from hexapod.scene.joints import JOINT_TYPES, Joint, kinds_that
 from hexapod.scene.scene import Scene
 from hexapod.spatial import Placement, rotation_from_rpy, rpy_from_rotation
 
-_JOINTS = {"revolute": Revolute, "continuous": Revolute, "prismatic": Prismatic,
-           "fixed": Fixed}
+
+def _joint_types() -> dict[str, type[Joint]]:
+    """The joint types by their URDF types (``continuous``: a revolute joint)."""
+    return {urdf: cls for cls in JOINT_TYPES.values() for urdf in cls.urdf_types}
 
 
 def _quoted(text: str, limit: int = 60) -> str:
@@ -126,9 +128,10 @@ class _UrdfReader:
         name = node.get("name")
         label = _tag("joint", name)
         kind = node.get("type")
-        if kind not in _JOINTS:
+        types = _joint_types()
+        if kind not in types:
             given = "has no type" if kind is None else f"type={_quoted(kind)} is not supported"
-            self.add(label, f"{given} (revolute, continuous, prismatic, fixed)")
+            self.add(label, f"{given} ({', '.join(types)})")
             return None
         ends = {}
         for end in ("parent", "child"):
@@ -147,7 +150,7 @@ class _UrdfReader:
         # scaled by its largest component first, so that huge (finite) components do not
         # overflow the norm
         largest = float(np.max(np.abs(axis)))
-        if kind != "fixed" and not largest > 1e-12:
+        if types[kind].drivable and not largest > 1e-12:
             self.add(label, "<axis> has zero length")
         unit = axis / largest if largest > 1e-12 else np.array([1.0, 0.0, 0.0])
         return _Joint(name, kind, ends["parent"], ends["child"], self.origin(node, label),
@@ -222,7 +225,7 @@ class _UrdfReader:
             link = links[joint.child]
             body, in_body = owner[joint.parent]
             if link.mass <= 0:
-                if joint.kind != "fixed":
+                if _joint_types()[joint.kind].drivable:
                     self.add(_tag("link", link.name), f"has no mass but moves (joint "
                              f"'{joint.name}' is {joint.kind}): the mass matrix would be "
                              "singular; give it an <inertial> or attach it by a fixed joint")
@@ -240,8 +243,8 @@ class _UrdfReader:
                                   rotation=pose[link.name].rotation,
                                   inertia_rotation=link.com.rotation,
                                   source=f"{self.path}, {_tag('link', link.name)}"))
-            cls = _JOINTS[joint.kind]
-            extra = {"axis": joint.axis} if cls is not Fixed else {}
+            cls = _joint_types()[joint.kind]
+            extra = {"axis": joint.axis} if "axis" in cls.file_keys(3) else {}
             scene.add(cls(joint.name, body, link.name, parent_frame=in_body @ joint.origin,
                           child_frame=Placement.identity(),
                           source=f"{self.path}, {_tag('joint', joint.name)}", **extra))
@@ -286,8 +289,9 @@ def _rpy(R: np.ndarray) -> str:
 
 
 def urdf_text(scene: Scene) -> str:
-    """The URDF of a spatial tree of revolute, prismatic and fixed joints hanging from the
-    ground; each link frame is its body's joint frame (URDF's rule), at the initial pose."""
+    """The URDF of a spatial tree of joints URDF has (revolute, prismatic and fixed: the types
+    with ``urdf_types``) hanging from the ground; each link frame is its body's joint frame
+    (URDF's rule), at the initial pose."""
     scene.validate()
     si = scene.in_si()
     problems = []
@@ -295,9 +299,9 @@ def urdf_text(scene: Scene) -> str:
         problems.append(Problem("scene", "URDF holds spatial bodies only"))
     parent_joint = {}
     for joint in si.joints.values():
-        if joint.kind not in ("revolute", "prismatic", "fixed"):
-            problems.append(Problem(joint.label, "URDF has revolute, prismatic and fixed "
-                                    "joints only here"))
+        if not joint.urdf_types:
+            written = kinds_that(lambda t: bool(t.urdf_types))
+            problems.append(Problem(joint.label, f"URDF has {written} joints only here"))
         if joint.child == GROUND or joint.child in parent_joint:
             problems.append(Problem(joint.label, "the joints do not form a tree hanging from "
                                     "the ground (a loop, or the ground as a child)"))
@@ -331,11 +335,10 @@ def urdf_text(scene: Scene) -> str:
         parent = root if joint.parent == GROUND else joint.parent
         on_parent = si.pose(joint.parent) @ si.joint_frames(joint)[0]
         origin = link_frame[joint.parent].inverse() @ on_parent
-        kind = joint.kind
-        lines += [f'  <joint name="{joint.name}" type="{kind}">',
+        lines += [f'  <joint name="{joint.name}" type="{joint.urdf_types[0]}">',
                   f'    <parent link="{parent}"/>', f'    <child link="{name}"/>',
                   f'    <origin xyz="{_xyz(origin.position)}" rpy="{_rpy(origin.rotation)}"/>']
-        if kind != "fixed":
+        if joint.drivable:
             axis = np.asarray(joint.axis, dtype=float)
             lines += [f'    <axis xyz="{_xyz(axis / np.linalg.norm(axis))}"/>',
                       '    <limit lower="-1e9" upper="1e9" effort="1e9" velocity="1e9"/>']

@@ -169,6 +169,10 @@ def _value(name: str, value) -> str:
     return _number(value)
 
 
+#: the fields every joint's table holds (the others: the type's file keys)
+_JOINT_KEYS = frozenset(f.name for f in dataclasses.fields(Joint))
+
+
 def _section(element: Element) -> str:
     if isinstance(element, Body):
         return "body"
@@ -186,8 +190,9 @@ def _table(element: Element, dimension: int) -> list[str]:
     for f in dataclasses.fields(element):
         if f.name in ("name", "source") or f.name.startswith("_"):
             continue
-        if f.name == "axis" and element.kind == "revolute" and dimension == 2:
-            continue  # a planar revolute turns about the plane's normal
+        if isinstance(element, Joint) and f.name not in _JOINT_KEYS and (
+                f.name not in element.file_keys(dimension)):
+            continue  # what the type's file does not hold (a planar revolute's axis)
         value = getattr(element, f.name)
         if _is_default(f.name, value) or (f.name in ("markers", "mesh") and not value):
             continue

@@ -70,16 +70,16 @@ def state_columns(model: Model) -> Columns:
 
 
 def wrench_columns(model: Model, frame: str = "joint") -> Columns:
-    """Per joint in model order ``tau:<joint>`` (revolute and prismatic joints) and
+    """Per joint in model order ``tau:<joint>`` (the joints with a coordinate) and
     ``Fx .. Tz:<joint>``: the wrench by the parent on the child about the joint origin, in the
     child's joint frame (or world axes, ``frame="world"``), as ``hexapod inverse`` writes it."""
     axes = "world axes" if frame == "world" else "the child's joint frame"
     out: Columns = {}
     for joint in model.joints:
-        if joint.kind == "revolute":
-            out[f"tau:{joint.name}"] = ("N m", "effort about the joint's axis, parent on child")
-        elif joint.kind == "prismatic":
-            out[f"tau:{joint.name}"] = ("N", "effort along the joint's axis, parent on child")
+        if joint.type.drivable:
+            along = "about" if joint.type.coordinate_unit == "angle" else "along"
+            out[f"tau:{joint.name}"] = (joint.type.effort_unit,
+                                        f"effort {along} the joint's axis, parent on child")
         for c in WRENCH_COMPONENTS:
             out[f"{c}:{joint.name}"] = (
                 ("N", f"force by the parent on the child, {c[1]} in {axes}") if c[0] == "F"
@@ -202,7 +202,7 @@ class SimulationResult:
         parts = [self.t[:, None], self.q, self.v, self.v_dot, self.lam]
         if self.force is not None:
             for k, joint in enumerate(self.model.joints):
-                if joint.kind in ("revolute", "prismatic"):
+                if joint.type.drivable:
                     parts.append(self.effort[:, k, None])
                 parts += [self.force[:, k], self.torque[:, k]]
         return np.hstack(parts)
@@ -224,8 +224,8 @@ class SimulationResult:
         if self.force is not None:
             arrays.update(force=self.force, torque=self.torque, effort=self.effort,
                           joints=np.array([j.name for j in self.model.joints]),
-                          effort_units=np.array([{"revolute": "N m", "prismatic": "N"}.get(
-                              j.kind, "") for j in self.model.joints]))
+                          effort_units=np.array([j.type.effort_unit or ""
+                                                 for j in self.model.joints]))
         buffer = io.BytesIO()
         np.savez_compressed(buffer, **arrays)
         return buffer.getvalue()

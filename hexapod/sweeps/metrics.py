@@ -48,8 +48,7 @@ def metric_unit(model, column: str) -> str:
     """The unit of a metric column ("" for a pure number)."""
     family, _, element = column.partition(":")
     if family in ("peak_effort", "rms_effort"):
-        kind = model.joints[model.joint_index[element]].kind
-        return "N" if kind == "prismatic" else "N m"
+        return model.joints[model.joint_index[element]].type.effort_unit or ""
     return _UNITS.get(family, "")
 
 
@@ -57,8 +56,7 @@ def inverse_metrics(model, result, families, strides: float) -> dict[str, float]
     """The metrics of an inverse-dynamics ``result`` over ``strides`` strides."""
     out: dict[str, float] = {}
     t = result.times
-    driven = [j for j in model.joints if j.driver_rows.size and j.kind in ("revolute",
-                                                                             "prismatic")]
+    driven = [j for j in model.joints if j.driver_rows.size and j.type.drivable]
     _wrench_metrics(out, model, t, result.effort, result.force, result.torque, driven, families)
     if model.contacts and result.ground_force is not None:
         from hexapod.output.ground import foot_loads
@@ -91,8 +89,7 @@ def simulation_metrics(model, result, families) -> dict[str, float]:
     """The metrics of a simulation ``result`` (wrench metrics when it computed forces)."""
     out: dict[str, float] = {}
     if result.force is not None:
-        driven = [j for j in model.joints if j.driver_rows.size
-                  and j.kind in ("revolute", "prismatic")]
+        driven = [j for j in model.joints if j.driver_rows.size and j.type.drivable]
         _wrench_metrics(out, model, result.t, result.effort, result.force, result.torque,
                         driven, families)
     scalars = {"energy_drift": result.energy_drift,

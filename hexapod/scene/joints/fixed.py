@@ -1,0 +1,37 @@
+"""The fixed joint (a weld)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from hexapod.scene.joints.base import Joint, register
+from hexapod.scene.joints.geometry import ANGLE, dot, point_rows
+
+
+@register
+@dataclass(eq=False)
+class Fixed(Joint):
+    """A weld: no relative motion (6 rows in space, 3 in the plane).
+
+    Rows: ``x, y, z``, ``rx = z_p . y_c``, ``ry = x_p . z_c``, ``rz = y_p . x_c``; in the plane
+    ``x, y, rot``.
+    """
+
+    kind = "fixed"
+    exists_in_plane = True
+    urdf_types = ("fixed",)
+
+    def rows(self, g, laws=None):
+        if g.dimension == 2:
+            return point_rows(g) + [("rot", g.relative_angle(), ANGLE)]
+        e = np.eye(3)
+        x_p, y_p, z_p = (g.parent_vector(e[i]) for i in range(3))
+        x_c, y_c, z_c = (g.child_vector(e[i]) for i in range(3))
+        return point_rows(g) + [("rx", dot(z_p, y_c), ANGLE), ("ry", dot(x_p, z_c), ANGLE),
+                                ("rz", dot(y_p, x_c), ANGLE)]
+
+    def tree_step(self, value):
+        """The child frame is the parent's: no rotation, no translation."""
+        return None, None

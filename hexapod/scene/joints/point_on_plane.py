@@ -1,0 +1,31 @@
+"""The point-on-plane joint: a foot on the ground."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from hexapod.scene.joints.base import AXIS, Joint, register
+from hexapod.scene.joints.geometry import LENGTH, dot
+
+
+@register
+@dataclass(eq=False)
+class PointOnPlane(Joint):
+    """The child frame's origin stays on the plane through the parent frame's origin with
+    normal ``axis`` (joint frame on the parent; default z, or y in the plane, where the plane is
+    a line): a foot on the ground. 1 row, ``normal = a_p . d``; the child may be a particle."""
+
+    axis: np.ndarray | None = None
+    kind = "point-on-plane"
+    default_axis = {3: (0.0, 0.0, 1.0), 2: (0.0, 1.0)}
+    exists_in_plane = True
+    particle_ends = {3: "c", 2: "c"}
+
+    @classmethod
+    def file_keys(cls, dimension):
+        return {"axis": AXIS}
+
+    def rows(self, g, laws=None):
+        return [("normal", dot(g.parent_vector(g.axis), g.gap), LENGTH)]

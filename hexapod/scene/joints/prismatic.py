@@ -1,0 +1,71 @@
+"""The prismatic joint: one translation along an axis."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from hexapod.scene.joints.base import AXIS, Joint, register
+from hexapod.scene.joints.geometry import (
+    ANGLE,
+    LENGTH,
+    JointGeometry,
+    axial_displacement,
+    dot,
+    normal_in_plane,
+)
+
+
+@register
+@dataclass(eq=False)
+class Prismatic(Joint):
+    """One translation along ``axis`` (in the joint frame; default x in the plane, z in space).
+    5 rows in space, 2 in the plane. The displacement is that of the child frame's origin from
+    the parent frame's origin, along the axis.
+
+    Rows: ``ax1, ax2`` (the axes stay aligned), ``rot = w_p . u_c``, ``t1 = u_p . d``,
+    ``t2 = w_p . d``; in the plane ``rot`` (relative angle) and ``t = n_p . d`` (``n`` normal to
+    the axis). A driver sets ``a_p . d - f``.
+    """
+
+    axis: np.ndarray | None = None
+    kind = "prismatic"
+    drivable = True
+    default_axis = {3: (0.0, 0.0, 1.0), 2: (1.0, 0.0)}
+    exists_in_plane = True
+    coordinate_unit, effort_unit = LENGTH, "N"
+    urdf_types = ("prismatic",)
+
+    @classmethod
+    def file_keys(cls, dimension):
+        return {"axis": AXIS}
+
+    def rows(self, g: JointGeometry, laws=None):
+        d = g.gap
+        if g.dimension == 2:
+            return [("rot", g.relative_angle(), ANGLE),
+                    ("t", dot(g.parent_vector(normal_in_plane(g.axis)), d), LENGTH)]
+        u, w, a = g.triad()
+        a_c = g.child_vector(a)
+        u_p, w_p = g.parent_vector(u), g.parent_vector(w)
+        return [("ax1", dot(u_p, a_c), ANGLE), ("ax2", dot(w_p, a_c), ANGLE),
+                ("rot", dot(w_p, g.child_vector(u)), ANGLE),
+                ("t1", dot(u_p, d), LENGTH), ("t2", dot(w_p, d), LENGTH)]
+
+    def driver_row(self, g, f):
+        return axial_displacement(g) - f
+
+    def rate(self, g, q, qdot):
+        import casadi as ca
+
+        return ca.jtimes(axial_displacement(g), q, qdot)
+
+    def twist(self, dimension):
+        return self._axis_twist(dimension, 1.0, 0.0)
+
+    def tree_step(self, value):
+        """No rotation, a translation by ``value`` along the axis (parent's joint frame)."""
+        import casadi as ca
+
+        return None, value * ca.DM(self.unit_axis(3))

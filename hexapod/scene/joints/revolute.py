@@ -1,0 +1,73 @@
+"""The revolute joint: one rotation about an axis."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from hexapod.scene.joints.base import AXIS, Joint, register
+from hexapod.scene.joints.geometry import (
+    ANGLE,
+    JointGeometry,
+    angle_rate,
+    dot,
+    point_rows,
+    wrapped_angle,
+)
+
+
+@register
+@dataclass(eq=False)
+class Revolute(Joint):
+    """One rotation about ``axis`` (in the joint frame; default z). 5 rows in space, 2 in the plane
+    (where the axis is always normal to the plane). The joint angle is measured from the parent
+    frame to the child frame, positive about the axis.
+
+    Rows: ``x, y, z`` (the frame origins coincide), ``ax1 = u_p . a_c``, ``ax2 = w_p . a_c``;
+    in the plane ``x, y``. A driver sets the **wrapped** angle difference
+    ``atan2(sin(theta - f), cos(theta - f))``.
+    """
+
+    axis: np.ndarray | None = None
+    kind = "revolute"
+    drivable = True
+    default_axis = {3: (0.0, 0.0, 1.0)}  # in the plane: the plane's normal, not stored
+    exists_in_plane = True
+    particle_ends = {2: "pc"}
+    turns = True
+    coordinate_unit, effort_unit = ANGLE, "N m"
+    urdf_types = ("revolute", "continuous")
+
+    def __post_init__(self):
+        self.axis = np.array((0.0, 0.0, 1.0) if self.axis is None else self.axis,
+                             dtype=float).reshape(-1)
+        super().__post_init__()
+
+    @classmethod
+    def file_keys(cls, dimension):
+        return {"axis": AXIS} if dimension == 3 else {}
+
+    def rows(self, g: JointGeometry, laws=None):
+        if g.dimension == 2:
+            return point_rows(g)
+        u, w, a = g.triad()
+        a_c = g.child_vector(a)
+        return point_rows(g) + [("ax1", dot(g.parent_vector(u), a_c), ANGLE),
+                                ("ax2", dot(g.parent_vector(w), a_c), ANGLE)]
+
+    def driver_row(self, g, f):
+        return wrapped_angle(g, f)
+
+    def rate(self, g, q, qdot):
+        return angle_rate(g)
+
+    def twist(self, dimension):
+        return self._axis_twist(dimension, 0.0, 1.0)
+
+    def tree_step(self, value):
+        """A rotation by ``value`` about the axis (Euler parameters), no translation."""
+        import casadi as ca
+
+        half = value / 2
+        return ca.vertcat(ca.cos(half), ca.sin(half) * ca.DM(self.unit_axis(3))), None
