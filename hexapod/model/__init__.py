@@ -3,16 +3,9 @@ Functions built once and only for what the scene has; ``Model.create_data()`` gi
 the algorithms fill."""
 
 from hexapod.model.assemble import assemble
-from hexapod.model.model import (
-    GROUND_INDEX,
-    BodyInfo,
-    Data,
-    DriverInfo,
-    ForceInfo,
-    JointInfo,
-    Model,
-    RowInfo,
-)
+from hexapod.model.data import Data
+from hexapod.model.infos import GROUND_INDEX, BodyInfo, DriverInfo, ForceInfo, JointInfo, RowInfo
+from hexapod.model.model import Model
 
 __all__ = ["GROUND_INDEX", "BodyInfo", "Data", "DriverInfo", "ForceInfo", "JointInfo", "Model",
            "RowInfo", "assemble"]

@@ -15,18 +15,17 @@ from hexapod._support.limits import check_model_size
 from hexapod.model.digest import scene_digest
 from hexapod.model.forces import ForceBuilder, gravity_potential, inertial_forces
 from hexapod.model.frames import BodyState
-from hexapod.model.model import (
+from hexapod.model.infos import (
     GROUND_INDEX,
-    BlockDiagonal,
     BodyInfo,
     ContactInfo,
     DriverInfo,
     ForceInfo,
     JointInfo,
-    Model,
     RowInfo,
-    Symbolic,
 )
+from hexapod.model.mass import BlockDiagonal
+from hexapod.model.model import Model, Symbolic
 from hexapod.scene.bodies import Particle, PlanarBody, SpatialBody
 from hexapod.scene.drivers import CoordinateDriver, JointDriver
 from hexapod.scene.element import GROUND

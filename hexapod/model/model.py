@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cached_property
 
 import casadi as ca
@@ -31,7 +31,17 @@ import numpy as np
 
 from hexapod._support.fastcall import FastFunction, ScatteredFunction, dense_outputs
 from hexapod.errors import HexapodError
-from hexapod.scene.joints import Joint
+from hexapod.model.data import Data
+from hexapod.model.infos import (
+    GROUND_INDEX,
+    BodyInfo,
+    ContactInfo,
+    DriverInfo,
+    ForceInfo,
+    JointInfo,
+    RowInfo,
+)
+from hexapod.model.mass import BlockDiagonal
 from hexapod.scene.laws import Law
 from hexapod.spatial import (
     Placement,
@@ -41,188 +51,16 @@ from hexapod.spatial import (
     rotation_from_euler_parameters,
 )
 
-GROUND_INDEX = -1
+__all__ = ["GROUND_INDEX", "BodyInfo", "ContactInfo", "Data", "DriverInfo", "ForceInfo",
+           "JointInfo", "Model", "RowInfo", "Symbolic"]
 _MATRIX_OUTPUTS = frozenset({"Phi_q", "Phi_v", "M", "Q_across"})
 #: outputs with more entries than this are evaluated on their nonzeros (ScatteredFunction)
 _DENSE_OUTPUT_ENTRIES = 100_000
 
 
-@dataclass(frozen=True)
-class BodyInfo:
-    """One body of the model. ``q`` and ``v`` are its slices of the coordinate vectors."""
-
-    name: str
-    kind: str  # "spatial" | "planar" | "particle"
-    index: int
-    q: slice
-    v: slice
-    mass: float
-    inertia: np.ndarray  # about the centre of mass, body axes: 3 x 3, 1 x 1 (plane), 0 x 0
-    com: np.ndarray  # centre of mass in the body's reference frame (for reference-frame poses)
-    markers: dict[str, Placement] = field(default_factory=dict)  # in the centre-of-mass frame
-
-
-@dataclass(frozen=True)
-class JointInfo:
-    """One joint. Frames are given in the centre-of-mass frames of the bodies (world: ground).
-
-    ``type`` is the joint itself, in SI units (the copy of the scene :meth:`Scene.in_si` made
-    for the assembly, which nothing changes), and answers the algorithms' questions about its
-    type (whether it is ``drivable``, its ``twist`` and ``effort``, its ``tree_step``, its
-    ``effort_unit``: :class:`hexapod.scene.joints.Joint`); ``kind`` is its type's name.
-    """
-
-    name: str
-    kind: str
-    index: int
-    parent: int  # body index, GROUND_INDEX for the ground
-    child: int
-    parent_frame: Placement
-    child_frame: Placement
-    axis: np.ndarray | None  # unit, in the joint frame (the type's unit_axis)
-    rows: np.ndarray  # the joint's own constraint rows
-    driver_rows: np.ndarray  # rows of the drivers acting on this joint
-    loop_closing: bool
-    type: Joint
-    across: tuple[str, ...] = ()  # force elements acting across the joint
-    across_column: int = -1  # column of Q_across holding them, -1 when none
-
-
-@dataclass(frozen=True)
-class ContactInfo:
-    """A foot contact: its joint (index into ``Model.joints``), its three rows (world x, y,
-    z of ``gate (r_foot - foothold)``), its schedule (the scene's
-    :class:`~hexapod.scene.joints.Contact`, in SI) and the index of its gate in the law
-    values ``w`` (1 in stance, 0 in swing)."""
-
-    name: str
-    joint: int
-    rows: np.ndarray
-    schedule: object
-    gate: int
-
-    def in_stance(self, t) -> np.ndarray:
-        """Whether the foot is on the ground at ``t`` (touch-down included)."""
-        from hexapod.scene.contacts import in_stance
-
-        return in_stance(self.schedule, t)
-
-    def weight(self, t) -> np.ndarray:
-        """The foot's weight in the ground-force policy at ``t``
-        (:func:`hexapod.scene.contacts.stance_weight`)."""
-        from hexapod.scene.contacts import stance_weight
-
-        return stance_weight(self.schedule, t)
-
-    def stances(self, start: float, stop: float) -> list[tuple[float, float]]:
-        """The stances (touch-down to lift-off) overlapping ``[start, stop]``, clipped to it."""
-        from hexapod.scene.contacts import stance_intervals
-
-        return stance_intervals(self.schedule, start, stop)
-
-
-@dataclass(frozen=True)
-class DriverInfo:
-    """One driver row. ``joint`` for joint drivers; ``body`` and ``coordinate`` otherwise."""
-
-    name: str
-    kind: str  # "joint" | "coordinate"
-    row: int
-    law: int  # index into Model.laws, -1 for a constant law (folded into the row)
-    spec: Law | None = None  # the law itself, for descriptions
-    joint: int | None = None
-    body: int | None = None
-    coordinate: str | None = None
-
-
-@dataclass(frozen=True)
-class ForceInfo:
-    """One force element: the bodies it acts on and where (points in the bodies'
-    centre-of-mass frames, world on the ground; none for torques), or the joint it acts across."""
-
-    name: str
-    kind: str  # "spring", "applied-force", "applied-torque", "effort", "rotational-spring"
-    bodies: tuple[int, ...]
-    points: tuple[np.ndarray, ...] = ()
-    joint: int | None = None
-
-
-@dataclass(frozen=True)
-class RowInfo:
-    """One constraint row: its name (``joint/row`` or the driver's name), owner and unit kind."""
-
-    name: str
-    owner: str
-    kind: str  # "length" | "angle"
-
-
 def _large(function: ca.Function) -> bool:
     """Whether an output of ``function`` has too many entries to be densified."""
     return any(function.numel_out(i) > _DENSE_OUTPUT_ENTRIES for i in range(function.n_out()))
-
-
-class BlockDiagonal:
-    """A symmetric block-diagonal matrix: scalar entries plus 3 x 3 blocks (spatial rotations).
-
-    ``diagonal`` holds the scalar entries (zero where a block sits); ``blocks[k]`` sits at rows
-    and columns ``block_index[k]``.
-    """
-
-    # make NumPy defer ``ndarray @ BlockDiagonal`` to __rmatmul__
-    __array_ufunc__ = None
-
-    def __init__(self, diagonal: np.ndarray, blocks: np.ndarray, block_index: np.ndarray):
-        self.diagonal = np.asarray(diagonal, dtype=float)
-        self.blocks = np.asarray(blocks, dtype=float).reshape(-1, 3, 3)
-        self.block_index = np.asarray(block_index, dtype=int).reshape(-1, 3)
-        self._block_columns = self.block_index.reshape(-1)
-
-    def map_blocks(self, fn) -> BlockDiagonal:
-        """Apply a matrix function (inverse, square root ...) to every block and scalar; ``fn``
-        takes a stack of matrices (k, n, n), as NumPy's linear algebra does."""
-        diagonal = self.diagonal.copy()
-        scalar = np.ones(diagonal.size, dtype=bool)
-        scalar[self._block_columns] = False
-        if scalar.any():
-            diagonal[scalar] = fn(diagonal[scalar][:, None, None])[:, 0, 0]
-        blocks = fn(self.blocks) if self.blocks.size else self.blocks.copy()
-        return BlockDiagonal(diagonal, blocks, self.block_index)
-
-    def __matmul__(self, x: np.ndarray) -> np.ndarray:
-        """``self @ x`` for a vector or a matrix with n rows."""
-        x = np.asarray(x, dtype=float)
-        out = self.diagonal.reshape((-1,) + (1,) * (x.ndim - 1)) * x
-        if self.blocks.size:
-            xb = x[self.block_index]  # (n_b, 3, ...)
-            out[self.block_index] = np.einsum("bij,bj...->bi...", self.blocks, xb)
-        return out
-
-    def __rmatmul__(self, A: np.ndarray) -> np.ndarray:
-        """``A @ self`` for a matrix with n columns."""
-        return (self @ np.asarray(A, dtype=float).T).T
-
-    def dense(self) -> np.ndarray:
-        return self @ np.eye(self.diagonal.size)
-
-    def sparse(self):
-        """The matrix in SciPy's CSR format (for products with large sparse matrices)."""
-        from scipy.sparse import csr_array
-
-        n = self.diagonal.size
-        scalar = np.ones(n, dtype=bool)
-        scalar[self._block_columns] = False
-        index = np.flatnonzero(scalar)
-        rows = np.broadcast_to(self.block_index[:, :, None], self.blocks.shape).reshape(-1)
-        columns = np.broadcast_to(self.block_index[:, None, :], self.blocks.shape).reshape(-1)
-        return csr_array((np.concatenate([self.diagonal[index], self.blocks.reshape(-1)]),
-                          (np.concatenate([index, rows]), np.concatenate([index, columns]))),
-                         shape=(n, n))
-
-
-def _sym_sqrt(J: np.ndarray, power: float) -> np.ndarray:
-    """``J**power`` of symmetric positive definite matrices (a stack of them)."""
-    values, vectors = np.linalg.eigh(J)
-    return (vectors * values[..., None, :]**power) @ np.swapaxes(vectors, -1, -2)
 
 
 @dataclass
@@ -311,7 +149,7 @@ class Model:
         self.v0 = v0
         self.mass = mass
         self.mass_inv = mass.map_blocks(np.linalg.inv)
-        self.mass_inv_sqrt = mass.map_blocks(lambda J: _sym_sqrt(J, -0.5))
+        self.mass_inv_sqrt = mass.power(-0.5)
         self.forces = forces
         self.force_names = tuple(f.name for f in forces)
         self.rank_tolerance = rank_tolerance
@@ -721,81 +559,3 @@ class Model:
         return Placement(qb)
 
 
-@dataclass
-class Data:
-    """The workspace of one model (:meth:`Model.create_data`): the numbers of the last state an
-    algorithm saw, and what belongs to a run rather than to the model.
-
-    Algorithms fill the state fields they compute; ``None`` means not computed at this state
-    (:meth:`at` clears them when the state changes). Besides them a workspace keeps the call
-    buffers of the model's Functions (``calls``), the law values of the last run of samples
-    (``laws``) and the objects a run builds and reuses (``built``: rank decisions and their
-    plans). Each thread uses a workspace of its own; :meth:`Model.check` tells whether one was
-    made for a given model.
-
-    Attributes
-    ----------
-    t : float
-    q, v, v_dot : ndarray (n_q,), (n_v,), (n_v,)
-    w, wd, wdd : ndarray (n_w,)
-        The laws' values and derivatives at ``t``.
-    Phi_v : ndarray (n_c, n_v)
-        A SciPy CSR array for a large model (:mod:`hexapod.algorithms.saddle`).
-    gamma, Q, lam : ndarray (n_c,), (n_v,), (n_c,)
-    Q_across : ndarray (n_v, k)
-        Generalized forces of the force elements acting across joints.
-    independent_rows, redundant_rows : ndarray of int
-        The rank decision's rows (indices into ``Model.rows``).
-    inconsistency : float
-        The relative violation of the redundant rows.
-    condition_number, sigma_min : float
-        Of the equilibrated saddle-point matrix; the smallest singular value of the
-        equilibrated kept rows.
-    singular_values : ndarray
-        All of them, ascending.
-    ground_status : tuple of str
-        Per contact: ``swing``, ``ok``, or where the friction policy found no admissible force,
-        ``slip`` (outside the friction cone) or ``pull`` (normal force below its minimum).
-    """
-
-    t: float | None = None
-    q: np.ndarray | None = None
-    v: np.ndarray | None = None
-    w: np.ndarray | None = None
-    wd: np.ndarray | None = None
-    wdd: np.ndarray | None = None
-    Phi_v: np.ndarray | None = None
-    gamma: np.ndarray | None = None
-    Q: np.ndarray | None = None
-    v_dot: np.ndarray | None = None
-    lam: np.ndarray | None = None
-    Q_across: np.ndarray | None = None
-    independent_rows: np.ndarray | None = None
-    redundant_rows: np.ndarray | None = None
-    inconsistency: float | None = None
-    condition_number: float | None = None
-    sigma_min: float | None = None
-    singular_values: np.ndarray | None = None
-    ground_status: tuple[str, ...] | None = None
-    #: what the workspace was made for (:meth:`Model.check`), and what belongs to a run
-    model_sizes: tuple = field(default=(), repr=False, compare=False)
-    calls: dict = field(default_factory=dict, repr=False, compare=False)
-    laws: tuple | None = field(default=None, repr=False, compare=False)
-    built: dict = field(default_factory=dict, repr=False, compare=False)
-
-    #: the fields :meth:`at` clears (those of a state)
-    _RUN = frozenset({"model_sizes", "calls", "laws", "built"})
-
-    def at(self, t: float, q: np.ndarray, v: np.ndarray | None = None) -> None:
-        """Make ``(t, q)`` (and ``v`` when given) the state of this workspace: every field
-        computed at another state is cleared, so that nothing of an earlier state is read as
-        belonging to this one."""
-        same = (self.t == t and self.q is not None and np.array_equal(self.q, q)
-                and (v is None or self.v is not None and np.array_equal(self.v, v)))
-        if not same:
-            for name in self.__dataclass_fields__:
-                if name not in self._RUN:
-                    setattr(self, name, None)
-        self.t, self.q = t, q
-        if v is not None:
-            self.v = v

@@ -1,0 +1,125 @@
+"""What a model knows of each of its elements: frozen records of bodies, joints, contacts,
+drivers, force elements and constraint rows, with their slices of the coordinate vectors and
+their rows (the index maps of :class:`hexapod.model.model.Model`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from hexapod.scene.joints import Joint
+from hexapod.scene.laws import Law
+from hexapod.spatial import Placement
+
+#: The body index of the ground.
+GROUND_INDEX = -1
+
+
+@dataclass(frozen=True)
+class BodyInfo:
+    """One body of the model. ``q`` and ``v`` are its slices of the coordinate vectors."""
+
+    name: str
+    kind: str  # "spatial" | "planar" | "particle"
+    index: int
+    q: slice
+    v: slice
+    mass: float
+    inertia: np.ndarray  # about the centre of mass, body axes: 3 x 3, 1 x 1 (plane), 0 x 0
+    com: np.ndarray  # centre of mass in the body's reference frame (for reference-frame poses)
+    markers: dict[str, Placement] = field(default_factory=dict)  # in the centre-of-mass frame
+
+
+@dataclass(frozen=True)
+class JointInfo:
+    """One joint. Frames are given in the centre-of-mass frames of the bodies (world: ground).
+
+    ``type`` is the joint itself, in SI units (the copy of the scene :meth:`Scene.in_si` made
+    for the assembly, which nothing changes), and answers the algorithms' questions about its
+    type (whether it is ``drivable``, its ``twist`` and ``effort``, its ``tree_step``, its
+    ``effort_unit``: :class:`hexapod.scene.joints.Joint`); ``kind`` is its type's name.
+    """
+
+    name: str
+    kind: str
+    index: int
+    parent: int  # body index, GROUND_INDEX for the ground
+    child: int
+    parent_frame: Placement
+    child_frame: Placement
+    axis: np.ndarray | None  # unit, in the joint frame (the type's unit_axis)
+    rows: np.ndarray  # the joint's own constraint rows
+    driver_rows: np.ndarray  # rows of the drivers acting on this joint
+    loop_closing: bool
+    type: Joint
+    across: tuple[str, ...] = ()  # force elements acting across the joint
+    across_column: int = -1  # column of Q_across holding them, -1 when none
+
+
+@dataclass(frozen=True)
+class ContactInfo:
+    """A foot contact: its joint (index into ``Model.joints``), its three rows (world x, y,
+    z of ``gate (r_foot - foothold)``), its schedule (the scene's
+    :class:`~hexapod.scene.joints.Contact`, in SI) and the index of its gate in the law
+    values ``w`` (1 in stance, 0 in swing)."""
+
+    name: str
+    joint: int
+    rows: np.ndarray
+    schedule: object
+    gate: int
+
+    def in_stance(self, t) -> np.ndarray:
+        """Whether the foot is on the ground at ``t`` (touch-down included)."""
+        from hexapod.scene.contacts import in_stance
+
+        return in_stance(self.schedule, t)
+
+    def weight(self, t) -> np.ndarray:
+        """The foot's weight in the ground-force policy at ``t``
+        (:func:`hexapod.scene.contacts.stance_weight`)."""
+        from hexapod.scene.contacts import stance_weight
+
+        return stance_weight(self.schedule, t)
+
+    def stances(self, start: float, stop: float) -> list[tuple[float, float]]:
+        """The stances (touch-down to lift-off) overlapping ``[start, stop]``, clipped to it."""
+        from hexapod.scene.contacts import stance_intervals
+
+        return stance_intervals(self.schedule, start, stop)
+
+
+@dataclass(frozen=True)
+class DriverInfo:
+    """One driver row. ``joint`` for joint drivers; ``body`` and ``coordinate`` otherwise."""
+
+    name: str
+    kind: str  # "joint" | "coordinate"
+    row: int
+    law: int  # index into Model.laws, -1 for a constant law (folded into the row)
+    spec: Law | None = None  # the law itself, for descriptions
+    joint: int | None = None
+    body: int | None = None
+    coordinate: str | None = None
+
+
+@dataclass(frozen=True)
+class ForceInfo:
+    """One force element: the bodies it acts on and where (points in the bodies'
+    centre-of-mass frames, world on the ground; none for torques), or the joint it acts across."""
+
+    name: str
+    kind: str  # "spring", "applied-force", "applied-torque", "effort", "rotational-spring"
+    bodies: tuple[int, ...]
+    points: tuple[np.ndarray, ...] = ()
+    joint: int | None = None
+
+
+@dataclass(frozen=True)
+class RowInfo:
+    """One constraint row: its name (``joint/row`` or the driver's name), owner and unit kind."""
+
+    name: str
+    owner: str
+    kind: str  # "length" | "angle"
