@@ -16,7 +16,7 @@ import pytest
 
 import hexapod as hx
 from hexapod._support.fastcall import FastFunction, ScatteredFunction
-from hexapod.algorithms import linalg
+from hexapod.algorithms import linalg, sparse_qr
 from hexapod.benchmarks.redundant import bricard
 from hexapod.errors import InputFileError, ModelError
 from hexapod.output.describe import describe_model
@@ -197,11 +197,11 @@ def test_sparse_diagnostics_equal_the_dense_ones(name, monkeypatch):
     large models against the dense QR and SVD, forced on models small enough for both."""
     model = hx.assemble(SCENES[name]())
     dense = describe_model(model)
-    monkeypatch.setattr(linalg, "SPARSE_ABOVE", 0)
-    monkeypatch.setattr(linalg, "SPARSE_DENSITY", 2.0)
+    monkeypatch.setattr(sparse_qr, "SPARSE_ABOVE", 0)
+    monkeypatch.setattr(sparse_qr, "SPARSE_DENSITY", 2.0)
     calls = []
-    factor = linalg._sparse_split
-    monkeypatch.setattr(linalg, "_sparse_split", lambda *a, **k: calls.append(1) or factor(*a,
+    factor = sparse_qr.sparse_split
+    monkeypatch.setattr(linalg, "sparse_split", lambda *a, **k: calls.append(1) or factor(*a,
                                                                                         **k))
     sparse = describe_model(model)
     assert calls  # the sparse path was taken

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import hexapod as hx
-from hexapod.algorithms import linalg, saddle, step
+from hexapod.algorithms import linalg, saddle, sparse_qr, step
 from hexapod.algorithms.kinematics import rank_split
 from hexapod.benchmarks import n_four_bar
 from hexapod.benchmarks.redundant import bricard
@@ -34,8 +34,8 @@ SCENES = {
 @pytest.fixture
 def sparse_path(monkeypatch):
     """Every model takes the sparse path (as a large one does)."""
-    monkeypatch.setattr(linalg, "SPARSE_ABOVE", 0)
-    monkeypatch.setattr(linalg, "SPARSE_DENSITY", 2.0)
+    monkeypatch.setattr(sparse_qr, "SPARSE_ABOVE", 0)
+    monkeypatch.setattr(sparse_qr, "SPARSE_DENSITY", 2.0)
 
 
 def _state(model, t=0.1, seed=0):
@@ -59,8 +59,8 @@ def test_the_sparse_forward_solve_equals_the_dense_one(name, monkeypatch):
     dense = model.create_data()
     hx.forward_dynamics(model, dense, 0.1, q, v)
     assert not linalg.is_sparse(dense.Phi_v)
-    monkeypatch.setattr(linalg, "SPARSE_ABOVE", 0)
-    monkeypatch.setattr(linalg, "SPARSE_DENSITY", 2.0)
+    monkeypatch.setattr(sparse_qr, "SPARSE_ABOVE", 0)
+    monkeypatch.setattr(sparse_qr, "SPARSE_DENSITY", 2.0)
     assert saddle.is_large(model)
     data = model.create_data()
     hx.forward_dynamics(model, data, 0.1, q, v)
@@ -87,8 +87,8 @@ def test_the_sparse_kinematics_equal_the_dense_ones(name, monkeypatch):
     results = []
     for forced in (False, True):
         if forced:
-            monkeypatch.setattr(linalg, "SPARSE_ABOVE", 0)
-            monkeypatch.setattr(linalg, "SPARSE_DENSITY", 2.0)
+            monkeypatch.setattr(sparse_qr, "SPARSE_ABOVE", 0)
+            monkeypatch.setattr(sparse_qr, "SPARSE_DENSITY", 2.0)
         data = model.create_data()
         q = hx.assemble_positions(model, data, 0.1, guess)
         v = hx.solve_velocities(model, data, 0.1, q, v_guess)
@@ -130,8 +130,8 @@ def test_a_run_on_the_sparse_path_is_the_dense_run(monkeypatch):
     runs = []
     for forced in (False, True):
         if forced:
-            monkeypatch.setattr(linalg, "SPARSE_ABOVE", 0)
-            monkeypatch.setattr(linalg, "SPARSE_DENSITY", 2.0)
+            monkeypatch.setattr(sparse_qr, "SPARSE_ABOVE", 0)
+            monkeypatch.setattr(sparse_qr, "SPARSE_DENSITY", 2.0)
         chain = hx.assemble(SCENES["chain of 40"]())
         first = hx.simulate(chain, 0.05, method="dop853-projection", rtol=1e-8, atol=1e-10)
         case = n_four_bar(3, t_end=1.0)
@@ -223,8 +223,8 @@ def test_an_implicit_method_on_the_sparse_path_is_the_dense_run(method, name, mo
     runs = []
     for forced in (False, True):
         if forced:
-            monkeypatch.setattr(linalg, "SPARSE_ABOVE", 0)
-            monkeypatch.setattr(linalg, "SPARSE_DENSITY", 2.0)
+            monkeypatch.setattr(sparse_qr, "SPARSE_ABOVE", 0)
+            monkeypatch.setattr(sparse_qr, "SPARSE_DENSITY", 2.0)
         model = hx.assemble(SCENES[name]())
         result = hx.simulate(model, 0.05, method=method, step=5e-3)
         assert result.success, result.message

@@ -4,7 +4,7 @@ methods on them.
 ``Phi_v`` has a few nonzeros per row: a joint's rows touch the velocities of its two bodies
 only. Merely writing it densely costs ``O(n^2)`` (at a thousand bodies, 30 million entries,
 nearly all zero), and a dense factorisation ``O(n^3)``. A model is **large** (:func:`is_large`)
-when its ``Phi_v`` has more than :data:`hexapod.algorithms.linalg.SPARSE_ABOVE` entries, few of
+when its ``Phi_v`` has more than :data:`hexapod.algorithms.sparse_qr.SPARSE_ABOVE` entries, few of
 them nonzero: CasADi then gives ``Phi_v`` as its nonzeros (:func:`constraint_jacobian`,
 :func:`dynamics_terms`), ``W`` is formed and scaled as a sparse matrix
 (:func:`hexapod.algorithms.linalg.equilibrate`), and the rank decision is the sparse
@@ -19,18 +19,18 @@ from __future__ import annotations
 import numpy as np
 
 from hexapod._support.fastcall import ScatteredFunction
-from hexapod.algorithms import linalg
+from hexapod.algorithms import linalg, sparse_qr
 from hexapod.algorithms.step import mass_factors, sparse_dm  # noqa: F401 (TEMPORARY)
 from hexapod.model.model import Data, Model
 
 
 def is_large(model: Model) -> bool:
     """Whether ``model``'s forward solves take the sparse path: its ``Phi_v`` has more than
-    ``linalg.SPARSE_ABOVE`` entries and, structurally, fewer than ``linalg.SPARSE_DENSITY`` of
+    ``sparse_qr.SPARSE_ABOVE`` entries and, structurally, fewer than ``sparse_qr.SPARSE_DENSITY`` of
     them nonzero."""
     entries = model.n_c * model.n_v
-    return (entries > linalg.SPARSE_ABOVE
-            and model.Phi_v.nnz_out(0) < linalg.SPARSE_DENSITY * entries)
+    return (entries > sparse_qr.SPARSE_ABOVE
+            and model.Phi_v.nnz_out(0) < sparse_qr.SPARSE_DENSITY * entries)
 
 
 def _scattered(model: Model, data: Data | None, name: str) -> ScatteredFunction:
@@ -84,7 +84,7 @@ def force_multipliers(split: linalg.RowSplit, Phi_v, force: np.ndarray,
     ``lam_I = R^-1 Q_I^T M^-1/2 force / d_I`` (least squares in the kinetic-energy norm: the
     same solution when the force is the kept rows')."""
     I = split.independent
-    if not isinstance(split, linalg.SparseRowSplit):
+    if not isinstance(split, sparse_qr.SparseRowSplit):
         Phi_v = linalg.as_dense(Phi_v)
         return np.linalg.lstsq(Phi_v[I].T, force, rcond=None)[0]
     if not I.size:
