@@ -1,0 +1,180 @@
+"""The law contract, what the laws share (checks of their numbers, polynomials), and the laws
+made of other laws."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+
+class Law:
+    """Base class: a scalar function of time, C2 at least."""
+
+    #: Short name used in scene files (``type = "..."``).
+    kind: str = ""
+
+    def evaluate(self, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Value, first and second time derivatives at ``t`` (scalar or array), shaped like t."""
+        raise NotImplementedError
+
+    def __call__(self, t):
+        return self.evaluate(t)[0]
+
+    def scaled(self, factor: float) -> Law:
+        """The law multiplied by ``factor`` (unit conversion); the law itself for 1."""
+        return self if factor == 1.0 else self._scaled(factor)
+
+    def _scaled(self, factor: float) -> Law:
+        return Scaled(self, factor)
+
+    def problems(self) -> list[str]:
+        """What is wrong with the law's own numbers (empty when it is fine)."""
+        return []
+
+    def cycle_time(self) -> float | None:
+        """The time after which the law repeats itself, None when it does not (or when it is
+        constant, which repeats at any time)."""
+        return None
+
+    def symbolic(self, t):
+        """Value, first and second derivatives as CasADi expressions of the symbol ``t`` (SX or
+        MX), for integrators whose time loop runs in compiled code; None when the law has no
+        closed form to offer (such an integrator then calls :meth:`evaluate`)."""
+        return None
+
+
+def _finite(values) -> bool:
+    return bool(np.all(np.isfinite(np.asarray(values, dtype=float))))
+
+
+#: The largest magnitude of a law's numbers: a force of 1e15 N, an angle of 1e15 rad or a time
+#: of 1e15 s is nothing a legged machine meets, and products of a few stay far from overflow.
+LARGEST_NUMBER = 1e15
+#: The closest two samples of a table may be, as a fraction of its span and never below a
+#: nanosecond: the derivatives are differences over the spacing (its square for accelerations),
+#: so closer samples make them 1e18 times the values, nothing but round-off.
+CLOSEST_SAMPLES = 1e-9
+#: The shortest period of a gait, s: its accelerations go as 1 / period^2.
+SHORTEST_PERIOD = 1e-6
+
+
+def _size_problem(*groups) -> str:
+    """A number of ``groups`` beyond :data:`LARGEST_NUMBER` in magnitude, or ''."""
+    largest = max(float(np.max(np.abs(np.asarray(g, dtype=float)), initial=0.0)) for g in groups)
+    return (f"holds a number of magnitude {largest:.3g}, beyond the 1e15 a law may hold"
+            if largest > LARGEST_NUMBER else "")
+
+
+def _spacing_problem(times) -> str:
+    """Samples too close together for their derivatives to mean anything, or ''."""
+    times = np.asarray(times, dtype=float)
+    if times.size < 2:
+        return ""
+    spacing = np.diff(times)
+    span = times[-1] - times[0]
+    closest = CLOSEST_SAMPLES * max(span, 1.0)
+    if spacing.min() < closest:
+        k = int(np.argmin(spacing))
+        return (f"the samples cannot be interpolated: times {float(times[k])!r} and "
+                f"{float(times[k + 1])!r} s are {spacing[k]:.3g} s apart, closer than "
+                f"{closest:.3g} s (a billionth of the span, at least a nanosecond), where the "
+                "derivatives would be meaningless")
+    return ""
+
+
+def _derivative(coefficients) -> tuple[float, ...]:
+    """The coefficients (ascending powers) of a polynomial's derivative, as NumPy's ``polyder``
+    computes them (``(0.0,)`` for a constant)."""
+    return tuple(k * float(coefficients[k]) for k in range(1, len(coefficients))) or (0.0,)
+
+
+def _horner(s, coefficients):
+    """The polynomial of ``coefficients`` (ascending powers) at ``s``, by Horner's rule in the
+    order of NumPy's ``polyval`` (the same numbers to the last bit, without loading
+    ``numpy.polynomial``: 7 ms of a command's start)."""
+    out = coefficients[-1] + s * 0.0
+    for a in coefficients[-2::-1]:
+        out = a + out * s
+    return out
+
+
+@dataclass(frozen=True)
+class Constant(Law):
+    """``f(t) = value``."""
+
+    value: float
+    kind = "constant"
+
+    def evaluate(self, t):
+        t = np.asarray(t, dtype=float)
+        return np.full_like(t, self.value), np.zeros_like(t), np.zeros_like(t)
+
+    def symbolic(self, t):
+        return self.value + 0 * t, 0 * t, 0 * t
+
+    def _scaled(self, factor):
+        return Constant(self.value * factor)
+
+    def problems(self):
+        if not math.isfinite(self.value):
+            return [f"value is not finite: {self.value}"]
+        size = _size_problem(self.value)
+        return [size] if size else []
+
+
+@dataclass(frozen=True)
+class Scaled(Law):
+    """``factor * law(t)``."""
+
+    law: Law
+    factor: float
+    kind = "scaled"
+
+    def evaluate(self, t):
+        f, fd, fdd = self.law.evaluate(t)
+        return self.factor * f, self.factor * fd, self.factor * fdd
+
+    def _scaled(self, factor):
+        return Scaled(self.law, self.factor * factor)
+
+    def cycle_time(self):
+        return self.law.cycle_time()
+
+    def symbolic(self, t):
+        inner = self.law.symbolic(t)
+        return None if inner is None else tuple(self.factor * x for x in inner)
+
+    def problems(self):
+        return self.law.problems()
+
+
+def as_law(value) -> Law:
+    """A law from a law or a number (a number is a :class:`Constant`)."""
+    if isinstance(value, Law):
+        return value
+    return Constant(float(value))
+
+
+class LawOnJoint:
+    """What an element driven by one time law along one joint's coordinate shares (a joint
+    driver, a joint effort): ``law`` taken as a :class:`Law`, its problems reported under the key
+    ``law``, scaled with the element (the scene passes the unit factor of the coordinate or the
+    effort, 1 for angles and forces) and the joint's name prefixed when attached."""
+
+    def __post_init__(self):
+        self.law = as_law(self.law)
+
+    def problems(self):
+        return [self.problem("law", message) for message in self.law.problems()]
+
+    def scaled(self, length):
+        out = super().scaled(length)
+        out.law = self.law.scaled(length)
+        return out
+
+    def attached(self, attachment):
+        out = super().attached(attachment)
+        out.joint = attachment.name(self.joint)
+        return out

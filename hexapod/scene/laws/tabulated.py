@@ -1,0 +1,176 @@
+"""Laws through samples: a cubic or quintic spline through values, and quintic Hermite
+interpolation of values, rates and accelerations (C2 either way)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from hexapod.scene.laws.base import (
+    Law,
+    _derivative,
+    _finite,
+    _horner,
+    _size_problem,
+    _spacing_problem,
+)
+
+_BOUNDARY = {"not-a-knot": None, "natural": "natural", "clamped": "clamped",
+             "periodic": "periodic"}
+
+
+@dataclass(frozen=True)
+class Spline(Law):
+    """Interpolating spline through tabulated samples ``(times, values)``.
+
+    ``degree`` 3 (C2, the default) or 5 (C4); ``boundary`` one of ``not-a-knot``, ``natural``,
+    ``clamped`` (zero end slopes) or ``periodic`` (values at both ends must be equal). Outside the
+    table the end polynomials are continued (periodic splines repeat).
+    """
+
+    times: tuple[float, ...]
+    values: tuple[float, ...]
+    degree: int = 3
+    boundary: str = "not-a-knot"
+    _spline: object = field(default=None, init=False, repr=False, compare=False)
+    _failure: str = field(default="", init=False, repr=False, compare=False)
+    kind = "spline"
+
+    def __post_init__(self):
+        object.__setattr__(self, "times", tuple(float(x) for x in self.times))
+        object.__setattr__(self, "values", tuple(float(y) for y in self.values))
+        if not self._sample_problems():
+            object.__setattr__(self, "_spline", self._fit())
+
+    def _fit(self):
+        from scipy.interpolate import make_interp_spline
+
+        bc = _BOUNDARY[self.boundary]
+        if self.degree == 5 and bc in ("natural", "clamped"):
+            # quintic ends: clamped fixes the 1st and 2nd derivatives, natural the 3rd and 4th
+            order = 1 if bc == "clamped" else 3
+            ends = [(order, 0.0), (order + 1, 0.0)]
+            bc = (ends, ends)
+        try:
+            spline = make_interp_spline(self.times, self.values, k=self.degree, bc_type=bc)
+        except (ValueError, ArithmeticError, np.linalg.LinAlgError) as error:
+            object.__setattr__(self, "_failure", f"the samples cannot be interpolated ({error})")
+            return None
+        if not np.all(np.isfinite(spline.c)):
+            object.__setattr__(self, "_failure", "the samples cannot be interpolated (times "
+                               "too close together for floating point)")
+            return None
+        if self.boundary == "periodic":
+            spline.extrapolate = "periodic"
+        return spline
+
+    def evaluate(self, t):
+        if self._spline is None:
+            raise ValueError("spline law is invalid: " + "; ".join(self.problems()))
+        t = np.asarray(t, dtype=float)
+        s = self._spline
+        return s(t), s(t, nu=1), s(t, nu=2)
+
+    def cycle_time(self):
+        return self.times[-1] - self.times[0] if self.boundary == "periodic" else None
+
+    def _scaled(self, factor):
+        return Spline(self.times, tuple(v * factor for v in self.values), self.degree,
+                      self.boundary)
+
+    def problems(self):
+        return self._sample_problems() or ([self._failure] if self._failure else [])
+
+    def _sample_problems(self):
+        out = []
+        if self.degree not in (3, 5):
+            out.append(f"degree must be 3 or 5 (C2 at least), got {self.degree}")
+            return out
+        if self.boundary not in _BOUNDARY:
+            out.append(f"boundary must be one of {', '.join(_BOUNDARY)}, got {self.boundary!r}")
+            return out
+        if len(self.times) != len(self.values):
+            out.append(f"{len(self.times)} times but {len(self.values)} values")
+            return out
+        if len(self.times) < self.degree + 1:
+            out.append(f"a degree-{self.degree} spline needs at least {self.degree + 1} samples,"
+                       f" got {len(self.times)}")
+        if not _finite(self.times) or not _finite(self.values):
+            out.append("times or values are not finite")
+        elif np.any(np.diff(self.times) <= 0):
+            out.append("times must be strictly increasing")
+        elif self.boundary == "periodic" and self.values[0] != self.values[-1]:
+            out.append("a periodic spline needs equal first and last values")
+        else:
+            out.append(_size_problem(self.times, self.values) or _spacing_problem(self.times))
+        return [problem for problem in out if problem]
+
+
+_QUINTIC_HERMITE = (
+    (1, 0, 0, -10, 15, -6), (0, 1, 0, -6, 8, -3), (0, 0, 0.5, -1.5, 1.5, -0.5),
+    (0, 0, 0, 10, -15, 6), (0, 0, 0, -4, 7, -3), (0, 0, 0, 0.5, -1, 0.5),
+)
+#: Each basis polynomial with its first and second derivatives.
+_QUINTIC_HERMITE_RATES = tuple((tuple(map(float, c)), _derivative(c), _derivative(_derivative(c)))
+                               for c in _QUINTIC_HERMITE)
+
+
+@dataclass(frozen=True, eq=False)
+class Hermite(Law):
+    """Tabulated values with their first and second derivatives: the quintic Hermite
+    interpolant, C2, equal to the given values, rates and accelerations at every sample (a
+    motion file with exact derivatives). Outside the table the end polynomials are continued."""
+
+    times: np.ndarray
+    values: np.ndarray
+    rates: np.ndarray
+    accelerations: np.ndarray
+    _table: object = field(default=None, init=False, repr=False, compare=False)
+    kind = "hermite"
+
+    def __post_init__(self):
+        for key in ("times", "values", "rates", "accelerations"):  # arrays: motions are long
+            object.__setattr__(self, key, np.asarray(getattr(self, key), dtype=float).ravel())
+        if not self.problems():
+            object.__setattr__(self, "_table", np.array(
+                [self.times, self.values, self.rates, self.accelerations]))
+
+    def evaluate(self, t):
+        """On each interval ``[t0, t1]`` of length ``h``, with ``s = (t - t0) / h``, the quintic
+        ``sum_k f_k H_k(s)`` through the end values ``(y, h y', h^2 y'')`` (the standard quintic
+        Hermite basis); outside the table the end interval's polynomial continues."""
+        if self._table is None:
+            raise ValueError("hermite law is invalid: " + "; ".join(self.problems()))
+        times, y, yd, ydd = self._table
+        t = np.asarray(t, dtype=float)
+        i = np.clip(np.searchsorted(times, t, side="right") - 1, 0, times.size - 2)
+        h = times[i + 1] - times[i]
+        s = (t - times[i]) / h
+        ends = (y[i], h * yd[i], h * h * ydd[i], y[i + 1], h * yd[i + 1], h * h * ydd[i + 1])
+        f = fd = fdd = 0.0
+        for (c, c1, c2), end in zip(_QUINTIC_HERMITE_RATES, ends, strict=True):
+            f = f + end * _horner(s, c)
+            fd = fd + end * _horner(s, c1) / h
+            fdd = fdd + end * _horner(s, c2) / h**2
+        return f, fd, fdd
+
+    def _scaled(self, factor):
+        return Hermite(self.times, self.values * factor, self.rates * factor,
+                       self.accelerations * factor)
+
+    def problems(self):
+        n = self.times.size
+        if any(getattr(self, k).size != n for k in ("values", "rates", "accelerations")):
+            return [f"{n} times but {len(self.values)} values, {len(self.rates)} rates and "
+                    f"{len(self.accelerations)} accelerations"]
+        if n < 2:
+            return ["needs at least 2 samples"]
+        if not all(_finite(getattr(self, k)) for k in ("times", "values", "rates",
+                                                        "accelerations")):
+            return ["times, values, rates or accelerations are not finite"]
+        if np.any(np.diff(self.times) <= 0):
+            return ["times must be strictly increasing"]
+        numbers = (_size_problem(self.times, self.values, self.rates, self.accelerations)
+                   or _spacing_problem(self.times))
+        return [numbers] if numbers else []
