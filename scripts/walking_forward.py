@@ -37,8 +37,8 @@ import numpy as np  # noqa: E402
 from scratch_cache import use_scratch_cache  # noqa: E402
 
 import hexapod as hx  # noqa: E402
+from legs.efforts import EFFORT_TOL  # noqa: E402
 from legs.replay import (  # noqa: E402
-    EFFORT_TOL,
     WINDOW,
     agreement,
     joint_angles,

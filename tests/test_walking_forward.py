@@ -30,13 +30,8 @@ import numpy as np
 import pytest
 
 import hexapod as hx
-from legs.replay import (
-    EffortTable,
-    effort_breaks,
-    lift_off_times,
-    replay_gait,
-    switch_times,
-)
+from legs.efforts import EffortTable, effort_breaks, lift_off_times, switch_times
+from legs.replay import replay_gait
 from legs.robot import hexapod_scene
 
 RTOL = hx.DEFAULT_RTOL  # the run's tolerance, and the bound on the joint-angle error (rad)
