@@ -27,16 +27,12 @@ from hexapod.simulation.compiled_steps import CompiledLoop
 from hexapod.simulation.integrators.base import RANK_MARGIN, Integrator
 from hexapod.simulation.integrators.interpolants import Interpolant, PolynomialInterpolant
 from hexapod.simulation.integrators.stability import largest_stable_step, runge_kutta_stability
+from hexapod.simulation.integrators.tableaus import RK4_A, RK4_B, RK4_DENSE
 from hexapod.simulation.methods import DEFAULT_LOOP, LOOPS
 from hexapod.simulation.scales import characteristic_time
 
-#: the classical tableau, for the stability function
-_A = np.array([[0, 0, 0, 0], [0.5, 0, 0, 0], [0, 0.5, 0, 0], [0, 0, 1, 0]], dtype=float)
-_B = np.array([1, 2, 2, 1], dtype=float) / 6
-_R = runge_kutta_stability(_A, _B)
-#: the continuous extension of order 3 (Hairer, Norsett and Wanner, *Solving ODEs I*, II.6):
-#: the weights ``b_i(theta)`` of the four stages, coefficients of theta, theta^2 and theta^3
-_DENSE = np.array([[1, -3 / 2, 2 / 3], [0, 1, -2 / 3], [0, 1, -2 / 3], [0, -1 / 2, 2 / 3]])
+#: RK4's stability function
+_R = runge_kutta_stability(RK4_A, RK4_B)
 #: the position drift (relative to the row scales) past which a state is no longer a motion
 #: of the mechanism and the run fails: healthy runs of the extreme-case suite drift by 1e-7 to
 #: 7e-5 (6e-4 on the anti-parallelogram's dead points), a pendulum at a coarse 20 steps per
@@ -178,4 +174,4 @@ class RungeKutta4Baumgarte(CompiledLoop, Integrator):
         renormalised."""
         t, h, q, v, dq, dv = self._last_step()
         K = np.hstack([np.array(dq), np.array(dv)])
-        return PolynomialInterpolant(self.model, t, h, np.concatenate([q, v]), K, _DENSE)
+        return PolynomialInterpolant(self.model, t, h, np.concatenate([q, v]), K, RK4_DENSE)

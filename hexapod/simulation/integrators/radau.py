@@ -83,7 +83,6 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 from scipy import sparse
-from scipy.integrate._ivp.radau import P as COLLOCATION
 from scipy.linalg import lu_factor, lu_solve
 from scipy.sparse.linalg import splu
 
@@ -93,19 +92,13 @@ from hexapod.errors import IntegrationError
 from hexapod.model.model import Model
 from hexapod.simulation.integrators.base import RANK_MARGIN, Integrator
 from hexapod.simulation.integrators.interpolants import Interpolant
+from hexapod.simulation.integrators.tableaus import RADAU_A, RADAU_C, RADAU_DENSE, RADAU_E
 from hexapod.spatial import quaternion_exp, quaternion_log, quaternion_product
 
 # ---------------------------------------------------------------- Radau IIA, three stages
 
-_S6 = np.sqrt(6.0)
-#: Butcher matrix and nodes (Hairer and Wanner, *Solving ODEs II*, IV.5)
-A = np.array([[(88 - 7 * _S6) / 360, (296 - 169 * _S6) / 1800, (-2 + 3 * _S6) / 225],
-              [(296 + 169 * _S6) / 1800, (88 + 7 * _S6) / 360, (-2 - 3 * _S6) / 225],
-              [(16 - _S6) / 36, (16 + _S6) / 36, 1 / 9]])
-C = np.array([(4 - _S6) / 10, (4 + _S6) / 10, 1.0])
-#: weights of the stage increments in RADAU5's error estimate (its DD1, DD2, DD3)
-E = np.array([-(13 + 7 * _S6), -13 + 7 * _S6, -1.0]) / 3
-
+#: Butcher matrix, nodes and error weights (:mod:`~hexapod.simulation.integrators.tableaus`)
+A, C, E = RADAU_A, RADAU_C, RADAU_E
 
 
 def _transformation() -> tuple[np.ndarray, np.ndarray, float, float, float]:
@@ -591,7 +584,7 @@ class RadauIIA5GGL(Integrator):
         """The collocation polynomial of the last step (order 3, the stage order): the cubic
         through the start and the three Radau IIA stages at ``c = (4 - sqrt 6)/10, (4 + sqrt
         6)/10, 1``, in the step's local coordinates ``(xi, v)``, the positions ``q_n (+) xi``
-        (SciPy's ``Radau`` dense output, its matrix ``P``)."""
+        (:data:`~.tableaus.RADAU_DENSE`, as SciPy's ``Radau`` dense output)."""
         return _CollocationInterpolant(self.model, *self._collocation)
 
 
@@ -603,7 +596,7 @@ class _CollocationInterpolant(Interpolant):
 
     def __init__(self, model, t_old, h, q_old, y_old, Z):
         super().__init__(model, t_old, t_old + h)
-        self.q_old, self.y_old, self.Q = q_old, y_old, Z.T @ COLLOCATION
+        self.q_old, self.y_old, self.Q = q_old, y_old, Z.T @ RADAU_DENSE
 
     def _evaluate(self, theta):
         y = self.y_old + self.Q @ np.array([theta, theta**2, theta**3])
