@@ -17,13 +17,6 @@ DEFAULT_RTOL = 1e-6
 #: Default absolute tolerance of the adaptive methods (SI units of each coordinate).
 DEFAULT_ATOL = 1e-8
 
-#: How the explicit methods (``dopri5-projection``, ``dop853-projection``, ``rk4-baumgarte``)
-#: run their steps: ``"auto"`` in a compiled loop (CasADi's virtual machine, then C once the
-#: run is foreseen to be long), ``"c"`` compiled to C at once, ``"vm"`` in the virtual machine
-#: only, ``"python"`` one step per Python call (see :mod:`hexapod.simulation.compiled_loop`).
-LOOPS = ("auto", "c", "vm", "python")
-DEFAULT_LOOP = "auto"
-
 #: The kinds of coordinates an absolute tolerance per kind names (``atol`` as a mapping), each
 #: with the units of its coordinates. Euler parameters (unit 1) count as angles: a change ``d``
 #: of them turns the body by about ``2 d`` rad.

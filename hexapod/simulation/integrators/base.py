@@ -216,15 +216,11 @@ class Integrator:
             self._lam = self.multipliers(self.t, self.q, self.v)
         return self._lam
 
-    def multipliers(self, t: float, q: np.ndarray, v: np.ndarray,
-                    known: np.ndarray | None = None) -> np.ndarray:
+    def multipliers(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """The multipliers at a state by the redundancy policy, counted as a solve: the
-        compiled solve's when every row is kept (they are then unique), else the exact solve's.
-        ``known``: those the compiled solve gave at this state already (the compiled loop's),
-        used instead of solving again when every row is kept."""
+        compiled solve's when every row is kept (they are then unique), else the exact solve's."""
         if self._compiled.complete:
-            solution = (None, None, known) if known is not None else self._compiled.solve(
-                t, q, v)
+            solution = self._compiled.solve(t, q, v)
             if solution is not None:
                 self.counters.rhs += 1
                 return np.asarray(solution[2], dtype=float)
@@ -302,20 +298,6 @@ class Integrator:
         if self.model.energy_conserved:
             self._kinetic_peak = max(self._kinetic_peak,
                                      float(self.model.energy(self.q, self.v)[0]))
-
-    def advance(self, *, t_stop: float = np.inf, steps_cap: float = np.inf,
-                tried_cap: float = np.inf):
-        """Many accepted steps in one call, for a method whose time loop runs in compiled code:
-        a :class:`~hexapod.simulation.compiled_steps.Batch` of them (until the end, the first
-        step past ``t_stop``, ``steps_cap`` accepted steps or ``tried_cap`` steps tried, counted
-        from the start of the run), its own state at the last. None (this default): the next
-        step is taken by :meth:`step`."""
-        return None
-
-    def loop_statistics(self) -> dict | None:
-        """How the steps were taken, for a method with a compiled time loop (see
-        :meth:`advance`); None (this default) for the others."""
-        return None
 
     def _starting_step(self, d0: float, d1: float, rate_change, error_order: int) -> float:
         """Hairer's starting step (*Solving ODEs I*, II.4): from the weighted norms of the state

@@ -15,9 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from hexapod.errors import IntegrationError
-from hexapod.simulation.compiled_loop import EmbeddedKernel
-from hexapod.simulation.compiled_steps import CompiledLoop
-from hexapod.simulation.integrators.base import SINGULAR_BAND, Integrator
+from hexapod.simulation.integrators.base import Integrator
 from hexapod.simulation.integrators.interpolants import Interpolant, PolynomialInterpolant
 from hexapod.simulation.integrators.stability import largest_stable_step, runge_kutta_stability
 from hexapod.simulation.integrators.tableaus import (
@@ -36,10 +34,9 @@ from hexapod.simulation.integrators.tableaus import (
     DOPRI5_C,
     DOPRI5_DENSE,
 )
-from hexapod.simulation.methods import DEFAULT_LOOP, LOOPS
 
 
-class EmbeddedRungeKutta(CompiledLoop, Integrator):
+class EmbeddedRungeKutta(Integrator):
     """An explicit embedded pair ``(A, b, b_hat, c)`` with error-per-step control; subclasses
     give the tableau, ``order`` (that of the propagated solution) and ``error_order`` (that of
     the embedded one, which sets the step controller's exponent)."""
@@ -52,9 +49,6 @@ class EmbeddedRungeKutta(CompiledLoop, Integrator):
     b_hat: np.ndarray
     c: np.ndarray
     error_order: int
-    #: how the local error is estimated: ``"difference"`` of the pair's two solutions, or
-    #: ``"dop853"`` (:meth:`DormandPrince853._error`); the compiled loop reads it
-    error_estimate = "difference"
     safety, min_factor, max_factor = 0.9, 0.2, 10.0
 
     @classmethod
@@ -64,15 +58,10 @@ class EmbeddedRungeKutta(CompiledLoop, Integrator):
         R = runge_kutta_stability(cls.A, cls.b)
         return largest_stable_step(lambda z: abs(R(z)), eigenvalues)
 
-    def __init__(self, *args, step: float | None = None, loop: str = DEFAULT_LOOP, **kwargs):
-        if loop not in LOOPS:
-            raise ValueError(f"loop must be one of {', '.join(LOOPS)}, got {loop!r}")
+    def __init__(self, *args, step: float | None = None, **kwargs):
         self._given_step = step
+        self._dense_step = None  # (t_old, h, y0, K, y1) of the last accepted step
         super().__init__(*args, step=step, **kwargs)
-        self._setup_loop(loop)
-
-    def _loop_kernel(self, rows: np.ndarray) -> EmbeddedKernel:
-        return EmbeddedKernel(self.model, type(self), rows, singular_band=SINGULAR_BAND)
 
     def _start(self) -> None:
         if self._given_step is None:
@@ -116,18 +105,6 @@ class EmbeddedRungeKutta(CompiledLoop, Integrator):
             stages.append(self._derivative(t + self.c[i] * h, y[:n_q], y[n_q:]))
         K = np.array(stages)
         return K, y0 + h * (self.b @ K)
-
-    def _rebuild_dense_step(self, start: tuple, h: float) -> tuple:
-        """``(t_old, h, y0, K, y1)`` of a step the compiled loop took from ``start``."""
-        t_old, q, v, v_dot = start
-        y0 = np.concatenate([q, v])
-        f0 = np.concatenate([self.model.call("qdot", q=q, v=v), v_dot])
-        K, y1 = self._stages(t_old, h, y0, f0)
-        if self.error_estimate == "dop853":  # with the rate at y1, as _error keeps it
-            n_q = self.model.n_q
-            self._stages_at_end = np.vstack([K, self._derivative(t_old + h, y1[:n_q],
-                                                                 y1[n_q:])])
-        return t_old, h, y0, K, y1
 
     def _step(self) -> None:
         model, n_q = self.model, self.model.n_q
@@ -177,7 +154,6 @@ class DormandPrince5(EmbeddedRungeKutta):
     """Dormand and Prince's 5(4) pair (DOPRI5), the solution propagated at order 5."""
 
     name = "dopri5-projection"
-    kernel_reproduces = True  # its steps are EmbeddedKernel's (see CompiledLoop._setup_loop)
     order, error_order = 5, 4
     description = "Dormand-Prince 5(4), adaptive step, acceleration level"
     c, A, b, b_hat = DOPRI5_C, DOPRI5_A, DOPRI5_B, DOPRI5_B_HAT
@@ -186,7 +162,7 @@ class DormandPrince5(EmbeddedRungeKutta):
         """The classical continuous extension of DOPRI5, of order 4 (Shampine's coefficients,
         :data:`~.tableaus.DOPRI5_DENSE`), from the step's seven stages; exact at both ends of
         the step (at its end, the state before the projection)."""
-        t_old, h, y0, K, _ = self._last_step()
+        t_old, h, y0, K, _ = self._dense_step
         return PolynomialInterpolant(self.model, t_old, h, y0, K, DOPRI5_DENSE)
 
 
@@ -201,14 +177,12 @@ class DormandPrince853(EmbeddedRungeKutta):
     """
 
     name = "dop853-projection"
-    kernel_reproduces = True
     order, error_order = 8, 7
     description = "Dormand-Prince 8(5,3), adaptive step, acceleration level"
     c = DOP853_C[:DOP853_STAGES]
     A = DOP853_A[:DOP853_STAGES, :DOP853_STAGES]
     b = DOP853_B
     b_hat = DOP853_B  # unused: the error comes from the embedded 5th and 3rd order solutions
-    error_estimate = "dop853"
     E3, E5 = DOP853_E3, DOP853_E5
 
     def _error(self, h, K, y0, y1):
@@ -228,7 +202,7 @@ class DormandPrince853(EmbeddedRungeKutta):
         :data:`~.tableaus.DOP853_A` and ``DOP853_C`` after the twelve stages and the rate at
         the new state) and the coefficients :data:`~.tableaus.DOP853_D`; exact at both ends
         of the step (at its end, the state before the projection)."""
-        t_old, h, y0, K, y1 = self._last_step()
+        t_old, h, y0, K, y1 = self._dense_step
         n_q, n = self.model.n_q, DOP853_STAGES
         stages = getattr(self, "_stages_at_end", None)
         if stages is None or not np.array_equal(stages[:n], K):  # not the accepted step's
