@@ -396,7 +396,8 @@ def _packed(name: str, inputs: list, outputs: list) -> ca.Function:
     """A Function of one vector (the inputs stacked) to one vector (the outputs likewise): a
     call then costs one conversion each way, not one per argument. Vectors are stacked whole,
     matrices by their nonzeros (in CasADi's column order): ``Phi_v`` and the Newton matrix of
-    a large model would otherwise be written densely, ``O(n^2)`` entries per call."""
+    a large model would otherwise be written densely, ``O(n^2)`` entries per call. A row
+    vector (``Phi_v`` of a single row) is a matrix: its nonzeros, made a column."""
     def size(x):
         return x.numel() if x.size2() == 1 else x.nnz()
 
@@ -407,8 +408,8 @@ def _packed(name: str, inputs: list, outputs: list) -> ca.Function:
         parts.append(chunk if x.size2() == 1 else ca.SX(x.sparsity(), chunk))
         k += size(x)
     inner = ca.Function(name + "_inner", inputs, outputs)
-    return ca.Function(name, [z], [ca.vertcat(*[ca.densify(x) if x.size2() == 1 else x.nz[:]
-                                                 for x in inner(*parts)])])
+    return ca.Function(name, [z], [ca.vertcat(*[ca.densify(x) if x.size2() == 1
+                                                 else ca.vec(x.nz[:]) for x in inner(*parts)])])
 
 
 def _functions(model):
