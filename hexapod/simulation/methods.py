@@ -2,8 +2,10 @@
 importing nothing, so that the command line lists the methods in its help without loading CasADi
 or SciPy.
 
-:data:`METHODS` repeats what each class of :data:`hexapod.simulation.registry.INTEGRATORS`
-declares (order, index, adaptive, stabilisation), in the same order; a test keeps the two equal.
+:data:`METHODS` is where each class of :data:`hexapod.simulation.registry.INTEGRATORS` finds
+what it is (order, index, adaptive, stabilisation): the classes read their entry,
+``order, index, adaptive, stabilisation = METHODS[name]``, and the registry lists them in the
+same order.
 """
 
 from __future__ import annotations
@@ -29,7 +31,8 @@ CHARACTERISTIC_TIME = 1.0
 
 
 class Method(NamedTuple):
-    """What an integrator class declares about itself."""
+    """What an integrator is: the order of its solution, the index of the equations it
+    integrates, whether its step is adaptive, and how it keeps the constraints."""
 
     order: int
     index: int

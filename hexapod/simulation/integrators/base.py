@@ -6,13 +6,14 @@ An integrator advances the constrained equations of motion
 
 from a consistent state, one accepted step per call of :meth:`Integrator.step`, until
 ``t_bound``. A subclass declares what it is (class attributes ``name``, ``order``, ``index``,
-``stabilisation``, ``adaptive``, ``description``) and implements :meth:`Integrator._step`, which
-advances ``t, q, v, v_dot, lam`` by one accepted step and counts its work in ``counters`` through
-the services of this class (:meth:`_dynamics`, :meth:`_project`). The base class makes the
-initial state consistent (positions assembled, velocities projected, accelerations and
-multipliers solved), keeps the last step inside ``t_bound``, and turns any failure into data:
-``status = "failed"`` and a ``message`` naming the time and the cause, never an exception
-escaping :meth:`step`.
+``stabilisation``, ``adaptive``, ``description``; the registered methods read the four in
+between from :data:`hexapod.simulation.methods.METHODS`) and implements
+:meth:`Integrator._step`, which advances ``t, q, v, v_dot, lam`` by one accepted step and
+counts its work in ``counters`` through the services of this class (:meth:`_dynamics`,
+:meth:`_project`). The base class makes the initial state consistent (positions assembled,
+velocities projected, accelerations and multipliers solved), keeps the last step inside
+``t_bound``, and turns any failure into data: ``status = "failed"`` and a ``message`` naming
+the time and the cause, never an exception escaping :meth:`step`.
 """
 
 from __future__ import annotations

@@ -34,16 +34,16 @@ from hexapod.simulation.integrators.tableaus import (
     DOPRI5_C,
     DOPRI5_DENSE,
 )
+from hexapod.simulation.methods import METHODS
 
 
 class EmbeddedRungeKutta(Integrator):
     """An explicit embedded pair ``(A, b, b_hat, c)`` with error-per-step control; subclasses
-    give the tableau, ``order`` (that of the propagated solution) and ``error_order`` (that of
-    the embedded one, which sets the step controller's exponent)."""
+    give the tableau, what they are (``order``, that of the propagated solution, ``index``,
+    ``adaptive``, ``stabilisation``: from :data:`~hexapod.simulation.methods.METHODS`) and
+    ``error_order`` (that of the embedded solution, which sets the step controller's
+    exponent)."""
 
-    adaptive = True
-    index = 1
-    stabilisation = "projection of positions and velocities after each step"
     A: np.ndarray
     b: np.ndarray
     b_hat: np.ndarray
@@ -154,7 +154,8 @@ class DormandPrince5(EmbeddedRungeKutta):
     """Dormand and Prince's 5(4) pair (DOPRI5), the solution propagated at order 5."""
 
     name = "dopri5-projection"
-    order, error_order = 5, 4
+    order, index, adaptive, stabilisation = METHODS[name]
+    error_order = 4
     description = "Dormand-Prince 5(4), adaptive step, acceleration level"
     c, A, b, b_hat = DOPRI5_C, DOPRI5_A, DOPRI5_B, DOPRI5_B_HAT
 
@@ -177,7 +178,8 @@ class DormandPrince853(EmbeddedRungeKutta):
     """
 
     name = "dop853-projection"
-    order, error_order = 8, 7
+    order, index, adaptive, stabilisation = METHODS[name]
+    error_order = 7
     description = "Dormand-Prince 8(5,3), adaptive step, acceleration level"
     c = DOP853_C[:DOP853_STAGES]
     A = DOP853_A[:DOP853_STAGES, :DOP853_STAGES]

@@ -26,6 +26,7 @@ from hexapod.simulation.integrators.base import RANK_MARGIN, Integrator
 from hexapod.simulation.integrators.interpolants import Interpolant, PolynomialInterpolant
 from hexapod.simulation.integrators.stability import largest_stable_step, runge_kutta_stability
 from hexapod.simulation.integrators.tableaus import RK4_A, RK4_B, RK4_DENSE
+from hexapod.simulation.methods import METHODS
 from hexapod.simulation.scales import characteristic_time
 
 #: RK4's stability function
@@ -50,10 +51,7 @@ class RungeKutta4Baumgarte(Integrator):
     """
 
     name = "rk4-baumgarte"
-    order = 4
-    index = 1
-    stabilisation = "Baumgarte (alpha = beta), Euler parameters renormalised"
-    adaptive = False
+    order, index, adaptive, stabilisation = METHODS[name]
     description = "classical Runge-Kutta, fixed step, acceleration level"
 
     DEFAULT_ALPHA = 10.0

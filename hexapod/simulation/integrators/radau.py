@@ -93,6 +93,7 @@ from hexapod.model.model import Model
 from hexapod.simulation.integrators.base import RANK_MARGIN, Integrator
 from hexapod.simulation.integrators.interpolants import Interpolant
 from hexapod.simulation.integrators.tableaus import RADAU_A, RADAU_C, RADAU_DENSE, RADAU_E
+from hexapod.simulation.methods import METHODS
 from hexapod.spatial import quaternion_exp, quaternion_log, quaternion_product
 
 # ---------------------------------------------------------------- Radau IIA, three stages
@@ -236,10 +237,7 @@ class RadauIIA5GGL(Integrator):
     """
 
     name = "radau5-ggl"
-    order = 5
-    index = 2
-    stabilisation = "GGL: position and velocity constraints, B Phi_v^T mu"
-    adaptive = True
+    order, index, adaptive, stabilisation = METHODS[name]
     description = "Radau IIA order 5 (RADAU5), adaptive, GGL index 2, Lie-group coordinates"
     max_newton = 7  # RADAU5's NIT
     safety = 0.9

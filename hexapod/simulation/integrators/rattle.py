@@ -80,6 +80,7 @@ from hexapod.algorithms.saddle import force_multipliers, is_large, solve_sparse,
 from hexapod.simulation.integrators.base import Integrator
 from hexapod.simulation.integrators.interpolants import Interpolant
 from hexapod.simulation.integrators.stability import largest_stable_step, oscillator_parameters
+from hexapod.simulation.methods import METHODS
 from hexapod.simulation.scales import ENERGY_JUMP
 from hexapod.spatial import quaternion_product, skew
 
@@ -113,11 +114,7 @@ class Rattle(Integrator):
     """
 
     name = "rattle"
-    order = 2
-    index = 3
-    stabilisation = ("none needed: position constraints solved every step (Newton), velocities "
-                     "projected onto Phi_v v = nu by the second half kick")
-    adaptive = False
+    order, index, adaptive, stabilisation = METHODS[name]
     description = ("RATTLE in Lie-group form (Moser-Veselov rotations): symplectic and "
                    "time-reversible, index 3")
     max_iterations = 25
