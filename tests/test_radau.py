@@ -14,7 +14,8 @@ import pytest
 import hexapod as hx
 from hexapod.benchmarks import pendulum_exact
 from hexapod.scene.reader import read_scene
-from hexapod.simulation.integrators.radau import RadauIIA5GGL, dexp_inverse_sx, ggl_functions
+from hexapod.simulation.integrators.ggl import dexp_inverse_sx, ggl_functions
+from hexapod.simulation.integrators.radau import RadauIIA5GGL
 from hexapod.simulation.loop import simulate
 from hexapod.simulation.registry import INTEGRATORS
 

@@ -19,6 +19,19 @@ def test_the_catalogue_is_the_registry():
         assert methods.METHODS[name] == declared, name
 
 
+def test_the_registry_table_is_the_catalogue():
+    """The table of registry.py's docstring: a row per method, in order, with METHODS' order,
+    index and step control."""
+    lines = registry.__doc__.splitlines()
+    borders = [i for i, line in enumerate(lines) if line.startswith("=====")]
+    rows = [line.split() for line in lines[borders[1] + 1:borders[-1]] if line.startswith("``")]
+    assert [row[0].strip("`") for row in rows] == list(methods.METHODS)
+    for row in rows:
+        method = methods.METHODS[row[0].strip("`")]
+        step = "adaptive" if method.adaptive else "fixed"
+        assert (int(row[1]), int(row[2]), row[3]) == (method.order, method.index, step), row
+
+
 def test_the_summaries_say_what_the_classes_declare():
     summary = methods.METHODS["rk4-baumgarte"].summary()
     assert summary == ("order 4, index 1, fixed step, Baumgarte (alpha = beta), Euler parameters "

@@ -116,14 +116,9 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
         Stop the run, as failed, once its time loop has used this many CPU seconds (the states
         up to there are kept).
     progress :
-        Called as ``progress(t, t_end)`` after each accepted step, or, for a method whose time
-        loop runs in compiled code (DOPRI5, DOP853 and RK4, see
-        :mod:`hexapod.simulation.compiled_loop`), after each call of it (many steps, at most
-        about 0.05 s of CPU).
+        Called as ``progress(t, t_end)`` after each accepted step.
     options :
-        Further keyword arguments of the integrator (e.g. ``rho_inf``, ``alpha``; ``loop`` for
-        DOPRI5, DOP853 and RK4, :data:`~hexapod.simulation.methods.LOOPS`). The result's
-        ``options["loop"]`` says how their steps were taken.
+        Further keyword arguments of the integrator (e.g. ``rho_inf``, ``alpha``).
     advice :
         What the messages of the limits suggest to ask for less (keys ``"steps"`` and
         ``"memory"``; default :data:`ADVICE`): a command line names its options.
@@ -174,8 +169,6 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
     options = {**options, "atol": dict(integrator.atol_kinds)}
     if grid is not None:
         options["output_times"] = int(grid.size)
-    if integrator.loop_statistics() is not None:
-        options["loop"] = integrator.loop_statistics()
     result = SimulationResult(
         model=model, method=cls.name, t=arrays["t"], q=arrays["q"], v=arrays["v"],
         v_dot=arrays["v_dot"], lam=arrays["lam"],
@@ -195,12 +188,7 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
 def _run(integrator: Integrator, watch: Watch, weigh: _Weighing, every: int,
          cpu_budget: float | None, progress) -> float:
     """Step until the end, a failure, a limit or an interruption; every outcome is said by the
-    integrator's ``status`` and ``message``. Returns the time of the last step completed.
-
-    A method whose loop runs in compiled code (:meth:`Integrator.advance`) takes many steps per
-    call, each call ending where this loop must look: at a step past the next output time, at
-    the step limit, where the pace is weighed next, or after about a twentieth of a second;
-    progress is then reported once per call."""
+    integrator's ``status`` and ``message``. Returns the time of the last step completed."""
     name = integrator.name
     cpu = cpu_seconds()
     returned = 0  # states returned (one per step, or per call for some methods)
@@ -216,17 +204,11 @@ def _run(integrator: Integrator, watch: Watch, weigh: _Weighing, every: int,
                 integrator.status = "failed"
                 integrator.message = f"{name}: stopped at t = {integrator.t:.6g} s {stop}"
                 break
-            batch = integrator.advance(t_stop=watch.t_next, steps_cap=weigh.max_steps,
-                                       tried_cap=weigh.next_weighing)
-            if batch is None:
-                integrator.step()
-                if integrator.status == "failed":
-                    break
-                returned += 1
-                _take_step(watch, integrator, returned, every)
-            else:
-                _take_batch(watch, integrator, batch, returned, every)
-                returned += len(batch)
+            integrator.step()
+            if integrator.status == "failed":
+                break
+            returned += 1
+            _take_step(watch, integrator, returned, every)
             reached = integrator.t
             if progress is not None:
                 progress(integrator.t, integrator.t_bound)
@@ -249,22 +231,6 @@ def _take_step(watch: Watch, integrator: Integrator, returned: int, every: int) 
         watch.save_grid()
     elif integrator.status == "finished" or returned % every == 0:
         watch.save()
-
-
-def _take_batch(watch: Watch, integrator: Integrator, batch, returned: int,
-                every: int) -> None:
-    """Watch the steps of a batch of the compiled loop, and save those due: every ``every``-th
-    state counted on from ``returned``, the last when the run finished; or the output times
-    its last step passed (the earlier ones pass none)."""
-    watch.watch_batch(batch)
-    if watch.grid is not None:
-        if len(batch):
-            watch.save_grid()
-        return
-    due = (returned + 1 + np.arange(len(batch))) % every == 0
-    if integrator.status == "finished" and len(batch):
-        due[-1] = True
-    watch.save_batch(batch, np.flatnonzero(due))
 
 
 class _Weighing:

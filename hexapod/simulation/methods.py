@@ -2,8 +2,10 @@
 importing nothing, so that the command line lists the methods in its help without loading CasADi
 or SciPy.
 
-:data:`METHODS` repeats what each class of :data:`hexapod.simulation.registry.INTEGRATORS`
-declares (order, index, adaptive, stabilisation), in the same order; a test keeps the two equal.
+:data:`METHODS` is where each class of :data:`hexapod.simulation.registry.INTEGRATORS` finds
+what it is (order, index, adaptive, stabilisation): the classes read their entry,
+``order, index, adaptive, stabilisation = METHODS[name]``, and the registry lists them in the
+same order.
 """
 
 from __future__ import annotations
@@ -17,13 +19,6 @@ DEFAULT_RTOL = 1e-6
 #: Default absolute tolerance of the adaptive methods (SI units of each coordinate).
 DEFAULT_ATOL = 1e-8
 
-#: How the explicit methods (``dopri5-projection``, ``dop853-projection``, ``rk4-baumgarte``)
-#: run their steps: ``"auto"`` in a compiled loop (CasADi's virtual machine, then C once the
-#: run is foreseen to be long), ``"c"`` compiled to C at once, ``"vm"`` in the virtual machine
-#: only, ``"python"`` one step per Python call (see :mod:`hexapod.simulation.compiled_loop`).
-LOOPS = ("auto", "c", "vm", "python")
-DEFAULT_LOOP = "auto"
-
 #: The kinds of coordinates an absolute tolerance per kind names (``atol`` as a mapping), each
 #: with the units of its coordinates. Euler parameters (unit 1) count as angles: a change ``d``
 #: of them turns the body by about ``2 d`` rad.
@@ -36,7 +31,8 @@ CHARACTERISTIC_TIME = 1.0
 
 
 class Method(NamedTuple):
-    """What an integrator class declares about itself."""
+    """What an integrator is: the order of its solution, the index of the equations it
+    integrates, whether its step is adaptive, and how it keeps the constraints."""
 
     order: int
     index: int

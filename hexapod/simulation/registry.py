@@ -1,18 +1,24 @@
 """The integrator registry; the defaults of a simulation, written once in
 :mod:`hexapod.simulation.methods` (with the summaries the command line shows), are re-exported.
 
-==========================  =====  =====  =============================================
-name                        order  index  stabilisation
-==========================  =====  =====  =============================================
-``rk4-baumgarte``           4      1      Baumgarte, Euler parameters renormalised
-``dopri5-projection``       5      1      projection onto phi = 0 and Phi_v v = nu
-``dop853-projection``       8      1      projection onto phi = 0 and Phi_v v = nu
-``generalized-alpha``       2      3      position constraints solved (Newton)
-``rattle``                  2      3      position constraints solved (Newton), symplectic
-``radau5-ggl``              5      2      GGL: phi = 0 and Phi_v v = nu, B Phi_v^T mu
-``idas-bdf``                1-5    1      Baumgarte terms in the DAE; projection and restart
-                                          when the drift passes a tolerance
-==========================  =====  =====  =============================================
+==========================  =====  =====  ========  ========================================
+name                        order  index  step      stabilisation
+==========================  =====  =====  ========  ========================================
+``rk4-baumgarte``           4      1      fixed     Baumgarte, Euler parameters renormalised
+``dopri5-projection``       5      1      adaptive  projection onto phi = 0 and Phi_v v = nu
+``dop853-projection``       8      1      adaptive  projection onto phi = 0 and Phi_v v = nu
+``generalized-alpha``       2      2      fixed     position and velocity constraints solved
+                                                    (Newton, GGL)
+``rattle``                  2      3      fixed     position constraints solved (Newton),
+                                                    symplectic
+``radau5-ggl``              5      2      adaptive  GGL: phi = 0 and Phi_v v = nu, B Phi_v^T mu
+``idas-bdf``                5      1      adaptive  Baumgarte terms in the DAE; projection and
+                                                    restart when the drift passes a tolerance
+==========================  =====  =====  ========  ========================================
+
+The order, index and step control are :data:`hexapod.simulation.methods.METHODS`' (which the
+classes read; ``tests/test_registry.py`` holds this table to it); ``idas-bdf`` varies its order
+from 1 to 5.
 
 Tests and studies iterate over :data:`INTEGRATORS` (name -> class, in the order studies list
 them); :func:`get_integrator` accepts a name, a short name (:data:`ALIASES`: ``rk4``,

@@ -3,8 +3,7 @@
 The characteristic time, speed, acceleration and energy of a scene (gravity moving it by its own
 size) give tolerances their units and round-off its size; a fixed-step method's step is judged
 against them by the branch and energy tests of :meth:`Integrator.step
-<hexapod.simulation.integrators.base.Integrator.step>` and of the compiled loop
-(:mod:`hexapod.simulation.compiled_loop`), which both read their thresholds here.
+<hexapod.simulation.integrators.base.Integrator.step>`, which reads its thresholds here.
 """
 
 from __future__ import annotations

@@ -1,8 +1,8 @@
 """What the time loop measures at every accepted step (constraint residuals, energy) and the
-states it saves, one step at a time or a batch of steps from the compiled loop at once.
+states it saves.
 
 The saved states are kept as blocks of rows (a state a block of one), joined once the run is
-over (:meth:`Watch.arrays`): a batch of thousands of steps is saved in a few array operations.
+over (:meth:`Watch.arrays`).
 """
 
 from __future__ import annotations
@@ -51,13 +51,6 @@ class Watch:
             self.save()
             self.next = 1
 
-    @property
-    def t_next(self) -> float:
-        """The next output time (``inf`` without output times, or past the last)."""
-        if self.grid is None or self.next >= self.grid.size:
-            return np.inf
-        return float(self.grid[self.next])
-
     def watch(self) -> None:
         """Measure the integrator's current state."""
         model, integrator, worst = self.model, self.integrator, self.worst
@@ -75,21 +68,6 @@ class Watch:
             worst["drift"] = max(worst["drift"], abs(total - self.energy0))
             self.latest = total
 
-    def watch_batch(self, batch) -> None:
-        """Take in what the compiled loop measured at each step of ``batch``
-        (:class:`~hexapod.simulation.compiled_steps.Batch`), as :meth:`watch` would have."""
-        if not len(batch):
-            return
-        worst = self.worst
-        if self.model.n_c:
-            worst["phi"] = max(worst["phi"], float(batch.phi.max()))
-            worst["velocity"] = max(worst["velocity"], float(batch.velocity.max()))
-        if self.conserved:
-            worst["kinetic"] = max(worst["kinetic"], float(batch.kinetic.max()))
-            worst["drift"] = max(worst["drift"],
-                                 float(np.abs(batch.energy - self.energy0).max()))
-            self.latest = float(batch.energy[-1])
-
     def save(self) -> None:
         """Save the current state; accelerations and multipliers may be solved only now
         (lazily): a state the solve refuses, or one whose accelerations or multipliers are not
@@ -104,31 +82,6 @@ class Watch:
                                   f"{error}")
             return
         self._keep(values, np.array([self.latest if self.conserved else np.nan]))
-
-    def save_batch(self, batch, chosen: np.ndarray) -> None:
-        """Save the states ``chosen`` (indices, increasing) of ``batch``; their multipliers
-        are solved now when the batch has none (:meth:`Integrator.multipliers`). A state the
-        solve refuses ends the run as a failure, with the states before it saved."""
-        if not chosen.size:
-            return
-        integrator = self.integrator
-        values = {"t": batch.t[chosen], "q": batch.q[chosen], "v": batch.v[chosen],
-                  "v_dot": batch.v_dot[chosen]}
-        lam = np.zeros((chosen.size, self.model.n_c))
-        for row, i in enumerate(chosen):
-            known = None if batch.lam is None else batch.lam[i]
-            try:
-                lam[row] = integrator.multipliers(batch.t[i], batch.q[i], batch.v[i], known)
-            except HexapodError as error:
-                integrator.status = "failed"
-                integrator.message = (f"{integrator.name}: failed at t = {batch.t[i]:.6g} s: "
-                                      f"{error}")
-                values = {key: value[:row] for key, value in values.items()}
-                lam, chosen = lam[:row], chosen[:row]
-                break
-        values["lam"] = lam
-        self._keep(values, batch.energy[chosen] if self.conserved else np.full(chosen.size,
-                                                                               np.nan))
 
     def save_grid(self) -> None:
         """Save the states at the output times the last step passed, each from the method's

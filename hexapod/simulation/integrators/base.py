@@ -6,13 +6,14 @@ An integrator advances the constrained equations of motion
 
 from a consistent state, one accepted step per call of :meth:`Integrator.step`, until
 ``t_bound``. A subclass declares what it is (class attributes ``name``, ``order``, ``index``,
-``stabilisation``, ``adaptive``, ``description``) and implements :meth:`Integrator._step`, which
-advances ``t, q, v, v_dot, lam`` by one accepted step and counts its work in ``counters`` through
-the services of this class (:meth:`_dynamics`, :meth:`_project`). The base class makes the
-initial state consistent (positions assembled, velocities projected, accelerations and
-multipliers solved), keeps the last step inside ``t_bound``, and turns any failure into data:
-``status = "failed"`` and a ``message`` naming the time and the cause, never an exception
-escaping :meth:`step`.
+``stabilisation``, ``adaptive``, ``description``; the registered methods read the four in
+between from :data:`hexapod.simulation.methods.METHODS`) and implements
+:meth:`Integrator._step`, which advances ``t, q, v, v_dot, lam`` by one accepted step and
+counts its work in ``counters`` through the services of this class (:meth:`_dynamics`,
+:meth:`_project`). The base class makes the initial state consistent (positions assembled,
+velocities projected, accelerations and multipliers solved), keeps the last step inside
+``t_bound``, and turns any failure into data: ``status = "failed"`` and a ``message`` naming
+the time and the cause, never an exception escaping :meth:`step`.
 """
 
 from __future__ import annotations
@@ -22,15 +23,13 @@ from functools import cached_property
 from typing import ClassVar
 
 import numpy as np
-from scipy.linalg import qr
 
 from hexapod.algorithms.dynamics import forward_dynamics
-from hexapod.algorithms.kinematics import assemble_positions, rank_split, solve_velocities
-from hexapod.algorithms.linalg import as_dense
-from hexapod.algorithms.saddle import constraint_jacobian, is_large
+from hexapod.algorithms.kinematics import assemble_positions, solve_velocities
 from hexapod.errors import HexapodError, IntegrationError
 from hexapod.model.model import Model
 from hexapod.simulation.integrators.interpolants import HermiteInterpolant, Interpolant
+from hexapod.simulation.integrators.singular import SingularPoses
 from hexapod.simulation.integrators.tolerances import (
     KIND_OF_UNIT,
     absolute_tolerances,
@@ -49,40 +48,13 @@ from hexapod.simulation.scales import (
     BRANCH_JUMP,
     ENERGY_JUMP,
     ROUND_OFF,
-    characteristic_time,
     motion_scales,
 )
 
-#: smallest singular value of the equilibrated ``Phi_v`` (rows of unit length, so 1 is
-#: well-conditioned) below which a state counts as near a singular configuration. Approaching
-#: such a pose, the motion's derivatives off the constraints grow as ``1 / sigma`` and the error
-#: test lets steps shrink with the distance to it, never reaching it (the N-four-bar at rtol
-#: 1e-10 stalled 3e-7 from its flat pose, the step at 7e-15 s); so the crossing leaves the
-#: nearly dependent rows out there
-SINGULAR_BAND = 1e-4
-#: the crossing's tolerance over the smallest singular value where it begins (or widens)
-CROSSING_FACTOR = 10.0
 #: the rank decision's tolerance at a state off the constraints by ``e`` (scaled by the row
 #: scales) is at least this times ``e``: a redundant row's distance from the others' span grows
 #: like ``e`` there (the methods that leave the constraints by a drift or a Newton error)
 RANK_MARGIN = 10.0
-#: the largest singular value a crossing leaves out with a cluster of smaller ones (rows of
-#: unit length: a well-posed row's are of order 0.1 to 1); the N-four-bar's 40 windows spread
-#: theirs over a factor 26, 8e-5 to 2e-3 where DOPRI5 at rtol 1e-9 begins to cross
-CLUSTER_CEILING = 1e-2
-#: a crossing's step may not end nearer the pose than where the smallest singular value is
-#: this fraction of the one where the crossing began (see :meth:`Integrator._lands_on_pose`)
-POSE_CLEARANCE = 0.1
-#: a crossing begins only where the pose is foreseen (its distance over the smallest singular
-#: value's rate) within this many of the last accepted steps (none before the first) and within
-#: this fraction of the model's characteristic time. At the N-four-bars (10 and 40 windows, 2-D
-#: and 3-D) and the anti-parallelograms from rtol 1e-6 to 1e-10, the rejections that begin
-#: crossings foresee their poses within 4.5 steps and 5.5e-4 characteristic times; the walking
-#: hexapod, whose smallest singular value is 5e-5 where nothing is singular and drifts at 3e-5
-#: per second, foresaw one 330 steps and 10 characteristic times ahead, and crept on the
-#: crossing's capped steps to the end of its run (647 steps instead of 31)
-FORESIGHT_STEPS = 50
-FORESIGHT_TIME = 1e-2
 
 
 @dataclass
@@ -118,7 +90,7 @@ class Counters:
         return asdict(self)
 
 
-class Integrator:
+class Integrator(SingularPoses):
     """Base class of the integrators (see the module's description of the contract).
 
     Parameters
@@ -203,12 +175,6 @@ class Integrator:
         self._start()
 
     @property
-    def crossing(self) -> bool:
-        """Whether a crossing of a singular configuration is under way (its steps are short for
-        a while: :meth:`_cross_singular`)."""
-        return self._crossing is not None
-
-    @property
     def lam(self) -> np.ndarray:
         """The multipliers at the current state (by the least-wrench redundancy policy); a method
         that advances with the compiled right-hand side solves for them only when asked."""
@@ -216,15 +182,11 @@ class Integrator:
             self._lam = self.multipliers(self.t, self.q, self.v)
         return self._lam
 
-    def multipliers(self, t: float, q: np.ndarray, v: np.ndarray,
-                    known: np.ndarray | None = None) -> np.ndarray:
+    def multipliers(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """The multipliers at a state by the redundancy policy, counted as a solve: the
-        compiled solve's when every row is kept (they are then unique), else the exact solve's.
-        ``known``: those the compiled solve gave at this state already (the compiled loop's),
-        used instead of solving again when every row is kept."""
+        compiled solve's when every row is kept (they are then unique), else the exact solve's."""
         if self._compiled.complete:
-            solution = (None, None, known) if known is not None else self._compiled.solve(
-                t, q, v)
+            solution = self._compiled.solve(t, q, v)
             if solution is not None:
                 self.counters.rhs += 1
                 return np.asarray(solution[2], dtype=float)
@@ -302,20 +264,6 @@ class Integrator:
         if self.model.energy_conserved:
             self._kinetic_peak = max(self._kinetic_peak,
                                      float(self.model.energy(self.q, self.v)[0]))
-
-    def advance(self, *, t_stop: float = np.inf, steps_cap: float = np.inf,
-                tried_cap: float = np.inf):
-        """Many accepted steps in one call, for a method whose time loop runs in compiled code:
-        a :class:`~hexapod.simulation.compiled_steps.Batch` of them (until the end, the first
-        step past ``t_stop``, ``steps_cap`` accepted steps or ``tried_cap`` steps tried, counted
-        from the start of the run), its own state at the last. None (this default): the next
-        step is taken by :meth:`step`."""
-        return None
-
-    def loop_statistics(self) -> dict | None:
-        """How the steps were taken, for a method with a compiled time loop (see
-        :meth:`advance`); None (this default) for the others."""
-        return None
 
     def _starting_step(self, d0: float, d1: float, rate_change, error_order: int) -> float:
         """Hairer's starting step (*Solving ODEs I*, II.4): from the weighted norms of the state
@@ -406,137 +354,6 @@ class Integrator:
         v_dot, _ = self._dynamics(t, q, v, (alpha, alpha) if alpha else None,
                                   consistency_tol=REDUNDANT_TOLERANCE)
         return self.model.call("qdot", q=q, v=v), v_dot
-
-    def _cross_singular(self) -> bool:
-        """Begin crossing a singular configuration if the state is near one (see
-        :data:`SINGULAR_BAND`) and moving towards it, or widen the crossing under way; returns
-        whether it did. Moving away from a singular pose, the rows are all kept: the steps then
-        grow back as the distance to the pose does, and a crossing begun there would leave rows
-        out over a band ten times as wide as the state's, for nothing.
-
-        While crossing, the rows nearly dependent on the others (as many as there are singular
-        values of the equilibrated ``Phi_v`` below the crossing's tolerance, ``CROSSING_FACTOR``
-        times the smallest where it began) are left out: the stages then solve one smooth
-        system of fewer rows, compiled for them, and the projection after each step puts the
-        state back on every constraint. Widening (the error test still failing) multiplies the
-        tolerance by ``CROSSING_FACTOR`` again, up to ``CROSSING_FACTOR * SINGULAR_BAND``."""
-        if not self.model.n_c:
-            return False
-        split = self._rank_split()
-        # the smallest singular value alone (ARPACK on a large model's sparse factor) decides
-        # whether to go on: all of them (a dense SVD, cubic in the bodies) only near a pose
-        smallest = split.smallest_singular_value()
-        if not smallest < SINGULAR_BAND:
-            return False
-        base = smallest if self._crossing is None else self._crossing
-        if base >= SINGULAR_BAND:
-            return False  # as wide as it goes
-        if self._crossing is None:
-            rate = self._singular_rate(smallest)
-            if not rate < 0:
-                return False  # moving away
-            horizon = min(FORESIGHT_STEPS * self._accepted_step,
-                          FORESIGHT_TIME * characteristic_time(self.model))
-            if smallest > -rate * horizon:
-                return False  # the pose far ahead, or sigma small for another reason
-            self.counters.crossings += 1
-            self._crossing_from, self._crossing_rate = smallest, rate
-            self._crossing_start = self.t
-        starting = self._crossing is None
-        self._crossing = CROSSING_FACTOR * base
-        # the rows left out: those a rank-revealing (column-pivoted) QR factorisation takes last
-        rows = split.independent
-        dependent = _collapsing(split.singular_values(), self._crossing)
-        pivots = qr(as_dense(split.W[rows]).T, mode="r", pivoting=True)[1]
-        kept = np.sort(rows[pivots[:rows.size - dependent]])
-        self._crossing_rates = compiled_rates(self.model, kept)
-        if starting:
-            # no step longer than the way to the pose and as far again (one much longer lands
-            # far out of the band on the rows left out), nor than their forces' absence allows
-            self._crossing_cap = min(2 * smallest / -self._crossing_rate,
-                                     self._crossing_step_limit())
-            self.h = min(self.h, self._crossing_cap)
-        return True
-
-    def _crossing_step_limit(self) -> float:
-        """The longest step a crossing may take: the one over which the rows it leaves out,
-        their forces missing, move the positions by the step's tolerance, ``h^2 / 2`` times the
-        gap between the accelerations of the reduced and the full system at the current state
-        (in the error test's weighted RMS norm). Without this cap a crossing took the
-        steps of the motion around it, and the energy its projections cost (about 5e-8 J of 620
-        per pose of the N-four-bar) did not fall with the tolerance."""
-        rates = self._crossing_rates(self.t, self.q, self.v, 0.0, left_out=np.inf)
-        if rates is None:  # the reduced solve refused: no estimate, no cap
-            return np.inf
-        n_q = self.model.n_q
-        gap = self.model.call("qdot", q=self.q, v=rates[1] - self.v_dot)
-        weight = self.atol_vector[:n_q] + self.rtol * np.abs(self.q)
-        size = float(np.sqrt(np.mean((gap / weight) ** 2)))
-        return np.sqrt(2.0 / size) if size > 0 else np.inf
-
-    def _over_pose(self, h: float) -> float:
-        """The step to take instead of ``h``, a crossing's step that would end near the pose
-        (:meth:`_lands_on_pose`): one long enough to pass it by as much as the current state
-        is before it (from the rate of the smallest singular value where the crossing began),
-        at least half as long again as ``h``."""
-        rate = self._crossing_rate
-        if not rate < 0:
-            return 1.5 * h
-        return max(1.5 * h, 2 * self._smallest_singular_value() / -rate)
-
-    def _end_crossing(self) -> None:
-        """End the crossing once the state has left the band it began in, or has passed the
-        pose and is as far from it as where the crossing began (the steps that follow keep
-        every row and grow back with the distance to the pose; steps leaving rows out further
-        on, long ones especially, let the state leave the constraints they hold by more than
-        the projection puts right without a loss of energy)."""
-        if self._crossing is None:
-            return
-        if -self._crossing_rate * (self.t - self._crossing_start) < 1.9 * self._crossing_from:
-            return  # foreseen before the pose or not yet nine tenths of its way back: no rank split
-        smallest = self._smallest_singular_value()
-        if not smallest <= self._crossing or (smallest >= self._crossing_from
-                                              and self._singular_rate(smallest) > 0):
-            self._crossing = None
-
-    def _lands_on_pose(self, t: float, q: np.ndarray) -> bool:
-        """Whether a crossing's step ending at ``(t, q)`` ends near the pose: the smallest
-        singular value there below :data:`POSE_CLEARANCE` times the one where it began."""
-        if (self._crossing is None
-                or self._foreseen_singular_value(t) > 2 * POSE_CLEARANCE * self._crossing_from):
-            return False  # far from it: no rank split
-        return bool(self._smallest_singular_value(self.model.normalize(q))
-                    < POSE_CLEARANCE * self._crossing_from)
-
-    def _foreseen_singular_value(self, t: float) -> float:
-        """The smallest singular value at ``t`` as the crossing under way foresees it, falling
-        at its starting rate to the pose and rising as fast beyond: a crossing's steps are short
-        (see :meth:`_crossing_step_limit`), and a rank split at each to see where they are cost
-        four fifths of the run."""
-        return abs(self._crossing_from + self._crossing_rate * (t - self._crossing_start))
-
-    def _singular_rate(self, smallest: float) -> float:
-        """The rate of change along the motion of the smallest singular value of the
-        equilibrated ``Phi_v`` (``smallest`` at the current state), negative approaching a
-        singular pose: a difference over a thousandth of the step, close enough never to jump
-        over the pose."""
-        delta = 1e-3 * self.h
-        return (self._smallest_singular_value(self._positions_ahead(delta)) - smallest) / delta
-
-    def _positions_ahead(self, delta: float) -> np.ndarray:
-        """The positions ``delta`` seconds along the current motion, to first order (for the
-        rates of singular values, as differences)."""
-        q_dot = self.model.call("qdot", q=self.q, v=self.v)
-        return self.model.normalize(self.q + delta * q_dot)
-
-    def _rank_split(self, q: np.ndarray | None = None, t: float | None = None):
-        """The rank decision on the equilibrated ``Phi_v`` at positions ``q`` (default the
-        current ones), with the laws at ``t`` (default the current time)."""
-        w, _, _ = self.model.law_values(self.t if t is None else t)
-        self.counters.jacobians += 1
-        self.counters.factorisations += 1
-        return rank_split(self.model,
-                          constraint_jacobian(self.model, self.q if q is None else q, w), w)
 
     def _jumps_branch(self, h: float, v0: np.ndarray, a0: np.ndarray, v1: np.ndarray,
                       a1: np.ndarray) -> bool:
@@ -700,117 +517,3 @@ class Integrator:
         increments = np.array([self.atol_kinds["position" if unit == "m/s" else "angle"]
                                for unit in units])
         return np.concatenate([increments, rates])
-
-    # ------------------------------------------------------------------ singular poses
-
-    #: a failure is reported as one at a singular configuration (:meth:`_singular_pose`) where
-    #: a singular value of the equilibrated ``Phi_v`` has fallen below this fraction of its
-    #: value at the start (:attr:`_spectrum_start`, the singular values compared in sorted
-    #: order): their values away from such poses depend on the mechanism and its masses (5e-5
-    #: on a hexapod, 0.08 on the N-four-bar standing up), so only their fall tells one
-    near_singular = 0.05
-    #: the methods that cross singular configurations (the crossing of :meth:`_cross_singular`)
-    crossing_methods = ("dopri5-projection", "dop853-projection")
-
-    def _smallest_singular_value(self, q: np.ndarray | None = None,
-                                 t: float | None = None) -> float:
-        """Of the kept rows of the equilibrated ``Phi_v`` at ``(t, q)`` (default the current
-        state; ``inf`` without rows)."""
-        if not self.model.n_c:
-            return np.inf
-        return self._rank_split(q, t).smallest_singular_value()
-
-    @cached_property
-    def _spectrum_start(self) -> np.ndarray:
-        """The singular values of the kept rows of the equilibrated ``Phi_v`` at the start, in
-        increasing order (a large model's smallest alone: a dense SVD is cubic in the bodies),
-        computed when a failure first needs them. Measured against the start, not against 1:
-        the flyball governor's smallest is 9e-4 where nothing is singular, and measured
-        against 1 its failures were blamed on a singular pose."""
-        return self._spectrum(self._q_start, self.t0)
-
-    def _spectrum(self, q: np.ndarray | None = None, t: float | None = None) -> np.ndarray:
-        if not self.model.n_c:
-            return np.zeros(0)
-        split = self._rank_split(q, t)
-        if is_large(self.model):
-            return np.array([split.smallest_singular_value()])
-        return np.sort(split.singular_values())
-
-    def _singular_pose(self) -> str:
-        """When the current positions are near a singular configuration (see
-        :attr:`near_singular`), or on the way to one foreseen close ahead, a sentence that
-        names it (time, the singular value that fell) and the methods that cross it; else the
-        empty string. For the messages of failures.
-
-        The smallest singular value is compared first; where it has not fallen, the others in
-        sorted order (the k-th smallest falls only where k values do): the spatial
-        N-four-bar's smallest stands near 1.4e-4 all along, and the ten that collapse at its
-        flat pose are the next ten (to 0.06 to 0.08 of their values at the start, which is
-        near the pose already, where Radau5 fails). A method may fail before they have fallen
-        that far (Radau5 at rtol 1e-8, 1.7e-3 s before that pose, the ten at 0.55 to 0.96 of
-        their values at the start, 4e-3 to 8e-3): the pose is then foreseen from the rate at
-        which the values fall (:meth:`_foreseen_pose`)."""
-        try:
-            now = self._spectrum()
-            start = self._spectrum_start
-        except (HexapodError, np.linalg.LinAlgError, ValueError):
-            return ""
-        n = min(now.size, start.size)
-        if n == 0:
-            return ""
-        reference = np.where(np.isfinite(start[:n]) & (start[:n] > 0), start[:n], 1.0)
-        ratios = now[:n] / reference
-        k = 0 if ratios[0] < self.near_singular else int(np.argmin(ratios))
-        which = "smallest singular value" if k == 0 else "a singular value"
-        where = (f"at a singular configuration at t = {self.t:.6g} s ({which} of the "
-                 f"equilibrated constraint Jacobian {now[k]:.2g}, {ratios[k]:.2g} of its value "
-                 "at the start)")
-        # the smallest fallen, or within the band where crossings begin with others fallen
-        # tenfold (the spatial N-four-bar: its smallest 1.1e-4, ten more fallen 12 to 16 times)
-        if not (ratios[0] < self.near_singular
-                or (now[0] < CROSSING_FACTOR * SINGULAR_BAND
-                    and ratios[k] < 1.0 / CROSSING_FACTOR)):
-            foreseen = self._foreseen_pose(now[:n])
-            if foreseen is None:
-                return ""
-            k, ahead = foreseen
-            where = (f"near a singular configuration at t = {self.t:.6g} s (a singular value "
-                     f"of the equilibrated constraint Jacobian, {now[k]:.2g}, falls to zero "
-                     f"{ahead:.2g} s ahead at its present rate)")
-        return (f"the mechanism is {where}, which {self.name} cannot pass; "
-                f"{' and '.join(self.crossing_methods)} cross such poses")
-
-    def _foreseen_pose(self, now: np.ndarray) -> tuple[int, float] | None:
-        """``(k, seconds)``: the singular value (in sorted order) that, falling along the
-        motion at its present rate, reaches zero soonest, and in how long, when it is one a
-        crossing could leave out (below :data:`CLUSTER_CEILING`) and reaches zero within the
-        crossings' horizon (:data:`FORESIGHT_STEPS` accepted steps and :data:`FORESIGHT_TIME`
-        characteristic times); else None. The rates are differences over a thousandth of the
-        last accepted step."""
-        delta = 1e-3 * self._accepted_step
-        if not delta > 0 or not now[0] < CLUSTER_CEILING:
-            return None
-        ahead = self._spectrum(self._positions_ahead(delta))[:now.size]
-        rates = (ahead - now) / delta
-        falling = (rates < 0) & (now < CLUSTER_CEILING)
-        seconds = np.where(falling, now / -np.minimum(rates, -1e-300), np.inf)
-        k = int(np.argmin(seconds))
-        horizon = min(FORESIGHT_STEPS * self._accepted_step,
-                      FORESIGHT_TIME * characteristic_time(self.model))
-        return (k, float(seconds[k])) if seconds[k] <= horizon else None
-
-
-def _collapsing(sigma: np.ndarray, tolerance: float) -> int:
-    """How many rows a crossing leaves out: the singular values below ``tolerance`` and those
-    just above that belong to the same cluster (each within :data:`CROSSING_FACTOR` of the
-    next smaller, below :data:`CLUSTER_CEILING`). Identical loops flattening at
-    once (the N-four-bar's N windows) make such a cluster, spread over decades by their places
-    in the chain: leaving out only its smallest members left the others to fail the error test
-    one by one, each failure widening the crossing tenfold."""
-    ordered = np.sort(sigma)
-    count = int(np.sum(ordered < tolerance))
-    while (0 < count < ordered.size and ordered[count] < CROSSING_FACTOR * ordered[count - 1]
-           and ordered[count] < CLUSTER_CEILING):
-        count += 1
-    return count

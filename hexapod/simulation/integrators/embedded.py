@@ -13,34 +13,42 @@ does not lower the order.
 from __future__ import annotations
 
 import numpy as np
-from scipy.integrate._ivp import dop853_coefficients as dop853
-from scipy.integrate._ivp.rk import RK45
 
 from hexapod.errors import IntegrationError
-from hexapod.simulation.compiled_loop import EmbeddedKernel
-from hexapod.simulation.compiled_steps import CompiledLoop
-from hexapod.simulation.integrators.base import SINGULAR_BAND, Integrator
+from hexapod.simulation.integrators.base import Integrator
 from hexapod.simulation.integrators.interpolants import Interpolant, PolynomialInterpolant
 from hexapod.simulation.integrators.stability import largest_stable_step, runge_kutta_stability
-from hexapod.simulation.methods import DEFAULT_LOOP, LOOPS
+from hexapod.simulation.integrators.tableaus import (
+    DOP853_A,
+    DOP853_B,
+    DOP853_C,
+    DOP853_D,
+    DOP853_E3,
+    DOP853_E5,
+    DOP853_INTERPOLATOR_POWER,
+    DOP853_STAGES,
+    DOP853_STAGES_EXTENDED,
+    DOPRI5_A,
+    DOPRI5_B,
+    DOPRI5_B_HAT,
+    DOPRI5_C,
+    DOPRI5_DENSE,
+)
+from hexapod.simulation.methods import METHODS
 
 
-class EmbeddedRungeKutta(CompiledLoop, Integrator):
+class EmbeddedRungeKutta(Integrator):
     """An explicit embedded pair ``(A, b, b_hat, c)`` with error-per-step control; subclasses
-    give the tableau, ``order`` (that of the propagated solution) and ``error_order`` (that of
-    the embedded one, which sets the step controller's exponent)."""
+    give the tableau, what they are (``order``, that of the propagated solution, ``index``,
+    ``adaptive``, ``stabilisation``: from :data:`~hexapod.simulation.methods.METHODS`) and
+    ``error_order`` (that of the embedded solution, which sets the step controller's
+    exponent)."""
 
-    adaptive = True
-    index = 1
-    stabilisation = "projection of positions and velocities after each step"
     A: np.ndarray
     b: np.ndarray
     b_hat: np.ndarray
     c: np.ndarray
     error_order: int
-    #: how the local error is estimated: ``"difference"`` of the pair's two solutions, or
-    #: ``"dop853"`` (:meth:`DormandPrince853._error`); the compiled loop reads it
-    error_estimate = "difference"
     safety, min_factor, max_factor = 0.9, 0.2, 10.0
 
     @classmethod
@@ -50,15 +58,10 @@ class EmbeddedRungeKutta(CompiledLoop, Integrator):
         R = runge_kutta_stability(cls.A, cls.b)
         return largest_stable_step(lambda z: abs(R(z)), eigenvalues)
 
-    def __init__(self, *args, step: float | None = None, loop: str = DEFAULT_LOOP, **kwargs):
-        if loop not in LOOPS:
-            raise ValueError(f"loop must be one of {', '.join(LOOPS)}, got {loop!r}")
+    def __init__(self, *args, step: float | None = None, **kwargs):
         self._given_step = step
+        self._dense_step = None  # (t_old, h, y0, K, y1) of the last accepted step
         super().__init__(*args, step=step, **kwargs)
-        self._setup_loop(loop)
-
-    def _loop_kernel(self, rows: np.ndarray) -> EmbeddedKernel:
-        return EmbeddedKernel(self.model, type(self), rows, singular_band=SINGULAR_BAND)
 
     def _start(self) -> None:
         if self._given_step is None:
@@ -102,18 +105,6 @@ class EmbeddedRungeKutta(CompiledLoop, Integrator):
             stages.append(self._derivative(t + self.c[i] * h, y[:n_q], y[n_q:]))
         K = np.array(stages)
         return K, y0 + h * (self.b @ K)
-
-    def _rebuild_dense_step(self, start: tuple, h: float) -> tuple:
-        """``(t_old, h, y0, K, y1)`` of a step the compiled loop took from ``start``."""
-        t_old, q, v, v_dot = start
-        y0 = np.concatenate([q, v])
-        f0 = np.concatenate([self.model.call("qdot", q=q, v=v), v_dot])
-        K, y1 = self._stages(t_old, h, y0, f0)
-        if self.error_estimate == "dop853":  # with the rate at y1, as _error keeps it
-            n_q = self.model.n_q
-            self._stages_at_end = np.vstack([K, self._derivative(t_old + h, y1[:n_q],
-                                                                 y1[n_q:])])
-        return t_old, h, y0, K, y1
 
     def _step(self) -> None:
         model, n_q = self.model, self.model.n_q
@@ -163,29 +154,17 @@ class DormandPrince5(EmbeddedRungeKutta):
     """Dormand and Prince's 5(4) pair (DOPRI5), the solution propagated at order 5."""
 
     name = "dopri5-projection"
-    kernel_reproduces = True  # its steps are EmbeddedKernel's (see CompiledLoop._setup_loop)
-    order, error_order = 5, 4
+    order, index, adaptive, stabilisation = METHODS[name]
+    error_order = 4
     description = "Dormand-Prince 5(4), adaptive step, acceleration level"
-    c = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0, 1.0])
-    A = np.array([
-        [0, 0, 0, 0, 0, 0, 0],
-        [1 / 5, 0, 0, 0, 0, 0, 0],
-        [3 / 40, 9 / 40, 0, 0, 0, 0, 0],
-        [44 / 45, -56 / 15, 32 / 9, 0, 0, 0, 0],
-        [19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729, 0, 0, 0],
-        [9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656, 0, 0],
-        [35 / 384, 0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84, 0],
-    ])
-    b = np.array([35 / 384, 0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84, 0])
-    b_hat = np.array([5179 / 57600, 0, 7571 / 16695, 393 / 640, -92097 / 339200, 187 / 2100,
-                      1 / 40])
+    c, A, b, b_hat = DOPRI5_C, DOPRI5_A, DOPRI5_B, DOPRI5_B_HAT
 
     def dense_output(self) -> Interpolant:
         """The classical continuous extension of DOPRI5, of order 4 (Shampine's coefficients,
-        SciPy's ``RK45.P``), from the step's seven stages; exact at both ends of the step (at
-        its end, the state before the projection)."""
-        t_old, h, y0, K, _ = self._last_step()
-        return PolynomialInterpolant(self.model, t_old, h, y0, K, RK45.P)
+        :data:`~.tableaus.DOPRI5_DENSE`), from the step's seven stages; exact at both ends of
+        the step (at its end, the state before the projection)."""
+        t_old, h, y0, K, _ = self._dense_step
+        return PolynomialInterpolant(self.model, t_old, h, y0, K, DOPRI5_DENSE)
 
 
 class DormandPrince853(EmbeddedRungeKutta):
@@ -194,19 +173,19 @@ class DormandPrince853(EmbeddedRungeKutta):
     (the stiffer the problem, the more the third-order one weighs), twelve stages and one more
     right-hand side at the new state. For tight tolerances and long horizons.
 
-    The tableau is SciPy's (``scipy.integrate.DOP853``), so that the two cannot disagree.
+    The tableau is Hairer's (:mod:`~hexapod.simulation.integrators.tableaus`), SciPy's
+    ``scipy.integrate.DOP853`` too (``tests/test_tableaus.py`` compares them).
     """
 
     name = "dop853-projection"
-    kernel_reproduces = True
-    order, error_order = 8, 7
+    order, index, adaptive, stabilisation = METHODS[name]
+    error_order = 7
     description = "Dormand-Prince 8(5,3), adaptive step, acceleration level"
-    c = dop853.C[:dop853.N_STAGES]
-    A = dop853.A[:dop853.N_STAGES, :dop853.N_STAGES]
-    b = dop853.B
-    b_hat = dop853.B  # unused: the error comes from the embedded 5th and 3rd order solutions
-    error_estimate = "dop853"
-    E3, E5 = dop853.E3, dop853.E5
+    c = DOP853_C[:DOP853_STAGES]
+    A = DOP853_A[:DOP853_STAGES, :DOP853_STAGES]
+    b = DOP853_B
+    b_hat = DOP853_B  # unused: the error comes from the embedded 5th and 3rd order solutions
+    E3, E5 = DOP853_E3, DOP853_E5
 
     def _error(self, h, K, y0, y1):
         n_q = self.model.n_q
@@ -221,18 +200,18 @@ class DormandPrince853(EmbeddedRungeKutta):
 
     def dense_output(self) -> Interpolant:
         """DOP853's continuous extension of order 7 (Hairer, Norsett and Wanner, II.6), as
-        ``scipy.integrate.DOP853`` builds it: three more stages and SciPy's coefficients
-        (its ``A_EXTRA, C_EXTRA``, the rows of ``A`` and ``C`` after the twelve stages and the
-        rate at the new state, and ``D``); exact at both ends of the step (at its end, the
-        state before the projection)."""
-        t_old, h, y0, K, y1 = self._last_step()
-        n_q, n = self.model.n_q, dop853.N_STAGES
+        ``scipy.integrate.DOP853`` builds it: three more stages (the rows of
+        :data:`~.tableaus.DOP853_A` and ``DOP853_C`` after the twelve stages and the rate at
+        the new state) and the coefficients :data:`~.tableaus.DOP853_D`; exact at both ends
+        of the step (at its end, the state before the projection)."""
+        t_old, h, y0, K, y1 = self._dense_step
+        n_q, n = self.model.n_q, DOP853_STAGES
         stages = getattr(self, "_stages_at_end", None)
         if stages is None or not np.array_equal(stages[:n], K):  # not the accepted step's
             stages = np.vstack([K, self._derivative(t_old + h, y1[:n_q], y1[n_q:])])
-        extended = np.empty((dop853.N_STAGES_EXTENDED, y0.size))
+        extended = np.empty((DOP853_STAGES_EXTENDED, y0.size))
         extended[:n + 1] = stages
-        for s, (a, c) in enumerate(zip(dop853.A[n + 1:], dop853.C[n + 1:], strict=True),
+        for s, (a, c) in enumerate(zip(DOP853_A[n + 1:], DOP853_C[n + 1:], strict=True),
                                    start=n + 1):
             y = y0 + h * (a[:s] @ extended[:s])
             extended[s] = self._derivative(t_old + c * h, y[:n_q], y[n_q:])
@@ -240,19 +219,19 @@ class DormandPrince853(EmbeddedRungeKutta):
 
 
 class _Dop853Interpolant(Interpolant):
-    """``scipy.integrate._ivp.rk.Dop853DenseOutput``: ``y_old`` plus nested products of
+    """DOP853's dense output (as SciPy's ``DOP853`` evaluates it): ``y_old`` plus nested products of
     ``F_k`` with ``theta`` and ``1 - theta`` in turn."""
 
     order = 7
 
     def __init__(self, model, t_old, h, y0, y1, K):
         super().__init__(model, t_old, t_old + h)
-        F = np.empty((dop853.INTERPOLATOR_POWER, y0.size))
+        F = np.empty((DOP853_INTERPOLATOR_POWER, y0.size))
         delta = y1 - y0
         F[0] = delta
         F[1] = h * K[0] - delta
-        F[2] = 2 * delta - h * (K[dop853.N_STAGES] + K[0])
-        F[3:] = h * (dop853.D @ K)
+        F[2] = 2 * delta - h * (K[DOP853_STAGES] + K[0])
+        F[3:] = h * (DOP853_D @ K)
         self.y0, self.F = y0, F
 
     def _evaluate(self, theta):

@@ -22,21 +22,15 @@ from __future__ import annotations
 import numpy as np
 
 from hexapod.errors import IntegrationError
-from hexapod.simulation.compiled_loop import BaumgarteKernel
-from hexapod.simulation.compiled_steps import CompiledLoop
 from hexapod.simulation.integrators.base import RANK_MARGIN, Integrator
 from hexapod.simulation.integrators.interpolants import Interpolant, PolynomialInterpolant
 from hexapod.simulation.integrators.stability import largest_stable_step, runge_kutta_stability
-from hexapod.simulation.methods import DEFAULT_LOOP, LOOPS
+from hexapod.simulation.integrators.tableaus import RK4_A, RK4_B, RK4_DENSE
+from hexapod.simulation.methods import METHODS
 from hexapod.simulation.scales import characteristic_time
 
-#: the classical tableau, for the stability function
-_A = np.array([[0, 0, 0, 0], [0.5, 0, 0, 0], [0, 0.5, 0, 0], [0, 0, 1, 0]], dtype=float)
-_B = np.array([1, 2, 2, 1], dtype=float) / 6
-_R = runge_kutta_stability(_A, _B)
-#: the continuous extension of order 3 (Hairer, Norsett and Wanner, *Solving ODEs I*, II.6):
-#: the weights ``b_i(theta)`` of the four stages, coefficients of theta, theta^2 and theta^3
-_DENSE = np.array([[1, -3 / 2, 2 / 3], [0, 1, -2 / 3], [0, 1, -2 / 3], [0, -1 / 2, 2 / 3]])
+#: RK4's stability function
+_R = runge_kutta_stability(RK4_A, RK4_B)
 #: the position drift (relative to the row scales) past which a state is no longer a motion
 #: of the mechanism and the run fails: healthy runs of the extreme-case suite drift by 1e-7 to
 #: 7e-5 (6e-4 on the anti-parallelogram's dead points), a pendulum at a coarse 20 steps per
@@ -47,7 +41,7 @@ DRIFT_LIMIT = 0.1
 DRIFT_CHECK_EVERY = 10
 
 
-class RungeKutta4Baumgarte(CompiledLoop, Integrator):
+class RungeKutta4Baumgarte(Integrator):
     """RK4 on ``(q, v)`` with Baumgarte stabilisation.
 
     ``alpha`` (1/s): the stabilisation rate ``alpha = beta``, 10/s by default (a violation
@@ -57,11 +51,7 @@ class RungeKutta4Baumgarte(CompiledLoop, Integrator):
     """
 
     name = "rk4-baumgarte"
-    kernel_reproduces = True  # its steps are BaumgarteKernel's (see CompiledLoop._setup_loop)
-    order = 4
-    index = 1
-    stabilisation = "Baumgarte (alpha = beta), Euler parameters renormalised"
-    adaptive = False
+    order, index, adaptive, stabilisation = METHODS[name]
     description = "classical Runge-Kutta, fixed step, acceleration level"
 
     DEFAULT_ALPHA = 10.0
@@ -76,32 +66,12 @@ class RungeKutta4Baumgarte(CompiledLoop, Integrator):
             modes.append(-float(options.get("alpha", cls.DEFAULT_ALPHA)) + 0j)
         return largest_stable_step(lambda z: abs(_R(z)), modes)
 
-    def __init__(self, *args, alpha: float = DEFAULT_ALPHA, loop: str = DEFAULT_LOOP,
-                 **kwargs):
+    def __init__(self, *args, alpha: float = DEFAULT_ALPHA, **kwargs):
         if not alpha >= 0:
             raise ValueError(f"alpha must be non-negative, got {alpha}")
-        if loop not in LOOPS:
-            raise ValueError(f"loop must be one of {', '.join(LOOPS)}, got {loop!r}")
         self.alpha = float(alpha)
+        self._dense_step = None  # (t, h, q, v, dq stages, dv stages) of the last step
         super().__init__(*args, **kwargs)
-        self._setup_loop(loop)
-
-    def _kernel_options(self) -> tuple:
-        return (self.alpha,)
-
-    def _loop_kernel(self, rows: np.ndarray) -> BaumgarteKernel:
-        return BaumgarteKernel(self.model, rows, alpha=self.alpha, drift_limit=DRIFT_LIMIT,
-                               drift_every=DRIFT_CHECK_EVERY)
-
-    def _rebuild_dense_step(self, start: tuple, h: float) -> tuple:
-        """The stages of a step the compiled loop took from ``start``, as :meth:`_step` keeps
-        them for the dense output."""
-        t, q, v, v_dot = start
-        dq1, dv1 = self.model.call("qdot", q=q, v=v), v_dot
-        dq2, dv2 = self._rates(t + h / 2, q + h / 2 * dq1, v + h / 2 * dv1, self.alpha)
-        dq3, dv3 = self._rates(t + h / 2, q + h / 2 * dq2, v + h / 2 * dv2, self.alpha)
-        dq4, dv4 = self._rates(t + h, q + h * dq3, v + h * dv3, self.alpha)
-        return t, h, q, v, (dq1, dq2, dq3, dq4), (dv1, dv2, dv3, dv4)
 
     def _step(self) -> None:
         h = self.next_step()
@@ -176,6 +146,6 @@ class RungeKutta4Baumgarte(CompiledLoop, Integrator):
         """RK4's continuous extension of order 3 from the step's four stages (Baumgarte terms
         included); at the step's end it is the state before the Euler parameters are
         renormalised."""
-        t, h, q, v, dq, dv = self._last_step()
+        t, h, q, v, dq, dv = self._dense_step
         K = np.hstack([np.array(dq), np.array(dv)])
-        return PolynomialInterpolant(self.model, t, h, np.concatenate([q, v]), K, _DENSE)
+        return PolynomialInterpolant(self.model, t, h, np.concatenate([q, v]), K, RK4_DENSE)

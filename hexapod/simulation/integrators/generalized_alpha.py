@@ -80,6 +80,7 @@ from hexapod.algorithms.saddle import (
 from hexapod.errors import HexapodError
 from hexapod.simulation.integrators.base import Integrator
 from hexapod.simulation.integrators.interpolants import Interpolant
+from hexapod.simulation.methods import METHODS
 from hexapod.spatial import quaternion_product, rotation_from_euler_parameters
 
 # ---------------------------------------------------------------- the groups, for CasADi
@@ -272,11 +273,7 @@ class LieGroupGeneralizedAlpha(Integrator):
     """
 
     name = "generalized-alpha"
-    order = 2
-    index = 2
-    stabilisation = ("none needed: position and velocity constraints solved every step "
-                     "(Newton, GGL)")
-    adaptive = False
+    order, index, adaptive, stabilisation = METHODS[name]
     description = ("Lie-group generalized-alpha (Arnold, Bruls, Cardona) on SE(3), "
                    "stabilised index 2")
     max_iterations = 25

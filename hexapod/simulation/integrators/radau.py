@@ -80,32 +80,25 @@ from __future__ import annotations
 import warnings
 from dataclasses import dataclass
 
-import casadi as ca
 import numpy as np
 from scipy import sparse
-from scipy.integrate._ivp.radau import P as COLLOCATION
 from scipy.linalg import lu_factor, lu_solve
 from scipy.sparse.linalg import splu
 
 from hexapod.algorithms.linalg import equilibrate, split_rows
 from hexapod.algorithms.saddle import is_large, kept_multipliers
 from hexapod.errors import IntegrationError
-from hexapod.model.model import Model
 from hexapod.simulation.integrators.base import RANK_MARGIN, Integrator
+from hexapod.simulation.integrators.ggl import ggl_functions
 from hexapod.simulation.integrators.interpolants import Interpolant
+from hexapod.simulation.integrators.tableaus import RADAU_A, RADAU_C, RADAU_DENSE, RADAU_E
+from hexapod.simulation.methods import METHODS
 from hexapod.spatial import quaternion_exp, quaternion_log, quaternion_product
 
 # ---------------------------------------------------------------- Radau IIA, three stages
 
-_S6 = np.sqrt(6.0)
-#: Butcher matrix and nodes (Hairer and Wanner, *Solving ODEs II*, IV.5)
-A = np.array([[(88 - 7 * _S6) / 360, (296 - 169 * _S6) / 1800, (-2 + 3 * _S6) / 225],
-              [(296 + 169 * _S6) / 1800, (88 + 7 * _S6) / 360, (-2 - 3 * _S6) / 225],
-              [(16 - _S6) / 36, (16 + _S6) / 36, 1 / 9]])
-C = np.array([(4 - _S6) / 10, (4 + _S6) / 10, 1.0])
-#: weights of the stage increments in RADAU5's error estimate (its DD1, DD2, DD3)
-E = np.array([-(13 + 7 * _S6), -13 + 7 * _S6, -1.0]) / 3
-
+#: Butcher matrix, nodes and error weights (:mod:`~hexapod.simulation.integrators.tableaus`)
+A, C, E = RADAU_A, RADAU_C, RADAU_E
 
 
 def _transformation() -> tuple[np.ndarray, np.ndarray, float, float, float]:
@@ -137,88 +130,6 @@ def _extrapolation(ratio: float) -> np.ndarray:
     return L
 
 
-def _cross(a, b):
-    """Cross product of two SX 3-vectors."""
-    return ca.vertcat(a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
-                      a[0] * b[1] - a[1] * b[0])
-
-
-def _exp_sx(x):
-    """Unit quaternion of the rotation vector ``x`` (SX), smooth through ``x = 0``: below
-    1e-3 rad the series of ``cos(theta/2)`` and ``sin(theta/2)/theta`` (truncation below
-    1e-22), and a square root that never sees zero, so that derivatives stay finite."""
-    theta2 = ca.dot(x, x)
-    small = theta2 < 1e-6
-    theta = ca.sqrt(ca.if_else(small, 1.0, theta2))
-    c = ca.if_else(small, 1 - theta2 / 8 + theta2**2 / 384, ca.cos(theta / 2))
-    s = ca.if_else(small, 0.5 - theta2 / 48 + theta2**2 / 3840, ca.sin(theta / 2) / theta)
-    return ca.vertcat(c, s * x)
-
-
-def dexp_inverse_sx(x, u):
-    """``J_r(x)^-1 u`` (SX 3-vectors): the rate of the rotation vector ``x`` of ``R_n Exp(x)``
-    when the body turns at ``u`` (body frame). The inverse right Jacobian of SO(3),
-    ``I + [x]/2 + (1/theta^2 - (1 + cos theta) / (2 theta sin theta)) [x]^2``, with its series
-    ``1/12 + theta^2/720`` below 1e-3 rad (truncation ``theta^4 / 30240``)."""
-    theta2 = ca.dot(x, x)
-    small = theta2 < 1e-6
-    theta = ca.sqrt(ca.if_else(small, 1.0, theta2))
-    c = ca.if_else(small, 1.0 / 12 + theta2 / 720,
-                   1 / theta**2 - (1 + ca.cos(theta)) / (2 * theta * ca.sin(theta)))
-    xu = _cross(x, u)
-    return u + 0.5 * xu + c * _cross(x, xu)
-
-
-def ggl_functions(model: Model) -> dict:
-    """CasADi Functions built once per model (:meth:`Model.built_once`): the residual ``F`` of
-    the GGL equations in the local coordinates ``xi`` of the step, ``q = q_n (+) xi``, at one
-    point and at three stages, and at ``xi = 0`` with its Jacobian in ``(xi, v, lambda, mu)``
-    (exact: the Lie-group composition and ``J_r^-1`` are part of the expression)."""
-    return model.built_once(("radau5-ggl",), _ggl_functions)
-
-
-def _ggl_functions(model: Model) -> dict:
-    q0 = ca.SX.sym("q0", model.n_q)
-    xi = ca.SX.sym("xi", model.n_v)
-    v = ca.SX.sym("v", model.n_v)
-    lam = ca.SX.sym("lam", model.n_c)
-    mu = ca.SX.sym("mu", model.n_c)
-    w = ca.SX.sym("w", model.n_w)
-    wd = ca.SX.sym("wd", model.n_w)
-    parts, rotations = [], []
-    for b in model.bodies:
-        qb, xb = q0[b.q.start:b.q.stop], xi[b.v.start:b.v.stop]
-        if b.kind == "spatial":
-            parts += [qb[:3] + xb[:3], quaternion_product(qb[3:], _exp_sx(xb[3:]))]
-            rotations.append(b.v.start + 3)
-        else:
-            parts.append(qb + xb)
-    q = ca.vertcat(*parts)
-    symbols = {"q": q, "v": v, "w": w, "wd": wd}
-
-    def call(function: ca.Function) -> ca.SX:
-        return function(*[symbols[n] for n in function.name_in()])
-
-    Phi_v = call(model.Phi_v)
-    rate = v + ca.mtimes(Phi_v.T, mu)
-    kinematic = [rate[i] for i in range(model.n_v)]
-    for k in rotations:
-        turn = dexp_inverse_sx(xi[k:k + 3], rate[k:k + 3])
-        kinematic[k:k + 3] = [turn[0], turn[1], turn[2]]
-    F = ca.vertcat(ca.vertcat(*kinematic), call(model.Q) - ca.mtimes(Phi_v.T, lam),
-                   call(model.phi), ca.mtimes(Phi_v, v) - call(model.nu))
-    J = ca.jacobian(F, ca.vertcat(xi, v, lam, mu))
-    names = ["q0", "xi", "v", "lam", "mu"] + (["w", "wd"] if model.n_w else [])
-    inputs = [q0, xi, v, lam, mu] + ([w, wd] if model.n_w else [])
-    residual = ca.Function("ggl_residual", inputs, [F], names, ["F"])
-    functions = {
-        "residual": residual,
-        "stages": residual.map(3),
-        "start": ca.Function("ggl_start", inputs, [F, J, Phi_v], names, ["F", "J", "Phi_v"]),
-    }
-    return functions
-
-
 class NewtonFailure(Exception):
     """The stage equations could not be solved with this step (internal: the step is cut)."""
 
@@ -243,10 +154,7 @@ class RadauIIA5GGL(Integrator):
     """
 
     name = "radau5-ggl"
-    order = 5
-    index = 2
-    stabilisation = "GGL: position and velocity constraints, B Phi_v^T mu"
-    adaptive = True
+    order, index, adaptive, stabilisation = METHODS[name]
     description = "Radau IIA order 5 (RADAU5), adaptive, GGL index 2, Lie-group coordinates"
     max_newton = 7  # RADAU5's NIT
     safety = 0.9
@@ -591,7 +499,7 @@ class RadauIIA5GGL(Integrator):
         """The collocation polynomial of the last step (order 3, the stage order): the cubic
         through the start and the three Radau IIA stages at ``c = (4 - sqrt 6)/10, (4 + sqrt
         6)/10, 1``, in the step's local coordinates ``(xi, v)``, the positions ``q_n (+) xi``
-        (SciPy's ``Radau`` dense output, its matrix ``P``)."""
+        (:data:`~.tableaus.RADAU_DENSE`, as SciPy's ``Radau`` dense output)."""
         return _CollocationInterpolant(self.model, *self._collocation)
 
 
@@ -603,7 +511,7 @@ class _CollocationInterpolant(Interpolant):
 
     def __init__(self, model, t_old, h, q_old, y_old, Z):
         super().__init__(model, t_old, t_old + h)
-        self.q_old, self.y_old, self.Q = q_old, y_old, Z.T @ COLLOCATION
+        self.q_old, self.y_old, self.Q = q_old, y_old, Z.T @ RADAU_DENSE
 
     def _evaluate(self, theta):
         y = self.y_old + self.Q @ np.array([theta, theta**2, theta**3])

@@ -80,6 +80,7 @@ from hexapod.algorithms.saddle import force_multipliers, is_large, solve_sparse,
 from hexapod.simulation.integrators.base import Integrator
 from hexapod.simulation.integrators.interpolants import Interpolant
 from hexapod.simulation.integrators.stability import largest_stable_step, oscillator_parameters
+from hexapod.simulation.methods import METHODS
 from hexapod.simulation.scales import ENERGY_JUMP
 from hexapod.spatial import quaternion_product, skew
 
@@ -113,11 +114,7 @@ class Rattle(Integrator):
     """
 
     name = "rattle"
-    order = 2
-    index = 3
-    stabilisation = ("none needed: position constraints solved every step (Newton), velocities "
-                     "projected onto Phi_v v = nu by the second half kick")
-    adaptive = False
+    order, index, adaptive, stabilisation = METHODS[name]
     description = ("RATTLE in Lie-group form (Moser-Veselov rotations): symplectic and "
                    "time-reversible, index 3")
     max_iterations = 25
@@ -396,7 +393,8 @@ def _packed(name: str, inputs: list, outputs: list) -> ca.Function:
     """A Function of one vector (the inputs stacked) to one vector (the outputs likewise): a
     call then costs one conversion each way, not one per argument. Vectors are stacked whole,
     matrices by their nonzeros (in CasADi's column order): ``Phi_v`` and the Newton matrix of
-    a large model would otherwise be written densely, ``O(n^2)`` entries per call."""
+    a large model would otherwise be written densely, ``O(n^2)`` entries per call. A row
+    vector (``Phi_v`` of a single row) is a matrix: its nonzeros, made a column."""
     def size(x):
         return x.numel() if x.size2() == 1 else x.nnz()
 
@@ -407,8 +405,8 @@ def _packed(name: str, inputs: list, outputs: list) -> ca.Function:
         parts.append(chunk if x.size2() == 1 else ca.SX(x.sparsity(), chunk))
         k += size(x)
     inner = ca.Function(name + "_inner", inputs, outputs)
-    return ca.Function(name, [z], [ca.vertcat(*[ca.densify(x) if x.size2() == 1 else x.nz[:]
-                                                 for x in inner(*parts)])])
+    return ca.Function(name, [z], [ca.vertcat(*[ca.densify(x) if x.size2() == 1
+                                                 else ca.vec(x.nz[:]) for x in inner(*parts)])])
 
 
 def _functions(model):

@@ -76,6 +76,7 @@ from hexapod.algorithms.linalg import as_dense
 from hexapod.algorithms.saddle import sparse_dm
 from hexapod.errors import HexapodError, IntegrationError
 from hexapod.simulation.integrators.base import Counters, Integrator
+from hexapod.simulation.methods import METHODS
 
 
 @dataclass
@@ -206,12 +207,7 @@ class IdasBDF(Integrator):
     """
 
     name = "idas-bdf"
-    order = 5
-    index = 1
-    stabilisation = ("Baumgarte terms in the DAE (alpha = beta, 10/s by default); projection "
-                     "onto phi = 0 and Phi_v v = nu and a restart when the drift passes "
-                     "drift_tol")
-    adaptive = True
+    order, index, adaptive, stabilisation = METHODS[name]
     counts_own_steps = True
     description = ("variable-order BDF (SUNDIALS IDAS through CasADi), index 1, Baumgarte-"
                    "stabilised, projection restarts")
