@@ -160,10 +160,11 @@ def driver_efforts_over_time(model: Model, result: InverseResult) -> dict[str, n
     if across and model.Q_across is not None:
         w = model.law_values(result.times)[0].T
         zero_lam, zero_rows = np.zeros(model.n_c), np.zeros((model.n_c, model.n_v))
+        data = model.create_data()
         for i in range(result.times.size):
-            q_across = model.call("Q_across", q=result.q[i], v=result.v[i], w=w[i])
+            q_across = model.call("Q_across", data, q=result.q[i], v=result.v[i], w=w[i])
             passive = wrenches_from_multipliers(model, result.q[i], zero_lam, zero_rows,
-                                                q_across).effort
+                                                q_across, data=data).effort
             for j in across:
                 efforts[model.joints[j].name][i] -= passive[j]
     return efforts

@@ -98,13 +98,14 @@ def frames(model: Model, recording: Recording) -> Frames:
                 sizes != (model.n_q, model.n_v, model.n_c):
             raise InputFileError(f"{where}: its coordinates are not those of scene "
                                  f"'{model.name}': not a run of this scene")
-        q = recording.q
+        q, data = recording.q, model.create_data()
         for k in range(n):
-            w, _, _ = model.law_values(recording.t[k])
-            Phi_v = model.call("Phi_v", q=q[k], w=w)
-            Q_across = (model.call("Q_across", q=q[k], v=recording.v[k], w=w)
+            w, _, _ = model.law_values(recording.t[k], data)
+            Phi_v = model.call("Phi_v", data, q=q[k], w=w)
+            Q_across = (model.call("Q_across", data, q=q[k], v=recording.v[k], w=w)
                         if model.Q_across is not None else None)
-            wrenches = wrenches_from_multipliers(model, q[k], recording.lam[k], Phi_v, Q_across)
+            wrenches = wrenches_from_multipliers(model, q[k], recording.lam[k], Phi_v, Q_across,
+                                                 data=data)
             force_joint[k], moment_joint[k] = wrenches.force, wrenches.torque
             effort[k] = wrenches.effort
             if model.contacts:

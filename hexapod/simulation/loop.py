@@ -402,13 +402,15 @@ def _add_wrenches(result: SimulationResult) -> None:
     model = result.model
     n, J = result.t.size, len(model.joints)
     force, torque, effort = np.zeros((n, J, 3)), np.zeros((n, J, 3)), np.zeros((n, J))
+    data = model.create_data()
     for k in range(n):
         q, v = result.q[k], result.v[k]
-        w, _, _ = model.law_values(result.t[k])
-        Phi_v = model.call("Phi_v", q=q, w=w)
-        Q_across = (model.call("Q_across", q=q, v=v, w=w) if model.Q_across is not None
+        w, _, _ = model.law_values(result.t[k], data)
+        Phi_v = model.call("Phi_v", data, q=q, w=w)
+        Q_across = (model.call("Q_across", data, q=q, v=v, w=w) if model.Q_across is not None
                     else None)
-        wrenches = wrenches_from_multipliers(model, q, result.lam[k], Phi_v, Q_across)
+        wrenches = wrenches_from_multipliers(model, q, result.lam[k], Phi_v, Q_across,
+                                             data=data)
         force[k], torque[k], effort[k] = wrenches.force, wrenches.torque, wrenches.effort
     result.force, result.torque, result.effort = force, torque, effort
 

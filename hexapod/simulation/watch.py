@@ -56,9 +56,11 @@ class Watch:
         model, integrator, worst = self.model, self.integrator, self.worst
         t, q, v = integrator.t, integrator.q, integrator.v
         if model.n_c:
-            w, wd, _ = model.law_values(t)
-            phi = model.call("phi", q=q, w=w) / model.row_scale
-            rate = (model.call("Phi_v", q=q, w=w) @ v - model.call("nu", q=q, w=w, wd=wd))
+            data = integrator.data  # its call buffers: the integrator is between steps
+            w, wd, _ = model.law_values(t, data)
+            phi = model.call("phi", data, q=q, w=w) / model.row_scale
+            rate = (model.call("Phi_v", data, q=q, w=w) @ v
+                    - model.call("nu", data, q=q, w=w, wd=wd))
             worst["phi"] = max(worst["phi"], float(np.abs(phi).max()))
             worst["velocity"] = max(worst["velocity"],
                                     float(np.abs(rate / model.row_scale).max()))

@@ -302,7 +302,7 @@ class Integrator(SingularPoses):
         """Which of the model's feet are on the ground at ``t`` (their gates)."""
         if not self.model.contacts:
             return ()
-        w = self.model.law_values(t)[0]
+        w = self.model.law_values(t, self.data)[0]
         return tuple(bool(w[c.gate] > 0.5) for c in self.model.contacts)
 
     def _follow_contacts(self) -> None:
@@ -353,7 +353,7 @@ class Integrator(SingularPoses):
         # rows disagree with the others by as much: as far as the compiled solve allows
         v_dot, _ = self._dynamics(t, q, v, (alpha, alpha) if alpha else None,
                                   consistency_tol=REDUNDANT_TOLERANCE)
-        return self.model.call("qdot", q=q, v=v), v_dot
+        return self.model.call("qdot", self.data, q=q, v=v), v_dot
 
     def _jumps_branch(self, h: float, v0: np.ndarray, a0: np.ndarray, v1: np.ndarray,
                       a1: np.ndarray) -> bool:

@@ -82,7 +82,7 @@ class EmbeddedRungeKutta(Integrator):
         """Hairer's starting step: from the sizes of the state, of its rate and of the rate's
         change over a trial Euler step."""
         y0 = np.concatenate([self.q, self.v])
-        f0 = np.concatenate([self.model.call("qdot", q=self.q, v=self.v), self.v_dot])
+        f0 = np.concatenate([self.model.call("qdot", self.data, q=self.q, v=self.v), self.v_dot])
         n_q = self.model.n_q
 
         def rate_change(h0: float) -> float:
@@ -109,7 +109,7 @@ class EmbeddedRungeKutta(Integrator):
     def _step(self) -> None:
         model, n_q = self.model, self.model.n_q
         y0 = np.concatenate([self.q, self.v])
-        f0 = np.concatenate([model.call("qdot", q=self.q, v=self.v), self.v_dot])
+        f0 = np.concatenate([model.call("qdot", self.data, q=self.q, v=self.v), self.v_dot])
         nudged = False
         while True:
             h = self.next_step()

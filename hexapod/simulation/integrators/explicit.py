@@ -78,7 +78,7 @@ class RungeKutta4Baumgarte(Integrator):
         t, q, v = self.t, self.q, self.v
         # the accelerations at the current state come from the end of the last step, with the
         # same stabilisation (at the start the state is consistent and the terms vanish)
-        dq1, dv1 = self.model.call("qdot", q=q, v=v), self.v_dot
+        dq1, dv1 = self.model.call("qdot", self.data, q=q, v=v), self.v_dot
         dq2, dv2 = self._rates(t + h / 2, q + h / 2 * dq1, v + h / 2 * dv1, self.alpha)
         dq3, dv3 = self._rates(t + h / 2, q + h / 2 * dq2, v + h / 2 * dv2, self.alpha)
         dq4, dv4 = self._rates(t + h, q + h * dq3, v + h * dv3, self.alpha)
@@ -102,8 +102,8 @@ class RungeKutta4Baumgarte(Integrator):
         model = self.model
         if not model.n_c:
             return 0.0
-        w, _, _ = model.law_values(t)
-        return float(np.abs(model.call("phi", q=q, w=w) / model.row_scale).max())
+        w, _, _ = model.law_values(t, self.data)
+        return float(np.abs(model.call("phi", self.data, q=q, w=w) / model.row_scale).max())
 
     def _check_drift(self) -> None:
         """Fail past :data:`DRIFT_LIMIT` of position drift (relative to the scene's size)."""
@@ -132,9 +132,10 @@ class RungeKutta4Baumgarte(Integrator):
         model = self.model
         if self._crossing is not None or not model.n_c:
             return super()._dynamics(t, q, v, baumgarte, consistency_tol, data)
-        w, wd, _ = model.law_values(t)
+        w, wd, _ = model.law_values(t, self.data)
         e = self._position_drift(t, q)
-        rates = model.call("Phi_v", q=q, w=w) @ v - model.call("nu", q=q, w=w, wd=wd)
+        rates = (model.call("Phi_v", self.data, q=q, w=w) @ v
+                 - model.call("nu", self.data, q=q, w=w, wd=wd))
         e_v = float(np.abs(rates / model.row_scale).max()) * characteristic_time(model)
         rank_tolerance, tol = model.rank_tolerance, consistency_tol
         if np.isfinite(e) and np.isfinite(e_v):  # else the solve says what is wrong

@@ -345,7 +345,7 @@ class LieGroupGeneralizedAlpha(Integrator):
         beta_p = (1 - am) / (beta * h**2 * (1 - af))
         gamma_p = gamma / (beta * h)
         t = self.t + h
-        w, wd, _ = model.law_values(t)
+        w, wd, _ = model.law_values(t, self.data)
         laws = [w, wd] if model.n_w else []
         n, n_c = model.n_v, model.n_c
         # the rows kept, decided at the start of the step, and the multipliers carried onto them
@@ -486,7 +486,7 @@ class LieGroupGeneralizedAlpha(Integrator):
         if self.decision is not None and self.decision[0] is q:
             return self.decision[1:]
         model = self.model
-        w, _, _ = model.law_values(t)
+        w, _, _ = model.law_values(t, self.data)
         Phi_v = constraint_jacobian(model, q, w)
         self.counters.jacobians += 1
         self.counters.factorisations += 1
@@ -499,7 +499,7 @@ class LieGroupGeneralizedAlpha(Integrator):
         Phi_v, split = self._rank_decision(t, q)
         if not split.redundant.size or not split.rank:
             return lam
-        Q_across = (model.call("Q_across", q=q, v=v, w=w) if model.Q_across is not None
+        Q_across = (model.call("Q_across", self.data, q=q, v=v, w=w) if model.Q_across is not None
                     else None)
         wrench_map, offset = policy_map(model, q, as_dense(Phi_v), Q_across)
         return distribute(split, lam, wrench_map, offset)

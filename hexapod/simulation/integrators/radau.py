@@ -216,7 +216,7 @@ class RadauIIA5GGL(Integrator):
         sizes of the state, of its rate and of the rate's change over a trial Euler step."""
         model = self.model
         y0 = np.concatenate([self.q, self.v])
-        f0 = np.concatenate([model.call("qdot", q=self.q, v=self.v), self.v_dot])
+        f0 = np.concatenate([model.call("qdot", self.data, q=self.q, v=self.v), self.v_dot])
 
         def norm(x):
             return float(np.sqrt(np.mean((x / (self.atol_vector + self.rtol * np.abs(y0))) ** 2)))
@@ -224,7 +224,7 @@ class RadauIIA5GGL(Integrator):
         def rate_change(h0: float) -> float:
             q1, v1 = model.integrate(self.q, h0 * self.v), self.v + h0 * self.v_dot
             v_dot1, _ = self._dynamics(self.t + h0, q1, v1)
-            return norm(np.concatenate([model.call("qdot", q=q1, v=v1), v_dot1]) - f0)
+            return norm(np.concatenate([model.call("qdot", self.data, q=q1, v=v1), v_dot1]) - f0)
 
         with np.errstate(all="ignore"):
             d0, d1 = norm(y0), norm(f0)
@@ -236,7 +236,7 @@ class RadauIIA5GGL(Integrator):
         model = self.model
         n_v, n_c = model.n_v, model.n_c
         t0, q0, v0 = self.t, self.q, self.v
-        w0, wd0, _ = model.law_values(t0)
+        w0, wd0, _ = model.law_values(t0, self.data)
         F0, J, kept = self._linearise(q0, v0, w0, wd0)
         sel = np.concatenate([np.arange(2 * n_v), 2 * n_v + kept, 2 * n_v + n_c + kept])
         J = J[sel][:, sel] if self._sparse else J[np.ix_(sel, sel)]
@@ -395,7 +395,7 @@ class RadauIIA5GGL(Integrator):
         lam, mu = np.zeros((count, n_c)), np.zeros((count, n_c))
         lam[:, step.kept] = Y[:, 2 * n_v:2 * n_v + m]
         mu[:, step.kept] = Y[:, 2 * n_v + m:]
-        w, wd, _ = model.law_values(times)
+        w, wd, _ = model.law_values(times, self.data)
         values = {"q0": step.q0, "xi": Y[:, :n_v].T, "v": Y[:, n_v:2 * n_v].T, "lam": lam.T,
                   "mu": mu.T, "w": w, "wd": wd}
         function = self._fn["stages" if count == 3 else "residual"]

@@ -161,7 +161,7 @@ class Rattle(Integrator):
     def _laws(self, t: float, derivative: bool) -> list[np.ndarray]:
         if not self.model.n_w:
             return []
-        w, wd, _ = self.model.law_values(t)
+        w, wd, _ = self.model.law_values(t, self.data)
         return [w, wd] if derivative else [w]
 
     def _matrix(self, name: str, values: np.ndarray):

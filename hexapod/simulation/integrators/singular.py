@@ -132,7 +132,7 @@ class SingularPoses:
         if rates is None:  # the reduced solve refused: no estimate, no cap
             return np.inf
         n_q = self.model.n_q
-        gap = self.model.call("qdot", q=self.q, v=rates[1] - self.v_dot)
+        gap = self.model.call("qdot", self.data, q=self.q, v=rates[1] - self.v_dot)
         weight = self.atol_vector[:n_q] + self.rtol * np.abs(self.q)
         size = float(np.sqrt(np.mean((gap / weight) ** 2)))
         return np.sqrt(2.0 / size) if size > 0 else np.inf
@@ -189,13 +189,13 @@ class SingularPoses:
     def _positions_ahead(self, delta: float) -> np.ndarray:
         """The positions ``delta`` seconds along the current motion, to first order (for the
         rates of singular values, as differences)."""
-        q_dot = self.model.call("qdot", q=self.q, v=self.v)
+        q_dot = self.model.call("qdot", self.data, q=self.q, v=self.v)
         return self.model.normalize(self.q + delta * q_dot)
 
     def _rank_split(self, q: np.ndarray | None = None, t: float | None = None):
         """The rank decision on the equilibrated ``Phi_v`` at positions ``q`` (default the
         current ones), with the laws at ``t`` (default the current time)."""
-        w, _, _ = self.model.law_values(self.t if t is None else t)
+        w, _, _ = self.model.law_values(self.t if t is None else t, self.data)
         self.counters.jacobians += 1
         self.counters.factorisations += 1
         return rank_split(self.model,

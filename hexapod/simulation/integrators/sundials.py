@@ -352,7 +352,7 @@ class IdasBDF(Integrator):
         V = X[:, n_q:]
         values = {"q": Q.T, "v": V.T}
         if model.n_w:
-            values["w"], values["wd"], _ = model.law_values(times)
+            values["w"], values["wd"], _ = model.law_values(times, self.data)
         # one call over all the window's states (CasADi maps over the columns)
         position, velocity = (d.full().reshape(-1) for d in self.drift_function(
             *[values[n] for n in self.drift_function.name_in()]))
@@ -445,7 +445,7 @@ class IdasBDF(Integrator):
             Phi = as_dense(self.data.Phi_v[rows])
             rhs = self.data.Q - model.mass @ self.v_dot
             lam = np.linalg.lstsq(Phi.T, rhs, rcond=None)[0]
-        xdot = np.concatenate([model.call("qdot", q=self.q, v=self.v), self.v_dot])
+        xdot = np.concatenate([model.call("qdot", self.data, q=self.q, v=self.v), self.v_dot])
         options = {"abstol": self.tolerance_factor * self.atol,
                    "reltol": self.tolerance_factor * self.rtol,
                    "calc_ic": False, "init_xdot": xdot.tolist(), "suppress_algebraic": True,
@@ -500,7 +500,7 @@ class IdasBDF(Integrator):
         self.counters.rhs += 1  # counted as _dynamics counts its solve
         self.counters.jacobians += 1
         self.counters.factorisations += 1
-        xdot1 = np.concatenate([model.call("qdot", q=q1, v=v1), v_dot1])
+        xdot1 = np.concatenate([model.call("qdot", self.data, q=q1, v=v1), v_dot1])
         second = np.sqrt(np.mean(((xdot1 - xdot) / delta * weights) ** 2))
         if not (np.isfinite(second) and second > 0):
             return min(interval, 1e-3)
