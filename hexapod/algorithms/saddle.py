@@ -20,7 +20,6 @@ import numpy as np
 
 from hexapod._support.fastcall import ScatteredFunction
 from hexapod.algorithms import linalg, sparse_qr
-from hexapod.algorithms.step import mass_factors, sparse_dm  # noqa: F401 (TEMPORARY)
 from hexapod.model.model import Data, Model
 
 

@@ -70,13 +70,8 @@ from hexapod.algorithms.dynamics import forward_dynamics
 from hexapod.algorithms.kinematics import rank_split
 from hexapod.algorithms.liaison import policy_map
 from hexapod.algorithms.linalg import as_dense, distribute, solve_or_least_squares
-from hexapod.algorithms.saddle import (
-    constraint_jacobian,
-    is_large,
-    kept_multipliers,
-    solve_sparse,
-    sparse_dm,
-)
+from hexapod.algorithms.saddle import constraint_jacobian, is_large, kept_multipliers, solve_sparse
+from hexapod.algorithms.step import sparse_dm
 from hexapod.errors import HexapodError
 from hexapod.simulation.integrators.base import Integrator
 from hexapod.simulation.integrators.interpolants import Interpolant

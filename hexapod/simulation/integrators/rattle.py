@@ -76,7 +76,8 @@ from hexapod.algorithms.linalg import (
     solve_or_least_squares,
     split_rows,
 )
-from hexapod.algorithms.saddle import force_multipliers, is_large, solve_sparse, sparse_dm
+from hexapod.algorithms.saddle import force_multipliers, is_large, solve_sparse
+from hexapod.algorithms.step import sparse_dm
 from hexapod.simulation.integrators.base import Integrator
 from hexapod.simulation.integrators.interpolants import Interpolant
 from hexapod.simulation.integrators.stability import largest_stable_step, oscillator_parameters

@@ -73,7 +73,7 @@ import numpy as np
 from hexapod._support import signals
 from hexapod.algorithms.dynamics import forward_dynamics
 from hexapod.algorithms.linalg import as_dense
-from hexapod.algorithms.saddle import sparse_dm
+from hexapod.algorithms.step import sparse_dm
 from hexapod.errors import HexapodError, IntegrationError
 from hexapod.simulation.integrators.base import Counters, Integrator
 from hexapod.simulation.methods import METHODS
