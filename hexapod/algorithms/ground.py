@@ -26,7 +26,7 @@ import casadi as ca
 import numpy as np
 
 from hexapod.algorithms.linalg import RowSplit, multiplier_null_space
-from hexapod.algorithms.phase_terms import terms_of
+from hexapod.algorithms.step_terms import terms_of
 from hexapod.model.model import Model
 
 #: Below this weight a foot carries nothing.
@@ -77,7 +77,7 @@ def foot_values(policy: str, weights: np.ndarray) -> np.ndarray:
 def policy_objective(model: Model, data, q: np.ndarray, Phi_v, Q_across,
                      feet: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``A, b`` of the policy's objective ``|A lam + b|^2`` at a state, from its one
-    definition (:meth:`hexapod.algorithms.phase_terms.PhaseTerms.objective`); ``feet`` as
+    definition (:meth:`hexapod.algorithms.step_terms.StepTerms.objective`); ``feet`` as
     :func:`foot_values` gives them."""
     terms = terms_of(model)
     offset = (terms.evaluate(data, "across", q, Q_across)[0] if Q_across is not None

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hexapod.algorithms.phase_terms import terms_of
+from hexapod.algorithms.step_terms import terms_of
 from hexapod.errors import HexapodError
 from hexapod.model.model import Data, JointInfo, Model
 
@@ -141,7 +141,7 @@ def wrenches_from_multipliers(model: Model, q: np.ndarray, lam: np.ndarray, Phi_
     """:func:`joint_wrenches` from explicit multipliers (n_c) at positions ``q`` (n_q), e.g.
     those of a recorded simulation; ``Q_across`` is ``model.Q_across`` at the same state (None
     leaves out the force elements acting across joints). The wrenches come from their one
-    definition (:meth:`hexapod.algorithms.phase_terms.PhaseTerms.report`), evaluated through
+    definition (:meth:`hexapod.algorithms.step_terms.StepTerms.report`), evaluated through
     the call buffers of ``data`` when it is given."""
     if on not in ("child", "parent"):
         raise ValueError(f"on must be 'child' or 'parent', got {on!r}")
@@ -179,7 +179,7 @@ def policy_map(model: Model, q: np.ndarray, Phi_v, Q_across: np.ndarray | None =
     by the characteristic length ``l``; world axes, since norms do not depend on axes) and per
     coordinate driver (force and moment about the body's centre of mass). The policy minimises
     ``|map @ lam + offset|^2``. Written once, as CasADi expressions
-    (:meth:`hexapod.algorithms.phase_terms.PhaseTerms.wrench_map`), evaluated here on numbers
+    (:meth:`hexapod.algorithms.step_terms.StepTerms.wrench_map`), evaluated here on numbers
     (through the call buffers of ``data``, when given)."""
     terms = terms_of(model)
     (A,) = terms.evaluate(data, "wrench_map", q, terms.nonzeros(Phi_v))

@@ -49,8 +49,8 @@ from hexapod._support.execution import current
 from hexapod.algorithms.ground import NO_LOAD, foot_values, sharing_weights
 from hexapod.algorithms.linalg import as_dense, equilibrate, split_rows
 from hexapod.algorithms.phase_plan import MORE_NEWTON_STEPS, NEWTON_STEPS, PhasePlan, plan_for
-from hexapod.algorithms.phase_terms import PhaseTerms, terms_of
 from hexapod.algorithms.sample_inverse import SampleResult, exact_forces, exact_sample
+from hexapod.algorithms.step_terms import StepTerms, terms_of
 from hexapod.model.model import Data, Model
 
 #: A sample is redone exactly when its scaled position residual is above this (a tenth of the
@@ -202,7 +202,7 @@ class _Decisions:
     the ground as the exact decision chooses them (the farthest from the span of those kept
     first), the feet that carry nothing last, so that their multipliers can be held at zero."""
 
-    def __init__(self, model: Model, data: Data, terms: PhaseTerms, feet: _Feet, to_c: bool):
+    def __init__(self, model: Model, data: Data, terms: StepTerms, feet: _Feet, to_c: bool):
         self.model, self.data, self.terms, self.feet, self.to_c = model, data, terms, feet, to_c
         self.plans: dict = {}
         self.base = None  # the kept and left-out rows that are no foot's

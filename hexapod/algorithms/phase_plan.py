@@ -31,7 +31,7 @@ before). One sample:
    checks fail is redone by the exact path (:mod:`hexapod.algorithms.phase_inverse`).
 
 The model's Functions (``phi``, ``Phi_v``, ``gamma``...) come from
-:class:`hexapod.algorithms.phase_terms.PhaseTerms`, built once per model; a plan adds only the
+:class:`hexapod.algorithms.step_terms.StepTerms`, built once per model; a plan adds only the
 linear algebra of its row set (some tens of thousands of operations), so a new rank decision
 costs little to build or compile.
 """
@@ -41,8 +41,8 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from hexapod.algorithms.phase_terms import PhaseTerms, sx_function
 from hexapod.algorithms.step import KeptFactor, sparse_dm
+from hexapod.algorithms.step_terms import StepTerms, sx_function
 from hexapod.model.model import Data
 
 #: Newton steps on the positions per sample, from the positions predicted by the sample before
@@ -61,7 +61,7 @@ class PhasePlan:
 
     Parameters
     ----------
-    terms : PhaseTerms
+    terms : StepTerms
         The model's Functions.
     kept, left_out : sequence of int
         The rows ``I`` (``len(kept) == n_v``) and the redundant rows ``R``.
@@ -72,7 +72,7 @@ class PhasePlan:
         Compile the plan's own SX Functions to C (kept in the execution setting's cache).
     """
 
-    def __init__(self, terms: PhaseTerms, kept, left_out, scale, to_c: bool = False):
+    def __init__(self, terms: StepTerms, kept, left_out, scale, to_c: bool = False):
         self.terms, self.model = terms, terms.model
         self.kept = np.asarray(kept, dtype=int)
         self.left_out = np.asarray(left_out, dtype=int)
@@ -224,7 +224,7 @@ class PhasePlan:
         return policy(q, Phi, offset, feet, lam0, self.null_space(F, Phi), mask)
 
 
-def plan_for(data: Data, terms: PhaseTerms, kept, left_out, make,
+def plan_for(data: Data, terms: StepTerms, kept, left_out, make,
              to_c: bool = False) -> PhasePlan:
     """The :class:`PhasePlan` of a rank decision, built once per workspace ``data`` (a run's):
     ``make()`` gives the rows' scales when it is built. A later decision with the same rows

@@ -1,8 +1,11 @@
-"""The model's part of the compiled closed-loop inverse dynamics: CasADi SX Functions that do not
-depend on which rows are kept, built (and compiled) once per model.
+"""The model's part of the constrained step: CasADi SX Functions that do not depend on which rows
+are kept, built (and compiled, when the execution setting says so) once per model.
 
-:mod:`hexapod.algorithms.phase_plan` composes them, with the linear algebra of one row set, into
-one Function per sample. Here:
+The batched inverse dynamics (:mod:`hexapod.algorithms.phase_plan`) composes them, with the
+linear algebra of one row set, into one Function per sample; the exact path evaluates the
+policy's objective, the wrench map and the report from here on numbers, so that each is written
+once (:func:`hexapod.algorithms.liaison.policy_map`, :func:`~.liaison.wrenches_from_multipliers`,
+:func:`hexapod.algorithms.ground.policy_objective`). Here:
 
 * ``predict(q, v, a, h)``: ``q (+) (h v + h^2/2 a)``, the positions a sample ahead;
 * ``correct(q, dq)``: ``q (+) (-dq)`` (a Newton step; :func:`hexapod.spatial.retract_symbolic`);
@@ -12,13 +15,14 @@ one Function per sample. Here:
 * ``policy(m)(q, Phi, offset, feet, lam, N, mask)``: the redundancy policy, among ``lam + N
   z`` the least ``|A (lam + N z) + b|^2`` (``m`` the columns of ``N``, one Function per
   ``m``): for ``min-wrench`` ``A`` maps multipliers to the joint wrenches
-  (:func:`hexapod.algorithms.liaison.policy_map`: force and moment about the joint origin over
-  the characteristic length, world axes, one block of 6 rows per joint and per coordinate
-  driver), each foot's block times ``feet`` (one over the square root of its weight); for
+  (force and moment about the joint origin over the characteristic length, world axes, one
+  block of 6 rows per joint and per coordinate driver), each foot's block times ``feet``
+  (one over the square root of its weight); for
   ``min-effort`` to the actuator efforts over their references and the feet's load-sharing
   terms (coefficients ``feet``), as in :mod:`hexapod.algorithms.ground`;
 * ``report(q, Phi, lam, offset)``: the joint wrenches in the report convention (joint frames)
-  and the joint frames' rotations;
+  and the joint frames' rotations; ``wrench_map(q, Phi)``, ``objective(q, Phi, offset, feet)``
+  and ``across(q, Q_across)``: the policy's map, its objective and its constant term on numbers;
 * ``residuals(Phi, phi, v, nu, a, gamma, d)``: what the checks need: the velocity and
   acceleration residuals per row, over the row scales ``d`` (the norms of the rows of
   ``Phi_v M^-1/2`` at the rank decision, the equilibration of :mod:`hexapod.algorithms.linalg`)
@@ -59,7 +63,7 @@ def _embed_rotation(R):
     return out
 
 
-class PhaseTerms:
+class StepTerms:
     """The model-level SX Functions of the compiled closed-loop inverse dynamics.
 
     Parameters
@@ -372,13 +376,13 @@ class PhaseTerms:
                               ["q", "Phi", "lam", "offset"], ["wrench", "frames"])
 
 
-def terms_of(model: Model) -> PhaseTerms:
-    """The model's :class:`PhaseTerms`, built once per model and execution (compiled to C when
+def terms_of(model: Model) -> StepTerms:
+    """The model's :class:`StepTerms`, built once per model and execution (compiled to C when
     the execution setting says so)."""
     from hexapod._support.execution import current
 
     to_c = current().compiled
-    return model.built_once(("phase-terms", to_c), lambda m: PhaseTerms(m, to_c))
+    return model.built_once(("phase-terms", to_c), lambda m: StepTerms(m, to_c))
 
 
 def sx_function(name: str, inputs, outputs, to_c: bool, *names) -> ca.Function:
