@@ -293,7 +293,7 @@ def hexapod_walking(*, gait: str = "tripod", period: float | None = None,
                     femur_length: float = 1.0, tibia_length: float = 1.0,
                     tarsus_length: float = 1.0) -> Scene:
     """Built-in ``hexapod``: the six-legged robot at 20:1 walking in a tripod gait (duty 0.6):
-    a free trunk, 18 joints driven so that each foot follows its path exactly, the feet in
+    a free trunk, 36 joints driven so that each foot follows its path exactly, the feet in
     stance held to the ground by contacts, the ground forces shared by the least-wrench
     policy.
 

@@ -235,11 +235,20 @@ def test_headlines_give_peaks_in_body_weights_and_per_joint_type(walking):
     lines = walking_headlines(model, result)
     assert lines[0].startswith("ground forces by the policy min-wrench")
     weight = sum(b.mass for b in model.bodies) * 9.81
-    peaks = dict(re.findall(r"(\w\d) ([\d.]+)", lines[1].partition("N): ")[2]))
+    # each foot: the peak of |F| and the peak of the vertical (world z) component, both in body
+    # weights, from the inverse result's ground forces
+    head, _, values = lines[1].partition("N): ")
+    assert head.startswith("peak ground reaction per foot, |F| / vertical Fz (body weights")
+    peaks = {leg: (float(f), float(z))
+             for leg, f, z in re.findall(r"(\w\d) ([\d.]+) / ([\d.]+)", values)}
     assert list(peaks) == list(LEGS)
     for c, leg in enumerate(LEGS):
-        peak = np.linalg.norm(result.ground_force[:, c], axis=1).max() / weight
-        assert float(peaks[leg]) == pytest.approx(peak, rel=2e-3)
+        force = result.ground_force[:, c]
+        magnitude = np.sqrt((force**2).sum(axis=1)).max() / weight
+        vertical = force[:, 2].max() / weight
+        assert peaks[leg][0] == pytest.approx(magnitude, rel=2e-3)
+        assert peaks[leg][1] == pytest.approx(vertical, rel=2e-3)
+        assert peaks[leg][1] <= peaks[leg][0]
     kinds = re.findall(r"(\w+) [\d.]+ N m \((\w\d)\)", lines[2])
     assert [k for k, _ in kinds] == ["thc_protraction", "thc_levation", "coxa_rotation", "ctr",
                                      "fti", "tita"]

@@ -400,21 +400,25 @@ def _trunk_section(trunks: list[TrunkMotion]) -> list[str]:
 def walking_headlines(model: Model, result: InverseResult,
                       drivers: list[DriverStatistics] | None = None) -> list[str]:
     """The lines ``hexapod report`` prints for a model with foot contacts: the policy and the
-    redundant rows, each foot's peak ground reaction in body weights, the peak effort per joint
-    type, and every run of samples where a foot slips or pulls (empty without contacts)."""
+    redundant rows, each foot's peak ground reaction in body weights (the peak of its magnitude
+    ``|F|`` and, beside it, the peak of its vertical component ``Fz``, world axes), the peak
+    effort per joint type, and every run of samples where a foot slips or pulls (empty without
+    contacts)."""
     if not model.contacts:
         return []
     loads = foot_loads(model, result)
     drivers = driver_statistics(model, result) if drivers is None else drivers
-    peaks = [float(np.linalg.norm(loads.force[:, c], axis=1).max())
-             for c in range(len(loads.legs))]
+    feet = range(len(loads.legs))
+    peaks = [float(np.linalg.norm(loads.force[:, c], axis=1).max()) for c in feet]
+    vertical = [float(loads.force[:, c, 2].max()) for c in feet]
     unit = "body weights" if loads.weight > 0 else "N"
     scale = loads.weight if loads.weight > 0 else 1.0
     lines = [f"ground forces by the policy {loads.policy}; "
              f"{_count(len(result.redundant_rows), 'redundant row')}",
-             f"peak ground reaction per foot ({unit}, robot weight {loads.weight:.4g} N): "
-             + ", ".join(f"{leg} {p / scale:.3g}" for leg, p in zip(loads.legs, peaks,
-                                                                   strict=True))]
+             f"peak ground reaction per foot, |F| / vertical Fz ({unit}, robot weight "
+             f"{loads.weight:.4g} N): "
+             + ", ".join(f"{leg} {p / scale:.3g} / {z / scale:.3g}"
+                         for leg, p, z in zip(loads.legs, peaks, vertical, strict=True))]
     types = effort_peaks_by_type(drivers)
     if types:
         lines.append("peak effort per joint type: " + ", ".join(
