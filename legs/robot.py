@@ -339,7 +339,7 @@ def hexapod_held(*, gait: str = "tripod", period: float | None = None,
                  femur_length: float = 1.0, tibia_length: float = 1.0,
                  tarsus_length: float = 1.0) -> Scene:
     """Built-in ``hexapod-held``: the six-legged robot on a bench, trunk welded to the world,
-    18 driven joints in a tripod gait, each foot loaded by a ``sin^2`` pulse in stance (its
+    36 driven joints in a tripod gait, each foot loaded by a ``sin^2`` pulse in stance (its
     peak such that the feet carry the robot's weight on average).
 
     With no arguments, the built-in scene.
