@@ -364,13 +364,16 @@ class TreePlan:
         return out
 
     def _evaluator(self, data: Data, n: int, compiled: bool):
-        """The Function mapped over ``n`` samples and its buffer, built once per ``n`` and
-        workspace."""
-        key = ("tree-evaluator", n, compiled)
-        if key not in data.built:
+        """The Function mapped over ``n`` samples (built once per plan and ``n``: a pure
+        function of the model) and its buffer (made once per workspace)."""
+        def mapped(model: Model) -> ca.Function:
             function = self.compiled if compiled else self.function
-            mapped = function.map(n, "serial") if n > 1 else function
-            data.built[key] = (mapped, *mapped.buffer())
+            return function.map(n, "serial") if n > 1 else function
+
+        function = self.model.built_once(("tree-map", n, compiled), mapped)
+        key = ("tree-buffer", n, compiled)
+        if key not in data.built:
+            data.built[key] = function.buffer()
         return data.built[key]
 
     def solve(self, data: Data, times, w, wd, wdd, frame,
@@ -406,7 +409,7 @@ class TreePlan:
         block = min(n, max(SMALLEST_BLOCK, round(math.sqrt(BLOCK_FACTOR * n))))
         for start in range(0, n, block):
             stop = min(n, start + block)
-            _, buffer, evaluate = self._evaluator(data, stop - start, compiled)
+            buffer, evaluate = self._evaluator(data, stop - start, compiled)
             for i, x in enumerate(inputs):
                 buffer.set_arg(i, memoryview(x[start:stop]))
             for i, y in enumerate(results):

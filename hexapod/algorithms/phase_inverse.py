@@ -167,7 +167,7 @@ def phase_inverse(model: Model, data: Data, times: np.ndarray, w, wd, wdd, frame
         stop = min(n, k + chunk, feet.run_end(k))
         failed = None
         if plan is not None:
-            failed = _run(plan, newton, out, feet, times, w, wd, wdd, k, stop)
+            failed = _run(plan, data, newton, out, feet, times, w, wd, wdd, k, stop)
         if plan is None or failed is not None:
             bad, blame = (k, "rank") if plan is None else failed
             out.store(bad, exact_sample(model, data, times[bad - 1], out.q[bad - 1],
@@ -256,18 +256,11 @@ class _Decisions:
         """The plan of a decision. The rows are sorted: a decision that keeps the same rows in
         another order (the exact one orders drivers and feet by their conditioning) is the same
         plan."""
-        model, terms = self.model, self.terms
-        kept, left = np.sort(kept), np.sort(left)
-
-        def make():  # the rows' scales at the decision
-            Phi = model.call("Phi_v", self.data, q=q, w=w_k)
-            return equilibrate(Phi, model.mass_inv_sqrt)[1]
-
-        return plan_for(self.data, terms, kept, left, make, self.to_c)
+        return plan_for(self.terms, np.sort(kept), np.sort(left), self.to_c)
 
 
-def _run(plan: PhasePlan, newton: int, out: _Results, feet: _Feet, times, w, wd, wdd,
-         k: int, stop: int):
+def _run(plan: PhasePlan, data: Data, newton: int, out: _Results, feet: _Feet, times, w, wd,
+         wdd, k: int, stop: int):
     """Samples ``k`` to ``stop - 1`` by the plan; results kept up to the first that fails.
     Returns None, or that sample and what failed: ``"newton"`` (its positions did not
     converge), ``"rank"`` (its rows left out no longer follow from those kept, or rows the
@@ -277,7 +270,7 @@ def _run(plan: PhasePlan, newton: int, out: _Results, feet: _Feet, times, w, wd,
     span = slice(k, stop)
     mask = (~feet.rows_idle_over(plan.left_out, k, stop)).astype(float).T
     state, lam, wrench, frames, checks = plan.evaluate(
-        out.state(k - 1), np.diff(times[k - 1:stop]), w[:, span], wd[:, span], wdd[:, span],
+        data, out.state(k - 1), np.diff(times[k - 1:stop]), w[:, span], wd[:, span], wdd[:, span],
         feet.values[:, span], mask, newton)
     checks = np.nan_to_num(checks, nan=np.inf)
     finite = np.all(np.isfinite(state), axis=1) & np.all(np.isfinite(wrench), axis=(1, 2))

@@ -65,19 +65,15 @@ class PhasePlan:
         The model's Functions.
     kept, left_out : sequence of int
         The rows ``I`` (``len(kept) == n_v``) and the redundant rows ``R``.
-    scale : ndarray (n_c,)
-        The rows' scales for the checks: the norms of the rows of ``Phi_v M^-1/2`` at the
-        decision (1 for zero rows).
     to_c : bool
         Compile the plan's own SX Functions to C (kept in the execution setting's cache).
     """
 
-    def __init__(self, terms: StepTerms, kept, left_out, scale, to_c: bool = False):
+    def __init__(self, terms: StepTerms, kept, left_out, to_c: bool = False):
         self.terms, self.model = terms, terms.model
         self.kept = np.asarray(kept, dtype=int)
         self.left_out = np.asarray(left_out, dtype=int)
         self.to_c = to_c
-        self.scale = np.asarray(scale, dtype=float)
         left = set(self.left_out.tolist())
         self._left_entries = [k for k, r in enumerate(terms.pattern_rows) if int(r) in left]
         self._build_linear_algebra()
@@ -172,10 +168,10 @@ class PhasePlan:
         if self.left_out.size:
             lam = self._policy(q, F, Phi, offset, lam, feet, mask)
         wrench, frames = terms.report(q, Phi, lam, offset)
-        d = ca.DM(self.scale)
+        d = terms.row_norms(Phi)  # the rows' scales at this sample
         velocity, acceleration, position, presence = terms.residuals(Phi, phi, v, nu, a,
                                                                      gamma, d)
-        checks = self.checks(self.solve(F, ca.DM(self.scale * self._probe)), velocity,
+        checks = self.checks(self.solve(F, d * ca.DM(self._probe)), velocity,
                              acceleration, position, presence)
         outputs = [ca.densify(y) for y in (ca.vertcat(q, v, a), lam, wrench, frames, checks)]
         return ca.Function("phase_step", [x, h, w, wd, wdd, feet, mask], outputs,
@@ -184,22 +180,25 @@ class PhasePlan:
 
     # ---------------------------------------------------------------- evaluation
 
-    def _evaluator(self, n: int, newton: int):
-        """The step mapped over ``n`` samples (each from the one before) and its buffer."""
-        cache = self.__dict__.setdefault("_evaluators", {})
+    def _evaluator(self, data: Data, n: int, newton: int):
+        """The step mapped over ``n`` samples (each from the one before), built once per plan,
+        and its buffer, made once per workspace ``data``."""
+        cache = self.__dict__.setdefault("_mapped", {})
         if (n, newton) not in cache:
-            mapped = self.step(newton).mapaccum("phase_steps", n)
-            cache[n, newton] = (mapped, *mapped.buffer())
-        return cache[n, newton]
+            cache[n, newton] = self.step(newton).mapaccum("phase_steps", n)
+        key = ("phase-buffer", id(self), n, newton)
+        if key not in data.built:
+            data.built[key] = cache[n, newton].buffer()
+        return data.built[key]
 
-    def evaluate(self, x0, h, w, wd, wdd, feet, mask, newton: int = NEWTON_STEPS):
+    def evaluate(self, data: Data, x0, h, w, wd, wdd, feet, mask, newton: int = NEWTON_STEPS):
         """The samples of one run: ``x0`` the state ``[q; v; v_dot]`` of the sample before,
         ``h`` (N,) the time steps, laws and per-foot inputs (rows x N). Returns arrays with the
         samples first: states (N, n_q + 2 n_v), multipliers (N, n_c), wrenches (N, J, 6) in
         the joint frames, the joint frames' rotations (N, J, 9, column-major) and the checks
         (N, 6), all NaN when the evaluation fails."""
         model, n = self.model, h.size
-        mapped, buffer, run = self._evaluator(n, newton)
+        buffer, run = self._evaluator(data, n, newton)
         # CasADi's column-major (rows x n) is NumPy's C-order (n x rows)
         inputs = [np.ascontiguousarray(x0, dtype=float),
                   np.ascontiguousarray(np.reshape(h, (n, 1)), dtype=float)]
@@ -224,12 +223,8 @@ class PhasePlan:
         return policy(q, Phi, offset, feet, lam0, self.null_space(F, Phi), mask)
 
 
-def plan_for(data: Data, terms: StepTerms, kept, left_out, make,
-             to_c: bool = False) -> PhasePlan:
-    """The :class:`PhasePlan` of a rank decision, built once per workspace ``data`` (a run's):
-    ``make()`` gives the rows' scales when it is built. A later decision with the same rows
-    reuses it, whatever the positions it was taken at (every sample is checked)."""
+def plan_for(terms: StepTerms, kept, left_out, to_c: bool = False) -> PhasePlan:
+    """The :class:`PhasePlan` of a rank decision, built once per model: a pure function of the
+    rows (every sample is checked, at its own state)."""
     key = ("phase-plan", tuple(int(r) for r in kept), tuple(int(r) for r in left_out), to_c)
-    if key not in data.built:
-        data.built[key] = PhasePlan(terms, kept, left_out, make(), to_c)
-    return data.built[key]
+    return terms.model.built_once(key, lambda m: PhasePlan(terms, kept, left_out, to_c))

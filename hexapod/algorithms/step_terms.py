@@ -45,7 +45,7 @@ import numpy as np
 
 from hexapod._support.compiled import compiled
 from hexapod._support.fastcall import FastFunction
-from hexapod.algorithms.step import sparse_dm
+from hexapod.algorithms.step import mass_factors, sparse_dm
 from hexapod.model.model import GROUND_INDEX, Model
 from hexapod.spatial import retract_symbolic, rotation_from_euler_parameters
 
@@ -201,6 +201,16 @@ class StepTerms:
         A, b = self._objective(ca.SX(self.pattern, Phi_nz), offset, feet)
         return self._function("phase_objective", [self.q, Phi_nz, offset, feet],
                               [ca.densify(A), b], ["q", "Phi", "offset", "feet"], ["A", "b"])
+
+    @cached_property
+    def row_norms(self) -> ca.Function:
+        """``(Phi) -> d``: the norms of the rows of ``Phi_v M^-1/2`` (1 for a zero row): the
+        equilibration of :mod:`hexapod.algorithms.linalg`, at the state of ``Phi``."""
+        Phi_nz = ca.SX.sym("Phi", self.pattern.nnz())
+        W = ca.mtimes(ca.SX(self.pattern, Phi_nz), mass_factors(self.model)[0])
+        norms = ca.sqrt(ca.sum2(W * W))
+        return self._function("phase_row_norms", [Phi_nz], [ca.if_else(norms > 0, norms, 1.0)],
+                              ["Phi"], ["d"])
 
     def evaluate(self, data, name: str, *arguments) -> list[np.ndarray]:
         """The Function ``name`` on numbers, through call buffers kept in the workspace
