@@ -15,6 +15,10 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
+#: Public as ``hexapod.spatial``: the frame and the rotation helpers a scene is written with.
+__all__ = ["Placement", "euler_parameters_from_rotation", "rotation_about_axis",
+           "rotation_from_euler_parameters", "rotation_from_rpy", "rpy_from_rotation"]
+
 _SYMBOLIC = (ca.SX, ca.MX, ca.DM)
 
 
