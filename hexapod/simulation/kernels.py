@@ -61,7 +61,9 @@ class CompiledRates:
     def __init__(self, model: Model, rows: np.ndarray):
         self.model = model
         self.rows = np.asarray(rows, dtype=int)
-        self.function = self._build()
+        # the Function once per model and row set; the buffers are this object's (a run's)
+        self.function = model.built_once(("rates", tuple(self.rows.tolist())),
+                                         lambda m: self._build())
         self._fast = FastFunction(self.function)
         self._args = [n for n in ("q", "v", "w", "wd", "wdd") if n in ("q", "v") or model.n_w]
 
@@ -152,7 +154,8 @@ class CompiledProjection:
 
     def __init__(self, model: Model, rows: np.ndarray, newton: int = 2, tol: float = 1e-12):
         self.model, self.rows, self.newton, self.tol = model, np.asarray(rows, int), newton, tol
-        self.function = self._build()
+        self.function = model.built_once(("projection", tuple(self.rows.tolist()), newton),
+                                         lambda m: self._build())
         self._fast = FastFunction(self.function)
         self._args = ["q", "v"] + (["w", "wd"] if model.n_w else [])
 
@@ -205,12 +208,12 @@ class CompiledProjection:
 
 
 def compiled_projection(model: Model, rows: np.ndarray) -> CompiledProjection:
-    """The :class:`CompiledProjection` of ``model`` for a row set, built once."""
-    key = ("projection", tuple(int(r) for r in rows))
-    return model.built_once(key, lambda m: CompiledProjection(m, rows))
+    """The :class:`CompiledProjection` of ``model`` for a row set: its Function built once per
+    model, its buffers the caller's."""
+    return CompiledProjection(model, rows)
 
 
 def compiled_rates(model: Model, rows: np.ndarray) -> CompiledRates:
-    """The :class:`CompiledRates` of ``model`` for a row set, built once."""
-    key = ("rates", tuple(int(r) for r in rows))
-    return model.built_once(key, lambda m: CompiledRates(m, rows))
+    """The :class:`CompiledRates` of ``model`` for a row set: its Function built once per
+    model, its buffers the caller's."""
+    return CompiledRates(model, rows)

@@ -126,15 +126,15 @@ def _planar_rotation(angle):
     return ca.vertcat(ca.horzcat(c, -s), ca.horzcat(s, c))
 
 
-def step_function(model) -> ScatteredFunction:
+def step_function(model) -> ca.Function:
     """The residuals of a step and their derivatives, built once per model
-    (:meth:`Model.built_once`) and called on arrays: ``(q0, xi, V, A, lam[, w, wd])`` -> the
+    (:meth:`Model.built_once`; each integrator calls it through buffers of its own) on
+    arrays: ``(q0, xi, V, A, lam[, w, wd])`` -> the
     positions
     ``q = q0 exp(xi)``, the velocities ``v = T(q) V`` and accelerations ``T (A + k(V))``,
     the residuals ``r = (M (A + k) + Phi_V^T lam - T^T Q, phi, Phi_V V - nu)``, their Jacobians
     in ``xi`` and in ``V``, ``Phi_V`` and ``T^T Q`` (the sizes of the terms)."""
-    return model.built_once(("generalized-alpha", "SE(3)"),
-                            lambda model: ScatteredFunction(_build_step_function(model)))
+    return model.built_once(("generalized-alpha", "SE(3)"), _build_step_function)
 
 
 #: the outputs of :func:`step_function`, in order
@@ -298,7 +298,7 @@ class LieGroupGeneralizedAlpha(Integrator):
         self.mass_inv_sqrt = (model.mass_inv_sqrt.sparse() if self.large
                               else model.mass_inv_sqrt.dense())
         self.frames = _Frames(model)
-        self.function = step_function(model)
+        self.function = ScatteredFunction(step_function(model))
         self.failure = ""  # why the last attempt failed
         self.decision = None  # (q, Phi_v, rank decision) at the last state decided
         self.kept = None  # (rows kept, their multipliers) of the last step
