@@ -1,7 +1,7 @@
 """Bad input never crashes: malformed scene, URDF and motion files give one error naming the file,
 never a traceback, and no command leaves a partial output.
 
-The mutations are those of ``scripts/fuzz_inputs.py`` (which runs thousands of them); here
+The mutations are those of ``tests/fuzz/fuzz_inputs.py`` (which runs thousands of them); here
 Hypothesis draws them, so that a failure is shrunk to a small input and replayed the same way on
 every run (``derandomize``).
 """
@@ -20,9 +20,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fuzzer import fuzz
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from script_loader import load_script
 
 import hexapod as hx
 from hexapod import cli
@@ -31,6 +31,8 @@ from hexapod.errors import HexapodError, InputFileError, ModelError
 from hexapod.scene.motion import apply_motion, read_motion
 from hexapod.scene.reader import read_scene
 from hexapod.scene.urdf import read_urdf
+
+fuzz = load_script("tests/fuzz/fuzz_inputs.py")  # the mutations and the TOML writer
 
 ROOT = Path(__file__).resolve().parents[1]
 
