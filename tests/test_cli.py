@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import json
-import os
 import subprocess
 import sys
 from pathlib import Path
 
+import commands
 import pytest
 
 import hexapod
@@ -29,9 +29,7 @@ STATE_KEYS = {"t", "max_abs_phi", "condition_number", "sigma_min", "characterist
 
 def hexapod_cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
     """Run ``python -m hexapod.cli ARGS`` from ``cwd`` (so no file there shadows a scene name)."""
-    env = {k: v for k, v in os.environ.items() if k != "HEXAPOD_DEBUG"}
-    return subprocess.run([sys.executable, "-m", "hexapod.cli", *args], cwd=cwd, env=env,
-                          capture_output=True, text=True, timeout=120)
+    return commands.python("-m", "hexapod.cli", *args, cwd=cwd)
 
 
 def assert_no_traceback(result: subprocess.CompletedProcess) -> None:
@@ -96,8 +94,7 @@ def test_version(tmp_path):
 
 def imported(*args: str, cwd: Path) -> set[str]:
     """The top-level packages ``python -X importtime ARGS`` imports (every import is listed)."""
-    result = subprocess.run([sys.executable, "-X", "importtime", *args], cwd=cwd,
-                            capture_output=True, text=True, timeout=120)
+    result = commands.python("-X", "importtime", *args, cwd=cwd)
     assert result.returncode == 0, result.stderr
     return {line.rpartition("|")[2].strip().split(".")[0] for line in result.stderr.splitlines()
             if line.startswith("import time:")}
@@ -125,12 +122,8 @@ def test_the_command_line_sets_one_blas_thread_before_numpy(tmp_path):
             "assert main(['validate', sys.argv[1]]) == 0 and 'numpy' in sys.modules\n"
             "print(os.environ['OPENBLAS_NUM_THREADS'])\n")
     for given, expected in ((None, "1"), ("3", "3")):
-        env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
-        if given:
-            env["OPENBLAS_NUM_THREADS"] = given
-        result = subprocess.run([sys.executable, "-c", code, str(SCENES / "pendulum.toml")],
-                                cwd=tmp_path, env=env, capture_output=True, text=True,
-                                timeout=120)
+        result = commands.python("-c", code, str(SCENES / "pendulum.toml"), cwd=tmp_path,
+                                 OPENBLAS_NUM_THREADS=given)
         assert result.returncode == 0, result.stderr
         assert result.stdout.splitlines()[-1] == expected
 
@@ -139,8 +132,7 @@ def test_console_script_if_installed(tmp_path):
     script = Path(sys.executable).with_name("hexapod")
     if not script.exists():
         pytest.skip("no hexapod console script next to the interpreter")
-    result = subprocess.run([str(script), "--help"], cwd=tmp_path, capture_output=True,
-                            text=True, timeout=120)
+    result = commands.run([str(script), "--help"], cwd=tmp_path)
     assert result.returncode == 0 and "dynamics" in result.stdout
 
 
@@ -426,7 +418,7 @@ def test_long_lived_holds_the_collector_and_gives_it_back_even_on_an_error():
     gc.unfreeze()  # the test session's objects back under collection
 
 
-def test_a_command_of_its_own_process_says_so_and_one_in_process_does_not():
+def test_a_command_of_its_own_process_says_so_and_one_in_process_does_not(tmp_path):
     """``hexapod`` as a process marks its arguments ``whole_process`` (the collector may be
     held at its start); ``main(argv)`` inside another program does not."""
     import gc
@@ -438,7 +430,6 @@ def test_a_command_of_its_own_process_says_so_and_one_in_process_does_not():
     assert gc.get_freeze_count() == frozen and gc.isenabled()
     probe = ("import gc, sys; from hexapod.cli.app import main; sys.argv = ['hexapod', 'info', "
              "'front-leg']; status = main(); print(gc.get_freeze_count() > 0, gc.isenabled())")
-    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
-                          env={**os.environ, "OPENBLAS_NUM_THREADS": "1"}, timeout=300)
+    done = commands.python("-c", probe, cwd=tmp_path, OPENBLAS_NUM_THREADS="1")
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip().splitlines()[-1] == "True True"

@@ -13,11 +13,11 @@ import os
 import re
 import signal
 import subprocess
-import sys
 import time
 import warnings
 from pathlib import Path
 
+import commands
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -225,12 +225,6 @@ def test_assembly_errors_name_the_file(tmp_path):
 # ------------------------------------------------------------------ the command line
 
 
-def hexapod_cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
-    env = {k: v for k, v in os.environ.items() if k != "HEXAPOD_DEBUG"}
-    return subprocess.run([sys.executable, "-m", "hexapod", *args], cwd=cwd, env=env,
-                          capture_output=True, text=True, timeout=300)
-
-
 def assert_clean_failure(result: subprocess.CompletedProcess, name: str) -> None:
     """Non-zero exit, nothing on stdout, one message naming the file: a head line and at most
     one line per problem, and no traceback."""
@@ -250,7 +244,7 @@ def test_command_line_on_malformed_files(tmp_path):
                        (("info", "bad.urdf"), "bad.urdf"),
                        (("inverse", str(FIXTURE / "model.urdf"), "--motion", "bad.csv",
                          "--out", "X.csv"), "bad.csv")):
-        assert_clean_failure(hexapod_cli(*args, cwd=tmp_path), name)
+        assert_clean_failure(commands.hexapod(*args, cwd=tmp_path), name)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.csv", "bad.toml", "bad.urdf"]
 
 
@@ -353,21 +347,14 @@ def test_a_killed_simulation_writes_what_it_computed(tmp_path, signum):
     interrupted in stats.json, and the status is the signal's (130, 143)."""
     # a shell that starts a job in the background (nohup ... &) makes it ignore SIGINT, and
     # Python then never turns SIGINT into KeyboardInterrupt: give the run the default action
-    process = subprocess.Popen(
-        [sys.executable, "-m", "hexapod", "simulate", str(PENDULUM), "--method",
-         "rk4-baumgarte", "--step", "1e-5", "--t-end", "50", "--every", "1000", "--out",
-         "run"], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
-    try:
+    with commands.Running("-m", "hexapod", "simulate", str(PENDULUM), "--method",
+                          "rk4-baumgarte", "--step", "1e-5", "--t-end", "50", "--every", "1000",
+                          "--out", "run", cwd=tmp_path, default_sigint=True) as process:
         time.sleep(4.0)  # into the time loop, most likely
         process.send_signal(signum)
-        _, stderr = process.communicate(timeout=60)
-    finally:
-        if process.poll() is None:  # never leave the run behind
-            process.kill()
-            process.wait()
+        status, _, stderr = process.finish()
     assert "Traceback" not in stderr
-    assert process.returncode == 128 + signum, stderr
+    assert status == 128 + signum, stderr
     stats = json.loads((tmp_path / "run" / "stats.json").read_text())
     assert stats["status"] == "interrupted" and 0 < stats["t_reached"] < 50, stats
     assert "interrupted" in stderr.strip().splitlines()[-1]

@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import csv
-import subprocess
-import sys
 import warnings
 from pathlib import Path
 
 import numpy as np
 import pytest
+from commands import hexapod as cli
 
 import hexapod as hx
 from hexapod.algorithms.inverse import inverse_dynamics
@@ -27,11 +26,6 @@ def read_csv(path) -> tuple[list[str], np.ndarray]:
     with open(path, newline="") as stream:
         rows = list(csv.reader(stream))
     return rows[0], np.array(rows[1:], dtype=float)
-
-
-def cli(*args, cwd):
-    return subprocess.run([sys.executable, "-m", "hexapod", *args], cwd=cwd,
-                          capture_output=True, text=True, timeout=300)
 
 
 def assert_matches(header, table, expected_header, expected, rel=1e-10):
