@@ -5,7 +5,10 @@ limit and its output captured as text.
 
 :func:`hexapod` runs a command to its end; :func:`python` runs any ``python ARGS`` the same way
 (``-X importtime -m hexapod ...``, ``-c CODE``) and :func:`run` any program; :class:`Running`
-starts ``python ARGS`` in the background and reads its output as it comes.
+starts ``python ARGS`` in the background and reads its output as it comes, so that a test can
+wait for what the run announces before it acts (never a fixed sleep, which a loaded machine
+outlasts): a progress line (``HEXAPOD_PROGRESS=1`` draws them on a pipe too), or the signal
+handlers the command installs first.
 """
 
 from __future__ import annotations
@@ -14,11 +17,18 @@ import os
 import subprocess
 import sys
 import threading
+import time
+from collections.abc import Callable
 from pathlib import Path
 
 #: Seconds a command of the tests may take: far more than any needs on an idle machine (a few
 #: seconds), so that a loaded one does not fail them.
 TIMEOUT = 300.0
+#: Seconds a test waits for what a run announces: far more than it takes on an idle machine
+#: (under a second to a few seconds).
+ANNOUNCE = 60.0
+#: How often (s) a waiting test looks again.
+POLL = 0.02
 
 
 def environment(**settings: str | None) -> dict[str, str]:
@@ -92,6 +102,47 @@ class Running:
         """What the run has written on ``name`` (stdout or stderr) so far."""
         with self._lock:
             return b"".join(self._text[name]).decode(errors="replace")
+
+    def wait_until(self, condition: Callable[[str], bool], what: str,
+                   timeout: float = ANNOUNCE) -> None:
+        """Return once ``condition(stderr so far)`` holds; fail (AssertionError, with the
+        run's stderr) if the run ends first or ``timeout`` seconds pass. ``what`` names the
+        awaited event in that message."""
+        deadline = time.monotonic() + timeout
+        while not condition(self.output()):
+            if self.process.poll() is not None:
+                for reader in self._readers:  # what was left in the pipes
+                    reader.join(timeout=10)
+                if condition(self.output()):
+                    return
+                raise AssertionError(f"the run ended ({self.process.returncode}) before "
+                                     f"{what}:\n{self.output()}")
+            if time.monotonic() > deadline:
+                raise AssertionError(f"not {what} within {timeout:g} s:\n{self.output()}")
+            time.sleep(POLL)
+
+    def wait_for(self, text: str, timeout: float = ANNOUNCE) -> None:
+        """Return once ``text`` is on the run's stderr (see :meth:`wait_until`)."""
+        self.wait_until(lambda err: text in err, f"writing {text!r}", timeout)
+
+    def wait_for_handler(self, number: int, timeout: float = ANNOUNCE) -> None:
+        """Return once the run catches signal ``number`` (``/proc/PID/status``, Linux): the
+        command installs its handlers of SIGINT and SIGTERM before anything else, so a
+        signal sent then finds it in its imports. Where the system does not say, once the run
+        writes on stderr (``HEXAPOD_PROGRESS=1``: its first progress line)."""
+        status = Path(f"/proc/{self.process.pid}/status")
+        if not status.exists():
+            self.wait_until(bool, "writing on stderr", timeout)
+            return
+
+        def caught(_: str) -> bool:
+            try:
+                lines = status.read_text().splitlines()
+            except OSError:  # the process has ended: wait_until says so
+                return False
+            mask = next(int(line.split()[1], 16) for line in lines if line.startswith("SigCgt:"))
+            return bool(mask >> (number - 1) & 1)
+        self.wait_until(caught, f"catching signal {number}", timeout)
 
     def send_signal(self, number: int) -> None:
         self.process.send_signal(number)

@@ -395,6 +395,19 @@ def test_progress_is_drawn_when_stderr_is_a_terminal(tmp_path, monkeypatch, caps
     assert "inverse dynamics: 11/11 samples" in capsys.readouterr().err
 
 
+def test_progress_is_drawn_where_hexapod_progress_asks(tmp_path, monkeypatch, capsys):
+    """HEXAPOD_PROGRESS=1 draws the progress lines off a terminal too (into a log, for a program
+    that watches the run: the signal tests wait for them); 0, they are not drawn."""
+    from hexapod.cli import main as cli_main
+
+    args = ["simulate", str(SCENES / "pendulum.toml"), "--t-end", "0.01", "--out",
+            str(tmp_path / "run")]
+    for setting, drawn in (("1", True), ("0", False)):
+        monkeypatch.setenv("HEXAPOD_PROGRESS", setting)
+        assert cli_main(args) == 0
+        assert ("100 %  t = 0.01 s" in capsys.readouterr().err) == drawn
+
+
 def test_long_lived_holds_the_collector_and_gives_it_back_even_on_an_error():
     """The commands make their long-lived objects with the cyclic collector held
     (``long_lived``) when the process is theirs; it is running again after the block, also

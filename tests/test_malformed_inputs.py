@@ -13,7 +13,6 @@ import os
 import re
 import signal
 import subprocess
-import time
 import warnings
 from pathlib import Path
 
@@ -341,6 +340,12 @@ def test_an_error_after_reading_writes_nothing(tmp_path, capsys, monkeypatch):
     assert code == 1 and names(tmp_path) == []
 
 
+def _time_reached(progress: str) -> float:
+    """The time (s) the last progress line of ``hexapod simulate`` gives, 0 before the first."""
+    times = re.findall(r"t = ([-+.0-9eE]+) s", progress)
+    return float(times[-1]) if times else 0.0
+
+
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
 def test_a_killed_simulation_writes_what_it_computed(tmp_path, signum):
     """A long run stopped by Ctrl-C or kill: the states computed so far are written, marked
@@ -349,8 +354,10 @@ def test_a_killed_simulation_writes_what_it_computed(tmp_path, signum):
     # Python then never turns SIGINT into KeyboardInterrupt: give the run the default action
     with commands.Running("-m", "hexapod", "simulate", str(PENDULUM), "--method",
                           "rk4-baumgarte", "--step", "1e-5", "--t-end", "50", "--every", "1000",
-                          "--out", "run", cwd=tmp_path, default_sigint=True) as process:
-        time.sleep(4.0)  # into the time loop, most likely
+                          "--out", "run", cwd=tmp_path, default_sigint=True,
+                          HEXAPOD_PROGRESS="1") as process:
+        # well into the time loop, as its progress line says: states saved past t = 0
+        process.wait_until(lambda err: _time_reached(err) >= 0.05, "at t = 0.05 s")
         process.send_signal(signum)
         status, _, stderr = process.finish()
     assert "Traceback" not in stderr

@@ -13,6 +13,7 @@ from hexapod.cli.common import (
     limit_arguments,
     long_lived,
     sample_progress,
+    show_progress,
 )
 from hexapod.cli.outputs import given_files, output_file
 
@@ -63,7 +64,7 @@ def run(args) -> int:
     times = motion.times
     check_inverse_memory(model, times.size, args.max_memory,
                          f"give a motion of fewer samples than {args.motion}'s")
-    progress = sample_progress("inverse dynamics") if sys.stderr.isatty() else None
+    progress = sample_progress("inverse dynamics") if show_progress() else None
     result = inverse_dynamics(model, times, method=args.method, frame=args.frame,
                               compile=COMPILE_CHOICES[args.compile],
                               progress=progress)
