@@ -50,6 +50,7 @@ def test_n_four_bar_stays_on_its_branch_through_the_singular_pose():
     assert result.energy_drift < 1e-6
 
 
+@pytest.mark.slow  # a tolerance study over 20 s; ten windows are crossed by default (above)
 @pytest.mark.parametrize("method, tolerances", [("dopri5-projection", (1e-8, 1e-9)),
                                                  ("dop853-projection", (1e-9,))])
 def test_forty_windows_cross_all_their_flat_poses_more_accurately_at_tighter_tolerances(
