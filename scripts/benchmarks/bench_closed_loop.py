@@ -8,10 +8,11 @@ Protocol
   by contacts, ground forces by the least-wrench policy: the phase path) and
   ``hexapod-standing`` (six feet pinned, every joint held: 12 redundant rows, the phase path).
 * Motion: one stride, ``--samples`` samples over 0.5 s (default 5001).
-* Build: what the first call of ``inverse_dynamics(model, times, compile=True)`` costs more
-  than the later ones (assembly apart): building the CasADi Functions and compiling them to C
-  with gcc, in wall time and in CPU time of this process and of the compiler it starts.
-  Compiled code is kept with the model, so the later calls only evaluate it.
+* Build: what the first call of ``inverse_dynamics(model, times)`` under
+  ``hx.executing(compiled=True)`` costs more than the later ones (assembly apart): building
+  the CasADi Functions and compiling them to C with gcc, in wall time and in CPU time of this
+  process and of the compiler it starts. Compiled code is kept with the model, so the later
+  calls only evaluate it.
 * Per sample: ``time.process_time`` of the later calls (the median of ``--repeats``), over the
   number of samples, each on the times moved by a picosecond so that no law reuses values kept
   from the call before. This is what a
@@ -21,8 +22,8 @@ Protocol
   The laws' own cost is printed apart, and the ratios with and without it (the held robot's
   laws are harmonic series, the walking robot's the gait's exact inverse kinematics, the
   standing robot's constants).
-* The phase path interpreted by CasADi's virtual machine (``compile=False``, the default below
-  50 000 samples), on a fresh model: one call, its build apart.
+* The phase path interpreted by CasADi's virtual machine (the library's default), on a fresh
+  model: one call, its build apart.
 * The saddle path (every sample solved exactly in Python: the reference) on ``--saddle``
   samples (default 6) from 0.195 s to 0.205 s of the same stride (a touch-down of the walking
   robot at 0.2 s).
@@ -50,10 +51,17 @@ import hexapod as hx  # noqa: E402
 STRIDE = 0.5  # s
 
 
-def _timed(model, times, repeats: int, **options) -> tuple[float, float, float, object]:
+def _timed(model, times, repeats: int, compiled: bool = False,
+           **options) -> tuple[float, float, float, object]:
     """The first call's wall and CPU seconds, the later calls' CPU seconds per sample (median),
-    and the result. Each later call moves the times by a picosecond, so that no law reuses
-    values kept from the call before (the walking robot's gait laws keep their last samples)."""
+    and the result, compiled or not. Each later call moves the times by a picosecond, so that
+    no law reuses values kept from the call before (the walking robot's gait laws keep their
+    last samples)."""
+    with hx.executing(compiled=compiled):
+        return _calls(model, times, repeats, **options)
+
+
+def _calls(model, times, repeats: int, **options) -> tuple[float, float, float, object]:
     wall, cpu = time.perf_counter(), cpu_seconds()
     result = hx.inverse_dynamics(model, times, **options)
     first_wall, first_cpu = time.perf_counter() - wall, cpu_seconds() - cpu
@@ -85,20 +93,19 @@ def _agreement(a, b) -> float:
 
 def run(name: str, times, args) -> dict:
     model = hx.assemble(hx.load_scene(name))
-    wall, cpu, cost, result = _timed(model, times, args.repeats, compile=True)
+    wall, cpu, cost, result = _timed(model, times, args.repeats, compiled=True)
     steady = cost * times.size
     row = {"scene": name, "method": result.method, "build_wall": wall - steady,
            "build_cpu": cpu - steady, "us": 1e6 * cost,
            "laws_us": 1e6 * _laws(model, times, args.repeats)}
     if result.method == "phase":
-        # a model without compiled code; compile=False keeps the libraries compiled above, which
-        # the cache holds, out of it
-        interpreted = hx.assemble(hx.load_scene(name))
-        wall, _, cost, _ = _timed(interpreted, times, 1, compile=False)
+        interpreted = hx.assemble(hx.load_scene(name))  # a model without compiled code
+        wall, _, cost, _ = _timed(interpreted, times, 1)
         row["vm_build"], row["vm_us"] = wall - cost * times.size, 1e6 * cost
         few = np.linspace(0.195, 0.205, args.saddle)  # across a touch-down at 0.2 s
         _, _, saddle, exact = _timed(model, few, 1, method="saddle")
-        phase = hx.inverse_dynamics(model, few, method="phase", compile=True)
+        with hx.executing(compiled=True):
+            phase = hx.inverse_dynamics(model, few, method="phase")
         row["saddle_us"] = 1e6 * saddle
         row["agreement"] = _agreement(phase, exact)
     log(f"  {name}: done")

@@ -10,10 +10,8 @@ Protocol
 * hexapod: ``inverse_dynamics`` on the model driven by the motion (the tree-ordered path). The
   build (reading, assembly, the CasADi Function and its compilation) is reported apart; one
   call warms up; the per-sample cost is the median of ``--repeats`` calls divided by the
-  number of samples. Run with compiled code (``jit``) and, when ``--vm`` is given,
-  interpreted too: as an array program (``arr``: one NumPy operation per instruction over a
-  block of samples, whatever their number; by default from 500 samples) and by
-  CasADi's virtual machine (``vm``).
+  number of samples. Run with compiled code (``jit``: ``hx.executing(compiled=True)``) and,
+  when ``--vm`` is given, by CasADi's virtual machine too (``vm``, the library's default).
 * Pinocchio (optional extra ``compare``): in the same process, ``pinocchio.rnea`` then reading
   ``data.f`` and ``tau`` into one array per sample, the job the CSV needs; median of repeats.
   Agreement (``hexapod.output.report.agreement``): the largest difference, relative to the largest
@@ -30,14 +28,12 @@ What a user waits for, start-up included: ``hexapod inverse MODEL.urdf --motion 
 (``scripts/peers/pinocchio_inverse.py``: the same files in, the same CSV out), on the front leg
 and the 18-joint hexapod (``--samples`` samples, default 1000), timed in the same run:
 
-* ``first``: an empty cache (a new cache folder each time): the graphs are built, the tree
-  Function is serialized into the cache and, the run being long enough, read into an array
-  program (kept there too) that evaluates it;
-* ``cached``: the cache the first run left: the array program read back (no graph built, no
-  Function read), as every later run of the model;
-* ``compiled``: the cache holding the optimized (``-O2``) library (put there beforehand by
-  ``inverse_dynamics(..., compile=True)``, or ``hexapod inverse --compile yes``), which later
-  runs then use;
+* ``first``: an empty cache (a new cache folder each time): the graphs are built and the tree
+  Function is serialized into the cache, then evaluated by CasADi's virtual machine;
+* ``cached``: the cache the first run left: the Function read back (no graph built), as every
+  later run of the model;
+* ``compiled``: ``--compile yes`` with the cache holding the optimized (``-O2``) library (put
+  there beforehand by a compiled run), which later compiled runs then load;
 * ``off``: ``HEXAPOD_CACHE=0``, everything built in the process (hexapod without a cache);
 * Pinocchio's script.
 
@@ -147,17 +143,16 @@ def write_motion(path: Path, joints: list[str], samples: int) -> None:
 
 
 def time_hexapod(urdf: Path, motion: Path, repeats: int, mode: str) -> dict:
-    """Build and per-sample cost, compiled (``jit``), as an array program (``arr``, whatever
-    the number of samples) or in CasADi's virtual machine (``vm``)."""
-    compiled, arrays = mode == "jit", {"arr": True, "vm": False}.get(mode)
-    begun = time.perf_counter()
-    read = read_motion(motion)
-    model = hx.assemble(apply_motion(read_urdf(urdf), read))
-    inverse_dynamics(model, read.times[:1], compile=compiled, arrays=arrays)  # the build
-    built = time.perf_counter() - begun
-    result = inverse_dynamics(model, read.times, compile=compiled, arrays=arrays)  # warm-up
-    cost = median_time(lambda _: inverse_dynamics(model, read.times, compile=compiled,
-                                                  arrays=arrays), repeats, time.perf_counter)
+    """Build and per-sample cost, compiled (``jit``) or in CasADi's virtual machine (``vm``)."""
+    with hx.executing(compiled=mode == "jit"):
+        begun = time.perf_counter()
+        read = read_motion(motion)
+        model = hx.assemble(apply_motion(read_urdf(urdf), read))
+        inverse_dynamics(model, read.times[:1])  # the build
+        built = time.perf_counter() - begun
+        result = inverse_dynamics(model, read.times)  # warm-up
+        cost = median_time(lambda _: inverse_dynamics(model, read.times), repeats,
+                           time.perf_counter)
     return {"build_s": built, "per_sample_us": 1e6 * cost / read.times.size,
             "table": (inverse_columns(model), inverse_table(model, result))}
 
@@ -189,7 +184,7 @@ def run(name: str, scene: hx.Scene, folder: Path, args) -> dict:
     motion = folder / f"{name.replace(' ', '_')}.csv"
     write_motion(motion, joints, args.samples)
     row = {"model": name, "joints": len(joints)}
-    modes = ["jit", "arr", "vm"] if args.vm else ["jit"]
+    modes = ["jit", "vm"] if args.vm else ["jit"]
     for mode in modes:
         result = time_hexapod(urdf, motion, args.repeats, mode)
         row[f"{mode}_build_s"] = result["build_s"]
@@ -199,7 +194,7 @@ def run(name: str, scene: hx.Scene, folder: Path, args) -> dict:
     if pin is not None:
         row["pin_us"] = pin["per_sample_us"]
         row["ratio"] = row["jit_us"] / pin["per_sample_us"]
-        for mode in ("arr", "vm"):
+        for mode in ("vm",):
             if f"{mode}_us" in row:
                 row[f"{mode}_ratio"] = row[f"{mode}_us"] / pin["per_sample_us"]
         row["agreement"] = agreement(*row["table"], *pin["table"])
@@ -215,7 +210,8 @@ PRIME = """
 import sys, hexapod as hx
 motion = hx.read_motion(sys.argv[2])
 driven = hx.apply_motion(hx.read_urdf(sys.argv[1]), motion)
-hx.inverse_dynamics(hx.assemble(driven), motion.times, compile=True)
+with hx.executing(compiled=True, cache=sys.argv[3]):
+    hx.inverse_dynamics(hx.assemble(driven), motion.times)
 """
 
 
@@ -234,13 +230,14 @@ def whole_commands(name: str, folder: Path, args) -> dict:
                "--out"]
     kept = dict(env, HEXAPOD_CACHE_DIR=str(base) + "-cache")
     compiled = dict(env, HEXAPOD_CACHE_DIR=str(base) + "-compiled")
-    subprocess.run([sys.executable, "-c", PRIME, str(urdf), str(motion)], env=compiled,
-                   check=True)
+    subprocess.run([sys.executable, "-c", PRIME, str(urdf), str(motion),
+                    compiled["HEXAPOD_CACHE_DIR"]], env=compiled, check=True)
     commands = {
         "first": lambda k: (inverse + [f"{base}-first.csv"],
                             dict(env, HEXAPOD_CACHE_DIR=f"{base}-empty-{k}")),
         "cached": lambda k: (inverse + [f"{base}-cached.csv"], kept),
-        "compiled": lambda k: (inverse + [f"{base}-compiled.csv"], compiled),
+        "compiled": lambda k: (inverse + [f"{base}-compiled.csv", "--compile", "yes"],
+                               compiled),
         "off": lambda k: (inverse + [f"{base}-off.csv"], dict(env, HEXAPOD_CACHE="0")),
         "pinocchio": lambda k: ([sys.executable, str(PEERS / "pinocchio_inverse.py"),
                                  str(urdf), str(motion), f"{base}-pinocchio.csv"], env),
@@ -319,9 +316,8 @@ def main() -> None:
         for n in args.chains:
             rows.append(run(f"chain {n}", chain_scene(n), folder, args))
     columns = [("model", "{:<18}"), ("joints", "{:>6}"), ("jit_build_s", "{:>9.2f}"),
-               ("jit_us", "{:>9.2f}"), ("arr_build_s", "{:>9.2f}"), ("arr_us", "{:>9.2f}"),
-               ("vm_build_s", "{:>9.2f}"), ("vm_us", "{:>9.2f}"), ("pin_us", "{:>9.2f}"),
-               ("ratio", "{:>7.2f}"), ("arr_ratio", "{:>8.2f}"), ("vm_ratio", "{:>8.2f}"),
+               ("jit_us", "{:>9.2f}"), ("vm_build_s", "{:>9.2f}"), ("vm_us", "{:>9.2f}"),
+               ("pin_us", "{:>9.2f}"), ("ratio", "{:>7.2f}"), ("vm_ratio", "{:>8.2f}"),
                ("agreement", "{:>10.1e}")]
     print(f"samples per call: {args.samples}; costs in microseconds per sample (median of "
           f"{args.repeats}); build in seconds")
@@ -334,7 +330,7 @@ def main() -> None:
             cells.append(fmt.format(row[name]) if name in row else f"{'-':>{width}}")
         print(" ".join(cells))
     chains = [r for r in rows if r["model"].startswith("chain")]
-    for mode, label in (("jit", "compiled"), ("arr", "array program"), ("vm", "interpreted")):
+    for mode, label in (("jit", "compiled"), ("vm", "interpreted")):
         if len(chains) >= 2 and f"{mode}_us" in chains[0]:
             slope = growth_exponent([r["joints"] for r in chains],
                                     [r[f"{mode}_us"] for r in chains])
