@@ -11,7 +11,7 @@ quintic Hermite polynomials: each interval's polynomial depends on its two ends 
 loads are exactly zero in swing and C2 everywhere.
 
 The robot's inverse dynamics costs seconds, so the reactions of the built-in gaits are kept in
-``legs/data/`` (``scripts/make_walking_loads.py`` writes them; a test recomputes some samples).
+``legs/data/`` (``legs/data/make_walking_loads.py`` writes them; a test recomputes some samples).
 """
 
 from __future__ import annotations

@@ -15,10 +15,11 @@ a stance leg is a loaded chain of six free joints between the trunk and its foot
 buckles), a swing leg a free chain under gravity. :func:`hexapod.diagnose` at states of the
 tripod gait finds 19 to 34 growing modes of the motion linearised on the constraints, the
 fastest growing as ``exp(130 t)`` to ``exp(210 t)``, and one run over the stride shows it
-(default tolerances, ``scripts/walking_forward.py --unbroken 0.15``): the tripod's joint-angle
-error is ``1e-8`` rad at 25 ms, ``9e-5`` at 0.1 s, ``3`` at 0.15 s, growing as ``exp(131 t)``,
-the wave's ``2e-8`` at 24 ms, ``4e-4`` at 75 ms, ``0.3`` at 0.1 s (``exp(178 t)``). Round-off
-alone would grow past any tolerance within a stride (``exp(150 x 0.5) ~ 1e32``). So
+(default tolerances, ``scripts/studies/walking_forward.py --unbroken 0.15``): the tripod's
+joint-angle error is ``1e-8`` rad at 25 ms, ``9e-5`` at 0.1 s, ``3`` at 0.15 s, growing as
+``exp(131 t)``, the wave's ``2e-8`` at 24 ms, ``4e-4`` at 75 ms, ``0.3`` at 0.1 s
+(``exp(178 t)``). Round-off alone would grow past any tolerance within a stride
+(``exp(150 x 0.5) ~ 1e32``). So
 :func:`replay` starts a new run every ``window`` (10 ms: a growth of ``exp(2) ~ 7`` at most)
 from the prescribed state at that time and compares each run with the prescribed motion up to
 the next start: every instant of the stride, every touch-down and lift-off, is covered by a run
@@ -46,9 +47,10 @@ new foot's rows left out while they disagree by less than ``1e-3`` (the tripod's
 0.195 s to 0.205 s in one call: ``3e-6`` rad off, against ``4e-9`` restarted at the touch-down),
 and at a lift-off the lifting feet's rows vanish and the compiled saddle-point solve, singular
 then, returns wrong accelerations that its check (constraint rows only) does not notice (0.245 s
-to 0.255 s in one call: ``0.9`` rad off, and the run "finished"; ``scripts/walking_forward.py
---one-call``). So :func:`replay` restarts at every switch time, from the state reached, and
-keeps each run off the lift-off instants by :data:`LIFT_OFF_GAP` (see :func:`replay`).
+to 0.255 s in one call: ``0.9`` rad off, and the run "finished";
+``scripts/studies/walking_forward.py --one-call``). So :func:`replay` restarts at every switch
+time, from the state reached, and keeps each run off the lift-off instants by
+:data:`LIFT_OFF_GAP` (see :func:`replay`).
 
 Angles are radians and efforts SI; the twin keeps the scene's length unit.
 """

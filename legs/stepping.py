@@ -16,7 +16,7 @@ follows its fore-aft position, with the amplitudes of ``legs.cockroach.GAIT_LAWS
 samples of the cycle at once) so that the foot is on its path. Each joint's angle is then a
 periodic function of time, fitted by least squares with ``HARMONICS`` harmonics
 (:class:`hexapod.Harmonic`, C-infinity), the three prescribed ones first so that the solved
-ones compensate exactly what the fit makes of them. ``scripts/gait_paths.py`` measures how
+ones compensate exactly what the fit makes of them. ``scripts/studies/gait_paths.py`` measures how
 closely the feet then follow their paths. Angles do not depend on the scale, so the fit is done
 once per leg position, duty factor and segment lengths, at natural scale, and serves both sides
 (the right leg's axes mirror the left's, see :mod:`legs.leg`).

@@ -69,7 +69,7 @@ def body_motion_balance(model, result):
 
 def stance_slip(model, result) -> float:
     """The largest distance of a stance foot from its foothold (m), as
-    ``scripts/walking_checks.py`` measures it."""
+    ``scripts/studies/walking_checks.py`` measures it."""
     feet = hx.marker_trajectories(model, result.q, "foot")
     w = model.law_values(result.times)[0]
     worst = 0.0

@@ -528,6 +528,8 @@ def test_an_interrupted_compilation_leaves_no_compiler_running_and_nothing_behin
     process.send_signal(signal.SIGINT)
     _, err = process.communicate(timeout=60)
     assert "KeyboardInterrupt" in err
-    time.sleep(0.2)
+    deadline = time.time() + 10  # well before the compiler's child would end by itself (20 s)
+    while sleeping() and time.time() < deadline:  # the killed child leaves the process table
+        time.sleep(0.05)
     assert not sleeping()
     assert not list((folder / cache.LAYOUT).iterdir())

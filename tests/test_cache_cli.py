@@ -10,6 +10,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import commands
 import numpy as np
 import pytest
 
@@ -18,11 +19,9 @@ FIXTURE = ROOT / "tests" / "data" / "pinocchio" / "chain-3"
 
 
 def run(*args: str, cache: Path, cwd: Path, **settings: str) -> subprocess.CompletedProcess:
-    env = {k: v for k, v in os.environ.items()
-           if k not in ("HEXAPOD_DEBUG", "HEXAPOD_CACHE", "HEXAPOD_CACHE_SIZE")}
-    env.update(HEXAPOD_CACHE_DIR=str(cache), **settings)
-    return subprocess.run([sys.executable, "-m", "hexapod", *args], cwd=cwd, env=env,
-                          capture_output=True, text=True, timeout=120)
+    """``hexapod ARGS`` with its cache in ``cache`` (the session has no other cache setting:
+    conftest.py)."""
+    return commands.hexapod(*args, cwd=cwd, HEXAPOD_CACHE_DIR=str(cache), **settings)
 
 
 def inverse(tmp_path: Path, cache: Path, out: str = "out.csv") -> None:
@@ -126,9 +125,8 @@ def test_the_cache_turned_off(tmp_path):
 
 @pytest.mark.parametrize("args", [("cache", "info"), ("cache", "--help")], ids=" ".join)
 def test_the_cache_command_loads_no_heavy_library(tmp_path, args):
-    env = dict(os.environ, HEXAPOD_CACHE_DIR=str(tmp_path / "cache"))
-    done = subprocess.run([sys.executable, "-X", "importtime", "-m", "hexapod", *args],
-                          cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120)
+    done = commands.python("-X", "importtime", "-m", "hexapod", *args, cwd=tmp_path,
+                           HEXAPOD_CACHE_DIR=str(tmp_path / "cache"))
     assert done.returncode == 0, done.stderr
     loaded = {line.rpartition("|")[2].strip().split(".")[0]
               for line in done.stderr.splitlines() if line.startswith("import time:")}

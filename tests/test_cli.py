@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import json
-import os
 import subprocess
 import sys
 from pathlib import Path
 
+import commands
 import pytest
 
 import hexapod
@@ -29,9 +29,7 @@ STATE_KEYS = {"t", "max_abs_phi", "condition_number", "sigma_min", "characterist
 
 def hexapod_cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
     """Run ``python -m hexapod.cli ARGS`` from ``cwd`` (so no file there shadows a scene name)."""
-    env = {k: v for k, v in os.environ.items() if k != "HEXAPOD_DEBUG"}
-    return subprocess.run([sys.executable, "-m", "hexapod.cli", *args], cwd=cwd, env=env,
-                          capture_output=True, text=True, timeout=120)
+    return commands.python("-m", "hexapod.cli", *args, cwd=cwd)
 
 
 def assert_no_traceback(result: subprocess.CompletedProcess) -> None:
@@ -96,8 +94,7 @@ def test_version(tmp_path):
 
 def imported(*args: str, cwd: Path) -> set[str]:
     """The top-level packages ``python -X importtime ARGS`` imports (every import is listed)."""
-    result = subprocess.run([sys.executable, "-X", "importtime", *args], cwd=cwd,
-                            capture_output=True, text=True, timeout=120)
+    result = commands.python("-X", "importtime", *args, cwd=cwd)
     assert result.returncode == 0, result.stderr
     return {line.rpartition("|")[2].strip().split(".")[0] for line in result.stderr.splitlines()
             if line.startswith("import time:")}
@@ -125,12 +122,8 @@ def test_the_command_line_sets_one_blas_thread_before_numpy(tmp_path):
             "assert main(['validate', sys.argv[1]]) == 0 and 'numpy' in sys.modules\n"
             "print(os.environ['OPENBLAS_NUM_THREADS'])\n")
     for given, expected in ((None, "1"), ("3", "3")):
-        env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
-        if given:
-            env["OPENBLAS_NUM_THREADS"] = given
-        result = subprocess.run([sys.executable, "-c", code, str(SCENES / "pendulum.toml")],
-                                cwd=tmp_path, env=env, capture_output=True, text=True,
-                                timeout=120)
+        result = commands.python("-c", code, str(SCENES / "pendulum.toml"), cwd=tmp_path,
+                                 OPENBLAS_NUM_THREADS=given)
         assert result.returncode == 0, result.stderr
         assert result.stdout.splitlines()[-1] == expected
 
@@ -139,8 +132,7 @@ def test_console_script_if_installed(tmp_path):
     script = Path(sys.executable).with_name("hexapod")
     if not script.exists():
         pytest.skip("no hexapod console script next to the interpreter")
-    result = subprocess.run([str(script), "--help"], cwd=tmp_path, capture_output=True,
-                            text=True, timeout=120)
+    result = commands.run([str(script), "--help"], cwd=tmp_path)
     assert result.returncode == 0 and "dynamics" in result.stdout
 
 
@@ -401,3 +393,16 @@ def test_progress_is_drawn_when_stderr_is_a_terminal(tmp_path, monkeypatch, caps
     monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
     assert cli_main(["report", "--out", str(tmp_path / "report"), "--samples", "11"]) == 0
     assert "inverse dynamics: 11/11 samples" in capsys.readouterr().err
+
+
+def test_progress_is_drawn_where_hexapod_progress_asks(tmp_path, monkeypatch, capsys):
+    """HEXAPOD_PROGRESS=1 draws the progress lines off a terminal too (into a log, for a program
+    that watches the run: the signal tests wait for them); 0, they are not drawn."""
+    from hexapod.cli import main as cli_main
+
+    args = ["simulate", str(SCENES / "pendulum.toml"), "--t-end", "0.01", "--out",
+            str(tmp_path / "run")]
+    for setting, drawn in (("1", True), ("0", False)):
+        monkeypatch.setenv("HEXAPOD_PROGRESS", setting)
+        assert cli_main(args) == 0
+        assert ("100 %  t = 0.01 s" in capsys.readouterr().err) == drawn

@@ -50,6 +50,7 @@ def test_n_four_bar_stays_on_its_branch_through_the_singular_pose():
     assert result.energy_drift < 1e-6
 
 
+@pytest.mark.slow  # a tolerance study over 20 s; ten windows are crossed by default (above)
 @pytest.mark.parametrize("method, tolerances", [("dopri5-projection", (1e-8, 1e-9)),
                                                  ("dop853-projection", (1e-9,))])
 def test_forty_windows_cross_all_their_flat_poses_more_accurately_at_tighter_tolerances(
@@ -65,7 +66,7 @@ def test_forty_windows_cross_all_their_flat_poses_more_accurately_at_tighter_tol
     is as far past it: the error against the exact motion falls with the tolerance (DOPRI5:
     1.3e-7, 8.3e-9, 5.2e-10 at rtol 1e-8, 1e-9, 1e-10; DOP853 at 1e-9: 1.3e-9; another branch
     is an error of order 1). The whole table:
-    ``python3 scripts/singular_crossings.py --rtol 1e-4 1e-6 1e-8 1e-9 1e-10 --cases
+    ``python3 scripts/studies/singular_crossings.py --rtol 1e-4 1e-6 1e-8 1e-9 1e-10 --cases
     n-four-bar-40``."""
     case = n_four_bar(40, t_end=20.0)
     model = hx.assemble(case.scene)

@@ -20,6 +20,7 @@ Newton's method failing after 21 s).
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 import hexapod.benchmarks as m
 from hexapod.model.assemble import assemble
@@ -28,6 +29,7 @@ from hexapod.simulation.loop import simulate
 PERIODS, STEPS_PER_PERIOD = 100, 20
 
 
+@pytest.mark.slow  # 100 periods: a long integration
 def test_energy_stays_bounded_over_100_periods_at_20_steps_per_period():
     case = m.long_pendulum(periods=PERIODS)
     model = assemble(case.scene)

@@ -1,4 +1,4 @@
-"""The hostile command lines of the hardening issue (``scripts/fuzz_hostile.py`` lists them):
+"""The hostile command lines of the hardening issue (``tests/fuzz/fuzz_hostile.py`` lists them):
 each ends with its expected status (1 for a file or a job, 2 for an argument) and one error
 message naming the option, the key or the file, no traceback, within 30 s, and touches no
 file (a device node, an input) nor leaves one behind."""
@@ -8,7 +8,7 @@ from __future__ import annotations
 import pytest
 from script_loader import load_script
 
-hostile = load_script("fuzz_hostile")
+hostile = load_script("tests/fuzz/fuzz_hostile.py")
 
 
 @pytest.mark.parametrize("case", hostile.CASES, ids=[case.name for case in hostile.CASES])

@@ -1,6 +1,7 @@
 """The package layout of the README's "Layout" section, enforced: one folder per layer, no upward
 import, no cycle, no scene below the model, ``__init__`` files that only re-export, optional
-libraries imported lazily, and ``legs/`` and ``scripts/`` on the public API alone.
+libraries imported lazily, and ``legs/``, ``scripts/`` and the fixture makers (``data/``,
+``tests/data/``) on the public API alone.
 
 Each rule is a function from sources to a list of violations, so that the tests below can show
 that every rule catches what it forbids (a rule that cannot fail checks nothing).
@@ -214,7 +215,7 @@ def test_package_init_files_only_reexport():
     assert init_logic(package_sources(), packages()) == []
 
 
-@pytest.mark.parametrize("folder", ["legs", "scripts"])
+@pytest.mark.parametrize("folder", ["legs", "scripts", "data", "tests/data"])
 def test_legs_and_scripts_use_only_the_public_api(folder):
     namespaces = {name: set(getattr(hexapod, name).__all__) for name in hexapod.__all__
                   if inspect.ismodule(getattr(hexapod, name))}

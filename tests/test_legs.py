@@ -60,7 +60,7 @@ def test_seed001_mixed_model_equals_the_engine(loaded):
 
 # The feet against the paths they are designed to follow (legs.stepping): the joint laws are
 # harmonic fits of inverse-kinematics solutions, so the feet miss their paths by the fit's
-# error, measured (scripts/gait_paths.py) at < 1e-9 m (tripod), 1e-8 m (tetrapod) and 3e-7 m
+# error, measured (scripts/studies/gait_paths.py) at < 1e-9 m (tripod), 1e-8 m (tetrapod) and 3e-7 m
 # (wave) over a 0.26 m stride at 20:1. 2e-6 m (1e-5 of the stride) bounds them all, while a
 # wrong phase, side or duty factor misses by centimetres. The stance speed likewise, to 1e-3
 # (measured 1.3e-6, 1e-5 and 3e-4).

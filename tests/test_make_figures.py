@@ -1,4 +1,4 @@
-"""scripts/make_figures.py leaves the committed figures alone: by default it writes a fresh
+"""scripts/papers/make_figures.py leaves the committed figures alone: by default it writes a fresh
 folder; with --update it rewrites only the files whose content changed, and a timing-dependent
 file only with --timings. The papers' scripts are replaced by a stand-in (they take minutes and
 have their own tests)."""
@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 from script_loader import load_script
 
-make_figures = load_script("make_figures")
+make_figures = load_script("scripts/papers/make_figures.py")
 
 CPU = "seed000/seed000_cpu_time.png"
 assert CPU in make_figures.TIMINGS

@@ -1,7 +1,7 @@
 """Bad input never crashes: malformed scene, URDF and motion files give one error naming the file,
 never a traceback, and no command leaves a partial output.
 
-The mutations are those of ``scripts/fuzz_inputs.py`` (which runs thousands of them); here
+The mutations are those of ``tests/fuzz/fuzz_inputs.py`` (which runs thousands of them); here
 Hypothesis draws them, so that a failure is shrunk to a small input and replayed the same way on
 every run (``derandomize``).
 """
@@ -13,16 +13,15 @@ import os
 import re
 import signal
 import subprocess
-import sys
-import time
 import warnings
 from pathlib import Path
 
+import commands
 import numpy as np
 import pytest
-from fuzzer import fuzz
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from script_loader import load_script
 
 import hexapod as hx
 from hexapod import cli
@@ -31,6 +30,8 @@ from hexapod.errors import HexapodError, InputFileError, ModelError
 from hexapod.scene.motion import apply_motion, read_motion
 from hexapod.scene.reader import read_scene
 from hexapod.scene.urdf import read_urdf
+
+fuzz = load_script("tests/fuzz/fuzz_inputs.py")  # the mutations and the TOML writer
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -223,12 +224,6 @@ def test_assembly_errors_name_the_file(tmp_path):
 # ------------------------------------------------------------------ the command line
 
 
-def hexapod_cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
-    env = {k: v for k, v in os.environ.items() if k != "HEXAPOD_DEBUG"}
-    return subprocess.run([sys.executable, "-m", "hexapod", *args], cwd=cwd, env=env,
-                          capture_output=True, text=True, timeout=300)
-
-
 def assert_clean_failure(result: subprocess.CompletedProcess, name: str) -> None:
     """Non-zero exit, nothing on stdout, one message naming the file: a head line and at most
     one line per problem, and no traceback."""
@@ -248,7 +243,7 @@ def test_command_line_on_malformed_files(tmp_path):
                        (("info", "bad.urdf"), "bad.urdf"),
                        (("inverse", str(FIXTURE / "model.urdf"), "--motion", "bad.csv",
                          "--out", "X.csv"), "bad.csv")):
-        assert_clean_failure(hexapod_cli(*args, cwd=tmp_path), name)
+        assert_clean_failure(commands.hexapod(*args, cwd=tmp_path), name)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.csv", "bad.toml", "bad.urdf"]
 
 
@@ -345,27 +340,28 @@ def test_an_error_after_reading_writes_nothing(tmp_path, capsys, monkeypatch):
     assert code == 1 and names(tmp_path) == []
 
 
+def _time_reached(progress: str) -> float:
+    """The time (s) the last progress line of ``hexapod simulate`` gives, 0 before the first."""
+    times = re.findall(r"t = ([-+.0-9eE]+) s", progress)
+    return float(times[-1]) if times else 0.0
+
+
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
 def test_a_killed_simulation_writes_what_it_computed(tmp_path, signum):
     """A long run stopped by Ctrl-C or kill: the states computed so far are written, marked
     interrupted in stats.json, and the status is the signal's (130, 143)."""
     # a shell that starts a job in the background (nohup ... &) makes it ignore SIGINT, and
     # Python then never turns SIGINT into KeyboardInterrupt: give the run the default action
-    process = subprocess.Popen(
-        [sys.executable, "-m", "hexapod", "simulate", str(PENDULUM), "--method",
-         "rk4-baumgarte", "--step", "1e-5", "--t-end", "50", "--every", "1000", "--out",
-         "run"], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
-    try:
-        time.sleep(4.0)  # into the time loop, most likely
+    with commands.Running("-m", "hexapod", "simulate", str(PENDULUM), "--method",
+                          "rk4-baumgarte", "--step", "1e-5", "--t-end", "50", "--every", "1000",
+                          "--out", "run", cwd=tmp_path, default_sigint=True,
+                          HEXAPOD_PROGRESS="1") as process:
+        # well into the time loop, as its progress line says: states saved past t = 0
+        process.wait_until(lambda err: _time_reached(err) >= 0.05, "at t = 0.05 s")
         process.send_signal(signum)
-        _, stderr = process.communicate(timeout=60)
-    finally:
-        if process.poll() is None:  # never leave the run behind
-            process.kill()
-            process.wait()
+        status, _, stderr = process.finish()
     assert "Traceback" not in stderr
-    assert process.returncode == 128 + signum, stderr
+    assert status == 128 + signum, stderr
     stats = json.loads((tmp_path / "run" / "stats.json").read_text())
     assert stats["status"] == "interrupted" and 0 < stats["t_reached"] < 50, stats
     assert "interrupted" in stderr.strip().splitlines()[-1]

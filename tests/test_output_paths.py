@@ -7,13 +7,14 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import stat
 import subprocess
 import sys
-import time
 from pathlib import Path
 
+import commands
 import pytest
 from script_loader import load_script
 
@@ -22,7 +23,7 @@ from hexapod.cli import main
 from hexapod.errors import InputFileError
 
 ROOT = Path(__file__).resolve().parents[1]
-hostile = load_script("fuzz_hostile")
+hostile = load_script("tests/fuzz/fuzz_hostile.py")
 FIXTURE = ROOT / "tests" / "data" / "pinocchio" / "chain-3"
 PENDULUM = ROOT / "data" / "scenes" / "pendulum.toml"
 
@@ -184,9 +185,8 @@ def test_a_crash_between_the_two_renames_is_recovered_by_the_next_run(tmp_path, 
     out = tmp_path / "run"
     assert main(SIMULATE + ["--out", str(out)]) == 0
     before = {p.name: p.read_bytes() for p in out.iterdir()}
-    crashed = subprocess.run([sys.executable, "-c", CRASH_BETWEEN_RENAMES, *SIMULATE,
-                              "--t-end", "0.03", "--out", str(out)], capture_output=True,
-                             text=True, timeout=120)
+    crashed = commands.python("-c", CRASH_BETWEEN_RENAMES, *SIMULATE, "--t-end", "0.03",
+                              "--out", str(out), cwd=tmp_path)
     assert crashed.returncode == 9
     assert not out.exists() and (tmp_path / ".run.old").is_dir()  # the state a crash leaves
     fileio.recover_directory(out)  # what the next writer of the output does first
@@ -198,8 +198,8 @@ def test_a_crash_between_the_two_renames_is_recovered_by_the_next_run(tmp_path, 
 def test_a_run_after_the_crash_writes_its_output_and_leaves_nothing_else(tmp_path, capsys):
     out = tmp_path / "run"
     assert main(SIMULATE + ["--out", str(out)]) == 0
-    crashed = subprocess.run([sys.executable, "-c", CRASH_BETWEEN_RENAMES, *SIMULATE,
-                              "--out", str(out)], capture_output=True, text=True, timeout=120)
+    crashed = commands.python("-c", CRASH_BETWEEN_RENAMES, *SIMULATE, "--out", str(out),
+                              cwd=tmp_path)
     assert crashed.returncode == 9
     assert main(SIMULATE + ["--t-end", "0.03", "--out", str(out)]) == 0
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]
@@ -239,37 +239,49 @@ def _command(kind: str, out: Path) -> list[str]:
     return ["simulate", "front-leg", "--t-end", "0.3", "--out", str(out)]
 
 
+def _reach(child: commands.Running, kind: str, moment: str) -> None:
+    """Wait until the run is at ``moment``: ``imports`` (it catches SIGTERM: the handlers are
+    the first thing the command installs, its imports come next), ``computation`` (its first
+    progress line), ``writing`` (its last: all samples or 100 %, then the figures and files)."""
+    if moment == "imports":
+        child.wait_for_handler(signal.SIGTERM)
+    elif moment == "computation":
+        child.wait_for("inverse dynamics: " if kind != "simulate" else "%  t = ")
+    elif kind == "simulate":
+        child.wait_for("100 %")
+    else:
+        child.wait_until(lambda err: re.search(r"(\d+)/\1 samples", err) is not None,
+                         "at its last sample")
+
+
 @pytest.mark.parametrize("kind", ["inverse", "report", "simulate"])
 def test_signals_leave_the_earlier_output_or_a_complete_new_one(tmp_path, kind):
     """SIGINT, SIGTERM and SIGKILL at several moments of a run (during the imports, the
-    model's build, the computation and the writing): the status is the conventional one, no
-    traceback, and the output is the earlier one or a complete new one, with no leftovers
-    after the next run."""
+    computation and the writing, each awaited as the run announces it): the status is the
+    conventional one, no traceback, and the output is the earlier one or a complete new one,
+    with no leftovers after the next run."""
     out = tmp_path / ("out.csv" if kind == "inverse" else "out")
-    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
-    first = subprocess.run([sys.executable, "-m", "hexapod", *_command(kind, out)], env=env,
-                           capture_output=True, text=True, timeout=300)
+    first = commands.hexapod(*_command(kind, out), cwd=tmp_path)
     assert first.returncode == 0, first.stderr
     earlier = hostile.contents(out)
     seen = set()
-    # early ones too: with its model in the cache, 'hexapod inverse' ends within 0.35 s
-    for delay, number in ((0.1, signal.SIGTERM), (0.2, signal.SIGINT), (0.35, signal.SIGINT),
-                          (1.2, signal.SIGTERM), (2.5, signal.SIGINT), (0.8, signal.SIGKILL)):
-        child = subprocess.Popen([sys.executable, "-m", "hexapod", *_command(kind, out)],
-                                 env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                 text=True)
-        time.sleep(delay)
-        child.send_signal(number)
-        _, err = child.communicate(timeout=300)
+    for moment, number in (("imports", signal.SIGTERM), ("imports", signal.SIGINT),
+                           ("computation", signal.SIGINT), ("computation", signal.SIGTERM),
+                           ("writing", signal.SIGINT), ("computation", signal.SIGKILL)):
+        with commands.Running("-m", "hexapod", *_command(kind, out), cwd=tmp_path,
+                              HEXAPOD_PROGRESS="1") as child:
+            _reach(child, kind, moment)
+            child.send_signal(number)
+            status, _, err = child.finish()
         expected = {signal.SIGINT: 130, signal.SIGTERM: 143, signal.SIGKILL: -9}[number]
-        assert child.returncode in (expected, 0), (delay, number, child.returncode, err)
+        assert status in (expected, 0), (moment, number, status, err)
         assert "Traceback" not in err, err
         now = hostile.contents(out)
-        assert now == earlier or hostile.complete(kind, out), (delay, number)
-        if child.returncode == 0:
+        assert now == earlier or hostile.complete(kind, out), (moment, number)
+        if status == 0:
             earlier = now
-        seen.add(child.returncode)
-    assert 0 not in seen or len(seen) > 1, "no run was interrupted: the delays are too long"
+        seen.add(status)
+    assert 0 not in seen or len(seen) > 1, "no run was interrupted"
     assert main(_command(kind, out)) == 0
     assert sorted(p.name for p in tmp_path.iterdir()) == [out.name] + (
         [out.name.replace(".csv", ".units.json")] if kind == "inverse" else [])

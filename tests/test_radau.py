@@ -319,6 +319,7 @@ def test_a_tighter_newton_tolerance_lowers_the_error():
     assert 5 * pendulum_error(tight, omega0, arm) < pendulum_error(default, omega0, arm)
 
 
+@pytest.mark.slow  # rtol 1e-12, the tightest of a tolerance study
 def test_andrews_squeezer_at_rtol_1e_12():
     """Andrews' squeezing mechanism (7 bodies, a stiff spring, 0.03 s) at rtol = atol = 1e-12:
     RADAU5's map of the tolerances (``rtol' = 0.1 rtol^(2/3)``, ``atol' = atol rtol' / rtol``,

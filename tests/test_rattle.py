@@ -47,6 +47,7 @@ def pendulum_energy_error(model, q, v) -> np.ndarray:
 
 # ------------------------------------------------------------------ (a) long-time energy
 
+@pytest.mark.slow  # 200 periods: a long integration (the order: the convergence tests below)
 @pytest.mark.parametrize("dimension", [2, 3])
 def test_energy_error_stays_bounded_over_200_periods_and_is_second_order(dimension):
     """The rod released horizontal (amplitude 90 deg) at a coarse 20 steps per period over 200

@@ -156,7 +156,7 @@ def test_counted_runs_give_the_float_results():
 def test_operation_counts_grow_as_the_methods_predict():
     """Forming by Lagrange with Christoffel symbols is O(n^4) on a chain; the basic theorems
     and Gibbs-Appell are O(n^3) at most; counts do not depend on the state."""
-    chain_scene = load_script("seed000_efficiency").chain_scene
+    chain_scene = load_script("scripts/papers/seed000_efficiency.py").chain_scene
 
     counts = {}
     for n in (4, 8, 16):
@@ -176,7 +176,7 @@ def test_operation_counts_grow_as_the_methods_predict():
 
 
 def test_efficiency_script_writes_csv_and_figures(tmp_path):
-    seed000_efficiency = load_script("seed000_efficiency")
+    seed000_efficiency = load_script("scripts/papers/seed000_efficiency.py")
 
     result = seed000_efficiency.main(["--out", str(tmp_path), "--count-sizes", "1", "2", "3",
                                       "--time-sizes", "1", "3", "--repeats", "1"])

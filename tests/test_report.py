@@ -3,12 +3,11 @@
 from __future__ import annotations
 
 import re
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from commands import hexapod as run_cli
 
 import hexapod as hx
 from hexapod._support.files import write_directory_atomically
@@ -33,11 +32,6 @@ MALFORMED = Path(__file__).resolve().parent / "data" / "malformed_scene.toml"
 FIGURES = {"forces.png", "torques.png", "efforts.png", "foot.png"}
 FILES = {"inverse.csv", "units.json", "summary.md"} | FIGURES
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
-
-
-def run_cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "hexapod", *args], cwd=cwd, capture_output=True,
-                          text=True, timeout=300)
 
 
 @pytest.fixture(scope="module")

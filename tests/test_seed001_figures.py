@@ -1,7 +1,7 @@
-"""scripts/seed001_figures.py: Fig. 7 of Dumitru, Marin and Margine (the liaison force F21 of the
-left front leg) and the same figure for every joint. The curves drawn (read back from the figures'
-axes) are checked against `hexapod report`'s CSV, against the engine's joint wrenches recomputed
-apart (the saddle-point forward dynamics at single instants), and against the recursive
+"""scripts/papers/seed001_figures.py: Fig. 7 of Dumitru, Marin and Margine (the liaison force F21
+of the left front leg) and the same figure for every joint. The curves drawn (read back from the
+figures' axes) are checked against `hexapod report`'s CSV, against the engine's joint wrenches
+recomputed apart (the saddle-point forward dynamics at single instants), and against the recursive
 joint-coordinate model of Vukobratović and Potkonjak with the foot load added by hand, the last two
 on a scene built here from ``legs`` rather than loaded by name."""
 
@@ -26,7 +26,7 @@ KEYS = {"file", "reproduces", "parameters", "caption", "joint", "wrench", "by_el
 PARAMETERS = {"scene", "gait", "leg", "start", "duration", "samples", "frame"}
 
 
-figures_script = load_script("seed001_figures")
+figures_script = load_script("scripts/papers/seed001_figures.py")
 
 
 @pytest.fixture(scope="module")

@@ -1,6 +1,6 @@
-"""Figs. 6-10 of Richard, Anderson and Andrews (``scripts/seed002_figures.py``): the engine against
-the closed-loop pendulum's Lagrange equation, the vector network's matrices, and the files ``make``
-writes.
+"""Figs. 6-10 of Richard, Anderson and Andrews (``scripts/papers/seed002_figures.py``): the engine
+against the closed-loop pendulum's Lagrange equation, the vector network's matrices, and the files
+``make`` writes.
 
 The reference is built here from the paper's numbers (Section 5, in dm), apart from the script
 and from the scene file, so a wrong number in either, or a wrong engine, fails the test.
@@ -17,7 +17,7 @@ from hexapod.benchmarks import ClosedLoopPendulum
 
 @pytest.fixture(scope="module")
 def script():
-    return load_script("seed002_figures")
+    return load_script("scripts/papers/seed002_figures.py")
 
 
 @pytest.fixture(scope="module")

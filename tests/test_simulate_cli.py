@@ -3,12 +3,11 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from commands import hexapod as run_cli
 
 import hexapod as hx
 from hexapod.algorithms.balance import body_balance
@@ -50,11 +49,6 @@ body = "p"
 coordinate = "x"
 law = { type = "polynomial", coefficients = [0.0, 2.0] }
 """
-
-
-def run_cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "hexapod", *args], cwd=cwd, capture_output=True,
-                          text=True, timeout=300)
 
 
 def read_csv(path: Path) -> tuple[list[str], np.ndarray]:

@@ -13,8 +13,8 @@ by at most ``exp(210 x 0.01) ~ 8``. Agreement at the level of the tolerance is t
 largest joint-angle error of at most ``rtol`` radians, the bound asserted. The effort splines
 are accurate to ``3e-6`` of each joint's largest effort (``legs.replay.EFFORT_TOL``), which
 moves the angles by a few ``1e-8`` rad over a window (splines to ``1e-5`` left ``3e-7``). Found
-(``scripts/walking_forward.py``): ``2.6e-8`` rad over the tripod's stride and ``1.1e-7`` over
-the wave's. With ``rtol = 1e-8``, ``atol = 1e-10`` the wave's falls to ``1.3e-8`` and the
+(``scripts/studies/walking_forward.py``): ``2.6e-8`` rad over the tripod's stride and ``1.1e-7``
+over the wave's. With ``rtol = 1e-8``, ``atol = 1e-10`` the wave's falls to ``1.3e-8`` and the
 tripod's stays, the splines' share; both shares converge (the tripod from 0.15 s to 0.18 s:
 ``5.6e-9`` rad, ``1.0e-11`` with splines to ``1e-8`` and ``rtol = 1e-9``).
 
@@ -23,7 +23,7 @@ the splines need 317 samples for the tripod and 485 for the wave (their load ram
 along), some 17 s and 28 s with the replay, too long for the default test run. So the tripod
 is checked here from 0.18 s to 0.28 s (a touch-down, a lift-off and both load ramps), the wave
 over two windows around one sixth of its stride, where one foot lifts off as another touches
-down; ``python3 scripts/walking_forward.py`` checks both whole strides.
+down; ``python3 scripts/studies/walking_forward.py`` checks both whole strides.
 """
 
 import numpy as np

@@ -3,7 +3,7 @@ floating-base recursive Newton-Euler algorithm with the reported ground reaction
 feet, to 1e-8 of the largest effort.
 
 ``tests/data/walking_rnea.npz`` holds Pinocchio's torques for one stride of the tripod gait
-(``scripts/make_walking_fixture.py``; CI has no Pinocchio): the efforts recomputed here must
+(``tests/data/make_walking_fixture.py``; CI has no Pinocchio): the efforts recomputed here must
 match them. With Pinocchio installed the comparison is also redone live, and the free flyer's
 generalized force must vanish (the ground reactions balance the robot).
 """
@@ -58,7 +58,7 @@ def test_efforts_match_the_stored_pinocchio_torques(stored, walking):
 
 def test_efforts_match_pinocchio_live(walking):
     pytest.importorskip("pinocchio")
-    script = load_script("make_walking_fixture")
+    script = load_script("tests/data/make_walking_fixture.py")
     model, result = walking
     comparison = script.pinocchio_rnea(model, result)
     assert comparison.angle_gap < 1e-12  # the driver laws are the angles of q

@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 
 from hexapod.catalog import POLICIES
@@ -290,6 +291,12 @@ def apply_ground_options(scene, args):
 
 
 # ------------------------------------------------------------------ progress on stderr
+
+
+def show_progress() -> bool:
+    """Whether the progress lines are drawn on stderr: on a terminal, and wherever
+    ``HEXAPOD_PROGRESS=1`` asks for them (a log, a program that watches the run)."""
+    return sys.stderr.isatty() or os.environ.get("HEXAPOD_PROGRESS", "0") not in ("", "0")
 
 
 def time_progress(method: str, t0: float):

@@ -11,6 +11,7 @@ from hexapod.cli.common import (
     inverse_arguments,
     limit_arguments,
     sample_progress,
+    show_progress,
 )
 from hexapod.cli.outputs import given_files, output_file
 
@@ -60,7 +61,7 @@ def run(args) -> int:
     times = motion.times
     check_inverse_memory(model, times.size, args.max_memory,
                          f"give a motion of fewer samples than {args.motion}'s")
-    progress = sample_progress("inverse dynamics") if sys.stderr.isatty() else None
+    progress = sample_progress("inverse dynamics") if show_progress() else None
     result = inverse_dynamics(model, times, method=args.method, frame=args.frame,
                               progress=progress)
     write_inverse_files(out, model, result)  # OUT.units.json, then OUT.csv

@@ -15,6 +15,7 @@ from hexapod.cli.common import (
     sample_progress,
     scene_positional,
     seconds,
+    show_progress,
     time_value,
 )
 from hexapod.cli.outputs import given_files, output_directory, suffixes
@@ -76,7 +77,7 @@ def run(args) -> int:
                            " s a report may span: give a shorter --duration")
     check_inverse_memory(model, args.samples, args.max_memory, "ask for fewer --samples")
     times = args.start + np.linspace(0.0, duration, args.samples)
-    show = sys.stderr.isatty()
+    show = show_progress()
     progress = sample_progress("inverse dynamics") if show else None
     started = time.perf_counter()
     result = inverse_dynamics(model, times, method=args.method, frame=args.frame,

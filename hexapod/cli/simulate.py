@@ -18,6 +18,7 @@ from hexapod.cli.common import (
     scene_positional,
     seconds,
     short,
+    show_progress,
     time_progress,
     time_value,
 )
@@ -130,7 +131,7 @@ def run(args) -> int:
     except _OptionError as error:
         print(f"hexapod simulate: error: {error}", file=sys.stderr)
         return 2
-    show = sys.stderr.isatty()
+    show = show_progress()
     result = simulate(model, args.start + duration, t0=args.start, method=args.method,
                       rtol=args.rtol, atol=_absolute_tolerance(args), step=args.step,
                       every=args.every or 1, t_eval=grid,
