@@ -25,9 +25,10 @@ from hexapod.model.model import Data, Model
 from hexapod.spatial import rotation_from_euler_parameters
 
 #: The largest scaled residual of a guess from which Newton's method starts with the rank
-#: decision of the last state it solved (a guess predicted from the sample before: some
-#: 1e-9 for the walking robot's samples a millisecond apart) instead of deciding again.
-HOLD_BELOW = 1e-6
+#: decision of the last state it solved (a guess predicted from the sample before: about
+#: 3e-6 for the walking robot's samples a millisecond apart) instead of deciding again; a
+#: held decision whose rows have come near dependence is decided again anyway.
+HOLD_BELOW = 1e-3
 #: A Newton step keeps the factorisation of the one before when it reduced the largest scaled
 #: residual by at least this factor (as Newton's method proper does near the solution);
 #: a slower step factorises again.
