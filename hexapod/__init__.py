@@ -15,36 +15,39 @@ leaves its results in ``data``::
     gait = hx.inverse_dynamics(model, times)    # a whole motion: efforts and wrenches
     run = hx.simulate(model, 2.0)               # forward simulation
 
-Public means listed in ``hexapod.__all__``; the namespaces :mod:`hexapod.benchmarks` (cases with
-independent references, the studies) and :mod:`hexapod.minimal` (joint-coordinate forms) hold
-their own. Names are imported when first used, so ``import hexapod`` is quick.
+Public means listed in ``hexapod.__all__`` (the pipeline: errors, scenes and their files, the
+model, the algorithms, simulation, sweeps and their results) or in the ``__all__`` of a public
+namespace:
+
+* :mod:`hexapod.scene`: the elements of a scene (``hx.scene.Revolute``, ``hx.scene.SpatialBody``,
+  ...), the laws of time (``hx.scene.Harmonic``, ...) and the scene constants (``GROUND``,
+  ``LENGTH_UNITS``);
+* :mod:`hexapod.output`: what a report is made of (tables, descriptions, figures, atomic
+  writers);
+* :mod:`hexapod.spatial`: :class:`~hexapod.spatial.Placement` and the rotation helpers;
+* :mod:`hexapod.simulation`: the integrators and the defaults (``DEFAULT_METHOD``, ...);
+* :mod:`hexapod.benchmarks` (cases with independent references, the studies),
+  :mod:`hexapod.minimal` (joint-coordinate forms) and :mod:`hexapod.sweeps` (design studies).
+
+Names are imported when first used, so ``import hexapod`` is quick.
 """
 
 from hexapod._support.lazy import attach
 from hexapod._version import __version__ as __version__
 
 __getattr__, __dir__, __all__ = attach(__name__, {
-    "hexapod._support.execution": ["Execution", "executing"],
     "hexapod.errors": ["AssemblyError", "HexapodError", "InputFileError", "IntegrationError",
                        "ModelError", "SingularSystemError"],
-    "hexapod.spatial": ["Placement", "euler_parameters_from_rotation", "rotation_about_axis",
-                        "rotation_from_euler_parameters", "rotation_from_rpy"],
-    # describing a system
-    "hexapod.scene": ["GROUND", "LENGTH_UNITS", "AppliedForce", "AppliedTorque", "Constant",
-                      "Contact", "CoordinateDriver", "Cylindrical", "Distance", "Expression",
-                      "Fixed", "Gait", "GroundForces",
-                      "Harmonic", "Hermite", "Joint", "JointDriver", "JointEffort", "Law",
-                      "Particle", "PlanarBody", "PlanarJoint", "PointOnPlane", "Polynomial",
-                      "Prismatic", "Revolute", "RotationalSpringDamper", "Scene", "SpatialBody",
-                      "Spherical", "Spline", "SpringDamper", "Universal"],
-    # its files, and the built-in scenes
+    "hexapod._support.execution": ["Execution", "executing"],
+    # scenes and their files
+    "hexapod.scene.scene": ["Scene"],
+    "hexapod.scene.builtin": ["builtin_scenes", "load_scene"],
     "hexapod.scene.reader": ["read_scene"],
-    "hexapod.scene.writer": ["scene_text", "write_scene"],
-    "hexapod.scene.urdf": ["read_urdf", "urdf_text"],
-    "hexapod.scene.motion": ["Motion", "MotionWarning", "apply_motion", "read_motion"],
-    "hexapod.scene.builtin": ["DEFAULT_SCENE", "builtin_scenes", "load_scene"],
+    "hexapod.scene.writer": ["write_scene"],
+    "hexapod.scene.urdf": ["read_urdf"],
+    "hexapod.scene.motion": ["apply_motion", "read_motion"],
     # the model
-    "hexapod.model": ["GROUND_INDEX", "Data", "Model", "assemble"],
+    "hexapod.model": ["Data", "Model", "assemble"],
     # algorithms at a state, and over a motion
     "hexapod.algorithms.kinematics": ["assemble_positions", "body_poses", "consistent_state",
                                       "degrees_of_freedom", "marker_trajectories",
@@ -54,27 +57,21 @@ __getattr__, __dir__, __all__ = attach(__name__, {
                                    "wrenches_from_multipliers"],
     "hexapod.algorithms.inverse": ["InverseResult", "inverse_dynamics"],
     "hexapod.algorithms.balance": ["BodyBalance", "body_balance"],
-    "hexapod.algorithms.ground": ["contact_weights", "ground_reactions"],
+    "hexapod.algorithms.ground": ["ground_reactions"],
     "hexapod.algorithms.topology": ["BodyJointGraph", "Mobility", "VectorNetwork",
                                     "body_joint_graph", "mobility", "vector_network"],
-    # simulation
+    # in time
     "hexapod.simulation.loop": ["simulate"],
     "hexapod.simulation.results": ["SimulationResult"],
-    "hexapod.simulation.registry": ["DEFAULT_ATOL", "DEFAULT_METHOD", "DEFAULT_RTOL",
-                                    "INTEGRATORS", "get_integrator", "register"],
+    "hexapod.simulation.registry": ["INTEGRATORS", "get_integrator", "register"],
     "hexapod.simulation.integrators": ["Integrator"],
     "hexapod.simulation.diagnostics": ["Diagnosis", "diagnose"],
-    # what users read
-    "hexapod.output.report": ["RunInfo", "agreement", "report_files", "wrench_label"],
-    "hexapod.output.inverse_csv": ["inverse_columns", "inverse_csv_text", "inverse_table"],
-    "hexapod.output.describe": ["describe_model", "describe_state", "format_model",
-                                "format_state"],
-    "hexapod.output.figures": ["COMPONENT_COLOURS", "effort_figure", "png_bytes",
-                               "trajectory_figure", "wrench_figure"],
-    "hexapod._support.files": ["write_atomically", "write_directory_atomically"],
-    # design studies
     "hexapod.sweeps.run": ["sweep"],
     # namespaces
+    "hexapod.scene": ["scene"],
+    "hexapod.output": ["output"],
+    "hexapod.spatial": ["spatial"],
+    "hexapod.simulation": ["simulation"],
     "hexapod.benchmarks": ["benchmarks"],
     "hexapod.minimal": ["minimal"],
     "hexapod.sweeps": ["sweeps"],

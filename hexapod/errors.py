@@ -38,7 +38,15 @@ class Problem:
 
 
 class ModelError(HexapodError):
-    """A scene description is invalid. Carries every problem found, not only the first."""
+    """A scene description is invalid. Carries every problem found, not only the first.
+
+    Parameters
+    ----------
+    subject : str
+        What was checked, e.g. ``"scene file leg.toml"``; the message's first line.
+    problems : list of Problem
+        Every problem found, one line each in the message.
+    """
 
     def __init__(self, subject: str, problems: list[Problem]):
         self.subject = subject

@@ -10,10 +10,16 @@ so the model's residuals and the numerical helpers share one formula.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import casadi as ca
 import numpy as np
+from numpy.typing import ArrayLike
+
+#: Public as ``hexapod.spatial``: the frame and the rotation helpers a scene is written with.
+__all__ = ["Placement", "euler_parameters_from_rotation", "rotation_about_axis",
+           "rotation_from_euler_parameters", "rotation_from_rpy", "rpy_from_rotation"]
 
 _SYMBOLIC = (ca.SX, ca.MX, ca.DM)
 
@@ -35,6 +41,7 @@ def _inlined(formula):
     operation from Python costs far more when models have many bodies)."""
     cache: dict = {}
 
+    @functools.wraps(formula)
     def wrapper(*args):
         if not _is_symbolic(*args):
             return formula(*args)
@@ -44,8 +51,6 @@ def _inlined(formula):
             cache[sizes] = ca.Function(formula.__name__, symbols, [formula(*symbols)])
         return cache[sizes](*args)
 
-    wrapper.__name__ = formula.__name__
-    wrapper.__doc__ = formula.__doc__
     return wrapper
 
 
@@ -56,8 +61,19 @@ def skew(w):
 
 
 @_inlined
-def rotation_from_euler_parameters(p):
-    """``A(p) = (2 e0^2 - 1) I + 2 (e e^T + e0 ~e)``, body -> global (unit ``p`` assumed)."""
+def rotation_from_euler_parameters(p: ArrayLike | ca.SX | ca.MX) -> np.ndarray | ca.SX | ca.MX:
+    """``A(p) = (2 e0^2 - 1) I + 2 (e e^T + e0 ~e)``, body -> global (unit ``p`` assumed).
+
+    Parameters
+    ----------
+    p : array_like, shape (4,), or a CasADi SX or MX vector
+        Euler parameters ``(e0, e1, e2, e3)``, scalar first.
+
+    Returns
+    -------
+    ndarray, shape (3, 3), or a CasADi matrix
+        The rotation matrix, of the kind of ``p``.
+    """
     e0, e1, e2, e3 = p[0], p[1], p[2], p[3]
     return _matrix(
         [
@@ -159,8 +175,19 @@ def quaternion_log(p) -> np.ndarray:
     return k * p[..., 1:]
 
 
-def euler_parameters_from_rotation(R) -> np.ndarray:
-    """Unit Euler parameters (scalar first, ``e0 >= 0``) of a rotation matrix (Shepperd)."""
+def euler_parameters_from_rotation(R: ArrayLike) -> np.ndarray:
+    """Unit Euler parameters (scalar first, ``e0 >= 0``) of a rotation matrix (Shepperd).
+
+    Parameters
+    ----------
+    R : array_like, shape (3, 3)
+        A rotation matrix.
+
+    Returns
+    -------
+    ndarray, shape (4,)
+        ``(e0, e1, e2, e3)``.
+    """
     R = np.asarray(R, dtype=float)
     trace = np.trace(R)
     candidates = np.array([trace, R[0, 0], R[1, 1], R[2, 2]])
@@ -186,16 +213,38 @@ def euler_parameters_from_rotation(R) -> np.ndarray:
     return -p if p[0] < 0 else p
 
 
-def rotation_about_axis(axis, angle) -> np.ndarray:
-    """Rodrigues' formula: rotation by ``angle`` (rad) about the unit direction of ``axis``."""
+def rotation_about_axis(axis: ArrayLike, angle: float) -> np.ndarray:
+    """Rodrigues' formula: rotation by ``angle`` (rad) about the unit direction of ``axis``.
+
+    Parameters
+    ----------
+    axis : array_like, shape (3,)
+        The axis (any nonzero length).
+    angle : float
+        rad, positive counter-clockwise about ``axis``.
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+    """
     a = np.asarray(axis, dtype=float)
     a = a / np.linalg.norm(a)
     K = skew(a)
     return np.eye(3) + np.sin(angle) * K + (1.0 - np.cos(angle)) * (K @ K)
 
 
-def rotation_from_rpy(roll, pitch, yaw) -> np.ndarray:
-    """URDF convention: ``R = Rz(yaw) Ry(pitch) Rx(roll)`` (fixed axes x, y, z)."""
+def rotation_from_rpy(roll: float, pitch: float, yaw: float) -> np.ndarray:
+    """URDF convention: ``R = Rz(yaw) Ry(pitch) Rx(roll)`` (fixed axes x, y, z).
+
+    Parameters
+    ----------
+    roll, pitch, yaw : float
+        rad.
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+    """
     return (
         rotation_about_axis([0, 0, 1], yaw)
         @ rotation_about_axis([0, 1, 0], pitch)
@@ -203,10 +252,21 @@ def rotation_from_rpy(roll, pitch, yaw) -> np.ndarray:
     )
 
 
-def rpy_from_rotation(R) -> np.ndarray:
+def rpy_from_rotation(R: ArrayLike) -> np.ndarray:
     """``(roll, pitch, yaw)`` with ``R = Rz(yaw) Ry(pitch) Rx(roll)`` (URDF), accurate to
     round-off everywhere (pitch from ``atan2``, not ``arcsin``, which loses half the digits near
-    +-90 degrees). At gimbal lock the whole turn about z is put in yaw."""
+    +-90 degrees). At gimbal lock the whole turn about z is put in yaw.
+
+    Parameters
+    ----------
+    R : array_like, shape (3, 3)
+        A rotation matrix.
+
+    Returns
+    -------
+    ndarray, shape (3,)
+        ``(roll, pitch, yaw)``, rad.
+    """
     R = np.asarray(R, dtype=float)
     pitch = np.arctan2(-R[2, 0], np.hypot(R[0, 0], R[1, 0]))
     if np.hypot(R[0, 0], R[1, 0]) < 1e-12:
@@ -246,6 +306,14 @@ class Placement:
     In space ``position`` has 3 entries and ``rotation`` is 3 x 3; in the plane, 2 and 2 x 2.
     Compose with ``@``: ``a @ b`` is frame ``b`` (given in ``a``) expressed in ``a``'s outer
     frame.
+
+    Parameters
+    ----------
+    position : array_like, shape (3,) or (2,)
+        The frame's origin in the outer frame (m, or the scene's length unit).
+    rotation : array_like, shape (3, 3) or (2, 2), or float, optional
+        Its axes in the outer frame (local -> outer); in the plane also an angle (rad).
+        Default: the identity.
     """
 
     position: np.ndarray

@@ -5,7 +5,7 @@ The inverse efforts are smooth between the times :func:`effort_breaks` lists and
 smoothness there: each foot's touch-down and lift-off (its rows and its path switch) and the
 ends of its load ramps (the load-sharing weight, a quintic smooth step clipped to 1, is C2
 there). Each effort is therefore a separate quintic spline (not-a-knot, the interpolant of
-:class:`hexapod.Spline` of degree 5) on each interval between consecutive breaks, exact at
+:class:`hexapod.scene.Spline` of degree 5) on each interval between consecutive breaks, exact at
 every sample (:class:`EffortTable`). Close to a switch the efforts change fast but smoothly;
 uniform samples would need some 0.2 ms steps all along, so :func:`adaptive_inverse` instead
 bisects, round after round, the intervals whose midpoint the spline misses, until each joint's
@@ -19,13 +19,10 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 
 import hexapod as hx
-from hexapod import (
-    Contact,
-    Law,
-    Scene,
-)
+from hexapod import Scene
+from hexapod.scene import Contact, Law
 
-#: Degree of the effort splines (C4; 5 is the largest :class:`hexapod.Spline` offers).
+#: Degree of the effort splines (C4; 5 is the largest :class:`hexapod.scene.Spline` offers).
 EFFORT_DEGREE = 5
 #: Mean step of the first samples of :func:`adaptive_inverse` (s).
 EFFORT_SPACING = 10e-3
@@ -38,8 +35,8 @@ MIN_INTERVALS = 6
 # ------------------------------------------------------------------ the schedule
 
 def _contacts(source) -> list:
-    """The contact schedules of a scene (its :class:`hexapod.Contact` joints) or of a model (the
-    schedules of ``model.contacts``, in SI)."""
+    """The contact schedules of a scene (its :class:`hexapod.scene.Contact` joints) or of a model
+    (the schedules of ``model.contacts``, in SI)."""
     if isinstance(source, Scene):
         return [j for j in source.joints.values() if isinstance(j, Contact)]
     return [c.schedule for c in source.contacts]
@@ -133,10 +130,10 @@ def sample_times(source, t0: float, t1: float, spacing: float = EFFORT_SPACING,
 class EffortTable:
     """The efforts of several joints (``values``, N x J, at ``times``) as splines of time joined
     end to end: piece ``k``, on ``[breaks[k], breaks[k + 1]]``, is the not-a-knot spline of
-    ``degree`` (the interpolant of :class:`hexapod.Spline`) through the samples in that interval,
-    both ends included (neighbouring pieces share their end sample). Outside ``[breaks[0],
-    breaks[-1]]`` the end pieces are continued. Exact at every sample; inside each piece as
-    smooth as the spline, continuous at the breaks.
+    ``degree`` (the interpolant of :class:`hexapod.scene.Spline`) through the samples in that
+    interval, both ends included (neighbouring pieces share their end sample). Outside
+    ``[breaks[0], breaks[-1]]`` the end pieces are continued. Exact at every sample; inside each
+    piece as smooth as the spline, continuous at the breaks.
 
     All joints are evaluated together (one spline with J columns per piece) and the values at
     the last time asked for are kept: an integrator asks for every law at the same time, one

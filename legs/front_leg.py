@@ -23,7 +23,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from hexapod import AppliedForce, Scene
+from hexapod import Scene
+from hexapod.scene import AppliedForce
 from legs.cockroach import MODEL_SCALE, STRIDE_PERIOD
 from legs.gait import GAITS
 from legs.leg import JOINTS, leg_scene

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hexapod import Harmonic, Spline
+from hexapod.scene import Harmonic, Spline
 from legs.cockroach import MODEL_SCALE, STANCE_LENGTH_MM, STRIDE_PERIOD, THC_POINT_MM
 from legs.stepping import path_targets, stepping_harmonics
 

@@ -38,7 +38,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hexapod import GROUND, JointDriver, Revolute, Scene, SpatialBody
+from hexapod import Scene
+from hexapod.scene import GROUND, JointDriver, Revolute, SpatialBody
 from legs.cockroach import GAIT_LAWS, MODEL_SCALE, REST_POSE_DEG, SEGMENTS, bracket
 
 JOINTS = tuple(name for name, _, _ in GAIT_LAWS)

@@ -22,7 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from hexapod import Hermite, assemble, inverse_dynamics
+from hexapod import assemble, inverse_dynamics
+from hexapod.scene import Hermite
 from legs.cockroach import MODEL_SCALE, STRIDE_PERIOD
 from legs.gait import LEG_NAMES
 from legs.robot import hexapod_scene

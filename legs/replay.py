@@ -2,12 +2,13 @@
 simulation of the same robot with the same contact schedule.
 
 :func:`replay_scene` turns a driven walking scene (every revolute joint prescribed by a
-:class:`hexapod.JointDriver`, the feet held by :class:`hexapod.Contact` joints on their stance
-schedule, see :func:`legs.robot.hexapod_scene`) into its **forward twin**: the same bodies,
-joints and contacts, each driver replaced by a :class:`hexapod.JointEffort` whose law reproduces
-the efforts :func:`hexapod.inverse_dynamics` found, the bodies starting at the first sample's
-state. :func:`replay` simulates the twin (:func:`hexapod.simulate`), :func:`agreement` compares
-its joint angles with the drivers' laws; :func:`replay_gait` does all of it for one gait.
+:class:`hexapod.scene.JointDriver`, the feet held by :class:`hexapod.scene.Contact` joints on
+their stance schedule, see :func:`legs.robot.hexapod_scene`) into its **forward twin**: the
+same bodies, joints and contacts, each driver replaced by a :class:`hexapod.scene.JointEffort`
+whose law reproduces the efforts :func:`hexapod.inverse_dynamics` found, the bodies starting at
+the first sample's state. :func:`replay` simulates the twin (:func:`hexapod.simulate`),
+:func:`agreement` compares its joint angles with the drivers' laws; :func:`replay_gait` does
+all of it for one gait.
 
 **The twin is unstable, so it is replayed in windows.** A robot whose joints are driven by
 efforts fixed in time, with nothing feeding back its state, has nothing to hold it on its path:
@@ -29,7 +30,7 @@ of at most one window, and a disagreement of the efforts with the motion would s
 the times :func:`effort_breaks` lists and lose smoothness there: each foot's touch-down and
 lift-off (its rows and its path switch) and the ends of its load ramps (the load-sharing weight,
 a quintic smooth step clipped to 1, is C2 there). Each effort is therefore a separate quintic
-spline (not-a-knot, the interpolant of :class:`hexapod.Spline` of degree 5) on each interval
+spline (not-a-knot, the interpolant of :class:`hexapod.scene.Spline` of degree 5) on each interval
 between consecutive breaks, exact at every sample. Close to a switch the efforts change fast but
 smoothly: a foot's load reaches it over the first few milliseconds after touch-down and leaves
 it over the last few before lift-off (inverse dynamics at 25 microsecond steps there: a quintic
@@ -63,15 +64,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 import hexapod as hx
-from hexapod import (
-    Joint,
-    JointDriver,
-    JointEffort,
-    Particle,
-    PlanarBody,
-    Scene,
-    SpatialBody,
-)
+from hexapod import Scene
+from hexapod.scene import Joint, JointDriver, JointEffort, Particle, PlanarBody, SpatialBody
 from legs.cockroach import STRIDE_PERIOD
 from legs.efforts import (
     EFFORT_DEGREE,
@@ -101,8 +95,8 @@ def _drivers(scene: Scene) -> dict[str, JointDriver]:
 def replay_scene(scene: Scene, result, *, breaks=None, degree: int = EFFORT_DEGREE,
                  name: str | None = None) -> Scene:
     """The forward twin of a driven ``scene``: its bodies, joints, contacts and force elements,
-    each joint driver replaced by a :class:`hexapod.JointEffort` named ``<driver>/effort`` whose
-    law (a column of an :class:`EffortTable`) passes through the efforts of ``result`` (an
+    each joint driver replaced by a :class:`hexapod.scene.JointEffort` named ``<driver>/effort``
+    whose law (a column of an :class:`EffortTable`) passes through the efforts of ``result`` (an
     :class:`hexapod.InverseResult` of the scene's model) at its sample times, and the bodies
     starting at the state of the first sample (pose and velocity). Every joint's frames are
     written out explicitly (as the original scene places them), so that moving the bodies to
@@ -178,7 +172,7 @@ def _body_at(body, q: np.ndarray, v: np.ndarray, unit: float):
     frame's pose and velocity given in the scene's unit."""
     if not isinstance(body, SpatialBody):
         raise ValueError(f"body '{body.name}': only spatial bodies are replayed")
-    rotation = hx.rotation_from_euler_parameters(q[3:7])
+    rotation = hx.spatial.rotation_from_euler_parameters(q[3:7])
     omega = rotation @ v[3:6]  # world axes
     arm = rotation @ (np.asarray(body.com, dtype=float) * unit)  # origin -> centre of mass
     position = q[:3] - arm
@@ -310,7 +304,7 @@ def _phase(model, a: float, b: float, lift_offs: np.ndarray) -> tuple[float, flo
 
 
 def replay(model, result, *, window: float | None = WINDOW, method: str | None = None,
-           rtol: float = hx.DEFAULT_RTOL, atol: float = hx.DEFAULT_ATOL,
+           rtol: float = hx.simulation.DEFAULT_RTOL, atol: float = hx.simulation.DEFAULT_ATOL,
            every: int = EVERY, until: float | None = None) -> Replay:
     """Simulate the twin ``model`` with :func:`hexapod.simulate` over the span of ``result``
     (the inverse result it was made from).
@@ -333,7 +327,7 @@ def replay(model, result, *, window: float | None = WINDOW, method: str | None =
     singular saddle-point system. Without the gap the tripod's replay jumped by 1e-3 rad at
     each lift-off, and the wave's, whose sample at a lift-off falls 1e-17 s before it, failed
     on non-finite numbers)."""
-    method = method or hx.DEFAULT_METHOD
+    method = method or hx.simulation.DEFAULT_METHOD
     times = np.asarray(result.times, dtype=float)
     end = times[-1] if until is None else float(until)
     if not times[0] < end <= times[-1]:
@@ -420,8 +414,8 @@ def agreement(scene: Scene, model, run: Replay, result, trunk: str = "trunk") ->
 def replay_gait(gait: str, t0: float = 0.0, t1: float | None = None, *,
                 period: float = STRIDE_PERIOD, tol: float = EFFORT_TOL,
                 spacing: float = EFFORT_SPACING, window: float | None = WINDOW,
-                method: str | None = None, rtol: float = hx.DEFAULT_RTOL,
-                atol: float = hx.DEFAULT_ATOL, every: int = EVERY) -> dict:
+                method: str | None = None, rtol: float = hx.simulation.DEFAULT_RTOL,
+                atol: float = hx.simulation.DEFAULT_ATOL, every: int = EVERY) -> dict:
     """The whole check for one gait of the free-trunk hexapod from ``t0`` to ``t1`` (default:
     one stride): inverse dynamics at the samples of :func:`adaptive_inverse`, the twin, its
     replay (:func:`replay`), the agreement. Returns a dict with ``scene, model, result,

@@ -6,11 +6,11 @@ the trunk's reference frame is its centre of mass (x forward, y left, z up).
 **Walking** (``trunk="free"``, the built-in ``hexapod``): the trunk is a free body. Every joint
 is driven by the gait's exact laws (:class:`legs.stepping.Stepping`: each foot on its path to
 round-off), and each foot in stance is held at its foothold by a
-:class:`hexapod.Contact` (no slip). The footholds are where the feet touch down when the trunk
+:class:`hexapod.scene.Contact` (no slip). The footholds are where the feet touch down when the trunk
 walks straight ahead at the gait's speed, level, from the origin at ``t = 0`` at the height that
 puts the ground at ``z = 0``; the trunk's motion itself is not prescribed but follows from the
 legs and the feet in stance. Three or more feet are always down, so the ground forces are shared
-by the scene's policy (``hexapod.GroundForces``).
+by the scene's policy (``hexapod.scene.GroundForces``).
 
 **Bench-top** (``trunk="held"``): the trunk is welded to the world, every joint driven by the
 gait's harmonic laws and each foot in stance loaded by an invented ``sin^2`` pulse (the
@@ -36,19 +36,18 @@ from dataclasses import replace
 
 import numpy as np
 
-from hexapod import (
+from hexapod import Scene
+from hexapod.scene import (
     GROUND,
     AppliedForce,
     Constant,
     Contact,
     Fixed,
     GroundForces,
-    Placement,
-    Scene,
     SpatialBody,
     Spherical,
-    rotation_about_axis,
 )
+from hexapod.spatial import Placement, rotation_about_axis
 from legs.cockroach import (
     GROUND_Z_MM,
     MODEL_SCALE,

@@ -15,7 +15,7 @@ follows its fore-aft position, with the amplitudes of ``legs.cockroach.GAIT_LAWS
 ``thc_protraction``, ``ctr`` and ``fti`` are solved (inverse kinematics, Newton's method for all
 samples of the cycle at once) so that the foot is on its path. Each joint's angle is then a
 periodic function of time, fitted by least squares with ``HARMONICS`` harmonics
-(:class:`hexapod.Harmonic`, C-infinity), the three prescribed ones first so that the solved
+(:class:`hexapod.scene.Harmonic`, C-infinity), the three prescribed ones first so that the solved
 ones compensate exactly what the fit makes of them. ``scripts/studies/gait_paths.py`` measures how
 closely the feet then follow their paths. Angles do not depend on the scale, so the fit is done
 once per leg position, duty factor and segment lengths, at natural scale, and serves both sides
@@ -36,7 +36,7 @@ from functools import cache
 
 import numpy as np
 
-from hexapod import Law
+from hexapod.scene import Law
 from legs.cockroach import (
     FOOT_LIFT_MM,
     GAIT_LAWS,

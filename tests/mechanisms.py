@@ -33,8 +33,8 @@ def rod_pendulum(dimension: int):
         model = hx.assemble(read_scene(scenes / "pendulum.toml"))
     else:
         scene = hx.Scene("planar-pendulum", 2)
-        scene.add(hx.PlanarBody("rod", 1.0, 0.0833, position=[0.5, 0.0]))
-        scene.add(hx.Revolute("pivot", "ground", "rod", origin=[0.0, 0.0]))
+        scene.add(hx.scene.PlanarBody("rod", 1.0, 0.0833, position=[0.5, 0.0]))
+        scene.add(hx.scene.Revolute("pivot", "ground", "rod", origin=[0.0, 0.0]))
         model = hx.assemble(scene)
     return model, np.sqrt(9.81 * 0.5 / (0.0833 + 0.25))
 
@@ -58,21 +58,22 @@ def pendulum(form: str, theta: float, unit: str = "m", mass=None, inertia=None) 
     if form == "spatial":
         scene = hx.Scene("pendulum", 3, unit)
         # x right, z up; rotating about +y by theta takes -z (down) towards -x
-        scene.add(hx.SpatialBody("bob", m, [inertia_u, inertia_u, inertia_u],
-                                 position=[-lenu * s, 0.0, -lenu * c],
-                                 rotation=hx.rotation_about_axis([0, 1, 0], theta)))
-        scene.add(hx.Revolute("pivot", "ground", "bob", origin=[0, 0, 0], axis=[0, 1, 0]))
+        scene.add(hx.scene.SpatialBody("bob", m, [inertia_u, inertia_u, inertia_u],
+                                       position=[-lenu * s, 0.0, -lenu * c],
+                                       rotation=hx.spatial.rotation_about_axis([0, 1, 0], theta)))
+        scene.add(hx.scene.Revolute("pivot", "ground", "bob", origin=[0, 0, 0], axis=[0, 1, 0]))
     elif form == "planar":
         scene = hx.Scene("pendulum", 2, unit)
-        scene.add(hx.PlanarBody("bob", m, inertia_u, position=[lenu * s, -lenu * c],
-                                angle=theta))
-        scene.add(hx.Revolute("pivot", "ground", "bob", origin=[0, 0]))
+        scene.add(hx.scene.PlanarBody("bob", m, inertia_u, position=[lenu * s, -lenu * c],
+                                      angle=theta))
+        scene.add(hx.scene.Revolute("pivot", "ground", "bob", origin=[0, 0]))
     elif form in ("particle-3d", "particle-2d"):
         dim = 3 if form == "particle-3d" else 2
         scene = hx.Scene("pendulum", dim, unit)
         position = [lenu * s, 0.0, -lenu * c] if dim == 3 else [lenu * s, -lenu * c]
-        scene.add(hx.Particle("bob", m, position=position))
-        scene.add(hx.Distance("rod", "ground", "bob", parent_frame=hx.Placement(np.zeros(dim))))
+        scene.add(hx.scene.Particle("bob", m, position=position))
+        scene.add(hx.scene.Distance("rod", "ground", "bob",
+                                    parent_frame=hx.spatial.Placement(np.zeros(dim))))
     else:
         raise ValueError(form)
     return scene
@@ -129,22 +130,22 @@ def four_bar(dimension: int, theta: float, *, driven: bool = True, unit: str = "
         centre = (P + R) / 2
         if dimension == 3:
             radius = 0.01 / k
-            scene.add(hx.SpatialBody(
+            scene.add(hx.scene.SpatialBody(
                 name, mass, [mass * radius**2 / 2, transverse, transverse],
-                position=[*centre, 0.0], rotation=hx.rotation_about_axis([0, 0, 1], angle)))
+                position=[*centre, 0.0], rotation=hx.spatial.rotation_about_axis([0, 0, 1], angle)))
         else:
-            scene.add(hx.PlanarBody(name, mass, transverse, position=centre, angle=angle))
+            scene.add(hx.scene.PlanarBody(name, mass, transverse, position=centre, angle=angle))
 
     def at(p):
         return [*p, 0.0] if dimension == 3 else list(p)
 
-    scene.add(hx.Revolute("crank_pin", "ground", "crank", origin=at(A)))
-    scene.add(hx.Revolute("coupler_pin", "crank", "coupler", origin=at(B)))
-    scene.add(hx.Revolute("rocker_pin", "coupler", "rocker", origin=at(C)))
-    scene.add(hx.Revolute("rocker_ground", "rocker", "ground", origin=at(D)))
+    scene.add(hx.scene.Revolute("crank_pin", "ground", "crank", origin=at(A)))
+    scene.add(hx.scene.Revolute("coupler_pin", "crank", "coupler", origin=at(B)))
+    scene.add(hx.scene.Revolute("rocker_pin", "coupler", "rocker", origin=at(C)))
+    scene.add(hx.scene.Revolute("rocker_ground", "rocker", "ground", origin=at(D)))
     if driven:
-        scene.add(hx.JointDriver("motor", "crank_pin",
-                                 law or hx.Polynomial([0.0, 2.0, -1.5])))
+        scene.add(hx.scene.JointDriver("motor", "crank_pin",
+                                       law or hx.scene.Polynomial([0.0, 2.0, -1.5])))
     return scene
 
 
@@ -162,23 +163,24 @@ def random_tree(seed: int, n_bodies: int, *, chain: bool = False, prismatic: flo
         name = f"b{k}"
         parent = "ground" if k == 0 else (f"b{k - 1}" if chain else f"b{rng.integers(0, k)}")
         origin = points[parent] + rng.normal(size=3) * 0.3
-        rotation = hx.rotation_about_axis(rng.normal(size=3), rng.uniform(0, np.pi))
+        rotation = hx.spatial.rotation_about_axis(rng.normal(size=3), rng.uniform(0, np.pi))
         moments = np.sort(rng.uniform(0.02, 0.1, size=3))
         moments[2] = min(moments[2], moments[0] + moments[1])  # a physical inertia
-        scene.add(hx.SpatialBody(name, rng.uniform(0.5, 2.0), moments,
-                                 com=rng.normal(size=3) * 0.2, position=origin,
-                                 rotation=rotation,
-                                 inertia_rotation=hx.rotation_about_axis(rng.normal(size=3),
-                                                                         rng.uniform(0, 3))))
-        cls = hx.Prismatic if rng.uniform() < prismatic else hx.Revolute
+        scene.add(hx.scene.SpatialBody(name, rng.uniform(0.5, 2.0), moments,
+                                       com=rng.normal(size=3) * 0.2, position=origin,
+                                       rotation=rotation,
+                                       inertia_rotation=hx.spatial.rotation_about_axis(
+                                           rng.normal(size=3), rng.uniform(0, 3))))
+        cls = hx.scene.Prismatic if rng.uniform() < prismatic else hx.scene.Revolute
         axis = rng.normal(size=3) * rng.uniform(0.5, 3.0)  # not normalised on purpose
         scene.add(cls(f"j{k}", parent, name, origin=origin,
-                      rotation=hx.rotation_about_axis(rng.normal(size=3), rng.uniform(0, 3)),
+                      rotation=hx.spatial.rotation_about_axis(rng.normal(size=3),
+                                                              rng.uniform(0, 3)),
                       axis=axis))
-        law = hx.Harmonic(offset=rng.normal() * 0.3, sin=[rng.uniform(0.2, 0.8)],
-                          cos=[rng.normal() * 0.2], frequency=rng.uniform(0.3, 1.5))
+        law = hx.scene.Harmonic(offset=rng.normal() * 0.3, sin=[rng.uniform(0.2, 0.8)],
+                                cos=[rng.normal() * 0.2], frequency=rng.uniform(0.3, 1.5))
         if driven:  # the law is drawn either way, so driven and free twins share a geometry
-            scene.add(hx.JointDriver(f"d{k}", f"j{k}", law))
+            scene.add(hx.scene.JointDriver(f"d{k}", f"j{k}", law))
         points[name] = origin + rng.normal(size=3) * 0.2
     return scene
 
@@ -190,11 +192,11 @@ def sprung_top(damping: float, inertia=(0.002, 0.002, 0.004)) -> hx.Model:
     point of its rim to a fixed point: gyroscopic terms, a spring potential, and, with damping,
     a force depending on the velocities."""
     scene = hx.Scene("sprung-top", 3)
-    rotation = hx.rotation_about_axis([1.0, 0.0, 0.0], 0.5)
-    scene.add(hx.SpatialBody("top", 0.5, list(inertia), position=rotation @ [0, 0, 0.1],
-                             rotation=rotation, angular_velocity=[1.0, -2.0, 30.0]))
-    scene.add(hx.Spherical("tip", "ground", "top", origin=[0.0, 0.0, 0.0]))
-    scene.add(hx.SpringDamper("spring", "ground", "top", point_a=[0.3, 0.1, 0.2],
-                              point_b=[0.05, 0.0, 0.0], stiffness=40.0, damping=damping,
-                              free_length=0.2))
+    rotation = hx.spatial.rotation_about_axis([1.0, 0.0, 0.0], 0.5)
+    scene.add(hx.scene.SpatialBody("top", 0.5, list(inertia), position=rotation @ [0, 0, 0.1],
+                                   rotation=rotation, angular_velocity=[1.0, -2.0, 30.0]))
+    scene.add(hx.scene.Spherical("tip", "ground", "top", origin=[0.0, 0.0, 0.0]))
+    scene.add(hx.scene.SpringDamper("spring", "ground", "top", point_a=[0.3, 0.1, 0.2],
+                                    point_b=[0.05, 0.0, 0.0], stiffness=40.0, damping=damping,
+                                    free_length=0.2))
     return hx.assemble(scene)

@@ -15,33 +15,36 @@ def arm(unit="m", world_joint=False):
     """A two-link arm whose first joint is on the sub-model's ground."""
     k = hx.scene.LENGTH_UNITS[unit]
     scene = hx.Scene("arm", 3, unit)
-    scene.add(hx.SpatialBody("upper", 0.4, np.array([1e-3, 4e-3, 4e-3]) / k**2,
-                             com=[0.1 / k, 0, 0]))
-    scene.add(hx.SpatialBody("lower", 0.3, np.array([1e-3, 3e-3, 3e-3]) / k**2,
-                             com=[0.1 / k, 0, 0],
-                             position=[0.2 / k, 0, 0]))
+    scene.add(hx.scene.SpatialBody("upper", 0.4, np.array([1e-3, 4e-3, 4e-3]) / k**2,
+                                   com=[0.1 / k, 0, 0]))
+    scene.add(hx.scene.SpatialBody("lower", 0.3, np.array([1e-3, 3e-3, 3e-3]) / k**2,
+                                   com=[0.1 / k, 0, 0],
+                                   position=[0.2 / k, 0, 0]))
     if world_joint:
-        scene.add(hx.Revolute("shoulder", "ground", "upper", origin=[0, 0, 0], axis=[0, 1, 0]))
+        scene.add(hx.scene.Revolute("shoulder", "ground", "upper", origin=[0, 0, 0],
+                                    axis=[0, 1, 0]))
     else:
-        scene.add(hx.Revolute("shoulder", "ground", "upper",
-                              parent_frame=hx.Placement(np.zeros(3)), axis=[0, 1, 0]))
-    scene.add(hx.Revolute("elbow", "upper", "lower", origin=[0.2 / k, 0, 0], axis=[0, 1, 0]))
-    scene.add(hx.JointDriver("drive", "elbow", hx.Harmonic(sin=[0.4], frequency=1.0)))
-    scene.add(hx.SpringDamper("tendon", "ground", "lower", point_a=[0.0, 0.0, 0.05 / k],
-                              point_b=[0.1 / k, 0, 0], stiffness=20.0 * k))
+        scene.add(hx.scene.Revolute("shoulder", "ground", "upper",
+                                    parent_frame=hx.spatial.Placement(np.zeros(3)), axis=[0, 1, 0]))
+    scene.add(hx.scene.Revolute("elbow", "upper", "lower", origin=[0.2 / k, 0, 0], axis=[0, 1, 0]))
+    scene.add(hx.scene.JointDriver("drive", "elbow", hx.scene.Harmonic(sin=[0.4], frequency=1.0)))
+    scene.add(hx.scene.SpringDamper("tendon", "ground", "lower", point_a=[0.0, 0.0, 0.05 / k],
+                                    point_b=[0.1 / k, 0, 0], stiffness=20.0 * k))
     return scene
 
 
 def trunk_scene():
     scene = hx.Scene("robot")
-    scene.add(hx.SpatialBody("trunk", 5.0, [0.1, 0.2, 0.25], position=[0.0, 0.0, 0.5],
-                             rotation=hx.rotation_about_axis([0, 0, 1], 0.3)))
-    scene.add(hx.Fixed("weld", "ground", "trunk"))
+    scene.add(hx.scene.SpatialBody("trunk", 5.0, [0.1, 0.2, 0.25], position=[0.0, 0.0, 0.5],
+                                   rotation=hx.spatial.rotation_about_axis([0, 0, 1], 0.3)))
+    scene.add(hx.scene.Fixed("weld", "ground", "trunk"))
     return scene
 
 
-PLACEMENTS = {"L": hx.Placement([0.2, 0.1, 0.0], hx.rotation_about_axis([0, 0, 1], 1.2)),
-              "R": hx.Placement([0.2, -0.1, 0.0], hx.rotation_about_axis([0, 0, 1], -1.2))}
+PLACEMENTS = {
+    "L": hx.spatial.Placement([0.2, 0.1, 0.0], hx.spatial.rotation_about_axis([0, 0, 1], 1.2)),
+    "R": hx.spatial.Placement([0.2, -0.1, 0.0], hx.spatial.rotation_about_axis([0, 0, 1], -1.2)),
+}
 
 
 def direct_scene():
@@ -53,19 +56,19 @@ def direct_scene():
         sub = arm()
         for name in ("upper", "lower"):
             b = sub.bodies[name]
-            scene.add(hx.SpatialBody(f"{prefix}/{name}", b.mass, b.inertia, com=b.com,
-                                     position=T.transform_point(b.position),
-                                     rotation=T.rotation @ b.rotation))
-        scene.add(hx.Revolute(f"{prefix}/shoulder", "trunk", f"{prefix}/upper",
-                              parent_frame=placement, axis=[0, 1, 0]))
-        scene.add(hx.Revolute(f"{prefix}/elbow", f"{prefix}/upper", f"{prefix}/lower",
-                              origin=T.transform_point([0.2, 0, 0]), rotation=T.rotation,
-                              axis=[0, 1, 0]))
-        scene.add(hx.JointDriver(f"{prefix}/drive", f"{prefix}/elbow",
-                                 hx.Harmonic(sin=[0.4], frequency=1.0)))
-        scene.add(hx.SpringDamper(f"{prefix}/tendon", "trunk", f"{prefix}/lower",
-                                  point_a=placement.transform_point([0, 0, 0.05]),
-                                  point_b=[0.1, 0, 0], stiffness=20.0))
+            scene.add(hx.scene.SpatialBody(f"{prefix}/{name}", b.mass, b.inertia, com=b.com,
+                                           position=T.transform_point(b.position),
+                                           rotation=T.rotation @ b.rotation))
+        scene.add(hx.scene.Revolute(f"{prefix}/shoulder", "trunk", f"{prefix}/upper",
+                                    parent_frame=placement, axis=[0, 1, 0]))
+        scene.add(hx.scene.Revolute(f"{prefix}/elbow", f"{prefix}/upper", f"{prefix}/lower",
+                                    origin=T.transform_point([0.2, 0, 0]), rotation=T.rotation,
+                                    axis=[0, 1, 0]))
+        scene.add(hx.scene.JointDriver(f"{prefix}/drive", f"{prefix}/elbow",
+                                       hx.scene.Harmonic(sin=[0.4], frequency=1.0)))
+        scene.add(hx.scene.SpringDamper(f"{prefix}/tendon", "trunk", f"{prefix}/lower",
+                                        point_a=placement.transform_point([0, 0, 0.05]),
+                                        point_b=[0.1, 0, 0], stiffness=20.0))
     return scene
 
 
@@ -94,13 +97,14 @@ def test_attached_arms_equal_the_same_robot_written_by_hand(unit, world_joint):
 
 def test_six_legs_from_one_builder():
     scene = hx.Scene("hexapod")
-    scene.add(hx.SpatialBody("trunk", 18.4, [0.218, 1.055, 1.226]))
-    scene.add(hx.Fixed("stand", "ground", "trunk"))
+    scene.add(hx.scene.SpatialBody("trunk", 18.4, [0.218, 1.055, 1.226]))
+    scene.add(hx.scene.Fixed("stand", "ground", "trunk"))
     for k, (prefix, y) in enumerate((("L1", 0.08), ("R1", -0.08), ("L2", 0.09), ("R2", -0.09),
                                      ("L3", 0.09), ("R3", -0.09))):
         leg = front_leg_scene(phase=0.0 if prefix in ("L1", "R2", "L3") else np.pi)
-        placement = hx.Placement([0.24 - 0.12 * (k // 2), y, -0.04],
-                                 np.diag([1.0, 1.0 if y > 0 else -1.0, 1.0 if y > 0 else -1.0]))
+        placement = hx.spatial.Placement(
+            [0.24 - 0.12 * (k // 2), y, -0.04],
+            np.diag([1.0, 1.0 if y > 0 else -1.0, 1.0 if y > 0 else -1.0]))
         scene.attach(leg, prefix, base="trunk", placement=placement)
     model = hx.assemble(scene)
     assert len(model.bodies) == 37 and len(model.joints) == 37 and len(model.drivers) == 36

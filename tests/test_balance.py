@@ -110,7 +110,7 @@ class Reference:
 
     def pose(self, name):
         """Centre of mass, rotation (reference axes -> world) of a body; the ground is fixed."""
-        if name == hx.GROUND:
+        if name == hx.scene.GROUND:
             return np.zeros(3), np.eye(3)
         return body_pose(self.model, self.q, self.index(name))
 
@@ -128,7 +128,7 @@ class Reference:
     def point(self, name, ref):
         """World position of a point given in a body's reference frame (world on the ground;
         None: the centre of mass)."""
-        if name == hx.GROUND:
+        if name == hx.scene.GROUND:
             return embed(ref)
         r, R = self.pose(name)
         body = self.bodies[name]
@@ -136,7 +136,7 @@ class Reference:
         return r + R @ embed(local - body.com)
 
     def point_velocity(self, name, world_point):
-        if name == hx.GROUND:
+        if name == hx.scene.GROUND:
             return np.zeros(3)
         velocity, omega = self.motion(name)
         return velocity + np.cross(omega, world_point - self.pose(name)[0])
@@ -147,7 +147,7 @@ class Reference:
         child is the ground)."""
         assert joint.origin is not None
         rotation = np.eye(3) if joint.rotation is None else embed_rotation(joint.rotation)
-        if joint.child == hx.GROUND:
+        if joint.child == hx.scene.GROUND:
             return embed(joint.origin), rotation
         r0, R0 = self.initial_pose(joint.child)
         r, R = self.pose(joint.child)
@@ -192,7 +192,7 @@ def check_free_body_balance(scene, model, t, q, v, loads: Loads, what=""):
     moment_terms = [[] for _ in range(n_bodies)]
 
     def add(name, force, moment_about_point, point, sign=1.0):
-        if name == hx.GROUND:
+        if name == hx.scene.GROUND:
             return
         b = ref.index(name)
         r, _ = ref.pose(name)
@@ -318,39 +318,39 @@ def random_loaded_chain(rng, n=4, reversed_root=False):
         R = _random_rotation(rng)
         inertia = R @ np.diag(mass / 5 * np.array([b * b + c * c, a * a + c * c,
                                                    a * a + b * b])) @ R.T
-        scene.add(hx.SpatialBody(f"b{k}", mass, inertia, com=rng.uniform(-0.2, 0.2, 3),
-                                 position=position, rotation=_random_rotation(rng),
-                                 inertia_rotation=_random_rotation(rng)))
-        parent, child = (hx.GROUND if k == 0 else f"b{k - 1}"), f"b{k}"
+        scene.add(hx.scene.SpatialBody(f"b{k}", mass, inertia, com=rng.uniform(-0.2, 0.2, 3),
+                                       position=position, rotation=_random_rotation(rng),
+                                       inertia_rotation=_random_rotation(rng)))
+        parent, child = (hx.scene.GROUND if k == 0 else f"b{k - 1}"), f"b{k}"
         if k == 0 and reversed_root:
             parent, child = child, parent
-        scene.add(hx.Revolute(f"j{k}", parent, child,
-                              origin=previous + rng.uniform(-0.1, 0.1, 3),
-                              rotation=_random_rotation(rng), axis=rng.normal(size=3)))
+        scene.add(hx.scene.Revolute(f"j{k}", parent, child,
+                                    origin=previous + rng.uniform(-0.1, 0.1, 3),
+                                    rotation=_random_rotation(rng), axis=rng.normal(size=3)))
         previous = position
     springs = [
         # across joint j1 (written child first), across j0 (ground end in world coordinates)
-        hx.SpringDamper("across_j1", "b1", "b0", point_a=[0.1, 0.05, -0.1],
-                        point_b=[-0.05, 0.2, 0.0], stiffness=40.0, damping=3.0,
-                        free_length=0.2),
-        hx.SpringDamper("across_j0", hx.GROUND, "b0", point_a=[0.0, 0.3, 0.2],
-                        point_b=[0.1, 0.0, 0.0], stiffness=25.0, damping=1.5,
-                        free_length=0.25),
+        hx.scene.SpringDamper("across_j1", "b1", "b0", point_a=[0.1, 0.05, -0.1],
+                              point_b=[-0.05, 0.2, 0.0], stiffness=40.0, damping=3.0,
+                              free_length=0.2),
+        hx.scene.SpringDamper("across_j0", hx.scene.GROUND, "b0", point_a=[0.0, 0.3, 0.2],
+                              point_b=[0.1, 0.0, 0.0], stiffness=25.0, damping=1.5,
+                              free_length=0.25),
         # between bodies that share no joint
-        hx.SpringDamper("b0_b2", "b0", "b2", point_a=[0.0, 0.1, 0.1], point_b=None,
-                        stiffness=60.0, damping=2.0, free_length=0.5),
-        hx.SpringDamper("ground_b3", hx.GROUND, "b3", point_a=[1.0, 1.0, 0.5],
-                        point_b=[0.05, -0.1, 0.1], stiffness=30.0, damping=4.0,
-                        free_length=0.8),
+        hx.scene.SpringDamper("b0_b2", "b0", "b2", point_a=[0.0, 0.1, 0.1], point_b=None,
+                              stiffness=60.0, damping=2.0, free_length=0.5),
+        hx.scene.SpringDamper("ground_b3", hx.scene.GROUND, "b3", point_a=[1.0, 1.0, 0.5],
+                              point_b=[0.05, -0.1, 0.1], stiffness=30.0, damping=4.0,
+                              free_length=0.8),
     ]
     forces = [
-        hx.AppliedForce("push_b1", "b1", [3.0, -2.0, 5.0], point=[0.2, -0.1, 0.05]),
-        hx.AppliedForce("push_b3", "b3", [-1.5, 4.0, 2.5], point=[-0.1, 0.15, 0.3],
-                        frame="body"),
-        hx.AppliedForce("pull_b2", "b2", [0.0, 0.0, 6.0]),  # at the centre of mass
+        hx.scene.AppliedForce("push_b1", "b1", [3.0, -2.0, 5.0], point=[0.2, -0.1, 0.05]),
+        hx.scene.AppliedForce("push_b3", "b3", [-1.5, 4.0, 2.5], point=[-0.1, 0.15, 0.3],
+                              frame="body"),
+        hx.scene.AppliedForce("pull_b2", "b2", [0.0, 0.0, 6.0]),  # at the centre of mass
     ]
-    torques = [hx.AppliedTorque("twist_b2", "b2", [0.3, -0.4, 0.8], frame="body")]
-    motor = hx.JointEffort("motor_j2", "j2", 1.7)  # across j2: part of its wrench
+    torques = [hx.scene.AppliedTorque("twist_b2", "b2", [0.3, -0.4, 0.8], frame="body")]
+    motor = hx.scene.JointEffort("motor_j2", "j2", 1.7)  # across j2: part of its wrench
     scene.add(*springs, *forces, *torques, motor)
     loads = Loads(forces=forces, torques=torques, springs=springs[2:])
     return scene, loads
@@ -378,25 +378,25 @@ def random_planar_chain(rng, n=3):
     previous = np.zeros(2)
     for k in range(n):
         position = previous + rng.uniform(-0.1, 0.1, 2) + [0.5, 0.0]
-        scene.add(hx.PlanarBody(f"b{k}", rng.uniform(0.3, 2.0), rng.uniform(0.01, 0.1),
-                                com=rng.uniform(-0.2, 0.2, 2), position=position,
-                                angle=rng.uniform(-np.pi, np.pi)))
+        scene.add(hx.scene.PlanarBody(f"b{k}", rng.uniform(0.3, 2.0), rng.uniform(0.01, 0.1),
+                                      com=rng.uniform(-0.2, 0.2, 2), position=position,
+                                      angle=rng.uniform(-np.pi, np.pi)))
         angle = rng.uniform(-np.pi, np.pi)
-        scene.add(hx.Revolute(f"j{k}", hx.GROUND if k == 0 else f"b{k - 1}", f"b{k}",
-                              origin=previous + rng.uniform(-0.1, 0.1, 2),
-                              rotation=[[np.cos(angle), -np.sin(angle)],
-                                        [np.sin(angle), np.cos(angle)]]))
+        scene.add(hx.scene.Revolute(f"j{k}", hx.scene.GROUND if k == 0 else f"b{k - 1}", f"b{k}",
+                                    origin=previous + rng.uniform(-0.1, 0.1, 2),
+                                    rotation=[[np.cos(angle), -np.sin(angle)],
+                                              [np.sin(angle), np.cos(angle)]]))
         previous = position
     springs = [
-        hx.SpringDamper("across_j1", "b1", "b0", point_a=[0.1, 0.1], point_b=[0.2, -0.1],
-                        stiffness=30.0, damping=2.0, free_length=0.1),
-        hx.SpringDamper("ground_b2", hx.GROUND, "b2", point_a=[1.5, 1.0], point_b=[0.0, 0.1],
-                        stiffness=20.0, damping=1.0, free_length=0.5),
+        hx.scene.SpringDamper("across_j1", "b1", "b0", point_a=[0.1, 0.1], point_b=[0.2, -0.1],
+                              stiffness=30.0, damping=2.0, free_length=0.1),
+        hx.scene.SpringDamper("ground_b2", hx.scene.GROUND, "b2", point_a=[1.5, 1.0],
+                              point_b=[0.0, 0.1], stiffness=20.0, damping=1.0, free_length=0.5),
     ]
-    forces = [hx.AppliedForce("push_b1", "b1", [2.0, -3.0], point=[0.3, 0.1], frame="body"),
-              hx.AppliedForce("push_b0", "b0", [-1.0, 2.5], point=[-0.1, 0.2])]
-    torques = [hx.AppliedTorque("twist_b2", "b2", [0.4])]
-    motor = hx.JointEffort("motor_j2", "j2", 0.9)
+    forces = [hx.scene.AppliedForce("push_b1", "b1", [2.0, -3.0], point=[0.3, 0.1], frame="body"),
+              hx.scene.AppliedForce("push_b0", "b0", [-1.0, 2.5], point=[-0.1, 0.2])]
+    torques = [hx.scene.AppliedTorque("twist_b2", "b2", [0.4])]
+    motor = hx.scene.JointEffort("motor_j2", "j2", 0.9)
     scene.add(*springs, *forces, *torques, motor)
     return scene, Loads(forces=forces, torques=torques, springs=springs[1:])
 
@@ -432,11 +432,12 @@ def test_driven_pendulum_effort_closed_form(motor):
     offset, a, b, f = 0.3, 0.5, -0.4, 0.8  # theta = offset + a cos(w t) + b sin(w t)
     w = 2 * np.pi * f
     scene = hx.Scene("driven-pendulum", dimension=3, gravity=[0.0, -G, 0.0])
-    scene.add(hx.SpatialBody("rod", m, [0.004, J_zz, J_zz], com=[l, 0.0, 0.0]),
-              hx.Revolute("pivot", hx.GROUND, "rod", origin=[0.0, 0.0, 0.0]),
-              hx.JointDriver("drive", "pivot", hx.Harmonic(offset, [a], [b], frequency=f)))
+    scene.add(hx.scene.SpatialBody("rod", m, [0.004, J_zz, J_zz], com=[l, 0.0, 0.0]),
+              hx.scene.Revolute("pivot", hx.scene.GROUND, "rod", origin=[0.0, 0.0, 0.0]),
+              hx.scene.JointDriver("drive", "pivot",
+                                   hx.scene.Harmonic(offset, [a], [b], frequency=f)))
     if motor:
-        scene.add(hx.JointEffort("motor", "pivot", motor))
+        scene.add(hx.scene.JointEffort("motor", "pivot", motor))
     model = hx.assemble(scene)
     for t in (0.0, 0.21, 0.55, 0.9):
         theta = offset + a * np.cos(w * t) + b * np.sin(w * t)

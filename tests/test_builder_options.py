@@ -120,22 +120,22 @@ def test_no_arguments_give_the_committed_scene_files(name):
     header = f"Built-in scene '{name}', written by 'hexapod scenes {name} --write'."
     # alike to round-off: the builders' trigonometry goes through NumPy and SciPy, whose last
     # bits differ between releases
-    assert same_numbers(hx.scene_text(BUILDERS[name](), header=header), committed)
+    assert same_numbers(hx.scene.scene_text(BUILDERS[name](), header=header), committed)
 
 
 def test_explicit_default_values_give_the_built_in_scenes():
     lengths = dict.fromkeys(FACTORS, 1.0)
-    assert hx.scene_text(hexapod_walking(gait="tripod", period=0.5, duty=0.6, scale=20,
-                                         payload=0, **lengths)) \
-        == hx.scene_text(hexapod_walking())
-    assert hx.scene_text(hexapod_held(gait="tripod", period=0.5, duty=0.5, scale=20.0,
-                                      payload=0.0, **lengths)) \
-        == hx.scene_text(hexapod_held())
-    assert hx.scene_text(hexapod_standing(feet=6, scale=20.0, payload=0.0, **lengths)) \
-        == hx.scene_text(hexapod_standing())
-    assert hx.scene_text(front_leg_walking(gait="tripod", period=0.5, scale=20.0)) \
-        == hx.scene_text(front_leg_walking())
-    assert "_length" not in hx.scene_text(hexapod_walking())  # no key more in the files
+    assert hx.scene.scene_text(hexapod_walking(gait="tripod", period=0.5, duty=0.6, scale=20,
+                                               payload=0, **lengths)) \
+        == hx.scene.scene_text(hexapod_walking())
+    assert hx.scene.scene_text(hexapod_held(gait="tripod", period=0.5, duty=0.5, scale=20.0,
+                                            payload=0.0, **lengths)) \
+        == hx.scene.scene_text(hexapod_held())
+    assert hx.scene.scene_text(hexapod_standing(feet=6, scale=20.0, payload=0.0, **lengths)) \
+        == hx.scene.scene_text(hexapod_standing())
+    assert hx.scene.scene_text(front_leg_walking(gait="tripod", period=0.5, scale=20.0)) \
+        == hx.scene.scene_text(front_leg_walking())
+    assert "_length" not in hx.scene.scene_text(hexapod_walking())  # no key more in the files
 
 
 # ------------------------------------------------------------------ period and speed
@@ -145,20 +145,20 @@ def test_speed_and_period_give_the_same_scene():
     tripod = walking_pattern("tripod", None)
     speed = tripod.walking_speed(0.4, 20.0)  # the default duty 0.6
     assert speed == pytest.approx(STANCE_LENGTH_MM * 1e-3 * 20 / (0.6 * 0.4), rel=1e-15)
-    assert same_numbers(hx.scene_text(hexapod_walking(speed=speed)),
-                        hx.scene_text(hexapod_walking(period=0.4)))
+    assert same_numbers(hx.scene.scene_text(hexapod_walking(speed=speed)),
+                        hx.scene.scene_text(hexapod_walking(period=0.4)))
     # the speed depends on the duty factor: at 0.75 the same speed is a shorter period
     slow = walking_pattern("tripod", 0.75).walking_speed(0.3, 20.0)
-    assert same_numbers(hx.scene_text(hexapod_walking(duty=0.75, speed=slow)),
-                        hx.scene_text(hexapod_walking(duty=0.75, period=0.3)))
+    assert same_numbers(hx.scene.scene_text(hexapod_walking(duty=0.75, speed=slow)),
+                        hx.scene.scene_text(hexapod_walking(duty=0.75, period=0.3)))
     held = GAITS["wave"].walking_speed(0.6, 10.0)  # the held robot: the gait's own duty
-    assert same_numbers(hx.scene_text(hexapod_held(gait="wave", scale=10, speed=held)),
-                        hx.scene_text(hexapod_held(gait="wave", scale=10, period=0.6)))
+    assert same_numbers(hx.scene.scene_text(hexapod_held(gait="wave", scale=10, speed=held)),
+                        hx.scene.scene_text(hexapod_held(gait="wave", scale=10, period=0.6)))
     # a leg at the built-in speed: the built-in period exactly, so the tabulated loads
     default_speed = tripod.walking_speed(PERIOD, 20.0)
     assert tripod.period_for_speed(default_speed, 20.0) == PERIOD
-    assert hx.scene_text(front_leg_walking(speed=default_speed)) \
-        == hx.scene_text(front_leg_walking())
+    assert hx.scene.scene_text(front_leg_walking(speed=default_speed)) \
+        == hx.scene.scene_text(front_leg_walking())
 
 
 # ------------------------------------------------------------------ payload
@@ -245,8 +245,8 @@ def test_segment_factors_round_trip_through_scene_files(tmp_path):
     def stepping_lines(text):  # (the rest of a scene reads back to round-off and reordered)
         return sorted(line for line in text.splitlines() if '"stepping"' in line)
 
-    assert len(stepping_lines(hx.scene_text(scene))) == 36
-    assert stepping_lines(hx.scene_text(copy)) == stepping_lines(hx.scene_text(scene))
+    assert len(stepping_lines(hx.scene.scene_text(scene))) == 36
+    assert stepping_lines(hx.scene.scene_text(copy)) == stepping_lines(hx.scene.scene_text(scene))
     laws = {name: d.law for name, d in copy.drivers.items() if isinstance(d.law, Stepping)}
     assert len(laws) == 36
     expected = tuple(FACTORS[f"{s}_length"] for s in SEGMENT_NAMES)

@@ -13,30 +13,34 @@ from hexapod.scene.reader import read_scene
 from hexapod.scene.writer import scene_text, write_scene
 
 
-def _leg(ground: hx.GroundForces | None = None) -> hx.Scene:
+def _leg(ground: hx.scene.GroundForces | None = None) -> hx.Scene:
     """A thigh and a shank hanging from the ground, the shank's foot in contact with it by a
     walking schedule."""
     scene = hx.Scene("stepping-leg", ground=ground)
-    scene.add(hx.SpatialBody("thigh", 1.0, [0.01, 0.01, 0.001], position=[0.0, 0.0, -0.25],
-                             markers={"knee": [0.0, 0.0, -0.25]}))
-    scene.add(hx.SpatialBody("shank", 0.5, [0.005, 0.005, 0.0005], position=[0.0, 0.0, -0.75],
-                             markers={"foot": [0.0, 0.0, -0.25]}))
-    scene.add(hx.Revolute("hip", "ground", "thigh", origin=[0.0, 0.0, 0.0], axis=[0.0, 1.0, 0.0]))
-    scene.add(hx.Revolute("knee", "thigh", "shank", parent_frame="knee",
-                          child_frame=hx.Placement([0.0, 0.0, 0.25]), axis=[0.0, 1.0, 0.0]))
-    scene.add(hx.Contact("toe", "ground", "shank", child_frame="foot", period=1.2, duty=0.7,
-                         lift_off=0.25, foothold=[0.0, 0.0, -1.0], advance=[0.1, 0.0, 0.0],
-                         ramp=0.15))
-    scene.add(hx.JointDriver("hip_drive", "hip", hx.Harmonic(sin=(0.1,), frequency=0.5)))
-    scene.add(hx.JointDriver("knee_drive", "knee", hx.Harmonic(sin=(0.2,), frequency=0.5)))
+    scene.add(hx.scene.SpatialBody("thigh", 1.0, [0.01, 0.01, 0.001], position=[0.0, 0.0, -0.25],
+                                   markers={"knee": [0.0, 0.0, -0.25]}))
+    scene.add(hx.scene.SpatialBody("shank", 0.5, [0.005, 0.005, 0.0005], position=[0.0, 0.0, -0.75],
+                                   markers={"foot": [0.0, 0.0, -0.25]}))
+    scene.add(hx.scene.Revolute("hip", "ground", "thigh", origin=[0.0, 0.0, 0.0],
+                                axis=[0.0, 1.0, 0.0]))
+    scene.add(hx.scene.Revolute("knee", "thigh", "shank", parent_frame="knee",
+                                child_frame=hx.spatial.Placement([0.0, 0.0, 0.25]),
+                                axis=[0.0, 1.0, 0.0]))
+    scene.add(hx.scene.Contact("toe", "ground", "shank", child_frame="foot", period=1.2, duty=0.7,
+                               lift_off=0.25, foothold=[0.0, 0.0, -1.0], advance=[0.1, 0.0, 0.0],
+                               ramp=0.15))
+    scene.add(hx.scene.JointDriver("hip_drive", "hip",
+                                   hx.scene.Harmonic(sin=(0.1,), frequency=0.5)))
+    scene.add(hx.scene.JointDriver("knee_drive", "knee",
+                                   hx.scene.Harmonic(sin=(0.2,), frequency=0.5)))
     return scene
 
 
-GROUND = hx.GroundForces(policy="friction", mu=0.6, faces=0, min_normal=0.5,
-                         default_reference=2.0, reference_efforts={"hip": 3.0, "knee": 1.5})
+GROUND = hx.scene.GroundForces(policy="friction", mu=0.6, faces=0, min_normal=0.5,
+                               default_reference=2.0, reference_efforts={"hip": 3.0, "knee": 1.5})
 
 
-def _ground_settings(ground: hx.GroundForces) -> dict:
+def _ground_settings(ground: hx.scene.GroundForces) -> dict:
     """Every setting but where it was written."""
     return {k: v for k, v in dataclasses.asdict(ground).items() if k != "source"}
 
@@ -51,7 +55,7 @@ def test_contact_and_ground_round_trip(tmp_path):
     assert _ground_settings(copy.ground) == _ground_settings(GROUND)
     assert copy.ground.source == f"{path}, ground"
     toe = copy.joints["toe"]
-    assert isinstance(toe, hx.Contact) and toe.child_frame == "foot"
+    assert isinstance(toe, hx.scene.Contact) and toe.child_frame == "foot"
     assert (toe.period, toe.duty, toe.lift_off, toe.ramp) == (1.2, 0.7, 0.25, 0.15)
     np.testing.assert_array_equal(toe.foothold, [0.0, 0.0, -1.0])
     np.testing.assert_array_equal(toe.advance, [0.1, 0.0, 0.0])
@@ -68,12 +72,12 @@ def test_default_ground_writes_no_table(tmp_path):
     scene = _leg()
     assert "[ground" not in scene_text(scene)
     copy = read_scene(write_scene(scene, tmp_path / "leg.toml"))
-    assert _ground_settings(copy.ground) == _ground_settings(hx.GroundForces())
+    assert _ground_settings(copy.ground) == _ground_settings(hx.scene.GroundForces())
 
 
 def test_reference_efforts_of_prefixed_joints_are_quoted(tmp_path):
     """Attached legs have names with '/', which TOML keys must quote."""
-    ground = hx.GroundForces(policy="min-effort", reference_efforts={"L1/hip": 0.5})
+    ground = hx.scene.GroundForces(policy="min-effort", reference_efforts={"L1/hip": 0.5})
     scene = hx.Scene("legs", ground=ground)
     scene.attach(_leg(), "L1")
     copy = read_scene(write_scene(scene, tmp_path / "legs.toml"))
@@ -82,7 +86,7 @@ def test_reference_efforts_of_prefixed_joints_are_quoted(tmp_path):
 
 
 def test_a_reference_effort_of_no_driven_joint_is_a_problem():
-    scene = _leg(hx.GroundForces(policy="min-effort", reference_efforts={"hipp": 0.5}))
+    scene = _leg(hx.scene.GroundForces(policy="min-effort", reference_efforts={"hipp": 0.5}))
     with pytest.raises(hx.ModelError, match="no driven joint .hipp."):
         scene.validate()
 

@@ -188,8 +188,8 @@ def tumbler():
     """A free box tumbling about its intermediate axis (positions: a free fall, integrated
     exactly; the rotation is what the error test sees)."""
     scene = hx.Scene("tumbler", 3)
-    scene.add(hx.SpatialBody("box", 1.0, [0.01, 0.02, 0.03], position=[0.0, 0.0, 0.0],
-                             angular_velocity=[1.0, 8.0, 0.5]))
+    scene.add(hx.scene.SpatialBody("box", 1.0, [0.01, 0.02, 0.03], position=[0.0, 0.0, 0.0],
+                                   angular_velocity=[1.0, 8.0, 0.5]))
     return hx.assemble(scene)
 
 

@@ -35,12 +35,12 @@ def parallelogram(theta: float) -> hx.Scene:
     scene = hx.Scene("parallelogram", 2)
     c, s = np.cos(theta), np.sin(theta)
     for name, x in (("crank_a", 0.0), ("crank_b", 1.0)):
-        scene.add(hx.PlanarBody(name, 1.0, 1 / 12, position=[x + c / 2, s / 2], angle=theta))
-    scene.add(hx.PlanarBody("coupler", 1.0, 1 / 12, position=[0.5 + c, s]))
-    scene.add(hx.Revolute("A", "ground", "crank_a", origin=[0, 0]))
-    scene.add(hx.Revolute("B", "ground", "crank_b", origin=[1, 0]))
-    scene.add(hx.Revolute("C", "crank_a", "coupler", origin=[c, s]))
-    scene.add(hx.Revolute("D", "crank_b", "coupler", origin=[1 + c, s]))
+        scene.add(hx.scene.PlanarBody(name, 1.0, 1 / 12, position=[x + c / 2, s / 2], angle=theta))
+    scene.add(hx.scene.PlanarBody("coupler", 1.0, 1 / 12, position=[0.5 + c, s]))
+    scene.add(hx.scene.Revolute("A", "ground", "crank_a", origin=[0, 0]))
+    scene.add(hx.scene.Revolute("B", "ground", "crank_b", origin=[1, 0]))
+    scene.add(hx.scene.Revolute("C", "crank_a", "coupler", origin=[c, s]))
+    scene.add(hx.scene.Revolute("D", "crank_b", "coupler", origin=[1 + c, s]))
     return scene
 
 
@@ -143,10 +143,10 @@ def test_mass_ratio_shows_in_the_written_condition_not_the_solved_one():
     written has a condition number near 1e6 times worse; equilibrated, it does not."""
     def double(ratio):
         scene = hx.Scene("double", 2)
-        scene.add(hx.PlanarBody("upper", 1.0, 1 / 12, position=[0.5, 0.0]))
-        scene.add(hx.PlanarBody("lower", ratio, ratio / 12, position=[1.5, 0.0]))
-        scene.add(hx.Revolute("hip", "ground", "upper", origin=[0, 0]))
-        scene.add(hx.Revolute("knee", "upper", "lower", origin=[1, 0]))
+        scene.add(hx.scene.PlanarBody("upper", 1.0, 1 / 12, position=[0.5, 0.0]))
+        scene.add(hx.scene.PlanarBody("lower", ratio, ratio / 12, position=[1.5, 0.0]))
+        scene.add(hx.scene.Revolute("hip", "ground", "upper", origin=[0, 0]))
+        scene.add(hx.scene.Revolute("knee", "upper", "lower", origin=[1, 0]))
         return scene
 
     model, q, v = state(double(1.0))

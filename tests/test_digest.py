@@ -56,7 +56,7 @@ def test_another_motion_of_the_same_robot_has_the_same_digest(tmp_path):
     rows = np.column_stack([times] + [0.3 * np.sin(times + k) for k in range(len(joints))])
     other = tmp_path / "other.csv"
     np.savetxt(other, rows, delimiter=",", header=",".join(["t", *joints]), comments="")
-    with pytest.warns(hx.MotionWarning):
+    with pytest.warns(hx.scene.MotionWarning):
         assert digest(driven_urdf(other)) == digest(driven_urdf())
 
 
@@ -65,7 +65,8 @@ def test_dictionary_order_names_of_files_and_the_scene_name_do_not_count():
         scene = front_leg_scene(name=name)
         scene.source = source
         body = next(iter(scene.bodies.values()))
-        markers = {"tip": hx.Placement([0.1, 0.0, 0.0]), "base": hx.Placement([0.0, 0.0, 0.0])}
+        markers = {"tip": hx.spatial.Placement([0.1, 0.0, 0.0]),
+                   "base": hx.spatial.Placement([0.0, 0.0, 0.0])}
         body.markers = dict(sorted(markers.items(), reverse=order))
         body.source = source
         return scene
@@ -94,8 +95,8 @@ CHANGES = {
                                         np.asarray(_first(s, "joints").origin) + 1e-6),
     "a body's name": lambda s: setattr(_first(s, "bodies"), "name", "renamed"),
     "gravity": lambda s: setattr(s, "gravity", [0.0, 0.0, -9.80665]),
-    "a constant law": lambda s: setattr(_first(s, "drivers"), "law", hx.Constant(0.25)),
-    "a force element": lambda s: s.add(hx.AppliedForce("push", "b1", [1.0, 0.0, 0.0])),
+    "a constant law": lambda s: setattr(_first(s, "drivers"), "law", hx.scene.Constant(0.25)),
+    "a force element": lambda s: s.add(hx.scene.AppliedForce("push", "b1", [1.0, 0.0, 0.0])),
     "the order of elements": lambda s: s._elements.reverse(),
     "the length unit": lambda s: setattr(s, "length_unit", "cm"),
 }
@@ -110,7 +111,7 @@ def test_a_constant_laws_value_counts_and_the_rank_tolerance_too():
     def constant(value):
         scene = random_tree(3, 5)
         driver = _first(scene, "drivers")
-        driver.law = hx.Constant(value)
+        driver.law = hx.scene.Constant(value)
         return digest(scene)
 
     assert constant(0.25) == constant(0.25) != constant(0.2500000001)
@@ -138,4 +139,4 @@ def test_a_value_of_an_unknown_kind_is_an_error_not_an_unstable_description():
     with pytest.raises(TypeError, match="cannot describe a object"):
         describe(object())
     assert describe({"b": 1.5, "a": [np.float64(2.0), None]}) == {"b": 1.5, "a": [2.0, None]}
-    assert describe(float("nan")) == "nan" and describe(hx.Harmonic(offset=1.0)) == "time law"
+    assert describe(float("nan")) == "nan" and describe(hx.scene.Harmonic(offset=1.0)) == "time law"

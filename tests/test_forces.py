@@ -18,12 +18,14 @@ def _fd(model, q, v, t=0.0):
 
 def _free_body(rng, **extra):
     J = rng.uniform(0.5, 1.5, 3)
-    return hx.SpatialBody("body", 2.0, J, com=[0.1, -0.2, 0.05],
-                          position=rng.normal(size=3),
-                          rotation=hx.rotation_about_axis(rng.normal(size=3), 1.1),
-                          inertia_rotation=hx.rotation_about_axis([1, 2, 3], 0.4),
-                          velocity=rng.normal(size=3), angular_velocity=rng.normal(size=3) * 2,
-                          markers={"tip": hx.Placement([0.3, 0.1, -0.4])}, **extra)
+    return hx.scene.SpatialBody("body", 2.0, J, com=[0.1, -0.2, 0.05],
+                                position=rng.normal(size=3),
+                                rotation=hx.spatial.rotation_about_axis(rng.normal(size=3), 1.1),
+                                inertia_rotation=hx.spatial.rotation_about_axis([1, 2, 3], 0.4),
+                                velocity=rng.normal(size=3),
+                                angular_velocity=rng.normal(size=3) * 2,
+                                markers={"tip": hx.spatial.Placement([0.3, 0.1, -0.4])},
+                                **extra)
 
 
 def _euler_rhs(body, R, omega_body, force_world, moment_world):
@@ -56,12 +58,13 @@ def test_free_body_follows_euler_equations():
 def test_applied_force_and_torque_at_a_marker(frame):
     rng = np.random.default_rng(2)
     body = _free_body(rng)
-    f_laws = [hx.Harmonic(offset=1.0, sin=[2.0], frequency=0.5), 3.0, hx.Polynomial([0, 1, 1])]
-    t_laws = [0.5, hx.Harmonic(cos=[1.5], frequency=1.0), -0.7]
+    f_laws = [hx.scene.Harmonic(offset=1.0, sin=[2.0], frequency=0.5), 3.0,
+              hx.scene.Polynomial([0, 1, 1])]
+    t_laws = [0.5, hx.scene.Harmonic(cos=[1.5], frequency=1.0), -0.7]
     scene = hx.Scene("loaded")
     scene.add(body)
-    scene.add(hx.AppliedForce("push", "body", f_laws, point="tip", frame=frame))
-    scene.add(hx.AppliedTorque("twist", "body", t_laws, frame=frame))
+    scene.add(hx.scene.AppliedForce("push", "body", f_laws, point="tip", frame=frame))
+    scene.add(hx.scene.AppliedTorque("twist", "body", t_laws, frame=frame))
     model = hx.assemble(scene)
     t = 0.37
     v_dot, _ = _fd(model, model.q0, model.v0, t)
@@ -80,9 +83,9 @@ def test_spring_damper_on_a_particle():
     k, c, free = 200.0, 3.0, 0.4
     anchor = np.array([0.1, -0.2, 1.0])
     scene = hx.Scene("spring")
-    scene.add(hx.Particle("m", 0.5, position=[0.3, 0.1, 0.2], velocity=[0.4, -1.0, 2.0]))
-    scene.add(hx.SpringDamper("s", "ground", "m", point_a=anchor, stiffness=k, damping=c,
-                              free_length=free, force=hx.Constant(1.5)))
+    scene.add(hx.scene.Particle("m", 0.5, position=[0.3, 0.1, 0.2], velocity=[0.4, -1.0, 2.0]))
+    scene.add(hx.scene.SpringDamper("s", "ground", "m", point_a=anchor, stiffness=k, damping=c,
+                                    free_length=free, force=hx.scene.Constant(1.5)))
     model = hx.assemble(scene)
     v_dot, _ = _fd(model, model.q0, model.v0)
     d = model.q0 - anchor
@@ -101,8 +104,8 @@ def test_spring_between_markers_conserves_momentum_balance():
     a = _free_body(rng)
     b = _free_body(rng).replace(name="other")
     scene.add(a, b)
-    scene.add(hx.SpringDamper("s", "body", "other", point_a="tip", point_b="tip",
-                              stiffness=150.0, damping=4.0, free_length=0.2))
+    scene.add(hx.scene.SpringDamper("s", "body", "other", point_a="tip", point_b="tip",
+                                    stiffness=150.0, damping=4.0, free_length=0.2))
     model = hx.assemble(scene)
     q, v = model.q0, model.v0
     v_dot, _ = _fd(model, q, v)
@@ -124,11 +127,11 @@ def test_spring_between_markers_conserves_momentum_balance():
 
 def test_joint_effort_drives_a_pendulum():
     m, l, Ic = 1.2, 0.6, 0.03
-    law = hx.Harmonic(offset=2.0, sin=[1.0], frequency=0.8)
+    law = hx.scene.Harmonic(offset=2.0, sin=[1.0], frequency=0.8)
     scene = hx.Scene("effort", 2)
-    scene.add(hx.PlanarBody("arm", m, Ic, position=[l, 0.0]))
-    scene.add(hx.Revolute("hinge", "ground", "arm", origin=[0.0, 0.0]))
-    scene.add(hx.JointEffort("motor", "hinge", law))
+    scene.add(hx.scene.PlanarBody("arm", m, Ic, position=[l, 0.0]))
+    scene.add(hx.scene.Revolute("hinge", "ground", "arm", origin=[0.0, 0.0]))
+    scene.add(hx.scene.JointEffort("motor", "hinge", law))
     model = hx.assemble(scene)
     theta = 0.0
     for t, theta_dot in ((0.2, 0.0), (1.3, 2.5)):
@@ -147,12 +150,12 @@ def test_joint_effort_drives_a_pendulum():
 
 def test_planar_spring_and_torque():
     scene = hx.Scene("planar", 2)
-    scene.add(hx.PlanarBody("plate", 3.0, 0.2, com=[0.05, 0.0], position=[0.2, 0.5],
-                            angle=0.3, velocity=[1.0, -0.5], angular_velocity=2.0,
-                            markers={"corner": [0.2, 0.1]}))
-    scene.add(hx.SpringDamper("s", "ground", "plate", point_a=[0.0, 1.0], point_b="corner",
-                              stiffness=80.0, damping=2.0, free_length=0.3))
-    scene.add(hx.AppliedTorque("t", "plate", [hx.Constant(0.9)]))
+    scene.add(hx.scene.PlanarBody("plate", 3.0, 0.2, com=[0.05, 0.0], position=[0.2, 0.5],
+                                  angle=0.3, velocity=[1.0, -0.5], angular_velocity=2.0,
+                                  markers={"corner": [0.2, 0.1]}))
+    scene.add(hx.scene.SpringDamper("s", "ground", "plate", point_a=[0.0, 1.0], point_b="corner",
+                                    stiffness=80.0, damping=2.0, free_length=0.3))
+    scene.add(hx.scene.AppliedTorque("t", "plate", [hx.scene.Constant(0.9)]))
     model = hx.assemble(scene)
     q, v = model.q0, model.v0
     v_dot, _ = _fd(model, q, v)
@@ -183,14 +186,14 @@ def test_gyroscopic_term_matches_skew_form():
 def test_scene_without_force_elements_builds_no_force_terms():
     """Leave out what the scene does not need: no springs, no Q_across, no law inputs."""
     scene = hx.Scene("bare", 2)
-    scene.add(hx.PlanarBody("b", 1.0, 0.1))
-    scene.add(hx.Revolute("r", "ground", "b"))
+    scene.add(hx.scene.PlanarBody("b", 1.0, 0.1))
+    scene.add(hx.scene.Revolute("r", "ground", "b"))
     model = hx.assemble(scene)
     assert model.Q_across is None and model.n_w == 0 and model.force_names == ()
     assert model.Q.name_in() == ["q", "v"]
     spring = hx.Scene("sprung", 2)
-    spring.add(hx.PlanarBody("b", 1.0, 0.1), hx.Revolute("r", "ground", "b"),
-               hx.SpringDamper("s", "ground", "b", point_a=[0.0, 1.0], stiffness=1.0))
+    spring.add(hx.scene.PlanarBody("b", 1.0, 0.1), hx.scene.Revolute("r", "ground", "b"),
+               hx.scene.SpringDamper("s", "ground", "b", point_a=[0.0, 1.0], stiffness=1.0))
     assert hx.assemble(spring).Q.n_instructions() > model.Q.n_instructions()
 
 
@@ -200,18 +203,18 @@ def test_rotational_spring_damper_on_a_pendulum(build):
     - c theta_dot + tau(t) - m g l cos(theta), theta from the horizontal; its torque is part of
     the joint's reported effort (it acts across the joint)."""
     m, l, Ic, k, c, free = 1.1, 0.5, 0.02, 7.0, 0.3, 0.4
-    law = hx.Harmonic(offset=0.2, sin=[0.5], frequency=1.5)
+    law = hx.scene.Harmonic(offset=0.2, sin=[0.5], frequency=1.5)
     if build == "planar":
         scene = hx.Scene("torsion", 2)
-        scene.add(hx.PlanarBody("arm", m, Ic, position=[l, 0.0]))
-        scene.add(hx.Revolute("hinge", "ground", "arm", origin=[0.0, 0.0]))
+        scene.add(hx.scene.PlanarBody("arm", m, Ic, position=[l, 0.0]))
+        scene.add(hx.scene.Revolute("hinge", "ground", "arm", origin=[0.0, 0.0]))
     else:
         scene = hx.Scene("torsion", 3, gravity=[0.0, -9.81, 0.0])
-        scene.add(hx.SpatialBody("arm", m, [Ic, Ic, Ic], position=[l, 0.0, 0.0]))
-        cls = hx.Revolute if build == "spatial" else hx.scene.joints.Cylindrical
+        scene.add(hx.scene.SpatialBody("arm", m, [Ic, Ic, Ic], position=[l, 0.0, 0.0]))
+        cls = hx.scene.Revolute if build == "spatial" else hx.scene.joints.Cylindrical
         scene.add(cls("hinge", "ground", "arm", origin=[0.0, 0.0, 0.0], axis=[0, 0, 1]))
         if build == "cylindrical":  # hold the slide so the arm only turns
-            scene.add(hx.CoordinateDriver("hold", "arm", "z", 0.0))
+            scene.add(hx.scene.CoordinateDriver("hold", "arm", "z", 0.0))
     scene.add(hx.scene.forces.RotationalSpringDamper("torsion", "hinge", stiffness=k,
                                                       damping=c, free_angle=free, torque=law))
     model = hx.assemble(scene)

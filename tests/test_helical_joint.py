@@ -104,7 +104,7 @@ LAW = dict(offset=0.2, sin=[0.8], cos=[0.3], frequency=0.7)  # theta(t), rad
 
 
 def theta_of(t):
-    return (x for x in hx.Harmonic(**LAW).evaluate(np.asarray(t, dtype=float)))
+    return (x for x in hx.scene.Harmonic(**LAW).evaluate(np.asarray(t, dtype=float)))
 
 
 def closed_form_effort(theta_dd):
@@ -113,10 +113,10 @@ def closed_form_effort(theta_dd):
 
 def screw_scene(driven: bool = True) -> hx.Scene:
     scene = hx.Scene("screw")
-    scene.add(hx.SpatialBody("nut", M, [0.03, 0.03, I_AXIS], position=[0.0, 0.0, Z0]))
+    scene.add(hx.scene.SpatialBody("nut", M, [0.03, 0.03, I_AXIS], position=[0.0, 0.0, Z0]))
     scene.add(Helical("screw", "ground", "nut", axis=[0.0, 0.0, 1.0], pitch=PITCH))
     if driven:
-        scene.add(hx.JointDriver("drive", "screw", hx.Harmonic(**LAW)))
+        scene.add(hx.scene.JointDriver("drive", "screw", hx.scene.Harmonic(**LAW)))
     return scene
 
 
@@ -221,8 +221,8 @@ def test_report_columns_and_units():
     assert units["tau:screw"][0] == "N m"
     times = np.linspace(0.0, 1.0 / 0.7, 41)
     result = hx.inverse_dynamics(model, times)
-    table = hx.inverse_table(model, result)
-    assert table.shape == (times.size, len(hx.inverse_columns(model)))
+    table = hx.output.inverse_table(model, result)
+    assert table.shape == (times.size, len(hx.output.inverse_columns(model)))
     assert np.allclose(table[:, 1], result.effort[:, 0], rtol=0, atol=0)
     (stats,) = driver_statistics(model, result)
     assert stats.joint == "screw" and stats.unit == "N m"
@@ -266,7 +266,7 @@ def test_bad_files_name_the_type_and_key(tmp_path):
     assert "joint[0].pitch" in str(missing.value) and "missing required key 'pitch'" in str(
         missing.value)
     plane = hx.Scene("flat", 2)
-    plane.add(hx.PlanarBody("nut", 1.0, 0.1))
+    plane.add(hx.scene.PlanarBody("nut", 1.0, 0.1))
     plane.add(Helical("screw", "ground", "nut", pitch=0.1))
     with pytest.raises(hx.ModelError, match="no helical joint in the plane: use a revolute"):
         plane.validate()

@@ -36,10 +36,10 @@ def planar_rod(law=None):
     """A 1 m, 1 kg rod (centre of mass 0.5 m from the pivot, I_G = 0.0833 kg m^2) on a revolute
     joint at the origin of the plane, gravity -y; its angle from +x driven by ``law``."""
     scene = hx.Scene("rod", 2)
-    scene.add(hx.PlanarBody("rod", 1.0, 0.0833, position=[0.5, 0.0]))
-    scene.add(hx.Revolute("pivot", "ground", "rod", origin=[0.0, 0.0]))
+    scene.add(hx.scene.PlanarBody("rod", 1.0, 0.0833, position=[0.5, 0.0]))
+    scene.add(hx.scene.Revolute("pivot", "ground", "rod", origin=[0.0, 0.0]))
     if law is not None:
-        scene.add(hx.JointDriver("motor", "pivot", law))
+        scene.add(hx.scene.JointDriver("motor", "pivot", law))
     return hx.assemble(scene)
 
 
@@ -117,8 +117,8 @@ def test_driven_rod_follows_its_law_and_needs_its_torque(kind):
     effort, tau = -lambda = I_O theta'' + m g l cos(theta), to 1e-7 N m (multipliers solved at
     each returned state: their error is that of the state, ~1e-9 relative to ~5 N m)."""
     times = np.linspace(0.0, 2.0, 21)
-    law = (hx.Harmonic(offset=0.3, cos=[0.4], sin=[0.2, 0.1], frequency=0.7)
-           if kind == "harmonic" else hx.Spline(times, 0.3 + 0.4 * np.sin(2 * times)))
+    law = (hx.scene.Harmonic(offset=0.3, cos=[0.4], sin=[0.2, 0.1], frequency=0.7)
+           if kind == "harmonic" else hx.scene.Spline(times, 0.3 + 0.4 * np.sin(2 * times)))
     model = planar_rod(law)
     integrator = IdasBDF(model, 0.0, 2.0, rtol=1e-9, atol=1e-11)
     assert (integrator.equations.callback is None) == (kind == "harmonic")

@@ -39,8 +39,8 @@ def spatial_pendulum():
 def planar_pendulum():
     """The same rod in the plane: a planar body on a revolute joint, gravity -y."""
     scene = hx.Scene("planar-pendulum", 2)
-    scene.add(hx.PlanarBody("rod", 1.0, 0.0833, position=[0.5, 0.0]))
-    scene.add(hx.Revolute("pivot", "ground", "rod", origin=[0.0, 0.0]))
+    scene.add(hx.scene.PlanarBody("rod", 1.0, 0.0833, position=[0.5, 0.0]))
+    scene.add(hx.scene.Revolute("pivot", "ground", "rod", origin=[0.0, 0.0]))
     return hx.assemble(scene), np.sqrt(G * 0.5 / (0.0833 + 0.25)), 0.5
 
 
@@ -66,12 +66,12 @@ def symmetric_top():
     """A heavy symmetric top on a spherical joint at its tip: axis tilted 30 deg from the
     vertical, spinning at 40 rad/s about it, centre of mass 0.1 m up the axis."""
     A, C, mass, arm, tilt, spin = 0.002, 0.004, 0.5, 0.1, np.radians(30.0), 40.0
-    rotation = hx.rotation_about_axis([1.0, 0.0, 0.0], tilt)
+    rotation = hx.spatial.rotation_about_axis([1.0, 0.0, 0.0], tilt)
     axis = rotation @ [0.0, 0.0, 1.0]
     scene = hx.Scene("top", 3)
-    scene.add(hx.SpatialBody("top", mass, [A, A, C], position=arm * axis, rotation=rotation,
-                             angular_velocity=spin * axis))
-    scene.add(hx.Spherical("tip", "ground", "top", origin=[0.0, 0.0, 0.0]))
+    scene.add(hx.scene.SpatialBody("top", mass, [A, A, C], position=arm * axis, rotation=rotation,
+                                   angular_velocity=spin * axis))
+    scene.add(hx.scene.Spherical("tip", "ground", "top", origin=[0.0, 0.0, 0.0]))
     return hx.assemble(scene)
 
 
@@ -243,9 +243,9 @@ def test_constraint_drift_is_bounded(method):
 def _stiff_spring_scene() -> hx.Scene:
     """A 1 kg mass on a 1e9 N/m spring (period 0.2 ms), stretched by 1 mm."""
     scene = hx.Scene("stiff", 3, gravity=[0.0, 0.0, 0.0])
-    scene.add(hx.Particle("mass", 1.0, position=[1.001, 0.0, 0.0]))
-    scene.add(hx.SpringDamper("spring", "ground", "mass", point_a=[0.0, 0.0, 0.0],
-                              stiffness=1e9, free_length=1.0))
+    scene.add(hx.scene.Particle("mass", 1.0, position=[1.001, 0.0, 0.0]))
+    scene.add(hx.scene.SpringDamper("spring", "ground", "mass", point_a=[0.0, 0.0, 0.0],
+                                    stiffness=1e9, free_length=1.0))
     return scene
 
 
@@ -285,9 +285,10 @@ def test_a_driver_pulling_past_reach_fails_with_a_message(method):
     the constraints. Every method ends the run as failed, at or after the limit, saying why;
     the methods that hold the positions on the constraints stop at the limit."""
     scene = hx.Scene("unreachable", 2)
-    scene.add(hx.Particle("p", 1.0, position=[0.0, -1.0]))
-    scene.add(hx.Distance("rod", "ground", "p", parent_frame=hx.Placement(np.zeros(2))))
-    scene.add(hx.CoordinateDriver("push", "p", "x", Polynomial((0.0, 2.0))))
+    scene.add(hx.scene.Particle("p", 1.0, position=[0.0, -1.0]))
+    scene.add(hx.scene.Distance("rod", "ground", "p",
+                                parent_frame=hx.spatial.Placement(np.zeros(2))))
+    scene.add(hx.scene.CoordinateDriver("push", "p", "x", Polynomial((0.0, 2.0))))
     result = simulate(hx.assemble(scene), 1.0, method=method, step=1e-2)
     assert result.status == "failed" and method in result.message
     assert result.t[-1] >= 0.5 - 1e-6 and np.all(np.isfinite(result.q))
@@ -401,7 +402,7 @@ def test_a_scene_without_constraints_follows_the_exact_parabola(method):
     its accelerations are constant, so any method of order 2 or more is exact to round-off,
     and the implicit ones to their tolerance."""
     scene = hx.Scene("thrown", 3)
-    scene.add(hx.Particle("p", 1.0, position=[0.0, 0.0, 0.0], velocity=[1.0, 0.0, 2.0]))
+    scene.add(hx.scene.Particle("p", 1.0, position=[0.0, 0.0, 0.0], velocity=[1.0, 0.0, 2.0]))
     result = simulate(hx.assemble(scene), 1.0, method=method, step=1e-2)
     assert result.success, result.message
     exact = [1.0, 0.0, 2.0 - 9.81 / 2]
@@ -413,9 +414,9 @@ def particle_pendulum(dimension: int):
     at rest level with it: the simple pendulum ``psi'' = -(g / l) sin psi`` from ``psi0 = pi/2``,
     in the plane (gravity -y) or in space (gravity -z, the swing in the x-z plane)."""
     scene = hx.Scene(f"particle-pendulum-{dimension}d", dimension)
-    scene.add(hx.Particle("bob", 1.0, position=[1.0] + [0.0] * (dimension - 1)))
-    origin = hx.Placement(np.zeros(dimension))
-    scene.add(hx.Distance("rod", "ground", "bob", parent_frame=origin, child_frame=origin))
+    scene.add(hx.scene.Particle("bob", 1.0, position=[1.0] + [0.0] * (dimension - 1)))
+    origin = hx.spatial.Placement(np.zeros(dimension))
+    scene.add(hx.scene.Distance("rod", "ground", "bob", parent_frame=origin, child_frame=origin))
     return hx.assemble(scene)
 
 

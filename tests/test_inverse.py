@@ -55,8 +55,8 @@ def test_tree_path_equals_seed000(seed, n, chain):
 def test_four_bar_crank_torque_balances_the_power():
     """Closed loop (saddle path): the crank's torque times its rate equals the rate of change
     of kinetic energy minus the power of gravity, sum of m v.(a - g) + I w alpha."""
-    model = hx.assemble(four_bar(2, 1.05, law=hx.Harmonic(offset=1.05, sin=[0.6],
-                                                          frequency=0.8)))
+    model = hx.assemble(four_bar(2, 1.05, law=hx.scene.Harmonic(offset=1.05, sin=[0.6],
+                                                                frequency=0.8)))
     assert tree_plan(model) is None
     result = inverse_dynamics(model, TIMES)
     crank = model.joint_index["crank_pin"]
@@ -74,11 +74,11 @@ def test_four_bar_crank_torque_balances_the_power():
 
 def test_driven_pendulum_effort_over_a_gait():
     m, l, Ic = 1.3, 0.7, 0.02
-    law = hx.Harmonic(offset=0.3, sin=[1.1], cos=[-0.4], frequency=0.9)
+    law = hx.scene.Harmonic(offset=0.3, sin=[1.1], cos=[-0.4], frequency=0.9)
     scene = hx.Scene("arm")
-    scene.add(hx.SpatialBody("arm", m, [Ic, Ic, Ic], position=[l, 0.0, 0.0]))
-    scene.add(hx.Revolute("motor_pin", "ground", "arm", origin=[0, 0, 0], axis=[0, -1, 0]))
-    scene.add(hx.JointDriver("motor", "motor_pin", law))
+    scene.add(hx.scene.SpatialBody("arm", m, [Ic, Ic, Ic], position=[l, 0.0, 0.0]))
+    scene.add(hx.scene.Revolute("motor_pin", "ground", "arm", origin=[0, 0, 0], axis=[0, -1, 0]))
+    scene.add(hx.scene.JointDriver("motor", "motor_pin", law))
     result = inverse_dynamics(hx.assemble(scene), TIMES)
     theta, _, theta_dd = law.evaluate(TIMES)
     # about -y, theta lifts the arm from the horizontal: tau = I_O theta_dd + m g l cos(theta)

@@ -30,7 +30,7 @@ RNG_SEED = 20261122
 
 
 def rot(axis, angle):
-    return hx.rotation_about_axis(axis, angle)
+    return hx.spatial.rotation_about_axis(axis, angle)
 
 
 def unit(rng, n):
@@ -58,8 +58,8 @@ class Wave:
 
     def law(self):
         c, s = np.sin(self.phase), np.cos(self.phase)
-        return hx.Harmonic(offset=self.offset, cos=[self.amplitude * c],
-                           sin=[self.amplitude * s], frequency=self.omega / (2 * np.pi))
+        return hx.scene.Harmonic(offset=self.offset, cos=[self.amplitude * c],
+                                 sin=[self.amplitude * s], frequency=self.omega / (2 * np.pi))
 
 
 # ------------------------------------------------------------------ joint cases
@@ -185,12 +185,13 @@ class Case:
         mass = rng.uniform(0.5, 2.0)
         if kind == "spatial":
             moments = rng.uniform(0.5, 1.0, size=3)
-            return hx.SpatialBody(name, mass, moments, com=com, position=pose.position,
-                                  rotation=pose.rotation, inertia_rotation=random_rotation(rng))
+            return hx.scene.SpatialBody(name, mass, moments, com=com, position=pose.position,
+                                        rotation=pose.rotation,
+                                        inertia_rotation=random_rotation(rng))
         if kind == "planar":
-            return hx.PlanarBody(name, mass, rng.uniform(.1, .5), com=com,
-                                 position=pose.position, angle=pose.angle)
-        return hx.Particle(name, mass, position=pose.position)
+            return hx.scene.PlanarBody(name, mass, rng.uniform(.1, .5), com=com,
+                                       position=pose.position, angle=pose.angle)
+        return hx.scene.Particle(name, mass, position=pose.position)
 
     def scene(self, drive=True) -> hx.Scene:
         scene = hx.Scene(f"{self.joint}-case", dimension=self.dimension)
@@ -211,11 +212,11 @@ class Case:
         scene.add(cls("J", parent, child, **kwargs))
         if drive and self.joint in ("revolute", "prismatic"):
             law = (self.angle if self.joint == "revolute" else self.slide).law()
-            scene.add(hx.JointDriver("drive", "J", law))
+            scene.add(hx.scene.JointDriver("drive", "J", law))
         if drive and self.parent == "planar":
             wave = self.p_waves[3]
             law = Wave(self.p_rotation0 + wave.offset, wave.amplitude, wave.omega, wave.phase)
-            scene.add(hx.CoordinateDriver("hold", "P", "angle", law.law()))
+            scene.add(hx.scene.CoordinateDriver("hold", "P", "angle", law.law()))
         return scene
 
     def coordinates(self, model, t) -> np.ndarray:

@@ -44,7 +44,7 @@ def test_an_impossible_loop_names_the_violated_constraints():
     on_rocker, on_ground = scene.joint_frames(joint)
     # the ground pivot 0.9 m from the crank's: farther than crank + coupler + rocker (0.55 m)
     joint.origin, joint.parent_frame = None, on_rocker
-    joint.child_frame = hx.Placement([0.9, 0.0])
+    joint.child_frame = hx.spatial.Placement([0.9, 0.0])
     model = hx.assemble(scene)
     with pytest.raises(hx.AssemblyError, match=r"rocker_ground/x|rocker_pin/x"):
         data = model.create_data()

@@ -15,14 +15,15 @@ TIMES = TIMES[np.min(np.abs(TIMES[:, None] - SAMPLES_T), axis=1) > 1e-3]  # off 
 SAMPLES_Y = np.sin(2 * SAMPLES_T) + 0.3 * SAMPLES_T**2
 
 LAWS = {
-    "constant": hx.Constant(0.7),
-    "polynomial": hx.Polynomial([0.1, -0.4, 2.0, 0.5], t0=0.3),
-    "harmonic": hx.Harmonic(offset=0.2, cos=[0.3, -0.1], sin=[0.5, 0.05], frequency=0.8, t0=0.1),
-    "spline3": hx.Spline(SAMPLES_T, SAMPLES_Y),
-    "spline3-natural": hx.Spline(SAMPLES_T, SAMPLES_Y, boundary="natural"),
-    "spline5": hx.Spline(SAMPLES_T, SAMPLES_Y, degree=5),
-    "spline5-clamped": hx.Spline(SAMPLES_T, SAMPLES_Y, degree=5, boundary="clamped"),
-    "scaled": Scaled(hx.Harmonic(sin=[1.0], frequency=1.0), -2.5),
+    "constant": hx.scene.Constant(0.7),
+    "polynomial": hx.scene.Polynomial([0.1, -0.4, 2.0, 0.5], t0=0.3),
+    "harmonic": hx.scene.Harmonic(offset=0.2, cos=[0.3, -0.1], sin=[0.5, 0.05], frequency=0.8,
+                                  t0=0.1),
+    "spline3": hx.scene.Spline(SAMPLES_T, SAMPLES_Y),
+    "spline3-natural": hx.scene.Spline(SAMPLES_T, SAMPLES_Y, boundary="natural"),
+    "spline5": hx.scene.Spline(SAMPLES_T, SAMPLES_Y, degree=5),
+    "spline5-clamped": hx.scene.Spline(SAMPLES_T, SAMPLES_Y, degree=5, boundary="clamped"),
+    "scaled": Scaled(hx.scene.Harmonic(sin=[1.0], frequency=1.0), -2.5),
 }
 
 
@@ -41,7 +42,7 @@ def test_derivatives_match_finite_differences(name):
 
 @pytest.mark.parametrize("degree, order", [(3, 2), (5, 4)])
 def test_splines_interpolate_and_are_smooth_at_the_knots(degree, order):
-    law = hx.Spline(SAMPLES_T, SAMPLES_Y, degree=degree)
+    law = hx.scene.Spline(SAMPLES_T, SAMPLES_Y, degree=degree)
     assert np.allclose(law(SAMPLES_T), SAMPLES_Y, atol=1e-13)
     spline = law._spline
     eps = 1e-9
@@ -54,22 +55,22 @@ def test_splines_interpolate_and_are_smooth_at_the_knots(degree, order):
 def test_periodic_spline_repeats():
     y = np.sin(2 * np.pi * SAMPLES_T / 2.0)
     y[-1] = y[0]
-    law = hx.Spline(SAMPLES_T, y, boundary="periodic")
+    law = hx.scene.Spline(SAMPLES_T, y, boundary="periodic")
     for t in (0.3, 1.1, 1.9):
         assert np.allclose(np.array(law.evaluate(t)), np.array(law.evaluate(t + 2.0)),
                            atol=1e-12)
 
 
 @pytest.mark.parametrize("law, message", [
-    (hx.Spline([0, 1, 0.5, 2], [0, 1, 2, 3]), "strictly increasing"),
-    (hx.Spline([0, 1, 2], [0, 1, 2]), "at least 4 samples"),
-    (hx.Spline([0, 1, 2, 3], [0, 1, 2]), "3 values"),
-    (hx.Spline([0, 1, 2, 3], [0, 1, 2, 3], degree=4), "degree must be 3 or 5"),
-    (hx.Spline([0, 1, 2, 3], [0, 1, 2, 3], boundary="periodic"), "periodic"),
-    (hx.Spline([0, 1, 2, 3], [0, np.nan, 2, 3]), "not finite"),
-    (hx.Harmonic(sin=[1.0], frequency=-2.0), "frequency must be positive"),
-    (hx.Polynomial([]), "empty"),
-    (hx.Constant(np.inf), "not finite"),
+    (hx.scene.Spline([0, 1, 0.5, 2], [0, 1, 2, 3]), "strictly increasing"),
+    (hx.scene.Spline([0, 1, 2], [0, 1, 2]), "at least 4 samples"),
+    (hx.scene.Spline([0, 1, 2, 3], [0, 1, 2]), "3 values"),
+    (hx.scene.Spline([0, 1, 2, 3], [0, 1, 2, 3], degree=4), "degree must be 3 or 5"),
+    (hx.scene.Spline([0, 1, 2, 3], [0, 1, 2, 3], boundary="periodic"), "periodic"),
+    (hx.scene.Spline([0, 1, 2, 3], [0, np.nan, 2, 3]), "not finite"),
+    (hx.scene.Harmonic(sin=[1.0], frequency=-2.0), "frequency must be positive"),
+    (hx.scene.Polynomial([]), "empty"),
+    (hx.scene.Constant(np.inf), "not finite"),
 ])
 def test_bad_laws_report_their_problem(law, message):
     assert any(message in p for p in law.problems())
@@ -90,8 +91,8 @@ GAIT_CASES = [(0.5, 0.1, 0.0), (2 / 3, 0.1, 0.25), (5 / 6, 0.08, 0.6)]  # duty, 
 
 @pytest.mark.parametrize("duty, blend, shift", GAIT_CASES)
 def test_gait_law_is_c2(duty, blend, shift):
-    law = hx.Gait(0.1, cos=[0.3, -0.05], sin=[0.4, 0.02], period=0.5, duty=duty, shift=shift,
-                  blend=blend)
+    law = hx.scene.Gait(0.1, cos=[0.3, -0.05], sin=[0.4, 0.02], period=0.5, duty=duty, shift=shift,
+                        blend=blend)
     t = np.linspace(-0.3, 1.3, 4001)
     f, fd, fdd = law.evaluate(t)
     h = 1e-6
@@ -116,7 +117,7 @@ def test_gait_law_phase_reaches_pi_at_touch_down(duty, blend, shift):
     """Phase 0 at lift-off (t = -shift * period), pi at touch-down, a fraction 1 - duty of the
     period later, 2 pi one period after lift-off; the stance (phase past pi) lasts duty."""
     period = 0.5
-    law = hx.Gait(sin=[1.0], period=period, duty=duty, shift=shift, blend=blend)
+    law = hx.scene.Gait(sin=[1.0], period=period, duty=duty, shift=shift, blend=blend)
     lift = -shift * period
     phi = law.phase(np.array([lift, lift + (1 - duty) * period, lift + period]))[0]
     assert phi[0] == pytest.approx(0.0, abs=1e-12)
@@ -148,6 +149,6 @@ def test_symbolic_form_equals_the_numeric_law(name):
         got = np.array([np.array(function(x)).reshape(-1) for x in TIMES]).T
         for k, (a, b) in enumerate(zip(got, law.evaluate(TIMES), strict=True)):
             assert np.allclose(a, b, rtol=1e-13, atol=1e-13 * (1 + np.abs(b).max())), (name, k)
-    for other in (hx.Gait(sin=[1.0]), hx.Hermite([0.0, 1.0], [0.0, 1.0], [0.0, 0.0],
-                                                 [0.0, 0.0])):
+    for other in (hx.scene.Gait(sin=[1.0]), hx.scene.Hermite([0.0, 1.0], [0.0, 1.0], [0.0, 0.0],
+                                                             [0.0, 0.0])):
         assert other.symbolic(ca.SX.sym("t")) is None

@@ -156,8 +156,8 @@ def init_logic(sources: dict[str, str], packages: set[str]) -> list[str]:
 def private_uses(sources: dict[str, str], public: set[str],
                  namespaces: dict[str, set[str]] | None = None) -> list[str]:
     """Uses of the engine other than ``hexapod.<name in __all__>`` (and ``__version__``), names of
-    a public namespace's ``__all__`` (``from hexapod.benchmarks import n_four_bar``), or the
-    command line's ``from hexapod.cli import main``."""
+    a public namespace's ``__all__`` (``from hexapod.scene import Revolute``,
+    ``hexapod.scene.Revolute``), or the command line's ``from hexapod.cli import main``."""
     namespaces = namespaces or {}
     found = []
     for name, source in sources.items():
@@ -188,6 +188,12 @@ def private_uses(sources: dict[str, str], public: set[str],
                     and node.value.id in aliases and node.attr not in public
                     and node.attr != "__version__"):
                 found.append(f"{name} line {node.lineno}: hexapod.{node.attr} is not public")
+            elif (isinstance(node, ast.Attribute) and isinstance(node.value, ast.Attribute)
+                    and isinstance(node.value.value, ast.Name) and node.value.value.id in aliases
+                    and node.value.attr in namespaces
+                    and node.attr not in namespaces[node.value.attr]):
+                found.append(f"{name} line {node.lineno}: hexapod.{node.value.attr}.{node.attr} "
+                             "is not public")
     return found
 
 
@@ -257,12 +263,14 @@ def test_the_rules_catch_what_they_forbid():
         "hexapod.output/__init__.py line 1: not a re-export (Assign)"]
     script = ("import hexapod as hx\nfrom hexapod.algorithms.inverse import tree_plan\n"
               "from hexapod import assemble, _private\nhx.secret(1)\nhx.assemble(2)\n"
-              "from hexapod.benchmarks import suite, _jet\n")
-    found = private_uses({"scripts/x.py": script}, {"assemble", "benchmarks"},
-                         {"benchmarks": {"suite"}})
+              "from hexapod.benchmarks import suite, _jet\n"
+              "hx.scene.Revolute(3)\nhx.scene.bodies.inertia_tensor(4)\n")
+    found = private_uses({"scripts/x.py": script}, {"assemble", "benchmarks", "scene"},
+                         {"benchmarks": {"suite"}, "scene": {"Revolute"}})
     assert found == ["scripts/x.py: from hexapod.algorithms.inverse import ...",
                      "scripts/x.py: hexapod._private is not public",
                      "scripts/x.py: hexapod.benchmarks._jet is not public",
-                     "scripts/x.py line 4: hexapod.secret is not public"]
+                     "scripts/x.py line 4: hexapod.secret is not public",
+                     "scripts/x.py line 8: hexapod.scene.bodies is not public"]
     with pytest.raises(AssertionError, match="has no layer"):
         layer("hexapod.attic.module")

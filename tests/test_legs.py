@@ -139,7 +139,8 @@ def _foot_jacobian(q, side="L"):
     def foot(angles):
         x = np.asarray(g.points[6])
         for k in reversed(range(6)):
-            x = g.points[k] + hx.rotation_about_axis(g.axes[k], angles[k]) @ (x - g.points[k])
+            turn = hx.spatial.rotation_about_axis(g.axes[k], angles[k])
+            x = g.points[k] + turn @ (x - g.points[k])
         return x
 
     h = 1e-6

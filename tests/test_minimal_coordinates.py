@@ -180,10 +180,10 @@ class PendulumCase:
 def planar_bodies() -> PendulumCase:
     p = LINKS
     scene = hx.Scene("double-pendulum", dimension=2, gravity=[0.0, -G])
-    scene.add(hx.PlanarBody("link1", p.m1, p.I1, com=[p.c1, 0.0]),
-              hx.PlanarBody("link2", p.m2, p.I2, com=[p.c2, 0.0], position=[p.l1, 0.0]),
-              hx.Revolute("shoulder", hx.GROUND, "link1", origin=[0.0, 0.0]),
-              hx.Revolute("elbow", "link1", "link2", origin=[p.l1, 0.0]))
+    scene.add(hx.scene.PlanarBody("link1", p.m1, p.I1, com=[p.c1, 0.0]),
+              hx.scene.PlanarBody("link2", p.m2, p.I2, com=[p.c2, 0.0], position=[p.l1, 0.0]),
+              hx.scene.Revolute("shoulder", hx.scene.GROUND, "link1", origin=[0.0, 0.0]),
+              hx.scene.Revolute("elbow", "link1", "link2", origin=[p.l1, 0.0]))
 
     def state(k):
         q = np.concatenate([k.r[0], [k.phi[0]], k.r[1], [k.phi[1]]])
@@ -200,13 +200,14 @@ def spatial_bodies(R0) -> PendulumCase:
     """Spatial bodies whose z axes are the joint axes, moving in the plane ``R0 (x, y)``."""
     p = LINKS
     scene = hx.Scene("double-pendulum-3d", dimension=3, gravity=R0 @ [0.0, -G, 0.0])
-    scene.add(hx.SpatialBody("link1", p.m1, _spatial_inertia(p.I1), com=[p.c1, 0.0, 0.0],
-                             rotation=R0),
-              hx.SpatialBody("link2", p.m2, _spatial_inertia(p.I2), com=[p.c2, 0.0, 0.0],
-                             position=_in_space(R0, [p.l1, 0.0]), rotation=R0),
-              hx.Revolute("shoulder", hx.GROUND, "link1", origin=np.zeros(3), rotation=R0),
-              hx.Revolute("elbow", "link1", "link2", origin=_in_space(R0, [p.l1, 0.0]),
-                          rotation=R0))
+    scene.add(hx.scene.SpatialBody("link1", p.m1, _spatial_inertia(p.I1), com=[p.c1, 0.0, 0.0],
+                                   rotation=R0),
+              hx.scene.SpatialBody("link2", p.m2, _spatial_inertia(p.I2), com=[p.c2, 0.0, 0.0],
+                                   position=_in_space(R0, [p.l1, 0.0]), rotation=R0),
+              hx.scene.Revolute("shoulder", hx.scene.GROUND, "link1", origin=np.zeros(3),
+                                rotation=R0),
+              hx.scene.Revolute("elbow", "link1", "link2", origin=_in_space(R0, [p.l1, 0.0]),
+                                rotation=R0))
 
     def state(k):
         q, v = [], []
@@ -236,12 +237,12 @@ def particles(R0=None) -> PendulumCase:
     gravity = [0.0, -G] if planar else R0 @ [0.0, -G, 0.0]
     scene = hx.Scene("point-pendulum", dimension=dim, gravity=gravity)
     zero = np.zeros(dim)
-    scene.add(hx.Particle("mass1", p.m1, position=place([p.l1, 0.0])),
-              hx.Particle("mass2", p.m2, position=place([p.l1 + p.l2, 0.0])),
-              hx.Distance("rod1", hx.GROUND, "mass1", parent_frame=Placement(zero),
-                          child_frame=Placement(zero), length=p.l1),
-              hx.Distance("rod2", "mass1", "mass2", parent_frame=Placement(zero),
-                          child_frame=Placement(zero), length=p.l2))
+    scene.add(hx.scene.Particle("mass1", p.m1, position=place([p.l1, 0.0])),
+              hx.scene.Particle("mass2", p.m2, position=place([p.l1 + p.l2, 0.0])),
+              hx.scene.Distance("rod1", hx.scene.GROUND, "mass1", parent_frame=Placement(zero),
+                                child_frame=Placement(zero), length=p.l1),
+              hx.scene.Distance("rod2", "mass1", "mass2", parent_frame=Placement(zero),
+                                child_frame=Placement(zero), length=p.l2))
 
     def state(k):
         return (np.concatenate([place(k.r[0]), place(k.r[1])]),
@@ -456,17 +457,17 @@ def chain_scene(links, gravity, efforts=None, laws=None) -> hx.Scene:
     scene = hx.Scene("chain", dimension=3, gravity=gravity)
     rest = chain_motion(links, *(np.zeros(len(links)),) * 3)
     for k, (link, m) in enumerate(zip(links, rest, strict=True)):
-        scene.add(hx.SpatialBody(f"b{k}", link.mass, link.inertia_given, com=link.com,
-                                 position=m.x, rotation=m.R,
-                                 inertia_rotation=link.inertia_rotation))
+        scene.add(hx.scene.SpatialBody(f"b{k}", link.mass, link.inertia_given, com=link.com,
+                                       position=m.x, rotation=m.R,
+                                       inertia_rotation=link.inertia_rotation))
     for k, link in enumerate(links):
-        scene.add(hx.Revolute(f"j{k}", hx.GROUND if k == 0 else f"b{k - 1}", f"b{k}",
-                              parent_frame=Placement(*link.parent_frame),
-                              child_frame=Placement(*link.child_frame), axis=link.axis_given))
+        scene.add(hx.scene.Revolute(f"j{k}", hx.scene.GROUND if k == 0 else f"b{k - 1}", f"b{k}",
+                                    parent_frame=Placement(*link.parent_frame),
+                                    child_frame=Placement(*link.child_frame), axis=link.axis_given))
     for k, value in enumerate(efforts if efforts is not None else []):
-        scene.add(hx.JointEffort(f"motor{k}", f"j{k}", float(value)))
+        scene.add(hx.scene.JointEffort(f"motor{k}", f"j{k}", float(value)))
     for k, law in enumerate(laws if laws is not None else []):
-        scene.add(hx.JointDriver(f"drive{k}", f"j{k}", law))
+        scene.add(hx.scene.JointDriver(f"drive{k}", f"j{k}", law))
     return scene
 
 
@@ -562,9 +563,9 @@ class Wave:
                 -self.amplitude * self.omega**2 * np.sin(s))
 
     def law(self):
-        return hx.Harmonic(offset=self.offset, cos=[self.amplitude * np.sin(self.phase)],
-                           sin=[self.amplitude * np.cos(self.phase)],
-                           frequency=self.omega / (2 * np.pi))
+        return hx.scene.Harmonic(offset=self.offset, cos=[self.amplitude * np.sin(self.phase)],
+                                 sin=[self.amplitude * np.cos(self.phase)],
+                                 frequency=self.omega / (2 * np.pi))
 
 
 @pytest.mark.parametrize("n_links", [2, 4])

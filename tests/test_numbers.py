@@ -35,12 +35,12 @@ def run_main(argv: list[str], capsys) -> tuple[int, str]:
 def planar_pendulum(force=None, driven=None) -> hx.Scene:
     """A particle on a 1 m rod in the plane: a model that assembles in milliseconds."""
     scene = hx.Scene("rod", dimension=2)
-    scene.add(hx.Particle(name="p", mass=1.0, position=np.array([1.0, 0.0])))
-    scene.add(hx.Distance(name="rod", parent="ground", child="p", length=1.0))
+    scene.add(hx.scene.Particle(name="p", mass=1.0, position=np.array([1.0, 0.0])))
+    scene.add(hx.scene.Distance(name="rod", parent="ground", child="p", length=1.0))
     if force is not None:
-        scene.add(hx.AppliedForce(name="push", body="p", force=force))
+        scene.add(hx.scene.AppliedForce(name="push", body="p", force=force))
     if driven is not None:
-        scene.add(hx.CoordinateDriver(name="drive", body="p", coordinate="x", law=driven))
+        scene.add(hx.scene.CoordinateDriver(name="drive", body="p", coordinate="x", law=driven))
     return scene
 
 
@@ -255,7 +255,7 @@ def test_the_step_limit_comes_from_the_option_then_the_environment(monkeypatch):
 
 def test_a_model_beyond_the_body_limit_is_refused_naming_the_scene(monkeypatch):
     scene = planar_pendulum()
-    scene.add(hx.Particle(name="q", mass=1.0, position=np.array([2.0, 0.0])))
+    scene.add(hx.scene.Particle(name="q", mass=1.0, position=np.array([2.0, 0.0])))
     monkeypatch.setenv("HEXAPOD_MAX_BODIES", "1")
     with pytest.raises(HexapodError, match="scene 'rod' has 2 bodies \\(limit 1\\).*"
                        "HEXAPOD_MAX_BODIES=2"):
@@ -270,8 +270,8 @@ def test_a_rate_too_large_for_the_starting_step_ends_as_a_result(method, monkeyp
     """An applied force of 1e300 N (out of range in a file; let through here): the starting-
     step heuristic divided by a zero step (ZeroDivisionError) before; now the run is a result,
     and the heuristic gives a positive step for any norms."""
-    monkeypatch.setattr(hx.Constant, "problems", lambda self: [])
-    model = hx.assemble(planar_pendulum(force=(hx.Constant(1e300), hx.Constant(1e300))))
+    monkeypatch.setattr(hx.scene.Constant, "problems", lambda self: [])
+    model = hx.assemble(planar_pendulum(force=(hx.scene.Constant(1e300), hx.scene.Constant(1e300))))
     result = simulate(model, 1.0, method=method)
     assert result.status in ("finished", "failed")
     integrator = hx.get_integrator(method)(hx.assemble(planar_pendulum()), 0.0, 1.0)
@@ -304,7 +304,7 @@ def test_non_finite_accelerations_end_the_run_with_the_time():
     assert result.t[-1] == pytest.approx(0.2) and np.isfinite(result.v_dot).all()
 
 
-class _Kick(hx.Law):
+class _Kick(hx.scene.Law):
     """A law whose acceleration is infinite after t = 0.5 s (no scene file can say this)."""
 
     def evaluate(self, t):
@@ -315,7 +315,7 @@ class _Kick(hx.Law):
 @pytest.mark.parametrize("method", ["tree", "saddle"])
 def test_a_non_finite_inverse_dynamics_result_names_the_sample(method):
     scene = read_scene(PENDULUM)
-    scene.add(hx.JointDriver(name="drive", joint="pivot", law=_Kick()))
+    scene.add(hx.scene.JointDriver(name="drive", joint="pivot", law=_Kick()))
     model = hx.assemble(scene)
     assert np.isfinite(hx.inverse_dynamics(model, [0.0, 0.5], method=method).force).all()
     with pytest.raises(HexapodError, match="non-finite"):

@@ -121,10 +121,10 @@ def test_a_planar_scene_names_its_angle_and_prismatic_efforts():
     from hexapod.simulation.results import state_columns, wrench_columns
 
     scene = hx.Scene("slider", dimension=2)
-    scene.add(hx.PlanarBody("cart", mass=1.0, inertia=0.1))
-    scene.add(hx.PlanarBody("arm", mass=1.0, inertia=0.1, position=[0.5, 0.0]))
-    scene.add(hx.Prismatic("rail", "ground", "cart", origin=[0.0, 0.0], axis=[1.0, 0.0]))
-    scene.add(hx.Revolute("hinge", "cart", "arm", origin=[0.0, 0.0]))
+    scene.add(hx.scene.PlanarBody("cart", mass=1.0, inertia=0.1))
+    scene.add(hx.scene.PlanarBody("arm", mass=1.0, inertia=0.1, position=[0.5, 0.0]))
+    scene.add(hx.scene.Prismatic("rail", "ground", "cart", origin=[0.0, 0.0], axis=[1.0, 0.0]))
+    scene.add(hx.scene.Revolute("hinge", "cart", "arm", origin=[0.0, 0.0]))
     model = hx.assemble(scene)
     states, wrenches = state_columns(model), wrench_columns(model, "world")
     assert states["q:cart.angle"][0] == "rad" and states["v:arm.w"][0] == "rad/s"

@@ -92,7 +92,7 @@ def test_reported_wrench_is_the_pivot_force_in_the_joint_frame(form):
     assert np.allclose(world.force[0], force, atol=1e-12 * np.abs(force).max())
     assert np.allclose(world.torque[0], 0.0, atol=1e-12)
     if form == "spatial":
-        R = hx.rotation_about_axis([0, 1, 0], theta)
+        R = hx.spatial.rotation_about_axis([0, 1, 0], theta)
         assert np.allclose(local.force[0], R.T @ force, atol=1e-12 * np.abs(force).max())
     if form == "planar":
         c, s = np.cos(theta), np.sin(theta)
@@ -104,11 +104,11 @@ def test_driven_pendulum_effort():
     """The check of the effort sign: tau = I_O theta_dd + m g l cos(theta), with theta measured from
     the horizontal (+x) about +z, in the plane with gravity -y."""
     m, l, Ic = PENDULUM["mass"], PENDULUM["length"], PENDULUM["inertia"]
-    law = hx.Harmonic(offset=0.4, sin=[0.9], cos=[0.3], frequency=0.7)
+    law = hx.scene.Harmonic(offset=0.4, sin=[0.9], cos=[0.3], frequency=0.7)
     scene = hx.Scene("driven", 2)
-    scene.add(hx.PlanarBody("arm", m, Ic, position=[l, 0.0]))
-    scene.add(hx.Revolute("motor_pin", "ground", "arm", origin=[0.0, 0.0]))
-    scene.add(hx.JointDriver("motor", "motor_pin", law))
+    scene.add(hx.scene.PlanarBody("arm", m, Ic, position=[l, 0.0]))
+    scene.add(hx.scene.Revolute("motor_pin", "ground", "arm", origin=[0.0, 0.0]))
+    scene.add(hx.scene.JointDriver("motor", "motor_pin", law))
     model = hx.assemble(scene)
     for t in np.linspace(0.0, 2.0, 9):
         data = model.create_data()

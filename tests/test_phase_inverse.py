@@ -48,7 +48,7 @@ def saddle(name: str, start: float, stop: float, count: int):
 
 
 def four_bar_model(dimension: int):
-    law = hx.Harmonic(offset=1.05, sin=[0.6], frequency=0.8)
+    law = hx.scene.Harmonic(offset=1.05, sin=[0.6], frequency=0.8)
     return hx.assemble(four_bar(dimension, 1.05, law=law))
 
 

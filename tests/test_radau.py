@@ -98,7 +98,7 @@ def run(model, t_end: float, tol: float):
 def driven_four_bar():
     """A planar four-bar whose crank turns by 0.8 sin(2 pi t) rad from 0.3 rad: a rheonomic
     driver, the whole motion known in closed form (:func:`mechanisms.four_bar_points`)."""
-    law = hx.Harmonic(sin=[0.8], frequency=1.0)
+    law = hx.scene.Harmonic(sin=[0.8], frequency=1.0)
     return hx.assemble(four_bar(2, 0.3, law=law, gravity=[0.0, -G])), law
 
 
@@ -158,10 +158,11 @@ def stiff_double_pendulum(stiffness: float = 1e6, mass: float = 0.01):
     so the fast mode is hardly excited: its amplitude is bounded by the static stretch,
     m (3 g) / k = 3e-7 m at the bottom of the swing."""
     scene = hx.Scene("stiff-spring", 2)
-    scene.add(hx.Particle("a", 1.0, position=[1.0, 0.0]))
-    scene.add(hx.Distance("rod", "ground", "a", parent_frame=hx.Placement(np.zeros(2))))
-    scene.add(hx.Particle("b", mass, position=[1.0, -0.1]))
-    scene.add(hx.SpringDamper("spring", "a", "b", stiffness=stiffness, free_length=0.1))
+    scene.add(hx.scene.Particle("a", 1.0, position=[1.0, 0.0]))
+    scene.add(hx.scene.Distance("rod", "ground", "a",
+                                parent_frame=hx.spatial.Placement(np.zeros(2))))
+    scene.add(hx.scene.Particle("b", mass, position=[1.0, -0.1]))
+    scene.add(hx.scene.SpringDamper("spring", "a", "b", stiffness=stiffness, free_length=0.1))
     return hx.assemble(scene)
 
 
@@ -190,8 +191,8 @@ def tumbling_body():
     """A free body spinning at 6 rad/s about its intermediate principal axis, slightly
     perturbed: it flips over and back (the tennis-racket effect), with large rotations."""
     scene = hx.Scene("tumbling", 3, gravity=[0.0, 0.0, 0.0])
-    scene.add(hx.SpatialBody("body", 1.0, [0.01, 0.02, 0.03],
-                             angular_velocity=[0.05, 6.0, 0.05]))
+    scene.add(hx.scene.SpatialBody("body", 1.0, [0.01, 0.02, 0.03],
+                                   angular_velocity=[0.05, 6.0, 0.05]))
     return hx.assemble(scene)
 
 

@@ -122,11 +122,11 @@ def driven_pivot_pendulum() -> hx.Model:
     """A particle on a 0.5 m rod from a pivot particle whose x follows a time law (rheonomic
     constraints, one degree of freedom left)."""
     scene = hx.Scene("driven-pivot", 2)
-    scene.add(hx.Particle("pivot", 0.5, position=[0.0, 0.0]))
-    scene.add(hx.Particle("bob", 1.0, position=[0.3, -0.4]))
-    scene.add(hx.Distance("rod", "pivot", "bob"))
-    scene.add(hx.CoordinateDriver("push", "pivot", "x", hx.Polynomial((0.0, 0.5, 4.0))))
-    scene.add(hx.CoordinateDriver("hold", "pivot", "y", hx.Polynomial((0.0,))))
+    scene.add(hx.scene.Particle("pivot", 0.5, position=[0.0, 0.0]))
+    scene.add(hx.scene.Particle("bob", 1.0, position=[0.3, -0.4]))
+    scene.add(hx.scene.Distance("rod", "pivot", "bob"))
+    scene.add(hx.scene.CoordinateDriver("push", "pivot", "x", hx.scene.Polynomial((0.0, 0.5, 4.0))))
+    scene.add(hx.scene.CoordinateDriver("hold", "pivot", "y", hx.scene.Polynomial((0.0,))))
     return hx.assemble(scene)
 
 
@@ -171,10 +171,11 @@ def test_unit_quaternions_constraints_and_momentum_at_round_off():
         assert np.abs(rate).max() < 1e-12 * np.abs(v).max()  # the second kick's projection
     # the free heavy top: vertical angular momentum about the tip
     scene = hx.Scene("top", 3)
-    rotation = hx.rotation_about_axis([1.0, 0.0, 0.0], 0.5)
-    scene.add(hx.SpatialBody("top", 0.5, [0.002, 0.003, 0.004], position=rotation @ [0, 0, 0.1],
-                             rotation=rotation, angular_velocity=[1.0, -2.0, 30.0]))
-    scene.add(hx.Spherical("tip", "ground", "top", origin=[0.0, 0.0, 0.0]))
+    rotation = hx.spatial.rotation_about_axis([1.0, 0.0, 0.0], 0.5)
+    scene.add(hx.scene.SpatialBody("top", 0.5, [0.002, 0.003, 0.004],
+                                   position=rotation @ [0, 0, 0.1], rotation=rotation,
+                                   angular_velocity=[1.0, -2.0, 30.0]))
+    scene.add(hx.scene.Spherical("tip", "ground", "top", origin=[0.0, 0.0, 0.0]))
     model = hx.assemble(scene)
     q, v, _ = run(model, 1e-3, 1000)
     body = model.bodies[0]

@@ -62,7 +62,7 @@ def test_forward_dynamics_agree(seed, n, chain):
     # the absolute state of those joint values, from the driven twin of the model
     driven = random_tree(seed, n, chain=chain)
     for k in range(n):
-        driven.drivers[f"d{k}"].law = hx.Polynomial([qj[k], qj_d[k]])
+        driven.drivers[f"d{k}"].law = hx.scene.Polynomial([qj[k], qj_d[k]])
     twin = hx.assemble(driven)
     data = twin.create_data()
     q = hx.assemble_positions(twin, data, 0.0)

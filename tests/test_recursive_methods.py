@@ -60,7 +60,7 @@ def _engine_effort(seed, n, chain, q, q_d, q_dd):
     """The engine's driving efforts with every joint driven through (q, q_d, q_dd) at t = 0."""
     scene = random_tree(seed, n, chain=chain)
     for k in range(n):
-        scene.drivers[f"d{k}"].law = hx.Polynomial([q[k], q_d[k], q_dd[k] / 2])
+        scene.drivers[f"d{k}"].law = hx.scene.Polynomial([q[k], q_d[k], q_dd[k] / 2])
     model = hx.assemble(scene)
     data = model.create_data()
     x = hx.assemble_positions(model, data, 0.0)

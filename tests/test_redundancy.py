@@ -143,7 +143,7 @@ def test_contradicting_drivers_are_named():
     """A second driver whose law matches the pose at t = 0 but prescribes a speed the crank's
     law cannot produce: the velocity analysis names it instead of ignoring it."""
     scene = four_bar(2, THETA)
-    scene.add(hx.JointDriver("second", "rocker_ground", hx.Polynomial([0.0, 5.0])))
+    scene.add(hx.scene.JointDriver("second", "rocker_ground", hx.scene.Polynomial([0.0, 5.0])))
     model = hx.assemble(scene)
     data = model.create_data()
     q = hx.assemble_positions(model, data, 0.0)

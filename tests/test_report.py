@@ -149,9 +149,10 @@ def test_driver_effort_excludes_springs_across_the_joint():
     """A driven pendulum with a torsion spring across its hinge: the joint carries both, the
     driver (the -lambda of the saddle-point solve) only its share."""
     scene = hx.Scene("sprung", 3, gravity=[0.0, -9.81, 0.0])
-    scene.add(hx.SpatialBody("arm", 1.1, [0.02] * 3, position=[0.5, 0.0, 0.0]))
-    scene.add(hx.Revolute("hinge", "ground", "arm", origin=[0.0, 0.0, 0.0], axis=[0, 0, 1]))
-    scene.add(hx.JointDriver("drive", "hinge", hx.Harmonic(offset=0.1, sin=[0.6], frequency=1)))
+    scene.add(hx.scene.SpatialBody("arm", 1.1, [0.02] * 3, position=[0.5, 0.0, 0.0]))
+    scene.add(hx.scene.Revolute("hinge", "ground", "arm", origin=[0.0, 0.0, 0.0], axis=[0, 0, 1]))
+    scene.add(hx.scene.JointDriver("drive", "hinge",
+                                   hx.scene.Harmonic(offset=0.1, sin=[0.6], frequency=1)))
     scene.add(hx.scene.forces.RotationalSpringDamper("torsion", "hinge", stiffness=7.0,
                                                       damping=0.3, free_angle=0.4))
     model = hx.assemble(scene)
@@ -210,8 +211,8 @@ def test_body_balance_of_a_planar_closed_loop():
     assert balance.relative().max() < 1e-11
     planar = hx.read_scene(SCENES / "double_pendulum_planar.toml")
     for joint in list(planar.joints):
-        planar.add(hx.JointDriver(f"drive_{joint}", joint,
-                                  hx.Harmonic(offset=0.3, sin=[0.4], frequency=0.7)))
+        planar.add(hx.scene.JointDriver(f"drive_{joint}", joint,
+                                        hx.scene.Harmonic(offset=0.3, sin=[0.4], frequency=0.7)))
     model = hx.assemble(planar)
     result = inverse_dynamics(model, t)
     balance = body_balance(model, t, result.q, result.v, result.v_dot, result.force,
@@ -243,12 +244,12 @@ def test_poses_and_markers_over_samples():
 
 
 def test_laws_know_their_cycle():
-    assert hx.Harmonic(sin=[1.0], frequency=4.0).cycle_time() == 0.25
-    assert hx.Gait(cos=[1.0], period=0.7).cycle_time() == 0.7
-    assert hx.Spline([0, 1, 2, 3], [0, 1, -1, 0], boundary="periodic").cycle_time() == 3.0
-    assert hx.Spline([0, 1, 2, 3], [0, 1, -1, 0]).cycle_time() is None
-    assert hx.Constant(2.0).cycle_time() is None
-    assert hx.Harmonic(offset=1.0).cycle_time() is None
+    assert hx.scene.Harmonic(sin=[1.0], frequency=4.0).cycle_time() == 0.25
+    assert hx.scene.Gait(cos=[1.0], period=0.7).cycle_time() == 0.7
+    assert hx.scene.Spline([0, 1, 2, 3], [0, 1, -1, 0], boundary="periodic").cycle_time() == 3.0
+    assert hx.scene.Spline([0, 1, 2, 3], [0, 1, -1, 0]).cycle_time() is None
+    assert hx.scene.Constant(2.0).cycle_time() is None
+    assert hx.scene.Harmonic(offset=1.0).cycle_time() is None
 
 
 # ------------------------------------------------------------------ errors and no partial output

@@ -74,7 +74,7 @@ def test_pendulum_closed_form():
 def test_double_pendulum_planar():
     scene = read_scene(SCENES / "double_pendulum_planar.toml")
     assert scene.dimension == 2
-    assert [type(b) for b in scene.bodies.values()] == [hexapod.PlanarBody] * 2
+    assert [type(b) for b in scene.bodies.values()] == [hexapod.scene.PlanarBody] * 2
     model = hexapod.assemble(scene)
     data = model.create_data()
     q = hexapod.assemble_positions(model, data)
@@ -87,7 +87,7 @@ def test_four_bar_3d_has_three_redundant_rows():
     assert [j.kind for j in joints] == ["revolute"] * 4
     assert all(np.allclose(j.axis, [0.0, 0.0, 1.0]) and j.rotation is None for j in joints)
     assert set(scene.drivers) == {"crank_motor"}
-    assert isinstance(scene.drivers["crank_motor"].law, hexapod.Harmonic)
+    assert isinstance(scene.drivers["crank_motor"].law, hexapod.scene.Harmonic)
     model = hexapod.assemble(scene)
     data = model.create_data()
     q = hexapod.assemble_positions(model, data)
@@ -107,8 +107,8 @@ def test_closed_pendulum_seed002():
     assert scene.length_unit == "dm" and scene.dimension == 2
     np.testing.assert_allclose(scene.gravity, [0.0, 98.1])
     bodies = scene.bodies
-    assert {n: type(b) for n, b in bodies.items()} == {"m1": hexapod.Particle,
-                                                       "m2": hexapod.Particle}
+    assert {n: type(b) for n, b in bodies.items()} == {"m1": hexapod.scene.Particle,
+                                                       "m2": hexapod.scene.Particle}
     assert bodies["m1"].mass == 2.0 and bodies["m2"].mass == 1.0
     np.testing.assert_array_equal(bodies["m1"].position, [4.0, 4.0])
     np.testing.assert_array_equal(bodies["m2"].position, [12.0, 5.0])
@@ -123,7 +123,7 @@ def test_closed_pendulum_seed002():
         lengths[joint.name] = np.linalg.norm(child - parent)
     assert lengths == pytest.approx({"rod1": 5.657, "rod2": 7.071, "coupler": 8.062}, abs=5e-4)
     anchors = {j.name: tuple(j.parent_frame.position) for j in scene.joints.values()
-               if j.parent == hexapod.GROUND}
+               if j.parent == hexapod.scene.GROUND}
     assert anchors == {"rod1": (0.0, 0.0), "rod2": (7.0, 0.0)}
 
     model = hexapod.assemble(scene)
@@ -148,7 +148,7 @@ def test_rotation_forms_and_conventions(tmp_path):
     roll, pitch, yaw = 0.3, -0.4, 1.1
 
     def rot(axis, a):
-        return hexapod.rotation_about_axis(np.eye(3)[axis], a)
+        return hexapod.spatial.rotation_about_axis(np.eye(3)[axis], a)
 
     expected = rot(2, yaw) @ rot(1, pitch) @ rot(0, roll)  # URDF: Rz(yaw) Ry(pitch) Rx(roll)
     p = hexapod.spatial.euler_parameters_from_rotation(expected)

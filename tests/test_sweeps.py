@@ -22,9 +22,9 @@ MASS, LENGTH, RATE, G = 1.3, 0.8, 2.0, 9.81  # kg, m (pivot to centre of mass), 
 def driven_pendulum() -> hx.Scene:
     """A planar pendulum turned at a constant rate: the effort is ``m g L sin(theta)``."""
     scene = hx.Scene("spun-pendulum", 2)
-    scene.add(hx.PlanarBody("bob", MASS, 0.02, position=[0.0, -LENGTH]))
-    scene.add(hx.Revolute("pivot", "ground", "bob", origin=[0.0, 0.0]))
-    scene.add(hx.JointDriver("spin", "pivot", hx.Polynomial((0.0, RATE))))
+    scene.add(hx.scene.PlanarBody("bob", MASS, 0.02, position=[0.0, -LENGTH]))
+    scene.add(hx.scene.Revolute("pivot", "ground", "bob", origin=[0.0, 0.0]))
+    scene.add(hx.scene.JointDriver("spin", "pivot", hx.scene.Polynomial((0.0, RATE))))
     return scene
 
 
@@ -310,7 +310,7 @@ def test_builder_arguments_and_scene_keys_reach_the_walking_robot(tmp_path):
     row = run_study(read_study(path)).rows[0]
     assert row["status"] == "ok", row["message"]
     scene = hexapod_walking(payload=0.5)
-    scene.ground = hx.GroundForces(policy="min-effort")
+    scene.ground = hx.scene.GroundForces(policy="min-effort")
     model = hx.assemble(scene)
     result = hx.inverse_dynamics(model, np.linspace(0.0, model.cycle_time(), 3))
     peak = np.linalg.norm(result.ground_force, axis=-1).max(axis=0)

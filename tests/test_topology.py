@@ -110,7 +110,7 @@ def test_redundant_four_bar_counts():
 
 def test_open_chain_and_free_body():
     scene = front_leg_scene(gait=False)
-    scene.add(hx.SpatialBody("free", 1.0, [1, 1, 1], position=[2.0, 0, 0]))
+    scene.add(hx.scene.SpatialBody("free", 1.0, [1, 1, 1], position=[2.0, 0, 0]))
     model = hx.assemble(scene)
     graph = body_joint_graph(model)
     assert graph.independent_loops == 0 and graph.components == 2

@@ -17,12 +17,12 @@ def _problems(scene):
 
 def test_every_problem_is_listed_once():
     scene = hx.Scene("bad", 2)
-    scene.add(hx.Particle("p", 1.0, position=[0.0, 1.0]))
-    scene.add(hx.PlanarBody("b", -1.0, 0.0, markers={"bad name": [0.0, 0.0]}))
-    scene.add(hx.Revolute("pin", "ground", "p"))
-    scene.add(hx.JointDriver("drive", "pin", 0.3))
-    scene.add(hx.AppliedTorque("twist", "p", [1.0]))
-    scene.add(hx.AppliedForce("on_ground", "ground", [1.0, 0.0]))
+    scene.add(hx.scene.Particle("p", 1.0, position=[0.0, 1.0]))
+    scene.add(hx.scene.PlanarBody("b", -1.0, 0.0, markers={"bad name": [0.0, 0.0]}))
+    scene.add(hx.scene.Revolute("pin", "ground", "p"))
+    scene.add(hx.scene.JointDriver("drive", "pin", 0.3))
+    scene.add(hx.scene.AppliedTorque("twist", "p", [1.0]))
+    scene.add(hx.scene.AppliedForce("on_ground", "ground", [1.0, 0.0]))
     problems = _problems(scene)
     expected = ["mass): must be positive", "inertia): must be positive",
                 "'bad name' is not a valid marker name", "joins a particle, which has no angle",
@@ -35,12 +35,12 @@ def test_every_problem_is_listed_once():
 def test_rotation_tolerance_is_absolute():
     R = np.diag([1 + 4e-6, 1 / (1 + 4e-6), 1.0])  # det 1, but not orthonormal to 1e-6
     assert not is_rotation(R)
-    assert is_rotation(np.round(hx.rotation_from_rpy(0.3, -0.2, 1.1), 7))
+    assert is_rotation(np.round(hx.spatial.rotation_from_rpy(0.3, -0.2, 1.1), 7))
     assert not is_rotation(np.diag([1.0, 1.0, -1.0]))
 
 
 def test_spline_with_times_too_close_is_reported():
-    law = hx.Spline([0.0, 1e-320, 2e-320, 1.0], [0.0, 1.0, 2.0, 3.0])
+    law = hx.scene.Spline([0.0, 1e-320, 2e-320, 1.0], [0.0, 1.0, 2.0, 3.0])
     assert law.problems() and "interpolated" in law.problems()[0]
 
 
@@ -50,11 +50,12 @@ def test_velocity_is_that_of_the_reference_origin(dimension):
     with it plus the rotation about it."""
     com = np.array([0.3, -0.1, 0.2])[:dimension]
     if dimension == 3:
-        body = hx.SpatialBody("b", 1.0, [1, 1, 1], com=com, velocity=[1.0, 2.0, 3.0],
-                              angular_velocity=[0.0, 0.0, 2.0])
+        body = hx.scene.SpatialBody("b", 1.0, [1, 1, 1], com=com, velocity=[1.0, 2.0, 3.0],
+                                    angular_velocity=[0.0, 0.0, 2.0])
         arm_velocity = np.cross([0, 0, 2.0], com)
     else:
-        body = hx.PlanarBody("b", 1.0, 1.0, com=com, velocity=[1.0, 2.0], angular_velocity=2.0)
+        body = hx.scene.PlanarBody("b", 1.0, 1.0, com=com, velocity=[1.0, 2.0],
+                                   angular_velocity=2.0)
         arm_velocity = 2.0 * np.array([-com[1], com[0]])
     scene = hx.Scene("v", dimension)
     scene.add(body)
@@ -64,4 +65,4 @@ def test_velocity_is_that_of_the_reference_origin(dimension):
 
 def test_particles_need_a_position():
     with pytest.raises(TypeError):
-        hx.Particle("p", 1.0)  # its dimension comes from its position
+        hx.scene.Particle("p", 1.0)  # its dimension comes from its position

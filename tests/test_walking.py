@@ -27,7 +27,7 @@ PERIOD = 0.5
 def walking_model(gait="tripod", references=(), **ground):
     """The walking robot, built once per test module and set of arguments (``references``:
     pairs of joint name and reference effort)."""
-    settings = hx.GroundForces(**ground, reference_efforts=dict(references))
+    settings = hx.scene.GroundForces(**ground, reference_efforts=dict(references))
     return hx.assemble(hexapod_scene(gait, trunk="free", ground=settings))
 
 

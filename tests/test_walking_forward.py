@@ -34,7 +34,8 @@ from legs.efforts import EffortTable, effort_breaks, lift_off_times, switch_time
 from legs.replay import replay_gait
 from legs.robot import hexapod_scene
 
-RTOL = hx.DEFAULT_RTOL  # the run's tolerance, and the bound on the joint-angle error (rad)
+#: the run's tolerance, and the bound on the joint-angle error (rad)
+RTOL = hx.simulation.DEFAULT_RTOL
 PERIOD = 0.5
 
 
@@ -87,7 +88,7 @@ def check(out: dict, t0: float, t1: float) -> None:
     # the twin: the same robot, its 36 drivers replaced by efforts
     twin = out["twin"]
     assert not twin.drivers
-    efforts = [f for f in twin.forces.values() if isinstance(f, hx.JointEffort)]
+    efforts = [f for f in twin.forces.values() if isinstance(f, hx.scene.JointEffort)]
     assert len(efforts) == len(out["scene"].drivers) == 36
     assert twin.joints.keys() == out["scene"].joints.keys()
 

@@ -19,11 +19,11 @@ SCENES = sorted((Path(__file__).resolve().parent.parent / "data" / "scenes").glo
 
 def _six_legs():
     scene = hx.Scene("six-legs")
-    scene.add(hx.SpatialBody("trunk", 18.4, [0.218, 1.055, 1.226]))
-    scene.add(hx.Fixed("stand", "ground", "trunk"))
+    scene.add(hx.scene.SpatialBody("trunk", 18.4, [0.218, 1.055, 1.226]))
+    scene.add(hx.scene.Fixed("stand", "ground", "trunk"))
     for k, side in enumerate(("L1", "R1")):
-        placement = hx.Placement([0.24, 0.08 * (1 - 2 * k), -0.04],
-                                 np.diag([1.0, 1.0 - 2 * k, 1.0 - 2 * k]))
+        placement = hx.spatial.Placement([0.24, 0.08 * (1 - 2 * k), -0.04],
+                                         np.diag([1.0, 1.0 - 2 * k, 1.0 - 2 * k]))
         scene.attach(front_leg_scene(), side, base="trunk", placement=placement)
     return scene
 
@@ -109,7 +109,7 @@ def test_names_the_reader_would_refuse_are_refused(tmp_path, where, name, charac
     elif where == "body":
         scene.bodies["femur"].name = name
     else:
-        scene.bodies["femur"].markers[name] = hx.Placement([0.0, 0.0, 0.1])
+        scene.bodies["femur"].markers[name] = hx.spatial.Placement([0.0, 0.0, 0.1])
     target = tmp_path / "refused.toml"
     with pytest.raises(hx.ModelError) as error:
         write_scene(scene, target)

@@ -80,7 +80,8 @@ def rotation(draw, dimension: int):
 
 @st.composite
 def placement(draw, dimension: int, real):
-    return hx.Placement(draw(vector(dimension, real)), draw(st.none() | rotation(dimension)))
+    return hx.spatial.Placement(draw(vector(dimension, real)),
+                                draw(st.none() | rotation(dimension)))
 
 
 @st.composite
@@ -88,40 +89,41 @@ def law(draw, numbers: Numbers):
     kind = draw(st.sampled_from(("constant", "polynomial", "harmonic", "spline")))
     real = numbers.real
     if kind == "constant":
-        return hx.Constant(draw(numbers.value))
+        return hx.scene.Constant(draw(numbers.value))
     if kind == "polynomial":
-        return hx.Polynomial(draw(st.lists(numbers.value, min_size=1, max_size=4)), draw(real))
+        return hx.scene.Polynomial(draw(st.lists(numbers.value, min_size=1, max_size=4)),
+                                   draw(real))
     if kind == "harmonic":
-        return hx.Harmonic(draw(real), draw(st.lists(real, max_size=3)),
-                           draw(st.lists(real, max_size=3)), draw(numbers.positive),
-                           draw(real))
+        return hx.scene.Harmonic(draw(real), draw(st.lists(real, max_size=3)),
+                                 draw(st.lists(real, max_size=3)), draw(numbers.positive),
+                                 draw(real))
     steps = draw(st.lists(st.floats(0.1, 2.0), min_size=4, max_size=6))
     boundary = draw(st.one_of(BOUNDARIES, text) if numbers is HOSTILE_NUMBERS else BOUNDARIES)
-    return hx.Spline(tuple(np.cumsum(steps)), draw(vector(len(steps), st.floats(-3, 3))),
-                     boundary=boundary)
+    return hx.scene.Spline(tuple(np.cumsum(steps)), draw(vector(len(steps), st.floats(-3, 3))),
+                           boundary=boundary)
 
 
 @st.composite
 def body(draw, dimension: int, name, serial: str, numbers: Numbers):
     kind = draw(st.sampled_from(("rigid", "rigid", "particle")))
     real, positive = numbers.real, numbers.positive
-    frames = (st.builds(hx.Placement, vector(dimension, real)) if kind == "particle"
+    frames = (st.builds(hx.spatial.Placement, vector(dimension, real)) if kind == "particle"
               else placement(dimension, real))  # a particle's markers have no rotation
     common = dict(position=draw(vector(dimension, real)),
                   velocity=draw(vector(dimension, real)),
                   markers=draw(st.dictionaries(name, frames, max_size=2)),
                   mesh=draw(st.just("") | text))
     if kind == "particle":
-        return hx.Particle(draw(name) + serial, draw(positive), **common)
+        return hx.scene.Particle(draw(name) + serial, draw(positive), **common)
     if dimension == 2:
-        return hx.PlanarBody(draw(name) + serial, draw(positive), draw(positive),
-                             angle=draw(real), com=draw(vector(2, real)),
-                             angular_velocity=draw(real), **common)
+        return hx.scene.PlanarBody(draw(name) + serial, draw(positive), draw(positive),
+                                   angle=draw(real), com=draw(vector(2, real)),
+                                   angular_velocity=draw(real), **common)
     scale = draw(positive)
     moments = [scale * draw(st.floats(0.6, 1.0)) for _ in range(3)]  # triangle inequality
-    return hx.SpatialBody(draw(name) + serial, draw(positive), moments,
-                          com=draw(vector(3, real)), rotation=draw(rotation(3)),
-                          angular_velocity=draw(vector(3, real)), **common)
+    return hx.scene.SpatialBody(draw(name) + serial, draw(positive), moments,
+                                com=draw(vector(3, real)), rotation=draw(rotation(3)),
+                                angular_velocity=draw(vector(3, real)), **common)
 
 
 def on(draw, owner, where):
@@ -138,12 +140,12 @@ def joints(draw, dimension: int, bodies, name, serials, real) -> list:
         parent = draw(st.sampled_from([None] + bodies[:k]))
         options = dict(parent_frame=on(draw, parent, placement(dimension, real)),
                        child_frame=on(draw, child, placement(dimension, real)))
-        particle = any(isinstance(b, hx.Particle) for b in (parent, child))
+        particle = any(isinstance(b, hx.scene.Particle) for b in (parent, child))
         if particle:  # it has no orientation: no axis to turn about, none to slide along
-            kind = hx.Spherical if dimension == 3 else hx.Revolute
+            kind = hx.scene.Spherical if dimension == 3 else hx.scene.Revolute
         else:
-            kind = draw(st.sampled_from((hx.Revolute, hx.Prismatic)))
-        if kind is hx.Prismatic or (kind is hx.Revolute and dimension == 3):
+            kind = draw(st.sampled_from((hx.scene.Revolute, hx.scene.Prismatic)))
+        if kind is hx.scene.Prismatic or (kind is hx.scene.Revolute and dimension == 3):
             options["axis"] = draw(vector(dimension, st.floats(0.1, 1)))
         out.append(kind(draw(name) + next(serials), parent.name if parent else "ground",
                         child.name, **options))
@@ -160,7 +162,7 @@ def scenes(draw):
                      else (valid_name, CLEAN))
     real, positive = numbers.real, numbers.positive
     scene = hx.Scene(draw(text if hostile else st.one_of(valid_name, line)), dimension,
-                     draw(st.sampled_from(list(hx.LENGTH_UNITS))),
+                     draw(st.sampled_from(list(hx.scene.LENGTH_UNITS))),
                      gravity=draw(st.none() | vector(dimension, real)),
                      characteristic_length=draw(st.none() | positive),
                      report_forces=draw(st.booleans()))
@@ -172,24 +174,24 @@ def scenes(draw):
     scene.add(*tree)
     drivable = [j for j in tree if j.drivable]
     if drivable and draw(st.booleans()):
-        scene.add(hx.JointDriver(draw(name) + next(serials), drivable[0].name,
-                                 draw(law(numbers))))
+        scene.add(hx.scene.JointDriver(draw(name) + next(serials), drivable[0].name,
+                                       draw(law(numbers))))
     if drivable and draw(st.booleans()):
-        scene.add(hx.JointEffort(draw(name) + next(serials), drivable[-1].name,
-                                 draw(law(numbers))))
+        scene.add(hx.scene.JointEffort(draw(name) + next(serials), drivable[-1].name,
+                                       draw(law(numbers))))
     if draw(st.booleans()):
         other = draw(st.sampled_from([None, *bodies[1:]]))
-        scene.add(hx.SpringDamper(draw(name) + next(serials), bodies[0].name,
-                                  other.name if other else "ground",
-                                  point_a=on(draw, bodies[0], vector(dimension, real)),
-                                  stiffness=draw(positive), damping=draw(positive),
-                                  free_length=draw(st.none() | positive),
-                                  force=draw(st.none() | law(numbers))))
+        scene.add(hx.scene.SpringDamper(draw(name) + next(serials), bodies[0].name,
+                                        other.name if other else "ground",
+                                        point_a=on(draw, bodies[0], vector(dimension, real)),
+                                        stiffness=draw(positive), damping=draw(positive),
+                                        free_length=draw(st.none() | positive),
+                                        force=draw(st.none() | law(numbers))))
     if draw(st.booleans()):
-        scene.add(hx.AppliedForce(draw(name) + next(serials), bodies[-1].name,
-                                  tuple(draw(law(numbers)) for _ in range(dimension)),
-                                  point=draw(st.none() | vector(dimension, real)),
-                                  frame=draw(st.sampled_from(("world", "body")))))
+        scene.add(hx.scene.AppliedForce(draw(name) + next(serials), bodies[-1].name,
+                                        tuple(draw(law(numbers)) for _ in range(dimension)),
+                                        point=draw(st.none() | vector(dimension, real)),
+                                        frame=draw(st.sampled_from(("world", "body")))))
     return scene
 
 

@@ -74,9 +74,23 @@ def current() -> Execution:
 
 
 @contextlib.contextmanager
-def executing(execution: Execution | None = None, **changes) -> Iterator[Execution]:
+def executing(execution: Execution | None = None,
+              **changes: bool | str | os.PathLike | int | None) -> Iterator[Execution]:
     """Run a block with ``execution`` (default: the current setting) changed by ``changes``
     (``compiled``, ``cache``, ``cache_size``); the setting before is restored after it.
+
+    Parameters
+    ----------
+    execution : Execution, optional
+        The setting to start from (default: the current one).
+    **changes
+        Fields of :class:`Execution` to change: ``compiled`` (bool), ``cache`` (a folder, or
+        None), ``cache_size`` (bytes).
+
+    Yields
+    ------
+    Execution
+        The setting in force in the block.
 
     Raises
     ------

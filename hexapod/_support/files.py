@@ -205,6 +205,20 @@ def write_atomically(path: str | Path, text: str | bytes, *, durable: bool = Tru
     crash of the machine can leave the new name on an empty file; ``durable=False`` skips that
     wait, for files whose loss is harmless (the cache's, which checks what it reads).
 
+    Parameters
+    ----------
+    path : str or Path
+        The file to write.
+    text : str or bytes
+        Its content.
+    durable : bool
+        Flush the file to the disk before it is renamed.
+
+    Returns
+    -------
+    Path
+        ``path``.
+
     Raises
     ------
     InputFileError
@@ -315,6 +329,18 @@ def write_directory_atomically(path: str | Path, files: dict[str, bytes]) -> Pat
     not at all, and the earlier output stays whole until the new one is complete. An existing
     ``path`` is replaced only when it holds nothing but files of those names (an earlier run's
     output); anything else is an error and is left untouched.
+
+    Parameters
+    ----------
+    path : str or Path
+        The directory to write.
+    files : dict of str to bytes
+        Its files' contents by name.
+
+    Returns
+    -------
+    Path
+        ``path``.
 
     Raises
     ------

@@ -8,9 +8,11 @@ eager imports, and ``dir(hexapod)`` lists the public API.
 from __future__ import annotations
 
 import importlib
+from collections.abc import Callable
 
 
-def attach(package: str, exports: dict[str, list[str]]):
+def attach(package: str, exports: dict[str, list[str]]
+           ) -> tuple[Callable[[str], object], Callable[[], list[str]], list[str]]:
     """``__getattr__``, ``__dir__`` and ``__all__`` for a package that re-exports, for each
     module in ``exports``, the names listed with it.
 
@@ -29,8 +31,8 @@ def attach(package: str, exports: dict[str, list[str]]):
         if module is None:
             raise AttributeError(f"module {package!r} has no attribute {name!r}")
         loaded = importlib.import_module(module)
-        value = loaded if module.rpartition(".")[2] == name and not hasattr(loaded, name) \
-            else getattr(loaded, name)
+        # the package itself, even when it holds a module of the same name (hexapod.scene.scene)
+        value = loaded if module.rpartition(".")[2] == name else getattr(loaded, name)
         globals_of_package = importlib.import_module(package).__dict__
         globals_of_package[name] = value  # found directly from now on
         return value

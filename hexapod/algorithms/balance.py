@@ -30,6 +30,7 @@ class BodyBalance:
     Attributes
     ----------
     bodies : tuple of str
+        The bodies' names, in model order.
     force, moment : ndarray (N, n_bodies)
         Norm of the unbalanced force (N) and moment about the centre of mass (N m).
     force_scale, moment_scale : ndarray (n_bodies,)
@@ -68,7 +69,24 @@ def body_balance(model: Model, times: np.ndarray, q: np.ndarray, v: np.ndarray,
                  v_dot: np.ndarray, force: np.ndarray, torque: np.ndarray,
                  frame: str = "joint") -> BodyBalance:
     """Balance of every body under the joint wrenches ``force``, ``torque`` (N, n_joints, 3),
-    given about the joint origins in the joint frames (``frame="joint"``) or world axes."""
+    given about the joint origins in the joint frames (``frame="joint"``) or world axes.
+
+    Parameters
+    ----------
+    model : Model
+    times : ndarray, shape (N,)
+        s.
+    q, v, v_dot : ndarray, shape (N, n_q), (N, n_v), (N, n_v)
+        The motion at the samples.
+    force, torque : ndarray, shape (N, n_joints, 3)
+        The joint wrenches (N, N m), e.g. an :class:`InverseResult`'s.
+    frame : {"joint", "world"}
+        Their axes.
+
+    Returns
+    -------
+    BodyBalance
+    """
     w = model.law_values(np.asarray(times, dtype=float))[0].T
     inertial = v_dot @ model.mass.dense().T
     loads = model.call_samples("Q", q=q, v=v, w=w)

@@ -44,6 +44,29 @@ def forward_dynamics(model: Model, data: Data, t: float, q: np.ndarray, v: np.nd
     ``Phi_v`` is a NumPy array, or for a large model a SciPy CSR array: the whole solve is
     then sparse, its cost linear in the number of bodies (:mod:`hexapod.algorithms.saddle`).
 
+    Parameters
+    ----------
+    model, data : Model, Data
+        The model and its workspace (``model.create_data()``).
+    t : float
+        s.
+    q, v : ndarray, shape (n_q,) and (n_v,)
+        The state (consistent, e.g. from :func:`~hexapod.algorithms.kinematics.consistent_state`,
+        unless ``baumgarte`` pulls it back).
+    condition : bool
+        Also the condition number and the singular values.
+    baumgarte : (float, float), optional
+        ``(alpha, beta)``, 1/s.
+    rank_tolerance : float, optional
+        Default ``model.rank_tolerance``.
+    consistency_tol : float
+        The largest relative violation of the redundant rows.
+
+    Returns
+    -------
+    ndarray, shape (n_v,)
+        ``v_dot`` (m/s^2, rad/s^2).
+
     Raises
     ------
     SingularSystemError

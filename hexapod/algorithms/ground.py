@@ -42,7 +42,19 @@ def contact_weights(model: Model, t: float) -> np.ndarray:
 
 def ground_reactions(model: Model, lam: np.ndarray) -> np.ndarray:
     """The ground's force on each foot (n_contacts, 3), N, world axes: ``-lam`` of the
-    contact's rows (their Jacobian on the foot point is the identity in stance)."""
+    contact's rows (their Jacobian on the foot point is the identity in stance).
+
+    Parameters
+    ----------
+    model : Model
+    lam : ndarray, shape (n_c,)
+        Multipliers (e.g. ``data.lam`` after forward or inverse dynamics).
+
+    Returns
+    -------
+    ndarray, shape (n_contacts, 3)
+        N, world axes, in the order of ``model.contacts``; zero in swing.
+    """
     return np.array([-lam[c.rows] for c in model.contacts]).reshape(-1, 3)
 
 

@@ -35,6 +35,7 @@ from functools import cached_property
 
 import casadi as ca
 import numpy as np
+from numpy.typing import ArrayLike
 
 from hexapod._support import signals
 from hexapod._support.compiled import compiled, serialized
@@ -55,6 +56,7 @@ class InverseResult:
     Attributes
     ----------
     times : ndarray (N,)
+        Sample times, s.
     joints : tuple of str
         Joint names, in model order.
     force, torque : ndarray (N, J, 3)
@@ -64,6 +66,9 @@ class InverseResult:
         ``tau`` of the joints with a coordinate (revolute and prismatic: torque about the axis,
         force along it), NaN for the others.
     q, v, v_dot : ndarray (N, n_q), (N, n_v), (N, n_v)
+        The prescribed motion: positions, velocities and accelerations (SI).
+    frame : {"joint", "world"}
+        The axes of ``force`` and ``torque``.
     method : str
         ``"tree"``, ``"phase"`` or ``"saddle"``.
     max_violation : float
@@ -113,7 +118,7 @@ BLOCK_FACTOR, SMALLEST_BLOCK = 12, 64
 PHASE_FROM_SAMPLES = 32
 
 
-def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = "joint",
+def inverse_dynamics(model: Model, times: ArrayLike, *, method: str = "auto", frame: str = "joint",
                      data: Data | None = None,
                      progress: Callable[[int, int], None] | None = None) -> InverseResult:
     """Joint wrenches and driver efforts of the prescribed motion at ``times``.
@@ -125,20 +130,21 @@ def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = 
     Parameters
     ----------
     model : Model
+        Assembled from a scene whose drivers prescribe the motion.
     times : array_like (N,)
         Sample times, s.
-    method :
+    method : str
         ``"auto"`` (the tree path when the model allows it, else the phase path from
         :data:`PHASE_FROM_SAMPLES` samples, else the saddle path), ``"tree"``, ``"phase"``
         (closed loops and contacts, batched: :mod:`hexapod.algorithms.phase_inverse`) or
         ``"saddle"`` (any mechanism, every sample solved exactly: the reference).
-    frame :
+    frame : str
         ``"joint"`` (the report convention) or ``"world"``.
     data : Data, optional
         A workspace of ``model`` to run in (default: a new one). A run leaves there what it
         built for its samples (call buffers, rank decisions and their plans), which a later
         run with the same workspace reuses.
-    progress :
+    progress : callable, optional
         Called as ``progress(done, total)`` as samples are done (after each block of samples
         on the tree path, see :data:`BLOCK_FACTOR`; after each run of samples sharing one
         rank decision on the phase path).
@@ -146,6 +152,7 @@ def inverse_dynamics(model: Model, times, *, method: str = "auto", frame: str = 
     Returns
     -------
     InverseResult
+        Wrenches and efforts in N and N m, with the motion.
 
     Raises
     ------

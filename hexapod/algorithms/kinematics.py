@@ -120,9 +120,16 @@ def assemble_positions(model: Model, data: Data, t: float = 0.0, q: np.ndarray |
     tol : float
         On ``max |phi_i| / s_i`` with ``s_i`` the characteristic length for length rows and 1
         for angle rows.
+    max_iterations : int
+        The most Newton iterations.
     counts : dict, optional
         Receives the work done: ``newton`` (iterations, each a Jacobian evaluation and a
         factorisation) added to what it holds.
+
+    Returns
+    -------
+    ndarray, shape (n_q,)
+        The positions (m, Euler parameters, rad).
 
     Raises
     ------
@@ -206,7 +213,28 @@ def solve_velocities(model: Model, data: Data, t: float, q: np.ndarray,
                      v: np.ndarray | None = None) -> np.ndarray:
     """Velocities (n_v) satisfying ``Phi_v v = nu`` at ``(t, q)`` closest to the guess ``v``
     (default: the scene's initial velocities) in the kinetic-energy norm; left in ``data.v``
-    (with ``data.t``, ``data.q``)."""
+    (with ``data.t``, ``data.q``).
+
+    Parameters
+    ----------
+    model, data : Model, Data
+        The model and its workspace (``model.create_data()``).
+    t : float
+        s.
+    q : ndarray, shape (n_q,)
+        Positions satisfying the constraints (e.g. from :func:`assemble_positions`).
+    v : ndarray, shape (n_v,), optional
+        The guess (default: the scene's initial velocities).
+
+    Returns
+    -------
+    ndarray, shape (n_v,)
+
+    Raises
+    ------
+    SingularSystemError
+        The velocity constraints of redundant rows contradict the others.
+    """
     model.check(data)
     v = _project_velocities(model, data, t, q,
                             model.v0 if v is None else np.asarray(v, dtype=float))
@@ -235,7 +263,26 @@ def solve_accelerations(model: Model, data: Data, t: float, q: np.ndarray,
                         v: np.ndarray) -> np.ndarray:
     """Accelerations (n_v) satisfying ``Phi_v v_dot = gamma`` of least kinetic-energy norm
     (unique for a fully driven mechanism): the acceleration analysis of prescribed motion; left
-    in ``data.v_dot`` (with ``data.t, q, v, Phi_v, gamma``)."""
+    in ``data.v_dot`` (with ``data.t, q, v, Phi_v, gamma``).
+
+    Parameters
+    ----------
+    model, data : Model, Data
+        The model and its workspace (``model.create_data()``).
+    t : float
+        s.
+    q, v : ndarray, shape (n_q,) and (n_v,)
+        A consistent state (e.g. from :func:`consistent_state`).
+
+    Returns
+    -------
+    ndarray, shape (n_v,)
+
+    Raises
+    ------
+    SingularSystemError
+        The acceleration constraints of redundant rows contradict the others.
+    """
     w, wd, wdd = model.law_values(t, data)
     Phi_v = constraint_jacobian(model, q, w, data)
     gamma = model.call("gamma", data, q=q, v=v, w=w, wd=wd, wdd=wdd)
@@ -251,7 +298,28 @@ def solve_accelerations(model: Model, data: Data, t: float, q: np.ndarray,
 def consistent_state(model: Model, data: Data, t: float = 0.0, q: np.ndarray | None = None,
                      v: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Positions assembled and velocities projected at time ``t`` from guesses (default: the
-    scene's initial state): ``(q (n_q), v (n_v))``, also left in ``data``."""
+    scene's initial state): ``(q (n_q), v (n_v))``, also left in ``data``.
+
+    Parameters
+    ----------
+    model, data : Model, Data
+        The model and its workspace (``model.create_data()``).
+    t : float
+        s.
+    q : ndarray, shape (n_q,), optional
+        Guess of the positions (default: the scene's initial poses).
+    v : ndarray, shape (n_v,), optional
+        Guess of the velocities (default: the scene's initial velocities).
+
+    Returns
+    -------
+    q, v : ndarray, shape (n_q,) and (n_v,)
+
+    Raises
+    ------
+    AssemblyError, SingularSystemError
+        As :func:`assemble_positions` and :func:`solve_velocities`.
+    """
     q = assemble_positions(model, data, t, q)
     return q, solve_velocities(model, data, t, q, v)
 
@@ -259,7 +327,22 @@ def consistent_state(model: Model, data: Data, t: float = 0.0, q: np.ndarray | N
 def degrees_of_freedom(model: Model, data: Data, t: float, q: np.ndarray) -> dict:
     """Numerical mobility at ``(t, q)``: ``n_v - rank(Phi_v)`` of the joints alone (``dof``)
     and with the drivers (``dof_with_drivers``), and the redundant rows by name
-    (``redundant_rows``); ``data`` receives ``Phi_v``."""
+    (``redundant_rows``); ``data`` receives ``Phi_v``.
+
+    Parameters
+    ----------
+    model, data : Model, Data
+        The model and its workspace (``model.create_data()``).
+    t : float
+        s.
+    q : ndarray, shape (n_q,)
+        Positions.
+
+    Returns
+    -------
+    dict
+        ``dof`` and ``dof_with_drivers`` (int), ``redundant_rows`` (list of row names).
+    """
     w, _, _ = model.law_values(t, data)
     Phi_v = constraint_jacobian(model, q, w, data)
     data.at(t, q)
@@ -282,7 +365,21 @@ def degrees_of_freedom(model: Model, data: Data, t: float, q: np.ndarray) -> dic
 def body_poses(model: Model, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """World poses of every body's centre-of-mass frame over samples ``q`` (N, n_q): positions
     (N, n_bodies, 3) and rotations (N, n_bodies, 3, 3), planar poses embedded in 3-D (z = 0,
-    rotation about z) and particles with the identity."""
+    rotation about z) and particles with the identity.
+
+    Parameters
+    ----------
+    model : Model
+    q : ndarray, shape (N, n_q) or (n_q,)
+        Positions at N samples (one sample: N = 1).
+
+    Returns
+    -------
+    position : ndarray, shape (N, n_bodies, 3)
+        The centres of mass, m.
+    rotation : ndarray, shape (N, n_bodies, 3, 3)
+        Body -> world.
+    """
     q = np.atleast_2d(np.asarray(q, dtype=float))
     n, n_b = q.shape[0], len(model.bodies)
     position, rotation = np.zeros((n, n_b, 3)), np.tile(np.eye(3), (n, n_b, 1, 1))
@@ -302,7 +399,21 @@ def body_poses(model: Model, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def marker_trajectories(model: Model, q: np.ndarray, marker: str) -> dict[str, np.ndarray]:
     """World positions (N, 3) over samples ``q`` of the markers named ``marker``, by body (every
-    body that has one)."""
+    body that has one).
+
+    Parameters
+    ----------
+    model : Model
+    q : ndarray, shape (N, n_q) or (n_q,)
+        Positions at N samples.
+    marker : str
+        The marker's name (e.g. ``"foot"``).
+
+    Returns
+    -------
+    dict of str to ndarray, shape (N, 3)
+        By body name, m; empty when no body has such a marker.
+    """
     owners = [b for b, body in enumerate(model.bodies) if marker in body.markers]
     if not owners:
         return {}

@@ -14,12 +14,16 @@ Planar wrenches are embedded in 3-D: ``(Fx, Fy, 0)`` and ``(0, 0, Tz)``.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from hexapod.algorithms.step_terms import terms_of
 from hexapod.errors import HexapodError
 from hexapod.model.model import Data, JointInfo, Model
+
+if TYPE_CHECKING:
+    from scipy.sparse import sparray
 
 
 @dataclass(frozen=True)
@@ -29,6 +33,7 @@ class JointWrenches:
     Attributes
     ----------
     names : tuple of str
+        The joints' names.
     force, torque : ndarray (n_joints, 3)
         N and N m, about the joint origin, in the child's joint frame (or world axes when
         computed with ``frame="world"``).
@@ -37,7 +42,8 @@ class JointWrenches:
         torque about its axis, a prismatic joint's force along it: the wrench dotted with the
         joint type's twist), NaN for the other joints. Equals ``-lambda`` of a driver on the
         joint plus the efforts and torsion springs acting across it.
-    frame : str
+    frame : {"joint", "world"}
+        The axes of ``force`` and ``torque``.
     """
 
     names: tuple[str, ...]
@@ -100,6 +106,11 @@ def joint_wrenches(model: Model, data: Data, *, frame: str = "joint",
         parent's joint point (which differs from the child's for prismatic and distance joints),
         in the parent's joint frame (or world axes); ``effort`` stays that of the child.
 
+    Returns
+    -------
+    JointWrenches
+        N and N m.
+
     Raises
     ------
     HexapodError
@@ -113,6 +124,17 @@ def joint_wrenches(model: Model, data: Data, *, frame: str = "joint",
 def driver_efforts(model: Model, data: Data) -> dict[str, float]:
     """The effort each driver exerts along its coordinate at the state of ``data``:
     ``-lambda_d`` (N m about a revolute axis, N along a prismatic one), by driver name.
+
+    Parameters
+    ----------
+    model, data : Model, Data
+        ``data`` filled at one state by :func:`~hexapod.algorithms.dynamics.forward_dynamics`
+        (or by the inverse dynamics).
+
+    Returns
+    -------
+    dict of str to float
+        N m or N, by driver name (a coordinate driver's: N, or N m for an angle).
 
     Raises
     ------
@@ -135,14 +157,41 @@ def _require_solved(model: Model, data: Data, caller: str) -> None:
                            f"multipliers, model '{model.name}' has {model.n_c} rows)")
 
 
-def wrenches_from_multipliers(model: Model, q: np.ndarray, lam: np.ndarray, Phi_v,
+def wrenches_from_multipliers(model: Model, q: np.ndarray, lam: np.ndarray,
+                              Phi_v: np.ndarray | sparray,
                               Q_across: np.ndarray | None = None, *, frame: str = "joint",
                               on: str = "child", data: Data | None = None) -> JointWrenches:
     """:func:`joint_wrenches` from explicit multipliers (n_c) at positions ``q`` (n_q), e.g.
     those of a recorded simulation; ``Q_across`` is ``model.Q_across`` at the same state (None
     leaves out the force elements acting across joints). The wrenches come from their one
     definition (:meth:`hexapod.algorithms.step_terms.StepTerms.report`), evaluated through
-    the call buffers of ``data`` when it is given."""
+    the call buffers of ``data`` when it is given.
+
+    Parameters
+    ----------
+    model : Model
+    q : ndarray, shape (n_q,)
+        Positions.
+    lam : ndarray, shape (n_c,)
+        Multipliers at ``q``.
+    Phi_v : ndarray or scipy.sparse array, shape (n_c, n_v)
+        The constraint Jacobian at ``q``.
+    Q_across : ndarray, shape (n_v, k), optional
+        ``model.Q_across`` at the same state.
+    frame, on : str
+        As for :func:`joint_wrenches`.
+    data : Data, optional
+        A workspace of ``model`` whose call buffers to use.
+
+    Returns
+    -------
+    JointWrenches
+
+    Raises
+    ------
+    ValueError
+        ``frame`` or ``on`` is not one of the choices.
+    """
     if on not in ("child", "parent"):
         raise ValueError(f"on must be 'child' or 'parent', got {on!r}")
     if frame not in ("joint", "world"):

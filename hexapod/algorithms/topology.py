@@ -48,6 +48,22 @@ class Loop:
 
 @dataclass(frozen=True)
 class BodyJointGraph:
+    """The body-joint graph of :func:`body_joint_graph`.
+
+    Attributes
+    ----------
+    vertices : tuple of str
+        The ground, then the bodies in model order.
+    joints : tuple of str
+        The edges: every joint, in model order.
+    tree, cotree : tuple of str
+        The spanning tree's joints and the loop-closing joints.
+    components : int
+        Connected parts: 1 unless some body is free or floats.
+    loops : tuple of Loop
+        The independent loops, one per loop-closing joint.
+    """
+
     vertices: tuple[str, ...]  # the ground, then the bodies
     joints: tuple[str, ...]
     tree: tuple[str, ...]
@@ -67,7 +83,16 @@ def _name(model: Model, body: int) -> str:
 
 def body_joint_graph(model: Model) -> BodyJointGraph:
     """The body-joint graph (vertices: the ground and the bodies; edges: the joints): its
-    spanning tree, the loop-closing joints (cotree) and the independent loops they close."""
+    spanning tree, the loop-closing joints (cotree) and the independent loops they close.
+
+    Parameters
+    ----------
+    model : Model
+
+    Returns
+    -------
+    BodyJointGraph
+    """
     vertices = (GROUND, *(b.name for b in model.bodies))
     edges = [(_name(model, j.parent), _name(model, j.child)) for j in model.joints]
     tree, chords = spanning_forest(vertices, edges)
@@ -86,7 +111,18 @@ def body_joint_graph(model: Model) -> BodyJointGraph:
 
 @dataclass(frozen=True)
 class Mobility:
-    """Degrees of freedom counted (Grubler-Kutzbach) and numerical, without and with drivers."""
+    """Degrees of freedom counted (Grubler-Kutzbach) and numerical, without and with drivers.
+
+    Attributes
+    ----------
+    counted, numerical : int
+        The joints alone: ``sum of body freedoms - sum of joint rows``, and
+        ``n_v - rank(Phi_v)``.
+    counted_with_drivers, numerical_with_drivers : int
+        The same with the drivers' rows.
+    redundant_rows : tuple of str
+        The rows the rank decision names redundant, drivers included.
+    """
 
     counted: int
     numerical: int
@@ -102,7 +138,21 @@ class Mobility:
 
 def mobility(model: Model, data: Data, t: float, q: np.ndarray) -> Mobility:
     """Grubler-Kutzbach's count against the numerical ``n_v - rank(Phi_v)`` at ``(t, q)``
-    (see :func:`~hexapod.algorithms.kinematics.degrees_of_freedom`, which fills ``data``)."""
+    (see :func:`~hexapod.algorithms.kinematics.degrees_of_freedom`, which fills ``data``).
+
+    Parameters
+    ----------
+    model, data : Model, Data
+        The model and a workspace of it.
+    t : float
+        s.
+    q : ndarray, shape (n_q,)
+        Positions (need not satisfy the constraints: the rank is that of ``Phi_v`` there).
+
+    Returns
+    -------
+    Mobility
+    """
     freedoms = sum(_BODY_FREEDOMS[(b.kind, model.dimension)] for b in model.bodies)
     counted = freedoms - sum(j.rows.size for j in model.joints)
     numerical = degrees_of_freedom(model, data, t, q)
@@ -130,6 +180,19 @@ class VectorNetwork:
 
     ``edges`` lists the tree branches first, then the chords, so ``cutset = [U A]`` and
     ``circuit = [B U]`` in that column order.
+
+    Attributes
+    ----------
+    vertices : tuple of str
+        The ground, the centres of mass and the points of interconnection.
+    edges : tuple of NetworkEdge
+        The elements, oriented ``tail -> head``: tree branches, then chords.
+    incidence : ndarray of int, shape (len(vertices), len(edges))
+        +1 at an edge's tail, -1 at its head.
+    cutset : ndarray of int, shape (branches, len(edges))
+        The fundamental cutsets ``[U A]``, one per tree branch.
+    circuit : ndarray of int, shape (chords, len(edges))
+        The fundamental circuits ``[B U]``, one per chord.
     """
 
     vertices: tuple[str, ...]
@@ -230,5 +293,15 @@ class _NetworkBuilder:
 
 
 def vector_network(model: Model) -> VectorNetwork:
-    """The vector-network graph of the model (Richard, Anderson and Andrews)."""
+    """The vector-network graph of the model (Richard, Anderson and Andrews).
+
+    Parameters
+    ----------
+    model : Model
+
+    Returns
+    -------
+    VectorNetwork
+        The graph and its incidence, cutset and circuit matrices (the module's description).
+    """
     return _NetworkBuilder(model).build()

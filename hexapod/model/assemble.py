@@ -368,9 +368,14 @@ def assemble(scene: Scene, *, rank_tolerance: float = 1e-9) -> Model:
     Parameters
     ----------
     scene : Scene
+        The description, in its own length unit (the model is in SI).
     rank_tolerance : float
         Rows of the equilibrated ``Phi_v`` whose distance to the span of the rows kept before
         them is below this are redundant (see :mod:`hexapod.algorithms.linalg`).
+
+    Returns
+    -------
+    Model
 
     Raises
     ------

@@ -22,12 +22,16 @@ class Data:
     Attributes
     ----------
     t : float
+        The state's time, s.
     q, v, v_dot : ndarray (n_q,), (n_v,), (n_v,)
+        Positions, velocities and accelerations (SI; Euler parameters for orientations, body
+        angular velocities).
     w, wd, wdd : ndarray (n_w,)
         The laws' values and derivatives at ``t``.
     Phi_v : ndarray (n_c, n_v)
         A SciPy CSR array for a large model (:mod:`hexapod.algorithms.saddle`).
     gamma, Q, lam : ndarray (n_c,), (n_v,), (n_c,)
+        The acceleration right-hand side, the generalized applied forces and the multipliers.
     Q_across : ndarray (n_v, k)
         Generalized forces of the force elements acting across joints.
     independent_rows, redundant_rows : ndarray of int
@@ -42,6 +46,11 @@ class Data:
     ground_status : tuple of str
         Per contact: ``swing``, ``ok``, or where the friction policy found no admissible force,
         ``slip`` (outside the friction cone) or ``pull`` (normal force below its minimum).
+    model_sizes : tuple
+        The sizes of the model the workspace was made for (:meth:`Model.check`).
+    calls, laws, built : dict, tuple, dict
+        What belongs to a run: the call buffers, the law values of the last run of samples,
+        and the objects a run builds and reuses.
     """
 
     t: float | None = None

@@ -25,6 +25,7 @@ import threading
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 import casadi as ca
 import numpy as np
@@ -50,6 +51,9 @@ from hexapod.spatial import (
     quaternion_product,
     rotation_from_euler_parameters,
 )
+
+if TYPE_CHECKING:
+    from hexapod.scene.contacts import GroundForces
 
 __all__ = ["GROUND_INDEX", "BodyInfo", "ContactInfo", "Data", "DriverInfo", "ForceInfo",
            "JointInfo", "Model", "RowInfo", "Symbolic"]
@@ -91,9 +95,13 @@ class Model:
     values, rank decisions and the plans built for them) lives in a :class:`Data`, so that
     threads with their own ``Data`` share a model safely.
 
+    The parameters of ``__init__`` are the attributes of the same names (keyword-only), which
+    :func:`hexapod.assemble` computes from a scene.
+
     Attributes
     ----------
     name : str
+        The scene's name.
     dimension : int
         3 (space) or 2 (plane).
     bodies, joints, drivers, rows, forces, contacts : tuple
@@ -117,6 +125,16 @@ class Model:
         The content hash of what the model was built from (:mod:`hexapod.model.digest`).
     source : str
         The file the scene was read from (empty for a scene built in Python).
+    symbolic : Symbolic
+        The CasADi symbols and expressions the Functions are built from.
+    working_elements : tuple of str
+        The drivers with time laws and force elements that do work not drawn from a potential
+        (dampers, loads, efforts): the energy is conserved when there are none.
+    report_forces : bool
+        Whether simulations ask for the joint wrenches at the saved states (the scene's
+        setting).
+    ground : GroundForces or None
+        The policy that shares the ground forces among the feet (None without contacts).
     """
 
     def __init__(self, *, name: str, dimension: int, bodies: tuple[BodyInfo, ...],
@@ -126,7 +144,7 @@ class Model:
                  mass: BlockDiagonal, symbolic: Symbolic, forces: tuple[ForceInfo, ...],
                  rank_tolerance: float = 1e-9, working_elements: tuple[str, ...] = (),
                  report_forces: bool = False, contacts: tuple[ContactInfo, ...] = (),
-                 ground=None, digest: str = "", source: str = ""):
+                 ground: GroundForces | None = None, digest: str = "", source: str = ""):
         self.name = name
         self.source = source
         #: the content hash of what the model was built from (:mod:`hexapod.model.digest`):

@@ -79,7 +79,29 @@ def _pose(model: Model, q: np.ndarray, t: float, data: Data) -> dict:
 
 
 def describe_model(model: Model, t: float = 0.0, graph: bool = False) -> dict:
-    """Everything ``hexapod info`` reports, at the pose assembled at time ``t``."""
+    """Everything ``hexapod info`` reports, at the pose assembled at time ``t``.
+
+    Parameters
+    ----------
+    model : Model
+    t : float
+        The time the pose is assembled at, s.
+    graph : bool
+        Also the vector-network graph (:func:`hexapod.vector_network`), key ``vector_network``.
+
+    Returns
+    -------
+    dict
+        JSON-ready: the model's bodies, joints, drivers and force elements, its sizes, the
+        topology, the mobility and the initial pose (``ground``: the ground-force settings of a
+        model with contacts).
+
+    Raises
+    ------
+    AssemblyError, SingularSystemError
+        No pose satisfies the constraints at ``t``, or redundant constraints contradict each
+        other there.
+    """
     rows = [r.name for r in model.rows]
     drivers_on = {j.name: [model.rows[r].name for r in j.driver_rows] for j in model.joints}
     bodies = [{"name": b.name, "kind": b.kind, "mass": b.mass,
@@ -134,7 +156,26 @@ def describe_model(model: Model, t: float = 0.0, graph: bool = False) -> dict:
 
 
 def describe_state(model: Model, t: float = 0.0) -> dict:
-    """Everything ``hexapod dynamics`` reports at time ``t``."""
+    """Everything ``hexapod dynamics`` reports at time ``t``.
+
+    Parameters
+    ----------
+    model : Model
+    t : float
+        s.
+
+    Returns
+    -------
+    dict
+        JSON-ready: the sizes, the state and its mobility, every joint's wrench (report
+        convention; a contact's ground force too), the driver efforts, the accelerations and
+        the multipliers by name.
+
+    Raises
+    ------
+    AssemblyError, SingularSystemError
+        No consistent state at ``t``, or contradicting redundant constraints.
+    """
     q, _, data = _solved_state(model, t)
     wrenches = joint_wrenches(model, data)
     m = mobility(model, data, t, q)
@@ -189,7 +230,17 @@ def _pose_lines(pose: dict, redundant: list[str], policy: str | None = None) -> 
 
 
 def format_model(info: dict) -> str:
-    """The text ``hexapod info`` prints, from :func:`describe_model`'s dictionary."""
+    """The text ``hexapod info`` prints, from :func:`describe_model`'s dictionary.
+
+    Parameters
+    ----------
+    info : dict
+        From :func:`describe_model`.
+
+    Returns
+    -------
+    str
+    """
     m, top, mob = info["model"], info["topology"], info["mobility"]
     out = [f"scene '{info['scene']}' ({info['dimension']}-D, SI units), total mass "
            f"{info['mass']:.6g} kg", "", "bodies"]
@@ -262,7 +313,17 @@ def format_network(net: dict) -> list[str]:
 
 
 def format_state(report: dict) -> str:
-    """The text ``hexapod dynamics`` prints, from :func:`describe_state`'s dictionary."""
+    """The text ``hexapod dynamics`` prints, from :func:`describe_state`'s dictionary.
+
+    Parameters
+    ----------
+    report : dict
+        From :func:`describe_state`.
+
+    Returns
+    -------
+    str
+    """
     c = report["counts"]
     out = [f"scene '{report['scene']}' ({report['dimension']}-D): {c['bodies']} bodies, "
            f"{c['joints']} joints, {c['drivers']} drivers, {c['forces']} force elements",

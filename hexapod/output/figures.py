@@ -10,9 +10,14 @@ from __future__ import annotations
 
 import io
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+#: The colours of the x, y and z components in every figure.
 COMPONENT_COLOURS = ("tab:red", "tab:green", "tab:blue")
 PANEL_SIZE = (3.6, 2.5)  # inches per panel
 
@@ -45,17 +50,49 @@ def _finish_panels(axes, columns: int) -> None:
             ax.xaxis.set_tick_params(labelbottom=True)
 
 
-def png_bytes(figure, dpi: int = 110) -> bytes:
-    """A :class:`matplotlib.figure.Figure` rendered as PNG bytes (at ``dpi`` dots per inch)."""
+def png_bytes(figure: Figure, dpi: int = 110) -> bytes:
+    """A :class:`matplotlib.figure.Figure` rendered as PNG bytes (at ``dpi`` dots per inch).
+
+    Parameters
+    ----------
+    figure : matplotlib.figure.Figure
+    dpi : int
+        Dots per inch.
+
+    Returns
+    -------
+    bytes
+        The PNG file's content.
+    """
     buffer = io.BytesIO()
     figure.savefig(buffer, format="png", dpi=dpi)
     return buffer.getvalue()
 
 
 def wrench_figure(times: np.ndarray, values: np.ndarray, names: list[str], symbol: str,
-                  unit: str, title: str):
+                  unit: str, title: str) -> Figure:
     """Components and magnitude of vectors ``values`` (N, panels, 3), e.g. every joint's force,
-    against time: one panel per vector, titled by ``names``."""
+    against time: one panel per vector, titled by ``names``.
+
+    Parameters
+    ----------
+    times : ndarray, shape (N,)
+        s.
+    values : ndarray, shape (N, panels, 3)
+        The vectors, in ``unit``.
+    names : list of str, length panels
+        Each panel's title.
+    symbol : str
+        The vector's symbol in the legend (``F`` gives ``Fx, Fy, Fz, |F|``).
+    unit : str
+        The vertical axes' label, e.g. ``"N"``.
+    title : str
+        The figure's title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     figure, axes, columns = _figure(len(names), title)
     for k, (ax, name) in enumerate(zip(axes, names, strict=True)):
         for c, colour in enumerate(COMPONENT_COLOURS):
@@ -71,9 +108,24 @@ def wrench_figure(times: np.ndarray, values: np.ndarray, names: list[str], symbo
 
 
 def effort_figure(times: np.ndarray, efforts: list[tuple[str, str, np.ndarray, np.ndarray]],
-                  title: str):
+                  title: str) -> Figure:
     """Each actuator's effort (solid, left axis) and power (dashed, right axis) against time;
-    ``efforts`` holds (name, unit of the effort, effort, power) per actuator."""
+    ``efforts`` holds (name, unit of the effort, effort, power) per actuator.
+
+    Parameters
+    ----------
+    times : ndarray, shape (N,)
+        s.
+    efforts : list of (str, str, ndarray, ndarray)
+        Per actuator: its name, the effort's unit (``"N m"`` or ``"N"``), the effort (N,) and
+        the power (N,), W.
+    title : str
+        The figure's title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     figure, axes, columns = _figure(len(efforts), title, twin=True)
     for ax, (name, unit, effort, power) in zip(axes, efforts, strict=True):
         ax.plot(times, effort, color="tab:blue", linewidth=1.3)
@@ -87,9 +139,24 @@ def effort_figure(times: np.ndarray, efforts: list[tuple[str, str, np.ndarray, n
     return figure
 
 
-def trajectory_figure(times: np.ndarray, trajectories: dict[str, np.ndarray], title: str):
+def trajectory_figure(times: np.ndarray, trajectories: dict[str, np.ndarray],
+                      title: str) -> Figure:
     """Paths of points (e.g. the feet): side view (x, z), top view (x, y), and the coordinates
-    against time; a dot marks each path's start."""
+    against time; a dot marks each path's start.
+
+    Parameters
+    ----------
+    times : ndarray, shape (N,)
+        s.
+    trajectories : dict of str to ndarray, shape (N, 3)
+        World positions (m) by name, e.g. from :func:`hexapod.marker_trajectories`.
+    title : str
+        The figure's title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     from matplotlib.figure import Figure
 
     figure = Figure(figsize=(13.0, 4.2), layout="constrained")

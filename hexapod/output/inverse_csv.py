@@ -46,12 +46,35 @@ def inverse_column_units(model: Model, frame: str = "joint") -> Columns:
 
 
 def inverse_columns(model: Model) -> list[str]:
-    """The header of the inverse-dynamics CSV."""
+    """The header of the inverse-dynamics CSV.
+
+    Parameters
+    ----------
+    model : Model
+
+    Returns
+    -------
+    list of str
+        ``t``, then ``tau:<joint>`` (joints with a coordinate), ``Fx:<joint> .. Tz:<joint>``
+        per joint, then ``GRx:<leg> .. GRz:<leg>`` per foot contact (the module's description).
+    """
     return list(inverse_column_units(model))
 
 
 def inverse_table(model: Model, result: InverseResult) -> np.ndarray:
-    """The rows of the CSV: one per sample, columns as :func:`inverse_columns`."""
+    """The rows of the CSV: one per sample, columns as :func:`inverse_columns`.
+
+    Parameters
+    ----------
+    model : Model
+    result : InverseResult
+        From :func:`hexapod.inverse_dynamics` on ``model``.
+
+    Returns
+    -------
+    ndarray, shape (N, len(inverse_columns(model)))
+        s, N, N m.
+    """
     columns = [result.times[:, None]]
     for k, joint in enumerate(model.joints):
         if joint.type.drivable:
@@ -69,7 +92,19 @@ def inverse_table(model: Model, result: InverseResult) -> np.ndarray:
 def inverse_csv_text(model: Model, result: InverseResult) -> str:
     """The CSV of ``hexapod inverse``: a header of :func:`inverse_columns` (``t``, then per joint
     ``tau`` where it has one and ``Fx .. Tz``; N, N m; then per foot contact ``GRx .. GRz``, N)
-    and one row per sample, every number written to round-trip (17 significant digits)."""
+    and one row per sample, every number written to round-trip (17 significant digits).
+
+    Parameters
+    ----------
+    model : Model
+    result : InverseResult
+        From :func:`hexapod.inverse_dynamics` on ``model``.
+
+    Returns
+    -------
+    str
+        The file's text (nothing is written).
+    """
     rows = inverse_table(model, result)
     line = ",".join(["%.17g"] * rows.shape[1])
     return ",".join(inverse_columns(model)) + "\n" + "".join(

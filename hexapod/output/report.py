@@ -54,7 +54,24 @@ def agreement(columns: list[str], table: np.ndarray, reference_columns: list[str
     """Largest difference from a reference CSV, relative to the largest magnitude of the same
     quantity: for each joint, its forces (``Fx, Fy, Fz``) against the largest of them, its
     moments (``tau, Tx, Ty, Tz``) against the largest of those, over all samples. Columns of the
-    table that the reference lacks (fixed joints, say) are not compared."""
+    table that the reference lacks (fixed joints, say) are not compared.
+
+    Parameters
+    ----------
+    columns : list of str
+        The table's header (:func:`inverse_columns`).
+    table : ndarray, shape (N, len(columns))
+        Our values (:func:`inverse_table`).
+    reference_columns : list of str
+        The reference's header; each must be one of ``columns``.
+    reference : ndarray, shape (N, len(reference_columns))
+        The reference's values at the same samples.
+
+    Returns
+    -------
+    float
+        The largest relative difference (0 for none).
+    """
     index = {name: k for k, name in enumerate(columns)}
     groups: dict[tuple[str, str], list[int]] = {}
     for k, name in enumerate(reference_columns):
@@ -76,7 +93,18 @@ def agreement(columns: list[str], table: np.ndarray, reference_columns: list[str
 def wrench_label(model: Model, joint: JointInfo) -> str:
     """The name Dumitru, Marin and Margine give a joint's wrench: ``F21`` is exerted by element 1 on
     element 2, with the bodies numbered from 1 in model order and the ground 0 (``F12,11`` past
-    9)."""
+    9).
+
+    Parameters
+    ----------
+    model : Model
+    joint : JointInfo
+        One of ``model.joints``.
+
+    Returns
+    -------
+    str
+    """
     child = joint.child + 1
     parent = 0 if joint.parent == GROUND_INDEX else joint.parent + 1
     return f"F{child}{parent}" if max(child, parent) < 10 else f"F{child},{parent}"
@@ -191,7 +219,19 @@ def driver_statistics(model: Model, result: InverseResult) -> list[DriverStatist
 
 @dataclass(frozen=True)
 class RunInfo:
-    """How the report's numbers were obtained."""
+    """How the report's numbers were obtained.
+
+    Attributes
+    ----------
+    scene : str
+        The scene's name.
+    source : str
+        Where the scene came from (a file, or a built-in scene's name).
+    run_time : float
+        The inverse dynamics' wall-clock time, s.
+    window : str
+        Why the time window is what it is (shown in the summary).
+    """
 
     scene: str
     source: str
@@ -495,7 +535,26 @@ def report_files(model: Model, result: InverseResult, balance: BodyBalance, run:
     (``forces-L1.png`` ...). With foot contacts (a walking robot) also ``ground.csv`` and
     ``trunk.csv`` (:mod:`hexapod.output.ground`), and the figures ``ground.png`` (the
     ground's force on each foot), ``friction.png`` (the friction ratio) and ``gait.png`` (the
-    gait diagram)."""
+    gait diagram).
+
+    Parameters
+    ----------
+    model : Model
+    result : InverseResult
+        The inverse dynamics over the report's window.
+    balance : BodyBalance
+        Its per-body balance (:func:`hexapod.body_balance`), summarised in ``summary.md``.
+    run : RunInfo
+        How the numbers were obtained.
+    feet : dict of str to ndarray, shape (N, 3)
+        Foot paths (world, m) by body; empty for none.
+
+    Returns
+    -------
+    dict of str to bytes
+        The files' contents by name; nothing is written (see
+        :func:`write_directory_atomically`).
+    """
     t = result.times
     figures = _wrench_figures(model, result, run.scene)
     drivers = driver_statistics(model, result)

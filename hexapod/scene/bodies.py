@@ -95,6 +95,7 @@ class SpatialBody(Body):
     Parameters
     ----------
     name : str
+        The body's name, unique among the bodies.
     mass : float
         kg.
     inertia : array_like
@@ -103,8 +104,10 @@ class SpatialBody(Body):
         principal moments, or ``(xx, yy, zz, xy, xz, yz)``.
     com : array_like, shape (3,)
         Centre of mass in the reference frame (L).
-    position, rotation :
+    position, rotation : array_like, shape (3,) and (3, 3)
         Pose of the reference frame in the world at the initial guess (L; rotation body -> world).
+    inertia_rotation : array_like, shape (3, 3), optional
+        The axes ``inertia`` is given in, in the reference frame (default: its own axes).
     velocity, angular_velocity : array_like, shape (3,)
         Initial velocity of the reference frame's origin and angular velocity, both in world
         axes (like ``position``, the velocity belongs to the reference frame).
@@ -114,6 +117,11 @@ class SpatialBody(Body):
         A mesh file (any format meshio reads) that ``hexapod export`` draws for the body, its
         points in the reference frame (L); a relative path is taken from the scene file's
         directory. Optional: without it the body is drawn as its box of inertia.
+    source : str
+        Where the body was written (file and entry), named in messages; empty for a body built
+        in Python.
+
+    L is the scene's length unit (:attr:`Scene.length_unit`).
     """
 
     name: str
@@ -197,6 +205,27 @@ class PlanarBody(Body):
     ``inertia`` is the moment of inertia about the centre of mass (kg L^2); ``position`` and
     ``angle`` give the reference frame in the world at the initial guess; ``com`` is in that frame;
     ``velocity`` is that of the reference frame's origin, ``angular_velocity`` in rad/s.
+
+    Parameters
+    ----------
+    name : str
+        The body's name, unique among the bodies.
+    mass : float
+        kg.
+    inertia : float
+        Moment of inertia about the centre of mass, kg L^2.
+    com : array_like, shape (2,)
+        Centre of mass in the reference frame (L).
+    position : array_like, shape (2,)
+        The reference frame's origin in the world at the initial guess (L).
+    angle : float
+        The reference frame's angle at the initial guess, rad.
+    velocity : array_like, shape (2,)
+        Initial velocity of the reference frame's origin (L/s).
+    angular_velocity : float
+        Initial angular velocity, rad/s.
+    markers, mesh, source :
+        As for a :class:`SpatialBody`, in the plane.
     """
 
     name: str
@@ -257,6 +286,21 @@ class Particle(Body):
 
     The dimension follows ``position`` (2 or 3 numbers), which is therefore required. A particle
     has no orientation: markers on it are points that translate with it.
+
+    Parameters
+    ----------
+    name : str
+        The particle's name, unique among the bodies.
+    mass : float
+        kg.
+    position : array_like, shape (3,) or (2,)
+        Its position in the world at the initial guess (L).
+    velocity : array_like, shape (3,) or (2,), optional
+        Its initial velocity (L/s; default zero).
+    markers : dict
+        Named points, relative to the particle (L).
+    mesh, source :
+        As for a :class:`SpatialBody`.
     """
 
     name: str

@@ -42,6 +42,10 @@ def load_scene(name_or_path: str | Path) -> Scene:
     name_or_path : str or Path
         A file path, or the name of a built-in scene (see :func:`builtin_scenes`).
 
+    Returns
+    -------
+    Scene
+
     Raises
     ------
     InputFileError

@@ -132,6 +132,10 @@ class GroundForces:
     min_normal : float
         Least normal force of a foot in full stance (N), scaled by its weight near touch-down
         and lift-off.
+    default_reference : float
+        The reference effort of the driven joints ``reference_efforts`` leaves out (N m, or N).
+    source : str
+        Where the settings were written (the scene file's ``[ground]``), named in messages.
     """
 
     policy: str = "min-wrench"

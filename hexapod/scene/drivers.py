@@ -19,7 +19,20 @@ COORDINATES = ("x", "y", "z", "angle")
 
 @dataclass(eq=False)
 class JointDriver(LawOnJoint, Element):
-    """Prescribes the coordinate of a revolute (rad) or prismatic (L) joint by ``law``."""
+    """Prescribes the coordinate of a revolute (rad) or prismatic (L) joint by ``law``.
+
+    Parameters
+    ----------
+    name : str
+        The driver's name, unique among the drivers.
+    joint : str
+        The driven joint (a type with a coordinate: revolute, prismatic).
+    law : Law or float
+        The coordinate as a function of time (rad or L), C2 at least; a number is a
+        :class:`~hexapod.scene.laws.Constant`.
+    source : str
+        Where the driver was written, named in messages; empty when built in Python.
+    """
 
     name: str
     joint: str
@@ -32,7 +45,21 @@ class JointDriver(LawOnJoint, Element):
 @dataclass(eq=False)
 class CoordinateDriver(Element):
     """Prescribes ``coordinate`` (``x``, ``y``, ``z`` of the centre of mass, or the planar
-    ``angle``) of ``body`` by ``law``, in world axes."""
+    ``angle``) of ``body`` by ``law``, in world axes.
+
+    Parameters
+    ----------
+    name : str
+        The driver's name, unique among the drivers.
+    body : str
+        The driven body.
+    coordinate : {"x", "y", "z", "angle"}
+        Which coordinate of its centre of mass (world axes), or its planar angle.
+    law : Law or float
+        The coordinate as a function of time (L, or rad for ``angle``), C2 at least.
+    source : str
+        Where the driver was written, named in messages; empty when built in Python.
+    """
 
     name: str
     body: str

@@ -53,6 +53,26 @@ class SpringDamper(ForceElement):
     Tension ``f = stiffness (L - free_length) + damping dL/dt + force(t)`` pulls the points
     together when positive. ``free_length`` defaults to the distance at the initial pose.
     Units: stiffness N/L, damping N s/L, force N.
+
+    Parameters
+    ----------
+    name : str
+        The element's name, unique among the force elements.
+    body_a, body_b : str
+        The bodies of its two ends (``"ground"`` allowed).
+    point_a, point_b : str or array_like, optional
+        Its ends: a marker name or a point in the body's reference frame (world on the
+        ground), L; default the centre of mass.
+    stiffness : float
+        N/L, at least 0.
+    damping : float
+        N s/L, at least 0.
+    free_length : float, optional
+        L; default: the distance at the initial pose.
+    force : Law or float, optional
+        An actuator's tension as a function of time, N.
+    source : str
+        Where the element was written, named in messages; empty when built in Python.
     """
 
     name: str
@@ -107,7 +127,24 @@ class SpringDamper(ForceElement):
 class AppliedForce(ForceElement):
     """A force (N) at a point of a body; components are numbers or laws of time, in ``frame``
     (``world`` or ``body``: the body's reference axes). World-frame loads of an attached
-    sub-model stay in the world frame (a ground reaction does not turn with the trunk)."""
+    sub-model stay in the world frame (a ground reaction does not turn with the trunk).
+
+    Parameters
+    ----------
+    name : str
+        The element's name, unique among the force elements.
+    body : str
+        The body loaded (not the ground).
+    force : sequence of (Law or float)
+        The components, N: 3 in space, 2 in the plane.
+    point : str or array_like, optional
+        Where it acts: a marker name or a point in the body's reference frame (L); default the
+        centre of mass.
+    frame : {"world", "body"}
+        The axes of the components.
+    source : str
+        Where the element was written, named in messages; empty when built in Python.
+    """
 
     name: str
     body: str
@@ -143,7 +180,21 @@ class AppliedForce(ForceElement):
 
 @dataclass(eq=False)
 class AppliedTorque(ForceElement):
-    """A torque (N L) on a body; 3 components in space, 1 in the plane, in ``frame``."""
+    """A torque (N L) on a body; 3 components in space, 1 in the plane, in ``frame``.
+
+    Parameters
+    ----------
+    name : str
+        The element's name, unique among the force elements.
+    body : str
+        The body loaded (not the ground).
+    torque : sequence of (Law or float)
+        The components, N L: 3 in space, 1 in the plane.
+    frame : {"world", "body"}
+        The axes of the components.
+    source : str
+        Where the element was written, named in messages; empty when built in Python.
+    """
 
     name: str
     body: str
@@ -177,7 +228,19 @@ class AppliedTorque(ForceElement):
 @dataclass(eq=False)
 class JointEffort(LawOnJoint, ForceElement):
     """An actuator effort along a joint's coordinate, exerted by the parent on the child:
-    a torque (N L) about a revolute axis, a force (N) along a prismatic axis."""
+    a torque (N L) about a revolute axis, a force (N) along a prismatic axis.
+
+    Parameters
+    ----------
+    name : str
+        The element's name, unique among the force elements.
+    joint : str
+        The joint it acts along (a type with a coordinate: revolute, prismatic).
+    law : Law or float
+        The effort as a function of time (N L or N).
+    source : str
+        Where the element was written, named in messages; empty when built in Python.
+    """
 
     name: str
     joint: str
@@ -192,7 +255,25 @@ class RotationalSpringDamper(ForceElement):
     the torque of the parent on the child about the joint axis is
     ``-stiffness * wrap(theta - free_angle) - damping * dtheta/dt + torque(t)``, with ``wrap``
     the angle difference brought into (-pi, pi]. Units: stiffness N L/rad, damping N L s/rad,
-    torque N L."""
+    torque N L.
+
+    Parameters
+    ----------
+    name : str
+        The element's name, unique among the force elements.
+    joint : str
+        The revolute or cylindrical joint it acts across.
+    stiffness : float
+        N L/rad, at least 0.
+    damping : float
+        N L s/rad, at least 0.
+    free_angle : float
+        The joint angle at which the spring is relaxed, rad.
+    torque : Law or float, optional
+        An actuator's torque as a function of time, N L.
+    source : str
+        Where the element was written, named in messages; empty when built in Python.
+    """
 
     name: str
     joint: str

@@ -43,7 +43,20 @@ class MotionWarning(UserWarning):
 
 @dataclass(frozen=True)
 class Motion:
-    """Samples of joint coordinates (SI), with the derivatives that were given."""
+    """Samples of joint coordinates (SI), with the derivatives that were given.
+
+    Attributes
+    ----------
+    times : ndarray, shape (N,)
+        Sample times, s.
+    values : dict of str to ndarray, shape (N,)
+        Each joint's coordinate (rad or m), by joint name.
+    rates, accelerations : dict of str to ndarray, shape (N,)
+        Their first and second time derivatives where the file gives them (rad/s, m/s;
+        rad/s^2, m/s^2).
+    source : str
+        The file read, named in messages.
+    """
 
     times: np.ndarray
     values: dict[str, np.ndarray]
@@ -71,7 +84,28 @@ def _fast_table(text: str) -> tuple[list[str], np.ndarray] | None:
 
 
 def read_motion(path: str | Path) -> Motion:
-    """Read a motion CSV file; every problem is named with the file, line and column."""
+    """Read a motion CSV file; every problem is named with the file, line and column.
+
+    The columns are ``t`` (s) and one per joint coordinate (rad or m, SI), with optional
+    ``qd:<joint>`` and ``qdd:<joint>`` for its rates and accelerations.
+
+    Parameters
+    ----------
+    path : str or Path
+        The CSV file.
+
+    Returns
+    -------
+    Motion
+
+    Raises
+    ------
+    InputFileError
+        The file is missing, unreadable, empty or not CSV.
+    ModelError
+        A value is not a finite number, a line has the wrong number of values, or there are
+        fewer than 2 samples; every problem is listed.
+    """
     path = Path(path)
     text = read_text(path, "motion file")
     fast = _fast_table(text) if '"' not in text else None
@@ -235,8 +269,28 @@ def _column_problems(scene: Scene, motion: Motion) -> list[tuple[str, str]]:
 
 def apply_motion(scene: Scene, motion: Motion) -> Scene:
     """A copy of ``scene`` whose joints named in ``motion`` are driven by it (driver names
-    ``motion/<joint>``). Raises ``ModelError`` for unknown or undrivable joints, joints already
-    driven, too few samples for a spline, or samples no spline passes through."""
+    ``motion/<joint>``).
+
+    Each law passes through the samples as the module's description says; a
+    :class:`MotionWarning` names the joints whose derivatives were estimated.
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene to drive; it is not changed.
+    motion : Motion
+        From :func:`read_motion`.
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    ModelError
+        Unknown or undrivable joints, joints already driven, too few samples for a spline, or
+        samples no spline passes through.
+    """
     where = motion.source or "motion"
 
     def problem(joint: str, message: str) -> Problem:

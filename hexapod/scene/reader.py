@@ -547,6 +547,15 @@ class _Reader:
 def read_scene(path: str | Path) -> Scene:
     """Read and validate a TOML scene file.
 
+    Parameters
+    ----------
+    path : str or Path
+        The scene file (docs/scene-format.md).
+
+    Returns
+    -------
+    Scene
+
     Raises
     ------
     InputFileError

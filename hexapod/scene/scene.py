@@ -10,6 +10,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from hexapod.errors import ModelError, Problem
 from hexapod.scene.bodies import Body, Particle, PlanarBody, SpatialBody
@@ -67,6 +68,7 @@ class Scene:
     Parameters
     ----------
     name : str
+        The scene's name, shown in messages and outputs.
     dimension : int
         3 for a spatial scene, 2 for a planar one.
     length_unit : str
@@ -76,6 +78,8 @@ class Scene:
     characteristic_length : float, optional
         The length ``l`` (L) of the redundancy policy, which minimises
         ``sum |F|^2 + |T / l|^2`` over the joint wrenches. Default: see :func:`hexapod.assemble`.
+    source : str
+        The file the scene was read from, named in messages; empty for a scene built in Python.
     report_forces : bool
         Ask simulations of this scene for the joint wrenches at the saved states.
     ground : GroundForces, optional
@@ -84,8 +88,9 @@ class Scene:
     """
 
     def __init__(self, name: str = "scene", dimension: int = 3, length_unit: str = "m",
-                 gravity=None, characteristic_length: float | None = None, source: str = "",
-                 *, report_forces: bool = False, ground: GroundForces | None = None):
+                 gravity: ArrayLike | None = None, characteristic_length: float | None = None,
+                 source: str = "", *, report_forces: bool = False,
+                 ground: GroundForces | None = None):
         self.name = name
         self.ground = ground if ground is not None else GroundForces()
         self.report_forces = bool(report_forces)

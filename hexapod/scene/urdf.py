@@ -256,6 +256,18 @@ class _UrdfReader:
 def read_urdf(path: str | Path) -> Scene:
     """Read a URDF file into a :class:`Scene` (metres, gravity -9.81 m/s^2 along z).
 
+    Parameters
+    ----------
+    path : str or Path
+        The URDF file.
+
+    Returns
+    -------
+    Scene
+        The root link is the ground, each other link a spatial body (a massless link fixed to
+        its parent merged into it), each URDF joint a joint whose frame is the child link's
+        frame (the module's description).
+
     Raises
     ------
     InputFileError
@@ -291,7 +303,23 @@ def _rpy(R: np.ndarray) -> str:
 def urdf_text(scene: Scene) -> str:
     """The URDF of a spatial tree of joints URDF has (revolute, prismatic and fixed: the types
     with ``urdf_types``) hanging from the ground; each link frame is its body's joint frame
-    (URDF's rule), at the initial pose."""
+    (URDF's rule), at the initial pose.
+
+    Parameters
+    ----------
+    scene : Scene
+        A valid spatial scene of such a tree.
+
+    Returns
+    -------
+    str
+        The URDF document, in metres.
+
+    Raises
+    ------
+    ModelError
+        The scene is invalid, or not a tree URDF can hold (every problem listed).
+    """
     scene.validate()
     si = scene.in_si()
     problems = []

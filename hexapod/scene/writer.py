@@ -242,6 +242,16 @@ def scene_text(scene: Scene, header: str = "") -> str:
     """The TOML text of ``scene``, which :func:`~hexapod.scene.reader.read_scene` reads back
     as the same scene; ``header`` becomes a comment at the top.
 
+    Parameters
+    ----------
+    scene : Scene
+    header : str
+        Lines of comment above the scene (empty: none).
+
+    Returns
+    -------
+    str
+
     Raises
     ------
     ModelError
@@ -275,6 +285,19 @@ def _text(scene: Scene, header: str) -> str:
 
 def write_scene(scene: Scene, path: str | Path, header: str = "") -> Path:
     """Write ``scene`` to ``path`` atomically; ``header`` becomes a comment at the top.
+
+    Parameters
+    ----------
+    scene : Scene
+    path : str or Path
+        The TOML file to write (replaced whole, or left untouched on failure).
+    header : str
+        Lines of comment above the scene (empty: none).
+
+    Returns
+    -------
+    Path
+        The file written.
 
     Raises
     ------

@@ -1,2 +1,13 @@
 """Forward simulation (layer 4): the integrator registry and contract, compiled kernels, the
 time loop, its results and the diagnostics of a state."""
+
+from hexapod._support.lazy import attach
+
+__getattr__, __dir__, __all__ = attach(__name__, {
+    "hexapod.simulation.loop": ["simulate"],
+    "hexapod.simulation.results": ["SimulationResult"],
+    "hexapod.simulation.registry": ["DEFAULT_ATOL", "DEFAULT_METHOD", "DEFAULT_RTOL",
+                                    "INTEGRATORS", "get_integrator", "register"],
+    "hexapod.simulation.integrators": ["Integrator"],
+    "hexapod.simulation.diagnostics": ["Diagnosis", "diagnose"],
+})

@@ -31,6 +31,7 @@ singular configuration, and the largest step each explicit method can take there
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
@@ -51,7 +52,43 @@ DIFFERENCE_STEP = 1e-6
 
 @dataclass
 class Diagnosis:
-    """The diagnostics of :func:`diagnose` (see the module's description)."""
+    """The diagnostics of :func:`diagnose` (see the module's description).
+
+    Attributes
+    ----------
+    t : float
+        The state's time, s.
+    n_v, n_c : int
+        Velocities and constraint rows.
+    rank : int
+        Rows kept by the rank decision.
+    dof, dof_counted, dof_with_drivers : int
+        Numerical degrees of freedom of the joints, Grubler-Kutzbach's count, and the
+        numerical ones with the drivers.
+    redundant_rows : list of str
+        The rows left out as redundant.
+    condition_number, condition_number_unscaled : float, float or None
+        Of the saddle-point matrix as solved (equilibrated) and as written.
+    singular_values : ndarray
+        Of the equilibrated kept rows of ``Phi_v``, ascending.
+    sigma_min : float
+        The smallest singular value (``inf`` without rows).
+    singular_distance : float or None
+        The distance to the nearest singular configuration (rad, lengths in units of
+        ``characteristic_length``); None when not computed.
+    singular_rows : list of str
+        The rows that become dependent there.
+    eigenvalues : ndarray of complex
+        The linearised modes ``exp(lambda t)``, 1/s.
+    stiffness_ratio, fastest_rate, slowest_rate : float
+        The largest over the smallest nonzero ``|lambda|``, and those two (1/s).
+    growing_modes : int
+        Modes with a positive real part (an unstable equilibrium).
+    stable_steps : dict of str to (float or None)
+        The largest stable step of each method, s (None for an implicit one).
+    characteristic_length : float
+        The model's, m.
+    """
 
     t: float
     n_v: int
@@ -222,13 +259,36 @@ def linearised_modes(model: Model, data: Data, t: float, q: np.ndarray, v: np.nd
 
 
 def diagnose(model: Model, data: Data, t: float, q: np.ndarray, v: np.ndarray, *,
-             methods=None, distance: bool | None = None) -> Diagnosis:
+             methods: Iterable[str] | None = None, distance: bool | None = None) -> Diagnosis:
     """The diagnostics at ``(t, q, v)`` (a consistent state), for the explicit ``methods``
     (default: every registered one; implicit ones report None); ``data`` is left with the
     forward dynamics at that state (with its condition number).
 
     ``distance`` computes the distance to the nearest singular configuration (default: when
-    ``n_v <= DISTANCE_LIMIT``)."""
+    ``n_v <= DISTANCE_LIMIT``).
+
+    Parameters
+    ----------
+    model, data : Model, Data
+        The model and its workspace.
+    t : float
+        s.
+    q, v : ndarray, shape (n_q,) and (n_v,)
+        A consistent state (:func:`~hexapod.algorithms.kinematics.consistent_state`).
+    methods : iterable of str, optional
+        Registered integrator names whose largest stable steps to compute.
+    distance : bool, optional
+        Compute the distance to the nearest singular configuration.
+
+    Returns
+    -------
+    Diagnosis
+
+    Raises
+    ------
+    SingularSystemError
+        Redundant constraints contradict each other at the state.
+    """
     q = np.asarray(q, dtype=float)
     v = np.asarray(v, dtype=float)
     forward_dynamics(model, data, t, q, v, condition=True)

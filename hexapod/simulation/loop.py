@@ -21,6 +21,7 @@ import warnings
 from collections.abc import Callable, Mapping
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from hexapod._support import limits, signals
 from hexapod.algorithms.liaison import wrenches_from_multipliers
@@ -63,7 +64,7 @@ _NO_STEP_SAVED = 2**62
 def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEFAULT_METHOD,
              t0: float = 0.0, q0: np.ndarray | None = None, v0: np.ndarray | None = None,
              rtol: float | None = None, atol: float | Mapping[str, float] | None = None,
-             step: float | None = None, every: int = 1, t_eval=None,
+             step: float | None = None, every: int = 1, t_eval: ArrayLike | None = None,
              forces: bool | None = None, max_steps: int | None = None,
              max_memory: int | None = None, cpu_budget: float | None = None,
              progress: Callable[[float, float], None] | None = None,
@@ -73,12 +74,19 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
 
     Parameters
     ----------
-    method :
+    model : Model
+    t_end : float
+        The end of the run, s.
+    t0 : float
+        Its start, s.
+    q0, v0 : ndarray, shape (n_q,) and (n_v,), optional
+        Guesses of the initial state (default: the scene's), made consistent first.
+    method : str or type
         A registered integrator name (:data:`hexapod.simulation.integrators.INTEGRATORS`), its
         short name (:data:`~hexapod.simulation.methods.ALIASES`: ``rk4``, ``dopri5``,
         ``dop853``, ``radau``, ``idas``, ``gen-alpha``) or class; the result records the
         registered name.
-    rtol, atol, step :
+    rtol, atol, step : float, float or mapping, float; optional
         Tolerances of adaptive methods (default :data:`~hexapod.simulation.methods.DEFAULT_RTOL`
         and ``DEFAULT_ATOL``; a fixed-step method given them warns that it ignores them); the
         step of fixed-step methods (the first step of adaptive ones). See
@@ -90,21 +98,21 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
         :func:`~hexapod.simulation.integrators.tolerances.default_tolerances` (scaled by the
         scene's characteristic length and time). The result's ``options["atol"]`` holds the
         tolerance used per kind.
-    every :
+    every : int
         Save every ``every``-th accepted step (every ``every``-th state a method returns, for
         a method that returns states at output times and counts its own steps). Not with
         ``t_eval``.
-    t_eval :
+    t_eval : array_like, shape (K,), optional
         Output times (s, increasing, within ``[t0, t_end]``): the states saved are those at
         these times (``t0`` and ``t_end`` only when they are among them), each from the
         method's own continuous extension of the step that holds it (for ``idas-bdf``, IDAS's
         interpolation at its output times), positions and velocities projected onto the
         constraints and the accelerations and multipliers solved there. The steps are not
         changed by them. See :func:`output_times` and :func:`uniform_times`.
-    forces :
+    forces : bool, optional
         Also compute the joint wrenches at the saved states (report convention); default: as
         the scene asks (``[scene] report_forces``).
-    max_steps, max_memory :
+    max_steps, max_memory : int, optional
         The limits the run is weighed against (default: those of
         :mod:`hexapod._support.limits`, ``HEXAPOD_MAX_STEPS`` and ``HEXAPOD_MAX_MEMORY``): the
         steps, and the memory of the saved states. A fixed-step run is weighed before it starts
@@ -112,20 +120,24 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
         :data:`WEIGH_AFTER` on, by extrapolating its pace since the last weighing to ``t_end``:
         one that would pass a limit ends as failed, its states kept. The run also stops, as
         failed, after ``max_steps`` steps.
-    cpu_budget :
+    cpu_budget : float, optional
         Stop the run, as failed, once its time loop has used this many CPU seconds (the states
         up to there are kept).
-    progress :
+    progress : callable, optional
         Called as ``progress(t, t_end)`` after each accepted step.
-    options :
+    options : dict, optional
         Further keyword arguments of the integrator (e.g. ``rho_inf``, ``alpha``).
-    advice :
+    advice : dict of str to str, optional
         What the messages of the limits suggest to ask for less (keys ``"steps"`` and
         ``"memory"``; default :data:`ADVICE`): a command line names its options.
 
-    A ``KeyboardInterrupt`` during the time loop ends the run too: the result has ``status =
-    "interrupted"`` and the states saved up to there. A state, acceleration or multiplier that
-    becomes non-finite ends it as failed, with the time.
+    Returns
+    -------
+    SimulationResult
+        The saved states and the run's statistics. A run that fails is a result too
+        (``status``, ``message``): a ``KeyboardInterrupt`` during the time loop ends it with
+        ``status = "interrupted"`` and the states saved up to there; a state, acceleration or
+        multiplier that becomes non-finite ends it as failed, with the time.
 
     Raises
     ------

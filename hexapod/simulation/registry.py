@@ -56,6 +56,16 @@ INTEGRATORS: dict[str, type[Integrator]] = {}
 def register(cls: type[Integrator]) -> type[Integrator]:
     """Add an integrator class to :data:`INTEGRATORS` under ``cls.name`` (usable as a decorator).
 
+    Parameters
+    ----------
+    cls : type
+        A subclass of :class:`~hexapod.simulation.integrators.Integrator` with a ``name``.
+
+    Returns
+    -------
+    type
+        ``cls``.
+
     Raises
     ------
     TypeError
@@ -71,6 +81,16 @@ def get_integrator(method: str | type[Integrator]) -> type[Integrator]:
     """The integrator class for a registered name or its short name (:data:`ALIASES`:
     ``rk4``, ``dopri5``, ``dop853``, ``radau``, ``idas``, ``gen-alpha``), or ``method`` itself
     when it is a subclass of ``Integrator``.
+
+    Parameters
+    ----------
+    method : str or type
+        A name, a short name, or an ``Integrator`` subclass.
+
+    Returns
+    -------
+    type
+        The ``Integrator`` subclass.
 
     Raises
     ------

@@ -106,14 +106,23 @@ class SimulationResult:
 
     Attributes
     ----------
+    model : Model
+        The model simulated.
+    method : str
+        The integrator's registered name.
     t : ndarray (N,)
+        The saved times, s.
     q, v, v_dot, lam : ndarray (N, n_q), (N, n_v), (N, n_v), (N, n_c)
+        The saved states, their accelerations and multipliers (SI).
     force, torque, effort : ndarray (N, J, 3), (N, J, 3), (N, J), or None
-        Joint wrenches (report convention), when asked for.
+        Joint wrenches (report convention; N, N m), when asked for.
     status : str
         ``"finished"``, ``"failed"`` or ``"interrupted"`` (then ``message`` says when and why;
         the states up to there are kept).
+    message : str
+        Why the run stopped short (empty when it finished).
     counters : Counters
+        Steps, evaluations, factorisations and Newton iterations.
     wall_time, cpu_time : float
         Seconds spent in the time loop.
     max_position_violation : float
@@ -131,6 +140,12 @@ class SimulationResult:
         coordinate: ``position`` m, ``angle`` rad, ``velocity`` m/s, ``angular_velocity``
         rad/s), ``step``, the method's own options and, with output times, ``output_times``
         (how many were asked).
+    source : str
+        The scene the run was made on, set by the caller (:func:`scene_reference`); written
+        to ``results.npz`` so that ``hexapod export`` can pose the bodies (empty: unknown).
+    t_bound, t_start, t_reached : float or None
+        The end the run was asked to reach, its start, and the time it reached when that may
+        differ from the last saved time (s; None: the last or first saved time).
     """
 
     model: Model

@@ -14,12 +14,16 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from hexapod._support.files import write_atomically
 from hexapod.errors import InputFileError
 from hexapod.sweeps.cases import StudyError, check_study, run_case
 from hexapod.sweeps.spec import Study, read_study, study_from_document
 from hexapod.sweeps.table import SweepTable, timings_csv_text
+
+if TYPE_CHECKING:
+    import numpy as np
 
 #: The files a study writes in its output folder (anything else there is not ours).
 OUTPUT_FILES = ("study.json", "study.csv", "columns.csv", "study.npz", "timings.csv",
@@ -70,9 +74,10 @@ def load_study(spec) -> Study:
     return read_study(spec)
 
 
-def sweep(spec, client=None, *, workers: int | None = None, scheduler: str | None = None,
-          out: str | Path | None = None, resume: bool = False,
-          progress: Callable[[Progress], None] | None = None, as_frame: bool | None = None):
+def sweep(spec: str | Path | dict | Study, client: Any = None, *, workers: int | None = None,
+          scheduler: str | None = None, out: str | Path | None = None, resume: bool = False,
+          progress: Callable[[Progress], None] | None = None,
+          as_frame: bool | None = None) -> np.ndarray | Any:
     """Run a design study and return its table.
 
     Parameters
@@ -90,9 +95,22 @@ def sweep(spec, client=None, *, workers: int | None = None, scheduler: str | Non
         Keep the cases and write the table and figures in this folder.
     resume : bool
         Reuse the cases already in ``out`` (same parameters, scene, job and code version).
+    progress : callable, optional
+        Called with a :class:`Progress` as cases finish.
     as_frame : bool, optional
         Return a pandas DataFrame (default: when pandas is installed) rather than a structured
         array; both carry the units (``attrs["units"]``, ``dtype.metadata["units"]``).
+
+    Returns
+    -------
+    numpy structured array or pandas.DataFrame
+        One row per case: its parameters, status and metrics.
+
+    Raises
+    ------
+    InputFileError
+        The study cannot be read or cannot run (an unknown parameter, a scene key that leads
+        nowhere, no Dask for a cluster), or ``out`` holds something else.
     """
     run = run_study(load_study(spec), client=client, workers=workers, scheduler=scheduler,
                     out=out, resume=resume, progress=progress)

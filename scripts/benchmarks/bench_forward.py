@@ -107,7 +107,8 @@ from bench_forward_runs import (  # noqa: E402
 )
 
 import hexapod as hx  # noqa: E402
-from hexapod import INTEGRATORS, get_integrator, write_atomically  # noqa: E402
+from hexapod import INTEGRATORS, get_integrator  # noqa: E402
+from hexapod.output import write_atomically  # noqa: E402
 
 # ------------------------------------------------------------------ one problem
 

@@ -12,7 +12,7 @@ from bench_forward_runs import REPRESENTATIVE_STEP, STEP_LADDER, Run, best_of, w
 from measure import log
 
 import hexapod as hx
-from hexapod import rotation_from_euler_parameters
+from hexapod.spatial import rotation_from_euler_parameters
 
 EXUDYN_TIGHT_STEPS = 8000  # Exudyn's tight solution: h = t_end / this, and half of it
 EXUDYN_TIGHT_NEWTON = 1e-12  # its Newton tolerance (relative; 1e-8 by default, which limits

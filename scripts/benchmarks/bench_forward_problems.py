@@ -35,12 +35,12 @@ def four_bar_scene() -> hx.Scene:
     for name, mass, (P, R) in (("crank", 0.3, (A, B)), ("coupler", 1.0, (B, C)),
                                ("rocker", 0.8, (D, C))):
         length = float(np.linalg.norm(R - P))
-        scene.add(hx.PlanarBody(name, mass, mass * length**2 / 12, position=(P + R) / 2,
-                                angle=float(np.arctan2(*(R - P)[::-1]))))
-    scene.add(hx.Revolute("A", "ground", "crank", origin=A))
-    scene.add(hx.Revolute("B", "crank", "coupler", origin=B))
-    scene.add(hx.Revolute("C", "coupler", "rocker", origin=C))
-    scene.add(hx.Revolute("D", "ground", "rocker", origin=D))  # closes the loop
+        scene.add(hx.scene.PlanarBody(name, mass, mass * length**2 / 12, position=(P + R) / 2,
+                                      angle=float(np.arctan2(*(R - P)[::-1]))))
+    scene.add(hx.scene.Revolute("A", "ground", "crank", origin=A))
+    scene.add(hx.scene.Revolute("B", "crank", "coupler", origin=B))
+    scene.add(hx.scene.Revolute("C", "coupler", "rocker", origin=C))
+    scene.add(hx.scene.Revolute("D", "ground", "rocker", origin=D))  # closes the loop
     return scene
 
 
@@ -137,9 +137,9 @@ class Reference:
 
 
 def write_bytes_atomically(path: Path, content: bytes) -> None:
-    """:func:`hexapod.write_atomically`, making the folder first."""
+    """:func:`hexapod.output.write_atomically`, making the folder first."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    hx.write_atomically(path, content)
+    hx.output.write_atomically(path, content)
 
 
 def model_fingerprint(model: hx.Model) -> str:

@@ -75,16 +75,9 @@ one_blas_thread()  # before NumPy loads
 import numpy as np  # noqa: E402
 
 import hexapod as hx  # noqa: E402
-from hexapod import (  # noqa: E402
-    agreement,
-    apply_motion,
-    inverse_columns,
-    inverse_dynamics,
-    inverse_table,
-    read_motion,
-    read_urdf,
-    urdf_text,
-)
+from hexapod import apply_motion, inverse_dynamics, read_motion, read_urdf  # noqa: E402
+from hexapod.output import agreement, inverse_columns, inverse_table  # noqa: E402
+from hexapod.scene import urdf_text  # noqa: E402
 from legs import front_leg_scene  # noqa: E402
 
 #: Pinocchio's side (``inverse`` CSV by its RNEA): ``scripts/peers/pinocchio_inverse.py``
@@ -96,18 +89,18 @@ def chain_scene(n: int, planar: bool = False, seed: int = 0) -> hx.Scene:
     scene = hx.Scene(f"chain-{n}")
     for k in range(n):
         axis = [0.0, 0.0, 1.0] if planar else rng.normal(size=3)
-        scene.add(hx.SpatialBody(f"l{k}", 1.0, [1e-3, 1e-2, 1e-2], com=[0.05, 0, 0],
-                                 position=[0.1 * k, 0, 0]))
-        scene.add(hx.Revolute(f"j{k}", "ground" if k == 0 else f"l{k - 1}", f"l{k}",
-                              origin=[0.1 * k, 0, 0], axis=axis))
+        scene.add(hx.scene.SpatialBody(f"l{k}", 1.0, [1e-3, 1e-2, 1e-2], com=[0.05, 0, 0],
+                                       position=[0.1 * k, 0, 0]))
+        scene.add(hx.scene.Revolute(f"j{k}", "ground" if k == 0 else f"l{k - 1}", f"l{k}",
+                                    origin=[0.1 * k, 0, 0], axis=axis))
     return scene
 
 
 def hexapod_robot() -> hx.Scene:
     """Six 3-joint legs (coxa about z, femur and tibia about the leg's normal) on a trunk."""
     scene = hx.Scene("hexapod-18")
-    scene.add(hx.SpatialBody("trunk", 18.4, [0.218, 1.055, 1.226]))
-    scene.add(hx.Fixed("stand", "ground", "trunk"))
+    scene.add(hx.scene.SpatialBody("trunk", 18.4, [0.218, 1.055, 1.226]))
+    scene.add(hx.scene.Fixed("stand", "ground", "trunk"))
     for k, side in enumerate(("L1", "R1", "L2", "R2", "L3", "R3")):
         sign = 1.0 if side[0] == "L" else -1.0
         base = np.array([0.24 - 0.12 * (k // 2), 0.08 * sign, -0.04])
@@ -117,12 +110,12 @@ def hexapod_robot() -> hx.Scene:
         point = np.zeros(3)
         parents = ("ground", "coxa", "femur")
         for i, name in enumerate(("coxa", "femur", "tibia")):
-            leg.add(hx.SpatialBody(name, masses[i], [1e-5, 2e-4, 2e-4], com=lengths[i] / 2 * out,
-                                   position=point))
+            leg.add(hx.scene.SpatialBody(name, masses[i], [1e-5, 2e-4, 2e-4],
+                                         com=lengths[i] / 2 * out, position=point))
             axis = [0.0, 0.0, 1.0] if i == 0 else [sign, 0.0, 0.0]
-            leg.add(hx.Revolute(name, parents[i], name, origin=point, axis=axis))
+            leg.add(hx.scene.Revolute(name, parents[i], name, origin=point, axis=axis))
             point = point + lengths[i] * out
-        scene.attach(leg, side, base="trunk", placement=hx.Placement(base))
+        scene.attach(leg, side, base="trunk", placement=hx.spatial.Placement(base))
     return scene
 
 

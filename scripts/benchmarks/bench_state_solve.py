@@ -31,12 +31,13 @@ from legs import front_leg_scene  # noqa: E402
 
 def hexapod_robot() -> hx.Scene:
     scene = hx.Scene("six-legs")
-    scene.add(hx.SpatialBody("trunk", 18.4, [0.218, 1.055, 1.226]))
-    scene.add(hx.Fixed("stand", "ground", "trunk"))
+    scene.add(hx.scene.SpatialBody("trunk", 18.4, [0.218, 1.055, 1.226]))
+    scene.add(hx.scene.Fixed("stand", "ground", "trunk"))
     for k, side in enumerate(("L1", "R1", "L2", "R2", "L3", "R3")):
         left = side.startswith("L")
-        placement = hx.Placement([0.24 - 0.12 * (k // 2), 0.08 if left else -0.08, -0.04],
-                                 np.diag([1.0, 1.0, 1.0]) if left else np.diag([1.0, -1.0, -1.0]))
+        placement = hx.spatial.Placement(
+            [0.24 - 0.12 * (k // 2), 0.08 if left else -0.08, -0.04],
+            np.diag([1.0, 1.0, 1.0]) if left else np.diag([1.0, -1.0, -1.0]))
         scene.attach(front_leg_scene(phase=0.0 if side in ("L1", "R2", "L3") else np.pi),
                      side, base="trunk", placement=placement)
     return scene

@@ -167,7 +167,7 @@ def update(made: Path, target: Path, timings: bool = False,
             report["kept"].append(name)
         else:
             old.parent.mkdir(parents=True, exist_ok=True)
-            hx.write_atomically(old, new)
+            hx.output.write_atomically(old, new)
             report["written"].append(name)
     folders = {Path(name).parent for name in files} - {Path(".")}
     report["stale"] = sorted(p.relative_to(target).as_posix() for folder in folders

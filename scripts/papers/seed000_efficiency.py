@@ -56,13 +56,13 @@ def chain_scene(n: int, seed: int = 0) -> hx.Scene:
         name = f"l{k}"
         moments = np.sort(rng.uniform(0.02, 0.1, size=3))
         moments[2] = min(moments[2], moments[0] + moments[1])
-        scene.add(hx.SpatialBody(name, rng.uniform(0.5, 2.0), moments,
-                                 com=rng.normal(size=3) * 0.05, position=point,
-                                 rotation=hx.rotation_about_axis(rng.normal(size=3),
-                                                                 rng.uniform(0, np.pi)),
-                                 inertia_rotation=hx.rotation_about_axis(rng.normal(size=3),
-                                                                         rng.uniform(0, 3))))
-        scene.add(hx.Revolute(f"j{k}", parent, name, origin=point, axis=rng.normal(size=3)))
+        scene.add(hx.scene.SpatialBody(name, rng.uniform(0.5, 2.0), moments,
+                                       com=rng.normal(size=3) * 0.05, position=point,
+                                       rotation=hx.spatial.rotation_about_axis(
+                                           rng.normal(size=3), rng.uniform(0, np.pi)),
+                                       inertia_rotation=hx.spatial.rotation_about_axis(
+                                           rng.normal(size=3), rng.uniform(0, 3))))
+        scene.add(hx.scene.Revolute(f"j{k}", parent, name, origin=point, axis=rng.normal(size=3)))
         parent, point = name, point + np.array([0.1, 0.0, 0.0]) + rng.normal(size=3) * 0.02
     return scene
 

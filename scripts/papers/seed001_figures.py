@@ -42,17 +42,18 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 import hexapod as hx  # noqa: E402
-from hexapod import (  # noqa: E402  # noqa: E402  # noqa: E402  # noqa: E402
-    COMPONENT_COLOURS,
-    DEFAULT_SCENE,
-    GROUND_INDEX,
+from hexapod import (  # noqa: E402
     InverseResult,
     Model,
     inverse_dynamics,
     load_scene,
-    png_bytes,
-    wrench_label,  # noqa: E402
 )
+from hexapod.output import (  # noqa: E402
+    COMPONENT_COLOURS,
+    png_bytes,
+    wrench_label,
+)
+from hexapod.scene import DEFAULT_SCENE  # noqa: E402
 
 SCENE = DEFAULT_SCENE  # "front-leg": what `hexapod report` runs without a SCENE
 GAIT = "tripod"  # the built-in leg scenes are driven by the tripod gait (legs/front_leg.py)
@@ -94,19 +95,19 @@ def liaison_forces(samples: int = SAMPLES, scene: str = SCENE) -> Run:
     return Run(scene, model, times, result, f"{why}, {duration:g} s")
 
 
-def _element(model: Model, index: int) -> tuple[int, str]:
+def _element(model: Model, name: str) -> tuple[int, str]:
     """The number Dumitru, Marin and Margine give a body (from 1 in scene order, the ground 0) and
     its name."""
-    if index == GROUND_INDEX:
+    if name == hx.scene.GROUND:
         return 0, "trunk, held: the ground"
-    return index + 1, model.bodies[index].name
+    return model.body_index[name] + 1, name
 
 
 def joint_description(model: Model, k: int) -> dict:
     """The wrench's label and which element exerts it on which."""
     joint = model.joints[k]
-    parent, parent_name = _element(model, joint.parent)
-    child, child_name = _element(model, joint.child)
+    parent, parent_name = _element(model, joint.type.parent)
+    child, child_name = _element(model, joint.type.child)
     return {"joint": joint.name, "wrench": wrench_label(model, joint),
             "by_element": parent, "by_body": parent_name,
             "on_element": child, "on_body": child_name,

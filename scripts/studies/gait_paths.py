@@ -62,7 +62,7 @@ def joint_ranges(duty: float) -> list[str]:
         ranges = []
         for joint in SOLVED_JOINTS:
             offset, cos, sin = harmonics[joint]
-            law = hx.Harmonic(offset, cos, sin, frequency=1.0)
+            law = hx.scene.Harmonic(offset, cos, sin, frequency=1.0)
             angles = np.degrees(law(tau))
             ranges.append(f"{joint} {angles.min():+.0f}..{angles.max():+.0f}")
         out.append(f"  {position:6s} ({elapsed:.2f} s to design): " + ", ".join(ranges)

@@ -75,8 +75,9 @@ def run(model, method: str, periods: int, period: float) -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     import hexapod as hx
-    from hexapod import INTEGRATORS, read_scene, write_directory_atomically
+    from hexapod import INTEGRATORS, read_scene
     from hexapod.benchmarks import pendulum_period
+    from hexapod.output import write_directory_atomically
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--periods", type=int, default=1000)

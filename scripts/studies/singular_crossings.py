@@ -24,8 +24,8 @@ from functools import partial
 from pathlib import Path
 
 import hexapod as hx
-from hexapod import DEFAULT_METHOD
 from hexapod.benchmarks import four_bar_dead_points, n_four_bar
+from hexapod.simulation import DEFAULT_METHOD
 
 CASES = {"n-four-bar-10": n_four_bar,
          "n-four-bar-40": partial(n_four_bar, 40, t_end=20.0),

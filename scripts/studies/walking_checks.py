@@ -85,7 +85,7 @@ def main() -> None:
     times = np.linspace(0.0, PERIOD, args.samples)
     for gait in args.gait:
         model = hx.assemble(hexapod_scene(gait, trunk="free",
-                                          ground=hx.GroundForces(policy=args.policy)))
+                                          ground=hx.scene.GroundForces(policy=args.policy)))
         hx.inverse_dynamics(model, times[:3])  # the CasADi functions built
         start = time.process_time()
         result = hx.inverse_dynamics(model, times)

@@ -117,9 +117,10 @@ def main() -> None:
     parser.add_argument("--tol", type=float, default=EFFORT_TOL,
                         help="accuracy of the effort splines, of each joint's largest effort")
     parser.add_argument("--window", type=float, default=WINDOW, help="replay window (s)")
-    parser.add_argument("--method", default=hx.DEFAULT_METHOD, choices=list(hx.INTEGRATORS))
-    parser.add_argument("--rtol", type=float, default=hx.DEFAULT_RTOL)
-    parser.add_argument("--atol", type=float, default=hx.DEFAULT_ATOL)
+    parser.add_argument("--method", default=hx.simulation.DEFAULT_METHOD,
+                        choices=list(hx.INTEGRATORS))
+    parser.add_argument("--rtol", type=float, default=hx.simulation.DEFAULT_RTOL)
+    parser.add_argument("--atol", type=float, default=hx.simulation.DEFAULT_ATOL)
     parser.add_argument("--unbroken", type=float, default=None, metavar="T",
                         help="also replay without windows from 0 to T s")
     parser.add_argument("--one-call", action="store_true",

@@ -54,12 +54,12 @@ class PinocchioRobot:
     model: object  # pinocchio.Model
     joint_id: dict[int, int]  # hexapod joint index -> Pinocchio joint id
     body_joint: dict[int, int]  # hexapod body index -> Pinocchio joint id carrying it
-    body_frame: dict[int, hx.Placement]  # Pinocchio frame of the body in its com frame
+    body_frame: dict[int, hx.spatial.Placement]  # Pinocchio frame of the body in its com frame
     free_flyer: int  # Pinocchio joint id of the trunk
     trunk: int  # hexapod body index of the trunk
 
 
-def _se3(placement: hx.Placement):
+def _se3(placement: hx.spatial.Placement):
     import pinocchio as pin
 
     return pin.SE3(np.array(placement.rotation, dtype=float),
@@ -81,14 +81,14 @@ def pinocchio_robot(model: hx.Model) -> PinocchioRobot:
     pm.name = model.name
     pm.gravity = pin.Motion(np.concatenate([model.gravity, np.zeros(3)]))
 
-    def inertia(body_index: int, frame: hx.Placement):
+    def inertia(body_index: int, frame: hx.spatial.Placement):
         """The body's inertia in the Pinocchio frame ``frame`` (given in its com frame)."""
         body = model.bodies[body_index]
         R = frame.rotation
         com = -R.T @ frame.position  # the centre of mass in the Pinocchio frame
         return pin.Inertia(body.mass, com, R.T @ body.inertia @ R)
 
-    identity = hx.Placement(np.zeros(3))
+    identity = hx.spatial.Placement(np.zeros(3))
     flyer = pm.addJoint(0, pin.JointModelFreeFlyer(), pin.SE3.Identity(),
                         model.bodies[trunk].name)
     pm.appendBodyToJoint(flyer, inertia(trunk, identity), pin.SE3.Identity())
@@ -238,7 +238,7 @@ def pinocchio_rnea(model: hx.Model, result: hx.InverseResult) -> Comparison:
         tarsus = model.bodies[joint.child]
         foot = tarsus.markers["foot"].position
         feet.append((c, robot.body_joint[tarsus.index],
-                     robot.body_frame[tarsus.index].inverse() @ hx.Placement(foot)))
+                     robot.body_frame[tarsus.index].inverse() @ hx.spatial.Placement(foot)))
     revolute = [j for j in model.joints if j.kind == "revolute"]
     n = result.times.size
     tau = np.zeros((n, len(revolute)))

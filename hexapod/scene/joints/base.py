@@ -75,7 +75,29 @@ class LawSymbols(Protocol):
 @dataclass(eq=False)
 class Joint(Element):
     """Base class of the joint types. See the module docstring for the frame arguments and for
-    what a type answers."""
+    what a type answers.
+
+    Parameters
+    ----------
+    name : str
+        The joint's name, unique among the joints.
+    parent, child : str
+        The names of its first and second bodies (``"ground"`` for the fixed frame); the joint
+        frame is fixed to the child, and its wrench is the parent's on the child.
+    parent_frame, child_frame : Placement or str, optional
+        The joint frame in the parent's and in the child's reference frame (L), or the name of
+        a marker of that body. Not with ``origin``.
+    origin : array_like, shape (3,) or (2,), optional
+        The joint frame's origin in world coordinates at the initial pose (L).
+    rotation : array_like, shape (3, 3), optional
+        The joint frame's axes in world coordinates at the initial pose (joint -> world), with
+        ``origin``; default: the world's axes.
+    source : str
+        Where the joint was written (file and entry), named in messages; empty for a joint
+        built in Python.
+
+    L is the scene's length unit (:attr:`Scene.length_unit`).
+    """
 
     name: str
     parent: str

@@ -33,6 +33,25 @@ class Contact(Joint):
     Rows: ``x, y, z`` of ``gate (r_foot - foothold)``, world axes, where the gate (1 in stance,
     0 in swing) and the foothold are time laws, so the contact set and the footholds change
     without rebuilding anything.
+
+    Parameters
+    ----------
+    name, parent, child, parent_frame, child_frame, origin, rotation, source :
+        As for every joint (:class:`~hexapod.scene.joints.base.Joint`).
+    period : float
+        The gait's period, s (default 1).
+    duty : float
+        The fraction of the period the foot is on the ground, in (0, 1] (default 0.5).
+    lift_off : float
+        When the foot lifts off, a fraction of the period in [0, 1) (default 0).
+    foothold : array_like, shape (3,), optional
+        Where the foot stands in the stance that ends at ``t = lift_off period``, world (L);
+        default the origin.
+    advance : array_like, shape (3,), optional
+        How far the footholds move each cycle, world (L); default zero.
+    ramp : float
+        The fraction of the stance over which the foot's share of the ground forces grows
+        from or falls to zero, in (0, 0.5] (default 0.1).
     """
 
     period: float = 1.0

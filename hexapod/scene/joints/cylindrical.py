@@ -17,7 +17,15 @@ class Cylindrical(Joint):
     ``ax1, ax2`` (the axes stay aligned), ``t1 = u_p . d``, ``t2 = w_p . d`` (the child frame's
     origin stays on the parent's axis). In the plane it is a pin in a slot along ``axis``
     (default x): the child frame's origin stays on the parent's line, ``t = n_p . d``, and the
-    child may turn (1 row)."""
+    child may turn (1 row).
+
+    Parameters
+    ----------
+    name, parent, child, parent_frame, child_frame, origin, rotation, source :
+        As for every joint (:class:`~hexapod.scene.joints.base.Joint`).
+    axis : array_like, shape (3,) or (2,), optional
+        The axis in the joint frame (default z in space, x in the plane).
+    """
 
     axis: np.ndarray | None = None
     kind = "cylindrical"

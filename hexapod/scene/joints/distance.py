@@ -19,6 +19,14 @@ class Distance(Joint):
 
     ``length`` defaults to the distance at the initial pose; the rods of Richard, Anderson and
     Andrews (1989/90) are distance joints between particles.
+
+    Parameters
+    ----------
+    name, parent, child, parent_frame, child_frame, origin, rotation, source :
+        As for every joint (:class:`~hexapod.scene.joints.base.Joint`).
+    length : float, optional
+        The distance held between the two frame origins (L); default: the distance at the
+        initial pose.
     """
 
     length: float | None = None

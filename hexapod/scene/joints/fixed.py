@@ -17,6 +17,11 @@ class Fixed(Joint):
 
     Rows: ``x, y, z``, ``rx = z_p . y_c``, ``ry = x_p . z_c``, ``rz = y_p . x_c``; in the plane
     ``x, y, rot``.
+
+    Parameters
+    ----------
+    name, parent, child, parent_frame, child_frame, origin, rotation, source :
+        As for every joint (:class:`~hexapod.scene.joints.base.Joint`).
     """
 
     kind = "fixed"

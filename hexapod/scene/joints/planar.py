@@ -15,7 +15,15 @@ from hexapod.scene.joints.geometry import ANGLE, LENGTH, dot
 class PlanarJoint(Joint):
     """The child frame slides and turns in the plane of the parent frame whose normal is
     ``axis`` (joint frame; default z): two translations and a rotation, 3 rows, ``ax1, ax2``
-    (the normals stay aligned) and ``t = a_p . d``. Space only."""
+    (the normals stay aligned) and ``t = a_p . d``. Space only.
+
+    Parameters
+    ----------
+    name, parent, child, parent_frame, child_frame, origin, rotation, source :
+        As for every joint (:class:`~hexapod.scene.joints.base.Joint`).
+    axis : array_like, shape (3,), optional
+        The plane's normal in the joint frame (default z).
+    """
 
     axis: np.ndarray | None = None
     kind = "planar"

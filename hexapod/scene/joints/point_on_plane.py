@@ -15,7 +15,16 @@ from hexapod.scene.joints.geometry import LENGTH, dot
 class PointOnPlane(Joint):
     """The child frame's origin stays on the plane through the parent frame's origin with
     normal ``axis`` (joint frame on the parent; default z, or y in the plane, where the plane is
-    a line): a foot on the ground. 1 row, ``normal = a_p . d``; the child may be a particle."""
+    a line): a foot on the ground. 1 row, ``normal = a_p . d``; the child may be a particle.
+
+    Parameters
+    ----------
+    name, parent, child, parent_frame, child_frame, origin, rotation, source :
+        As for every joint (:class:`~hexapod.scene.joints.base.Joint`).
+    axis : array_like, shape (3,) or (2,), optional
+        The plane's normal in the joint frame on the parent (default z in space, y in the
+        plane).
+    """
 
     axis: np.ndarray | None = None
     kind = "point-on-plane"

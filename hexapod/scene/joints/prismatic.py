@@ -27,6 +27,13 @@ class Prismatic(Joint):
     Rows: ``ax1, ax2`` (the axes stay aligned), ``rot = w_p . u_c``, ``t1 = u_p . d``,
     ``t2 = w_p . d``; in the plane ``rot`` (relative angle) and ``t = n_p . d`` (``n`` normal to
     the axis). A driver sets ``a_p . d - f``.
+
+    Parameters
+    ----------
+    name, parent, child, parent_frame, child_frame, origin, rotation, source :
+        As for every joint (:class:`~hexapod.scene.joints.base.Joint`).
+    axis : array_like, shape (3,) or (2,), optional
+        The sliding axis in the joint frame (default z in space, x in the plane).
     """
 
     axis: np.ndarray | None = None

@@ -27,6 +27,13 @@ class Revolute(Joint):
     Rows: ``x, y, z`` (the frame origins coincide), ``ax1 = u_p . a_c``, ``ax2 = w_p . a_c``;
     in the plane ``x, y``. A driver sets the **wrapped** angle difference
     ``atan2(sin(theta - f), cos(theta - f))``.
+
+    Parameters
+    ----------
+    name, parent, child, parent_frame, child_frame, origin, rotation, source :
+        As for every joint (:class:`~hexapod.scene.joints.base.Joint`).
+    axis : array_like, shape (3,), optional
+        The rotation axis in the joint frame (default z); ignored in the plane.
     """
 
     axis: np.ndarray | None = None

@@ -12,7 +12,13 @@ from hexapod.scene.joints.geometry import point_rows
 @dataclass(eq=False)
 class Spherical(Joint):
     """A ball joint: the two frame origins coincide (3 rows ``x, y, z``). Space only (in the
-    plane it would be a revolute joint)."""
+    plane it would be a revolute joint).
+
+    Parameters
+    ----------
+    name, parent, child, parent_frame, child_frame, origin, rotation, source :
+        As for every joint (:class:`~hexapod.scene.joints.base.Joint`).
+    """
 
     kind = "spherical"
     plane_hint = "a revolute joint"

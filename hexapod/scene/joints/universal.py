@@ -17,7 +17,16 @@ class Universal(Joint):
     """A Cardan joint: rotations about ``axis`` (fixed to the parent, default x) and ``axis2``
     (fixed to the child, default y), both given in the joint frame and perpendicular. The two
     frame origins coincide: 4 rows, ``x, y, z`` and ``cross = a_p . b_c`` (``a`` the parent's
-    axis, ``b`` the child's). Space only."""
+    axis, ``b`` the child's). Space only.
+
+    Parameters
+    ----------
+    name, parent, child, parent_frame, child_frame, origin, rotation, source :
+        As for every joint (:class:`~hexapod.scene.joints.base.Joint`).
+    axis, axis2 : array_like, shape (3,), optional
+        The axis fixed to the parent (default x) and the one fixed to the child (default y),
+        in the joint frame; perpendicular.
+    """
 
     axis: np.ndarray | None = None
     axis2: np.ndarray | None = None

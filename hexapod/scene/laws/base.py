@@ -102,7 +102,13 @@ def _horner(s, coefficients):
 
 @dataclass(frozen=True)
 class Constant(Law):
-    """``f(t) = value``."""
+    """``f(t) = value``.
+
+    Parameters
+    ----------
+    value : float
+        In the unit of what the law gives (rad, L, N, N m).
+    """
 
     value: float
     kind = "constant"

@@ -18,7 +18,15 @@ from hexapod.scene.laws.base import (
 
 @dataclass(frozen=True)
 class Polynomial(Law):
-    """``f(t) = sum_k c_k (t - t0)^k``, coefficients in ascending powers."""
+    """``f(t) = sum_k c_k (t - t0)^k``, coefficients in ascending powers.
+
+    Parameters
+    ----------
+    coefficients : sequence of float
+        ``c_0, c_1, ...``, in the law's unit per s^k.
+    t0 : float
+        The time origin, s.
+    """
 
     coefficients: tuple[float, ...]
     t0: float = 0.0
@@ -67,6 +75,17 @@ class Harmonic(Law):
     """``f(t) = offset + sum_k a_k cos(k w (t - t0)) + b_k sin(k w (t - t0))``, w = 2 pi frequency.
 
     ``cos[k-1]`` and ``sin[k-1]`` are the amplitudes of harmonic ``k``; ``frequency`` in Hz.
+
+    Parameters
+    ----------
+    offset : float
+        The mean value, in the law's unit.
+    cos, sin : sequence of float
+        The amplitudes of harmonics 1, 2, ..., in the law's unit.
+    frequency : float
+        The fundamental frequency, Hz (positive).
+    t0 : float
+        The time origin, s.
     """
 
     offset: float = 0.0

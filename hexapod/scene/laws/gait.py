@@ -36,6 +36,21 @@ class Gait(Law):
     over ``blend`` (a fraction of the period) around each switch with a quintic smooth step, so
     the law is C2; the two rates are chosen so that the phase is exactly pi at touch-down and
     2 pi at lift-off. With ``duty = 0.5`` the phase is uniform (``blend`` plays no part).
+
+    Parameters
+    ----------
+    offset : float
+        The mean value, in the law's unit (rad for a joint angle).
+    cos, sin : sequence of float
+        The amplitudes of harmonics 1, 2, ... of the warped phase, in the law's unit.
+    period : float
+        The gait's period, s.
+    duty : float
+        The stance's fraction of the period.
+    shift : float
+        The leg's phase shift, a fraction of the period.
+    blend : float
+        The width of the phase rate's change around each switch, a fraction of the period.
     """
 
     offset: float = 0.0

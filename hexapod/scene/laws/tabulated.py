@@ -27,6 +27,17 @@ class Spline(Law):
     ``degree`` 3 (C2, the default) or 5 (C4); ``boundary`` one of ``not-a-knot``, ``natural``,
     ``clamped`` (zero end slopes) or ``periodic`` (values at both ends must be equal). Outside the
     table the end polynomials are continued (periodic splines repeat).
+
+    Parameters
+    ----------
+    times : sequence of float, shape (N,)
+        Sample times, s, strictly increasing.
+    values : sequence of float, shape (N,)
+        The values there, in the law's unit.
+    degree : {3, 5}
+        The spline's degree.
+    boundary : {"not-a-knot", "natural", "clamped", "periodic"}
+        The end conditions.
     """
 
     times: tuple[float, ...]
@@ -120,7 +131,16 @@ _QUINTIC_HERMITE_RATES = tuple((tuple(map(float, c)), _derivative(c), _derivativ
 class Hermite(Law):
     """Tabulated values with their first and second derivatives: the quintic Hermite
     interpolant, C2, equal to the given values, rates and accelerations at every sample (a
-    motion file with exact derivatives). Outside the table the end polynomials are continued."""
+    motion file with exact derivatives). Outside the table the end polynomials are continued.
+
+    Parameters
+    ----------
+    times : array_like, shape (N,)
+        Sample times, s, strictly increasing (at least 2).
+    values, rates, accelerations : array_like, shape (N,)
+        The values there, in the law's unit, and their first and second time derivatives (per
+        s and per s^2).
+    """
 
     times: np.ndarray
     values: np.ndarray
