@@ -50,6 +50,7 @@ from hexapod.algorithms.ground import NO_LOAD, foot_values, sharing_weights
 from hexapod.algorithms.linalg import as_dense, equilibrate, split_rows
 from hexapod.algorithms.phase_plan import MORE_NEWTON_STEPS, NEWTON_STEPS, PhasePlan, plan_for
 from hexapod.algorithms.sample_inverse import SampleResult, exact_forces, exact_sample
+from hexapod.algorithms.static_lu import StaticLU
 from hexapod.algorithms.step_terms import StepTerms, terms_of
 from hexapod.model.model import Data, Model
 
@@ -253,10 +254,21 @@ class _Decisions:
                           np.concatenate([left, split.redundant]).astype(int))
 
     def _plan(self, q, w_k, kept, left) -> PhasePlan | None:
-        """The plan of a decision. The rows are sorted: a decision that keeps the same rows in
-        another order (the exact one orders drivers and feet by their conditioning) is the same
-        plan."""
-        return plan_for(self.terms, np.sort(kept), np.sort(left), self.to_c)
+        """The plan of a decision, with the pivots of ``Phi_v[kept]`` at ``q``. The rows are
+        sorted: a decision that keeps the same rows in another order (the exact one orders
+        drivers and feet by their conditioning) is the same plan."""
+        model, terms = self.model, self.terms
+        kept, left = np.sort(kept), np.sort(left)
+        Phi = model.call("Phi_v", self.data, q=q, w=w_k)
+        where = np.full(model.n_c, -1)
+        where[kept] = np.arange(kept.size)
+        entries = np.flatnonzero(where[terms.pattern_rows] >= 0)
+        rows, columns = where[terms.pattern_rows[entries]], terms.pattern_columns[entries]
+        try:
+            lu = StaticLU.pivoted(rows, columns, model.n_v, Phi[kept[rows], columns])
+        except RuntimeError:  # exactly singular there
+            return None
+        return plan_for(terms, kept, left, lu, self.to_c)
 
 
 def _run(plan: PhasePlan, data: Data, newton: int, out: _Results, feet: _Feet, times, w, wd,

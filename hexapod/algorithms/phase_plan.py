@@ -12,10 +12,11 @@ before). One sample:
 1. positions: ``q_p = q (+) (h v + h^2/2 v_dot)`` predicted from the sample before, then
    :data:`NEWTON_STEPS` Newton steps on ``phi_I = 0`` with the Jacobian of ``q_p`` (one
    factorisation), each step applied with the retraction;
-2. ``J = Phi_v[I]`` at the positions found, factorised once by CasADi's sparse QR
-   (:class:`~hexapod.algorithms.step.KeptFactor`: the square case of the kept-row solve of
-   :mod:`hexapod.algorithms.step`): ``v = J^-1 nu_I``, ``v_dot = J^-1 gamma_I``,
-   ``lam_I = J^-T (Q - M v_dot)``;
+2. ``J = Phi_v[I]`` at the positions found, factorised once (:class:`StaticLU`: pivots chosen
+   at the decision, the elimination written out as straight-line code, about 1 400
+   multiply-adds for the walking hexapod where a sparse QR of the same matrix takes some
+   25 000; the checks below catch pivots gone stale): ``v = J^-1 nu_I``,
+   ``v_dot = J^-1 gamma_I``, ``lam_I = J^-T (Q - M v_dot)``;
 3. the redundancy policy (when rows are left out): every multiplier vector that balances the
    bodies is ``lam0 + N z`` with ``N = [e_R - L_I J^-T Phi_R^T]``; ``z`` minimises the policy's
    ``|A (lam0 + N z) + b|^2`` (the least joint wrenches, each foot's block over the square root
@@ -41,7 +42,8 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from hexapod.algorithms.step import KeptFactor, sparse_dm
+from hexapod.algorithms.static_lu import StaticLU
+from hexapod.algorithms.step import sparse_dm
 from hexapod.algorithms.step_terms import StepTerms, sx_function
 from hexapod.model.model import Data
 
@@ -65,15 +67,21 @@ class PhasePlan:
         The model's Functions.
     kept, left_out : sequence of int
         The rows ``I`` (``len(kept) == n_v``) and the redundant rows ``R``.
+    lu : StaticLU
+        The factorisation's pattern and pivots for ``Phi_v[kept]``, chosen at the decision.
     to_c : bool
         Compile the plan's own SX Functions to C (kept in the execution setting's cache).
     """
 
-    def __init__(self, terms: StepTerms, kept, left_out, to_c: bool = False):
+    def __init__(self, terms: StepTerms, kept, left_out, lu: StaticLU, to_c: bool = False):
         self.terms, self.model = terms, terms.model
         self.kept = np.asarray(kept, dtype=int)
         self.left_out = np.asarray(left_out, dtype=int)
-        self.to_c = to_c
+        self.lu, self.to_c = lu, to_c
+        position = {(int(r), int(c)): k for k, (r, c) in enumerate(
+            zip(terms.pattern_rows, terms.pattern_columns, strict=True))}
+        self._J_entries = [position[int(self.kept[r]), int(c)]
+                           for r, c in zip(lu.rows, lu.columns, strict=True)]
         left = set(self.left_out.tolist())
         self._left_entries = [k for k, r in enumerate(terms.pattern_rows) if int(r) in left]
         self._build_linear_algebra()
@@ -86,17 +94,18 @@ class PhasePlan:
     def _build_linear_algebra(self) -> None:
         """The plan's own Functions: the factorisation of ``Phi_v[I]`` and its solves, the
         coefficients of the left-out rows, the policy's small solve and the checks."""
-        model, terms = self.model, self.terms
+        lu, model, terms = self.lu, self.model, self.terms
         n_v, n_c = model.n_v, model.n_c
         Phi = ca.SX.sym("Phi", terms.pattern.nnz())
-        factor = KeptFactor(ca.SX(terms.pattern, Phi)[self.kept.tolist(), :])
-        self.factor = self._sx("phase_factor", [Phi], [factor.packed])
-        packed = ca.SX.sym("F", factor.packed.numel())
+        factors = lu.pack(lu.factor(Phi[self._J_entries]))
+        self.factor = self._sx("phase_lu", [Phi], [factors])
+        packed = ca.SX.sym("F", factors.numel())
+        rows = lu.unpack(packed)
         b, Q, a = ca.SX.sym("b", n_c), ca.SX.sym("Q", n_v), ca.SX.sym("a", n_v)
         y = ca.SX.sym("y", n_v)
         # the transposed solve, formed once and called (inlined) where needed
-        solve_t = ca.Function("solve_t", [packed, y], [factor.solve(packed, y, True)])
-        self.solve = self._sx("phase_solve", [packed, b], [factor.solve(packed, b[self.kept])])
+        solve_t = ca.Function("solve_t", [packed, y], [lu.solve(rows, y, True)])
+        self.solve = self._sx("phase_solve", [packed, b], [lu.solve(rows, b[self.kept])])
         lam = ca.SX(n_c, 1)
         lam[self.kept.tolist()] = solve_t(packed, Q - ca.mtimes(sparse_dm(model.mass.dense()), a))
         self.multipliers = self._sx("phase_multipliers", [packed, Q, a], [lam])
@@ -223,8 +232,10 @@ class PhasePlan:
         return policy(q, Phi, offset, feet, lam0, self.null_space(F, Phi), mask)
 
 
-def plan_for(terms: StepTerms, kept, left_out, to_c: bool = False) -> PhasePlan:
-    """The :class:`PhasePlan` of a rank decision, built once per model: a pure function of the
-    rows (every sample is checked, at its own state)."""
-    key = ("phase-plan", tuple(int(r) for r in kept), tuple(int(r) for r in left_out), to_c)
-    return terms.model.built_once(key, lambda m: PhasePlan(terms, kept, left_out, to_c))
+def plan_for(terms: StepTerms, kept, left_out, lu: StaticLU, to_c: bool = False) -> PhasePlan:
+    """The :class:`PhasePlan` of a rank decision and its pivots, built once per model: a pure
+    function of the rows and the pivots (every sample is checked, at its own state), so that a
+    run's results depend on its own decisions only."""
+    key = ("phase-plan", tuple(int(r) for r in kept), tuple(int(r) for r in left_out),
+           tuple(lu.row_order.tolist()), tuple(lu.column_order.tolist()), to_c)
+    return terms.model.built_once(key, lambda m: PhasePlan(terms, kept, left_out, lu, to_c))

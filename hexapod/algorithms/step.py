@@ -18,12 +18,13 @@ of leaving the matrix singular. The same solve gives
 
 When the rows kept are as many as the velocities (a fully driven mechanism: inverse
 dynamics), ``W_I`` is square and the system splits into ``y = W_I^-1 (bottom_I / d_I)`` and
-``mu = W_I^-T (top - y)``: the same solve on half the unknowns. Both forms are factorised by
-CasADi's sparse QR (the ``qr`` linear solver: backward stable without pivoting, its symbolic
-analysis done once per row set, its factors as sparse as the body-joint graph allows), so a
-row set held over many samples needs no pivots of its own; what can go wrong as the state
-moves (a row that becomes dependent, a singular pose) shows in the residual checks the
-callers evaluate.
+``mu = W_I^-T (top - y)``: the same solve on half the unknowns. Both forms are factorised here
+by CasADi's sparse QR (the ``qr`` linear solver: backward stable without pivoting, its
+symbolic analysis done once per row set, its factors as sparse as the body-joint graph allows);
+the batched inverse dynamics factorises its square ``W_I`` instead by an LU with pivots chosen
+at the decision (:mod:`hexapod.algorithms.static_lu`, a tenth of the QR's operations). What
+can go wrong as the state moves (a row that becomes dependent, a singular pose, pivots gone
+stale) shows in the residual checks the callers evaluate.
 """
 
 from __future__ import annotations
@@ -66,30 +67,6 @@ def solve_kept(W_all: ca.MX, d: ca.MX, zero: ca.MX, rows: list[int], top: ca.MX,
     rhs = ca.vertcat(top, bottom[rows, :] / ca.repmat(d[rows], 1, bottom.size2()))
     solution = ca.solve(K, rhs, "qr")
     return solution[:n_v, :], solution[n_v:, :]
-
-
-class KeptFactor:
-    """The sparse QR factorisation of a square matrix of kept rows ``J`` (SX, one sparsity
-    pattern), as SX expressions: CasADi's ``qr_sparse`` (Householder, columns in a
-    fill-reducing order chosen once from the pattern) and ``qr_solve``. Its factors travel
-    between Functions as one vector (:attr:`packed`), so a sample factorises once and solves
-    as often as it needs, with ``J`` or its transpose.
-    """
-
-    def __init__(self, J: ca.SX):
-        V, R, beta, self.prinv, self.pc = ca.qr_sparse(J)
-        self.V, self.R = V.sparsity(), R.sparsity()
-        #: the factors' nonzeros in one column: V's, R's, then the reflectors' scales
-        self.packed = ca.vertcat(V.nz[:], R.nz[:], beta)
-        self._beta = beta.numel()
-
-    def solve(self, packed: ca.SX, b: ca.SX, transpose: bool = False) -> ca.SX:
-        """``J^-1 b`` (or ``J^-T b``) from the factors ``packed``."""
-        nv, nr = self.V.nnz(), self.R.nnz()
-        V = ca.SX(self.V, packed[:nv])
-        R = ca.SX(self.R, packed[nv:nv + nr])
-        beta = packed[nv + nr:nv + nr + self._beta]
-        return ca.qr_solve(b, V, R, beta, self.prinv, self.pc, transpose)
 
 
 def retract(model: Model, q, dv):
