@@ -175,7 +175,7 @@ def phase_inverse(model: Model, data: Data, times: np.ndarray, w, wd, wdd, frame
                                         times[bad], (out.v[bad - 1], out.v_dot[bad - 1]),
                                         frame=frame))
             if blame == "rank":  # the decision no longer holds: take the exact solve's
-                decisions.adopt(bad, data, w[:, bad])
+                decisions.adopt(bad, data, w[:, bad], plan)
             elif blame == "newton":  # samples too far apart for the Newton steps taken
                 newton = MORE_NEWTON_STEPS
             k, chunk = bad + 1, 1  # short runs after a failure, growing again
@@ -207,10 +207,16 @@ class _Decisions:
         self.model, self.data, self.terms, self.feet, self.to_c = model, data, terms, feet, to_c
         self.plans: dict = {}
         self.base = None  # the kept and left-out rows that are no foot's
+        self.generation: dict = {}  # per kept and left-out rows: plans whose pivots failed
 
-    def adopt(self, k: int, data, w_k) -> None:
-        """The exact solve's decision at sample ``k`` (held in ``data``)."""
+    def adopt(self, k: int, data, w_k, failed: PhasePlan | None = None) -> None:
+        """The exact solve's decision at sample ``k`` (held in ``data``); when it keeps the
+        rows of the plan that ``failed`` there, new pivots for them."""
         kept, left = np.sort(data.independent_rows), np.sort(data.redundant_rows)
+        if failed is not None and np.array_equal(failed.kept, kept) and np.array_equal(
+                failed.left_out, left):
+            key = (tuple(kept.tolist()), tuple(left.tolist()))
+            self.generation[key] = self.generation.get(key, 0) + 1
         foot = self.feet.owner >= 0
         self.base = (kept[~foot[kept]], left[~foot[left]])
         key = self.feet.contact_set(k)
@@ -254,21 +260,25 @@ class _Decisions:
                           np.concatenate([left, split.redundant]).astype(int))
 
     def _plan(self, q, w_k, kept, left) -> PhasePlan | None:
-        """The plan of a decision, with the pivots of ``Phi_v[kept]`` at ``q``. The rows are
-        sorted: a decision that keeps the same rows in another order (the exact one orders
-        drivers and feet by their conditioning) is the same plan."""
+        """The plan of a decision (for a new one, the pivots of ``Phi_v[kept]`` at ``q``). The
+        rows are sorted: a decision that keeps the same rows in another order (the exact one
+        orders drivers and feet by their conditioning) is the same plan."""
         model, terms = self.model, self.terms
         kept, left = np.sort(kept), np.sort(left)
-        Phi = model.call("Phi_v", self.data, q=q, w=w_k)
-        where = np.full(model.n_c, -1)
-        where[kept] = np.arange(kept.size)
-        entries = np.flatnonzero(where[terms.pattern_rows] >= 0)
-        rows, columns = where[terms.pattern_rows[entries]], terms.pattern_columns[entries]
+
+        def make() -> StaticLU:
+            Phi = model.call("Phi_v", self.data, q=q, w=w_k)
+            where = np.full(model.n_c, -1)
+            where[kept] = np.arange(kept.size)
+            entries = np.flatnonzero(where[terms.pattern_rows] >= 0)
+            rows, columns = where[terms.pattern_rows[entries]], terms.pattern_columns[entries]
+            return StaticLU.pivoted(rows, columns, model.n_v, Phi[kept[rows], columns])
+
+        key = (tuple(kept.tolist()), tuple(left.tolist()))
         try:
-            lu = StaticLU.pivoted(rows, columns, model.n_v, Phi[kept[rows], columns])
+            return plan_for(terms, kept, left, make, self.generation.get(key, 0), self.to_c)
         except RuntimeError:  # exactly singular there
             return None
-        return plan_for(terms, kept, left, lu, self.to_c)
 
 
 def _run(plan: PhasePlan, data: Data, newton: int, out: _Results, feet: _Feet, times, w, wd,

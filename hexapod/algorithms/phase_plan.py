@@ -232,10 +232,14 @@ class PhasePlan:
         return policy(q, Phi, offset, feet, lam0, self.null_space(F, Phi), mask)
 
 
-def plan_for(terms: StepTerms, kept, left_out, lu: StaticLU, to_c: bool = False) -> PhasePlan:
-    """The :class:`PhasePlan` of a rank decision and its pivots, built once per model: a pure
-    function of the rows and the pivots (every sample is checked, at its own state), so that a
-    run's results depend on its own decisions only."""
+def plan_for(terms: StepTerms, kept, left_out, make, generation: int = 0,
+             to_c: bool = False) -> PhasePlan:
+    """The :class:`PhasePlan` of a rank decision, built once per model and ``generation``:
+    ``make()`` gives the factorisation's pivots (:class:`StaticLU`) when it is built. A later
+    decision with the same rows reuses it, whatever the positions it was taken at (its pivots
+    are checked at every sample); a new ``generation`` takes new pivots. The pivots are those
+    of the first decision of these rows the model saw, so results may differ from run to run
+    by round-off (never more: every sample is checked against the constraints)."""
     key = ("phase-plan", tuple(int(r) for r in kept), tuple(int(r) for r in left_out),
-           tuple(lu.row_order.tolist()), tuple(lu.column_order.tolist()), to_c)
-    return terms.model.built_once(key, lambda m: PhasePlan(terms, kept, left_out, lu, to_c))
+           generation, to_c)
+    return terms.model.built_once(key, lambda m: PhasePlan(terms, kept, left_out, make(), to_c))
