@@ -83,9 +83,10 @@ class StepTerms:
         self.pattern_rows, self.pattern_columns = (np.asarray(x, dtype=int) for x in
                                                    self.pattern.get_triplet())
 
-    def _function(self, name, inputs, outputs, names_in, names_out, cse=True):
+    def _function(self, name, inputs, outputs, names_in, names_out, cse=True, to_c=None):
         outputs = ca.cse(outputs) if cse else outputs
-        return sx_function(name, inputs, outputs, self.to_c, names_in, names_out)
+        to_c = self.to_c if to_c is None else to_c
+        return sx_function(name, inputs, outputs, to_c, names_in, names_out)
 
     def _retract(self, q, dv):
         m = self.model
@@ -194,13 +195,16 @@ class StepTerms:
     @cached_property
     def objective(self) -> ca.Function:
         """``(q, Phi, offset, feet) -> (A, b)``: the redundancy policy's objective
-        ``|A lam + b|^2`` (see :meth:`_objective`), ``Phi`` the nonzeros of ``Phi_v``."""
+        ``|A lam + b|^2`` (see :meth:`_objective`), ``Phi`` the nonzeros of ``Phi_v``. Never
+        compiled: it is evaluated once per rank decision and per exact sample (0.2 ms
+        interpreted for the walking robot), and its graph takes gcc a minute."""
         Phi_nz = ca.SX.sym("Phi", self.pattern.nnz())
         offset = ca.SX.sym("offset", 6 * self.owners)
         feet = ca.SX.sym("feet", len(self.model.contacts))
         A, b = self._objective(ca.SX(self.pattern, Phi_nz), offset, feet)
         return self._function("phase_objective", [self.q, Phi_nz, offset, feet],
-                              [ca.densify(A), b], ["q", "Phi", "offset", "feet"], ["A", "b"])
+                              [ca.densify(A), b], ["q", "Phi", "offset", "feet"], ["A", "b"],
+                              to_c=False)
 
     @cached_property
     def row_norms(self) -> ca.Function:
