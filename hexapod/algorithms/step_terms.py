@@ -186,18 +186,20 @@ class StepTerms:
     @cached_property
     def wrench_map(self) -> ca.Function:
         """``(q, Phi) -> A``: the map from multipliers to the wrenches of the least-wrench policy
-        (see :meth:`_wrench_map`; world axes, moments over the characteristic length)."""
+        (see :meth:`_wrench_map`; world axes, moments over the characteristic length). Never
+        compiled, as :attr:`objective`: the standing robot's took gcc 65 s."""
         Phi_nz = ca.SX.sym("Phi", self.pattern.nnz())
         A, _ = self._wrench_map(ca.SX(self.pattern, Phi_nz))
         return self._function("phase_wrench_map", [self.q, Phi_nz], [ca.densify(A)],
-                              ["q", "Phi"], ["A"])
+                              ["q", "Phi"], ["A"], to_c=False)
 
     @cached_property
     def objective(self) -> ca.Function:
         """``(q, Phi, offset, feet) -> (A, b)``: the redundancy policy's objective
         ``|A lam + b|^2`` (see :meth:`_objective`), ``Phi`` the nonzeros of ``Phi_v``. Never
-        compiled: it is evaluated once per rank decision and per exact sample (0.2 ms
-        interpreted for the walking robot), and its graph takes gcc a minute."""
+        compiled: the batched driver evaluates it once per call (its exact first sample), the
+        exact one once per sample (0.2 ms interpreted for the walking robot), and its graph
+        takes gcc a minute."""
         Phi_nz = ca.SX.sym("Phi", self.pattern.nnz())
         offset = ca.SX.sym("offset", 6 * self.owners)
         feet = ca.SX.sym("feet", len(self.model.contacts))
