@@ -136,7 +136,7 @@ def main() -> None:
               f"{ratio:>7.2f}{bare:>9.2f}{vm}{saddle}{agree}")
     print("ratio: per sample against hexapod-held (tree path), target <= 3; w/o laws: the "
           "same without the law values' cost; interp.: the phase path in CasADi's interpreter "
-          "(the default below 50 000 samples), per sample; saddle: the exact path, per sample")
+          "(the default execution), per sample; saddle: the exact path, per sample")
 
 
 if __name__ == "__main__":
