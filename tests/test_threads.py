@@ -67,6 +67,29 @@ def test_two_threads_with_their_own_data_compute_the_same_forward_dynamics():
         assert np.array_equal(result, alone)
 
 
+def test_two_threads_build_and_run_the_walking_robots_phase_path_together():
+    """The batched closed-loop path across a touch-down (0.2 s): both threads start on a model
+    that has built nothing, so they race to build its plans (built once, under the model's
+    lock) and each runs them through its own buffers."""
+    times = np.linspace(0.18, 0.22, 9)
+    alone = hx.inverse_dynamics(hx.assemble(hx.load_scene("hexapod")), times, method="phase")
+    model = hx.assemble(hx.load_scene("hexapod"))
+    together = _in_threads(lambda k: hx.inverse_dynamics(model, times, method="phase",
+                                                         data=model.create_data()))
+    for result in together:
+        for key in ("force", "torque", "effort", "ground_force"):  # NaN: no effort
+            np.testing.assert_array_equal(getattr(result, key), getattr(alone, key), key)
+
+
+def test_two_threads_simulate_the_same_model_together():
+    model = hx.assemble(four_bar(2, 0.6))
+    alone = hx.simulate(model, 0.2, method="rk4", step=1e-3)
+    for result in _in_threads(lambda k: hx.simulate(model, 0.2, method="rk4",
+                                                     step=1e-3)):
+        assert np.array_equal(result.q, alone.q)
+        assert np.array_equal(result.v, alone.v)
+
+
 def test_a_model_is_frozen_and_refuses_another_models_data():
     model = hx.assemble(hx.load_scene("front-leg"))
     other = hx.assemble(four_bar(2, 0.6))
