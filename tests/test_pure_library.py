@@ -1,8 +1,9 @@
 """A library call writes nothing its caller did not ask for: with a read-only home, no cache
 folder set and empty working and temporary folders, importing hexapod, assembling the walking
 robot and running its inverse dynamics (the phase path, and the exact path of its first
-sample) leaves every folder as it was, and Python's audit events show no file opened for
-writing, no folder made and nothing renamed or removed."""
+sample), and the front leg's (the tree path), leaves every folder as it was; Python's audit
+events show no file opened for writing, no folder made and nothing renamed or removed; and the
+sources are not listed to make a cache key."""
 
 from __future__ import annotations
 
@@ -37,6 +38,10 @@ PROGRAM = textwrap.dedent("""
     model = hx.assemble(hx.load_scene("hexapod"))
     result = hx.inverse_dynamics(model, np.linspace(0.0, 0.1, 40))
     assert result.method == "phase" and np.all(np.isfinite(result.force))
+    leg = hx.inverse_dynamics(hx.assemble(hx.load_scene("front-leg")), np.linspace(0, 0.1, 9))
+    assert leg.method == "tree" and np.all(np.isfinite(leg.force))
+    from hexapod._support.cache import _code_identity  # the cache keys' stat of every source
+    assert _code_identity.cache_info().misses == 0, "a cache key was made with no cache"
     print(repr(written))
 """)
 

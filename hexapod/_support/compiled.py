@@ -58,10 +58,11 @@ def compiler() -> str | None:
     return shutil.which("gcc") or shutil.which("cc")
 
 
-def compiled_key(key: str, command: str, flags: tuple[str, ...] = COMPILER_FLAGS) -> str:
+def compiled_key(key: str, command: str) -> str:
     """The cache key of ``key``'s library, compiled by ``command`` (a compiler's path) with
-    ``flags``."""
-    return cache.key("compiled", key, f"casadi {ca.__version__}", command, " ".join(flags),
+    :data:`COMPILER_FLAGS`."""
+    return cache.key("compiled", key, f"casadi {ca.__version__}", command,
+                     " ".join(COMPILER_FLAGS),
                      sys.platform, _machine())
 
 
@@ -79,13 +80,12 @@ def serialized_key(key: str) -> str:
     return cache.key("serialized", key, f"casadi {ca.__version__}")
 
 
-def find_compiled(key: str | None, flags: tuple[str, ...] = COMPILER_FLAGS) -> ca.Function | None:
-    """The library of ``key`` compiled with ``flags`` when the cache holds one (loaded), else
-    None."""
+def find_compiled(key: str | None) -> ca.Function | None:
+    """The library of ``key`` when the cache holds one (loaded), else None."""
     command = compiler()
-    if command is None or key is None:
+    if command is None or key is None or cache.folder() is None:  # no key: it stats the sources
         return None
-    entry_key = compiled_key(key, command, flags)
+    entry_key = compiled_key(key, command)
     found = cache.load(entry_key)
     if found is None:
         return None
@@ -97,25 +97,26 @@ def find_compiled(key: str | None, flags: tuple[str, ...] = COMPILER_FLAGS) -> c
         return None
 
 
-def compiled(key: str | None, build: Callable[[], ca.Function], *, what: str = "",
-             flags: tuple[str, ...] = COMPILER_FLAGS) -> ca.Function:
-    """The Function ``build()`` makes, compiled to C with ``flags`` (:data:`COMPILER_FLAGS`):
+def compiled(key: str | None, build: Callable[[], ca.Function], *,
+             what: str = "") -> ca.Function:
+    """The Function ``build()`` makes, compiled to C with :data:`COMPILER_FLAGS`:
     loaded from the cache when it holds the library of ``key``, else built, compiled and stored
     there (``what`` says what it is, for ``hexapod cache info``);
     with ``key=None``, compiled and not stored. The interpreted Function when there is no
     compiler."""
-    found = find_compiled(key, flags)
+    found = find_compiled(key)
     if found is not None:
         return found
     function = build()
     command = compiler()
     if command is None:
         return function
-    entry_key = compiled_key(key, command, flags) if key is not None else None
-    said = f"{what or function.name()}, compiled {' '.join(flags)}"
+    stored = key is not None and cache.folder() is not None
+    entry_key = compiled_key(key, command) if stored else None
+    said = f"{what or function.name()}, compiled {' '.join(COMPILER_FLAGS)}"
     try:
         with cache.writing(entry_key, said) as folder:
-            library = _compile(function, folder, command, flags)
+            library = _compile(function, folder, command)
             # loaded before the folder is published or removed: the library stays mapped
             return ca.external(function.name(), str(library))
     except (CompileError, HexapodError) as error:  # nothing was stored
@@ -127,7 +128,7 @@ class CompileError(Exception):
     """The C compiler failed (its last lines of output in the message)."""
 
 
-def _compile(function: ca.Function, folder: Path, command: str, flags: tuple[str, ...]) -> Path:
+def _compile(function: ca.Function, folder: Path, command: str) -> Path:
     """Generate ``function``'s C code in ``folder`` and compile it to a shared library there;
     the source is removed (only the library is kept)."""
     generator = ca.CodeGenerator("source.c", {"with_header": False})
@@ -137,7 +138,7 @@ def _compile(function: ca.Function, folder: Path, command: str, flags: tuple[str
     except RuntimeError as error:  # the folder cannot be written (a full disk)
         raise CompileError(f"cannot write the C code of {function.name()} ({error})") from None
     source, library = folder / "source.c", folder / LIBRARY
-    status, said = _run_compiler([command, *flags, "-shared", "-fPIC", str(source), "-o",
+    status, said = _run_compiler([command, *COMPILER_FLAGS, "-shared", "-fPIC", str(source), "-o",
                                   str(library)])
     source.unlink()
     if status != 0 or not library.is_file():
@@ -178,7 +179,7 @@ def serialized(key: str | None, build: Callable[[], ca.Function], *,
     """The Function ``build()`` makes, loaded from the cache when it holds the serialized
     Function of ``key`` (no graph to build), else built and stored there; with ``key=None``,
     ``build()`` alone."""
-    if key is None:
+    if key is None or cache.folder() is None:
         return build()
     entry_key = serialized_key(key)
     found = cache.load(entry_key)
@@ -188,7 +189,6 @@ def serialized(key: str | None, build: Callable[[], ca.Function], *,
         except (KeyError, UnicodeDecodeError, RuntimeError):
             cache.discard(entry_key)
     function = build()
-    if cache.folder() is not None:  # nothing to serialize when there is no cache
-        cache.keep(entry_key, f"{what or function.name()}, serialized",
-                   {SERIALIZED: function.serialize()}, stacklevel=2)
+    cache.keep(entry_key, f"{what or function.name()}, serialized",
+               {SERIALIZED: function.serialize()}, stacklevel=2)
     return function
