@@ -495,7 +495,8 @@ class Integrator(SingularPoses):
     def _hermite(self, start: tuple) -> HermiteInterpolant:
         """The quintic Hermite interpolant (:class:`HermiteInterpolant`) of the last step from
         its start ``(t, q, v, v_dot)`` to the current state (second-order methods)."""
-        return HermiteInterpolant(self.model, start, (self.t, self.q, self.v, self.v_dot))
+        return HermiteInterpolant(self.model, start, (self.t, self.q, self.v, self.v_dot),
+                                  self.data)
 
     # ------------------------------------------------------------------ tolerances per kind
 

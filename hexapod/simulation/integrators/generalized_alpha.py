@@ -482,7 +482,7 @@ class LieGroupGeneralizedAlpha(Integrator):
             return self.decision[1:]
         model = self.model
         w, _, _ = model.law_values(t, self.data)
-        Phi_v = constraint_jacobian(model, q, w)
+        Phi_v = constraint_jacobian(model, q, w, self.data)
         self.counters.jacobians += 1
         self.counters.factorisations += 1
         self.decision = (q, Phi_v, rank_split(model, Phi_v, w))
@@ -496,7 +496,7 @@ class LieGroupGeneralizedAlpha(Integrator):
             return lam
         Q_across = (model.call("Q_across", self.data, q=q, v=v, w=w) if model.Q_across is not None
                     else None)
-        wrench_map, offset = policy_map(model, q, as_dense(Phi_v), Q_across)
+        wrench_map, offset = policy_map(model, q, as_dense(Phi_v), Q_across, self.data)
         return distribute(split, lam, wrench_map, offset)
 
     def dense_output(self) -> Interpolant:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from hexapod.model.data import Data
 from hexapod.model.model import Model
 from hexapod.simulation.integrators.tolerances import state_units
 
@@ -60,20 +61,21 @@ class HermiteInterpolant(Interpolant):
     on the others; the positions are interpolated as coordinates, Euler parameters then
     renormalised. Order 5 on positions, 3 on velocities (the methods' own error is of order 2).
 
-    ``start`` and ``end`` are ``(t, q, v, v_dot)``.
+    ``start`` and ``end`` are ``(t, q, v, v_dot)``; ``data`` the integrator's workspace (its
+    call buffers).
     """
 
     order = 3
 
-    def __init__(self, model: Model, start: tuple, end: tuple):
+    def __init__(self, model: Model, start: tuple, end: tuple, data: Data | None = None):
         super().__init__(model, start[0], end[0])
         units = state_units(model)[:model.n_q]
         euler = np.array([unit == "1" for unit in units])
         self.ends = []
         for _, q, v, v_dot in (start, end):
-            q_dot = model.call("qdot", q=q, v=v)
-            q_ddot = model.call("qdot", q=q, v=v_dot)
-            q_ddot[euler] += model.call("qdot", q=q_dot, v=v)[euler]
+            q_dot = model.call("qdot", data, q=q, v=v)
+            q_ddot = model.call("qdot", data, q=q, v=v_dot)
+            q_ddot[euler] += model.call("qdot", data, q=q_dot, v=v)[euler]
             self.ends.append((np.asarray(q, dtype=float), q_dot, q_ddot,
                               np.asarray(v, dtype=float), np.asarray(v_dot, dtype=float)))
 

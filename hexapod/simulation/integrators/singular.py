@@ -199,7 +199,8 @@ class SingularPoses:
         self.counters.jacobians += 1
         self.counters.factorisations += 1
         return rank_split(self.model,
-                          constraint_jacobian(self.model, self.q if q is None else q, w), w)
+                          constraint_jacobian(self.model, self.q if q is None else q, w,
+                                              self.data), w)
 
     def _smallest_singular_value(self, q: np.ndarray | None = None,
                                  t: float | None = None) -> float:
