@@ -125,18 +125,50 @@ class ScatteredFunction:
         return out
 
 
+class InPlaceFunction:
+    """A Function evaluated from and into arrays the caller gives at each call: each
+    C-contiguous and holding one input's or output's nonzeros in CasADi's column-major order
+    (the samples of a mapped Function as the rows of a NumPy array, say). Through CasADi's
+    buffer interface, made once; a plain call where there is none. Raises ``RuntimeError``
+    when the evaluation fails, as a plain call does."""
+
+    def __init__(self, function: ca.Function):
+        self.function = function
+        self._buffer = _buffer_of(function)
+
+    def __call__(self, inputs: list[np.ndarray], outputs: list[np.ndarray]) -> None:
+        if self._buffer is None:
+            flat = [np.reshape(y, -1) for y in outputs]
+            if not all(np.shares_memory(f, y) for f, y in zip(flat, outputs, strict=True)):
+                raise ValueError("outputs must be contiguous arrays")
+            _evaluate(self.function, None, [np.reshape(x, -1) for x in inputs], flat)
+            return
+        buffer, _ = self._buffer
+        for i, array in enumerate(inputs):
+            buffer.set_arg(i, memoryview(array))
+        for i, array in enumerate(outputs):
+            buffer.set_res(i, memoryview(array))
+        _evaluate(self.function, self._buffer, inputs, outputs)
+
+
+def _buffer_of(function: ca.Function):
+    """CasADi's evaluation buffer of ``function`` and its evaluate function (the buffer must be
+    kept alive while it is used), or None where CasADi has no buffer interface."""
+    return function.buffer() if hasattr(function, "buffer") else None
+
+
 def _bound(function: ca.Function, inputs: list[np.ndarray], outputs: list[np.ndarray]):
-    """``function``'s evaluation buffer reading ``inputs`` and writing ``outputs`` in place:
-    (the buffer, which must be kept alive, and its evaluate function); None where CasADi has
-    no buffer interface."""
-    if not hasattr(function, "buffer"):
+    """``function``'s evaluation buffer reading ``inputs`` and writing ``outputs`` in place
+    (:func:`_buffer_of`), or None."""
+    found = _buffer_of(function)
+    if found is None:
         return None
-    buffer, evaluate = function.buffer()
+    buffer, _ = found
     for i, array in enumerate(inputs):
         buffer.set_arg(i, memoryview(array))
     for i, array in enumerate(outputs):
         buffer.set_res(i, memoryview(array))
-    return buffer, evaluate
+    return found
 
 
 def _evaluate(function: ca.Function, bound, inputs: list[np.ndarray],

@@ -40,7 +40,9 @@ from numpy.typing import ArrayLike
 from hexapod._support import signals
 from hexapod._support.compiled import compiled, serialized
 from hexapod._support.execution import current
+from hexapod._support.fastcall import InPlaceFunction
 from hexapod.errors import HexapodError
+from hexapod.model.data import kept
 from hexapod.model.model import GROUND_INDEX, Data, Model
 from hexapod.spatial import (
     g_matrix,
@@ -378,10 +380,7 @@ class TreePlan:
             return function.map(n, "serial") if n > 1 else function
 
         function = self.model.built_once(("tree-map", n, compiled), mapped)
-        key = ("tree-buffer", n, compiled)
-        if key not in data.built:
-            data.built[key] = function.buffer()
-        return data.built[key]
+        return kept(data, ("tree-buffer", n, compiled), lambda: InPlaceFunction(function))
 
     def solve(self, data: Data, times, w, wd, wdd, frame,
               progress: Callable[[int, int], None] | None = None) -> InverseResult:
@@ -416,12 +415,8 @@ class TreePlan:
         block = min(n, max(SMALLEST_BLOCK, round(math.sqrt(BLOCK_FACTOR * n))))
         for start in range(0, n, block):
             stop = min(n, start + block)
-            buffer, evaluate = self._evaluator(data, stop - start, compiled)
-            for i, x in enumerate(inputs):
-                buffer.set_arg(i, memoryview(x[start:stop]))
-            for i, y in enumerate(results):
-                buffer.set_res(i, memoryview(y[start:stop]))
-            evaluate()
+            self._evaluator(data, stop - start, compiled)([x[start:stop] for x in inputs],
+                                                         [y[start:stop] for y in results])
             if progress is not None:
                 progress(stop, n)
 

@@ -42,9 +42,11 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
+from hexapod._support.fastcall import InPlaceFunction
 from hexapod.algorithms.static_lu import StaticLU
 from hexapod.algorithms.step import sparse_dm
 from hexapod.algorithms.step_terms import StepTerms, sx_function
+from hexapod.model.data import kept
 from hexapod.model.model import Data
 
 #: Newton steps on the positions per sample, from the positions predicted by the sample before
@@ -195,10 +197,8 @@ class PhasePlan:
         cache = self.__dict__.setdefault("_mapped", {})
         if (n, newton) not in cache:
             cache[n, newton] = self.step(newton).mapaccum("phase_steps", n)
-        key = ("phase-buffer", id(self), n, newton)
-        if key not in data.built:
-            data.built[key] = cache[n, newton].buffer()
-        return data.built[key]
+        return kept(data, ("phase-buffer", id(self), n, newton),
+                    lambda: InPlaceFunction(cache[n, newton]))
 
     def evaluate(self, data: Data, x0, h, w, wd, wdd, feet, mask, newton: int = NEWTON_STEPS):
         """The samples of one run: ``x0`` the state ``[q; v; v_dot]`` of the sample before,
@@ -207,7 +207,7 @@ class PhasePlan:
         the joint frames, the joint frames' rotations (N, J, 9, column-major) and the checks
         (N, 6), all NaN when the evaluation fails."""
         model, n = self.model, h.size
-        buffer, run = self._evaluator(data, n, newton)
+        run = self._evaluator(data, n, newton)
         # CasADi's column-major (rows x n) is NumPy's C-order (n x rows)
         inputs = [np.ascontiguousarray(x0, dtype=float),
                   np.ascontiguousarray(np.reshape(h, (n, 1)), dtype=float)]
@@ -216,12 +216,9 @@ class PhasePlan:
         J = len(model.joints)
         outputs = [np.empty((n, model.n_q + 2 * model.n_v)), np.empty((n, model.n_c)),
                    np.empty((n, J, 6)), np.empty((n, J, 9)), np.empty((n, len(CHECKS)))]
-        for i, x in enumerate(inputs):
-            buffer.set_arg(i, memoryview(x))
-        for i, y in enumerate(outputs):
-            buffer.set_res(i, memoryview(y))
-        run()
-        if buffer.ret():
+        try:
+            run(inputs, outputs)
+        except RuntimeError:  # a singular solve: the samples are redone exactly
             for y in outputs:
                 y[...] = np.nan
         return outputs

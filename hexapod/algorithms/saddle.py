@@ -20,6 +20,7 @@ import numpy as np
 
 from hexapod._support.fastcall import ScatteredFunction
 from hexapod.algorithms import linalg, sparse_qr
+from hexapod.model.data import kept
 from hexapod.model.model import Data, Model
 
 
@@ -34,14 +35,9 @@ def is_large(model: Model) -> bool:
 
 def _scattered(model: Model, data: Data | None, name: str) -> ScatteredFunction:
     """The model's Function ``name`` evaluated on its nonzeros, with the buffers of ``data``
-    (made once per workspace)."""
-    key = f"scattered {name}"
-    if data is not None and key in data.calls:
-        return data.calls[key]
-    function = ScatteredFunction(getattr(model, name))
-    if data is not None:
-        data.calls[key] = function
-    return function
+    (made once per workspace). Not :meth:`Model.fast`: the sparse path's threshold
+    (:func:`is_large`) is its own."""
+    return kept(data, f"scattered {name}", lambda: ScatteredFunction(getattr(model, name)))
 
 
 def constraint_jacobian(model: Model, q: np.ndarray, w: np.ndarray, data: Data | None = None):

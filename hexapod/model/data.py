@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -94,3 +96,14 @@ class Data:
         self.t, self.q = t, q
         if v is not None:
             self.v = v
+
+
+def kept(data: Data | None, key: Any, make: Callable[[], Any]) -> Any:
+    """What ``make()`` returns (call buffers: they belong to one user at a time), made once per
+    workspace ``data`` and kept in it under ``key``; made afresh without a workspace."""
+    if data is None:
+        return make()
+    found = data.calls.get(key)
+    if found is None:
+        found = data.calls[key] = make()
+    return found

@@ -32,7 +32,7 @@ import numpy as np
 
 from hexapod._support.fastcall import FastFunction, ScatteredFunction, dense_outputs
 from hexapod.errors import HexapodError
-from hexapod.model.data import Data
+from hexapod.model.data import Data, kept
 from hexapod.model.infos import (
     GROUND_INDEX,
     BodyInfo,
@@ -489,13 +489,11 @@ class Model:
         the same numbers, without the cost of converting arguments. The buffers are those of
         ``data`` (made once per workspace), or fresh ones without it. Large matrix outputs
         are evaluated on their nonzeros only (:class:`ScatteredFunction`)."""
-        if data is not None and name in data.calls:
-            return data.calls[name]
-        function = self._evaluated(name)
-        made = (ScatteredFunction if _large(function) else FastFunction)(function)
-        if data is not None:
-            data.calls[name] = made
-        return made
+        def make() -> FastFunction | ScatteredFunction:
+            function = self._evaluated(name)
+            return (ScatteredFunction if _large(function) else FastFunction)(function)
+
+        return kept(data, name, make)
 
     def _evaluated(self, name: str) -> ca.Function:
         """The Function ``name`` as its buffers evaluate it: outputs densified, unless large."""
