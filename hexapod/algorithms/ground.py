@@ -92,9 +92,8 @@ def policy_objective(model: Model, data, q: np.ndarray, Phi_v, Q_across,
     definition (:meth:`hexapod.algorithms.step_terms.StepTerms.objective`); ``feet`` as
     :func:`foot_values` gives them."""
     terms = terms_of(model)
-    offset = (terms.evaluate(data, "across", q, Q_across)[0] if Q_across is not None
-              else np.zeros(6 * terms.owners))
-    return tuple(terms.evaluate(data, "objective", q, terms.nonzeros(Phi_v), offset, feet))
+    return tuple(terms.evaluate(data, "objective", q, terms.nonzeros(Phi_v),
+                                terms.offset(data, q, Q_across), feet))
 
 
 def share_ground_forces(model: Model, data, t: float, q: np.ndarray, Phi_v: np.ndarray,

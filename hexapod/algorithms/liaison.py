@@ -198,9 +198,8 @@ def wrenches_from_multipliers(model: Model, q: np.ndarray, lam: np.ndarray,
         raise ValueError(f"frame must be 'joint' or 'world', got {frame!r}")
     terms = terms_of(model)
     n = len(model.joints)
-    offset = (terms.evaluate(data, "across", q, Q_across)[0] if Q_across is not None
-              else np.zeros(6 * terms.owners))
-    wrench, frames = terms.evaluate(data, "report", q, terms.nonzeros(Phi_v), lam, offset)
+    wrench, frames = terms.evaluate(data, "report", q, terms.nonzeros(Phi_v), lam,
+                                    terms.offset(data, q, Q_across))
     wrench, frames = wrench.reshape(6, n), frames.reshape(9, n)
     force, torque, effort = np.zeros((n, 3)), np.zeros((n, 3)), np.full(n, np.nan)
     for k, joint in enumerate(model.joints):
@@ -232,6 +231,4 @@ def policy_map(model: Model, q: np.ndarray, Phi_v, Q_across: np.ndarray | None =
     (through the call buffers of ``data``, when given)."""
     terms = terms_of(model)
     (A,) = terms.evaluate(data, "wrench_map", q, terms.nonzeros(Phi_v))
-    offset = (terms.evaluate(data, "across", q, Q_across)[0] if Q_across is not None
-              else np.zeros(A.shape[0]))
-    return A, offset
+    return A, terms.offset(data, q, Q_across)

@@ -8,7 +8,7 @@ once (:func:`hexapod.algorithms.liaison.policy_map`, :func:`~.liaison.wrenches_f
 :func:`hexapod.algorithms.ground.policy_objective`). Here:
 
 * ``predict(q, v, a, h)``: ``q (+) (h v + h^2/2 a)``, the positions a sample ahead;
-* ``correct(q, dq)``: ``q (+) (-dq)`` (a Newton step; :func:`hexapod.spatial.retract_symbolic`);
+* ``correct(q, dq)``: ``q (+) (-dq)`` (a Newton step; :func:`hexapod.algorithms.step.retract`);
 * ``residual(q, w)``: ``phi``; ``jacobian(q, w)``: ``phi`` and the nonzeros of ``Phi_v``;
 * ``rates(q, w, wd)``: ``nu``; ``forces(q, v, w, wd, wdd)``: ``gamma``, ``Q`` and the wrenches
   of the force elements acting across joints;
@@ -45,9 +45,10 @@ import numpy as np
 
 from hexapod._support.compiled import compiled
 from hexapod._support.fastcall import FastFunction
-from hexapod.algorithms.step import mass_factors, sparse_dm
+from hexapod.algorithms.step import equilibrated, mass_factors, retract, sparse_dm
+from hexapod.model.data import kept
 from hexapod.model.model import GROUND_INDEX, Model
-from hexapod.spatial import retract_symbolic, rotation_from_euler_parameters
+from hexapod.spatial import rotation_from_euler_parameters
 
 
 def _call(function: ca.Function, **values):
@@ -88,10 +89,6 @@ class StepTerms:
         to_c = self.to_c if to_c is None else to_c
         return sx_function(name, inputs, outputs, to_c, names_in, names_out)
 
-    def _retract(self, q, dv):
-        m = self.model
-        return retract_symbolic(q, dv, m._lin_q, m._lin_v, m._quat_q, m._omega_v)
-
     @cached_property
     def predict(self) -> ca.Function:
         model = self.model
@@ -99,14 +96,14 @@ class StepTerms:
                                                       ("a", model.n_v)))
         h = ca.SX.sym("h")
         return self._function("phase_predict", [q, v, a, h],
-                              [self._retract(q, h * v + h * h / 2 * a)],
+                              [retract(self.model, q, h * v + h * h / 2 * a)],
                               ["q", "v", "a", "h"], ["q_predicted"], cse=False)
 
     @cached_property
     def correct(self) -> ca.Function:
         model = self.model
         q, dq = ca.SX.sym("q", model.n_q), ca.SX.sym("dq", model.n_v)
-        return self._function("phase_correct", [q, dq], [self._retract(q, -dq)],
+        return self._function("phase_correct", [q, dq], [retract(self.model, q, -dq)],
                               ["q", "dq"], ["q_corrected"], cse=False)
 
     @cached_property
@@ -213,22 +210,22 @@ class StepTerms:
         """``(Phi) -> d``: the norms of the rows of ``Phi_v M^-1/2`` (1 for a zero row): the
         equilibration of :mod:`hexapod.algorithms.linalg`, at the state of ``Phi``."""
         Phi_nz = ca.SX.sym("Phi", self.pattern.nnz())
-        W = ca.mtimes(ca.SX(self.pattern, Phi_nz), mass_factors(self.model)[0])
-        norms = ca.sqrt(ca.sum2(W * W))
-        return self._function("phase_row_norms", [Phi_nz], [ca.if_else(norms > 0, norms, 1.0)],
-                              ["Phi"], ["d"])
+        _, d, _ = equilibrated(ca.SX(self.pattern, Phi_nz), mass_factors(self.model)[0])
+        return self._function("phase_row_norms", [Phi_nz], [d], ["Phi"], ["d"])
 
     def evaluate(self, data, name: str, *arguments) -> list[np.ndarray]:
         """The Function ``name`` on numbers, through call buffers kept in the workspace
         ``data`` (fresh ones without it): ``evaluate(data, "objective", q, Phi, offset,
         feet)``."""
-        key = ("terms", self.to_c, name)
-        fast = data.calls.get(key) if data is not None else None
-        if fast is None:
-            fast = FastFunction(getattr(self, name))
-            if data is not None:
-                data.calls[key] = fast
+        fast = kept(data, ("terms", self.to_c, name), lambda: FastFunction(getattr(self, name)))
         return fast(*arguments)
+
+    def offset(self, data, q, Q_across) -> np.ndarray:
+        """The policy's constant term at ``q`` on numbers: the wrenches of the force elements
+        acting across joints (``across``), zero without them (``Q_across`` None)."""
+        if Q_across is None:
+            return np.zeros(6 * self.owners)
+        return self.evaluate(data, "across", q, Q_across)[0]
 
     def nonzeros(self, Phi_v) -> np.ndarray:
         """The entries of a numeric ``Phi_v`` (dense, or SciPy sparse) at the pattern's
