@@ -450,7 +450,7 @@ def walking_headlines(model: Model, result: InverseResult,
     drivers = driver_statistics(model, result) if drivers is None else drivers
     feet = range(len(loads.legs))
     peaks = [float(np.linalg.norm(loads.force[:, c], axis=1).max()) for c in feet]
-    vertical = [float(loads.force[:, c, 2].max()) for c in feet]
+    vertical = loads.normal.max(axis=0)  # F_n = Fz: the ground's normal is world z
     unit = "body weights" if loads.weight > 0 else "N"
     scale = loads.weight if loads.weight > 0 else 1.0
     lines = [f"ground forces by the policy {loads.policy}; "

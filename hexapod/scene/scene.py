@@ -32,7 +32,7 @@ from hexapod.scene.forces import (
     RotationalSpringDamper,
     SpringDamper,
 )
-from hexapod.scene.joints import JOINT_TYPES, Joint, kinds_that
+from hexapod.scene.joints import Joint, kinds_that
 from hexapod.spatial import Placement
 
 #: Length units a scene may use, in metres.
@@ -481,8 +481,7 @@ class _ReferenceCheck:
         ends = joint.particle_ends.get(dim, "")
         for key, name in (("parent", joint.parent), ("child", joint.child)):
             if isinstance(self.bodies.get(name), Particle) and key[0] not in ends:
-                allowed = ", ".join(k for k, t in JOINT_TYPES.items()
-                                    if key[0] in t.particle_ends.get(dim, ""))
+                allowed = kinds_that(lambda t, end=key[0]: end in t.particle_ends.get(dim, ""))
                 self._add(key, f"particle '{name}' has no orientation: as {key} of a joint "
                           f"it needs one of: {allowed}")
 
