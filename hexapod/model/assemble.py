@@ -128,10 +128,6 @@ def _com_frame(bodies: dict, body: str, frame: Placement) -> Placement:
     return bodies[body].marker_in_com_frame(frame)
 
 
-def _unit(axis) -> np.ndarray | None:
-    return None if axis is None else np.asarray(axis, dtype=float) / np.linalg.norm(axis)
-
-
 def _characteristic_length(scene: Scene, joint_points: list[np.ndarray]) -> float:
     """The scene's value, else the RMS distance of joint origins and centres of mass from
     their centroid at the initial pose (1 m when that is zero). SI, so unit-free."""
@@ -193,8 +189,7 @@ class _Assembly:
             frame_c = _com_frame(self.scene_bodies, joint.child, on_child)
             axis = joint.unit_axis(self.dim)
             g = JointGeometry(self.states[joint.parent], self.states[joint.child], frame_p,
-                              frame_c, axis, self.dim, _unit(getattr(joint, "axis2", None)),
-                              (world_p, world_c))
+                              frame_c, axis, self.dim, (world_p, world_c))
             self.geometries[joint.name] = g
             rows = [self._add_row(f"{joint.name}/{name}", joint.name, unit, expr)
                     for name, expr, unit in joint.rows(g, self.laws)]

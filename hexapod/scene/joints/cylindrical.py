@@ -4,10 +4,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import casadi as ca
 import numpy as np
 
 from hexapod.scene.joints.base import AXIS, Joint, register
-from hexapod.scene.joints.geometry import ANGLE, LENGTH, dot, normal_in_plane
+from hexapod.scene.joints.geometry import ANGLE, LENGTH, normal_in_plane
 
 
 @register
@@ -41,9 +42,9 @@ class Cylindrical(Joint):
     def rows(self, g, laws=None):
         d = g.gap
         if g.dimension == 2:
-            return [("t", dot(g.parent_vector(normal_in_plane(g.axis)), d), LENGTH)]
+            return [("t", ca.dot(g.parent_vector(normal_in_plane(g.axis)), d), LENGTH)]
         u, w, a = g.triad()
         a_c = g.child_vector(a)
         u_p, w_p = g.parent_vector(u), g.parent_vector(w)
-        return [("ax1", dot(u_p, a_c), ANGLE), ("ax2", dot(w_p, a_c), ANGLE),
-                ("t1", dot(u_p, d), LENGTH), ("t2", dot(w_p, d), LENGTH)]
+        return [("ax1", ca.dot(u_p, a_c), ANGLE), ("ax2", ca.dot(w_p, a_c), ANGLE),
+                ("t1", ca.dot(u_p, d), LENGTH), ("t2", ca.dot(w_p, d), LENGTH)]

@@ -4,11 +4,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import casadi as ca
 import numpy as np
 
 from hexapod.scene.element import check_finite
 from hexapod.scene.joints.base import NUMBER, Joint, register
-from hexapod.scene.joints.geometry import LENGTH, dot
+from hexapod.scene.joints.geometry import LENGTH
 
 
 @register
@@ -59,4 +60,4 @@ class Distance(Joint):
             parent, child = g.initial
             length = float(np.linalg.norm(child - parent))
         d = g.gap
-        return [("length", (dot(d, d) - length**2) / (2.0 * length), LENGTH)]
+        return [("length", (ca.dot(d, d) - length**2) / (2.0 * length), LENGTH)]

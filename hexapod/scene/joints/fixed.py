@@ -4,10 +4,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import casadi as ca
 import numpy as np
 
 from hexapod.scene.joints.base import Joint, register
-from hexapod.scene.joints.geometry import ANGLE, dot, point_rows
+from hexapod.scene.joints.geometry import ANGLE, point_rows
 
 
 @register
@@ -34,8 +35,8 @@ class Fixed(Joint):
         e = np.eye(3)
         x_p, y_p, z_p = (g.parent_vector(e[i]) for i in range(3))
         x_c, y_c, z_c = (g.child_vector(e[i]) for i in range(3))
-        return point_rows(g) + [("rx", dot(z_p, y_c), ANGLE), ("ry", dot(x_p, z_c), ANGLE),
-                                ("rz", dot(y_p, x_c), ANGLE)]
+        return point_rows(g) + [("rx", ca.dot(z_p, y_c), ANGLE), ("ry", ca.dot(x_p, z_c), ANGLE),
+                                ("rz", ca.dot(y_p, x_c), ANGLE)]
 
     def tree_step(self, value):
         """The child frame is the parent's: no rotation, no translation."""

@@ -9,8 +9,6 @@ so the joint types write their residuals without knowing how bodies are parametr
 ``d`` is the world vector from the parent frame's origin to the child frame's origin; ``u, w, a``
 is a right-handed orthonormal triad of the joint frame with ``a`` the joint axis; a subscript
 ``p`` or ``c`` is that vector fixed to the parent's or to the child's frame, in world axes.
-
-CasADi is imported inside the functions, so that reading a scene does not load it.
 """
 
 from __future__ import annotations
@@ -18,6 +16,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+import casadi as ca
 import numpy as np
 
 from hexapod.spatial import Placement, orthonormal_complement
@@ -44,8 +43,6 @@ class JointGeometry:
         The joint's unit axis in the joint frame (:meth:`Joint.unit_axis`).
     dimension : int
         3 in space, 2 in the plane.
-    axis2 : ndarray (3,) or None
-        A universal joint's child axis, unit, joint frame.
     initial : tuple of ndarray (d,), optional
         World positions of the parent's and the child's frame origins at the initial pose.
     """
@@ -56,7 +53,6 @@ class JointGeometry:
     child_frame: Placement
     axis: np.ndarray | None
     dimension: int
-    axis2: np.ndarray | None = None
     initial: tuple[np.ndarray, np.ndarray] | None = None
 
     @property
@@ -84,13 +80,6 @@ class JointGeometry:
         return u, w, self.axis
 
 
-def dot(a, b):
-    """The scalar product of two CasADi vectors."""
-    import casadi as ca
-
-    return ca.dot(a, b)
-
-
 def point_rows(g: JointGeometry) -> list[Row]:
     """``x, y(, z)``: the components of ``d`` (the two frame origins coincide)."""
     d = g.gap
@@ -105,21 +94,17 @@ def normal_in_plane(axis: np.ndarray) -> np.ndarray:
 def angle_sin_cos(g: JointGeometry):
     """``(sin theta, cos theta)`` of the angle about the axis from the parent frame to the child
     frame (up to a common positive factor in space, where the axes need not be aligned)."""
-    import casadi as ca
-
     if g.dimension == 2:
         theta = g.relative_angle()
         return ca.sin(theta), ca.cos(theta)
     u, w, _ = g.triad()
     u_c = g.child_vector(u)
-    return dot(g.parent_vector(w), u_c), dot(g.parent_vector(u), u_c)
+    return ca.dot(g.parent_vector(w), u_c), ca.dot(g.parent_vector(u), u_c)
 
 
 def wrapped_angle(g: JointGeometry, f):
     """``atan2(sin(theta - f), cos(theta - f))``: the angle about the axis minus ``f``, brought
     into (-pi, pi]. Derivative +1 in theta, correct past +-pi (a crank that turns many times)."""
-    import casadi as ca
-
     if g.dimension == 2:
         delta = g.relative_angle() - f
         return ca.atan2(ca.sin(delta), ca.cos(delta))
@@ -130,19 +115,17 @@ def wrapped_angle(g: JointGeometry, f):
 def angle_rate(g: JointGeometry):
     """Rate of the angle about the axis: the child's angular velocity relative to the parent's,
     along the child's axis (in the plane, the relative angular velocity)."""
-    import casadi as ca
-
     zero = ca.DM.zeros(3 if g.dimension == 3 else 1)
     omega_c = g.child.omega if g.child.omega is not None else zero
     omega_p = g.parent.omega if g.parent.omega is not None else zero
     if g.dimension == 2:
         return omega_c - omega_p
-    return dot(g.child_vector(g.axis), omega_c - omega_p)
+    return ca.dot(g.child_vector(g.axis), omega_c - omega_p)
 
 
 def axial_displacement(g: JointGeometry):
     """``a_p . d``: displacement of the child frame's origin along the parent's axis."""
-    return dot(g.parent_vector(g.axis), g.gap)
+    return ca.dot(g.parent_vector(g.axis), g.gap)
 
 
 def embedded(vector) -> np.ndarray:

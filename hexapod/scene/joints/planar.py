@@ -4,10 +4,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import casadi as ca
 import numpy as np
 
 from hexapod.scene.joints.base import AXIS, Joint, register
-from hexapod.scene.joints.geometry import ANGLE, LENGTH, dot
+from hexapod.scene.joints.geometry import ANGLE, LENGTH
 
 
 @register
@@ -37,6 +38,6 @@ class PlanarJoint(Joint):
     def rows(self, g, laws=None):
         u, w, a = g.triad()
         a_c = g.child_vector(a)
-        return [("ax1", dot(g.parent_vector(u), a_c), ANGLE),
-                ("ax2", dot(g.parent_vector(w), a_c), ANGLE),
-                ("t", dot(g.parent_vector(a), g.gap), LENGTH)]
+        return [("ax1", ca.dot(g.parent_vector(u), a_c), ANGLE),
+                ("ax2", ca.dot(g.parent_vector(w), a_c), ANGLE),
+                ("t", ca.dot(g.parent_vector(a), g.gap), LENGTH)]

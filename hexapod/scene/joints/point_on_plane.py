@@ -4,10 +4,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import casadi as ca
 import numpy as np
 
 from hexapod.scene.joints.base import AXIS, Joint, register
-from hexapod.scene.joints.geometry import LENGTH, dot
+from hexapod.scene.joints.geometry import LENGTH
 
 
 @register
@@ -37,4 +38,4 @@ class PointOnPlane(Joint):
         return {"axis": AXIS}
 
     def rows(self, g, laws=None):
-        return [("normal", dot(g.parent_vector(g.axis), g.gap), LENGTH)]
+        return [("normal", ca.dot(g.parent_vector(g.axis), g.gap), LENGTH)]

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import casadi as ca
 import numpy as np
 
 from hexapod.scene.joints.base import AXIS, Joint, register
@@ -12,7 +13,6 @@ from hexapod.scene.joints.geometry import (
     LENGTH,
     JointGeometry,
     axial_displacement,
-    dot,
     normal_in_plane,
 )
 
@@ -52,20 +52,18 @@ class Prismatic(Joint):
         d = g.gap
         if g.dimension == 2:
             return [("rot", g.relative_angle(), ANGLE),
-                    ("t", dot(g.parent_vector(normal_in_plane(g.axis)), d), LENGTH)]
+                    ("t", ca.dot(g.parent_vector(normal_in_plane(g.axis)), d), LENGTH)]
         u, w, a = g.triad()
         a_c = g.child_vector(a)
         u_p, w_p = g.parent_vector(u), g.parent_vector(w)
-        return [("ax1", dot(u_p, a_c), ANGLE), ("ax2", dot(w_p, a_c), ANGLE),
-                ("rot", dot(w_p, g.child_vector(u)), ANGLE),
-                ("t1", dot(u_p, d), LENGTH), ("t2", dot(w_p, d), LENGTH)]
+        return [("ax1", ca.dot(u_p, a_c), ANGLE), ("ax2", ca.dot(w_p, a_c), ANGLE),
+                ("rot", ca.dot(w_p, g.child_vector(u)), ANGLE),
+                ("t1", ca.dot(u_p, d), LENGTH), ("t2", ca.dot(w_p, d), LENGTH)]
 
     def driver_row(self, g, f):
         return axial_displacement(g) - f
 
     def rate(self, g, q, qdot):
-        import casadi as ca
-
         return ca.jtimes(axial_displacement(g), q, qdot)
 
     def twist(self, dimension):
@@ -73,6 +71,4 @@ class Prismatic(Joint):
 
     def tree_step(self, value):
         """No rotation, a translation by ``value`` along the axis (parent's joint frame)."""
-        import casadi as ca
-
         return None, value * ca.DM(self.unit_axis(3))

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import casadi as ca
 import numpy as np
 
 from hexapod.scene.joints.base import AXIS, Joint, register
@@ -11,7 +12,6 @@ from hexapod.scene.joints.geometry import (
     ANGLE,
     JointGeometry,
     angle_rate,
-    dot,
     point_rows,
     wrapped_angle,
 )
@@ -47,7 +47,7 @@ class Revolute(Joint):
     urdf_types = ("revolute", "continuous")
 
     def __post_init__(self):
-        self.axis = np.array((0.0, 0.0, 1.0) if self.axis is None else self.axis,
+        self.axis = np.array(self.default_axis[3] if self.axis is None else self.axis,
                              dtype=float).reshape(-1)
         super().__post_init__()
 
@@ -60,8 +60,8 @@ class Revolute(Joint):
             return point_rows(g)
         u, w, a = g.triad()
         a_c = g.child_vector(a)
-        return point_rows(g) + [("ax1", dot(g.parent_vector(u), a_c), ANGLE),
-                                ("ax2", dot(g.parent_vector(w), a_c), ANGLE)]
+        return point_rows(g) + [("ax1", ca.dot(g.parent_vector(u), a_c), ANGLE),
+                                ("ax2", ca.dot(g.parent_vector(w), a_c), ANGLE)]
 
     def driver_row(self, g, f):
         return wrapped_angle(g, f)
@@ -74,7 +74,5 @@ class Revolute(Joint):
 
     def tree_step(self, value):
         """A rotation by ``value`` about the axis (Euler parameters), no translation."""
-        import casadi as ca
-
         half = value / 2
         return ca.vertcat(ca.cos(half), ca.sin(half) * ca.DM(self.unit_axis(3))), None

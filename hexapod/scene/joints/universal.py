@@ -4,11 +4,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import casadi as ca
 import numpy as np
 
 from hexapod.scene.element import check_axis
 from hexapod.scene.joints.base import AXIS, Joint, register
-from hexapod.scene.joints.geometry import ANGLE, dot, point_rows
+from hexapod.scene.joints.geometry import ANGLE, point_rows
 
 
 @register
@@ -35,7 +36,7 @@ class Universal(Joint):
     plane_hint = "a revolute joint"
 
     def __post_init__(self):
-        self.axis = np.array((1.0, 0.0, 0.0) if self.axis is None else self.axis,
+        self.axis = np.array(self.default_axis[3] if self.axis is None else self.axis,
                              dtype=float).reshape(-1)
         self.axis2 = np.array((0.0, 1.0, 0.0) if self.axis2 is None else self.axis2,
                               dtype=float).reshape(-1)
@@ -57,5 +58,6 @@ class Universal(Joint):
         return {"axis": AXIS, "axis2": AXIS}
 
     def rows(self, g, laws=None):
-        return point_rows(g) + [("cross", dot(g.parent_vector(g.axis), g.child_vector(g.axis2)),
+        b = self.axis2 / np.linalg.norm(self.axis2)  # the child's axis, unit
+        return point_rows(g) + [("cross", ca.dot(g.parent_vector(g.axis), g.child_vector(b)),
                                  ANGLE)]
