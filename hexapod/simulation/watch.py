@@ -40,7 +40,7 @@ class Watch:
         self.grid = grid  # the output times, if given
         self.next = 0  # the output time to save next
         self.saved: dict[str, list[np.ndarray]] = {key: [] for key in _KEYS}
-        self.energy_saved: list[np.ndarray] = []
+        self.energy_saved: list[float] = []
         self.conserved = model.energy_conserved
         self.energy0 = (energy(model, integrator.q, integrator.v)[1] if self.conserved
                         else None)
@@ -76,14 +76,14 @@ class Watch:
         finite, ends the run as a failure, with the states saved before it."""
         integrator = self.integrator
         try:
-            values = {key: np.array(getattr(integrator, key), dtype=float, copy=True)[None]
+            values = {key: np.array(getattr(integrator, key), dtype=float, copy=True)
                       for key in _KEYS}
         except HexapodError as error:
             integrator.status = "failed"
             integrator.message = (f"{integrator.name}: failed at t = {integrator.t:.6g} s: "
                                   f"{error}")
             return
-        self._keep(values, np.array([self.latest if self.conserved else np.nan]))
+        self._keep(values, self.latest if self.conserved else np.nan)
 
     def save_grid(self) -> None:
         """Save the states at the output times the last step passed, each from the method's
@@ -111,40 +111,34 @@ class Watch:
                 return
             self.next += 1
             level = energy(self.model, q, v)[1] if self.conserved else np.nan
-            self._keep({"t": np.array([at]), "q": q[None], "v": v[None], "v_dot": v_dot[None],
-                        "lam": np.asarray(lam, dtype=float)[None]}, np.array([level]))
+            self._keep({"t": np.array(at), "q": q, "v": v, "v_dot": v_dot,
+                        "lam": np.asarray(lam, dtype=float)}, level)
             if integrator.status == "failed":
                 return
 
-    def _keep(self, values: dict, levels: np.ndarray) -> None:
-        """Append states (rows), up to the first whose accelerations or multipliers are not
-        finite (then the run ends as a failure)."""
+    def _keep(self, values: dict, level: float) -> None:
+        """Append one state, unless its accelerations or multipliers are not finite (then the
+        run ends as a failure)."""
         integrator = self.integrator
-        count = values["t"].shape[0]
         for key, what in (("v_dot", "accelerations"), ("lam", "multipliers")):
-            bad = np.flatnonzero(~np.all(np.isfinite(values[key]), axis=1))
-            if bad.size and bad[0] < count:
-                count = int(bad[0])
+            if not np.all(np.isfinite(values[key])):
                 integrator.status = "failed"
                 integrator.message = (f"{integrator.name}: non-finite {what} at t = "
-                                      f"{float(values['t'][count]):.6g} s (an overflow: the "
+                                      f"{float(values['t']):.6g} s (an overflow: the "
                                       "scene's forces or laws are too large, or the motion is "
                                       "unstable)")
-        if not count:
-            return
+                return
         for key in _KEYS:
-            self.saved[key].append(values[key][:count])
+            self.saved[key].append(values[key])
         if self.conserved:
-            self.energy_saved.append(levels[:count])
+            self.energy_saved.append(level)
 
     def complete(self) -> None:
         """Only whole states: an interruption inside a save may have left one in part."""
-        rows = [sum(block.shape[0] for block in self.saved[key]) for key in _KEYS]
-        if self.conserved:
-            rows.append(sum(block.shape[0] for block in self.energy_saved))
-        count = min(rows)
-        for blocks in [*self.saved.values(), self.energy_saved]:
-            _truncate(blocks, count)
+        lists = [*self.saved.values()] + ([self.energy_saved] if self.conserved else [])
+        count = min(len(states) for states in lists)
+        for states in lists:
+            del states[count:]
 
     def arrays(self) -> tuple[dict[str, np.ndarray], np.ndarray | None]:
         """The saved states as arrays (``t`` (n,), the others (n, size)), and their energies
@@ -154,20 +148,10 @@ class Watch:
                  "lam": (model.n_c,)}
         out = {}
         for key, blocks in self.saved.items():
-            out[key] = (np.concatenate(blocks).astype(float) if blocks
+            out[key] = (np.array(blocks, dtype=float) if blocks
                         else np.zeros((0, *sizes[key])))
         levels = None
         if self.conserved:
-            levels = np.concatenate(self.energy_saved) if self.energy_saved else np.zeros(0)
+            levels = np.array(self.energy_saved, dtype=float)
         return out, levels
 
-
-def _truncate(blocks: list[np.ndarray], count: int) -> None:
-    """Keep the first ``count`` rows of a list of blocks."""
-    kept = 0
-    for i, block in enumerate(blocks):
-        if kept + block.shape[0] >= count:
-            blocks[i] = block[:count - kept]
-            del blocks[i + 1:]
-            return
-        kept += block.shape[0]
