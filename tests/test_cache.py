@@ -1,6 +1,6 @@
-"""The cache on disk (hexapod._support.cache) and the CasADi Functions kept in it
+"""The cache on disk (hexapod._support.cache) and the compiled CasADi Functions kept in it
 (hexapod._support.compiled): where it is, entries whole or absent, concurrent processes,
-corrupted entries, the size limit, cleaning, and nothing written when it is off.
+damaged or untrusted entries, the size limit, cleaning, and nothing written when it is off.
 
 Every test turns the cache on in a folder of its own (the execution setting, and
 ``HEXAPOD_CACHE_DIR`` for the processes it starts)."""
@@ -22,13 +22,11 @@ import pytest
 from hexapod._support import cache
 from hexapod._support.compiled import (
     LIBRARY,
-    SERIALIZED,
+    NAME,
     compiled,
     compiled_key,
     compiler,
     find_compiled,
-    serialized,
-    serialized_key,
 )
 from hexapod._support.execution import executing
 from hexapod.errors import HexapodError
@@ -65,6 +63,13 @@ class Builder:
 
 def values(function: ca.Function) -> list[np.ndarray]:
     return [np.asarray(y).ravel() for y in function([0.1, -0.4, 2.0])]
+
+
+def store(name: str, data: bytes = b"0123456789" * 10) -> str:
+    """Keep ``data`` as the entry of ``name`` (one file, ``data.bin``); its key."""
+    key = cache.key(name)
+    cache.keep(key, f"entry {name}", {"data.bin": data})
+    return key
 
 
 def entry_folders(root: Path) -> list[Path]:
@@ -126,23 +131,19 @@ def test_keys_change_with_the_version_of_hexapod_and_of_casadi(monkeypatch):
     assert compiled_key("m", "/usr/bin/clang") != library
     monkeypatch.setattr(ca, "__version__", "0.0.1")
     assert compiled_key("m", "/usr/bin/gcc") != library
-    assert serialized_key("m") != compiled_key("m", "/usr/bin/gcc")
 
 
 # ------------------------------------------------------------------ entries
 
 
-def test_a_serialized_function_is_built_once(folder):
-    build = Builder()
-    first = serialized("k1", build, what="a test function")
-    second = serialized("k1", build)
-    assert build.calls == 1
-    for a, b in zip(values(first), values(second), strict=True):
-        assert np.array_equal(a, b)
+def test_an_entry_is_kept_and_read_back_whole(folder):
+    key = store("k1", b"what was built")
+    path, files = cache.load(key)
+    assert files == {"data.bin": b"what was built"} and path.name == key
     (entry,) = cache.entries(folder, describe=True)
-    assert entry.what == "a test function, serialized"
+    assert entry.what == "entry k1"
     meta = json.loads((entry.path / cache.META).read_text())
-    assert set(meta["files"]) == {SERIALIZED}
+    assert set(meta["files"]) == {"data.bin"}
     assert (folder / "CACHEDIR.TAG").read_text().startswith("Signature: 8a477f597d28d172789f")
     assert not [p for p in (folder / cache.LAYOUT).iterdir() if p.name.startswith(".")]
 
@@ -192,10 +193,10 @@ def test_when_the_cache_is_off_nothing_is_written(tmp_path, monkeypatch):
     monkeypatch.setenv("TMPDIR", str(scratch))
     monkeypatch.setattr("tempfile.tempdir", None)  # TMPDIR read again
     build = Builder()
-    serialized("k5", build)
-    serialized("k5", build)
     compiled("k5", build)
-    assert build.calls == 3
+    compiled("k5", build)
+    store("k5")
+    assert build.calls == 2 and cache.load(cache.key("k5")) is None
     assert cache.entries() == [] and cache.clean() == (0, 0)
     assert not target.exists()
     assert list(scratch.iterdir()) == []  # the compiler's scratch folder is gone too
@@ -225,39 +226,74 @@ def _damage(path: Path, how: str) -> None:
         listed = json.loads(meta.read_text())
         listed["files"] = {"../escape": "0" * 64}
         meta.write_text(json.dumps(listed))
+    elif how == "truncated but consistent":  # a bus error when loaded, were it not checked
+        _rewrite(payload, payload.read_bytes()[: payload.stat().st_size // 2])
+    elif how == "others may write":
+        payload.chmod(0o666)
+    elif how == "a link":
+        target = path.parent.parent / "elsewhere"
+        target.write_bytes(payload.read_bytes())
+        payload.unlink()
+        payload.symlink_to(target)
+    elif how == "a named pipe":  # read without waiting for a writer that never comes
+        data = payload.read_bytes()
+        payload.unlink()
+        os.mkfifo(payload)
+        listed = json.loads(meta.read_text())
+        listed["files"][payload.name] = __import__("hashlib").sha256(data).hexdigest()
+        meta.write_text(json.dumps(listed))
+    elif how == "not a C function's name":
+        _rewrite(path / NAME, b"f; rm -rf /")
 
 
-DAMAGES = ("garbage", "truncated", "meta garbled", "meta missing", "foreign but consistent",
-           "file listed outside")
+def _rewrite(path: Path, data: bytes) -> None:
+    """Give ``path`` the content ``data`` and its checksum in the entry's meta.json."""
+    path.write_bytes(data)
+    meta = path.parent / cache.META
+    listed = json.loads(meta.read_text())
+    listed["files"][path.name] = __import__("hashlib").sha256(data).hexdigest()
+    meta.write_text(json.dumps(listed))
+
+
+#: What the storage sees (a consistent foreign library is the loader's to refuse, below).
+DAMAGES = ("garbage", "truncated", "meta garbled", "meta missing", "file listed outside",
+           "others may write", "a link", "a named pipe")
 
 
 @pytest.mark.parametrize("how", DAMAGES)
-def test_a_damaged_serialized_entry_is_built_again(folder, how):
-    build = Builder()
-    expected = values(serialized("k6", build))
+def test_a_damaged_or_untrusted_entry_is_removed_with_a_warning(folder, how):
+    key = store("k6", b"what was built")
     _damage(entry_folders(folder)[0], how)
-    function = serialized("k6", build)
-    assert build.calls == 2
-    for a, b in zip(values(function), expected, strict=True):
-        assert np.array_equal(a, b)
-    serialized("k6", build)  # the entry was written again, whole
-    assert build.calls == 2
+    with pytest.warns(cache.CacheWarning, match=f"cache entry .*{key} not used"):
+        assert cache.load(key) is None
+    assert entry_folders(folder) == []
+    store("k6", b"what was built")  # written again, whole
+    assert cache.load(key)[1] == {"data.bin": b"what was built"}
+
+
+def test_a_file_larger_than_the_size_limit_is_not_read(folder):
+    key = store("k6b", b"x" * 5000)
+    with executing(cache_size=4000), \
+            pytest.warns(cache.CacheWarning, match="larger than the cache's size limit"):
+        assert cache.load(key) is None
 
 
 @needs_compiler
-@pytest.mark.parametrize("how", ["garbage", "truncated", "foreign but consistent"])
-def test_a_damaged_library_is_compiled_again(folder, how):
+@pytest.mark.parametrize("how", ["garbage", "truncated", "foreign but consistent",
+                                 "truncated but consistent", "not a C function's name"])
+def test_a_damaged_library_is_compiled_again_never_loaded(folder, how):
     build = Builder("h")
     compiled("k7", build)
     _damage(entry_folders(folder)[0], how)
-    function = compiled("k7", build)
+    with pytest.warns(cache.CacheWarning, match="not used"):
+        function = compiled("k7", build)
     assert build.calls == 2 and function.is_a("External")
     for a, b in zip(values(function), values(Builder("h")()), strict=True):
         assert np.allclose(a, b, rtol=1e-15, atol=0)
 
 
 def test_a_foreign_folder_or_file_in_the_cache_is_left_alone(folder):
-    serialized("k8", Builder())
+    store("k8")
     layout = folder / cache.LAYOUT
     (layout / "notes.txt").write_text("mine")
     (layout / "photos").mkdir()
@@ -270,12 +306,10 @@ def test_a_foreign_folder_or_file_in_the_cache_is_left_alone(folder):
 
 @pytest.mark.skipif(not hasattr(os, "getuid"), reason="POSIX permissions")
 def test_a_folder_others_may_write_in_is_not_used(folder):
-    serialized("k9", Builder())
+    key = store("k9")
     (folder / cache.LAYOUT).chmod(0o777)
-    build = Builder()
     with pytest.warns(cache.CacheWarning, match="others may write in it"):
-        serialized("k9", build)
-    assert build.calls == 1  # not read from there: built
+        assert cache.load(key) is None  # not read from there
 
 
 def test_a_folder_that_cannot_be_written_is_a_warning_and_the_work_goes_on(tmp_path,
@@ -283,11 +317,10 @@ def test_a_folder_that_cannot_be_written_is_a_warning_and_the_work_goes_on(tmp_p
     blocker = tmp_path / "file"
     blocker.write_text("not a folder")
     monkeypatch.setattr(cache, "_warned", set())
-    build = Builder()
     with pytest.warns(cache.CacheWarning, match="cannot write in the cache folder"), \
             executing(cache=blocker / "cache"):
-        function = serialized("k10", build)
-    assert values(function)[1] == pytest.approx(4.17)
+        key = store("k10")
+        assert cache.load(key) is None
 
 
 # ------------------------------------------------------------------ processes at once
@@ -296,7 +329,7 @@ WORKER = textwrap.dedent("""
     import sys, time
     import casadi as ca
     from hexapod._support import cache
-    from hexapod._support.compiled import compiled, serialized
+    from hexapod._support.compiled import compiled
     from hexapod._support.execution import executing
     setting = executing(**cache.configured())
     setting.__enter__()
@@ -306,12 +339,17 @@ WORKER = textwrap.dedent("""
     x = ca.SX.sym("x", 3)
     build = lambda: ca.Function("w", [x], [2 * ca.sin(x), ca.sumsqr(x)], ["x"], ["y", "n"])
     kind = sys.argv[1]
-    function = (compiled if kind == "compiled" else serialized)("shared", build)
+    if kind == "compiled":
+        function = compiled("shared", build)
+    else:  # the same data kept, read back
+        cache.keep(cache.key("shared"), "w", {"data.bin": build().serialize()})
+        data = cache.load(cache.key("shared"))[1]["data.bin"]
+        function = ca.Function.deserialize(data.decode())
     print(kind, function.is_a("External"), float(function([0.1, -0.4, 2.0])[1]))
 """)
 
 
-@pytest.mark.parametrize("kind", ["serialized",
+@pytest.mark.parametrize("kind", ["kept",
                                   pytest.param("compiled", marks=needs_compiler)])
 def test_processes_building_the_same_entry_at_once_all_succeed(folder, kind):
     start = time.time() + 1.0  # every process has loaded CasADi by then, most likely
@@ -363,21 +401,19 @@ WRITER = textwrap.dedent("""
     import sys
     import casadi as ca
     from hexapod._support import cache
-    from hexapod._support.compiled import serialized, serialized_key
     from hexapod._support.execution import executing
     setting = executing(**cache.configured())
     setting.__enter__()
     x = ca.SX.sym("x", 40)
-    big = ca.Function("big", [x], [ca.cumsum(ca.sin(x) * ca.cos(x.T @ x))])
+    big = ca.Function("big", [x], [ca.cumsum(ca.sin(x) * ca.cos(x.T @ x))]).serialize()
     for _ in range(int(sys.argv[1])):
-        cache.discard(serialized_key("churn"))
-        serialized("churn", lambda: big)
+        cache.discard(cache.key("churn"))
+        cache.keep(cache.key("churn"), "churn", {"data.bin": big, "more.bin": big[::-1]})
 """)
 
 
 def test_readers_never_see_half_an_entry_while_others_write_and_remove_it(folder):
-    serialized("churn", Builder())  # makes the folder; the writers replace the entry
-    key = serialized_key("churn")
+    key = store("churn")  # makes the folder; the writers replace the entry
     entry = folder / cache.LAYOUT / key
     readers = [subprocess.Popen([sys.executable, "-c", READER, str(entry), "2.5"], cwd=ROOT,
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -401,8 +437,7 @@ def _fill(folder: Path, count: int) -> list[str]:
     """``count`` entries, each used one minute after the one before."""
     keys = []
     for k in range(count):
-        serialized(f"fill{k}", Builder(f"f{k}"))  # all of the same size
-        keys.append(serialized_key(f"fill{k}"))
+        keys.append(store(f"fill{k}"))  # all of the same size
         os.utime(folder / cache.LAYOUT / keys[-1], (1e9 + 60 * k, 1e9 + 60 * k))
     return keys
 
@@ -412,12 +447,12 @@ def test_beyond_the_size_limit_the_least_recently_used_entries_go(folder):
     size = cache.entries()[0].size
     assert cache.load(keys[0]) is not None  # the oldest is used now: it stays
     with executing(cache_size=4 * size + size // 2):  # room for 4
-        serialized("fill4", Builder("f4"))
+        store("fill4")
     left = {e.key for e in cache.entries()}
-    assert left == {keys[0], keys[2], keys[3], serialized_key("fill4")}
+    assert left == {keys[0], keys[2], keys[3], cache.key("fill4")}
     with executing(cache_size=1):  # smaller than any entry: the limit holds
-        function = serialized("fill5", Builder("f5"))
-    assert cache.entries() == [] and values(function)[1] == pytest.approx(4.17)
+        store("fill5")
+    assert cache.entries() == []
 
 
 def test_clean_removes_everything_or_the_old_or_down_to_a_size(folder):
@@ -433,7 +468,7 @@ def test_clean_removes_everything_or_the_old_or_down_to_a_size(folder):
 
 
 def test_leftovers_of_processes_that_are_gone_are_removed(folder):
-    serialized("k11", Builder())
+    store("k11")
     layout = folder / cache.LAYOUT
     dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
                           capture_output=True, text=True, check=True).stdout.strip()
@@ -453,38 +488,33 @@ def test_the_cache_never_waits_for_the_disk(folder, monkeypatch):
         raise AssertionError("the cache flushed a file to the disk")
 
     monkeypatch.setattr(os, "fsync", no_sync)
-    build = Builder()
-    serialized("k13", build)
-    assert serialized("k13", build) is not None and build.calls == 1
+    assert cache.load(store("k13")) is not None
 
 
-def test_a_full_disk_while_storing_is_a_warning_and_the_function_is_returned(folder,
-                                                                             monkeypatch):
+def test_a_full_disk_while_storing_is_a_warning_and_nothing_is_kept(folder, monkeypatch):
     def full(*args):
         raise OSError(28, "No space left on device")
 
     monkeypatch.setattr(cache, "_publish", full)
-    build = Builder()
     with pytest.warns(cache.CacheWarning, match="No space left on device"):
-        function = serialized("k14", build)
-    assert values(function)[1] == pytest.approx(4.17) and cache.entries() == []
+        store("k14")
+    assert cache.entries() == []
     assert not [p for p in (folder / cache.LAYOUT).iterdir() if p.name.startswith(".")]
 
 
 
 def test_a_file_that_cannot_be_written_is_a_warning_at_the_callers_line(folder, monkeypatch):
     """A write that fails inside an entry (write_atomically's error, a full disk) is a
-    CacheWarning attributed to the code that asked for the Function, and the Function is
-    returned, not kept."""
+    CacheWarning attributed to the code that asked to keep the entry, and nothing is
+    kept."""
     def refused(path, *args, **kwargs):
         raise HexapodError(f"{path}: no space left on device")
 
     monkeypatch.setattr(cache, "write_atomically", refused)
-    build = Builder()
     with pytest.warns(cache.CacheWarning, match="not kept in the cache") as caught:
-        function = serialized("k15", build)
+        cache.keep(cache.key("k15"), "k15", {"data.bin": b"x"})
     assert caught[0].filename == __file__
-    assert values(function)[1] == pytest.approx(4.17) and cache.entries() == []
+    assert cache.entries() == []
 
 INTERRUPTED = textwrap.dedent("""
     import signal, sys

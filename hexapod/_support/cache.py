@@ -1,5 +1,5 @@
-"""A cache on disk of what is slow to build (compiled code, serialized CasADi Functions), kept
-under content hashes, so that the second run of the same model builds nothing.
+"""A cache on disk of what is slow to build (compiled code), kept under content hashes, so that
+the second run of the same model builds nothing.
 
 Off unless asked
 ----------------
@@ -24,11 +24,13 @@ versions it was made, the SHA-256 of every file). ``KEY`` is a SHA-256 of what t
 built from (:func:`key`). An entry is written in a staging folder (``FOLDER/v1/.staging-PID-*``)
 and renamed into place in one step, so that no process ever sees half of one; when two
 processes build the same entry at once, both succeed and the first one renamed is kept. An
-entry whose files do not match their checksums (corrupted, truncated, written by something
-else) is removed and built again; the cache never makes a computation fail. The last use of an
-entry is its folder's modification time, set at each use. Only folders it made itself are ever
-removed (``FOLDER`` may be shared with other files), and only a folder owned by the user and
-writable by nobody else is used (a cached library is code that runs).
+entry that fails its checks (files that do not match their checksums: corrupted, truncated,
+written by something else; a folder or file of another user, or that others may write; a link;
+anything but a plain file) is removed, said in a warning, and built again: the cache never
+makes a computation fail. The last use of an entry is its folder's modification time, set at
+each use. Only folders it made itself are ever removed (``FOLDER`` may be shared with other
+files), and only a folder owned by the user and writable by nobody else is used (a cached
+library is code that runs).
 
 Nothing here imports CasADi: :mod:`hexapod._support.compiled` puts CasADi Functions in the
 cache, and ``hexapod cache`` lists and cleans it.
@@ -37,12 +39,14 @@ cache, and ``hexapod cache`` lists and cleans it.
 from __future__ import annotations
 
 import contextlib
+import errno
 import functools
 import hashlib
 import json
 import os
 import re
 import shutil
+import stat
 import sys
 import tempfile
 import time
@@ -68,10 +72,11 @@ META = "meta.json"
 LEFTOVER_AGE = 24 * 3600.0
 
 _KEY = re.compile(r"[0-9a-f]{64}")
+_NO_FOLLOW = getattr(os, "O_NOFOLLOW", 0)
 _OFF = ("0", "off", "no", "false")
 _TAG = ("Signature: 8a477f597d28d172789f06886806bc55\n"
-        "# This file is a cache directory tag created by hexapod (compiled code and\n"
-        "# serialized functions, rebuilt when missing): see 'hexapod cache --help'.\n")
+        "# This file is a cache directory tag created by hexapod (compiled code,\n"
+        "# rebuilt when missing): see 'hexapod cache --help'.\n")
 
 
 class CacheWarning(UserWarning):
@@ -250,36 +255,90 @@ def _usable(root: Path) -> bool:
 
 
 def load(entry_key: str) -> tuple[Path, dict[str, bytes]] | None:
-    """The folder and files (name -> content) of the entry ``entry_key``, checked against their
-    checksums and marked as used now; None when there is none (or no cache). An entry that
-    fails its check is removed."""
+    """The folder and files (name -> content) of the entry ``entry_key``, checked and marked as
+    used now; None when there is none (or no cache).
+
+    An entry is read only when its folder and every file in it belong to this user, nobody
+    else may write them, no file is a link or larger than the cache's size limit, and every
+    file listed in ``meta.json`` matches its checksum. An entry that fails is removed, with a
+    :class:`CacheWarning` saying why (once), and the caller builds it again."""
     root = folder()
     if root is None or not _usable(root):
         return None
     path = _entries_folder(root) / entry_key
-    meta = _read_meta(path)
-    if not meta:
-        if path.exists():
-            discard(entry_key)
-        return None
-    files = {}
-    listed = meta.get("files")
     try:
-        if not isinstance(listed, dict) or not listed:
-            raise ValueError("no files listed")
-        for name, checksum in listed.items():
-            if not isinstance(name, str) or "/" in name or name in ("", ".", "..", META):
-                raise ValueError(f"bad file name {name!r}")
-            data = (path / name).read_bytes()
-            if hashlib.sha256(data).hexdigest() != checksum:
-                raise ValueError(f"{name} does not match its checksum")
-            files[name] = data
-    except (OSError, ValueError):
-        discard(entry_key)
+        status = os.lstat(path)
+    except OSError:  # no such entry
+        return None
+    try:
+        files = _read_entry(path, status, size_limit())
+    except FileNotFoundError:  # removed meanwhile by another process (or the meta missing)
+        if os.path.lexists(path) and not os.path.lexists(path / META):
+            reject(entry_key, "it has no meta.json")
+        return None
+    except (OSError, ValueError) as error:
+        reject(entry_key, str(error))
         return None
     with contextlib.suppress(OSError):
         os.utime(path)  # used now: the last to be evicted
     return path, files
+
+
+def _read_entry(path: Path, status: os.stat_result, largest: int) -> dict[str, bytes]:
+    """The files an entry's ``meta.json`` lists, each checked (see :func:`load`)."""
+    _check_private(status, "the entry's folder", directory=True)
+    try:
+        meta = json.loads(_read_private(path / META, largest))
+    except (UnicodeDecodeError, json.JSONDecodeError):
+        raise ValueError("its meta.json is not JSON") from None
+    listed = meta.get("files") if isinstance(meta, dict) else None
+    if not isinstance(listed, dict) or not listed:
+        raise ValueError("its meta.json lists no files")
+    files = {}
+    for name, checksum in listed.items():
+        if not isinstance(name, str) or "/" in name or name in ("", ".", "..", META):
+            raise ValueError(f"its meta.json lists a bad file name {name!r}")
+        data = _read_private(path / name, largest)
+        if hashlib.sha256(data).hexdigest() != checksum:
+            raise ValueError(f"{name} does not match its checksum")
+        files[name] = data
+    return files
+
+
+def _check_private(status: os.stat_result, what: str, *, directory: bool = False) -> None:
+    """Refuse what is not a plain file (a folder), or belongs to another user, or others may
+    write (``os.getuid`` missing: not a POSIX system, only the kind is checked)."""
+    kind = stat.S_ISDIR if directory else stat.S_ISREG
+    if not kind(status.st_mode):
+        raise ValueError(f"{what} is not a {'folder' if directory else 'plain file'}")
+    if hasattr(os, "getuid") and (status.st_uid != os.getuid() or status.st_mode & 0o022):
+        raise ValueError(f"{what} belongs to another user or others may write it")
+
+
+def _read_private(path: Path, largest: int) -> bytes:
+    """The content of ``path``, not followed if a link, checked as :func:`_check_private` and
+    no larger than ``largest`` bytes before it is read."""
+    try:  # a named pipe opens without waiting for a writer, and is refused below
+        handle = os.open(path, os.O_RDONLY | _NO_FOLLOW | getattr(os, "O_NONBLOCK", 0))
+    except OSError as error:
+        if error.errno == errno.ELOOP:
+            raise ValueError(f"{path.name} is a link") from None
+        raise
+    with os.fdopen(handle, "rb") as stream:
+        status = os.fstat(handle)
+        _check_private(status, path.name)
+        if status.st_size > largest:
+            raise ValueError(f"{path.name} is larger than the cache's size limit")
+        return stream.read()
+
+
+def reject(entry_key: str, reason: str) -> None:
+    """Remove the entry ``entry_key``, found damaged or not trusted (``reason``), saying so in a
+    :class:`CacheWarning`: it is built again."""
+    root = folder()
+    where = _entries_folder(root) / entry_key if root is not None else entry_key
+    _warn_once(f"cache entry {where} not used ({reason}): removed, it will be built again")
+    discard(entry_key)
 
 
 def discard(entry_key: str) -> None:

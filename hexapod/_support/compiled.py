@@ -1,11 +1,14 @@
-"""CasADi Functions built once and kept in the cache on disk (:mod:`hexapod._support.cache`):
-compiled to C as shared libraries, or serialized as they are.
+"""CasADi Functions compiled to C as shared libraries, kept in the cache on disk
+(:mod:`hexapod._support.cache`).
 
 One small API for every compiled kernel::
 
     function = compiled(key, build)      # a shared library: compiled in the first process only
-    function = serialized(key, build)    # the Function itself: its graph built once
     function = find_compiled(key)        # the library when one is cached, else None
+
+Only libraries are kept, never a serialized Function: CasADi's deserializer loads whatever
+library a serialized ``External`` names, so reading one back would run code from the cache
+folder, for a saving of a few tens of milliseconds of graph building.
 
 The cache is the execution setting's (:mod:`hexapod._support.execution`): without one, a
 library is compiled in a temporary folder, loaded and the folder removed, and nothing is kept.
@@ -24,8 +27,10 @@ fails is said in a :class:`CompilerWarning` and the interpreted Function is used
 from __future__ import annotations
 
 import contextlib
+import functools
 import os
 import shutil
+import struct
 import sys
 import warnings
 from collections.abc import Callable
@@ -43,8 +48,6 @@ COMPILER_FLAGS = ("-O2",)
 #: The files of a compiled entry: the library and the name of the Function it holds.
 LIBRARY, NAME = "library" + (".dll" if sys.platform == "win32" else
                              ".dylib" if sys.platform == "darwin" else ".so"), "name.txt"
-#: The file of a serialized entry.
-SERIALIZED = "function.casadi"
 
 
 class CompilerWarning(UserWarning):
@@ -75,11 +78,6 @@ def _machine() -> str:
     return platform.machine()
 
 
-def serialized_key(key: str) -> str:
-    """The cache key of ``key``'s serialized Function."""
-    return cache.key("serialized", key, f"casadi {ca.__version__}")
-
-
 def find_compiled(key: str | None) -> ca.Function | None:
     """The library of ``key`` when the cache holds one (loaded), else None."""
     command = compiler()
@@ -91,10 +89,56 @@ def find_compiled(key: str | None) -> ca.Function | None:
         return None
     path, files = found
     try:
-        return ca.external(files[NAME].decode("utf-8").strip(), str(path / LIBRARY))
-    except (KeyError, UnicodeDecodeError, RuntimeError):  # not a library CasADi can load
-        cache.discard(entry_key)
+        name = files[NAME].decode("ascii").strip()
+        if not name.isidentifier():
+            raise ValueError(f"{NAME} does not name a C function")
+        check_library(files[LIBRARY])
+        return ca.external(name, str(path / LIBRARY))
+    except KeyError as missing:
+        cache.reject(entry_key, f"it has no {missing}")
+    except (UnicodeDecodeError, ValueError, RuntimeError) as error:
+        cache.reject(entry_key, str(error).splitlines()[0])
+    return None
+
+
+def check_library(data: bytes) -> None:
+    """Raise ValueError unless ``data`` is a whole shared library for this machine: an ELF
+    file of this interpreter's class, byte order and processor whose headers and segments
+    all lie inside it. A truncated library would otherwise end the process when loaded (a bus
+    error, no message). Other formats (macOS, Windows) are left to the loader."""
+    if sys.platform in ("darwin", "win32"):
+        return
+    if data[:4] != b"\x7fELF" or len(data) < 64:
+        raise ValueError("the library is not an ELF file")
+    wide, order = data[4] == 2, "<" if data[5] == 1 else ">"
+    if wide != (sys.maxsize > 2**32) or order != ("<" if sys.byteorder == "little" else ">"):
+        raise ValueError("the library is for another kind of machine")
+    header = struct.unpack_from(order + ("HHIQQQIHHHHHH" if wide else "HHIIIIIHHHHHH"), data, 16)
+    kind, machine, phoff, shoff = header[0], header[1], header[4], header[5]
+    phentsize, phnum, shentsize, shnum = header[8], header[9], header[10], header[11]
+    if kind != 3 or machine != (_own_machine() or machine):  # 3: a shared object
+        raise ValueError("the library is not a shared object for this processor")
+    if phoff + phnum * phentsize > len(data) or shoff + shnum * shentsize > len(data):
+        raise ValueError("the library is truncated (its headers lie past its end)")
+    segment = order + ("IIQQQQQQ" if wide else "IIIIIIII")
+    for k in range(phnum):
+        fields = struct.unpack_from(segment, data, phoff + k * phentsize)
+        offset, size = (fields[2], fields[5]) if wide else (fields[1], fields[4])
+        if fields[0] in (1, 2) and offset + size > len(data):  # a loaded or dynamic segment
+            raise ValueError("the library is truncated (a segment lies past its end)")
+
+
+@functools.cache
+def _own_machine() -> int | None:
+    """The ELF processor number of this interpreter's executable (None: not an ELF file)."""
+    try:
+        with open(sys.executable, "rb") as stream:
+            head = stream.read(20)
+    except OSError:
         return None
+    if head[:4] != b"\x7fELF" or len(head) < 20:
+        return None
+    return struct.unpack_from("<H" if head[5] == 1 else ">H", head, 18)[0]
 
 
 def compiled(key: str | None, build: Callable[[], ca.Function], *,
@@ -172,23 +216,3 @@ def _run_compiler(arguments: list[str]) -> tuple[int, str]:
         process.wait()
         raise
     return process.returncode, said
-
-
-def serialized(key: str | None, build: Callable[[], ca.Function], *,
-               what: str = "") -> ca.Function:
-    """The Function ``build()`` makes, loaded from the cache when it holds the serialized
-    Function of ``key`` (no graph to build), else built and stored there; with ``key=None``,
-    ``build()`` alone."""
-    if key is None or cache.folder() is None:
-        return build()
-    entry_key = serialized_key(key)
-    found = cache.load(entry_key)
-    if found is not None:
-        try:
-            return ca.Function.deserialize(found[1][SERIALIZED].decode("ascii"))
-        except (KeyError, UnicodeDecodeError, RuntimeError):
-            cache.discard(entry_key)
-    function = build()
-    cache.keep(entry_key, f"{what or function.name()}, serialized",
-               {SERIALIZED: function.serialize()}, stacklevel=2)
-    return function

@@ -6,8 +6,8 @@ setting, chosen by the caller, never by the algorithms.
                           system's C compiler (``gcc`` or ``cc``), else (the default) by
                           CasADi's virtual machine. The same numbers either way, to round-off;
                           without a compiler the virtual machine is used
-``cache``                 a folder where what is slow to build (compiled libraries, serialized
-                          Functions) is kept between runs (:mod:`hexapod._support.cache`);
+``cache``                 a folder where compiled libraries are kept between runs
+                          (:mod:`hexapod._support.cache`);
                           ``None`` (the default): nothing is read from or written to disk
 ``cache_size``            the most the cache may hold, in bytes
 ========================  ==================================================================

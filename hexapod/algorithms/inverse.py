@@ -21,9 +21,9 @@ same results:
   differentiates it for velocities and accelerations, and a backward pass from the leaves gives
   each joint's wrench from its child's Newton-Euler equations. The whole pass is one CasADi
   Function, mapped over blocks of samples; its cost grows linearly with the number of bodies.
-  When the execution setting has a cache (:mod:`hexapod._support.execution`), it is kept
-  there under the model's content hash, serialized (another run of the same model does not
-  build its graph again) and, when compiled, as a library.
+  When it is compiled and the execution setting has a cache
+  (:mod:`hexapod._support.execution`), the library is kept there under the model's content
+  hash: another run of the same model compiles nothing.
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from hexapod._support import signals
-from hexapod._support.compiled import compiled, serialized
+from hexapod._support.compiled import compiled
 from hexapod._support.execution import current
 from hexapod._support.fastcall import InPlaceFunction
 from hexapod.errors import HexapodError
@@ -258,7 +258,7 @@ class TreePlan:
 
     @property
     def key(self) -> str | None:
-        """The key of the plan's Functions in the cache: the model's content hash and the
+        """The key of the plan's library in the cache: the model's content hash and the
         plan's name (None for a model without a content hash: nothing is cached)."""
         return f"{self.model.digest}/tree-inverse" if self.model.digest else None
 
@@ -271,10 +271,8 @@ class TreePlan:
     def function(self) -> ca.Function:
         """``(w, wd, wdd) -> (q, v, v_dot, wrench, rotation)`` for one sample: the joint wrenches
         (6 x J: force then moment about the joint origin, joint frame) and the joint frames'
-        rotations (9 x J, column-major). Read from the cache when the execution setting has
-        one and it holds the Function (no graph to build), else built (and kept there)."""
-        return serialized(self.key, lambda: ca.Function("tree_inverse", *self._expressions),
-                          what=self._what)
+        rotations (9 x J, column-major)."""
+        return ca.Function("tree_inverse", *self._expressions)
 
     @cached_property
     def compiled(self) -> ca.Function:

@@ -11,9 +11,9 @@ import time
 
 HELP = "what the cache of compiled code holds; clean it"
 DESCRIPTION = (
-    "The cache on disk keeps what is slow to build (compiled code, serialized CasADi Functions) "
-    "under the content hash of each model, so that the second run of the same model builds "
-    "nothing. Folder: HEXAPOD_CACHE_DIR, else $XDG_CACHE_HOME/hexapod, else ~/.cache/hexapod; "
+    "The cache on disk keeps compiled code under the content hash of each model, so that the "
+    "second compiled run of the same model compiles nothing. Folder: HEXAPOD_CACHE_DIR, else "
+    "$XDG_CACHE_HOME/hexapod, else ~/.cache/hexapod; "
     "HEXAPOD_CACHE=0 turns it off; at most HEXAPOD_CACHE_SIZE (default 1G), the entries used "
     "least recently removed beyond. 'info' (the default) lists it, 'clean' empties it.")
 

@@ -28,13 +28,10 @@ What a user waits for, start-up included: ``hexapod inverse MODEL.urdf --motion 
 (``scripts/peers/pinocchio_inverse.py``: the same files in, the same CSV out), on the front leg
 and the 18-joint hexapod (``--samples`` samples, default 1000), timed in the same run:
 
-* ``first``: an empty cache (a new cache folder each time): the graphs are built and the tree
-  Function is serialized into the cache, then evaluated by CasADi's virtual machine;
-* ``cached``: the cache the first run left: the Function read back (no graph built), as every
-  later run of the model;
+* ``interpreted``: the default, evaluated by CasADi's virtual machine (nothing is cached:
+  only compiled libraries are);
 * ``compiled``: ``--compile yes`` with the cache holding the optimized (``-O2``) library (put
   there beforehand by a compiled run), which later compiled runs then load;
-* ``off``: ``HEXAPOD_CACHE=0``, everything built in the process (hexapod without a cache);
 * Pinocchio's script.
 
 Each is run ``--runs`` times (default 7), interleaved, after one warm-up run of each; the table
@@ -43,7 +40,7 @@ gives the minimum and the median wall time of the processes, the minimum of thei
 Pinocchio's.
 Everything is written in a temporary folder: the models, the outputs, the caches, and Python's
 bytecode of both programs (``PYTHONPYCACHEPREFIX``, so that neither recompiles its modules on
-each run, whatever ``PYTHONDONTWRITEBYTECODE`` says). Target: the cached runs at most 1.0x.
+each run, whatever ``PYTHONDONTWRITEBYTECODE`` says).
 POSIX only (the CPU time of child processes).
 
     python3 scripts/benchmarks/bench_inverse.py --whole-command [--samples 1000] [--runs 7]
@@ -221,22 +218,19 @@ def whole_commands(name: str, folder: Path, args) -> dict:
     env.update(PYTHONPYCACHEPREFIX=str(folder / "bytecode"), OPENBLAS_NUM_THREADS="1")
     inverse = [sys.executable, "-m", "hexapod", "inverse", str(urdf), "--motion", str(motion),
                "--out"]
-    kept = dict(env, HEXAPOD_CACHE_DIR=str(base) + "-cache")
     compiled = dict(env, HEXAPOD_CACHE_DIR=str(base) + "-compiled")
     subprocess.run([sys.executable, "-c", PRIME, str(urdf), str(motion),
                     compiled["HEXAPOD_CACHE_DIR"]], env=compiled, check=True)
     commands = {
-        "first": lambda k: (inverse + [f"{base}-first.csv"],
-                            dict(env, HEXAPOD_CACHE_DIR=f"{base}-empty-{k}")),
-        "cached": lambda k: (inverse + [f"{base}-cached.csv"], kept),
+        "interpreted": lambda k: (inverse + [f"{base}-interpreted.csv"],
+                                  dict(env, HEXAPOD_CACHE_DIR=f"{base}-empty-{k}")),
         "compiled": lambda k: (inverse + [f"{base}-compiled.csv", "--compile", "yes"],
                                compiled),
-        "off": lambda k: (inverse + [f"{base}-off.csv"], dict(env, HEXAPOD_CACHE="0")),
         "pinocchio": lambda k: ([sys.executable, str(PEERS / "pinocchio_inverse.py"),
                                  str(urdf), str(motion), f"{base}-pinocchio.csv"], env),
     }
     times: dict[str, list[tuple[float, float]]] = {mode: [] for mode in commands}
-    for k in range(args.runs + 1):  # the first round warms up (bytecode, the first cache)
+    for k in range(args.runs + 1):  # the first round warms up (bytecode)
         for mode, command in commands.items():
             argv, variables = command(k)
             measured = run_process(argv, folder, variables)
@@ -266,7 +260,7 @@ def whole_command_study(args) -> None:
             from None
     with tempfile.TemporaryDirectory(prefix="hexapod-whole-") as scratch:
         rows = [whole_commands(name, Path(scratch), args) for name in WHOLE_MODELS]
-    modes = ("pinocchio", "first", "cached", "compiled", "off")
+    modes = ("pinocchio", "interpreted", "compiled")
     print(f"whole processes, {args.samples} samples, {args.runs} runs each. Seconds: wall "
           "time min / median, CPU time min; ratios to Pinocchio's script: wall min / wall "
           "median / CPU min (CPU time is the steadier on a shared machine)")
@@ -289,7 +283,7 @@ def main() -> None:
     parser.add_argument("--chains", type=int, nargs="*", default=[10, 30, 100, 300])
     parser.add_argument("--vm", action="store_true", help="also time the interpreted path")
     parser.add_argument("--whole-command", action="store_true", help="time whole processes "
-                        "of 'hexapod inverse' (first run, cached runs) against Pinocchio's "
+                        "of 'hexapod inverse' (interpreted, compiled) against Pinocchio's "
                         "whole script instead (see the module docstring)")
     parser.add_argument("--runs", type=int, default=7, help="--whole-command: processes per "
                         "mode (default 7)")
