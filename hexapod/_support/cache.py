@@ -232,8 +232,10 @@ def entries(root: Path | None = None, *, describe: bool = False) -> list[Entry]:
 
 
 def _read_meta(path: Path) -> dict:
+    """An entry's ``meta.json`` ({} when it cannot be read: not a plain file of this user's,
+    not JSON, or over a megabyte)."""
     try:
-        meta = json.loads((path / META).read_text(encoding="utf-8"))
+        meta = json.loads(_read_private(path / META, 2**20))
     except (OSError, ValueError):
         return {}
     return meta if isinstance(meta, dict) else {}
