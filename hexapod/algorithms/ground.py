@@ -11,8 +11,15 @@ chooses ``z``:
 * ``friction``: the same least effort subject to ``F_n >= w F_min`` and ``|F_t| <= mu F_n`` for
   every foot in stance (a pyramid of ``faces`` faces inscribed in the cone, by DAQP, or the
   exact cone, by IPOPT, both through CasADi). Where no force satisfies them all, the least
-  violation is returned and the feet that would slip or pull are named (``data.ground_status``),
-  never a silent clamp.
+  violation is returned, never a silent clamp.
+
+Whatever the policy, each foot's status says whether the ground can give the force it gets
+(:func:`feet_status`): ``pull`` where its normal force falls below its least normal force
+(zero unless the scene sets ``min_normal``), ``slip`` where its tangential force exceeds ``mu``
+times the normal force (the exact cone, the scene's ``mu``, 0.8 by default), each beyond
+:data:`VIOLATION_TOL` of the robot's weight; else ``ok`` (``swing`` off the ground). The
+least-wrench and least-effort policies ignore friction and can ask the ground to pull: their
+statuses are how a user learns it.
 
 Load sharing: a foot of weight ``w`` (:meth:`hexapod.model.model.ContactInfo.weight`) adds
 ``(1 / w - 1) |F / (m g)|^2`` to the effort objectives (``m g`` the robot's weight), and its
@@ -31,7 +38,8 @@ from hexapod.model.model import Model
 
 #: Below this weight a foot carries nothing.
 NO_LOAD = 1e-12
-#: Relative violation above which the friction policy reports a foot as slipping or pulling.
+#: Violation, relative to the robot's weight, above which a foot is reported as slipping or
+#: pulling (round-off in the forces stays some five orders below it).
 VIOLATION_TOL = 1e-7
 
 
@@ -96,17 +104,60 @@ def policy_objective(model: Model, data, q: np.ndarray, Phi_v, Q_across,
                                 terms.offset(data, q, Q_across), feet))
 
 
+def feet_status(model: Model, times: np.ndarray, forces: np.ndarray) -> np.ndarray:
+    """Each foot's status at each sample, from the ground's forces on the feet.
+
+    Parameters
+    ----------
+    model : Model
+        A model with foot contacts (its ``ground`` gives ``mu`` and ``min_normal``).
+    times : ndarray, shape (N,)
+        s.
+    forces : ndarray, shape (N, C, 3)
+        The ground's force on each foot, N, world axes (z the ground's normal).
+
+    Returns
+    -------
+    ndarray, shape (N, C), of str
+        ``swing`` (not in stance), ``pull`` (normal force below the foot's least normal force,
+        ``min_normal`` times its load-sharing weight), ``slip`` (tangential force above ``mu``
+        times the normal force), else ``ok``; each beyond :data:`VIOLATION_TOL` of the
+        robot's weight.
+    """
+    times = np.atleast_1d(np.asarray(times, dtype=float))
+    forces = np.asarray(forces, dtype=float).reshape(times.size, len(model.contacts), 3)
+    stance = np.array([[bool(c.in_stance(t)) for c in model.contacts] for t in times.tolist()],
+                      dtype=bool).reshape(forces.shape[:2])
+    weights = np.array([contact_weights(model, t) for t in times.tolist()]).reshape(stance.shape)
+    weights = sharing_weights(weights.T, stance.T).T
+    ground = model.ground
+    tolerance = VIOLATION_TOL * (robot_weight(model) or 1.0)
+    normal, tangential = forces[..., 2], np.hypot(forces[..., 0], forces[..., 1])
+    status = np.where(stance, "ok", "swing").astype("<U5")
+    status[stance & (tangential > ground.mu * np.maximum(normal, 0.0) + tolerance)] = "slip"
+    status[stance & (normal < weights * ground.min_normal - tolerance)] = "pull"
+    return status
+
+
 def share_ground_forces(model: Model, data, t: float, q: np.ndarray, Phi_v: np.ndarray,
                         Q_across: np.ndarray | None, split: RowSplit,
                         lam: np.ndarray) -> tuple[np.ndarray, tuple[str, ...]]:
     """The multipliers chosen by the scene's ground-force policy among ``lam + N z``, and each
-    contact's status (``swing``, ``ok``, ``slip``, ``pull``)."""
+    contact's status (:func:`feet_status`)."""
+    chosen = _policy_multipliers(model, data, t, q, Phi_v, Q_across, split, lam)
+    status = feet_status(model, np.array([t]), ground_reactions(model, chosen)[None])[0]
+    return chosen, tuple(status.tolist())
+
+
+def _policy_multipliers(model: Model, data, t: float, q: np.ndarray, Phi_v: np.ndarray,
+                        Q_across: np.ndarray | None, split: RowSplit,
+                        lam: np.ndarray) -> np.ndarray:
+    """The multipliers among ``lam + N z`` of least policy objective."""
     stance = np.array([bool(c.in_stance(t)) for c in model.contacts])
-    status = ["ok" if down else "swing" for down in stance]
     weights = sharing_weights(contact_weights(model, t), stance)
     N = multiplier_null_space(split, model.n_c)
     if N.shape[1] == 0:
-        return lam, tuple(status)
+        return lam
     # feet of weight zero carry nothing: lam + N z = 0 on their rows
     idle = [c.rows for c, w in zip(model.contacts, weights, strict=True) if w <= NO_LOAD]
     if idle:
@@ -121,15 +172,10 @@ def share_ground_forces(model: Model, data, t: float, q: np.ndarray, Phi_v: np.n
     AK, r = A @ NK, A @ base + b
     policy = model.ground.policy
     if NK.shape[1] == 0:  # the feet that carry nothing take up all the freedom
-        return base, tuple(status)
+        return base
     if policy != "friction":
-        y = np.linalg.lstsq(AK, -r, rcond=None)[0]
-        return base + NK @ y, tuple(status)
-    y, flags = _friction(model, weights, base, NK, AK, r)
-    for k, flag in enumerate(flags):
-        if flag:
-            status[k] = flag
-    return base + NK @ y, tuple(status)
+        return base + NK @ np.linalg.lstsq(AK, -r, rcond=None)[0]
+    return base + NK @ _friction(model, weights, base, NK, AK, r)
 
 
 def _orthonormal(B: np.ndarray) -> np.ndarray:
@@ -156,7 +202,7 @@ _SOLVERS: dict = {}
 
 def _friction(model: Model, weights, base, NK, AK, r):
     """``y`` of least ``|AK y + r|^2`` with every loaded foot's force ``F = F0 + G y`` inside
-    its cone and above its least normal force; flags per contact."""
+    its cone and above its least normal force (of least violation where none is)."""
     ground = model.ground
     loaded = [k for k, w in enumerate(weights) if w > NO_LOAD]
     F0 = {k: -base[model.contacts[k].rows] for k in loaded}
@@ -165,20 +211,12 @@ def _friction(model: Model, weights, base, NK, AK, r):
     H = AK.T @ AK
     g = AK.T @ r
     reference = robot_weight(model) or 1.0  # the forces' scale
-    y, violation = _solve_cone(ground, loaded, weights, F0, G, H, g, n, reference)
-    flags = [""] * len(model.contacts)
-    for k in loaded:
-        normal, tangential = violation[k]
-        if normal > VIOLATION_TOL * reference:
-            flags[k] = "pull"
-        elif tangential > VIOLATION_TOL * reference:
-            flags[k] = "slip"
-    return y, flags
+    return _solve_cone(ground, loaded, weights, F0, G, H, g, n, reference)
 
 
 def _solve_cone(ground, loaded, weights, F0, G, H, g, n, reference):
     """The constrained least-effort ``y``; when no ``y`` is admissible, the one of least
-    violation (normal and tangential slacks per foot, in N), and the violations."""
+    violation (slacks on the normal and tangential conditions)."""
     key = (ground.faces, n, len(loaded))
     if key not in _SOLVERS:
         _SOLVERS[key] = _build_solver(ground.faces, n, len(loaded))
@@ -192,23 +230,7 @@ def _solve_cone(ground, loaded, weights, F0, G, H, g, n, reference):
     y, ok = solver(*params)
     if not ok:
         y, _ = relaxed(*params)
-    F = {k: F0[k] + G[k] @ y for k in loaded}
-    violation = {}
-    for i, k in enumerate(loaded):
-        normal = max(0.0, minimum[i] - F[k][2])
-        limit = mu * (np.cos(np.pi / ground.faces) if ground.faces else 1.0) * F[k][2]
-        tangential = max(0.0, _tangential(F[k], ground.faces) - max(limit, 0.0))
-        violation[k] = (normal, tangential)
-    return y, violation
-
-
-def _tangential(F, faces) -> float:
-    """The tangential force as the cone measures it: the largest face projection of the
-    pyramid, or the norm for the exact cone."""
-    if not faces:
-        return float(np.hypot(F[0], F[1]))
-    angles = 2 * np.pi * (np.arange(faces) + 0.5) / faces
-    return float(np.max(np.cos(angles) * F[0] + np.sin(angles) * F[1]))
+    return y
 
 
 def _build_solver(faces: int, n: int, feet: int):

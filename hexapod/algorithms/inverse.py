@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
 
 import casadi as ca
@@ -83,8 +83,9 @@ class InverseResult:
     ground_force : ndarray (N, C, 3)
         The ground's force on each foot, N, world axes (zero in swing).
     ground_status : ndarray (N, C) of str
-        ``swing``, ``ok``, or where the friction policy found no admissible force, ``slip`` or
-        ``pull`` (see :mod:`hexapod.algorithms.ground`).
+        Whatever the policy, whether the ground can give each foot its force:
+        ``swing``, ``ok``, ``slip`` (outside the friction cone of the scene's ``mu``) or
+        ``pull`` (the ground pulling the foot) (:func:`hexapod.algorithms.ground.feet_status`).
     policy : str
         The ground-force policy of the model (empty without contacts).
     """
@@ -183,6 +184,10 @@ def inverse_dynamics(model: Model, times: ArrayLike, *, method: str = "auto", fr
     else:
         result = _saddle(model, data, times, frame, progress)
     _check_finite(model, result)
+    if model.contacts:  # whatever the path and the policy: can the ground give these forces?
+        from hexapod.algorithms.ground import feet_status
+
+        result = replace(result, ground_status=feet_status(model, times, result.ground_force))
     return result
 
 
@@ -209,8 +214,7 @@ def _phase(model, data, times, w, wd, wdd, frame, progress) -> InverseResult:
                          fields["torque"], fields["effort"], fields["q"], fields["v"],
                          fields["v_dot"], frame, "phase", fields["max_violation"],
                          fields["redundant_rows"], tuple(c.name for c in model.contacts),
-                         fields["ground"], fields["status"],
-                         model.ground.policy if model.contacts else "")
+                         fields["ground"], None, model.ground.policy if model.contacts else "")
 
 
 def _saddle(model, data, times, frame, progress) -> InverseResult:
@@ -223,7 +227,6 @@ def _saddle(model, data, times, frame, progress) -> InverseResult:
     Q, V, A = np.zeros((n, model.n_q)), np.zeros((n, model.n_v)), np.zeros((n, model.n_v))
     redundant: list[str] = []
     ground = np.zeros((n, len(model.contacts), 3))
-    status = np.full((n, len(model.contacts)), "swing", dtype=object)
     worst = 0.0
     for k, t in enumerate(times):
         sample = exact_sample(model, data, times[k - 1] if k else t,
@@ -232,7 +235,7 @@ def _saddle(model, data, times, frame, progress) -> InverseResult:
         Q[k], V[k], A[k] = sample.q, sample.v, sample.v_dot
         force[k], torque[k], effort[k] = sample.force, sample.torque, sample.effort
         if model.contacts:
-            ground[k], status[k] = sample.ground, sample.status
+            ground[k] = sample.ground
         worst = max(worst, sample.violation)
         redundant += [name for name in sample.redundant if name not in redundant]
         if signals.received() is not None:  # an interruption a library call swallowed
@@ -242,8 +245,7 @@ def _saddle(model, data, times, frame, progress) -> InverseResult:
     contacts = tuple(c.name for c in model.contacts)
     return InverseResult(times, tuple(j.name for j in model.joints), force, torque, effort,
                          Q, V, A, frame, "saddle", worst, tuple(redundant), contacts,
-                         ground, status.astype(str),
-                         model.ground.policy if model.contacts else "")
+                         ground, None, model.ground.policy if model.contacts else "")
 
 
 # ------------------------------------------------------------------ the tree path

@@ -117,7 +117,6 @@ class _Results:
         self.v_dot = np.zeros((n, model.n_v))
         self.force, self.torque = np.zeros((n, J, 3)), np.zeros((n, J, 3))
         self.effort, self.ground = np.zeros((n, J)), np.zeros((n, C, 3))
-        self.status = np.full((n, C), "swing", dtype=object)
         self.violation = np.zeros(n)
         # the joint frames of the compiled samples, kept for world axes only
         self.frames = np.zeros((n, J, 9)) if world else None
@@ -129,7 +128,7 @@ class _Results:
         self.force[k], self.torque[k], self.effort[k] = (sample.force, sample.torque,
                                                          sample.effort)
         if sample.ground.size:
-            self.ground[k], self.status[k] = sample.ground, sample.status
+            self.ground[k] = sample.ground
         self.violation[k] = sample.violation
         self.name(sample.redundant)
         self.exact[k] = True
@@ -190,7 +189,7 @@ def phase_inverse(model: Model, data: Data, times: np.ndarray, w, wd, wdd, frame
         _friction(model, data, out, feet, times, frame)
     return {"q": out.q, "v": out.v, "v_dot": out.v_dot, "force": out.force,
             "torque": out.torque, "effort": out.effort, "ground": out.ground,
-            "status": out.status.astype(str), "max_violation": float(out.violation.max()),
+            "max_violation": float(out.violation.max()),
             "redundant_rows": tuple(out.redundant), "exact_samples": int(out.exact.sum())}
 
 
@@ -311,7 +310,6 @@ def _run(plan: PhasePlan, data: Data, newton: int, out: _Results, feet: _Feet, t
     out.violation[done] = checks[:count, 0]
     for c, contact in enumerate(model.contacts):
         out.ground[done, c] = -lam[:count][:, contact.rows]
-        out.status[done, c] = np.where(feet.stance[c, done], "ok", "swing")
     if count:
         out.name([model.rows[i].name for i in plan.left_out])
     if count == stop - k:

@@ -36,7 +36,6 @@ class SampleResult:
     torque: np.ndarray
     effort: np.ndarray
     ground: np.ndarray
-    status: tuple[str, ...]
     violation: float
     redundant: tuple[str, ...]
 
@@ -69,14 +68,13 @@ def exact_forces(model: Model, data: Data, t: float, q: np.ndarray, v: np.ndarra
     wrenches = joint_wrenches(model, data, frame=frame)
     ground = (ground_reactions(model, data.lam) if model.contacts
               else np.zeros((0, 3)))
-    status = data.ground_status if model.contacts else ()
     violation = 0.0
     if model.n_c:
         violation = float(np.max(np.abs(model.call("phi", data, q=q, w=data.w)
                                          / model.row_scale)))
     redundant = tuple(model.rows[i].name for i in data.redundant_rows)
     return SampleResult(q, v, v_dot, data.lam, wrenches.force, wrenches.torque,
-                        wrenches.effort, ground, tuple(status), violation, redundant)
+                        wrenches.effort, ground, violation, redundant)
 
 
 def require_prescribed(model: Model, data: Data, t: float, q: np.ndarray) -> None:

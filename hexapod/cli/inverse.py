@@ -23,7 +23,8 @@ DESCRIPTION = (
     "Ty, Tz:<joint>, the wrench by the parent on the child about the joint origin in the child's "
     "joint frame (N, N m); for a scene with foot contacts (a walking robot) then GRx, GRy, "
     "GRz:LEG, the ground's force on each foot in world axes (N, zero in swing; LEG is the "
-    "contact's name without '/ground'). Each column's unit is in OUT.units.json, written "
+    "contact's name without '/ground'), and status:LEG, whether the ground can give it (0 "
+    "swing, 1 ok, 2 slip, 3 pull). Each column's unit is in OUT.units.json, written "
     "beside it. The files are written whole or not at all.")
 
 

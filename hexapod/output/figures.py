@@ -245,16 +245,20 @@ def _shade(ax, intervals) -> None:
 
 
 def ground_reaction_figure(times: np.ndarray, forces: np.ndarray, legs: list[str],
-                           stance: list, weight: float, title: str):
+                           stance: list, weight: float, title: str,
+                           status: np.ndarray | None = None):
     """The ground's force on each foot against time, one panel per foot placed as the legs
     stand (left column ``L1 L2 L3``, right column ``R1 R2 R3``), as in the ground-reaction
     figures of cockroach locomotion (Full and Tu 1991): vertical (``GRz``), fore-aft (``GRx``)
     and lateral (``GRy``, to the left positive) components in N, stance shaded grey; a right
     axis in body weights when ``weight`` (N) is positive. ``forces`` (N, feet, 3), world axes;
-    ``stance``: per foot, its (touch-down, lift-off) intervals."""
+    ``stance``: per foot, its (touch-down, lift-off) intervals; ``status`` (N, feet), where
+    given: the samples where a foot slips or pulls are hatched red (infeasible)."""
     figure, axes = _leg_panels(legs, title)
     for k, (ax, leg) in enumerate(zip(axes, legs, strict=True)):
         _shade(ax, stance[k])
+        if status is not None:
+            _hatch_infeasible(ax, times, np.isin(status[:, k], ("slip", "pull")))
         ax.axhline(0.0, color="0.4", linewidth=0.6)
         ax.plot(times, forces[:, k, 2], color="black", linewidth=1.6, label="vertical (z)")
         ax.plot(times, forces[:, k, 0], color="tab:red", linewidth=1.1, label="fore-aft (x)")
@@ -269,6 +273,19 @@ def ground_reaction_figure(times: np.ndarray, forces: np.ndarray, legs: list[str
             right.tick_params(labelsize=8)
     axes[0].legend(fontsize=7, loc="best")
     return figure
+
+
+def _hatch_infeasible(ax, times: np.ndarray, bad: np.ndarray) -> None:
+    """Hatch each run of infeasible samples, from half a spacing before it to half after."""
+    if not bad.any():
+        return
+    edges = np.concatenate([[times[0]], (times[1:] + times[:-1]) / 2, [times[-1]]])
+    starts = np.flatnonzero(bad & ~np.concatenate([[False], bad[:-1]]))
+    stops = np.flatnonzero(bad & ~np.concatenate([bad[1:], [False]]))
+    for first, last in zip(starts, stops, strict=True):
+        ax.axvspan(edges[first], edges[last + 1], facecolor="none", edgecolor="tab:red",
+                   hatch="///", linewidth=0, zorder=0.5, label=None if first != starts[0]
+                   else "infeasible (slip / pull)")
 
 
 def friction_ratio_figure(times: np.ndarray, ratio: np.ndarray, status: np.ndarray,

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hexapod.algorithms.ground import VIOLATION_TOL, robot_weight
+from hexapod.algorithms.ground import robot_weight
 from hexapod.algorithms.inverse import InverseResult
 from hexapod.algorithms.kinematics import body_poses
 from hexapod.model.model import Model
@@ -36,12 +36,28 @@ def leg_name(contact: str) -> str:
     return contact[:-len(CONTACT_SUFFIX)] if contact.endswith(CONTACT_SUFFIX) else contact
 
 
+#: The feet's statuses as numbers, in the inverse CSV's ``status:<leg>`` columns.
+STATUS_CODES = {"swing": 0, "ok": 1, "slip": 2, "pull": 3}
+
+
 def ground_columns(model: Model) -> Columns:
-    """``GRx:<leg>``, ``GRy:<leg>``, ``GRz:<leg>`` per contact, in model order (none without
-    contacts), with their unit and meaning."""
-    return {f"{c}:{leg_name(contact.name)}": ("N", f"the ground's force on the foot, world "
-                                                   f"{c[-1]} (zero in swing)")
-            for contact in model.contacts for c in GROUND_COMPONENTS}
+    """``GRx:<leg>``, ``GRy:<leg>``, ``GRz:<leg>`` per contact, then ``status:<leg>`` per
+    contact, in model order (none without contacts), with their unit and meaning."""
+    legs = [leg_name(contact.name) for contact in model.contacts]
+    codes = ", ".join(f"{code} {name}" for name, code in STATUS_CODES.items())
+    return {**{f"{c}:{leg}": ("N", f"the ground's force on the foot, world {c[-1]} (zero in "
+                                   "swing)") for leg in legs for c in GROUND_COMPONENTS},
+            **{f"status:{leg}": ("1", f"whether the ground can give the foot its force: "
+                                      f"{codes} (outside the friction cone; the ground pulling "
+                                      "the foot)") for leg in legs}}
+
+
+def status_codes(status: np.ndarray) -> np.ndarray:
+    """The statuses (``swing``, ``ok``, ``slip``, ``pull``) as their :data:`STATUS_CODES`."""
+    out = np.zeros(np.shape(status))
+    for name, code in STATUS_CODES.items():
+        out[np.asarray(status) == name] = code
+    return out
 
 
 @dataclass(frozen=True)
@@ -61,7 +77,8 @@ class FootLoads:
         ``|F_t| / (mu F_n)``: NaN where the foot carries nothing (swing, touch-down,
         lift-off), infinite where the ground would pull a loaded foot (``F_n <= 0``).
     status : ndarray (N, C) of str
-        The policy's status: ``swing``, ``ok``, ``slip``, ``pull``.
+        Whether the ground can give each foot its force, whatever the policy: ``swing``,
+        ``ok``, ``slip``, ``pull`` (:func:`hexapod.algorithms.ground.feet_status`).
     stance : list of list of (float, float)
         Per foot, its stance intervals within the samples' span.
     mu : float
@@ -106,7 +123,8 @@ GROUND_CSV_QUANTITIES = {
     "Fn": ("N", "normal force of the ground on the foot (GRz)"),
     "Ft": ("N", "tangential force of the ground on the foot, |(GRx, GRy)|"),
     "ratio": ("1", "friction ratio |F_t| / (mu F_n); nan where the foot carries nothing"),
-    "status": (None, "the friction policy's status: swing, ok, slip or pull"),
+    "status": (None, "swing, ok, slip (outside the friction cone) or pull (the ground pulling "
+               "the foot), whatever the policy"),
 }
 
 
@@ -131,9 +149,8 @@ def ground_csv_text(loads: FootLoads) -> str:
 
 @dataclass(frozen=True)
 class FootEvent:
-    """A run of consecutive samples where a foot is in one trouble: ``slip`` or ``pull`` (the
-    friction policy's status), ``outside the cone`` (friction ratio above 1) or ``pulled``
-    (the ground pulling a loaded foot, ``F_n < 0``)."""
+    """A run of consecutive samples where a foot is in one trouble: ``slip`` or ``pull`` (its
+    status)."""
 
     leg: str
     kind: str
@@ -160,20 +177,9 @@ def describe_events(events: list[FootEvent]) -> list[str]:
 
 
 def foot_events(loads: FootLoads) -> list[FootEvent]:
-    """Every run of samples where a foot slips or pulls (policy status), or where its force
-    lies outside the friction cone or pulls it (as the forces stand, whatever the policy; by
-    more than the friction policy's own tolerance,
-    :data:`hexapod.algorithms.ground.VIOLATION_TOL` of the robot's weight), foot by foot in
-    time order."""
-    tol = VIOLATION_TOL * (loads.weight if loads.weight > 0 else 1.0)
-    flagged = np.isin(loads.status, ("slip", "pull"))  # said once, by the policy's word
-    kinds = {
-        "slip": loads.status == "slip",
-        "pull": loads.status == "pull",
-        "outside the friction cone": (loads.tangential - loads.mu * loads.normal > tol)
-        & ~flagged,
-        "pulled by the ground": (loads.normal < -tol) & ~flagged,
-    }
+    """Every run of samples where a foot slips or pulls (its status), foot by foot in time
+    order."""
+    kinds = {kind: loads.status == kind for kind in ("slip", "pull")}
     out = []
     for c, leg in enumerate(loads.legs):
         for kind, flags in kinds.items():

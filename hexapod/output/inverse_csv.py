@@ -7,7 +7,9 @@ the joint origin, in the child's joint frame (or world axes on request). Fixed j
 other joints without an axis have the force and moment columns without ``tau``. A model with
 foot contacts (a walking robot) has, after the joints' columns, ``GRx:<leg>``, ``GRy:<leg>``,
 ``GRz:<leg>`` per contact: the ground's force on the foot in world axes (N), zero in swing,
-``<leg>`` the contact's name without its ``/ground`` suffix. Numbers are written with 17
+``<leg>`` the contact's name without its ``/ground`` suffix, then ``status:<leg>`` per contact:
+whether the ground can give the foot its force, as a number (0 swing, 1 ok, 2 slip: outside
+the friction cone, 3 pull: the ground pulling the foot). Numbers are written with 17
 significant digits, so they read back exactly. Each column's unit and meaning
 (:func:`inverse_column_units`) are written beside the CSV: ``OUT.units.json`` for ``hexapod
 inverse``, ``units.json`` in the report's directory (``docs/outputs.md``).
@@ -56,7 +58,8 @@ def inverse_columns(model: Model) -> list[str]:
     -------
     list of str
         ``t``, then ``tau:<joint>`` (joints with a coordinate), ``Fx:<joint> .. Tz:<joint>``
-        per joint, then ``GRx:<leg> .. GRz:<leg>`` per foot contact (the module's description).
+        per joint, then ``GRx:<leg> .. GRz:<leg>`` and ``status:<leg>`` per foot contact (the
+        module's description).
     """
     return list(inverse_column_units(model))
 
@@ -84,8 +87,11 @@ def inverse_table(model: Model, result: InverseResult) -> np.ndarray:
         if result.ground_force is None:
             raise HexapodError(f"model '{model.name}' has foot contacts but the result has no "
                                "ground forces")
+        from hexapod.output.ground import status_codes
+
         # + 0.0: zero in swing written 0, not -0
         columns.append(np.asarray(result.ground_force).reshape(result.times.size, -1) + 0.0)
+        columns.append(status_codes(result.ground_status))
     return np.hstack(columns)
 
 

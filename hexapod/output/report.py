@@ -409,13 +409,34 @@ def _ground_section(model: Model, result: InverseResult, loads: FootLoads) -> li
         ["foot", "in stance (% of samples)", "peak \\|F\\| (N)", "peak \\|F\\| (body weights)",
          "at t (s)", "peak F_n (N)", "peak \\|F_t\\| (N)", "peak friction ratio", "at t (s)"],
         rows)
+    return lines + _feasibility_lines(loads)
+
+
+def _feasibility_lines(loads: FootLoads) -> list[str]:
+    """Whether the ground can give the feet their forces, whatever the policy: a verdict, and
+    for a foot that slips or pulls its counts, first time and worst margins."""
     events = foot_events(loads)
-    lines += ["", "Slip and pull: " + ("none: every loaded foot's force is inside the friction "
-                                      "cone and presses on the ground." if not events else
-                                      f"{_count(len(events), 'run')} of samples:")]
-    if events:
-        lines += [""] + [f"- {phrase}" for phrase in describe_events(events)]
-    return lines
+    if not events:
+        return ["", "Feasible: at every sample every loaded foot's force presses on the ground "
+                f"and lies inside the friction cone of mu = {loads.mu:g}."]
+    bad = np.isin(loads.status, ("slip", "pull"))
+    lines = ["", f"**Infeasible**: at {int(bad.any(axis=1).sum())} of {bad.shape[0]} samples "
+             "the ground cannot give these forces: a foot slips (tangential force beyond mu "
+             "times the normal force) or the ground would have to pull it. A robot moving so "
+             "would slip or leave the ground; its efforts are not ones to size motors by.", ""]
+    rows = []
+    for c, leg in enumerate(loads.legs):
+        if not bad[:, c].any():
+            continue
+        first = float(loads.times[int(np.argmax(bad[:, c]))])
+        ratio = loads.ratio[:, c][np.isfinite(loads.ratio[:, c])]
+        rows.append([leg, str(int(np.sum(loads.status[:, c] == "slip"))),
+                     str(int(np.sum(loads.status[:, c] == "pull"))), f"{first:.4g}",
+                     _g(float(ratio.max())) if ratio.size else "-",
+                     _g(float(loads.normal[:, c].min()))])
+    lines += _markdown_table(["foot", "slip samples", "pull samples", "first at t (s)",
+                              "worst friction ratio", "least F_n (N)"], rows)
+    return lines + ["", *(f"- {phrase}" for phrase in describe_events(events))]
 
 
 def _trunk_section(trunks: list[TrunkMotion]) -> list[str]:
@@ -516,7 +537,8 @@ def _ground_figures(model: Model, loads: FootLoads, scene: str) -> dict:
     return {
         "ground.png": ground_reaction_figure(
             t, loads.force, legs, loads.stance, loads.weight,
-            f"{scene}: the ground's force on each foot (stance shaded; policy {loads.policy})"),
+            f"{scene}: the ground's force on each foot (stance shaded, infeasible hatched; "
+            f"policy {loads.policy})", loads.status),
         "friction.png": friction_ratio_figure(
             t, loads.ratio, loads.status, legs, loads.stance, loads.mu,
             f"{scene}: friction ratio |F_t| / (mu F_n) of each foot"),
