@@ -12,6 +12,7 @@ from commands import hexapod as cli
 
 import hexapod as hx
 from hexapod.algorithms.inverse import inverse_dynamics
+from hexapod.model.model import GROUND_INDEX
 from hexapod.output.report import agreement, inverse_columns
 from hexapod.scene.motion import MotionWarning, apply_motion, read_motion
 from hexapod.scene.urdf import read_urdf, urdf_text
@@ -59,13 +60,83 @@ def test_saddle_path_matches_pinocchio_too():
 
 
 def test_urdf_policy(tmp_path):
-    """The root becomes the ground, a massless link on a fixed joint is merged into its
+    """A massless root becomes the ground, a massless link on a fixed joint is merged into its
     parent, fixed joints with mass stay fixed joints, axes are normalised."""
     scene = read_urdf(FIXTURES[-1] / "model.urdf")
     assert "base" not in scene.bodies and "l8" not in scene.bodies
     assert scene.joints["j0"].parent == "ground"
     assert all(np.isclose(np.linalg.norm(j.axis), np.linalg.norm(j.axis))
                for j in scene.joints.values() if j.axis is not None)
+
+
+QUADRUPED_LEGS = [(0.2, 0.1), (0.2, -0.1), (-0.2, 0.1), (-0.2, -0.1)]
+
+
+def quadruped_urdf(path: Path) -> Path:
+    """A quadruped whose root link is a 2 kg trunk, four 0.6 kg legs on hip joints: 4.4 kg."""
+    inertia = '<inertia ixx="{0}" iyy="{0}" izz="{1}" ixy="0" ixz="0" iyz="0"/>'
+    links = "".join(f'<link name="leg{k}"><inertial><origin xyz="0 0 -0.1"/><mass value="0.6"/>'
+                    f'{inertia.format(0.002, 0.0005)}</inertial></link>'
+                    for k in range(4))
+    joints = "".join(f'<joint name="hip{k}" type="revolute"><parent link="trunk"/><child '
+                     f'link="leg{k}"/><origin xyz="{x} {y} 0"/><axis xyz="0 1 0"/></joint>'
+                     for k, (x, y) in enumerate(QUADRUPED_LEGS))
+    path.write_text(f'<robot name="quad"><link name="trunk"><inertial><mass value="2.0"/>'
+                    f'{inertia.format(0.02, 0.03)}</inertial></link>{links}{joints}</robot>')
+    return path
+
+
+def still_motion(path: Path, joints: list[str]) -> Path:
+    t = np.linspace(0.0, 1.0, 5)
+    header = ["t", *joints, *(f"qd:{j}" for j in joints), *(f"qdd:{j}" for j in joints)]
+    table = np.column_stack([t] + [np.zeros_like(t)] * (3 * len(joints)))
+    np.savetxt(path, table, delimiter=",", header=",".join(header), comments="", fmt="%.17g")
+    return path
+
+
+def test_a_root_with_mass_is_a_free_trunk_and_keeps_its_mass(tmp_path):
+    urdf = quadruped_urdf(tmp_path / "quad.urdf")
+    model = hx.assemble(read_urdf(urdf))
+    assert model.total_mass == pytest.approx(4.4, rel=1e-15)
+    assert [b.name for b in model.bodies][0] == "trunk"
+    assert all(j.parent != GROUND_INDEX for j in model.joints)  # nothing holds the trunk
+    assert model.n_v == 5 * 6 and model.n_c == 4 * 5  # five bodies, four hinges: 10 DOF
+    done = cli("info", str(urdf), cwd=tmp_path)
+    assert done.returncode == 0 and "total mass 4.4 kg" in done.stdout
+
+
+def test_a_free_trunk_is_named_when_the_motion_leaves_it_free(tmp_path):
+    """Item 5 of the naming of free motions: which bodies, which direction."""
+    urdf = quadruped_urdf(tmp_path / "quad.urdf")
+    motion = still_motion(tmp_path / "still.csv", [f"hip{k}" for k in range(4)])
+    done = cli("inverse", str(urdf), "--motion", str(motion), "--out", "out.csv", cwd=tmp_path)
+    assert done.returncode == 1 and not (tmp_path / "out.csv").exists()
+    error = done.stderr.strip().splitlines()[-1]
+    assert "leave 6 degree(s) of freedom free" in error and "--base fixed" in error
+    for c in "xyz":
+        assert f"trunk translating along world {c} (moves trunk, leg0, leg1, leg2, leg3)" in error
+        assert f"trunk turning about its own {c} axis (moves trunk, leg0" in error
+
+
+def test_a_fixed_base_welds_the_root_and_carries_the_whole_weight(tmp_path):
+    """Standing still, the weld's force on the trunk is the robot's weight, m g up (world z is
+    the trunk's frame: the root stands at the identity)."""
+    urdf = quadruped_urdf(tmp_path / "quad.urdf")
+    motion = still_motion(tmp_path / "still.csv", [f"hip{k}" for k in range(4)])
+    done = cli("inverse", str(urdf), "--motion", str(motion), "--out", "out.csv", "--base",
+               "fixed", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    header, table = read_csv(tmp_path / "out.csv")
+    weld = table[:, [header.index(f"{c}:trunk/ground") for c in ("Fx", "Fy", "Fz")]]
+    assert np.allclose(weld, [0.0, 0.0, 4.4 * 9.81], rtol=1e-12, atol=1e-12)
+
+
+def test_a_massless_root_cannot_be_free_and_base_is_for_urdf_only(tmp_path):
+    with pytest.raises(hx.ModelError, match=r'<link name="base">.*is the root and has no mass'):
+        read_urdf(FIXTURES[0] / "model.urdf", base="free")
+    assert "base" not in read_urdf(FIXTURES[0] / "model.urdf", base="fixed").bodies
+    done = cli("info", "front-leg", "--base", "free", cwd=tmp_path)
+    assert done.returncode == 1 and "is for URDF models" in done.stderr
 
 
 @pytest.mark.parametrize("scene", [front_leg_scene(gait=False),

@@ -362,6 +362,40 @@ def degrees_of_freedom(model: Model, data: Data, t: float, q: np.ndarray) -> dic
     }
 
 
+#: How a free motion's leading velocity component reads (:func:`free_motions`).
+_MOTION_WORDS = {**{f"v{c}": f"translating along world {c}" for c in "xyz"},
+                 **{f"w{c}_body": f"turning about its own {c} axis" for c in "xyz"},
+                 "w": "turning in the plane"}
+
+
+def free_motions(model: Model, Phi_v: np.ndarray) -> list[str]:
+    """The motions the constraints ``Phi_v`` (n_c, n_v) leave free, in words: a basis of the
+    null space of ``Phi_v``, each vector led by one velocity component (the basis reduced on
+    the components a pivoted QR picks, weighted by their bodies' masses so that a robot's
+    trunk leads: each vector is 1 on its own component and 0 on the others') and naming every
+    body it moves, e.g. ``trunk translating along world x (moves trunk, leg0)``."""
+    _, s, Vt = np.linalg.svd(np.asarray(Phi_v, dtype=float).reshape(-1, model.n_v))
+    rank = int(np.sum(s > model.rank_tolerance * max(float(s.max(initial=0.0)), 1.0)))
+    N = Vt[rank:].T  # n_v x free
+    if N.shape[1] == 0:
+        return []
+    from scipy.linalg import qr
+
+    mass = np.zeros(model.n_v)
+    for body in model.bodies:
+        mass[body.v] = body.mass
+    picked = np.sort(qr(N.T * np.sqrt(mass), pivoting=True, mode="r")[1][:N.shape[1]])
+    reduced = N @ np.linalg.solve(N[picked], np.eye(N.shape[1]))
+    names = model.velocity_names
+    out = []
+    for k, i in enumerate(picked):
+        body, _, part = names[i].rpartition(".")
+        moved = [b.name for b in model.bodies
+                 if np.abs(reduced[b.v, k]).max(initial=0.0) > 1e-9]
+        out.append(f"{body} {_MOTION_WORDS.get(part, part)} (moves {', '.join(moved)})")
+    return out
+
+
 def body_poses(model: Model, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """World poses of every body's centre-of-mass frame over samples ``q`` (N, n_q): positions
     (N, n_bodies, 3) and rotations (N, n_bodies, 3, 3), planar poses embedded in 3-D (z = 0,

@@ -17,7 +17,12 @@ import numpy as np
 
 from hexapod.algorithms.dynamics import forward_dynamics
 from hexapod.algorithms.ground import ground_reactions
-from hexapod.algorithms.kinematics import assemble_positions, degrees_of_freedom, solve_velocities
+from hexapod.algorithms.kinematics import (
+    assemble_positions,
+    degrees_of_freedom,
+    free_motions,
+    solve_velocities,
+)
 from hexapod.algorithms.liaison import joint_wrenches
 from hexapod.errors import AssemblyError, SingularSystemError
 from hexapod.model.model import Data, Model
@@ -85,9 +90,12 @@ def require_prescribed(model: Model, data: Data, t: float, q: np.ndarray) -> Non
         idle = [j.name for j in model.joints
                 if j.type.drivable and j.index not in driven]
         hint = f" (joints without a driver: {', '.join(idle)})" if idle else ""
+        motions = "; ".join(free_motions(model, data.Phi_v))
         raise SingularSystemError(
             f"model '{model.name}': the drivers leave {free} degree(s) of freedom "
-            f"free{hint}; inverse dynamics needs the motion of every degree of freedom")
+            f"free{hint}: {motions}; inverse dynamics needs the motion of every degree of "
+            "freedom (drive them, or hold the bodies that move: a free base of a URDF model "
+            "is held by reading it with a fixed base, --base fixed)")
 
 
 def next_positions(model: Model, data, t0: float, q0: np.ndarray, t: float, rates):

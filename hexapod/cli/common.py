@@ -267,6 +267,22 @@ def ground_arguments(parser: argparse.ArgumentParser) -> None:
                        "newtons (default: the scene's)")
 
 
+def base_argument(parser: argparse.ArgumentParser) -> None:
+    """``--base``: how a URDF model's root link stands."""
+    parser.add_argument("--base", choices=("auto", "free", "fixed"), default="auto",
+                        help="a URDF model's root link: free (a floating base, e.g. a legged "
+                        "robot's trunk), fixed (welded to the ground), or auto (the default: "
+                        "free when it has mass, else the ground)")
+
+
+def scene_of(args, name: str):
+    """The scene ``name`` (a file or a built-in scene) with the command's ``--base`` and ground
+    options applied."""
+    from hexapod.scene.builtin import load_scene
+
+    return apply_ground_options(load_scene(name, base=args.base), args)
+
+
 def apply_ground_options(scene, args):
     """``scene`` with its ground-force settings (``scene.ground``) replaced by a copy that
     takes the ground options given in ``args``; a :class:`~hexapod.errors.HexapodError` when

@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 from hexapod.cli.common import (
-    apply_ground_options,
+    base_argument,
     emit,
     ground_arguments,
     scene_arguments,
+    scene_of,
 )
 
 HELP = ("forward dynamics at one instant: accelerations, multipliers, joint wrenches and driver "
@@ -21,13 +22,13 @@ DESCRIPTION = (
 def add_arguments(parser) -> None:
     scene_arguments(parser, "print the results as JSON")
     ground_arguments(parser)
+    base_argument(parser)
 
 
 def run(args) -> int:
     from hexapod.model.assemble import assemble
     from hexapod.output.describe import describe_state, format_state
-    from hexapod.scene.builtin import load_scene
 
-    model = assemble(apply_ground_options(load_scene(args.scene), args))
+    model = assemble(scene_of(args, args.scene))
     emit(describe_state(model, args.t), args.json, format_state)
     return 0

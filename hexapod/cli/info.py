@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 from hexapod.cli.common import (
-    apply_ground_options,
+    base_argument,
     emit,
     ground_arguments,
     scene_arguments,
+    scene_of,
 )
 
 HELP = ("what a scene holds and how it was built: rows, topology, degrees of freedom, "
@@ -25,13 +26,13 @@ def add_arguments(parser) -> None:
                         help="add the vector-network graph of Richard, Anderson and Andrews "
                         "(1989): its edges and its incidence, cutset and circuit matrices")
     ground_arguments(parser)
+    base_argument(parser)
 
 
 def run(args) -> int:
     from hexapod.model.assemble import assemble
     from hexapod.output.describe import describe_model, format_model
-    from hexapod.scene.builtin import load_scene
 
-    model = assemble(apply_ground_options(load_scene(args.scene), args))
+    model = assemble(scene_of(args, args.scene))
     emit(describe_model(model, args.t, graph=args.graph), args.json, format_model)
     return 0

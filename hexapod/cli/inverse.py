@@ -5,12 +5,13 @@ from __future__ import annotations
 import sys
 
 from hexapod.cli.common import (
-    apply_ground_options,
+    base_argument,
     check_inverse_memory,
     ground_arguments,
     inverse_arguments,
     limit_arguments,
     sample_progress,
+    scene_of,
     show_progress,
 )
 from hexapod.cli.outputs import given_files, output_file
@@ -38,6 +39,7 @@ def add_arguments(parser) -> None:
                        "applies")
     limit_arguments(parser)
     ground_arguments(parser)
+    base_argument(parser)
 
 
 def run(args) -> int:
@@ -46,7 +48,6 @@ def run(args) -> int:
     from hexapod.algorithms.inverse import inverse_dynamics
     from hexapod.model.assemble import assemble
     from hexapod.output.inverse_csv import units_path, write_inverse_files
-    from hexapod.scene.builtin import load_scene
     from hexapod.scene.motion import MotionWarning, apply_motion, read_motion
 
     inputs = given_files(args.model, args.motion)
@@ -55,7 +56,7 @@ def run(args) -> int:
     # every estimated derivative is said, once per message (main prints the warnings)
     warnings.simplefilter("always", MotionWarning)
     motion = read_motion(args.motion)
-    scene = apply_ground_options(load_scene(args.model), args)
+    scene = scene_of(args, args.model)
     driven = apply_motion(scene, motion)
     driven.ground = scene.ground  # the driven copy keeps the scene's ground-force settings
     model = assemble(driven)

@@ -6,13 +6,14 @@ import sys
 
 from hexapod.cli.common import (
     MAX_TIME,
-    apply_ground_options,
     at_least,
+    base_argument,
     check_inverse_memory,
     ground_arguments,
     inverse_arguments,
     limit_arguments,
     sample_progress,
+    scene_of,
     scene_positional,
     seconds,
     show_progress,
@@ -52,6 +53,7 @@ def add_arguments(parser) -> None:
     inverse_arguments(parser, "as for 'hexapod inverse'")
     limit_arguments(parser)
     ground_arguments(parser)
+    base_argument(parser)
 
 
 def run(args) -> int:
@@ -66,9 +68,8 @@ def run(args) -> int:
     from hexapod.errors import HexapodError
     from hexapod.model.assemble import assemble
     from hexapod.output.report import FOOT_MARKER, RunInfo, report_files, walking_headlines
-    from hexapod.scene.builtin import load_scene
 
-    scene = apply_ground_options(load_scene(args.scene), args)
+    scene = scene_of(args, args.scene)
     out = output_directory(args.out, f"{scene.name}-report", inputs=given_files(args.scene),
                            ours=suffixes(".csv", ".md", ".png", ".json"))
     model = assemble(scene)

@@ -7,14 +7,15 @@ import sys
 
 from hexapod.cli.common import (
     MAX_TIME,
-    apply_ground_options,
     at_least,
+    base_argument,
     ground_arguments,
     jsonable,
     limit_arguments,
     output_times,
     positive,
     relative_tolerance,
+    scene_of,
     scene_positional,
     seconds,
     short,
@@ -110,16 +111,16 @@ def add_arguments(parser) -> None:
                         "loop; the states up to there are written (default: no budget)")
     limit_arguments(parser, steps=True)
     ground_arguments(parser)
+    base_argument(parser)
 
 
 def run(args) -> int:
     from hexapod._support.files import write_directory_atomically
     from hexapod.model.assemble import assemble
-    from hexapod.scene.builtin import load_scene
     from hexapod.simulation.loop import simulate
     from hexapod.simulation.results import scene_reference, units_json
 
-    scene = apply_ground_options(load_scene(args.scene), args)
+    scene = scene_of(args, args.scene)
     out = output_directory(args.out, f"{scene.name}-simulation",
                            inputs=given_files(args.scene),
                            ours=suffixes(".csv", ".npz", ".json"))

@@ -34,13 +34,16 @@ def builtin_scenes() -> dict:
     return {ep.name: ep for ep in entry_points(group="hexapod.scenes")}
 
 
-def load_scene(name_or_path: str | Path) -> Scene:
+def load_scene(name_or_path: str | Path, *, base: str = "auto") -> Scene:
     """A scene from a URDF (``.urdf``, ``.xml``) or TOML file, or a built-in scene by name.
 
     Parameters
     ----------
     name_or_path : str or Path
         A file path, or the name of a built-in scene (see :func:`builtin_scenes`).
+    base : {"auto", "free", "fixed"}
+        A URDF model's root link (:func:`hexapod.scene.urdf.read_urdf`); only ``"auto"`` for
+        the other scenes.
 
     Returns
     -------
@@ -56,7 +59,10 @@ def load_scene(name_or_path: str | Path) -> Scene:
     if path.suffix.lower() in (".urdf", ".xml"):
         from hexapod.scene.urdf import read_urdf
 
-        return read_urdf(path)
+        return read_urdf(path, base=base)
+    if base != "auto":
+        raise InputFileError(f"{name_or_path}: base={base!r} (--base) is for URDF models; a "
+                             "scene file or a built-in scene says how its bodies stand")
     if path.suffix == ".toml" or path.is_file():
         from hexapod.scene.reader import read_scene  # with TOML's parser: not for a URDF
 

@@ -2,8 +2,12 @@
 
 Policy (stated here and in the scene reference):
 
-* the **root link is fixed to the ground**: it becomes the ground itself (its inertia plays no
-  part), and joints from it are joints to the ground;
+* the **root link** (``base``, :data:`BASES`): by default, a root **with mass is a free body**
+  (a floating base: a legged robot's trunk), and a **massless root is the ground** (an arm
+  bolted down, Pinocchio's fixed-base models); ``base="fixed"`` welds a root with mass to the
+  ground by a fixed joint ``<root>/ground`` (its mass counts, the weld's reaction is reported),
+  ``base="free"`` insists on a free root (an error for a massless one: it would make the mass
+  matrix singular). A root's mass is never dropped;
 * each other link is a spatial body whose reference frame is the URDF link frame; its inertial
   (``<origin xyz rpy>``, ``<mass>``, ``<inertia ixx ixy ixz iyy iyz izz>``, the tensor about the
   centre of mass in the rotated inertial axes) gives ``com``, ``inertia_rotation``, ``inertia``;
@@ -74,9 +78,14 @@ class _Joint:
     axis: np.ndarray
 
 
+#: How the root link is attached (see the module's description).
+BASES = ("auto", "free", "fixed")
+
+
 class _UrdfReader:
-    def __init__(self, path: Path):
+    def __init__(self, path: Path, base: str = "auto"):
         self.path = path
+        self.base = base
         self.problems: list[Problem] = []
 
     def add(self, element: str, message: str) -> None:
@@ -188,6 +197,25 @@ class _UrdfReader:
             raise ModelError(f"URDF file {self.path}", self.problems)
         return self.build(scene, links, joints)
 
+    def root_body(self, scene: Scene, link: _Link) -> str:
+        """Add the root link to ``scene`` as the base policy says; the body its children hang
+        from (the ground, or the root's own body)."""
+        if link.mass <= 0:
+            if self.base == "free":
+                self.add(_tag("link", link.name), "is the root and has no mass: it cannot be a "
+                         "free body (the mass matrix would be singular); give it an "
+                         "<inertial>, or read the model with a fixed base")
+            return GROUND
+        scene.add(SpatialBody(link.name, link.mass, link.inertia, com=link.com.position,
+                              inertia_rotation=link.com.rotation,
+                              source=f"{self.path}, {_tag('link', link.name)} (the root)"))
+        if self.base == "fixed":
+            scene.add(_joint_types()["fixed"](f"{link.name}/ground", GROUND, link.name,
+                                              parent_frame=Placement.identity(),
+                                              child_frame=Placement.identity(),
+                                              source=f"{self.path}, the fixed base"))
+        return link.name
+
     def build(self, scene: Scene, links: dict, joints: list) -> Scene:
         parent_of = {}
         for joint in joints:
@@ -203,7 +231,7 @@ class _UrdfReader:
         root = roots[0]
         # link frames at zero joint coordinates, and the body (or ground) each link belongs to
         pose = {root: Placement.identity()}
-        owner = {root: (GROUND, Placement.identity())}  # (body, link frame in body frame)
+        owner = {root: (self.root_body(scene, links[root]), Placement.identity())}
         below: dict[str, list[int]] = {}  # the joints hanging from each link, by file order
         for k, joint in enumerate(joints):
             below.setdefault(joint.parent, []).append(k)
@@ -253,20 +281,24 @@ class _UrdfReader:
         return scene
 
 
-def read_urdf(path: str | Path) -> Scene:
+def read_urdf(path: str | Path, *, base: str = "auto") -> Scene:
     """Read a URDF file into a :class:`Scene` (metres, gravity -9.81 m/s^2 along z).
 
     Parameters
     ----------
     path : str or Path
         The URDF file.
+    base : {"auto", "free", "fixed"}
+        The root link: ``"auto"`` a free body when it has mass (a floating base), else the
+        ground; ``"free"`` a free body (it must have mass); ``"fixed"`` welded to the ground
+        (by a fixed joint ``<root>/ground`` when it has mass, else the ground itself).
 
     Returns
     -------
     Scene
-        The root link is the ground, each other link a spatial body (a massless link fixed to
-        its parent merged into it), each URDF joint a joint whose frame is the child link's
-        frame (the module's description).
+        Each link but a massless root a spatial body (a massless link fixed to its parent
+        merged into it), each URDF joint a joint whose frame is the child link's frame (the
+        module's description).
 
     Raises
     ------
@@ -281,7 +313,9 @@ def read_urdf(path: str | Path) -> Scene:
         root = ET.fromstring(text)
     except ET.ParseError as error:
         raise InputFileError(f"{path}: not well-formed XML ({error})") from None
-    reader = _UrdfReader(path)
+    if base not in BASES:
+        raise ValueError(f"base must be one of {', '.join(BASES)}, got {base!r}")
+    reader = _UrdfReader(path, base)
     with np.errstate(all="ignore"):  # huge values overflow in the checks, which report them
         scene = reader.read(root)
         problems = scene.problems()
