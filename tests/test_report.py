@@ -325,3 +325,19 @@ def test_particles_balance_forces_only():
                            wrenches.force[None], wrenches.torque[None])
     assert np.all(balance.moment_scale == 0.0)
     assert balance.relative().max() < 1e-12
+
+
+def test_a_report_driven_by_a_motion_file_writes_what_inverse_writes(tmp_path):
+    """``hexapod report MODEL --motion FILE`` spans the motion's samples; its inverse.csv is
+    ``hexapod inverse``'s on the same files, to the last digit; window options are refused."""
+    fixture = ROOT / "tests" / "data" / "pinocchio" / "chain-3"
+    model, motion = str(fixture / "model.urdf"), str(fixture / "motion.csv")
+    done = run_cli("report", model, "--motion", motion, "--out", "report", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    done = run_cli("inverse", model, "--motion", motion, "--out", "inverse.csv", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    reported = (tmp_path / "report" / "inverse.csv").read_text()
+    assert reported == (tmp_path / "inverse.csv").read_text()
+    assert len(reported.splitlines()) - 1 == len((fixture / "motion.csv").read_text().split()) - 1
+    refused = run_cli("report", model, "--motion", motion, "--duration", "1", cwd=tmp_path)
+    assert refused.returncode == 1 and "--duration: the motion file" in refused.stderr

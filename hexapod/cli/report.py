@@ -48,12 +48,37 @@ def add_arguments(parser) -> None:
     parser.add_argument("--duration", type=seconds, metavar="S",
                         help="length of the window in s (default: one cycle of the scene's "
                         "periodic laws, e.g. the gait's stride, or 1 s)")
-    parser.add_argument("--samples", type=at_least(2), default=501,
+    parser.add_argument("--samples", type=at_least(2),
                         help="samples over the window, ends included (default 501)")
+    parser.add_argument("--motion", metavar="MOTION.csv",
+                        help="drive the scene's joints by this motion file, as 'hexapod "
+                        "inverse' does (columns t, one per joint, optional qd:<joint> and "
+                        "qdd:<joint>); the report then spans the motion's samples")
     inverse_arguments(parser, "as for 'hexapod inverse'")
     limit_arguments(parser)
     ground_arguments(parser)
     base_argument(parser)
+
+
+def _driven_by_motion(scene, args):
+    """``scene`` driven by ``--motion`` (its ground-force settings kept), and the motion's
+    sample times; the window options are refused with it (the motion gives the samples)."""
+    import warnings
+
+    from hexapod.errors import HexapodError
+    from hexapod.scene.motion import MotionWarning, apply_motion, read_motion
+
+    given = [option for option, value in (("--start", args.start or None),
+                                          ("--duration", args.duration),
+                                          ("--samples", args.samples)) if value is not None]
+    if given:
+        raise HexapodError(f"{', '.join(given)}: the motion file {args.motion} gives the "
+                           "samples; leave these out with --motion")
+    warnings.simplefilter("always", MotionWarning)  # every estimated derivative is said
+    motion = read_motion(args.motion)
+    driven = apply_motion(scene, motion)
+    driven.ground = scene.ground  # the driven copy keeps the scene's ground-force settings
+    return driven, motion.times
 
 
 def run(args) -> int:
@@ -70,15 +95,24 @@ def run(args) -> int:
     from hexapod.output.report import FOOT_MARKER, RunInfo, report_files, walking_headlines
 
     scene = scene_of(args, args.scene)
-    out = output_directory(args.out, f"{scene.name}-report", inputs=given_files(args.scene),
+    out = output_directory(args.out, f"{scene.name}-report",
+                           inputs=given_files(args.scene, args.motion),
                            ours=suffixes(".csv", ".md", ".png", ".json"))
-    model = assemble(scene)
-    duration, why = model.time_window(args.duration)
-    if duration > MAX_TIME:
-        raise HexapodError(f"the scene's cycle, {duration:g} s, is longer than the {MAX_TIME:g}"
-                           " s a report may span: give a shorter --duration")
-    check_inverse_memory(model, args.samples, args.max_memory, "ask for fewer --samples")
-    times = args.start + np.linspace(0.0, duration, args.samples)
+    if args.motion is not None:
+        scene, times = _driven_by_motion(scene, args)
+        model = assemble(scene)
+        duration, why = float(times[-1] - times[0]), f"the motion {args.motion}"
+        check_inverse_memory(model, times.size, args.max_memory,
+                             f"give a motion of fewer samples than {args.motion}'s")
+    else:
+        model = assemble(scene)
+        duration, why = model.time_window(args.duration)
+        if duration > MAX_TIME:
+            raise HexapodError(f"the scene's cycle, {duration:g} s, is longer than the "
+                               f"{MAX_TIME:g} s a report may span: give a shorter --duration")
+        samples = 501 if args.samples is None else args.samples
+        check_inverse_memory(model, samples, args.max_memory, "ask for fewer --samples")
+        times = args.start + np.linspace(0.0, duration, samples)
     show = show_progress()
     progress = sample_progress("inverse dynamics") if show else None
     started = time.perf_counter()
