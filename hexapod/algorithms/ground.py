@@ -22,9 +22,11 @@ least-wrench and least-effort policies ignore friction and can ask the ground to
 statuses are how a user learns it.
 
 Load sharing: a foot of weight ``w`` (:meth:`hexapod.model.model.ContactInfo.weight`) adds
-``(1 / w - 1) |F / (m g)|^2`` to the effort objectives (``m g`` the robot's weight), and its
-wrench term is divided by ``w`` in ``min-wrench``; a foot of weight zero (swing, touch-down,
-lift-off) carries nothing. Forces are then continuous in time.
+``(1 / w - 1) |F l / tau_ref|^2`` to the effort objectives (``l`` the model's characteristic
+length, ``tau_ref`` the default reference effort: the effort the load would cause, in the
+efforts' units, so the term outweighs them as soon as ``w`` falls), and its wrench term is
+divided by ``w`` in ``min-wrench``; a foot of weight zero (swing, touch-down, lift-off) carries
+nothing. Forces are then Lipschitz in time, the loads shed over the whole ramp.
 """
 
 from __future__ import annotations

@@ -327,10 +327,14 @@ class StepTerms:
         A = ca.SX(len(efforts) + 3 * len(model.contacts), model.n_c)
         for i, driver in enumerate(efforts):
             A[i, driver.row] = 1.0 / model.ground.reference(model.joints[driver.joint].name)
-        weight = model.total_mass * float(np.linalg.norm(model.gravity)) or 1.0
+        # a foot's load F enters as the effort it would cause at the lever arm l, in reference
+        # efforts: in the efforts' own units, so the load-sharing term outweighs them as soon as
+        # the foot's weight falls, whatever the robot's size (F / (m g) made it count only in
+        # the last percent of a ramp: 60 N gone in 2 ms)
+        lever = model.characteristic_length / model.ground.default_reference
         for k, contact in enumerate(model.contacts):
             for i, row in enumerate(contact.rows):
-                A[len(efforts) + 3 * k + i, int(row)] = feet[k] / weight
+                A[len(efforts) + 3 * k + i, int(row)] = feet[k] * lever
         return A, ca.SX.zeros(A.shape[0])
 
     def policy(self, m: int) -> ca.Function:

@@ -11,8 +11,9 @@ model serves every contact set and a change of contact set costs nothing.
 ``S(min(s, 1 - s) / ramp)``, clipped to 1, with ``s`` the stance progress (0 at touch-down, 1 at
 lift-off) and ``S(u) = u^3 (10 - 15 u + 6 u^2)`` the quintic smooth step: 0 at touch-down and
 lift-off, 1 over the middle of the stance, C2 in time. The policies add to their objective
-``(1 / w - 1) |F / F_ref|^2`` per foot, so a foot's force grows from zero after touch-down and
-falls to zero before lift-off; a foot of weight zero carries nothing.
+``(1 / w - 1) |F l / tau_ref|^2`` per foot (:mod:`hexapod.algorithms.ground`), so a foot's
+force grows from zero after touch-down and falls to zero before lift-off; a foot of weight zero
+carries nothing.
 """
 
 from __future__ import annotations
