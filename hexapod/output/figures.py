@@ -37,8 +37,54 @@ def _figure(panels: int, title: str, twin: bool = False):
                            top=1 - 0.65 / height, wspace=0.55 if twin else 0.3, hspace=0.45)
     for extra in axes[panels:]:
         extra.set_visible(False)
-    figure.suptitle(title)
+    _title(figure, title, width)
     return figure, axes[:panels], columns
+
+
+def _title(figure, title: str, width: float) -> None:
+    """The figure's title, broken into lines that fit its width (inches), never clipped."""
+    import textwrap
+
+    fits = max(20, int(width * 72 / 7.5))  # characters of a 12-point title per line
+    figure.suptitle("\n".join(textwrap.wrap(title, fits)), fontsize=12 if len(title) <= fits
+                    else 10)
+
+
+#: A panel whose largest value is below this fraction of its figure's largest is round-off.
+ROUND_OFF = 1e-9
+
+
+def _scale_round_off(axes, values: list[np.ndarray]) -> None:
+    """Panels whose values are round-off (e.g. the moments of point contacts, 1e-15) drawn at
+    the scale of the figure's largest panel, with a note, rather than auto-scaled into what
+    would look like a signal."""
+    peaks = [float(np.nanmax(np.abs(v))) if np.size(v) else 0.0 for v in values]
+    largest = max(peaks, default=0.0)
+    for ax, peak in zip(axes, peaks, strict=True):
+        if largest > 0 and peak < ROUND_OFF * largest:
+            ax.set_ylim(-largest, largest)
+            ax.text(0.5, 0.62, f"round-off (below {ROUND_OFF:g} of the largest panel)",
+                    transform=ax.transAxes, ha="center", va="center", fontsize=7,
+                    color="0.35")
+
+
+def _align_zeros(left, right) -> None:
+    """Limits of two axes sharing a panel so that their zeros lie at the same height."""
+    ranges = []
+    for ax in (left, right):
+        low, high = ax.get_ylim()
+        ranges.append((min(low, 0.0), max(high, 0.0)))
+    # the fraction of each axis below zero; both get the larger
+    below = max(-low / (high - low) if high > low else 0.5 for low, high in ranges)
+    below = min(max(below, 0.0), 1.0)
+    for ax, (low, high) in zip((left, right), ranges, strict=True):
+        if below >= 1.0:
+            ax.set_ylim(low, 0.0)
+        elif below <= 0.0:
+            ax.set_ylim(0.0, high)
+        else:
+            span = max(high / (1 - below), -low / below)
+            ax.set_ylim(-below * span, (1 - below) * span)
 
 
 def _finish_panels(axes, columns: int) -> None:
@@ -102,6 +148,7 @@ def wrench_figure(times: np.ndarray, values: np.ndarray, names: list[str], symbo
                 label=f"|{symbol}|")
         ax.set_title(name, fontsize=9)
         ax.set_ylabel(unit, fontsize=8)
+    _scale_round_off(axes, [values[:, k] for k in range(len(names))])
     _finish_panels(axes, columns)
     axes[0].legend(fontsize=7, ncols=2, loc="best")
     return figure
@@ -134,6 +181,7 @@ def effort_figure(times: np.ndarray, efforts: list[tuple[str, str, np.ndarray, n
         twin.plot(times, power, color="tab:orange", linewidth=1.0, linestyle="--")
         twin.set_ylabel("power (W)", fontsize=8, color="tab:orange")
         twin.tick_params(labelsize=8)
+        _align_zeros(ax, twin)
         ax.set_title(name, fontsize=9)
     _finish_panels(axes, columns)
     return figure
@@ -186,7 +234,7 @@ def trajectory_figure(times: np.ndarray, trajectories: dict[str, np.ndarray],
         ax.grid(True, linewidth=0.4, alpha=0.6)
         ax.tick_params(labelsize=8)
     (timeline if len(trajectories) == 1 else top).legend(fontsize=7)
-    figure.suptitle(title)
+    _title(figure, title, figure.get_figwidth())
     return figure
 
 
@@ -228,7 +276,7 @@ def _leg_panels(legs: list[str], title: str):
         for c in range(columns):
             if (r, c) not in used:
                 grid[r, c].set_visible(False)
-    figure.suptitle(title)
+    _title(figure, title, width)
     axes = [grid[r, c] for r, c in places]
     for ax, (r, c) in zip(axes, places, strict=True):
         ax.grid(True, linewidth=0.4, alpha=0.6)

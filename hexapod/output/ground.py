@@ -11,6 +11,7 @@ than ``mu``. A foot is named by its contact's name without the ``/ground`` suffi
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 
 import numpy as np
@@ -279,20 +280,66 @@ def trunk_csv_text(times: np.ndarray, trunks: list[TrunkMotion]) -> str:
 
 # ------------------------------------------------------------------ grouping by leg
 
-def leg_groups(names: list[str]) -> dict[str, list[int]] | None:
-    """Indices of ``names`` grouped by the prefix before their first ``/`` (a robot's legs:
-    ``L1/ctr`` is in ``L1``), names without one in ``other``; None when there are fewer than
-    two prefixes (a single leg, a mechanism)."""
+def leg_groups(names: list[str], model: Model | None = None) -> dict[str, list[int]] | None:
+    """Indices of ``names`` (joint names) grouped by leg: by the prefix before their first
+    ``/`` (``L1/ctr`` is in ``L1``), else, given the ``model``, by limb (:func:`limbs`: a URDF
+    robot's ``FL_hip``, ``FL_knee`` and its foot's contact together); names in no group in
+    ``other``, last. None when there are fewer than two legs (a single leg, a mechanism)."""
     groups: dict[str, list[int]] = {}
     for k, name in enumerate(names):
         prefix, slash, _ = name.partition("/")
         groups.setdefault(prefix if slash else "other", []).append(k)
-    prefixed = [g for g in groups if g != "other"]
-    if len(prefixed) < 2:
-        return None
+    if len([g for g in groups if g != "other"]) < 2:
+        limb_of = limbs(model) if model is not None else {}
+        groups = {}
+        for k, name in enumerate(names):
+            groups.setdefault(limb_of.get(name, "other"), []).append(k)
+        if len([g for g in groups if g != "other"]) < 2:
+            return None
     if "other" in groups:  # last
         groups["other"] = groups.pop("other")
     return groups
+
+
+def limbs(model: Model) -> dict[str, str]:
+    """Each joint's limb, by name: the subtrees hanging from the trunk (the body most joints
+    hang from; the ground for a fixed base) through the tree's joints, a foot's contact with
+    the limb of its foot. A limb is named after its foot's contact (``FL`` for
+    ``FL/ground``), else after its joints' common prefix (``FL`` for ``FL_hip``, ``FL_knee``),
+    else after its first joint. Joints between the trunk and the ground, loop
+    closures and limbs of a single joint are in none."""
+    tree = [j for j in model.joints if not j.loop_closing and j.kind != "contact"]
+    parent_of = {j.child: j for j in tree}
+    hanging: dict[int, int] = {}
+    for joint in tree:
+        hanging[joint.parent] = hanging.get(joint.parent, 0) + 1
+    if not hanging:
+        return {}
+    trunk = max(hanging, key=lambda body: (hanging[body], -body))
+
+    def first_joint(body: int):  # the joint from the trunk that starts the body's limb
+        joint = None
+        while body in parent_of and body != trunk:
+            joint = parent_of[body]
+            body = joint.parent
+        return joint if body == trunk else None
+
+    members: dict[int, list[str]] = {}
+    for joint in model.joints:
+        if joint.loop_closing and joint.kind != "contact":
+            continue
+        start = first_joint(joint.child)
+        if start is not None:
+            members.setdefault(start.index, []).append(joint.name)
+    out = {}
+    for start, names in members.items():
+        if len(names) < 2:
+            continue
+        feet = [leg_name(c.name) for c in model.contacts if c.name in names]
+        shared = os.path.commonprefix(names).rstrip("_-./ ")
+        label = feet[0] if len(feet) == 1 else shared or model.joints[start].name
+        out.update({name: label for name in names})
+    return out
 
 
 def joint_type(name: str) -> str:

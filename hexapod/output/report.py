@@ -501,7 +501,7 @@ def _wrench_figures(model: Model, result: InverseResult, scene: str) -> dict:
     labels = [wrench_label(model, joint) for joint in model.joints]
     names = [j.name for j in model.joints]
     where = "joint frame" if result.frame == "joint" else "world axes"
-    groups = leg_groups(names) or {"": list(range(len(names)))}
+    groups = leg_groups(names, model) or {"": list(range(len(names)))}
     figures = {}
     for leg, index in groups.items():
         suffix, which = (f"-{leg}", f" leg {leg}" if leg != "other" else " other joints") \
@@ -515,11 +515,12 @@ def _wrench_figures(model: Model, result: InverseResult, scene: str) -> dict:
     return dict(sorted(figures.items(), key=lambda item: not item[0].startswith("forces")))
 
 
-def _effort_figures(times: np.ndarray, drivers: list[DriverStatistics], scene: str) -> dict:
+def _effort_figures(model: Model, times: np.ndarray, drivers: list[DriverStatistics],
+                    scene: str) -> dict:
     """``efforts.png``, or for a robot one per leg (``efforts-L1.png`` ...)."""
     if not drivers:
         return {}
-    groups = leg_groups([d.joint for d in drivers]) or {"": list(range(len(drivers)))}
+    groups = leg_groups([d.joint for d in drivers], model) or {"": list(range(len(drivers)))}
     out = {}
     for leg, index in groups.items():
         suffix, which = (f"-{leg}", f" leg {leg}" if leg != "other" else " other joints") \
@@ -580,7 +581,7 @@ def report_files(model: Model, result: InverseResult, balance: BodyBalance, run:
     t = result.times
     figures = _wrench_figures(model, result, run.scene)
     drivers = driver_statistics(model, result)
-    figures.update(_effort_figures(t, drivers, run.scene))
+    figures.update(_effort_figures(model, t, drivers, run.scene))
     if feet:
         figures["foot.png"] = trajectory_figure(
             t, feet, f"{run.scene}: {'foot' if len(feet) == 1 else 'feet'} (world frame)")
