@@ -113,11 +113,15 @@ def read_times(path: str, limit: int):
     """The output times of a file, one a line (blank lines and ``#`` comments skipped): an
     ``array('d')`` of at most ``limit`` finite, increasing times; a ValueError saying what is
     wrong (and where), or that the file cannot be read."""
+    import io
     from array import array
+
+    from hexapod._support.files import open_input
+    from hexapod.errors import InputFileError
 
     times = array("d")
     try:
-        with open(path, encoding="utf-8") as lines:
+        with io.TextIOWrapper(open_input(path, "file of times"), encoding="utf-8") as lines:
             for number, line in enumerate(lines, 1):
                 text = line.split("#", 1)[0].strip()
                 if not text:
@@ -129,6 +133,8 @@ def read_times(path: str, limit: int):
                 if len(times) > limit:
                     raise ValueError(f"{path} holds more than {limit:,} times, the limit of "
                                      "steps (--max-steps)")
+    except InputFileError as error:
+        raise ValueError(str(error)) from None
     except (OSError, UnicodeDecodeError) as error:
         raise ValueError(f"cannot read {path}: {getattr(error, 'strerror', None) or error}") \
             from None

@@ -57,7 +57,7 @@ def load_scene(name_or_path: str | Path) -> Scene:
         from hexapod.scene.urdf import read_urdf
 
         return read_urdf(path)
-    if path.suffix == ".toml" or path.is_file():
+    if path.suffix == ".toml" or (path.exists() and not path.is_dir()):  # a pipe: refused
         from hexapod.scene.reader import read_scene  # with TOML's parser: not for a URDF
 
         return read_scene(path)

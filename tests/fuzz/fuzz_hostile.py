@@ -52,6 +52,7 @@ class Hostile:
     status: tuple[int, ...]
     says: tuple[str, ...]  # words the error line must hold
     writes: tuple[str, ...] = ()  # outputs a failed run writes (marked failed in stats.json)
+    env: tuple[tuple[str, str], ...] = ()  # environment variables of the run
 
     def argv(self, folder: Path) -> list[str]:
         return [str(a) for a in self.make(folder)]
@@ -76,6 +77,22 @@ def _device(folder: Path) -> Path:
     except OSError:
         os.mkfifo(path)
     return path
+
+
+def _pipe(folder: Path, name: str) -> Path:
+    """A named pipe that nobody writes to: reading it would wait for ever."""
+    path = folder / name
+    os.mkfifo(path)
+    return path
+
+
+def _report_csv(folder: Path, rows: int = 2, cell: str = "0") -> Path:
+    """A report folder whose ``inverse.csv`` has ``rows`` rows, the second value ``cell``."""
+    run = folder / "report"
+    run.mkdir()
+    with open(run / "inverse.csv", "w") as stream:
+        stream.write("t,x\n" + f"0,{cell}\n" + "".join(f"{k},0\n" for k in range(1, rows)))
+    return run
 
 
 def _scene(folder: Path, text: str, name: str = "scene.toml") -> Path:
@@ -178,6 +195,47 @@ CASES = (
     Hostile("a mesh of 4 GiB", lambda f: [
         "export", _small_run(f), "--vtk", f / "vtk", "--mesh", f"rod={_huge_mesh(f)}"], (1,),
             ("huge.stl",)),
+    # inputs that never end: refused by kind before they are opened
+    Hostile("a scene that is a pipe", lambda f: ["simulate", _pipe(f, "scene.toml")], (1,),
+            ("scene.toml", "named pipe")),
+    Hostile("a scene without suffix that is a pipe", lambda f: ["validate", _pipe(f, "s")],
+            (1,), ("named pipe",)),
+    Hostile("a URDF that is a pipe", lambda f: [
+        "inverse", _pipe(f, "model.urdf"), "--motion", _copy(f, CHAIN / "motion.csv"), "--out",
+        f / "out.csv"], (1,), ("model.urdf", "named pipe")),
+    Hostile("a motion that is a pipe", lambda f: [
+        "inverse", _copy(f, CHAIN / "model.urdf"), "--motion", _pipe(f, "motion.csv"), "--out",
+        f / "out.csv"], (1,), ("motion.csv", "named pipe")),
+    Hostile("a study that is a pipe", lambda f: ["sweep", _pipe(f, "study.toml"), "--out",
+                                                f / "study"], (1,), ("study.toml", "named pipe")),
+    Hostile("a study's scene that is a pipe", lambda f: ["sweep", _scene(
+        f, f'[study]\nname = "s"\nscene = "{_pipe(f, "base.toml")}"\n[vary.duty]\n'
+        'values = [0.6]\n[job]\nkind = "inverse"\n', "study.toml"), "--out", f / "study"],
+            (1,), ("base.toml", "named pipe")),
+    Hostile("--t-eval @ a pipe", lambda f: ["simulate", PENDULUM, "--t-eval",
+                                            f"@{_pipe(f, 'times.txt')}"], (2,),
+            ("--t-eval", "named pipe")),
+    Hostile("a report's CSV that is a pipe", lambda f: [
+        "export", _pipe((f / "r").mkdir() or f / "r", "inverse.csv").parent, "--vtk", f / "v"],
+            (1,), ("inverse.csv", "named pipe")),
+    Hostile("a results.npz that is a pipe", lambda f: [
+        "export", _pipe((f / "r").mkdir() or f / "r", "results.npz").parent, "--vtk", f / "v"],
+            (1,), ("results.npz", "named pipe")),
+    # counts and sizes bounded
+    Hostile("a report of 30,000 rows to export", lambda f: [
+        "export", _report_csv(f, 30_000), "--vtk", f / "v"], (1,),
+            ("30,000 saved instants", "--max-instants")),
+    Hostile("a CSV field over 131,072 characters", lambda f: [
+        "export", _report_csv(f, 2, "x" * 200_000), "--vtk", f / "v"], (1,),
+            ("inverse.csv", "line 2")),
+    Hostile("a scene larger than the memory limit", lambda f: [
+        "validate", _scene(f, PENDULUM_TEXT + "#" * 400_000)], (1,),
+            ("scene.toml", "HEXAPOD_MAX_MEMORY"), env=(("HEXAPOD_MAX_MEMORY", "1M"),)),
+    Hostile("a motion weighed before it is read", lambda f: [
+        "inverse", _copy(f, CHAIN / "model.urdf"), "--motion", _scene(
+            f, "t,j0,j1,j2\n" + "".join(f"{k},0.1,0.2,0.3\n" for k in range(200_000)),
+            "motion.csv"), "--out", f / "out.csv"], (1,), ("reading the motion file", "motion.csv"),
+            env=(("HEXAPOD_MAX_MEMORY", "50M"),)),
     # errors that escape
     Hostile("an unreadable .vtu mesh", lambda f: [
         "export", _small_run(f), "--vtk", f / "vtk", "--mesh",
@@ -192,7 +250,7 @@ def run_case(case: Hostile, folder: Path) -> tuple[str, str]:
     """(verdict, detail) of one case run in ``folder``."""
     argv = case.argv(folder)
     before = _listing(folder)
-    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
+    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", **dict(case.env)}
     started = time.perf_counter()
     try:
         done = subprocess.run([sys.executable, "-m", "hexapod", *argv], cwd=folder, env=env,
