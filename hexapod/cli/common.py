@@ -13,7 +13,7 @@ import math
 import os
 import sys
 
-from hexapod.catalog import POLICIES
+from hexapod.catalog import MAX_FACES, POLICIES
 from hexapod.scene.builtin import DEFAULT_SCENE
 
 # ------------------------------------------------------------------ arguments
@@ -30,9 +30,6 @@ MAX_TIME = 1e9
 MAX_COUNT = 10**15
 #: The largest number of worker processes of a local cluster.
 MAX_WORKERS = 1024
-#: The most faces of a friction pyramid: with 1000 faces it is within 5e-6 of the cone (the
-#: exact cone, 0, is cheaper still).
-MAX_FACES = 1000
 
 
 def _number(kind, accept, condition: str):
