@@ -111,6 +111,18 @@ law = { type = "spline", times = [0.0, 1e-300, 2e-300], values = [0.0, 0.1, 0.2]
 """
 
 
+_DOC = (ROOT / "docs" / "scene-format.md").read_text()
+#: the documentation's stool: a body on four contacts, two of them stepping (period 2 s)
+STOOL_TEXT = _DOC[_DOC.index("# A stool on four feet"):_DOC.index("```", _DOC.index(
+    "# A stool on four feet"))]
+
+
+def _driven(expression: str) -> str:
+    """The pendulum driven by the law ``expression`` of t."""
+    return PENDULUM_TEXT + ('\n[[driver]]\nname = "swing"\njoint = "pivot"\nlaw = { type = '
+                            f'"expression", expression = "{expression}" }}\n')
+
+
 def _wide_motion(folder: Path, columns: int = 100_000) -> Path:
     path = folder / "wide.csv"
     names = ["t"] + [f"j{k}" for k in range(columns)]
@@ -236,6 +248,22 @@ CASES = (
             f, "t,j0,j1,j2\n" + "".join(f"{k},0.1,0.2,0.3\n" for k in range(200_000)),
             "motion.csv"), "--out", f / "out.csv"], (1,), ("reading the motion file", "motion.csv"),
             env=(("HEXAPOD_MAX_MEMORY", "50M"),)),
+    Hostile("a friction pyramid of 1e9 faces in the scene", lambda f: [
+        "report", _scene(f, STOOL_TEXT.replace("faces = 0 ", "faces = 1000000000 ")), "--out",
+        f / "r"], (1,), ("scene.toml", "faces", "1000")),
+    Hostile("a contact of period 1e-12 s", lambda f: [
+        "report", _scene(f, STOOL_TEXT.replace("period = 2.0  ", "period = 1e-12")), "--out",
+        f / "r"], (1,), ("scene.toml", "period", "back_left")),
+    Hostile("a contact of period 2e-6 s over 100 s", lambda f: [
+        "report", _scene(f, STOOL_TEXT.replace("period = 2.0  ", "period = 2e-6")), "--out",
+        f / "r", "--duration", "100", "--samples", "3"], (1,),
+            ("back_left", "HEXAPOD_MAX_STEPS")),
+    # laws that blow up end the run as failed, naming the law and the time
+    Hostile("a driver law 1/(t-0.1)", lambda f: [
+        "simulate", _scene(f, _driven("1/(t-0.1)")), "--t-end", "0.3", "--out", f / "run"],
+            (1,), ("driver 'swing'", "t = 0.09"), writes=("run",)),
+    Hostile("a driver law 1/0", lambda f: ["report", _scene(f, _driven("1/0")), "--out",
+                                          f / "r"], (1,), ("driver 'swing'", "division by zero")),
     # errors that escape
     Hostile("an unreadable .vtu mesh", lambda f: [
         "export", _small_run(f), "--vtk", f / "vtk", "--mesh",
