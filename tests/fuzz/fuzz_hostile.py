@@ -258,6 +258,11 @@ CASES = (
         "report", _scene(f, STOOL_TEXT.replace("period = 2.0  ", "period = 2e-6")), "--out",
         f / "r", "--duration", "100", "--samples", "3"], (1,),
             ("back_left", "HEXAPOD_MAX_STEPS")),
+    Hostile("validate a scene of more bodies than the limit", lambda f: [
+        "validate", _scene(f, '[scene]\nname = "many"\n' + "".join(
+            f'[[body]]\nname = "b{k}"\nmass = 1.0\ninertia = [1.0, 1.0, 1.0]\n'
+            for k in range(3)))], (1,), ("3 bodies", "HEXAPOD_MAX_BODIES"),
+            env=(("HEXAPOD_MAX_BODIES", "2"),)),
     # laws that blow up end the run as failed, naming the law and the time
     Hostile("a driver law 1/(t-0.1)", lambda f: [
         "simulate", _scene(f, _driven("1/(t-0.1)")), "--t-end", "0.3", "--out", f / "run"],
