@@ -14,6 +14,7 @@ steps          10,000,000                      ``HEXAPOD_MAX_STEPS``    ``--max-
                                                                         (simulate)
 bodies,        10,000 each                     ``HEXAPOD_MAX_BODIES``
 joints
+contacts       32                              ``HEXAPOD_MAX_CONTACTS``
 instants       20,000                          ``HEXAPOD_MAX_INSTANTS`` ``--max-instants``
 exported                                                                (export)
 =============  ==============================  =======================  ==================
@@ -44,6 +45,10 @@ DEFAULT_MAX_STEPS = 10_000_000
 #: bodies (and joints) of a scene: assembling a model builds symbolic expressions per body, and
 #: scenes beyond this many would take minutes before anything is computed
 DEFAULT_MAX_BODIES = 10_000
+#: foot contacts of a scene: the ground-force policy and the report's per-foot figures grow
+#: faster than the square of their number (one body on 30 feet: a report of 12 s; 50: 32 s
+#: and 1 GB; 100: over 2 minutes and 5 GB)
+DEFAULT_MAX_CONTACTS = 32
 #: saved instants of a result that ``hexapod export`` reads: each becomes VTK files held in
 #: memory until the directory is written (about 8 KB and, for a report, a Newton solve each)
 DEFAULT_MAX_INSTANTS = 20_000
@@ -215,8 +220,21 @@ def check_steps(estimate: float, what: str, how_to_lower: str,
             f"{_raise_with(option, _round_up(estimate), 'HEXAPOD_MAX_STEPS')}")
 
 
-def check_model_size(bodies: int, joints: int, what: str) -> None:
-    """Refuse to assemble a scene of more bodies or joints than :func:`max_bodies`."""
+def max_contacts() -> int:
+    """The limit on foot contacts: ``HEXAPOD_MAX_CONTACTS``, else :data:`DEFAULT_MAX_CONTACTS`."""
+    return _from_environment("HEXAPOD_MAX_CONTACTS", _whole, DEFAULT_MAX_CONTACTS)
+
+
+def check_model_size(bodies: int, joints: int, what: str, contacts: int = 0) -> None:
+    """Refuse to assemble a scene of more bodies or joints than :func:`max_bodies`, or more
+    foot contacts than :func:`max_contacts`."""
+    bound = max_contacts()
+    if contacts > bound:
+        raise HexapodError(
+            f"{what} has {contacts} foot contacts (limit {bound}): the sharing of the ground "
+            "forces grows faster than the square of their number (50 take half a minute and a "
+            "gigabyte); give fewer, or raise the limit with the environment variable "
+            f"HEXAPOD_MAX_CONTACTS={contacts}")
     bound = max_bodies()
     for count, kind in ((bodies, "bodies"), (joints, "joints")):
         if count > bound:

@@ -22,7 +22,7 @@ def run(args) -> int:
     scene = load_scene(args.scene)
     # refused as every command that assembles it refuses it
     check_model_size(len(scene.bodies), len(scene.joints), f"scene '{scene.name}' "
-                     f"({args.scene})")
+                     f"({args.scene})", sum(j.kind == "contact" for j in scene.joints.values()))
     scene.validate()
     counts = ", ".join(_count(len(items), noun) for items, noun in (
         (scene.bodies, "body"), (scene.joints, "joint"), (scene.drivers, "driver"),

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import random
 import signal
@@ -121,6 +122,17 @@ def _driven(expression: str) -> str:
     """The pendulum driven by the law ``expression`` of t."""
     return PENDULUM_TEXT + ('\n[[driver]]\nname = "swing"\njoint = "pivot"\nlaw = { type = '
                             f'"expression", expression = "{expression}" }}\n')
+
+
+def _many_feet(count: int) -> str:
+    """The stool on ``count`` feet in a circle, all on the ground."""
+    feet = []
+    for k in range(count):
+        x, y = 0.2 * math.cos(2 * math.pi * k / count), 0.2 * math.sin(2 * math.pi * k / count)
+        feet.append(f'[[joint]]\nname = "f{k}"\ntype = "contact"\nparent = "ground"\n'
+                    f'child = "seat"\nchild_frame = [{x}, {y}, -0.4]\nduty = 1.0\n'
+                    f"foothold = [{x}, {y}, 0.0]\n")
+    return STOOL_TEXT[:STOOL_TEXT.index("[[joint]]")] + "".join(feet)
 
 
 def _wide_motion(folder: Path, columns: int = 100_000) -> Path:
@@ -263,6 +275,12 @@ CASES = (
             f'[[body]]\nname = "b{k}"\nmass = 1.0\ninertia = [1.0, 1.0, 1.0]\n'
             for k in range(3)))], (1,), ("3 bodies", "HEXAPOD_MAX_BODIES"),
             env=(("HEXAPOD_MAX_BODIES", "2"),)),
+    Hostile("1000 contacts on one body", lambda f: [
+        "report", _scene(f, _many_feet(1000)), "--out", f / "r"], (1,),
+            ("1000 foot contacts", "HEXAPOD_MAX_CONTACTS")),
+    Hostile("validate 1000 contacts on one body", lambda f: [
+        "validate", _scene(f, _many_feet(1000))], (1,),
+            ("1000 foot contacts", "HEXAPOD_MAX_CONTACTS")),
     # laws that blow up end the run as failed, naming the law and the time
     Hostile("a driver law 1/(t-0.1)", lambda f: [
         "simulate", _scene(f, _driven("1/(t-0.1)")), "--t-end", "0.3", "--out", f / "run"],
