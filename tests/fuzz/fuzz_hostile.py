@@ -245,6 +245,9 @@ CASES = (
     Hostile("a results.npz that is a pipe", lambda f: [
         "export", _pipe((f / "r").mkdir() or f / "r", "results.npz").parent, "--vtk", f / "v"],
             (1,), ("results.npz", "named pipe")),
+    Hostile("a mesh that is a pipe", lambda f: [
+        "export", _small_run(f), "--vtk", f / "vtk", "--mesh", f"rod={_pipe(f, 'rod.stl')}"],
+            (1,), ("rod.stl", "named pipe")),
     # counts and sizes bounded
     Hostile("a report of 30,000 rows to export", lambda f: [
         "export", _report_csv(f, 30_000), "--vtk", f / "v"], (1,),
