@@ -29,6 +29,11 @@ def _arithmetic(error: ArithmeticError) -> str:
     return f"a value beyond the floating-point range ({error or type(error).__name__})"
 
 
+def _driven(model) -> np.ndarray:
+    """The indices of the laws that drivers follow."""
+    return np.array(sorted({d.law for d in model.drivers if d.law >= 0}), dtype=int)
+
+
 def evaluate_laws(model, t: np.ndarray, w: np.ndarray, wd: np.ndarray, wdd: np.ndarray) -> None:
     """Fill ``w``, ``wd``, ``wdd`` (n_w,) or (n_w, len(t)) with the values, rates and
     accelerations of ``model``'s laws at ``t``.
@@ -48,8 +53,8 @@ def evaluate_laws(model, t: np.ndarray, w: np.ndarray, wd: np.ndarray, wdd: np.n
                                    f"computed at t = {float(t.flat[0]):.6g} s: "
                                    f"{_arithmetic(error)}") from None
         if np.isfinite(w.sum() + wd.sum() + wdd.sum()):
-            driven = [d.law for d in model.drivers if d.law >= 0]
-            if not driven or np.abs(wd[driven]).max() <= FASTEST_DRIVER:
+            driven = model.built_once(("driven laws",), _driven)
+            if not driven.size or np.abs(wd[driven]).max() <= FASTEST_DRIVER:
                 return
         _refuse(model, t, w, wd, wdd)
 
