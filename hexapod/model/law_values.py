@@ -70,9 +70,9 @@ def _refuse(model, t: np.ndarray, w, wd, wdd) -> None:
             bad = np.flatnonzero(~np.isfinite(values))
             if bad.size:
                 raise HexapodError(
-                    f"model '{model.name}': {law_name(model, i)} is not finite at t = "
-                    f"{float(times[bad[0]]):.6g} s (its {what} is {values[bad[0]]}): a division "
-                    "by zero, or a value beyond the floating-point range")
+                    f"model '{model.name}': {law_name(model, i)} has a non-finite {what} "
+                    f"({values[bad[0]]}) at t = {float(times[bad[0]]):.6g} s: a division by "
+                    "zero, or a value beyond the floating-point range")
             if what == "rate" and i in driven:
                 bad = np.flatnonzero(np.abs(values) > FASTEST_DRIVER)
                 if bad.size:

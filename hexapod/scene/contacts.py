@@ -179,6 +179,6 @@ class GroundForces:
                 out.append(problem(key, f"must be positive, got {value!r}"))
         if not isinstance(self.faces, int) or isinstance(self.faces, bool) or not (
                 self.faces == 0 or 3 <= self.faces <= MAX_FACES):
-            out.append(problem("faces", f"must be 0 (the exact cone) or from 3 to {MAX_FACES}, "
-                               f"got {self.faces!r}"))
+            out.append(problem("faces", f"must be 0 (the exact cone) or at least 3 (at most "
+                               f"{MAX_FACES}), got {self.faces!r}"))
         return out
