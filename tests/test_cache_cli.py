@@ -165,3 +165,44 @@ def test_a_script_keeps_the_cache_in_a_folder_of_its_own(tmp_path):
                           text=True, timeout=120)
     assert done.stdout.strip() == str(tmp_path / "named")
     assert not (tmp_path / "named").exists()
+
+
+def _entry(cache: Path, what: str) -> Path:
+    """One cache entry made by hand, whose meta.json says ``what``."""
+    from hexapod._support.cache import LAYOUT
+
+    entry = cache / LAYOUT / ("a" * 64)
+    entry.mkdir(parents=True)
+    (entry / "meta.json").write_text(json.dumps({"what": what}))
+    return entry
+
+
+def test_info_escapes_the_control_characters_an_entry_holds(tmp_path, monkeypatch, capsys):
+    from hexapod.cli.app import main
+
+    cache = tmp_path / "cache"
+    _entry(cache, "tree \x1b[31mred\x1b[0m\x07 of 'x'")
+    monkeypatch.setenv("HEXAPOD_CACHE_DIR", str(cache))
+    assert main(["cache", "info"]) == 0
+    out = capsys.readouterr().out
+    assert "\x1b" not in out and "\x07" not in out
+    assert "tree \\x1b[31mred\\x1b[0m\\x07 of 'x'" in out
+
+
+def test_clean_that_cannot_remove_says_so_and_fails(tmp_path, monkeypatch, capsys):
+    """A cache the user may not write (simulated: the tests may run as root, whom permissions
+    do not stop): the entries stay, and the command says so with status 1."""
+    from hexapod.cli.app import main
+
+    cache = tmp_path / "cache"
+    entry = _entry(cache, "tree")
+    monkeypatch.setenv("HEXAPOD_CACHE_DIR", str(cache))
+
+    def refused(*args, **kwargs):
+        raise PermissionError(13, "Permission denied")
+
+    monkeypatch.setattr(os, "rename", refused)
+    assert main(["cache", "clean"]) == 1
+    err = capsys.readouterr().err
+    assert entry.is_dir()
+    assert "could not remove 1 entry" in err and "removed 0 entries" in err

@@ -1,4 +1,5 @@
-"""Files and directories written whole or not at all; text files read with clear errors."""
+"""Files and directories written whole or not at all; a user's files read through one checked
+open (regular files only, weighed before they are read), with clear errors."""
 
 from __future__ import annotations
 
@@ -13,20 +14,128 @@ from pathlib import Path
 
 from hexapod.errors import InputFileError
 
+# ------------------------------------------------------------------ inputs checked before reading
 
-def read_text(path: str | Path, what: str) -> str:
-    """The text of a file, or an :class:`InputFileError` saying why it cannot be read
-    (``what`` names the kind of file expected, e.g. ``"scene file"``). The text is UTF-8; a
-    byte-order mark at its start, as some editors write, is dropped."""
-    path = Path(path)
+_KINDS = ((stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+          (stat.S_ISFIFO, "a named pipe"), (stat.S_ISSOCK, "a socket"),
+          (stat.S_ISLNK, "a symbolic link"), (stat.S_ISDIR, "a directory"),
+          (stat.S_ISREG, "a regular file"))
+
+
+def _kind(mode: int) -> str:
+    return next((name for test, name in _KINDS if test(mode)), "a special file")
+
+
+#: Bytes read at a time once a file turned out larger than it said (a file still growing).
+_CHUNK = 1 << 20
+
+
+def check_input(path: str | Path, what: str) -> os.stat_result:
+    """``path`` as an input, checked before it is opened: it must be a regular file (or a
+    link to one). A named pipe, a device or a socket is refused with its kind named, since
+    reading one may wait for ever or never end.
+
+    Returns
+    -------
+    os.stat_result
+        The file's status.
+
+    Raises
+    ------
+    InputFileError
+        The file is missing, cannot be reached, or is not a regular file.
+    """
     try:
-        data = path.read_bytes()
+        info = os.stat(path)
     except FileNotFoundError:
         raise InputFileError(f"{path}: no such file") from None
-    except IsADirectoryError:
-        raise InputFileError(f"{path}: is a directory, not a {what}") from None
     except OSError as error:
-        raise InputFileError(f"{path}: cannot read the file ({error})") from None
+        raise InputFileError(f"{path}: cannot read the file ({error.strerror})") from None
+    if stat.S_ISDIR(info.st_mode):
+        raise InputFileError(f"{path}: is a directory, not a {what}")
+    if not stat.S_ISREG(info.st_mode):
+        raise InputFileError(f"{path}: is {_kind(info.st_mode)}, not a {what}: only a regular "
+                             "file is read (a pipe or a device may never end)")
+    return info
+
+
+def open_input(path: str | Path, what: str, *, cost: float = 1.0):
+    """A user's file opened for reading (binary), the one checked way in: the file must be a
+    regular file (:func:`check_input`, before it is opened; a file swapped for a pipe in
+    between is refused too, without waiting on it) and its size weighed against the memory
+    limit (:func:`hexapod._support.limits.check_memory`: reading it costs about ``cost``
+    bytes of memory a byte), before any of it is read.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+    what : str
+        The kind of file expected, for messages (``"scene file"``).
+    cost : float
+        Bytes of memory its reader needs per byte of the file.
+
+    Returns
+    -------
+    BinaryIO
+        The open file, to be closed by the caller (a context manager).
+
+    Raises
+    ------
+    InputFileError
+        The file is missing, not a regular file, or cannot be opened.
+    HexapodError
+        Reading it would pass the memory limit.
+    """
+    from hexapod._support.limits import check_memory, size_text
+
+    info = check_input(path, what)
+    check_memory(cost * info.st_size, f"reading the {what} {path} ({size_text(info.st_size)})",
+                 f"give a smaller {what}", option=None)
+    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0)
+    try:
+        handle = os.open(path, flags)
+    except OSError as error:
+        raise InputFileError(f"{path}: cannot read the file ({error.strerror})") from None
+    opened = os.fstat(handle)
+    if not stat.S_ISREG(opened.st_mode):
+        os.close(handle)
+        raise InputFileError(f"{path}: is {_kind(opened.st_mode)}, not a {what}: only a "
+                             "regular file is read (a pipe or a device may never end)")
+    os.set_blocking(handle, True)
+    return os.fdopen(handle, "rb")
+
+
+def read_bytes(path: str | Path, what: str, *, cost: float = 1.0) -> bytes:
+    """The content of a user's file, read through :func:`open_input` (refused before it is
+    read when it is not a regular file or would pass the memory limit), and never more than
+    the limit allows if it grows while it is read."""
+    from hexapod._support.limits import check_memory, max_memory
+
+    budget = int(max_memory() / max(cost, 1.0))
+    with open_input(path, what, cost=cost) as stream:
+        try:
+            size = os.fstat(stream.fileno()).st_size
+            chunks, total = [], 0
+            while chunk := stream.read(size + 1 if not chunks else _CHUNK):
+                chunks.append(chunk)
+                total += len(chunk)
+                if total > budget:
+                    check_memory(cost * total, f"reading the {what} {path} (still growing)",
+                                 f"give a smaller {what}", option=None)
+        except OSError as error:
+            raise InputFileError(f"{path}: cannot read the file ({error.strerror})") from None
+    return b"".join(chunks)
+
+
+def read_text(path: str | Path, what: str, *, cost: float = 50.0) -> str:
+    """The text of a user's file, or an :class:`InputFileError` saying why it cannot be read
+    (``what`` names the kind of file expected, e.g. ``"scene file"``). The file is checked
+    before it is read (:func:`read_bytes`; ``cost``: bytes of memory its parser needs per
+    byte, 50 for TOML or XML). The text is UTF-8; a byte-order mark at its start, as some
+    editors write, is dropped."""
+    path = Path(path)
+    data = read_bytes(path, what, cost=cost)
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as error:
@@ -50,16 +159,8 @@ def _sync(stream) -> None:
 
 # ------------------------------------------------------------------ outputs checked before work
 
-_KINDS = ((stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
-          (stat.S_ISFIFO, "a named pipe"), (stat.S_ISSOCK, "a socket"),
-          (stat.S_ISLNK, "a symbolic link"), (stat.S_ISDIR, "a directory"),
-          (stat.S_ISREG, "a regular file"))
 #: Characters the temporary names add to an output's name (``.NAME.PID.XXXXXXXX.tmp``).
 _TEMPORARY_EXTRA = 40
-
-
-def _kind(mode: int) -> str:
-    return next((name for test, name in _KINDS if test(mode)), "a special file")
 
 
 def _inside(path: Path, folder: Path) -> bool:

@@ -14,7 +14,13 @@ steps          10,000,000                      ``HEXAPOD_MAX_STEPS``    ``--max-
                                                                         (simulate)
 bodies,        10,000 each                     ``HEXAPOD_MAX_BODIES``
 joints
+contacts       32                              ``HEXAPOD_MAX_CONTACTS``
+instants       20,000                          ``HEXAPOD_MAX_INSTANTS`` ``--max-instants``
+exported                                                                (export)
 =============  ==============================  =======================  ==================
+
+Files a command reads are weighed against the memory limit before they are read
+(:func:`hexapod._support.files.open_input`).
 
 An option given wins over the environment, which wins over the default. Nothing here imports
 NumPy: the command line parses sizes before loading it.
@@ -39,6 +45,13 @@ DEFAULT_MAX_STEPS = 10_000_000
 #: bodies (and joints) of a scene: assembling a model builds symbolic expressions per body, and
 #: scenes beyond this many would take minutes before anything is computed
 DEFAULT_MAX_BODIES = 10_000
+#: foot contacts of a scene: the ground-force policy and the report's per-foot figures grow
+#: faster than the square of their number (one body on 30 feet: a report of 12 s; 50: 32 s
+#: and 1 GB; 100: over 2 minutes and 5 GB)
+DEFAULT_MAX_CONTACTS = 32
+#: saved instants of a result that ``hexapod export`` reads: each becomes VTK files held in
+#: memory until the directory is written (about 8 KB and, for a report, a Newton solve each)
+DEFAULT_MAX_INSTANTS = 20_000
 
 _UNITS = {"": 1, "K": 1024, "M": 1024**2, "G": GIB, "T": 1024**4}
 _SIZE = re.compile(r"\s*([0-9]*\.?[0-9]+(?:[eE][+-]?[0-9]+)?)\s*([KMGT]?)(?:I?B)?\s*",
@@ -132,6 +145,24 @@ def max_bodies() -> int:
     return _from_environment("HEXAPOD_MAX_BODIES", _whole, DEFAULT_MAX_BODIES)
 
 
+def max_instants(given: int | None = None) -> int:
+    """The limit on the saved instants an export reads: ``given``, else
+    ``HEXAPOD_MAX_INSTANTS``, else :data:`DEFAULT_MAX_INSTANTS`."""
+    if given is not None:
+        return int(given)
+    return _from_environment("HEXAPOD_MAX_INSTANTS", _whole, DEFAULT_MAX_INSTANTS)
+
+
+def check_instants(count: int, what: str, limit: int | None = None) -> None:
+    """Refuse to export more than ``limit`` (or :func:`max_instants`) saved instants."""
+    bound = max_instants(limit)
+    if count > bound:
+        raise HexapodError(
+            f"{what} holds {count:,} saved instants (limit {bound:,}): export a shorter run or "
+            f"fewer samples, or raise the limit with "
+            f"{_raise_with('--max-instants', _round_up(count), 'HEXAPOD_MAX_INSTANTS')}")
+
+
 def _suggested_size(size: float) -> str:
     """A round size above ``size`` to suggest as a new limit: ``8G``, ``512M``."""
     for unit, factor in (("T", 1024**4), ("G", GIB), ("M", 1024**2)):
@@ -155,33 +186,55 @@ def _shown(count: float) -> str:
     return f"{mantissa}e{int(exponent)}" if e else mantissa
 
 
+def _raise_with(option: str | None, value: str, variable: str) -> str:
+    """How to raise a limit: "--max-memory 8G (or HEXAPOD_MAX_MEMORY)", or without an option
+    "the environment variable HEXAPOD_MAX_MEMORY=8G"."""
+    if option is None:
+        return f"the environment variable {variable}={value}"
+    return f"{option} {value} (or {variable})"
+
+
 def check_memory(estimate: float, what: str, how_to_lower: str,
-                 limit: int | None = None) -> None:
+                 limit: int | None = None, option: str | None = "--max-memory") -> None:
     """Refuse a job whose memory ``estimate`` (bytes) passes the limit (``limit`` or
     :func:`max_memory`): "<what> would need about 7.7 GiB (limit 4.0 GiB): <how_to_lower>, or
-    raise the limit with --max-memory 8G"."""
+    raise the limit with --max-memory 8G" (``option``: the command's option that raises it,
+    None where only the environment does)."""
     bound = max_memory(limit)
     if estimate > bound:
         raise HexapodError(
             f"{what} would need about {size_text(estimate)} of memory (limit "
-            f"{size_text(bound)}): {how_to_lower}, or raise the limit with --max-memory "
-            f"{_suggested_size(estimate)} (or HEXAPOD_MAX_MEMORY)")
+            f"{size_text(bound)}): {how_to_lower}, or raise the limit with "
+            f"{_raise_with(option, _suggested_size(estimate), 'HEXAPOD_MAX_MEMORY')}")
 
 
 def check_steps(estimate: float, what: str, how_to_lower: str,
-                limit: int | None = None) -> None:
+                limit: int | None = None, option: str | None = "--max-steps") -> None:
     """Refuse a job whose number of steps ``estimate`` passes the limit (``limit`` or
-    :func:`max_steps`)."""
+    :func:`max_steps`; ``option`` as for :func:`check_memory`)."""
     bound = max_steps(limit)
     if estimate > bound:
         raise HexapodError(
             f"{what} would take about {_shown(estimate)} steps (limit {bound:,}): "
-            f"{how_to_lower}, or raise the limit with --max-steps {_round_up(estimate)} (or "
-            "HEXAPOD_MAX_STEPS)")
+            f"{how_to_lower}, or raise the limit with "
+            f"{_raise_with(option, _round_up(estimate), 'HEXAPOD_MAX_STEPS')}")
 
 
-def check_model_size(bodies: int, joints: int, what: str) -> None:
-    """Refuse to assemble a scene of more bodies or joints than :func:`max_bodies`."""
+def max_contacts() -> int:
+    """The limit on foot contacts: ``HEXAPOD_MAX_CONTACTS``, else :data:`DEFAULT_MAX_CONTACTS`."""
+    return _from_environment("HEXAPOD_MAX_CONTACTS", _whole, DEFAULT_MAX_CONTACTS)
+
+
+def check_model_size(bodies: int, joints: int, what: str, contacts: int = 0) -> None:
+    """Refuse to assemble a scene of more bodies or joints than :func:`max_bodies`, or more
+    foot contacts than :func:`max_contacts`."""
+    bound = max_contacts()
+    if contacts > bound:
+        raise HexapodError(
+            f"{what} has {contacts} foot contacts (limit {bound}): the sharing of the ground "
+            "forces grows faster than the square of their number (50 take half a minute and a "
+            "gigabyte); give fewer, or raise the limit with the environment variable "
+            f"HEXAPOD_MAX_CONTACTS={contacts}")
     bound = max_bodies()
     for count, kind in ((bodies, "bodies"), (joints, "joints")):
         if count > bound:

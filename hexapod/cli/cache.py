@@ -71,13 +71,32 @@ def _text(report: dict) -> str:
 
     if report["folder"] is None:
         return f"the cache is off ({report['where']}): nothing is kept between runs"
-    lines = [f"cache folder: {report['folder']} ({report['where']})",
+    lines = [f"cache folder: {_printable(str(report['folder']))} ({report['where']})",
              f"entries: {report['entries']}, {size_text(report['size'])} of at most "
              f"{report['limit_text']}"]
     for item in reversed(report["items"]):  # most recently used first
         used = time.strftime("%Y-%m-%d %H:%M", time.localtime(item["used"]))
-        lines.append(f"  {size_text(item['size']):>10}  used {used}  {item['what']}")
+        lines.append(f"  {size_text(item['size']):>10}  used {used}  {_printable(item['what'])}")
     return "\n".join(lines)
+
+
+def _printable(text) -> str:
+    """``text`` with its control characters escaped (``\\x1b``): what an entry says is shown,
+    never sent to the terminal as a command."""
+    text = str(text)
+    return "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii")
+                   for c in text)
+
+
+def _not_removed(left: list, args) -> list:
+    """The entries still there that the cleaning should have removed (it could not)."""
+    if args.older_than is None and args.max_size is None:
+        return left
+    stale = [e for e in left if args.older_than is not None
+             and time.time() - e.used > args.older_than * 86400.0]
+    if args.max_size is not None and sum(e.size for e in left) > args.max_size:
+        return stale or left
+    return stale
 
 
 def _clean(cache, args) -> int:
@@ -90,6 +109,16 @@ def _clean(cache, args) -> int:
     unused = None if args.older_than is None else args.older_than * 86400.0
     removed, freed = cache.clean(root, unused_for=unused, keep_size=args.max_size)
     left = cache.entries(root)
-    print(f"removed {removed} entr{'y' if removed == 1 else 'ies'} ({size_text(freed)}) from "
-          f"{root}; {len(left)} left ({size_text(sum(e.size for e in left))})")
+    said = (f"removed {removed} entr{'y' if removed == 1 else 'ies'} ({size_text(freed)}) from "
+            f"{root}; {len(left)} left ({size_text(sum(e.size for e in left))})")
+    failed = _not_removed(left, args)
+    if failed:
+        from hexapod.errors import HexapodError
+
+        writable = os.access(root, os.W_OK) and all(
+            os.access(e.path.parent, os.W_OK) for e in failed)
+        raise HexapodError(f"{said}: could not remove {len(failed)} entr"
+                           f"{'y' if len(failed) == 1 else 'ies'}"
+                           + ("" if writable else " (the folder is not writable)"))
+    print(said)
     return 0

@@ -13,7 +13,7 @@ import math
 import os
 import sys
 
-from hexapod.catalog import POLICIES
+from hexapod.catalog import MAX_FACES, POLICIES
 from hexapod.scene.builtin import DEFAULT_SCENE
 
 # ------------------------------------------------------------------ arguments
@@ -30,9 +30,6 @@ MAX_TIME = 1e9
 MAX_COUNT = 10**15
 #: The largest number of worker processes of a local cluster.
 MAX_WORKERS = 1024
-#: The most faces of a friction pyramid: with 1000 faces it is within 5e-6 of the cone (the
-#: exact cone, 0, is cheaper still).
-MAX_FACES = 1000
 
 
 def _number(kind, accept, condition: str):
@@ -113,11 +110,15 @@ def read_times(path: str, limit: int):
     """The output times of a file, one a line (blank lines and ``#`` comments skipped): an
     ``array('d')`` of at most ``limit`` finite, increasing times; a ValueError saying what is
     wrong (and where), or that the file cannot be read."""
+    import io
     from array import array
+
+    from hexapod._support.files import open_input
+    from hexapod.errors import InputFileError
 
     times = array("d")
     try:
-        with open(path, encoding="utf-8") as lines:
+        with io.TextIOWrapper(open_input(path, "file of times"), encoding="utf-8") as lines:
             for number, line in enumerate(lines, 1):
                 text = line.split("#", 1)[0].strip()
                 if not text:
@@ -129,6 +130,8 @@ def read_times(path: str, limit: int):
                 if len(times) > limit:
                     raise ValueError(f"{path} holds more than {limit:,} times, the limit of "
                                      "steps (--max-steps)")
+    except InputFileError as error:
+        raise ValueError(str(error)) from None
     except (OSError, UnicodeDecodeError) as error:
         raise ValueError(f"cannot read {path}: {getattr(error, 'strerror', None) or error}") \
             from None

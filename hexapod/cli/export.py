@@ -37,6 +37,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--mesh", action="append", metavar="BODY=FILE",
                         help="draw BODY with a mesh file meshio reads (STL, OBJ, VTU ...), given "
                         "in the body's centre-of-mass frame in metres; repeatable")
+    parser.add_argument("--max-instants", type=at_least(1), metavar="N",
+                        help="the most saved instants read (default: the environment variable "
+                        "HEXAPOD_MAX_INSTANTS, else 20000)")
     parser.add_argument("--max-mesh-size", type=mesh_size, metavar="SIZE",
                         help="the largest mesh file read for a body, e.g. 512M or 2G (default: "
                         "the environment variable HEXAPOD_MAX_MESH_BYTES, else 256M)")
@@ -52,6 +55,7 @@ def mesh_size(text: str) -> int:
 
 def run(args) -> int:
     from hexapod._support.files import write_directory_atomically
+    from hexapod._support.limits import check_instants
     from hexapod.errors import InputFileError
     from hexapod.model.assemble import assemble
     from hexapod.output.recording import read_recording
@@ -62,7 +66,8 @@ def run(args) -> int:
                            inputs=given_files(args.results, args.scene, *(
                                item.partition("=")[2] for item in args.mesh or [])),
                            ours=suffixes(".vtu", ".pvd", ".csv", ".json"))
-    recording = read_recording(args.results)
+    recording = read_recording(args.results, weigh=lambda count: check_instants(
+        count, f"{args.results}", args.max_instants))
     source = args.scene or recording.scene
     if not source:
         raise InputFileError(f"{recording.scene_file}: does not say which scene the results "

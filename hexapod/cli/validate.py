@@ -16,9 +16,13 @@ def _count(n: int, noun: str) -> str:
 
 
 def run(args) -> int:
+    from hexapod._support.limits import check_model_size
     from hexapod.scene.builtin import load_scene
 
     scene = load_scene(args.scene)
+    # refused as every command that assembles it refuses it
+    check_model_size(len(scene.bodies), len(scene.joints), f"scene '{scene.name}' "
+                     f"({args.scene})", sum(j.kind == "contact" for j in scene.joints.values()))
     scene.validate()
     counts = ", ".join(_count(len(items), noun) for items, noun in (
         (scene.bodies, "body"), (scene.joints, "joint"), (scene.drivers, "driver"),

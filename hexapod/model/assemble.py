@@ -381,7 +381,8 @@ def assemble(scene: Scene, *, rank_tolerance: float = 1e-9) -> Model:
         (:func:`hexapod._support.limits.max_bodies`, ``HEXAPOD_MAX_BODIES``).
     """
     where = f" ({scene.source})" if scene.source else ""
-    check_model_size(len(scene.bodies), len(scene.joints), f"scene '{scene.name}'{where}")
+    check_model_size(len(scene.bodies), len(scene.joints), f"scene '{scene.name}'{where}",
+                     sum(j.kind == "contact" for j in scene.joints.values()))
     scene.validate()
     si = scene.in_si()
     return _Assembly(si).model(rank_tolerance, scene_digest(si, rank_tolerance), scene.source)

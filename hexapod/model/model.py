@@ -42,6 +42,7 @@ from hexapod.model.infos import (
     JointInfo,
     RowInfo,
 )
+from hexapod.model.law_values import evaluate_laws
 from hexapod.model.mass import BlockDiagonal
 from hexapod.scene.laws import Law
 from hexapod.spatial import (
@@ -284,8 +285,7 @@ class Model:
                 return tuple(x[:, column].copy() for x in batch[1:])
         shape = (self.n_w,) + t.shape
         w, wd, wdd = np.zeros(shape), np.zeros(shape), np.zeros(shape)
-        for i, law in enumerate(self.laws):
-            w[i], wd[i], wdd[i] = law.evaluate(t)
+        evaluate_laws(self, t, w, wd, wdd)
         if data is not None and t.ndim == 1 and t.size > 1:
             data.laws = ({float(x): k for k, x in enumerate(t)}, w, wd, wdd)
         return w, wd, wdd

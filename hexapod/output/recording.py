@@ -61,8 +61,11 @@ class Recording:
     frame: str = "joint"
 
 
-def read_recording(directory: str | Path) -> Recording:
+def read_recording(directory: str | Path, weigh=None) -> Recording:
     """Read the result directory of ``hexapod simulate`` or ``hexapod report``.
+
+    ``weigh``, when given, is called with the number of saved instants (from an array's header,
+    or the CSV's lines) before any of them is read, and raises to refuse them.
 
     Raises
     ------
@@ -77,9 +80,9 @@ def read_recording(directory: str | Path) -> Recording:
         raise InputFileError(f"{directory}: is a file, not a result directory of 'hexapod "
                              "simulate' or 'hexapod report'")
     if (directory / "results.npz").exists():
-        return _read_simulation(directory)
+        return _read_simulation(directory, weigh)
     if (directory / "inverse.csv").exists():
-        return _read_report(directory)
+        return _read_report(directory, weigh)
     raise InputFileError(f"{directory}: not a result directory of 'hexapod simulate' "
                          "(results.npz) or 'hexapod report' (inverse.csv)")
 
@@ -132,10 +135,16 @@ def _check_shapes(path: Path, headers: dict) -> None:
                                  f"({dtype}), not one row per saved time")
 
 
-def _read_simulation(directory: Path) -> Recording:
+def _read_simulation(directory: Path, weigh) -> Recording:
+    from hexapod._support.files import check_input, read_text
+
     path = directory / "results.npz"
+    check_input(path, "results file")
     try:
-        _check_shapes(path, _npz_headers(path, max_memory()))
+        headers = _npz_headers(path, max_memory())
+        _check_shapes(path, headers)
+        if weigh is not None:
+            weigh(headers["t"][0][0])
         with np.load(path, allow_pickle=False) as saved:
             arrays = {key: saved[key] for key in saved.files}
     except (OSError, ValueError, EOFError, zipfile.BadZipFile) as error:
@@ -154,8 +163,8 @@ def _read_simulation(directory: Path) -> Recording:
     else:  # written before results recorded their scene: a built-in scene's name may do
         stats = directory / "stats.json"
         try:
-            name = json.loads(stats.read_text(encoding="utf-8")).get("scene")
-        except (OSError, ValueError, AttributeError):
+            name = json.loads(read_text(stats, "statistics file")).get("scene")
+        except (InputFileError, ValueError, AttributeError):
             name = None
         if isinstance(name, str) and name:
             scene, said_by = name, str(stats)
@@ -168,29 +177,61 @@ def _read_simulation(directory: Path) -> Recording:
 _SCENE_LINE = re.compile(r"^Scene `([^`]*)`", re.M)
 
 
-def _read_report(directory: Path) -> Recording:
+#: bytes of memory reading a report's CSV needs per byte of the file (its text, and the
+#: careful parser's rows of strings when the fast one cannot read it)
+REPORT_MEMORY_PER_BYTE = 20
+
+
+def _report_table(path: Path, header: list[str], body: str) -> np.ndarray:
+    """The numbers of a report CSV's rows (``body``, from line 2): NumPy's parser, else the
+    careful one, which says what is wrong and where."""
+    if '"' not in body:
+        try:
+            values = np.loadtxt(io.StringIO(body), delimiter=",", ndmin=2, comments=None)
+        except ValueError:
+            values = None
+        if values is not None and values.shape[1] == len(header) and len(values):
+            return values
+    table = []
+    reader = csv.reader(io.StringIO(body, newline=""))
+    try:
+        for row in reader:
+            number = reader.line_num + 1
+            if not row:
+                continue
+            if len(row) != len(header):
+                raise InputFileError(f"{path}: line {number}: {len(row)} values for "
+                                     f"{len(header)} columns")
+            try:
+                table.append([float(x) for x in row])
+            except ValueError:
+                raise InputFileError(f"{path}: line {number}: not a number in the "
+                                     "row") from None
+    except csv.Error as error:
+        raise InputFileError(f"{path}: line {reader.line_num + 1}: cannot read the CSV "
+                             f"({error}): not the CSV of 'hexapod report'") from None
+    if not table:
+        raise InputFileError(f"{path}: no sample")
+    return np.array(table)
+
+
+def _read_report(directory: Path, weigh) -> Recording:
     from hexapod._support.files import read_text
 
     path = directory / "inverse.csv"
-    rows = list(csv.reader(io.StringIO(read_text(path, "report CSV"))))
-    if not rows or not rows[0] or rows[0][0] != "t":
+    text = read_text(path, "report CSV", cost=REPORT_MEMORY_PER_BYTE)
+    first, _, body = text.partition("\n")
+    try:
+        header = next(csv.reader([first]), [])
+    except csv.Error as error:
+        raise InputFileError(f"{path}: line 1: cannot read the CSV ({error}): not the CSV of "
+                             "'hexapod report'") from None
+    if not header or header[0] != "t":
         raise InputFileError(f"{path}: line 1: the header does not start with 't': not the CSV "
                              "of 'hexapod report'")
-    header = rows[0]
-    table = []
-    for number, row in enumerate(rows[1:], start=2):
-        if not row:
-            continue
-        if len(row) != len(header):
-            raise InputFileError(f"{path}: line {number}: {len(row)} values for "
-                                 f"{len(header)} columns")
-        try:
-            table.append([float(x) for x in row])
-        except ValueError:
-            raise InputFileError(f"{path}: line {number}: not a number in the row") from None
-    if not table:
-        raise InputFileError(f"{path}: no sample")
-    values = np.array(table)
+    if weigh is not None:
+        weigh(body.count("\n") + (not body.endswith("\n")))
+    values = _report_table(path, header, body)
     if not np.all(np.isfinite(values[:, 0])):
         raise InputFileError(f"{path}: non-finite times")
     summary = directory / "summary.md"

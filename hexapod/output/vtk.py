@@ -44,6 +44,7 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
+from hexapod._support.files import check_input
 from hexapod._support.limits import parse_size, size_text
 from hexapod.algorithms.ground import ground_reactions
 from hexapod.algorithms.kinematics import assemble_positions, body_poses
@@ -467,8 +468,9 @@ def read_mesh(path: str | Path, limit: int | None = None):
     import meshio
 
     path = Path(path)
-    if not path.is_file():
+    if not path.exists():
         raise InputFileError(f"{path}: no such mesh file")
+    check_input(path, "mesh file")  # a pipe or a device: said, never waited on
     _check_mesh_size(path, max_mesh_bytes(limit))
     said = io.StringIO()
     try:

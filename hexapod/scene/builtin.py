@@ -63,7 +63,7 @@ def load_scene(name_or_path: str | Path, *, base: str = "auto") -> Scene:
     if base != "auto":
         raise InputFileError(f"{name_or_path}: base={base!r} (--base) is for URDF models; a "
                              "scene file or a built-in scene says how its bodies stand")
-    if path.suffix == ".toml" or path.is_file():
+    if path.suffix == ".toml" or (path.exists() and not path.is_dir()):  # a pipe: refused
         from hexapod.scene.reader import read_scene  # with TOML's parser: not for a URDF
 
         return read_scene(path)

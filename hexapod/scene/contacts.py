@@ -22,7 +22,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hexapod.catalog import POLICIES
+from hexapod._support import limits
+from hexapod.catalog import MAX_FACES, POLICIES
 from hexapod.errors import Problem
 from hexapod.scene.laws import Law
 
@@ -66,6 +67,10 @@ def stance_intervals(contact, start: float, stop: float) -> list[tuple[float, fl
     if contact.duty >= 1.0:
         return [(start, stop)]
     period = contact.period
+    limits.check_steps(2.0 * (stop - start) / period, f"the stances of contact '{contact.name}' "
+                       f"(period {period:g} s) over {stop - start:g} s, a phase each,",
+                       "give the contact a longer period, or ask for a shorter window",
+                       option=None)
     first = int(np.floor(start / period - contact.lift_off)) - 1
     out = []
     for k in range(first, first + int(np.ceil((stop - start) / period)) + 3):
@@ -174,7 +179,7 @@ class GroundForces:
             elif key != "min_normal" and number <= 0:
                 out.append(problem(key, f"must be positive, got {value!r}"))
         if not isinstance(self.faces, int) or isinstance(self.faces, bool) or not (
-                self.faces == 0 or self.faces >= 3):
-            out.append(problem("faces", f"must be 0 (the exact cone) or at least 3, got "
-                               f"{self.faces!r}"))
+                self.faces == 0 or 3 <= self.faces <= MAX_FACES):
+            out.append(problem("faces", f"must be 0 (the exact cone) or at least 3 (at most "
+                               f"{MAX_FACES}), got {self.faces!r}"))
         return out

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import random
 import signal
@@ -52,6 +53,7 @@ class Hostile:
     status: tuple[int, ...]
     says: tuple[str, ...]  # words the error line must hold
     writes: tuple[str, ...] = ()  # outputs a failed run writes (marked failed in stats.json)
+    env: tuple[tuple[str, str], ...] = ()  # environment variables of the run
 
     def argv(self, folder: Path) -> list[str]:
         return [str(a) for a in self.make(folder)]
@@ -78,6 +80,22 @@ def _device(folder: Path) -> Path:
     return path
 
 
+def _pipe(folder: Path, name: str) -> Path:
+    """A named pipe that nobody writes to: reading it would wait for ever."""
+    path = folder / name
+    os.mkfifo(path)
+    return path
+
+
+def _report_csv(folder: Path, rows: int = 2, cell: str = "0") -> Path:
+    """A report folder whose ``inverse.csv`` has ``rows`` rows, the second value ``cell``."""
+    run = folder / "report"
+    run.mkdir()
+    with open(run / "inverse.csv", "w") as stream:
+        stream.write("t,x\n" + f"0,{cell}\n" + "".join(f"{k},0\n" for k in range(1, rows)))
+    return run
+
+
 def _scene(folder: Path, text: str, name: str = "scene.toml") -> Path:
     path = folder / name
     path.write_text(text)
@@ -92,6 +110,29 @@ kind = "joint"
 joint = "hinge"
 law = { type = "spline", times = [0.0, 1e-300, 2e-300], values = [0.0, 0.1, 0.2] }
 """
+
+
+_DOC = (ROOT / "docs" / "scene-format.md").read_text()
+#: the documentation's stool: a body on four contacts, two of them stepping (period 2 s)
+STOOL_TEXT = _DOC[_DOC.index("# A stool on four feet"):_DOC.index("```", _DOC.index(
+    "# A stool on four feet"))]
+
+
+def _driven(expression: str) -> str:
+    """The pendulum driven by the law ``expression`` of t."""
+    return PENDULUM_TEXT + ('\n[[driver]]\nname = "swing"\njoint = "pivot"\nlaw = { type = '
+                            f'"expression", expression = "{expression}" }}\n')
+
+
+def _many_feet(count: int) -> str:
+    """The stool on ``count`` feet in a circle, all on the ground."""
+    feet = []
+    for k in range(count):
+        x, y = 0.2 * math.cos(2 * math.pi * k / count), 0.2 * math.sin(2 * math.pi * k / count)
+        feet.append(f'[[joint]]\nname = "f{k}"\ntype = "contact"\nparent = "ground"\n'
+                    f'child = "seat"\nchild_frame = [{x}, {y}, -0.4]\nduty = 1.0\n'
+                    f"foothold = [{x}, {y}, 0.0]\n")
+    return STOOL_TEXT[:STOOL_TEXT.index("[[joint]]")] + "".join(feet)
 
 
 def _wide_motion(folder: Path, columns: int = 100_000) -> Path:
@@ -178,6 +219,77 @@ CASES = (
     Hostile("a mesh of 4 GiB", lambda f: [
         "export", _small_run(f), "--vtk", f / "vtk", "--mesh", f"rod={_huge_mesh(f)}"], (1,),
             ("huge.stl",)),
+    # inputs that never end: refused by kind before they are opened
+    Hostile("a scene that is a pipe", lambda f: ["simulate", _pipe(f, "scene.toml")], (1,),
+            ("scene.toml", "named pipe")),
+    Hostile("a scene without suffix that is a pipe", lambda f: ["validate", _pipe(f, "s")],
+            (1,), ("named pipe",)),
+    Hostile("a URDF that is a pipe", lambda f: [
+        "inverse", _pipe(f, "model.urdf"), "--motion", _copy(f, CHAIN / "motion.csv"), "--out",
+        f / "out.csv"], (1,), ("model.urdf", "named pipe")),
+    Hostile("a motion that is a pipe", lambda f: [
+        "inverse", _copy(f, CHAIN / "model.urdf"), "--motion", _pipe(f, "motion.csv"), "--out",
+        f / "out.csv"], (1,), ("motion.csv", "named pipe")),
+    Hostile("a study that is a pipe", lambda f: ["sweep", _pipe(f, "study.toml"), "--out",
+                                                f / "study"], (1,), ("study.toml", "named pipe")),
+    Hostile("a study's scene that is a pipe", lambda f: ["sweep", _scene(
+        f, f'[study]\nname = "s"\nscene = "{_pipe(f, "base.toml")}"\n[vary.duty]\n'
+        'values = [0.6]\n[job]\nkind = "inverse"\n', "study.toml"), "--out", f / "study"],
+            (1,), ("base.toml", "named pipe")),
+    Hostile("--t-eval @ a pipe", lambda f: ["simulate", PENDULUM, "--t-eval",
+                                            f"@{_pipe(f, 'times.txt')}"], (2,),
+            ("--t-eval", "named pipe")),
+    Hostile("a report's CSV that is a pipe", lambda f: [
+        "export", _pipe((f / "r").mkdir() or f / "r", "inverse.csv").parent, "--vtk", f / "v"],
+            (1,), ("inverse.csv", "named pipe")),
+    Hostile("a results.npz that is a pipe", lambda f: [
+        "export", _pipe((f / "r").mkdir() or f / "r", "results.npz").parent, "--vtk", f / "v"],
+            (1,), ("results.npz", "named pipe")),
+    Hostile("a mesh that is a pipe", lambda f: [
+        "export", _small_run(f), "--vtk", f / "vtk", "--mesh", f"rod={_pipe(f, 'rod.stl')}"],
+            (1,), ("rod.stl", "named pipe")),
+    # counts and sizes bounded
+    Hostile("a report of 30,000 rows to export", lambda f: [
+        "export", _report_csv(f, 30_000), "--vtk", f / "v"], (1,),
+            ("30,000 saved instants", "--max-instants")),
+    Hostile("a CSV field over 131,072 characters", lambda f: [
+        "export", _report_csv(f, 2, "x" * 200_000), "--vtk", f / "v"], (1,),
+            ("inverse.csv", "line 2")),
+    Hostile("a scene larger than the memory limit", lambda f: [
+        "validate", _scene(f, PENDULUM_TEXT + "#" * 400_000)], (1,),
+            ("scene.toml", "HEXAPOD_MAX_MEMORY"), env=(("HEXAPOD_MAX_MEMORY", "1M"),)),
+    Hostile("a motion weighed before it is read", lambda f: [
+        "inverse", _copy(f, CHAIN / "model.urdf"), "--motion", _scene(
+            f, "t,j0,j1,j2\n" + "".join(f"{k},0.1,0.2,0.3\n" for k in range(200_000)),
+            "motion.csv"), "--out", f / "out.csv"], (1,), ("reading the motion file", "motion.csv"),
+            env=(("HEXAPOD_MAX_MEMORY", "50M"),)),
+    Hostile("a friction pyramid of 1e9 faces in the scene", lambda f: [
+        "report", _scene(f, STOOL_TEXT.replace("faces = 0 ", "faces = 1000000000 ")), "--out",
+        f / "r"], (1,), ("scene.toml", "faces", "1000")),
+    Hostile("a contact of period 1e-12 s", lambda f: [
+        "report", _scene(f, STOOL_TEXT.replace("period = 2.0  ", "period = 1e-12")), "--out",
+        f / "r"], (1,), ("scene.toml", "period", "back_left")),
+    Hostile("a contact of period 2e-6 s over 100 s", lambda f: [
+        "report", _scene(f, STOOL_TEXT.replace("period = 2.0  ", "period = 2e-6")), "--out",
+        f / "r", "--duration", "100", "--samples", "3"], (1,),
+            ("back_left", "HEXAPOD_MAX_STEPS")),
+    Hostile("validate a scene of more bodies than the limit", lambda f: [
+        "validate", _scene(f, '[scene]\nname = "many"\n' + "".join(
+            f'[[body]]\nname = "b{k}"\nmass = 1.0\ninertia = [1.0, 1.0, 1.0]\n'
+            for k in range(3)))], (1,), ("3 bodies", "HEXAPOD_MAX_BODIES"),
+            env=(("HEXAPOD_MAX_BODIES", "2"),)),
+    Hostile("1000 contacts on one body", lambda f: [
+        "report", _scene(f, _many_feet(1000)), "--out", f / "r"], (1,),
+            ("1000 foot contacts", "HEXAPOD_MAX_CONTACTS")),
+    Hostile("validate 1000 contacts on one body", lambda f: [
+        "validate", _scene(f, _many_feet(1000))], (1,),
+            ("1000 foot contacts", "HEXAPOD_MAX_CONTACTS")),
+    # laws that blow up end the run as failed, naming the law and the time
+    Hostile("a driver law 1/(t-0.1)", lambda f: [
+        "simulate", _scene(f, _driven("1/(t-0.1)")), "--t-end", "0.3", "--out", f / "run"],
+            (1,), ("driver 'swing'", "t = 0.09"), writes=("run",)),
+    Hostile("a driver law 1/0", lambda f: ["report", _scene(f, _driven("1/0")), "--out",
+                                          f / "r"], (1,), ("driver 'swing'", "division by zero")),
     # errors that escape
     Hostile("an unreadable .vtu mesh", lambda f: [
         "export", _small_run(f), "--vtk", f / "vtk", "--mesh",
@@ -192,7 +304,7 @@ def run_case(case: Hostile, folder: Path) -> tuple[str, str]:
     """(verdict, detail) of one case run in ``folder``."""
     argv = case.argv(folder)
     before = _listing(folder)
-    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
+    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", **dict(case.env)}
     started = time.perf_counter()
     try:
         done = subprocess.run([sys.executable, "-m", "hexapod", *argv], cwd=folder, env=env,

@@ -11,6 +11,10 @@ from hexapod.scene.element import Attachment, check_finite
 from hexapod.scene.joints.base import NUMBER, VECTOR3, Joint, register
 from hexapod.scene.joints.geometry import LENGTH
 
+#: The shortest period of a contact's schedule, s, as for a gait law: each stance is a phase of
+#: the inverse dynamics, and a shorter period is no gait (1e-12 s gave 2e12 phases a second).
+SHORTEST_PERIOD = 1e-6
+
 
 @register
 @dataclass(eq=False)
@@ -82,8 +86,9 @@ class Contact(Joint):
         numbers = {k: getattr(self, k) for k in ("period", "duty", "lift_off", "ramp")}
         if not all(check_finite(self, k, v, out) for k, v in numbers.items()):
             return out
-        if not self.period > 0:
-            out.append(self.problem("period", f"must be positive, got {self.period}"))
+        if not self.period >= SHORTEST_PERIOD:
+            out.append(self.problem("period", f"must be at least {SHORTEST_PERIOD:g} s (a "
+                                    f"microsecond), got {self.period}"))
         if not 0 < self.duty <= 1:
             out.append(self.problem("duty", f"must be in (0, 1], got {self.duty}"))
         if not 0 <= self.lift_off < 1:

@@ -1,0 +1,83 @@
+"""The model's time laws evaluated, and checked: a law that cannot be computed, is not finite,
+or drives a joint faster than any machine moves ends the computation with an error naming the
+law and the time (a simulation then ends as failed, saying them)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from hexapod.errors import HexapodError
+
+#: The fastest a driver may move a joint or a coordinate, rad/s or m/s (SI): the largest speed
+#: and angular rate a scene may hold (``hexapod.scene.scene.LARGEST``). A law beyond it is
+#: singular (``1 / (t - 0.1)``) or exploding (``exp(exp(exp(10 t)))``), and a simulation would
+#: otherwise shrink its step towards the singular time for ever.
+FASTEST_DRIVER = 1e6
+
+
+def law_name(model, i: int) -> str:
+    """Law ``i`` of ``model`` as a user knows it: by the driver it prescribes, else its kind."""
+    driver = next((d.name for d in model.drivers if d.law == i), None)
+    return (f"the law of driver '{driver}'" if driver is not None else
+            f"law {i} ({getattr(model.laws[i], 'kind', type(model.laws[i]).__name__)})")
+
+
+def _arithmetic(error: ArithmeticError) -> str:
+    """What a Python arithmetic error means, in a user's words."""
+    if isinstance(error, ZeroDivisionError):
+        return "a division by zero"
+    return f"a value beyond the floating-point range ({error or type(error).__name__})"
+
+
+def _driven(model) -> np.ndarray:
+    """The indices of the laws that drivers follow."""
+    return np.array(sorted({d.law for d in model.drivers if d.law >= 0}), dtype=int)
+
+
+def evaluate_laws(model, t: np.ndarray, w: np.ndarray, wd: np.ndarray, wdd: np.ndarray) -> None:
+    """Fill ``w``, ``wd``, ``wdd`` (n_w,) or (n_w, len(t)) with the values, rates and
+    accelerations of ``model``'s laws at ``t``.
+
+    Raises
+    ------
+    HexapodError
+        A law cannot be computed (a division by zero), is not finite, or a driver's rate passes
+        :data:`FASTEST_DRIVER`; the message names the law and the time.
+    """
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        for i, law in enumerate(model.laws):
+            try:
+                w[i], wd[i], wdd[i] = law.evaluate(t)
+            except ArithmeticError as error:  # Python's floats: 1 / 0, 10.0 ** 400
+                raise HexapodError(f"model '{model.name}': {law_name(model, i)} cannot be "
+                                   f"computed at t = {float(t.flat[0]):.6g} s: "
+                                   f"{_arithmetic(error)}") from None
+        if np.isfinite(w.sum() + wd.sum() + wdd.sum()):
+            driven = model.built_once(("driven laws",), _driven)
+            if not driven.size or np.abs(wd[driven]).max() <= FASTEST_DRIVER:
+                return
+        _refuse(model, t, w, wd, wdd)
+
+
+def _refuse(model, t: np.ndarray, w, wd, wdd) -> None:
+    """Raise the error naming the first law at fault and the time (a sum overflowed or a rate
+    passed the bound: perhaps none is at fault)."""
+    driven = {d.law for d in model.drivers}
+    times = np.atleast_1d(t)
+    for i in range(model.n_w):
+        for what, values in (("value", w[i]), ("rate", wd[i]), ("acceleration", wdd[i])):
+            values = np.atleast_1d(values)
+            bad = np.flatnonzero(~np.isfinite(values))
+            if bad.size:
+                raise HexapodError(
+                    f"model '{model.name}': {law_name(model, i)} has a non-finite {what} "
+                    f"({values[bad[0]]}) at t = {float(times[bad[0]]):.6g} s: a division by "
+                    "zero, or a value beyond the floating-point range")
+            if what == "rate" and i in driven:
+                bad = np.flatnonzero(np.abs(values) > FASTEST_DRIVER)
+                if bad.size:
+                    raise HexapodError(
+                        f"model '{model.name}': {law_name(model, i)} moves at {values[bad[0]]:.3g}"
+                        f" (rad/s or m/s) at t = {float(times[bad[0]]):.6g} s, faster than any "
+                        f"machine (at most {FASTEST_DRIVER:.0e}): the law is singular or "
+                        "overflows there")
