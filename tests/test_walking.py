@@ -157,6 +157,23 @@ def test_loads_ramp_over_the_ramp_under_every_policy(policy):
     assert rates[1] <= 4 * weight * 15 / 8 / (0.1 * 0.6 * PERIOD)
 
 
+def test_a_foothold_off_is_named_with_its_offset():
+    """R2's foothold 25 mm off along x: assembly fails and the error names R2 alone, 25 mm off
+    along x (found by lifting each foot in turn: with R2 lifted the others agree)."""
+    scene = hexapod_scene("tripod", trunk="free")
+    contact = scene.joints["R2/ground"]
+    contact.foothold = contact.foothold + np.array([0.025, 0.0, 0.0])
+    model = hx.assemble(scene)
+    t = 0.7 * PERIOD  # L1, L3 and R2 down
+    assert sorted(c.name for c in model.contacts if c.in_stance(t)) == [
+        "L1/ground", "L3/ground", "R2/ground"]
+    with pytest.raises(hx.AssemblyError) as caught:
+        hx.inverse_dynamics(model, [t], method="saddle")
+    said = str(caught.value).partition("(model")[0]
+    assert "the footholds do not agree with the legs' motion: R2 25 mm off (x -25," in said
+    assert "L1 " not in said and "L3 " not in said
+
+
 def test_min_wrench_does_not_depend_on_the_length_unit():
     scene = hexapod_scene(trunk="free")
     millimetres = hx.Scene(scene.name, 3, "mm", scene.gravity * 1000)

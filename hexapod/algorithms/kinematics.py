@@ -146,6 +146,79 @@ def assemble_positions(model: Model, data: Data, t: float = 0.0, q: np.ndarray |
 def _assemble(model: Model, data: Data, t: float, q: np.ndarray, tol: float,
               max_iterations: int, counts: dict | None) -> np.ndarray:
     w, _, _ = model.law_values(t, data)
+    try:
+        return _newton(model, data, t, w, q, tol, max_iterations, counts)
+    except AssemblyError as error:
+        feet = _feet_off(model, data, t, w, q, tol, max_iterations)
+        if not feet:
+            raise
+        raise AssemblyError(f"{_subject(model)}: at t = {t:g} the footholds do not agree with "
+                            f"the legs' motion: {feet}; check the contacts' footholds and the "
+                            f"gait, or the joint frames ({error})") from None
+
+
+def _feet_off(model: Model, data: Data, t: float, w: np.ndarray, q: np.ndarray, tol: float,
+              max_iterations: int) -> str:
+    """The feet in stance whose footholds alone keep the constraints from assembling at ``t``:
+    each foot that, lifted, lets the rest assemble, with how far it then is from its foothold
+    (``FL 25 mm off (x +25, y +0, z +0)``); when every foot down does (two feet of a trot: the
+    rest cannot tell), all of them, said so. Empty when no single foot explains the
+    failure."""
+    down = [c for c in model.contacts if w[c.gate] >= 0.5]
+    if len(down) < 2:
+        return ""
+    found = []
+    for contact in down:
+        lifted = w.copy()
+        lifted[contact.gate] = 0.0
+        try:
+            trial = _closest(model, data, t, w, lifted, contact,
+                             _newton(model, data, t, lifted, q, tol, max_iterations, None), tol)
+        except AssemblyError:
+            continue
+        offset = model.call("phi", data, q=trial, w=w)[contact.rows] * 1e3  # r - a, mm
+        found.append(f"{contact.name.removesuffix('/ground')} {np.linalg.norm(offset):.3g} mm "
+                     f"off (x {offset[0]:+.3g}, y {offset[1]:+.3g}, z {offset[2]:+.3g})")
+    if not found:
+        return ""
+    if len(found) == len(down):
+        return ("lifting any one foot lets the rest assemble, so which foothold is wrong cannot "
+                "be told; the feet's offsets, each lifted: " + "; ".join(found))
+    return "; ".join(found) + " (lifted, the other feet agree)"
+
+
+def _closest(model: Model, data: Data, t: float, w: np.ndarray, lifted: np.ndarray, contact,
+             q: np.ndarray, tol: float, steps: int = 8) -> np.ndarray:
+    """From ``q`` (the other constraints met, ``contact``'s foot lifted), the configuration
+    that brings the foot nearest its foothold while the others stay met: Gauss-Newton on the
+    foot's offset within the motions the other constraints leave free (two feet of a tripod
+    leave the trunk a roll), each step followed by Newton back onto the others."""
+    for _ in range(steps):
+        Phi_v = np.asarray(_dense(constraint_jacobian(model, q, w, data)))
+        others = np.delete(Phi_v, contact.rows, axis=0)
+        _, s, Vt = np.linalg.svd(others)
+        rank = int(np.sum(s > model.rank_tolerance * max(float(s.max(initial=0.0)), 1.0)))
+        free = Vt[rank:].T
+        offset = model.call("phi", data, q=q, w=w)[contact.rows]
+        if free.shape[1] == 0 or np.linalg.norm(offset) <= tol * model.characteristic_length:
+            return q
+        dv = free @ np.linalg.lstsq(Phi_v[contact.rows] @ free, -offset, rcond=None)[0]
+        trial = _newton(model, data, t, lifted, model.integrate(q, dv), tol, 20, None)
+        if np.linalg.norm(model.call("phi", data, q=trial, w=w)[contact.rows]) >= \
+                np.linalg.norm(offset):
+            return q
+        q = trial
+    return q
+
+
+def _dense(matrix):
+    return matrix.toarray() if hasattr(matrix, "toarray") else matrix
+
+
+def _newton(model: Model, data: Data, t: float, w: np.ndarray, q: np.ndarray, tol: float,
+            max_iterations: int, counts: dict | None) -> np.ndarray:
+    """Newton's method on the constraints at law values ``w`` from ``q`` (see
+    :func:`assemble_positions`)."""
     if model.n_c == 0:
         return q
     residual = model.call("phi", data, q=q, w=w) / model.row_scale
