@@ -46,6 +46,8 @@ from hexapod.output.inverse_csv import (  # noqa: F401 (re-exported: the CSV's c
     units_path,
     write_inverse_files,
 )
+from hexapod.output.summary_parts import Peak, count, g4, markdown_table
+from hexapod.output.walking_summary import ground_section, trunk_section
 from hexapod.simulation.results import units_json
 
 
@@ -124,17 +126,6 @@ def time_rms(times: np.ndarray, x: np.ndarray) -> float:
     if times.size < 2:
         return float(np.abs(x).max(initial=0.0))
     return float(np.sqrt(time_integral(times, x**2) / (times[-1] - times[0])))
-
-
-@dataclass(frozen=True)
-class Peak:
-    value: float
-    time: float
-
-    @classmethod
-    def of(cls, times: np.ndarray, x: np.ndarray) -> Peak:
-        k = int(np.argmax(np.abs(x)))
-        return cls(float(np.abs(x[k])), float(times[k]))
 
 
 @dataclass(frozen=True)
@@ -239,19 +230,6 @@ class RunInfo:
     window: str  # why the time window is what it is
 
 
-def _count(n: int, noun: str, plural: str | None = None) -> str:
-    return f"{n} {noun if n == 1 else plural or noun + 's'}"
-
-
-def _g(x: float) -> str:
-    return f"{x:.4g}"
-
-
-def _markdown_table(header: list[str], rows: list[list[str]]) -> list[str]:
-    return ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"] + [
-        "| " + " | ".join(row) + " |" for row in rows]
-
-
 def summary_markdown(model: Model, result: InverseResult, balance: BodyBalance,
                      run: RunInfo, drivers: list[DriverStatistics], figures: list[str],
                      loads: FootLoads | None = None,
@@ -265,9 +243,9 @@ def summary_markdown(model: Model, result: InverseResult, balance: BodyBalance,
     lines = [
         f"# Liaison force report: {run.scene}",
         "",
-        f"Scene `{run.source}`: {_count(len(model.bodies), 'body', 'bodies')}, "
-        f"{_count(len(model.joints), 'joint')}, {_count(len(model.drivers), 'driver')}, "
-        f"{_count(len(model.forces), 'force element')}{mass}.",
+        f"Scene `{run.source}`: {count(len(model.bodies), 'body', 'bodies')}, "
+        f"{count(len(model.joints), 'joint')}, {count(len(model.drivers), 'driver')}, "
+        f"{count(len(model.forces), 'force element')}{mass}.",
         f"{t.size} samples over t = {t[0]:g} ... {t[-1]:g} s ({run.window}); "
         f"{result.method} path, {run.run_time:.3g} s of inverse dynamics.",
         f"Largest constraint residual {result.max_violation:.1e} (scaled); "
@@ -285,35 +263,35 @@ def summary_markdown(model: Model, result: InverseResult, balance: BodyBalance,
         "## Joints",
         "",
     ]
-    lines += _markdown_table(
+    lines += markdown_table(
         ["wrench", "joint", "parent -> child", "peak \\|F\\| (N)", "at t (s)",
          "RMS \\|F\\| (N)", "peak \\|T\\| (N m)", "at t (s)", "RMS \\|T\\| (N m)"],
-        [[s.label, f"`{s.name}`", f"{s.parent} -> {s.child}", _g(s.peak_force.value),
-          f"{s.peak_force.time:.4g}", _g(s.rms_force), _g(s.peak_torque.value),
-          f"{s.peak_torque.time:.4g}", _g(s.rms_torque)]
+        [[s.label, f"`{s.name}`", f"{s.parent} -> {s.child}", g4(s.peak_force.value),
+          f"{s.peak_force.time:.4g}", g4(s.rms_force), g4(s.peak_torque.value),
+          f"{s.peak_torque.time:.4g}", g4(s.rms_torque)]
          for s in joint_statistics(model, result)])
     if drivers:
         lines += ["", "## Drivers", "",
                   "The actuator's effort about (along) the joint axis, and the power it "
                   "delivers, effort times joint rate; work is the net energy over the run.", ""]
-        lines += _markdown_table(
+        lines += markdown_table(
             ["joint", "peak \\|effort\\|", "at t (s)", "RMS effort", "peak \\|power\\| (W)",
              "at t (s)", "RMS power (W)", "work (J)"],
-            [[f"`{d.joint}`", f"{_g(d.peak_effort.value)} {d.unit}", f"{d.peak_effort.time:.4g}",
-              f"{_g(d.rms_effort)} {d.unit}", _g(d.peak_power.value),
-              f"{d.peak_power.time:.4g}", _g(d.rms_power), _g(d.work)] for d in drivers])
+            [[f"`{d.joint}`", f"{g4(d.peak_effort.value)} {d.unit}", f"{d.peak_effort.time:.4g}",
+              f"{g4(d.rms_effort)} {d.unit}", g4(d.peak_power.value),
+              f"{d.peak_power.time:.4g}", g4(d.rms_power), g4(d.work)] for d in drivers])
         lines += _effort_type_section(drivers)
     if loads is not None:
-        lines += _ground_section(model, result, loads)
+        lines += ground_section(model, result, loads)
     if trunks:
-        lines += _trunk_section(trunks)
+        lines += trunk_section(trunks)
     relative = balance.relative()
     lines += ["", "## Balance of each body", "",
               "Largest residual over the samples of each body's Newton-Euler equations under "
               "the reported wrenches, gravity and the loads (the joint frames rebuilt from the "
               "bodies' poses): round-off when the report is consistent. Relative to the "
               "body's largest force or moment term.", ""]
-    lines += _markdown_table(
+    lines += markdown_table(
         ["body", "force residual (N)", "moment residual (N m)", "relative"],
         [[name, f"{balance.force[:, b].max():.2e}", f"{balance.moment[:, b].max():.2e}",
           f"{relative[b]:.1e}"] for b, name in enumerate(balance.bodies)])
@@ -354,108 +332,10 @@ def _effort_type_section(drivers: list[DriverStatistics]) -> list[str]:
         return []
     lines = ["", "## Peak effort per joint type", "",
              "The largest actuator effort of each joint over the legs, and where it occurs.", ""]
-    return lines + _markdown_table(
+    return lines + markdown_table(
         ["joint type", "peak \\|effort\\|", "joint", "at t (s)"],
-        [[f"`{p.joint_type}`", f"{_g(p.peak.value)} {p.unit}", f"`{p.joint}`",
+        [[f"`{p.joint_type}`", f"{g4(p.peak.value)} {p.unit}", f"`{p.joint}`",
           f"{p.peak.time:.4g}"] for p in peaks])
-
-
-def policy_description(model: Model) -> str:
-    """The ground-force policy of a model with contacts, in words, with its settings."""
-    ground = model.ground
-    if ground.policy == "min-wrench":
-        return ("the least sum of |F|^2 + |T / l|^2 over every joint's wrench, the feet's "
-                f"included, l = {model.characteristic_length:.4g} m")
-    refs = ", ".join(f"`{k}` {v:g}" for k, v in ground.reference_efforts.items())
-    effort = ("the least sum of (tau / tau_ref)^2 over the actuator efforts (reference "
-              f"efforts {ground.default_reference:g}" + (f"; {refs}" if refs else "") + ")")
-    if ground.policy == "min-effort":
-        return effort
-    cone = (f"a pyramid of {ground.faces} faces inscribed in the cone" if ground.faces
-            else "the exact cone")
-    return (f"{effort}, each foot's normal force at least its load-sharing weight times "
-            f"{ground.min_normal:g} N and its tangential force inside the friction cone of "
-            f"mu = {ground.mu:g} ({cone})")
-
-
-def _ground_section(model: Model, result: InverseResult, loads: FootLoads) -> list[str]:
-    weight = loads.weight
-    lines = ["", "## Ground reactions", "",
-             f"Policy `{loads.policy}`: {policy_description(model)}. "
-             + (f"Redundant rows (their multipliers chosen by the policy): "
-                f"{', '.join(result.redundant_rows)}." if result.redundant_rows
-                else "No redundant rows."),
-             "",
-             "The ground's force on each foot, world axes (`GRx:<leg>`, `GRy:<leg>`, "
-             "`GRz:<leg>` in inverse.csv; zero in swing): normal force F_n = GRz, tangential "
-             f"force \\|F_t\\| = \\|(GRx, GRy)\\|, friction ratio \\|F_t\\| / (mu F_n) with "
-             f"mu = {loads.mu:g} (above 1 the foot needs more friction than mu). Robot weight "
-             f"m \\|g\\| = {model.total_mass:.4g} kg x {np.linalg.norm(model.gravity):.4g} "
-             f"m/s^2 = {weight:.4g} N. Per sample in ground.csv.", ""]
-    rows = []
-    t = loads.times
-    for c, leg in enumerate(loads.legs):
-        magnitude = np.linalg.norm(loads.force[:, c], axis=1)
-        peak = Peak.of(t, magnitude)
-        ratio = np.where(np.isfinite(loads.ratio[:, c]), loads.ratio[:, c], -np.inf)
-        worst = int(np.argmax(ratio))
-        stance = np.mean(loads.status[:, c] != "swing")
-        rows.append([leg, f"{100 * stance:.0f}", _g(peak.value),
-                     _g(peak.value / weight) if weight > 0 else "-", f"{peak.time:.4g}",
-                     _g(float(loads.normal[:, c].max())), _g(float(loads.tangential[:, c].max())),
-                     _g(float(ratio[worst])) if np.isfinite(ratio[worst]) else "-",
-                     f"{t[worst]:.4g}" if np.isfinite(ratio[worst]) else "-"])
-    lines += _markdown_table(
-        ["foot", "in stance (% of samples)", "peak \\|F\\| (N)", "peak \\|F\\| (body weights)",
-         "at t (s)", "peak F_n (N)", "peak \\|F_t\\| (N)", "peak friction ratio", "at t (s)"],
-        rows)
-    return lines + _feasibility_lines(loads)
-
-
-def _feasibility_lines(loads: FootLoads) -> list[str]:
-    """Whether the ground can give the feet their forces, whatever the policy: a verdict, and
-    for a foot that slips or pulls its counts, first time and worst margins."""
-    events = foot_events(loads)
-    if not events:
-        return ["", "Feasible: at every sample every loaded foot's force presses on the ground "
-                f"and lies inside the friction cone of mu = {loads.mu:g}."]
-    bad = np.isin(loads.status, ("slip", "pull"))
-    lines = ["", f"**Infeasible**: at {int(bad.any(axis=1).sum())} of {bad.shape[0]} samples "
-             "the ground cannot give these forces: a foot slips (tangential force beyond mu "
-             "times the normal force) or the ground would have to pull it. A robot moving so "
-             "would slip or leave the ground; its efforts are not ones to size motors by.", ""]
-    rows = []
-    for c, leg in enumerate(loads.legs):
-        if not bad[:, c].any():
-            continue
-        first = float(loads.times[int(np.argmax(bad[:, c]))])
-        ratio = loads.ratio[:, c][np.isfinite(loads.ratio[:, c])]
-        rows.append([leg, str(int(np.sum(loads.status[:, c] == "slip"))),
-                     str(int(np.sum(loads.status[:, c] == "pull"))), f"{first:.4g}",
-                     _g(float(ratio.max())) if ratio.size else "-",
-                     _g(float(loads.normal[:, c].min()))])
-    lines += _markdown_table(["foot", "slip samples", "pull samples", "first at t (s)",
-                              "worst friction ratio", "least F_n (N)"], rows)
-    return lines + ["", *(f"- {phrase}" for phrase in describe_events(events))]
-
-
-def _trunk_section(trunks: list[TrunkMotion]) -> list[str]:
-    lines = ["", "## Trunk", "",
-             "Pose (centre of mass, world; Euler parameters and roll, pitch, yaw) and velocity "
-             "(centre of mass, angular; world axes) of each free body, per sample in "
-             "trunk.csv.", ""]
-    rows = []
-    for m in trunks:
-        low, high = m.position.min(axis=0), m.position.max(axis=0)
-        angles = np.degrees(np.abs(m.angles).max(axis=0))
-        rows.append([f"`{m.body}`", f"{low[0]:.4g} ... {high[0]:.4g}",
-                     f"{low[1]:.4g} ... {high[1]:.4g}", f"{low[2]:.4g} ... {high[2]:.4g}",
-                     " / ".join(f"{a:.3g}" for a in angles),
-                     f"{m.velocity[:, 0].mean():.4g}",
-                     _g(float(np.linalg.norm(m.angular_velocity, axis=1).max()))])
-    return lines + _markdown_table(
-        ["body", "x (m)", "y (m)", "z (m)", "largest \\|roll\\| / \\|pitch\\| / \\|yaw\\| (deg)",
-         "mean vx (m/s)", "largest \\|omega\\| (rad/s)"], rows)
 
 
 def walking_headlines(model: Model, result: InverseResult,
@@ -475,7 +355,7 @@ def walking_headlines(model: Model, result: InverseResult,
     unit = "body weights" if loads.weight > 0 else "N"
     scale = loads.weight if loads.weight > 0 else 1.0
     lines = [f"ground forces by the policy {loads.policy}; "
-             f"{_count(len(result.redundant_rows), 'redundant row')}",
+             f"{count(len(result.redundant_rows), 'redundant row')}",
              f"peak ground reaction per foot, |F| / vertical Fz ({unit}, robot weight "
              f"{loads.weight:.4g} N): "
              + ", ".join(f"{leg} {p / scale:.3g} / {z / scale:.3g}"

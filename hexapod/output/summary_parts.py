@@ -1,0 +1,37 @@
+"""Small pieces of the reports' summaries: a peak with its time, Markdown tables, counts and
+numbers."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Peak:
+    """The largest magnitude of a quantity over the samples and the time it occurs (s)."""
+
+    value: float
+    time: float
+
+    @classmethod
+    def of(cls, times: np.ndarray, x: np.ndarray) -> Peak:
+        k = int(np.argmax(np.abs(x)))
+        return cls(float(np.abs(x[k])), float(times[k]))
+
+
+def count(n: int, noun: str, plural: str | None = None) -> str:
+    """``n noun``, the noun in the plural unless ``n`` is 1."""
+    return f"{n} {noun if n == 1 else plural or noun + 's'}"
+
+
+def g4(x: float) -> str:
+    """A number to four significant digits."""
+    return f"{x:.4g}"
+
+
+def markdown_table(header: list[str], rows: list[list[str]]) -> list[str]:
+    """The lines of a Markdown table."""
+    return ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"] + [
+        "| " + " | ".join(row) + " |" for row in rows]
