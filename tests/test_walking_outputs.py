@@ -88,6 +88,7 @@ def test_inverse_csv_gives_each_foot_its_ground_force_after_the_joints(walking):
     table = columns(header, rows, "GR")
     assert np.array_equal(table, result.ground_force.reshape(result.times.size, -1))
     codes = columns(header, rows, "status:")  # 0 swing, 1 ok: this gait is feasible
+    assert result.feasible and not result.infeasible.any()
     assert np.array_equal(codes, np.where(result.ground_status == "swing", 0.0, 1.0))
 
 

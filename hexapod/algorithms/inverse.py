@@ -107,6 +107,20 @@ class InverseResult:
     ground_status: np.ndarray | None = None
     policy: str = ""
 
+    @property
+    def infeasible(self) -> np.ndarray:
+        """``(N,)`` bool: the samples where some foot slips or pulls (``ground_status``), so
+        that the ground cannot give the forces; all False without contacts."""
+        if self.ground_status is None or self.ground_status.size == 0:
+            return np.zeros(self.times.size, dtype=bool)
+        return np.isin(self.ground_status, ("slip", "pull")).any(axis=1)
+
+    @property
+    def feasible(self) -> bool:
+        """Whether the ground can give every foot its force at every sample (always True
+        without contacts): an infeasible result's efforts are not ones to size motors by."""
+        return not self.infeasible.any()
+
 
 #: CasADi's map of a Function over ``b`` samples costs about 4 microseconds per sample to build
 #: (once per size), and each call of it about 50 microseconds of Python: the tree path calls
