@@ -102,7 +102,7 @@ def test_one_numeric_parameter():
               .get_legend().get_texts()]
     peaks = {j: np.nanmax(metrics[f"peak_effort:{j}"]) for j in JOINTS}
     assert legend[:6] == sorted(peaks, key=peaks.get, reverse=True)[:6]
-    assert legend[6:] == ["12 others", "not ok (1)"]
+    assert legend[6:] == ["12 others", "failed (1)"]
 
 
 def test_categorical_parameter():
@@ -217,3 +217,31 @@ def test_no_pyplot_and_no_matplotlib_use():
     assert not any("pyplot" in (name or "") for name in imported)
     assert not any(isinstance(node, ast.Attribute) and node.attr == "use"
                    for node in ast.walk(tree))
+
+
+def test_an_infeasible_case_is_drawn_in_a_map_only_marked():
+    """A case the ground cannot hold (status infeasible) keeps its value in the heat map, in a
+    cell hatched orange and labelled INFEASIBLE, is left out of the lines and marked there with
+    an orange cross, and is counted in the titles."""
+    duty = np.repeat([0.6, 0.75], 3)
+    speed = np.tile([0.4, 0.8, 1.2], 2)
+    parameters, metrics, units, status = table({"duty": duty, "speed": speed}, failed=0)
+    status[0] = "ok"  # no failed case here: metrics of case 0 stay NaN, as a failed one's
+    status[5] = "infeasible"  # duty 0.75, speed 1.2
+    figures = dict(sweep_figures(parameters, metrics, units, status, "speed study"))
+    heat = figures["peak_effort-map.png"]
+    ax = heat.axes[0]
+    data = np.ma.filled(ax.images[0].get_array().astype(float), np.nan)
+    stacked = np.column_stack([metrics[f"peak_effort:{j}"] for j in JOINTS])
+    assert data[2, 1] == np.nanmax(stacked[5])  # row: speed 1.2, column: duty 0.75
+    (cell,) = [t for t in ax.texts if t.get_position() == (1, 2)]
+    assert cell.get_text().startswith("INFEASIBLE\n")
+    hatched = [p for p in ax.patches if p.get_hatch() == "xx"]
+    assert [p.get_xy() for p in hatched] == [(0.5, 1.5)]
+    assert "(infeasible 1)" in heat.get_suptitle()
+    lines = figures["peak_effort-vs-speed.png"].axes[0]
+    np.testing.assert_array_equal(line(lines, "infeasible").get_xdata(), [1.2])
+    envelope = np.nanmax(stacked[[2]], axis=1)  # speed 1.2: only duty 0.6's case is drawn
+    drawn = [a for a in lines.lines if a.get_gid() in JOINTS]
+    top = max(np.nanmax(a.get_ydata()[2:]) for a in drawn)
+    assert top == envelope[0]

@@ -269,7 +269,7 @@ def test_the_command_runs_a_study_and_names_the_largest_effort(tmp_path, capsys)
     assert main(["sweep", str(path), "--in-process", "--out", str(tmp_path / "o")]) == 0
     out = capsys.readouterr().out
     assert "3 cases (3 computed, 0 reused, 0 failed)" in out
-    assert f"largest peak effort {4.0 * G * LENGTH:.4g} N m at pivot, case 2" in out
+    assert f"largest peak effort of the ok cases {4.0 * G * LENGTH:.4g} N m at pivot, case 2" in out
     assert main(["sweep", str(path), "--in-process", "--out", str(tmp_path / "o"),
                  "--resume"]) == 0
     assert "(0 computed, 3 reused, 0 failed)" in capsys.readouterr().out
@@ -291,6 +291,29 @@ def test_the_command_refuses_a_bad_study_and_says_how_to_get_dask(tmp_path, caps
     assert "pip install 'hexapod[sweep]'" in capsys.readouterr().err
 
 
+def test_a_gait_the_ground_cannot_hold_is_an_infeasible_row(tmp_path):
+    """The walking robot at 1.2 m/s, duty 0.75, asks the ground to pull its feet: its row is
+    'infeasible' (computed, metrics kept), with the count and the first time, never 'ok'."""
+    path = tmp_path / "fast.toml"
+    path.write_text(textwrap.dedent("""
+        [study]
+        scene = "hexapod"
+        [vary.speed]
+        values = [1.2]
+        [fixed]
+        duty = 0.75
+        [job]
+        samples = 21
+        metrics = ["peak_effort", "slip_samples"]
+    """))
+    row = run_study(read_study(path)).rows[0]
+    assert row["status"] == "infeasible"
+    count = int(row["metrics"]["slip_samples"])
+    assert 0 < count <= 21
+    assert f"at {count} of 21 samples, first at t = " in row["message"]
+    assert np.isfinite(row["metrics"]["peak_effort:L2/thc_levation"])
+
+
 def test_builder_arguments_and_scene_keys_reach_the_walking_robot(tmp_path):
     """A case of the built-in walking robot equals the same run made by hand."""
     from legs.robot import hexapod_walking
@@ -308,11 +331,13 @@ def test_builder_arguments_and_scene_keys_reach_the_walking_robot(tmp_path):
         metrics = ["peak_ground", "peak_effort"]
     """))
     row = run_study(read_study(path)).rows[0]
-    assert row["status"] == "ok", row["message"]
     scene = hexapod_walking(payload=0.5)
     scene.ground = hx.scene.GroundForces(policy="min-effort")
     model = hx.assemble(scene)
     result = hx.inverse_dynamics(model, np.linspace(0.0, model.cycle_time(), 3))
+    # min-effort ignores friction: its feet slip, which the row says (computed, infeasible)
+    assert not result.feasible
+    assert row["status"] == "infeasible" and "first at t = 0 s" in row["message"]
     peak = np.linalg.norm(result.ground_force, axis=-1).max(axis=0)
     # a scene key sends the scene through its TOML form, whose rotations are written as
     # angles: the same robot to the last bits

@@ -67,9 +67,13 @@ def run(args) -> int:
                     resume=args.resume, progress=_progress(),
                     announce=lambda text: print(text, file=sys.stderr))
     print(file=sys.stderr)
-    failed = int((run.table.data["status"] != "ok").sum())
+    status = run.table.data["status"]
+    failed = int(((status != "ok") & (status != "infeasible")).sum())
+    infeasible = int((status == "infeasible").sum())
     print(f"study '{study.name}': {len(run.table)} cases ({run.computed} computed, "
-          f"{run.reused} reused, {failed} failed) in {time.perf_counter() - started:.1f} s")
+          f"{run.reused} reused, {failed} failed"
+          + (f", {infeasible} infeasible: the ground cannot give their feet's forces"
+             if infeasible else "") + f") in {time.perf_counter() - started:.1f} s")
     headline = _headline(run.table)
     if headline:
         print(headline)
@@ -111,7 +115,8 @@ def _progress():
 
 
 def _headline(table) -> str:
-    """The largest peak effort over the study: which joint, in which case."""
+    """The largest peak effort over the study's ok cases (an infeasible case's efforts are not
+    ones to size motors by): which joint, in which case."""
     import numpy as np
 
     efforts = {c: v for c, v in table.metrics().items() if c.startswith("peak_effort:")}
@@ -119,13 +124,14 @@ def _headline(table) -> str:
         return ""
     names = list(efforts)
     values = np.array([efforts[c] for c in names])  # (joints, cases)
+    values = np.where(table.data["status"] == "ok", values, np.nan)
     if not np.isfinite(values).any():
         return ""
     joint, case = np.unravel_index(np.nanargmax(values), values.shape)
     params = ", ".join(f"{name}={_shown(table.data[name][case])}"
                        for name in table.parameters())
     unit = table.units[names[joint]]
-    return (f"largest peak effort {values[joint, case]:.4g} {unit} at "
+    return (f"largest peak effort of the ok cases {values[joint, case]:.4g} {unit} at "
             f"{names[joint].partition(':')[2]}, case {table.data['case'][case]}"
             + (f" ({params})" if params else ""))
 

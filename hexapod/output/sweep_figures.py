@@ -9,8 +9,11 @@ and each case's ``status``.
 Each metric family is drawn against each varied parameter (one line per element; when other
 parameters vary too, the value at a parameter value is the maximum over the cases that share it,
 the envelope) and, when exactly two numeric parameters vary, as a map of the family's maximum
-over its elements: a heat map on a full grid, a coloured scatter otherwise. Only cases whose
-status is ``"ok"`` are drawn; the others are marked with a red cross and counted in the title.
+over its elements: a heat map on a full grid, a coloured scatter otherwise. The lines are drawn
+from the cases whose status is ``"ok"``; the others are marked with a cross (red: failed,
+orange: infeasible, the ground unable to give the feet's forces) and counted in the title. The
+maps draw an infeasible case's value too, in a cell hatched orange and labelled so, so that a
+peak is never read from such a case without the mark.
 
 Figures are drawn on :class:`matplotlib.figure.Figure` directly (no pyplot, no global state);
 :func:`hexapod.output.figures.png_bytes` turns one into PNG bytes.
@@ -35,6 +38,9 @@ ALL_SHOWN = 8
 ANNOTATED_CELLS = 40
 #: The status of a case whose metrics are drawn.
 OK = "ok"
+#: A case computed whose robot the ground cannot hold (drawn in maps, marked).
+INFEASIBLE = "infeasible"
+INFEASIBLE_COLOUR = "tab:orange"
 LINE_SIZE = (8.0, 4.4)  # inches
 MAP_SIZE = (6.8, 5.2)
 OTHERS_COLOUR = "0.65"
@@ -205,13 +211,17 @@ def _draw_elements(ax, x: np.ndarray, envelopes: np.ndarray, names: list[str],
                 **({"linestyle": "none"} if categorical else {}))
 
 
-def _mark_failed(ax, x: np.ndarray, failed: np.ndarray) -> None:
-    """A red cross on the bottom axis at each failed case's parameter value."""
-    if failed.any():
-        ax.plot(x[failed], np.zeros(int(failed.sum())), "x", color=FAILED_COLOUR,
-                markersize=8, markeredgewidth=1.6, clip_on=False, zorder=4,
-                transform=ax.get_xaxis_transform(), label=f"not ok ({int(failed.sum())})",
-                gid="failed")
+def _mark_failed(ax, x: np.ndarray, status: np.ndarray) -> None:
+    """A cross on the bottom axis at each case not ok: red for a failed case, orange for an
+    infeasible one."""
+    for kind, colour, label in ((INFEASIBLE, INFEASIBLE_COLOUR, "infeasible"),
+                                (None, FAILED_COLOUR, "failed")):
+        marked = status == kind if kind else (status != OK) & (status != INFEASIBLE)
+        if marked.any():
+            ax.plot(x[marked], np.zeros(int(marked.sum())), "x", color=colour,
+                    markersize=8, markeredgewidth=1.6, clip_on=False, zorder=4,
+                    transform=ax.get_xaxis_transform(), label=f"{label} ({int(marked.sum())})",
+                    gid=label)
 
 
 def _against(parameter: str, others: list[str], columns: list[str],
@@ -233,7 +243,7 @@ def _against(parameter: str, others: list[str], columns: list[str],
     figure, ax = _line_axes(f"{title}\n{family} against {parameter}{over}"
                             f"{_failure_note(status)}")
     _draw_elements(ax, x, envelopes, [_element(c) for c in columns], categorical)
-    _mark_failed(ax, x[index], ~good)
+    _mark_failed(ax, x[index], status)
     if categorical:
         ax.set_xticks(x, [str(level) for level in levels])
         ax.set_xlim(-0.5, len(levels) - 0.5)
@@ -302,14 +312,18 @@ def _level_ticks(axis, levels: np.ndarray) -> None:
     axis.set_ticks(positions, [f"{levels[k]:g}" for k in positions])
 
 
-def _annotate_cells(ax, image, cell, element, anyfailed, names: list[str]) -> None:
-    """Each cell's element attaining the maximum (and the value), or why it is empty."""
+def _annotate_cells(ax, image, cell, element, anyfailed, names: list[str],
+                    infeasible: np.ndarray) -> None:
+    """Each cell's element attaining the maximum (and the value, marked when a case of the
+    cell is infeasible), or why it is empty."""
     many = len(names) > 1
     for (r, c), value in np.ndenumerate(cell):
         if np.isnan(value):
             text, colour = ("failed" if anyfailed[r, c] else "n/a"), "black"
         else:
             text = (f"{names[element[r, c]]}\n" if many else "") + f"{value:.3g}"
+            if infeasible[r, c]:
+                text = "INFEASIBLE\n" + text
             red, green, blue, _ = image.cmap(image.norm(value))
             colour = "black" if 0.299 * red + 0.587 * green + 0.114 * blue > 0.5 else "white"
         ax.text(c, r, text, ha="center", va="center", fontsize=6.5, color=colour)
@@ -323,10 +337,13 @@ def _heat_map(first: str, second: str, columns: list[str], parameters, metrics, 
 
     family = columns[0].partition(":")[0]
     unit = _family_unit(columns, units)
-    good = status == OK
-    largest, which = _family_max(_element_matrix(columns, metrics, good))
-    xs, ys, cell, element, anyfailed = _grid_cells(
-        np.asarray(parameters[first]), np.asarray(parameters[second]), largest, which, ~good)
+    drawn = (status == OK) | (status == INFEASIBLE)
+    largest, which = _family_max(_element_matrix(columns, metrics, drawn))
+    first_values, second_values = np.asarray(parameters[first]), np.asarray(parameters[second])
+    xs, ys, cell, element, anyfailed = _grid_cells(first_values, second_values, largest, which,
+                                                   ~drawn)
+    infeasible = _grid_cells(first_values, second_values, largest, which,
+                             status == INFEASIBLE)[4]
     over = "maximum over elements" if len(columns) > 1 else "value"
     figure, ax = _map_axes(f"{title}\n{family}: {over} per case{_failure_note(status)}")
     low, high = _limits(cell)
@@ -335,8 +352,12 @@ def _heat_map(first: str, second: str, columns: list[str], parameters, metrics, 
     for r, c in zip(*np.nonzero(np.isnan(cell)), strict=True):
         ax.add_patch(Rectangle((c - 0.5, r - 0.5), 1.0, 1.0, fill=False, hatch="///",
                                edgecolor="0.55", linewidth=0.0))
+    for r, c in zip(*np.nonzero(infeasible & ~np.isnan(cell)), strict=True):
+        ax.add_patch(Rectangle((c - 0.5, r - 0.5), 1.0, 1.0, fill=False, hatch="xx",
+                               edgecolor=INFEASIBLE_COLOUR, linewidth=1.5))
     if cell.size <= ANNOTATED_CELLS:
-        _annotate_cells(ax, image, cell, element, anyfailed, [_element(c) for c in columns])
+        _annotate_cells(ax, image, cell, element, anyfailed, [_element(c) for c in columns],
+                        infeasible)
     _level_ticks(ax.xaxis, xs)
     _level_ticks(ax.yaxis, ys)
     ax.set_xlabel(_label(first, units.get(first, "")))
@@ -354,6 +375,7 @@ def _scatter_map(first: str, second: str, columns: list[str], parameters, metric
     family = columns[0].partition(":")[0]
     good = status == OK
     largest, _ = _family_max(_element_matrix(columns, metrics, good))
+    bad_ground = status == INFEASIBLE
     x = np.asarray(parameters[first], dtype=float)
     y = np.asarray(parameters[second], dtype=float)
     over = "maximum over elements" if len(columns) > 1 else "value"
@@ -367,9 +389,15 @@ def _scatter_map(first: str, second: str, columns: list[str], parameters, metric
     if empty.any():
         ax.scatter(x[empty], y[empty], facecolors="none", edgecolors="0.5", s=36, zorder=3,
                    label=f"no value ({int(empty.sum())})")
-    if (~good).any():
-        ax.plot(x[~good], y[~good], "x", color=FAILED_COLOUR, markersize=7, markeredgewidth=1.5,
-                linestyle="none", zorder=4, label=f"not ok ({int((~good).sum())})")
+    failed = ~good & ~bad_ground
+    if failed.any():
+        ax.plot(x[failed], y[failed], "x", color=FAILED_COLOUR, markersize=7,
+                markeredgewidth=1.5, linestyle="none", zorder=4,
+                label=f"failed ({int(failed.sum())})")
+    if bad_ground.any():
+        ax.plot(x[bad_ground], y[bad_ground], "x", color=INFEASIBLE_COLOUR, markersize=7,
+                markeredgewidth=1.5, linestyle="none", zorder=4,
+                label=f"infeasible ({int(bad_ground.sum())})")
     if empty.any() or (~good).any():
         ax.legend(fontsize=7, loc="best")
     ax.set_xlabel(_label(first, units.get(first, "")))
@@ -406,8 +434,10 @@ def sweep_figures(parameters: Mapping[str, np.ndarray], metrics: Mapping[str, np
     units : mapping of str to str
         Unit of each parameter and metric column (``""`` for none; missing means none).
     status : array_like of str
-        Each case's status; only cases with ``"ok"`` are drawn, the others are marked with a red
-        cross and counted in the titles.
+        Each case's status: ``"ok"`` drawn; ``"infeasible"`` (computed, but the ground cannot
+        give the feet's forces) marked with an orange cross, and drawn in a heat map's cell
+        hatched and labelled ``INFEASIBLE``; any other marked with a red cross; all not ok
+        counted in the titles.
     title : str
         First line of every figure's title (e.g. the study's name).
 

@@ -170,7 +170,9 @@ def run_case(study: Study, case: Case) -> dict:
     Returns
     -------
     dict
-        ``case``, ``key``, ``params``, ``status`` (``ok`` or ``failed``), ``message``,
+        ``case``, ``key``, ``params``, ``status`` (``ok``; ``infeasible``: computed, but the
+        ground cannot give the feet their forces at some sample, the count and the first time
+        in ``message``; or ``failed``), ``message``,
         ``metrics`` (column -> float), ``units`` (column -> unit), and the run's cost:
         ``cpu_s``, ``wall_s``, ``worker``.
     """
@@ -213,7 +215,13 @@ def _run_job(job: dict, model) -> tuple[str, str, dict]:
         times = np.linspace(start, start + duration, job["samples"])
         result = inverse_dynamics(model, times)
         strides = duration / cycle if cycle else 1.0
-        return "ok", "", inverse_metrics(model, result, families, strides)
+        metrics = inverse_metrics(model, result, families, strides)
+        if not result.feasible:
+            bad = np.flatnonzero(result.infeasible)
+            return "infeasible", (f"the ground cannot give the feet's forces at {bad.size} of "
+                                  f"{times.size} samples, first at t = {times[bad[0]]:.4g} s (a "
+                                  "foot slips or is pulled)"), metrics
+        return "ok", "", metrics
     from hexapod.simulation.loop import simulate
 
     duration = job["duration"] or cycle or 1.0

@@ -13,7 +13,7 @@ peak_moment:J          N m     largest ``|T|`` of joint J's wrench, about the jo
 peak_ground:LEG        N       largest ``|F|`` of the ground's force on the foot
 friction_ratio:LEG             largest ``|F_t| / (mu F_n)`` of a loaded foot (above 1: outside
                                the friction cone; infinite: the ground would pull)
-slip_samples           1       samples where the friction policy found no admissible force
+slip_samples           1       samples where a foot slips or is pulled, whatever the policy
 energy                 J       the actuators' positive work per stride, ``int sum max(tau w, 0)``
 cost_of_transport      1       that work over ``m g d``, ``d`` the horizontal distance the
                                centre of mass travels in the stride (NaN when it stays put)

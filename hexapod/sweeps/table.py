@@ -1,8 +1,9 @@
 """The result of a study: one row per case, one column per parameter and metric.
 
 Columns, in order: ``case``, the varied parameters (the study's order), ``status`` (``ok``,
-``failed``), ``message``, then the metrics by family (:data:`hexapod.sweeps.metrics.FAMILIES`)
-and element (first appearance). The table is a function of the cases' results alone, sorted by
+``infeasible``: computed but the ground cannot give the feet's forces, ``failed``),
+``message``, then the metrics by family (:data:`hexapod.sweeps.metrics.FAMILIES`) and element
+(first appearance). The table is a function of the cases' results alone, sorted by
 case: it does not depend on the number of workers or the order in which cases finished. What a
 run cost (CPU and wall seconds, the worker) is kept beside it (``timings.csv``), since it
 differs from run to run.
@@ -36,8 +37,9 @@ TIMINGS_COLUMNS: Columns = {"case": (None, "the case's number"),
 COLUMNS_CSV_COLUMNS: Columns = {"column": (None, "a column of study.csv"),
                                 "kind": (None, "case, parameter, status or metric"),
                                 "unit": (None, "its unit (empty: text or a pure number)")}
-_MEANINGS = {"case": "the case's number", "status": "ok or failed",
-             "message": "why the case failed (empty when it did not)"}
+_MEANINGS = {"case": "the case's number",
+             "status": "ok, infeasible (the ground cannot give the feet's forces) or failed",
+             "message": "why the case failed or is infeasible (empty when ok)"}
 
 
 class SweepTable:
