@@ -14,6 +14,8 @@ steps          10,000,000                      ``HEXAPOD_MAX_STEPS``    ``--max-
                                                                         (simulate)
 bodies,        10,000 each                     ``HEXAPOD_MAX_BODIES``
 joints
+cases          100,000                         ``HEXAPOD_MAX_CASES``    ``--max-cases``
+                                                                        (sweep)
 =============  ==============================  =======================  ==================
 
 An option given wins over the environment, which wins over the default. Nothing here imports
@@ -39,6 +41,9 @@ DEFAULT_MAX_STEPS = 10_000_000
 #: bodies (and joints) of a scene: assembling a model builds symbolic expressions per body, and
 #: scenes beyond this many would take minutes before anything is computed
 DEFAULT_MAX_BODIES = 10_000
+#: cases of a design study: each is a run of its own and a file in the study's cases/ folder;
+#: at a tenth of a second a case, a day of one core
+DEFAULT_MAX_CASES = 100_000
 
 _UNITS = {"": 1, "K": 1024, "M": 1024**2, "G": GIB, "T": 1024**4}
 _SIZE = re.compile(r"\s*([0-9]*\.?[0-9]+(?:[eE][+-]?[0-9]+)?)\s*([KMGT]?)(?:I?B)?\s*",
@@ -189,3 +194,22 @@ def check_model_size(bodies: int, joints: int, what: str) -> None:
                 f"{what} has {count} {kind} (limit {bound}): assembling it would take minutes; "
                 "split the scene, or raise the limit with the environment variable "
                 f"HEXAPOD_MAX_BODIES={count}")
+
+
+def max_cases(given: int | None = None) -> int:
+    """The limit on a study's cases: ``given``, else ``HEXAPOD_MAX_CASES``, else
+    :data:`DEFAULT_MAX_CASES`."""
+    if given is not None:
+        return int(given)
+    return _from_environment("HEXAPOD_MAX_CASES", _whole, DEFAULT_MAX_CASES)
+
+
+def check_cases(count: float, what: str, limit: int | None = None) -> None:
+    """Refuse a design study of more cases than the limit (``limit`` or :func:`max_cases`),
+    before any case is listed."""
+    bound = max_cases(limit)
+    if count > bound:
+        raise HexapodError(
+            f"{what} has {_shown(count)} cases (limit {bound:,}): vary fewer values or draw "
+            f"fewer samples, or raise the limit with --max-cases {_round_up(count)} (or "
+            "HEXAPOD_MAX_CASES)")
