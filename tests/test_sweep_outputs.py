@@ -372,6 +372,9 @@ def test_a_study_of_a_billion_cases_is_refused_before_any_is_listed(tmp_path, mo
                   samples=10**9, job={"kind": "inverse"})
     with pytest.raises(HexapodError, match="has 1e9 cases"):
         run_study(drawn, max_cases=10**5)
+    past_floats = "".join(f"[vary.p{k}]\nrange = [0, 1]\nsteps = {2**62}\n" for k in range(20))
+    with pytest.raises(HexapodError, match="has more than 1e300 cases"):
+        read_study(study_file(tmp_path, "[study]\nscene = 'pendulum.toml'\n" + past_floats))
 
 
 def test_the_command_bounds_the_cases(tmp_path):

@@ -209,7 +209,9 @@ def check_cases(count: float, what: str, limit: int | None = None) -> None:
     before any case is listed."""
     bound = max_cases(limit)
     if count > bound:
+        count = count if count < 1e300 else math.inf  # an int past a float's range
+        shown = _shown(count) if count < math.inf else "more than 1e300"
         raise HexapodError(
-            f"{what} has {_shown(count)} cases (limit {bound:,}): vary fewer values or draw "
+            f"{what} has {shown} cases (limit {bound:,}): vary fewer values or draw "
             f"fewer samples, or raise the limit with --max-cases {_round_up(count)} (or "
             "HEXAPOD_MAX_CASES)")

@@ -70,7 +70,7 @@ def _kind(entry: os.DirEntry) -> str:
         return "a symbolic link"
     if entry.is_dir(follow_symlinks=False):
         return "a folder"
-    return "not a regular file" if not entry.is_file(follow_symlinks=False) else ""
+    return "a file" if entry.is_file(follow_symlinks=False) else "not a regular file"
 
 
 def _figure_names(folder: Path) -> set[str] | None:
@@ -94,14 +94,13 @@ def foreign_files(folder: Path) -> list[str]:
 
     def judge(entries, ours, prefix: str = "", folders=()):
         for entry in entries:
-            kind = _kind(entry)
-            name = prefix + entry.name
-            if entry.name in folders and kind == "a folder":
-                continue
-            if kind == "" and (ours(entry.name) or _leftover_of(entry.name, ours)):
+            kind, name = _kind(entry), prefix + entry.name
+            if kind == ("a folder" if entry.name in folders else "a file") and (
+                    entry.name in folders or ours(entry.name)
+                    or _leftover_of(entry.name, ours)):
                 continue
             known = ours(entry.name) or entry.name in folders
-            foreign.append(f"{name} ({kind})" if known and kind else name)
+            foreign.append(f"{name} ({kind})" if known else name)
 
     judge(_entries(folder), lambda n: n in OUTPUT_FILES, folders=OUTPUT_FOLDERS)
     if (folder / "cases").is_dir() and not (folder / "cases").is_symlink():
