@@ -31,7 +31,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("spec", metavar="SPEC.toml", help="the study file")
     parser.add_argument("--out", metavar="DIR",
                         help="the output folder (default: the study's name + '-sweep'); an "
-                        "earlier study's output there is replaced, unless --resume")
+                        "earlier study there is replaced when the new one is complete, unless "
+                        "--resume; a folder holding anything else is refused")
     where = parser.add_mutually_exclusive_group()
     where.add_argument("--workers", type=at_least(1, MAX_WORKERS), metavar="N",
                        help="worker processes of the local Dask cluster (default: one per "
