@@ -265,10 +265,12 @@ def test_a_study_that_fails_before_any_case_writes_nothing(tmp_path):
 
 
 @pytest.mark.parametrize("moment, number", [("imports", signal.SIGTERM),
-                                            ("cases", signal.SIGINT)])
+                                            ("cases", signal.SIGINT),
+                                            ("cases", signal.SIGKILL)])
 def test_a_signal_leaves_the_earlier_study_whole(tmp_path, earlier, moment, number):
     """A signal during the command's imports or after its first case (each awaited as the
-    run announces it): the conventional status, one line, the earlier study whole."""
+    run announces it): the conventional status, one line, the earlier study whole; what a
+    killed run left beside it is gone after the next run."""
     path, out, before = earlier
     many = other_study(tmp_path, [1.0 + k / 100 for k in range(200)])
     with commands.Running("-m", "hexapod", "sweep", str(many), "--in-process", "--out",
@@ -279,12 +281,16 @@ def test_a_signal_leaves_the_earlier_study_whole(tmp_path, earlier, moment, numb
             child.wait_for("cases: 1/200 done")
         child.send_signal(number)
         status, _, err = child.finish()
-    assert status == 128 + number, err
-    assert err.rstrip().endswith(f"hexapod: interrupted ({signal.Signals(number).name})")
-    assert "Traceback" not in err
     now = contents(out)
     assert {k: v for k, v in now.items() if k in before} == before
     assert all(k.startswith("cases/") for k in now if k not in before)
+    if number == signal.SIGKILL:
+        assert status == -number and leftovers(tmp_path)  # its folder, being written
+        run_study(read_study(path), out=out)
+    else:
+        assert status == 128 + number, err
+        assert err.rstrip().endswith(f"hexapod: interrupted ({signal.Signals(number).name})")
+        assert "Traceback" not in err
     assert leftovers(tmp_path) == []
 
 
@@ -302,10 +308,13 @@ def _tamper(row: dict, how: str, other: dict):
         return json.dumps(row | {"metrics": {"peak_effort:pivot": "big"}})
     if how == "extra key":
         return json.dumps(row | {"colour": "red"})
+    if how == "another metric":
+        return json.dumps(row | {"metrics": {"../../x:y": 1.0}, "units": {}})
     return json.dumps(row | {"params": other["params"]})  # another case's parameters
 
 
-TAMPERED = ["not JSON", "a list", "missing key", "wrong type", "extra key", "other parameters"]
+TAMPERED = ["not JSON", "a list", "missing key", "wrong type", "extra key", "other parameters",
+            "another metric"]
 
 
 @pytest.mark.parametrize("how", TAMPERED)

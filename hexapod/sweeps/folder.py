@@ -137,9 +137,10 @@ def check_folder(folder: Path) -> None:
                              "output folder")
 
 
-def row_problem(row, case) -> str | None:
+def row_problem(row, case, families=None) -> str | None:
     """What is wrong with ``row`` as the result of ``case`` (None: nothing): its keys, the
-    types of their values, its key and parameters."""
+    types of their values, its key and parameters, and its metrics' families (one of
+    ``families`` when given)."""
     if not isinstance(row, dict):
         return f"holds a JSON {type(row).__name__}, not a case's row (an object)"
     missing = [k for k in ROW_TYPES if k not in row]
@@ -158,6 +159,11 @@ def row_problem(row, case) -> str | None:
         bad = [k for k, v in row[key].items() if isinstance(v, bool) or not isinstance(v, kind)]
         if bad:
             return f"{key}.{bad[0]} must be {'a number' if key == 'metrics' else 'a string'}"
+    strange = [m for m in row["metrics"] if families is not None
+               and m.partition(":")[0] not in families] + [u for u in row["units"]
+                                                           if u not in row["metrics"]]
+    if strange:
+        return f"{strange[0]!r} is not a metric of the study's job"
     if not all(math.isfinite(v) and v >= 0 for v in (row["cpu_s"], row["wall_s"])):
         return "cpu_s and wall_s must be finite seconds, at least 0"
     if row["key"] != case.key:
@@ -168,7 +174,7 @@ def row_problem(row, case) -> str | None:
     return None
 
 
-def _read_case(path: Path, case) -> tuple[dict | None, str]:
+def _read_case(path: Path, case, families) -> tuple[dict | None, str]:
     """The row in ``path`` and its text, or (None, what is wrong)."""
     try:
         size = os.lstat(path).st_size
@@ -180,7 +186,7 @@ def _read_case(path: Path, case) -> tuple[dict | None, str]:
         return None, f"cannot be read ({error})"
     except (ValueError, RecursionError) as error:
         return None, f"not JSON ({str(error).split(':')[0]})"
-    problem = row_problem(row, case)
+    problem = row_problem(row, case, families)
     return (None, problem) if problem else (row, text)
 
 
@@ -205,10 +211,10 @@ class StudyFolder:
         write_atomically(self.staging / "study.json",
                          json.dumps(self.description, indent=1) + "\n")
 
-    def reuse(self, cases) -> dict[str, dict]:
-        """The rows of ``cases`` finished in the earlier study (by key), each checked and kept
-        in the new one; a file that fails the check is named in a warning and its case is
-        computed again."""
+    def reuse(self, cases, families=None) -> dict[str, dict]:
+        """The rows of ``cases`` finished in the earlier study (by key), each checked (its
+        metrics of ``families``, when given) and kept in the new one; a file that fails the
+        check is named in a warning and its case is computed again."""
         kept = {}
         earlier = self.folder / "cases"
         if not earlier.is_dir():
@@ -217,7 +223,7 @@ class StudyFolder:
             path = earlier / f"{case.key}.json"
             if not path.exists():
                 continue
-            row, text = _read_case(path, case)
+            row, text = _read_case(path, case, families)
             if row is None:
                 warnings.warn(f"{path}: {text}; case {case.index} is computed again",
                               stacklevel=2)

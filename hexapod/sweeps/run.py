@@ -145,7 +145,7 @@ def run_study(study: Study, *, client=None, workers: int | None = None,
     folder = StudyFolder(Path(out), _description(study, len(cases))) if out is not None \
         else None
     try:
-        kept = folder.reuse(cases) if folder is not None and resume else {}
+        kept = folder.reuse(cases, _families(study)) if folder is not None and resume else {}
         todo = [c for c in cases if c.key not in kept]
         state = Progress(len(cases), done=len(kept), reused=len(kept),
                          started=time.perf_counter())
@@ -209,6 +209,13 @@ def _execute(study, todo, cluster: StudyClient, folder, state, progress):
             state.running = min(len(futures), worker_count(dask_client))
             finished(case, row)
             yield case, row
+
+
+def _families(study: Study) -> set[str]:
+    """The metric families the study's job keeps."""
+    from hexapod.sweeps.metrics import FAMILIES
+
+    return set(study.job.get("metrics") or FAMILIES[study.job.get("kind", "inverse")])
 
 
 def _description(study: Study, cases: int) -> dict:
