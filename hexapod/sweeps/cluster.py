@@ -146,12 +146,26 @@ def _probe(address: str, timeout: float) -> None:
 class StudyClient:
     """A Dask client for the study, as a context manager: the one given (left open), or one
     made here on a local cluster of ``workers`` processes or on ``scheduler``'s address
-    (closed at the end); ``announce`` receives the dashboard's address."""
+    (closed at the end); ``announce`` receives the dashboard's address. The scheduler's
+    address and the timeout are checked when it is made, before any work.
+
+    Raises
+    ------
+    StudyError
+        An address of another form or protocol (:func:`scheduler_address`).
+    HexapodError
+        A timeout that is not positive seconds (:func:`scheduler_timeout`).
+    """
 
     def __init__(self, client, workers, scheduler, announce, timeout: float | None = None):
-        self.given, self.workers, self.scheduler, self.announce = (client, workers, scheduler,
-                                                                   announce)
-        self.timeout = timeout
+        self.given, self.workers, self.announce = client, workers, announce
+        self.scheduler = self.timeout = None
+        if client is None and scheduler is not None:
+            try:
+                self.scheduler = scheduler_address(scheduler)
+            except ValueError as error:
+                raise StudyError(f"scheduler {error}") from None
+            self.timeout = scheduler_timeout(timeout)
         self.made: list = []
 
     def __enter__(self):
@@ -180,11 +194,7 @@ class StudyClient:
         return client
 
     def _connect(self, Client):
-        try:
-            address = scheduler_address(self.scheduler)
-        except ValueError as error:
-            raise StudyError(f"scheduler {error}") from None
-        timeout = scheduler_timeout(self.timeout)
+        address, timeout = self.scheduler, self.timeout
         _probe(address, timeout)
         try:
             client = Client(address, timeout=timeout)

@@ -142,6 +142,7 @@ def run_study(study: Study, *, client=None, workers: int | None = None,
     check_cases(study.count(), f"the study {study.source or study.name}", max_cases)
     check_study(study)
     cases = study.cases()
+    cluster = StudyClient(client, workers, scheduler, announce, scheduler_timeout)
     folder = StudyFolder(Path(out), _description(study, len(cases))) if out is not None \
         else None
     try:
@@ -151,9 +152,7 @@ def run_study(study: Study, *, client=None, workers: int | None = None,
                          started=time.perf_counter())
         rows = list(kept.values())
         rows += [_failed(c) if row is None else row for c, row in
-                 _execute(study, todo, StudyClient(client, workers, scheduler, announce,
-                                                   scheduler_timeout), folder, state,
-                          progress)]
+                 _execute(study, todo, cluster, folder, state, progress)]
         wall = time.perf_counter() - state.started
         table = SweepTable.from_rows([p.name for p in study.parameters], rows)
         if folder is not None:
