@@ -249,14 +249,12 @@ def test_an_output_folder_holding_other_files_is_refused(tmp_path):
     assert (tmp_path / "mine" / "thesis.tex").read_text() == "x"
 
 
-def test_an_unreachable_scheduler_is_refused_with_one_message(tmp_path, monkeypatch):
-    import hexapod.sweeps.run as run_module
-
-    monkeypatch.setattr(run_module, "CONNECT_TIMEOUT", 1)
+def test_an_unreachable_scheduler_is_refused_with_one_message(tmp_path):
     path = study_file(tmp_path, MASSES)
     with pytest.raises(StudyError, match="scheduler tcp://127.0.0.1:9: cannot connect"):
-        run_study(read_study(path), scheduler="tcp://127.0.0.1:9", out=tmp_path / "o")
-    assert not list((tmp_path / "o" / "cases").glob("*.json"))
+        run_study(read_study(path), scheduler="tcp://127.0.0.1:9", out=tmp_path / "o",
+                  scheduler_timeout=1)
+    assert not (tmp_path / "o").exists()
 
 
 # ------------------------------------------------------------------ the command

@@ -424,6 +424,48 @@ def _swap_in(staging: Path, path: Path) -> None:
     shutil.rmtree(backup, ignore_errors=True)
 
 
+def staging_directory(path: str | Path) -> Path:
+    """A new empty directory beside ``path``, to be filled and then moved in with
+    :func:`swap_directory`: its temporary name carries this process's id, so that the next
+    writer of ``path`` removes it if this process dies first (:func:`recover_directory`).
+
+    Raises
+    ------
+    InputFileError
+        The directory cannot be made.
+    """
+    path = Path(path)
+    parent = path.parent if str(path.parent) else Path(".")
+    try:
+        staging = Path(tempfile.mkdtemp(dir=parent, prefix=_temporary_prefix(path),
+                                        suffix=".tmp"))
+        os.chmod(staging, 0o777 & ~_umask())  # as mkdir would make it (mkdtemp: 0700)
+    except OSError as error:
+        raise InputFileError(f"{path}: cannot write the directory ({error})") from None
+    return staging
+
+
+def swap_directory(staging: str | Path, path: str | Path) -> Path:
+    """Move the complete directory ``staging`` (:func:`staging_directory`) to ``path`` in one
+    step; an earlier directory there is replaced whole and then removed (its links are removed,
+    never followed). The caller checks first that the earlier directory is its own output.
+
+    Raises
+    ------
+    InputFileError
+        The directory cannot be moved; ``path`` is left as it was.
+    """
+    staging, path = Path(staging), Path(path)
+    try:
+        if path.exists() or path.is_symlink():
+            _swap_in(staging, path)
+        else:
+            os.replace(staging, path)
+    except OSError as error:
+        raise InputFileError(f"{path}: cannot write the directory ({error})") from None
+    return path
+
+
 def write_directory_atomically(path: str | Path, files: dict[str, bytes]) -> Path:
     """Write ``files`` (name -> content) as the directory ``path``: a temporary directory
     beside it, filled and then swapped with ``path``, so that the directory appears complete or

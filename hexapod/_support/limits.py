@@ -17,6 +17,8 @@ joints
 contacts       32                              ``HEXAPOD_MAX_CONTACTS``
 instants       20,000                          ``HEXAPOD_MAX_INSTANTS`` ``--max-instants``
 exported                                                                (export)
+cases          100,000                         ``HEXAPOD_MAX_CASES``    ``--max-cases``
+                                                                        (sweep)
 =============  ==============================  =======================  ==================
 
 Files a command reads are weighed against the memory limit before they are read
@@ -52,6 +54,9 @@ DEFAULT_MAX_CONTACTS = 32
 #: saved instants of a result that ``hexapod export`` reads: each becomes VTK files held in
 #: memory until the directory is written (about 8 KB and, for a report, a Newton solve each)
 DEFAULT_MAX_INSTANTS = 20_000
+#: cases of a design study: each is a run of its own and a file in the study's cases/ folder;
+#: at a tenth of a second a case, a day of one core
+DEFAULT_MAX_CASES = 100_000
 
 _UNITS = {"": 1, "K": 1024, "M": 1024**2, "G": GIB, "T": 1024**4}
 _SIZE = re.compile(r"\s*([0-9]*\.?[0-9]+(?:[eE][+-]?[0-9]+)?)\s*([KMGT]?)(?:I?B)?\s*",
@@ -242,3 +247,24 @@ def check_model_size(bodies: int, joints: int, what: str, contacts: int = 0) -> 
                 f"{what} has {count} {kind} (limit {bound}): assembling it would take minutes; "
                 "split the scene, or raise the limit with the environment variable "
                 f"HEXAPOD_MAX_BODIES={count}")
+
+
+def max_cases(given: int | None = None) -> int:
+    """The limit on a study's cases: ``given``, else ``HEXAPOD_MAX_CASES``, else
+    :data:`DEFAULT_MAX_CASES`."""
+    if given is not None:
+        return int(given)
+    return _from_environment("HEXAPOD_MAX_CASES", _whole, DEFAULT_MAX_CASES)
+
+
+def check_cases(count: float, what: str, limit: int | None = None) -> None:
+    """Refuse a design study of more cases than the limit (``limit`` or :func:`max_cases`),
+    before any case is listed."""
+    bound = max_cases(limit)
+    if count > bound:
+        count = count if count < 1e300 else math.inf  # an int past a float's range
+        shown = _shown(count) if count < math.inf else "more than 1e300"
+        raise HexapodError(
+            f"{what} has {shown} cases (limit {bound:,}): vary fewer values or draw "
+            f"fewer samples, or raise the limit with --max-cases {_round_up(count)} (or "
+            "HEXAPOD_MAX_CASES)")

@@ -21,26 +21,61 @@ DESCRIPTION = (
     "cluster of worker processes (default, one per core), on --workers N, or on the cluster "
     "of --scheduler; --in-process runs them here without Dask. A failing case is a row with "
     "its message. Each finished case is kept in OUT/cases, so --resume after an interruption "
-    "computes only the rest.")
+    "computes only the rest. The study is written beside OUT and swapped in when complete: "
+    "an earlier study there stays whole until then (an interrupted or failed run only adds "
+    "the cases it finished to its cases/), and OUT holding anything a study did not write "
+    "is refused.")
 
 
 def add_arguments(parser) -> None:
     parser.add_argument("spec", metavar="SPEC.toml", help="the study file")
     parser.add_argument("--out", metavar="DIR",
                         help="the output folder (default: the study's name + '-sweep'); an "
-                        "earlier study's output there is replaced, unless --resume")
+                        "earlier study there is replaced when the new one is complete, unless "
+                        "--resume; a folder holding anything else is refused")
     where = parser.add_mutually_exclusive_group()
     where.add_argument("--workers", type=at_least(1, MAX_WORKERS), metavar="N",
                        help="worker processes of the local Dask cluster (default: one per "
                        "core)")
-    where.add_argument("--scheduler", metavar="ADDRESS",
-                       help="send the cases to this running Dask scheduler "
-                       "(e.g. tcp://10.0.0.5:8786)")
+    where.add_argument("--scheduler", metavar="ADDRESS", type=_address,
+                       help="send the cases to this running Dask scheduler, "
+                       "tcp://HOST:PORT (e.g. tcp://10.0.0.5:8786)")
     where.add_argument("--in-process", action="store_true",
                        help="run the cases one after the other in this process, without Dask")
     parser.add_argument("--resume", action="store_true",
                         help="keep the cases already finished in DIR (same parameters, scene, "
                         "job and code version) and compute the rest")
+    parser.add_argument("--scheduler-timeout", type=_seconds, metavar="SECONDS",
+                        help="seconds the --scheduler has to answer and to have a worker, "
+                        "after which the study ends with an error (default: "
+                        "HEXAPOD_SCHEDULER_TIMEOUT, else 10)")
+    parser.add_argument("--max-cases", type=at_least(1), metavar="N",
+                        help="the most cases the study may have, checked before any work "
+                        "(default: HEXAPOD_MAX_CASES, else 100000)")
+
+
+def _address(text: str) -> str:
+    import argparse
+
+    from hexapod.sweeps.cluster import scheduler_address
+
+    try:
+        return scheduler_address(text)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+
+
+def _seconds(text: str) -> float:
+    import argparse
+
+    from hexapod.errors import HexapodError
+    from hexapod.sweeps.cluster import scheduler_timeout
+
+    try:
+        return scheduler_timeout(float(text))
+    except (ValueError, HexapodError) as error:
+        raise argparse.ArgumentTypeError(str(error).replace("scheduler timeout: ", "")) \
+            from None
 
 
 def run(args) -> int:
@@ -50,7 +85,7 @@ def run(args) -> int:
     from hexapod.sweeps.run import run_study
     from hexapod.sweeps.spec import read_study
 
-    study = read_study(args.spec)
+    study = read_study(args.spec, args.max_cases)
     # the study's own reader of the folder checks its contents (cases/, figures/, --resume)
     out = output_directory(args.out, f"{_safe(study.name)}-sweep",
                            inputs=given_files(args.spec, study.scene))
@@ -65,7 +100,8 @@ def run(args) -> int:
     started = time.perf_counter()
     run = run_study(study, workers=workers, scheduler=args.scheduler, out=out,
                     resume=args.resume, progress=_progress(),
-                    announce=lambda text: print(text, file=sys.stderr))
+                    announce=lambda text: print(text, file=sys.stderr),
+                    max_cases=args.max_cases, scheduler_timeout=args.scheduler_timeout)
     print(file=sys.stderr)
     status = run.table.data["status"]
     failed = int(((status != "ok") & (status != "infeasible")).sum())

@@ -6,7 +6,9 @@ table with figures.
 * :mod:`~hexapod.sweeps.cases`: one case, from its scene to its row;
 * :mod:`~hexapod.sweeps.metrics`: what a case keeps;
 * :mod:`~hexapod.sweeps.table`: the table and its files;
-* :mod:`~hexapod.sweeps.run`: running a study, resuming it, its output folder.
+* :mod:`~hexapod.sweeps.folder`: the output folder, written beside and swapped in whole;
+* :mod:`~hexapod.sweeps.cluster`: the Dask cluster, and a scheduler's address and wait;
+* :mod:`~hexapod.sweeps.run`: running a study, resuming it.
 
 ``hexapod.sweep`` is :func:`hexapod.sweeps.run.sweep`; ``docs/sweeps.md`` is the user's guide.
 """

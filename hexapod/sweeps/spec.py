@@ -103,8 +103,14 @@ class Study:
     source: str = ""  # the study file, for messages
     scene_digest: str = ""  # sha256 of a scene file's text ("" for a built-in scene)
 
+    def count(self) -> int:
+        """The number of cases, without listing them."""
+        return math.prod(len(p.values) for p in self.parameters if not p.random) * \
+            (self.samples if any(p.random for p in self.parameters) else 1)
+
     def cases(self) -> list[Case]:
-        """Every case, in index order."""
+        """Every case, in index order (:meth:`count` of them: see
+        :func:`hexapod._support.limits.check_cases`)."""
         listed = [p for p in self.parameters if not p.random]
         drawn = [p for p in self.parameters if p.random]
         draws = _draws(drawn, self.samples, self.seed) if drawn else [{}]
@@ -168,13 +174,17 @@ class _Problems:
             raise InputFileError(f"{self.source}: not a valid study:\n  {body}")
 
 
-def read_study(path: str | Path) -> Study:
-    """Read a study file; every problem is reported at once, naming its key.
+def read_study(path: str | Path, max_cases: int | None = None) -> Study:
+    """Read a study file; every problem is reported at once, naming its key. A study of more
+    cases than ``max_cases`` (default: :func:`hexapod._support.limits.max_cases`) is refused
+    before they are listed.
 
     Raises
     ------
     InputFileError
         The file cannot be read, is not TOML, or is not a valid study.
+    HexapodError
+        The study has more cases than the limit.
     """
     path = Path(path)
     try:
@@ -184,14 +194,19 @@ def read_study(path: str | Path) -> Study:
     except RecursionError:  # tomllib parses nested arrays and tables recursively
         raise InputFileError(f"{path}: arrays or tables nested too deeply to be a study") \
             from None
-    return study_from_document(document, path)
+    return study_from_document(document, path, max_cases)
 
 
-def study_from_document(document: dict, path: str | Path = "<study>") -> Study:
+def study_from_document(document: dict, path: str | Path = "<study>",
+                        max_cases: int | None = None) -> Study:
     """The study of a parsed TOML document; ``path`` names it and anchors a relative scene
     file. Checks the study's own keys and values (the scene's keys and the builder's
-    arguments are checked against the scene by :func:`hexapod.sweeps.cases.check_study`)."""
+    arguments are checked against the scene by :func:`hexapod.sweeps.cases.check_study`), and
+    its number of cases against ``max_cases`` before any grid is made."""
     path = Path(path)
+    from hexapod._support.limits import check_cases
+
+    check_cases(_count(document), f"the study {path}", max_cases)
     problems = _Problems(str(path))
     for key in document:
         if key not in _SECTIONS:
@@ -234,6 +249,27 @@ def study_from_document(document: dict, path: str | Path = "<study>") -> Study:
         scene, digest = str(scene_path.resolve()), hashlib.sha256(text.encode()).hexdigest()
     return Study(str(name), scene, fixed, tuple(parameters), job, seed, samples,
                  str(study.get("description", "")), str(path), digest)
+
+
+def _count(document: dict) -> int:
+    """The cases a study document asks for, counted from its lists, grid steps and samples
+    before any is made (an entry written wrong counts one: it is reported later)."""
+    vary = document.get("vary")
+    tables = [t for t in vary.values() if isinstance(t, dict)] if isinstance(vary, dict) else []
+    count, drawn = 1, False
+    for table in tables:
+        values, steps = table.get("values"), table.get("steps")
+        if isinstance(values, list):
+            count *= max(len(values), 1)
+        elif isinstance(steps, int) and not isinstance(steps, bool) and steps > 1:
+            count *= steps
+        elif "range" in table and "steps" not in table:
+            drawn = True
+    study = document.get("study")
+    samples = study.get("samples") if isinstance(study, dict) else None
+    if drawn and isinstance(samples, int) and not isinstance(samples, bool) and samples > 1:
+        count *= samples
+    return count
 
 
 def _table(document: dict, key: str, problems: _Problems) -> dict:
