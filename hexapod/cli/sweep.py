@@ -146,6 +146,7 @@ def _progress():
         eta = state.eta()
         left = "" if eta is None else f", about {eta:.0f} s left"
         print(f"\rcases: {state.done}/{state.total} done, {state.failed} failed, "
+              + (f"{state.infeasible} infeasible, " if state.infeasible else "") +
               f"{state.running} running{left}   ", end="", file=sys.stderr, flush=True)
     return report
 

@@ -35,6 +35,7 @@ class Progress:
     total: int
     done: int = 0  # finished, failed included, reused included
     failed: int = 0
+    infeasible: int = 0  # computed, but the ground cannot hold the robot
     running: int = 0
     reused: int = 0
     started: float = 0.0
@@ -178,7 +179,8 @@ def _execute(study, todo, cluster: StudyClient, folder, state, progress):
         if folder is not None:
             folder.write_case(row)
         state.done += 1
-        state.failed += row["status"] != "ok"
+        state.failed += row["status"] not in ("ok", "infeasible")
+        state.infeasible += row["status"] == "infeasible"
         if progress is not None:
             progress(state)
 
