@@ -128,10 +128,9 @@ def feet_status(model: Model, times: np.ndarray, forces: np.ndarray) -> np.ndarr
     """
     times = np.atleast_1d(np.asarray(times, dtype=float))
     forces = np.asarray(forces, dtype=float).reshape(times.size, len(model.contacts), 3)
-    stance = np.array([[bool(c.in_stance(t)) for c in model.contacts] for t in times.tolist()],
-                      dtype=bool).reshape(forces.shape[:2])
-    weights = np.array([contact_weights(model, t) for t in times.tolist()]).reshape(stance.shape)
-    weights = sharing_weights(weights.T, stance.T).T
+    stance = np.array([np.asarray(c.in_stance(times), dtype=bool) for c in model.contacts])
+    weights = np.array([np.asarray(c.weight(times), dtype=float) for c in model.contacts])
+    stance, weights = stance.reshape(-1, times.size).T, sharing_weights(weights, stance).T
     ground = model.ground
     tolerance = VIOLATION_TOL * (robot_weight(model) or 1.0)
     normal, tangential = forces[..., 2], np.hypot(forces[..., 0], forces[..., 1])

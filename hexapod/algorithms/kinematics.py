@@ -195,10 +195,7 @@ def _closest(model: Model, data: Data, t: float, w: np.ndarray, lifted: np.ndarr
     leave the trunk a roll), each step followed by Newton back onto the others."""
     for _ in range(steps):
         Phi_v = np.asarray(_dense(constraint_jacobian(model, q, w, data)))
-        others = np.delete(Phi_v, contact.rows, axis=0)
-        _, s, Vt = np.linalg.svd(others)
-        rank = int(np.sum(s > model.rank_tolerance * max(float(s.max(initial=0.0)), 1.0)))
-        free = Vt[rank:].T
+        free = _null_space(model, np.delete(Phi_v, contact.rows, axis=0))
         offset = model.call("phi", data, q=q, w=w)[contact.rows]
         if free.shape[1] == 0 or np.linalg.norm(offset) <= tol * model.characteristic_length:
             return q
@@ -213,6 +210,15 @@ def _closest(model: Model, data: Data, t: float, w: np.ndarray, lifted: np.ndarr
 
 def _dense(matrix):
     return matrix.toarray() if hasattr(matrix, "toarray") else matrix
+
+
+def _null_space(model: Model, matrix: np.ndarray) -> np.ndarray:
+    """An orthonormal basis (n_v, k) of the motions ``matrix`` (rows of ``Phi_v``) leaves
+    free: singular values below the model's rank tolerance (relative, at least 1) count as
+    zero."""
+    _, s, Vt = np.linalg.svd(matrix)
+    rank = int(np.sum(s > model.rank_tolerance * max(float(s.max(initial=0.0)), 1.0)))
+    return Vt[rank:].T
 
 
 def _newton(model: Model, data: Data, t: float, w: np.ndarray, q: np.ndarray, tol: float,
@@ -447,9 +453,7 @@ def free_motions(model: Model, Phi_v: np.ndarray) -> list[str]:
     the components a pivoted QR picks, weighted by their bodies' masses so that a robot's
     trunk leads: each vector is 1 on its own component and 0 on the others') and naming every
     body it moves, e.g. ``trunk translating along world x (moves trunk, leg0)``."""
-    _, s, Vt = np.linalg.svd(np.asarray(Phi_v, dtype=float).reshape(-1, model.n_v))
-    rank = int(np.sum(s > model.rank_tolerance * max(float(s.max(initial=0.0)), 1.0)))
-    N = Vt[rank:].T  # n_v x free
+    N = _null_space(model, np.asarray(_dense(Phi_v), dtype=float).reshape(-1, model.n_v))
     if N.shape[1] == 0:
         return []
     from scipy.linalg import qr
