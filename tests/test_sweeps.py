@@ -312,6 +312,41 @@ def test_a_gait_the_ground_cannot_hold_is_an_infeasible_row(tmp_path):
     assert np.isfinite(row["metrics"]["peak_effort:L2/thc_levation"])
 
 
+def test_cases_differing_in_ground_settings_each_get_their_own_numbers(tmp_path):
+    """Cases of one robot that differ only in ground-force settings share its model where
+    they may (mu: read at run time) and not where they may not (the policy: built into its
+    Functions); each case equals its own robot assembled afresh. A frozen model once made every
+    case after the first an internal error here."""
+    path = tmp_path / "ground.toml"
+    path.write_text(textwrap.dedent("""
+        [study]
+        scene = "hexapod"
+        [vary."ground.policy"]
+        values = ["min-wrench", "friction"]
+        [vary."ground.mu"]
+        values = [0.5, 1.0]
+        [job]
+        samples = 3
+        metrics = ["peak_ground"]
+    """))
+    from legs.robot import hexapod_walking
+
+    rows = run_study(read_study(path)).rows
+    for row in rows:
+        assert row["status"] in ("ok", "infeasible"), row["message"]
+        scene = hexapod_walking()
+        scene.ground = hx.scene.GroundForces(policy=row["params"]["ground.policy"],
+                                             mu=row["params"]["ground.mu"])
+        model = hx.assemble(scene)
+        result = hx.inverse_dynamics(model, np.linspace(0.0, model.cycle_time(), 3))
+        peak = np.linalg.norm(result.ground_force, axis=-1).max(axis=0)
+        np.testing.assert_allclose([row["metrics"][f"peak_ground:{leg}"] for leg in
+                                    ("L1", "L2", "L3", "R1", "R2", "R3")], peak, rtol=1e-9)
+    by_policy = {row["params"]["ground.policy"]: row["metrics"]["peak_ground:L1"]
+                 for row in rows}
+    assert abs(by_policy["min-wrench"] - by_policy["friction"]) > 1e-3 * by_policy["friction"]
+
+
 def test_builder_arguments_and_scene_keys_reach_the_walking_robot(tmp_path):
     """A case of the built-in walking robot equals the same run made by hand."""
     from legs.robot import hexapod_walking

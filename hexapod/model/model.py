@@ -21,6 +21,7 @@ Functions: ``phi(q, w)``, ``Phi_q(q, w)``, ``Phi_v(q, w)``, ``nu(q, w, wd)``,
 
 from __future__ import annotations
 
+import copy
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -306,6 +307,32 @@ class Model:
             return cycle, "one cycle of the scene's periodic laws"
         return 1.0, "the default duration: the scene's laws do not repeat"
 
+    def with_ground(self, ground: GroundForces, digest: str) -> Model:
+        """This model with other ground-force settings (``digest``: the content hash of the
+        scene they come from). What the model has built is shared when the settings differ only
+        in numbers the solvers read at run time (``mu``, ``faces``, ``min_normal``: a sweep
+        over friction reuses the built phase plans); a change of the policy or of the reference
+        efforts, which the policy's Functions are built from, starts from nothing built.
+
+        Parameters
+        ----------
+        ground : GroundForces
+            The settings, in SI.
+        digest : str
+            The content hash of the scene with these settings.
+
+        Returns
+        -------
+        Model
+        """
+        twin = copy.copy(self)
+        object.__setattr__(twin, "ground", ground)
+        object.__setattr__(twin, "digest", digest)
+        if _built_from(ground) != _built_from(self.ground):
+            object.__setattr__(twin, "_built", {})
+            object.__setattr__(twin, "_lock", threading.RLock())
+        return twin
+
     def built_once(self, key: tuple, build: Callable[[Model], object]):
         """``build(self)``, computed on the first call with ``key`` and returned again after:
         immutable objects that are pure functions of the frozen model and cost a build (the
@@ -575,3 +602,10 @@ class Model:
         return Placement(qb)
 
 
+def _built_from(ground: GroundForces | None) -> tuple:
+    """The ground-force settings the policy's Functions are built from (the rest are read at
+    run time)."""
+    if ground is None:
+        return ()
+    return (ground.policy, tuple(sorted(ground.reference_efforts.items())),
+            ground.default_reference)

@@ -10,7 +10,6 @@ which checks it as it checks any file.
 
 from __future__ import annotations
 
-import copy
 import json
 import os
 import socket
@@ -158,9 +157,11 @@ def model_for(study: Study, arguments: dict, keys: dict, scene):
             _models.popitem(last=False)
     else:
         _models.move_to_end(structure)
-    if model.ground != scene.ground:
-        model = copy.copy(model)
-        model.ground = scene.ground
+    si = scene.in_si()
+    if model.ground != si.ground:
+        from hexapod.model.digest import scene_digest
+
+        model = model.with_ground(si.ground, scene_digest(si, model.rank_tolerance))
     return model
 
 
