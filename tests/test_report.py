@@ -341,3 +341,22 @@ def test_a_report_driven_by_a_motion_file_writes_what_inverse_writes(tmp_path):
     assert len(reported.splitlines()) - 1 == len((fixture / "motion.csv").read_text().split()) - 1
     refused = run_cli("report", model, "--motion", motion, "--duration", "1", cwd=tmp_path)
     assert refused.returncode == 1 and "--duration: the motion file" in refused.stderr
+
+
+def test_no_figures_writes_the_same_tables_and_summary_without_the_figures(tmp_path):
+    """``--no-figures`` (for scripts: the figures are most of a report's time) leaves out the
+    PNG files and the summary's list of them, and nothing else."""
+    for out, extra in (("drawn", ()), ("bare", ("--no-figures",))):
+        done = run_cli("report", "front-leg", "--samples", "41", "--out", out, *extra,
+                       cwd=tmp_path)
+        assert done.returncode == 0, done.stderr
+    drawn, bare = tmp_path / "drawn", tmp_path / "bare"
+    assert sorted(p.name for p in bare.iterdir()) == sorted(
+        p.name for p in drawn.iterdir() if p.suffix != ".png")
+    assert any(p.suffix == ".png" for p in drawn.iterdir())
+    assert (bare / "inverse.csv").read_bytes() == (drawn / "inverse.csv").read_bytes()
+    summary = (drawn / "summary.md").read_text()
+    without = summary.partition("\n## Figures\n")[0].rstrip("\n") + "\n"
+    run_time = re.compile(r"[\d.]+ s of inverse dynamics")  # differs from run to run
+    assert (run_time.sub("", (bare / "summary.md").read_text())
+            == run_time.sub("", without))

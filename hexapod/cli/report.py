@@ -50,6 +50,9 @@ def add_arguments(parser) -> None:
                         "periodic laws, e.g. the gait's stride, or 1 s)")
     parser.add_argument("--samples", type=at_least(2),
                         help="samples over the window, ends included (default 501)")
+    parser.add_argument("--no-figures", dest="figures", action="store_false",
+                        help="write the tables and the summary only (the figures are most of "
+                        "a walking robot's report time: for scripts and sweeps)")
     parser.add_argument("--motion", metavar="MOTION.csv",
                         help="drive the scene's joints by this motion file, as 'hexapod "
                         "inverse' does (columns t, one per joint, optional qd:<joint> and "
@@ -119,13 +122,13 @@ def run(args) -> int:
     result = inverse_dynamics(model, times, method=args.method, frame=args.frame,
                               progress=progress)
     run_time = time.perf_counter() - started
-    if show:
+    if show and args.figures:
         print("\rdrawing the figures" + " " * 40, end="", file=sys.stderr, flush=True)
     balance = body_balance(model, times, result.q, result.v, result.v_dot, result.force,
                            result.torque, result.frame)
     feet = marker_trajectories(model, result.q, FOOT_MARKER)
     run = RunInfo(scene.name, args.scene, run_time, f"{why}, {duration:g} s")
-    files = report_files(model, result, balance, run, feet)
+    files = report_files(model, result, balance, run, feet, figures=args.figures)
     write_directory_atomically(out, files)
     if show:
         print("\r" + " " * 60 + "\r", end="", file=sys.stderr)

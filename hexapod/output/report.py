@@ -429,7 +429,7 @@ def _ground_figures(model: Model, loads: FootLoads, scene: str) -> dict:
 
 
 def report_files(model: Model, result: InverseResult, balance: BodyBalance, run: RunInfo,
-                 feet: dict[str, np.ndarray]) -> dict[str, bytes]:
+                 feet: dict[str, np.ndarray], *, figures: bool = True) -> dict[str, bytes]:
     """Every file of the report, in memory: ``inverse.csv``, ``units.json`` (the unit and
     meaning of every column of every CSV), ``summary.md`` and the figures
     (``forces.png``, ``torques.png``; ``efforts.png`` when there are joint drivers;
@@ -451,6 +451,9 @@ def report_files(model: Model, result: InverseResult, balance: BodyBalance, run:
         How the numbers were obtained.
     feet : dict of str to ndarray, shape (N, 3)
         Foot paths (world, m) by body; empty for none.
+    figures : bool
+        Draw the figures (most of a report's time: 7 s of the walking robot's 12); without
+        them the tables and the summary are the same.
 
     Returns
     -------
@@ -459,19 +462,16 @@ def report_files(model: Model, result: InverseResult, balance: BodyBalance, run:
         :func:`write_directory_atomically`).
     """
     t = result.times
-    figures = _wrench_figures(model, result, run.scene)
     drivers = driver_statistics(model, result)
-    figures.update(_effort_figures(model, t, drivers, run.scene))
-    if feet:
-        figures["foot.png"] = trajectory_figure(
-            t, feet, f"{run.scene}: {'foot' if len(feet) == 1 else 'feet'} (world frame)")
+    drawn = _figures(model, result, drivers, feet, run.scene) if figures else {}
     files = {"inverse.csv": inverse_csv_text(model, result).encode()}
     units = {"inverse.csv": inverse_column_units(model, result.frame)}
     loads = trunks = None
     if model.contacts:
         loads = foot_loads(model, result)
         trunks = trunk_motion(model, result.q, result.v)
-        figures.update(_ground_figures(model, loads, run.scene))
+        if figures:
+            drawn.update(_ground_figures(model, loads, run.scene))
         files["ground.csv"] = ground_csv_text(loads).encode()
         units["ground.csv"] = ground_csv_columns(loads.legs)
         if trunks:
@@ -479,7 +479,19 @@ def report_files(model: Model, result: InverseResult, balance: BodyBalance, run:
             units["trunk.csv"] = trunk_csv_columns([m.body for m in trunks])
     files["units.json"] = units_json(units).encode()
     files["summary.md"] = summary_markdown(model, result, balance, run, drivers,
-                                           list(figures), loads, trunks).encode()
-    for name, figure in figures.items():
+                                           list(drawn), loads, trunks).encode()
+    for name, figure in drawn.items():
         files[name] = png_bytes(figure)
     return files
+
+
+def _figures(model: Model, result: InverseResult, drivers: list[DriverStatistics],
+             feet: dict[str, np.ndarray], scene: str) -> dict:
+    """The wrench, effort and foot figures of a report (the ground's are drawn beside its
+    loads)."""
+    drawn = _wrench_figures(model, result, scene)
+    drawn.update(_effort_figures(model, result.times, drivers, scene))
+    if feet:
+        drawn["foot.png"] = trajectory_figure(
+            result.times, feet, f"{scene}: {'foot' if len(feet) == 1 else 'feet'} (world frame)")
+    return drawn
