@@ -332,6 +332,21 @@ def test_a_tampered_case_file_is_computed_again_on_resume(tmp_path, earlier, how
     assert fresh.computed == 3
 
 
+def test_a_case_of_every_status_is_kept_on_resume_and_no_other(earlier):
+    """An infeasible case (computed, the ground unable to hold the robot) is a result like an
+    ok one: kept by --resume, not computed again; a status no case has is tampering."""
+    from hexapod.sweeps.folder import row_problem
+
+    path, out, _ = earlier
+    study = read_study(path)
+    row = json.loads(sorted((out / "cases").iterdir())[0].read_text())
+    (case,) = [c for c in study.cases() if c.key == row["key"]]
+    for status in ("ok", "infeasible", "failed"):
+        assert row_problem(row | {"status": status}, case) is None
+    assert "status must be one of ok, infeasible, failed" in row_problem(
+        row | {"status": "slipped"}, case)
+
+
 def test_the_command_names_a_tampered_case_file_and_finishes(tmp_path, earlier, capsys):
     from hexapod.cli import main
 

@@ -45,6 +45,8 @@ OUTPUT_FOLDERS = ("cases", "figures")
 CASE_FILE = re.compile(r"[0-9a-f]{20}\.json")
 #: The largest case file read back (a row is a few kilobytes).
 MAX_CASE_BYTES = 2**20
+#: A case's statuses (hexapod.sweeps.cases.run_case).
+STATUSES = ("ok", "infeasible", "failed")
 #: A case's row: its keys and the types of their values.
 ROW_TYPES = {"case": int, "key": str, "params": dict, "status": str, "message": str,
              "metrics": dict, "units": dict, "cpu_s": float, "wall_s": float, "worker": str}
@@ -153,8 +155,8 @@ def row_problem(row, case, families=None) -> str | None:
         number = kind is float and isinstance(value, int | float)
         if isinstance(value, bool) or not (isinstance(value, kind) or number):
             return f"{key} must be {kind.__name__}, got {type(value).__name__}"
-    if row["status"] not in ("ok", "failed"):
-        return f"status must be ok or failed, got {row['status']!r}"
+    if row["status"] not in STATUSES:
+        return f"status must be one of {', '.join(STATUSES)}, got {row['status']!r}"
     for key, kind in (("metrics", (int, float)), ("units", (str,))):
         bad = [k for k, v in row[key].items() if isinstance(v, bool) or not isinstance(v, kind)]
         if bad:
