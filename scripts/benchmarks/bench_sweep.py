@@ -74,9 +74,11 @@ def main() -> None:
         many, parallel = timed(f"{args.workers} workers", spec, folder / "many",
                                workers=args.workers)
     same = plain.table.csv_text() == single.table.csv_text() == parallel.table.csv_text()
-    failed = int((plain.table.data["status"] != "ok").sum())
-    print(f"study: {cases} cases ({failed} failed), walking hexapod, {args.samples} samples "
-          f"per stride")
+    status = plain.table.data["status"]
+    failed, infeasible = int((status == "failed").sum()), int((status == "infeasible").sum())
+    print(f"study: {cases} cases ({failed} failed, {infeasible} infeasible: computed, the "
+          f"ground unable to hold the robot), walking hexapod, {args.samples} samples per "
+          "stride")
     print(f"{'run':<14} {'wall s':>9} {'s per case':>11}")
     for label, wall in (("plain loop", loop), ("1 worker", one),
                         (f"{args.workers} workers", many)):
