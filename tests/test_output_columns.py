@@ -62,10 +62,8 @@ def no_figures(monkeypatch):
     """The report without drawing (its figures are tested elsewhere): the CSVs stay real."""
     import hexapod.output.report as report
 
-    for name in ("effort_figure", "friction_ratio_figure", "gait_diagram_figure",
-                 "ground_reaction_figure", "trajectory_figure", "wrench_figure"):
-        monkeypatch.setattr(report, name, lambda *args, **kwargs: None)
-    monkeypatch.setattr(report, "png_bytes", lambda figure: b"")
+    monkeypatch.setattr(report, "render_figures",
+                        lambda builders, workers=1: dict.fromkeys(builders, b""))
 
 
 @pytest.mark.parametrize("scene, tables", [

@@ -79,3 +79,19 @@ def test_a_urdf_robots_joints_are_grouped_by_limb(tmp_path):
         assert [names[k] for k in groups[leg]] == [f"{leg}_{p}" for p in ("hip", "thigh", "calf")]
     assert [names[k] for k in groups["other"]] == ["trunk/ground"]
     assert leg_groups(names) is None  # by the names alone: no L1/... prefixes
+
+
+def test_figures_drawn_by_forked_processes_are_the_same_bytes():
+    """render_figures shares the figures among forked processes (on Linux): the same PNG files
+    as drawn here, in the builders' order."""
+    from functools import partial
+
+    from hexapod.output.figures import render_figures
+
+    values = np.random.default_rng(3).normal(size=(TIMES.size, 2, 3)).cumsum(axis=0)
+    builders = {f"sheet-{k}.png": partial(wrench_figure, TIMES, values * (k + 1), ["a", "b"],
+                                          "F", "N", f"sheet {k}") for k in range(3)}
+    here = render_figures(builders, workers=1)
+    shared = render_figures(builders, workers=2)
+    assert list(shared) == list(builders) and shared == here
+    assert all(data.startswith(b"\x89PNG") for data in here.values())

@@ -374,9 +374,9 @@ def test_force_and_torque_figures_are_drawn_per_leg(walking):
     assert leg_groups(["ctr", "fti"]) is None
     drawn = _wrench_figures(model, result, "hexapod")
     assert set(drawn) == {f"{kind}-{leg}.png" for kind in ("forces", "torques") for leg in LEGS}
-    for name, figure in drawn.items():
+    for name, build in drawn.items():
         leg = name[:-4].split("-")[1]
-        assert [ax.get_title().split()[-1] for ax in panels(figure)] == [
+        assert [ax.get_title().split()[-1] for ax in panels(build())] == [
             n for n in names if n.startswith(f"{leg}/")], name
 
 

@@ -128,7 +128,8 @@ def run(args) -> int:
                            result.torque, result.frame)
     feet = marker_trajectories(model, result.q, FOOT_MARKER)
     run = RunInfo(scene.name, args.scene, run_time, f"{why}, {duration:g} s")
-    files = report_files(model, result, balance, run, feet, figures=args.figures)
+    files = report_files(model, result, balance, run, feet, figures=args.figures,
+                         workers=_figure_workers())
     write_directory_atomically(out, files)
     if show:
         print("\r" + " " * 60 + "\r", end="", file=sys.stderr)
@@ -141,3 +142,13 @@ def run(args) -> int:
     for line in walking_headlines(model, result):
         print(line)
     return 0
+
+
+def _figure_workers() -> int:
+    """Processes to draw the figures: the processors this process may run on, at most 4 (the
+    figures of a walking robot's report fill two; more only add start-up)."""
+    import os
+
+    available = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (
+        os.cpu_count() or 1)
+    return max(1, min(4, available))

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import io
 import math
+import sys
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -128,6 +129,48 @@ def png_bytes(figure: Figure, dpi: int = 110) -> bytes:
     buffer = io.BytesIO()
     figure.savefig(buffer, format="png", dpi=dpi)
     return buffer.getvalue()
+
+
+#: The builders a forked process renders (:func:`render_figures`): set before the fork, so the
+#: children inherit them instead of receiving pickles.
+_PENDING: list = []
+
+
+def render_figures(builders: dict, workers: int = 1) -> dict[str, bytes]:
+    """Each figure made by its builder and rendered as PNG bytes (:func:`png_bytes`), by name.
+
+    Parameters
+    ----------
+    builders : dict of str to callable
+        ``name -> build``, ``build()`` returning a :class:`matplotlib.figure.Figure`.
+    workers : int
+        Processes that share the figures: with more than one, on a system that forks (Linux),
+        this process is forked that many times (the figures are independent; the bytes are
+        those of one process). One draws them here.
+
+    Returns
+    -------
+    dict of str to bytes
+        The PNG files' contents, in the order of ``builders``.
+    """
+    names = list(builders)
+    if workers <= 1 or len(names) < 2 or not sys.platform.startswith("linux"):
+        return {name: png_bytes(builders[name]()) for name in names}
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    global _PENDING
+    _PENDING = [builders[name] for name in names]
+    try:
+        with ProcessPoolExecutor(max_workers=min(workers, len(names)),
+                                 mp_context=multiprocessing.get_context("fork")) as pool:
+            return dict(zip(names, pool.map(_render_pending, range(len(names))), strict=True))
+    finally:
+        _PENDING = []
+
+
+def _render_pending(index: int) -> bytes:
+    return png_bytes(_PENDING[index]())
 
 
 def wrench_figure(times: np.ndarray, values: np.ndarray, names: list[str], symbol: str,

@@ -8,6 +8,7 @@ whose functions this module re-exports.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
@@ -20,7 +21,7 @@ from hexapod.output.figures import (
     friction_ratio_figure,
     gait_diagram_figure,
     ground_reaction_figure,
-    png_bytes,
+    render_figures,
     trajectory_figure,
     wrench_figure,
 )
@@ -376,7 +377,7 @@ FOOT_MARKER = "foot"
 
 def _wrench_figures(model: Model, result: InverseResult, scene: str) -> dict:
     """``forces.png`` and ``torques.png``, or for a robot one of each per leg
-    (``forces-L1.png`` ...)."""
+    (``forces-L1.png`` ...): their builders (each makes its figure when called)."""
     t = result.times
     labels = [wrench_label(model, joint) for joint in model.joints]
     names = [j.name for j in model.joints]
@@ -386,18 +387,19 @@ def _wrench_figures(model: Model, result: InverseResult, scene: str) -> dict:
     for leg, index in groups.items():
         suffix, which = (f"-{leg}", f" leg {leg}" if leg != "other" else " other joints") \
             if leg else ("", "")
-        figures[f"forces{suffix}.png"] = wrench_figure(
-            t, result.force[:, index], [f"{labels[k]}  {names[k]}" for k in index],
+        figures[f"forces{suffix}.png"] = partial(
+            wrench_figure, t, result.force[:, index], [f"{labels[k]}  {names[k]}" for k in index],
             "F", "N", f"{scene}{which}: joint forces, by parent on child ({where})")
-        figures[f"torques{suffix}.png"] = wrench_figure(
-            t, result.torque[:, index], [f"T{labels[k][1:]}  {names[k]}" for k in index],
-            "T", "N m", f"{scene}{which}: joint moments about the joint origins ({where})")
+        figures[f"torques{suffix}.png"] = partial(
+            wrench_figure, t, result.torque[:, index],
+            [f"T{labels[k][1:]}  {names[k]}" for k in index], "T", "N m",
+            f"{scene}{which}: joint moments about the joint origins ({where})")
     return dict(sorted(figures.items(), key=lambda item: not item[0].startswith("forces")))
 
 
 def _effort_figures(model: Model, times: np.ndarray, drivers: list[DriverStatistics],
                     scene: str) -> dict:
-    """``efforts.png``, or for a robot one per leg (``efforts-L1.png`` ...)."""
+    """``efforts.png``, or for a robot one per leg (``efforts-L1.png`` ...): builders."""
     if not drivers:
         return {}
     groups = leg_groups([d.joint for d in drivers], model) or {"": list(range(len(drivers)))}
@@ -405,8 +407,8 @@ def _effort_figures(model: Model, times: np.ndarray, drivers: list[DriverStatist
     for leg, index in groups.items():
         suffix, which = (f"-{leg}", f" leg {leg}" if leg != "other" else " other joints") \
             if leg else ("", "")
-        out[f"efforts{suffix}.png"] = effort_figure(
-            times,
+        out[f"efforts{suffix}.png"] = partial(
+            effort_figure, times,
             [(drivers[k].joint, drivers[k].unit, drivers[k].effort, drivers[k].power)
              for k in index], f"{scene}{which}: actuator efforts (solid) and power (dashed)")
     return out
@@ -416,20 +418,21 @@ def _ground_figures(model: Model, loads: FootLoads, scene: str) -> dict:
     legs = list(loads.legs)
     t = loads.times
     return {
-        "ground.png": ground_reaction_figure(
-            t, loads.force, legs, loads.stance, loads.weight,
+        "ground.png": partial(
+            ground_reaction_figure, t, loads.force, legs, loads.stance, loads.weight,
             f"{scene}: the ground's force on each foot (stance shaded, infeasible hatched; "
             f"policy {loads.policy})", loads.status),
-        "friction.png": friction_ratio_figure(
-            t, loads.ratio, loads.status, legs, loads.stance, loads.mu,
+        "friction.png": partial(
+            friction_ratio_figure, t, loads.ratio, loads.status, legs, loads.stance, loads.mu,
             f"{scene}: friction ratio |F_t| / (mu F_n) of each foot"),
-        "gait.png": gait_diagram_figure(legs, loads.stance, float(t[0]), float(t[-1]),
-                                        f"{scene}: gait diagram (black: stance)"),
+        "gait.png": partial(gait_diagram_figure, legs, loads.stance, float(t[0]), float(t[-1]),
+                            f"{scene}: gait diagram (black: stance)"),
     }
 
 
 def report_files(model: Model, result: InverseResult, balance: BodyBalance, run: RunInfo,
-                 feet: dict[str, np.ndarray], *, figures: bool = True) -> dict[str, bytes]:
+                 feet: dict[str, np.ndarray], *, figures: bool = True,
+                 workers: int = 1) -> dict[str, bytes]:
     """Every file of the report, in memory: ``inverse.csv``, ``units.json`` (the unit and
     meaning of every column of every CSV), ``summary.md`` and the figures
     (``forces.png``, ``torques.png``; ``efforts.png`` when there are joint drivers;
@@ -454,6 +457,9 @@ def report_files(model: Model, result: InverseResult, balance: BodyBalance, run:
     figures : bool
         Draw the figures (most of a report's time: 7 s of the walking robot's 12); without
         them the tables and the summary are the same.
+    workers : int
+        Processes drawing the figures (:func:`hexapod.output.figures.render_figures`): more
+        than one forks this process that many times, on systems that fork; the same bytes.
 
     Returns
     -------
@@ -480,18 +486,18 @@ def report_files(model: Model, result: InverseResult, balance: BodyBalance, run:
     files["units.json"] = units_json(units).encode()
     files["summary.md"] = summary_markdown(model, result, balance, run, drivers,
                                            list(drawn), loads, trunks).encode()
-    for name, figure in drawn.items():
-        files[name] = png_bytes(figure)
+    files.update(render_figures(drawn, workers))
     return files
 
 
 def _figures(model: Model, result: InverseResult, drivers: list[DriverStatistics],
              feet: dict[str, np.ndarray], scene: str) -> dict:
-    """The wrench, effort and foot figures of a report (the ground's are drawn beside its
-    loads)."""
+    """The builders of the wrench, effort and foot figures of a report (the ground's are made
+    beside its loads), by file name."""
     drawn = _wrench_figures(model, result, scene)
     drawn.update(_effort_figures(model, result.times, drivers, scene))
     if feet:
-        drawn["foot.png"] = trajectory_figure(
-            result.times, feet, f"{scene}: {'foot' if len(feet) == 1 else 'feet'} (world frame)")
+        drawn["foot.png"] = partial(
+            trajectory_figure, result.times, feet,
+            f"{scene}: {'foot' if len(feet) == 1 else 'feet'} (world frame)")
     return drawn
