@@ -144,9 +144,10 @@ def render_figures(builders: dict, workers: int = 1) -> dict[str, bytes]:
     builders : dict of str to callable
         ``name -> build``, ``build()`` returning a :class:`matplotlib.figure.Figure`.
     workers : int
-        Processes that share the figures: with more than one, on a system that forks (Linux),
-        this process is forked that many times (the figures are independent; the bytes are
-        those of one process). One draws them here.
+        Processes that share the figures: with more than one, on a system that forks (Linux)
+        and from a process running no other thread, this process is forked that many times
+        (the figures are independent; the bytes are those of one process). One draws them
+        here.
 
     Returns
     -------
@@ -154,7 +155,11 @@ def render_figures(builders: dict, workers: int = 1) -> dict[str, bytes]:
         The PNG files' contents, in the order of ``builders``.
     """
     names = list(builders)
-    if workers <= 1 or len(names) < 2 or not sys.platform.startswith("linux"):
+    import threading
+
+    # forking a process that runs other threads may copy a lock one of them holds
+    if (workers <= 1 or len(names) < 2 or not sys.platform.startswith("linux")
+            or threading.active_count() > 1):
         return {name: png_bytes(builders[name]()) for name in names}
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
