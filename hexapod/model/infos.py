@@ -1,16 +1,21 @@
 """What a model knows of each of its elements: frozen records of bodies, joints, contacts,
 drivers, force elements and constraint rows, with their slices of the coordinate vectors and
-their rows (the index maps of :class:`hexapod.model.model.Model`)."""
+their rows (the index maps of :class:`hexapod.model.model.Model`), and the symbols its
+Functions are built from (:class:`Symbolic`)."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from hexapod.scene.joints import Joint
 from hexapod.scene.laws import Law
 from hexapod.spatial import Placement
+
+if TYPE_CHECKING:
+    import casadi as ca
 
 #: The body index of the ground.
 GROUND_INDEX = -1
@@ -123,3 +128,19 @@ class RowInfo:
     name: str
     owner: str
     kind: str  # "length" | "angle"
+
+
+@dataclass
+class Symbolic:
+    """The CasADi symbols and expressions a model's Functions are built from."""
+
+    q: ca.SX
+    v: ca.SX
+    w: ca.SX
+    wd: ca.SX
+    wdd: ca.SX
+    qdot: ca.SX  # B(q) v
+    phi: ca.SX
+    Q: ca.SX
+    Q_across: ca.SX | None = None  # n_v x (joints with force elements across them)
+    potential: ca.SX | None = None  # potential energy of gravity and springs (scalar)

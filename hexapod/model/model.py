@@ -24,7 +24,6 @@ from __future__ import annotations
 import copy
 import threading
 from collections.abc import Callable
-from dataclasses import dataclass
 from functools import cached_property
 from typing import TYPE_CHECKING
 
@@ -42,6 +41,7 @@ from hexapod.model.infos import (
     ForceInfo,
     JointInfo,
     RowInfo,
+    Symbolic,
 )
 from hexapod.model.law_values import evaluate_laws
 from hexapod.model.mass import BlockDiagonal
@@ -67,22 +67,6 @@ _DENSE_OUTPUT_ENTRIES = 100_000
 def _large(function: ca.Function) -> bool:
     """Whether an output of ``function`` has too many entries to be densified."""
     return any(function.numel_out(i) > _DENSE_OUTPUT_ENTRIES for i in range(function.n_out()))
-
-
-@dataclass
-class Symbolic:
-    """The CasADi symbols and expressions a model's Functions are built from."""
-
-    q: ca.SX
-    v: ca.SX
-    w: ca.SX
-    wd: ca.SX
-    wdd: ca.SX
-    qdot: ca.SX  # B(q) v
-    phi: ca.SX
-    Q: ca.SX
-    Q_across: ca.SX | None = None  # n_v x (joints with force elements across them)
-    potential: ca.SX | None = None  # potential energy of gravity and springs (scalar)
 
 
 class Model:
