@@ -162,16 +162,23 @@ def render_figures(builders: dict, workers: int = 1) -> dict[str, bytes]:
             or threading.active_count() > 1):
         return {name: png_bytes(builders[name]()) for name in names}
     import multiprocessing
+    import signal
     from concurrent.futures import ProcessPoolExecutor
 
     global _PENDING
     _PENDING = [builders[name] for name in names]
+    # an interruption is held while the processes are forked and draw (a few seconds): a
+    # handler run inside the fork's own hooks would print a traceback, and the children would
+    # be left to stop by themselves; it is raised here once they are done
+    held = {signal.SIGINT, signal.SIGTERM}
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, held)
     try:
         with ProcessPoolExecutor(max_workers=min(workers, len(names)),
                                  mp_context=multiprocessing.get_context("fork")) as pool:
             return dict(zip(names, pool.map(_render_pending, range(len(names))), strict=True))
     finally:
         _PENDING = []
+        signal.pthread_sigmask(signal.SIG_SETMASK, mask)
 
 
 def _render_pending(index: int) -> bytes:
