@@ -40,6 +40,8 @@ from hexapod.model.model import Model
 
 #: Below this weight a foot carries nothing.
 NO_LOAD = 1e-12
+#: The statuses of a foot whose force the ground cannot give (:func:`feet_status`).
+INFEASIBLE_STATUSES = ("slip", "pull")
 #: Violation, relative to the robot's weight, above which a foot is reported as slipping or
 #: pulling (round-off in the forces stays some five orders below it).
 VIOLATION_TOL = 1e-7

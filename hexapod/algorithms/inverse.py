@@ -113,7 +113,9 @@ class InverseResult:
         that the ground cannot give the forces; all False without contacts."""
         if self.ground_status is None or self.ground_status.size == 0:
             return np.zeros(self.times.size, dtype=bool)
-        return np.isin(self.ground_status, ("slip", "pull")).any(axis=1)
+        from hexapod.algorithms.ground import INFEASIBLE_STATUSES
+
+        return np.isin(self.ground_status, INFEASIBLE_STATUSES).any(axis=1)
 
     @property
     def feasible(self) -> bool:

@@ -14,6 +14,7 @@ import numpy as np
 
 from hexapod.algorithms.linalg import (
     RowSplit,
+    as_dense,
     check_consistency,
     equilibrate,
     hold_rows,
@@ -194,7 +195,7 @@ def _closest(model: Model, data: Data, t: float, w: np.ndarray, lifted: np.ndarr
     foot's offset within the motions the other constraints leave free (two feet of a tripod
     leave the trunk a roll), each step followed by Newton back onto the others."""
     for _ in range(steps):
-        Phi_v = np.asarray(_dense(constraint_jacobian(model, q, w, data)))
+        Phi_v = np.asarray(as_dense(constraint_jacobian(model, q, w, data)))
         free = _null_space(model, np.delete(Phi_v, contact.rows, axis=0))
         offset = model.call("phi", data, q=q, w=w)[contact.rows]
         if free.shape[1] == 0 or np.linalg.norm(offset) <= tol * model.characteristic_length:
@@ -206,10 +207,6 @@ def _closest(model: Model, data: Data, t: float, w: np.ndarray, lifted: np.ndarr
             return q
         q = trial
     return q
-
-
-def _dense(matrix):
-    return matrix.toarray() if hasattr(matrix, "toarray") else matrix
 
 
 def _null_space(model: Model, matrix: np.ndarray) -> np.ndarray:
@@ -453,7 +450,7 @@ def free_motions(model: Model, Phi_v: np.ndarray) -> list[str]:
     the components a pivoted QR picks, weighted by their bodies' masses so that a robot's
     trunk leads: each vector is 1 on its own component and 0 on the others') and naming every
     body it moves, e.g. ``trunk translating along world x (moves trunk, leg0)``."""
-    N = _null_space(model, np.asarray(_dense(Phi_v), dtype=float).reshape(-1, model.n_v))
+    N = _null_space(model, np.asarray(as_dense(Phi_v), dtype=float).reshape(-1, model.n_v))
     if N.shape[1] == 0:
         return []
     from scipy.linalg import qr

@@ -374,11 +374,13 @@ def ground_reaction_figure(times: np.ndarray, forces: np.ndarray, legs: list[str
     axis in body weights when ``weight`` (N) is positive. ``forces`` (N, feet, 3), world axes;
     ``stance``: per foot, its (touch-down, lift-off) intervals; ``status`` (N, feet), where
     given: the samples where a foot slips or pulls are hatched red (infeasible)."""
+    from hexapod.algorithms.ground import INFEASIBLE_STATUSES
+
     figure, axes = _leg_panels(legs, title)
     for k, (ax, leg) in enumerate(zip(axes, legs, strict=True)):
         _shade(ax, stance[k])
         if status is not None:
-            _hatch_infeasible(ax, times, np.isin(status[:, k], ("slip", "pull")))
+            _hatch_infeasible(ax, times, np.isin(status[:, k], INFEASIBLE_STATUSES))
         ax.axhline(0.0, color="0.4", linewidth=0.6)
         ax.plot(times, forces[:, k, 2], color="black", linewidth=1.6, label="vertical (z)")
         ax.plot(times, forces[:, k, 0], color="tab:red", linewidth=1.1, label="fore-aft (x)")
@@ -414,6 +416,8 @@ def friction_ratio_figure(times: np.ndarray, ratio: np.ndarray, status: np.ndarr
     as the legs stand, with the line ratio = 1 (the edge of the friction cone), stance shaded
     grey; samples where the policy says ``slip`` or ``pull`` marked with a red cross.
     ``ratio`` (N, feet) is NaN where a foot carries nothing; ``status`` (N, feet)."""
+    from hexapod.algorithms.ground import INFEASIBLE_STATUSES
+
     figure, axes = _leg_panels(legs, title)
     finite = ratio[np.isfinite(ratio)]
     top = max(1.25, min(1.05 * float(finite.max()), 5.0)) if finite.size else 1.25
@@ -422,7 +426,7 @@ def friction_ratio_figure(times: np.ndarray, ratio: np.ndarray, status: np.ndarr
         ax.axhline(1.0, color="tab:red", linestyle="--", linewidth=1.0, label="ratio = 1")
         shown = np.where(np.isinf(ratio[:, k]), top, ratio[:, k])
         ax.plot(times, shown, color="black", linewidth=1.3, label="|F_t| / (mu F_n)")
-        bad = np.isin(status[:, k], ("slip", "pull"))
+        bad = np.isin(status[:, k], INFEASIBLE_STATUSES)
         if bad.any():
             ax.plot(times[bad], np.minimum(np.nan_to_num(shown[bad], nan=top), top), "x",
                     color="tab:red", markersize=6, label="slip / pull")

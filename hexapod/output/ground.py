@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hexapod.algorithms.ground import robot_weight
+from hexapod.algorithms.ground import INFEASIBLE_STATUSES, robot_weight
 from hexapod.algorithms.inverse import InverseResult
 from hexapod.algorithms.kinematics import body_poses
 from hexapod.model.model import Model
@@ -100,6 +100,11 @@ class FootLoads:
     policy: str
     weight: float
 
+    @property
+    def infeasible(self) -> np.ndarray:
+        """``(N, C)`` bool: where a foot slips or pulls (the ground cannot give its force)."""
+        return np.isin(self.status, INFEASIBLE_STATUSES)
+
 
 def foot_loads(model: Model, result: InverseResult) -> FootLoads:
     """The feet's loads of an inverse-dynamics ``result`` of a model with contacts."""
@@ -180,7 +185,7 @@ def describe_events(events: list[FootEvent]) -> list[str]:
 def foot_events(loads: FootLoads) -> list[FootEvent]:
     """Every run of samples where a foot slips or pulls (its status), foot by foot in time
     order."""
-    kinds = {kind: loads.status == kind for kind in ("slip", "pull")}
+    kinds = {kind: loads.status == kind for kind in INFEASIBLE_STATUSES}
     out = []
     for c, leg in enumerate(loads.legs):
         for kind, flags in kinds.items():

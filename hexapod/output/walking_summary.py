@@ -71,7 +71,7 @@ def _feasibility_lines(loads: FootLoads) -> list[str]:
     if not events:
         return ["", "Feasible: at every sample every loaded foot's force presses on the ground "
                 f"and lies inside the friction cone of mu = {loads.mu:g}."]
-    bad = np.isin(loads.status, ("slip", "pull"))
+    bad = loads.infeasible
     lines = ["", f"**Infeasible**: at {int(bad.any(axis=1).sum())} of {bad.shape[0]} samples "
              "the ground cannot give these forces: a foot slips (tangential force beyond mu "
              "times the normal force) or the ground would have to pull it. A robot moving so "

@@ -72,8 +72,7 @@ def inverse_metrics(model, result, families, strides: float) -> dict[str, float]
                                                 if np.any(np.isfinite(ratio) | np.isinf(ratio))
                                                 else float("nan"))
         if "slip_samples" in families:
-            out["slip_samples"] = float(np.sum(np.any(np.isin(loads.status, ("slip", "pull")),
-                                                      axis=1)))
+            out["slip_samples"] = float(np.sum(loads.infeasible.any(axis=1)))
     if {"energy", "cost_of_transport"} & set(families):
         work = positive_work(model, t, result.effort, driven)
         if "energy" in families:
