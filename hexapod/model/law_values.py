@@ -34,6 +34,17 @@ def _driven(model) -> np.ndarray:
     return np.array(sorted({d.law for d in model.drivers if d.law >= 0}), dtype=int)
 
 
+def _batches(model) -> list[tuple[np.ndarray, list]]:
+    """The model's laws grouped for evaluation: the indices and laws of each batch (the laws of
+    one class and one :meth:`~hexapod.scene.laws.Law.batch_key`; a law without one alone)."""
+    groups: dict = {}
+    for i, law in enumerate(model.laws):
+        key = law.batch_key()
+        groups.setdefault(i if key is None else (type(law), key), []).append(i)
+    return [(np.array(indices), [model.laws[i] for i in indices])
+            for indices in groups.values()]
+
+
 def evaluate_laws(model, t: np.ndarray, w: np.ndarray, wd: np.ndarray, wdd: np.ndarray) -> None:
     """Fill ``w``, ``wd``, ``wdd`` (n_w,) or (n_w, len(t)) with the values, rates and
     accelerations of ``model``'s laws at ``t``.
@@ -45,10 +56,14 @@ def evaluate_laws(model, t: np.ndarray, w: np.ndarray, wd: np.ndarray, wdd: np.n
         :data:`FASTEST_DRIVER`; the message names the law and the time.
     """
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        for i, law in enumerate(model.laws):
+        for indices, laws in model.built_once(("law batches",), _batches):
             try:
-                w[i], wd[i], wdd[i] = law.evaluate(t)
+                if len(laws) == 1:
+                    w[indices[0]], wd[indices[0]], wdd[indices[0]] = laws[0].evaluate(t)
+                else:
+                    w[indices], wd[indices], wdd[indices] = type(laws[0]).evaluate_batch(laws, t)
             except ArithmeticError as error:  # Python's floats: 1 / 0, 10.0 ** 400
+                i = _culprit(indices, laws, t)
                 raise HexapodError(f"model '{model.name}': {law_name(model, i)} cannot be "
                                    f"computed at t = {float(t.flat[0]):.6g} s: "
                                    f"{_arithmetic(error)}") from None
@@ -57,6 +72,16 @@ def evaluate_laws(model, t: np.ndarray, w: np.ndarray, wd: np.ndarray, wdd: np.n
             if not driven.size or np.abs(wd[driven]).max() <= FASTEST_DRIVER:
                 return
         _refuse(model, t, w, wd, wdd)
+
+
+def _culprit(indices: np.ndarray, laws: list, t: np.ndarray) -> int:
+    """The index of the first law of a batch that cannot be evaluated alone at ``t``."""
+    for i, law in zip(indices, laws, strict=True):
+        try:
+            law.evaluate(t)
+        except ArithmeticError:
+            return int(i)
+    return int(indices[0])
 
 
 def _refuse(model, t: np.ndarray, w, wd, wdd) -> None:

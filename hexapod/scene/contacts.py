@@ -19,6 +19,7 @@ carries nothing.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -97,6 +98,23 @@ class StanceGate(Law):
     def cycle_time(self):
         return self.contact.period
 
+    def batch_key(self):
+        return "gate"
+
+    @classmethod
+    def evaluate_batch(cls, laws, t):
+        t = np.asarray(t, dtype=float)
+        gate = in_stance(_schedules(laws, t.ndim), t).astype(float)
+        return np.array([gate, np.zeros_like(gate), np.zeros_like(gate)])
+
+
+def _schedules(laws, ndim: int) -> SimpleNamespace:
+    """The schedules of the laws' contacts as arrays (k, 1, ...) that broadcast against times
+    of ``ndim`` dimensions: the same arithmetic as one contact's, for all at once."""
+    shape = (len(laws),) + (1,) * ndim
+    return SimpleNamespace(**{key: np.array([getattr(law.contact, key) for law in laws])
+                              .reshape(shape) for key in ("period", "lift_off", "duty")})
+
 
 @dataclass(frozen=True, eq=False)
 class Foothold(Law):
@@ -111,6 +129,19 @@ class Foothold(Law):
         _, k = _cycle(self.contact, t)
         value = self.contact.foothold[self.axis] + k * self.contact.advance[self.axis]
         return value, np.zeros_like(t), np.zeros_like(t)
+
+    def batch_key(self):
+        return "foothold"
+
+    @classmethod
+    def evaluate_batch(cls, laws, t):
+        t = np.asarray(t, dtype=float)
+        _, k = _cycle(_schedules(laws, t.ndim), t)
+        shape = k.shape[:1] + (1,) * t.ndim
+        start = np.array([law.contact.foothold[law.axis] for law in laws]).reshape(shape)
+        advance = np.array([law.contact.advance[law.axis] for law in laws]).reshape(shape)
+        value = start + k * advance
+        return np.array([value, np.zeros_like(value), np.zeros_like(value)])
 
 
 @dataclass

@@ -44,6 +44,29 @@ class Law:
         closed form to offer (such an integrator then calls :meth:`evaluate`)."""
         return None
 
+    #: True when evaluating the law costs far more than interpolating a table of it (a gait's
+    #: inverse kinematics solved at every call): a forward simulation, which asks for the
+    #: laws at every stage of every step, evaluates such laws once on a grid and interpolates
+    #: them to well within its tolerance (:mod:`hexapod.simulation.tabulation`).
+    costly = False
+
+    def batch_key(self):
+        """A key shared by the laws of this class that :meth:`evaluate_batch` evaluates
+        together at less cost than one by one (the contacts' gates, the columns of one table);
+        None (the default): evaluated alone."""
+        return None
+
+    @classmethod
+    def evaluate_batch(cls, laws, t) -> np.ndarray:
+        """Values, rates and accelerations of ``laws`` (of this class, one batch key) at ``t``:
+        an array (3, len(laws), *t.shape). The default evaluates them one by one."""
+        t = np.asarray(t, dtype=float)
+        out = np.empty((3, len(laws)) + t.shape)
+        for k, law in enumerate(laws):
+            for m, values in enumerate(law.evaluate(t)):
+                out[m, k] = values
+        return out
+
 
 def _finite(values) -> bool:
     return bool(np.all(np.isfinite(np.asarray(values, dtype=float))))

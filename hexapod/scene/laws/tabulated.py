@@ -162,17 +162,7 @@ class Hermite(Law):
         Hermite basis); outside the table the end interval's polynomial continues."""
         if self._table is None:
             raise ValueError("hermite law is invalid: " + "; ".join(self.problems()))
-        times, y, yd, ydd = self._table
-        t = np.asarray(t, dtype=float)
-        i = np.clip(np.searchsorted(times, t, side="right") - 1, 0, times.size - 2)
-        h = times[i + 1] - times[i]
-        s = (t - times[i]) / h
-        ends = (y[i], h * yd[i], h * h * ydd[i], y[i + 1], h * yd[i + 1], h * h * ydd[i + 1])
-        f = fd = fdd = 0.0
-        for (c, c1, c2), end in zip(_QUINTIC_HERMITE_RATES, ends, strict=True):
-            f = f + end * _horner(s, c)
-            fd = fd + end * _horner(s, c1) / h
-            fdd = fdd + end * _horner(s, c2) / h**2
+        f, fd, fdd = quintic_hermite(self._table[0], self._table[1:], t)
         return f, fd, fdd
 
     def _scaled(self, factor):
@@ -194,3 +184,23 @@ class Hermite(Law):
         numbers = (_size_problem(self.times, self.values, self.rates, self.accelerations)
                    or _spacing_problem(self.times))
         return [numbers] if numbers else []
+
+
+def quintic_hermite(times: np.ndarray, table: np.ndarray, t) -> np.ndarray:
+    """The quintic Hermite interpolant of ``table`` at ``t`` (see :class:`Hermite`): ``table``
+    (3, ..., N) holds the values, rates and accelerations at ``times`` (N,) along its last
+    axis (one or several laws); returns their interpolated values, rates and accelerations,
+    (3, ..., *t.shape). Outside ``times`` the end intervals' polynomials continue."""
+    t = np.asarray(t, dtype=float)
+    i = np.clip(np.searchsorted(times, t, side="right") - 1, 0, times.size - 2)
+    h = times[i + 1] - times[i]
+    s = (t - times[i]) / h
+    y, yd, ydd = table
+    ends = (y[..., i], h * yd[..., i], h * h * ydd[..., i], y[..., i + 1], h * yd[..., i + 1],
+            h * h * ydd[..., i + 1])
+    f = fd = fdd = 0.0
+    for (c, c1, c2), end in zip(_QUINTIC_HERMITE_RATES, ends, strict=True):
+        f = f + end * _horner(s, c)
+        fd = fd + end * _horner(s, c1) / h
+        fdd = fdd + end * _horner(s, c2) / h**2
+    return np.array([f, fd, fdd])
