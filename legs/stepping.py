@@ -431,6 +431,7 @@ class Stepping(Law):
     period: float = 1.0
     lift_off: float = 0.0
     kind = "stepping"
+    costly = True  # Newton's method on the leg at every call
 
     def evaluate(self, t):
         t = np.asarray(t, dtype=float)

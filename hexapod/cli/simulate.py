@@ -109,6 +109,11 @@ def add_arguments(parser) -> None:
     parser.add_argument("--cpu-budget", type=seconds, metavar="S",
                         help="stop the run, as failed, after this many CPU seconds in its time "
                         "loop; the states up to there are written (default: no budget)")
+    parser.add_argument("--exact-laws", action="store_true",
+                        help="evaluate every time law exactly at every stage (default: laws "
+                        "that cost far more than a table, a gait's inverse kinematics, are "
+                        "tabulated once and interpolated to a hundredth of --rtol; stats.json "
+                        "says how, under options.laws)")
     limit_arguments(parser, steps=True)
     ground_arguments(parser)
     base_argument(parser)
@@ -139,7 +144,8 @@ def run(args) -> int:
                       forces=True if args.forces else None,
                       progress=time_progress(args.method, args.start) if show else None,
                       max_steps=args.max_steps, max_memory=args.max_memory,
-                      cpu_budget=args.cpu_budget, advice=_advice(args))
+                      cpu_budget=args.cpu_budget, advice=_advice(args),
+                      exact_laws=args.exact_laws)
     result.source = scene_reference(args.scene)  # for 'hexapod export'
     if show:
         print("\r" + " " * 90 + "\r", end="", file=sys.stderr)

@@ -292,27 +292,27 @@ class Model:
         return 1.0, "the default duration: the scene's laws do not repeat"
 
     def with_ground(self, ground: GroundForces, digest: str) -> Model:
-        """This model with other ground-force settings (``digest``: the content hash of the
-        scene they come from). What the model has built is shared when the settings differ only
-        in numbers the solvers read at run time (``mu``, ``faces``, ``min_normal``: a sweep
-        over friction reuses the built phase plans); a change of the policy or of the reference
-        efforts, which the policy's Functions are built from, starts from nothing built.
+        """This model with other ground-force settings, in SI (``digest``: the content hash of
+        the scene they come from). What the model has built is shared when the settings differ
+        only in numbers the solvers read at run time (``mu``, ``faces``, ``min_normal``: a
+        sweep over friction reuses the built phase plans); a change of the policy or of the
+        reference efforts, which the policy's Functions are built from, starts from nothing."""
+        return self._twin(_built_from(ground) == _built_from(self.ground), ground=ground,
+                          digest=digest)
 
-        Parameters
-        ----------
-        ground : GroundForces
-            The settings, in SI.
-        digest : str
-            The content hash of the scene with these settings.
+    def with_laws(self, laws: tuple[Law, ...], digest: str) -> Model:
+        """This model with other time laws, as many (``digest``: a content hash that tells
+        them apart). Nothing built is shared: the tree path folds the laws in."""
+        if len(laws) != self.n_w:
+            raise ValueError(f"model '{self.name}' has {self.n_w} laws, got {len(laws)}")
+        return self._twin(False, laws=tuple(laws), digest=digest)
 
-        Returns
-        -------
-        Model
-        """
+    def _twin(self, share_built: bool, **changes) -> Model:
+        """A shallow copy with ``changes`` made, sharing what is built or not."""
         twin = copy.copy(self)
-        object.__setattr__(twin, "ground", ground)
-        object.__setattr__(twin, "digest", digest)
-        if _built_from(ground) != _built_from(self.ground):
+        for name, value in changes.items():
+            object.__setattr__(twin, name, value)
+        if not share_built:
             object.__setattr__(twin, "_built", {})
             object.__setattr__(twin, "_lock", threading.RLock())
         return twin

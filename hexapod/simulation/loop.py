@@ -31,6 +31,7 @@ from hexapod.simulation.integrators import Integrator
 from hexapod.simulation.methods import DEFAULT_ATOL, DEFAULT_RTOL
 from hexapod.simulation.registry import DEFAULT_METHOD, get_integrator
 from hexapod.simulation.results import SimulationResult
+from hexapod.simulation.tabulation import TOLERANCE_PER_RTOL, tabulated_model
 from hexapod.simulation.watch import Watch
 
 #: steps tried (accepted or rejected) after which a run's pace is measured, then weighed each
@@ -69,7 +70,7 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
              max_memory: int | None = None, cpu_budget: float | None = None,
              progress: Callable[[float, float], None] | None = None,
              options: dict | None = None, advice: dict[str, str] | None = None,
-             ) -> SimulationResult:
+             exact_laws: bool = False) -> SimulationResult:
     """Integrate the motion of ``model`` from ``t0`` to ``t_end``.
 
     Parameters
@@ -130,6 +131,11 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
     advice : dict of str to str, optional
         What the messages of the limits suggest to ask for less (keys ``"steps"`` and
         ``"memory"``; default :data:`ADVICE`): a command line names its options.
+    exact_laws : bool
+        Evaluate every time law exactly at every stage. By default the laws that cost far more
+        than interpolating them (a gait's inverse kinematics) are tabulated once and
+        interpolated to a hundredth of ``rtol`` (:mod:`hexapod.simulation.tabulation`); the
+        result's ``options["laws"]`` says how, and with what error.
 
     Returns
     -------
@@ -167,10 +173,12 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
     if grid is not None:
         weigh_output_times(model, grid.size, max_steps, max_memory, advice)
     weigh.before(step)
-    integrator = cls(model, t0, t_end, q0, v0, **options)
+    run_model, laws = (model, None) if exact_laws else tabulated_model(
+        model, t0, t_end, TOLERANCE_PER_RTOL * options.get("rtol", DEFAULT_RTOL))
+    integrator = cls(run_model, t0, t_end, q0, v0, **options)
     if grid is not None and cls.counts_own_steps:
         integrator.set_output_times(grid)
-    watch = Watch(model, integrator, grid)
+    watch = Watch(run_model, integrator, grid)
     wall, cpu = time.perf_counter(), cpu_seconds()
     reached = _run(integrator, watch, weigh, every, cpu_budget, progress)
     wall, cpu = time.perf_counter() - wall, cpu_seconds() - cpu
@@ -181,6 +189,8 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
     options = {**options, "atol": dict(integrator.atol_kinds)}
     if grid is not None:
         options["output_times"] = int(grid.size)
+    if laws is not None:
+        options["laws"] = laws
     result = SimulationResult(
         model=model, method=cls.name, t=arrays["t"], q=arrays["q"], v=arrays["v"],
         v_dot=arrays["v_dot"], lam=arrays["lam"],
@@ -415,6 +425,8 @@ def _add_wrenches(result: SimulationResult) -> None:
     n, J = result.t.size, len(model.joints)
     force, torque, effort = np.zeros((n, J, 3)), np.zeros((n, J, 3)), np.zeros((n, J))
     data = model.create_data()
+    if n > 1:
+        model.law_values(result.t, data)  # all at once, kept in data for the samples below
     for k in range(n):
         q, v = result.q[k], result.v[k]
         w, _, _ = model.law_values(result.t[k], data)

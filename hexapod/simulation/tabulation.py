@@ -1,0 +1,106 @@
+"""Costly time laws tabulated once for a forward simulation.
+
+An integrator asks for every law at every stage of every step. Most laws cost a microsecond;
+a law marked :attr:`~hexapod.scene.laws.Law.costly` (a walking leg's joint, whose value is the
+leg's inverse kinematics solved by Newton's method) costs milliseconds a call, more than the
+constrained step itself. Such laws are evaluated once, on a uniform grid over the run (one
+period when they repeat), and read by quintic Hermite interpolation of their values, rates and
+accelerations, all of them in one call (:class:`~hexapod.scene.laws.table.LawTable`: C2,
+exact at the grid's times).
+
+**Accuracy.** The grid is halved until the interpolant agrees with the exact laws at the
+midpoint of every interval (where a Hermite interpolant's error is near its largest) to
+``tolerance`` relative to each law's largest value, rate and acceleration over the run: a
+simulation asks for a hundredth of its relative tolerance (:data:`TOLERANCE_PER_RTOL`), so the
+table moves the result by far less than the integrator's own error. The acceleration's error
+falls as ``h^4``; when it no longer falls (round-off in the exact values, amplified by
+``1 / h^2``, has taken over) or the grid would pass :data:`MOST_INTERVALS`, the laws are
+evaluated exactly, and the run says so. The table and the error it reached are recorded in the
+result's options (``laws``).
+"""
+
+from __future__ import annotations
+
+import hashlib
+
+import numpy as np
+
+from hexapod.model.model import Model
+from hexapod.scene.laws import Law
+from hexapod.scene.laws.table import LawTable
+
+#: The table's tolerance, relative to the run's relative tolerance.
+TOLERANCE_PER_RTOL = 1e-2
+#: The first grid's intervals, and the most a grid may have.
+FIRST_INTERVALS = 64
+MOST_INTERVALS = 2**15
+
+
+def tabulated_model(model: Model, t0: float, t_end: float,
+                    tolerance: float) -> tuple[Model, dict | None]:
+    """``model`` with its costly laws tabulated over ``[t0, t_end]`` to ``tolerance``, and
+    what was done (a dict for the run's record; None when no law is costly). Built once per
+    model, span and tolerance: a second run reuses the table and what the twin has built.
+    When no table reaches ``tolerance``, the model itself, and the record says why."""
+    costly = [i for i, law in enumerate(model.laws) if law.costly]
+    if not costly:
+        return model, None
+    return model.built_once(("tabulated laws", float(t0), float(t_end), float(tolerance)),
+                            lambda m: _tabulate(m, costly, t0, t_end, tolerance))
+
+
+def _period(laws) -> float | None:
+    """The period the laws share (each repeats after it), or None."""
+    cycles = [law.cycle_time() for law in laws]
+    if any(c is None for c in cycles):
+        return None
+    longest = max(cycles)
+    ratios = [longest / c for c in cycles]
+    return longest if all(abs(r - round(r)) <= 1e-12 * r for r in ratios) else None
+
+
+def _exact(laws, times: np.ndarray) -> np.ndarray:
+    """Values, rates and accelerations of ``laws`` at ``times``: (3, k, N)."""
+    return Law.evaluate_batch(laws, times)
+
+
+def _tabulate(model: Model, costly: list[int], t0: float, t_end: float, tolerance: float):
+    laws = [model.laws[i] for i in costly]
+    period = _period(laws)
+    repeats = period is not None and t_end - t0 > period
+    span = period if repeats else t_end - t0
+    record = {"tabulated": len(laws), "tolerance": tolerance, "period_s": period if repeats
+              else None}
+    intervals = FIRST_INTERVALS
+    times = np.linspace(t0, t0 + span, intervals + 1)
+    table = _exact(laws, times)
+    errors = None
+    while True:
+        middle = 0.5 * (times[:-1] + times[1:])
+        exact = _exact(laws, middle)
+        scale = np.maximum(np.abs(table).max(axis=2), np.abs(exact).max(axis=2))  # (3, k)
+        interpolated = LawTable(times, table).evaluate(middle)
+        previous, errors = errors, (np.abs(interpolated - exact).max(axis=2)
+                                    / np.maximum(scale, np.finfo(float).tiny)).max(axis=1)
+        record.update(intervals=intervals, error={"value": float(errors[0]),
+                                                  "rate": float(errors[1]),
+                                                  "acceleration": float(errors[2])})
+        if errors.max() <= tolerance:
+            break
+        stalled = previous is not None and errors.max() > 0.5 * previous.max()
+        if stalled or 2 * intervals > MOST_INTERVALS:
+            record["exact"] = (f"no table reached the tolerance {tolerance:.2g} (the error "
+                               f"{'stopped falling' if stalled else 'was still falling'} at "
+                               f"{errors.max():.2g} with {intervals} intervals): the laws were "
+                               "evaluated exactly")
+            return model, record
+        times = np.insert(times, np.arange(1, times.size), middle)
+        table = np.insert(table, np.arange(1, table.shape[2]), exact, axis=2)
+        intervals *= 2
+    columns = LawTable(times, table, period if repeats else None).laws()
+    replaced = list(model.laws)
+    for i, column in zip(costly, columns, strict=True):
+        replaced[i] = column
+    digest = (hashlib.sha256(f"{model.digest}/laws".encode() + times.tobytes() + table.tobytes())
+              .hexdigest() if model.digest else "")
+    return model.with_laws(tuple(replaced), digest), record

@@ -1,0 +1,104 @@
+"""Laws evaluated together, and costly laws tabulated for a forward simulation
+(``hexapod/scene/laws/table.py``, ``hexapod/simulation/tabulation.py``).
+
+References are the laws' own exact values: a table is exact at its times, reads the same numbers
+one column at a time or all together, repeats with its period, and between its times agrees with
+the law it replaces to the tolerance it reports (checked here at times it never saw, with a
+margin of 10 over the midpoints it measured, where a quintic Hermite interpolant's error is near
+its largest). A simulation with the table agrees with one with the exact laws to far below its
+tolerance, because the table's error is a hundredth of it.
+"""
+
+import numpy as np
+import pytest
+
+import hexapod as hx
+from hexapod.scene import Harmonic
+from hexapod.scene.laws.table import LawTable
+from hexapod.simulation.tabulation import tabulated_model
+
+PERIOD = 0.5
+
+
+def test_a_table_is_exact_at_its_times_and_reads_the_same_in_one_call_or_column_by_column():
+    times = np.linspace(0.0, 1.0, 11)
+    table = np.random.default_rng(0).normal(size=(3, 4, times.size))
+    laws = LawTable(times, table).laws()
+    assert np.abs(laws[0].table.evaluate(times) - table).max() < 1e-14
+    t = np.array([0.03, 0.5, 0.77])
+    together = type(laws[0]).evaluate_batch(laws[1:3], t)
+    for k, law in enumerate(laws[1:3]):
+        assert np.array_equal(together[:, k], np.array(law.evaluate(t)))
+    with pytest.raises(ValueError, match="shape"):
+        LawTable(times, table[:, :, :-1])
+
+
+def test_a_periodic_table_repeats():
+    law = Harmonic(offset=0.1, cos=(0.3, 0.05), sin=(0.2,), frequency=1 / PERIOD)
+    times = np.linspace(0.1, 0.1 + PERIOD, 257)
+    table = LawTable(times, np.array(law.evaluate(times))[:, None, :], period=PERIOD)
+    t = np.array([0.1, 0.37, 2.0, 7.77])
+    read = table.evaluate(t)[:, 0]
+    assert np.allclose(read, table.evaluate(0.1 + np.mod(t - 0.1, PERIOD))[:, 0], rtol=0,
+                       atol=1e-12)
+    # and agrees with the law itself (h^6 for values, h^4 for accelerations)
+    exact = np.array(law.evaluate(t))
+    scale = np.abs(exact).max(axis=1, keepdims=True)
+    assert (np.abs(read - exact) / scale).max() < 1e-7
+
+
+def test_gates_and_footholds_evaluated_together_are_those_evaluated_alone():
+    model = hx.assemble(hx.load_scene("hexapod"))
+    t = np.linspace(0.0, 1.3, 53)
+    kinds = {"stance-gate", "foothold"}
+    chosen = [i for i, law in enumerate(model.laws) if law.kind in kinds]
+    assert len(chosen) == 24
+    w, wd, wdd = model.law_values(t)
+    for i in chosen:
+        alone = model.laws[i].evaluate(t)
+        assert np.array_equal(w[i], alone[0]) and np.array_equal(wd[i], alone[1])
+        assert np.array_equal(wdd[i], alone[2])
+    single = model.law_values(0.26)
+    assert np.array_equal(single[0][chosen], [model.laws[i].evaluate(0.26)[0] for i in chosen])
+
+
+def test_tabulation_meets_its_tolerance_between_the_times_it_checked():
+    model = hx.assemble(hx.load_scene("front-leg"))
+    costly = [i for i, law in enumerate(model.laws) if law.costly]
+    assert len(costly) == 6  # the six joints' gait laws
+    twin, record = tabulated_model(model, 0.0, 1.2, 1e-8)
+    assert record["tabulated"] == 6 and record["period_s"] == pytest.approx(PERIOD)
+    assert max(record["error"].values()) <= 1e-8
+    assert twin.digest != model.digest and twin.n_w == model.n_w
+    t = np.random.default_rng(1).uniform(0.0, 1.2, 400)  # over two periods and more
+    exact = np.array(model.law_values(t))[:, costly]
+    read = np.array(twin.law_values(t))[:, costly]
+    scale = np.abs(exact).max(axis=2, keepdims=True)
+    assert (np.abs(read - exact) / scale).max() <= 10 * 1e-8
+    # built once per model, span and tolerance
+    assert tabulated_model(model, 0.0, 1.2, 1e-8)[0] is twin
+
+
+def test_a_tolerance_below_the_exact_laws_round_off_keeps_them_exact():
+    model = hx.assemble(hx.load_scene("front-leg"))
+    twin, record = tabulated_model(model, 0.0, 0.1, 1e-15)
+    assert twin is model
+    assert "evaluated exactly" in record["exact"]
+
+
+def test_a_simulation_with_tabulated_laws_agrees_with_the_exact_laws():
+    model = hx.assemble(hx.load_scene("front-leg"))
+    # a fixed step, so that both runs take the same steps and differ by the laws alone
+    options = dict(method="rk4", step=2e-3, t0=0.1)
+    fast = hx.simulate(model, 0.14, **options)
+    exact = hx.simulate(model, 0.14, exact_laws=True, **options)
+    assert fast.status == exact.status == "finished"
+    record = fast.options["laws"]
+    assert record["tabulated"] == 6 and "laws" not in exact.options
+    assert record["tolerance"] == pytest.approx(1e-2 * hx.simulation.DEFAULT_RTOL)
+    assert fast.model is model  # the result speaks of the user's model
+    assert np.array_equal(fast.t, exact.t)
+    # joint angles of order 1 rad and coordinates of order 0.05 m moved by laws off by 1e-8
+    # of their scale: a few 1e-10 at most
+    assert np.abs(fast.q - exact.q).max() < 1e-9
+    assert np.abs(fast.q - exact.q).max() > 0.0  # the table is not the law
