@@ -1,5 +1,5 @@
 """Laws evaluated together, and costly laws tabulated for a forward simulation
-(``hexapod/scene/laws/table.py``, ``hexapod/simulation/tabulation.py``).
+(``hexapod/scene/laws/table.py``, ``hexapod/model/tabulation.py``).
 
 References are the laws' own exact values: a table is exact at its times, reads the same numbers
 one column at a time or all together, repeats with its period, and between its times agrees with
@@ -15,7 +15,7 @@ import pytest
 import hexapod as hx
 from hexapod.scene import Harmonic
 from hexapod.scene.laws.table import LawTable
-from hexapod.simulation.tabulation import tabulated_model
+from hexapod.model.tabulation import tabulated_model
 
 PERIOD = 0.5
 

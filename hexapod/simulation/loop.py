@@ -31,7 +31,7 @@ from hexapod.simulation.integrators import Integrator
 from hexapod.simulation.methods import DEFAULT_ATOL, DEFAULT_RTOL
 from hexapod.simulation.registry import DEFAULT_METHOD, get_integrator
 from hexapod.simulation.results import SimulationResult
-from hexapod.simulation.tabulation import TOLERANCE_PER_RTOL, tabulated_model
+from hexapod.model.tabulation import TOLERANCE_PER_RTOL, tabulated_model
 from hexapod.simulation.watch import Watch
 
 #: steps tried (accepted or rejected) after which a run's pace is measured, then weighed each
@@ -134,7 +134,7 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
     exact_laws : bool
         Evaluate every time law exactly at every stage. By default the laws that cost far more
         than interpolating them (a gait's inverse kinematics) are tabulated once and
-        interpolated to a hundredth of ``rtol`` (:mod:`hexapod.simulation.tabulation`); the
+        interpolated to a hundredth of ``rtol`` (:mod:`hexapod.model.tabulation`); the
         result's ``options["laws"]`` says how, and with what error.
 
     Returns

@@ -47,7 +47,7 @@ class Law:
     #: True when evaluating the law costs far more than interpolating a table of it (a gait's
     #: inverse kinematics solved at every call): a forward simulation, which asks for the
     #: laws at every stage of every step, evaluates such laws once on a grid and interpolates
-    #: them to well within its tolerance (:mod:`hexapod.simulation.tabulation`).
+    #: them to well within its tolerance (:mod:`hexapod.model.tabulation`).
     costly = False
 
     def batch_key(self):

@@ -1,7 +1,7 @@
 """Several laws tabulated on one grid of times, with their rates and accelerations, and read by
 quintic Hermite interpolation (C2), all of them in one evaluation: what a forward simulation
 puts in place of laws that cost far more to evaluate than to interpolate
-(:mod:`hexapod.simulation.tabulation`)."""
+(:mod:`hexapod.model.tabulation`)."""
 
 from __future__ import annotations
 
