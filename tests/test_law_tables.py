@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 import hexapod as hx
+from hexapod.model.tabulation import tabulated_model
 from hexapod.scene import Harmonic
 from hexapod.scene.laws.table import LawTable
-from hexapod.model.tabulation import tabulated_model
 
 PERIOD = 0.5
 

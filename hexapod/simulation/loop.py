@@ -27,11 +27,11 @@ from hexapod._support import limits, signals
 from hexapod.algorithms.liaison import wrenches_from_multipliers
 from hexapod.errors import HexapodError
 from hexapod.model.model import Model
+from hexapod.model.tabulation import TOLERANCE_PER_RTOL, tabulated_model
 from hexapod.simulation.integrators import Integrator
 from hexapod.simulation.methods import DEFAULT_ATOL, DEFAULT_RTOL
 from hexapod.simulation.registry import DEFAULT_METHOD, get_integrator
 from hexapod.simulation.results import SimulationResult
-from hexapod.model.tabulation import TOLERANCE_PER_RTOL, tabulated_model
 from hexapod.simulation.watch import Watch
 
 #: steps tried (accepted or rejected) after which a run's pace is measured, then weighed each
