@@ -91,50 +91,55 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return out
 
 
-def _rotate(v: np.ndarray, axis: np.ndarray, c: np.ndarray, s: np.ndarray) -> np.ndarray:
-    """Rodrigues' rotation of the vectors ``v`` (3, n: one row a component, so that each is
-    contiguous) about the unit ``axis`` (3, n, or 3, 1 for one axis) by the angles whose
-    cosines and sines are ``c`` and ``s`` (n,)."""
-    along = (axis[0] * v[0] + axis[1] * v[1] + axis[2] * v[2]) * (1 - c)
-    return np.stack([v[0] * c + (axis[1] * v[2] - axis[2] * v[1]) * s + axis[0] * along,
-                     v[1] * c + (axis[2] * v[0] - axis[0] * v[2]) * s + axis[1] * along,
-                     v[2] * c + (axis[0] * v[1] - axis[1] * v[0]) * s + axis[2] * along])
+def _rodrigues(axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each unit axis's cross-product matrix ``K`` and its square (k, 3, 3): the rotation by
+    an angle is then ``I + sin K + (1 - cos) K^2`` (Rodrigues)."""
+    K = np.zeros((axes.shape[0], 3, 3))
+    K[:, 0, 1], K[:, 0, 2], K[:, 1, 2] = -axes[:, 2], axes[:, 1], -axes[:, 0]
+    K -= K.transpose(0, 2, 1)
+    return K, K @ K
 
 
 def chain_state(geometry: LegGeometry, angles: np.ndarray):
     """The foot (n, 3), and every joint's axis and point (n, 6, 3) as moved by the joints
     before it, at joint angles (n, 6), in the leg's frame (the thorax-coxa point, trunk axes).
     Product of exponentials: each joint turns everything beyond it about its rest-pose axis
-    and point, the proximal joint last."""
+    and point, the proximal joint last; the transforms ``x -> A x + b`` of the joints up to
+    ``k`` are composed from the trunk outwards, their rotations as matrices (n, 3, 3)."""
+    rest_axes, rest_points = np.array(geometry.axes), np.array(geometry.points)
+    K, K2 = _rodrigues(rest_axes)
+    c, s = np.cos(angles).T, np.sin(angles).T  # (6, n): samples last, contiguous
     n = angles.shape[0]
-    c, s = np.cos(angles).T, np.sin(angles).T  # (6, n)
-    column = [p[:, None] for p in geometry.points]  # (3, 1)
-    foot = np.repeat(column[6], n, axis=1)
-    for k in reversed(range(6)):
-        foot = column[k] + _rotate(foot - column[k], geometry.axes[k][:, None], c[k], s[k])
-    axes = [np.repeat(a[:, None], n, axis=1) for a in geometry.axes]
-    points = [np.repeat(p, n, axis=1) for p in column[:6]]
+    axes, points = np.empty((6, 3, n)), np.empty((6, 3, n))
+    A, b = np.repeat(np.eye(3)[:, :, None], n, axis=2), np.zeros((3, n))  # x -> A x + b
     for k in range(6):
-        for j in range(k):
-            axes[k] = _rotate(axes[k], axes[j], c[j], s[j])
-            points[k] = points[j] + _rotate(points[k] - points[j], axes[j], c[j], s[j])
-    return (np.ascontiguousarray(foot.T), np.stack(axes, axis=2).transpose(1, 2, 0),
-            np.stack(points, axis=2).transpose(1, 2, 0))
+        axes[k] = np.einsum("ijn,j->in", A, rest_axes[k])
+        points[k] = np.einsum("ijn,j->in", A, rest_points[k]) + b
+        rotation = (np.eye(3)[:, :, None] + K[k][:, :, None] * s[k]
+                    + K2[k][:, :, None] * (1 - c[k]))
+        A = np.einsum("ijn,jkn->ikn", A, rotation)
+        b = points[k] - np.einsum("ijn,j->in", A, rest_points[k])
+    foot = np.einsum("ijn,j->in", A, rest_points[6]) + b
+    return (np.ascontiguousarray(foot.T), axes.transpose(2, 0, 1).copy(),
+            points.transpose(2, 0, 1).copy())
 
 
-def foot_position(geometry: LegGeometry, angles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def foot_position(geometry: LegGeometry, angles: np.ndarray,
+                  state=None) -> tuple[np.ndarray, np.ndarray]:
     """The foot (n, 3) at joint angles (n, 6), in the leg's frame, and its Jacobian (n, 3, 6):
-    column ``k`` is the moved axis of joint ``k`` crossed with the arm to the foot."""
-    foot, axes, points = chain_state(geometry, angles)
+    column ``k`` is the moved axis of joint ``k`` crossed with the arm to the foot. ``state``:
+    :func:`chain_state` at these angles, when already computed."""
+    foot, axes, points = chain_state(geometry, angles) if state is None else state
     return foot, _cross(axes, foot[:, None, :] - points).transpose(0, 2, 1)
 
 
-def foot_bias(geometry: LegGeometry, angles: np.ndarray, rates: np.ndarray) -> np.ndarray:
+def foot_bias(geometry: LegGeometry, angles: np.ndarray, rates: np.ndarray,
+              state=None) -> np.ndarray:
     """The foot's acceleration (n, 3) at zero joint accelerations (the ``J_dot theta_dot``
     term): ``sum_k theta_dot_k (theta_dot_k a_k + 2 omega_k) x c_k``, with ``c_k`` the
     Jacobian's column ``a_k x (foot - p_k)`` and ``omega_k`` the angular velocity of the body
-    before joint ``k``."""
-    foot, axes, points = chain_state(geometry, angles)
+    before joint ``k``. ``state``: :func:`chain_state` at ``angles``, when already computed."""
+    foot, axes, points = chain_state(geometry, angles) if state is None else state
     columns = _cross(axes, foot[:, None, :] - points)
     out = np.zeros_like(foot)
     omega = np.zeros_like(foot)
@@ -183,6 +188,12 @@ def solve_joints(geometry: LegGeometry, targets: np.ndarray, angles: np.ndarray,
     return current
 
 
+@cache
+def _unit_geometry(position: str, lengths: tuple[float, float, float, float]) -> LegGeometry:
+    """The left ``position`` leg at natural scale (built once: the laws ask at every call)."""
+    return leg_geometry(position, "L", scale=1.0, lengths=lengths)
+
+
 def _leg_label(geometry: LegGeometry) -> str:
     """``"front leg"``, with its length factors when they are not all 1."""
     if all(f == 1.0 for f in geometry.length_factors):
@@ -190,17 +201,24 @@ def _leg_label(geometry: LegGeometry) -> str:
     return f"{geometry.leg} leg ({describe_lengths(geometry.length_factors)})"
 
 
-def _fourier_basis(tau: np.ndarray, harmonics: int, *, exact: bool = True) -> np.ndarray:
-    """Columns 1, cos(2 pi k tau), sin(2 pi k tau) for k = 1 ... ``harmonics``. Not
-    ``exact``: the powers of ``exp(2 pi i tau)`` by repeated products, a few times faster and
-    off by about ``k`` units of round-off (for a starting guess of Newton's method)."""
-    if exact:
-        k = np.arange(1, harmonics + 1)
-        x = 2 * np.pi * tau
-        return np.hstack([np.ones((tau.size, 1)), np.cos(np.outer(x, k)),
-                          np.sin(np.outer(x, k))])
-    powers = np.cumprod(np.repeat(np.exp(2j * np.pi * tau)[:, None], harmonics, axis=1), axis=1)
-    return np.hstack([np.ones((tau.size, 1)), powers.real, powers.imag])
+def _fourier_basis(tau: np.ndarray, harmonics: int) -> np.ndarray:
+    """Columns 1, cos(2 pi k tau), sin(2 pi k tau) for k = 1 ... ``harmonics``."""
+    k = np.arange(1, harmonics + 1)
+    x = 2 * np.pi * tau
+    return np.hstack([np.ones((tau.size, 1)), np.cos(np.outer(x, k)), np.sin(np.outer(x, k))])
+
+
+def _harmonic_start(harmonics: dict, joints, tau: np.ndarray) -> np.ndarray:
+    """The harmonic series of ``joints`` (k, n) at cycle fractions ``tau``, by Horner's rule in
+    ``z = exp(2 pi i tau)``: ``offset + Re sum_k (a_k - i b_k) z^k``, off by a few hundred
+    units of round-off (Newton's method's start, which it then corrects)."""
+    z = np.exp(2j * np.pi * tau)
+    coefficients = np.array([np.array(harmonics[j][1]) - 1j * np.array(harmonics[j][2])
+                             for j in joints])  # (k, harmonics)
+    total = np.zeros((len(joints), tau.size), dtype=complex)
+    for c in coefficients.T[::-1]:
+        total = (total + c[:, None]) * z
+    return np.array([harmonics[j][0] for j in joints])[:, None] + total.real
 
 
 def path_targets(position: str, tau: np.ndarray, duty: float,
@@ -208,7 +226,8 @@ def path_targets(position: str, tau: np.ndarray, duty: float,
     """Where the foot of a left ``position`` leg should be at cycle fractions ``tau``, in the
     leg's frame (m at ``scale``; the right leg's is the mirror image, y negated): the stance
     line from the rest pose of the leg with its segment ``lengths`` (see the module's notes)."""
-    geometry = leg_geometry(position, "L", scale, lengths)
+    geometry = (_unit_geometry(position, length_factors(lengths)) if scale == 1.0 else
+                leg_geometry(position, "L", scale, lengths))
     mm = 1e-3 * scale
     fore_aft, height = foot_path(tau, duty, STANCE_LENGTH_MM * mm, FOOT_LIFT_MM * mm)
     rest_foot = geometry.points[6]
@@ -266,6 +285,9 @@ stepping_harmonics.cache_clear = _stepping_harmonics.cache_clear
 
 _STEP9 = np.polynomial.Polynomial([0, 0, 0, 0, 0, 126, -420, 540, -315, 70])
 _BUMP = np.polynomial.Polynomial([0, 1]) ** 5 * np.polynomial.Polynomial([1, -1]) ** 5 * 1024
+#: each with its first and second derivatives
+_STEP9_RATES = tuple(_STEP9.deriv(m) for m in range(3))
+_BUMP_RATES = tuple(_BUMP.deriv(m) for m in range(3))
 
 
 def foot_path_rates(tau, duty: float, length: float, lift: float):
@@ -276,8 +298,8 @@ def foot_path_rates(tau, duty: float, length: float, lift: float):
     stance = tau >= a
     u = np.where(stance, 0.0, tau / a)
     rate = -length * a / duty
-    step = [_STEP9.deriv(m)(u) for m in range(3)]
-    bump = [_BUMP.deriv(m)(u) for m in range(3)]
+    step = [p(u) for p in _STEP9_RATES]
+    bump = [p(u) for p in _BUMP_RATES]
     fore_aft = (
         np.where(stance, length / 2 - length * (tau - a) / duty,
                  -length / 2 + rate * u + (length - rate) * step[0]),
@@ -306,7 +328,7 @@ def exact_leg_motion(position: str, duty: float, tau,
     """
     tau = np.atleast_1d(np.asarray(tau, dtype=float)) % 1.0
     lengths = length_factors(lengths)
-    geometry = leg_geometry(position, "L", scale=1.0, lengths=lengths)
+    geometry = _unit_geometry(position, lengths)
     mm = 1e-3
     (fa, fa1, fa2), (h, h1, h2) = foot_path_rates(tau, duty, 1.0, 1.0)  # unit shapes
     amplitude = {joint: np.radians(a) for joint, a, _ in GAIT_LAWS}
@@ -319,40 +341,47 @@ def exact_leg_motion(position: str, duty: float, tau,
         angles[:, k], rates[:, k], accelerations[:, k] = (amplitude[joint] * x
                                                          for x in (value, d1, d2))
     harmonics = stepping_harmonics(position, duty, HARMONICS, lengths)
-    basis = _fourier_basis(tau, HARMONICS, exact=False)  # Newton's start only
     solved = [JOINTS.index(j) for j in SOLVED_JOINTS]
     free = [k for k in range(6) if k not in solved]
-    for joint in SOLVED_JOINTS:
-        offset, cos, sin = harmonics[joint]
-        angles[:, JOINTS.index(joint)] = basis @ np.concatenate([[offset], cos, sin])
+    angles[:, solved] = _harmonic_start(harmonics, SOLVED_JOINTS, tau).T
     length, lift = STANCE_LENGTH_MM * mm, FOOT_LIFT_MM * mm
     target = path_targets(position, tau, duty, scale=1.0, lengths=lengths)
     target_rate = np.column_stack([fa1 * length, np.zeros(n), h1 * lift])
     target_acceleration = np.column_stack([fa2 * length, np.zeros(n), h2 * lift])
     reach = np.linalg.norm(geometry.points[6])
     tolerance = 1e-15 * reach
-    try:
+    with np.errstate(divide="ignore", invalid="ignore"):  # a stretched leg: NaN, said below
         for _ in range(8):
-            foot, jacobian = foot_position(geometry, angles)
+            state = chain_state(geometry, angles)
+            foot, jacobian = foot_position(geometry, angles, state)
             residual = foot - target
             if np.abs(residual).max() <= tolerance:
                 break
-            angles[:, solved] -= np.linalg.solve(jacobian[:, :, solved],
-                                                 residual[..., None])[..., 0]
-        foot, jacobian = foot_position(geometry, angles)
-        missed = float(np.abs(foot - target).max()) / reach
-    except np.linalg.LinAlgError:
-        missed = np.inf
+            angles[:, solved] -= _solve3(jacobian[:, :, solved], residual)
+        else:
+            state = chain_state(geometry, angles)
+            foot, jacobian = foot_position(geometry, angles, state)
+    missed = float(np.abs(foot - target).max()) / reach
     if not missed <= 1e-12:  # NaN included
         raise ValueError(f"{_leg_label(geometry)}: the foot cannot follow its path (Newton's "
                          f"method missed it by {missed:.2g} of the leg's reach)")
     Js, Jp = jacobian[:, :, solved], jacobian[:, :, free]
     rhs = target_rate - np.einsum("nij,nj->ni", Jp, rates[:, free])
-    rates[:, solved] = np.linalg.solve(Js, rhs[..., None])[..., 0]
+    rates[:, solved] = _solve3(Js, rhs)
     rhs = (target_acceleration - np.einsum("nij,nj->ni", Jp, accelerations[:, free])
-           - foot_bias(geometry, angles, rates))
-    accelerations[:, solved] = np.linalg.solve(Js, rhs[..., None])[..., 0]
+           - foot_bias(geometry, angles, rates, state))
+    accelerations[:, solved] = _solve3(Js, rhs)
     return angles, rates, accelerations
+
+
+def _solve3(A: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``x`` with ``A x = b`` for (n, 3, 3) and (n, 3), by the adjugate: the inverse's columns
+    are the cross products of ``A``'s rows over its determinant (NaN or infinite where ``A`` is
+    singular). Several times cheaper than a batched LU on 3 x 3 systems."""
+    r0, r1, r2 = A[:, 0], A[:, 1], A[:, 2]
+    c0, c1, c2 = _cross(r1, r2), _cross(r2, r0), _cross(r0, r1)
+    determinant = np.einsum("ni,ni->n", r0, c0)[:, None]
+    return (c0 * b[:, :1] + c1 * b[:, 1:2] + c2 * b[:, 2:]) / determinant
 
 
 _MOTIONS: dict = {}
@@ -440,6 +469,27 @@ class Stepping(Law):
         values = [x[:, k].reshape(t.shape) / self.period**m
                   for m, x in enumerate(_cached_motion(self.position, self.duty, tau))]
         return values[0], values[1], values[2]
+
+    def batch_key(self):
+        return (self.position, self.duty)
+
+    @classmethod
+    def evaluate_batch(cls, laws, t):
+        """The laws of legs of one shape and duty in one solve: each leg's phase (its period
+        and lift-off) gives its cycle fractions, and the foot paths of all are solved
+        together (Newton's method costs little more for more samples)."""
+        t = np.asarray(t, dtype=float)
+        phases = sorted({(law.period, law.lift_off) for law in laws})
+        taus = [(np.atleast_1d(t) / period - lift_off) % 1.0 for period, lift_off in phases]
+        motion = _cached_motion(laws[0].position, laws[0].duty, np.concatenate(taus))
+        size = taus[0].size
+        out = np.empty((3, len(laws)) + t.shape)
+        for i, law in enumerate(laws):
+            p = phases.index((law.period, law.lift_off))
+            k = JOINTS.index(law.joint)
+            for m in range(3):
+                out[m, i] = motion[m][p * size:(p + 1) * size, k].reshape(t.shape) / law.period**m
+        return out
 
     @property
     def leg(self) -> str:
