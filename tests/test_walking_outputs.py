@@ -36,7 +36,9 @@ from hexapod.output.ground import (
 from hexapod.output.recording import read_recording
 from hexapod.output.report import (
     RunInfo,
+    _effort_figures,
     _wrench_figures,
+    driver_statistics,
     inverse_columns,
     inverse_csv_text,
     summary_markdown,
@@ -367,17 +369,38 @@ def test_gait_diagram_has_a_bar_per_stance(walking):
     assert bars == [len(s) for s in loads.stance]
 
 
-def test_force_and_torque_figures_are_drawn_per_leg(walking):
+def test_force_and_torque_figures_put_the_legs_side_by_side_or_one_sheet_per_leg(walking):
     model, result = walking
     names = [j.name for j in model.joints]
     assert list(leg_groups(names)) == list(LEGS)
     assert leg_groups(["ctr", "fti"]) is None
     drawn = _wrench_figures(model, result, "hexapod")
-    assert set(drawn) == {f"{kind}-{leg}.png" for kind in ("forces", "torques") for leg in LEGS}
-    for name, build in drawn.items():
-        leg = name[:-4].split("-")[1]
-        assert [ax.get_title().split()[-1] for ax in panels(build())] == [
-            n for n in names if n.startswith(f"{leg}/")], name
+    assert set(drawn) == {"forces.png", "torques.png"}
+    figure = drawn["forces.png"]()
+    roles = [n.split("/")[1] for n in names if n.startswith("L1/")]
+    assert [ax.get_title() for ax in panels(figure)] == roles
+    # each panel: one line per leg, the magnitude of that leg's joint of the panel
+    for ax, role in zip(panels(figure), roles, strict=True):
+        lines = [line for line in ax.get_lines() if line.get_label() in LEGS]
+        assert [line.get_label() for line in lines] == list(LEGS)
+        for line in lines:
+            k = names.index(f"{line.get_label()}/{role}")
+            assert np.array_equal(line.get_ydata(), np.linalg.norm(result.force[:, k], axis=1))
+    drivers = driver_statistics(model, result)
+    (efforts,) = _effort_figures(model, result.times, drivers, "hexapod").values()
+    for ax in panels(efforts()):
+        for line in ax.get_lines():
+            joint = f"{line.get_label()}/{ax.get_title()}"
+            (driver,) = [d for d in drivers if d.joint == joint]
+            assert np.array_equal(line.get_ydata(), driver.effort)
+    sheets = _wrench_figures(model, result, "hexapod", leg_figures=True)
+    assert set(sheets) == {"forces.png", "torques.png"} | {
+        f"{kind}-{leg}.png" for kind in ("forces", "torques") for leg in LEGS}
+    for name, build in sheets.items():
+        if "-" in name:
+            leg = name[:-4].split("-")[1]
+            assert [ax.get_title().split()[-1] for ax in panels(build())] == [
+                n for n in names if n.startswith(f"{leg}/")], name
 
 
 # ------------------------------------------------------------------ export

@@ -28,8 +28,9 @@ DESCRIPTION = (
     "of 'hexapod inverse'), summary.md (per joint the peak and RMS force and moment magnitudes, "
     "per driver the peak effort and RMS power, per body the residual of its equations of motion "
     "under the reported wrenches) and the figures forces.png, torques.png, efforts.png and, when "
-    "bodies have a 'foot' marker, foot.png; for a robot (joints named LEG/JOINT) the force, "
-    "moment and effort figures per leg (forces-L1.png ...). A walking scene (feet on the ground "
+    "bodies have a 'foot' marker, foot.png; for a robot (joints named LEG/JOINT, or a URDF "
+    "robot's limbs) the force, moment and effort figures put the legs side by side, and "
+    "--leg-figures adds one sheet of each per leg (forces-L1.png ...). A walking scene (feet on the ground "
     "by contacts) adds the ground's force on each foot to inverse.csv (GRx, GRy, GRz:LEG and "
     "status:LEG), "
     "ground.csv (per foot: normal and tangential force, friction ratio, status), trunk.csv (the "
@@ -53,6 +54,10 @@ def add_arguments(parser) -> None:
     parser.add_argument("--no-figures", dest="figures", action="store_false",
                         help="write the tables and the summary only (the figures are most of "
                         "a walking robot's report time: for scripts and sweeps)")
+    parser.add_argument("--leg-figures", action="store_true",
+                        help="for a robot, also one sheet per leg of its joints' forces, "
+                        "moments (components and magnitude) and efforts with their power "
+                        "(forces-L1.png ...; three times the drawing)")
     parser.add_argument("--motion", metavar="MOTION.csv",
                         help="drive the scene's joints by this motion file, as 'hexapod "
                         "inverse' does (columns t, one per joint, optional qd:<joint> and "
@@ -129,7 +134,7 @@ def run(args) -> int:
     feet = marker_trajectories(model, result.q, FOOT_MARKER)
     run = RunInfo(scene.name, args.scene, run_time, f"{why}, {duration:g} s")
     files = report_files(model, result, balance, run, feet, figures=args.figures,
-                         workers=_figure_workers())
+                         workers=_figure_workers(), leg_figures=args.leg_figures)
     write_directory_atomically(out, files)
     if show:
         print("\r" + " " * 60 + "\r", end="", file=sys.stderr)

@@ -224,6 +224,49 @@ def wrench_figure(times: np.ndarray, values: np.ndarray, names: list[str], symbo
     return figure
 
 
+#: Colours of the legs in the figures that compare them (then dashed, then dotted, past ten).
+LEG_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown",
+               "tab:pink", "tab:gray", "tab:olive", "tab:cyan")
+
+
+def leg_comparison_figure(times: np.ndarray, values: np.ndarray, legs: list[str],
+                          panels: list[str], unit: str, title: str) -> Figure:
+    """The legs side by side: one panel per joint of a leg (the k-th joint of every leg
+    together), one line per leg.
+
+    Parameters
+    ----------
+    times : ndarray, shape (N,)
+        s.
+    values : ndarray, shape (N, legs, panels)
+        What is compared (a magnitude, an effort), in ``unit``; NaN where a leg has no such
+        joint.
+    legs, panels : list of str
+        The legs' names (the legend) and the panels' titles.
+    unit : str
+        The vertical axes' label.
+    title : str
+        The figure's title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    figure, axes, columns = _figure(len(panels), title)
+    styles = ("-", "--", ":")
+    for k, (ax, name) in enumerate(zip(axes, panels, strict=True)):
+        for m, leg in enumerate(legs):
+            ax.plot(times, values[:, m, k], color=LEG_COLOURS[m % len(LEG_COLOURS)],
+                    linestyle=styles[m // len(LEG_COLOURS) % len(styles)], linewidth=1.1,
+                    label=leg)
+        ax.set_title(name, fontsize=9)
+        ax.set_ylabel(unit, fontsize=8)
+    _scale_round_off(axes, [values[:, :, k] for k in range(len(panels))])
+    _finish_panels(axes, columns)
+    axes[0].legend(fontsize=7, ncols=2, loc="best")
+    return figure
+
+
 def effort_figure(times: np.ndarray, efforts: list[tuple[str, str, np.ndarray, np.ndarray]],
                   title: str) -> Figure:
     """Each actuator's effort (solid, left axis) and power (dashed, right axis) against time;

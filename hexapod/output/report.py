@@ -21,6 +21,7 @@ from hexapod.output.figures import (
     friction_ratio_figure,
     gait_diagram_figure,
     ground_reaction_figure,
+    leg_comparison_figure,
     render_figures,
     trajectory_figure,
     wrench_figure,
@@ -375,15 +376,50 @@ def walking_headlines(model: Model, result: InverseResult,
 FOOT_MARKER = "foot"
 
 
-def _wrench_figures(model: Model, result: InverseResult, scene: str) -> dict:
-    """``forces.png`` and ``torques.png``, or for a robot one of each per leg
-    (``forces-L1.png`` ...): their builders (each makes its figure when called)."""
+def _side_by_side(names: list[str], groups: dict[str, list[int]]):
+    """The legs of ``groups`` (``other`` left out), a title per k-th joint of a leg (the first
+    leg's, its leg's name taken off: ``L1/ctr`` -> ``ctr``), and the index (legs, panels) of
+    each leg's k-th joint in ``names`` (-1 where a leg has fewer)."""
+    legs = [leg for leg in groups if leg != "other"]
+    count = max(len(groups[leg]) for leg in legs)
+    index = np.full((len(legs), count), -1)
+    for m, leg in enumerate(legs):
+        index[m, :len(groups[leg])] = groups[leg]
+    titles = []
+    for k in range(count):
+        m = int(np.flatnonzero(index[:, k] >= 0)[0])
+        name = names[index[m, k]]
+        titles.append(name.removeprefix(legs[m]).lstrip("/_-") or name)
+    return legs, titles, index
+
+
+def _gathered(values: np.ndarray, index: np.ndarray) -> np.ndarray:
+    """``values`` (N, joints) arranged (N, legs, panels), NaN where ``index`` is -1."""
+    out = values[:, np.maximum(index, 0)]
+    out[:, index < 0] = np.nan
+    return out
+
+
+def _wrench_figures(model: Model, result: InverseResult, scene: str,
+                    leg_figures: bool = False) -> dict:
+    """``forces.png`` and ``torques.png``: every joint's force and moment. For a robot (see
+    :func:`report_files`) the legs side by side (magnitudes), and with ``leg_figures`` one
+    sheet of each per leg with the components (``forces-L1.png`` ...). Their builders (each
+    makes its figure when called)."""
     t = result.times
     labels = [wrench_label(model, joint) for joint in model.joints]
     names = [j.name for j in model.joints]
     where = "joint frame" if result.frame == "joint" else "world axes"
     groups = leg_groups(names, model) or {"": list(range(len(names)))}
     figures = {}
+    if "" not in groups:
+        legs, titles, index = _side_by_side(names, groups)
+        for kind, values, unit, what in (("forces", result.force, "N", "force |F|"),
+                                         ("torques", result.torque, "N m", "moment |T|")):
+            figures[f"{kind}.png"] = partial(
+                leg_comparison_figure, t, _gathered(np.linalg.norm(values, axis=2), index),
+                legs, titles, unit, f"{scene}: each joint's {what}, legs side by side")
+        groups = {leg: k for leg, k in groups.items() if leg_figures or leg == "other"}
     for leg, index in groups.items():
         suffix, which = (f"-{leg}", f" leg {leg}" if leg != "other" else " other joints") \
             if leg else ("", "")
@@ -398,12 +434,22 @@ def _wrench_figures(model: Model, result: InverseResult, scene: str) -> dict:
 
 
 def _effort_figures(model: Model, times: np.ndarray, drivers: list[DriverStatistics],
-                    scene: str) -> dict:
-    """``efforts.png``, or for a robot one per leg (``efforts-L1.png`` ...): builders."""
+                    scene: str, leg_figures: bool = False) -> dict:
+    """``efforts.png``: each actuator's effort and power; for a robot the legs' efforts side
+    by side, and with ``leg_figures`` one sheet per leg (``efforts-L1.png`` ...). Builders."""
     if not drivers:
         return {}
-    groups = leg_groups([d.joint for d in drivers], model) or {"": list(range(len(drivers)))}
+    joints = [d.joint for d in drivers]
+    groups = leg_groups(joints, model) or {"": list(range(len(drivers)))}
     out = {}
+    if "" not in groups:
+        legs, titles, index = _side_by_side(joints, groups)
+        efforts = np.column_stack([d.effort for d in drivers])
+        units = sorted({d.unit for d in drivers})
+        out["efforts.png"] = partial(
+            leg_comparison_figure, times, _gathered(efforts, index), legs, titles,
+            " or ".join(units), f"{scene}: actuator efforts, legs side by side")
+        groups = {leg: k for leg, k in groups.items() if leg_figures or leg == "other"}
     for leg, index in groups.items():
         suffix, which = (f"-{leg}", f" leg {leg}" if leg != "other" else " other joints") \
             if leg else ("", "")
@@ -432,13 +478,15 @@ def _ground_figures(model: Model, loads: FootLoads, scene: str) -> dict:
 
 def report_files(model: Model, result: InverseResult, balance: BodyBalance, run: RunInfo,
                  feet: dict[str, np.ndarray], *, figures: bool = True,
-                 workers: int = 1) -> dict[str, bytes]:
+                 workers: int = 1, leg_figures: bool = False) -> dict[str, bytes]:
     """Every file of the report, in memory: ``inverse.csv``, ``units.json`` (the unit and
     meaning of every column of every CSV), ``summary.md`` and the figures
     (``forces.png``, ``torques.png``; ``efforts.png`` when there are joint drivers;
     ``foot.png`` when there are ``feet``, paths (N, 3) by body). For a robot (joints named
-    ``<leg>/...`` in two legs or more) the force, moment and effort figures are drawn per leg
-    (``forces-L1.png`` ...). With foot contacts (a walking robot) also ``ground.csv`` and
+    ``<leg>/...`` in two legs or more, or a URDF robot's limbs) the force, moment and effort
+    figures put the legs side by side, one panel per joint of a leg, and ``leg_figures`` adds
+    one sheet of each per leg with the components (``forces-L1.png`` ...: three times the
+    drawing). With foot contacts (a walking robot) also ``ground.csv`` and
     ``trunk.csv`` (:mod:`hexapod.output.ground`), and the figures ``ground.png`` (the
     ground's force on each foot), ``friction.png`` (the friction ratio) and ``gait.png`` (the
     gait diagram).
@@ -469,7 +517,7 @@ def report_files(model: Model, result: InverseResult, balance: BodyBalance, run:
     """
     t = result.times
     drivers = driver_statistics(model, result)
-    drawn = _figures(model, result, drivers, feet, run.scene) if figures else {}
+    drawn = _figures(model, result, drivers, feet, run.scene, leg_figures) if figures else {}
     files = {"inverse.csv": inverse_csv_text(model, result).encode()}
     units = {"inverse.csv": inverse_column_units(model, result.frame)}
     loads = trunks = None
@@ -491,11 +539,11 @@ def report_files(model: Model, result: InverseResult, balance: BodyBalance, run:
 
 
 def _figures(model: Model, result: InverseResult, drivers: list[DriverStatistics],
-             feet: dict[str, np.ndarray], scene: str) -> dict:
+             feet: dict[str, np.ndarray], scene: str, leg_figures: bool) -> dict:
     """The builders of the wrench, effort and foot figures of a report (the ground's are made
     beside its loads), by file name."""
-    drawn = _wrench_figures(model, result, scene)
-    drawn.update(_effort_figures(model, result.times, drivers, scene))
+    drawn = _wrench_figures(model, result, scene, leg_figures)
+    drawn.update(_effort_figures(model, result.times, drivers, scene, leg_figures))
     if feet:
         drawn["foot.png"] = partial(
             trajectory_figure, result.times, feet,
