@@ -99,15 +99,14 @@ class PhasePlan:
         lu, model, terms = self.lu, self.model, self.terms
         n_v, n_c = model.n_v, model.n_c
         Phi = ca.SX.sym("Phi", terms.pattern.nnz())
-        factors = lu.pack(lu.factor(Phi[self._J_entries]))
+        factors = lu.factor(Phi[self._J_entries])
         self.factor = self._sx("phase_lu", [Phi], [factors])
         packed = ca.SX.sym("F", factors.numel())
-        rows = lu.unpack(packed)
         b, Q, a = ca.SX.sym("b", n_c), ca.SX.sym("Q", n_v), ca.SX.sym("a", n_v)
         y = ca.SX.sym("y", n_v)
         # the transposed solve, formed once and called (inlined) where needed
-        solve_t = ca.Function("solve_t", [packed, y], [lu.solve(rows, y, True)])
-        self.solve = self._sx("phase_solve", [packed, b], [lu.solve(rows, b[self.kept])])
+        solve_t = ca.Function("solve_t", [packed, y], [lu.solve(packed, y, True)])
+        self.solve = self._sx("phase_solve", [packed, b], [lu.solve(packed, b[self.kept])])
         lam = ca.SX(n_c, 1)
         lam[self.kept.tolist()] = solve_t(packed, Q - ca.mtimes(sparse_dm(model.mass.dense()), a))
         self.multipliers = self._sx("phase_multipliers", [packed, Q, a], [lam])

@@ -83,64 +83,82 @@ class StaticLU:
         self.structure = [sorted(row) for row in structure]
         self.nnz = sum(len(row) for row in self.structure)
         self._where_row, self._where_column = where_row, where_column
+        self._positions()
 
-    def factor(self, values: ca.SX) -> list[dict]:
-        """The factors of the matrix with these values (SX, one per pattern entry): the rows of
-        the permuted ``L`` (below the diagonal) and ``U`` (the rest), as dicts column -> SX."""
-        rows: list[dict] = [{j: ca.SX(0) for j in row} for row in self.structure]
+    def _positions(self) -> None:
+        """Where each factor entry lies in the packed vector (row by row, columns ascending),
+        and, per row, its entries left of the diagonal (``L``), on it and right of it (``U``),
+        per pivot the entries its elimination reads and writes: the factorisation and the
+        solves are then a few vector operations per row instead of one per entry."""
+        self._at: list[dict[int, int]] = []
+        k = 0
+        for row in self.structure:
+            self._at.append({j: k + m for m, j in enumerate(row)})
+            k += len(row)
+        at = self._at
+        self._lower = [(np.array([at[i][j] for j in row if j < i], dtype=int),
+                        np.array([j for j in row if j < i], dtype=int))
+                       for i, row in enumerate(self.structure)]
+        self._upper = [(np.array([at[i][j] for j in row if j > i], dtype=int),
+                        np.array([j for j in row if j > i], dtype=int))
+                       for i, row in enumerate(self.structure)]
+        self._diagonal = np.array([at[i][i] for i in range(self.n)], dtype=int)
+        self._eliminations = []
+        for k in range(self.n):
+            below = [i for i in range(k + 1, self.n) if k in at[i]]
+            upper = [j for j in self.structure[k] if j > k]
+            targets = [at[i][j] for i in below for j in upper]
+            left = [at[i][k] for i in below for _ in upper]
+            right = [at[k][j] for _ in below for j in upper]
+            self._eliminations.append(tuple(np.array(x, dtype=int).tolist() for x in (
+                [at[i][k] for i in below], targets, left, right)))
+
+    def factor(self, values: ca.SX) -> ca.SX:
+        """The factors of the matrix with these values (SX, one per pattern entry), packed:
+        the rows of the permuted ``L`` (below the diagonal) and ``U`` (the rest), row by row,
+        columns ascending."""
+        F = ca.SX.zeros(self.nnz)
+        seen = set()
         for k, (i, j) in enumerate(zip(self._where_row[self.rows],
                                        self._where_column[self.columns], strict=True)):
-            rows[i][j] = rows[i][j] + values[k]
-        for k in range(self.n):
-            pivot = rows[k][k]
-            upper = [(j, x) for j, x in rows[k].items() if j > k]
-            for i in range(k + 1, self.n):
-                if k not in rows[i]:
-                    continue
-                factor = rows[i][k] / pivot
-                rows[i][k] = factor
-                for j, x in upper:
-                    rows[i][j] = rows[i][j] - factor * x
-        return rows
+            position = self._at[i][j]
+            F[position] = F[position] + values[k] if position in seen else values[k]
+            seen.add(position)
+        for k, (column, targets, left, right) in enumerate(self._eliminations):
+            if not column:
+                continue
+            F[column] = F[column] / F[int(self._diagonal[k])]
+            if targets:
+                F[targets] = F[targets] - F[left] * F[right]
+        return F
 
-    def pack(self, rows: list[dict]) -> ca.SX:
-        """The factors as one vector (row by row, columns ascending)."""
-        return ca.vertcat(*[rows[i][j] for i, row in enumerate(self.structure) for j in row])
-
-    def unpack(self, packed: ca.SX) -> list[dict]:
-        out, k = [], 0
-        for row in self.structure:
-            out.append({j: packed[k + n] for n, j in enumerate(row)})
-            k += len(row)
-        return out
-
-    def solve(self, rows: list[dict], b: ca.SX, transpose: bool = False) -> ca.SX:
-        """``A^-1 b`` (or ``A^-T b``) from the factors of :meth:`factor`."""
+    def solve(self, F: ca.SX, b: ca.SX, transpose: bool = False) -> ca.SX:
+        """``A^-1 b`` (or ``A^-T b``) from the packed factors ``F`` of :meth:`factor`."""
         n = self.n
         if not transpose:
-            y = [b[int(r)] for r in self.row_order]  # L y = P b
-            for i in range(n):
-                y[i] = y[i] - sum((rows[i][j] * y[j] for j in rows[i] if j < i), ca.SX(0))
-            x = [None] * n
+            y = b[self.row_order.tolist()]  # L y = P b
+            for i, (where, columns) in enumerate(self._lower):
+                if where.size:
+                    y[i] = y[i] - ca.dot(F[where.tolist()], y[columns.tolist()])
+            x = ca.SX.zeros(n)
             for i in reversed(range(n)):
-                rest = sum((rows[i][j] * x[j] for j in rows[i] if j > i), ca.SX(0))
-                x[i] = (y[i] - rest) / rows[i][i]
-            out = [None] * n
-            for k, c in enumerate(self.column_order):
-                out[int(c)] = x[k]
-            return ca.vertcat(*out)
+                where, columns = self._upper[i]
+                rest = ca.dot(F[where.tolist()], x[columns.tolist()]) if where.size else 0.0
+                x[i] = (y[i] - rest) / F[int(self._diagonal[i])]
+            out = ca.SX.zeros(n)
+            out[self.column_order.tolist()] = x
+            return out
         # A^T = P_c U^T L^T P_r: U^T y = (b in column order), L^T x = y, then rows back
-        y = [b[int(c)] for c in self.column_order]
+        y = b[self.column_order.tolist()]
         for i in range(n):  # U^T is lower triangular: column i of U is row i of U^T
-            y[i] = y[i] / rows[i][i]
-            for j in rows[i]:
-                if j > i:
-                    y[j] = y[j] - rows[i][j] * y[i]
+            y[i] = y[i] / F[int(self._diagonal[i])]
+            where, columns = self._upper[i]
+            if where.size:
+                y[columns.tolist()] = y[columns.tolist()] - F[where.tolist()] * y[i]
         for i in reversed(range(n)):  # L^T is upper triangular (unit diagonal)
-            for j in rows[i]:
-                if j < i:
-                    y[j] = y[j] - rows[i][j] * y[i]
-        out = [None] * n
-        for k, r in enumerate(self.row_order):
-            out[int(r)] = y[k]
-        return ca.vertcat(*out)
+            where, columns = self._lower[i]
+            if where.size:
+                y[columns.tolist()] = y[columns.tolist()] - F[where.tolist()] * y[i]
+        out = ca.SX.zeros(n)
+        out[self.row_order.tolist()] = y
+        return out
