@@ -160,10 +160,11 @@ def ratio_to_rk4(result: dict) -> dict:
 
 
 def markdown(results: list[dict], args, mujoco_version: str | None) -> str:
+    mujoco = (f"MuJoCo {mujoco_version}, CPU of its own loop (`mj_step(m, d, nstep)`), and in "
+              "brackets of a Python loop copying the centres of mass after each step"
+              if mujoco_version else "MuJoCo not installed: hexapod alone")
     lines = [f"Target: relative position error {TARGET:g} over the span; CPU times best of "
-             f"{args.repeat}; MuJoCo {mujoco_version or 'not installed'}, CPU of its own loop "
-             "(`mj_step(m, d, nstep)`), and in brackets of a Python loop copying the centres "
-             "of mass after each step.", "",
+             f"{args.repeat}; {mujoco}.", "",
              "| problem | bodies | library | method | CPU/step ms (steps) | error at setting "
              "| CPU to 1e-6 s | rungs |", "| --- | ---: | --- | --- | ---: | ---: | ---: | ---: |"]
     for r in results:
