@@ -142,10 +142,32 @@ def pinocchio_motion(model: hx.Model, result: hx.InverseResult, robot: Robot,
     return q, v, a, weights
 
 
-def _least_norm(robot: Robot, tau0, J, down, weights) -> np.ndarray:
+@dataclass
+class Stance:
+    """The feet down at one sample, from the gait's schedule (part of the motion, as the
+    weights: computed before the timing)."""
+
+    down: np.ndarray  # the feet carrying a load, in contact order
+    loaded: set  # the same, as a set
+    weights: np.ndarray  # their weights
+    rows: np.ndarray  # their weights, each repeated for the three rows of its foot
+    frames: list[int]  # their foot frames
+
+
+def schedule(weights: np.ndarray, foot_frame: list[int]) -> list[Stance]:
+    """The feet down at every sample, from their weights (N, C)."""
+    out = []
+    for w in weights:
+        down = np.flatnonzero(w > NO_LOAD)
+        out.append(Stance(down, set(down.tolist()), w[down], np.repeat(w[down], 3),
+                          [foot_frame[i] for i in down.tolist()]))
+    return out
+
+
+def _least_norm(robot: Robot, tau0, J, stance: Stance) -> np.ndarray:
     """The least ``sum_k |f_k|^2 / w_k`` with ``J_b^T f = tau_0[:6]``."""
     Jb = J[:, :6]
-    WJ = np.repeat(weights[down], 3)[:, None] * Jb
+    WJ = stance.rows[:, None] * Jb
     return WJ @ np.linalg.solve(Jb.T @ WJ, tau0[:6])
 
 
@@ -154,10 +176,10 @@ def _cross(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     return x[:, [1, 2, 0]] * y[:, [2, 0, 1]] - x[:, [2, 0, 1]] * y[:, [1, 2, 0]]
 
 
-def _min_wrench(robot: Robot, tau0, J, down, weights) -> np.ndarray:
+def _min_wrench(robot: Robot, tau0, J, stance: Stance) -> np.ndarray:
     """hexapod's least-wrench policy (module docstring), from ``data.f`` of the last RNEA: per
     foot ``H f - g`` of its leg's wrenches, then the balance rows by their multipliers."""
-    data, scale = robot.data, 1.0 / robot.length**2
+    data, scale, down = robot.data, 1.0 / robot.length**2, stance.down
     wrench = np.array([x.vector for x in data.f])  # local frames, about the joint origins
     pose = np.array([x.homogeneous for x in data.oMi])
     ids = robot.chain[down].reshape(-1)  # the stance legs' joints, foot by foot
@@ -170,7 +192,7 @@ def _min_wrench(robot: Robot, tau0, J, down, weights) -> np.ndarray:
     d = (np.repeat(foot, links, axis=0) - origin)
     g = (force + scale * _cross(moment, d)).reshape(s, links, 3).sum(axis=1)
     dd = (d[:, :, None] * d[:, None, :]).reshape(s, links, 3, 3).sum(axis=1)
-    diagonal = links + 1.0 / weights[down] + scale * np.trace(dd, axis1=1, axis2=2)
+    diagonal = links + 1.0 / stance.weights + scale * np.trace(dd, axis1=1, axis2=2)
     H = diagonal[:, None, None] * np.eye(3) - scale * dd
     Hinv = np.linalg.inv(H)
     Jb = J[:, :6]
@@ -206,15 +228,15 @@ def run_pipeline(robot: Robot, q, v, a, weights, policy: str = "least-norm",
     fext = pin.StdVec_Force()
     fext.extend([pin.Force.Zero() for _ in range(pm.njoints)])
     nothing, zero = pin.Force.Zero(), np.zeros(3)
+    feet_down = schedule(weights, robot.foot_frame)
     begun = time.process_time()
     for k in range(n):
-        down = np.flatnonzero(weights[k] > NO_LOAD)
-        loaded = set(down.tolist())
+        stance = feet_down[k]
+        down = stance.down
         tau0 = pin.rnea(pm, data, q[k], v[k], a[k]).copy()
         pin.computeJointJacobians(pm, data, q[k])
-        J = np.vstack([pin.getFrameJacobian(pm, data, robot.foot_frame[i], frame)[:3]
-                       for i in down])
-        f = share(robot, tau0, J, down, weights[k]) if forces is None \
+        J = np.vstack([pin.getFrameJacobian(pm, data, i, frame)[:3] for i in stance.frames])
+        f = share(robot, tau0, J, stance) if forces is None \
             else forces[k, down].reshape(-1)
         ground[k, down] = f.reshape(-1, 3)
         if not wrenches:
@@ -222,8 +244,9 @@ def run_pipeline(robot: Robot, q, v, a, weights, policy: str = "least-norm",
         else:
             for i in range(feet):  # the foot's force at the foot, in its joint's frame
                 jid = int(robot.foot_joint[i])
-                fext[jid] = robot.foot_placement[i].act(pin.Force(
-                    data.oMi[jid].rotation.T @ ground[k, i], zero)) if i in loaded else nothing
+                fext[jid] = nothing if i not in stance.loaded else \
+                    robot.foot_placement[i].act(pin.Force(data.oMi[jid].rotation.T @ ground[k, i],
+                                                          zero))
             out = pin.rnea(pm, data, q[k], v[k], a[k], fext)
             joint_wrenches[k] = np.array([x.vector for x in data.f])[robot.joints]
         tau[k], base[k] = out[robot.v_index], out[:6]
