@@ -24,7 +24,7 @@ Protocol
   engineer's pipeline, which the ratios are taken against) and ``min-wrench`` (hexapod's policy
   reproduced, the check of agreement). Per sample: the median of ``--repeats`` passes over the
   samples after a warm-up pass, ``time.process_time`` of the loop.
-* Targets (issue 36): hexapod, which always returns every joint wrench, at most 2 times the
+* Targets: hexapod, which always returns every joint wrench, at most 2 times the
   Pinocchio pipeline that also returns every joint wrench, compiled (moonshot: 1 time), at most
   5 times interpreted; the gait laws at most 20 us a sample. Both ratios are printed, against
   the torques-only pipeline as well.
@@ -327,7 +327,6 @@ def figure(figures: dict) -> bytes:
         ax.set_yticks(np.arange(len(data)), names, fontsize=8)
         ax.invert_yaxis()
         ax.set_xscale("log")
-        ax.set_xlim(right=2.0 * max(r["us"] for r in data))  # room for the labels
         wrenches = (figures.get("pinocchio") or {}).get(variant_name("least-norm", True), {})
         if n in wrenches:
             for key, style in (("compiled", "--"), ("interpreted", ":")):
@@ -337,6 +336,8 @@ def figure(figures: dict) -> bytes:
                    label=f"gait laws target {TARGETS['laws_us']:g} us")
         ax.set_title(f"{n} samples over one stride", fontsize=9)
         ax.grid(True, axis="x", which="both", linewidth=0.4, alpha=0.6)
+    every = [r["us"] for r in rows(figures)] + [TARGETS["laws_us"]]
+    axes[0].set_xlim(0.5 * min(every), 2.0 * max(every))  # room for the labels
     axes[0].legend(fontsize=7, loc="lower right")
     axes[-1].set_xlabel("CPU time per sample (us, log scale)")
     fig.tight_layout()

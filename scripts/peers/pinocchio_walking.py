@@ -14,7 +14,8 @@ trunk's pose, velocity and acceleration from hexapod's own ``q``, ``v``, ``v_dot
 free-flyer convention: position and quaternion ``x, y, z, w`` of the base frame, velocity and
 acceleration in the base frame, the acceleration the rate of that velocity), the 36 joint
 angles, rates and accelerations from the gait's laws (the driver laws: the angles count from
-the rest pose in both libraries), and each foot's load-sharing weight ``w`` (0 in swing).
+the rest pose in both libraries), and each foot's load-sharing weight ``w`` (0 in swing) with
+the list of the feet down at each sample (the gait's schedule).
 
 The pipeline per sample, in Python:
 
@@ -26,12 +27,13 @@ The pipeline per sample, in Python:
 
    * ``least-norm``: the weighted least-norm solution, least ``sum_k |f_k|^2 / w_k``, the feet of
      weight zero left out (every foot down when all weigh zero, hexapod's rule): the force part
-     of hexapod's policy, the usual choice of a Pinocchio script;
+     of hexapod's policy, and a common choice where the distribution is not the point;
    * ``min-wrench``: hexapod's default policy itself, least ``sum_j |F_j|^2 + |T_j / l|^2`` over
      every joint's wrench plus ``sum_k |f_k|^2 / w_k``: each joint's wrench is ``data.f`` of step
      1 minus its foot's force carried to the joint origin (world axes: norms do not depend on
      axes), so the objective is one 3 x 3 block per foot; ``l`` is hexapod's characteristic
-     length. It agrees with hexapod to round-off, and costs reading every ``data.f``;
+     length. It agrees with hexapod to round-off (so the numbers of both can be compared
+     exactly), and costs reading every ``data.f`` and joint placement;
 
 4. ``tau = tau_0[6:] - J_j^T f``; with every joint wrench, ``pinocchio.rnea`` again with the
    feet's forces as ``fext`` (each tarsus joint's local frame, about its origin), whose ``tau``
@@ -49,7 +51,6 @@ import numpy as np
 import hexapod as hx
 from hexapod.scene import Contact, Fixed, urdf_text
 
-POLICIES = ("least-norm", "min-wrench")
 #: Below this weight a foot carries nothing (hexapod's threshold for its policy).
 NO_LOAD = 1e-12
 
