@@ -508,6 +508,9 @@ def report_files(model: Model, result: InverseResult, balance: BodyBalance, run:
     workers : int
         Processes drawing the figures (:func:`hexapod.output.figures.render_figures`): more
         than one forks this process that many times, on systems that fork; the same bytes.
+    leg_figures : bool
+        For a robot, also one sheet per leg of its joints' forces, moments and efforts (the
+        components and the power), beside the sheets that put the legs side by side.
 
     Returns
     -------
