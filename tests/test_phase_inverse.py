@@ -15,7 +15,7 @@ import pytest
 
 import hexapod as hx
 from hexapod._support.compiled import compiler
-from hexapod.algorithms import phase_inverse
+from hexapod.algorithms import phase_inverse, phase_plan
 from hexapod.algorithms.inverse import inverse_dynamics
 
 from mechanisms import four_bar
@@ -112,6 +112,25 @@ def test_the_walking_hexapod_agrees_across_a_touch_down():
     assert fields["exact_samples"] == 1
     stance = exact.ground_status != "swing"
     assert stance.sum(axis=1)[0] == 3 and stance.sum(axis=1)[-1] == 6
+
+
+def test_the_expanded_step_gives_the_numbers_of_the_graph_it_expands(monkeypatch):
+    """A plan that has evaluated enough samples runs its step expanded into one SX Function
+    (phase_plan.EXPAND_AFTER): the same operations, so the same numbers, to round-off."""
+    model, exact = scene_model("hexapod"), saddle("hexapod", *TOUCH_DOWN)
+    monkeypatch.setattr(phase_plan, "EXPAND_AFTER", 10**9)
+    graph = phase(model, exact.times)
+    monkeypatch.setattr(phase_plan, "EXPAND_AFTER", 0)
+    expanded = phase(model, exact.times)
+    assert any(key[2] for plan in _plans(model) for key in plan.__dict__.get("_mapped", {}))
+    for key in ("force", "torque", "q", "v", "v_dot", "ground"):
+        scale = max(np.nanmax(np.abs(graph[key])), 1.0)
+        assert np.nanmax(np.abs(expanded[key] - graph[key])) <= 1e-14 * scale, key
+
+
+def _plans(model) -> list:
+    """The phase plans a model has built."""
+    return [v for v in model._built.values() if isinstance(v, phase_plan.PhasePlan)]
 
 
 def test_a_change_of_rank_is_redone_exactly(monkeypatch):

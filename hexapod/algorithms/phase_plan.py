@@ -55,6 +55,12 @@ NEWTON_STEPS = 3
 #: ... and the steps taken instead once a sample's positions did not converge in those (samples
 #: a hundredth of a second apart); each step contracts the error by a factor of about 100 there.
 MORE_NEWTON_STEPS = 6
+#: Samples after which a plan evaluates its step expanded into one SX Function (when it is not
+#: compiled): one loop of CasADi's virtual machine instead of an MX graph calling some thirty
+#: Functions, a sixth less time a sample (the walking robot: 1.57 against 1.90 ms) and the
+#: same numbers. The expansion costs about what 500 samples gain, so a plan expands once the
+#: samples it has evaluated and those it is asked for reach this.
+EXPAND_AFTER = 1_000
 #: ``checks`` entries, in order.
 CHECKS = ("position", "kept_velocity", "kept_acceleration", "left_velocity",
           "left_acceleration", "outside", "sigma")
@@ -143,12 +149,14 @@ class PhasePlan:
 
     # ---------------------------------------------------------------- one sample
 
-    def step(self, newton: int = NEWTON_STEPS) -> ca.Function:
-        """The Function of one sample with ``newton`` Newton steps (built once per count)."""
+    def step(self, newton: int = NEWTON_STEPS, expanded: bool = False) -> ca.Function:
+        """The Function of one sample with ``newton`` Newton steps (built once per count), or
+        the same expanded into one SX Function (see :data:`EXPAND_AFTER`)."""
         cache = self.__dict__.setdefault("_steps", {})
-        if newton not in cache:
-            cache[newton] = self._build_step(newton)
-        return cache[newton]
+        if (newton, expanded) not in cache:
+            cache[newton, expanded] = (self.step(newton).expand() if expanded else
+                                       self._build_step(newton))
+        return cache[newton, expanded]
 
     @property
     def function(self) -> ca.Function:
@@ -194,10 +202,13 @@ class PhasePlan:
         """The step mapped over ``n`` samples (each from the one before), built once per plan,
         and its buffer, made once per workspace ``data``."""
         cache = self.__dict__.setdefault("_mapped", {})
-        if (n, newton) not in cache:
-            cache[n, newton] = self.step(newton).mapaccum("phase_steps", n)
-        return kept(data, ("phase-buffer", id(self), n, newton),
-                    lambda: InPlaceFunction(cache[n, newton]))
+        done = self.__dict__.get("_evaluated", 0)
+        self._evaluated = done + n
+        expanded = not self.to_c and done + n >= EXPAND_AFTER
+        key = (n, newton, expanded)
+        if key not in cache:
+            cache[key] = self.step(newton, expanded).mapaccum("phase_steps", n)
+        return kept(data, ("phase-buffer", id(self), *key), lambda: InPlaceFunction(cache[key]))
 
     def evaluate(self, data: Data, x0, h, w, wd, wdd, feet, mask, newton: int = NEWTON_STEPS):
         """The samples of one run: ``x0`` the state ``[q; v; v_dot]`` of the sample before,
