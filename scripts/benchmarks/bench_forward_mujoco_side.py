@@ -10,7 +10,7 @@ import time
 
 import numpy as np
 from bench_forward_problems import Reference
-from bench_forward_report import fmt
+from bench_forward_report import fmt, method_row
 from bench_forward_runs import TARGET, Run
 
 import hexapod as hx
@@ -169,16 +169,10 @@ def markdown(results: list[dict], args, mujoco_version: str | None) -> str:
              "| CPU to 1e-6 s | rungs |", "| --- | ---: | --- | --- | ---: | ---: | ---: | ---: |"]
     for r in results:
         for method, x in r["methods"].items():
-            rep = x["representative"]
-            steps = f" ({rep['steps']})" if rep["status"] == "finished" else f" ({rep['status']})"
-            reach = f"{x['time_to_target_qualifier']} {fmt(x['time_to_target_s'])}".strip()
-            if x["library"] == "mujoco" and np.isfinite(x.get("time_to_target_recorded_s",
-                                                              np.nan)):
-                reach += f" ({fmt(x['time_to_target_recorded_s'])})"
-            lines.append(f"| {r['problem']['key']} | {r['bodies']} | {x['library']} | {method} "
-                         f"| {fmt(x['cpu_per_step_ms'])}{steps} | {fmt(rep['error'], 2)} "
-                         f"| {reach if x['time_to_target_qualifier'] else '-'} "
-                         f"| {len(x['rungs'])} |")
+            recorded = x.get("time_to_target_recorded_s", np.nan)
+            note = (f" ({fmt(recorded)})" if x["library"] == "mujoco" and np.isfinite(recorded)
+                    else "")
+            lines.append(method_row(r, method, x, note))
     lines += ["", "| problem | span s | initial positions | initial com accelerations "
               "| initial angular accelerations | reference vs MuJoCo RK4 at h = "
               f"{args.check_step * 1e6:g} us | hexapod best / MuJoCo RK4, time to 1e-6 "

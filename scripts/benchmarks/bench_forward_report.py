@@ -72,6 +72,18 @@ def ratios(result: dict) -> dict:
     return out
 
 
+def method_row(r: dict, method: str, x: dict, reach_note: str = "") -> str:
+    """One method's row of the table: cost per step and steps at the representative setting,
+    its error there, CPU time to the target (with ``reach_note`` after it) and rungs run."""
+    rep = x["representative"]
+    steps = f" ({rep['steps']})" if rep["status"] == "finished" else f" ({rep['status']})"
+    reach = f"{x['time_to_target_qualifier']} {fmt(x['time_to_target_s'])}".strip()
+    return (f"| {r['problem']['key']} | {r['bodies']} | {x['library']} | {method} "
+            f"| {fmt(x['cpu_per_step_ms'])}{steps} | {fmt(rep['error'], 2)} "
+            f"| {reach + reach_note if x['time_to_target_qualifier'] else '-'} "
+            f"| {len(x['rungs'])} |")
+
+
 def markdown(results: list[dict], exponents: dict, args) -> str:
     lines = [f"Target: relative position error {TARGET:g}; representative setting: rtol = "
              f"{REPRESENTATIVE_RTOL:g} (adaptive), h = {REPRESENTATIVE_STEP * 1e3:g} ms (fixed); "
@@ -79,14 +91,7 @@ def markdown(results: list[dict], exponents: dict, args) -> str:
              "| problem | bodies | library | method | CPU/step ms (steps) | error at setting "
              "| CPU to 1e-6 s | rungs |", "| --- | ---: | --- | --- | ---: | ---: | ---: | ---: |"]
     for r in results:
-        for method, x in r["methods"].items():
-            rep = x["representative"]
-            steps = f" ({rep['steps']})" if rep["status"] == "finished" else f" ({rep['status']})"
-            reach = f"{x['time_to_target_qualifier']} {fmt(x['time_to_target_s'])}".strip()
-            lines.append(f"| {r['problem']['key']} | {r['bodies']} | {x['library']} | {method} "
-                         f"| {fmt(x['cpu_per_step_ms'])}{steps} | {fmt(rep['error'], 2)} "
-                         f"| {reach if x['time_to_target_qualifier'] else '-'} "
-                         f"| {len(x['rungs'])} |")
+        lines += [method_row(r, method, x) for method, x in r["methods"].items()]
     lines += ["", "| problem | assemble s | warm-up s | reference steps | interpolation check "
               "| Exudyn initial accelerations | reference vs Exudyn tight | Exudyn explicit "
               "| time to 1e-6 hexapod/Exudyn | per step GA/GA | per step cheapest |",
