@@ -34,15 +34,24 @@ def _driven(model) -> np.ndarray:
     return np.array(sorted({d.law for d in model.drivers if d.law >= 0}), dtype=int)
 
 
-def _batches(model) -> list[tuple[np.ndarray, list]]:
-    """The model's laws grouped for evaluation: the indices and laws of each batch (the laws of
-    one class and one :meth:`~hexapod.scene.laws.Law.batch_key`; a law without one alone)."""
+def batches(laws) -> list[tuple[np.ndarray, list]]:
+    """``laws`` grouped for evaluation: the indices and laws of each batch (the laws of one
+    class and one :meth:`~hexapod.scene.laws.Law.batch_key`; a law without one alone)."""
     groups: dict = {}
-    for i, law in enumerate(model.laws):
+    for i, law in enumerate(laws):
         key = law.batch_key()
         groups.setdefault(i if key is None else (type(law), key), []).append(i)
-    return [(np.array(indices), [model.laws[i] for i in indices])
-            for indices in groups.values()]
+    return [(np.array(indices), [laws[i] for i in indices]) for indices in groups.values()]
+
+
+def evaluate_together(laws, t) -> np.ndarray:
+    """Values, rates and accelerations of ``laws`` at ``t``, (3, len(laws), *t.shape), each
+    batch in one call (see :func:`batches`)."""
+    t = np.asarray(t, dtype=float)
+    out = np.empty((3, len(laws)) + t.shape)
+    for indices, batch in batches(laws):
+        out[:, indices] = type(batch[0]).evaluate_batch(batch, t)
+    return out
 
 
 def evaluate_laws(model, t: np.ndarray, w: np.ndarray, wd: np.ndarray, wdd: np.ndarray) -> None:
@@ -56,7 +65,7 @@ def evaluate_laws(model, t: np.ndarray, w: np.ndarray, wd: np.ndarray, wdd: np.n
         :data:`FASTEST_DRIVER`; the message names the law and the time.
     """
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        for indices, laws in model.built_once(("law batches",), _batches):
+        for indices, laws in model.built_once(("law batches",), lambda m: batches(m.laws)):
             try:
                 if len(laws) == 1:
                     w[indices[0]], wd[indices[0]], wdd[indices[0]] = laws[0].evaluate(t)

@@ -25,8 +25,8 @@ import hashlib
 
 import numpy as np
 
+from hexapod.model.law_values import evaluate_together
 from hexapod.model.model import Model
-from hexapod.scene.laws import Law
 from hexapod.scene.laws.table import LawTable
 
 #: The table's tolerance, relative to the run's relative tolerance.
@@ -59,11 +59,6 @@ def _period(laws) -> float | None:
     return longest if all(abs(r - round(r)) <= 1e-12 * r for r in ratios) else None
 
 
-def _exact(laws, times: np.ndarray) -> np.ndarray:
-    """Values, rates and accelerations of ``laws`` at ``times``: (3, k, N)."""
-    return Law.evaluate_batch(laws, times)
-
-
 def _tabulate(model: Model, costly: list[int], t0: float, t_end: float, tolerance: float):
     laws = [model.laws[i] for i in costly]
     period = _period(laws)
@@ -73,11 +68,11 @@ def _tabulate(model: Model, costly: list[int], t0: float, t_end: float, toleranc
               else None}
     intervals = FIRST_INTERVALS
     times = np.linspace(t0, t0 + span, intervals + 1)
-    table = _exact(laws, times)
+    table = evaluate_together(laws, times)
     errors = None
     while True:
         middle = 0.5 * (times[:-1] + times[1:])
-        exact = _exact(laws, middle)
+        exact = evaluate_together(laws, middle)
         scale = np.maximum(np.abs(table).max(axis=2), np.abs(exact).max(axis=2))  # (3, k)
         interpolated = LawTable(times, table).evaluate(middle)
         previous, errors = errors, (np.abs(interpolated - exact).max(axis=2)
