@@ -148,14 +148,9 @@ class StepTerms:
     def forces(self) -> ca.Function:
         """``(q, v, w, wd, wdd) -> (gamma, Q, offset)``: ``offset`` is the policy's constant
         term, the wrenches of the force elements acting across joints (6 per block)."""
-        model, s = self.model, self.model._sym
+        model = self.model
         q, v, w, wd, wdd = self.q, self.v, self.w, self.wd, self.wdd
-        Pv = ca.jtimes(s.phi, q, s.qdot)  # Phi_v v, with B(q) inside
-        gamma = -ca.jtimes(Pv, q, s.qdot)
-        if model.n_w:
-            Phi_t = ca.jtimes(s.phi, w, wd)
-            gamma = (gamma - 2 * ca.jtimes(Pv, w, wd) - ca.jtimes(Phi_t, w, wd)
-                     - ca.jtimes(s.phi, w, wdd))
+        gamma = _call(model.gamma, q=q, v=v, w=w, wd=wd, wdd=wdd)
         Q = _call(model.Q, q=q, v=v, w=w)
         offset = ca.SX.zeros(6 * self.owners)
         if model.Q_across is not None:

@@ -405,10 +405,12 @@ class Model:
         """``gamma(q, v, w, wd, wdd)``: right-hand side of ``Phi_v v_dot = gamma``.
 
         ``gamma = -[d(Phi_v v)/dq] B v - 2 d(Phi_v v)/dt - Phi_tt``, with ``B(q)`` inside the
-        derivative (``q_dot = B(q) v``: Euler parameters make ``n_q != n_v``).
+        derivative (``q_dot = B(q) v``: Euler parameters make ``n_q != n_v``). ``Phi_v v`` is
+        formed as the derivative of ``phi`` along ``q_dot`` (forward mode), not as the product
+        of the Jacobian's expression with ``v``: half the operations.
         """
         s = self._sym
-        Pv = ca.mtimes(self._Phi_v_expr, s.v)
+        Pv = ca.jtimes(s.phi, s.q, s.qdot)
         expr = -ca.jtimes(Pv, s.q, s.qdot)
         if self.n_w > 0:
             Phi_t = self._time_derivative
