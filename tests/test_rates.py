@@ -141,3 +141,28 @@ def test_compiled_projection_equals_the_exact_one(case):
     # far from the constraints two Newton steps are not enough: refused, not returned
     far = model.integrate(q, 0.3 * rng.normal(size=model.n_v))
     assert compiled_projection(model, data.independent_rows)(0.2, far, v) is None
+
+
+def test_kernels_compiled_to_c_give_the_interpreters_numbers_and_are_kept(tmp_path,
+                                                                         monkeypatch):
+    """With compiled execution the integrators' kernels are C code from the cache: a run gives
+    the interpreter's states (the same operations: to round-off), and a later model of the same
+    scene loads the libraries instead of compiling them again (the laws are inputs: the front
+    leg's tabulated twin shares them)."""
+    from hexapod._support import cache, compiled
+
+    scene = hx.load_scene("front-leg")
+    options = dict(method="rk4", step=2e-3, t0=0.1)
+    interpreted = hx.simulate(hx.assemble(scene), 0.12, **options)
+    with hx.executing(compiled=True, cache=tmp_path):
+        first = hx.simulate(hx.assemble(scene), 0.12, **options)
+        kept = {entry.what for entry in cache.entries(describe=True)}
+        assert {"forward rates, compiled -O2", "forward project, compiled -O2"} <= kept
+
+        def no_compiler(*args):
+            raise AssertionError("a kernel was compiled again")
+
+        monkeypatch.setattr(compiled, "_compile", no_compiler)
+        again = hx.simulate(hx.assemble(scene), 0.12, **options)
+    assert np.abs(first.q - interpreted.q).max() <= 1e-12
+    assert np.array_equal(again.q, first.q)

@@ -168,6 +168,18 @@ def compiled(key: str | None, build: Callable[[], ca.Function], *,
         return function
 
 
+def compiled_graph(function: ca.Function, kind: str, what: str = "") -> ca.Function:
+    """``function`` compiled (see :func:`compiled`), its library kept under the hash of its
+    serialized graph: Functions that depend on more than the model's content (a plan's rows
+    and pivots, a kernel's rows), or on less (not on the laws' numbers, which are inputs),
+    share a library exactly when they are the same Function."""
+    import hashlib
+
+    graph = hashlib.sha256(function.serialize().encode("utf-8")).hexdigest()
+    return compiled(f"{kind}/{function.name()}/{graph}", lambda: function,
+                    what=what or f"{kind} {function.name()}")
+
+
 class CompileError(Exception):
     """The C compiler failed (its last lines of output in the message)."""
 

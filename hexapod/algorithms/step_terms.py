@@ -37,13 +37,12 @@ of the operations.
 
 from __future__ import annotations
 
-import hashlib
 from functools import cached_property
 
 import casadi as ca
 import numpy as np
 
-from hexapod._support.compiled import compiled
+from hexapod._support.compiled import compiled_graph
 from hexapod._support.fastcall import FastFunction
 from hexapod.algorithms.step import equilibrated, mass_factors, retract, sparse_dm
 from hexapod.model.data import kept
@@ -403,10 +402,7 @@ def sx_function(name: str, inputs, outputs, to_c: bool, *names) -> ca.Function:
     serialized graph (a plan's Functions depend on its rows and pivots as well as on the
     model)."""
     function = ca.Function(name, inputs, outputs, *names)
-    if not to_c:
-        return function
-    graph = hashlib.sha256(function.serialize().encode("utf-8")).hexdigest()
-    return compiled(f"phase/{name}/{graph}", lambda: function, what=f"phase path {name}")
+    return compiled_graph(function, "phase", f"phase path {name}") if to_c else function
 
 
 def _normal_solve(m: int):

@@ -238,8 +238,14 @@ def inverse_arguments(parser: argparse.ArgumentParser, method_help: str) -> None
                         help="axes of the wrench components (default: the child's joint frame)")
     parser.add_argument("--method", choices=("auto", "tree", "phase", "saddle"), default="auto",
                         help=method_help)
+    compile_argument(parser, "the inverse dynamics")
+
+
+def compile_argument(parser: argparse.ArgumentParser, what: str) -> None:
+    """``--compile yes|no``: ``what`` evaluated as compiled C code or by CasADi's virtual
+    machine (the execution setting the command runs in)."""
     parser.add_argument("--compile", choices=("yes", "no"), default="no",
-                        help="evaluate the inverse dynamics as C code compiled by the system's C "
+                        help=f"evaluate {what} as C code compiled by the system's C "
                         "compiler (kept in the cache, so later runs of the model load it) "
                         "rather than by CasADi's virtual machine (default no: the same numbers; "
                         "compiled code pays on long runs, see docs/cache.md)")

@@ -9,6 +9,7 @@ from hexapod.cli.common import (
     MAX_TIME,
     at_least,
     base_argument,
+    compile_argument,
     ground_arguments,
     jsonable,
     limit_arguments,
@@ -114,6 +115,8 @@ def add_arguments(parser) -> None:
                         "that cost far more than a table, a gait's inverse kinematics, are "
                         "tabulated once and interpolated to a hundredth of --rtol; stats.json "
                         "says how, under options.laws)")
+    compile_argument(parser, "the integrators' kernels (the right-hand side and the "
+                     "projection, one per set of feet down)")
     limit_arguments(parser, steps=True)
     ground_arguments(parser)
     base_argument(parser)

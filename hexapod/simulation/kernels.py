@@ -32,6 +32,8 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
+from hexapod._support.compiled import compiled_graph
+from hexapod._support.execution import current
 from hexapod._support.fastcall import FastFunction
 from hexapod.algorithms.step import equilibrated, mass_factors, newton, solve_kept
 from hexapod.model.model import Model
@@ -61,9 +63,10 @@ class CompiledRates:
     def __init__(self, model: Model, rows: np.ndarray):
         self.model = model
         self.rows = np.asarray(rows, dtype=int)
-        # the Function once per model and row set; the buffers are this object's (a run's)
-        self.function = model.built_once(("rates", tuple(self.rows.tolist())),
-                                         lambda m: self._build())
+        # the Function once per model, row set and execution; the buffers are this object's
+        to_c = current().compiled
+        self.function = model.built_once(("rates", tuple(self.rows.tolist()), to_c),
+                                         lambda m: _evaluated(self._build(), to_c))
         self._fast = FastFunction(self.function)
         self._args = [n for n in ("q", "v", "w", "wd", "wdd") if n in ("q", "v") or model.n_w]
 
@@ -154,8 +157,9 @@ class CompiledProjection:
 
     def __init__(self, model: Model, rows: np.ndarray, newton: int = 2, tol: float = 1e-12):
         self.model, self.rows, self.newton, self.tol = model, np.asarray(rows, int), newton, tol
-        self.function = model.built_once(("projection", tuple(self.rows.tolist()), newton),
-                                         lambda m: self._build())
+        to_c = current().compiled
+        self.function = model.built_once(("projection", tuple(self.rows.tolist()), newton, to_c),
+                                         lambda m: _evaluated(self._build(), to_c))
         self._fast = FastFunction(self.function)
         self._args = ["q", "v"] + (["w", "wd"] if model.n_w else [])
 
@@ -205,6 +209,14 @@ class CompiledProjection:
         if not (phi_error[0] <= self.tol and rate_error[0] <= RESIDUAL_TOLERANCE):
             return None
         return position, velocity
+
+
+def _evaluated(function: ca.Function, to_c: bool) -> ca.Function:
+    """``function`` as the execution setting evaluates it: compiled to C (the library kept in
+    the cache under its graph's hash: the laws are inputs, so a kernel serves any laws) or by
+    CasADi's virtual machine."""
+    return compiled_graph(function, "forward", f"forward {function.name()}") if to_c \
+        else function
 
 
 def compiled_projection(model: Model, rows: np.ndarray) -> CompiledProjection:
