@@ -18,6 +18,7 @@ the time and the cause, never an exception escaping :meth:`step`.
 
 from __future__ import annotations
 
+from collections import deque
 from dataclasses import asdict, dataclass
 from functools import cached_property
 from typing import ClassVar
@@ -29,7 +30,7 @@ from hexapod.algorithms.kinematics import assemble_positions, solve_velocities
 from hexapod.errors import HexapodError, IntegrationError
 from hexapod.model.model import Model
 from hexapod.simulation.integrators.interpolants import HermiteInterpolant, Interpolant
-from hexapod.simulation.integrators.singular import SingularPoses
+from hexapod.simulation.integrators.singular import FORESIGHT_STEPS, SingularPoses
 from hexapod.simulation.integrators.tolerances import (
     KIND_OF_UNIT,
     absolute_tolerances,
@@ -162,6 +163,7 @@ class Integrator(SingularPoses):
         self._crossing_start = self.t0  # and the time
         self._crossing_cap = np.inf  # the longest step of the crossing under way
         self._accepted_step = 0.0  # the last accepted step's length (s)
+        self._recent_steps: deque[float] = deque(maxlen=FORESIGHT_STEPS)  # and those before
         self._kinetic_peak = 0.0  # the largest kinetic energy of the run so far (J)
         q, v = self._project(self.t0, q0, v0)  # guesses of None: the scene's initial state
         self.t, self.q, self.v = self.t0, q, v
@@ -235,6 +237,7 @@ class Integrator(SingularPoses):
         if not self.counts_own_steps:
             self.counters.steps += 1
         self._accepted_step = self.t - t_before
+        self._recent_steps.append(self._accepted_step)
         if not np.all(np.isfinite(self.q)) or not np.all(np.isfinite(self.v)):
             self.status = "failed"
             self.message = (f"{self.name}: non-finite state at t = {self.t:.6g} s (the step is "
