@@ -44,13 +44,16 @@ def batches(laws) -> list[tuple[np.ndarray, list]]:
     return [(np.array(indices), [laws[i] for i in indices]) for indices in groups.values()]
 
 
-def evaluate_together(laws, t) -> np.ndarray:
+def evaluate_together(laws, t, grouped: list | None = None) -> np.ndarray:
     """Values, rates and accelerations of ``laws`` at ``t``, (3, len(laws), *t.shape), each
-    batch in one call (see :func:`batches`)."""
+    batch in one call (``grouped``: their :func:`batches`, when already made)."""
     t = np.asarray(t, dtype=float)
     out = np.empty((3, len(laws)) + t.shape)
-    for indices, batch in batches(laws):
-        out[:, indices] = type(batch[0]).evaluate_batch(batch, t)
+    for indices, batch in batches(laws) if grouped is None else grouped:
+        if len(batch) == 1:  # most laws: their own evaluation, no batch array
+            out[0, indices[0]], out[1, indices[0]], out[2, indices[0]] = batch[0].evaluate(t)
+        else:
+            out[:, indices] = type(batch[0]).evaluate_batch(batch, t)
     return out
 
 
@@ -65,17 +68,14 @@ def evaluate_laws(model, t: np.ndarray, w: np.ndarray, wd: np.ndarray, wdd: np.n
         :data:`FASTEST_DRIVER`; the message names the law and the time.
     """
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        for indices, laws in model.built_once(("law batches",), lambda m: batches(m.laws)):
-            try:
-                if len(laws) == 1:
-                    w[indices[0]], wd[indices[0]], wdd[indices[0]] = laws[0].evaluate(t)
-                else:
-                    w[indices], wd[indices], wdd[indices] = type(laws[0]).evaluate_batch(laws, t)
-            except ArithmeticError as error:  # Python's floats: 1 / 0, 10.0 ** 400
-                i = _culprit(indices, laws, t)
-                raise HexapodError(f"model '{model.name}': {law_name(model, i)} cannot be "
-                                   f"computed at t = {float(t.flat[0]):.6g} s: "
-                                   f"{_arithmetic(error)}") from None
+        try:
+            w[...], wd[...], wdd[...] = evaluate_together(
+                model.laws, t, model.built_once(("law batches",), lambda m: batches(m.laws)))
+        except ArithmeticError as error:  # Python's floats: 1 / 0, 10.0 ** 400
+            i = _culprit(model.laws, t)
+            raise HexapodError(f"model '{model.name}': {law_name(model, i)} cannot be "
+                               f"computed at t = {float(t.flat[0]):.6g} s: "
+                               f"{_arithmetic(error)}") from None
         if np.isfinite(w.sum() + wd.sum() + wdd.sum()):
             driven = model.built_once(("driven laws",), _driven)
             if not driven.size or np.abs(wd[driven]).max() <= FASTEST_DRIVER:
@@ -83,14 +83,14 @@ def evaluate_laws(model, t: np.ndarray, w: np.ndarray, wd: np.ndarray, wdd: np.n
         _refuse(model, t, w, wd, wdd)
 
 
-def _culprit(indices: np.ndarray, laws: list, t: np.ndarray) -> int:
-    """The index of the first law of a batch that cannot be evaluated alone at ``t``."""
-    for i, law in zip(indices, laws, strict=True):
+def _culprit(laws, t: np.ndarray) -> int:
+    """The index of the first law that cannot be evaluated alone at ``t``."""
+    for i, law in enumerate(laws):
         try:
             law.evaluate(t)
         except ArithmeticError:
-            return int(i)
-    return int(indices[0])
+            return i
+    return 0
 
 
 def _refuse(model, t: np.ndarray, w, wd, wdd) -> None:
