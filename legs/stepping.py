@@ -105,7 +105,8 @@ def chain_state(geometry: LegGeometry, angles: np.ndarray):
     before it, at joint angles (n, 6), in the leg's frame (the thorax-coxa point, trunk axes).
     Product of exponentials: each joint turns everything beyond it about its rest-pose axis
     and point, the proximal joint last; the transforms ``x -> A x + b`` of the joints up to
-    ``k`` are composed from the trunk outwards, their rotations as matrices (n, 3, 3)."""
+    ``k`` are composed from the trunk outwards, their rotations as matrices (3, 3, n: the
+    samples last, so that each product is a few long vector operations)."""
     rest_axes, rest_points = np.array(geometry.axes), np.array(geometry.points)
     K, K2 = _rodrigues(rest_axes)
     c, s = np.cos(angles).T, np.sin(angles).T  # (6, n): samples last, contiguous
