@@ -3,10 +3,10 @@
 An integrator asks for every law at every stage of every step. Most laws cost a microsecond;
 a law marked :attr:`~hexapod.scene.laws.Law.costly` (a walking leg's joint, whose value is the
 leg's inverse kinematics solved by Newton's method) costs milliseconds a call, more than the
-constrained step itself. Such laws are evaluated once, on a uniform grid over the run (one
-period when they repeat), and read by quintic Hermite interpolation of their values, rates and
-accelerations, all of them in one call (:class:`~hexapod.scene.laws.table.LawTable`: C2,
-exact at the grid's times).
+constrained step itself. Such laws are evaluated once, on a uniform grid over one period
+when they repeat (over the run otherwise), and read by quintic Hermite interpolation of their
+values, rates and accelerations, all of them in one call
+(:class:`~hexapod.scene.laws.table.LawTable`: C2, exact at the grid's times).
 
 **Accuracy.** The grid is halved until the interpolant agrees with the exact laws at the
 midpoint of every interval (where a Hermite interpolant's error is near its largest) to
@@ -39,14 +39,18 @@ MOST_INTERVALS = 2**15
 def tabulated_model(model: Model, t0: float, t_end: float,
                     tolerance: float) -> tuple[Model, dict | None]:
     """``model`` with its costly laws tabulated over ``[t0, t_end]`` to ``tolerance``, and
-    what was done (a dict for the run's record; None when no law is costly). Built once per
-    model, span and tolerance: a second run reuses the table and what the twin has built.
-    When no table reaches ``tolerance``, the model itself, and the record says why."""
+    what was done (a dict for the run's record; None when no law is costly). Laws that share
+    a period are tabulated over one period from 0 and repeat, whatever the run: the table is
+    built once per model and tolerance, and every run (a window of a long motion, a sweep of
+    starts) reuses it and what the twin has built. Other laws are tabulated over the run, once
+    per span. When no table reaches ``tolerance``, the model itself, and the record says why."""
     costly = [i for i, law in enumerate(model.laws) if law.costly]
     if not costly:
         return model, None
-    return model.built_once(("tabulated laws", float(t0), float(t_end), float(tolerance)),
-                            lambda m: _tabulate(m, costly, t0, t_end, tolerance))
+    period = _period([model.laws[i] for i in costly])
+    start, span = (0.0, period) if period is not None else (float(t0), float(t_end - t0))
+    return model.built_once(("tabulated laws", start, span, period, float(tolerance)),
+                            lambda m: _tabulate(m, costly, start, span, period, tolerance))
 
 
 def _period(laws) -> float | None:
@@ -59,15 +63,12 @@ def _period(laws) -> float | None:
     return longest if all(abs(r - round(r)) <= 1e-12 * r for r in ratios) else None
 
 
-def _tabulate(model: Model, costly: list[int], t0: float, t_end: float, tolerance: float):
+def _tabulate(model: Model, costly: list[int], start: float, span: float,
+              period: float | None, tolerance: float):
     laws = [model.laws[i] for i in costly]
-    period = _period(laws)
-    repeats = period is not None and t_end - t0 > period
-    span = period if repeats else t_end - t0
-    record = {"tabulated": len(laws), "tolerance": tolerance, "period_s": period if repeats
-              else None}
+    record = {"tabulated": len(laws), "tolerance": tolerance, "period_s": period}
     intervals = FIRST_INTERVALS
-    times = np.linspace(t0, t0 + span, intervals + 1)
+    times = np.linspace(start, start + span, intervals + 1)
     table = evaluate_together(laws, times)
     errors = None
     while True:
@@ -92,7 +93,7 @@ def _tabulate(model: Model, costly: list[int], t0: float, t_end: float, toleranc
         times = np.insert(times, np.arange(1, times.size), middle)
         table = np.insert(table, np.arange(1, table.shape[2]), exact, axis=2)
         intervals *= 2
-    columns = LawTable(times, table, period if repeats else None).laws()
+    columns = LawTable(times, table, period).laws()
     replaced = list(model.laws)
     for i, column in zip(costly, columns, strict=True):
         replaced[i] = column
