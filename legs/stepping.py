@@ -464,12 +464,8 @@ class Stepping(Law):
     costly = True  # Newton's method on the leg at every call
 
     def evaluate(self, t):
-        t = np.asarray(t, dtype=float)
-        tau = (np.atleast_1d(t) / self.period - self.lift_off) % 1.0
-        k = JOINTS.index(self.joint)
-        values = [x[:, k].reshape(t.shape) / self.period**m
-                  for m, x in enumerate(_cached_motion(self.position, self.duty, tau))]
-        return values[0], values[1], values[2]
+        values = type(self).evaluate_batch([self], t)
+        return values[0, 0], values[1, 0], values[2, 0]
 
     def batch_key(self):
         return (self.position, self.duty)
