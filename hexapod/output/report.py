@@ -393,6 +393,19 @@ def _side_by_side(names: list[str], groups: dict[str, list[int]]):
     return legs, titles, index
 
 
+def _sheets(groups: dict[str, list[int]], leg_figures: bool):
+    """``(index, suffix, which)`` of each sheet drawn one group at a time: every joint on one
+    (``groups`` of the single group ``""``), else the joints of no leg (``-other``) and, with
+    ``leg_figures``, each leg's (``-L1`` ...)."""
+    for leg, index in groups.items():
+        if not leg:
+            yield index, "", ""
+        elif leg == "other":
+            yield index, "-other", " other joints"
+        elif leg_figures:
+            yield index, f"-{leg}", f" leg {leg}"
+
+
 def _gathered(values: np.ndarray, index: np.ndarray) -> np.ndarray:
     """``values`` (N, joints) arranged (N, legs, panels), NaN where ``index`` is -1."""
     out = values[:, np.maximum(index, 0)]
@@ -419,10 +432,7 @@ def _wrench_figures(model: Model, result: InverseResult, scene: str,
             figures[f"{kind}.png"] = partial(
                 leg_comparison_figure, t, _gathered(np.linalg.norm(values, axis=2), index),
                 legs, titles, unit, f"{scene}: each joint's {what}, legs side by side")
-        groups = {leg: k for leg, k in groups.items() if leg_figures or leg == "other"}
-    for leg, index in groups.items():
-        suffix, which = (f"-{leg}", f" leg {leg}" if leg != "other" else " other joints") \
-            if leg else ("", "")
+    for index, suffix, which in _sheets(groups, leg_figures):
         figures[f"forces{suffix}.png"] = partial(
             wrench_figure, t, result.force[:, index], [f"{labels[k]}  {names[k]}" for k in index],
             "F", "N", f"{scene}{which}: joint forces, by parent on child ({where})")
@@ -449,10 +459,7 @@ def _effort_figures(model: Model, times: np.ndarray, drivers: list[DriverStatist
         out["efforts.png"] = partial(
             leg_comparison_figure, times, _gathered(efforts, index), legs, titles,
             " or ".join(units), f"{scene}: actuator efforts, legs side by side")
-        groups = {leg: k for leg, k in groups.items() if leg_figures or leg == "other"}
-    for leg, index in groups.items():
-        suffix, which = (f"-{leg}", f" leg {leg}" if leg != "other" else " other joints") \
-            if leg else ("", "")
+    for index, suffix, which in _sheets(groups, leg_figures):
         out[f"efforts{suffix}.png"] = partial(
             effort_figure, times,
             [(drivers[k].joint, drivers[k].unit, drivers[k].effort, drivers[k].power)
