@@ -19,6 +19,7 @@ carries nothing.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import lru_cache
 from types import SimpleNamespace
 
 import numpy as np
@@ -104,16 +105,23 @@ class StanceGate(Law):
     @classmethod
     def evaluate_batch(cls, laws, t):
         t = np.asarray(t, dtype=float)
-        gate = in_stance(_schedules(laws, t.ndim), t).astype(float)
+        gate = in_stance(_schedules(tuple(laws), t.ndim), t).astype(float)
         return np.array([gate, np.zeros_like(gate), np.zeros_like(gate)])
 
 
-def _schedules(laws, ndim: int) -> SimpleNamespace:
+@lru_cache(maxsize=64)  # an integrator asks for the same laws' batch at every stage
+def _schedules(laws: tuple, ndim: int) -> SimpleNamespace:
     """The schedules of the laws' contacts as arrays (k, 1, ...) that broadcast against times
-    of ``ndim`` dimensions: the same arithmetic as one contact's, for all at once."""
+    of ``ndim`` dimensions: the same arithmetic as one contact's, for all at once; and, for
+    footholds, their first positions and advances per stance (``start``, ``advance``)."""
     shape = (len(laws),) + (1,) * ndim
-    return SimpleNamespace(**{key: np.array([getattr(law.contact, key) for law in laws])
-                              .reshape(shape) for key in ("period", "lift_off", "duty")})
+    arrays = {key: np.array([getattr(law.contact, key) for law in laws]).reshape(shape)
+              for key in ("period", "lift_off", "duty")}
+    if all(hasattr(law, "axis") for law in laws):
+        for key in ("foothold", "advance"):
+            arrays[key] = np.array([getattr(law.contact, key)[law.axis]
+                                    for law in laws]).reshape(shape)
+    return SimpleNamespace(**arrays)
 
 
 @dataclass(frozen=True, eq=False)
@@ -136,11 +144,9 @@ class Foothold(Law):
     @classmethod
     def evaluate_batch(cls, laws, t):
         t = np.asarray(t, dtype=float)
-        _, k = _cycle(_schedules(laws, t.ndim), t)
-        shape = k.shape[:1] + (1,) * t.ndim
-        start = np.array([law.contact.foothold[law.axis] for law in laws]).reshape(shape)
-        advance = np.array([law.contact.advance[law.axis] for law in laws]).reshape(shape)
-        value = start + k * advance
+        schedules = _schedules(tuple(laws), t.ndim)
+        _, k = _cycle(schedules, t)
+        value = schedules.foothold + k * schedules.advance
         return np.array([value, np.zeros_like(value), np.zeros_like(value)])
 
 

@@ -10,12 +10,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from hexapod.scene.laws.base import Law
-from hexapod.scene.laws.tabulated import quintic_hermite
+from hexapod.scene.laws.tabulated import quintic_pieces, read_pieces
 
 
 class LawTable:
     """Values, rates and accelerations of ``k`` laws at ``N`` times, interpolated by quintic
-    Hermite polynomials (:func:`~hexapod.scene.laws.tabulated.quintic_hermite`).
+    Hermite polynomials (:func:`~hexapod.scene.laws.tabulated.quintic_pieces`), formed once.
 
     Parameters
     ----------
@@ -37,6 +37,7 @@ class LawTable:
             raise ValueError(f"a table of {self.times.size} times needs values, rates and "
                              f"accelerations of shape (3, k, {self.times.size}), got "
                              f"{self.table.shape}")
+        self._pieces = quintic_pieces(self.times, self.table)
 
     def __len__(self) -> int:
         return self.table.shape[1]
@@ -46,7 +47,7 @@ class LawTable:
         t = np.asarray(t, dtype=float)
         if self.period is not None:
             t = self.times[0] + np.mod(t - self.times[0], self.period)
-        return quintic_hermite(self.times, self.table, t)
+        return read_pieces(self.times, self._pieces, t)
 
     def laws(self) -> list[TableColumn]:
         """One law per column, evaluated together."""
