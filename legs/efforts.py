@@ -20,7 +20,7 @@ import numpy as np
 
 import hexapod as hx
 from hexapod import Scene
-from hexapod.scene import Contact, Law
+from hexapod.scene import Contact, Law, cycle_breaks
 
 #: Degree of the effort splines (C4; 5 is the largest :class:`hexapod.scene.Spline` offers).
 EFFORT_DEGREE = 5
@@ -45,17 +45,10 @@ def _contacts(source) -> list:
 def _times(contact, fractions, t0: float, t1: float) -> list[float]:
     """The times ``(lift_off + k - f) period`` inside ``[t0, t1]`` for each ``f`` of
     ``fractions`` (fractions of the period before lift-off) and every cycle ``k``."""
-    out = []
-    period = contact.period
     tol = 1e-12 * max(1.0, abs(t0), abs(t1))
-    for f in fractions:
-        base = (contact.lift_off - f) * period
-        for k in range(int(np.floor((t0 - base) / period)) - 1,
-                       int(np.ceil((t1 - base) / period)) + 2):
-            t = base + k * period
-            if t0 - tol <= t <= t1 + tol:
-                out.append(min(max(t, t0), t1))
-    return out
+    times = cycle_breaks(contact.period, [contact.lift_off - f for f in fractions],
+                         t0 - tol, t1 + tol)
+    return [min(max(float(t), t0), t1) for t in times]
 
 
 def _unique(times, tol: float) -> list[float]:
@@ -195,6 +188,10 @@ class TabulatedEffort(Law):
     def evaluate(self, t):
         values = self.table.evaluate(t)[..., self.column]
         return values[0], values[1], values[2]
+
+    def breaks(self, start, stop):  # where the splines join
+        inside = self.table.breaks
+        return inside[(inside > start) & (inside < stop)]
 
 
 # ------------------------------------------------------------------ adaptive sampling

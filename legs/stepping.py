@@ -36,7 +36,7 @@ from functools import cache
 
 import numpy as np
 
-from hexapod.scene import Law
+from hexapod.scene import Law, cycle_breaks
 from legs.cockroach import (
     FOOT_LIFT_MM,
     GAIT_LAWS,
@@ -500,6 +500,10 @@ class Stepping(Law):
 
     def cycle_time(self):
         return self.period
+
+    def breaks(self, start, stop):  # lift-off and touch-down: the foot path's pieces join
+        return cycle_breaks(self.period, (self.lift_off, self.lift_off + 1.0 - self.duty),
+                            start, stop)
 
     def problems(self):
         out = []

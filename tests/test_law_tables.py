@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 import hexapod as hx
+from hexapod.model.law_values import law_breaks
 from hexapod.model.tabulation import tabulated_model
 from hexapod.scene import Harmonic
 from hexapod.scene.laws.table import LawTable
@@ -104,3 +105,26 @@ def test_a_simulation_with_tabulated_laws_agrees_with_the_exact_laws():
     # of their scale: a few 1e-10 at most
     assert np.abs(fast.q - exact.q).max() < 1e-9
     assert np.abs(fast.q - exact.q).max() > 0.0  # the table is not the law
+
+
+def test_a_table_keeps_the_breaks_of_the_laws_it_replaces():
+    # the front leg's gait laws change regime at lift-off and touch-down: the table's columns
+    # say so over any window, periods after the one tabulated included
+    model = hx.assemble(hx.load_scene("front-leg"))
+    costly = [i for i, law in enumerate(model.laws) if law.costly]
+    twin, _ = tabulated_model(model, 0.0, 1.2, 1e-8)
+    for start, stop in ((0.0, 0.5), (0.2, 1.9), (3.01, 3.7)):
+        for i in costly:
+            exact, read = model.laws[i].breaks(start, stop), twin.laws[i].breaks(start, stop)
+            assert exact.size >= int(2 * (stop - start) / PERIOD) - 1  # two a period
+            assert np.allclose(read, exact, rtol=0, atol=1e-12)
+
+
+def test_adaptive_steps_end_on_the_touch_downs_and_lift_offs():
+    model = hx.assemble(hx.load_scene("front-leg"))
+    breaks = law_breaks(model.laws, 0.05, 0.6)
+    assert breaks.size >= 2
+    result = hx.simulate(model, 0.6, t0=0.05)
+    assert result.status == "finished"
+    for t in breaks:  # each an accepted step's end, exactly
+        assert np.min(np.abs(result.t - t)) == 0.0

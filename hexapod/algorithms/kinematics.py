@@ -66,13 +66,19 @@ def rank_split(model: Model, Phi_v: np.ndarray, w: np.ndarray, *,
 def state_split(model: Model, data: Data, q: np.ndarray, w: np.ndarray, Phi_v,
                 tol: float | None = None) -> RowSplit:
     """The rank decision at the state ``(q, w)``, taken once per state and workspace: the
-    velocity analysis and the dynamics at the same state share it."""
+    velocity analysis and the dynamics at the same state share it. The workspace's last
+    decision (a simulation's previous state) is held while its kept rows stay independent
+    and its redundant ones dependent (:func:`~hexapod.algorithms.linalg.hold_rows`: one
+    factorisation instead of a decision row by row). Among dependent rows it may keep others
+    than a fresh decision would: the accelerations and the policy's multipliers do not
+    depend on which."""
     tol = model.rank_tolerance if tol is None else tol
     kept = data.built.get("state decision")
     if kept is not None and kept[2] == tol and np.array_equal(kept[0], q) \
             and np.array_equal(kept[1], w):
         return kept[3]
-    split = rank_split(model, Phi_v, w, tol=tol)
+    split = rank_split(model, Phi_v, w, tol=tol,
+                       held=kept[3] if kept is not None and kept[2] == tol else None)
     data.built["state decision"] = (np.array(q), np.array(w), tol, split)
     return split
 

@@ -104,15 +104,22 @@ def split_rows(W: np.ndarray, scale: np.ndarray, priority: np.ndarray, tol: floa
 
 def hold_rows(W: np.ndarray, scale: np.ndarray, split: RowSplit, tol: float
               ) -> RowSplit | None:
-    """The decision ``split`` held at another ``W`` (the next Newton iterate): its kept rows
-    factorised again, in one QR, the same rows left out; None when a kept row has come within
-    ``tol`` of the span of those before it (then decide again), or for a large sparse ``W``."""
+    """The decision ``split`` held at another ``W`` (the next Newton iterate, the next state
+    of a simulation): its kept rows factorised again, in one QR, the same rows left out; None
+    when a kept row has come within ``tol`` of the span of those before it, or a row left out
+    has moved farther than ``tol`` from the span of the kept ones (then decide again), or for
+    a large sparse ``W``."""
     if is_sparse(W) or sparse_form(W) is not None or not split.rank:
         return None
     I = split.independent
     basis, R = np.linalg.qr(W[I].T, mode="reduced")
     if not np.all(np.abs(np.diag(R)) > tol):
         return None
+    if split.redundant.size:
+        left_out = W[split.redundant]
+        off = left_out - (left_out @ basis) @ basis.T
+        if np.any(np.linalg.norm(off, axis=1) > tol):
+            return None
     signs = np.sign(np.diag(R))
     return RowSplit(I, split.redundant, basis * signs, signs[:, None] * R, scale, W)
 

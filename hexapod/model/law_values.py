@@ -44,6 +44,17 @@ def batches(laws) -> list[tuple[np.ndarray, list]]:
     return [(np.array(indices), [laws[i] for i in indices]) for indices in groups.values()]
 
 
+def law_breaks(laws, start: float, stop: float) -> np.ndarray:
+    """The times in ``(start, stop)`` where any of ``laws`` changes regime
+    (:meth:`~hexapod.scene.laws.Law.breaks`), sorted, those closer than a billionth of the
+    span merged."""
+    times = np.sort(np.concatenate([np.zeros(0)] + [law.breaks(start, stop) for law in laws]))
+    if times.size == 0:
+        return times
+    close = np.diff(times) <= 1e-9 * max(stop - start, abs(stop), 1e-300)
+    return times[np.concatenate([[True], ~close])]
+
+
 def evaluate_together(laws, t, grouped: list | None = None) -> np.ndarray:
     """Values, rates and accelerations of ``laws`` at ``t``, (3, len(laws), *t.shape), each
     batch in one call (``grouped``: their :func:`batches`, when already made)."""

@@ -25,7 +25,7 @@ import hashlib
 
 import numpy as np
 
-from hexapod.model.law_values import evaluate_together
+from hexapod.model.law_values import evaluate_together, law_breaks
 from hexapod.model.model import Model
 from hexapod.scene.laws.table import LawTable
 
@@ -93,7 +93,8 @@ def _tabulate(model: Model, costly: list[int], start: float, span: float,
         times = np.insert(times, np.arange(1, times.size), middle)
         table = np.insert(table, np.arange(1, table.shape[2]), exact, axis=2)
         intervals *= 2
-    columns = LawTable(times, table, period).laws()
+    columns = LawTable(times, table, period,
+                       law_breaks(laws, start - 1e-9 * span, start + span)).laws()
     replaced = list(model.laws)
     for i, column in zip(costly, columns, strict=True):
         replaced[i] = column

@@ -23,7 +23,7 @@ __getattr__, __dir__, __all__ = attach(__name__, {
                              "RotationalSpringDamper", "SpringDamper"],
     "hexapod.scene.contacts": ["POLICIES", "GroundForces"],
     "hexapod.scene.laws": ["Constant", "Expression", "Gait", "Harmonic", "Hermite", "Law",
-                           "Polynomial", "Spline"],
+                           "Polynomial", "Spline", "cycle_breaks"],
     # files, motions and the built-in scenes
     "hexapod.scene.reader": ["read_scene"],
     "hexapod.scene.writer": ["scene_text", "write_scene"],

@@ -28,6 +28,7 @@ from hexapod._support import limits
 from hexapod.catalog import MAX_FACES, POLICIES
 from hexapod.errors import Problem
 from hexapod.scene.laws import Law
+from hexapod.scene.laws.base import cycle_breaks
 
 
 def _cycle(contact, t):
@@ -99,6 +100,12 @@ class StanceGate(Law):
     def cycle_time(self):
         return self.contact.period
 
+    def breaks(self, start, stop):
+        c = self.contact
+        if c.duty >= 1.0:
+            return np.zeros(0)
+        return cycle_breaks(c.period, (c.lift_off, c.lift_off - c.duty), start, stop)
+
     def batch_key(self):
         return "gate"
 
@@ -137,6 +144,11 @@ class Foothold(Law):
         _, k = _cycle(self.contact, t)
         value = self.contact.foothold[self.axis] + k * self.contact.advance[self.axis]
         return value, np.zeros_like(t), np.zeros_like(t)
+
+    def breaks(self, start, stop):  # the next stance's foothold from lift-off
+        c = self.contact
+        return np.zeros(0) if c.duty >= 1.0 else cycle_breaks(c.period, (c.lift_off,), start,
+                                                               stop)
 
     def batch_key(self):
         return "foothold"

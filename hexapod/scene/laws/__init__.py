@@ -6,7 +6,7 @@ an array of times. Drivers need laws that are at least C2 (a prescribed motion e
 second derivative).
 """
 
-from hexapod.scene.laws.base import Constant, Law, LawOnJoint, Scaled, as_law
+from hexapod.scene.laws.base import Constant, Law, LawOnJoint, Scaled, as_law, cycle_breaks
 from hexapod.scene.laws.closed_form import Harmonic, Polynomial
 from hexapod.scene.laws.expression import Expression
 from hexapod.scene.laws.gait import Gait
@@ -14,4 +14,4 @@ from hexapod.scene.laws.registry import LAW_TYPES, law_types
 from hexapod.scene.laws.tabulated import Hermite, Spline
 
 __all__ = ["LAW_TYPES", "Constant", "Expression", "Gait", "Harmonic", "Hermite", "Law",
-           "LawOnJoint", "Polynomial", "Scaled", "Spline", "as_law", "law_types"]
+           "LawOnJoint", "Polynomial", "Scaled", "Spline", "as_law", "cycle_breaks", "law_types"]

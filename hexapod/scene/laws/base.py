@@ -38,6 +38,14 @@ class Law:
         constant, which repeats at any time)."""
         return None
 
+    def breaks(self, start: float, stop: float) -> np.ndarray:
+        """The times in ``(start, stop)`` where the law changes regime (a foot touching down
+        or lifting off): a derivative jumps there, the law's third or a lower one. An
+        adaptive integrator ends a step at each instead of stepping over it and letting its
+        error control find it by rejected steps. Sampled laws do not list their samples.
+        Default: none."""
+        return np.zeros(0)
+
     def symbolic(self, t):
         """Value, first and second derivatives as CasADi expressions of the symbol ``t`` (SX or
         MX), for integrators whose time loop runs in compiled code; None when the law has no
@@ -171,6 +179,9 @@ class Scaled(Law):
     def cycle_time(self):
         return self.law.cycle_time()
 
+    def breaks(self, start, stop):
+        return self.law.breaks(start, stop)
+
     def symbolic(self, t):
         inner = self.law.symbolic(t)
         return None if inner is None else tuple(self.factor * x for x in inner)
@@ -207,3 +218,12 @@ class LawOnJoint:
         out = super().attached(attachment)
         out.joint = attachment.name(self.joint)
         return out
+
+
+def cycle_breaks(period: float, phases, start: float, stop: float) -> np.ndarray:
+    """The times in ``(start, stop)`` at the fractions ``phases`` of each cycle of ``period``
+    (``(k + phase) period`` for every integer ``k``), sorted."""
+    phases = np.mod(np.asarray(phases, dtype=float), 1.0)
+    first, last = math.floor(start / period) - 1, math.ceil(stop / period) + 1
+    times = ((np.arange(first, last + 1)[:, None] + phases[None, :]) * period).ravel()
+    return np.unique(times[(times > start) & (times < stop)])

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hexapod.scene.laws.base import Law
+from hexapod.scene.laws.base import Law, cycle_breaks
 from hexapod.scene.laws.tabulated import quintic_pieces, read_pieces
 
 
@@ -27,12 +27,16 @@ class LawTable:
         The laws repeat with this period, s: a time ``t`` is read at ``times[0] + (t -
         times[0]) mod period`` (the table then spans one period). None: the end intervals'
         polynomials continue outside the table.
+    breaks : array_like, optional
+        The tabulated laws' own :meth:`~hexapod.scene.laws.Law.breaks` within the table's
+        span, s (repeated with the period).
     """
 
-    def __init__(self, times, table, period: float | None = None):
+    def __init__(self, times, table, period: float | None = None, breaks=()):
         self.times = np.asarray(times, dtype=float)
         self.table = np.asarray(table, dtype=float)
         self.period = period
+        self.breaks = np.asarray(breaks, dtype=float)
         if self.table.shape[0] != 3 or self.table.shape[-1] != self.times.size:
             raise ValueError(f"a table of {self.times.size} times needs values, rates and "
                              f"accelerations of shape (3, k, {self.times.size}), got "
@@ -69,6 +73,15 @@ class TableColumn(Law):
 
     def cycle_time(self):
         return self.table.period
+
+    def breaks(self, start, stop):
+        table = self.table
+        if table.period is None:
+            inside = table.breaks
+        else:
+            inside = cycle_breaks(table.period, (table.breaks - table.times[0]) / table.period,
+                                  start - table.times[0], stop - table.times[0]) + table.times[0]
+        return inside[(inside > start) & (inside < stop)]
 
     def batch_key(self):
         return id(self.table)

@@ -28,6 +28,7 @@ import numpy as np
 from hexapod.algorithms.dynamics import forward_dynamics
 from hexapod.algorithms.kinematics import assemble_positions, solve_velocities
 from hexapod.errors import HexapodError, IntegrationError
+from hexapod.model.law_values import law_breaks
 from hexapod.model.model import Model
 from hexapod.simulation.integrators.interpolants import HermiteInterpolant, Interpolant
 from hexapod.simulation.integrators.singular import FORESIGHT_STEPS, SingularPoses
@@ -264,6 +265,11 @@ class Integrator(SingularPoses):
         elif self.t >= self.t_bound - 1e-12 * max(1.0, abs(self.t_bound)):
             self.t = self.t_bound
             self.status = "finished"
+        elif self.adaptive:  # a step cut to end at a break ends on it, not an ulp before
+            k = np.searchsorted(self._breaks, self.t)
+            for near in self._breaks[max(k - 1, 0):k + 1]:
+                if abs(near - self.t) <= self._break_tolerance:
+                    self.t = float(near)
         if self.model.energy_conserved:
             self._kinetic_peak = max(self._kinetic_peak, self._energy(self.q, self.v)[0])
 
@@ -292,11 +298,30 @@ class Integrator(SingularPoses):
         return h if np.isfinite(h) and h > 0 else h0
 
     def next_step(self) -> float:
-        """The step to take now: the method's current step, cut to end at ``t_bound`` (and a
-        step that would leave a sliver of less than 1 % is stretched to the end)."""
-        remaining = self.t_bound - self.t
+        """The step to take now: the method's current step, cut to end at ``t_bound`` or, for
+        an adaptive method, at the laws' next break (a foot's touch-down: a kink its error
+        control would otherwise find by rejected steps); a step that would leave a sliver of
+        less than 1 % is stretched to the end."""
+        remaining = self._next_stop() - self.t
         h = min(self.h, self.max_step)
         return remaining if h >= 0.99 * remaining else h
+
+    def _next_stop(self) -> float:
+        """``t_bound``, or for an adaptive method the first break of the laws after ``t``."""
+        if not self.adaptive:
+            return self.t_bound
+        breaks = self._breaks
+        k = np.searchsorted(breaks, self.t + self._break_tolerance, side="right")
+        return float(breaks[k]) if k < breaks.size else self.t_bound
+
+    @cached_property
+    def _breaks(self) -> np.ndarray:
+        return law_breaks(self.model.laws, self.t0, self.t_bound)
+
+    @cached_property
+    def _break_tolerance(self) -> float:
+        """How near a break a step's end counts as on it (the sum ``t + h`` rounds)."""
+        return 1e-12 * max(1.0, abs(self.t0), abs(self.t_bound))
 
     # ------------------------------------------------------------------ services
 
