@@ -7,6 +7,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 
 class Law:
@@ -220,9 +221,25 @@ class LawOnJoint:
         return out
 
 
-def cycle_breaks(period: float, phases, start: float, stop: float) -> np.ndarray:
+def cycle_breaks(period: float, phases: ArrayLike, start: float, stop: float) -> np.ndarray:
     """The times in ``(start, stop)`` at the fractions ``phases`` of each cycle of ``period``
-    (``(k + phase) period`` for every integer ``k``), sorted."""
+    (``(k + phase) period`` for every integer ``k``): a periodic law's
+    :meth:`Law.breaks`.
+
+    Parameters
+    ----------
+    period : float
+        s.
+    phases : array_like
+        Fractions of the period (any real numbers: taken modulo 1).
+    start, stop : float
+        The open window, s.
+
+    Returns
+    -------
+    ndarray
+        The times, sorted, each once (s).
+    """
     phases = np.mod(np.asarray(phases, dtype=float), 1.0)
     first, last = math.floor(start / period) - 1, math.ceil(stop / period) + 1
     times = ((np.arange(first, last + 1)[:, None] + phases[None, :]) * period).ravel()

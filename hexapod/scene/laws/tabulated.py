@@ -213,11 +213,23 @@ def read_pieces(times: np.ndarray, pieces: np.ndarray, t) -> np.ndarray:
     h = times[i + 1] - times[i]
     s = (t - times[i]) / h
     # the six basis polynomials and their first and second derivatives in s (exact integers
-    # at s = 0 and 1), then in t: (*t.shape, 3, 6)
-    basis = (s[..., None] ** _POWERS @ _BASIS_RATES.T).reshape((*t.shape, 3, 6))
-    basis[..., 1, :] /= h[..., None]
-    basis[..., 2, :] /= (h * h)[..., None]
-    return np.einsum("...p,...dp->d...", pieces[..., i, :], basis)
+    # at s = 0 and 1), then in t: (3, *t.shape, 6). Sums are written out, never a matrix
+    # product, so that a time gives the same bits alone or among others
+    powers = np.ones((*t.shape, 6))
+    powers[..., 1:] = np.multiply.accumulate(np.broadcast_to(s[..., None], (*t.shape, 5)),
+                                             axis=-1)
+    ones = (1,) * t.ndim
+    basis = _sum_last(_BASIS_RATES.reshape((3, *ones, 6, 6)) * powers[None, ..., None, :])
+    basis[1] /= h[..., None]
+    basis[2] /= (h * h)[..., None]
+    lead = (1,) * (pieces.ndim - 2)  # the laws' axes
+    return _sum_last(pieces[..., i, :] * basis.reshape((3, *lead, *t.shape, 6)))
+
+
+def _sum_last(x: np.ndarray) -> np.ndarray:
+    """The sum over the last axis, of length 6: NumPy adds fewer than 8 terms one after the
+    other, in the same order whatever the shape."""
+    return np.add.reduce(x, axis=-1)
 
 
 def quintic_hermite(times: np.ndarray, table: np.ndarray, t) -> np.ndarray:
