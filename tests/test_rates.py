@@ -166,3 +166,29 @@ def test_kernels_compiled_to_c_give_the_interpreters_numbers_and_are_kept(tmp_pa
         again = hx.simulate(hx.assemble(scene), 0.12, **options)
     assert np.abs(first.q - interpreted.q).max() <= 1e-12
     assert np.array_equal(again.q, first.q)
+
+
+def test_kernels_compiled_with_pivots_solve_by_lu_to_the_exact_numbers():
+    """Compiled to C with a reference state, the kernels factorise by an LU with pivots chosen
+    there, written out (here the saddle-point matrix of a four-bar, whose rows are fewer than
+    its velocities; the front leg's square Jacobian in the test above, through a simulation):
+    the exact solve's accelerations, and the projection's state, to round-off times the
+    conditioning."""
+    from hexapod.simulation.kernels import compiled_projection, pivots_near
+
+    scene = four_bar(3, 0.7, driven=False, gravity=[0, -9.81, 0])
+    model, q, _, _, data = solve_state(scene, 0.2)
+    v = _random_velocities(model, q, 0.2, 0)
+    exact = hx.forward_dynamics(model, data, 0.2, q, v)
+    rows = data.independent_rows
+    reference = (q, model.law_values(0.2)[0])
+    with hx.executing(compiled=True):
+        rates = compiled_rates(model, rows, reference)
+        projection = compiled_projection(model, rows, reference)
+    assert pivots_near(model, rows, reference).n == model.n_v + rows.size  # [[I, W^T], [W, 0]]
+    _, v_dot, _ = rates.solve(0.2, q, v)
+    assert np.abs(v_dot - exact).max() <= 1e-9 * np.abs(exact).max()
+    drifted = model.integrate(q, 1e-6 * np.random.default_rng(1).normal(size=model.n_v))
+    state = projection(0.2, drifted, v)
+    assert state is not None
+    assert np.abs(model.call("phi", q=state[0], w=reference[1]) / model.row_scale).max() <= 1e-12

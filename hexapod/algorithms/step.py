@@ -22,7 +22,10 @@ dynamics), ``W_I`` is square and the system splits into ``y = W_I^-1 (bottom_I /
 by CasADi's sparse QR (the ``qr`` linear solver: backward stable without pivoting, its
 symbolic analysis done once per row set, its factors as sparse as the body-joint graph allows);
 the batched inverse dynamics factorises its square ``W_I`` instead by an LU with pivots chosen
-at the decision (:mod:`hexapod.algorithms.static_lu`, a tenth of the QR's operations). What
+at the decision (:mod:`hexapod.algorithms.static_lu`, a tenth of the QR's operations), and so
+do the integrators' kernels compiled to C, either form, with pivots chosen at the state where
+they are built (:func:`kept_pivots`; written out, the LU runs in a third of the compiled QR's
+time, where CasADi's virtual machine gains nothing from it). What
 can go wrong as the state moves (a row that becomes dependent, a singular pose, pivots gone
 stale) shows in the residual checks the callers evaluate.
 """
@@ -32,6 +35,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
+from hexapod.algorithms.static_lu import StaticLU
 from hexapod.model.model import Model
 from hexapod.spatial import retract_symbolic
 
@@ -47,26 +51,76 @@ def equilibrated(Phi_v: ca.MX, m_inv_sqrt: ca.DM) -> tuple[ca.MX, ca.MX, ca.MX]:
 
 def kept_matrix(W_all: ca.MX, d: ca.MX, zero: ca.MX, rows: list[int]) -> ca.MX:
     """The saddle-point matrix ``[[I, W^T], [W, Z]]`` of the kept ``rows``, as sparse as
-    ``Phi_v``."""
+    ``Phi_v`` (MX or SX, as ``W_all``)."""
     n_v = W_all.size2()
     W = ca.mtimes(ca.diag(1.0 / d[rows]), W_all[rows, :])  # sparse: never a dense node
-    return ca.vertcat(ca.horzcat(ca.MX.eye(n_v), W.T), ca.horzcat(W, -ca.diag(zero[rows])))
+    return ca.vertcat(ca.horzcat(type(W_all).eye(n_v), W.T), ca.horzcat(W, -ca.diag(zero[rows])))
+
+
+def factorised_matrix(W_all, d, zero, rows: list[int]):
+    """The matrix :func:`solve_kept` factorises: ``W_I`` when the kept rows are as many as the
+    velocities, else the saddle-point matrix of :func:`kept_matrix`."""
+    if len(rows) == W_all.size2():
+        return ca.mtimes(ca.diag(1.0 / d[rows]), W_all[rows, :])
+    return kept_matrix(W_all, d, zero, rows)
+
+
+def kept_pivots(model: Model, rows: list[int], q: np.ndarray, w: np.ndarray) -> StaticLU:
+    """Pivots for :func:`solve_kept`'s LU (:class:`StaticLU`), chosen by SuperLU on the matrix
+    it factorises at positions ``q`` and law values ``w``: a kernel built with them serves the
+    states near there, its residual checks saying when they no longer do."""
+    symbols = {"q": ca.SX.sym("q", model.n_q), "w": ca.SX.sym("w", model.n_w)}
+    Phi_v = model.Phi_v(*[symbols[n] for n in model.Phi_v.name_in()])
+    A = factorised_matrix(*equilibrated(Phi_v, mass_factors(model)[0]), rows)
+    values = ca.Function("A", list(symbols.values()), [A])(q, w)
+    pattern_rows, pattern_columns = A.sparsity().get_triplet()
+    return StaticLU.pivoted(pattern_rows, pattern_columns, A.size1(),
+                            np.array(values.nonzeros()))
 
 
 def solve_kept(W_all: ca.MX, d: ca.MX, zero: ca.MX, rows: list[int], top: ca.MX,
-               bottom: ca.MX) -> tuple[ca.MX, ca.MX]:
+               bottom: ca.MX, lu: StaticLU | None = None) -> tuple[ca.MX, ca.MX]:
     """``(y, mu)`` of the kept ``rows`` (see the module's description); ``bottom``: all rows'
     right-hand sides (those of the kept rows are used), ``top`` and ``bottom`` with as many
-    columns as there are systems to solve with one factorisation."""
+    columns as there are systems to solve with one factorisation. With ``lu`` (SX
+    expressions only), the factorisation is that LU with its fixed pivots
+    (:func:`kept_pivots`), written out, instead of CasADi's sparse QR."""
     n_v = W_all.size2()
-    if len(rows) == n_v:
-        W = ca.mtimes(ca.diag(1.0 / d[rows]), W_all[rows, :])
-        y = ca.solve(W, bottom[rows, :] / ca.repmat(d[rows], 1, bottom.size2()), "qr")
-        return y, ca.solve(W.T, top - y, "qr")
-    K = kept_matrix(W_all, d, zero, rows)
-    rhs = ca.vertcat(top, bottom[rows, :] / ca.repmat(d[rows], 1, bottom.size2()))
-    solution = ca.solve(K, rhs, "qr")
+    scaled = bottom[rows, :] / ca.repmat(d[rows], 1, bottom.size2())
+    A = factorised_matrix(W_all, d, zero, rows)
+    if lu is not None:  # one call of the LU's straight-line SX code (inlined on SX)
+        solve = _lu_solve(lu, A.sparsity(), bottom.size2(), len(rows) == n_v)
+        if len(rows) == n_v:
+            return solve(A, scaled, top)
+        solution = solve(A, ca.vertcat(top, scaled))
+    elif len(rows) == n_v:
+        y = ca.solve(A, scaled, "qr")
+        return y, ca.solve(A.T, top - y, "qr")
+    else:
+        solution = ca.solve(A, ca.vertcat(top, scaled), "qr")
     return solution[:n_v, :], solution[n_v:, :]
+
+
+def _lu_solve(lu: StaticLU, pattern: ca.Sparsity, columns: int, square: bool) -> ca.Function:
+    """:func:`solve_kept`'s factorisation and solves by ``lu``, an SX Function of the matrix
+    (of ``pattern``) and the right-hand sides: ``(A, B) -> A^-1 B``, or for the square ``W_I``
+    ``(A, B, C) -> (Y, A^-T (C - Y))`` with ``Y = A^-1 B``. Built once per LU and shape."""
+    key = (tuple(pattern.colind()), tuple(pattern.row()), columns, square)
+    functions = lu.__dict__.setdefault("_functions", {})
+    if key not in functions:
+        A = ca.SX.sym("A", pattern)
+        F = lu.factor(ca.vertcat(*A.nonzeros()))
+        B = ca.SX.sym("B", A.size1(), columns)
+        if square:
+            C = ca.SX.sym("C", A.size1(), columns)
+            Y = ca.horzcat(*[lu.solve(F, B[:, k]) for k in range(columns)])
+            Z = ca.horzcat(*[lu.solve(F, C[:, k] - Y[:, k], transpose=True)
+                             for k in range(columns)])
+            functions[key] = ca.Function("lu_solve_pair", [A, B, C], [Y, Z])
+        else:
+            X = ca.horzcat(*[lu.solve(F, B[:, k]) for k in range(columns)])
+            functions[key] = ca.Function("lu_solve", [A, B], [X])
+    return functions[key]
 
 
 def retract(model: Model, q, dv):
@@ -83,14 +137,16 @@ def _retraction(model: Model) -> ca.Function:
 
 
 def newton(model: Model, position: ca.MX, residual, jacobian, rows: list[int],
-           m_inv_sqrt: ca.DM, steps: int) -> ca.MX:
+           m_inv_sqrt: ca.DM, steps: int, lu: StaticLU | None = None) -> ca.MX:
     """``steps`` Newton corrections of ``position`` onto the kept ``rows``: each the least
-    ``M``-norm step with ``Phi_v dv = -phi`` on those rows (:func:`solve_kept`), applied with
-    the retraction. ``residual(q)`` gives ``phi``, ``jacobian(q)`` ``Phi_v``; the Jacobian is
-    taken at the first position only (a chord method: the corrections are small)."""
+    ``M``-norm step with ``Phi_v dv = -phi`` on those rows (:func:`solve_kept`, with ``lu``
+    when given), applied with the retraction. ``residual(q)`` gives ``phi``, ``jacobian(q)``
+    ``Phi_v``; the Jacobian is taken at the first position only (a chord method: the
+    corrections are small)."""
     W_all, d, zero = equilibrated(jacobian(position), m_inv_sqrt)
     for _ in range(steps):
-        y, _ = solve_kept(W_all, d, zero, rows, ca.MX.zeros(model.n_v), -residual(position))
+        y, _ = solve_kept(W_all, d, zero, rows, type(position).zeros(model.n_v),
+                          -residual(position), lu)
         position = retract(model, position, ca.mtimes(m_inv_sqrt, y))
     return position
 

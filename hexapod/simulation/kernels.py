@@ -12,8 +12,10 @@ that forms ``Phi_v, gamma, Q`` and solves the equilibrated saddle-point system
     [[I, W^T], [W, 0]] [y; mu] = [M^-1/2 Q; D^-1 gamma],   W = D^-1 Phi_v M^-1/2,
     v_dot = M^-1/2 y
 
-with a sparse QR factorisation (CasADi's ``qr`` linear solver, symbolic analysis done once), on
-the independent rows chosen by the rank decision at a reference state. Equilibration makes the
+with a sparse QR factorisation (CasADi's ``qr`` linear solver, symbolic analysis done once), or,
+compiled to C, an LU with pivots chosen at the state where the kernel is built
+(:func:`pivots_near`), on the independent rows chosen by the rank decision at a reference
+state. Equilibration makes the
 rows dimensionless and of unit length, so that the conditioning is the mechanism's, not its
 units'. The matrix and every node of the Function are as sparse as ``Phi_v`` and the
 factorisation follows the body-joint graph, so a call costs time linear in the number of
@@ -35,7 +37,14 @@ import numpy as np
 from hexapod._support.compiled import compiled_graph
 from hexapod._support.execution import current
 from hexapod._support.fastcall import FastFunction
-from hexapod.algorithms.step import equilibrated, mass_factors, newton, solve_kept
+from hexapod.algorithms.static_lu import StaticLU
+from hexapod.algorithms.step import (
+    equilibrated,
+    kept_pivots,
+    mass_factors,
+    newton,
+    solve_kept,
+)
 from hexapod.model.model import Model
 
 #: relative residual above which a compiled solve is refused (the rank changed, or a
@@ -58,19 +67,25 @@ class CompiledRates:
     rows : ndarray of int
         The independent constraint rows to solve with (indices into ``model.rows``); the other
         rows are redundant and only checked.
+    reference : (ndarray, ndarray), optional
+        Positions and law values ``(q, w)`` near the states to come: compiled to C, the
+        solve is then an LU with pivots chosen there (:func:`pivots_near`).
     """
 
-    def __init__(self, model: Model, rows: np.ndarray):
+    def __init__(self, model: Model, rows: np.ndarray, reference: tuple | None = None):
         self.model = model
         self.rows = np.asarray(rows, dtype=int)
-        # the Function once per model, row set and execution; the buffers are this object's
+        # the Function once per model, row set, execution and pivots; the buffers are this
+        # object's
         to_c = current().compiled
-        self.function = model.built_once(("rates", tuple(self.rows.tolist()), to_c),
-                                         lambda m: _evaluated(self._build(), to_c))
+        lu = pivots_near(model, self.rows, reference) if to_c else None
+        self.function = model.built_once(("rates", tuple(self.rows.tolist()), to_c,
+                                          _pivot_key(lu)),
+                                         lambda m: _evaluated(self._build(lu), to_c))
         self._fast = FastFunction(self.function)
         self._args = [n for n in ("q", "v", "w", "wd", "wdd") if n in ("q", "v") or model.n_w]
 
-    def _build(self) -> ca.Function:
+    def _build(self, lu: StaticLU | None) -> ca.Function:
         model, rows = self.model, self.rows
         symbols = {"q": ca.MX.sym("q", model.n_q), "v": ca.MX.sym("v", model.n_v),
                    "w": ca.MX.sym("w", model.n_w), "wd": ca.MX.sym("wd", model.n_w),
@@ -97,7 +112,7 @@ class CompiledRates:
                      + alpha**2 * call(model.phi))
             gamma = gamma - ca.if_else(alpha == 0, ca.MX.zeros(model.n_c), drift, True)
             W_all, d_all, zero = equilibrated(Phi_v, m_inv_sqrt)
-            y, mu = solve_kept(W_all, d_all, zero, rows.tolist(), y0, gamma)
+            y, mu = solve_kept(W_all, d_all, zero, rows.tolist(), y0, gamma, lu)
             # the kept rows' multipliers (lambda_I = mu / d_I); the others are zero
             lam = ca.MX(model.n_c, 1)
             lam[rows.tolist()] = mu / d_all[rows.tolist()]
@@ -155,15 +170,18 @@ class CompiledProjection:
     exact, rank-deciding functions.
     """
 
-    def __init__(self, model: Model, rows: np.ndarray, newton: int = 2, tol: float = 1e-12):
+    def __init__(self, model: Model, rows: np.ndarray, newton: int = 2, tol: float = 1e-12,
+                 reference: tuple | None = None):
         self.model, self.rows, self.newton, self.tol = model, np.asarray(rows, int), newton, tol
         to_c = current().compiled
-        self.function = model.built_once(("projection", tuple(self.rows.tolist()), newton, to_c),
-                                         lambda m: _evaluated(self._build(), to_c))
+        lu = pivots_near(model, self.rows, reference) if to_c else None
+        self.function = model.built_once(("projection", tuple(self.rows.tolist()), newton, to_c,
+                                          _pivot_key(lu)),
+                                         lambda m: _evaluated(self._build(lu), to_c))
         self._fast = FastFunction(self.function)
         self._args = ["q", "v"] + (["w", "wd"] if model.n_w else [])
 
-    def _build(self) -> ca.Function:
+    def _build(self, lu: StaticLU | None) -> ca.Function:
         model, rows = self.model, self.rows.tolist()
         q, v = ca.MX.sym("q", model.n_q), ca.MX.sym("v", model.n_v)
         w, wd = ca.MX.sym("w", model.n_w), ca.MX.sym("wd", model.n_w)
@@ -181,12 +199,12 @@ class CompiledProjection:
         def saddle(position, top, bottom_all):
             """Solve [[I, W^T], [W, 0]] [y; mu] = [top; bottom / d] on the kept rows."""
             W_all, d, zero = equilibrated(call(model.Phi_v, q=position), m_inv_sqrt)
-            return solve_kept(W_all, d, zero, rows, top, bottom_all)[0]
+            return solve_kept(W_all, d, zero, rows, top, bottom_all, lu)[0]
 
         position = q
         for _ in range(self.newton):  # the Jacobian at each iterate: Newton's method proper
             position = newton(model, position, lambda x: call(model.phi, q=x),
-                              lambda x: call(model.Phi_v, q=x), rows, m_inv_sqrt, 1)
+                              lambda x: call(model.Phi_v, q=x), rows, m_inv_sqrt, 1, lu)
         phi_error = ca.mmax(ca.fabs(call(model.phi, q=position) / scale))
         nu = call(model.nu, q=position)
         y = saddle(position, ca.mtimes(m_sqrt, v), nu)
@@ -219,13 +237,32 @@ def _evaluated(function: ca.Function, to_c: bool) -> ca.Function:
         else function
 
 
-def compiled_projection(model: Model, rows: np.ndarray) -> CompiledProjection:
-    """The :class:`CompiledProjection` of ``model`` for a row set: its Function built once per
-    model, its buffers the caller's."""
-    return CompiledProjection(model, rows)
+def pivots_near(model: Model, rows: np.ndarray, reference: tuple | None) -> StaticLU | None:
+    """The pivots of a compiled kernel's LU (:func:`~hexapod.algorithms.step.kept_pivots`) at
+    ``reference = (q, w)``; None without a reference or a row (CasADi's sparse QR then).
+    Written out as straight-line code, an LU of the kernel's pattern costs a third of the
+    compiled sparse QR's time (the 10-link chain's right-hand side: 26 against 77 us); in
+    CasADi's virtual machine it gains nothing, and is not used there."""
+    if reference is None or not rows.size:
+        return None
+    q, w = reference
+    return kept_pivots(model, rows.tolist(), q, w)
 
 
-def compiled_rates(model: Model, rows: np.ndarray) -> CompiledRates:
-    """The :class:`CompiledRates` of ``model`` for a row set: its Function built once per
-    model, its buffers the caller's."""
-    return CompiledRates(model, rows)
+def _pivot_key(lu: StaticLU | None) -> tuple:
+    """What a kernel built with ``lu`` is known by: its pivot orders."""
+    return () if lu is None else (lu.row_order.tobytes(), lu.column_order.tobytes())
+
+
+def compiled_projection(model: Model, rows: np.ndarray,
+                        reference: tuple | None = None) -> CompiledProjection:
+    """The :class:`CompiledProjection` of ``model`` for a row set (and, compiled, pivots
+    chosen at ``reference``): its Function built once per model, its buffers the caller's."""
+    return CompiledProjection(model, rows, reference=reference)
+
+
+def compiled_rates(model: Model, rows: np.ndarray,
+                   reference: tuple | None = None) -> CompiledRates:
+    """The :class:`CompiledRates` of ``model`` for a row set (and, compiled, pivots chosen at
+    ``reference``): its Function built once per model, its buffers the caller's."""
+    return CompiledRates(model, rows, reference)

@@ -172,8 +172,9 @@ class Integrator(SingularPoses):
         self.v_dot, self.lam = self._dynamics(self.t, q, v)
         # the stages' right-hand sides and the projection, compiled for the rows independent
         # at the start
-        self._compiled = compiled_rates(model, self.data.independent_rows)
-        self._compiled_projection = compiled_projection(model, self.data.independent_rows)
+        self._compiled = compiled_rates(model, self.data.independent_rows, self._here())
+        self._compiled_projection = compiled_projection(model, self.data.independent_rows,
+                                                        self._here())
         self._feet_down = self._contact_set(self.t)
         self._start()
 
@@ -341,8 +342,13 @@ class Integrator(SingularPoses):
             return
         self._feet_down = feet
         rows = self._rank_split().independent
-        self._compiled = compiled_rates(self.model, rows)
-        self._compiled_projection = compiled_projection(self.model, rows)
+        self._compiled = compiled_rates(self.model, rows, self._here())
+        self._compiled_projection = compiled_projection(self.model, rows, self._here())
+
+    def _here(self) -> tuple[np.ndarray, np.ndarray]:
+        """The current positions and law values: where compiled kernels choose their
+        factorisation's pivots."""
+        return self.q, self.model.law_values(self.t, self.data)[0]
 
     def _dynamics(self, t: float, q: np.ndarray, v: np.ndarray,
                   baumgarte: tuple[float, float] | None = None,

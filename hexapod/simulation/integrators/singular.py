@@ -112,7 +112,7 @@ class SingularPoses:
         dependent = _collapsing(split.singular_values(), self._crossing)
         pivots = qr(as_dense(split.W[rows]).T, mode="r", pivoting=True)[1]
         kept = np.sort(rows[pivots[:rows.size - dependent]])
-        self._crossing_rates = compiled_rates(self.model, kept)
+        self._crossing_rates = compiled_rates(self.model, kept, self._here())
         if starting:
             # no step longer than the way to the pose and as far again (one much longer lands
             # far out of the band on the rows left out), nor than their forces' absence allows
