@@ -62,6 +62,8 @@ a panel per problem) and the references; progress and the load average on stderr
     python3 scripts/benchmarks/bench_forward_mujoco.py [--repeat 3] [--budget 900]
     python3 scripts/benchmarks/bench_forward_mujoco.py --quick   # one run per rung, budget
         # 120 s, MuJoCo's Euler at h = 1 ms only
+    python3 scripts/benchmarks/bench_forward_mujoco.py --quick --compile   # hexapod's kernels
+        # compiled to C (the LU written out), compiled during the warm-up
 """
 
 from __future__ import annotations
@@ -201,8 +203,17 @@ def main() -> None:
     parser.add_argument("--no-mujoco", action="store_true", help="hexapod alone")
     parser.add_argument("--quick", action="store_true", help="one run per rung, budget 120 s, "
                         "MuJoCo's Euler at h = 1 ms only")
+    parser.add_argument("--compile", action="store_true",
+                        help="hexapod's kernels compiled to C (kept in OUT/kernels; compiling "
+                        "is part of the warm-up, not of the times compared)")
     parser.add_argument("--out", default="bench-forward-mujoco")
     args = parser.parse_args()
+    with hx.executing(compiled=args.compile,
+                      cache=Path(args.out) / "kernels" if args.compile else None):
+        run(args)
+
+
+def run(args) -> None:
     if args.quick:
         args.repeat = args.repeat or 1
         args.budget = min(args.budget, 120.0)
@@ -221,6 +232,7 @@ def main() -> None:
 
     def report(results: list[dict], complete: bool) -> dict:
         return {"complete": complete, "protocol": __doc__, "repeat": args.repeat,
+                "compiled": args.compile,
                 "budget_s": args.budget, "methods": methods, "hexapod": hx.__version__,
                 "mujoco": mujoco_version if mujoco_ok else None, **machine(),
                 "numpy": np.__version__, "wall_time_s": time.perf_counter() - started,

@@ -163,8 +163,10 @@ def markdown(results: list[dict], args, mujoco_version: str | None) -> str:
     mujoco = (f"MuJoCo {mujoco_version}, CPU of its own loop (`mj_step(m, d, nstep)`), and in "
               "brackets of a Python loop copying the centres of mass after each step"
               if mujoco_version else "MuJoCo not installed: hexapod alone")
+    kernels = ("hexapod's kernels compiled to C" if getattr(args, "compile", False) else
+               "hexapod's kernels in CasADi's virtual machine")
     lines = [f"Target: relative position error {TARGET:g} over the span; CPU times best of "
-             f"{args.repeat}; {mujoco}.", "",
+             f"{args.repeat}; {kernels}; {mujoco}.", "",
              "| problem | bodies | library | method | CPU/step ms (steps) | error at setting "
              "| CPU to 1e-6 s | rungs |", "| --- | ---: | --- | --- | ---: | ---: | ---: | ---: |"]
     for r in results:
