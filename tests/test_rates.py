@@ -192,3 +192,20 @@ def test_kernels_compiled_with_pivots_solve_by_lu_to_the_exact_numbers():
     state = projection(0.2, drifted, v)
     assert state is not None
     assert np.abs(model.call("phi", q=state[0], w=reference[1]) / model.row_scale).max() <= 1e-12
+
+
+def test_kernels_refuse_what_gives_nan_though_their_residual_maxima_skip_it():
+    """CasADi's maxima skip NaN (C's fmax: all NaN gives -inf), so a residual test alone let a
+    projection through a singular matrix return NaN positions (a compiled walking run, at the
+    end of a step on a lift-off whose rows the kernel still kept). The outputs say it."""
+    from hexapod.simulation.kernels import compiled_projection
+
+    model, q, _, _, data = solve_state(four_bar(3, 0.7, driven=False, gravity=[0, -9.81, 0]),
+                                       0.2)
+    v = np.zeros(model.n_v)
+    projection = compiled_projection(model, data.independent_rows)
+    bad = q.copy()
+    bad[3] = np.nan  # an Euler parameter: every term of the first body depends on it
+    assert projection._fast(bad, v)[2][0] == -np.inf  # the maximum said all is well
+    assert projection(0.2, bad, v) is None
+    assert compiled_rates(model, data.independent_rows).solve(0.2, bad, v) is None

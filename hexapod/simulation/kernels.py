@@ -154,8 +154,10 @@ class CompiledRates:
             q_dot, v_dot, lam, residual = self._fast(*[values[n] for n in self._args], alpha)
         except RuntimeError:  # the factorisation failed: a singular matrix, or NaN in it
             return None
+        # the residuals' maxima skip NaN (C's fmax): a singular matrix (a kept row that a
+        # lift-off zeroed, at the end of a step on the lift-off) shows in the outputs
         if not (residual[0] <= RESIDUAL_TOLERANCE and residual[1] <= left_out
-                and np.all(np.isfinite(v_dot))):
+                and np.all(np.isfinite(v_dot)) and np.all(np.isfinite(lam))):
             return None
         return q_dot, v_dot, lam
 
@@ -224,8 +226,9 @@ class CompiledProjection:
                 *[values[n] for n in self._args])
         except RuntimeError:  # the factorisation failed: a singular matrix, or NaN in it
             return None
-        if not (phi_error[0] <= self.tol and rate_error[0] <= RESIDUAL_TOLERANCE):
-            return None
+        if not (phi_error[0] <= self.tol and rate_error[0] <= RESIDUAL_TOLERANCE
+                and np.all(np.isfinite(position)) and np.all(np.isfinite(velocity))):
+            return None  # the maxima skip NaN (C's fmax): the outputs say it
         return position, velocity
 
 
