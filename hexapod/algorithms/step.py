@@ -23,9 +23,9 @@ by CasADi's sparse QR (the ``qr`` linear solver: backward stable without pivotin
 symbolic analysis done once per row set, its factors as sparse as the body-joint graph allows);
 the batched inverse dynamics factorises its square ``W_I`` instead by an LU with pivots chosen
 at the decision (:mod:`hexapod.algorithms.static_lu`, a tenth of the QR's operations), and so
-do the integrators' kernels compiled to C, either form, with pivots chosen at the state where
-they are built (:func:`kept_pivots`; written out, the LU runs in a third of the compiled QR's
-time, where CasADi's virtual machine gains nothing from it). What
+do the integrators' kernels compiled to C in the saddle-point form, with pivots chosen at the
+state where they are built (:func:`kept_pivots`; written out, the LU runs in 40 % of the
+compiled QR's time, where CasADi's virtual machine gains nothing from it). What
 can go wrong as the state moves (a row that becomes dependent, a singular pose, pivots gone
 stale) shows in the residual checks the callers evaluate.
 """

@@ -13,9 +13,9 @@ that forms ``Phi_v, gamma, Q`` and solves the equilibrated saddle-point system
     v_dot = M^-1/2 y
 
 with a sparse QR factorisation (CasADi's ``qr`` linear solver, symbolic analysis done once), or,
-compiled to C, an LU with pivots chosen at the state where the kernel is built
-(:func:`pivots_near`), on the independent rows chosen by the rank decision at a reference
-state. Equilibration makes the
+compiled to C and in the saddle-point form, an LU with pivots chosen at the state where the
+kernel is built (:func:`pivots_near`), on the independent rows chosen by the rank decision at a
+reference state. Equilibration makes the
 rows dimensionless and of unit length, so that the conditioning is the mechanism's, not its
 units'. The matrix and every node of the Function are as sparse as ``Phi_v`` and the
 factorisation follows the body-joint graph, so a call costs time linear in the number of
@@ -242,11 +242,14 @@ def _evaluated(function: ca.Function, to_c: bool) -> ca.Function:
 
 def pivots_near(model: Model, rows: np.ndarray, reference: tuple | None) -> StaticLU | None:
     """The pivots of a compiled kernel's LU (:func:`~hexapod.algorithms.step.kept_pivots`) at
-    ``reference = (q, w)``; None without a reference or a row (CasADi's sparse QR then).
-    Written out as straight-line code, an LU of the kernel's pattern costs a third of the
-    compiled sparse QR's time (the 10-link chain's right-hand side: 26 against 77 us); in
-    CasADi's virtual machine it gains nothing, and is not used there."""
-    if reference is None or not rows.size:
+    ``reference = (q, w)``, for the saddle-point form (fewer rows kept than velocities); None
+    without a reference, without a row, or for a square ``W_I`` (CasADi's sparse QR then).
+    Written out as straight-line code, the saddle-point matrix's LU costs 40 % of the compiled
+    sparse QR's time (the 10-link chain's right-hand side: 39 against 94 us); in CasADi's
+    virtual machine it gains nothing, and is not used there. A fully driven mechanism's square
+    ``W_I`` keeps the QR: on the walking robot, building the LU's code for each contact set
+    (its pivots, its SX expressions) cost a run 4 s more than its kernels saved."""
+    if reference is None or not rows.size or rows.size == model.n_v:
         return None
     q, w = reference
     return kept_pivots(model, rows.tolist(), q, w)
