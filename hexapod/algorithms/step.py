@@ -57,24 +57,17 @@ def kept_matrix(W_all: ca.MX, d: ca.MX, zero: ca.MX, rows: list[int]) -> ca.MX:
     return ca.vertcat(ca.horzcat(type(W_all).eye(n_v), W.T), ca.horzcat(W, -ca.diag(zero[rows])))
 
 
-def factorised_matrix(W_all, d, zero, rows: list[int]):
-    """The matrix :func:`solve_kept` factorises: ``W_I`` when the kept rows are as many as the
-    velocities, else the saddle-point matrix of :func:`kept_matrix`."""
-    if len(rows) == W_all.size2():
-        return ca.mtimes(ca.diag(1.0 / d[rows]), W_all[rows, :])
-    return kept_matrix(W_all, d, zero, rows)
-
-
 def kept_pivots(model: Model, rows: list[int], q: np.ndarray, w: np.ndarray) -> StaticLU:
-    """Pivots for :func:`solve_kept`'s LU (:class:`StaticLU`), chosen by SuperLU on the matrix
-    it factorises at positions ``q`` and law values ``w``: a kernel built with them serves the
-    states near there, its residual checks saying when they no longer do."""
+    """Pivots for the LU of the saddle-point matrix of the kept ``rows`` (:func:`kept_matrix`,
+    fewer rows than velocities), chosen by SuperLU at positions ``q`` and law values ``w``: a
+    kernel built with them serves the states near there, its residual checks saying when they
+    no longer do."""
     symbols = {"q": ca.SX.sym("q", model.n_q), "w": ca.SX.sym("w", model.n_w)}
     Phi_v = model.Phi_v(*[symbols[n] for n in model.Phi_v.name_in()])
-    A = factorised_matrix(*equilibrated(Phi_v, mass_factors(model)[0]), rows)
-    values = ca.Function("A", list(symbols.values()), [A])(q, w)
-    pattern_rows, pattern_columns = A.sparsity().get_triplet()
-    return StaticLU.pivoted(pattern_rows, pattern_columns, A.size1(),
+    K = kept_matrix(*equilibrated(Phi_v, mass_factors(model)[0]), rows)
+    values = ca.Function("K", list(symbols.values()), [K])(q, w)
+    pattern_rows, pattern_columns = K.sparsity().get_triplet()
+    return StaticLU.pivoted(pattern_rows, pattern_columns, K.size1(),
                             np.array(values.nonzeros()))
 
 
@@ -82,44 +75,33 @@ def solve_kept(W_all: ca.MX, d: ca.MX, zero: ca.MX, rows: list[int], top: ca.MX,
                bottom: ca.MX, lu: StaticLU | None = None) -> tuple[ca.MX, ca.MX]:
     """``(y, mu)`` of the kept ``rows`` (see the module's description); ``bottom``: all rows'
     right-hand sides (those of the kept rows are used), ``top`` and ``bottom`` with as many
-    columns as there are systems to solve with one factorisation. With ``lu`` (SX
-    expressions only), the factorisation is that LU with its fixed pivots
-    (:func:`kept_pivots`), written out, instead of CasADi's sparse QR."""
+    columns as there are systems to solve with one factorisation. With ``lu`` (the pivots of
+    :func:`kept_pivots`) the saddle-point form is factorised by that LU, written out, instead
+    of CasADi's sparse QR; the square form always by the QR."""
     n_v = W_all.size2()
     scaled = bottom[rows, :] / ca.repmat(d[rows], 1, bottom.size2())
-    A = factorised_matrix(W_all, d, zero, rows)
-    if lu is not None:  # one call of the LU's straight-line SX code (inlined on SX)
-        solve = _lu_solve(lu, A.sparsity(), bottom.size2(), len(rows) == n_v)
-        if len(rows) == n_v:
-            return solve(A, scaled, top)
-        solution = solve(A, ca.vertcat(top, scaled))
-    elif len(rows) == n_v:
-        y = ca.solve(A, scaled, "qr")
-        return y, ca.solve(A.T, top - y, "qr")
-    else:
-        solution = ca.solve(A, ca.vertcat(top, scaled), "qr")
+    if len(rows) == n_v:
+        W = ca.mtimes(ca.diag(1.0 / d[rows]), W_all[rows, :])
+        y = ca.solve(W, scaled, "qr")
+        return y, ca.solve(W.T, top - y, "qr")
+    K = kept_matrix(W_all, d, zero, rows)
+    rhs = ca.vertcat(top, scaled)
+    solution = (ca.solve(K, rhs, "qr") if lu is None else
+                _lu_solve(lu, K.sparsity(), rhs.size2())(K, rhs))
     return solution[:n_v, :], solution[n_v:, :]
 
 
-def _lu_solve(lu: StaticLU, pattern: ca.Sparsity, columns: int, square: bool) -> ca.Function:
-    """:func:`solve_kept`'s factorisation and solves by ``lu``, an SX Function of the matrix
-    (of ``pattern``) and the right-hand sides: ``(A, B) -> A^-1 B``, or for the square ``W_I``
-    ``(A, B, C) -> (Y, A^-T (C - Y))`` with ``Y = A^-1 B``. Built once per LU and shape."""
-    key = (tuple(pattern.colind()), tuple(pattern.row()), columns, square)
+def _lu_solve(lu: StaticLU, pattern: ca.Sparsity, columns: int) -> ca.Function:
+    """``(K, B) -> K^-1 B`` by ``lu``, for ``K`` of ``pattern``: its straight-line SX code as
+    one Function (one node in an MX graph, inlined on SX), built once per LU and shape."""
+    key = (tuple(pattern.colind()), tuple(pattern.row()), columns)
     functions = lu.__dict__.setdefault("_functions", {})
     if key not in functions:
-        A = ca.SX.sym("A", pattern)
-        F = lu.factor(ca.vertcat(*A.nonzeros()))
-        B = ca.SX.sym("B", A.size1(), columns)
-        if square:
-            C = ca.SX.sym("C", A.size1(), columns)
-            Y = ca.horzcat(*[lu.solve(F, B[:, k]) for k in range(columns)])
-            Z = ca.horzcat(*[lu.solve(F, C[:, k] - Y[:, k], transpose=True)
-                             for k in range(columns)])
-            functions[key] = ca.Function("lu_solve_pair", [A, B, C], [Y, Z])
-        else:
-            X = ca.horzcat(*[lu.solve(F, B[:, k]) for k in range(columns)])
-            functions[key] = ca.Function("lu_solve", [A, B], [X])
+        K = ca.SX.sym("K", pattern)
+        F = lu.factor(ca.vertcat(*K.nonzeros()))
+        B = ca.SX.sym("B", K.size1(), columns)
+        X = ca.horzcat(*[lu.solve(F, B[:, k]) for k in range(columns)])
+        functions[key] = ca.Function("lu_solve", [K, B], [X])
     return functions[key]
 
 
