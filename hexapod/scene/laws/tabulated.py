@@ -230,11 +230,3 @@ def _sum_last(x: np.ndarray) -> np.ndarray:
     """The sum over the last axis, of length 6: NumPy adds fewer than 8 terms one after the
     other, in the same order whatever the shape."""
     return np.add.reduce(x, axis=-1)
-
-
-def quintic_hermite(times: np.ndarray, table: np.ndarray, t) -> np.ndarray:
-    """The quintic Hermite interpolant of ``table`` at ``t`` (see :class:`Hermite`): ``table``
-    (3, ..., N) holds the values, rates and accelerations at ``times`` (N,) along its last
-    axis (one or several laws); returns their interpolated values, rates and accelerations,
-    (3, ..., *t.shape). Outside ``times`` the end intervals' polynomials continue."""
-    return read_pieces(times, quintic_pieces(times, table), t)
