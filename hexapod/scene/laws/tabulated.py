@@ -120,7 +120,6 @@ _QUINTIC_HERMITE = (
     (1, 0, 0, -10, 15, -6), (0, 1, 0, -6, 8, -3), (0, 0, 0.5, -1.5, 1.5, -0.5),
     (0, 0, 0, 10, -15, 6), (0, 0, 0, -4, 7, -3), (0, 0, 0, 0.5, -1, 0.5),
 )
-#: Each basis polynomial with its first and second derivatives.
 #: The basis as a matrix: row ``e`` holds the coefficients of the polynomial that multiplies
 #: end value ``e``.
 _BASIS = np.array(_QUINTIC_HERMITE, dtype=float)
@@ -151,23 +150,23 @@ class Hermite(Law):
     values: np.ndarray
     rates: np.ndarray
     accelerations: np.ndarray
-    _table: object = field(default=None, init=False, repr=False, compare=False)
+    _pieces: object = field(default=None, init=False, repr=False, compare=False)
     kind = "hermite"
 
     def __post_init__(self):
         for key in ("times", "values", "rates", "accelerations"):  # arrays: motions are long
             object.__setattr__(self, key, np.asarray(getattr(self, key), dtype=float).ravel())
         if not self.problems():
-            object.__setattr__(self, "_table", quintic_pieces(
+            object.__setattr__(self, "_pieces", quintic_pieces(
                 self.times, np.array([self.values, self.rates, self.accelerations])))
 
     def evaluate(self, t):
         """On each interval ``[t0, t1]`` of length ``h``, with ``s = (t - t0) / h``, the quintic
         ``sum_k f_k H_k(s)`` through the end values ``(y, h y', h^2 y'')`` (the standard quintic
         Hermite basis); outside the table the end interval's polynomial continues."""
-        if self._table is None:
+        if self._pieces is None:
             raise ValueError("hermite law is invalid: " + "; ".join(self.problems()))
-        f, fd, fdd = read_pieces(self.times, self._table, t)
+        f, fd, fdd = read_pieces(self.times, self._pieces, t)
         return f, fd, fdd
 
     def _scaled(self, factor):

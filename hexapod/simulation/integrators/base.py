@@ -172,9 +172,9 @@ class Integrator(SingularPoses):
         self.v_dot, self.lam = self._dynamics(self.t, q, v)
         # the stages' right-hand sides and the projection, compiled for the rows independent
         # at the start
-        self._compiled = compiled_rates(model, self.data.independent_rows, self._here())
-        self._compiled_projection = compiled_projection(model, self.data.independent_rows,
-                                                        self._here())
+        here = self._here()
+        self._compiled = compiled_rates(model, self.data.independent_rows, here)
+        self._compiled_projection = compiled_projection(model, self.data.independent_rows, here)
         self._feet_down = self._contact_set(self.t)
         self._start()
 
@@ -342,8 +342,9 @@ class Integrator(SingularPoses):
             return
         self._feet_down = feet
         rows = self._rank_split().independent
-        self._compiled = compiled_rates(self.model, rows, self._here())
-        self._compiled_projection = compiled_projection(self.model, rows, self._here())
+        here = self._here()
+        self._compiled = compiled_rates(self.model, rows, here)
+        self._compiled_projection = compiled_projection(self.model, rows, here)
 
     def _here(self) -> tuple[np.ndarray, np.ndarray]:
         """The current positions and law values: where compiled kernels choose their
