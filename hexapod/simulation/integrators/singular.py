@@ -50,6 +50,14 @@ POSE_CLEARANCE = 0.1
 #: crossing's capped steps to the end of its run (647 steps instead of 31)
 FORESIGHT_STEPS = 50
 FORESIGHT_TIME = 1e-2
+#: a crossing begins only where the smallest singular value has also fallen below this
+#: fraction of its value at the start: a mechanism's own value, away from any pose, may lie in
+#: the band (the walking hexapod's stays between 5.2e-5 and 6.5e-5 all stride long, 0.81 to
+#: 1.02 of its start), and each rejected step then paid two rank decisions and SVDs to find
+#: no pose ahead (a fifth of its run). Where a mechanism starts above ``SINGULAR_BAND /
+#: FALLEN`` the band alone decides, as it does for the crossings' test mechanisms (the lowest,
+#: the spatial N-four-bar of ten windows, starts at 1.39e-4)
+FALLEN = 0.75
 
 
 class SingularPoses:
@@ -91,6 +99,8 @@ class SingularPoses:
         smallest = split.smallest_singular_value()
         if not smallest < SINGULAR_BAND:
             return False
+        if self._crossing is None and not smallest < FALLEN * self._spectrum_start[0]:
+            return False  # where it started: the mechanism's own value, no pose
         base = smallest if self._crossing is None else self._crossing
         if base >= SINGULAR_BAND:
             return False  # as wide as it goes
