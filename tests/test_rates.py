@@ -209,3 +209,39 @@ def test_kernels_refuse_what_gives_nan_though_their_residual_maxima_skip_it():
     assert projection._fast(bad, v)[2][0] == -np.inf  # the maximum said all is well
     assert projection(0.2, bad, v) is None
     assert compiled_rates(model, data.independent_rows).solve(0.2, bad, v) is None
+
+
+def test_the_kernels_ground_policy_multipliers_are_the_exact_solves():
+    """A walking simulation saves its states' multipliers through the kernel's ground-force
+    policy (the redundant feet's rows left out, the multipliers that change no force solved
+    with the kept rows' factorisation, the policy's choice the exact solve's own function).
+    At states of a run across the tripods' switch at 0.25 s (a load ramp, feet that carry
+    nothing, a new contact set), they are the exact solve's, with its own rank decision, to
+    1e-10 of the largest multiplier: the two decisions alone give 2e-12 (measured), and
+    ``1e-10`` is what the inverse dynamics' paths must meet against the exact one. A decision
+    whose rows left out have left the span of the kept ones is refused."""
+    from hexapod.algorithms.dynamics import forward_dynamics
+    from hexapod.simulation.kernels import policy_multipliers
+
+    model = hx.assemble(hx.load_scene("hexapod"))
+    times = np.array([0.02, 0.2, 0.245, 0.25, 0.252, 0.258])
+    run = hx.simulate(model, 0.26, t_eval=times)
+    assert run.success, run.message
+    kernels, compared = {}, 0
+    for t, q, v in zip(run.t, run.q, run.v, strict=True):
+        data = model.create_data()
+        forward_dynamics(model, data, t, q, v)
+        key = (tuple(np.sort(data.independent_rows)), tuple(np.sort(data.redundant_rows)))
+        if key not in kernels:
+            kernels[key] = compiled_rates(model, data.independent_rows,
+                                          left_out=data.redundant_rows)
+        lam = kernels[key].multipliers(t, q, v)
+        assert lam is not None, t
+        assert np.abs(lam - data.lam).max() <= 1e-10 * np.abs(data.lam).max(), t
+        compared += 1
+    assert compared == times.size and len(kernels) >= 2  # both tripods' contact sets
+    # the first tripod's decision after the switch: its rows left out now have a force of
+    # their own (or none at all), and the kernel says so
+    (first, *_), t, q, v = list(kernels), run.t[-1], run.q[-1], run.v[-1]
+    stale = policy_multipliers(model, np.array(first[0]), np.array(first[1]))
+    assert stale(t, q, v) is None

@@ -98,14 +98,15 @@ def foot_values(policy: str, weights: np.ndarray) -> np.ndarray:
                     np.sqrt(np.maximum(1.0 / safe - 1.0, 0.0)), 0.0)
 
 
-def policy_objective(model: Model, data, q: np.ndarray, Phi_v, Q_across,
+def policy_objective(model: Model, data, q: np.ndarray, Phi: np.ndarray, Q_across,
                      feet: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``A, b`` of the policy's objective ``|A lam + b|^2`` at a state, from its one
-    definition (:meth:`hexapod.algorithms.step_terms.StepTerms.objective`); ``feet`` as
-    :func:`foot_values` gives them."""
+    definition (:meth:`hexapod.algorithms.step_terms.StepTerms.objective`); ``Phi`` the
+    nonzeros of ``Phi_v`` (:meth:`~hexapod.algorithms.step_terms.StepTerms.nonzeros`),
+    ``feet`` as :func:`foot_values` gives them."""
     terms = terms_of(model)
-    return tuple(terms.evaluate(data, "objective", q, terms.nonzeros(Phi_v),
-                                terms.offset(data, q, Q_across), feet))
+    return tuple(terms.evaluate(data, "objective", q, Phi, terms.offset(data, q, Q_across),
+                                feet))
 
 
 def feet_status(model: Model, times: np.ndarray, forces: np.ndarray) -> np.ndarray:
@@ -147,18 +148,19 @@ def share_ground_forces(model: Model, data, t: float, q: np.ndarray, Phi_v: np.n
                         lam: np.ndarray) -> tuple[np.ndarray, tuple[str, ...]]:
     """The multipliers chosen by the scene's ground-force policy among ``lam + N z``, and each
     contact's status (:func:`feet_status`)."""
-    chosen = _policy_multipliers(model, data, t, q, Phi_v, Q_across, split, lam)
+    chosen = ground_policy(model, data, t, q, terms_of(model).nonzeros(Phi_v), Q_across, lam,
+                           multiplier_null_space(split, model.n_c))
     status = feet_status(model, np.array([t]), ground_reactions(model, chosen)[None])[0]
     return chosen, tuple(status.tolist())
 
 
-def _policy_multipliers(model: Model, data, t: float, q: np.ndarray, Phi_v: np.ndarray,
-                        Q_across: np.ndarray | None, split: RowSplit,
-                        lam: np.ndarray) -> np.ndarray:
-    """The multipliers among ``lam + N z`` of least policy objective."""
+def ground_policy(model: Model, data, t: float, q: np.ndarray, Phi: np.ndarray,
+                  Q_across: np.ndarray | None, lam: np.ndarray, N: np.ndarray) -> np.ndarray:
+    """The multipliers among ``lam + N z`` of least policy objective at ``(t, q)``: ``N``
+    (n_c x m) spans the multipliers that change no constraint force, ``Phi`` holds the
+    nonzeros of ``Phi_v``."""
     stance = np.array([bool(c.in_stance(t)) for c in model.contacts])
     weights = sharing_weights(contact_weights(model, t), stance)
-    N = multiplier_null_space(split, model.n_c)
     if N.shape[1] == 0:
         return lam
     # feet of weight zero carry nothing: lam + N z = 0 on their rows
@@ -170,7 +172,7 @@ def _policy_multipliers(model: Model, data, t: float, q: np.ndarray, Phi_v: np.n
         z0, K = np.zeros(N.shape[1]), np.eye(N.shape[1])
     base = lam + N @ z0  # lam + N (z0 + K y)
     NK = _orthonormal(N @ K)  # the same multipliers, in directions the QP solvers handle well
-    A, b = policy_objective(model, data, q, Phi_v, Q_across,
+    A, b = policy_objective(model, data, q, Phi, Q_across,
                             foot_values(model.ground.policy, weights))
     AK, r = A @ NK, A @ base + b
     policy = model.ground.policy

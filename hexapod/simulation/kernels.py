@@ -37,6 +37,7 @@ import numpy as np
 from hexapod._support.compiled import compiled_graph
 from hexapod._support.execution import current
 from hexapod._support.fastcall import FastFunction
+from hexapod.algorithms.ground import ground_policy
 from hexapod.algorithms.static_lu import StaticLU
 from hexapod.algorithms.step import (
     equilibrated,
@@ -56,6 +57,10 @@ RESIDUAL_TOLERANCE = 1e-9
 #: ones by about that error and are rightly ignored (the step's end is projected); a row that
 #: has become independent (leaving a singular pose) disagrees by far more
 REDUNDANT_TOLERANCE = 1e-3
+#: relative residual of the rows left out above which the policy's multipliers are refused:
+#: the exact solve's default (``consistency_tol`` of
+#: :func:`~hexapod.algorithms.dynamics.forward_dynamics`), which then says which rows disagree
+CONSISTENCY_TOLERANCE = 1e-6
 
 
 class CompiledRates:
@@ -72,18 +77,21 @@ class CompiledRates:
         solve is then an LU with pivots chosen there (:func:`pivots_near`).
     """
 
-    def __init__(self, model: Model, rows: np.ndarray, reference: tuple | None = None):
+    def __init__(self, model: Model, rows: np.ndarray, reference: tuple | None = None,
+                 left_out: np.ndarray = ()):
         self.model = model
         self.rows = np.asarray(rows, dtype=int)
+        self.left_out = np.asarray(left_out, dtype=int)
         # the Function once per model, row set, execution and pivots; the buffers are this
         # object's
         to_c = current().compiled
-        lu = pivots_near(model, self.rows, reference) if to_c else None
+        self._lu = lu = pivots_near(model, self.rows, reference) if to_c else None
         self.function = model.built_once(("rates", tuple(self.rows.tolist()), to_c,
                                           _pivot_key(lu)),
                                          lambda m: _evaluated(self._build(lu), to_c))
         self._fast = FastFunction(self.function)
         self._args = [n for n in ("q", "v", "w", "wd", "wdd") if n in ("q", "v") or model.n_w]
+        self._policy = None  # the multipliers by the redundancy policy, built when first asked
 
     def _build(self, lu: StaticLU | None) -> ca.Function:
         model, rows = self.model, self.rows
@@ -128,6 +136,24 @@ class CompiledRates:
         return ca.Function("rates", inputs, [q_dot, v_dot, lam, residual], args + ["alpha"],
                            ["q_dot", "v_dot", "lam", "residual"])
 
+    def multipliers(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray | None:
+        """The multipliers at ``(t, q, v)`` by the redundancy policy
+        (:func:`~hexapod.algorithms.dynamics.forward_dynamics`'s), or None where this kernel
+        cannot give them as the exact solve would: those of :meth:`solve` when every row is
+        kept; with rows left out and feet on the ground, the ground-force policy's
+        (:class:`PolicyMultipliers`), refused (None) where a row left out has left the span of
+        the kept ones by more than the rank tolerance, or the rows disagree by more than the
+        exact solve allows. A mechanism without feet keeps the exact solve's least-wrench
+        choice."""
+        if self.complete:
+            solution = self.solve(t, q, v)
+            return None if solution is None else solution[2]
+        if not (self.left_out.size and self.model.contacts):
+            return None  # no redundant rows; or the least-wrench policy of solve_saddle
+        if self._policy is None:
+            self._policy = policy_multipliers(self.model, self.rows, self.left_out, self._lu)
+        return self._policy(t, q, v)
+
     @property
     def complete(self) -> bool:
         """True when every row is solved with (none redundant): the multipliers are then
@@ -160,6 +186,85 @@ class CompiledRates:
                 and np.all(np.isfinite(v_dot)) and np.all(np.isfinite(lam))):
             return None
         return q_dot, v_dot, lam
+
+
+class PolicyMultipliers:
+    """The multipliers by the ground-force policy at a state, for a rank decision (the kept
+    ``rows`` and the redundant ``left_out`` ones): one call gives the kept rows' solve of
+    :class:`CompiledRates` and, with one more right-hand side per row left out, the
+    multipliers that change no constraint force, ``N = [e_R - C^T]`` with ``Phi_R = C Phi_I``
+    (the saddle-point system with ``M^-1/2 Phi_R^T`` on top and zero below returns ``C^T``
+    in its lower part and, in its upper part, the rows' components off the span of the kept
+    ones: zero while the decision holds); the policy's choice among ``lam0 + N z`` is then
+    the exact solve's own, :func:`hexapod.algorithms.ground.ground_policy`. A simulation saves
+    its states' multipliers by it: the exact solve (a rank decision, dense factorisations)
+    cost the walking robot some 12 ms a save, a third of its run."""
+
+    def __init__(self, model: Model, rows: np.ndarray, left_out: np.ndarray,
+                 lu: StaticLU | None = None):
+        self.model, self.rows, self.left_out = model, rows, left_out
+        to_c = current().compiled
+        key = ("policy multipliers", tuple(rows.tolist()), tuple(left_out.tolist()), to_c,
+               _pivot_key(lu))
+        self.function = model.built_once(key, lambda m: _evaluated(self._build(lu), to_c))
+        self._fast = FastFunction(self.function)
+        self.data = model.create_data()  # the objective's and Q_across's call buffers
+
+    def _build(self, lu: StaticLU | None) -> ca.Function:
+        model, rows, left = self.model, self.rows.tolist(), self.left_out.tolist()
+        n_c, m = model.n_c, len(left)
+        symbols = {n: ca.MX.sym(n, size) for n, size in (
+            ("q", model.n_q), ("v", model.n_v), ("w", model.n_w), ("wd", model.n_w),
+            ("wdd", model.n_w))}
+        Phi_v, gamma, Q = model.dynamics_terms(*[symbols[n]
+                                                 for n in model.dynamics_terms.name_in()])
+        m_inv_sqrt, _ = mass_factors(model)
+        W_all, d_all, zero = equilibrated(Phi_v, m_inv_sqrt)
+        top = ca.horzcat(ca.mtimes(m_inv_sqrt, Q), ca.mtimes(m_inv_sqrt, Phi_v[left, :].T))
+        y, mu = solve_kept(W_all, d_all, zero, rows, top,
+                           ca.horzcat(gamma, ca.MX.zeros(n_c, m)), lu)
+        mu = mu / ca.repmat(d_all[rows], 1, m + 1)
+        lam0 = ca.MX(n_c, 1)
+        lam0[rows] = mu[:, 0]
+        N = ca.MX(n_c, m)
+        N[rows, :] = -mu[:, 1:]
+        N[left, :] = ca.MX(ca.DM.eye(m))
+        # the dynamics' residual on the rows kept and left out, relative; the rows left out's
+        # distances from the span of those kept (their rows of W are of unit length)
+        scaled = ca.fabs(ca.mtimes(Phi_v, ca.mtimes(m_inv_sqrt, y[:, 0])) - gamma) / d_all
+        size = ca.norm_inf(y[:, 0]) + ca.norm_inf(top[:, 0]) + 1e-300
+        off_span = ca.sqrt(ca.sum1(y[:, 1:] ** 2)).T / d_all[left]
+        checks = ca.vertcat(ca.mmax(scaled[rows]) / size, ca.mmax(scaled[left]) / size,
+                            ca.mmax(off_span))
+        args = [n for n in ("q", "v", "w", "wd", "wdd") if n in ("q", "v") or model.n_w]
+        return ca.Function("policy_terms", [symbols[n] for n in args],
+                           [lam0, ca.densify(N), Phi_v.nz[:], checks], args,
+                           ["lam0", "N", "Phi", "checks"])
+
+    def __call__(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray | None:
+        """The multipliers, or None (see :meth:`CompiledRates.multipliers`)."""
+        model = self.model
+        w, wd, wdd = model.law_values(t) if model.n_w else ((),) * 3
+        try:
+            lam0, N, Phi, checks = self._fast(*[q, v, *((w, wd, wdd) if model.n_w else ())])
+        except RuntimeError:  # the factorisation failed: a singular matrix, or NaN in it
+            return None
+        if not (checks[0] <= RESIDUAL_TOLERANCE and checks[1] <= CONSISTENCY_TOLERANCE
+                and checks[2] <= model.rank_tolerance and np.all(np.isfinite(N))
+                and np.all(np.isfinite(lam0))):
+            return None  # the maxima skip NaN (C's fmax): the outputs say it
+        Q_across = (model.call("Q_across", self.data, q=q, v=v, w=w)
+                    if model.Q_across is not None else None)
+        return ground_policy(model, self.data, t, q, Phi, Q_across, lam0,
+                             N.reshape(model.n_c, -1, order="F"))
+
+
+def policy_multipliers(model: Model, rows: np.ndarray, left_out: np.ndarray,
+                       lu: StaticLU | None = None) -> PolicyMultipliers:
+    """The :class:`PolicyMultipliers` of a rank decision (with, compiled, the LU pivots of
+    its rates kernel): its Function built once per model, its buffers the caller's."""
+    return PolicyMultipliers(model, np.asarray(rows, dtype=int),
+                             np.asarray(left_out, dtype=int), lu)
 
 
 class CompiledProjection:
@@ -267,8 +372,9 @@ def compiled_projection(model: Model, rows: np.ndarray,
     return CompiledProjection(model, rows, reference=reference)
 
 
-def compiled_rates(model: Model, rows: np.ndarray,
-                   reference: tuple | None = None) -> CompiledRates:
+def compiled_rates(model: Model, rows: np.ndarray, reference: tuple | None = None,
+                   left_out: np.ndarray = ()) -> CompiledRates:
     """The :class:`CompiledRates` of ``model`` for a row set (and, compiled, pivots chosen at
-    ``reference``): its Function built once per model, its buffers the caller's."""
-    return CompiledRates(model, rows, reference)
+    ``reference``; ``left_out`` the rows the rank decision found redundant, for the policy's
+    multipliers): its Function built once per model, its buffers the caller's."""
+    return CompiledRates(model, rows, reference, left_out)

@@ -173,7 +173,8 @@ class Integrator(SingularPoses):
         # the stages' right-hand sides and the projection, compiled for the rows independent
         # at the start
         here = self._here()
-        self._compiled = compiled_rates(model, self.data.independent_rows, here)
+        self._compiled = compiled_rates(model, self.data.independent_rows, here,
+                                        self.data.redundant_rows)
         self._compiled_projection = compiled_projection(model, self.data.independent_rows, here)
         self._feet_down = self._contact_set(self.t)
         self._start()
@@ -188,12 +189,15 @@ class Integrator(SingularPoses):
 
     def multipliers(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """The multipliers at a state by the redundancy policy, counted as a solve: the
-        compiled solve's when every row is kept (they are then unique), else the exact solve's."""
-        if self._compiled.complete:
-            solution = self._compiled.solve(t, q, v)
-            if solution is not None:
+        compiled kernel's where it can give them
+        (:meth:`~hexapod.simulation.kernels.CompiledRates.multipliers`; not while
+        a singular pose is crossed, whose rows left out are violated by design), else the exact
+        solve's."""
+        if self._crossing is None:
+            lam = self._compiled.multipliers(t, q, v)
+            if lam is not None:
                 self.counters.rhs += 1
-                return np.asarray(solution[2], dtype=float)
+                return np.asarray(lam, dtype=float)
         return self._dynamics(t, q, v)[1]
 
     @lam.setter
@@ -341,9 +345,10 @@ class Integrator(SingularPoses):
         if feet == self._feet_down:
             return
         self._feet_down = feet
-        rows = self._rank_split().independent
+        split = self._rank_split()
+        rows = split.independent
         here = self._here()
-        self._compiled = compiled_rates(self.model, rows, here)
+        self._compiled = compiled_rates(self.model, rows, here, split.redundant)
         self._compiled_projection = compiled_projection(self.model, rows, here)
 
     def _here(self) -> tuple[np.ndarray, np.ndarray]:
