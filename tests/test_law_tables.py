@@ -82,6 +82,23 @@ def test_tabulation_meets_its_tolerance_between_the_times_it_checked():
     assert tabulated_model(model, 0.73, 0.75, 1e-8)[0] is twin
 
 
+def test_a_model_keeps_its_recent_times_law_values_and_its_twins_their_own():
+    """The values at the last few single times are kept (an adaptive step asks for its end's
+    again and again), returned as copies, and never served to a twin with other laws."""
+    model = hx.assemble(hx.load_scene("front-leg"))
+    costly = [i for i, law in enumerate(model.laws) if law.costly]
+    first = model.law_values(0.3)
+    first[0][:] = np.nan  # a caller's change does not reach what is kept
+    again = model.law_values(0.3)
+    assert np.array_equal(again[0][costly], [model.laws[i].evaluate(0.3)[0] for i in costly])
+    scaled = model.with_laws(tuple(law._scaled(2.0) if i in costly else law
+                                   for i, law in enumerate(model.laws)), "scaled")
+    assert np.array_equal(scaled.law_values(0.3)[0][costly], 2.0 * again[0][costly])
+    for t in np.linspace(0.0, 0.1, 10):  # more times than are kept: the oldest go
+        model.law_values(t)
+    assert np.array_equal(model.law_values(0.3)[1], again[1])
+
+
 def test_a_tolerance_below_the_exact_laws_round_off_keeps_them_exact():
     model = hx.assemble(hx.load_scene("front-leg"))
     twin, record = tabulated_model(model, 0.0, 0.1, 1e-15)

@@ -62,6 +62,10 @@ __all__ = ["GROUND_INDEX", "BodyInfo", "ContactInfo", "Data", "DriverInfo", "For
 _MATRIX_OUTPUTS = frozenset({"Phi_q", "Phi_v", "M", "Q_across"})
 #: outputs with more entries than this are evaluated on their nonzeros (ScatteredFunction)
 _DENSE_OUTPUT_ENTRIES = 100_000
+#: the times whose law values a model keeps (:meth:`Model.law_values`): an adaptive step asks
+#: for its end's four or five times (its projection, its rates there, the saved state's
+#: multipliers, the next step's contact set), half of a walking run's evaluations
+RECENT_LAWS = 4
 
 
 def _large(function: ca.Function) -> bool:
@@ -171,6 +175,7 @@ class Model:
         self.row_index = {r.name: i for i, r in enumerate(rows)}
         self._built: dict = {}  # see built_once
         self._lock = threading.RLock()
+        self._recent_laws: dict = {}  # see law_values
         self._lie_indices()
         self._frozen = True
 
@@ -261,18 +266,27 @@ class Model:
         With ``data``, the values at the times of the last call with several times are kept
         there: an algorithm that walks through samples one by one (the saddle path of the
         inverse dynamics) asks for the same numbers again, and some laws (a gait's inverse
-        kinematics) cost far less per sample when evaluated together."""
+        kinematics) cost far less per sample when evaluated together. The values at the last
+        :data:`RECENT_LAWS` single times are kept by the model (they are a pure function of
+        the time), and returned as copies."""
         t = np.asarray(t, dtype=float)
         batch = data.laws if data is not None else None
-        if t.ndim == 0 and batch is not None:
-            column = batch[0].get(float(t))
-            if column is not None:
+        if t.ndim == 0:
+            if batch is not None and (column := batch[0].get(float(t))) is not None:
                 return tuple(x[:, column].copy() for x in batch[1:])
+            if (recent := self._recent_laws.get(float(t))) is not None:
+                return tuple(x.copy() for x in recent)
         shape = (self.n_w,) + t.shape
         w, wd, wdd = np.zeros(shape), np.zeros(shape), np.zeros(shape)
         evaluate_laws(self, t, w, wd, wdd)
         if data is not None and t.ndim == 1 and t.size > 1:
             data.laws = ({float(x): k for k, x in enumerate(t)}, w, wd, wdd)
+        if t.ndim == 0:
+            with self._lock:
+                recent = self._recent_laws
+                if len(recent) >= RECENT_LAWS:
+                    del recent[next(iter(recent))]  # the oldest
+                recent[float(t)] = (w.copy(), wd.copy(), wdd.copy())
         return w, wd, wdd
 
     def cycle_time(self) -> float | None:
@@ -312,6 +326,7 @@ class Model:
         twin = copy.copy(self)
         for name, value in changes.items():
             object.__setattr__(twin, name, value)
+        object.__setattr__(twin, "_recent_laws", {})  # its laws may not be these
         if not share_built:
             object.__setattr__(twin, "_built", {})
             object.__setattr__(twin, "_lock", threading.RLock())
