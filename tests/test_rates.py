@@ -47,6 +47,36 @@ def test_compiled_rates_equal_the_exact_solve(case):
     assert compiled_rates(model, data.independent_rows).function is rates.function  # once
 
 
+@pytest.mark.parametrize("case", ["four-bar-3d", "driven-tree"])
+def test_a_steps_stages_in_one_call_are_those_taken_one_by_one(case):
+    """DOP853's eleven later stages in one call of the kernel (the tableau applied inside
+    the Function) are the stages one by one, from the same sums in the same order: equal to
+    round-off (they were bit for bit on both cases), with redundant rows left out
+    (four-bar-3d) and time laws read at each stage's time (driven-tree). A stage whose
+    solve would be refused refuses the call."""
+    from hexapod.simulation.integrators import DormandPrince853
+
+    scene = (four_bar(3, 0.7, driven=False, gravity=[0, -9.81, 0]) if case == "four-bar-3d"
+             else random_tree(3, 4))
+    model, q, _, _, data = solve_state(scene, 0.2)
+    v = _random_velocities(model, q, 0.2, 0)
+    method = DormandPrince853(model, 0.2, 1.0, q, v)
+    y0 = np.concatenate([method.q, method.v])
+    f0 = np.concatenate([model.call("qdot", q=method.q, v=method.v), method.v_dot])
+    h = 1e-2
+    K = method._compiled.stages(method.A, method.c, 0.2, h, y0, f0)
+    stages = [f0]
+    for i in range(1, len(method.c)):
+        y = y0 + h * sum(a * k for a, k in zip(method.A[i, :i], stages, strict=True))
+        stages.append(method._derivative(0.2 + method.c[i] * h, y[:model.n_q], y[model.n_q:]))
+    one_by_one = np.array(stages[1:])
+    assert K.shape == one_by_one.shape == (len(method.c) - 1, y0.size)
+    assert np.abs(K - one_by_one).max() <= 1e-14 * np.abs(one_by_one).max()
+    bad = y0.copy()
+    bad[3] = np.nan  # an Euler parameter: every term of the first body depends on it
+    assert method._compiled.stages(method.A, method.c, 0.2, h, bad, f0) is None
+
+
 def test_baumgarte_terms_match_the_exact_solve():
     model, q, v, _, data = solve_state(four_bar(2, 0.7, driven=False, gravity=[0, -9.81]))
     drifted_q = q + 1e-3 * np.random.default_rng(1).normal(size=q.size)

@@ -34,6 +34,7 @@ from hexapod.simulation.integrators.tableaus import (
     DOPRI5_C,
     DOPRI5_DENSE,
 )
+from hexapod.simulation.kernels import REDUNDANT_TOLERANCE
 from hexapod.simulation.methods import METHODS
 
 
@@ -97,7 +98,15 @@ class EmbeddedRungeKutta(Integrator):
     def _stages(self, t: float, h: float, y0: np.ndarray,
                 f0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The stages ``K`` of a step ``h`` from ``(t, y0)``, ``f0`` the rate there, and the
-        propagated solution ``y1``."""
+        propagated solution ``y1``: in one call of the compiled kernel
+        (:meth:`~hexapod.simulation.kernels.CompiledRates.stages`), else one by one."""
+        kernel, left_out = ((self._compiled, REDUNDANT_TOLERANCE) if self._crossing is None
+                            else (self._crossing_rates, np.inf))
+        later = kernel.stages(self.A, self.c, t, h, y0, f0, left_out)
+        if later is not None:
+            self.counters.rhs += later.shape[0]
+            K = np.vstack([f0, later])
+            return K, y0 + h * (self.b @ K)
         n_q = self.model.n_q
         stages = [f0]
         for i in range(1, len(self.c)):
