@@ -86,8 +86,8 @@ class CompiledRates:
         # object's
         to_c = current().compiled
         self._lu = lu = pivots_near(model, self.rows, reference) if to_c else None
-        self.function = model.built_once(("rates", tuple(self.rows.tolist()), to_c,
-                                          _pivot_key(lu)),
+        self._key = ("rates", tuple(self.rows.tolist()), to_c, _pivot_key(lu))
+        self.function = model.built_once(self._key,
                                          lambda m: _evaluated(self._build(lu), to_c))
         self._fast = FastFunction(self.function)
         self._args = [n for n in ("q", "v", "w", "wd", "wdd") if n in ("q", "v") or model.n_w]
@@ -212,8 +212,11 @@ class CompiledStages:
 
     def __init__(self, rates: CompiledRates, A: np.ndarray, c: np.ndarray):
         self.model, self.c = rates.model, np.asarray(c, dtype=float)
-        self.function = _stages_function(rates.function, np.asarray(A, dtype=float),
-                                         self.c, rates.model)
+        A = np.asarray(A, dtype=float)
+        # built once per model, kernel and tableau (a run's start would otherwise pay it)
+        self.function = rates.model.built_once(
+            ("stages", rates._key, A.tobytes(), self.c.tobytes()),
+            lambda m: _stages_function(rates.function, A, self.c, m))
         self._fast = FastFunction(self.function)
 
     def __call__(self, t: float, h: float, y0: np.ndarray, f0: np.ndarray,
