@@ -8,13 +8,14 @@ on machines without a screen.
 
 from __future__ import annotations
 
-import functools
 import io
 import math
 import sys
 from typing import TYPE_CHECKING
 
 import numpy as np
+
+from hexapod.output.panel_axes import few_ticks, light_ticks
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -120,50 +121,14 @@ def _align_zeros(left, right) -> None:
             ax.set_ylim(-below * span, (1 - below) * span)
 
 
-#: Tick marks per panel axis at most: a report draws some 50 panels, and their ticks (a tick
-#: is five artists: two marks, a grid line, two labels, made anew for every axis) are most of
-#: the drawing.
-TICKS = 5
-
-
-def _few_ticks(ax, which: str = "xy") -> None:
-    """At most :data:`TICKS` ticks on the axes ``which`` of ``ax``, only those in view
-    (:func:`_in_view_locator`)."""
-    locator = _in_view_locator()
-    for axis in which:
-        getattr(ax, f"{axis}axis").set_major_locator(locator(TICKS))
-
-
-@functools.cache
-def _in_view_locator():
-    """matplotlib's ``MaxNLocator`` less the ticks outside the axis' limits: it returns one
-    more on each side, which matplotlib makes (a tenth of a sheet's time) but never draws."""
-    from matplotlib.ticker import MaxNLocator
-
-    class InView(MaxNLocator):
-        def __call__(self):
-            low, high = sorted(self.axis.get_view_interval())
-            ticks = super().__call__()
-            slack = 1e-9 * (high - low)
-            return ticks[(ticks >= low - slack) & (ticks <= high + slack)]
-
-    return InView
-
-
 def _finish_panels(axes, columns: int) -> None:
     """Grid, ticks and the time label (on the lowest panel of each column) of :func:`_figure`'s
-    panels."""
+    panels, once their limits are final."""
     for k, ax in enumerate(axes):
-        _grid_and_labels(ax)
-        _few_ticks(ax)
-        if k >= len(axes) - columns:
+        lowest = k >= len(axes) - columns
+        if lowest:
             ax.set_xlabel("t (s)")
-
-
-def _grid_and_labels(ax) -> None:
-    """A light grid and 8-point tick labels, set in one pass over the panel's ticks (each of
-    ``grid`` and ``tick_params`` is a pass over every tick of both axes)."""
-    ax.tick_params(labelsize=8, gridOn=True, grid_linewidth=0.4, grid_alpha=0.6)
+        light_ticks(ax, x_labels=lowest)
 
 
 def png_bytes(figure: Figure, dpi: int = 110) -> bytes:
@@ -363,7 +328,7 @@ def effort_figure(times: np.ndarray, efforts: list[tuple[str, str, np.ndarray, n
         twin.plot(times, power, color="tab:orange", linewidth=1.0, linestyle="--")
         twin.set_ylabel("power (W)", fontsize=8, color="tab:orange")
         twin.tick_params(labelsize=8)
-        _few_ticks(twin, "y")
+        few_ticks(twin, "y")
         _align_zeros(ax, twin)
         _panel_title(ax, name)
     _finish_panels(axes, columns)
@@ -417,8 +382,8 @@ def trajectory_figure(times: np.ndarray, trajectories: dict[str, np.ndarray],
     timeline.set_xlabel("t (s)")
     _panel_title(timeline, "against time")
     for ax in (side, top, timeline):
-        _grid_and_labels(ax)
-        _few_ticks(ax)
+        ax.apply_aspect()  # the views' limits as drawn (equal scales), final from here on
+        light_ticks(ax)
     _shared_legend(figure, [timeline if len(trajectories) == 1 else top])
     _title(figure, title, figure.get_figwidth())
     return figure
@@ -448,34 +413,39 @@ def _leg_layout(legs: list[str]) -> tuple[int, int, list[tuple[int, int]]]:
 
 
 def _leg_panels(legs: list[str], title: str):
-    """A figure with one panel per leg, placed by :func:`_leg_layout`, sharing both axes;
-    unused panels hidden; room for a legend row under the title. Returns the figure, the
-    panels in the order of ``legs``, and per panel whether it is the first and the last of its
-    row (where the shared vertical axis is labelled, left and right)."""
+    """A figure with one panel per leg, placed by :func:`_leg_layout`, all sharing both axes,
+    with room for a legend row under the title. Returns the figure, the panels in the order
+    of ``legs``, and per panel whether it is the first and the last of its row (where the
+    shared vertical axis is labelled, left and right) and the lowest of its column (where
+    the time axis is)."""
     from matplotlib.figure import Figure
 
     rows, columns, places = _leg_layout(legs)
     width, height = 4.6 * columns + 0.6, 2.4 * rows + 1.0 + LEGEND_ROW
     figure = Figure(figsize=(width, height))
-    grid = figure.subplots(rows, columns, sharex=True, sharey=True, squeeze=False)
-    figure.subplots_adjust(left=0.8 / width, right=1 - 0.8 / width, bottom=0.55 / height,
-                           top=1 - (0.7 + LEGEND_ROW) / height, wspace=0.35, hspace=0.4)
-    used = set(places)
-    for r in range(rows):
-        for c in range(columns):
-            if (r, c) not in used:
-                grid[r, c].set_visible(False)
+    grid = figure.add_gridspec(rows, columns, left=0.8 / width, right=1 - 0.8 / width,
+                               bottom=0.55 / height, top=1 - (0.7 + LEGEND_ROW) / height,
+                               wspace=0.35, hspace=0.4)
+    axes = [figure.add_subplot(grid[places[0]])]
+    axes += [figure.add_subplot(grid[place], sharex=axes[0], sharey=axes[0])
+             for place in places[1:]]
     _title(figure, title, width)
-    axes = [grid[r, c] for r, c in places]
+    used = set(places)
+    ends = []
     for ax, (r, c) in zip(axes, places, strict=True):
-        _grid_and_labels(ax)
-        _few_ticks(ax)
-        if r == rows - 1 or (r + 1, c) not in used:
+        row = [c2 for r2, c2 in places if r2 == r]
+        ends.append((c == min(row), c == max(row), (r + 1, c) not in used))
+        ax.tick_params(labelleft=ends[-1][0], labelbottom=ends[-1][2])
+        if ends[-1][2]:
             ax.set_xlabel("t (s)")
-            ax.xaxis.set_tick_params(labelbottom=True)
-    ends = [(min(c for r2, c in places if r2 == r) == c, max(c for r2, c in places if r2 == r) == c)
-            for r, c in places]
     return figure, axes, ends
+
+
+def _finish_leg_panels(axes, ends) -> None:
+    """Grid and ticks of :func:`_leg_panels`' panels, once every panel is drawn (they share
+    their limits)."""
+    for ax, (first, _, lowest) in zip(axes, ends, strict=True):
+        light_ticks(ax, x_labels=lowest, y_labels=first)
 
 
 def _shade(ax, intervals) -> None:
@@ -506,7 +476,7 @@ def ground_reaction_figure(times: np.ndarray, forces: np.ndarray, legs: list[str
         ax.plot(times, forces[:, k, 1], color="tab:blue", linewidth=1.1,
                 label="lateral (y, left +)")
         _panel_title(ax, leg)
-        first, last = ends[k]
+        first, last, _ = ends[k]
         if first:
             ax.set_ylabel("N", fontsize=8)
         if weight > 0 and last:  # the panels share their scale: one right axis per row
@@ -514,7 +484,8 @@ def ground_reaction_figure(times: np.ndarray, forces: np.ndarray, legs: list[str
                                                            lambda b: b * weight))
             right.set_ylabel("body weights", fontsize=8)
             right.tick_params(labelsize=8)
-            _few_ticks(right, "y")
+            few_ticks(right, "y")
+    _finish_leg_panels(axes, ends)
     _shared_legend(figure, axes)
     return figure
 
@@ -556,6 +527,7 @@ def friction_ratio_figure(times: np.ndarray, ratio: np.ndarray, status: np.ndarr
         _panel_title(ax, leg)
         if ends[k][0]:
             ax.set_ylabel("friction ratio", fontsize=8)
+    _finish_leg_panels(axes, ends)
     _shared_legend(figure, axes)
     figure.text(0.5, 0.005, f"mu = {mu:g}; above the dashed line the foot needs more friction "
                 "than mu", ha="center", va="bottom", fontsize=8)
@@ -582,5 +554,5 @@ def gait_diagram_figure(legs: list[str], stance: list, start: float, stop: float
     ax.set_xlabel("t (s)")
     ax.grid(True, axis="x", linewidth=0.4, alpha=0.6)
     ax.set_title(title, fontsize=10, y=1.0)
-    _few_ticks(ax, "x")
+    few_ticks(ax, "x")
     return figure
