@@ -108,9 +108,9 @@ def light_ticks(ax, x_labels: bool = True, y_labels: bool = True) -> None:
     figure = ax.get_figure()
     box = ax.get_position()
     size = (box.width * figure.get_figwidth() * 72, box.height * figure.get_figheight() * 72)
-    limits = {"x": ax.get_xlim(), "y": ax.get_ylim()}
-    ax.set_xlim(*limits["x"])
-    ax.set_ylim(*limits["y"])
+    limits = {"x": ax.get_xlim(), "y": ax.get_ylim()}  # autoscaled now, if they were to be
+    # frozen (set_xlim would do it too, but it sets every panel sharing the axis: n^2 on a sheet)
+    ax.set_autoscale_on(False)
     label_room = {"x": TICK_LENGTH + TICK_PAD, "y": TICK_LENGTH + TICK_PAD}
     light = set()
     for axis in "xy":
