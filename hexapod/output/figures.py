@@ -199,6 +199,7 @@ def render_figures(builders: dict, workers: int = 1) -> dict[str, bytes]:
     import signal
     from concurrent.futures import ProcessPoolExecutor
 
+    prepare_drawing()  # once, here: the forked processes inherit it
     global _PENDING
     _PENDING = [builders[name] for name in names]
     # an interruption is held while the processes are forked and draw (a few seconds): a
@@ -213,6 +214,18 @@ def render_figures(builders: dict, workers: int = 1) -> dict[str, bytes]:
     finally:
         _PENDING = []
         signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+
+
+def prepare_drawing() -> None:
+    """matplotlib's figure, its Agg canvas, Pillow and the default font loaded: what every
+    process that draws pays first (0.5 s of CPU on a slow core), paid once by a process that
+    forks its drawers rather than by each of them."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: F401
+    from matplotlib.figure import Figure  # noqa: F401
+    from matplotlib.font_manager import FontProperties, findfont, get_font
+    from PIL import Image, PngImagePlugin  # noqa: F401
+
+    get_font(findfont(FontProperties()))
 
 
 def _render_pending(index: int) -> bytes:
