@@ -78,3 +78,31 @@ def test_an_axis_beyond_plain_numbers_keeps_matplotlibs_ticks():
     png_bytes(figure)
     assert len(ax.get_yticks()) > 0  # matplotlib's, with its offset or power of ten
     assert len(ax.get_xticks()) == 0  # time: plain, drawn here
+
+
+def test_a_right_hand_scale_reads_the_values_times_its_factor():
+    from matplotlib.collections import LineCollection
+
+    from hexapod.output.panel_axes import light_scale
+
+    weight = 196.2  # N: labels in body weights
+    figure, ax = panel(120.0 * np.sin(np.linspace(0.0, 6.0, 200)))
+    light_ticks(ax)
+    assert light_scale(ax, 1.0 / weight, "body weights")
+    png_bytes(figure)
+    right = [t for t in ax.texts if t.get_horizontalalignment() == "left"
+             and t.get_rotation() == 0]
+    low, high = sorted(v / weight for v in ax.get_ylim())
+    assert sorted(float(t.get_text().replace(MINUS, "-")) for t in right) == pytest.approx(
+        sorted(nice_ticks(low, high)))
+    for text in right:  # each at the height of its value in newtons
+        assert text.get_position()[1] == pytest.approx(
+            float(text.get_text().replace(MINUS, "-")) * weight)
+    marks = [c for c in ax.collections if isinstance(c, LineCollection)
+             and all(seg[0][0] == 1.0 for seg in c.get_segments())]
+    assert len(marks) == 1 and len(marks[0].get_segments()) == len(right)
+    (label,) = [t for t in ax.texts if t.get_text() == "body weights"]
+    renderer = figure.canvas.get_renderer()
+    box = label.get_window_extent(renderer)
+    assert all(not box.overlaps(t.get_window_extent(renderer)) for t in right)
+    assert not light_scale(ax, 1e6, "micro")  # labels past plain numbers: not drawn here

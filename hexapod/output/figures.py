@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from hexapod.output.panel_axes import few_ticks, light_ticks
+from hexapod.output.panel_axes import few_ticks, light_scale, light_ticks
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -489,16 +489,17 @@ def ground_reaction_figure(times: np.ndarray, forces: np.ndarray, legs: list[str
         ax.plot(times, forces[:, k, 1], color="tab:blue", linewidth=1.1,
                 label="lateral (y, left +)")
         _panel_title(ax, leg)
-        first, last, _ = ends[k]
-        if first:
+        if ends[k][0]:
             ax.set_ylabel("N", fontsize=8)
-        if weight > 0 and last:  # the panels share their scale: one right axis per row
+    _finish_leg_panels(axes, ends)
+    for ax, (_, last, _) in zip(axes, ends, strict=True):
+        # the panels share their scale: body weights on the right of each row
+        if weight > 0 and last and not light_scale(ax, 1.0 / weight, "body weights"):
             right = ax.secondary_yaxis("right", functions=(lambda f: f / weight,
                                                            lambda b: b * weight))
             right.set_ylabel("body weights", fontsize=8)
             right.tick_params(labelsize=8)
             few_ticks(right, "y")
-    _finish_leg_panels(axes, ends)
     _shared_legend(figure, axes)
     return figure
 

@@ -155,3 +155,37 @@ def light_ticks(ax, x_labels: bool = True, y_labels: bool = True) -> None:
         ax.xaxis.set_label_coords(0.5, -(label_room["x"] + 4.0) / size[1])
     if "y" in light:
         ax.yaxis.set_label_coords(-(label_room["y"] + 4.0) / size[0], 0.5)
+
+
+def light_scale(ax, scale: float, label: str) -> bool:
+    """A right-hand scale on panel ``ax`` reading its vertical values times ``scale`` (> 0;
+    e.g. newtons in body weights): tick marks and labels at round values of the scale and
+    the ``label``, drawn as :func:`light_ticks` draws a panel's own (matplotlib's secondary
+    axis is a whole Axes with its ticks: a third of a ground figure). Call it once the limits
+    are final. False, with nothing drawn, when the labels would need a power of ten (then use
+    ``ax.secondary_yaxis``)."""
+    from matplotlib.collections import LineCollection
+    from matplotlib.transforms import ScaledTranslation
+
+    low, high = sorted(scale * v for v in ax.get_ylim())
+    ticks = nice_ticks(low, high)
+    texts = tick_texts(ticks)
+    if texts is None or scale <= 0:
+        return False
+    figure = ax.get_figure()
+    width = ax.get_position().width * figure.get_figwidth() * 72
+    transform = ax.get_yaxis_transform()
+    mark = TICK_LENGTH / width
+    ax.add_collection(LineCollection([((1.0, t / scale), (1.0 + mark, t / scale)) for t in ticks],
+                                     transform=transform, colors="black", linewidths=0.8,
+                                     clip_on=False, zorder=2.5), autolim=False)
+    gap = (TICK_LENGTH + TICK_PAD) / 72
+    shift = ScaledTranslation(gap, 0.0, figure.dpi_scale_trans)
+    for t, text in zip(ticks, texts, strict=True):
+        ax.text(1.0, t / scale, text, transform=transform + shift, ha="left",
+                va="center_baseline", fontsize=LABEL_SIZE)
+    room = (TICK_LENGTH + TICK_PAD + max(map(_width_points, texts)) + 4.0) / 72
+    ax.text(1.0, 0.5, label, transform=ax.transAxes + ScaledTranslation(
+        room, 0.0, figure.dpi_scale_trans), rotation=90, ha="left", va="center",
+        fontsize=LABEL_SIZE)
+    return True
