@@ -15,6 +15,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from hexapod.output.panel_axes import few_ticks, light_scale, light_ticks
+
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
@@ -23,23 +25,34 @@ COMPONENT_COLOURS = ("tab:red", "tab:green", "tab:blue")
 PANEL_SIZE = (3.6, 2.5)  # inches per panel
 
 
-def _figure(panels: int, title: str, twin: bool = False):
+#: Height (inches) of the row under a figure's title that holds its legend.
+LEGEND_ROW = 0.35
+
+
+def _figure(panels: int, title: str, twin: bool = False, legend: bool = False):
     """A grid of panels with fixed margins (constrained layout costs seconds for many
-    panels); ``twin`` leaves room for a right-hand axis in each panel."""
+    panels); ``twin`` leaves room for a right-hand axis in each panel, ``legend`` a row under
+    the title for the legend the panels share (:func:`_shared_legend`)."""
     from matplotlib.figure import Figure
 
     columns = min(panels, max(1, math.ceil(math.sqrt(1.5 * panels))))
     rows = math.ceil(panels / columns)
-    width, height = PANEL_SIZE[0] * columns, PANEL_SIZE[1] * rows + 0.6
+    extra = LEGEND_ROW if legend else 0.0
+    width, height = PANEL_SIZE[0] * columns, PANEL_SIZE[1] * rows + 0.6 + extra
     figure = Figure(figsize=(width, height))
-    axes = figure.subplots(rows, columns, sharex=True, squeeze=False).ravel()
     right = 0.75 if twin else 0.2  # inches
-    figure.subplots_adjust(left=0.75 / width, right=1 - right / width, bottom=0.5 / height,
-                           top=1 - 0.65 / height, wspace=0.55 if twin else 0.3, hspace=0.45)
-    for extra in axes[panels:]:
-        extra.set_visible(False)
+    grid = figure.add_gridspec(rows, columns, left=0.75 / width, right=1 - right / width,
+                               bottom=0.5 / height, top=1 - (0.65 + extra) / height,
+                               wspace=0.55 if twin else 0.3, hspace=0.45)
+    # only the panels drawn are made (an Axes costs as much to make as to draw), all sharing
+    # the time axis, its tick labels on the lowest panel of each column
+    axes = [figure.add_subplot(grid[0, 0])]
+    axes += [figure.add_subplot(grid[divmod(k, columns)], sharex=axes[0])
+             for k in range(1, panels)]
+    for ax in axes[:panels - columns]:
+        ax.xaxis.set_tick_params(labelbottom=False)
     _title(figure, title, width)
-    return figure, axes[:panels], columns
+    return figure, axes, columns
 
 
 def _title(figure, title: str, width: float) -> None:
@@ -49,6 +62,26 @@ def _title(figure, title: str, width: float) -> None:
     fits = max(20, int(width * 72 / 7.5))  # characters of a 12-point title per line
     figure.suptitle("\n".join(textwrap.wrap(title, fits)), fontsize=12 if len(title) <= fits
                     else 10)
+
+
+def _shared_legend(figure, axes) -> None:
+    """One legend for the panels ``axes`` of ``figure`` (their labelled artists, each label
+    once, in order), in one row under the title (:data:`LEGEND_ROW`): a fixed place costs
+    nothing to find, where ``loc="best"`` tries every line of a panel against nine places, and
+    it hides no curve."""
+    handles = {}
+    for ax in axes:
+        for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
+            handles.setdefault(label, handle)
+    figure.legend(list(handles.values()), list(handles), loc="center",
+                  bbox_to_anchor=(0.5, 1 - 0.62 / figure.get_figheight()),
+                  ncols=max(1, len(handles)), fontsize=8, frameon=False, columnspacing=1.5)
+
+
+def _panel_title(ax, name: str) -> None:
+    """A panel's title at a fixed height: left to itself matplotlib lays out the panel's tick
+    labels once more to keep the title clear of them (a third of a sheet's drawing)."""
+    ax.set_title(name, fontsize=9, y=1.0)
 
 
 #: A panel whose largest value is below this fraction of its figure's largest is round-off.
@@ -88,32 +121,23 @@ def _align_zeros(left, right) -> None:
             ax.set_ylim(-below * span, (1 - below) * span)
 
 
-#: Tick marks per panel axis at most: a report draws some 130 panels, and their ticks (lines
-#: and labels) are most of the drawing (five instead of matplotlib's eight or nine: a third
-#: less time per sheet).
-TICKS = 5
-
-
-def _few_ticks(ax, which: str = "xy") -> None:
-    """At most :data:`TICKS` ticks on the axes ``which`` of ``ax``."""
-    from matplotlib.ticker import MaxNLocator
-
-    for axis in which:
-        getattr(ax, f"{axis}axis").set_major_locator(MaxNLocator(TICKS))
-
-
 def _finish_panels(axes, columns: int) -> None:
+    """Grid, ticks and the time label (on the lowest panel of each column) of :func:`_figure`'s
+    panels, once their limits are final."""
     for k, ax in enumerate(axes):
-        ax.grid(True, linewidth=0.4, alpha=0.6)
-        ax.tick_params(labelsize=8)
-        _few_ticks(ax)
-        if k >= len(axes) - columns:
+        lowest = k >= len(axes) - columns
+        if lowest:
             ax.set_xlabel("t (s)")
-            ax.xaxis.set_tick_params(labelbottom=True)
+        light_ticks(ax, x_labels=lowest)
 
 
 def png_bytes(figure: Figure, dpi: int = 110) -> bytes:
     """A :class:`matplotlib.figure.Figure` rendered as PNG bytes (at ``dpi`` dots per inch).
+
+    The figure is drawn once by Agg and its opaque pixels encoded as RGB at zlib level 3:
+    matplotlib's own ``savefig`` encodes RGBA at level 6, a sixth of a sheet's time for an
+    alpha channel that is 255 everywhere on an opaque figure and some 5 % smaller files. A
+    figure with a transparent background keeps its alpha channel.
 
     Parameters
     ----------
@@ -126,8 +150,18 @@ def png_bytes(figure: Figure, dpi: int = 110) -> bytes:
     bytes
         The PNG file's content.
     """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from PIL import Image
+
+    figure.set_dpi(dpi)
+    canvas = FigureCanvasAgg(figure)
+    canvas.draw()
+    pixels = np.asarray(canvas.buffer_rgba())
+    if (pixels[..., 3] == 255).all():
+        pixels = pixels[..., :3]
     buffer = io.BytesIO()
-    figure.savefig(buffer, format="png", dpi=dpi)
+    Image.fromarray(np.ascontiguousarray(pixels)).save(
+        buffer, format="png", compress_level=3, dpi=(dpi, dpi))
     return buffer.getvalue()
 
 
@@ -165,6 +199,7 @@ def render_figures(builders: dict, workers: int = 1) -> dict[str, bytes]:
     import signal
     from concurrent.futures import ProcessPoolExecutor
 
+    prepare_drawing()  # once, here: the forked processes inherit it
     global _PENDING
     _PENDING = [builders[name] for name in names]
     # an interruption is held while the processes are forked and draw (a few seconds): a
@@ -179,6 +214,18 @@ def render_figures(builders: dict, workers: int = 1) -> dict[str, bytes]:
     finally:
         _PENDING = []
         signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+
+
+def prepare_drawing() -> None:
+    """matplotlib's figure, its Agg canvas, Pillow and the default font loaded: what every
+    process that draws pays first (0.5 s of CPU on a slow core), paid once by a process that
+    forks its drawers rather than by each of them."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: F401
+    from matplotlib.figure import Figure  # noqa: F401
+    from matplotlib.font_manager import FontProperties, findfont, get_font
+    from PIL import Image, PngImagePlugin  # noqa: F401
+
+    get_font(findfont(FontProperties()))
 
 
 def _render_pending(index: int) -> bytes:
@@ -209,18 +256,18 @@ def wrench_figure(times: np.ndarray, values: np.ndarray, names: list[str], symbo
     -------
     matplotlib.figure.Figure
     """
-    figure, axes, columns = _figure(len(names), title)
+    figure, axes, columns = _figure(len(names), title, legend=True)
     for k, (ax, name) in enumerate(zip(axes, names, strict=True)):
         for c, colour in enumerate(COMPONENT_COLOURS):
             ax.plot(times, values[:, k, c], color=colour, linewidth=1.0,
                     label=f"{symbol}{'xyz'[c]}")
         ax.plot(times, np.linalg.norm(values[:, k], axis=1), color="black", linewidth=1.6,
                 label=f"|{symbol}|")
-        ax.set_title(name, fontsize=9)
+        _panel_title(ax, name)
         ax.set_ylabel(unit, fontsize=8)
     _scale_round_off(axes, [values[:, k] for k in range(len(names))])
     _finish_panels(axes, columns)
-    axes[0].legend(fontsize=7, ncols=2, loc="best")
+    _shared_legend(figure, axes[:1])
     return figure
 
 
@@ -252,18 +299,18 @@ def leg_comparison_figure(times: np.ndarray, values: np.ndarray, legs: list[str]
     -------
     matplotlib.figure.Figure
     """
-    figure, axes, columns = _figure(len(panels), title)
+    figure, axes, columns = _figure(len(panels), title, legend=True)
     styles = ("-", "--", ":")
     for k, (ax, name) in enumerate(zip(axes, panels, strict=True)):
         for m, leg in enumerate(legs):
             ax.plot(times, values[:, m, k], color=LEG_COLOURS[m % len(LEG_COLOURS)],
                     linestyle=styles[m // len(LEG_COLOURS) % len(styles)], linewidth=1.1,
                     label=leg)
-        ax.set_title(name, fontsize=9)
+        _panel_title(ax, name)
         ax.set_ylabel(unit, fontsize=8)
     _scale_round_off(axes, [values[:, :, k] for k in range(len(panels))])
     _finish_panels(axes, columns)
-    axes[0].legend(fontsize=7, ncols=2, loc="best")
+    _shared_legend(figure, axes[:1])
     return figure
 
 
@@ -294,9 +341,9 @@ def effort_figure(times: np.ndarray, efforts: list[tuple[str, str, np.ndarray, n
         twin.plot(times, power, color="tab:orange", linewidth=1.0, linestyle="--")
         twin.set_ylabel("power (W)", fontsize=8, color="tab:orange")
         twin.tick_params(labelsize=8)
-        _few_ticks(twin, "y")
+        few_ticks(twin, "y")
         _align_zeros(ax, twin)
-        ax.set_title(name, fontsize=9)
+        _panel_title(ax, name)
     _finish_panels(axes, columns)
     return figure
 
@@ -321,8 +368,11 @@ def trajectory_figure(times: np.ndarray, trajectories: dict[str, np.ndarray],
     """
     from matplotlib.figure import Figure
 
-    figure = Figure(figsize=(13.0, 4.2), layout="constrained")
+    width, height = 13.0, 4.2 + LEGEND_ROW
+    figure = Figure(figsize=(width, height))
     side, top, timeline = figure.subplots(1, 3)
+    figure.subplots_adjust(left=0.75 / width, right=1 - 0.2 / width, bottom=0.55 / height,
+                           top=1 - (0.65 + LEGEND_ROW) / height, wspace=0.3)
     colours = [f"C{k % 10}" for k in range(len(trajectories))]
     for colour, (name, path) in zip(colours, trajectories.items(), strict=True):
         for ax, (i, j) in ((side, (0, 2)), (top, (0, 1))):
@@ -332,7 +382,7 @@ def trajectory_figure(times: np.ndarray, trajectories: dict[str, np.ndarray],
         ax.set_xlabel(f"{x} (m)")
         ax.set_ylabel(f"{y} (m)")
         ax.set_aspect("equal", adjustable="datalim")
-        ax.set_title(view, fontsize=9)
+        _panel_title(ax, view)
     if len(trajectories) == 1:
         path = next(iter(trajectories.values()))
         for c, colour in enumerate(COMPONENT_COLOURS):
@@ -343,11 +393,11 @@ def trajectory_figure(times: np.ndarray, trajectories: dict[str, np.ndarray],
             timeline.plot(times, path[:, 2], color=colour)
         timeline.set_ylabel("z (m)")
     timeline.set_xlabel("t (s)")
-    timeline.set_title("against time", fontsize=9)
+    _panel_title(timeline, "against time")
     for ax in (side, top, timeline):
-        ax.grid(True, linewidth=0.4, alpha=0.6)
-        ax.tick_params(labelsize=8)
-    (timeline if len(trajectories) == 1 else top).legend(fontsize=7)
+        ax.apply_aspect()  # the views' limits as drawn (equal scales), final from here on
+        light_ticks(ax)
+    _shared_legend(figure, [timeline if len(trajectories) == 1 else top])
     _title(figure, title, figure.get_figwidth())
     return figure
 
@@ -376,30 +426,39 @@ def _leg_layout(legs: list[str]) -> tuple[int, int, list[tuple[int, int]]]:
 
 
 def _leg_panels(legs: list[str], title: str):
-    """A figure with one panel per leg, placed by :func:`_leg_layout`; unused panels hidden."""
+    """A figure with one panel per leg, placed by :func:`_leg_layout`, all sharing both axes,
+    with room for a legend row under the title. Returns the figure, the panels in the order
+    of ``legs``, and per panel whether it is the first and the last of its row (where the
+    shared vertical axis is labelled, left and right) and the lowest of its column (where
+    the time axis is)."""
     from matplotlib.figure import Figure
 
     rows, columns, places = _leg_layout(legs)
-    width, height = 4.6 * columns + 0.6, 2.4 * rows + 1.0
+    width, height = 4.6 * columns + 0.6, 2.4 * rows + 1.0 + LEGEND_ROW
     figure = Figure(figsize=(width, height))
-    grid = figure.subplots(rows, columns, sharex=True, sharey=True, squeeze=False)
-    figure.subplots_adjust(left=0.8 / width, right=1 - 0.8 / width, bottom=0.55 / height,
-                           top=1 - 0.7 / height, wspace=0.35, hspace=0.4)
-    used = set(places)
-    for r in range(rows):
-        for c in range(columns):
-            if (r, c) not in used:
-                grid[r, c].set_visible(False)
+    grid = figure.add_gridspec(rows, columns, left=0.8 / width, right=1 - 0.8 / width,
+                               bottom=0.55 / height, top=1 - (0.7 + LEGEND_ROW) / height,
+                               wspace=0.35, hspace=0.4)
+    axes = [figure.add_subplot(grid[places[0]])]
+    axes += [figure.add_subplot(grid[place], sharex=axes[0], sharey=axes[0])
+             for place in places[1:]]
     _title(figure, title, width)
-    axes = [grid[r, c] for r, c in places]
+    used = set(places)
+    ends = []
     for ax, (r, c) in zip(axes, places, strict=True):
-        ax.grid(True, linewidth=0.4, alpha=0.6)
-        ax.tick_params(labelsize=8)
-        _few_ticks(ax)
-        if r == rows - 1 or (r + 1, c) not in used:
+        row = [c2 for r2, c2 in places if r2 == r]
+        ends.append((c == min(row), c == max(row), (r + 1, c) not in used))
+        ax.tick_params(labelleft=ends[-1][0], labelbottom=ends[-1][2])
+        if ends[-1][2]:
             ax.set_xlabel("t (s)")
-            ax.xaxis.set_tick_params(labelbottom=True)
-    return figure, axes
+    return figure, axes, ends
+
+
+def _finish_leg_panels(axes, ends) -> None:
+    """Grid and ticks of :func:`_leg_panels`' panels, once every panel is drawn (they share
+    their limits)."""
+    for ax, (first, _, lowest) in zip(axes, ends, strict=True):
+        light_ticks(ax, x_labels=lowest, y_labels=first)
 
 
 def _shade(ax, intervals) -> None:
@@ -419,7 +478,7 @@ def ground_reaction_figure(times: np.ndarray, forces: np.ndarray, legs: list[str
     given: the samples where a foot slips or pulls are hatched red (infeasible)."""
     from hexapod.algorithms.ground import INFEASIBLE_STATUSES
 
-    figure, axes = _leg_panels(legs, title)
+    figure, axes, ends = _leg_panels(legs, title)
     for k, (ax, leg) in enumerate(zip(axes, legs, strict=True)):
         _shade(ax, stance[k])
         if status is not None:
@@ -429,14 +488,19 @@ def ground_reaction_figure(times: np.ndarray, forces: np.ndarray, legs: list[str
         ax.plot(times, forces[:, k, 0], color="tab:red", linewidth=1.1, label="fore-aft (x)")
         ax.plot(times, forces[:, k, 1], color="tab:blue", linewidth=1.1,
                 label="lateral (y, left +)")
-        ax.set_title(leg, fontsize=9)
-        ax.set_ylabel("N", fontsize=8)
-        if weight > 0:
+        _panel_title(ax, leg)
+        if ends[k][0]:
+            ax.set_ylabel("N", fontsize=8)
+    _finish_leg_panels(axes, ends)
+    for ax, (_, last, _) in zip(axes, ends, strict=True):
+        # the panels share their scale: body weights on the right of each row
+        if weight > 0 and last and not light_scale(ax, 1.0 / weight, "body weights"):
             right = ax.secondary_yaxis("right", functions=(lambda f: f / weight,
                                                            lambda b: b * weight))
             right.set_ylabel("body weights", fontsize=8)
             right.tick_params(labelsize=8)
-    axes[0].legend(fontsize=7, loc="best")
+            few_ticks(right, "y")
+    _shared_legend(figure, axes)
     return figure
 
 
@@ -461,7 +525,7 @@ def friction_ratio_figure(times: np.ndarray, ratio: np.ndarray, status: np.ndarr
     ``ratio`` (N, feet) is NaN where a foot carries nothing; ``status`` (N, feet)."""
     from hexapod.algorithms.ground import INFEASIBLE_STATUSES
 
-    figure, axes = _leg_panels(legs, title)
+    figure, axes, ends = _leg_panels(legs, title)
     finite = ratio[np.isfinite(ratio)]
     top = max(1.25, min(1.05 * float(finite.max()), 5.0)) if finite.size else 1.25
     for k, (ax, leg) in enumerate(zip(axes, legs, strict=True)):
@@ -474,9 +538,11 @@ def friction_ratio_figure(times: np.ndarray, ratio: np.ndarray, status: np.ndarr
             ax.plot(times[bad], np.minimum(np.nan_to_num(shown[bad], nan=top), top), "x",
                     color="tab:red", markersize=6, label="slip / pull")
         ax.set_ylim(0.0, top)
-        ax.set_title(leg, fontsize=9)
-        ax.set_ylabel("friction ratio", fontsize=8)
-    axes[0].legend(fontsize=7, loc="upper right")
+        _panel_title(ax, leg)
+        if ends[k][0]:
+            ax.set_ylabel("friction ratio", fontsize=8)
+    _finish_leg_panels(axes, ends)
+    _shared_legend(figure, axes)
     figure.text(0.5, 0.005, f"mu = {mu:g}; above the dashed line the foot needs more friction "
                 "than mu", ha="center", va="bottom", fontsize=8)
     return figure
@@ -487,8 +553,11 @@ def gait_diagram_figure(legs: list[str], stance: list, start: float, stop: float
     bar over each stance, as in insect gait diagrams."""
     from matplotlib.figure import Figure
 
-    figure = Figure(figsize=(8.0, 0.45 * len(legs) + 1.3), layout="constrained")
+    width, height = 8.0, 0.45 * len(legs) + 1.3
+    figure = Figure(figsize=(width, height))
     ax = figure.subplots()
+    figure.subplots_adjust(left=0.8 / width, right=1 - 0.25 / width, bottom=0.55 / height,
+                           top=1 - 0.45 / height)
     for row, intervals in enumerate(stance):
         y = len(legs) - 1 - row
         ax.broken_barh([(a, b - a) for a, b in intervals], (y - 0.35, 0.7),
@@ -498,5 +567,6 @@ def gait_diagram_figure(legs: list[str], stance: list, start: float, stop: float
     ax.set_xlim(start, stop)
     ax.set_xlabel("t (s)")
     ax.grid(True, axis="x", linewidth=0.4, alpha=0.6)
-    ax.set_title(title, fontsize=10)
+    ax.set_title(title, fontsize=10, y=1.0)
+    few_ticks(ax, "x")
     return figure

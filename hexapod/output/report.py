@@ -510,8 +510,9 @@ def report_files(model: Model, result: InverseResult, balance: BodyBalance, run:
     feet : dict of str to ndarray, shape (N, 3)
         Foot paths (world, m) by body; empty for none.
     figures : bool
-        Draw the figures (most of a report's time: 7 s of the walking robot's 12); without
-        them the tables and the summary are the same.
+        Draw the figures (3 s of CPU of the walking robot's 10,
+        ``scripts/benchmarks/bench_report.py``); without them the tables and the summary are
+        the same.
     workers : int
         Processes drawing the figures (:func:`hexapod.output.figures.render_figures`): more
         than one forks this process that many times, on systems that fork; the same bytes.
@@ -527,15 +528,15 @@ def report_files(model: Model, result: InverseResult, balance: BodyBalance, run:
     """
     t = result.times
     drivers = driver_statistics(model, result)
-    drawn = _figures(model, result, drivers, feet, run.scene, leg_figures) if figures else {}
     files = {"inverse.csv": inverse_csv_text(model, result).encode()}
     units = {"inverse.csv": inverse_column_units(model, result.frame)}
     loads = trunks = None
     if model.contacts:
         loads = foot_loads(model, result)
         trunks = trunk_motion(model, result.q, result.v)
-        if figures:
-            drawn.update(_ground_figures(model, loads, run.scene))
+    drawn = figure_builders(model, result, run.scene, feet, leg_figures=leg_figures,
+                            drivers=drivers, loads=loads) if figures else {}
+    if loads is not None:
         files["ground.csv"] = ground_csv_text(loads).encode()
         units["ground.csv"] = ground_csv_columns(loads.legs)
         if trunks:
@@ -548,14 +549,22 @@ def report_files(model: Model, result: InverseResult, balance: BodyBalance, run:
     return files
 
 
-def _figures(model: Model, result: InverseResult, drivers: list[DriverStatistics],
-             feet: dict[str, np.ndarray], scene: str, leg_figures: bool) -> dict:
-    """The builders of the wrench, effort and foot figures of a report (the ground's are made
-    beside its loads), by file name."""
+def figure_builders(model: Model, result: InverseResult, scene: str,
+                    feet: dict[str, np.ndarray], *, leg_figures: bool = False,
+                    drivers: list[DriverStatistics] | None = None,
+                    loads: FootLoads | None = None) -> dict:
+    """The figures of :func:`report_files`, not drawn: a builder per file name, each making
+    its :class:`matplotlib.figure.Figure` when called (to draw them:
+    :func:`hexapod.output.figures.render_figures`). ``drivers`` and ``loads`` (with foot
+    contacts), when given, are those of ``result`` (else computed here)."""
+    drivers = driver_statistics(model, result) if drivers is None else drivers
     drawn = _wrench_figures(model, result, scene, leg_figures)
     drawn.update(_effort_figures(model, result.times, drivers, scene, leg_figures))
     if feet:
         drawn["foot.png"] = partial(
             trajectory_figure, result.times, feet,
             f"{scene}: {'foot' if len(feet) == 1 else 'feet'} (world frame)")
+    if model.contacts:
+        loads = foot_loads(model, result) if loads is None else loads
+        drawn.update(_ground_figures(model, loads, scene))
     return drawn
