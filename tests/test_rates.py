@@ -249,8 +249,11 @@ def test_the_kernels_ground_policy_multipliers_are_the_exact_solves():
     nothing, a new contact set), they are the exact solve's, with its own rank decision, to
     1e-10 of the largest multiplier: the two decisions alone give 2e-12 (measured), and
     ``1e-10`` is what the inverse dynamics' paths must meet against the exact one. A decision
-    whose rows left out have left the span of the kept ones is refused."""
+    whose rows left out have left the span of the kept ones is refused. The run's own saved
+    multipliers are the exact solve's on its twin to the same bound: at 0.2 s, a touch-down
+    the step ends on, the old contact set's kernels gave 2e-8, and the exact solve serves."""
     from hexapod.algorithms.dynamics import forward_dynamics
+    from hexapod.model.tabulation import TOLERANCE_PER_RTOL, tabulated_model
     from hexapod.simulation.kernels import policy_multipliers
 
     model = hx.assemble(hx.load_scene("hexapod"))
@@ -270,6 +273,13 @@ def test_the_kernels_ground_policy_multipliers_are_the_exact_solves():
         assert np.abs(lam - data.lam).max() <= 1e-10 * np.abs(data.lam).max(), t
         compared += 1
     assert compared == times.size and len(kernels) >= 2  # both tripods' contact sets
+    # the run saved these states' multipliers (output times: the dense output's states made
+    # consistent) by the kernels too, on its twin with the gait laws tabulated
+    twin, _ = tabulated_model(model, 0.0, 0.26, TOLERANCE_PER_RTOL * hx.simulation.DEFAULT_RTOL)
+    for t, q, v, lam in zip(run.t, run.q, run.v, run.lam, strict=True):
+        data = twin.create_data()
+        forward_dynamics(twin, data, t, q, v)
+        assert np.abs(lam - data.lam).max() <= 1e-10 * np.abs(data.lam).max(), t
     # the first tripod's decision after the switch: its rows left out now have a force of
     # their own (or none at all), and the kernel says so
     (first, *_), t, q, v = list(kernels), run.t[-1], run.q[-1], run.v[-1]
