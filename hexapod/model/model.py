@@ -43,7 +43,7 @@ from hexapod.model.infos import (
     RowInfo,
     Symbolic,
 )
-from hexapod.model.law_values import evaluate_laws
+from hexapod.model.law_values import RecentLaws, evaluate_laws
 from hexapod.model.mass import BlockDiagonal
 from hexapod.scene.laws import Law
 from hexapod.spatial import (
@@ -62,10 +62,6 @@ __all__ = ["GROUND_INDEX", "BodyInfo", "ContactInfo", "Data", "DriverInfo", "For
 _MATRIX_OUTPUTS = frozenset({"Phi_q", "Phi_v", "M", "Q_across"})
 #: outputs with more entries than this are evaluated on their nonzeros (ScatteredFunction)
 _DENSE_OUTPUT_ENTRIES = 100_000
-#: the times whose law values a model keeps (:meth:`Model.law_values`): an adaptive step asks
-#: for its end's four or five times (its projection, its rates there, the saved state's
-#: multipliers, the next step's contact set), half of a walking run's evaluations
-RECENT_LAWS = 4
 
 
 def _large(function: ca.Function) -> bool:
@@ -165,17 +161,15 @@ class Model:
         #: (dampers, loads, efforts): the energy is conserved when there are none
         self.working_elements = working_elements
         self._sym = symbolic
-        self.n_q = q0.size
-        self.n_v = v0.size
-        self.n_c = len(rows)
-        self.n_w = len(laws)
+        self.n_q, self.n_v = q0.size, v0.size
+        self.n_c, self.n_w = len(rows), len(laws)
         self.body_index = {b.name: b.index for b in bodies}
         self.joint_index = {j.name: j.index for j in joints}
         self.driver_index = {d.name: i for i, d in enumerate(drivers)}
         self.row_index = {r.name: i for i, r in enumerate(rows)}
         self._built: dict = {}  # see built_once
         self._lock = threading.RLock()
-        self._recent_laws: dict = {}  # see law_values
+        self._recent_laws = RecentLaws()  # see law_values
         self._lie_indices()
         self._frozen = True
 
@@ -266,27 +260,21 @@ class Model:
         With ``data``, the values at the times of the last call with several times are kept
         there: an algorithm that walks through samples one by one (the saddle path of the
         inverse dynamics) asks for the same numbers again, and some laws (a gait's inverse
-        kinematics) cost far less per sample when evaluated together. The values at the last
-        :data:`RECENT_LAWS` single times are kept by the model (they are a pure function of
-        the time), and returned as copies."""
+        kinematics) cost far less per sample when evaluated together. The model keeps the last
+        few single times' (:class:`~hexapod.model.law_values.RecentLaws`)."""
         t = np.asarray(t, dtype=float)
         batch = data.laws if data is not None else None
-        if t.ndim == 0:
-            if batch is not None and (column := batch[0].get(float(t))) is not None:
-                return tuple(x[:, column].copy() for x in batch[1:])
-            if (recent := self._recent_laws.get(float(t))) is not None:
-                return tuple(x.copy() for x in recent)
+        if t.ndim == 0 and batch is not None and (column := batch[0].get(float(t))) is not None:
+            return tuple(x[:, column].copy() for x in batch[1:])
+        if t.ndim == 0 and (recent := self._recent_laws.get(float(t))) is not None:
+            return recent
         shape = (self.n_w,) + t.shape
         w, wd, wdd = np.zeros(shape), np.zeros(shape), np.zeros(shape)
         evaluate_laws(self, t, w, wd, wdd)
         if data is not None and t.ndim == 1 and t.size > 1:
             data.laws = ({float(x): k for k, x in enumerate(t)}, w, wd, wdd)
         if t.ndim == 0:
-            with self._lock:
-                recent = self._recent_laws
-                if len(recent) >= RECENT_LAWS:
-                    del recent[next(iter(recent))]  # the oldest
-                recent[float(t)] = (w.copy(), wd.copy(), wdd.copy())
+            self._recent_laws.keep(float(t), (w, wd, wdd))
         return w, wd, wdd
 
     def cycle_time(self) -> float | None:
@@ -322,11 +310,11 @@ class Model:
         return self._twin(False, laws=tuple(laws), digest=digest)
 
     def _twin(self, share_built: bool, **changes) -> Model:
-        """A shallow copy with ``changes`` made, sharing what is built or not."""
+        """A shallow copy with ``changes`` made (not the laws' recent values: its laws may
+        not be these), sharing what is built or not."""
         twin = copy.copy(self)
-        for name, value in changes.items():
+        for name, value in {**changes, "_recent_laws": RecentLaws()}.items():
             object.__setattr__(twin, name, value)
-        object.__setattr__(twin, "_recent_laws", {})  # its laws may not be these
         if not share_built:
             object.__setattr__(twin, "_built", {})
             object.__setattr__(twin, "_lock", threading.RLock())
