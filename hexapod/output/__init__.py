@@ -8,11 +8,12 @@ in ``hexapod._support.files`` (layer 0) and are public here.
 from hexapod._support.lazy import attach
 
 __getattr__, __dir__, __all__ = attach(__name__, {
-    "hexapod.output.report": ["RunInfo", "agreement", "report_files", "wrench_label"],
+    "hexapod.output.report": ["FOOT_MARKER", "RunInfo", "agreement", "figure_builders",
+                              "report_files", "wrench_label"],
     "hexapod.output.inverse_csv": ["inverse_columns", "inverse_csv_text", "inverse_table"],
     "hexapod.output.describe": ["describe_model", "describe_state", "format_model",
                                 "format_state"],
     "hexapod.output.figures": ["COMPONENT_COLOURS", "effort_figure", "png_bytes",
-                               "trajectory_figure", "wrench_figure"],
+                               "render_figures", "trajectory_figure", "wrench_figure"],
     "hexapod._support.files": ["write_atomically", "write_directory_atomically"],
 })

@@ -21,8 +21,8 @@ Protocol
   the figures drawn as the command draws them (one process). Timings are noisy on a shared
   machine: the load average is printed at the start and the end; compare figures of one run.
 * An earlier revision: ``git worktree add ../before REV``, then this script with
-  ``PYTHONPATH=../before`` (the whole command then runs that revision too; its figures are
-  found by their older private builders).
+  ``PYTHONPATH=../before`` (the whole command then runs that revision too); it needs the public
+  ``hexapod.output.figure_builders`` and ``render_figures`` (from the revision after ``a20b28a``).
 
     OPENBLAS_NUM_THREADS=1 python3 scripts/benchmarks/bench_report.py [--repeats 3]
         [--workers 2]           # about 2 min here
@@ -65,7 +65,7 @@ def children_cpu() -> float:
 def forked_figures(builders: dict, workers: int) -> tuple[float, float]:
     """CPU (the forked process and its own children) and wall time of drawing ``builders``
     with ``workers`` processes, in a process forked from this one (matplotlib not loaded)."""
-    from hexapod.output.figures import render_figures
+    from hexapod.output import render_figures
 
     before, started = children_cpu(), time.perf_counter()
     pid = os.fork()
@@ -98,12 +98,8 @@ def stages() -> tuple[dict[str, float], dict, object]:
     started = time.process_time()
     import numpy as np
 
-    from hexapod.algorithms.balance import body_balance
-    from hexapod.algorithms.inverse import inverse_dynamics
-    from hexapod.algorithms.kinematics import marker_trajectories
-    from hexapod.model.assemble import assemble
-    from hexapod.output.report import FOOT_MARKER, RunInfo, report_files
-    from hexapod.scene.builtin import load_scene
+    from hexapod import assemble, body_balance, inverse_dynamics, load_scene, marker_trajectories
+    from hexapod.output import FOOT_MARKER, RunInfo, report_files
 
     cpu = {"imports": time.process_time() - started}
     model, cpu["assembly"] = timed(lambda: assemble(load_scene(SCENE)))
@@ -124,18 +120,10 @@ def stages() -> tuple[dict[str, float], dict, object]:
 
 
 def builders_of(model, result, feet) -> dict:
-    """The report's figure builders, also from a revision before ``figure_builders`` (run
-    this script with that revision first on ``PYTHONPATH`` to compare)."""
-    from hexapod.output import report
+    """The report's figure builders (``hexapod.output.figure_builders``)."""
+    from hexapod.output import figure_builders
 
-    if hasattr(report, "figure_builders"):
-        return report.figure_builders(model, result, SCENE, feet)
-    from hexapod.output.ground import foot_loads
-
-    drawn = report._figures(model, result, report.driver_statistics(model, result), feet,
-                            SCENE, False)
-    drawn.update(report._ground_figures(model, foot_loads(model, result), SCENE))
-    return drawn
+    return figure_builders(model, result, SCENE, feet)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -151,7 +139,7 @@ def main(argv: list[str] | None = None) -> int:
     drawn = {w: min(forked_figures(builders, w) for _ in range(options.repeats))
              for w in variants}
 
-    from hexapod.output.figures import png_bytes
+    from hexapod.output import png_bytes
 
     _, matplotlib_import = timed(load_matplotlib)
     per_figure = {name: min(timed(lambda b=build: png_bytes(b()))[1]
