@@ -555,8 +555,28 @@ def figure_builders(model: Model, result: InverseResult, scene: str,
                     loads: FootLoads | None = None) -> dict:
     """The figures of :func:`report_files`, not drawn: a builder per file name, each making
     its :class:`matplotlib.figure.Figure` when called (to draw them:
-    :func:`hexapod.output.figures.render_figures`). ``drivers`` and ``loads`` (with foot
-    contacts), when given, are those of ``result`` (else computed here)."""
+    :func:`hexapod.output.figures.render_figures`).
+
+    Parameters
+    ----------
+    model : Model
+    result : InverseResult
+        The inverse dynamics the figures show.
+    scene : str
+        The scene's name, in the titles.
+    feet : dict of str to ndarray
+        The feet's paths (:func:`hexapod.marker_trajectories`), drawn in ``foot.png``.
+    leg_figures : bool
+        Also one sheet of each kind per leg.
+    drivers, loads : optional
+        The drivers' statistics and, with foot contacts, the feet's loads of ``result``, when
+        already computed (else computed here).
+
+    Returns
+    -------
+    dict of str to callable
+        ``file name -> build``, ``build()`` returning the figure.
+    """
     drivers = driver_statistics(model, result) if drivers is None else drivers
     drawn = _wrench_figures(model, result, scene, leg_figures)
     drawn.update(_effort_figures(model, result.times, drivers, scene, leg_figures))

@@ -34,6 +34,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from hexapod._support.signals import deferred
 from hexapod.model.model import Model
 from hexapod.model.units import (
     ACCELERATION_UNITS,
@@ -242,7 +243,10 @@ class SimulationResult:
                           effort_units=np.array([j.type.effort_unit or ""
                                                  for j in self.model.joints]))
         buffer = io.BytesIO()
-        np.savez_compressed(buffer, **arrays)
+        # a signal inside ZipFile's constructor leaves an object whose finaliser prints a
+        # traceback (an interrupted 'hexapod simulate' did); held back, it comes after
+        with deferred():
+            np.savez_compressed(buffer, **arrays)
         return buffer.getvalue()
 
     def _npz_units(self) -> dict[str, np.ndarray]:

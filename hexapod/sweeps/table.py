@@ -22,6 +22,7 @@ import math
 
 import numpy as np
 
+from hexapod._support.signals import deferred
 from hexapod.simulation.results import Columns, units_json
 from hexapod.sweeps.metrics import FAMILIES
 from hexapod.sweeps.spec import parameter_unit
@@ -156,10 +157,11 @@ class SweepTable:
         column, in order); loads without pickles."""
         stream = io.BytesIO()
         records = self.records()
-        np.savez(stream, table=np.asarray(records, dtype=np.dtype(records.dtype.descr)),
-                 columns=np.array(self.columns),
-                 units=np.array([self.units[c] for c in self.columns]),
-                 kinds=np.array([self.kinds[c] for c in self.columns]))
+        with deferred():  # a signal inside ZipFile's constructor makes its finaliser print
+            np.savez(stream, table=np.asarray(records, dtype=np.dtype(records.dtype.descr)),
+                     columns=np.array(self.columns),
+                     units=np.array([self.units[c] for c in self.columns]),
+                     kinds=np.array([self.kinds[c] for c in self.columns]))
         return stream.getvalue()
 
 
