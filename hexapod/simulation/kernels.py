@@ -85,7 +85,7 @@ class CompiledRates:
         # the Function once per model, row set, execution and pivots; the buffers are this
         # object's
         to_c = current().compiled
-        self._lu = lu = pivots_near(model, self.rows, reference) if to_c else None
+        lu = pivots_near(model, self.rows, reference) if to_c else None
         self._key = ("rates", tuple(self.rows.tolist()), to_c, _pivot_key(lu))
         self.function = model.built_once(self._key,
                                          lambda m: _evaluated(self._build(lu), to_c))
@@ -151,7 +151,7 @@ class CompiledRates:
         if not (self.left_out.size and self.model.contacts):
             return None  # no redundant rows; or the least-wrench policy of solve_saddle
         if self._policy is None:
-            self._policy = policy_multipliers(self.model, self.rows, self.left_out, self._lu)
+            self._policy = policy_multipliers(self.model, self.rows, self.left_out)
         return self._policy(t, q, v)
 
     def stages(self, A: np.ndarray, c: np.ndarray, t: float, h: float, y0: np.ndarray,
@@ -263,19 +263,18 @@ class PolicyMultipliers:
     ones: zero while the decision holds); the policy's choice among ``lam0 + N z`` is then
     the exact solve's own, :func:`hexapod.algorithms.ground.ground_policy`. A simulation saves
     its states' multipliers by it: the exact solve (a rank decision, dense factorisations)
-    cost the walking robot some 12 ms a save, a third of its run."""
+    cost the walking robot some 12 ms a save, a third of its run. Always interpreted (by
+    CasADi's virtual machine, the sparse QR): it serves the saved states only, a fraction of
+    the stages' calls, and compiling it would cost as much as the rates kernel's compiling."""
 
-    def __init__(self, model: Model, rows: np.ndarray, left_out: np.ndarray,
-                 lu: StaticLU | None = None):
+    def __init__(self, model: Model, rows: np.ndarray, left_out: np.ndarray):
         self.model, self.rows, self.left_out = model, rows, left_out
-        to_c = current().compiled
-        key = ("policy multipliers", tuple(rows.tolist()), tuple(left_out.tolist()), to_c,
-               _pivot_key(lu))
-        self.function = model.built_once(key, lambda m: _evaluated(self._build(lu), to_c))
+        key = ("policy multipliers", tuple(rows.tolist()), tuple(left_out.tolist()))
+        self.function = model.built_once(key, lambda m: self._build())
         self._fast = FastFunction(self.function)
         self.data = model.create_data()  # the objective's and Q_across's call buffers
 
-    def _build(self, lu: StaticLU | None) -> ca.Function:
+    def _build(self) -> ca.Function:
         model, rows, left = self.model, self.rows.tolist(), self.left_out.tolist()
         n_c, m = model.n_c, len(left)
         symbols = {n: ca.MX.sym(n, size) for n, size in (
@@ -287,7 +286,7 @@ class PolicyMultipliers:
         W_all, d_all, zero = equilibrated(Phi_v, m_inv_sqrt)
         top = ca.horzcat(ca.mtimes(m_inv_sqrt, Q), ca.mtimes(m_inv_sqrt, Phi_v[left, :].T))
         y, mu = solve_kept(W_all, d_all, zero, rows, top,
-                           ca.horzcat(gamma, ca.MX.zeros(n_c, m)), lu)
+                           ca.horzcat(gamma, ca.MX.zeros(n_c, m)))
         mu = mu / ca.repmat(d_all[rows], 1, m + 1)
         lam0 = ca.MX(n_c, 1)
         lam0[rows] = mu[:, 0]
@@ -324,12 +323,12 @@ class PolicyMultipliers:
                              N.reshape(model.n_c, -1, order="F"))
 
 
-def policy_multipliers(model: Model, rows: np.ndarray, left_out: np.ndarray,
-                       lu: StaticLU | None = None) -> PolicyMultipliers:
-    """The :class:`PolicyMultipliers` of a rank decision (with, compiled, the LU pivots of
-    its rates kernel): its Function built once per model, its buffers the caller's."""
+def policy_multipliers(model: Model, rows: np.ndarray,
+                       left_out: np.ndarray) -> PolicyMultipliers:
+    """The :class:`PolicyMultipliers` of a rank decision: its Function built once per model,
+    its buffers the caller's."""
     return PolicyMultipliers(model, np.asarray(rows, dtype=int),
-                             np.asarray(left_out, dtype=int), lu)
+                             np.asarray(left_out, dtype=int))
 
 
 class CompiledProjection:
