@@ -204,8 +204,7 @@ class CompiledRates:
 
 class CompiledStages:
     """The stages of an explicit Runge-Kutta step in one call: one MX Function that applies
-    the tableau (stage ``i`` at ``y0 + h sum_j a_ij k_j``, the same sums in the same order as
-    the integrators' own loop, :meth:`EmbeddedRungeKutta._stages`) and calls the rates
+    the tableau (:func:`explicit_stages`, as the stages one by one do) and calls the rates
     kernel's Function at each stage, the laws' values at the stage times given. A call of a
     stage one by one costs Python some 80 us besides the kernel's own time (the 10-link
     chain's: 40 us compiled); DOP853 takes 11 such calls a step."""
@@ -236,19 +235,32 @@ class CompiledStages:
         return K.reshape(y0.size, -1, order="F").T
 
 
+def explicit_stages(derivative, h, y0, f0, A: np.ndarray) -> list:
+    """The stages ``k_i = derivative(i, y0 + h sum_j a_ij k_j)`` of an explicit Runge-Kutta
+    step, ``k_0 = f0``: on NumPy arrays (the stages one by one) or on CasADi symbols (one
+    Function of them all, :class:`CompiledStages`) alike, the sums in one order."""
+    stages = [f0]
+    for i in range(1, A.shape[0]):
+        y = y0 + h * sum(float(a) * k for a, k in zip(A[i, :i], stages, strict=True))
+        stages.append(derivative(i, y))
+    return stages
+
+
 def _stages_function(rates: ca.Function, A: np.ndarray, c: np.ndarray,
                      model: Model) -> ca.Function:
     n_q, n_w, s = model.n_q, model.n_w, c.size
     h = ca.MX.sym("h")
     y0, f0 = ca.MX.sym("y0", n_q + model.n_v), ca.MX.sym("f0", n_q + model.n_v)
     laws = ca.MX.sym("laws", 3 * n_w, s - 1)
-    stages, residuals = [f0], []
-    for i in range(1, s):
-        y = y0 + h * sum(float(a) * k for a, k in zip(A[i, :i], stages, strict=True))
+    residuals = []
+
+    def derivative(i, y):
         at = [laws[j * n_w:(j + 1) * n_w, i - 1] for j in range(3)] if n_w else []
         q_dot, v_dot, _, residual = rates(y[:n_q], y[n_q:], *at, 0.0)
-        stages.append(ca.vertcat(q_dot, v_dot))
         residuals.append(residual)
+        return ca.vertcat(q_dot, v_dot)
+
+    stages = explicit_stages(derivative, h, y0, f0, A)
     inputs = [h, y0, f0] + ([laws] if n_w else [])
     return ca.Function("stages", inputs, [ca.horzcat(*stages[1:]), ca.horzcat(*residuals)])
 

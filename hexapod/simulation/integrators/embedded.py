@@ -34,7 +34,7 @@ from hexapod.simulation.integrators.tableaus import (
     DOPRI5_C,
     DOPRI5_DENSE,
 )
-from hexapod.simulation.kernels import REDUNDANT_TOLERANCE
+from hexapod.simulation.kernels import REDUNDANT_TOLERANCE, explicit_stages
 from hexapod.simulation.methods import METHODS
 
 
@@ -108,11 +108,9 @@ class EmbeddedRungeKutta(Integrator):
             K = np.vstack([f0, later])
             return K, y0 + h * (self.b @ K)
         n_q = self.model.n_q
-        stages = [f0]
-        for i in range(1, len(self.c)):
-            y = y0 + h * sum(a * k for a, k in zip(self.A[i, :i], stages, strict=True))
-            stages.append(self._derivative(t + self.c[i] * h, y[:n_q], y[n_q:]))
-        K = np.array(stages)
+        K = np.array(explicit_stages(
+            lambda i, y: self._derivative(t + self.c[i] * h, y[:n_q], y[n_q:]), h, y0, f0,
+            self.A))
         return K, y0 + h * (self.b @ K)
 
     def _step(self) -> None:
