@@ -136,18 +136,19 @@ class CompiledRates:
         return ca.Function("rates", inputs, [q_dot, v_dot, lam, residual], args + ["alpha"],
                            ["q_dot", "v_dot", "lam", "residual"])
 
-    def multipliers(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray | None:
-        """The multipliers at ``(t, q, v)`` by the redundancy policy
-        (:func:`~hexapod.algorithms.dynamics.forward_dynamics`'s), or None where this kernel
-        cannot give them as the exact solve would: those of :meth:`solve` when every row is
-        kept; with rows left out and feet on the ground, the ground-force policy's
-        (:class:`PolicyMultipliers`), refused (None) where a row left out has left the span of
-        the kept ones by more than the rank tolerance, or the rows disagree by more than the
-        exact solve allows. A mechanism without feet keeps the exact solve's least-wrench
-        choice."""
+    def dynamics(self, t: float, q: np.ndarray,
+                 v: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """``(v_dot, lam)`` at ``(t, q, v)``, the multipliers by the redundancy policy
+        (:func:`~hexapod.algorithms.dynamics.forward_dynamics`'s), in one kernel call, or None
+        where this kernel cannot give them as the exact solve would: those of :meth:`solve`
+        when every row is kept; with rows left out and feet on the ground, the ground-force
+        policy's (:class:`PolicyMultipliers`), refused (None) where a row left out has left the
+        span of the kept ones by more than the rank tolerance, or the rows disagree by more
+        than the exact solve allows. A mechanism without feet keeps the exact solve's
+        least-wrench choice."""
         if self.complete:
             solution = self.solve(t, q, v)
-            return None if solution is None else solution[2]
+            return None if solution is None else (solution[1], solution[2])
         if not (self.left_out.size and self.model.contacts):
             return None  # no redundant rows; or the least-wrench policy of solve_saddle
         if self._policy is None:
@@ -314,25 +315,27 @@ class PolicyMultipliers:
                             ca.mmax(off_span))
         args = [n for n in ("q", "v", "w", "wd", "wdd") if n in ("q", "v") or model.n_w]
         return ca.Function("policy_terms", [symbols[n] for n in args],
-                           [lam0, ca.densify(N), Phi_v.nz[:], checks], args,
-                           ["lam0", "N", "Phi", "checks"])
+                           [ca.mtimes(m_inv_sqrt, y[:, 0]), lam0, ca.densify(N), Phi_v.nz[:],
+                            checks], args, ["v_dot", "lam0", "N", "Phi", "checks"])
 
-    def __call__(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray | None:
-        """The multipliers, or None (see :meth:`CompiledRates.multipliers`)."""
+    def __call__(self, t: float, q: np.ndarray,
+                 v: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """``(v_dot, lam)``, or None (see :meth:`CompiledRates.dynamics`)."""
         model = self.model
         w, wd, wdd = model.law_values(t) if model.n_w else ((),) * 3
         try:
-            lam0, N, Phi, checks = self._fast(*[q, v, *((w, wd, wdd) if model.n_w else ())])
+            v_dot, lam0, N, Phi, checks = self._fast(
+                *[q, v, *((w, wd, wdd) if model.n_w else ())])
         except RuntimeError:  # the factorisation failed: a singular matrix, or NaN in it
             return None
         if not (checks[0] <= RESIDUAL_TOLERANCE and checks[1] <= CONSISTENCY_TOLERANCE
                 and checks[2] <= model.rank_tolerance and np.all(np.isfinite(N))
-                and np.all(np.isfinite(lam0))):
+                and np.all(np.isfinite(lam0)) and np.all(np.isfinite(v_dot))):
             return None  # the maxima skip NaN (C's fmax): the outputs say it
         Q_across = (model.call("Q_across", self.data, q=q, v=v, w=w)
                     if model.Q_across is not None else None)
-        return ground_policy(model, self.data, t, q, Phi, Q_across, lam0,
-                             N.reshape(model.n_c, -1, order="F"))
+        return v_dot, ground_policy(model, self.data, t, q, Phi, Q_across, lam0,
+                                    N.reshape(model.n_c, -1, order="F"))
 
 
 def policy_multipliers(model: Model, rows: np.ndarray,

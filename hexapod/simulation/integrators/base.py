@@ -190,13 +190,12 @@ class Integrator(SingularPoses):
     def multipliers(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """The multipliers at a state by the redundancy policy, counted as a solve: the
         compiled kernel's where it can give them
-        (:meth:`~hexapod.simulation.kernels.CompiledRates.multipliers`, see
+        (:meth:`~hexapod.simulation.kernels.CompiledRates.dynamics`, see
         :meth:`_kernels_serve`), else the exact solve's."""
-        if self._kernels_serve(t):
-            lam = self._compiled.multipliers(t, q, v)
-            if lam is not None:
-                self.counters.rhs += 1
-                return np.asarray(lam, dtype=float)
+        solution = self._compiled.dynamics(t, q, v) if self._kernels_serve(t) else None
+        if solution is not None:
+            self.counters.rhs += 1
+            return np.asarray(solution[1], dtype=float)
         return self._dynamics(t, q, v)[1]
 
     def _kernels_serve(self, t: float) -> bool:
@@ -535,17 +534,16 @@ class Integrator(SingularPoses):
 
     def _dense_dynamics(self, t: float, q: np.ndarray,
                         v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The compiled kernels' accelerations and multipliers (those of the saved states,
-        :meth:`multipliers`), else :meth:`_dynamics` on data of its own (``data`` holds the
-        method's current state, which some methods read again in their next step)."""
-        solution = self._compiled.solve(t, q, v) if self._kernels_serve(t) else None
-        lam = None if solution is None else self._compiled.multipliers(t, q, v)
-        if lam is None:
-            v_dot, lam = self._dynamics(t, q, v, data=self._dense_data)
+        """The compiled kernel's accelerations and multipliers (one call, as for the saved
+        states, :meth:`multipliers`), else :meth:`_dynamics` on data of its own (``data``
+        holds the method's current state, which some methods read again in their next
+        step)."""
+        solution = self._compiled.dynamics(t, q, v) if self._kernels_serve(t) else None
+        if solution is None:
+            solution = self._dynamics(t, q, v, data=self._dense_data)
         else:
-            v_dot = solution[1]
             self.counters.rhs += 1
-        return np.array(v_dot, dtype=float), np.array(lam, dtype=float)
+        return np.array(solution[0], dtype=float), np.array(solution[1], dtype=float)
 
     @cached_property
     def _dense_data(self):
