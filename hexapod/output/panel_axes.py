@@ -54,10 +54,7 @@ def _in_view_locator():
 
     class InView(MaxNLocator):
         def __call__(self):
-            low, high = sorted(self.axis.get_view_interval())
-            ticks = super().__call__()
-            slack = 1e-9 * (high - low)
-            return ticks[(ticks >= low - slack) & (ticks <= high + slack)]
+            return _within(super().__call__(), *sorted(self.axis.get_view_interval()))
 
     return InView
 
@@ -66,7 +63,11 @@ def nice_ticks(low: float, high: float) -> np.ndarray:
     """matplotlib's choice of at most :data:`TICKS` round values, those within [low, high]."""
     from matplotlib.ticker import MaxNLocator
 
-    ticks = MaxNLocator(TICKS).tick_values(low, high)
+    return _within(MaxNLocator(TICKS).tick_values(low, high), low, high)
+
+
+def _within(ticks: np.ndarray, low: float, high: float) -> np.ndarray:
+    """The ``ticks`` within ``[low, high]`` (a billionth of the span's slack for round-off)."""
     slack = 1e-9 * abs(high - low)
     return ticks[(ticks >= low - slack) & (ticks <= high + slack)]
 
