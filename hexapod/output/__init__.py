@@ -14,6 +14,7 @@ __getattr__, __dir__, __all__ = attach(__name__, {
     "hexapod.output.describe": ["describe_model", "describe_state", "format_model",
                                 "format_state"],
     "hexapod.output.figures": ["COMPONENT_COLOURS", "effort_figure", "png_bytes",
-                               "render_figures", "trajectory_figure", "wrench_figure"],
+                               "prepare_drawing", "render_figures", "trajectory_figure",
+                               "wrench_figure"],
     "hexapod._support.files": ["write_atomically", "write_directory_atomically"],
 })

@@ -82,17 +82,6 @@ def forked_figures(builders: dict, workers: int) -> tuple[float, float]:
     return children_cpu() - before, time.perf_counter() - started
 
 
-def load_matplotlib() -> None:
-    """What a process pays before its first figure: matplotlib's figure and Agg canvas,
-    Pillow, the default font."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: F401
-    from matplotlib.figure import Figure  # noqa: F401
-    from matplotlib.font_manager import FontProperties, findfont, get_font
-    from PIL import Image  # noqa: F401
-
-    get_font(findfont(FontProperties()))
-
-
 def stages() -> tuple[dict[str, float], dict, object]:
     """The command's stages up to its figures; their CPU seconds, the builders, the times."""
     started = time.process_time()
@@ -139,9 +128,9 @@ def main(argv: list[str] | None = None) -> int:
     drawn = {w: min(forked_figures(builders, w) for _ in range(options.repeats))
              for w in variants}
 
-    from hexapod.output import png_bytes
+    from hexapod.output import png_bytes, prepare_drawing
 
-    _, matplotlib_import = timed(load_matplotlib)
+    _, matplotlib_import = timed(prepare_drawing)
     per_figure = {name: min(timed(lambda b=build: png_bytes(b()))[1]
                             for _ in range(options.repeats)) for name, build in builders.items()}
     with tempfile.TemporaryDirectory(prefix="hexapod-bench-report-") as tmp:
