@@ -23,6 +23,7 @@ from hexapod.model.infos import (
     ForceInfo,
     JointInfo,
     RowInfo,
+    SurfaceContact,
 )
 from hexapod.model.mass import BlockDiagonal
 from hexapod.model.model import Model, Symbolic
@@ -32,6 +33,7 @@ from hexapod.scene.element import GROUND
 from hexapod.scene.forces import (
     AppliedForce,
     AppliedTorque,
+    GroundContact,
     JointEffort,
     RotationalSpringDamper,
     SpringDamper,
@@ -321,6 +323,14 @@ class _Assembly:
                 if element.damping or element.torque is not None:
                     builder.nonconservative.append(name)
                 builder.effort(name, rate, torque)
+            elif isinstance(element, GroundContact):  # no force of the state: the scheme's
+                point = self._point(element.body, element.point)[0]
+                surface, normal = element.plane(self.dim)
+                mu = si.ground.mu if element.mu is None else element.mu
+                builder.nonconservative.append(name)  # impacts and friction dissipate
+                infos.append(ForceInfo(name, element.kind, (body(element.body),), (point,),
+                                       contact=SurfaceContact.plane(surface, normal,
+                                                                    element.restitution, mu)))
         return builder, across, infos
 
     def model(self, rank_tolerance: float, digest: str = "", source: str = "") -> Model:

@@ -110,15 +110,46 @@ class DriverInfo:
 
 
 @dataclass(frozen=True)
+class SurfaceContact:
+    """The plane and the laws of a unilateral contact (a ``ground-contact`` force element):
+    its force is decided by a contact scheme, not by the state."""
+
+    surface_point: np.ndarray  # a point of the plane, world (m)
+    normal: np.ndarray  # unit, world, out of the ground
+    tangents: np.ndarray  # (dimension - 1, dimension): unit, orthogonal, world
+    restitution: float
+    mu: float
+
+    @classmethod
+    def plane(cls, surface_point: np.ndarray, normal: np.ndarray, restitution: float,
+              mu: float) -> SurfaceContact:
+        """The contact of a plane through ``surface_point`` with unit ``normal``, with tangent
+        axes: in space the world axis farthest from the normal, made orthogonal to it, and
+        ``normal x t1``; in the plane the normal turned by -90 degrees."""
+        n = np.asarray(normal, dtype=float)
+        if n.size == 2:
+            tangents = np.array([[n[1], -n[0]]])
+        else:
+            axis = np.eye(3)[int(np.argmin(np.abs(n)))]
+            t1 = axis - (axis @ n) * n
+            t1 /= np.linalg.norm(t1)
+            tangents = np.array([t1, np.cross(n, t1)])
+        return cls(np.asarray(surface_point, dtype=float), n, tangents, float(restitution),
+                   float(mu))
+
+
+@dataclass(frozen=True)
 class ForceInfo:
     """One force element: the bodies it acts on and where (points in the bodies'
     centre-of-mass frames, world on the ground; none for torques), or the joint it acts across."""
 
     name: str
-    kind: str  # "spring", "applied-force", "applied-torque", "effort", "rotational-spring"
+    kind: str  # "spring", "applied-force", "applied-torque", "effort", "rotational-spring",
+    #            "ground-contact"
     bodies: tuple[int, ...]
     points: tuple[np.ndarray, ...] = ()
     joint: int | None = None
+    contact: SurfaceContact | None = None  # a ground contact's plane and laws
 
 
 @dataclass(frozen=True)

@@ -19,7 +19,7 @@ __getattr__, __dir__, __all__ = attach(__name__, {
     "hexapod.scene.joints": ["Contact", "Cylindrical", "Distance", "Fixed", "Joint", "PlanarJoint",
                              "PointOnPlane", "Prismatic", "Revolute", "Spherical", "Universal"],
     "hexapod.scene.drivers": ["CoordinateDriver", "JointDriver"],
-    "hexapod.scene.forces": ["AppliedForce", "AppliedTorque", "JointEffort",
+    "hexapod.scene.forces": ["AppliedForce", "AppliedTorque", "GroundContact", "JointEffort",
                              "RotationalSpringDamper", "SpringDamper"],
     "hexapod.scene.contacts": ["POLICIES", "GroundForces"],
     "hexapod.scene.laws": ["Constant", "Expression", "Gait", "Harmonic", "Hermite", "Law",

@@ -310,7 +310,92 @@ class RotationalSpringDamper(ForceElement):
         return out
 
 
+@dataclass(eq=False)
+class GroundContact(ForceElement):
+    """A unilateral point contact of a body with the ground surface (a plane), with Coulomb
+    friction and Newton's impact law: the force of the ground on the point is decided at each
+    step by a contact scheme (:mod:`hexapod.simulation.integrators.moreau_jean`), not by a law.
+
+    The **gap** ``g = n . (P - S)`` of the point ``P`` from the plane through ``S`` with unit
+    normal ``n`` (world) is positive when they are apart. Where it is closed the ground pushes
+    (normal force at least 0, never pulls) and the tangential force stays inside the cone
+    ``|F_t| <= mu F_n``; an approach at normal speed ``u`` rebounds at ``-restitution u``.
+
+    Parameters
+    ----------
+    name : str
+        The element's name, unique among the force elements.
+    body : str
+        The body that touches (not the ground).
+    point : str or array_like, optional
+        The touching point: a marker name or a point in the body's reference frame (L);
+        default the centre of mass.
+    normal : array_like, optional
+        The plane's normal, world, pointing out of the ground (normalised; default ``+z`` in
+        space, ``+y`` in the plane).
+    surface_point : array_like, optional
+        A point of the plane, world (L); default the origin.
+    restitution : float
+        Newton's coefficient of restitution, in [0, 1] (default 0: plastic).
+    mu : float, optional
+        The friction coefficient, at least 0; default the scene's ``[ground] mu``.
+    source : str
+        Where the element was written, named in messages; empty when built in Python.
+    """
+
+    name: str
+    body: str
+    point: object = None
+    normal: object = None
+    surface_point: object = None
+    restitution: float = 0.0
+    mu: float | None = None
+    source: str = ""
+    kind = "ground-contact"
+
+    def problems(self):
+        out: list[Problem] = []
+        if self.point is not None and not isinstance(self.point, str):
+            check_finite(self, "point", self.point, out)
+        for key in ("normal", "surface_point"):
+            check_finite(self, key, getattr(self, key), out)
+        if self.normal is not None and np.all(np.isfinite(np.asarray(self.normal, float))) \
+                and not np.linalg.norm(np.asarray(self.normal, dtype=float)) > 0:
+            out.append(self.problem("normal", "must not be zero"))
+        if check_finite(self, "restitution", self.restitution, out) and not (
+                0.0 <= self.restitution <= 1.0):
+            out.append(self.problem("restitution", f"must be in [0, 1], got "
+                                    f"{self.restitution}"))
+        if self.mu is not None:
+            _non_negative(self, ("mu",), out)
+        if self.body == GROUND:
+            out.append(self.problem("body", "the ground cannot touch itself"))
+        return out
+
+    def scaled(self, length):
+        out = super().scaled(length)
+        out.point = scaled_ref(self.point, length)
+        out.surface_point = scaled_ref(self.surface_point, length)
+        return out
+
+    def attached(self, attachment: Attachment):
+        out = super().attached(attachment)
+        out.body = attachment.body(self.body)
+        T = attachment.transform  # the plane is in the sub-model's world: into the scene's
+        out.surface_point, out.normal = T.transform_point(self.plane(T.rotation.shape[0])[0]), \
+            T.rotation @ self.plane(T.rotation.shape[0])[1]
+        return out
+
+    def plane(self, dimension: int) -> tuple[np.ndarray, np.ndarray]:
+        """The plane's point and unit normal (world), the defaults filled in."""
+        point = np.zeros(dimension) if self.surface_point is None else np.asarray(
+            self.surface_point, dtype=float)
+        normal = np.eye(dimension)[-1] if self.normal is None else np.asarray(
+            self.normal, dtype=float)
+        return point, normal / np.linalg.norm(normal)
+
+
 FORCE_TYPES: dict[str, type[ForceElement]] = {
     cls.kind: cls for cls in (SpringDamper, AppliedForce, AppliedTorque, JointEffort,
-                              RotationalSpringDamper)
+                              RotationalSpringDamper, GroundContact)
 }

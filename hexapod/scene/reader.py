@@ -388,6 +388,10 @@ def _force_schema(kind: str, dimension: int) -> Schema:
         "rotational-spring": {"joint": (_string, True), "stiffness": (_number, False),
                               "damping": (_number, False), "free_angle": (_number, False),
                               "torque": (_law, False)},
+        "ground-contact": {"body": (_string, True), "point": (_point(dimension), False),
+                           "normal": (_vector(dimension), False),
+                           "surface_point": (_vector(dimension), False),
+                           "restitution": (_number, False), "mu": (_number, False)},
     }
     return FORCE_TYPES[kind], {"name": (_string, True), "type": (_string, True),
                                **schemas[kind]}

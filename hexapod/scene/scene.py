@@ -28,6 +28,7 @@ from hexapod.scene.forces import (
     AppliedForce,
     AppliedTorque,
     ForceElement,
+    GroundContact,
     JointEffort,
     RotationalSpringDamper,
     SpringDamper,
@@ -378,6 +379,12 @@ class _ReferenceCheck:
                 self._add("body", f"particle '{e.body}' has no orientation: a torque on it "
                           "does nothing")
             self._components("torque", e.torque, 3 if self.scene.dimension == 3 else 1)
+        elif isinstance(e, GroundContact):
+            if self._body_ref(e.body, "body", ground_ok=True):
+                self._point(e.body, e.point, "point", "body")
+            for key in ("normal", "surface_point"):
+                if getattr(e, key) is not None:
+                    self._components(key, np.ravel(getattr(e, key)), self.scene.dimension)
         elif isinstance(e, JointEffort):
             self._driven_joint(e.joint, "joint", "an actuator effort")
         elif isinstance(e, RotationalSpringDamper):
