@@ -1,0 +1,117 @@
+"""Where the unilateral contacts of a model are, and how fast they close: gaps and the contact
+Jacobian in each contact's own axes (normal first, then the tangents).
+
+A contact (a ``ground-contact`` force element, :class:`~hexapod.model.infos.SurfaceContact`)
+touches with a point ``P`` of a body, fixed in its centre-of-mass frame at ``s``. Its gap is
+``g = n . (P - S)`` and its velocity in the contact's axes ``u = [n; t_1; t_2] v_P = J v``,
+with ``v_P = J_P v`` the point's world velocity:
+
+* a spatial body, ``P = r + R s``: ``J_P = [I, -R [s]x]`` on ``(r_dot, omega')`` (the angular
+  velocity in body axes, as the model's velocities);
+* a planar body, ``P = r + R(theta) s``: ``J_P = [I, k x R s]`` on ``(x_dot, y_dot,
+  theta_dot)``;
+* a particle, ``P = r + s``: ``J_P = I``.
+
+These few numbers per contact are evaluated in NumPy: a contact costs a rotation and a product.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from hexapod.errors import HexapodError
+from hexapod.model.infos import ForceInfo
+from hexapod.model.model import Model
+
+
+@dataclass(frozen=True)
+class ContactFrames:
+    """The unilateral contacts at one state.
+
+    Attributes
+    ----------
+    gaps : ndarray, shape (m,)
+        ``n . (P - S)`` per contact (m): positive when apart.
+    jacobian : ndarray, shape (m d, n_v)
+        Rows ``[n; t_1 ...]`` of each contact in turn (``d`` the scene's dimension).
+    points : ndarray, shape (m, d)
+        The touching points, world (m).
+    axes : ndarray, shape (m, d, d)
+        Each contact's axes as rows (normal, tangents), world.
+    """
+
+    gaps: np.ndarray
+    jacobian: np.ndarray
+    points: np.ndarray
+    axes: np.ndarray
+
+
+def ground_contacts(model: Model) -> tuple[ForceInfo, ...]:
+    """The model's unilateral contacts (its ``ground-contact`` force elements), in order."""
+    return tuple(f for f in model.forces if f.contact is not None)
+
+
+def refuse_contacts(model: Model) -> None:
+    """Raise a :class:`~hexapod.errors.HexapodError` when ``model`` has unilateral contacts:
+    their forces only a contact scheme decides, over a step, and an analysis at an instant (or
+    along a prescribed motion) would leave them out as if they were not there.
+
+    Parameters
+    ----------
+    model : Model
+    """
+    touching = [f.name for f in ground_contacts(model)]
+    if touching:
+        raise HexapodError(
+            f"model '{model.name}' has unilateral contacts ("
+            + ", ".join(f"'{n}'" for n in touching[:5]) + "), whose forces only a contact "
+            "scheme decides, over a step: simulate it (method moreau-jean); an analysis at an "
+            "instant or along a prescribed motion would leave them out")
+
+
+def contact_frames(model: Model, q: np.ndarray,
+                   contacts: tuple[ForceInfo, ...] | None = None) -> ContactFrames:
+    """Gaps, Jacobian, points and axes of ``contacts`` (default all the model's) at ``q``.
+
+    Parameters
+    ----------
+    model : Model
+    q : ndarray, shape (n_q,)
+    contacts : tuple of ForceInfo, optional
+        Default :func:`ground_contacts`.
+
+    Returns
+    -------
+    ContactFrames
+    """
+    contacts = ground_contacts(model) if contacts is None else contacts
+    d = model.dimension
+    gaps = np.zeros(len(contacts))
+    jacobian = np.zeros((len(contacts) * d, model.n_v))
+    points = np.zeros((len(contacts), d))
+    axes = np.zeros((len(contacts), d, d))
+    for k, element in enumerate(contacts):
+        surface = element.contact
+        info = model.bodies[element.bodies[0]]
+        pose = model.body_pose(q, info.index)
+        local = np.asarray(element.points[0], dtype=float)
+        arm = pose.rotation @ local if info.kind != "particle" else local
+        point = pose.position + arm
+        if info.kind == "spatial":
+            J_P = np.hstack([np.eye(3), -pose.rotation @ _skew(local)])
+        elif info.kind == "planar":
+            J_P = np.hstack([np.eye(2), np.array([[-arm[1]], [arm[0]]])])
+        else:
+            J_P = np.eye(d)
+        frame = np.vstack([surface.normal, surface.tangents])
+        gaps[k] = surface.normal @ (point - surface.surface_point)
+        jacobian[k * d:(k + 1) * d, info.v] = frame @ J_P
+        points[k], axes[k] = point, frame
+    return ContactFrames(gaps, jacobian, points, axes)
+
+
+def _skew(s: np.ndarray) -> np.ndarray:
+    """``[s]x``: ``[s]x w = s x w``."""
+    return np.array([[0.0, -s[2], s[1]], [s[2], 0.0, -s[0]], [-s[1], s[0], 0.0]])
