@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from hexapod.algorithms.contact_frames import refuse_contacts
 from hexapod.algorithms.ground import share_ground_forces
 from hexapod.algorithms.kinematics import state_split
 from hexapod.algorithms.liaison import policy_map
@@ -24,8 +25,14 @@ def forward_dynamics(model: Model, data: Data, t: float, q: np.ndarray, v: np.nd
                      condition: bool = False,
                      baumgarte: tuple[float, float] | None = None,
                      rank_tolerance: float | None = None,
-                     consistency_tol: float = 1e-6) -> np.ndarray:
+                     consistency_tol: float = 1e-6,
+                     open_contacts: bool = False) -> np.ndarray:
     """Accelerations ``v_dot`` at ``(t, q, v)``; fills ``data``.
+
+    A scene's unilateral contacts (``ground-contact`` force elements) carry forces that only a
+    contact scheme decides, over a step (:mod:`hexapod.simulation.integrators.moreau_jean`):
+    at an instant they are refused, unless ``open_contacts`` asks for the accelerations with
+    every contact open (no contact force), as such a scheme's free motion.
 
     With ``baumgarte = (alpha, beta)`` (1/s) the acceleration constraints are stabilised,
     ``Phi_v v_dot = gamma - 2 alpha (Phi_v v - nu) - beta^2 phi``, so that drifted positions
@@ -61,6 +68,8 @@ def forward_dynamics(model: Model, data: Data, t: float, q: np.ndarray, v: np.nd
         Default ``model.rank_tolerance``.
     consistency_tol : float
         The largest relative violation of the redundant rows.
+    open_contacts : bool
+        With unilateral contacts: the accelerations with all of them open, asked for.
 
     Returns
     -------
@@ -71,8 +80,12 @@ def forward_dynamics(model: Model, data: Data, t: float, q: np.ndarray, v: np.nd
     ------
     SingularSystemError
         When redundant constraints contradict each other.
+    HexapodError
+        The scene has unilateral contacts and ``open_contacts`` is false.
     """
     model.check(data)
+    if not open_contacts:
+        refuse_contacts(model)
     q = np.asarray(q, dtype=float)
     v = np.asarray(v, dtype=float)
     w, wd, wdd = model.law_values(t, data)

@@ -41,6 +41,7 @@ from hexapod._support import signals
 from hexapod._support.compiled import compiled
 from hexapod._support.execution import current
 from hexapod._support.fastcall import InPlaceFunction
+from hexapod.algorithms.contact_frames import refuse_contacts
 from hexapod.errors import HexapodError
 from hexapod.model.data import kept
 from hexapod.model.model import GROUND_INDEX, Data, Model
@@ -178,12 +179,14 @@ def inverse_dynamics(model: Model, times: ArrayLike, *, method: str = "auto", fr
     SingularSystemError
         When the drivers leave degrees of freedom free (the motion is not prescribed).
     HexapodError
-        When ``method="tree"`` and the model is not an open tree with every joint driven.
+        When ``method="tree"`` and the model is not an open tree with every joint driven, or
+        when it has unilateral contacts (whose forces only a contact scheme decides).
     """
     times = np.atleast_1d(np.asarray(times, dtype=float))
     if data is None:
         data = model.create_data()
     model.check(data)
+    refuse_contacts(model)
     if frame not in ("joint", "world"):
         raise ValueError(f"frame must be 'joint' or 'world', got {frame!r}")
     w, wd, wdd = (x.reshape(model.n_w, times.size) for x in model.law_values(times, data))

@@ -26,11 +26,12 @@ from hexapod.cli.common import (
 )
 from hexapod.cli.outputs import given_files, output_directory, suffixes
 from hexapod.simulation.methods import (
+    ALL_METHODS,
     ATOL_KINDS,
+    CONTACT_METHODS,
     DEFAULT_ATOL,
     DEFAULT_METHOD,
     DEFAULT_RTOL,
-    METHODS,
     aliases_of,
     resolve_method,
 )
@@ -61,12 +62,13 @@ def add_arguments(parser) -> None:
     methods = "; ".join(
         f"{name}: {method.summary()}"
         + "".join(f" (short name {alias})" for alias in aliases_of(name))
-        for name, method in METHODS.items())
+        for name, method in ALL_METHODS.items())
     scene_positional(parser)
-    parser.add_argument("--method", type=resolve_method, choices=list(METHODS),
-                        default=DEFAULT_METHOD, metavar="NAME",
-                        help=f"the integrator, by name or short name (default {DEFAULT_METHOD}):"
-                        f" {methods}")
+    parser.add_argument("--method", type=resolve_method, choices=list(ALL_METHODS),
+                        metavar="NAME",
+                        help=f"the integrator, by name or short name (default {DEFAULT_METHOD}"
+                        f", or {next(iter(CONTACT_METHODS))} for a scene with unilateral "
+                        f"contacts): {methods}")
     parser.add_argument("--t-end", type=seconds, metavar="S",
                         help="duration in s (default: one cycle of the scene's periodic laws, "
                         "or 1 s)")
@@ -126,13 +128,15 @@ def run(args) -> int:
     from hexapod._support.files import write_directory_atomically
     from hexapod.model.assemble import assemble
     from hexapod.simulation.loop import simulate
-    from hexapod.simulation.results import scene_reference, units_json
+    from hexapod.simulation.registry import default_method
+    from hexapod.simulation.results import EVENT_COLUMNS, scene_reference, units_json
 
     scene = scene_of(args, args.scene)
     out = output_directory(args.out, f"{scene.name}-simulation",
                            inputs=given_files(args.scene),
                            ours=suffixes(".csv", ".npz", ".json"))
     model = assemble(scene)
+    args.method = args.method or default_method(model)
     duration, why = model.time_window(args.t_end)
     _check_step(args, duration)
     try:
@@ -156,6 +160,10 @@ def run(args) -> int:
     files = {"results.csv": result.csv_text().encode(), "results.npz": result.npz_bytes(),
              "units.json": units_json({"results.csv": result.column_units()}).encode(),
              "stats.json": (json.dumps(jsonable(stats), indent=2) + "\n").encode()}
+    if result.events is not None:  # a contact scheme's
+        files["events.csv"] = result.events_csv_text().encode()
+        files["units.json"] = units_json({"results.csv": result.column_units(),
+                                          "events.csv": EVENT_COLUMNS}).encode()
     write_directory_atomically(out, files)
     print(f"wrote {out}/: {', '.join(files)}")
     drift = ("" if result.energy_drift is None
@@ -247,9 +255,7 @@ def _absolute_tolerance(args):
 
 def _advice(args) -> dict[str, str]:
     """What the messages of the limits suggest, in this command's options."""
-    from hexapod.simulation.methods import METHODS
-
-    if METHODS[args.method].adaptive:
+    if ALL_METHODS[args.method].adaptive:
         steps = "shorten --t-end, or loosen --rtol and --atol"
     else:
         steps = "shorten --t-end, or give a larger --step"

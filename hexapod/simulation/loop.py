@@ -30,7 +30,7 @@ from hexapod.model.model import Model
 from hexapod.model.tabulation import TOLERANCE_PER_RTOL, tabulated_model
 from hexapod.simulation.integrators import Integrator
 from hexapod.simulation.methods import DEFAULT_ATOL, DEFAULT_RTOL
-from hexapod.simulation.registry import DEFAULT_METHOD, get_integrator
+from hexapod.simulation.registry import default_method, get_integrator
 from hexapod.simulation.results import SimulationResult
 from hexapod.simulation.watch import Watch
 
@@ -62,7 +62,7 @@ ADVICE = {"steps": "shorten the run (t_end) or take larger steps (step, or loose
 _NO_STEP_SAVED = 2**62
 
 
-def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEFAULT_METHOD,
+def simulate(model: Model, t_end: float, *, method: str | type[Integrator] | None = None,
              t0: float = 0.0, q0: np.ndarray | None = None, v0: np.ndarray | None = None,
              rtol: float | None = None, atol: float | Mapping[str, float] | None = None,
              step: float | None = None, every: int = 1, t_eval: ArrayLike | None = None,
@@ -82,11 +82,13 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
         Its start, s.
     q0, v0 : ndarray, shape (n_q,) and (n_v,), optional
         Guesses of the initial state (default: the scene's), made consistent first.
-    method : str or type
-        A registered integrator name (:data:`hexapod.simulation.integrators.INTEGRATORS`), its
-        short name (:data:`~hexapod.simulation.methods.ALIASES`: ``rk4``, ``dopri5``,
-        ``dop853``, ``radau``, ``idas``, ``gen-alpha``) or class; the result records the
-        registered name.
+    method : str or type, optional
+        A registered integrator name (:data:`hexapod.simulation.registry.INTEGRATORS`, or a
+        contact scheme of :data:`~hexapod.simulation.registry.CONTACT_SCHEMES`), its short
+        name (:data:`~hexapod.simulation.methods.ALIASES`: ``rk4``, ``dopri5``, ``dop853``,
+        ``radau``, ``idas``, ``gen-alpha``) or class; the result records the registered name.
+        Default: :func:`~hexapod.simulation.registry.default_method` (``dopri5-projection``,
+        or ``moreau-jean`` for a scene with unilateral contacts).
     rtol, atol, step : float, float or mapping, float; optional
         Tolerances of adaptive methods (default :data:`~hexapod.simulation.methods.DEFAULT_RTOL`
         and ``DEFAULT_ATOL``; a fixed-step method given them warns that it ignores them); the
@@ -163,7 +165,7 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
     if grid is not None and every != 1:
         raise ValueError("every and t_eval cannot be given together: with output times the "
                          "states saved are those at the times")
-    cls = get_integrator(method)
+    cls = get_integrator(default_method(model) if method is None else method)
     if grid is not None and not cls.has_dense_output():
         raise ValueError(f"{cls.name} has no dense output: it cannot save states at t_eval")
     options = {**_tolerances(cls, rtol, atol), "step": step, **(options or {})}
@@ -201,7 +203,8 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] = DEF
         energy_drift=(worst["drift"] / max(worst["kinetic"], np.finfo(float).tiny)
                       if watch.conserved else None),
         options=options, t_bound=float(t_end), t_start=float(t0),
-        t_reached=float(reached) if grid is not None else None)
+        t_reached=float(reached) if grid is not None else None,
+        contact_forces=arrays.get("contact_forces"), events=getattr(integrator, "events", None))
     if forces or (forces is None and model.report_forces):
         _add_wrenches(result)
     return result

@@ -64,6 +64,17 @@ METHODS: dict[str, Method] = {
                        "passes drift_tol"),
 }
 
+#: The contact schemes: integrators of scenes with unilateral contacts (``ground-contact``
+#: force elements), which the methods above do not integrate.
+CONTACT_METHODS: dict[str, Method] = {
+    "moreau-jean": Method(1, 2, False, "velocity-level bilateral rows and Signorini's "
+                          "condition with Coulomb friction and impacts; positions projected "
+                          "onto phi = 0 and out of the ground"),
+}
+
+#: Every method by name: the smooth ones, then the contact schemes.
+ALL_METHODS: dict[str, Method] = {**METHODS, **CONTACT_METHODS}
+
 #: Short names accepted wherever a method is named (``--method``, ``simulate(method=...)``,
 #: ``get_integrator``); a run records the registered name. ``rattle`` is its own short name.
 ALIASES: dict[str, str] = {

@@ -34,6 +34,7 @@ from hexapod.simulation.integrators import (
     IdasBDF,
     Integrator,
     LieGroupGeneralizedAlpha,
+    MoreauJean,
     RadauIIA5GGL,
     Rattle,
     RungeKutta4Baumgarte,
@@ -46,11 +47,14 @@ from hexapod.simulation.methods import (
     resolve_method,
 )
 
-__all__ = ["ALIASES", "DEFAULT_ATOL", "DEFAULT_METHOD", "DEFAULT_RTOL", "INTEGRATORS",
-           "get_integrator", "register"]
+__all__ = ["ALIASES", "CONTACT_SCHEMES", "DEFAULT_ATOL", "DEFAULT_METHOD", "DEFAULT_RTOL",
+           "INTEGRATORS", "default_method", "get_integrator", "register"]
 
 #: Integrators by name, in the order studies list them.
 INTEGRATORS: dict[str, type[Integrator]] = {}
+#: The integrators of scenes with unilateral contacts, by name (the smooth methods of
+#: :data:`INTEGRATORS` refuse such scenes).
+CONTACT_SCHEMES: dict[str, type[Integrator]] = {MoreauJean.name: MoreauJean}
 
 
 def register(cls: type[Integrator]) -> type[Integrator]:
@@ -77,6 +81,24 @@ def register(cls: type[Integrator]) -> type[Integrator]:
     return cls
 
 
+def default_method(model) -> str:
+    """The method a simulation of ``model`` uses when none is named: the contact scheme for a
+    scene with unilateral contacts, else :data:`DEFAULT_METHOD`.
+
+    Parameters
+    ----------
+    model : Model
+
+    Returns
+    -------
+    str
+        A registered name.
+    """
+    if any(f.contact is not None for f in model.forces):
+        return next(iter(CONTACT_SCHEMES))
+    return DEFAULT_METHOD
+
+
 def get_integrator(method: str | type[Integrator]) -> type[Integrator]:
     """The integrator class for a registered name or its short name (:data:`ALIASES`:
     ``rk4``, ``dopri5``, ``dop853``, ``radau``, ``idas``, ``gen-alpha``), or ``method`` itself
@@ -100,9 +122,11 @@ def get_integrator(method: str | type[Integrator]) -> type[Integrator]:
     if isinstance(method, type) and issubclass(method, Integrator):
         return method
     name = resolve_method(method) if isinstance(method, str) else method
+    if name in CONTACT_SCHEMES:
+        return CONTACT_SCHEMES[name]
     if name not in INTEGRATORS:
         raise ValueError(f"unknown integrator {method!r}: choose one of "
-                         + ", ".join(INTEGRATORS) + " (or a short name: "
+                         + ", ".join([*INTEGRATORS, *CONTACT_SCHEMES]) + " (or a short name: "
                          + ", ".join(ALIASES) + ")")
     return INTEGRATORS[name]
 

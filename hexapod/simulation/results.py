@@ -13,7 +13,14 @@ Columns of ``results.csv`` (names built from the elements' names; SI units):
                      N for a length row, N m for an angle row
 ``tau:<joint>``,     with ``forces``: each joint's wrench, exerted by the parent on the child
 ``Fx:<joint>`` ...   about the joint origin in the child's joint frame, as ``hexapod inverse``
+``GRx:<contact>``    with unilateral contacts (a contact scheme): the force of the ground on
+...                  the body at each contact, world axes, N (the step's impulse over the step)
 ===================  ===================================================================
+
+A contact scheme's run also has its contact events (:meth:`SimulationResult.events_csv_text`,
+``events.csv``: ``t, kind, contact, Px, Py, Pz``; ``kind`` one of ``touch-down``, ``lift-off``,
+``slip-start``, ``slip-end``, ``impact``; the impulse of an impact in world axes, N s, zero for
+the other kinds).
 
 Every column's unit and meaning come from :meth:`SimulationResult.column_units`, written beside
 the CSV as ``units.json`` (:func:`units_json`; the naming scheme and the sidecar are described in
@@ -53,6 +60,14 @@ WRENCH_COMPONENTS = ("Fx", "Fy", "Fz", "Tx", "Ty", "Tz")
 #: a pure number, None for text; this is what ``units.json`` says of each column.
 Columns = dict[str, tuple[str | None, str]]
 
+
+#: the columns of ``events.csv`` (a contact scheme's run)
+EVENT_COLUMNS: Columns = {
+    "t": ("s", "the end of the step the event happened in"),
+    "kind": (None, "touch-down, lift-off, slip-start, slip-end or impact"),
+    "contact": (None, "the contact's name (its ground-contact force element)"),
+    **{f"P{axis}": ("N s", f"impulse of the ground on the body at an impact, {axis} in world "
+                           "axes (0 for the other kinds)") for axis in "xyz"}}
 
 
 def state_columns(model: Model) -> Columns:
@@ -147,6 +162,12 @@ class SimulationResult:
     t_bound, t_start, t_reached : float or None
         The end the run was asked to reach, its start, and the time it reached when that may
         differ from the last saved time (s; None: the last or first saved time).
+    contact_forces : ndarray (N, m, d) or None
+        With unilateral contacts: the ground's force on the body at each contact, world axes
+        (N), at the saved states.
+    events : list or None
+        With unilateral contacts: their events
+        (:class:`~hexapod.simulation.integrators.moreau_jean.ContactEvent`), in time order.
     """
 
     model: Model
@@ -179,6 +200,8 @@ class SimulationResult:
     #: the time the run reached (s), when it may differ from the last saved time (states saved
     #: at output times only); None: the last saved time
     t_reached: float | None = None
+    contact_forces: np.ndarray | None = None
+    events: list | None = None
 
     @property
     def success(self) -> bool:
@@ -209,7 +232,29 @@ class SimulationResult:
         out: Columns = {"t": ("s", "time"), **state_columns(self.model)}
         if self.force is not None:
             out.update(wrench_columns(self.model))
+        for name in self.contact_names:
+            for axis in "xyz"[:self.model.dimension]:
+                out[f"GR{axis}:{name}"] = ("N", f"force of the ground on the body at contact "
+                                                f"'{name}', {axis} in world axes")
         return out
+
+    @property
+    def contact_names(self) -> tuple[str, ...]:
+        """The unilateral contacts' names, in the order of ``contact_forces`` (none without)."""
+        if self.contact_forces is None:
+            return ()
+        return tuple(f.name for f in self.model.forces if f.contact is not None)
+
+    def events_csv_text(self) -> str:
+        """The contact events as CSV (``events.csv``): ``t, kind, contact, Px, Py, Pz``."""
+        lines = ["t,kind,contact,Px,Py,Pz\n"]
+        for event in self.events or ():
+            impulse = np.zeros(3)
+            impulse[:event.impulse.size] = event.impulse
+            name = event.contact.replace('"', '""')
+            lines.append(f'{event.t:.17g},{event.kind},"{name}",'
+                         + ",".join(f"{x:.17g}" for x in impulse) + "\n")
+        return "".join(lines)
 
     def columns(self) -> list[str]:
         return list(self.column_units())
@@ -221,6 +266,8 @@ class SimulationResult:
                 if joint.type.drivable:
                     parts.append(self.effort[:, k, None])
                 parts += [self.force[:, k], self.torque[:, k]]
+        if self.contact_forces is not None:
+            parts.append(self.contact_forces.reshape(self.t.size, -1))
         return np.hstack(parts)
 
     def csv_text(self) -> str:
@@ -237,6 +284,9 @@ class SimulationResult:
                   "statistics": np.array(json.dumps(self.statistics()))}
         if self.source:
             arrays["source"] = np.array(self.source)
+        if self.contact_forces is not None:
+            arrays.update(contact_forces=self.contact_forces,
+                          contacts=np.array(self.contact_names, dtype=str))
         if self.force is not None:
             arrays.update(force=self.force, torque=self.torque, effort=self.effort,
                           joints=np.array([j.name for j in self.model.joints]),

@@ -40,7 +40,10 @@ class Watch:
         self.model, self.integrator = model, integrator
         self.grid = grid  # the output times, if given
         self.next = 0  # the output time to save next
-        self.saved: dict[str, list[np.ndarray]] = {key: [] for key in _KEYS}
+        # a contact scheme's states carry their contact forces too
+        self.keys = _KEYS + (("contact_forces",) if hasattr(integrator, "contact_forces")
+                             else ())
+        self.saved: dict[str, list[np.ndarray]] = {key: [] for key in self.keys}
         self.energy_saved: list[float] = []
         self.conserved = model.energy_conserved
         self.energy0 = (energy(model, integrator.q, integrator.v)[1] if self.conserved
@@ -78,7 +81,7 @@ class Watch:
         integrator = self.integrator
         try:
             values = {key: np.array(getattr(integrator, key), dtype=float, copy=True)
-                      for key in _KEYS}
+                      for key in self.keys}
         except HexapodError as error:
             integrator.status = "failed"
             integrator.message = (f"{integrator.name}: failed at t = {integrator.t:.6g} s: "
@@ -129,7 +132,7 @@ class Watch:
                                       "scene's forces or laws are too large, or the motion is "
                                       "unstable)")
                 return
-        for key in _KEYS:
+        for key in self.keys:
             self.saved[key].append(values[key])
         if self.conserved:
             self.energy_saved.append(level)
@@ -146,7 +149,8 @@ class Watch:
         when the scene conserves it."""
         model = self.model
         sizes = {"t": (), "q": (model.n_q,), "v": (model.n_v,), "v_dot": (model.n_v,),
-                 "lam": (model.n_c,)}
+                 "lam": (model.n_c,),
+                 "contact_forces": np.shape(getattr(self.integrator, "contact_forces", ()))}
         out = {}
         for key, blocks in self.saved.items():
             out[key] = (np.array(blocks, dtype=float) if blocks

@@ -9,10 +9,11 @@ from hexapod.simulation.integrators.embedded import (
 )
 from hexapod.simulation.integrators.explicit import RungeKutta4Baumgarte
 from hexapod.simulation.integrators.generalized_alpha import LieGroupGeneralizedAlpha
+from hexapod.simulation.integrators.moreau_jean import MoreauJean
 from hexapod.simulation.integrators.radau import RadauIIA5GGL
 from hexapod.simulation.integrators.rattle import Rattle
 from hexapod.simulation.integrators.sundials import IdasBDF
 
 __all__ = ["Counters", "DormandPrince5", "DormandPrince853", "EmbeddedRungeKutta", "IdasBDF",
-           "Integrator", "LieGroupGeneralizedAlpha", "RadauIIA5GGL", "Rattle",
+           "Integrator", "LieGroupGeneralizedAlpha", "MoreauJean", "RadauIIA5GGL", "Rattle",
            "RungeKutta4Baumgarte"]

@@ -124,6 +124,9 @@ class Integrator(SingularPoses):
     #: True when the method counts its accepted steps itself: a call of :meth:`step` then
     #: returns one state but may stand for many steps of an underlying solver
     counts_own_steps: ClassVar[bool] = False
+    #: True for a contact scheme: its velocities jump at impacts, and unilateral contacts
+    #: (``ground-contact`` force elements) are its to integrate; the other methods refuse them
+    impulsive: ClassVar[bool] = False
 
     @classmethod
     def largest_stable_step(cls, eigenvalues, constrained: bool = False,
@@ -141,6 +144,12 @@ class Integrator(SingularPoses):
                  step: float | None = None, max_step: float = np.inf):
         if not t_bound > t0:
             raise ValueError(f"t_bound must be after t0, got {t0} and {t_bound}")
+        touching = [f.name for f in model.forces if f.contact is not None]
+        if touching and not self.impulsive:
+            raise HexapodError(f"{self.name} does not integrate unilateral contacts ("
+                               + ", ".join(f"'{n}'" for n in touching[:5])
+                               + "): simulate this scene with a contact scheme "
+                               "(method moreau-jean)")
         if step is not None and not step > 0:
             raise ValueError(f"step must be positive, got {step}")
         # a mapping gives each kind of coordinate its own (see absolute_tolerances); the scalar
@@ -251,12 +260,14 @@ class Integrator(SingularPoses):
             self.counters.steps += 1
         self._accepted_step = self.t - t_before
         self._recent_steps.append(self._accepted_step)
+        # a fixed smooth step is weighed: a jump of its velocities or energy is not an impact
+        weighed = not (self.adaptive or self.impulsive)
         if not np.all(np.isfinite(self.q)) or not np.all(np.isfinite(self.v)):
             self.status = "failed"
             self.message = (f"{self.name}: non-finite state at t = {self.t:.6g} s (the step is "
                             "too large for this method, or the motion is unstable)")
-        elif not self.adaptive and self._jumps_branch(self.t - t_before, v_before, a_before,
-                                                      self.v, self.v_dot):
+        elif weighed and self._jumps_branch(self.t - t_before, v_before, a_before,
+                                            self.v, self.v_dot):
             # a fixed step cannot shorten itself through a singular pose: it says so
             where = self._singular_pose()
             self.status = "failed"
@@ -265,8 +276,8 @@ class Integrator(SingularPoses):
                             "motion's branch" + (f"; {where}" if where else
                                                  " (take a smaller step)"))
             return
-        elif not self.adaptive and self._energy_jump(q_before, v_before,
-                                                     self.q, self.v) > ENERGY_JUMP:
+        elif weighed and self._energy_jump(q_before, v_before, self.q,
+                                           self.v) > ENERGY_JUMP:
             self.status = "failed"
             self.message = (f"{self.name}: the step from t = {t_before:.6g} s changed the "
                             f"energy of this conservative scene by "
@@ -377,7 +388,8 @@ class Integrator(SingularPoses):
         options = ({"rank_tolerance": rank_tolerance, "consistency_tol": consistency_tol}
                    if self._crossing is None else
                    {"rank_tolerance": self._crossing, "consistency_tol": np.inf})
-        v_dot = forward_dynamics(self.model, data, t, q, v, baumgarte=baumgarte, **options)
+        v_dot = forward_dynamics(self.model, data, t, q, v, baumgarte=baumgarte,
+                                 open_contacts=self.impulsive, **options)
         self.counters.rhs += 1
         self.counters.jacobians += 1
         self.counters.factorisations += 1

@@ -1,0 +1,229 @@
+"""Moreau-Jean time-stepping: unilateral contacts with Coulomb friction and impacts, at
+velocity level (Moreau 1988, Jean 1999; Acary and Brogliato, *Numerical Methods for Nonsmooth
+Dynamical Systems*, 2008, ch. 10).
+
+Each step of ``h`` from ``(t_k, q_k, v_k)`` is one saddle-point solve of the engine's
+constrained step with the contacts' impulses ``P`` on its right-hand side, at velocity level:
+
+    M (v_k+1 - v_k) = h Q(t_k, q_k, v_k) - Phi_v^T Lambda + J^T P,
+    Phi_v v_k+1 = nu(t_k+1),                          the bilateral rows, at q_k
+    q_k+1 = q_k (+) h ((1 - theta) v_k + theta v_k+1),  theta = 1/2
+
+with ``J`` the contacts' Jacobian in their own axes (:mod:`hexapod.algorithms.contact_frames`).
+The solve is linear in ``P``: ``v_k+1 = v_free + A J^T P``, ``A`` the mechanism's inverse mass
+under its bilateral rows, so the contacts see ``u = J v_k+1 = b + W P`` with the Delassus
+operator ``W = J A J^T``; the impulses come from the frictional contact problem
+(:func:`hexapod.algorithms.frictional.solve_contacts`) of the contacts whose gap would close
+in the step without them (the position update applied to the free velocity): Signorini with
+Newton's restitution on ``u_N + e u_N,k`` and the exact Coulomb cone. No acceleration-level
+complementarity problem is solved: the scheme is well posed in Painleve's configurations,
+where it answers with a tangential impact.
+
+Positions are then put back on the bilateral rows (Newton, :meth:`Integrator._project`) and
+on the ground: the gaps of the contacts the ground pushed are closed by the least ``M``-norm
+correction under the bilateral rows (a position correction, not an impulse: the velocities
+are kept), out of the ground and, where a plastic touch-down stopped a contact a little above
+it, down onto it. The method is of order 1 (its impacts and friction are resolved within
+a step); the saved accelerations are the step's mean ``(v_k+1 - v_k) / h`` and the saved
+multipliers the mean forces ``Lambda / h``, so that an impact shows as a force of one step.
+
+Contacts and their events: after each step every contact is ``open``, ``stick`` or ``slip``;
+a change from the step before is an event (touch-down, lift-off, slip start and end), and a
+touch-down whose approach speed is more than twice what the smooth forces change the contact's
+normal velocity by in the step is an **impact** (its impulse the step's). ``contact_forces``
+holds each contact's force of the ground on the body, world axes, the step's impulse over
+``h``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from hexapod.algorithms.contact_frames import contact_frames, ground_contacts
+from hexapod.algorithms.frictional import solve_contacts
+from hexapod.algorithms.kinematics import state_split
+from hexapod.algorithms.saddle import dynamics_terms
+from hexapod.simulation.integrators.base import Integrator
+from hexapod.simulation.methods import CONTACT_METHODS
+from hexapod.simulation.scales import ROUND_OFF
+
+#: the weight of the new velocity in the position update (1/2: the trapezoidal rule)
+THETA = 0.5
+#: the gap (relative to the scene's characteristic length) past which a closed contact's
+#: position is corrected onto the ground
+GAP_TOLERANCE = 1e-12
+
+
+@dataclass(frozen=True)
+class ContactEvent:
+    """One event of a contact: ``kind`` one of ``touch-down``, ``lift-off``, ``slip-start``,
+    ``slip-end``, ``impact``; ``impulse`` the ground's on the body, world axes (N s; zero but
+    for impacts)."""
+
+    t: float
+    kind: str
+    contact: str
+    impulse: np.ndarray
+
+
+class MoreauJean(Integrator):
+    """Moreau-Jean time-stepping with unilateral contacts (see the module's description).
+
+    Attributes
+    ----------
+    contact_forces : ndarray, shape (m, d)
+        The last step's contact forces (the ground's on each body, world axes, N).
+    contact_states : tuple of str
+        ``open``, ``stick`` or ``slip`` per contact after the last step.
+    events : list of ContactEvent
+        The run's contact events so far.
+    """
+
+    name = "moreau-jean"
+    order, index, adaptive, stabilisation = CONTACT_METHODS[name]
+    description = "time-stepping with unilateral contacts, Coulomb friction and impacts"
+    impulsive = True
+    default_steps = 1000
+
+    def _start(self) -> None:
+        self.contacts = ground_contacts(self.model)
+        self.contact_names = tuple(c.name for c in self.contacts)
+        d = self.model.dimension
+        self.contact_forces = np.zeros((len(self.contacts), d))
+        self.contact_states = ("open",) * len(self.contacts)
+        self.events: list[ContactEvent] = []
+        self._mu = np.array([c.contact.mu for c in self.contacts])
+        self._restitution = np.array([c.contact.restitution for c in self.contacts])
+        self._last_impulses = np.zeros((len(self.contacts), d))  # where the sweeps start
+        frames = contact_frames(self.model, self.q, self.contacts)
+        closed = frames.gaps <= GAP_TOLERANCE * self.model.characteristic_length
+        self.contact_states = tuple("stick" if c else "open" for c in closed)
+
+    def _step(self) -> None:
+        model, data = self.model, self.data
+        h = self.next_step()
+        t0, q0, v0 = self.t, self.q, self.v
+        t1 = t0 + h
+        w, wd, wdd = (np.array(x) for x in model.law_values(t0, data))
+        Phi_v, _, Q = dynamics_terms(model, {"q": q0, "v": v0, "w": w, "wd": wd, "wdd": wdd},
+                                     data)
+        half = model.mass_inv_sqrt
+        top = half @ (model.mass @ v0 + h * Q)  # M^1/2 v_k + h M^-1/2 Q
+        frames = contact_frames(model, q0, self.contacts)
+        G = half @ frames.jacobian.T  # M^-1/2 J^T
+        y, lam, Y, Lam = self._constrained(t1, q0, w, Phi_v, top, G)
+        self.counters.rhs += 1
+        self.counters.jacobians += 1
+        self.counters.factorisations += 1
+        impulses, states = self._impulses(h, frames, v0, G, y, Y)
+        y = y + Y @ impulses.reshape(-1)
+        lam = lam + Lam @ impulses.reshape(-1)
+        v1 = half @ y
+        q1 = model.integrate(q0, h * ((1 - THETA) * v0 + THETA * v1))
+        staying = np.array([state != "open" for state in states])
+        if staying.any():  # those that rebound leave at their normal speed
+            staying &= ((frames.jacobian @ v1)[::model.dimension]
+                        <= ROUND_OFF * max(np.abs(v0).max(), np.abs(v1).max()))
+        q1 = self._onto_ground(q1, impulses, staying, Y)
+        q1, v1 = self._project(t1, q1, v1)
+        self._record(t1, h, frames, impulses, states, v0, G, y - Y @ impulses.reshape(-1))
+        self.t, self.q, self.v = t1, q1, v1
+        self.v_dot, self.lam = (v1 - v0) / h, lam / h
+
+    def _constrained(self, t1, q0, w, Phi_v, top, G):
+        """The saddle-point solves of the step on the bilateral rows kept at ``q0``: the free
+        velocity (``y``, scaled, with the rows' impulses ``lam``) and the response to the
+        contacts' unit impulses (``Y``, ``Lam``)."""
+        model, data = self.model, self.data
+        n = model.n_c
+        if not n:
+            return top, np.zeros(0), G, np.zeros((0, G.shape[1]))
+        split = state_split(model, data, q0, w, Phi_v)
+        lam, Lam = np.zeros(n), np.zeros((n, G.shape[1]))
+        if not split.rank:
+            return top, lam, G, Lam
+        kept, scale = split.independent, split.scale
+        w1, wd1, _ = model.law_values(t1, data)
+        nu = model.call("nu", data, q=q0, w=w1, wd=wd1)
+        y, scaled = split.kept_solve(top, nu[kept] / scale[kept])
+        Y, scaled_unit = split.kept_solve(G, np.zeros((kept.size, G.shape[1])))
+        lam[kept] = scaled / scale[kept]
+        Lam[kept] = scaled_unit / scale[kept][:, None]
+        return y, lam, Y, Lam
+
+    def _impulses(self, h, frames, v0, G, y, Y):
+        """Each contact's impulse in its axes (m, d) and its state after the step."""
+        m, d = len(self.contacts), self.model.dimension
+        impulses = np.zeros((m, d))
+        states = ["open"] * m
+        normal_speed = (frames.jacobian @ v0)[::d]
+        free_speed = (G.T @ y)[::d]  # the normal speeds at the step's end without contact
+        predicted = frames.gaps + h * ((1 - THETA) * normal_speed + THETA * free_speed)
+        active = np.flatnonzero(predicted <= 0.0)
+        if active.size:
+            rows = (active[:, None] * d + np.arange(d)).reshape(-1)
+            W = G[:, rows].T @ Y[:, rows]
+            free = G[:, rows].T @ y
+            approach = np.where(_impacting(normal_speed[active], free[::d]),
+                                -normal_speed[active], 0.0)
+            solution = solve_contacts((W + W.T) / 2, free, self._mu[active],
+                                      self._restitution[active] * approach,
+                                      tuple(self.contact_names[a] for a in active),
+                                      initial=self._last_impulses[active])
+            impulses[active] = solution.impulses
+            for a, state in zip(active, solution.states, strict=True):
+                states[a] = state
+        self._last_impulses = impulses
+        return impulses, tuple(states)
+
+    def _onto_ground(self, q1, impulses, staying, Y):
+        """The gaps of the contacts the ground pushed in the step closed by the least
+        ``M``-norm correction along their normals, under the bilateral rows (linearised at the
+        step's start). Closed both ways: out of the ground, and down onto it where a plastic
+        touch-down stopped a contact short of it (which would otherwise fall again, and hop):
+        ``staying`` says which stay (their normal speed is zero at the step's end)."""
+        model, d = self.model, self.model.dimension
+        pushed = np.flatnonzero(impulses[:, 0] > 0.0)
+        if not pushed.size:
+            return q1
+        gaps = contact_frames(model, q1, tuple(self.contacts[a] for a in pushed)).gaps
+        # a contact that rebounds (leaving at its normal speed) is only pushed out
+        gaps = np.where(staying[pushed], gaps, np.minimum(gaps, 0.0))
+        if np.max(np.abs(gaps)) <= GAP_TOLERANCE * model.characteristic_length:
+            return q1
+        G = Y[:, pushed * d]  # the normal columns
+        correction = np.linalg.lstsq(G.T @ G, -gaps, rcond=None)[0]
+        return model.integrate(q1, model.mass_inv_sqrt @ (G @ correction))
+
+    def _record(self, t1, h, frames, impulses, states, v0, G, y_free) -> None:
+        """The step's contact forces and events."""
+        d = self.model.dimension
+        world = np.einsum("mij,mi->mj", frames.axes, impulses)  # axes as rows: J^T P
+        before = (frames.jacobian @ v0)[::d]
+        smooth = (G.T @ y_free)[::d] - before
+        impacting = _impacting(before, before + smooth)
+        for a, (old, new) in enumerate(zip(self.contact_states, states, strict=True)):
+            name = self.contact_names[a]
+            if old == "open" and new != "open":
+                self.events.append(ContactEvent(t1, "touch-down", name, np.zeros(d)))
+                if impacting[a]:
+                    self.events.append(ContactEvent(t1, "impact", name, world[a].copy()))
+            elif old != "open" and new == "open":
+                self.events.append(ContactEvent(t1, "lift-off", name, np.zeros(d)))
+            elif old == "stick" and new == "slip":
+                self.events.append(ContactEvent(t1, "slip-start", name, np.zeros(d)))
+            elif old == "slip" and new == "stick":
+                self.events.append(ContactEvent(t1, "slip-end", name, np.zeros(d)))
+        self.contact_states = states
+        self.contact_forces = world / h
+
+
+def _impacting(before: np.ndarray, free: np.ndarray) -> np.ndarray:
+    """Whether contacts approaching at normal speeds ``before`` (at the step's start) impact:
+    when they approach faster than twice what the smooth forces change their normal speed by
+    in the step (``free - before``). Restitution applies to impacts only: a contact resting
+    under gravity approaches at ``g h`` each step, and bouncing it back would make it chatter
+    forever at that speed instead of resting."""
+    return (before < 0.0) & (-before > 2.0 * np.abs(free - before))
