@@ -236,9 +236,18 @@ def test_dynamics_json(tmp_path, default_joints):
     assert report["counts"]["joints"] == len(default_joints)
 
 
+#: example scenes with unilateral contacts: their forces are a contact scheme's, over time
+CONTACT_SCENES = ("bouncing-ball.toml", "sliding-block.toml")
+
+
 @pytest.mark.parametrize("path", sorted(SCENES.glob("*.toml")), ids=lambda p: p.name)
 def test_dynamics_json_on_the_example_files(tmp_path, path):
     result = hexapod_cli("dynamics", str(path), "--json", "--t", "0.25", cwd=tmp_path)
+    if path.name in CONTACT_SCENES:  # not an analysis at an instant: refused, and said why
+        assert result.returncode == 1 and result.stdout == ""
+        assert "unilateral contacts" in result.stderr and "moreau-jean" in result.stderr
+        assert_no_traceback(result)
+        return
     assert result.returncode == 0, result.stderr
     report = strict_json(result.stdout)
     assert set(report) == REPORT_KEYS

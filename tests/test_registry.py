@@ -4,12 +4,16 @@ CasADi nor SciPy) agrees with what the classes and the studies declare."""
 from __future__ import annotations
 
 import inspect
+from pathlib import Path
 
+import hexapod
 from hexapod import catalog
 from hexapod.benchmarks import work_precision
 from hexapod.simulation import methods, registry
 from hexapod.simulation.integrators import Integrator
 from hexapod.simulation.registry import INTEGRATORS
+
+SCENES = Path(__file__).resolve().parent.parent / "data" / "scenes"
 
 
 def test_the_catalogue_is_the_registry():
@@ -56,7 +60,10 @@ def test_the_command_line_defaults_are_the_constants():
     from hexapod.cli.app import build_parser
 
     args = build_parser().parse_args(["simulate"])
-    # tolerances left unset, so that simulate() applies the defaults (and a fixed-step method
-    # warns only about tolerances the user gave)
-    assert (args.method, args.rtol, args.atol) == (methods.DEFAULT_METHOD, None, None)
+    # the method, tolerances left unset, so that simulate() applies the defaults (the method:
+    # the scene's, a contact scheme for unilateral contacts; a fixed-step method warns only
+    # about tolerances the user gave)
+    assert (args.method, args.rtol, args.atol) == (None, None, None)
+    pendulum = hexapod.assemble(hexapod.load_scene(SCENES / "pendulum.toml"))
+    assert registry.default_method(pendulum) == methods.DEFAULT_METHOD
     assert build_parser().parse_args(["bench"]).problems == list(catalog.PROBLEMS)

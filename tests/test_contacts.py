@@ -1,0 +1,260 @@
+"""Unilateral contacts with Coulomb friction and impacts, integrated by Moreau-Jean
+time-stepping, against closed forms: the bouncing ball (impact times, order 1, accumulation
+and rest), the block on an incline (sliding at ``g (sin - mu cos)``, sticking, a push that
+dies out), in space and in the plane; the frictional contact problem against its own
+conditions and against a second, independent way of finding the slip."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import hexapod
+from hexapod.algorithms.frictional import _slip, _slip_by_angle, solve_contacts
+from hexapod.errors import HexapodError, ModelError
+from hexapod.scene import GroundContact, Particle
+
+SCENES = Path(__file__).resolve().parent.parent / "data" / "scenes"
+G = 9.81
+#: the incline of the block's scene (30 degrees) and the unit vector down its slope
+GAMMA = np.pi / 6
+DOWN = np.array([np.cos(GAMMA), 0.0, -np.sin(GAMMA)])
+
+
+def ball_height(t: np.ndarray, restitution: float = 0.9, drop: float = 1.0) -> np.ndarray:
+    """The bouncing ball's height in closed form: a fall, then parabolas of speeds ``e^k u``."""
+    landing = np.sqrt(2 * drop / G)
+    z = np.where(t < landing, drop - G * t**2 / 2, 0.0)
+    start, speed = landing, G * landing
+    for _ in range(200):
+        speed *= restitution
+        s = t - start
+        z = np.where((s >= 0) & (s < 2 * speed / G), speed * s - G * s**2 / 2, z)
+        start += 2 * speed / G
+    return z
+
+
+@pytest.fixture(scope="module")
+def ball():
+    return hexapod.assemble(hexapod.load_scene(SCENES / "bouncing-ball.toml"))
+
+
+def block(mu: float):
+    scene = hexapod.load_scene(SCENES / "sliding-block.toml")
+    for element in scene.elements:
+        if getattr(element, "kind", "") == "ground-contact":
+            element.mu = mu
+    return hexapod.assemble(scene)
+
+
+def test_the_ball_lands_and_rebounds_when_and_as_the_closed_form_says(ball):
+    """Impacts at 0.451524 and 1.264266 s within a step (impacts are resolved to a step), with
+    the impulse ``m (1 + e) u`` of the landing speed ``u`` (plus the weight's over the step)."""
+    h = 1e-3
+    result = hexapod.simulate(ball, 1.5, step=h)
+    assert result.method == "moreau-jean" and result.success
+    impacts = [e for e in result.events if e.kind == "impact"]
+    assert len(impacts) == 2
+    for event, exact in zip(impacts, (0.451524, 1.264266), strict=True):
+        assert abs(event.t - exact) <= h
+    u = np.sqrt(2 * G)
+    assert impacts[0].impulse[2] == pytest.approx(1.9 * u, abs=2 * G * h)
+    assert np.allclose(impacts[0].impulse[:2], 0.0)
+    kinds = [e.kind for e in result.events]
+    assert kinds == ["touch-down", "impact", "lift-off"] * 2
+
+
+def test_the_balls_error_falls_at_order_one(ball):
+    """The largest height error over two bounces halves with the step (order 1: impacts are
+    resolved to a step); measured over three steps, the fitted order lies in [0.7, 1.4]."""
+    steps = np.array([2e-3, 1e-3, 5e-4])
+    errors = []
+    for h in steps:
+        result = hexapod.simulate(ball, 1.5, step=h)
+        errors.append(np.max(np.abs(result.q[:, 2] - ball_height(result.t))))
+    order = np.polyfit(np.log(steps), np.log(errors), 1)[0]
+    assert 0.7 <= order <= 1.4, (errors, order)
+    assert errors[-1] < 5e-3
+
+
+def test_the_bounces_accumulate_then_the_ball_rests_without_sinking_or_jitter(ball):
+    """The bounces accumulate at 8.578949 s (to a few steps: the last bounces are shorter than
+    the step, and the last touch-down, slower than what the weight gives in two steps, is
+    plastic); from then on the ball rests: no event, no speed, on the ground, carried by its
+    weight."""
+    h = 2e-3
+    result = hexapod.simulate(ball, 10.0, step=h)
+    assert result.events[-1].kind == "touch-down"
+    last = result.events[-1].t
+    assert abs(last - 8.578949) < 0.05
+    after = result.t > last
+    assert np.all(result.q[after, 2] >= -1e-9)
+    assert np.all(result.q[after, 2] <= 1e-4)  # rests where its last touch-down left it
+    assert np.max(np.abs(result.v[after])) <= 1e-12
+    assert np.allclose(result.contact_forces[after, 0], [0.0, 0.0, G], rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("mu", [0.3, 0.0])
+def test_the_block_slides_down_the_incline_at_g_sin_minus_mu_cos(mu):
+    """Its four corners slip from the first step; it slides with ``a = g (sin - mu cos)`` to
+    1e-9 and does not turn."""
+    model = block(mu)
+    h = 1e-3
+    result = hexapod.simulate(model, 0.05, step=h)
+    assert result.success, result.message
+    speed = result.v[:, :3] @ DOWN
+    accelerations = np.diff(speed) / np.diff(result.t)
+    exact = G * (np.sin(GAMMA) - mu * np.cos(GAMMA))
+    assert np.max(np.abs(accelerations / exact - 1)) < 1e-9
+    assert np.max(np.abs(result.v[:, 3:])) < 1e-9
+    starts = [e for e in result.events if e.kind == "slip-start"]
+    if mu:
+        assert sorted(e.contact for e in starts) == [f"corner-{k}" for k in range(1, 5)]
+    # the ground carries the block's weight across the slope
+    normal = np.array([np.sin(GAMMA), 0.0, np.cos(GAMMA)])
+    total = result.contact_forces[1:].sum(axis=1)
+    assert np.allclose(total @ normal, G * np.cos(GAMMA), rtol=1e-9)
+
+
+def test_the_block_stays_stuck_when_friction_holds_it():
+    """With ``mu > tan(30 deg)`` it stays where it is released: speed under 1e-12 m/s."""
+    result = hexapod.simulate(block(0.7), 0.05, step=1e-3)
+    assert result.success
+    assert np.max(np.abs(result.v)) < 1e-12
+    assert not result.events
+
+
+def test_a_push_dies_out_at_g_sin_minus_mu_cos_and_leaves_the_block_stuck():
+    """Pushed down the slope at 0.2 m/s with ``mu = 0.7`` it slows at ``g (sin - mu cos)``
+    (negative) to 1e-9, stops within a step of ``v0 / |a|`` (its corners' slip ends there),
+    and stays stuck."""
+    model, h, push = block(0.7), 1e-3, 0.2
+    v0 = np.concatenate([push * DOWN, np.zeros(3)])
+    result = hexapod.simulate(model, 0.3, step=h, v0=v0)
+    assert result.success, result.message
+    exact = G * (np.sin(GAMMA) - 0.7 * np.cos(GAMMA))
+    stop = push / -exact
+    speed = result.v[:, :3] @ DOWN
+    sliding = result.t < stop - h
+    accelerations = np.diff(speed)[sliding[1:]] / h
+    assert np.max(np.abs(accelerations / exact - 1)) < 1e-9
+    ends = [e for e in result.events if e.kind == "slip-end"]
+    assert len(ends) == 4 and all(abs(e.t - stop) <= h for e in ends)
+    assert np.max(np.abs(result.v[result.t > stop + h])) < 1e-12
+
+
+def planar_incline(mu: float, velocity: float = 0.0):
+    """A particle on an incline in the plane (normal ``(sin, cos)``), with friction ``mu``."""
+    n = [np.sin(GAMMA), np.cos(GAMMA)]
+    scene = hexapod.Scene("planar-incline", dimension=2)
+    scene.add(Particle("puck", mass=2.0, position=[0.0, 0.0],
+                       velocity=[velocity * np.cos(GAMMA), -velocity * np.sin(GAMMA)]))
+    scene.add(GroundContact("slope", "puck", normal=n, mu=mu))
+    return hexapod.assemble(scene)
+
+
+@pytest.mark.parametrize("mu", [0.2, 0.9])
+def test_in_the_plane_a_particle_slides_or_sticks_as_coulomb_says(mu):
+    model = planar_incline(mu, velocity=0.0)
+    result = hexapod.simulate(model, 0.05, step=1e-3)
+    down = np.array([np.cos(GAMMA), -np.sin(GAMMA)])
+    speed = result.v @ down
+    if np.tan(GAMMA) > mu:
+        a = np.diff(speed) / np.diff(result.t)
+        assert np.max(np.abs(a / (G * (np.sin(GAMMA) - mu * np.cos(GAMMA))) - 1)) < 1e-9
+    else:
+        assert np.max(np.abs(result.v)) < 1e-12
+
+
+def _conditions(D, c, mu, P):
+    """How far ``P`` is from satisfying one contact's conditions with ``u = D P + c``: the
+    largest violation of the case it claims (open, stick or slip), relative to ``|c|``."""
+    u = D @ P + c
+    scale = np.abs(c).max()
+    if P[0] == 0.0:
+        return max(0.0, -u[0]) / scale
+    cone = max(0.0, np.linalg.norm(P[1:]) - mu * P[0]) / max(P[0], 1e-300)
+    speed = np.linalg.norm(u[1:])
+    if speed <= 1e-12 * scale:  # stick
+        return max(abs(u[0]) / scale, cone)
+    # slip: on the cone, against the slip
+    against = np.linalg.norm(P[1:] + mu * P[0] * u[1:] / speed) / max(P[0], 1e-300)
+    return max(abs(u[0]) / scale, against)
+
+
+def test_the_contact_problem_meets_its_conditions_on_random_coupled_contacts():
+    """Random Delassus operators (coupled normal and tangential directions, of three and of
+    two contacts) and free velocities: the impulses meet Signorini and Coulomb to 1e-9."""
+    rng = np.random.default_rng(5)
+    for _ in range(40):
+        m = int(rng.integers(1, 4))
+        A = rng.normal(size=(3 * m, 3 * m))
+        W = A @ A.T + 0.1 * np.eye(3 * m)
+        b = rng.normal(size=3 * m)
+        mu = rng.uniform(0.05, 1.0, size=m)
+        solution = solve_contacts(W, b, mu, np.zeros(m))
+        u = (W @ solution.impulses.reshape(-1) + b).reshape(m, 3)
+        for a in range(m):
+            others = b.reshape(m, 3)[a] + (W[3 * a:3 * a + 3] @ solution.impulses.reshape(-1)
+                                           - W[3 * a:3 * a + 3, 3 * a:3 * a + 3]
+                                           @ solution.impulses[a])
+            D = W[3 * a:3 * a + 3, 3 * a:3 * a + 3]
+            assert _conditions(D, others, mu[a], solution.impulses[a]) < 1e-9
+            assert u[a, 0] >= -1e-9 * np.abs(b).max()
+
+
+def test_newtons_slip_is_the_bracketed_one():
+    """The slip by Newton's method and by bracketing the direction's angle agree to 1e-10 on
+    coupled contacts (two independent ways to the same impulse)."""
+    rng = np.random.default_rng(11)
+    checked = 0
+    for _ in range(60):
+        A = rng.normal(size=(3, 3))
+        D = A @ A.T + 0.2 * np.eye(3)
+        c = np.concatenate([[-abs(rng.normal())], 3 * rng.normal(size=2)])
+        mu = float(rng.uniform(0.05, 0.6))
+        try:
+            reference = _slip_by_angle(D, c, mu, "test")
+        except HexapodError:
+            continue
+        assert np.allclose(_slip(D, c, mu, "test"), reference, rtol=1e-10,
+                           atol=1e-10 * np.abs(reference).max())
+        checked += 1
+    assert checked >= 30
+
+
+@pytest.mark.parametrize("change, key", [
+    ({"restitution": -0.1}, "restitution"), ({"restitution": 1.5}, "restitution"),
+    ({"mu": -0.2}, "mu"), ({"body": "nobody"}, "body"), ({"normal": [0.0, 0.0, 0.0]}, "normal"),
+    ({"normal": [0.0, 1.0]}, "normal")])
+def test_a_bad_contact_is_one_clear_problem_naming_its_key(change, key):
+    scene = hexapod.Scene("ball")
+    scene.add(Particle("ball", mass=1.0, position=[0.0, 0.0, 1.0]))
+    scene.add(GroundContact(**{"name": "floor", "body": "ball", **change}))
+    with pytest.raises(ModelError) as info:
+        hexapod.assemble(scene)
+    assert len(info.value.problems) == 1
+    problem = str(info.value.problems[0])
+    assert "floor" in problem and key in problem
+
+
+def test_a_smooth_method_refuses_a_scene_with_unilateral_contacts(ball):
+    with pytest.raises(HexapodError, match="unilateral contacts .*'floor'.*moreau-jean"):
+        hexapod.simulate(ball, 0.1, method="dopri5")
+
+
+def test_the_command_writes_the_ground_forces_and_the_events(tmp_path):
+    from hexapod.cli.app import main
+
+    out = tmp_path / "ball"
+    status = main(["simulate", str(SCENES / "bouncing-ball.toml"), "--t-end", "0.6",
+                   "--step", "1e-3", "--out", str(out)])
+    assert status == 0
+    header = (out / "results.csv").read_text().splitlines()[0].split(",")
+    assert header[-3:] == ["GRx:floor", "GRy:floor", "GRz:floor"]
+    events = (out / "events.csv").read_text().splitlines()
+    assert events[0] == "t,kind,contact,Px,Py,Pz"
+    assert [line.split(",")[1] for line in events[1:]] == ["touch-down", "impact", "lift-off"]
+    assert '"events.csv"' in (out / "units.json").read_text()
