@@ -34,6 +34,7 @@ from hexapod.scene.forces import (
     AppliedForce,
     AppliedTorque,
     GroundContact,
+    JointController,
     JointEffort,
     RotationalSpringDamper,
     SpringDamper,
@@ -41,6 +42,7 @@ from hexapod.scene.forces import (
 from hexapod.scene.joints import Contact, JointGeometry
 from hexapod.scene.joints.geometry import angle_rate, wrapped_angle
 from hexapod.scene.laws import Constant, Law
+from hexapod.scene.laws.base import rate_of
 from hexapod.scene.scene import Scene
 from hexapod.spatial import Placement, euler_parameters_from_rotation
 
@@ -323,6 +325,10 @@ class _Assembly:
                 if element.damping or element.torque is not None:
                     builder.nonconservative.append(name)
                 builder.effort(name, rate, torque)
+            elif isinstance(element, JointController):
+                _, g = on_joint(element)
+                builder.effort(name, angle_rate(g), self._servo(element, g))
+                builder.nonconservative.append(name)
             elif isinstance(element, GroundContact):  # no force of the state: the scheme's
                 point = self._point(element.body, element.point)[0]
                 surface, normal = element.plane(self.dim)
@@ -332,6 +338,26 @@ class _Assembly:
                                        contact=SurfaceContact.plane(surface, normal,
                                                                     element.restitution, mu)))
         return builder, across, infos
+
+    def _servo(self, element: JointController, g) -> ca.SX:
+        """A joint controller's torque: feedforward, proportional and derivative terms on the
+        wrapped angle error and the speed error, clipped to its actuator's envelope."""
+        name, laws = element.name, self.laws
+        target = laws.value(element.target, name, ("force", name, "target", None))[0]
+        speed = laws.value(rate_of(element.target), f"{name}'",
+                           ("force", name, "target-rate", None))[0]
+        rate = angle_rate(g)
+        torque = element.kp * -wrapped_angle(g, target) + element.kd * (speed - rate)
+        if element.feedforward is not None:
+            torque = torque + laws.value(element.feedforward, f"{name}/ff",
+                                         ("force", name, "feedforward", None))[0]
+        if element.max_effort is None:
+            return torque
+        upper, lower = element.max_effort, -element.max_effort
+        if element.no_load_speed is not None:
+            upper = upper * (1 - rate / element.no_load_speed)
+            lower = lower * (1 + rate / element.no_load_speed)
+        return ca.fmin(ca.fmax(torque, lower), upper)
 
     def model(self, rank_tolerance: float, digest: str = "", source: str = "") -> Model:
         parts = self.joints()

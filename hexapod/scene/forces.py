@@ -311,6 +311,86 @@ class RotationalSpringDamper(ForceElement):
 
 
 @dataclass(eq=False)
+class JointController(ForceElement):
+    """A joint servo: the torque of the parent on the child about a revolute (or cylindrical)
+    joint's axis that makes the joint follow ``target``,
+
+        tau = feedforward(t) + kp wrap(target(t) - theta) + kd (target'(t) - theta'),
+
+    limited by its actuator: ``|tau| <= max_effort``, and with ``no_load_speed`` the motor's
+    torque-speed line, ``-max_effort (1 + w / w0) <= tau <= max_effort (1 - w / w0)`` at the
+    joint speed ``w`` (a DC motor at its voltage limit: at ``w0`` it gives nothing more in the
+    direction of motion). The actuator's numbers are the joint's: a motor's stall torque times
+    its gear ratio, its no-load speed divided by it. Units: kp N L/rad, kd N L s/rad, efforts
+    N L, speeds rad/s.
+
+    Parameters
+    ----------
+    name : str
+        The element's name, unique among the force elements.
+    joint : str
+        The revolute or cylindrical joint it drives.
+    target : Law or float
+        The joint angle to follow (rad), C2; its rate is the target speed.
+    kp, kd : float
+        Proportional and derivative gains, at least 0.
+    feedforward : Law or float, optional
+        The effort fed forward (N L), e.g. the inverse dynamics' effort of the same motion.
+    max_effort : float, optional
+        The actuator's largest effort (N L), positive; default unlimited.
+    no_load_speed : float, optional
+        With ``max_effort``: the speed at which the actuator's effort falls to zero (rad/s),
+        positive; default none (a flat limit).
+    source : str
+        Where the element was written, named in messages; empty when built in Python.
+    """
+
+    name: str
+    joint: str
+    target: Law = 0.0
+    kp: float = 0.0
+    kd: float = 0.0
+    feedforward: Law | None = None
+    max_effort: float | None = None
+    no_load_speed: float | None = None
+    source: str = ""
+    kind = "controller"
+
+    def __post_init__(self):
+        self.target = as_law(self.target)
+        if self.feedforward is not None:
+            self.feedforward = as_law(self.feedforward)
+
+    def problems(self):
+        out: list[Problem] = []
+        _non_negative(self, ("kp", "kd"), out)
+        out.extend(self.problem("target", m) for m in self.target.problems())
+        if self.feedforward is not None:
+            out.extend(self.problem("feedforward", m) for m in self.feedforward.problems())
+        for key in ("max_effort", "no_load_speed"):
+            value = getattr(self, key)
+            if value is not None and check_finite(self, key, value, out) and not value > 0:
+                out.append(self.problem(key, f"must be positive, got {value}"))
+        if self.no_load_speed is not None and self.max_effort is None:
+            out.append(self.problem("no_load_speed", "needs max_effort (the stall effort)"))
+        return out
+
+    def scaled(self, length):
+        out = super().scaled(length)  # efforts in N L: N m = N L * length
+        out.kp, out.kd = self.kp * length, self.kd * length
+        if self.feedforward is not None:
+            out.feedforward = self.feedforward.scaled(length)
+        if self.max_effort is not None:
+            out.max_effort = self.max_effort * length
+        return out
+
+    def attached(self, attachment: Attachment):
+        out = super().attached(attachment)
+        out.joint = attachment.name(self.joint)
+        return out
+
+
+@dataclass(eq=False)
 class GroundContact(ForceElement):
     """A unilateral point contact of a body with the ground surface (a plane), with Coulomb
     friction and Newton's impact law: the force of the ground on the point is decided at each
@@ -397,5 +477,5 @@ class GroundContact(ForceElement):
 
 FORCE_TYPES: dict[str, type[ForceElement]] = {
     cls.kind: cls for cls in (SpringDamper, AppliedForce, AppliedTorque, JointEffort,
-                              RotationalSpringDamper, GroundContact)
+                              RotationalSpringDamper, JointController, GroundContact)
 }

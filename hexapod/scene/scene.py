@@ -29,6 +29,7 @@ from hexapod.scene.forces import (
     AppliedTorque,
     ForceElement,
     GroundContact,
+    JointController,
     JointEffort,
     RotationalSpringDamper,
     SpringDamper,
@@ -387,7 +388,7 @@ class _ReferenceCheck:
                     self._components(key, np.ravel(getattr(e, key)), self.scene.dimension)
         elif isinstance(e, JointEffort):
             self._driven_joint(e.joint, "joint", "an actuator effort")
-        elif isinstance(e, RotationalSpringDamper):
+        elif isinstance(e, (RotationalSpringDamper, JointController)):
             joint = self.scene.joints.get(e.joint)
             if joint is None:
                 self._add("joint", f"unknown joint '{e.joint}'")

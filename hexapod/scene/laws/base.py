@@ -191,6 +191,34 @@ class Scaled(Law):
         return self.law.problems()
 
 
+@dataclass(frozen=True)
+class Rate(Law):
+    """The first time derivative of ``law``, for elements that read a law's rate as a value (a
+    joint controller's target velocity). Its own rate is the law's second derivative; its
+    second derivative, which no force element reads, is given as zero."""
+
+    law: Law
+    kind = "rate"
+
+    def evaluate(self, t):
+        _, fd, fdd = self.law.evaluate(t)
+        return fd, fdd, np.zeros_like(np.asarray(fdd, dtype=float))
+
+    def cycle_time(self):
+        return self.law.cycle_time()
+
+    def breaks(self, start, stop):
+        return self.law.breaks(start, stop)
+
+    def problems(self):
+        return self.law.problems()
+
+
+def rate_of(law: Law) -> Law:
+    """``law``'s first time derivative as a law (zero for a constant)."""
+    return Constant(0.0) if isinstance(law, Constant) else Rate(law)
+
+
 def as_law(value) -> Law:
     """A law from a law or a number (a number is a :class:`Constant`)."""
     if isinstance(value, Law):

@@ -1,0 +1,105 @@
+"""The joint controller (``type = "controller"`` force element) against closed forms on a
+planar rod hinged at one end (``I_O = m L^2 / 3``): exact feedforward tracks the target, a
+critically damped PD settles as ``1 - (1 + w t) e^(-w t)``, and a saturated actuator follows its
+torque-speed line, ``w(t) = w0 (1 - e^(-T t / (I w0)))``."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import hexapod
+from hexapod.errors import ModelError
+
+I_O = 1.0 / 3.0  # kg m^2: a 1 kg rod of 1 m about its end
+ROD = """
+[scene]
+name = "servo-rod"
+dimension = 2
+gravity = [0.0, {gravity}]
+
+[[body]]
+name = "rod"
+mass = 1.0
+inertia = 0.08333333333333333
+position = [0.0, 0.0]
+com = [0.5, 0.0]
+
+[[joint]]
+name = "hinge"
+type = "revolute"
+parent = "ground"
+child = "rod"
+
+[[force]]
+name = "servo"
+type = "controller"
+joint = "hinge"
+{controller}
+"""
+
+
+def rod(tmp_path, controller: str, gravity: float = 0.0):
+    path = tmp_path / "rod.toml"
+    path.write_text(ROD.format(controller=controller, gravity=gravity))
+    return hexapod.assemble(hexapod.read_scene(path))
+
+
+def angle(result) -> np.ndarray:
+    return result.q[:, 2]
+
+
+def test_exact_feedforward_tracks_the_target_under_gravity(tmp_path):
+    """``tau_ff = I_O theta_d'' + m g l cos(theta_d)`` makes the rod follow ``theta_d = 0.3
+    sin(2 pi t)`` exactly from the target's state: the error stays at the integrator's."""
+    model = rod(tmp_path, """
+target = { type = "harmonic", sin = [0.3], frequency = 1.0 }
+kp = 0.0
+[force.feedforward]
+type = "expression"
+expression = "-I*a*w^2*sin(w*t) + m*g*l*cos(a*sin(w*t))"
+constants = { I = 0.3333333333333333, a = 0.3, w = 6.283185307179586, m = 1.0, g = 9.81, l = 0.5 }
+""", gravity=-9.81)
+    w = 2 * np.pi
+    v0 = np.array([0.0, 0.5 * 0.3 * w, 0.3 * w])  # the centre of mass moves with the rod
+    result = hexapod.simulate(model, 1.0, method="dop853", rtol=1e-10, atol=1e-12, v0=v0)
+    assert result.success
+    assert np.max(np.abs(angle(result) - 0.3 * np.sin(w * result.t))) < 1e-8
+
+
+def test_a_critically_damped_pd_settles_as_the_closed_form(tmp_path):
+    """No gravity, a step target of 0.5 rad, ``kd = 2 sqrt(kp I_O)``: ``theta = 0.5 (1 - (1 +
+    w t) e^(-w t))`` with ``w = sqrt(kp / I_O)``."""
+    kp = 12.0
+    kd = float(2 * np.sqrt(kp * I_O))
+    model = rod(tmp_path, f"target = 0.5\nkp = {kp!r}\nkd = {kd!r}\n")
+    result = hexapod.simulate(model, 2.0, method="dop853", rtol=1e-10, atol=1e-12)
+    w = np.sqrt(kp / I_O)
+    exact = 0.5 * (1 - (1 + w * result.t) * np.exp(-w * result.t))
+    assert np.max(np.abs(angle(result) - exact)) < 1e-8
+
+
+def test_a_saturated_actuator_follows_its_torque_speed_line(tmp_path):
+    """A target 1.5 rad away and a stiff gain saturate the actuator at its upper line ``T (1 - w /
+    w0)``: ``w(t) = w0 (1 - exp(-T t / (I_O w0)))`` while the error is large."""
+    T, w0 = 2.0, 5.0
+    model = rod(tmp_path, f"target = 1.5\nkp = 1e6\nmax_effort = {T}\nno_load_speed = {w0}\n")
+    result = hexapod.simulate(model, 0.25, method="dop853", rtol=1e-10, atol=1e-12)
+    exact = w0 * (1 - np.exp(-T * result.t / (I_O * w0)))
+    assert np.max(np.abs(result.v[:, 2] - exact)) < 1e-8
+    # and the flat limit alone: constant acceleration T / I_O
+    flat = rod(tmp_path, f"target = 1.5\nkp = 1e6\nmax_effort = {T}\n")
+    result = hexapod.simulate(flat, 0.25, method="dop853", rtol=1e-10, atol=1e-12)
+    assert np.max(np.abs(result.v[:, 2] - T / I_O * result.t)) < 1e-8
+
+
+@pytest.mark.parametrize("controller, key", [
+    ("target = 0.0\nkp = -1.0\n", "kp"), ("target = 0.0\nkd = -1.0\n", "kd"),
+    ("target = 0.0\nmax_effort = 0.0\n", "max_effort"),
+    ("target = 0.0\nno_load_speed = 3.0\n", "no_load_speed"),
+    ("target = 0.0\nmax_effort = 1.0\nno_load_speed = -3.0\n", "no_load_speed")])
+def test_a_bad_controller_is_one_problem_naming_its_key(tmp_path, controller, key):
+    with pytest.raises(ModelError) as info:
+        rod(tmp_path, controller)
+    assert len(info.value.problems) == 1
+    assert "servo" in str(info.value.problems[0]) and key in str(info.value.problems[0])
