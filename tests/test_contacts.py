@@ -14,7 +14,7 @@ import pytest
 import hexapod
 from hexapod.algorithms.frictional import _slip, _slip_by_angle, solve_contacts
 from hexapod.errors import HexapodError, ModelError
-from hexapod.scene import GroundContact, Particle
+from hexapod.scene import GroundContact, Particle, PlanarBody
 
 SCENES = Path(__file__).resolve().parent.parent / "data" / "scenes"
 G = 9.81
@@ -166,6 +166,31 @@ def test_in_the_plane_a_particle_slides_or_sticks_as_coulomb_says(mu):
         assert np.max(np.abs(a / (G * (np.sin(GAMMA) - mu * np.cos(GAMMA))) - 1)) < 1e-9
     else:
         assert np.max(np.abs(result.v)) < 1e-12
+
+
+def test_painleves_rod_is_resolved_by_a_tangential_impact():
+    """A rod of 1 m leaning at atan(2) with its lower end sliding away from under it at 1 m/s,
+    mu = 1.5 > 4/3: no sliding motion exists at acceleration level (``W_NN - mu W_NT s < 0``:
+    friction would press the end into the ground faster than the ground can push). The
+    time-stepping scheme stops the slip by a tangential impact in the first step, whose
+    impulse is the sticking one, ``-W^-1 b``, with the rod's Delassus operator in closed form
+    ``W = [[1 + 3 c^2, -3 s c], [-3 s c, 1 + 3 s^2]] / m`` (normal, then tangent)."""
+    theta, half, h = np.arctan(2.0), 0.5, 1e-3
+    c, s = np.cos(theta), np.sin(theta)
+    assert 1 + 3 * c**2 - 1.5 * 3 * s * c < 0  # Painleve's condition, the end sliding to -x
+    scene = hexapod.Scene("painleve", dimension=2)
+    scene.add(PlanarBody("rod", mass=1.0, inertia=1.0 / 12, position=[half * c, half * s],
+                         angle=float(theta), velocity=[-1.0, 0.0]))
+    scene.add(GroundContact("end", "rod", point=[-half, 0.0], mu=1.5))
+    result = hexapod.simulate(hexapod.assemble(scene), 0.05, step=h)
+    assert result.success, result.message
+    W = np.array([[1 + 3 * c**2, -3 * s * c], [-3 * s * c, 1 + 3 * s**2]])
+    normal, tangent = np.linalg.solve(W, -np.array([-G * h, -1.0]))
+    first = result.events[0]
+    assert (first.t, first.kind) == (pytest.approx(h), "impact")
+    assert np.allclose(first.impulse, [tangent, normal], rtol=1e-12)
+    assert tangent <= 1.5 * normal
+    assert [e.kind for e in result.events[:2]] == ["impact", "slip-end"]
 
 
 def _conditions(D, c, mu, P):

@@ -99,7 +99,10 @@ class MoreauJean(Integrator):
         self._last_impulses = np.zeros((len(self.contacts), d))  # where the sweeps start
         frames = contact_frames(self.model, self.q, self.contacts)
         closed = frames.gaps <= GAP_TOLERANCE * self.model.characteristic_length
-        self.contact_states = tuple("stick" if c else "open" for c in closed)
+        sliding = np.linalg.norm((frames.jacobian @ self.v).reshape(-1, d)[:, 1:], axis=1) > (
+            ROUND_OFF * max(np.abs(self.v).max(), 1.0))
+        self.contact_states = tuple("open" if not c else "slip" if s else "stick"
+                                    for c, s in zip(closed, sliding, strict=True))
 
     def _step(self) -> None:
         model, data = self.model, self.data
@@ -118,6 +121,7 @@ class MoreauJean(Integrator):
         self.counters.jacobians += 1
         self.counters.factorisations += 1
         impulses, states = self._impulses(h, frames, v0, G, y, Y)
+        self._response = Y
         y = y + Y @ impulses.reshape(-1)
         lam = lam + Lam @ impulses.reshape(-1)
         v1 = half @ y
@@ -201,15 +205,24 @@ class MoreauJean(Integrator):
         """The step's contact forces and events."""
         d = self.model.dimension
         world = np.einsum("mij,mi->mj", frames.axes, impulses)  # axes as rows: J^T P
-        before = (frames.jacobian @ v0)[::d]
-        smooth = (G.T @ y_free)[::d] - before
-        impacting = _impacting(before, before + smooth)
+        m = len(self.contacts)
+        start = (frames.jacobian @ v0).reshape(m, d)
+        free = (G.T @ y_free).reshape(m, d)
+        end = free + (G.T @ (self._response @ impulses.reshape(-1))).reshape(m, d)
+        # an impact: an approach faster than twice what the smooth forces change the contact's
+        # velocity by in the step, or a slip stopped (or started) by more than that: a
+        # tangential impact (Painleve's rod)
+        smooth = np.linalg.norm(free - start, axis=1)
+        slip_jump = np.linalg.norm(end[:, 1:] - free[:, 1:], axis=1)
+        impacting = _impacting(start[:, 0], free[:, 0]) | (
+            (slip_jump > 2.0 * smooth) & (slip_jump > ROUND_OFF * np.abs(start).max()))
         for a, (old, new) in enumerate(zip(self.contact_states, states, strict=True)):
             name = self.contact_names[a]
+            if impacting[a] and new != "open":
+                self.events.append(ContactEvent(t1, "impact", name, world[a].copy()))
             if old == "open" and new != "open":
-                self.events.append(ContactEvent(t1, "touch-down", name, np.zeros(d)))
-                if impacting[a]:
-                    self.events.append(ContactEvent(t1, "impact", name, world[a].copy()))
+                self.events.insert(len(self.events) - bool(impacting[a]),
+                                   ContactEvent(t1, "touch-down", name, np.zeros(d)))
             elif old != "open" and new == "open":
                 self.events.append(ContactEvent(t1, "lift-off", name, np.zeros(d)))
             elif old == "stick" and new == "slip":
