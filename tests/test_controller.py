@@ -103,3 +103,31 @@ def test_a_bad_controller_is_one_problem_naming_its_key(tmp_path, controller, ke
         rod(tmp_path, controller)
     assert len(info.value.problems) == 1
     assert "servo" in str(info.value.problems[0]) and key in str(info.value.problems[0])
+
+
+@pytest.mark.parametrize("kp", [12.0, 1e6])
+def test_the_contact_scheme_takes_a_stiff_controller_implicitly(kp):
+    """Moreau-Jean takes state-dependent forces linearly implicit: the critically damped PD
+    follows its closed form at order 1 (errors halve with the step) and, with ``kp = 1e6``
+    (``w h`` up to 3.5, where a force taken at the step's start blows up), still settles on
+    the target."""
+    from hexapod.scene import JointController, PlanarBody, Revolute
+
+    kd = float(2 * np.sqrt(kp * I_O))
+    scene = hexapod.Scene("rod", dimension=2, gravity=[0.0, 0.0])
+    scene.add(PlanarBody("rod", mass=1.0, inertia=1.0 / 12, position=[0.0, 0.0],
+                         com=[0.5, 0.0]))
+    scene.add(Revolute("hinge", "ground", "rod"))
+    scene.add(JointController("servo", "hinge", target=0.5, kp=kp, kd=kd))
+    model = hexapod.assemble(scene)
+    w = np.sqrt(kp / I_O)
+    errors = []
+    for h in (2e-3, 1e-3):
+        result = hexapod.simulate(model, 1.0, method="moreau-jean", step=h)
+        assert result.success
+        exact = 0.5 * (1 - (1 + w * result.t) * np.exp(-w * result.t))
+        errors.append(np.max(np.abs(angle(result) - exact)))
+        if kp > 1e3:
+            assert abs(angle(result)[-1] - 0.5) < 1e-12
+    if kp < 1e3:
+        assert errors[1] < 1e-5 and 1.6 < errors[0] / errors[1] < 2.4

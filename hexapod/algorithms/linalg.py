@@ -323,11 +323,12 @@ def distribute(split: RowSplit, lam: np.ndarray, wrench_map: np.ndarray,
 
 def solve_or_least_squares(A: np.ndarray, b: np.ndarray, pivot_ratio: float = 1e-10,
                            rcond: float = 1e-12) -> np.ndarray | None:
-    """``A x = b`` for a square ``A`` that may be nearly singular (the iteration matrix of an
-    implicit method near a singular configuration): the rows are equilibrated, then LU with
-    partial pivoting when its smallest pivot is above ``pivot_ratio`` times the largest, else
-    the least-squares solution of least norm (singular values below ``rcond`` of the largest
-    dropped), which moves along the nearly dependent directions no more than ``b`` asks.
+    """``A x = b`` (``b`` a vector or columns) for a square ``A`` that may be nearly singular
+    (the iteration matrix of an implicit method near a singular configuration): the rows are
+    equilibrated, then LU with partial pivoting when its smallest pivot is above
+    ``pivot_ratio`` times the largest, else the least-squares solution of least norm (singular
+    values below ``rcond`` of the largest dropped), which moves along the nearly dependent
+    directions no more than ``b`` asks.
     None when neither gives finite numbers, or LAPACK fails."""
     import warnings
 
@@ -335,7 +336,7 @@ def solve_or_least_squares(A: np.ndarray, b: np.ndarray, pivot_ratio: float = 1e
 
     scale = np.abs(A).max(axis=1) if A.size else np.ones(0)
     scale[~(scale > 0)] = 1.0
-    A, b = A / scale[:, None], b / scale
+    A, b = A / scale[:, None], b / scale.reshape((-1,) + (1,) * (np.ndim(b) - 1))
     if not (np.all(np.isfinite(A)) and np.all(np.isfinite(b))):
         return None
     x = None

@@ -44,7 +44,9 @@ import numpy as np
 from hexapod.algorithms.contact_frames import contact_frames, ground_contacts
 from hexapod.algorithms.frictional import solve_contacts
 from hexapod.algorithms.kinematics import state_split
+from hexapod.algorithms.linalg import as_dense, solve_or_least_squares
 from hexapod.algorithms.saddle import dynamics_terms
+from hexapod.errors import IntegrationError
 from hexapod.simulation.integrators.base import Integrator
 from hexapod.simulation.methods import CONTACT_METHODS
 from hexapod.simulation.scales import ROUND_OFF
@@ -113,10 +115,9 @@ class MoreauJean(Integrator):
         Phi_v, _, Q = dynamics_terms(model, {"q": q0, "v": v0, "w": w, "wd": wd, "wdd": wdd},
                                      data)
         half = model.mass_inv_sqrt
-        top = half @ (model.mass @ v0 + h * Q)  # M^1/2 v_k + h M^-1/2 Q
         frames = contact_frames(model, q0, self.contacts)
         G = half @ frames.jacobian.T  # M^-1/2 J^T
-        y, lam, Y, Lam = self._constrained(t1, q0, w, Phi_v, top, G)
+        y, lam, Y, Lam = self._constrained(t1, q0, v0, w, Phi_v, Q, G, h)
         self.counters.rhs += 1
         self.counters.jacobians += 1
         self.counters.factorisations += 1
@@ -136,26 +137,59 @@ class MoreauJean(Integrator):
         self.t, self.q, self.v = t1, q1, v1
         self.v_dot, self.lam = (v1 - v0) / h, lam / h
 
-    def _constrained(self, t1, q0, w, Phi_v, top, G):
+    def _constrained(self, t1, q0, v0, w, Phi_v, Q, G, h):
         """The saddle-point solves of the step on the bilateral rows kept at ``q0``: the free
-        velocity (``y``, scaled, with the rows' impulses ``lam``) and the response to the
-        contacts' unit impulses (``Y``, ``Lam``)."""
+        velocity (``y = M^1/2 v``, with the rows' impulses ``lam``) and the response to the
+        contacts' unit impulses (``Y``, ``Lam``). Forces that depend on the state (a
+        controller's gains, dampers, springs, the gyroscopic terms) enter linearly implicit
+        (:meth:`_implicit`); without them the step is the mass metric's own solve."""
         model, data = self.model, self.data
         n = model.n_c
-        if not n:
-            return top, np.zeros(0), G, np.zeros((0, G.shape[1]))
-        split = state_split(model, data, q0, w, Phi_v)
-        lam, Lam = np.zeros(n), np.zeros((n, G.shape[1]))
-        if not split.rank:
-            return top, lam, G, Lam
-        kept, scale = split.independent, split.scale
+        split = state_split(model, data, q0, w, Phi_v) if n else None
+        kept = split.independent if split is not None and split.rank else np.zeros(0, int)
         w1, wd1, _ = model.law_values(t1, data)
-        nu = model.call("nu", data, q=q0, w=w1, wd=wd1)
+        nu = model.call("nu", data, q=q0, w=w1, wd=wd1) if n else np.zeros(0)
+        lam, Lam = np.zeros(n), np.zeros((n, G.shape[1]))
+        K, C = (model.fast("tangent_matrices", data)(
+            *[{"q": q0, "v": v0, "lam": np.zeros(n), "w": w}[name]
+              for name in model.tangent_matrices.name_in()]))
+        K, C = (np.asarray(x).reshape(model.n_v, model.n_v) for x in (K, C))
+        if np.any(K) or np.any(C):
+            return self._implicit(h, v0, Q, K, C, Phi_v, kept, nu, G, lam, Lam)
+        top = model.mass_inv_sqrt @ (model.mass @ v0 + h * Q)  # M^1/2 v_k + h M^-1/2 Q
+        if not kept.size:
+            return top, lam, G, Lam
+        scale = split.scale
         y, scaled = split.kept_solve(top, nu[kept] / scale[kept])
         Y, scaled_unit = split.kept_solve(G, np.zeros((kept.size, G.shape[1])))
         lam[kept] = scaled / scale[kept]
         Lam[kept] = scaled_unit / scale[kept][:, None]
         return y, lam, Y, Lam
+
+    def _implicit(self, h, v0, Q, K, C, Phi_v, kept, nu, G, lam, Lam):
+        """The step with the forces linearised at its start and taken at ``theta`` (Acary and
+        Brogliato 2008, 10.1): with ``K`` and ``C`` the derivatives of ``-Q`` along the
+        positions and in the velocities, ``(M + h theta C + h^2 theta^2 K) (v_k+1 - v_k) =
+        h Q - h^2 theta K v_k`` under the kept rows, solved as one square system for the free
+        velocity and the contacts' responses; stable for gains an explicit force would need
+        steps far shorter than the controller's period for."""
+        model = self.model
+        n_v, half = model.n_v, model.mass_inv_sqrt
+        M = model.mass.dense()
+        iteration = M + h * THETA * C + (h * THETA) ** 2 * K
+        Phi = as_dense(Phi_v)[kept]
+        S = np.block([[iteration, Phi.T], [Phi, np.zeros((kept.size, kept.size))]])
+        J_T = (half @ (M @ G)) if G.size else np.zeros((n_v, 0))  # M^1/2 G = J^T
+        rhs = np.zeros((n_v + kept.size, 1 + G.shape[1]))
+        rhs[:n_v, 0] = iteration @ v0 + h * Q - h**2 * THETA * (K @ v0)
+        rhs[n_v:, 0] = nu[kept]
+        rhs[:n_v, 1:] = J_T
+        x = solve_or_least_squares(S, rhs)
+        if x is None:
+            raise IntegrationError("the step's linearised system has no finite solution")
+        to_y = half @ M  # M^1/2
+        lam[kept], Lam[kept] = x[n_v:, 0], x[n_v:, 1:]
+        return to_y @ x[:n_v, 0], lam, to_y @ x[:n_v, 1:], Lam
 
     def _impulses(self, h, frames, v0, G, y, Y):
         """Each contact's impulse in its axes (m, d) and its state after the step."""
@@ -206,6 +240,8 @@ class MoreauJean(Integrator):
         d = self.model.dimension
         world = np.einsum("mij,mi->mj", frames.axes, impulses)  # axes as rows: J^T P
         m = len(self.contacts)
+        if not m:
+            return
         start = (frames.jacobian @ v0).reshape(m, d)
         free = (G.T @ y_free).reshape(m, d)
         end = free + (G.T @ (self._response @ impulses.reshape(-1))).reshape(m, d)
