@@ -65,7 +65,17 @@ import numpy as np
 
 import hexapod as hx
 from hexapod import Scene
-from hexapod.scene import Joint, JointDriver, JointEffort, Particle, PlanarBody, SpatialBody
+from hexapod.scene import (
+    Contact,
+    GroundContact,
+    Joint,
+    JointController,
+    JointDriver,
+    JointEffort,
+    Particle,
+    PlanarBody,
+    SpatialBody,
+)
 from legs.cockroach import STRIDE_PERIOD
 from legs.efforts import (
     EFFORT_DEGREE,
@@ -150,6 +160,38 @@ def replay_scene(scene: Scene, result, *, breaks=None, degree: int = EFFORT_DEGR
         else:
             twin.add(element)
     return twin
+
+
+def grounded_scene(scene: Scene, result, *, kp: float, kd: float, mu: float | None = None,
+                   breaks=None, degree: int = EFFORT_DEGREE) -> Scene:
+    """The driven walking ``scene`` on real ground under joint control: its forward twin
+    (:func:`replay_scene`, starting at the first sample's state) with each joint's effort
+    replaced by a :class:`hexapod.scene.JointController` named ``<driver>/servo`` (target the
+    driver's law, feedforward the efforts of ``result``, gains ``kp`` (N m/rad) and ``kd``
+    (N m s/rad)), and each foot's scheduled contact by a
+    :class:`hexapod.scene.GroundContact` on the same foot point, against the horizontal plane
+    of its footholds, friction ``mu`` (default the scene's ``[ground] mu``), plastic. The feet then
+    land and lift off where the controlled motion takes them, not where the schedule says;
+    simulate it with ``moreau-jean``."""
+    twin = replay_scene(scene, result, breaks=breaks, degree=degree,
+                        name=f"{scene.name}-on-ground")
+    drivers = _drivers(scene)
+    out = Scene(twin.name, twin.dimension, twin.length_unit, twin.gravity,
+                twin.characteristic_length, twin.source, report_forces=twin.report_forces,
+                ground=twin.ground)
+    gain = 1.0 / scene.unit  # N m per rad in the scene's unit of length (N L)
+    for element in twin.elements:
+        if isinstance(element, JointEffort):
+            driver = drivers[element.joint]
+            out.add(JointController(f"{driver.name}/servo", element.joint, target=driver.law,
+                                    kp=kp * gain, kd=kd * gain, feedforward=element.law))
+        elif isinstance(element, Contact):
+            out.add(GroundContact(element.name, element.child,  # the plane of its footholds
+                                  point=element.child_frame.position,
+                                  surface_point=element.foothold, mu=mu))
+        else:
+            out.add(element)
+    return out
 
 
 def _body_slices(scene: Scene) -> dict[str, tuple[slice, slice]]:

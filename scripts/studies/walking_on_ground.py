@@ -1,0 +1,97 @@
+"""The walking hexapod on real ground under joint control, over one stride (not a test).
+
+The tripod gait of the free-trunk hexapod (``legs.robot.hexapod_scene(gait, trunk="free")``,
+stride 0.5 s): inverse dynamics at samples chosen until each joint's effort spline is within
+``--tol`` of its largest (``legs.replay.adaptive_inverse``); the robot on real ground
+(``legs.replay.grounded_scene``): each joint driven by a controller (target the driver's law,
+feedforward the inverse efforts, gains ``--kp`` and ``--kd``), each foot a unilateral contact
+with the ground (Coulomb friction ``--mu``, plastic impacts) instead of its scheduled rows;
+simulated by Moreau-Jean time-stepping at ``--step``. Printed: each foot's touch-downs and
+lift-offs against its schedule, the impacts with their impulses, the slips, the largest joint
+tracking error (against the drivers' laws), the trunk's position against the prescribed one at
+the end, and the CPU time per simulated second. Nothing is written.
+
+    python3 scripts/studies/walking_on_ground.py [--gait tripod] [--kp 200] [--kd 2]
+        [--mu 0.8] [--step 1e-3] [--tol 3e-6]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
+
+import numpy as np  # noqa: E402
+
+import hexapod as hx  # noqa: E402
+from hexapod.scene import Contact  # noqa: E402
+from hexapod.scene.contacts import stance_intervals  # noqa: E402
+from legs.cockroach import STRIDE_PERIOD  # noqa: E402
+from legs.efforts import EFFORT_TOL, adaptive_inverse  # noqa: E402
+from legs.replay import grounded_scene, joint_angles, prescribed_angles, wrapped  # noqa: E402
+from legs.robot import hexapod_scene  # noqa: E402
+
+
+def schedule_table(scene, result, period: float) -> list[str]:
+    """Per foot: the scheduled stances and the simulated touch-downs and lift-offs (ms)."""
+    lines = [f"{'foot':10} {'scheduled stances (ms)':28} {'touch-downs (ms)':22} lift-offs (ms)"]
+    for contact in (e for e in scene.elements if isinstance(e, Contact)):
+        stances = stance_intervals(contact, 0.0, period)
+        times = {kind: [1e3 * e.t for e in result.events
+                        if e.contact == contact.name and e.kind == kind]
+                 for kind in ("touch-down", "lift-off")}
+        lines.append(f"{contact.name:10} "
+                     f"{' '.join(f'{1e3 * a:.0f}-{1e3 * b:.0f}' for a, b in stances):28} "
+                     f"{' '.join(f'{x:.0f}' for x in times['touch-down']):22} "
+                     f"{' '.join(f'{x:.0f}' for x in times['lift-off'])}")
+    return lines
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--gait", default="tripod")
+    parser.add_argument("--kp", type=float, default=200.0, help="N m/rad (default 200)")
+    parser.add_argument("--kd", type=float, default=2.0, help="N m s/rad (default 2)")
+    parser.add_argument("--mu", type=float, default=0.8)
+    parser.add_argument("--step", type=float, default=1e-3, help="s (default 1e-3)")
+    parser.add_argument("--tol", type=float, default=EFFORT_TOL)
+    args = parser.parse_args()
+    period = STRIDE_PERIOD
+    scene = hexapod_scene(gait=args.gait, trunk="free", period=period)
+    model = hx.assemble(scene)
+    mark = time.process_time()
+    inverse, _ = adaptive_inverse(model, scene, 0.0, period, tol=args.tol)
+    print(f"inverse dynamics: {inverse.times.size} samples, "
+          f"{time.process_time() - mark:.1f} s CPU")
+    grounded = hx.assemble(grounded_scene(scene, inverse, kp=args.kp, kd=args.kd, mu=args.mu))
+    mark = time.process_time()
+    result = hx.simulate(grounded, period, method="moreau-jean", step=args.step)
+    cpu = time.process_time() - mark
+    print(f"{result.method} at {args.step:g} s: {result.status} {result.message}")
+    print(f"CPU {cpu:.1f} s for {result.t[-1]:.3f} s simulated: "
+          f"{cpu / result.t[-1]:.1f} s per simulated second "
+          f"(load {os.getloadavg()[0]:.1f})")
+    print("\n".join(schedule_table(scene, result, period)))
+    for event in result.events:
+        if event.kind in ("impact", "slip-start", "slip-end"):
+            print(f"  {1e3 * event.t:7.1f} ms {event.kind:10} {event.contact:10} "
+                  + (f"impulse {np.array2string(event.impulse, precision=4)} N s"
+                     if event.kind == "impact" else ""))
+    joints, wanted = prescribed_angles(scene, result.t)
+    error = np.abs(wrapped(joint_angles(grounded, result.q, joints) - wanted))
+    k, j = np.unravel_index(int(np.argmax(error)), error.shape)
+    print(f"largest joint tracking error {error[k, j]:.3g} rad ({joints[j]} at "
+          f"{result.t[k]:.3f} s)")
+    trunk = [b.name for b in grounded.bodies].index("trunk")
+    sl = grounded.bodies[trunk].q
+    print(f"trunk at the end {np.round(result.q[-1][sl][:3], 5)} m, prescribed "
+          f"{np.round(inverse.q[-1][model.bodies[trunk].q][:3], 5)} m")
+
+
+if __name__ == "__main__":
+    main()
