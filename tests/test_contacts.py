@@ -283,3 +283,5 @@ def test_the_command_writes_the_ground_forces_and_the_events(tmp_path):
     assert events[0] == "t,kind,contact,Px,Py,Pz"
     assert [line.split(",")[1] for line in events[1:]] == ["touch-down", "impact", "lift-off"]
     assert '"events.csv"' in (out / "units.json").read_text()
+    for figure in ("contacts.png", "gait.png"):  # the ground forces, when it is pushed
+        assert (out / figure).read_bytes().startswith(b"\x89PNG")

@@ -161,9 +161,13 @@ def run(args) -> int:
              "units.json": units_json({"results.csv": result.column_units()}).encode(),
              "stats.json": (json.dumps(jsonable(stats), indent=2) + "\n").encode()}
     if result.events is not None:  # a contact scheme's
+        from hexapod.output.contact_figures import contact_figure_builders
+        from hexapod.output.figures import render_figures
+
         files["events.csv"] = result.events_csv_text().encode()
         files["units.json"] = units_json({"results.csv": result.column_units(),
                                           "events.csv": EVENT_COLUMNS}).encode()
+        files.update(render_figures(contact_figure_builders(result)))
     write_directory_atomically(out, files)
     print(f"wrote {out}/: {', '.join(files)}")
     drift = ("" if result.energy_drift is None

@@ -16,5 +16,6 @@ __getattr__, __dir__, __all__ = attach(__name__, {
     "hexapod.output.figures": ["COMPONENT_COLOURS", "effort_figure", "png_bytes",
                                "prepare_drawing", "render_figures", "trajectory_figure",
                                "wrench_figure"],
+    "hexapod.output.contact_figures": ["contact_figure_builders", "pushed_intervals"],
     "hexapod._support.files": ["write_atomically", "write_directory_atomically"],
 })
