@@ -29,19 +29,18 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 import numpy as np  # noqa: E402
 
 import hexapod as hx  # noqa: E402
-from hexapod.scene import Contact  # noqa: E402
-from hexapod.scene.contacts import stance_intervals  # noqa: E402
 from legs.cockroach import STRIDE_PERIOD  # noqa: E402
 from legs.efforts import EFFORT_TOL, adaptive_inverse  # noqa: E402
 from legs.replay import grounded_scene, joint_angles, prescribed_angles, wrapped  # noqa: E402
 from legs.robot import hexapod_scene  # noqa: E402
 
 
-def schedule_table(scene, result, period: float) -> list[str]:
-    """Per foot: the scheduled stances and the simulated touch-downs and lift-offs (ms)."""
+def schedule_table(model, result, period: float) -> list[str]:
+    """Per foot: the scheduled stances (of the driven ``model``) and the simulated
+    touch-downs and lift-offs (ms)."""
     lines = [f"{'foot':10} {'scheduled stances (ms)':28} {'touch-downs (ms)':22} lift-offs (ms)"]
-    for contact in (e for e in scene.elements if isinstance(e, Contact)):
-        stances = stance_intervals(contact, 0.0, period)
+    for contact in model.contacts:
+        stances = contact.stances(0.0, period)
         times = {kind: [1e3 * e.t for e in result.events
                         if e.contact == contact.name and e.kind == kind]
                  for kind in ("touch-down", "lift-off")}
@@ -76,7 +75,7 @@ def main() -> None:
     print(f"CPU {cpu:.1f} s for {result.t[-1]:.3f} s simulated: "
           f"{cpu / result.t[-1]:.1f} s per simulated second "
           f"(load {os.getloadavg()[0]:.1f})")
-    print("\n".join(schedule_table(scene, result, period)))
+    print("\n".join(schedule_table(model, result, period)))
     for event in result.events:
         if event.kind in ("impact", "slip-start", "slip-end"):
             print(f"  {1e3 * event.t:7.1f} ms {event.kind:10} {event.contact:10} "
