@@ -285,3 +285,33 @@ def test_the_command_writes_the_ground_forces_and_the_events(tmp_path):
     assert '"events.csv"' in (out / "units.json").read_text()
     for figure in ("contacts.png", "gait.png"):  # the ground forces, when it is pushed
         assert (out / figure).read_bytes().startswith(b"\x89PNG")
+
+
+@pytest.mark.parametrize("change, words", [
+    ('restitution = -0.5', "restitution"), ('mu = -0.1', "mu"),
+    ('body = "nobody"', "nobody"), ('kp = nan', "kp"), ("", "--step 20")])
+def test_bad_input_is_one_message_exit_1_and_nothing_written(tmp_path, capsys, change, words):
+    """A negative restitution or friction, a contact on no body, a gain that is not finite, a
+    step longer than the run: one message naming it, status 1, no output directory."""
+    from hexapod.cli.app import main
+
+    text = (SCENES / "bouncing-ball.toml").read_text()
+    if change.startswith("kp"):
+        text += ('\n[[body]]\nname = "arm"\nmass = 1.0\ninertia = [0.1, 0.1, 0.1]\n'
+                 'position = [1.0, 0.0, 1.0]\n\n[[joint]]\nname = "pin"\ntype = "revolute"\n'
+                 'parent = "ground"\nchild = "arm"\naxis = [0.0, 1.0, 0.0]\n'
+                 'origin = [0.5, 0.0, 1.0]\n\n[[force]]\nname = "servo"\ntype = "controller"\n'
+                 f'joint = "pin"\ntarget = 0.0\n{change}\n')
+    elif change:
+        key = change.split(" = ")[0]
+        lines = [line for line in text.splitlines() if not line.startswith(f"{key} =")]
+        text = "\n".join(lines) + f"\n{change}\n"
+    scene = tmp_path / "bad.toml"
+    scene.write_text(text)
+    out = tmp_path / "out"
+    step = ["--step", "20"] if not change else ["--step", "1e-3"]
+    status = main(["simulate", str(scene), "--t-end", "0.1", *step, "--out", str(out)])
+    error = capsys.readouterr().err
+    assert status == 1 and not out.exists()
+    assert words in error
+    assert "Traceback" not in error
