@@ -94,7 +94,6 @@ class MoreauJean(Integrator):
         self.contact_names = tuple(c.name for c in self.contacts)
         d = self.model.dimension
         self.contact_forces = np.zeros((len(self.contacts), d))
-        self.contact_states = ("open",) * len(self.contacts)
         self.events: list[ContactEvent] = []
         self._mu = np.array([c.contact.mu for c in self.contacts])
         self._restitution = np.array([c.contact.restitution for c in self.contacts])
@@ -122,8 +121,7 @@ class MoreauJean(Integrator):
         self.counters.jacobians += 1
         self.counters.factorisations += 1
         impulses, states = self._impulses(h, frames, v0, G, y, Y)
-        self._response = Y
-        y = y + Y @ impulses.reshape(-1)
+        y_free, y = y, y + Y @ impulses.reshape(-1)
         lam = lam + Lam @ impulses.reshape(-1)
         v1 = half @ y
         q1 = model.integrate(q0, h * ((1 - THETA) * v0 + THETA * v1))
@@ -133,7 +131,7 @@ class MoreauJean(Integrator):
                         <= ROUND_OFF * max(np.abs(v0).max(), np.abs(v1).max()))
         q1 = self._onto_ground(q1, impulses, staying, Y)
         q1, v1 = self._project(t1, q1, v1)
-        self._record(t1, h, frames, impulses, states, v0, G, y - Y @ impulses.reshape(-1))
+        self._record(t1, h, frames, impulses, states, v0, G, y_free, y)
         self.t, self.q, self.v = t1, q1, v1
         self.v_dot, self.lam = (v1 - v0) / h, lam / h
 
@@ -235,7 +233,7 @@ class MoreauJean(Integrator):
         correction = np.linalg.lstsq(G.T @ G, -gaps, rcond=None)[0]
         return model.integrate(q1, model.mass_inv_sqrt @ (G @ correction))
 
-    def _record(self, t1, h, frames, impulses, states, v0, G, y_free) -> None:
+    def _record(self, t1, h, frames, impulses, states, v0, G, y_free, y) -> None:
         """The step's contact forces and events."""
         d = self.model.dimension
         world = np.einsum("mij,mi->mj", frames.axes, impulses)  # axes as rows: J^T P
@@ -244,7 +242,7 @@ class MoreauJean(Integrator):
             return
         start = (frames.jacobian @ v0).reshape(m, d)
         free = (G.T @ y_free).reshape(m, d)
-        end = free + (G.T @ (self._response @ impulses.reshape(-1))).reshape(m, d)
+        end = (G.T @ y).reshape(m, d)
         # an impact: an approach faster than twice what the smooth forces change the contact's
         # velocity by in the step, or a slip stopped (or started) by more than that: a
         # tangential impact (Painleve's rod)
