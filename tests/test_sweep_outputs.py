@@ -98,8 +98,8 @@ def test_an_output_file_that_is_a_folder_is_one_line_naming_it(tmp_path, earlier
     (out / name).unlink(missing_ok=True)
     (out / name).mkdir()
     for resume in ([], ["--resume"]):
-        done = commands.hexapod("sweep", str(path), "--in-process", "--out", str(out), *resume,
-                                cwd=tmp_path)
+        done = commands.in_process("sweep", str(path), "--in-process", "--out", str(out),
+                                   *resume, cwd=tmp_path)
         assert done.returncode == 1, done.stderr
         assert done.stderr.count("\n") == 1 and f"{name} (a folder)" in done.stderr
     assert (out / name).is_dir()
@@ -404,9 +404,9 @@ def test_a_study_of_a_billion_cases_is_refused_before_any_is_listed(tmp_path, mo
 def test_the_command_bounds_the_cases(tmp_path):
     path = study_file(tmp_path, SMALL.replace('"small"\n', '"small"\nsamples = 1000000000\n')
                       + '[vary.duty]\nrange = [0.5, 0.7]\n')
-    done = commands.hexapod("sweep", str(path), "--in-process", cwd=tmp_path)
+    done = commands.in_process("sweep", str(path), "--in-process", cwd=tmp_path)
     assert done.returncode == 1 and done.stderr.count("\n") == 1
     assert f"the study {path} has 3e9 cases (limit 100,000)" in done.stderr
-    done = commands.hexapod("sweep", str(study_file(tmp_path, SMALL)), "--in-process",
-                            "--max-cases", "2", cwd=tmp_path)
+    done = commands.in_process("sweep", str(study_file(tmp_path, SMALL)), "--in-process",
+                               "--max-cases", "2", cwd=tmp_path)
     assert done.returncode == 1 and "has 3 cases (limit 2)" in done.stderr
