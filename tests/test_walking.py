@@ -23,11 +23,18 @@ from legs.robot import WALKING_DUTY, hexapod_scene
 PERIOD = 0.5
 
 
-@cache
 def walking_model(gait="tripod", references=(), **ground):
-    """The walking robot, built once per test module and set of arguments (``references``:
-    pairs of joint name and reference effort)."""
-    settings = hx.scene.GroundForces(**ground, reference_efforts=dict(references))
+    """The walking robot, built once per test module and set of ground settings (a setting
+    given its default value is the same robot: ``policy="min-wrench"`` is ``walking_model()``;
+    ``references``: pairs of joint name and reference effort)."""
+    defaults = hx.scene.GroundForces()
+    ground = {k: v for k, v in ground.items() if v != getattr(defaults, k)}
+    return _walking_model(gait, references, tuple(sorted(ground.items())))
+
+
+@cache
+def _walking_model(gait, references, ground):
+    settings = hx.scene.GroundForces(**dict(ground), reference_efforts=dict(references))
     return hx.assemble(hexapod_scene(gait, trunk="free", ground=settings))
 
 
