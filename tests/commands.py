@@ -9,16 +9,26 @@ starts ``python ARGS`` in the background and reads its output as it comes, so th
 wait for what the run announces before it acts (never a fixed sleep, which a loaded machine
 outlasts): a progress line (``HEXAPOD_PROGRESS=1`` draws them on a pipe too), or the signal
 handlers the command installs first.
+
+:func:`in_process` runs the command by its entry function in the test's own process, for the
+tests that are about what a command does rather than about the process (its exit on a signal,
+its imports, the environment it starts with): the status is the one the process would end with
+(``python -m hexapod`` exits with what the entry function returns), and stdout and stderr are
+read at their descriptors, so what a compiled library writes there is seen as from a process.
+It saves the second or so each process spends importing NumPy, SciPy, CasADi and Matplotlib.
 """
 
 from __future__ import annotations
 
+import io
 import os
 import subprocess
 import sys
+import tempfile
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 #: Seconds a command of the tests may take: far more than any needs on an idle machine (a few
@@ -62,6 +72,65 @@ def hexapod(*args: str, cwd: Path, timeout: float = TIMEOUT,
             **settings: str | None) -> subprocess.CompletedProcess:
     """``python -m hexapod ARGS`` run to its end from ``cwd``, as :func:`python`."""
     return python("-m", "hexapod", *args, cwd=cwd, timeout=timeout, **settings)
+
+
+def in_process(*args: str, cwd: Path, **settings: str | None) -> subprocess.CompletedProcess:
+    """``hexapod ARGS`` run to its end by the entry function in this process, from ``cwd`` and
+    with the session's environment less ``HEXAPOD_DEBUG`` and with ``settings``, as
+    :func:`hexapod` runs it in a process of its own (both restored afterwards): its status, and
+    what it wrote on stdout and stderr as text. A ``SystemExit`` (a usage error, which argparse
+    ends by exiting) is the status it carries, as for a process."""
+    from hexapod.cli import main
+
+    with _environment(cwd, environment(**settings)), _captured() as output:
+        try:
+            status = main(list(args))
+        except SystemExit as ended:
+            status = ended.code if isinstance(ended.code, int) else int(ended.code is not None)
+    return subprocess.CompletedProcess(["hexapod", *args], status, *output)
+
+
+@contextmanager
+def _environment(cwd: Path, env: dict[str, str]) -> Iterator[None]:
+    """Work in ``cwd`` with exactly the variables ``env``; the earlier ones restored after."""
+    before_env, before_cwd = dict(os.environ), os.getcwd()
+    os.environ.clear()
+    os.environ.update(env)
+    os.chdir(cwd)
+    try:
+        yield
+    finally:
+        os.chdir(before_cwd)
+        os.environ.clear()
+        os.environ.update(before_env)
+
+
+@contextmanager
+def _captured() -> Iterator[list[str]]:
+    """Capture stdout and stderr at their descriptors and at ``sys.stdout``/``sys.stderr``
+    (each stream one file, shared by both, so that their writes keep their order); the list
+    yielded holds the two texts once the block ends."""
+    output: list[str] = []
+    saved = []
+    for number, name in ((1, "stdout"), (2, "stderr")):
+        getattr(sys, name).flush()
+        file = tempfile.TemporaryFile()
+        saved.append((number, name, getattr(sys, name), os.dup(number), file))
+        os.dup2(file.fileno(), number)
+        setattr(sys, name, io.TextIOWrapper(open(file.fileno(), "wb", closefd=False),
+                                            encoding="utf-8", errors="replace",
+                                            write_through=True))
+    try:
+        yield output
+    finally:
+        for number, name, stream, descriptor, file in saved:
+            getattr(sys, name).flush()
+            setattr(sys, name, stream)
+            os.dup2(descriptor, number)
+            os.close(descriptor)
+            file.seek(0)
+            output.append(file.read().decode("utf-8", errors="replace"))
+            file.close()
 
 
 class Running:

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from robots import builtin_model
 
 import hexapod as hx
 from legs.cockroach import SEGMENTS, STANCE_LENGTH_MM
@@ -90,7 +91,8 @@ def walks():
     out = {}
     for key, options in (("default", {}), ("payload", {"payload": PAYLOAD}),
                          ("lengths", FACTORS)):
-        model = hx.assemble(hexapod_walking(**options))
+        # the built-in robot is hexapod_walking() (test_no_arguments_give_the_committed_...)
+        model = hx.assemble(hexapod_walking(**options)) if options else builtin_model("hexapod")
         out[key] = model, hx.inverse_dynamics(model, TIMES)
     return out
 

@@ -1,4 +1,6 @@
-"""The ``hexapod`` command, run as ``python -m hexapod.cli`` in a subprocess."""
+"""The ``hexapod`` command: run as ``python -m hexapod.cli`` in a subprocess where the test is
+about the process (its help, usage errors and version, its imports, its environment, the console
+script), by its entry function in this process where it is about what a command does."""
 
 from __future__ import annotations
 
@@ -30,6 +32,11 @@ STATE_KEYS = {"t", "max_abs_phi", "condition_number", "sigma_min", "characterist
 def hexapod_cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
     """Run ``python -m hexapod.cli ARGS`` from ``cwd`` (so no file there shadows a scene name)."""
     return commands.python("-m", "hexapod.cli", *args, cwd=cwd)
+
+
+def hexapod_here(*args: str, cwd: Path) -> subprocess.CompletedProcess:
+    """Run ``hexapod ARGS`` from ``cwd`` in this process (see ``commands.in_process``)."""
+    return commands.in_process(*args, cwd=cwd)
 
 
 def assert_no_traceback(result: subprocess.CompletedProcess) -> None:
@@ -139,7 +146,7 @@ def test_console_script_if_installed(tmp_path):
 # ------------------------------------------------------------------ scenes
 
 def test_scenes_lists_each_scene_with_what_it_is(tmp_path):
-    result = hexapod_cli("scenes", cwd=tmp_path)
+    result = hexapod_here("scenes", cwd=tmp_path)
     assert result.returncode == 0, result.stderr
     lines = result.stdout.splitlines()
     scenes = builtin_scenes()
@@ -185,11 +192,11 @@ def test_scene_summary_reads_the_docstring_without_running_the_module(tmp_path, 
 def test_scenes_name_prints_the_toml_and_writes_nothing(tmp_path):
     import tomllib
 
-    printed = hexapod_cli("scenes", DEFAULT_SCENE, cwd=tmp_path)
+    printed = hexapod_here("scenes", DEFAULT_SCENE, cwd=tmp_path)
     assert printed.returncode == 0, printed.stderr
     assert list(tmp_path.iterdir()) == []
     assert tomllib.loads(printed.stdout)["scene"]["name"] == DEFAULT_SCENE
-    written = hexapod_cli("scenes", DEFAULT_SCENE, "--write", "copy.toml", cwd=tmp_path)
+    written = hexapod_here("scenes", DEFAULT_SCENE, "--write", "copy.toml", cwd=tmp_path)
     assert written.returncode == 0 and written.stdout == "wrote copy.toml\n", written.stderr
     text = (tmp_path / "copy.toml").read_text()
     assert printed.stdout.splitlines()[0] == f"# Built-in scene '{DEFAULT_SCENE}', written by " \
@@ -207,7 +214,7 @@ def default_joints() -> list[str]:
 
 
 def test_dynamics_runs_the_default_scene(tmp_path, default_joints):
-    result = hexapod_cli("dynamics", cwd=tmp_path)
+    result = hexapod_here("dynamics", cwd=tmp_path)
     assert result.returncode == 0, result.stderr
     assert_no_traceback(result)
     out = result.stdout
@@ -225,7 +232,7 @@ def test_dynamics_runs_the_default_scene(tmp_path, default_joints):
 
 
 def test_dynamics_json(tmp_path, default_joints):
-    result = hexapod_cli("dynamics", "--json", cwd=tmp_path)
+    result = hexapod_here("dynamics", "--json", cwd=tmp_path)
     assert result.returncode == 0, result.stderr
     report = strict_json(result.stdout)
     assert set(report) == REPORT_KEYS and set(report["state"]) == STATE_KEYS
@@ -242,7 +249,7 @@ CONTACT_SCENES = ("bouncing-ball.toml", "sliding-block.toml")
 
 @pytest.mark.parametrize("path", sorted(SCENES.glob("*.toml")), ids=lambda p: p.name)
 def test_dynamics_json_on_the_example_files(tmp_path, path):
-    result = hexapod_cli("dynamics", str(path), "--json", "--t", "0.25", cwd=tmp_path)
+    result = hexapod_here("dynamics", str(path), "--json", "--t", "0.25", cwd=tmp_path)
     if path.name in CONTACT_SCENES:  # not an analysis at an instant: refused, and said why
         assert result.returncode == 1 and result.stdout == ""
         assert "unilateral contacts" in result.stderr and "moreau-jean" in result.stderr
@@ -261,7 +268,7 @@ def test_dynamics_json_is_standard_for_a_scene_without_constraints(tmp_path):
     """A free body has no constraint rows: its report must still be standard JSON."""
     scene = tmp_path / "free.toml"
     scene.write_text("[[body]]\nname = 'block'\nmass = 0.2\ninertia = [2e-5, 2e-5, 3e-5]\n")
-    result = hexapod_cli("dynamics", str(scene), "--json", cwd=tmp_path)
+    result = hexapod_here("dynamics", str(scene), "--json", cwd=tmp_path)
     assert result.returncode == 0, result.stderr
     strict_json(result.stdout)
 
@@ -270,7 +277,7 @@ def test_dynamics_json_is_standard_for_a_scene_without_constraints(tmp_path):
 
 @pytest.mark.parametrize("path", sorted(SCENES.glob("*.toml")), ids=lambda p: p.name)
 def test_validate_good_file(tmp_path, path):
-    result = hexapod_cli("validate", str(path), cwd=tmp_path)
+    result = hexapod_here("validate", str(path), cwd=tmp_path)
     assert result.returncode == 0, result.stderr
     assert "is valid" in result.stdout
     assert result.stderr == ""
@@ -281,7 +288,7 @@ def test_validate_malformed_file_prints_every_problem(tmp_path):
         read_scene(MALFORMED)
     problems = info.value.problems
     assert len(problems) > 20
-    result = hexapod_cli("validate", str(MALFORMED), cwd=tmp_path)
+    result = hexapod_here("validate", str(MALFORMED), cwd=tmp_path)
     assert result.returncode != 0
     assert_no_traceback(result)
     assert result.stdout == ""
@@ -292,7 +299,7 @@ def test_validate_malformed_file_prints_every_problem(tmp_path):
 
 
 def test_dynamics_on_the_malformed_file(tmp_path):
-    result = hexapod_cli("dynamics", str(MALFORMED), cwd=tmp_path)
+    result = hexapod_here("dynamics", str(MALFORMED), cwd=tmp_path)
     assert result.returncode != 0
     assert_no_traceback(result)
     assert "problems" in result.stderr
@@ -302,13 +309,13 @@ def test_dynamics_on_the_malformed_file(tmp_path):
 
 @pytest.mark.parametrize("command", ["validate", "dynamics"])
 def test_missing_file(tmp_path, command):
-    line = assert_one_error_line(hexapod_cli(command, "no_such_scene.toml", cwd=tmp_path))
+    line = assert_one_error_line(hexapod_here(command, "no_such_scene.toml", cwd=tmp_path))
     assert "no_such_scene.toml: no such file" in line
 
 
 @pytest.mark.parametrize("command", ["validate", "dynamics"])
 def test_unknown_builtin_scene(tmp_path, command):
-    line = assert_one_error_line(hexapod_cli(command, "no-such-robot", cwd=tmp_path))
+    line = assert_one_error_line(hexapod_here(command, "no-such-robot", cwd=tmp_path))
     assert "no-such-robot" in line and "built-in" in line and DEFAULT_SCENE in line
 
 
@@ -316,12 +323,12 @@ def test_unknown_builtin_scene(tmp_path, command):
 def test_toml_syntax_error(tmp_path, command):
     path = tmp_path / "broken.toml"
     path.write_text("[scene]\nname = 'broken'\n\n[[body]\nname = 'b'\n")
-    line = assert_one_error_line(hexapod_cli(command, str(path), cwd=tmp_path))
+    line = assert_one_error_line(hexapod_here(command, str(path), cwd=tmp_path))
     assert str(path) in line and "not valid TOML" in line and "line 4" in line
 
 
 def test_directory_instead_of_file(tmp_path):
-    line = assert_one_error_line(hexapod_cli("validate", str(tmp_path), cwd=tmp_path))
+    line = assert_one_error_line(hexapod_here("validate", str(tmp_path), cwd=tmp_path))
     assert "is a directory" in line
 
 
@@ -333,8 +340,8 @@ def test_scene_that_cannot_be_assembled(tmp_path):
                     "[[joint]]\nname = 'weld'\ntype = 'fixed'\nparent = 'ground'\nchild = 'a'\n"
                     "[[joint]]\nname = 'weld2'\ntype = 'fixed'\nparent = 'ground'\n"
                     "child = 'a'\nparent_frame = [0.0, 0.0, 1.0]\nchild_frame = [0.0, 0.0, 0.0]\n")
-    assert hexapod_cli("validate", str(path), cwd=tmp_path).returncode == 0
-    line = assert_one_error_line(hexapod_cli("dynamics", str(path), cwd=tmp_path))
+    assert hexapod_here("validate", str(path), cwd=tmp_path).returncode == 0
+    line = assert_one_error_line(hexapod_here("dynamics", str(path), cwd=tmp_path))
     assert "cannot assemble" in line and "weld2/z" in line
 
 
@@ -348,7 +355,7 @@ def test_bad_time_option(tmp_path):
 # ------------------------------------------------------------------ info
 
 def test_info_on_a_redundant_mechanism_names_the_redundant_rows(tmp_path):
-    result = hexapod_cli("info", str(SCENES / "four_bar_3d.toml"), cwd=tmp_path)
+    result = hexapod_here("info", str(SCENES / "four_bar_3d.toml"), cwd=tmp_path)
     assert result.returncode == 0, result.stderr
     assert "redundant rows: D/z, D/ax1, D/ax2" in result.stdout
     assert "-2 counted (Grubler-Kutzbach), 1 numerical" in result.stdout
@@ -356,7 +363,7 @@ def test_info_on_a_redundant_mechanism_names_the_redundant_rows(tmp_path):
 
 
 def test_info_json_and_graph(tmp_path):
-    result = hexapod_cli("info", str(SCENES / "closed_pendulum_seed002.toml"), "--json",
+    result = hexapod_here("info", str(SCENES / "closed_pendulum_seed002.toml"), "--json",
                          "--graph", cwd=tmp_path)
     assert result.returncode == 0, result.stderr
     info = strict_json(result.stdout)
@@ -372,7 +379,7 @@ def test_info_json_and_graph(tmp_path):
 
 
 def test_info_graph_prints_the_matrices(tmp_path):
-    result = hexapod_cli("info", str(SCENES / "seed002_figure2.toml"), "--graph", cwd=tmp_path)
+    result = hexapod_here("info", str(SCENES / "seed002_figure2.toml"), "--graph", cwd=tmp_path)
     assert result.returncode == 0, result.stderr
     assert "6 vertices, 8 edges, 5 cutsets, 3 circuits" in result.stdout
     for title in ("incidence matrix", "cutset matrix [U A]", "circuit matrix [B U]"):
@@ -380,7 +387,7 @@ def test_info_graph_prints_the_matrices(tmp_path):
 
 
 def test_info_on_a_malformed_file_is_one_clear_error(tmp_path):
-    result = hexapod_cli("info", str(MALFORMED), cwd=tmp_path)
+    result = hexapod_here("info", str(MALFORMED), cwd=tmp_path)
     assert result.returncode != 0
     assert_no_traceback(result)
     assert result.stdout == ""

@@ -11,6 +11,7 @@ tolerance, because the table's error is a hundredth of it.
 
 import numpy as np
 import pytest
+from robots import builtin_model
 
 import hexapod as hx
 from hexapod.model.law_values import law_breaks
@@ -49,7 +50,7 @@ def test_a_periodic_table_repeats():
 
 
 def test_gates_and_footholds_evaluated_together_are_those_evaluated_alone():
-    model = hx.assemble(hx.load_scene("hexapod"))
+    model = builtin_model("hexapod")
     t = np.linspace(0.0, 1.3, 53)
     kinds = {"stance-gate", "foothold"}
     chosen = [i for i, law in enumerate(model.laws) if law.kind in kinds]

@@ -245,7 +245,7 @@ def test_command_line_on_malformed_files(tmp_path):
                        (("info", "bad.urdf"), "bad.urdf"),
                        (("inverse", str(FIXTURE / "model.urdf"), "--motion", "bad.csv",
                          "--out", "X.csv"), "bad.csv")):
-        assert_clean_failure(commands.hexapod(*args, cwd=tmp_path), name)
+        assert_clean_failure(commands.in_process(*args, cwd=tmp_path), name)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.csv", "bad.toml", "bad.urdf"]
 
 

@@ -7,11 +7,11 @@ hold) it redoes the sample exactly and still agrees."""
 
 from __future__ import annotations
 
-import copy
 from functools import cache
 
 import numpy as np
 import pytest
+from robots import builtin_model, walking_robot
 
 import hexapod as hx
 from hexapod._support.compiled import compiler
@@ -25,19 +25,13 @@ QUANTITIES = ("force", "torque", "effort", "ground_force", "q", "v", "v_dot")
 TOUCH_DOWN = (0.194, 0.206, 7)
 
 
-@cache
-def scene(name: str):
-    return hx.load_scene(name)
-
-
-@cache
 def scene_model(name: str, policy: str | None = None, mu: float | None = None):
-    """A built-in scene's model, with another ground-force policy when given."""
+    """A built-in scene's model, the walking robot's with another ground-force policy when
+    given (shared with the other modules' tests: tests/robots.py)."""
     if policy is None:
-        return hx.assemble(scene(name))
-    changed = copy.deepcopy(scene(name))
-    changed.ground.policy, changed.ground.mu = policy, mu
-    return hx.assemble(changed)
+        return builtin_model(name)
+    assert name == "hexapod"
+    return walking_robot(policy=policy, mu=mu)
 
 
 @cache

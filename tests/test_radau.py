@@ -51,6 +51,10 @@ def pendulum_error(result, omega0: float, arm: float) -> float:
     return float(np.abs(result.q[:, :result.model.dimension] - np.column_stack(exact)).max())
 
 
+# a ladder of three tolerances with a fitted slope, a study: the default run checks Radau's global
+# error within ten times the tolerance at 1e-5 and 1e-8 on the same pendulums, planar and
+# spatial (test_integrators.py: test_adaptive_methods_meet_their_tolerance[radau5-ggl])
+@pytest.mark.slow
 @pytest.mark.parametrize("dimension", [2, 3])
 def test_global_error_follows_the_tolerance(dimension):
     """Over one period (1.93 s) of the exact pendulum, at rtol = atol = 1e-4, 1e-6, 1e-8: the

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from robots import builtin_model
 
 import hexapod as hx
 from hexapod.scene.reader import read_scene
@@ -256,7 +257,7 @@ def test_the_kernels_ground_policy_multipliers_are_the_exact_solves():
     from hexapod.model.tabulation import TOLERANCE_PER_RTOL, tabulated_model
     from hexapod.simulation.kernels import policy_multipliers
 
-    model = hx.assemble(hx.load_scene("hexapod"))
+    model = builtin_model("hexapod")
     times = np.array([0.02, 0.2, 0.245, 0.25, 0.252, 0.258])
     run = hx.simulate(model, 0.26, t_eval=times)
     assert run.success, run.message

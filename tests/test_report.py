@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from commands import hexapod as run_cli
+from commands import in_process as run_cli
 
 import hexapod as hx
 from hexapod._support.files import write_directory_atomically
@@ -36,7 +36,7 @@ PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 @pytest.fixture(scope="module")
 def default_report(tmp_path_factory):
-    """``python -m hexapod report`` as the README runs it, from an empty directory."""
+    """``hexapod report`` as the README runs it (in this process), from an empty directory."""
     cwd = tmp_path_factory.mktemp("report")
     result = run_cli("report", cwd=cwd)
     return cwd, result

@@ -1,4 +1,5 @@
-"""``hexapod simulate``: its files, their numbers against independent checks, its failures."""
+"""``hexapod simulate``: its files, their numbers against independent checks, its failures (run
+in this process; its help and usage errors in a process of its own)."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from commands import hexapod as run_cli
+from commands import in_process
 
 import hexapod as hx
 from hexapod.algorithms.balance import body_balance
@@ -68,7 +70,7 @@ def seed002_run(tmp_path_factory):
     """The closed pendulum of Richard, Anderson and Andrews over 1 s with the joint wrenches, from
     an empty directory."""
     cwd = tmp_path_factory.mktemp("simulate")
-    result = run_cli("simulate", str(SEED002), "--t-end", "1", "--rtol", "1e-9", "--atol",
+    result = in_process("simulate", str(SEED002), "--t-end", "1", "--rtol", "1e-9", "--atol",
                      "1e-11", "--forces", "--out", "run", cwd=cwd)
     return cwd, result
 
@@ -130,7 +132,7 @@ def test_scene_asking_for_forces_gets_them(tmp_path):
     (tmp_path / "again.toml").write_text(scene_text(read_scene(scene)))  # kept by the writer
     assert read_scene(tmp_path / "again.toml").report_forces
     assert not read_scene(SEED002).report_forces
-    result = run_cli("simulate", str(scene), "--t-end", "0.05", "--out", "run", cwd=tmp_path)
+    result = in_process("simulate", str(scene), "--t-end", "0.05", "--out", "run", cwd=tmp_path)
     assert result.returncode == 0, result.stderr
     header, _ = read_csv(tmp_path / "run" / "results.csv")
     assert "Fx:coupler" in header
@@ -138,7 +140,7 @@ def test_scene_asking_for_forces_gets_them(tmp_path):
 
 @pytest.mark.parametrize("method", INTEGRATORS)
 def test_every_method_runs_from_the_command_line(tmp_path, method):
-    result = run_cli("simulate", str(SEED002), "--method", method, "--t-end", "0.1", "--step",
+    result = in_process("simulate", str(SEED002), "--method", method, "--t-end", "0.1", "--step",
                      "1e-3", "--every", "10", "--out", "run", cwd=tmp_path)
     assert result.returncode == 0, result.stderr
     stats = strict_json((tmp_path / "run" / "stats.json").read_text())
@@ -156,7 +158,7 @@ def test_help_lists_every_method_with_its_order_and_index(tmp_path):
 
 def test_a_failed_run_writes_the_states_up_to_it_and_says_why(tmp_path):
     (tmp_path / "unreachable.toml").write_text(UNREACHABLE)
-    result = run_cli("simulate", "unreachable.toml", "--out", "run", cwd=tmp_path)
+    result = in_process("simulate", "unreachable.toml", "--out", "run", cwd=tmp_path)
     assert result.returncode == 1
     assert "Traceback" not in result.stderr
     errors = result.stderr.strip().splitlines()
@@ -175,7 +177,8 @@ def test_bad_options_and_occupied_output_are_one_clear_error(tmp_path):
     assert result.returncode == 2 and "must be positive" in result.stderr
     (tmp_path / "busy").mkdir()
     (tmp_path / "busy" / "notes.txt").write_text("keep me")
-    result = run_cli("simulate", str(SEED002), "--t-end", "0.01", "--out", "busy", cwd=tmp_path)
+    result = in_process("simulate", str(SEED002), "--t-end", "0.01", "--out", "busy",
+                        cwd=tmp_path)
     assert result.returncode == 1 and "holds other files (notes.txt)" in result.stderr
     assert [p.name for p in (tmp_path / "busy").iterdir()] == ["notes.txt"]
 
@@ -193,7 +196,7 @@ def test_help_names_the_short_names_and_the_output_options(tmp_path):
 
 
 def test_short_name_runs_and_is_recorded_by_its_full_name(tmp_path):
-    result = run_cli("simulate", str(SEED002), "--method", "radau", "--t-end", "0.05",
+    result = in_process("simulate", str(SEED002), "--method", "radau", "--t-end", "0.05",
                      "--dt-out", "0.01", "--out", "run", cwd=tmp_path)
     assert result.returncode == 0, result.stderr
     assert "radau5-ggl over 0.05 s" in result.stdout

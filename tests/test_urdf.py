@@ -1,4 +1,5 @@
-"""URDF import and export, motion files, and `hexapod inverse` against Pinocchio fixtures."""
+"""URDF import and export, motion files, and `hexapod inverse` (run in this process) against
+Pinocchio fixtures."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from commands import hexapod as cli
+from commands import in_process as cli
 
 import hexapod as hx
 from hexapod.algorithms.inverse import inverse_dynamics

@@ -16,6 +16,7 @@ import re
 import meshio
 import numpy as np
 import pytest
+from robots import builtin_model
 
 import hexapod as hx
 from hexapod.algorithms.balance import body_balance
@@ -56,7 +57,7 @@ LEGS = ("L1", "L2", "L3", "R1", "R2", "R3")
 @pytest.fixture(scope="module")
 def walking():
     """The built-in walking robot over one stride at 11 samples: (model, result)."""
-    model = hx.assemble(load_scene("hexapod"))
+    model = builtin_model("hexapod")
     times = np.linspace(0.0, 0.5, 11)
     return model, inverse_dynamics(model, times)
 
@@ -303,7 +304,7 @@ def test_dynamics_solves_with_the_policy_given(capsys):
     assert main(["dynamics", "hexapod", "--t", "0.1", "--policy", "friction", "--mu", "0.5"]) == 0
     assert ("ground forces of 6 foot contacts by the policy friction (mu = 0.5)"
             in capsys.readouterr().out)
-    weight = sum(b.mass for b in hx.assemble(load_scene("hexapod")).bodies) * 9.81
+    weight = sum(b.mass for b in builtin_model("hexapod").bodies) * 9.81
     assert forces["min-wrench"][:, 2].sum() == pytest.approx(forces["min-effort"][:, 2].sum())
     assert np.abs(forces["min-wrench"] - forces["min-effort"]).max() > 1e-3 * weight
 

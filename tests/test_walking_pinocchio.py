@@ -14,10 +14,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from robots import builtin_model
 from script_loader import load_script
 
 import hexapod as hx
-from legs.robot import hexapod_scene
 
 FIXTURE = Path(__file__).resolve().parent / "data" / "walking_rnea.npz"
 TOLERANCE = 1e-8  # of the largest torque
@@ -31,7 +31,7 @@ def stored():
 
 @pytest.fixture(scope="module")
 def walking(stored):
-    model = hx.assemble(hexapod_scene(trunk="free"))
+    model = builtin_model("hexapod")  # the robot with a free trunk
     return model, hx.inverse_dynamics(model, stored["times"])
 
 
