@@ -12,6 +12,10 @@ with ``v_P = J_P v`` the point's world velocity:
   theta_dot)``;
 * a particle, ``P = r + s``: ``J_P = I``.
 
+The contacts' acceleration is ``J v_dot + b`` with the bias ``b = J_dot v`` (a plane's axes are
+fixed): ``R (w' x (w' x s))`` for a spatial body, ``-theta_dot^2 R s`` for a planar one, zero
+for a particle (:func:`contact_bias`).
+
 These few numbers per contact are evaluated in NumPy: a contact costs a rotation and a product.
 """
 
@@ -67,8 +71,8 @@ def refuse_contacts(model: Model) -> None:
         raise HexapodError(
             f"model '{model.name}' has unilateral contacts ("
             + ", ".join(f"'{n}'" for n in touching[:5]) + "), whose forces only a contact "
-            "scheme decides, over a step: simulate it (method moreau-jean); an analysis at an "
-            "instant or along a prescribed motion would leave them out")
+            "scheme decides, over time: simulate it (method moreau-jean or event-driven); an "
+            "analysis at an instant or along a prescribed motion would leave them out")
 
 
 def contact_frames(model: Model, q: np.ndarray,
@@ -110,6 +114,42 @@ def contact_frames(model: Model, q: np.ndarray,
         jacobian[k * d:(k + 1) * d, info.v] = frame @ J_P
         points[k], axes[k] = point, frame
     return ContactFrames(gaps, jacobian, points, axes)
+
+
+def contact_bias(model: Model, q: np.ndarray, v: np.ndarray,
+                 contacts: tuple[ForceInfo, ...] | None = None) -> np.ndarray:
+    """``J_dot v``: the contacts' acceleration, in their axes, at zero accelerations.
+
+    Parameters
+    ----------
+    model : Model
+    q, v : ndarray
+        Positions and velocities.
+    contacts : tuple of ForceInfo, optional
+        Default :func:`ground_contacts`.
+
+    Returns
+    -------
+    ndarray, shape (m d,)
+    """
+    contacts = ground_contacts(model) if contacts is None else contacts
+    d = model.dimension
+    bias = np.zeros(len(contacts) * d)
+    for k, element in enumerate(contacts):
+        info = model.bodies[element.bodies[0]]
+        if info.kind == "particle":
+            continue
+        rotation = model.body_pose(q, info.index).rotation
+        local = np.asarray(element.points[0], dtype=float)
+        rates = v[info.v]
+        if info.kind == "spatial":
+            w = rates[3:]
+            world = rotation @ np.cross(w, np.cross(w, local))
+        else:
+            world = -rates[2] ** 2 * (rotation @ local)
+        frame = np.vstack([element.contact.normal, element.contact.tangents])
+        bias[k * d:(k + 1) * d] = frame @ world
+    return bias
 
 
 def _skew(s: np.ndarray) -> np.ndarray:

@@ -70,6 +70,9 @@ CONTACT_METHODS: dict[str, Method] = {
     "moreau-jean": Method(1, 2, False, "velocity-level bilateral rows and Signorini's "
                           "condition with Coulomb friction and impacts; positions projected "
                           "onto phi = 0 and out of the ground"),
+    "event-driven": Method(8, 2, True, "DOP853 between contact events with the closed "
+                           "contacts held at acceleration level; positions and velocities "
+                           "projected onto the bilateral rows and the closed contacts"),
 }
 
 #: Every method by name: the smooth ones, then the contact schemes.

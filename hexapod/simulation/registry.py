@@ -31,6 +31,7 @@ from __future__ import annotations
 from hexapod.simulation.integrators import (
     DormandPrince5,
     DormandPrince853,
+    EventDriven,
     IdasBDF,
     Integrator,
     LieGroupGeneralizedAlpha,
@@ -54,7 +55,8 @@ __all__ = ["ALIASES", "CONTACT_SCHEMES", "DEFAULT_ATOL", "DEFAULT_METHOD", "DEFA
 INTEGRATORS: dict[str, type[Integrator]] = {}
 #: The integrators of scenes with unilateral contacts, by name (the smooth methods of
 #: :data:`INTEGRATORS` refuse such scenes).
-CONTACT_SCHEMES: dict[str, type[Integrator]] = {MoreauJean.name: MoreauJean}
+CONTACT_SCHEMES: dict[str, type[Integrator]] = {MoreauJean.name: MoreauJean,
+                                                 EventDriven.name: EventDriven}
 
 
 def register(cls: type[Integrator]) -> type[Integrator]:

@@ -7,6 +7,7 @@ from hexapod.simulation.integrators.embedded import (
     DormandPrince853,
     EmbeddedRungeKutta,
 )
+from hexapod.simulation.integrators.event_driven import EventDriven
 from hexapod.simulation.integrators.explicit import RungeKutta4Baumgarte
 from hexapod.simulation.integrators.generalized_alpha import LieGroupGeneralizedAlpha
 from hexapod.simulation.integrators.moreau_jean import MoreauJean
@@ -14,6 +15,7 @@ from hexapod.simulation.integrators.radau import RadauIIA5GGL
 from hexapod.simulation.integrators.rattle import Rattle
 from hexapod.simulation.integrators.sundials import IdasBDF
 
-__all__ = ["Counters", "DormandPrince5", "DormandPrince853", "EmbeddedRungeKutta", "IdasBDF",
-           "Integrator", "LieGroupGeneralizedAlpha", "MoreauJean", "RadauIIA5GGL", "Rattle",
+__all__ = ["Counters", "DormandPrince5", "DormandPrince853", "EmbeddedRungeKutta", "EventDriven",
+           "IdasBDF", "Integrator", "LieGroupGeneralizedAlpha", "MoreauJean", "RadauIIA5GGL",
+           "Rattle",
            "RungeKutta4Baumgarte"]

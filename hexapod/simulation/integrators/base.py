@@ -149,7 +149,7 @@ class Integrator(SingularPoses):
             raise HexapodError(f"{self.name} does not integrate unilateral contacts ("
                                + ", ".join(f"'{n}'" for n in touching[:5])
                                + "): simulate this scene with a contact scheme "
-                               "(method moreau-jean)")
+                               "(method moreau-jean, or event-driven)")
         if step is not None and not step > 0:
             raise ValueError(f"step must be positive, got {step}")
         # a mapping gives each kind of coordinate its own (see absolute_tolerances); the scalar

@@ -107,6 +107,11 @@ class EmbeddedRungeKutta(Integrator):
             self.counters.rhs += later.shape[0]
             K = np.vstack([f0, later])
             return K, y0 + h * (self.b @ K)
+        return self._stages_one_by_one(t, h, y0, f0)
+
+    def _stages_one_by_one(self, t: float, h: float, y0: np.ndarray,
+                           f0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`_stages`, each stage's rate from :meth:`_derivative`."""
         n_q = self.model.n_q
         K = np.array(explicit_stages(
             lambda i, y: self._derivative(t + self.c[i] * h, y[:n_q], y[n_q:]), h, y0, f0,

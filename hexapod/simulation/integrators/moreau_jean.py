@@ -42,6 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hexapod.algorithms.contact_frames import contact_frames, ground_contacts
+from hexapod.algorithms.contact_response import contact_response
 from hexapod.algorithms.frictional import solve_contacts
 from hexapod.algorithms.kinematics import state_split
 from hexapod.algorithms.linalg import as_dense, solve_or_least_squares
@@ -143,26 +144,19 @@ class MoreauJean(Integrator):
         (:meth:`_implicit`); without them the step is the mass metric's own solve."""
         model, data = self.model, self.data
         n = model.n_c
-        split = state_split(model, data, q0, w, Phi_v) if n else None
-        kept = split.independent if split is not None and split.rank else np.zeros(0, int)
         w1, wd1, _ = model.law_values(t1, data)
         nu = model.call("nu", data, q=q0, w=w1, wd=wd1) if n else np.zeros(0)
-        lam, Lam = np.zeros(n), np.zeros((n, G.shape[1]))
         K, C = (model.fast("tangent_matrices", data)(
             *[{"q": q0, "v": v0, "lam": np.zeros(n), "w": w}[name]
               for name in model.tangent_matrices.name_in()]))
         K, C = (np.asarray(x).reshape(model.n_v, model.n_v) for x in (K, C))
         if np.any(K) or np.any(C):
-            return self._implicit(h, v0, Q, K, C, Phi_v, kept, nu, G, lam, Lam)
+            split = state_split(model, data, q0, w, Phi_v) if n else None
+            kept = split.independent if split is not None and split.rank else np.zeros(0, int)
+            return self._implicit(h, v0, Q, K, C, Phi_v, kept, nu, G, np.zeros(n),
+                                  np.zeros((n, G.shape[1])))
         top = model.mass_inv_sqrt @ (model.mass @ v0 + h * Q)  # M^1/2 v_k + h M^-1/2 Q
-        if not kept.size:
-            return top, lam, G, Lam
-        scale = split.scale
-        y, scaled = split.kept_solve(top, nu[kept] / scale[kept])
-        Y, scaled_unit = split.kept_solve(G, np.zeros((kept.size, G.shape[1])))
-        lam[kept] = scaled / scale[kept]
-        Lam[kept] = scaled_unit / scale[kept][:, None]
-        return y, lam, Y, Lam
+        return contact_response(model, data, q0, w, Phi_v, top, nu, G)
 
     def _implicit(self, h, v0, Q, K, C, Phi_v, kept, nu, G, lam, Lam):
         """The step with the forces linearised at its start and taken at ``theta`` (Acary and

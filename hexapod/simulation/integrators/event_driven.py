@@ -1,0 +1,524 @@
+"""Event-driven integration of unilateral contacts: smooth phases with the contacts' modes
+fixed, events located on their conditions, impacts by an impulse map (Pfeiffer and Glocker,
+*Multibody Dynamics with Unilateral Contacts*, 1996; Acary and Brogliato 2008, ch. 7).
+
+**Smooth phases.** Each contact is ``open``, ``stick`` or ``slip``. Between events the motion
+is smooth and integrated by DOP853 with its error control and its projection (the embedded
+pair of :class:`~.embedded.DormandPrince853`), on accelerations that hold the closed contacts:
+the engine's constrained step with the contacts' forces ``F`` on its right-hand side
+(:func:`~hexapod.algorithms.contact_response.contact_response`), so that the contacts'
+accelerations are ``c + W F`` (``c = J a_free + J_dot v``, ``W`` the Delassus operator).
+A sticking contact keeps all its acceleration zero (``d`` unknowns); a slipping one its normal
+acceleration, with the tangential force ``-mu F_N s`` against its slip ``s`` (one unknown).
+When a slipping contact's normal acceleration falls as its normal force grows (``W_NN - mu
+W_NT s <= 0``), no force holds it and none lets it go: Painleve's paradox, which this scheme
+reports by name (the time-stepping scheme resolves it by a tangential impact). After each
+step the closed contacts' gaps and velocities are projected to zero, as the bilateral rows
+are.
+
+**Events.** Each contact has two event functions that are positive while its mode holds: an
+open contact's gap (once its arming condition holds, see
+:class:`~hexapod.scene.GroundContact`) and a closed one's normal force; a sticking contact's
+cone margin ``mu F_N - |F_T|``, a slipping one's slip speed along its direction at the step's
+start. A function that falls below zero in a step has a root located on the step's dense
+output by Illinois' method (to round-off in time); a gap is also watched inside the step
+(a ball's bounce may be shorter than the step). A function zero at the step's start (a
+contact that has just left, or begun to slip) is divided by the time since, so that its
+root there is not found again.
+
+**Impacts.** At a touch-down the velocities jump by the impulse map ``M (v+ - v-) = J^T P``
+under the bilateral rows: the frictional contact problem of the touching contacts
+(:func:`~hexapod.algorithms.frictional.solve_contacts`) with Newton's restitution, as a
+Moreau-Jean step of zero length. A rebound whose flight would last less than
+:data:`ZENO_FLIGHT` ends an accumulation of impacts (a Zeno point) with the contact closed.
+After every event the modes are settled: a closed contact that would pull opens, a sticking
+one outside its cone slips, an open one at zero gap that would be pressed into the ground
+closes, until the modes are consistent.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from hexapod.algorithms.contact_frames import contact_bias, contact_frames, ground_contacts
+from hexapod.algorithms.contact_response import contact_response
+from hexapod.algorithms.frictional import solve_contacts
+from hexapod.algorithms.saddle import dynamics_terms
+from hexapod.errors import HexapodError, IntegrationError
+from hexapod.simulation.integrators.embedded import DormandPrince853
+from hexapod.simulation.integrators.moreau_jean import GAP_TOLERANCE, ContactEvent
+from hexapod.simulation.methods import CONTACT_METHODS
+from hexapod.simulation.scales import ROUND_OFF
+
+#: a rebound flying for less than this (s) ends the impacts' accumulation: the contact closes
+ZENO_FLIGHT = 1e-9
+#: points per step at which the open contacts' gaps are watched inside the step
+GAP_WATCH = 16
+#: relative tolerance of the modes' conditions (a force's sign, the cone)
+MODE_TOLERANCE = 1e-9
+
+
+class EventDriven(DormandPrince853):
+    """Event-driven integration with unilateral contacts (see the module's description).
+
+    Attributes
+    ----------
+    modes : list of str
+        ``open``, ``stick`` or ``slip`` per contact.
+    contact_forces : ndarray, shape (m, d)
+        The contacts' forces at the current state (the ground's on each body, world axes, N).
+    events : list of ContactEvent
+        The run's contact events so far.
+    """
+
+    name = "event-driven"
+    order, index, adaptive, stabilisation = CONTACT_METHODS[name]
+    description = "event-driven: DOP853 between contact events, impacts by an impulse map"
+    impulsive = True
+
+    def _start(self) -> None:
+        model = self.model
+        self.contacts = ground_contacts(model)
+        self.contact_names = tuple(c.name for c in self.contacts)
+        m, d = len(self.contacts), model.dimension
+        self._mu = np.array([c.contact.mu for c in self.contacts])
+        self._restitution = np.array([c.contact.restitution for c in self.contacts])
+        self.events: list[ContactEvent] = []
+        self.modes = ["open"] * m
+        self._direction = np.zeros((m, d - 1))  # each slip's direction, contact axes
+        self._just = np.zeros(m, bool)  # left the ground or began to slip at the step's start
+        self._gap_tol = GAP_TOLERANCE * model.characteristic_length
+        frames = contact_frames(model, self.q, self.contacts)
+        touching = np.flatnonzero(frames.gaps <= self._gap_tol)
+        u = (frames.jacobian @ self.v).reshape(m, d)
+        speed = ROUND_OFF * max(1.0, np.abs(self.v).max())
+        if np.any(u[touching, 0] < -speed):  # an impact at the start
+            self.v = self._impact(self.t, self.q, self.v, touching)
+        for k in touching:  # the state the run starts from (not events)
+            sliding = np.linalg.norm(u[k, 1:])
+            if self.modes[k] == "open" and u[k, 0] <= speed:
+                self.modes[k] = "slip" if sliding > speed else "stick"
+                if sliding > speed:
+                    self._direction[k] = u[k, 1:] / sliding
+        try:
+            self._settle(self.t, self.q, self.v)  # what changes at once (events)
+            self._refresh()
+        except HexapodError as error:  # a result, as a step's failure is
+            self.status, self.message = "failed", f"{self.name} failed at the start: {error}"
+            self.contact_forces = np.zeros((m, d))
+            return
+        super()._start()
+
+    # ---------------------------------------------------------------- dynamics with contacts
+
+    def _solve(self, t: float, q: np.ndarray, v: np.ndarray, modes=None) -> tuple:
+        """Accelerations, multipliers and the contacts' forces (contact axes, (m, d)) at a
+        state with ``modes`` (default the current ones), and the contacts' accelerations."""
+        model, data = self.model, self.data
+        modes = self.modes if modes is None else modes
+        w, wd, wdd = (np.array(x) for x in model.law_values(t, data))
+        Phi_v, gamma, Q = dynamics_terms(model, {"q": q, "v": v, "w": w, "wd": wd, "wdd": wdd},
+                                         data)
+        half = model.mass_inv_sqrt
+        frames = contact_frames(model, q, self.contacts)
+        G = half @ frames.jacobian.T
+        y, lam, Y, Lam = contact_response(model, data, q, w, Phi_v, half @ np.asarray(Q).ravel(),
+                                          np.asarray(gamma).ravel(), G)
+        self.counters.rhs += 1
+        self.counters.factorisations += 1
+        free = G.T @ y + contact_bias(model, q, v, self.contacts)
+        F = self._forces(t, frames.jacobian @ v, free, G.T @ Y, modes)
+        x = F.reshape(-1)
+        W = G.T @ Y
+        return half @ (y + Y @ x), lam + Lam @ x, F, free + W @ x, W
+
+    def _forces(self, t, u, free, W, modes) -> np.ndarray:
+        """The closed contacts' forces that keep their accelerations as their modes say."""
+        m, d = len(self.contacts), self.model.dimension
+        F = np.zeros((m, d))
+        closed = [k for k in range(m) if modes[k] != "open"]
+        if not closed:
+            return F
+        columns, equations = [], []
+        for k in closed:
+            if modes[k] == "stick":
+                for i in range(d):
+                    columns.append(_unit(m * d, k * d + i))
+                    equations.append(k * d + i)
+            else:
+                column = _unit(m * d, k * d)
+                column[k * d + 1:(k + 1) * d] = -self._mu[k] * self._slip(k, u)
+                columns.append(column)
+                equations.append(k * d)
+        B = np.array(columns).T
+        A = W[equations] @ B
+        for j, k in enumerate(closed):
+            if modes[k] == "slip" and A[equations.index(k * d), j] <= 0.0:
+                raise IntegrationError(_painleve(self.contact_names[k], t, self._mu[k]))
+        rhs = -free[equations]
+        x = np.linalg.lstsq(A, rhs, rcond=None)[0]
+        scale = max(np.abs(rhs).max(), np.abs(A @ x).max(), np.finfo(float).tiny)
+        if np.abs(A @ x - rhs).max() > 1e-8 * scale:  # the contacts' conditions contradict
+            names = ", ".join(f"'{self.contact_names[k]}'" for k in closed)
+            raise IntegrationError(f"no contact forces hold the closed contacts ({names}) at "
+                                   f"t = {t:.9g} s as their modes say")
+        return (B @ x).reshape(m, d)
+
+    def _slip(self, k: int, u: np.ndarray) -> np.ndarray:
+        """Contact ``k``'s slip direction: its tangential velocity's while that has a part
+        along the direction at the step's start; else (a slip beginning, or one that would
+        reverse within the step: its end is an event) that direction, so that the motion
+        stays smooth within the step."""
+        d = self.model.dimension
+        tangential = u[k * d + 1:(k + 1) * d]
+        speed = np.linalg.norm(tangential)
+        if tangential @ self._direction[k] > ROUND_OFF * max(1.0, np.abs(u).max()):
+            return tangential / speed
+        return self._direction[k]
+
+    def _rates(self, t, q, v, alpha=0.0):
+        return self.model.call("qdot", self.data, q=q, v=v), self._solve(t, q, v)[0]
+
+    def _stick_states(self, t, q, v, candidates) -> tuple:
+        """What the ``candidates`` (sticking, or open at zero gap and speed) do at a state:
+        their frictional contact problem at acceleration level, Signorini on the normal
+        acceleration and Coulomb's cone on the tangential one (well posed: none of them
+        slips). Redundant contacts (a block's four corners) share their forces as it finds
+        a distribution in the cones, which a least-norm distribution may leave.
+        Returns the states and the contacts' accelerations (len(candidates), d)."""
+        d = self.model.dimension
+        modes = [("open" if k in candidates else mode) for k, mode in enumerate(self.modes)]
+        accelerations, W = self._solve(t, q, v, modes=modes)[3:]
+        rows = (np.asarray(candidates)[:, None] * d + np.arange(d)).reshape(-1)
+        solution = solve_contacts(W[np.ix_(rows, rows)], accelerations[rows],
+                                  self._mu[candidates], np.zeros(len(candidates)),
+                                  tuple(self.contact_names[k] for k in candidates))
+        return solution.states, solution.velocities
+
+    def multipliers(self, t, q, v):
+        return self._solve(t, q, v)[1]
+
+    def _stages(self, t, h, y0, f0):  # the contacts' forces are not in the compiled kernel
+        return self._stages_one_by_one(t, h, y0, f0)
+
+    # ---------------------------------------------------------------- the step and its events
+
+    def _step(self) -> None:
+        t0 = self.t
+        self._follow_slips()
+        before = self._watch(t0, self.q, self.v, t0)
+        super()._step()
+        self.q, self.v = self._onto_contacts(self.t, self.q, self.v)
+        after = self._watch(self.t, self.q, self.v, t0)
+        fired = self._first_root(t0, before, after)
+        if not self._sticking(self.t, self.q, self.v):  # a sticking contact slips or leaves
+            t_stick = self._bisect(t0)
+            if fired is None or t_stick < fired[0]:
+                fired = (t_stick, None)
+        if fired is not None:
+            t_event, index = fired
+            q, v = self.dense_output()(t_event)
+            self.t = t_event
+            self.q, self.v = self._project(t_event, q, v)
+            self._handle(index)
+        else:
+            self._just[:] = False
+        self._refresh()
+
+    def _follow_slips(self) -> None:
+        """Each slipping contact's direction, the one its slip speed is watched along, turned
+        to its slip at the step's start."""
+        if "slip" not in self.modes:
+            return
+        u = contact_frames(self.model, self.q, self.contacts).jacobian @ self.v
+        for k, mode in enumerate(self.modes):
+            if mode == "slip" and not self._just[k]:
+                self._direction[k] = self._slip(k, u)
+
+    def _sticking(self, t, q, v) -> bool:
+        """Whether every sticking contact still sticks at a state (see :meth:`_stick_states`)."""
+        sticking = [k for k, mode in enumerate(self.modes) if mode == "stick"]
+        return not sticking or all(s == "stick" for s in self._stick_states(t, q, v,
+                                                                            sticking)[0])
+
+    def _bisect(self, t0: float) -> float:
+        """The first time of the step from ``t0`` at which a sticking contact no longer sticks,
+        by bisection on the dense output (to round-off in time)."""
+        interpolant = self.dense_output()
+        a, b = t0, self.t
+        while b - a > 4 * np.finfo(float).eps * max(1.0, abs(b)):
+            s = 0.5 * (a + b)
+            if self._sticking(s, *interpolant(s)):
+                a = s
+            else:
+                b = s
+        return b
+
+    def _refresh(self) -> None:
+        """The accelerations, multipliers and contact forces of the current state."""
+        self.v_dot, lam, F = self._solve(self.t, self.q, self.v)[:3]
+        self.lam = lam
+        axes = contact_frames(self.model, self.q, self.contacts).axes
+        self.contact_forces = np.einsum("mij,mi->mj", axes, F)
+        self.contact_states = tuple(self.modes)
+
+    def _watch(self, t, q, v, t0) -> np.ndarray:
+        """The event functions (m, 2) at a state of the step from ``t0`` (see the module's
+        description): column 0 the gap (open) or normal force, column 1 the cone margin
+        (stick) or slip speed (slip); positive while the modes hold."""
+        m, d = len(self.contacts), self.model.dimension
+        values = np.ones((m, 2))
+        if not m:
+            return values
+        F = self._solve(t, q, v)[2] if any(x == "slip" for x in self.modes) else np.zeros(
+            (m, d))
+        frames = contact_frames(self.model, q, self.contacts)
+        u = (frames.jacobian @ v).reshape(m, d)
+        for k, mode in enumerate(self.modes):
+            if mode == "open":
+                values[k, 0] = self._gap_value(k, frames.gaps[k], u[k, 0], t - t0, q)
+                continue
+            if mode == "stick":  # watched together, by _sticking
+                continue
+            values[k, 0] = F[k, 0]
+            along = u[k, 1:] @ self._direction[k]
+            values[k, 1] = along / (t - t0) if self._just[k] and t > t0 else along
+        return values
+
+    def _gap_value(self, k, gap, normal_speed, since, q) -> float:
+        """An open contact's gap event function: its gap, divided by the time since it left
+        when it left at the step's start (its speed there); positive while it is unarmed."""
+        if not self._armed(k, q):
+            return 1.0
+        if self._just[k]:
+            return gap / since if since > 0 else normal_speed
+        return gap
+
+    def _armed(self, k: int, q: np.ndarray) -> bool:
+        """Whether contact ``k`` may touch down (its scene's arming condition)."""
+        return True
+
+    def _first_root(self, t0, before, after):
+        """The first event of the step ``(t0, t]``: ``(t, (contact, column))`` or None."""
+        interpolant = self.dense_output() if self._dense_step is not None else None
+        if interpolant is None:
+            return None
+        best = None
+        m = before.shape[0]
+        watched = [k for k in range(m) if self.modes[k] == "open"]
+        grid = np.linspace(t0, self.t, GAP_WATCH + 1)
+        for k in range(m):
+            for column in (0, 1):
+                values = [before[k, column], after[k, column]]
+                times = [t0, self.t]
+                if column == 0 and k in watched:  # inside the step too: a short flight
+                    times = list(grid)
+                    values = [before[k, 0], *(self._value(interpolant, s, k, 0, t0)
+                                              for s in grid[1:-1]), after[k, 0]]
+                for a in range(len(times) - 1):
+                    if values[a] >= 0.0 and values[a + 1] < 0.0:
+                        root = self._locate(interpolant, k, column, t0, times[a], times[a + 1],
+                                            values[a], values[a + 1])
+                        if best is None or root < best[0]:
+                            best = (root, (k, column))
+                        break
+        return best
+
+    def _value(self, interpolant, t, k, column, t0) -> float:
+        q, v = interpolant(t)
+        return float(self._watch(t, q, v, t0)[k, column])
+
+    def _locate(self, interpolant, k, column, t0, a, b, fa, fb) -> float:
+        """The root of event function ``(k, column)`` in ``[a, b]`` (``fa >= 0 > fb``), by
+        Illinois' method on the dense output, to round-off in time."""
+        if fa == 0.0:
+            return a
+        side = 0
+        for _ in range(100):
+            if b - a <= 4 * np.finfo(float).eps * max(1.0, abs(b)):
+                break
+            s = b - fb * (b - a) / (fb - fa)
+            if not a < s < b:
+                s = 0.5 * (a + b)
+            fs = self._value(interpolant, s, k, column, t0)
+            if fs >= 0.0:
+                a, fa = s, fs
+                if side == -1:
+                    fb /= 2
+                side = -1
+            else:
+                b, fb = s, fs
+                if side == 1:
+                    fa /= 2
+                side = 1
+        return b
+
+    # ---------------------------------------------------------------- what an event changes
+
+    def _handle(self, index: tuple[int, int]) -> None:
+        """Apply the event ``(contact, column)`` at the current state, then settle the modes."""
+        t = self.t
+        self._just[:] = False
+        if index is None:  # the sticking contacts' problem changed: settled below
+            self._settle(t, self.q, self.v)
+            return
+        k, column = index
+        if self.modes[k] == "open":  # a touch-down, with the contacts touching at once
+            frames = contact_frames(self.model, self.q, self.contacts)
+            touching = np.flatnonzero(frames.gaps <= max(self._gap_tol, frames.gaps[k]))
+            self.v = self._impact(t, self.q, self.v, np.union1d(touching, [k]))
+        elif column == 0:
+            self._mode(k, "open", t)
+            self._just[k] = True
+        else:  # a slip ends, with those ending at once: they stick, or slip back (below)
+            m, d = len(self.contacts), self.model.dimension
+            u = (contact_frames(self.model, self.q, self.contacts).jacobian
+                 @ self.v).reshape(m, d)
+            resting = MODE_TOLERANCE * max(1.0, np.abs(self.v).max())
+            for j, mode in enumerate(self.modes):
+                if j == k or (mode == "slip" and np.linalg.norm(u[j, 1:]) <= resting):
+                    self._mode(j, "stick", t)
+        self._settle(t, self.q, self.v)
+
+    def _mode(self, k: int, mode: str, t: float) -> None:
+        """Contact ``k`` enters ``mode`` at ``t``: its event recorded."""
+        old, d = self.modes[k], self.model.dimension
+        kind = ("touch-down" if old == "open" else "lift-off" if mode == "open"
+                else "slip-start" if mode == "slip" else "slip-end")
+        if old != mode:
+            self.events.append(ContactEvent(t, kind, self.contact_names[k], np.zeros(d)))
+            self.modes[k] = mode
+
+    def _impact(self, t, q, v, touching) -> np.ndarray:
+        """The velocities after the impulse map of the ``touching`` contacts (see the module's
+        description); their modes and events follow."""
+        model, data, d = self.model, self.data, self.model.dimension
+        w, wd, _ = model.law_values(t, data)
+        Phi_v = dynamics_terms(model, {"q": q, "v": v, "w": w, "wd": wd,
+                                       "wdd": np.zeros_like(wd)}, data)[0]
+        nu = model.call("nu", data, q=q, w=w, wd=wd) if model.n_c else np.zeros(0)
+        half = model.mass_inv_sqrt
+        frames = contact_frames(model, q, self.contacts)
+        rows = (touching[:, None] * d + np.arange(d)).reshape(-1)
+        G = half @ frames.jacobian[rows].T
+        y, _, Y, _ = contact_response(model, data, q, w, Phi_v, half @ (model.mass @ v),
+                                      np.asarray(nu).ravel(), G)
+        self.counters.factorisations += 1
+        before = (frames.jacobian[rows] @ v).reshape(-1, d)
+        approach = np.maximum(-before[:, 0], 0.0)
+        restitution = self._restitution[touching].copy()
+        flying = self._free_normal_acceleration(t, q, v, touching)
+        for _ in range(2):  # again with restitution 0 where a rebound would not fly
+            solution = solve_contacts(G.T @ Y, G.T @ y, self._mu[touching],
+                                      restitution * approach,
+                                      tuple(self.contact_names[k] for k in touching))
+            rebound = solution.velocities[:, 0]
+            short = (rebound > 0) & (2 * rebound < ZENO_FLIGHT * np.maximum(-flying, 0.0))
+            if not short.any():
+                break
+            restitution[short] = 0.0
+        world = np.einsum("mij,mi->mj", frames.axes[touching], solution.impulses)
+        scale = ROUND_OFF * max(1.0, np.abs(v).max())
+        for j, k in enumerate(touching):
+            pushed = solution.impulses[j, 0] > 0.0
+            leaving = rebound[j] > scale
+            if self.modes[k] == "open" and not (pushed or not leaving):
+                continue  # grazed, and gone
+            self._mode(k, "stick", t)  # a touch-down, if it was open
+            if pushed and approach[j] > scale:
+                self.events.append(ContactEvent(t, "impact", self.contact_names[k], world[j]))
+            if leaving:  # a rebound
+                self._mode(k, "open", t)
+                self._just[k] = True
+            elif solution.states[j] == "slip":
+                slip = solution.velocities[j, 1:]
+                self._direction[k] = slip / np.linalg.norm(slip)
+                self._mode(k, "slip", t)
+        return half @ (y + Y @ solution.impulses.reshape(-1))
+
+    def _free_normal_acceleration(self, t, q, v, touching) -> np.ndarray:
+        """The ``touching`` contacts' normal accelerations with every contact open."""
+        d = self.model.dimension
+        accelerations = self._solve(t, q, v, modes=["open"] * len(self.contacts))[3]
+        return accelerations[touching * d]
+
+    def _settle(self, t, q, v) -> None:
+        """Change modes until they are consistent: a slipping contact that would pull opens;
+        the sticking ones, and the open ones touching at zero speed, take the states of their
+        frictional problem at acceleration level (:meth:`_stick_states`): stick, slip (along
+        their tangential acceleration) or open."""
+        m, d = len(self.contacts), self.model.dimension
+        frames = contact_frames(self.model, q, self.contacts)
+        u = (frames.jacobian @ v).reshape(m, d)
+        speed = ROUND_OFF * max(1.0, np.abs(v).max())
+        for _ in range(2 * m + 1):
+            F = self._solve(t, q, v)[2]
+            size = MODE_TOLERANCE * max(np.abs(F).max(initial=0.0), np.finfo(float).tiny)
+            pulling = [k for k, mode in enumerate(self.modes)
+                       if mode == "slip" and F[k, 0] < -size]
+            if pulling:
+                self._mode(pulling[0], "open", t)
+                self._just[pulling[0]] = True
+                continue
+            candidates = [k for k, mode in enumerate(self.modes) if mode == "stick" or (
+                mode == "open" and frames.gaps[k] <= self._gap_tol and u[k, 0] <= speed)]
+            if not candidates:
+                return
+            states, accelerations = self._stick_states(t, q, v, candidates)
+            changes = [(k, state, a) for k, state, a in zip(candidates, states, accelerations,
+                                                           strict=True)
+                       if state != self.modes[k]]
+            if not changes:
+                return
+            for k, state, a in changes:
+                if state == "slip":
+                    self._direction[k] = a[1:] / np.linalg.norm(a[1:])
+                self._mode(k, state, t)
+                self._just[k] = state != "stick"
+        raise IntegrationError(f"no consistent contact modes at t = {t:.9g} s ("
+                               + ", ".join(f"'{n}' {x}" for n, x in
+                                           zip(self.contact_names, self.modes, strict=True))
+                               + ")")
+
+    def _onto_contacts(self, t, q, v) -> tuple[np.ndarray, np.ndarray]:
+        """The closed contacts' gaps, normal velocities and (sticking) tangential velocities
+        put back to zero by the least ``M``-norm corrections under the bilateral rows."""
+        model, data, d = self.model, self.data, self.model.dimension
+        closed = [k for k in range(len(self.contacts)) if self.modes[k] != "open"]
+        if not closed:
+            return q, v
+        half = model.mass_inv_sqrt
+        for stage in ("positions", "velocities"):
+            w, wd, _ = model.law_values(t, data)
+            Phi_v = dynamics_terms(model, {"q": q, "v": v, "w": w, "wd": wd,
+                                           "wdd": np.zeros_like(wd)}, data)[0]
+            frames = contact_frames(model, q, self.contacts)
+            rows = [k * d + i for k in closed
+                    for i in range(d if stage == "velocities" and self.modes[k] == "stick"
+                                   else 1)]
+            G = half @ frames.jacobian[rows].T
+            nu = model.call("nu", data, q=q, w=w, wd=wd) if model.n_c else np.zeros(0)
+            y, _, Y, _ = contact_response(model, data, q, w, Phi_v, half @ (model.mass @ v),
+                                          np.asarray(nu).ravel(), G)
+            if stage == "positions":
+                gaps = frames.gaps[closed]
+                x = np.linalg.lstsq(Y.T @ Y, -gaps, rcond=None)[0]
+                q = model.integrate(q, half @ (Y @ x))
+            else:
+                x = np.linalg.lstsq(Y.T @ Y, -(G.T @ y), rcond=None)[0]
+                v = half @ (y + Y @ x)
+        return q, v
+
+
+def _unit(n: int, i: int) -> np.ndarray:
+    column = np.zeros(n)
+    column[i] = 1.0
+    return column
+
+
+def _painleve(name: str, t: float, mu: float) -> str:
+    return (f"Painleve's paradox at contact '{name}', t = {t:.9g} s: slipping with mu = {mu:g}, "
+            "its normal acceleration falls as its normal force grows, so no contact force "
+            "holds it and none lets it go (the acceleration-level contact problem has no "
+            "solution); simulate it with method moreau-jean, which resolves it by a "
+            "tangential impact")
