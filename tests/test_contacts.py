@@ -253,7 +253,8 @@ def test_newtons_slip_is_the_bracketed_one():
 @pytest.mark.parametrize("change, key", [
     ({"restitution": -0.1}, "restitution"), ({"restitution": 1.5}, "restitution"),
     ({"mu": -0.2}, "mu"), ({"body": "nobody"}, "body"), ({"normal": [0.0, 0.0, 0.0]}, "normal"),
-    ({"normal": [0.0, 1.0]}, "normal")])
+    ({"normal": [0.0, 1.0]}, "normal"), ({"armed_ahead_of": "nothing"}, "armed_ahead_of"),
+    ({"armed_ahead_of": "floor"}, "armed_ahead_of"), ({"forward": [0.0, 0.0, 0.0]}, "forward")])
 def test_a_bad_contact_is_one_clear_problem_naming_its_key(change, key):
     scene = hexapod.Scene("ball")
     scene.add(Particle("ball", mass=1.0, position=[0.0, 0.0, 1.0]))
@@ -263,6 +264,19 @@ def test_a_bad_contact_is_one_clear_problem_naming_its_key(change, key):
     assert len(info.value.problems) == 1
     problem = str(info.value.problems[0])
     assert "floor" in problem and key in problem
+
+
+def test_the_compass_gait_strikes_within_a_few_steps_of_its_period():
+    """The compass-gait walker (``data/scenes/compass-gait.toml``) at a 2 ms step: its swing
+    foot, armed once ahead of the stance foot (it passes the slope at mid-swing), strikes
+    within three steps of the period 0.73472 s (order 1), and the stance foot leaves then,
+    not when the swing foot passes it."""
+    model = hexapod.assemble(hexapod.load_scene(SCENES / "compass-gait.toml"))
+    result = hexapod.simulate(model, 0.76, step=2e-3)
+    assert result.success, result.message
+    kinds = [(e.kind, e.contact) for e in result.events]
+    assert kinds == [("lift-off", "foot-a"), ("touch-down", "foot-b"), ("impact", "foot-b")]
+    assert all(abs(e.t - 0.73472) <= 3 * 2e-3 for e in result.events)
 
 
 def test_a_smooth_method_refuses_a_scene_with_unilateral_contacts(ball):

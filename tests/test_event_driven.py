@@ -1,7 +1,8 @@
 """The event-driven contact scheme against closed forms: the bouncing ball's impact times to
 1e-8 s and its accumulation point (a Zeno point ended by sticking), the block on an incline
 (sliding at ``g (sin - mu cos)``, sticking, a push that stops when the closed form says),
-a particle in the plane, and Painleve's rod, which it reports by name. The same cases as the
+a particle in the plane, Painleve's rod, which it reports by name, and the compass-gait
+walker's periodic step (Goswami, Thuilot and Espiau 1996). The same cases as the
 time-stepping scheme's (``test_contacts.py``), at the integrator's tolerance instead of at
 order 1."""
 
@@ -106,3 +107,25 @@ def test_painleves_rod_is_reported_by_name():
     assert not result.success
     assert "Painleve's paradox at contact 'end'" in result.message
     assert "moreau-jean" in result.message
+
+
+def test_the_compass_gait_returns_to_its_state_after_one_step():
+    """Started just after an impact on its periodic gait (the issue's five-decimal state,
+    ``data/scenes/compass-gait.toml``), the walker's swing foot strikes at 0.73472 s (to
+    5e-6 s: the published period's rounding) and, the legs' roles swapped, the stance and
+    swing angles and rates return to the starting ones to 5e-6 (the starting state's five
+    decimals; the integrator's tolerance is 1e-10). Its swing foot passes the slope at
+    mid-swing unarmed (no event there); at the strike the old stance foot leaves."""
+    model = hexapod.assemble(hexapod.load_scene(SCENES / "compass-gait.toml"))
+    result = hexapod.simulate(model, 0.8, method="event-driven", rtol=1e-10, atol=1e-12)
+    assert result.success, result.message
+    kinds = [(e.kind, e.contact) for e in result.events]
+    assert kinds == [("lift-off", "foot-a"), ("touch-down", "foot-b"), ("impact", "foot-b")]
+    strike = result.events[-1].t
+    assert abs(strike - 0.73472) < 5e-6
+    after = np.flatnonzero(result.t == strike)[-1]  # the state after the impact
+    q, v = result.q[after], result.v[after]
+    # leg b now stands: its angle is pi/2 + the stance angle; leg a's pi/2 - the swing angle
+    state = [q[5] - np.pi / 2, np.pi / 2 - q[2], v[5], -v[2]]
+    assert np.allclose(state, [-0.21867, -0.32339, 1.09183, -0.37718], rtol=0, atol=5e-6)
+    assert result.events[-1].impulse[1] > 0  # the ground pushes the striking foot up

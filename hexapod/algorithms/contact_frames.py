@@ -152,6 +152,30 @@ def contact_bias(model: Model, q: np.ndarray, v: np.ndarray,
     return bias
 
 
+def armed(frames: ContactFrames, contacts: tuple[ForceInfo, ...]) -> np.ndarray:
+    """Which ``contacts`` may touch down at the state of ``frames`` (theirs): those without an
+    arming condition, and those ahead of the contact they name along their ``forward``.
+
+    Parameters
+    ----------
+    frames : ContactFrames
+    contacts : tuple of ForceInfo
+        All the model's contacts (those named by the conditions among them).
+
+    Returns
+    -------
+    ndarray of bool, shape (m,)
+    """
+    index = {c.name: k for k, c in enumerate(contacts)}
+    out = np.ones(len(contacts), dtype=bool)
+    for k, element in enumerate(contacts):
+        other = element.contact.armed_ahead_of
+        if other is not None:
+            ahead = frames.points[k] - frames.points[index[other]]
+            out[k] = ahead @ element.contact.forward > 0.0
+    return out
+
+
 def _skew(s: np.ndarray) -> np.ndarray:
     """``[s]x``: ``[s]x w = s x w``."""
     return np.array([[0.0, -s[2], s[1]], [s[2], 0.0, -s[0]], [-s[1], s[0], 0.0]])

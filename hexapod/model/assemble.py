@@ -335,8 +335,9 @@ class _Assembly:
                 mu = si.ground.mu if element.mu is None else element.mu
                 builder.nonconservative.append(name)  # impacts and friction dissipate
                 infos.append(ForceInfo(name, element.kind, (body(element.body),), (point,),
-                                       contact=SurfaceContact.plane(surface, normal,
-                                                                    element.restitution, mu)))
+                                       contact=SurfaceContact.plane(
+                                           surface, normal, element.restitution, mu,
+                                           element.armed_ahead_of, element.forward)))
         return builder, across, infos
 
     def _servo(self, element: JointController, g) -> ca.SX:

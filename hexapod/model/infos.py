@@ -119,10 +119,13 @@ class SurfaceContact:
     tangents: np.ndarray  # (dimension - 1, dimension): unit, orthogonal, world
     restitution: float
     mu: float
+    armed_ahead_of: str | None = None  # another contact: armed while ahead of it
+    forward: np.ndarray | None = None  # unit, world: what "ahead" means
 
     @classmethod
     def plane(cls, surface_point: np.ndarray, normal: np.ndarray, restitution: float,
-              mu: float) -> SurfaceContact:
+              mu: float, armed_ahead_of: str | None = None,
+              forward: np.ndarray | None = None) -> SurfaceContact:
         """The contact of a plane through ``surface_point`` with unit ``normal``, with tangent
         axes: in space the world axis farthest from the normal, made orthogonal to it, and
         ``normal x t1``; in the plane the normal turned by -90 degrees."""
@@ -134,8 +137,11 @@ class SurfaceContact:
             t1 = axis - (axis @ n) * n
             t1 /= np.linalg.norm(t1)
             tangents = np.array([t1, np.cross(n, t1)])
+        if armed_ahead_of is not None:
+            forward = tangents[0] if forward is None else np.asarray(forward, dtype=float)
+            forward = forward / np.linalg.norm(forward)
         return cls(np.asarray(surface_point, dtype=float), n, tangents, float(restitution),
-                   float(mu))
+                   float(mu), armed_ahead_of, forward if armed_ahead_of is not None else None)
 
 
 @dataclass(frozen=True)

@@ -419,6 +419,12 @@ class GroundContact(ForceElement):
         Newton's coefficient of restitution, in [0, 1] (default 0: plastic).
     mu : float, optional
         The friction coefficient, at least 0; default the scene's ``[ground] mu``.
+    armed_ahead_of : str, optional
+        Another ground contact: this one may touch down only while its point is ahead of
+        that one's along ``forward`` (a compass gait's swing foot, which passes the ground at
+        mid-swing, is armed once it is ahead of the stance foot); default always armed.
+    forward : array_like, optional
+        The direction of "ahead", world (default the plane's first tangent).
     source : str
         Where the element was written, named in messages; empty when built in Python.
     """
@@ -430,6 +436,8 @@ class GroundContact(ForceElement):
     surface_point: object = None
     restitution: float = 0.0
     mu: float | None = None
+    armed_ahead_of: str | None = None
+    forward: object = None
     source: str = ""
     kind = "ground-contact"
 
@@ -437,11 +445,15 @@ class GroundContact(ForceElement):
         out: list[Problem] = []
         if self.point is not None and not isinstance(self.point, str):
             check_finite(self, "point", self.point, out)
-        for key in ("normal", "surface_point"):
+        for key in ("normal", "surface_point", "forward"):
             check_finite(self, key, getattr(self, key), out)
-        if self.normal is not None and np.all(np.isfinite(np.asarray(self.normal, float))) \
-                and not np.linalg.norm(np.asarray(self.normal, dtype=float)) > 0:
-            out.append(self.problem("normal", "must not be zero"))
+        for key in ("normal", "forward"):
+            value = getattr(self, key)
+            if value is not None and np.all(np.isfinite(np.asarray(value, float))) \
+                    and not np.linalg.norm(np.asarray(value, dtype=float)) > 0:
+                out.append(self.problem(key, "must not be zero"))
+        if self.armed_ahead_of == self.name:
+            out.append(self.problem("armed_ahead_of", "names the contact itself"))
         if check_finite(self, "restitution", self.restitution, out) and not (
                 0.0 <= self.restitution <= 1.0):
             out.append(self.problem("restitution", f"must be in [0, 1], got "

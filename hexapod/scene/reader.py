@@ -395,7 +395,9 @@ def _force_schema(kind: str, dimension: int) -> Schema:
         "ground-contact": {"body": (_string, True), "point": (_point(dimension), False),
                            "normal": (_vector(dimension), False),
                            "surface_point": (_vector(dimension), False),
-                           "restitution": (_number, False), "mu": (_number, False)},
+                           "restitution": (_number, False), "mu": (_number, False),
+                           "armed_ahead_of": (_string, False),
+                           "forward": (_vector(dimension), False)},
     }
     return FORCE_TYPES[kind], {"name": (_string, True), "type": (_string, True),
                                **schemas[kind]}

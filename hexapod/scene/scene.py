@@ -383,9 +383,13 @@ class _ReferenceCheck:
         elif isinstance(e, GroundContact):
             if self._body_ref(e.body, "body", ground_ok=True):
                 self._point(e.body, e.point, "point", "body")
-            for key in ("normal", "surface_point"):
+            for key in ("normal", "surface_point", "forward"):
                 if getattr(e, key) is not None:
                     self._components(key, np.ravel(getattr(e, key)), self.scene.dimension)
+            if e.armed_ahead_of is not None and not isinstance(
+                    self.scene.forces.get(e.armed_ahead_of), GroundContact):
+                self._add("armed_ahead_of", f"'{e.armed_ahead_of}' is not a ground-contact "
+                          "force element of the scene")
         elif isinstance(e, JointEffort):
             self._driven_joint(e.joint, "joint", "an actuator effort")
         elif isinstance(e, (RotationalSpringDamper, JointController)):

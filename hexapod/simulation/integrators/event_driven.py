@@ -40,7 +40,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from hexapod.algorithms.contact_frames import contact_bias, contact_frames, ground_contacts
+from hexapod.algorithms.contact_frames import (
+    armed,
+    contact_bias,
+    contact_frames,
+    ground_contacts,
+)
 from hexapod.algorithms.contact_response import contact_response
 from hexapod.algorithms.frictional import solve_contacts
 from hexapod.algorithms.saddle import dynamics_terms
@@ -89,7 +94,8 @@ class EventDriven(DormandPrince853):
         self._just = np.zeros(m, bool)  # left the ground or began to slip at the step's start
         self._gap_tol = GAP_TOLERANCE * model.characteristic_length
         frames = contact_frames(model, self.q, self.contacts)
-        touching = np.flatnonzero(frames.gaps <= self._gap_tol)
+        touching = np.flatnonzero((frames.gaps <= self._gap_tol)
+                                  & armed(frames, self.contacts))
         u = (frames.jacobian @ self.v).reshape(m, d)
         speed = ROUND_OFF * max(1.0, np.abs(self.v).max())
         if np.any(u[touching, 0] < -speed):  # an impact at the start
@@ -274,9 +280,11 @@ class EventDriven(DormandPrince853):
             (m, d))
         frames = contact_frames(self.model, q, self.contacts)
         u = (frames.jacobian @ v).reshape(m, d)
+        ready = armed(frames, self.contacts)
         for k, mode in enumerate(self.modes):
             if mode == "open":
-                values[k, 0] = self._gap_value(k, frames.gaps[k], u[k, 0], t - t0, q)
+                values[k, 0] = self._gap_value(k, frames.gaps[k], u[k, 0], t - t0,
+                                               ready[k])
                 continue
             if mode == "stick":  # watched together, by _sticking
                 continue
@@ -285,18 +293,14 @@ class EventDriven(DormandPrince853):
             values[k, 1] = along / (t - t0) if self._just[k] and t > t0 else along
         return values
 
-    def _gap_value(self, k, gap, normal_speed, since, q) -> float:
+    def _gap_value(self, k, gap, normal_speed, since, ready) -> float:
         """An open contact's gap event function: its gap, divided by the time since it left
-        when it left at the step's start (its speed there); positive while it is unarmed."""
-        if not self._armed(k, q):
-            return 1.0
+        when it left at the step's start (its speed there); NaN while it is not armed."""
+        if not ready:
+            return np.nan
         if self._just[k]:
             return gap / since if since > 0 else normal_speed
         return gap
-
-    def _armed(self, k: int, q: np.ndarray) -> bool:
-        """Whether contact ``k`` may touch down (its scene's arming condition)."""
-        return True
 
     def _first_root(self, t0, before, after):
         """The first event of the step ``(t0, t]``: ``(t, (contact, column))`` or None."""
@@ -316,7 +320,7 @@ class EventDriven(DormandPrince853):
                     values = [before[k, 0], *(self._value(interpolant, s, k, 0, t0)
                                               for s in grid[1:-1]), after[k, 0]]
                 for a in range(len(times) - 1):
-                    if values[a] >= 0.0 and values[a + 1] < 0.0:
+                    if values[a] >= 0.0 and values[a + 1] < 0.0:  # (NaN: not armed)
                         root = self._locate(interpolant, k, column, t0, times[a], times[a + 1],
                                             values[a], values[a + 1])
                         if best is None or root < best[0]:
@@ -365,7 +369,9 @@ class EventDriven(DormandPrince853):
         k, column = index
         if self.modes[k] == "open":  # a touch-down, with the contacts touching at once
             frames = contact_frames(self.model, self.q, self.contacts)
-            touching = np.flatnonzero(frames.gaps <= max(self._gap_tol, frames.gaps[k]))
+            closed = np.array([mode != "open" for mode in self.modes])
+            touching = np.flatnonzero((frames.gaps <= max(self._gap_tol, frames.gaps[k]))
+                                      & (armed(frames, self.contacts) | closed))
             self.v = self._impact(t, self.q, self.v, np.union1d(touching, [k]))
         elif column == 0:
             self._mode(k, "open", t)
@@ -451,6 +457,7 @@ class EventDriven(DormandPrince853):
         frames = contact_frames(self.model, q, self.contacts)
         u = (frames.jacobian @ v).reshape(m, d)
         speed = ROUND_OFF * max(1.0, np.abs(v).max())
+        ready = armed(frames, self.contacts)
         for _ in range(2 * m + 1):
             F = self._solve(t, q, v)[2]
             size = MODE_TOLERANCE * max(np.abs(F).max(initial=0.0), np.finfo(float).tiny)
@@ -461,7 +468,8 @@ class EventDriven(DormandPrince853):
                 self._just[pulling[0]] = True
                 continue
             candidates = [k for k, mode in enumerate(self.modes) if mode == "stick" or (
-                mode == "open" and frames.gaps[k] <= self._gap_tol and u[k, 0] <= speed)]
+                mode == "open" and frames.gaps[k] <= self._gap_tol and u[k, 0] <= speed
+                and ready[k])]
             if not candidates:
                 return
             states, accelerations = self._stick_states(t, q, v, candidates)

@@ -41,7 +41,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hexapod.algorithms.contact_frames import contact_frames, ground_contacts
+from hexapod.algorithms.contact_frames import armed, contact_frames, ground_contacts
 from hexapod.algorithms.contact_response import contact_response
 from hexapod.algorithms.frictional import solve_contacts
 from hexapod.algorithms.kinematics import state_split
@@ -100,6 +100,10 @@ class MoreauJean(Integrator):
         self._restitution = np.array([c.contact.restitution for c in self.contacts])
         self._last_impulses = np.zeros((len(self.contacts), d))  # where the sweeps start
         frames = contact_frames(self.model, self.q, self.contacts)
+        self._unconditional = np.array([c.contact.armed_ahead_of is None
+                                        for c in self.contacts], dtype=bool)
+        self._armed = armed(frames, self.contacts) & ((frames.gaps >= 0.0)
+                                                      | self._unconditional)
         closed = frames.gaps <= GAP_TOLERANCE * self.model.characteristic_length
         sliding = np.linalg.norm((frames.jacobian @ self.v).reshape(-1, d)[:, 1:], axis=1) > (
             ROUND_OFF * max(np.abs(self.v).max(), 1.0))
@@ -191,7 +195,13 @@ class MoreauJean(Integrator):
         normal_speed = (frames.jacobian @ v0)[::d]
         free_speed = (G.T @ y)[::d]  # the normal speeds at the step's end without contact
         predicted = frames.gaps + h * ((1 - THETA) * normal_speed + THETA * free_speed)
-        active = np.flatnonzero(predicted <= 0.0)
+        # a contact with an arming condition may touch down ahead of its other contact once
+        # above the ground there (a scuffing swing foot, below it when it passes, is not
+        # pushed out); one closed stays so whatever its condition
+        self._armed = armed(frames, self.contacts) & (
+            self._armed | (frames.gaps > 0.0) | self._unconditional)
+        closed = np.array([state != "open" for state in self.contact_states], dtype=bool)
+        active = np.flatnonzero((predicted <= 0.0) & (self._armed | closed))
         if active.size:
             rows = (active[:, None] * d + np.arange(d)).reshape(-1)
             W = G[:, rows].T @ Y[:, rows]
