@@ -16,7 +16,8 @@ from robots import builtin_model
 import hexapod as hx
 from hexapod.model.law_values import law_breaks
 from hexapod.model.tabulation import tabulated_model
-from hexapod.scene import Harmonic
+from hexapod.scene import Harmonic, JointController
+from hexapod.scene.laws.base import Rate
 from hexapod.scene.laws.table import LawTable
 
 PERIOD = 0.5
@@ -146,3 +147,24 @@ def test_adaptive_steps_end_on_the_touch_downs_and_lift_offs():
     assert result.status == "finished"
     for t in breaks:  # each an accepted step's end, exactly
         assert np.min(np.abs(result.t - t)) == 0.0
+
+
+def test_a_controllers_target_speed_is_the_rate_of_its_targets_table():
+    """A joint controller reads its target's rate as a law of its own (``Rate``): in the
+    tabulated twin it is the rate of the target's table, not the costly law solved again at
+    every step (which made the walking robot's time-stepping spend half its time in the gait's
+    inverse kinematics), and agrees with the exact rate to the table's tolerance."""
+    scene = hx.load_scene("front-leg")
+    driver = next(e for e in scene.elements if getattr(e, "law", None) is not None
+                  and e.law.costly)
+    scene.add(JointController("servo", driver.joint, target=driver.law, kp=1.0))
+    model = hx.assemble(scene)
+    rates = [i for i, law in enumerate(model.laws) if isinstance(law, Rate)]
+    assert len(rates) == 1 and model.laws[rates[0]].law.costly
+    twin, record = tabulated_model(model, 0.0, 1.2, 1e-8)
+    assert not twin.laws[rates[0]].law.costly
+    t = np.random.default_rng(2).uniform(0.0, 1.2, 200)
+    exact = np.array(model.law_values(t))[:2, rates[0]]
+    read = np.array(twin.law_values(t))[:2, rates[0]]
+    scale = np.abs(exact).max(axis=1, keepdims=True)
+    assert (np.abs(read - exact) / scale).max() <= 10 * max(record["error"].values())

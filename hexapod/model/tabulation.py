@@ -27,6 +27,7 @@ import numpy as np
 
 from hexapod.model.law_values import evaluate_together, law_breaks
 from hexapod.model.model import Model
+from hexapod.scene.laws.base import Rate
 from hexapod.scene.laws.table import LawTable
 
 #: The table's tolerance, relative to the run's relative tolerance.
@@ -96,8 +97,15 @@ def _tabulate(model: Model, costly: list[int], start: float, span: float,
     columns = LawTable(times, table, period,
                        law_breaks(laws, start - 1e-9 * span, start + span)).laws()
     replaced = list(model.laws)
+    tabulated = {}
     for i, column in zip(costly, columns, strict=True):
+        tabulated[id(replaced[i])] = column
         replaced[i] = column
+    # the rate of a costly law (a controller's target speed) as the rate of its table: else
+    # each step would solve the costly law again for its rate alone
+    for i, law in enumerate(replaced):
+        if isinstance(law, Rate) and id(law.law) in tabulated:
+            replaced[i] = Rate(tabulated[id(law.law)])
     digest = (hashlib.sha256(f"{model.digest}/laws".encode() + times.tobytes() + table.tobytes())
               .hexdigest() if model.digest else "")
     return model.with_laws(tuple(replaced), digest), record

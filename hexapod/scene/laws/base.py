@@ -204,6 +204,15 @@ class Rate(Law):
         _, fd, fdd = self.law.evaluate(t)
         return fd, fdd, np.zeros_like(np.asarray(fdd, dtype=float))
 
+    def batch_key(self):  # the rates of laws evaluated together (a table's columns): together
+        inner = self.law.batch_key()
+        return None if inner is None else (type(self.law), inner)
+
+    @classmethod
+    def evaluate_batch(cls, laws, t):
+        inner = type(laws[0].law).evaluate_batch([law.law for law in laws], t)
+        return np.stack([inner[1], inner[2], np.zeros_like(inner[2])])
+
     def cycle_time(self):
         return self.law.cycle_time()
 
