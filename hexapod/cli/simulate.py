@@ -160,14 +160,19 @@ def run(args) -> int:
     files = {"results.csv": result.csv_text().encode(), "results.npz": result.npz_bytes(),
              "units.json": units_json({"results.csv": result.column_units()}).encode(),
              "stats.json": (json.dumps(jsonable(stats), indent=2) + "\n").encode()}
-    if result.events is not None:  # a contact scheme's
-        from hexapod.output.contact_figures import contact_figure_builders
+    if result.events is not None or result.tracking is not None:  # contacts, controllers
+        from hexapod.output.contact_figures import (
+            contact_figure_builders,
+            tracking_figure_builders,
+        )
         from hexapod.output.figures import render_figures
 
-        files["events.csv"] = result.events_csv_text().encode()
-        files["units.json"] = units_json({"results.csv": result.column_units(),
-                                          "events.csv": EVENT_COLUMNS}).encode()
-        files.update(render_figures(contact_figure_builders(result)))
+        if result.events is not None:
+            files["events.csv"] = result.events_csv_text().encode()
+            files["units.json"] = units_json({"results.csv": result.column_units(),
+                                              "events.csv": EVENT_COLUMNS}).encode()
+        files.update(render_figures({**contact_figure_builders(result),
+                                     **tracking_figure_builders(result)}))
     write_directory_atomically(out, files)
     print(f"wrote {out}/: {', '.join(files)}")
     drift = ("" if result.energy_drift is None

@@ -167,6 +167,7 @@ class _Assembly:
         self.laws = _Laws()
         self.rows: list[RowInfo] = []
         self.residuals: list[ca.SX] = []
+        self.tracking: list[ca.SX] = []  # each joint controller's coordinate minus its target
         self.geometries: dict[str, JointGeometry] = {}
         self.joint_points: list[np.ndarray] = []  # world joint origins at the initial pose
         self.contacts: list[ContactInfo] = []
@@ -348,7 +349,9 @@ class _Assembly:
         speed = laws.value(rate_of(element.target), f"{name}'",
                            ("force", name, "target-rate", None))[0]
         rate = angle_rate(g)
-        torque = element.kp * -wrapped_angle(g, target) + element.kd * (speed - rate)
+        error = wrapped_angle(g, target)
+        self.tracking.append(error)
+        torque = element.kp * -error + element.kd * (speed - rate)
         if element.feedforward is not None:
             torque = torque + laws.value(element.feedforward, f"{name}/ff",
                                          ("force", name, "feedforward", None))[0]
@@ -380,7 +383,8 @@ class _Assembly:
             Q=inertial_forces(self.bodies, self.v, self.si.gravity, n_v) + builder.total(),
             Q_across=ca.horzcat(*columns) if columns else None,
             potential=gravity_potential(self.bodies, self.q, self.si.gravity)
-            + builder.potential)
+            + builder.potential,
+            tracking=ca.vertcat(*self.tracking) if self.tracking else None)
         # work is done by rheonomic drivers (time laws) and by the non-conservative elements
         working = [d.name for d in drivers if d.law >= 0] + builder.nonconservative
         return Model(name=self.si.name, dimension=self.dim, bodies=self.bodies,

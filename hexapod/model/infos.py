@@ -181,3 +181,4 @@ class Symbolic:
     Q: ca.SX
     Q_across: ca.SX | None = None  # n_v x (joints with force elements across them)
     potential: ca.SX | None = None  # potential energy of gravity and springs (scalar)
+    tracking: ca.SX | None = None  # each joint controller's coordinate minus its target

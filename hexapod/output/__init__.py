@@ -16,6 +16,7 @@ __getattr__, __dir__, __all__ = attach(__name__, {
     "hexapod.output.figures": ["COMPONENT_COLOURS", "effort_figure", "png_bytes",
                                "prepare_drawing", "render_figures", "trajectory_figure",
                                "wrench_figure"],
-    "hexapod.output.contact_figures": ["contact_figure_builders", "pushed_intervals"],
+    "hexapod.output.contact_figures": ["contact_figure_builders", "pushed_intervals",
+                                       "tracking_figure", "tracking_figure_builders"],
     "hexapod._support.files": ["write_atomically", "write_directory_atomically"],
 })

@@ -1,6 +1,7 @@
-"""Figures of a simulation with unilateral contacts: each contact's ground force against time
-with the time the ground pushes it shaded, and the simulated gait diagram (when each contact is
-closed), drawn by the same figure functions as the walking robot's report."""
+"""Figures of a simulation with unilateral contacts and joint controllers: each contact's
+ground force against time with the time the ground pushes it shaded, the simulated gait
+diagram (when each contact is closed; beside a schedule when one is given), drawn by the same
+figure functions as the walking robot's report, and each controller's tracking error."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ import numpy as np
 
 from hexapod.output.figures import gait_diagram_figure, ground_reaction_figure
 from hexapod.simulation.results import SimulationResult
+from hexapod.simulation.tracking import controller_names
 
 
 def pushed_intervals(times: np.ndarray, forces: np.ndarray) -> list[list[tuple[float, float]]]:
@@ -35,7 +37,8 @@ def pushed_intervals(times: np.ndarray, forces: np.ndarray) -> list[list[tuple[f
     return out
 
 
-def contact_figure_builders(result: SimulationResult) -> dict[str, Callable]:
+def contact_figure_builders(result: SimulationResult,
+                            scheduled: list | None = None) -> dict[str, Callable]:
     """``contacts.png`` (each contact's ground force, world axes, in N and in body weights,
     pushed states shaded; an impact shows as the mean force of its step) and ``gait.png``
     (when each contact is pushed), as builders for
@@ -44,6 +47,9 @@ def contact_figure_builders(result: SimulationResult) -> dict[str, Callable]:
     Parameters
     ----------
     result : SimulationResult
+    scheduled : list, optional
+        Per contact, the intervals a schedule puts it on the ground (a walking robot's gait):
+        drawn behind the simulated ones.
 
     Returns
     -------
@@ -65,4 +71,60 @@ def contact_figure_builders(result: SimulationResult) -> dict[str, Callable]:
                 f"{model.name}: the ground's force on each contact ({result.method})"),
             "gait.png": lambda: gait_diagram_figure(
                 names, pushed, start, stop, f"{model.name}: when the ground pushes each "
-                "contact (simulated)")}
+                "contact" + (" (simulated)" if scheduled is None else
+                             ", simulated and scheduled"), scheduled)}
+
+
+def tracking_figure_builders(result: SimulationResult) -> dict[str, Callable]:
+    """``tracking.png``: each joint controller's tracking error against time (mrad; with more
+    than eight controllers the eight with the largest errors named, the others grey), as a
+    builder for :func:`hexapod.output.figures.render_figures`; none without controllers.
+
+    Parameters
+    ----------
+    result : SimulationResult
+
+    Returns
+    -------
+    dict of str to callable
+    """
+    if result.tracking is None or not result.tracking.shape[1]:
+        return {}
+    return {"tracking.png": lambda: tracking_figure(
+        result.t, result.tracking, list(controller_names(result.model)),
+        f"{result.model.name}: joint tracking errors ({result.method})")}
+
+
+def tracking_figure(t: np.ndarray, errors: np.ndarray, names: list[str], title: str):
+    """Tracking errors (N, k) of the controllers ``names`` against time, in mrad.
+
+    Parameters
+    ----------
+    t : ndarray, shape (N,)
+    errors : ndarray, shape (N, k)
+        rad.
+    names : list of str
+    title : str
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    from matplotlib.figure import Figure
+
+    figure = Figure(figsize=(8.0, 4.2))
+    ax = figure.subplots()
+    peaks = np.abs(errors).max(axis=0)
+    named = set(np.argsort(-peaks)[:8].tolist())
+    for k, name in enumerate(names):
+        if k in named:
+            ax.plot(t, 1e3 * errors[:, k], linewidth=1.0, label=f"{name} ({1e3 * peaks[k]:.3g})")
+        else:
+            ax.plot(t, 1e3 * errors[:, k], color="0.7", linewidth=0.6)
+    ax.set_xlabel("t (s)")
+    ax.set_ylabel("joint angle - target (mrad)")
+    ax.grid(True, linewidth=0.4, alpha=0.6)
+    ax.legend(fontsize=7, ncols=2, title="peak |error| (mrad)", title_fontsize=7)
+    ax.set_title(title, fontsize=10)
+    figure.tight_layout()
+    return figure

@@ -548,9 +548,11 @@ def friction_ratio_figure(times: np.ndarray, ratio: np.ndarray, status: np.ndarr
     return figure
 
 
-def gait_diagram_figure(legs: list[str], stance: list, start: float, stop: float, title: str):
+def gait_diagram_figure(legs: list[str], stance: list, start: float, stop: float, title: str,
+                        scheduled: list | None = None):
     """The gait diagram: one row per leg (in ``legs``' order, the first at the top), a black
-    bar over each stance, as in insect gait diagrams."""
+    bar over each stance, as in insect gait diagrams; with ``scheduled`` (intervals per leg),
+    the schedule's stances as wider grey bars behind them."""
     from matplotlib.figure import Figure
 
     width, height = 8.0, 0.45 * len(legs) + 1.3
@@ -560,8 +562,14 @@ def gait_diagram_figure(legs: list[str], stance: list, start: float, stop: float
                            top=1 - 0.45 / height)
     for row, intervals in enumerate(stance):
         y = len(legs) - 1 - row
-        ax.broken_barh([(a, b - a) for a, b in intervals], (y - 0.35, 0.7),
-                       facecolors="black")
+        if scheduled is not None:
+            ax.broken_barh([(a, b - a) for a, b in scheduled[row]], (y - 0.4, 0.8),
+                           facecolors="0.75", label="scheduled" if row == 0 else None)
+        ax.broken_barh([(a, b - a) for a, b in intervals],
+                       (y - 0.2, 0.4) if scheduled is not None else (y - 0.35, 0.7),
+                       facecolors="black", label="simulated" if row == 0 else None)
+    if scheduled is not None:
+        ax.legend(loc="upper right", fontsize=7, ncols=2, framealpha=0.9)
     ax.set_yticks(range(len(legs)), list(reversed(legs)))
     ax.set_ylim(-0.6, len(legs) - 0.4)
     ax.set_xlim(start, stop)

@@ -32,6 +32,7 @@ from hexapod.simulation.integrators import Integrator
 from hexapod.simulation.methods import DEFAULT_ATOL, DEFAULT_RTOL
 from hexapod.simulation.registry import default_method, get_integrator
 from hexapod.simulation.results import SimulationResult
+from hexapod.simulation.tracking import controller_names, tracking_errors
 from hexapod.simulation.watch import Watch
 
 #: steps tried (accepted or rejected) after which a run's pace is measured, then weighed each
@@ -205,6 +206,8 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] | Non
         options=options, t_bound=float(t_end), t_start=float(t0),
         t_reached=float(reached) if grid is not None else None,
         contact_forces=arrays.get("contact_forces"), events=getattr(integrator, "events", None))
+    if controller_names(model):
+        result.tracking = tracking_errors(model, result.t, result.q)
     if forces or (forces is None and model.report_forces):
         _add_wrenches(result)
     return result

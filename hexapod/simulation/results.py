@@ -50,6 +50,7 @@ from hexapod.model.units import (
     VELOCITY_UNITS,
     component,
 )
+from hexapod.simulation.tracking import controller_names
 
 if TYPE_CHECKING:  # the integrators load SciPy: 'hexapod inverse' writes results without them
     from hexapod.simulation.integrators import Counters
@@ -168,6 +169,9 @@ class SimulationResult:
     events : list or None
         With unilateral contacts: their events
         (:class:`~hexapod.simulation.integrators.moreau_jean.ContactEvent`), in time order.
+    tracking : ndarray (N, k) or None
+        With joint controllers: each one's joint angle minus its target (rad), wrapped
+        (:mod:`hexapod.simulation.tracking`).
     """
 
     model: Model
@@ -202,6 +206,7 @@ class SimulationResult:
     t_reached: float | None = None
     contact_forces: np.ndarray | None = None
     events: list | None = None
+    tracking: np.ndarray | None = None
 
     @property
     def success(self) -> bool:
@@ -236,6 +241,10 @@ class SimulationResult:
             for axis in "xyz"[:self.model.dimension]:
                 out[f"GR{axis}:{name}"] = ("N", f"force of the ground on the body at contact "
                                                 f"'{name}', {axis} in world axes")
+        if self.tracking is not None:
+            for name in controller_names(self.model):
+                out[f"err:{name}"] = ("rad", f"tracking error of controller '{name}': its "
+                                             "joint's angle minus its target, wrapped")
         return out
 
     @property
@@ -268,6 +277,8 @@ class SimulationResult:
                 parts += [self.force[:, k], self.torque[:, k]]
         if self.contact_forces is not None:
             parts.append(self.contact_forces.reshape(self.t.size, -1))
+        if self.tracking is not None:
+            parts.append(self.tracking)
         return np.hstack(parts)
 
     def csv_text(self) -> str:
@@ -287,6 +298,9 @@ class SimulationResult:
         if self.contact_forces is not None:
             arrays.update(contact_forces=self.contact_forces,
                           contacts=np.array(self.contact_names, dtype=str))
+        if self.tracking is not None:
+            arrays.update(tracking=self.tracking,
+                          controllers=np.array(controller_names(self.model), dtype=str))
         if self.force is not None:
             arrays.update(force=self.force, torque=self.torque, effort=self.effort,
                           joints=np.array([j.name for j in self.model.joints]),
