@@ -130,9 +130,11 @@ class EffortTable:
 
     All joints are evaluated together (one spline with J columns per piece) and the values at
     the last time asked for are kept: an integrator asks for every law at the same time, one
-    law after the other."""
+    law after the other. With ``periodic``, the efforts of one cycle ``[breaks[0],
+    breaks[-1]]`` repeat (a periodic gait's: its first and last samples then agree)."""
 
-    def __init__(self, times, values, breaks, degree: int = EFFORT_DEGREE):
+    def __init__(self, times, values, breaks, degree: int = EFFORT_DEGREE,
+                 periodic: bool = False):
         from scipy.interpolate import make_interp_spline
 
         times = np.asarray(times, dtype=float).ravel()
@@ -144,6 +146,7 @@ class EffortTable:
             raise ValueError("times must increase and values be finite")
         tol = 1e-9 * max(1.0, float(np.abs(times).max()))
         self.breaks, self.degree, self.columns = breaks, degree, values.shape[1]
+        self.period = float(breaks[-1] - breaks[0]) if periodic else None
         self.pieces = []
         for a, b in zip(breaks[:-1], breaks[1:], strict=True):
             inside = (times >= a - tol) & (times <= b + tol)
@@ -163,6 +166,8 @@ class EffortTable:
     def evaluate(self, t) -> np.ndarray:
         """Values and first and second derivatives, shape ``(3,) + t.shape + (J,)``."""
         t = np.asarray(t, dtype=float)
+        if self.period is not None:  # into the cycle tabulated
+            t = self.breaks[0] + np.mod(t - self.breaks[0], self.period)
         if t.ndim == 0:
             if self._last is None or self._last[0] != float(t):
                 spline = self.pieces[int(self._piece(t))]
@@ -189,9 +194,15 @@ class TabulatedEffort(Law):
         values = self.table.evaluate(t)[..., self.column]
         return values[0], values[1], values[2]
 
-    def breaks(self, start, stop):  # where the splines join
+    def breaks(self, start, stop):  # where the splines join (each cycle's, when periodic)
         inside = self.table.breaks
+        if self.table.period is not None:
+            return cycle_breaks(self.table.period, inside[:-1] / self.table.period, start,
+                                stop)
         return inside[(inside > start) & (inside < stop)]
+
+    def cycle_time(self):
+        return self.table.period
 
 
 # ------------------------------------------------------------------ adaptive sampling

@@ -103,7 +103,7 @@ def _drivers(scene: Scene) -> dict[str, JointDriver]:
 
 
 def replay_scene(scene: Scene, result, *, breaks=None, degree: int = EFFORT_DEGREE,
-                 name: str | None = None) -> Scene:
+                 name: str | None = None, periodic: bool = False) -> Scene:
     """The forward twin of a driven ``scene``: its bodies, joints, contacts and force elements,
     each joint driver replaced by a :class:`hexapod.scene.JointEffort` named ``<driver>/effort``
     whose law (a column of an :class:`EffortTable`) passes through the efforts of ``result`` (an
@@ -120,6 +120,8 @@ def replay_scene(scene: Scene, result, *, breaks=None, degree: int = EFFORT_DEGR
         :func:`adaptive_inverse` include).
     degree : {3, 5}
         Degree of the splines.
+    periodic : bool
+        The samples span one cycle of a periodic gait: the efforts repeat after it.
 
     Raises
     ------
@@ -140,7 +142,7 @@ def replay_scene(scene: Scene, result, *, breaks=None, degree: int = EFFORT_DEGR
     factors = np.array([1.0 / unit if joints[j].effort_unit == "N m" else 1.0
                         for j in drivers])
     table = EffortTable(times, result.effort[:, [columns[j] for j in drivers]] * factors,
-                        breaks, degree)
+                        breaks, degree, periodic)
     law = {j: TabulatedEffort(table, k) for k, j in enumerate(drivers)}
     twin = Scene(name or f"{scene.name}-forward", scene.dimension, scene.length_unit,
                  scene.gravity, scene.characteristic_length, scene.source,
@@ -163,7 +165,7 @@ def replay_scene(scene: Scene, result, *, breaks=None, degree: int = EFFORT_DEGR
 
 
 def grounded_scene(scene: Scene, result, *, kp: float, kd: float, mu: float | None = None,
-                   breaks=None, degree: int = EFFORT_DEGREE) -> Scene:
+                   breaks=None, degree: int = EFFORT_DEGREE, periodic: bool = False) -> Scene:
     """The driven walking ``scene`` on real ground under joint control: its forward twin
     (:func:`replay_scene`, starting at the first sample's state) with each joint's effort
     replaced by a :class:`hexapod.scene.JointController` named ``<driver>/servo`` (target the
@@ -172,9 +174,10 @@ def grounded_scene(scene: Scene, result, *, kp: float, kd: float, mu: float | No
     :class:`hexapod.scene.GroundContact` on the same foot point, against the horizontal plane
     of its footholds, friction ``mu`` (default the scene's ``[ground] mu``), plastic. The feet then
     land and lift off where the controlled motion takes them, not where the schedule says;
-    simulate it with ``moreau-jean``."""
+    simulate it with ``moreau-jean``. ``periodic``: the efforts of ``result`` (one cycle)
+    repeat, for runs of many strides."""
     twin = replay_scene(scene, result, breaks=breaks, degree=degree,
-                        name=f"{scene.name}-on-ground")
+                        name=f"{scene.name}-on-ground", periodic=periodic)
     drivers = _drivers(scene)
     out = Scene(twin.name, twin.dimension, twin.length_unit, twin.gravity,
                 twin.characteristic_length, twin.source, report_forces=twin.report_forces,

@@ -30,7 +30,13 @@ import numpy as np
 import pytest
 
 import hexapod as hx
-from legs.efforts import EffortTable, effort_breaks, lift_off_times, switch_times
+from legs.efforts import (
+    EffortTable,
+    TabulatedEffort,
+    effort_breaks,
+    lift_off_times,
+    switch_times,
+)
 from legs.replay import replay_gait
 from legs.robot import hexapod_scene
 
@@ -62,6 +68,20 @@ def test_effort_table_is_exact_at_the_samples_and_smooth_between_them():
                            atol=1e-15)
     with pytest.raises(ValueError, match="must be sample times"):
         EffortTable(times, f(times), [0.0, 0.305, 0.5])
+
+
+def test_a_periodic_effort_table_repeats_its_cycle_and_its_breaks():
+    """A periodic gait's efforts over one cycle (first and last samples equal) repeat: the
+    same values, rates and accelerations a cycle later, and the breaks in every cycle."""
+    times = np.concatenate([np.linspace(0.0, 0.3, 31), np.linspace(0.3, 0.5, 21)[1:]])
+    values = np.sin(4 * np.pi * times)  # period 0.5
+    table = EffortTable(times, values, [0.0, 0.3, 0.5], periodic=True)
+    t = np.linspace(0.0, 0.5, 77)[:-1]  # (the cycle's end is the next one's start)
+    assert np.allclose(table.evaluate(t + 1.5), table.evaluate(t), rtol=0, atol=1e-9)
+    law = TabulatedEffort(table, 0)
+    assert law.cycle_time() == 0.5
+    assert np.allclose(law.breaks(0.0, 1.2), [0.3, 0.5, 0.8, 1.0])
+    assert EffortTable(times, values, [0.0, 0.3, 0.5]).period is None
 
 
 def test_the_switch_times_follow_the_contact_schedules():

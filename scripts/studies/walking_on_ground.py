@@ -1,4 +1,4 @@
-"""The walking hexapod on real ground under joint control, over one stride (not a test).
+"""The walking hexapod on real ground under joint control, over strides (not a test).
 
 The tripod gait of the free-trunk hexapod (``legs.robot.hexapod_scene(gait, trunk="free")``,
 stride 0.5 s): inverse dynamics at samples chosen until each joint's effort spline is within
@@ -6,13 +6,18 @@ stride 0.5 s): inverse dynamics at samples chosen until each joint's effort spli
 (``legs.replay.grounded_scene``): each joint driven by a controller (target the driver's law,
 feedforward the inverse efforts, gains ``--kp`` and ``--kd``), each foot a unilateral contact
 with the ground (Coulomb friction ``--mu``, plastic impacts) instead of its scheduled rows;
-simulated by Moreau-Jean time-stepping at ``--step``. Printed: each foot's touch-downs and
-lift-offs against its schedule, the impacts with their impulses, the slips, the largest joint
-tracking error (against the drivers' laws), the trunk's position against the prescribed one at
-the end, and the CPU time per simulated second. Nothing is written.
+simulated by Moreau-Jean time-stepping at ``--step`` over ``--strides`` strides (the efforts
+of one stride repeat). Printed: each foot's touch-downs and lift-offs against its schedule
+(the table for one stride; over more, the largest lateness of each), the impacts with their
+impulses, the slips, the largest joint tracking error (the engine's ``err:`` columns, checked
+against an independent measure of the joint angles), the trunk's position against the
+prescribed one at the end, and the CPU time per simulated second. With ``--figures DIR``, the
+simulated gait against the scheduled one (``gait.png``), the ground forces
+(``contacts.png``) and the tracking errors (``tracking.png``) are written there; nothing
+else is written.
 
     python3 scripts/studies/walking_on_ground.py [--gait tripod] [--kp 200] [--kd 2]
-        [--mu 0.8] [--step 1e-3] [--tol 3e-6]
+        [--mu 0.8] [--step 1e-3] [--tol 3e-6] [--strides 1] [--figures DIR]
 """
 
 from __future__ import annotations
@@ -37,18 +42,50 @@ from legs.robot import hexapod_scene  # noqa: E402
 
 def schedule_table(model, result, period: float) -> list[str]:
     """Per foot: the scheduled stances (of the driven ``model``) and the simulated
-    touch-downs and lift-offs (ms)."""
+    touch-downs and lift-offs (ms), over the first stride."""
     lines = [f"{'foot':10} {'scheduled stances (ms)':28} {'touch-downs (ms)':22} lift-offs (ms)"]
     for contact in model.contacts:
         stances = contact.stances(0.0, period)
         times = {kind: [1e3 * e.t for e in result.events
-                        if e.contact == contact.name and e.kind == kind]
+                        if e.contact == contact.name and e.kind == kind and e.t <= period]
                  for kind in ("touch-down", "lift-off")}
         lines.append(f"{contact.name:10} "
                      f"{' '.join(f'{1e3 * a:.0f}-{1e3 * b:.0f}' for a, b in stances):28} "
                      f"{' '.join(f'{x:.0f}' for x in times['touch-down']):22} "
                      f"{' '.join(f'{x:.0f}' for x in times['lift-off'])}")
     return lines
+
+
+def lateness(model, result, t_end: float) -> dict[str, float]:
+    """The largest |simulated - scheduled| time (s) of the touch-downs and of the lift-offs,
+    each scheduled one matched with the foot's nearest simulated event of its kind (a foot
+    that never touches or leaves: infinite)."""
+    worst = {"touch-down": 0.0, "lift-off": 0.0}
+    for contact in model.contacts:
+        simulated = {kind: np.array([e.t for e in result.events
+                                     if e.contact == contact.name and e.kind == kind])
+                     for kind in worst}
+        for start, stop in contact.stances(0.0, t_end):
+            for kind, when in (("touch-down", start), ("lift-off", stop)):
+                if 0.0 < when < t_end:  # not the run's own ends
+                    near = simulated[kind]
+                    gap = np.abs(near - when).min() if near.size else np.inf
+                    worst[kind] = max(worst[kind], float(gap))
+    return worst
+
+
+def write_figures(folder: Path, model, result, t_end: float) -> None:
+    """``gait.png`` (simulated against scheduled), ``contacts.png``, ``tracking.png``."""
+    from hexapod.output.contact_figures import contact_figure_builders, tracking_figure_builders
+    from hexapod.output.figures import render_figures
+
+    scheduled = [contact.stances(0.0, t_end) for contact in model.contacts]
+    figures = render_figures({**contact_figure_builders(result, scheduled),
+                              **tracking_figure_builders(result)})
+    folder.mkdir(parents=True, exist_ok=True)
+    for name, data in figures.items():
+        (folder / name).write_bytes(data)
+    print(f"wrote {', '.join(figures)} in {folder}")
 
 
 def main() -> None:
@@ -59,6 +96,8 @@ def main() -> None:
     parser.add_argument("--mu", type=float, default=0.8)
     parser.add_argument("--step", type=float, default=1e-3, help="s (default 1e-3)")
     parser.add_argument("--tol", type=float, default=EFFORT_TOL)
+    parser.add_argument("--strides", type=int, default=1)
+    parser.add_argument("--figures", type=Path, default=None, help="a folder for the figures")
     args = parser.parse_args()
     period = STRIDE_PERIOD
     scene = hexapod_scene(gait=args.gait, trunk="free", period=period)
@@ -67,15 +106,20 @@ def main() -> None:
     inverse, _ = adaptive_inverse(model, scene, 0.0, period, tol=args.tol)
     print(f"inverse dynamics: {inverse.times.size} samples, "
           f"{time.process_time() - mark:.1f} s CPU")
-    grounded = hx.assemble(grounded_scene(scene, inverse, kp=args.kp, kd=args.kd, mu=args.mu))
+    grounded = hx.assemble(grounded_scene(scene, inverse, kp=args.kp, kd=args.kd, mu=args.mu,
+                                          periodic=True))
+    t_end = args.strides * period
     mark = time.process_time()
-    result = hx.simulate(grounded, period, method="moreau-jean", step=args.step)
+    result = hx.simulate(grounded, t_end, method="moreau-jean", step=args.step)
     cpu = time.process_time() - mark
     print(f"{result.method} at {args.step:g} s: {result.status} {result.message}")
     print(f"CPU {cpu:.1f} s for {result.t[-1]:.3f} s simulated: "
           f"{cpu / result.t[-1]:.1f} s per simulated second "
           f"(load {os.getloadavg()[0]:.1f})")
     print("\n".join(schedule_table(model, result, period)))
+    worst = lateness(model, result, float(result.t[-1]))
+    print(f"over {result.t[-1]:.3f} s: touch-downs within {1e3 * worst['touch-down']:.1f} ms "
+          f"of the schedule, lift-offs within {1e3 * worst['lift-off']:.1f} ms")
     for event in result.events:
         if event.kind in ("impact", "slip-start", "slip-end"):
             print(f"  {1e3 * event.t:7.1f} ms {event.kind:10} {event.contact:10} "
@@ -84,8 +128,11 @@ def main() -> None:
     joints, wanted = prescribed_angles(scene, result.t)
     error = np.abs(wrapped(joint_angles(grounded, result.q, joints) - wanted))
     k, j = np.unravel_index(int(np.argmax(error)), error.shape)
+    engine = float(np.abs(result.tracking).max())
     print(f"largest joint tracking error {error[k, j]:.3g} rad ({joints[j]} at "
-          f"{result.t[k]:.3f} s)")
+          f"{result.t[k]:.3f} s); the engine's err: columns say {engine:.3g} rad")
+    if args.figures is not None:
+        write_figures(args.figures, model, result, float(result.t[-1]))
     trunk = [b.name for b in grounded.bodies].index("trunk")
     sl = grounded.bodies[trunk].q
     print(f"trunk at the end {np.round(result.q[-1][sl][:3], 5)} m, prescribed "
