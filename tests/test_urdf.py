@@ -167,6 +167,46 @@ def test_urdf_round_trip_keeps_the_dynamics(scene, tmp_path):
         assert np.nanmax(np.abs(a - b)) <= 1e-10 * np.nanmax(np.abs(a)), key
 
 
+def test_a_floating_base_is_written_as_the_root_link_and_read_back_free(tmp_path):
+    """The walking robot on real ground (its trunk free, its feet ground contacts, no joint to
+    the ground) is written with the trunk as the root link; read back, the root (it has mass)
+    is a free body again, and every body's centre of mass sits where it did relative to the
+    trunk, with the same masses, to round-off. A second free body cannot be written."""
+    scene = hx.Scene("floating")
+    trunk = hx.scene.SpatialBody("trunk", mass=2.0, inertia=[0.01, 0.02, 0.03],
+                                 position=[0.3, -0.2, 0.5],
+                                 rotation=[[np.cos(0.4), -np.sin(0.4), 0.0],
+                                           [np.sin(0.4), np.cos(0.4), 0.0], [0.0, 0.0, 1.0]])
+    scene.add(trunk)
+    for k, side in enumerate((1.0, -1.0)):
+        leg = hx.scene.SpatialBody(f"leg{k}", mass=0.3, inertia=[1e-3, 1e-3, 2e-4],
+                                   position=[0.3, -0.2 + 0.15 * side, 0.4], com=[0.0, 0.0, 0.0])
+        scene.add(leg)
+        scene.add(hx.scene.Revolute(f"hip{k}", "trunk", f"leg{k}",
+                                    origin=[0.3, -0.2 + 0.1 * side, 0.5], axis=[1.0, 0.0, 0.0]))
+    text = urdf_text(scene)
+    assert "floating base: 'trunk'" in text and '<link name="ground"/>' not in text
+    path = tmp_path / "floating.urdf"
+    path.write_text(text)
+    back = hx.assemble(read_urdf(path))
+    ours = hx.assemble(scene)
+    assert not any(j.parent == GROUND_INDEX for j in back.joints)
+
+    def relative(model):
+        pose = model.body_pose(model.q0, [b.name for b in model.bodies].index("trunk"))
+        return {b.name: (b.mass, pose.rotation.T @ (model.body_pose(model.q0, b.index).position
+                                                      - pose.position))
+                for b in model.bodies}
+    a, b = relative(ours), relative(back)
+    assert set(a) == set(b)
+    for name in a:
+        assert a[name][0] == b[name][0]
+        assert np.allclose(a[name][1], b[name][1], rtol=0, atol=1e-12)
+    scene.add(hx.scene.SpatialBody("loose", mass=1.0, inertia=[1.0, 1.0, 1.0]))
+    with pytest.raises(hx.ModelError, match="free bodies cannot be written"):
+        urdf_text(scene)
+
+
 # ------------------------------------------------------------------ bad input
 
 BAD_URDF = {

@@ -336,8 +336,9 @@ def _rpy(R: np.ndarray) -> str:
 
 def urdf_text(scene: Scene) -> str:
     """The URDF of a spatial tree of joints URDF has (revolute, prismatic and fixed: the types
-    with ``urdf_types``) hanging from the ground; each link frame is its body's joint frame
-    (URDF's rule), at the initial pose.
+    with ``urdf_types``) hanging from the ground, or from one free body (a floating base, the
+    tree's root link: a walking robot's trunk); each link frame is its body's joint frame
+    (URDF's rule; the root's, its reference frame), at the initial pose.
 
     Parameters
     ----------
@@ -369,17 +370,27 @@ def urdf_text(scene: Scene) -> str:
                                     "the ground (a loop, or the ground as a child)"))
         parent_joint[joint.child] = joint
     missing = [b for b in si.bodies if b not in parent_joint]
-    if missing:
-        problems.append(Problem("scene", "free bodies cannot be written: " + ", ".join(missing)))
+    grounded = any(j.parent == GROUND for j in si.joints.values())
+    floating = missing[0] if len(missing) == 1 and not grounded else None
+    if missing and floating is None:
+        problems.append(Problem("scene", "free bodies cannot be written (one may, as the root "
+                                "of a tree no joint hangs from the ground): "
+                                + ", ".join(missing)))
     if problems:
         raise ModelError(f"scene '{scene.name}'", problems)
     link_frame = {GROUND: Placement.identity()}  # world pose of every link frame
+    if floating is not None:
+        link_frame[floating] = si.pose(floating)
     for body, joint in parent_joint.items():
         link_frame[body] = si.pose(body) @ si.joint_frames(joint)[1]
-    root = "ground"
+    root = "ground" if floating is None else floating
     lines = ['<?xml version="1.0"?>', f'<robot name="{si.name}">',
-             f"  <!-- written by hexapod; gravity of the scene: {_xyz(si.gravity)} m/s^2 -->",
-             f'  <link name="{root}"/>']
+             f"  <!-- written by hexapod; gravity of the scene: {_xyz(si.gravity)} m/s^2 -->"]
+    if floating is None:
+        lines.append(f'  <link name="{root}"/>')
+    else:
+        lines.append(f"  <!-- floating base: '{floating}', at {_xyz(link_frame[floating].position)}"
+                     f" m, rpy {_rpy(link_frame[floating].rotation)} in the world -->")
     for name, body in si.bodies.items():
         frame = link_frame[name]
         centre = frame.inverse().transform_point(si.pose(name).transform_point(body.com))
