@@ -112,7 +112,7 @@ def tracking_figure(t: np.ndarray, errors: np.ndarray, names: list[str], title: 
     """
     from matplotlib.figure import Figure
 
-    figure = Figure(figsize=(8.0, 4.2))
+    figure = Figure(figsize=(9.5, 4.2))
     ax = figure.subplots()
     peaks = np.abs(errors).max(axis=0)
     named = set(np.argsort(-peaks)[:8].tolist())
@@ -124,7 +124,8 @@ def tracking_figure(t: np.ndarray, errors: np.ndarray, names: list[str], title: 
     ax.set_xlabel("t (s)")
     ax.set_ylabel("joint angle - target (mrad)")
     ax.grid(True, linewidth=0.4, alpha=0.6)
-    ax.legend(fontsize=7, ncols=2, title="peak |error| (mrad)", title_fontsize=7)
+    ax.legend(fontsize=7, title="peak |error| (mrad)", title_fontsize=7, loc="upper left",
+              bbox_to_anchor=(1.01, 1.0), frameon=False)
     ax.set_title(title, fontsize=10)
     figure.tight_layout()
     return figure

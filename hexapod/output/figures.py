@@ -568,13 +568,14 @@ def gait_diagram_figure(legs: list[str], stance: list, start: float, stop: float
         ax.broken_barh([(a, b - a) for a, b in intervals],
                        (y - 0.2, 0.4) if scheduled is not None else (y - 0.35, 0.7),
                        facecolors="black", label="simulated" if row == 0 else None)
-    if scheduled is not None:
-        ax.legend(loc="upper right", fontsize=7, ncols=2, framealpha=0.9)
+    if scheduled is not None:  # above the axes, beside the title
+        ax.legend(loc="lower right", bbox_to_anchor=(1.0, 1.0), fontsize=7, ncols=2,
+                  frameon=False, borderaxespad=0.1)
     ax.set_yticks(range(len(legs)), list(reversed(legs)))
     ax.set_ylim(-0.6, len(legs) - 0.4)
     ax.set_xlim(start, stop)
     ax.set_xlabel("t (s)")
     ax.grid(True, axis="x", linewidth=0.4, alpha=0.6)
-    ax.set_title(title, fontsize=10, y=1.0)
+    ax.set_title(title, fontsize=10, y=1.0, loc="center" if scheduled is None else "left")
     few_ticks(ax, "x")
     return figure
