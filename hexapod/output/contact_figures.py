@@ -6,12 +6,16 @@ figure functions as the walking robot's report, and each controller's tracking e
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from hexapod.output.figures import gait_diagram_figure, ground_reaction_figure
 from hexapod.simulation.results import SimulationResult
 from hexapod.simulation.tracking import controller_names
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 
 def pushed_intervals(times: np.ndarray, forces: np.ndarray) -> list[list[tuple[float, float]]]:
@@ -95,7 +99,8 @@ def tracking_figure_builders(result: SimulationResult) -> dict[str, Callable]:
         f"{result.model.name}: joint tracking errors ({result.method})")}
 
 
-def tracking_figure(t: np.ndarray, errors: np.ndarray, names: list[str], title: str):
+def tracking_figure(t: np.ndarray, errors: np.ndarray, names: list[str],
+                    title: str) -> Figure:
     """Tracking errors (N, k) of the controllers ``names`` against time, in mrad.
 
     Parameters

@@ -1,5 +1,6 @@
 """Forward simulation (layer 4): the integrator registry and contract, compiled kernels, the
-time loop, its results and the diagnostics of a state."""
+time loop, its results (the joint controllers' tracking errors among them) and the diagnostics
+of a state."""
 
 from hexapod._support.lazy import attach
 
@@ -10,4 +11,5 @@ __getattr__, __dir__, __all__ = attach(__name__, {
                                     "INTEGRATORS", "get_integrator", "register"],
     "hexapod.simulation.integrators": ["Integrator"],
     "hexapod.simulation.diagnostics": ["Diagnosis", "diagnose"],
+    "hexapod.simulation.tracking": ["controller_names", "tracking_errors"],
 })

@@ -76,12 +76,9 @@ def lateness(model, result, t_end: float) -> dict[str, float]:
 
 def write_figures(folder: Path, model, result, t_end: float) -> None:
     """``gait.png`` (simulated against scheduled), ``contacts.png``, ``tracking.png``."""
-    from hexapod.output.contact_figures import contact_figure_builders, tracking_figure_builders
-    from hexapod.output.figures import render_figures
-
     scheduled = [contact.stances(0.0, t_end) for contact in model.contacts]
-    figures = render_figures({**contact_figure_builders(result, scheduled),
-                              **tracking_figure_builders(result)})
+    figures = hx.output.render_figures({**hx.output.contact_figure_builders(result, scheduled),
+                                        **hx.output.tracking_figure_builders(result)})
     folder.mkdir(parents=True, exist_ok=True)
     for name, data in figures.items():
         (folder / name).write_bytes(data)
