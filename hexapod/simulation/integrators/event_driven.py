@@ -100,11 +100,14 @@ class EventDriven(DormandPrince853):
         speed = ROUND_OFF * max(1.0, np.abs(self.v).max())
         if np.any(u[touching, 0] < -speed):  # an impact at the start
             self.v = self._impact(self.t, self.q, self.v, touching)
-        for k in touching:  # the state the run starts from (not events)
+        # the state the run starts from (not events); a contact sliding slower than the
+        # modes' tolerance (a foot leaving the ground at zero speed, to round-off) sticks
+        resting = MODE_TOLERANCE * max(1.0, np.abs(self.v).max())
+        for k in touching:
             sliding = np.linalg.norm(u[k, 1:])
             if self.modes[k] == "open" and u[k, 0] <= speed:
-                self.modes[k] = "slip" if sliding > speed else "stick"
-                if sliding > speed:
+                self.modes[k] = "slip" if sliding > resting else "stick"
+                if sliding > resting:
                     self._direction[k] = u[k, 1:] / sliding
         try:
             self._settle(self.t, self.q, self.v)  # what changes at once (events)
