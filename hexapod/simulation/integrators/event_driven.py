@@ -186,7 +186,16 @@ class EventDriven(DormandPrince853):
         return self._direction[k]
 
     def _rates(self, t, q, v, alpha=0.0):
-        return self.model.call("qdot", self.data, q=q, v=v), self._solve(t, q, v)[0]
+        """The rates at a stage; a stage that blew up, or whose contact problem has no
+        solution, gives NaN: the step is rejected and shortened (a stiff controller makes a
+        long step's stages blow up), and its cause is kept for the message should the step
+        fall to nothing."""
+        if np.all(np.isfinite(q)) and np.all(np.isfinite(v)):
+            try:
+                return self.model.call("qdot", self.data, q=q, v=v), self._solve(t, q, v)[0]
+            except (HexapodError, np.linalg.LinAlgError) as error:
+                self._stage_error = f"{error}"
+        return np.full(q.size, np.nan), np.full(v.size, np.nan)
 
     def _stick_states(self, t, q, v, candidates) -> tuple:
         """What the ``candidates`` (sticking, or open at zero gap and speed) do at a state:
@@ -202,7 +211,15 @@ class EventDriven(DormandPrince853):
         solution = solve_contacts(W[np.ix_(rows, rows)], accelerations[rows],
                                   self._mu[candidates], np.zeros(len(candidates)),
                                   tuple(self.contact_names[k] for k in candidates))
-        return solution.states, solution.velocities
+        # a slip, or a leaving, slower than the modes' tolerance of the accelerations is noise
+        # on a contact that carries nothing (a foot at the instant it is unloaded): it sticks
+        tol = MODE_TOLERANCE * max(float(np.linalg.norm(self.model.gravity)),
+                                   float(np.abs(accelerations).max(initial=0.0)))
+        a = solution.velocities
+        states = tuple("stick" if (state == "slip" and np.linalg.norm(a[j, 1:]) <= tol)
+                       or (state == "open" and a[j, 0] <= tol) else state
+                       for j, state in enumerate(solution.states))
+        return states, a
 
     def multipliers(self, t, q, v):
         return self._solve(t, q, v)[1]
@@ -216,7 +233,14 @@ class EventDriven(DormandPrince853):
         t0 = self.t
         self._follow_slips()
         before = self._watch(t0, self.q, self.v, t0)
-        super()._step()
+        self._stage_error = ""
+        try:
+            super()._step()
+        except IntegrationError as error:
+            if not self._stage_error:
+                raise
+            raise IntegrationError(f"{error}; the last stage tried: {self._stage_error}") \
+                from None
         self.q, self.v = self._onto_contacts(self.t, self.q, self.v)
         after = self._watch(self.t, self.q, self.v, t0)
         fired = self._first_root(t0, before, after)
