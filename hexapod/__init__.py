@@ -57,6 +57,7 @@ __getattr__, __dir__, __all__ = attach(__name__, {
                                    "wrenches_from_multipliers"],
     "hexapod.algorithms.inverse": ["InverseResult", "inverse_dynamics"],
     "hexapod.algorithms.balance": ["BodyBalance", "body_balance"],
+    "hexapod.algorithms.joint_inertia": ["reflected_inertias"],
     "hexapod.algorithms.ground": ["ground_reactions"],
     "hexapod.algorithms.topology": ["BodyJointGraph", "Mobility", "VectorNetwork",
                                     "body_joint_graph", "mobility", "vector_network"],

@@ -164,13 +164,25 @@ def replay_scene(scene: Scene, result, *, breaks=None, degree: int = EFFORT_DEGR
     return twin
 
 
-def grounded_scene(scene: Scene, result, *, kp: float, kd: float, mu: float | None = None,
+def critical_gains(model, q: np.ndarray, bandwidth: float) -> tuple[dict, dict]:
+    """Gains by the rule "critically damped on each joint's reflected inertia": ``kp = I w^2``
+    and ``kd = 2 I w`` at ``w = 2 pi bandwidth`` (Hz), ``I`` the joint's reflected inertia at
+    the positions ``q`` (:func:`hexapod.reflected_inertias`, the feet in the air): each joint
+    alone would follow a step of its target as ``1 - (1 + w t) e^(-w t)``. Returns ``(kp,
+    kd)``, each a dict of joint name to N m/rad and N m s/rad (SI)."""
+    w = 2 * np.pi * float(bandwidth)
+    inertia = hx.reflected_inertias(model, q)
+    return ({j: i * w**2 for j, i in inertia.items()}, {j: 2 * i * w for j, i in inertia.items()})
+
+
+def grounded_scene(scene: Scene, result, *, kp, kd, mu: float | None = None,
                    breaks=None, degree: int = EFFORT_DEGREE, periodic: bool = False) -> Scene:
     """The driven walking ``scene`` on real ground under joint control: its forward twin
     (:func:`replay_scene`, starting at the first sample's state) with each joint's effort
     replaced by a :class:`hexapod.scene.JointController` named ``<driver>/servo`` (target the
     driver's law, feedforward the efforts of ``result``, gains ``kp`` (N m/rad) and ``kd``
-    (N m s/rad)), and each foot's scheduled contact by a
+    (N m s/rad): one number for every joint, or a dict by joint name, e.g.
+    :func:`critical_gains`), and each foot's scheduled contact by a
     :class:`hexapod.scene.GroundContact` on the same foot point, against the horizontal plane
     of its footholds, friction ``mu`` (default the scene's ``[ground] mu``), plastic. The feet then
     land and lift off where the controlled motion takes them, not where the schedule says;
@@ -186,8 +198,9 @@ def grounded_scene(scene: Scene, result, *, kp: float, kd: float, mu: float | No
     for element in twin.elements:
         if isinstance(element, JointEffort):
             driver = drivers[element.joint]
+            p, d = ((g[element.joint] if isinstance(g, dict) else g) for g in (kp, kd))
             out.add(JointController(f"{driver.name}/servo", element.joint, target=driver.law,
-                                    kp=kp * gain, kd=kd * gain, feedforward=element.law))
+                                    kp=p * gain, kd=d * gain, feedforward=element.law))
         elif isinstance(element, Contact):
             out.add(GroundContact(element.name, element.child,  # the plane of its footholds
                                   point=element.child_frame.position,

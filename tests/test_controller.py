@@ -5,6 +5,8 @@ torque-speed line, ``w(t) = w0 (1 - e^(-T t / (I w0)))``."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -154,3 +156,21 @@ def test_the_contact_scheme_takes_a_stiff_controller_implicitly(kp):
             assert abs(angle(result)[-1] - 0.5) < 1e-12
     if kp < 1e3:
         assert errors[1] < 1e-5 and 1.6 < errors[0] / errors[1] < 2.4
+
+
+def test_reflected_inertias_are_the_closed_forms_and_refuse_a_loop(tmp_path):
+    """The rod about its hinge: ``m L^2 / 3``. The planar double pendulum (upper rod 1 kg,
+    1 m; lower 0.5 kg, 0.8 m, hanging from the tip): the shoulder sees both rods,
+    ``1/12 + 1 (0.5)^2 + 0.5 (0.8)^2 / 12 + 0.5 |(1, -0.4)|^2``, the elbow the lower rod about
+    its end, ``0.5 (0.8)^2 / 3``. A joint of a closed loop (the spatial four-bar) has none."""
+    assert hexapod.reflected_inertias(rod(tmp_path, "target = 0.0\n"),
+                                      rod(tmp_path, "target = 0.0\n").q0) == pytest.approx(
+        {"hinge": I_O}, rel=1e-12)
+    scenes = Path(__file__).resolve().parents[1] / "data" / "scenes"
+    pendulum = hexapod.assemble(hexapod.load_scene(scenes / "double_pendulum_planar.toml"))
+    inertia = hexapod.reflected_inertias(pendulum, pendulum.q0)
+    shoulder = 1 / 12 + 0.25 + 0.5 * 0.64 / 12 + 0.5 * (1.0 + 0.16)
+    assert inertia == pytest.approx({"shoulder": shoulder, "elbow": 0.5 * 0.64 / 3}, rel=1e-12)
+    four_bar = hexapod.assemble(hexapod.load_scene(scenes / "four_bar_3d.toml"))
+    with pytest.raises(hexapod.HexapodError, match="closes a loop"):
+        hexapod.reflected_inertias(four_bar, four_bar.q0)

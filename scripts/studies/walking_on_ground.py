@@ -11,13 +11,15 @@ of one stride repeat). Printed: each foot's touch-downs and lift-offs against it
 (the table for one stride; over more, the largest lateness of each), the impacts with their
 impulses, the slips, the largest joint tracking error (the engine's ``err:`` columns, checked
 against an independent measure of the joint angles), the trunk's position against the
-prescribed one at the end, and the CPU time per simulated second. With ``--figures DIR``, the
+prescribed one at the end, the CPU time per simulated second, and the feet that slip inside
+a stance beside those the inverse dynamics marks ``slip`` at ``--mu`` (its friction demand
+``|F_t| / F_n`` above it). With ``--figures DIR``, the
 simulated gait against the scheduled one (``gait.png``), the ground forces
 (``contacts.png``) and the tracking errors (``tracking.png``) are written there; nothing
 else is written.
 
     python3 scripts/studies/walking_on_ground.py [--gait tripod] [--kp 200] [--kd 2]
-        [--mu 0.8] [--step 1e-3] [--tol 3e-6] [--strides 1] [--figures DIR]
+        [--bandwidth HZ] [--mu 0.8] [--step 1e-3] [--tol 3e-6] [--strides 1] [--figures DIR]
 """
 
 from __future__ import annotations
@@ -36,7 +38,13 @@ import numpy as np  # noqa: E402
 import hexapod as hx  # noqa: E402
 from legs.cockroach import STRIDE_PERIOD  # noqa: E402
 from legs.efforts import EFFORT_TOL, adaptive_inverse  # noqa: E402
-from legs.replay import grounded_scene, joint_angles, prescribed_angles, wrapped  # noqa: E402
+from legs.replay import (  # noqa: E402
+    critical_gains,
+    grounded_scene,
+    joint_angles,
+    prescribed_angles,
+    wrapped,
+)
 from legs.robot import hexapod_scene  # noqa: E402
 
 
@@ -74,6 +82,35 @@ def lateness(model, result, t_end: float) -> dict[str, float]:
     return worst
 
 
+def slips(model, inverse, result, mu: float, margin: float = 5e-3) -> list[str]:
+    """The inverse dynamics' peak friction demand ``|F_t| / F_n`` per foot (over the samples
+    where it carries more than a thousandth of the weight), the feet it marks ``slip`` at
+    ``mu`` (a demand above it), and the feet that slip in the simulation while the schedule
+    has them in stance (a slip-start more than ``margin`` s inside a stance: not the instants
+    a foot is unloaded at touch-down and lift-off)."""
+    force = np.asarray(inverse.ground_force, dtype=float)
+    weight = float(model.total_mass * np.linalg.norm(model.gravity))
+    loaded = np.linalg.norm(force, axis=-1) > 1e-3 * weight
+    demand = np.where(loaded, np.hypot(force[..., 0], force[..., 1])
+                      / np.maximum(force[..., 2], 1e-300), 0.0)
+    names = [c.name for c in model.contacts]
+    peaks = demand.max(axis=0)
+    period = float(inverse.times[-1] - inverse.times[0])
+    slipped = set()
+    for event in result.events:
+        if event.kind != "slip-start" or event.contact not in names:
+            continue
+        contact = model.contacts[names.index(event.contact)]
+        cycle = event.t % period
+        if any(a + margin < cycle < b - margin for a, b in contact.stances(0.0, period)):
+            slipped.add(event.contact)
+    marked = [n for n, p in zip(names, peaks, strict=True) if p > mu]
+    return ["inverse dynamics, peak |F_t| / F_n per foot: "
+            + ", ".join(f"{n} {p:.3f}" for n, p in zip(names, peaks, strict=True)),
+            f"at mu = {mu:g} it marks slip: {', '.join(marked) or 'none'}; the simulation's "
+            f"feet slipping inside a stance: {', '.join(sorted(slipped)) or 'none'}"]
+
+
 def write_figures(folder: Path, model, result, t_end: float) -> None:
     """``gait.png`` (simulated against scheduled), ``contacts.png``, ``tracking.png``."""
     scheduled = [contact.stances(0.0, t_end) for contact in model.contacts]
@@ -93,6 +130,9 @@ def main() -> None:
     parser.add_argument("--mu", type=float, default=0.8)
     parser.add_argument("--step", type=float, default=1e-3, help="s (default 1e-3)")
     parser.add_argument("--tol", type=float, default=EFFORT_TOL)
+    parser.add_argument("--bandwidth", type=float, default=None,
+                        help="Hz: gains critically damped on each joint's reflected inertia "
+                             "at this bandwidth, instead of --kp and --kd")
     parser.add_argument("--strides", type=int, default=1)
     parser.add_argument("--figures", type=Path, default=None, help="a folder for the figures")
     args = parser.parse_args()
@@ -103,7 +143,13 @@ def main() -> None:
     inverse, _ = adaptive_inverse(model, scene, 0.0, period, tol=args.tol)
     print(f"inverse dynamics: {inverse.times.size} samples, "
           f"{time.process_time() - mark:.1f} s CPU")
-    grounded = hx.assemble(grounded_scene(scene, inverse, kp=args.kp, kd=args.kd, mu=args.mu,
+    kp, kd = (args.kp, args.kd) if args.bandwidth is None else critical_gains(
+        model, inverse.q[0], args.bandwidth)
+    if args.bandwidth is not None:
+        print(f"gains at {args.bandwidth:g} Hz: kp {min(kp.values()):.3g} to "
+              f"{max(kp.values()):.3g} N m/rad, kd {min(kd.values()):.3g} to "
+              f"{max(kd.values()):.3g} N m s/rad")
+    grounded = hx.assemble(grounded_scene(scene, inverse, kp=kp, kd=kd, mu=args.mu,
                                           periodic=True))
     t_end = args.strides * period
     mark = time.process_time()
@@ -114,6 +160,7 @@ def main() -> None:
           f"{cpu / result.t[-1]:.1f} s per simulated second "
           f"(load {os.getloadavg()[0]:.1f})")
     print("\n".join(schedule_table(model, result, period)))
+    print("\n".join(slips(model, inverse, result, args.mu)))
     worst = lateness(model, result, float(result.t[-1]))
     print(f"over {result.t[-1]:.3f} s: touch-downs within {1e3 * worst['touch-down']:.1f} ms "
           f"of the schedule, lift-offs within {1e3 * worst['lift-off']:.1f} ms")
