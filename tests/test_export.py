@@ -259,3 +259,28 @@ def test_a_missing_scene_mesh_names_the_scene_the_body_and_the_file(tmp_path, ca
     assert code == 1 and not (tmp_path / "vtk").exists()
     assert str(scene_file) in err and "body 'rod'" in err and "gone.stl" in err
     assert len(err.strip().splitlines()) == 1
+
+
+def test_a_contact_schemes_run_exports_its_contact_forces_at_the_touching_points(tmp_path):
+    """The block sliding down its incline (four corners, Moreau-Jean): each instant's
+    ``contacts_NNNN.vtu`` has a vertex per corner on the incline (gap zero: ``n . p = 0``), the
+    force the run saved there (pushing: ``closed`` 1, the incline's normal part equal to the
+    weight's share across the slope in all), indexed by ``contacts.csv``."""
+    scene = ROOT / "data" / "scenes" / "sliding-block.toml"
+    assert main(["simulate", str(scene), "--t-end", "0.02", "--step", "1e-3", "--out",
+                 str(tmp_path / "run")]) == 0
+    assert main(["export", str(tmp_path / "run"), "--vtk", str(tmp_path / "vtk")]) == 0
+    with np.load(tmp_path / "run" / "results.npz") as saved:
+        t, forces = saved["t"], saved["contact_forces"]
+    instants = read_pvd(tmp_path / "vtk" / "contacts.pvd")
+    assert [time for time, _ in instants] == pytest.approx(list(t))
+    normal = np.array([0.5, 0.0, np.sqrt(3) / 2])
+    for k, (_, name) in enumerate(instants[1:], start=1):
+        mesh = meshio.read(tmp_path / "vtk" / name)
+        assert np.array_equal(mesh.point_data["ground_force"], forces[k])
+        assert np.all(mesh.point_data["closed"] == 1)
+        assert np.abs(mesh.points @ normal).max() < 1e-12
+        assert mesh.point_data["ground_force"].sum(axis=0) @ normal == pytest.approx(
+            9.81 * np.sqrt(3) / 2, rel=1e-9)
+    index = (tmp_path / "vtk" / "contacts.csv").read_text().splitlines()
+    assert index[0] == "contact,name,body" and index[1] == "0,corner-1,block"

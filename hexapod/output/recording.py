@@ -45,6 +45,8 @@ class Recording:
         The CSV rows of a report.
     frame : str
         Axes of a report's wrenches, ``"joint"`` or ``"world"``.
+    contact_forces : ndarray (N, m, d) or None
+        A contact scheme's run: the ground's force at each unilateral contact, world axes.
     """
 
     kind: str
@@ -59,6 +61,7 @@ class Recording:
     columns: list[str] | None = None
     table: np.ndarray | None = None
     frame: str = "joint"
+    contact_forces: np.ndarray | None = None
 
 
 def read_recording(directory: str | Path, weigh=None) -> Recording:
@@ -133,6 +136,11 @@ def _check_shapes(path: Path, headers: dict) -> None:
                 or shape[0] != n:
             raise InputFileError(f"{path}: array '{key}' has shape {shape} "
                                  f"({dtype}), not one row per saved time")
+    if "contact_forces" in headers:  # a contact scheme's: (N, m, d)
+        shape, dtype = headers["contact_forces"]
+        if dtype.kind not in "fi" or len(shape) != 3 or shape[0] != n:
+            raise InputFileError(f"{path}: array 'contact_forces' has shape {shape} "
+                                 f"({dtype}), not one row of contacts per saved time")
 
 
 def _read_simulation(directory: Path, weigh) -> Recording:
@@ -151,8 +159,8 @@ def _read_simulation(directory: Path, weigh) -> Recording:
         raise InputFileError(f"{path}: cannot read the file ({error})") from None
     t = np.asarray(arrays["t"])
     n = t.shape[0]
-    for key in ("t", "q", "v", "lam"):
-        array = arrays[key]
+    for key in ("t", "q", "v", "lam", "contact_forces"):
+        array = arrays.get(key, np.zeros(0))
         if not np.all(np.isfinite(array)):
             raise InputFileError(f"{path}: array '{key}' holds non-finite numbers")
     if n == 0:
@@ -171,7 +179,9 @@ def _read_simulation(directory: Path, weigh) -> Recording:
     return Recording("simulation", directory, scene, said_by, t.astype(float),
                      q=arrays["q"].astype(float), v=arrays["v"].astype(float),
                      lam=arrays["lam"].astype(float),
-                     coordinates=[str(c) for c in arrays["coordinates"]])
+                     coordinates=[str(c) for c in arrays["coordinates"]],
+                     contact_forces=(arrays["contact_forces"].astype(float)
+                                     if "contact_forces" in arrays else None))
 
 
 _SCENE_LINE = re.compile(r"^Scene `([^`]*)`", re.M)

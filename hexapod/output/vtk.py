@@ -18,6 +18,10 @@ scene's model, :func:`vtk_files` turns it into one ``bodies_NNNN.vtu`` and one
   child about the joint origin, world axes), ``force_joint_frame`` and ``moment_joint_frame``
   (the same in the child's joint frame, the report convention) and ``effort`` (NaN for joints
   without an axis).
+- **contacts** (a contact scheme's run, a scene with ``ground-contact`` elements): one vertex
+  per contact at its touching point (world frame), with point data ``contact`` (the index in
+  ``contacts.csv``), ``ground_force`` (the ground's force on the body there, world axes, N, as
+  the run saved it) and ``closed`` (1 where the ground pushes).
 - **feet** (a scene with foot contacts, a walking robot): one vertex per foot at its point
   (world frame), with point data ``foot`` (the index in ``feet.csv``), ``ground_force`` (the
   ground's force on the foot, world axes, N; zero in swing) and ``stance`` (1 in stance, 0 in
@@ -46,6 +50,7 @@ import numpy as np
 
 from hexapod._support.files import check_input
 from hexapod._support.limits import parse_size, size_text
+from hexapod.algorithms.contact_frames import contact_frames, ground_contacts
 from hexapod.algorithms.ground import ground_reactions
 from hexapod.algorithms.kinematics import assemble_positions, body_poses
 from hexapod.algorithms.liaison import joint_origin, wrenches_from_multipliers
@@ -75,6 +80,7 @@ class Frames:
     moment_joint: np.ndarray
     effort: np.ndarray  # (N, J)
     ground_force: np.ndarray | None = None  # (N, C, 3) world axes, per foot contact
+    contact_force: np.ndarray | None = None  # (N, m, 3) world axes, per unilateral contact
 
 
 def frames(model: Model, recording: Recording) -> Frames:
@@ -140,8 +146,16 @@ def frames(model: Model, recording: Recording) -> Frames:
                 force_joint[k, j], moment_joint[k, j] = R.T @ force[k, j], R.T @ moment[k, j]
             else:
                 force[k, j], moment[k, j] = R @ force_joint[k, j], R @ moment_joint[k, j]
+    touching = None
+    if recording.contact_forces is not None:
+        touching = recording.contact_forces.reshape(n, -1, model.dimension)
+        if touching.shape[1] != len(ground_contacts(model)):
+            raise InputFileError(f"{recording.directory / 'results.npz'}: its contact forces "
+                                 f"are not those of scene '{model.name}'")
+        touching = np.concatenate([touching, np.zeros((n, touching.shape[1],
+                                                       3 - model.dimension))], axis=2)
     return Frames(recording.t, q, force, moment, force_joint, moment_joint, effort,
-                  ground if model.contacts else None)
+                  ground if model.contacts else None, touching)
 
 
 # ------------------------------------------------------------------ shapes in the body frames
@@ -275,7 +289,9 @@ def vtk_files(model: Model, frames: Frames, meshes: dict | None = None,
     saved instant (every ``every``-th, and the last), ``bodies.pvd`` and ``joints.pvd`` (no
     joint files for a scene without joints), and the index files ``bodies.csv`` and
     ``joints.csv``; with foot contacts also ``feet_NNNN.vtu``, ``feet.pvd`` and ``feet.csv``
-    (the ground's force on each foot). ``meshes``: meshio Meshes by body name, drawn
+    (the ground's force on each foot); a contact scheme's run also ``contacts_NNNN.vtu``,
+    ``contacts.pvd`` and ``contacts.csv`` (the ground's force at each unilateral contact).
+    ``meshes``: meshio Meshes by body name, drawn
     instead of the generated solids."""
     try:
         import meshio
@@ -294,7 +310,7 @@ def vtk_files(model: Model, frames: Frames, meshes: dict | None = None,
     digits = max(4, len(str(n - 1)))
     position, rotation = body_poses(model, frames.q)
     files: dict[str, bytes] = {}
-    bodies_pvd, joints_pvd, feet_pvd = [], [], []
+    bodies_pvd, joints_pvd, feet_pvd, contacts_pvd = [], [], [], []
     with tempfile.TemporaryDirectory(prefix="hexapod-export-") as scratch:
         scratch = Path(scratch)
         for k in chosen:
@@ -312,6 +328,10 @@ def vtk_files(model: Model, frames: Frames, meshes: dict | None = None,
             name = f"bodies_{k:0{digits}d}.vtu"
             files[name] = _vtu_bytes(bodies, scratch)
             bodies_pvd.append((float(frames.t[k]), name))
+            if frames.contact_force is not None and frames.contact_force.shape[1]:
+                name = f"contacts_{k:0{digits}d}.vtu"
+                files[name] = _vtu_bytes(_contacts_mesh(model, frames, k), scratch)
+                contacts_pvd.append((float(frames.t[k]), name))
             J = len(model.joints)
             if not J:  # nothing to draw (and meshio cannot read an empty VTU back)
                 continue
@@ -339,6 +359,11 @@ def vtk_files(model: Model, frames: Frames, meshes: dict | None = None,
         files["feet.csv"] = _csv(["foot", "contact", "leg"],
                                  [[c, contact.name, leg_name(contact.name)]
                                   for c, contact in enumerate(model.contacts)])
+    if contacts_pvd:
+        files["contacts.pvd"] = pvd_text(contacts_pvd).encode()
+        files["contacts.csv"] = _csv(["contact", "name", "body"],
+                                     [[c, f.name, model.bodies[f.bodies[0]].name]
+                                      for c, f in enumerate(ground_contacts(model))])
     files["bodies.csv"] = _csv(["body", "name", "kind", "mass"],
                                [[b.index, b.name, b.kind, repr(b.mass)] for b in model.bodies])
     names = ["ground"] + [b.name for b in model.bodies]
@@ -361,6 +386,13 @@ TABLE_UNITS = {
     "joints.csv": {"joint": ("1", "index of the joint (point data 'joint')"),
                    "name": (None, "the joint's name"), "kind": (None, "the joint's type"),
                    "parent": (None, "the parent body"), "child": (None, "the child body")},
+    "contacts.csv": {"contact": ("1", "index of the contact (point data 'contact')"),
+                     "name": (None, "the ground-contact element's name"),
+                     "body": (None, "the body that touches")},
+    "contacts_*.vtu": {"contact": ("1", "index in contacts.csv"),
+                       "ground_force": ("N", "the ground's force on the body, world axes"),
+                       "closed": ("1", "1 where the ground pushes, else 0"),
+                       "points": ("m", "touching points, world frame")},
     "feet.csv": {"foot": ("1", "index of the foot (point data 'foot')"),
                  "contact": (None, "the contact's name"), "leg": (None, "the leg")},
     "bodies_*.vtu": {"body": ("1", "index in bodies.csv"),
@@ -377,6 +409,22 @@ TABLE_UNITS = {
                    "stance": ("1", "1 in stance, 0 in swing"),
                    "points": ("m", "foot points, world frame")},
 }
+
+
+def _contacts_mesh(model: Model, frames: Frames, k: int):
+    """The unilateral contacts at saved instant ``k``: a vertex at each touching point with
+    the ground's force there (``ground_force``, world axes, N) and whether it pushes."""
+    import meshio
+
+    points = contact_frames(model, frames.q[k]).points
+    points = np.array([_embed(p) for p in points])
+    force = frames.contact_force[k] + 0.0
+    m = len(points)
+    return meshio.Mesh(points, [meshio.CellBlock("vertex", np.arange(m)[:, None])],
+                       point_data={"contact": np.arange(m, dtype=np.int32),
+                                   "ground_force": force,
+                                   "closed": (np.linalg.norm(force, axis=1) > 0).astype(
+                                       np.int32)})
 
 
 def _feet_mesh(model: Model, frames: Frames, k: int):
