@@ -11,12 +11,12 @@ of one stride repeat). Printed: each foot's touch-downs and lift-offs against it
 (the table for one stride; over more, the largest lateness of each), the impacts with their
 impulses, the slips, the largest joint tracking error (the engine's ``err:`` columns, checked
 against an independent measure of the joint angles), the trunk's position against the
-prescribed one at the end, the CPU time per simulated second, and the feet that slip inside
-a stance beside those the inverse dynamics marks ``slip`` at ``--mu`` (its friction demand
-``|F_t| / F_n`` above it). With ``--figures DIR``, the
-simulated gait against the scheduled one (``gait.png``), the ground forces
-(``contacts.png``) and the tracking errors (``tracking.png``) are written there; nothing
-else is written.
+prescribed one at the end, the CPU time per simulated second, the largest difference of the
+feet's normal forces from the inverse dynamics' inside the stances, and the feet that slip
+inside a stance beside those the inverse dynamics marks ``slip`` at ``--mu`` (its friction
+demand ``|F_t| / F_n`` above it). With ``--figures DIR``, the simulated gait against the
+scheduled one (``gait.png``), the ground forces (``contacts.png``) and the tracking errors
+(``tracking.png``) are written there; nothing else is written.
 
     python3 scripts/studies/walking_on_ground.py [--gait tripod] [--kp 200] [--kd 2]
         [--bandwidth HZ] [--mu 0.8] [--step 1e-3] [--tol 3e-6] [--strides 1] [--figures DIR]
@@ -111,6 +111,31 @@ def slips(model, inverse, result, mu: float, margin: float = 5e-3) -> list[str]:
             f"feet slipping inside a stance: {', '.join(sorted(slipped)) or 'none'}"]
 
 
+def normal_force_gap(model, inverse, result, margin: float = 0.02) -> str:
+    """The largest difference of each foot's simulated normal force from the inverse
+    dynamics' (its samples interpolated, a stride repeating) inside the scheduled stances,
+    ``margin`` s away from their touch-downs and lift-offs, in N and in body weights."""
+    period = float(inverse.times[-1] - inverse.times[0])
+    names = [c.name for c in model.contacts]
+    order = [result.contact_names.index(n) for n in names]
+    simulated = result.contact_forces[:, order, 2]
+    cycle = np.mod(result.t - inverse.times[0], period) + inverse.times[0]
+    worst, where = 0.0, ""
+    for c, contact in enumerate(model.contacts):
+        wanted = np.interp(cycle, inverse.times, inverse.ground_force[:, c, 2])
+        inside = np.zeros(result.t.size, bool)
+        for a, b in contact.stances(0.0, float(result.t[-1])):
+            inside |= (result.t > a + margin) & (result.t < b - margin)
+        if inside.any():
+            gap = np.abs(simulated[inside, c] - wanted[inside])
+            if gap.max() > worst:
+                worst, where = float(gap.max()), contact.name
+    weight = float(model.total_mass * np.linalg.norm(model.gravity))
+    return (f"normal forces inside the stances ({1e3 * margin:.0f} ms from their ends) within "
+            f"{worst:.3g} N of the inverse dynamics' ({worst / weight:.3g} body weights; "
+            f"{where})")
+
+
 def write_figures(folder: Path, model, result, t_end: float) -> None:
     """``gait.png`` (simulated against scheduled), ``contacts.png``, ``tracking.png``."""
     scheduled = [contact.stances(0.0, t_end) for contact in model.contacts]
@@ -161,6 +186,7 @@ def main() -> None:
           f"(load {os.getloadavg()[0]:.1f})")
     print("\n".join(schedule_table(model, result, period)))
     print("\n".join(slips(model, inverse, result, args.mu)))
+    print(normal_force_gap(model, inverse, result))
     worst = lateness(model, result, float(result.t[-1]))
     print(f"over {result.t[-1]:.3f} s: touch-downs within {1e3 * worst['touch-down']:.1f} ms "
           f"of the schedule, lift-offs within {1e3 * worst['lift-off']:.1f} ms")
