@@ -100,6 +100,7 @@ class EventDriven(DormandPrince853):
         speed = ROUND_OFF * max(1.0, np.abs(self.v).max())
         if np.any(u[touching, 0] < -speed):  # an impact at the start
             self.v = self._impact(self.t, self.q, self.v, touching)
+            u = (frames.jacobian @ self.v).reshape(m, d)
         # the state the run starts from (not events); a contact sliding slower than the
         # modes' tolerance (a foot leaving the ground at zero speed, to round-off) sticks
         resting = MODE_TOLERANCE * max(1.0, np.abs(self.v).max())
@@ -121,8 +122,9 @@ class EventDriven(DormandPrince853):
     # ---------------------------------------------------------------- dynamics with contacts
 
     def _solve(self, t: float, q: np.ndarray, v: np.ndarray, modes=None) -> tuple:
-        """Accelerations, multipliers and the contacts' forces (contact axes, (m, d)) at a
-        state with ``modes`` (default the current ones), and the contacts' accelerations."""
+        """At a state with ``modes`` (default the current ones): the accelerations, the
+        multipliers, the contacts' forces (contact axes, (m, d)), the contacts' accelerations
+        (m d) and the Delassus operator ``W`` (m d, m d)."""
         model, data = self.model, self.data
         modes = self.modes if modes is None else modes
         w, wd, wdd = (np.array(x) for x in model.law_values(t, data))
