@@ -30,10 +30,13 @@ def main(argv: list[str] | None = None) -> int:
                   "memory, e.g. under 'ulimit -v', or a broken installation)", file=sys.stderr)
             return 1
         else:
-            status = app.main(argv)
+            try:
+                status = app.main(argv)
+            except KeyboardInterrupt:  # a signal after the command's own handling of one
+                status = signals.exit_status()
     finally:
         if argv is None:  # the process itself: its work is done, a late signal changes nothing
-            signals.ignore_signals()
+            _ignore_late_signals(signals)
         else:
             restore()
     if argv is None and signals.received() is not None:
@@ -44,3 +47,15 @@ def main(argv: list[str] | None = None) -> int:
             stream.flush()
         os._exit(status)
     return status
+
+
+def _ignore_late_signals(signals) -> None:
+    """Ignore SIGINT and SIGTERM from now on, even when one arrives while the handlers are
+    being replaced (its handler raises then: the replacement is done again, and the signal
+    is remembered for the exit status)."""
+    while True:
+        try:
+            signals.ignore_signals()
+            return
+        except KeyboardInterrupt:
+            continue
