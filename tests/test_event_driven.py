@@ -129,3 +129,19 @@ def test_the_compass_gait_returns_to_its_state_after_one_step():
     state = [q[5] - np.pi / 2, np.pi / 2 - q[2], v[5], -v[2]]
     assert np.allclose(state, [-0.21867, -0.32339, 1.09183, -0.37718], rtol=0, atol=5e-6)
     assert result.events[-1].impulse[1] > 0  # the ground pushes the striking foot up
+
+
+def test_a_slipping_contacts_normal_compliance_is_its_schur_complement():
+    """The Painleve check reads, for a slipping contact among others held, the Schur complement
+    of the others' unknowns: ``1 / (A^-1)_jj`` for an invertible contact system (the walking
+    robot's feet: a raw diagonal entry, or another contact's, said "paradox" where there was
+    none); a contact alone, its own entry; redundant contacts, zero (not a paradox)."""
+    from hexapod.simulation.integrators.event_driven import _normal_compliance
+
+    rng = np.random.default_rng(3)
+    A = rng.normal(size=(5, 5)) + 5 * np.eye(5)
+    for j in range(5):
+        assert _normal_compliance(A, j) == pytest.approx(1 / np.linalg.inv(A)[j, j], rel=1e-10)
+    assert _normal_compliance(np.array([[-0.3]]), 0) == -0.3
+    shared = np.ones((4, 4))  # four contacts that carry one load (rank 1)
+    assert abs(_normal_compliance(shared, 2)) < 1e-12

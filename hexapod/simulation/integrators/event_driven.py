@@ -11,8 +11,8 @@ accelerations are ``c + W F`` (``c = J a_free + J_dot v``, ``W`` the Delassus op
 A sticking contact keeps all its acceleration zero (``d`` unknowns); a slipping one its normal
 acceleration, with the tangential force ``-mu F_N s`` against its slip ``s`` (one unknown).
 When a slipping contact's normal acceleration falls as its normal force grows (``W_NN - mu
-W_NT s <= 0``), no force holds it and none lets it go: Painleve's paradox, which this scheme
-reports by name (the time-stepping scheme resolves it by a tangential impact). After each
+W_NT s < 0`` for a contact alone; with others closed, the Schur complement of their unknowns),
+no force holds it and none lets it go: Painleve's paradox, which this scheme reports by name (the time-stepping scheme resolves it by a tangential impact). After each
 step the closed contacts' gaps and velocities are projected to zero, as the bilateral rows
 are.
 
@@ -61,6 +61,9 @@ ZENO_FLIGHT = 1e-9
 GAP_WATCH = 16
 #: relative tolerance of the modes' conditions (a force's sign, the cone)
 MODE_TOLERANCE = 1e-9
+#: a slipping contact's normal compliance below minus this (relative to the contact system's
+#: largest entry) is Painleve's paradox; round-off around zero is redundancy
+PAINLEVE_TOLERANCE = 1e-9
 
 
 class EventDriven(DormandPrince853):
@@ -150,7 +153,7 @@ class EventDriven(DormandPrince853):
         closed = [k for k in range(m) if modes[k] != "open"]
         if not closed:
             return F
-        columns, equations = [], []
+        columns, equations, slipping = [], [], {}
         for k in closed:
             if modes[k] == "stick":
                 for i in range(d):
@@ -159,12 +162,13 @@ class EventDriven(DormandPrince853):
             else:
                 column = _unit(m * d, k * d)
                 column[k * d + 1:(k + 1) * d] = -self._mu[k] * self._slip(k, u)
+                slipping[k] = len(columns)  # its unknown, and its equation, in the system
                 columns.append(column)
                 equations.append(k * d)
         B = np.array(columns).T
         A = W[equations] @ B
-        for j, k in enumerate(closed):
-            if modes[k] == "slip" and A[equations.index(k * d), j] <= 0.0:
+        for k, j in slipping.items():
+            if _normal_compliance(A, j) < -PAINLEVE_TOLERANCE * np.abs(A).max():
                 raise IntegrationError(_painleve(self.contact_names[k], t, self._mu[k]))
         rhs = -free[equations]
         x = np.linalg.lstsq(A, rhs, rcond=None)[0]
@@ -545,6 +549,17 @@ class EventDriven(DormandPrince853):
                 x = np.linalg.lstsq(Y.T @ Y, -(G.T @ y), rcond=None)[0]
                 v = half @ (y + Y @ x)
         return q, v
+
+
+def _normal_compliance(A: np.ndarray, j: int) -> float:
+    """How fast slipping contact ``j``'s normal acceleration grows with its normal force, the
+    other closed contacts' conditions kept: the Schur complement of ``A``'s other unknowns at
+    ``(j, j)`` (``W_NN - mu W_NT s`` for a contact alone). Negative: Painleve's paradox; zero:
+    the force is shared with redundant contacts (a block's four corners), which is not."""
+    rest = [i for i in range(A.shape[0]) if i != j]
+    if not rest:
+        return float(A[j, j])
+    return float(A[j, j] - A[j, rest] @ np.linalg.pinv(A[np.ix_(rest, rest)]) @ A[rest, j])
 
 
 def _unit(n: int, i: int) -> np.ndarray:
