@@ -12,9 +12,9 @@ A sticking contact keeps all its acceleration zero (``d`` unknowns); a slipping 
 acceleration, with the tangential force ``-mu F_N s`` against its slip ``s`` (one unknown).
 When a slipping contact's normal acceleration falls as its normal force grows (``W_NN - mu
 W_NT s < 0`` for a contact alone; with others closed, the Schur complement of their unknowns),
-no force holds it and none lets it go: Painleve's paradox, which this scheme reports by name (the time-stepping scheme resolves it by a tangential impact). After each
-step the closed contacts' gaps and velocities are projected to zero, as the bilateral rows
-are.
+no force holds it and none lets it go: Painleve's paradox, which this scheme reports by name
+(the time-stepping scheme resolves it by a tangential impact). After each step the closed
+contacts' gaps and velocities are projected to zero, as the bilateral rows are.
 
 **Events.** Each contact has two event functions that are positive while its mode holds: an
 open contact's gap (once its arming condition holds, see
@@ -48,7 +48,7 @@ from hexapod.algorithms.contact_frames import (
 )
 from hexapod.algorithms.contact_response import contact_response
 from hexapod.algorithms.frictional import solve_contacts
-from hexapod.algorithms.saddle import dynamics_terms
+from hexapod.algorithms.saddle import constraint_jacobian, dynamics_terms
 from hexapod.errors import HexapodError, IntegrationError
 from hexapod.simulation.integrators.embedded import DormandPrince853
 from hexapod.simulation.integrators.moreau_jean import GAP_TOLERANCE, ContactEvent
@@ -303,8 +303,9 @@ class EventDriven(DormandPrince853):
 
     def _watch(self, t, q, v, t0) -> np.ndarray:
         """The event functions (m, 2) at a state of the step from ``t0`` (see the module's
-        description): column 0 the gap (open) or normal force, column 1 the cone margin
-        (stick) or slip speed (slip); positive while the modes hold."""
+        description): column 0 the gap (open) or normal force (slip), column 1 the slip speed
+        along its direction (slip); positive while the modes hold. Sticking contacts are
+        watched together (:meth:`_sticking`): theirs stay 1."""
         m, d = len(self.contacts), self.model.dimension
         values = np.ones((m, 2))
         if not m:
@@ -431,18 +432,10 @@ class EventDriven(DormandPrince853):
     def _impact(self, t, q, v, touching) -> np.ndarray:
         """The velocities after the impulse map of the ``touching`` contacts (see the module's
         description); their modes and events follow."""
-        model, data, d = self.model, self.data, self.model.dimension
-        w, wd, _ = model.law_values(t, data)
-        Phi_v = dynamics_terms(model, {"q": q, "v": v, "w": w, "wd": wd,
-                                       "wdd": np.zeros_like(wd)}, data)[0]
-        nu = model.call("nu", data, q=q, w=w, wd=wd) if model.n_c else np.zeros(0)
+        model, d = self.model, self.model.dimension
         half = model.mass_inv_sqrt
-        frames = contact_frames(model, q, self.contacts)
         rows = (touching[:, None] * d + np.arange(d)).reshape(-1)
-        G = half @ frames.jacobian[rows].T
-        y, _, Y, _ = contact_response(model, data, q, w, Phi_v, half @ (model.mass @ v),
-                                      np.asarray(nu).ravel(), G)
-        self.counters.factorisations += 1
+        frames, G, y, Y = self._velocity_response(t, q, v, rows)
         before = (frames.jacobian[rows] @ v).reshape(-1, d)
         approach = np.maximum(-before[:, 0], 0.0)
         restitution = self._restitution[touching].copy()
@@ -521,26 +514,36 @@ class EventDriven(DormandPrince853):
                                            zip(self.contact_names, self.modes, strict=True))
                                + ")")
 
+    def _velocity_response(self, t, q, v, rows) -> tuple:
+        """At a state, the velocity-level solve on the bilateral rows (``v`` projected onto
+        ``Phi_v v = nu``, ``y = M^1/2 v``) and its response ``Y`` to unit impulses along the
+        contact ``rows`` (indices into the contacts' Jacobian), with the contacts' frames and
+        ``G = M^-1/2 J_rows^T``: what an impact and the contact projection solve on."""
+        model, data = self.model, self.data
+        w, wd, _ = model.law_values(t, data)
+        Phi_v = constraint_jacobian(model, q, w, data)
+        nu = model.call("nu", data, q=q, w=w, wd=wd) if model.n_c else np.zeros(0)
+        half = model.mass_inv_sqrt
+        frames = contact_frames(model, q, self.contacts)
+        G = half @ frames.jacobian[rows].T
+        y, _, Y, _ = contact_response(model, data, q, w, Phi_v, half @ (model.mass @ v),
+                                      np.asarray(nu).ravel(), G)
+        self.counters.factorisations += 1
+        return frames, G, y, Y
+
     def _onto_contacts(self, t, q, v) -> tuple[np.ndarray, np.ndarray]:
         """The closed contacts' gaps, normal velocities and (sticking) tangential velocities
         put back to zero by the least ``M``-norm corrections under the bilateral rows."""
-        model, data, d = self.model, self.data, self.model.dimension
+        model, d = self.model, self.model.dimension
         closed = [k for k in range(len(self.contacts)) if self.modes[k] != "open"]
         if not closed:
             return q, v
         half = model.mass_inv_sqrt
         for stage in ("positions", "velocities"):
-            w, wd, _ = model.law_values(t, data)
-            Phi_v = dynamics_terms(model, {"q": q, "v": v, "w": w, "wd": wd,
-                                           "wdd": np.zeros_like(wd)}, data)[0]
-            frames = contact_frames(model, q, self.contacts)
             rows = [k * d + i for k in closed
                     for i in range(d if stage == "velocities" and self.modes[k] == "stick"
                                    else 1)]
-            G = half @ frames.jacobian[rows].T
-            nu = model.call("nu", data, q=q, w=w, wd=wd) if model.n_c else np.zeros(0)
-            y, _, Y, _ = contact_response(model, data, q, w, Phi_v, half @ (model.mass @ v),
-                                          np.asarray(nu).ravel(), G)
+            frames, G, y, Y = self._velocity_response(t, q, v, rows)
             if stage == "positions":
                 gaps = frames.gaps[closed]
                 x = np.linalg.lstsq(Y.T @ Y, -gaps, rcond=None)[0]
