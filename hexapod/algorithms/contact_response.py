@@ -9,8 +9,10 @@ has the solution ``y + Y F``, ``lam + Lam F``: ``(y, lam)`` that of the forces i
 alone and ``(Y, Lam)`` the response to unit contact forces (``G = M^-1/2 J^T`` on the
 right-hand side), from one factorisation. The contacts then see ``J x = G^T y + W F`` with the
 Delassus operator ``W = G^T Y = Y^T Y`` (``Y`` is ``G`` projected on the rows' null space).
-At velocity level (a time step, an impact) ``x`` is the new velocity; at acceleration level
-(a smooth phase) the acceleration. Both contact schemes solve their contact problem on it.
+At velocity level (an impact) ``x`` is the new velocity; at acceleration level (a smooth
+phase) the acceleration: the event-driven scheme solves its contact problems on it. The
+time-stepping scheme solves the same system, its metric stiffened by the forces it takes
+implicitly, in one CasADi call (:class:`hexapod.simulation.kernels.CompiledContactStep`).
 """
 
 from __future__ import annotations

@@ -49,12 +49,15 @@ def equilibrated(Phi_v: ca.MX, m_inv_sqrt: ca.DM) -> tuple[ca.MX, ca.MX, ca.MX]:
     return W_all, ca.if_else(zero, 1.0, norms), zero
 
 
-def kept_matrix(W_all: ca.MX, d: ca.MX, zero: ca.MX, rows: list[int]) -> ca.MX:
-    """The saddle-point matrix ``[[I, W^T], [W, Z]]`` of the kept ``rows``, as sparse as
-    ``Phi_v`` (MX or SX, as ``W_all``)."""
+def kept_matrix(W_all: ca.MX, d: ca.MX, zero: ca.MX, rows: list[int],
+                extra: ca.MX | None = None) -> ca.MX:
+    """The saddle-point matrix ``[[I + E, W^T], [W, Z]]`` of the kept ``rows``, as sparse as
+    ``Phi_v`` (MX or SX, as ``W_all``); ``E`` (``extra``, default none) adds the scaled
+    stiffness and damping of a linearly implicit step to the metric."""
     n_v = W_all.size2()
     W = ca.mtimes(ca.diag(1.0 / d[rows]), W_all[rows, :])  # sparse: never a dense node
-    return ca.vertcat(ca.horzcat(type(W_all).eye(n_v), W.T), ca.horzcat(W, -ca.diag(zero[rows])))
+    metric = type(W_all).eye(n_v) if extra is None else type(W_all).eye(n_v) + extra
+    return ca.vertcat(ca.horzcat(metric, W.T), ca.horzcat(W, -ca.diag(zero[rows])))
 
 
 def kept_pivots(model: Model, rows: list[int], q: np.ndarray, w: np.ndarray) -> StaticLU:
@@ -72,19 +75,23 @@ def kept_pivots(model: Model, rows: list[int], q: np.ndarray, w: np.ndarray) -> 
 
 
 def solve_kept(W_all: ca.MX, d: ca.MX, zero: ca.MX, rows: list[int], top: ca.MX,
-               bottom: ca.MX, lu: StaticLU | None = None) -> tuple[ca.MX, ca.MX]:
+               bottom: ca.MX, lu: StaticLU | None = None,
+               extra: ca.MX | None = None) -> tuple[ca.MX, ca.MX]:
     """``(y, mu)`` of the kept ``rows`` (see the module's description); ``bottom``: all rows'
     right-hand sides (those of the kept rows are used), ``top`` and ``bottom`` with as many
     columns as there are systems to solve with one factorisation. With ``lu`` (the pivots of
     :func:`kept_pivots`) the saddle-point form is factorised by that LU, written out, instead
-    of CasADi's sparse QR; the square form always by the QR."""
+    of CasADi's sparse QR; the square form always by the QR. ``extra``: the metric's
+    addition (:func:`kept_matrix`; the saddle-point form and the QR then)."""
     n_v = W_all.size2()
     scaled = bottom[rows, :] / ca.repmat(d[rows], 1, bottom.size2())
-    if len(rows) == n_v:
+    if len(rows) == n_v and extra is None:
         W = ca.mtimes(ca.diag(1.0 / d[rows]), W_all[rows, :])
         y = ca.solve(W, scaled, "qr")
         return y, ca.solve(W.T, top - y, "qr")
-    K = kept_matrix(W_all, d, zero, rows)
+    K = kept_matrix(W_all, d, zero, rows, extra)
+    if extra is not None:
+        lu = None  # the pivots were chosen for the identity metric's pattern
     rhs = ca.vertcat(top, scaled)
     solution = (ca.solve(K, rhs, "qr") if lu is None else
                 _lu_solve(lu, K.sparsity(), rhs.size2())(K, rhs))

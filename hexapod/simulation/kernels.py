@@ -416,6 +416,98 @@ class CompiledProjection:
         return position, velocity
 
 
+class CompiledContactStep:
+    """The constrained solve of a time step with contact impulses (Moreau-Jean's, see
+    :mod:`hexapod.simulation.integrators.moreau_jean`) in one call: at velocity level, with the
+    forces that depend on the state linearly implicit at ``theta``,
+
+        (M + h theta C + (h theta)^2 K) (v1 - v) + Phi_v^T lam = h Q - h^2 theta K v + J^T P,
+        Phi_v v1 = nu(t1),
+
+    ``K`` and ``C`` the derivatives of ``-Q`` along the positions and in the velocities, all
+    at the step's start ``(q, v)`` with the laws ``mid`` (values, rates, accelerations at
+    ``t + theta h``) and ``end`` (values and rates at ``t + h``). Returned, linear in the
+    contacts' impulses ``P``: ``y = M^1/2 v1`` and ``lam`` for ``P = 0``, and their responses
+    ``Y`` and ``Lam`` to unit impulses (``G = M^-1/2 J^T`` given), as
+    :func:`~hexapod.algorithms.contact_response.contact_response` returns them. The system is
+    the engine's equilibrated saddle-point system of the kept ``rows`` with the scaled
+    stiffness and damping added to its metric (:func:`~hexapod.algorithms.step.solve_kept`,
+    CasADi's sparse QR), formed and solved in the call; its residuals (the kept rows', and the
+    rows ``left_out`` as redundant) say when the row set no longer serves: the call then
+    returns None and the caller decides the rows again.
+    """
+
+    def __init__(self, model: Model, rows: np.ndarray, left_out: np.ndarray, columns: int):
+        self.model, self.rows = model, np.asarray(rows, dtype=int)
+        self.left_out = np.asarray(left_out, dtype=int)
+        to_c = current().compiled
+        key = ("contact step", tuple(self.rows.tolist()), tuple(self.left_out.tolist()),
+               columns, to_c)
+        self.function = model.built_once(key, lambda m: _evaluated(self._build(columns), to_c))
+        self._fast = FastFunction(self.function)
+
+    def _build(self, columns: int) -> ca.Function:
+        model, rows = self.model, self.rows.tolist()
+        n = model.n_w
+        symbols = {"q": ca.MX.sym("q", model.n_q), "v": ca.MX.sym("v", model.n_v),
+                   "w": ca.MX.sym("w", n), "wd": ca.MX.sym("wd", n), "wdd": ca.MX.sym("wdd", n),
+                   "lam": ca.MX(model.n_c, 1)}
+        end = {"w": ca.MX.sym("w1", n), "wd": ca.MX.sym("wd1", n)}
+        G, h, theta = ca.MX.sym("G", model.n_v, columns), ca.MX.sym("h"), ca.MX.sym("theta")
+
+        def call(function, **values):
+            return function(*[values.get(name, symbols[name]) for name in function.name_in()])
+
+        v = symbols["v"]
+        _, _, Q = call(model.dynamics_terms)
+        K, C = call(model.tangent_matrices)
+        m_inv_sqrt, m_sqrt = mass_factors(model)
+        a = h * theta
+        force = h * Q + ca.mtimes(a * C + (a * a - h * a) * K, v)
+        top = ca.horzcat(ca.mtimes(m_sqrt, v) + ca.mtimes(m_inv_sqrt, force), G)
+        extra = ca.mtimes(ca.mtimes(m_inv_sqrt, a * C + a * a * K), m_inv_sqrt)
+        if model.n_c == 0:
+            y = ca.solve(ca.MX.eye(model.n_v) + extra, top, "qr") if extra.nnz() else top
+            lam, residual = ca.MX(0, columns + 1), ca.MX.zeros(2)
+        else:
+            Phi_v = call(model.Phi_v)
+            nu = call(model.nu, **end)
+            W_all, d, zero = equilibrated(Phi_v, m_inv_sqrt)
+            bottom = ca.horzcat(nu, ca.MX(model.n_c, columns))
+            y, mu = solve_kept(W_all, d, zero, rows, top, bottom, extra=extra)
+            lam = ca.MX(model.n_c, columns + 1)
+            lam[rows, :] = mu / ca.repmat(d[rows], 1, columns + 1)
+            scaled = ca.fabs(ca.mtimes(Phi_v, ca.mtimes(m_inv_sqrt, y[:, 0])) - nu) / d
+            size = ca.norm_inf(y[:, 0]) + ca.norm_inf(top[:, 0]) + 1e-300
+            others = [i for i in range(model.n_c) if i not in set(rows)]
+            residual = ca.vertcat(ca.mmax(scaled[rows]) / size,
+                                  ca.mmax(scaled[others]) / size if others else ca.MX(0.0))
+        laws = ["w", "wd", "wdd"] if n else []
+        inputs = ["q", "v", *laws] + (["w1", "wd1"] if n else [])
+        return ca.Function("contact_step",
+                           [symbols["q"], v, *[symbols[k] for k in laws],
+                            *([end["w"], end["wd"]] if n else []), G, h, theta],
+                           [y, lam, residual], inputs + ["G", "h", "theta"],
+                           ["y", "lam", "residual"])
+
+    def __call__(self, q: np.ndarray, v: np.ndarray, mid: tuple, end: tuple, G: np.ndarray,
+                 h: float, theta: float) -> tuple | None:
+        """``(y, lam, Y, Lam)`` (see the class's description), or None when the residuals
+        refuse the solve (a row kept has become dependent, one left out independent, or the
+        numbers are not finite)."""
+        laws = ([*mid, *end[:2]]) if self.model.n_w else []
+        try:
+            y, lam, residual = self._fast(q, v, *laws, G, h, theta)
+        except RuntimeError:  # the factorisation failed: a singular matrix, or NaN in it
+            return None
+        columns = self.function.size2_out(0)
+        y, lam = y.reshape(self.model.n_v, columns), lam.reshape(self.model.n_c, columns)
+        if not (residual[0] <= RESIDUAL_TOLERANCE and residual[1] <= REDUNDANT_TOLERANCE
+                and np.all(np.isfinite(y)) and np.all(np.isfinite(lam))):
+            return None
+        return y[:, 0], lam[:, 0], y[:, 1:], lam[:, 1:]
+
+
 def _evaluated(function: ca.Function, to_c: bool) -> ca.Function:
     """``function`` as the execution setting evaluates it: compiled to C (the library kept in
     the cache under its graph's hash: the laws are inputs, so a kernel serves any laws) or by

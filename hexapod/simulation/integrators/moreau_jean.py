@@ -46,13 +46,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from hexapod.algorithms.contact_frames import armed, contact_frames, ground_contacts
-from hexapod.algorithms.contact_response import contact_response
 from hexapod.algorithms.frictional import solve_contacts
-from hexapod.algorithms.kinematics import state_split
-from hexapod.algorithms.linalg import as_dense, solve_or_least_squares
-from hexapod.algorithms.saddle import dynamics_terms
 from hexapod.errors import IntegrationError
 from hexapod.simulation.integrators.base import Integrator
+from hexapod.simulation.kernels import CompiledContactStep
 from hexapod.simulation.methods import CONTACT_METHODS
 from hexapod.simulation.scales import ROUND_OFF
 
@@ -113,19 +110,21 @@ class MoreauJean(Integrator):
             ROUND_OFF * max(np.abs(self.v).max(), 1.0))
         self.contact_states = tuple("open" if not c else "slip" if s else "stick"
                                     for c, s in zip(closed, sliding, strict=True))
+        rows = self.data.independent_rows
+        self._kernel = CompiledContactStep(
+            self.model, np.zeros(0, int) if rows is None else rows,
+            np.zeros(0, int) if rows is None else self.data.redundant_rows, len(self.contacts) * d)
 
     def _step(self) -> None:
         model, data = self.model, self.data
         h = self.next_step()
         t0, q0, v0 = self.t, self.q, self.v
         t1 = t0 + h
-        w, wd, wdd = (np.array(x) for x in model.law_values(t0 + THETA * h, data))
-        Phi_v, _, Q = dynamics_terms(model, {"q": q0, "v": v0, "w": w, "wd": wd, "wdd": wdd},
-                                     data)
+        mid = tuple(np.array(x) for x in model.law_values(t0 + THETA * h, data))
         half = model.mass_inv_sqrt
         frames = contact_frames(model, q0, self.contacts)
         G = half @ frames.jacobian.T  # M^-1/2 J^T
-        y, lam, Y, Lam = self._constrained(t1, q0, v0, w, Phi_v, Q, G, h)
+        y, lam, Y, Lam = self._constrained(t1, q0, v0, mid, G, h)
         self.counters.rhs += 1
         self.counters.jacobians += 1
         self.counters.factorisations += 1
@@ -144,52 +143,26 @@ class MoreauJean(Integrator):
         self.t, self.q, self.v = t1, q1, v1
         self.v_dot, self.lam = (v1 - v0) / h, lam / h
 
-    def _constrained(self, t1, q0, v0, w, Phi_v, Q, G, h):
-        """The saddle-point solves of the step on the bilateral rows kept at ``q0``: the free
-        velocity (``y = M^1/2 v``, with the rows' impulses ``lam``) and the response to the
-        contacts' unit impulses (``Y``, ``Lam``). Forces that depend on the state (a
-        controller's gains, dampers, springs, the gyroscopic terms) enter linearly implicit
-        (:meth:`_implicit`); without them the step is the mass metric's own solve."""
-        model, data = self.model, self.data
-        n = model.n_c
-        w1, wd1, _ = model.law_values(t1, data)
-        nu = model.call("nu", data, q=q0, w=w1, wd=wd1) if n else np.zeros(0)
-        K, C = (model.fast("tangent_matrices", data)(
-            *[{"q": q0, "v": v0, "lam": np.zeros(n), "w": w}[name]
-              for name in model.tangent_matrices.name_in()]))
-        K, C = (np.asarray(x).reshape(model.n_v, model.n_v) for x in (K, C))
-        if np.any(K) or np.any(C):
-            split = state_split(model, data, q0, w, Phi_v) if n else None
-            kept = split.independent if split is not None and split.rank else np.zeros(0, int)
-            return self._implicit(h, v0, Q, K, C, Phi_v, kept, nu, G, np.zeros(n),
-                                  np.zeros((n, G.shape[1])))
-        top = model.mass_inv_sqrt @ (model.mass @ v0 + h * Q)  # M^1/2 v_k + h M^-1/2 Q
-        return contact_response(model, data, q0, w, Phi_v, top, nu, G)
-
-    def _implicit(self, h, v0, Q, K, C, Phi_v, kept, nu, G, lam, Lam):
-        """The step with the forces linearised at its start and taken at ``theta`` (Acary and
-        Brogliato 2008, 10.1): with ``K`` and ``C`` the derivatives of ``-Q`` along the
-        positions and in the velocities, ``(M + h theta C + h^2 theta^2 K) (v_k+1 - v_k) =
-        h Q - h^2 theta K v_k`` under the kept rows, solved as one square system for the free
-        velocity and the contacts' responses; stable for gains an explicit force would need
-        steps far shorter than the controller's period for."""
-        model = self.model
-        n_v, half = model.n_v, model.mass_inv_sqrt
-        M = model.mass.dense()
-        iteration = M + h * THETA * C + (h * THETA) ** 2 * K
-        Phi = as_dense(Phi_v)[kept]
-        S = np.block([[iteration, Phi.T], [Phi, np.zeros((kept.size, kept.size))]])
-        J_T = (half @ (M @ G)) if G.size else np.zeros((n_v, 0))  # M^1/2 G = J^T
-        rhs = np.zeros((n_v + kept.size, 1 + G.shape[1]))
-        rhs[:n_v, 0] = iteration @ v0 + h * Q - h**2 * THETA * (K @ v0)
-        rhs[n_v:, 0] = nu[kept]
-        rhs[:n_v, 1:] = J_T
-        x = solve_or_least_squares(S, rhs)
-        if x is None:
-            raise IntegrationError("the step's linearised system has no finite solution")
-        to_y = half @ M  # M^1/2
-        lam[kept], Lam[kept] = x[n_v:, 0], x[n_v:, 1:]
-        return to_y @ x[:n_v, 0], lam, to_y @ x[:n_v, 1:], Lam
+    def _constrained(self, t1, q0, v0, mid, G, h):
+        """The saddle-point solve of the step on the bilateral rows kept at ``q0``, in one
+        call (:class:`~hexapod.simulation.kernels.CompiledContactStep`): the free velocity
+        (``y = M^1/2 v``, with the rows' impulses ``lam``) and the response to the contacts'
+        unit impulses (``Y``, ``Lam``). Forces that depend on the state (a controller's gains,
+        dampers, springs, the gyroscopic terms) enter linearly implicit at ``theta`` (Acary and
+        Brogliato 2008, 10.1): stable for gains an explicit force would need steps far shorter
+        than the controller's period for. When the rows kept at the start no longer serve,
+        they are decided again here."""
+        end = self.model.law_values(t1, self.data)
+        solution = self._kernel(q0, v0, mid, end, G, h, THETA)
+        if solution is None:
+            split = self._rank_split(q0, self.t)
+            self._kernel = CompiledContactStep(self.model, split.independent, split.redundant,
+                                               G.shape[1])
+            solution = self._kernel(q0, v0, mid, end, G, h, THETA)
+        if solution is None:
+            raise IntegrationError("the step's saddle-point system has no reliable solution "
+                                   "(a singular configuration)")
+        return solution
 
     def _impulses(self, h, frames, v0, G, y, Y):
         """Each contact's impulse in its axes (m, d) and its state after the step."""
