@@ -97,13 +97,17 @@ def body_balance(model: Model, times: np.ndarray, q: np.ndarray, v: np.ndarray,
     force_sum, moment_sum = np.zeros((n, n_b, 3)), np.zeros((n, n_b, 3))
     force_scale, moment_scale = np.zeros(n_b), np.zeros(n_b)
 
-    def add(b, f, m):  # a term of body b's equations: f (N, 3), m about its centre (N, 3)
+    def add(b, f, m, *parts):  # a term of body b's equations: f (N, 3), m about its centre
+        # (N, 3), the sum of ``parts`` when given: they, not their sum, set the moment's scale
+        # (a joint's torque and its force's moment may cancel: an arm turning steadily)
         if model.bodies[b].kind == "particle":  # no moment equation (only round-off there)
-            m = np.zeros_like(m)
+            m, parts = np.zeros_like(m), ()
         force_sum[:, b] += f
         moment_sum[:, b] += m
         force_scale[b] = max(force_scale[b], np.linalg.norm(f, axis=1).max(initial=0.0))
-        moment_scale[b] = max(moment_scale[b], np.linalg.norm(m, axis=1).max(initial=0.0))
+        for part in parts or (m,):
+            moment_scale[b] = max(moment_scale[b],
+                                  np.linalg.norm(part, axis=1).max(initial=0.0))
 
     for b, body in enumerate(model.bodies):
         f, m = _embed(body.kind, inertial[:, body.v], rotation[:, b])
@@ -128,7 +132,8 @@ def body_balance(model: Model, times: np.ndarray, q: np.ndarray, v: np.ndarray,
         for body, sign in ((joint.child, 1.0), (joint.parent, -1.0)):
             if body != GROUND_INDEX:
                 arm = origin - position[:, body]
-                add(body, sign * f, sign * (t + np.cross(arm, f)))
+                lever = np.cross(arm, f)
+                add(body, sign * f, sign * (t + lever), t, lever)
     return BodyBalance(tuple(b.name for b in model.bodies),
                        np.linalg.norm(force_sum, axis=2), np.linalg.norm(moment_sum, axis=2),
                        force_scale, moment_scale)
