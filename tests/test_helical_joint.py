@@ -23,8 +23,8 @@ import numpy as np
 import pytest
 
 import hexapod as hx
+from hexapod.output.actuation import driver_statistics
 from hexapod.output.inverse_csv import inverse_column_units
-from hexapod.output.report import driver_statistics
 from hexapod.scene.element import check_finite
 from hexapod.scene.joints import Cylindrical, register, unregister
 from hexapod.scene.joints.base import AXIS, NUMBER

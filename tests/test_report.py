@@ -16,13 +16,9 @@ from hexapod.algorithms.inverse import inverse_dynamics
 from hexapod.algorithms.kinematics import body_poses, marker_trajectories
 from hexapod.cli import main
 from hexapod.errors import InputFileError
-from hexapod.output.report import (
-    driver_efforts_over_time,
-    driver_statistics,
-    inverse_columns,
-    joint_statistics,
-    time_rms,
-)
+from hexapod.output.actuation import driver_efforts_over_time, driver_statistics
+from hexapod.output.report import inverse_columns, joint_statistics
+from hexapod.output.summary_parts import time_rms
 from hexapod.scene.builtin import DEFAULT_SCENE, builtin_scenes
 from legs import front_leg_scene, walking_leg_scene
 

@@ -26,6 +26,7 @@ from hexapod.cli import main
 from hexapod.cli.common import POLICIES, apply_ground_options, ground_arguments
 from hexapod.errors import HexapodError
 from hexapod.output import figures
+from hexapod.output.actuation import driver_statistics
 from hexapod.output.ground import (
     foot_events,
     foot_loads,
@@ -39,7 +40,6 @@ from hexapod.output.report import (
     RunInfo,
     _effort_figures,
     _wrench_figures,
-    driver_statistics,
     inverse_columns,
     inverse_csv_text,
     summary_markdown,

@@ -35,8 +35,9 @@ DESCRIPTION = (
     "GRz:LEG and status:LEG), "
     "ground.csv (per foot: normal and tangential force, friction ratio, status), trunk.csv (the "
     "trunk's pose and velocity), the policy, the feet's peaks and any slip or pull to "
-    "summary.md, and the figures ground.png, friction.png and gait.png. The directory is "
-    "written whole or not at all.")
+    "summary.md, and the figures ground.png, friction.png and gait.png. With --actuators, "
+    "each driven joint is checked against its motor (motors.csv, motors.png and the summary's "
+    "section). The directory is written whole or not at all.")
 
 
 def add_arguments(parser) -> None:
@@ -62,6 +63,12 @@ def add_arguments(parser) -> None:
                         help="drive the scene's joints by this motion file, as 'hexapod "
                         "inverse' does (columns t, one per joint, optional qd:<joint> and "
                         "qdd:<joint>); the report then spans the motion's samples")
+    parser.add_argument("--actuators", metavar="ACTUATORS.toml",
+                        help="the driven joints' motors (stall torque and no-load speed, or a "
+                        "rated torque and speed; gear ratio; torque constant and winding "
+                        "resistance): adds motors.csv, motors.png and the summary's check of "
+                        "each joint against its motor's torque-speed envelope, with the "
+                        "current and the electrical power and energy")
     inverse_arguments(parser, "as for 'hexapod inverse'")
     limit_arguments(parser)
     ground_arguments(parser)
@@ -101,10 +108,12 @@ def run(args) -> int:
     from hexapod.errors import HexapodError
     from hexapod.model.assemble import assemble
     from hexapod.output.report import FOOT_MARKER, RunInfo, report_files, walking_headlines
+    from hexapod.scene.actuators import read_actuators
 
     scene = scene_of(args, args.scene)
+    actuators = None if args.actuators is None else read_actuators(args.actuators)
     out = output_directory(args.out, f"{scene.name}-report",
-                           inputs=given_files(args.scene, args.motion),
+                           inputs=given_files(args.scene, args.motion, args.actuators),
                            ours=suffixes(".csv", ".md", ".png", ".json"))
     if args.motion is not None:
         scene, times = _driven_by_motion(scene, args)
@@ -121,6 +130,9 @@ def run(args) -> int:
         samples = 501 if args.samples is None else args.samples
         check_inverse_memory(model, samples, args.max_memory, "ask for fewer --samples")
         times = args.start + np.linspace(0.0, duration, samples)
+    if actuators is not None:  # a table that names no driven joint: said before the run
+        actuators.assign([model.joints[d.joint].name for d in model.drivers
+                          if d.kind == "joint"])
     show = show_progress()
     progress = sample_progress("inverse dynamics") if show else None
     started = time.perf_counter()
@@ -135,7 +147,7 @@ def run(args) -> int:
     run = RunInfo(scene.name, args.scene, run_time, f"{why}, {duration:g} s")
     files = report_files(model, result, balance, run, feet, figures=args.figures,
                          workers=_figure_workers(args.leg_figures),
-                         leg_figures=args.leg_figures)
+                         leg_figures=args.leg_figures, actuators=actuators)
     write_directory_atomically(out, files)
     if show:
         print("\r" + " " * 60 + "\r", end="", file=sys.stderr)

@@ -27,6 +27,7 @@ from hexapod.model.infos import (
 )
 from hexapod.model.mass import BlockDiagonal
 from hexapod.model.model import Model, Symbolic
+from hexapod.scene.actuators import effort_limits
 from hexapod.scene.bodies import Particle, PlanarBody, SpatialBody
 from hexapod.scene.drivers import CoordinateDriver, JointDriver
 from hexapod.scene.element import GROUND
@@ -357,10 +358,7 @@ class _Assembly:
                                          ("force", name, "feedforward", None))[0]
         if element.max_effort is None:
             return torque
-        upper, lower = element.max_effort, -element.max_effort
-        if element.no_load_speed is not None:
-            upper = upper * (1 - rate / element.no_load_speed)
-            lower = lower * (1 + rate / element.no_load_speed)
+        lower, upper = effort_limits(element.max_effort, element.no_load_speed, rate)
         return ca.fmin(ca.fmax(torque, lower), upper)
 
     def model(self, rank_tolerance: float, digest: str = "", source: str = "") -> Model:

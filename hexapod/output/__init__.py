@@ -10,6 +10,8 @@ from hexapod._support.lazy import attach
 __getattr__, __dir__, __all__ = attach(__name__, {
     "hexapod.output.report": ["FOOT_MARKER", "RunInfo", "agreement", "figure_builders",
                               "report_files", "wrench_label"],
+    "hexapod.output.actuation": ["MotorCheck", "check_motors"],
+    "hexapod.output.motor_figures": ["envelope_figure"],
     "hexapod.output.inverse_csv": ["inverse_columns", "inverse_csv_text", "inverse_table"],
     "hexapod.output.describe": ["describe_model", "describe_state", "format_model",
                                 "format_state"],

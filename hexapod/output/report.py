@@ -14,8 +14,16 @@ import numpy as np
 
 from hexapod.algorithms.balance import BodyBalance
 from hexapod.algorithms.inverse import InverseResult
-from hexapod.algorithms.liaison import wrenches_from_multipliers
 from hexapod.model.model import GROUND_INDEX, JointInfo, Model
+from hexapod.output.actuation import (
+    DriverStatistics,
+    driver_statistics,
+    motor_checks,
+    motors_csv_columns,
+    motors_csv_text,
+    motors_section,
+    speed_unit,
+)
 from hexapod.output.figures import (
     effort_figure,
     friction_ratio_figure,
@@ -48,8 +56,10 @@ from hexapod.output.inverse_csv import (  # noqa: F401 (re-exported: the CSV's c
     units_path,
     write_inverse_files,
 )
-from hexapod.output.summary_parts import Peak, count, g4, markdown_table
+from hexapod.output.motor_figures import envelope_figure
+from hexapod.output.summary_parts import Peak, count, g4, markdown_table, time_rms
 from hexapod.output.walking_summary import ground_section, trunk_section
+from hexapod.scene.actuators import ActuatorTable
 from hexapod.simulation.results import units_json
 
 
@@ -118,18 +128,6 @@ def _body_name(model: Model, index: int) -> str:
     return "ground" if index == GROUND_INDEX else model.bodies[index].name
 
 
-def time_integral(times: np.ndarray, x: np.ndarray) -> float:
-    """Integral over the samples' span by the trapezoidal rule (0 for one sample)."""
-    return float(np.sum((x[1:] + x[:-1]) * np.diff(times)) / 2)
-
-
-def time_rms(times: np.ndarray, x: np.ndarray) -> float:
-    """Root mean square over time (trapezoidal rule; the value itself for one sample)."""
-    if times.size < 2:
-        return float(np.abs(x).max(initial=0.0))
-    return float(np.sqrt(time_integral(times, x**2) / (times[-1] - times[0])))
-
-
 @dataclass(frozen=True)
 class JointStatistics:
     """Peaks (with their times) and time-RMS of a joint's force and moment magnitudes."""
@@ -144,21 +142,6 @@ class JointStatistics:
     rms_torque: float
 
 
-@dataclass(frozen=True)
-class DriverStatistics:
-    """A driven joint's actuator: its effort (N m or N), the power it delivers (W)."""
-
-    joint: str
-    unit: str
-    effort: np.ndarray
-    power: np.ndarray
-    peak_effort: Peak
-    rms_effort: float
-    peak_power: Peak
-    rms_power: float
-    work: float  # net energy delivered over the run (J)
-
-
 def joint_statistics(model: Model, result: InverseResult) -> list[JointStatistics]:
     t = result.times
     out = []
@@ -169,44 +152,6 @@ def joint_statistics(model: Model, result: InverseResult) -> list[JointStatistic
                                    _body_name(model, joint.parent), _body_name(model, joint.child),
                                    Peak.of(t, force), time_rms(t, force),
                                    Peak.of(t, torque), time_rms(t, torque)))
-    return out
-
-
-def driver_efforts_over_time(model: Model, result: InverseResult) -> dict[str, np.ndarray]:
-    """The effort of each joint driver at every sample, by joint: the joint's axial effort less
-    the springs and efforts acting across it (those are in parallel with the actuator)."""
-    driven = {d.joint: d for d in model.drivers if d.kind == "joint"}
-    efforts = {model.joints[j].name: result.effort[:, j].copy() for j in driven}
-    across = [j for j in driven if model.joints[j].across_column >= 0]
-    if across and model.Q_across is not None:
-        w = model.law_values(result.times)[0].T
-        zero_lam, zero_rows = np.zeros(model.n_c), np.zeros((model.n_c, model.n_v))
-        data = model.create_data()
-        for i in range(result.times.size):
-            q_across = model.call("Q_across", data, q=result.q[i], v=result.v[i], w=w[i])
-            passive = wrenches_from_multipliers(model, result.q[i], zero_lam, zero_rows,
-                                                q_across, data=data).effort
-            for j in across:
-                efforts[model.joints[j].name][i] -= passive[j]
-    return efforts
-
-
-def driver_statistics(model: Model, result: InverseResult) -> list[DriverStatistics]:
-    t = result.times
-    _, wd, _ = model.law_values(t)
-    efforts = driver_efforts_over_time(model, result)
-    out = []
-    for driver in model.drivers:
-        if driver.kind != "joint":
-            continue
-        joint = model.joints[driver.joint]
-        effort = efforts[joint.name]
-        rate = wd[driver.law] if driver.law >= 0 else np.zeros_like(t)
-        power = effort * rate
-        work = time_integral(t, power)
-        out.append(DriverStatistics(joint.name, joint.type.effort_unit,
-                                    effort, power, Peak.of(t, effort), time_rms(t, effort),
-                                    Peak.of(t, power), time_rms(t, power), work))
     return out
 
 
@@ -235,7 +180,8 @@ class RunInfo:
 def summary_markdown(model: Model, result: InverseResult, balance: BodyBalance,
                      run: RunInfo, drivers: list[DriverStatistics], figures: list[str],
                      loads: FootLoads | None = None,
-                     trunks: list[TrunkMotion] | None = None) -> str:
+                     trunks: list[TrunkMotion] | None = None,
+                     motor_lines: list[str] = ()) -> str:
     """The report's summary: the run, the joints, the drivers (and their peaks per joint type
     for a robot), the feet's ground reactions and the trunk's motion (a walking robot:
     ``loads``, ``trunks``), the bodies' balance."""
@@ -274,15 +220,19 @@ def summary_markdown(model: Model, result: InverseResult, balance: BodyBalance,
          for s in joint_statistics(model, result)])
     if drivers:
         lines += ["", "## Drivers", "",
-                  "The actuator's effort about (along) the joint axis, and the power it "
-                  "delivers, effort times joint rate; work is the net energy over the run.", ""]
+                  "The actuator's effort about (along) the joint axis, the joint's speed, and "
+                  "the power it delivers, effort times joint rate; work is the net energy over "
+                  "the run, positive work the energy delivered where the power is positive.", ""]
         lines += markdown_table(
-            ["joint", "peak \\|effort\\|", "at t (s)", "RMS effort", "peak \\|power\\| (W)",
-             "at t (s)", "RMS power (W)", "work (J)"],
+            ["joint", "peak \\|effort\\|", "at t (s)", "RMS effort", "peak \\|speed\\|",
+             "peak \\|power\\| (W)", "at t (s)", "RMS power (W)", "work (J)",
+             "positive work (J)"],
             [[f"`{d.joint}`", f"{g4(d.peak_effort.value)} {d.unit}", f"{d.peak_effort.time:.4g}",
-              f"{g4(d.rms_effort)} {d.unit}", g4(d.peak_power.value),
-              f"{d.peak_power.time:.4g}", g4(d.rms_power), g4(d.work)] for d in drivers])
+              f"{g4(d.rms_effort)} {d.unit}", f"{g4(d.peak_speed.value)} {speed_unit(d)}",
+              g4(d.peak_power.value), f"{d.peak_power.time:.4g}", g4(d.rms_power),
+              g4(d.work), g4(d.positive_work)] for d in drivers])
         lines += _effort_type_section(drivers)
+    lines += motor_lines
     if loads is not None:
         lines += ground_section(model, result, loads)
     if trunks:
@@ -485,7 +435,8 @@ def _ground_figures(model: Model, loads: FootLoads, scene: str) -> dict:
 
 def report_files(model: Model, result: InverseResult, balance: BodyBalance, run: RunInfo,
                  feet: dict[str, np.ndarray], *, figures: bool = True,
-                 workers: int = 1, leg_figures: bool = False) -> dict[str, bytes]:
+                 workers: int = 1, leg_figures: bool = False,
+                 actuators: ActuatorTable | None = None) -> dict[str, bytes]:
     """Every file of the report, in memory: ``inverse.csv``, ``units.json`` (the unit and
     meaning of every column of every CSV), ``summary.md`` and the figures
     (``forces.png``, ``torques.png``; ``efforts.png`` when there are joint drivers;
@@ -519,6 +470,9 @@ def report_files(model: Model, result: InverseResult, balance: BodyBalance, run:
     leg_figures : bool
         For a robot, also one sheet per leg of its joints' forces, moments and efforts (the
         components and the power), beside the sheets that put the legs side by side.
+    actuators : ActuatorTable, optional
+        The driven joints' motors (:func:`hexapod.read_actuators`): adds ``motors.csv``, the
+        summary's section on them and ``motors.png`` (:mod:`hexapod.output.actuation`).
 
     Returns
     -------
@@ -542,9 +496,19 @@ def report_files(model: Model, result: InverseResult, balance: BodyBalance, run:
         if trunks:
             files["trunk.csv"] = trunk_csv_text(t, trunks).encode()
             units["trunk.csv"] = trunk_csv_columns([m.body for m in trunks])
+    motor_lines: list[str] = []
+    if actuators is not None:
+        assigned = actuators.assign([d.joint for d in drivers])
+        checks = motor_checks(t, drivers, assigned)
+        files["motors.csv"] = motors_csv_text(checks).encode()
+        units["motors.csv"] = motors_csv_columns(checks)
+        motor_lines = motors_section(checks, [d.joint for d in drivers if d.joint not in
+                                              assigned], actuators.source)
+        if figures and checks:
+            drawn["motors.png"] = partial(envelope_figure, checks, f"{run.scene}: motors")
     files["units.json"] = units_json(units).encode()
     files["summary.md"] = summary_markdown(model, result, balance, run, drivers,
-                                           list(drawn), loads, trunks).encode()
+                                           list(drawn), loads, trunks, motor_lines).encode()
     files.update(render_figures(drawn, workers))
     return files
 

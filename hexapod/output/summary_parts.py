@@ -35,3 +35,15 @@ def markdown_table(header: list[str], rows: list[list[str]]) -> list[str]:
     """The lines of a Markdown table."""
     return ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"] + [
         "| " + " | ".join(row) + " |" for row in rows]
+
+
+def time_integral(times: np.ndarray, x: np.ndarray) -> float:
+    """Integral over the samples' span by the trapezoidal rule (0 for one sample)."""
+    return float(np.sum((x[1:] + x[:-1]) * np.diff(times)) / 2)
+
+
+def time_rms(times: np.ndarray, x: np.ndarray) -> float:
+    """Root mean square over time (trapezoidal rule; the value itself for one sample)."""
+    if times.size < 2:
+        return float(np.abs(x).max(initial=0.0))
+    return float(np.sqrt(time_integral(times, x**2) / (times[-1] - times[0])))

@@ -27,6 +27,7 @@ __getattr__, __dir__, __all__ = attach(__name__, {
                            "Polynomial", "Spline", "cycle_breaks"],
     # files, motions and the built-in scenes
     "hexapod.scene.reader": ["read_scene"],
+    "hexapod.scene.actuators": ["Actuator", "ActuatorTable", "effort_limits", "read_actuators"],
     "hexapod.scene.writer": ["scene_text", "write_scene"],
     "hexapod.scene.urdf": ["read_urdf", "urdf_text"],
     "hexapod.scene.motion": ["Motion", "MotionWarning", "apply_motion", "read_motion"],

@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from hexapod.output.report import time_integral, time_rms
+from hexapod.output.summary_parts import time_integral, time_rms
 
 #: The metric families of each job kind, in the table's column order.
 FAMILIES = {
