@@ -10,6 +10,7 @@ l)``."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -160,3 +161,32 @@ def test_the_controller_and_the_check_share_the_envelope(tmp_path):
     (tmp_path / "empty.toml").write_text("title = 'nothing'\n")
     with pytest.raises(InputFileError, match="no \\[\\[actuator\\]\\] entries"):
         hx.scene.read_actuators(tmp_path / "empty.toml")
+
+
+def test_a_robots_motors_figure_has_a_panel_per_joint_type_and_motor(turn, tmp_path):
+    """Joints named ``<leg>/<joint>`` share a panel per joint type and motor, a line per leg:
+    four joints of two types on two legs make two panels of two lines."""
+    import dataclasses
+
+    model, result = turn
+    (check,) = hx.output.check_motors(model, result, table(tmp_path))
+    checks = [dataclasses.replace(check, driver=dataclasses.replace(check.driver, joint=name))
+              for name in ("L1/ctr", "L1/fti", "R1/ctr", "R1/fti")]
+    figure = hx.output.envelope_figure(checks, "robot")
+    titles = sorted(ax.get_title() for ax in figure.axes)
+    assert titles == ["ctr: geared DC motor", "fti: geared DC motor"]
+    assert all(len(ax.get_legend().get_texts()) == 2 for ax in figure.axes)
+
+
+def test_the_built_in_robots_table_gives_each_driven_joint_one_motor():
+    """``data/actuators/hexapod.toml`` covers the walking robot's 36 driven joints, each
+    once, and each motor in it is a DC motor by its own numbers: no-load speed = stall torque
+    x resistance / torque constant^2, to the 4 digits written."""
+    path = Path(__file__).resolve().parents[1] / "data" / "actuators" / "hexapod.toml"
+    motors = hx.scene.read_actuators(path)
+    driven = [d.joint for d in hx.load_scene("hexapod").drivers.values()
+              if isinstance(d, hx.scene.JointDriver)]
+    assert len(driven) == 36 and set(motors.assign(driven)) == set(driven)
+    for motor in motors.actuators:
+        implied = motor.stall_torque * motor.resistance / motor.torque_constant**2
+        assert implied == pytest.approx(motor.no_load_speed, rel=1e-3)
