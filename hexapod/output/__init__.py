@@ -12,6 +12,8 @@ __getattr__, __dir__, __all__ = attach(__name__, {
                               "report_files", "wrench_label"],
     "hexapod.output.actuation": ["MotorCheck", "check_motors"],
     "hexapod.output.motor_figures": ["envelope_figure"],
+    "hexapod.output.stability": ["Stability", "signed_distance", "stability_figure",
+                                 "stability_margins"],
     "hexapod.output.inverse_csv": ["inverse_columns", "inverse_csv_text", "inverse_table"],
     "hexapod.output.describe": ["describe_model", "describe_state", "format_model",
                                 "format_state"],

@@ -57,6 +57,13 @@ from hexapod.output.inverse_csv import (  # noqa: F401 (re-exported: the CSV's c
     write_inverse_files,
 )
 from hexapod.output.motor_figures import envelope_figure
+from hexapod.output.stability import (
+    stability_csv_columns,
+    stability_csv_text,
+    stability_figure,
+    stability_margins,
+    stability_section,
+)
 from hexapod.output.summary_parts import Peak, count, g4, markdown_table, time_rms
 from hexapod.output.walking_summary import ground_section, trunk_section
 from hexapod.scene.actuators import ActuatorTable
@@ -181,10 +188,11 @@ def summary_markdown(model: Model, result: InverseResult, balance: BodyBalance,
                      run: RunInfo, drivers: list[DriverStatistics], figures: list[str],
                      loads: FootLoads | None = None,
                      trunks: list[TrunkMotion] | None = None,
-                     motor_lines: list[str] = ()) -> str:
+                     more: list[str] = ()) -> str:
     """The report's summary: the run, the joints, the drivers (and their peaks per joint type
     for a robot), the feet's ground reactions and the trunk's motion (a walking robot:
-    ``loads``, ``trunks``), the bodies' balance."""
+    ``loads``, ``trunks``), ``more`` sections (the stability margins, the motors' check), the
+    bodies' balance."""
     t = result.times
     frame = ("the child's joint frame" if result.frame == "joint" else "world axes")
     mass = (f", total mass {model.total_mass:.4g} kg" if loads is not None else "")
@@ -232,11 +240,11 @@ def summary_markdown(model: Model, result: InverseResult, balance: BodyBalance,
               g4(d.peak_power.value), f"{d.peak_power.time:.4g}", g4(d.rms_power),
               g4(d.work), g4(d.positive_work)] for d in drivers])
         lines += _effort_type_section(drivers)
-    lines += motor_lines
     if loads is not None:
         lines += ground_section(model, result, loads)
     if trunks:
         lines += trunk_section(trunks)
+    lines += more  # the stability and the motors, when the report has them
     relative = balance.relative()
     lines += ["", "## Balance of each body", "",
               "Largest residual over the samples of each body's Newton-Euler equations under "
@@ -496,19 +504,27 @@ def report_files(model: Model, result: InverseResult, balance: BodyBalance, run:
         if trunks:
             files["trunk.csv"] = trunk_csv_text(t, trunks).encode()
             units["trunk.csv"] = trunk_csv_columns([m.body for m in trunks])
-    motor_lines: list[str] = []
+        margins = stability_margins(model, result)
+        files["stability.csv"] = stability_csv_text(margins).encode()
+        units["stability.csv"] = stability_csv_columns()
+        if figures:
+            drawn["stability.png"] = partial(stability_figure, margins,
+                                             f"{run.scene}: stability")
+    more: list[str] = []
     if actuators is not None:
         assigned = actuators.assign([d.joint for d in drivers])
         checks = motor_checks(t, drivers, assigned)
         files["motors.csv"] = motors_csv_text(checks).encode()
         units["motors.csv"] = motors_csv_columns(checks)
-        motor_lines = motors_section(checks, [d.joint for d in drivers if d.joint not in
+        more = motors_section(checks, [d.joint for d in drivers if d.joint not in
                                               assigned], actuators.source)
         if figures and checks:
             drawn["motors.png"] = partial(envelope_figure, checks, f"{run.scene}: motors")
     files["units.json"] = units_json(units).encode()
+    if loads is not None:
+        more = stability_section(margins) + more
     files["summary.md"] = summary_markdown(model, result, balance, run, drivers,
-                                           list(drawn), loads, trunks, motor_lines).encode()
+                                           list(drawn), loads, trunks, more).encode()
     files.update(render_figures(drawn, workers))
     return files
 
