@@ -14,6 +14,10 @@ peak_ground:LEG        N       largest ``|F|`` of the ground's force on the foot
 friction_ratio:LEG             largest ``|F_t| / (mu F_n)`` of a loaded foot (above 1: outside
                                the friction cone; infinite: the ground would pull)
 slip_samples           1       samples where a foot slips or is pulled, whatever the policy
+static_margin          m       smallest static stability margin (the centre of mass's
+                               projection to the support polygon's nearest edge; negative
+                               outside)
+cop_margin             m       smallest margin of the centre of pressure (the ZMP)
 energy                 J       the actuators' positive work per stride, ``int sum max(tau w, 0)``
 cost_of_transport      1       that work over ``m g d``, ``d`` the horizontal distance the
                                centre of mass travels in the stride (NaN when it stays put)
@@ -35,12 +39,13 @@ from hexapod.output.summary_parts import time_integral, time_rms
 #: The metric families of each job kind, in the table's column order.
 FAMILIES = {
     "inverse": ("peak_effort", "rms_effort", "peak_force", "peak_moment", "peak_ground",
-                "friction_ratio", "slip_samples", "energy", "cost_of_transport",
-                "max_violation"),
+                "friction_ratio", "slip_samples", "static_margin", "cop_margin", "energy",
+                "cost_of_transport", "max_violation"),
     "simulate": ("peak_effort", "rms_effort", "peak_force", "peak_moment", "energy_drift",
                  "max_position_violation", "max_velocity_violation", "t_reached", "steps"),
 }
 _UNITS = {"peak_force": "N", "peak_moment": "N m", "peak_ground": "N", "energy": "J",
+          "static_margin": "m", "cop_margin": "m",
           "t_reached": "s", "max_velocity_violation": "1/s"}
 
 
@@ -73,6 +78,13 @@ def inverse_metrics(model, result, families, strides: float) -> dict[str, float]
                                                 else float("nan"))
         if "slip_samples" in families:
             out["slip_samples"] = float(np.sum(loads.infeasible.any(axis=1)))
+        if {"static_margin", "cop_margin"} & set(families):
+            from hexapod.output.stability import stability_margins
+
+            margins = stability_margins(model, result)
+            for name in ("static_margin", "cop_margin"):
+                if name in families:
+                    out[name] = float(np.nanmin(getattr(margins, name)))
     if {"energy", "cost_of_transport"} & set(families):
         work = positive_work(model, t, result.effort, driven)
         if "energy" in families:
