@@ -23,7 +23,7 @@ SERIES = re.compile(r"^(t|[A-Za-z][A-Za-z0-9_]*:[A-Za-z0-9_./-]+)$")
 #: a record (one row per run or case): a field, or ``family:element``
 RECORD = re.compile(r"^[A-Za-z][A-Za-z0-9_]*(:[A-Za-z0-9_./-]+)?$")
 UNITS = {"s", "m", "rad", "kg", "N", "N m", "J", "m/s", "rad/s", "m/s^2", "rad/s^2", "N/m",
-         "1/s", "1", None}
+         "1/s", "A", "W", "1", None}
 
 
 def read_table(path: Path) -> tuple[list[str], list[list[str]]]:
@@ -68,13 +68,15 @@ def no_figures(monkeypatch):
 
 @pytest.mark.parametrize("scene, tables", [
     ("front-leg", ["inverse.csv"]),
-    ("hexapod", ["ground.csv", "inverse.csv", "trunk.csv"]),
+    ("hexapod", ["ground.csv", "inverse.csv", "margins.csv", "trunk.csv", "motors.csv"]),
 ])
 def test_a_report_describes_every_csv_it_writes(tmp_path, capsys, no_figures, scene, tables):
     out = tmp_path / "report"
-    assert main(["report", scene, "--samples", "2", "--out", str(out)]) == 0
+    motors = ["--actuators", str(ROOT / "data" / "actuators" / "hexapod.toml")] \
+        if "motors.csv" in tables else []
+    assert main(["report", scene, "--samples", "2", "--out", str(out), *motors]) == 0
     units = check_described(out, out / "units.json", SERIES)
-    assert sorted(units) == tables
+    assert sorted(units) == sorted(tables)
     model = hx.assemble(hx.load_scene(scene))
     known = elements(model)
     for name in ("inverse.csv", "ground.csv"):
@@ -87,6 +89,9 @@ def test_a_report_describes_every_csv_it_writes(tmp_path, capsys, no_figures, sc
         assert units["ground.csv"]["status:L1"]["unit"] is None
         assert units["ground.csv"]["ratio:R3"]["unit"] == "1"
         assert units["inverse.csv"]["GRz:L1"]["unit"] == "N"
+        assert units["margins.csv"]["margin:static"]["unit"] == "m"
+        assert units["motors.csv"]["P_el:L1/ctr"]["unit"] == "W"
+        assert units["motors.csv"]["I:L1/ctr"]["unit"] == "A"
 
 
 def test_simulate_describes_its_csv_and_its_npz(tmp_path, capsys):

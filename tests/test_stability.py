@@ -102,15 +102,15 @@ def test_the_signed_distance_in_closed_form():
 
 
 def test_the_report_writes_the_margins(walking):
-    """``stability.csv`` holds the margins the module computes, and the summary their
+    """``margins.csv`` holds the margins the module computes, and the summary their
     smallest values."""
     model, result, margins = walking
     balance = hx.body_balance(model, result.times, result.q, result.v, result.v_dot,
                               result.force, result.torque, result.frame)
     run = hx.output.RunInfo("hexapod", "hexapod", 1.0, "a stride")
     files = hx.output.report_files(model, result, balance, run, {}, figures=False)
-    lines = files["stability.csv"].decode().splitlines()
-    assert lines[0] == "t,com_x,com_y,cop_x,cop_y,static_margin,cop_margin"
+    lines = files["margins.csv"].decode().splitlines()
+    assert lines[0] == "t,com:x,com:y,cop:x,cop:y,margin:static,margin:cop"
     table = np.array([[float(x) for x in line.split(",")] for line in lines[1:]])
     np.testing.assert_array_equal(table[:, 5], margins.static_margin)
     summary = files["summary.md"].decode()

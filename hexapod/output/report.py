@@ -58,8 +58,8 @@ from hexapod.output.inverse_csv import (  # noqa: F401 (re-exported: the CSV's c
 )
 from hexapod.output.motor_figures import envelope_figure
 from hexapod.output.stability import (
-    stability_csv_columns,
-    stability_csv_text,
+    margins_csv_columns,
+    margins_csv_text,
     stability_figure,
     stability_margins,
     stability_section,
@@ -505,10 +505,10 @@ def report_files(model: Model, result: InverseResult, balance: BodyBalance, run:
             files["trunk.csv"] = trunk_csv_text(t, trunks).encode()
             units["trunk.csv"] = trunk_csv_columns([m.body for m in trunks])
         margins = stability_margins(model, result)
-        files["stability.csv"] = stability_csv_text(margins).encode()
-        units["stability.csv"] = stability_csv_columns()
+        files["margins.csv"] = margins_csv_text(margins).encode()
+        units["margins.csv"] = margins_csv_columns()
         if figures:
-            drawn["stability.png"] = partial(stability_figure, margins,
+            drawn["margins.png"] = partial(stability_figure, margins,
                                              f"{run.scene}: stability")
     more: list[str] = []
     if actuators is not None:

@@ -170,23 +170,24 @@ def signed_distance(point: np.ndarray, polygon: np.ndarray) -> float:
     return float(-beyond.max()) if np.all(beyond <= 0) else -float(nearest)
 
 
-def stability_csv_columns() -> dict[str, tuple[str, str]]:
-    """The columns of ``stability.csv``, each with its unit and meaning."""
+def margins_csv_columns() -> dict[str, tuple[str, str]]:
+    """The columns of ``margins.csv``, each with its unit and meaning."""
     return {"t": ("s", "time"),
-            "com_x": ("m", "the centre of mass projected on the ground's plane, first axis"),
-            "com_y": ("m", "the same, second axis"),
-            "cop_x": ("m", "the centre of pressure (ZMP), first axis; nan in flight"),
-            "cop_y": ("m", "the same, second axis"),
-            "static_margin": ("m", "distance from the centre of mass's projection to the "
-                              "support polygon's nearest edge, negative outside"),
-            "cop_margin": ("m", "the same for the centre of pressure")}
+            "com:x": ("m", "the centre of mass projected on the ground's plane, first axis"),
+            "com:y": ("m", "the same, second axis"),
+            "cop:x": ("m", "the centre of pressure (ZMP), first axis; nan in flight"),
+            "cop:y": ("m", "the same, second axis"),
+            "margin:static": ("m", "static stability margin: distance from the centre of "
+                              "mass's projection to the support polygon's nearest edge, "
+                              "negative outside"),
+            "margin:cop": ("m", "the same for the centre of pressure")}
 
 
-def stability_csv_text(margins: Stability) -> str:
-    """``stability.csv`` (:func:`stability_csv_columns`)."""
+def margins_csv_text(margins: Stability) -> str:
+    """``margins.csv`` (:func:`margins_csv_columns`)."""
     table = np.column_stack([margins.times, margins.com, margins.cop, margins.static_margin,
                              margins.cop_margin])
-    lines = [",".join(stability_csv_columns())]
+    lines = [",".join(margins_csv_columns())]
     lines += [",".join(f"{x:.17g}" for x in row) for row in table]
     return "\n".join(lines) + "\n"
 
