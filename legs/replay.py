@@ -176,7 +176,8 @@ def critical_gains(model, q: np.ndarray, bandwidth: float) -> tuple[dict, dict]:
 
 
 def grounded_scene(scene: Scene, result, *, kp, kd, mu: float | None = None,
-                   breaks=None, degree: int = EFFORT_DEGREE, periodic: bool = False) -> Scene:
+                   breaks=None, degree: int = EFFORT_DEGREE, periodic: bool = False,
+                   actuators=None) -> Scene:
     """The driven walking ``scene`` on real ground under joint control: its forward twin
     (:func:`replay_scene`, starting at the first sample's state) with each joint's effort
     replaced by a :class:`hexapod.scene.JointController` named ``<driver>/servo`` (target the
@@ -187,7 +188,10 @@ def grounded_scene(scene: Scene, result, *, kp, kd, mu: float | None = None,
     of its footholds, friction ``mu`` (default the scene's ``[ground] mu``), plastic. The feet then
     land and lift off where the controlled motion takes them, not where the schedule says;
     simulate it with ``moreau-jean``. ``periodic``: the efforts of ``result`` (one cycle)
-    repeat, for runs of many strides."""
+    repeat, for runs of many strides. ``actuators`` (a
+    :class:`hexapod.scene.ActuatorTable`): each controller whose joint has a motor there is
+    limited by it (``max_effort`` its stall torque times the gear ratio, ``no_load_speed`` its
+    no-load speed over it; a rated envelope limits the effort alone)."""
     twin = replay_scene(scene, result, breaks=breaks, degree=degree,
                         name=f"{scene.name}-on-ground", periodic=periodic)
     drivers = _drivers(scene)
@@ -195,12 +199,18 @@ def grounded_scene(scene: Scene, result, *, kp, kd, mu: float | None = None,
                 twin.characteristic_length, twin.source, report_forces=twin.report_forces,
                 ground=twin.ground)
     gain = 1.0 / scene.unit  # N m per rad in the scene's unit of length (N L)
+    motors = actuators.assign(list(drivers)) if actuators is not None else {}
     for element in twin.elements:
         if isinstance(element, JointEffort):
             driver = drivers[element.joint]
             p, d = ((g[element.joint] if isinstance(g, dict) else g) for g in (kp, kd))
+            limit, no_load = None, None
+            if element.joint in motors:
+                limit, no_load, _ = motors[element.joint].joint_limits()
+                limit *= gain
             out.add(JointController(f"{driver.name}/servo", element.joint, target=driver.law,
-                                    kp=p * gain, kd=d * gain, feedforward=element.law))
+                                    kp=p * gain, kd=d * gain, feedforward=element.law,
+                                    max_effort=limit, no_load_speed=no_load))
         elif isinstance(element, Contact):
             out.add(GroundContact(element.name, element.child,  # the plane of its footholds
                                   point=element.child_frame.position,

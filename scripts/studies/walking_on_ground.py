@@ -16,10 +16,13 @@ feet's normal forces from the inverse dynamics' inside the stances, and the feet
 inside a stance beside those the inverse dynamics marks ``slip`` at ``--mu`` (its friction
 demand ``|F_t| / F_n`` above it). With ``--figures DIR``, the simulated gait against the
 scheduled one (``gait.png``), the ground forces (``contacts.png``) and the tracking errors
-(``tracking.png``) are written there; nothing else is written.
+(``tracking.png``) are written there; nothing else is written. With ``--actuators TABLE``
+each controller is limited by its joint's motor (its torque-speed line), as a robot with
+those motors would be.
 
     python3 scripts/studies/walking_on_ground.py [--gait tripod] [--kp 200] [--kd 2]
         [--bandwidth HZ] [--mu 0.8] [--step 1e-3] [--tol 3e-6] [--strides 1] [--figures DIR]
+        [--actuators TABLE.toml]
 """
 
 from __future__ import annotations
@@ -160,6 +163,9 @@ def main() -> None:
                              "at this bandwidth, instead of --kp and --kd")
     parser.add_argument("--strides", type=int, default=1)
     parser.add_argument("--figures", type=Path, default=None, help="a folder for the figures")
+    parser.add_argument("--actuators", type=Path, default=None,
+                        help="an actuator table: each controller limited by its joint's motor "
+                        "(e.g. data/actuators/hexapod.toml)")
     args = parser.parse_args()
     period = STRIDE_PERIOD
     scene = hexapod_scene(gait=args.gait, trunk="free", period=period)
@@ -174,8 +180,9 @@ def main() -> None:
         print(f"gains at {args.bandwidth:g} Hz: kp {min(kp.values()):.3g} to "
               f"{max(kp.values()):.3g} N m/rad, kd {min(kd.values()):.3g} to "
               f"{max(kd.values()):.3g} N m s/rad")
+    motors = None if args.actuators is None else hx.scene.read_actuators(args.actuators)
     grounded = hx.assemble(grounded_scene(scene, inverse, kp=kp, kd=kd, mu=args.mu,
-                                          periodic=True))
+                                          periodic=True, actuators=motors))
     t_end = args.strides * period
     mark = time.process_time()
     result = hx.simulate(grounded, t_end, method="moreau-jean", step=args.step)

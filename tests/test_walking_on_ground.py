@@ -1,0 +1,64 @@
+"""The walking robot on real ground (``legs.replay.grounded_scene``): each joint under a PD
+controller fed forward with the inverse dynamics' efforts, each foot a unilateral contact with
+Coulomb friction, simulated by Moreau-Jean. The study of many strides is
+``scripts/studies/walking_on_ground.py``; here the first 20 ms of a stride, where the forward
+run and the inverse dynamics must agree: the feet the gait keeps down are pushed by the
+ground, those it lifts are not, and each stance foot's normal force is the inverse dynamics'
+to 1 N (0.5 % of the weight: the joints track to 0.2 mrad; measured 0.2 N). With the robot's
+actuator table each controller is limited by its motor.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from robots import builtin_model
+
+import hexapod as hx
+from legs.replay import grounded_scene
+from legs.robot import hexapod_scene
+
+ROOT = Path(__file__).resolve().parents[1]
+WINDOW = 0.05  # s: the efforts tabulated (one spline piece)
+RUN = 0.02  # s simulated
+
+
+@pytest.fixture(scope="module")
+def on_ground():
+    scene = hexapod_scene(gait="tripod", trunk="free", period=0.5)
+    driven = builtin_model("hexapod")  # the same robot, assembled once per test process
+    times = np.linspace(0.0, WINDOW, 26)
+    inverse = hx.inverse_dynamics(driven, times)
+    table = hx.scene.read_actuators(ROOT / "data" / "actuators" / "hexapod.toml")
+    grounded = grounded_scene(scene, inverse, kp=200.0, kd=2.0, breaks=[0.0, WINDOW],
+                              actuators=table)
+    model = hx.assemble(grounded)
+    run = hx.simulate(model, RUN, method="moreau-jean", step=1e-3)
+    return driven, inverse, grounded, table, run
+
+
+def test_the_controllers_take_their_motors_limits(on_ground):
+    _, _, grounded, table, _ = on_ground
+    servos = [f for f in grounded.forces.values() if isinstance(f, hx.scene.JointController)]
+    assert len(servos) == 36
+    motors = table.assign([s.joint for s in servos])
+    for servo in servos:
+        motor = motors[servo.joint]
+        assert servo.max_effort == pytest.approx(motor.gear_ratio * motor.stall_torque)
+        assert servo.no_load_speed == pytest.approx(motor.no_load_speed / motor.gear_ratio)
+
+
+def test_the_first_steps_on_the_ground_carry_the_inverse_dynamics_forces(on_ground):
+    driven, inverse, _, _, run = on_ground
+    assert run.status == "finished"
+    assert np.abs(run.tracking).max() < 2e-4
+    k = int(np.argmin(np.abs(run.t - RUN)))
+    j = int(np.argmin(np.abs(inverse.times - RUN)))
+    assert run.t[k] == pytest.approx(RUN) and inverse.times[j] == pytest.approx(RUN)
+    simulated, expected = run.contact_forces[k], inverse.ground_force[j]
+    stance = np.array([bool(c.in_stance(RUN)) for c in driven.contacts])
+    assert stance.sum() == 3
+    assert np.all(simulated[stance, 2] > 10.0) and np.all(simulated[~stance] == 0.0)
+    assert np.abs(simulated[stance, 2] - expected[stance, 2]).max() < 1.0
