@@ -8,33 +8,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from test_controller import rod as servo_rod
 
-import hexapod
 from hexapod.simulation.kernels import CompiledContactStep
 
-ROD = """
-[scene]
-name = "servo-rod"
-dimension = 2
-gravity = [0.0, -9.81]
-
-[[body]]
-name = "rod"
-mass = 1.0
-inertia = 0.08333333333333333
-position = [0.0, 0.0]
-com = [0.5, 0.0]
-
-[[joint]]
-name = "hinge"
-type = "revolute"
-parent = "ground"
-child = "rod"
-
-[[force]]
-name = "servo"
-type = "controller"
-joint = "hinge"
+SERVO = """
 target = { type = "harmonic", sin = [0.3], frequency = 1.0 }
 kp = 50.0
 kd = 3.0
@@ -44,9 +22,8 @@ H, THETA, T = 1e-2, 0.5, 0.13
 
 @pytest.fixture(scope="module")
 def rod(tmp_path_factory):
-    path = tmp_path_factory.mktemp("rod") / "rod.toml"
-    path.write_text(ROD)
-    return hexapod.assemble(hexapod.read_scene(path))
+    """The servo rod of tests/test_controller.py under gravity, its PD gains nonzero."""
+    return servo_rod(tmp_path_factory.mktemp("rod"), SERVO, gravity=-9.81)
 
 
 def _named(function, **values):
