@@ -12,6 +12,7 @@ import numpy as np
 from bench_forward_problems import Reference
 from bench_forward_report import fmt, method_row
 from bench_forward_runs import TARGET, Run
+from measure import mujoco_warnings_to_stderr
 
 import hexapod as hx
 from hexapod.scene import urdf_text
@@ -45,6 +46,7 @@ class MujocoModel:
         import mujoco
 
         self.mj, self.hx_model = mujoco, model
+        mujoco_warnings_to_stderr(mujoco)
         text = urdf_text(scene).replace("</robot>", COMPILER + "\n</robot>")
         m = self.m = mujoco.MjModel.from_xml_string(text)
         m.opt.gravity[:] = model.gravity

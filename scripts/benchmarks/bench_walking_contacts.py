@@ -40,7 +40,7 @@ import sys
 import time
 from pathlib import Path
 
-from measure import log, one_blas_thread, start
+from measure import log, mujoco_warnings_to_stderr, one_blas_thread, start
 
 one_blas_thread()  # before NumPy loads
 
@@ -101,6 +101,7 @@ class MujocoRobot:
         import mujoco
 
         self.mj = mujoco
+        mujoco_warnings_to_stderr(mujoco)
         spec = mujoco.MjSpec.from_string(
             hx.scene.urdf_text(scene).replace("</robot>", COMPILER + "\n</robot>"))
         spec.body("trunk").add_freejoint()

@@ -39,6 +39,12 @@ def log(message: str) -> None:
     print(message, file=sys.stderr, flush=True)
 
 
+def mujoco_warnings_to_stderr(mujoco) -> None:
+    """MuJoCo's warnings on stderr: its default handler also appends them to MUJOCO_LOG.TXT
+    in the working directory, and a benchmark writes nothing."""
+    mujoco.set_mju_user_warning(lambda text: log(f"MuJoCo warning: {text}"))
+
+
 def load_average() -> str:
     """The machine's load average over 1, 5 and 15 minutes, with its number of cores."""
     try:
