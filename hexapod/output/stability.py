@@ -76,14 +76,13 @@ def stability_margins(model: Model, result: InverseResult) -> Stability:
     Stability
     """
     t = result.times
-    axes = _plane_axes(np.asarray(model.gravity, dtype=float))
+    axes, normal = _plane_axes(np.asarray(model.gravity, dtype=float))
     positions, rotations = body_poses(model, result.q)
     masses = np.array([body.mass for body in model.bodies])
     com = np.einsum("b,nbi->ni", masses, positions) / masses.sum() @ axes.T
     feet = np.stack([_foot(model, contact, positions, rotations) for contact in model.contacts],
                     axis=1)  # (N, C, 3), world
     feet_plane = feet @ axes.T
-    normal = -np.asarray(model.gravity, dtype=float) / np.linalg.norm(model.gravity)
     pushed = np.asarray(result.ground_force, dtype=float) @ normal  # (N, C)
     total = pushed.sum(axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -96,13 +95,14 @@ def stability_margins(model: Model, result: InverseResult) -> Stability:
                      np.array([signed_distance(p, s) for p, s in zip(cop, support, strict=True)]))
 
 
-def _plane_axes(gravity: np.ndarray) -> np.ndarray:
-    """Two unit axes normal to gravity: world x and y when gravity is along -z."""
+def _plane_axes(gravity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Two unit axes normal to gravity (world x and y when gravity is along -z, or without
+    gravity) and the upward unit normal."""
     up = -gravity / np.linalg.norm(gravity) if np.any(gravity) else np.array([0.0, 0.0, 1.0])
     first = np.eye(3)[int(np.argmin(np.abs(up)))] if abs(up[2]) < 0.9 else np.eye(3)[0]
     first = first - (first @ up) * up
     first /= np.linalg.norm(first)
-    return np.array([first, np.cross(up, first)])
+    return np.array([first, np.cross(up, first)]), up
 
 
 def _foot(model: Model, contact, positions: np.ndarray, rotations: np.ndarray) -> np.ndarray:
