@@ -14,9 +14,8 @@ Inputs of every Function (absent ones are dropped from the signature when a scen
 ``wdd``      n_w     their second time derivatives
 ===========  ======  =====================================================================
 
-Functions: ``phi(q, w)``, ``Phi_q(q, w)``, ``Phi_v(q, w)``, ``nu(q, w, wd)``,
-``gamma(q, v, w, wd, wdd)``, ``M()``, ``Q(q, v, w)``; ``Phi_v v = nu`` and
-``Phi_v v_dot = gamma`` along motions, ``M v_dot + Phi_v^T lambda = Q``.
+Functions: ``phi``, ``Phi_q``, ``Phi_v`` (of q, w), ``nu`` (q, w, wd), ``gamma``, ``M``, ``Q``;
+``Phi_v v = nu``, ``Phi_v v_dot = gamma``, ``M v_dot + Phi_v^T lambda = Q`` along motions.
 """
 
 from __future__ import annotations
@@ -258,11 +257,12 @@ class Model:
         """Values and derivatives of every law at ``t``: arrays (n_w,) or (n_w, len(t)).
 
         With ``data``, the values at the times of the last call with several times are kept
-        there: an algorithm that walks through samples one by one (the saddle path of the
-        inverse dynamics) asks for the same numbers again, and some laws (a gait's inverse
-        kinematics) cost far less per sample when evaluated together. The model keeps the last
+        there: the saddle path of the inverse dynamics asks for them again sample by sample,
+        and some laws cost far less per sample evaluated together. The model keeps the last
         few single times' (:class:`~hexapod.model.law_values.RecentLaws`)."""
         t = np.asarray(t, dtype=float)
+        if not self.n_w:  # no law to evaluate (a ball, a mechanism without drivers)
+            return tuple(np.zeros((0,) + t.shape) for _ in range(3))
         batch = data.laws if data is not None else None
         if t.ndim == 0 and batch is not None and (column := batch[0].get(float(t))) is not None:
             return tuple(x[:, column].copy() for x in batch[1:])
