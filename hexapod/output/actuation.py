@@ -13,7 +13,14 @@ import numpy as np
 from hexapod.algorithms.inverse import InverseResult
 from hexapod.algorithms.liaison import wrenches_from_multipliers
 from hexapod.model.model import Model
-from hexapod.output.summary_parts import Peak, g4, markdown_table, time_integral, time_rms
+from hexapod.output.summary_parts import (
+    Peak,
+    g4,
+    markdown_table,
+    time_integral,
+    time_rms,
+    true_runs,
+)
 from hexapod.scene.actuators import Actuator, ActuatorTable, effort_limits
 
 
@@ -197,10 +204,8 @@ def motor_checks(times: np.ndarray, drivers: list[DriverStatistics],
 def _excursions(times, use, effort_excess, speed_excess) -> tuple[Excursion, ...]:
     """The runs of samples outside the envelope (``use > 1``), their ends interpolated
     linearly to where the use crosses 1."""
-    outside = use > 1.0
-    edges = np.diff(np.concatenate([[0], outside.astype(int), [0]]))
     out = []
-    for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1, strict=True):
+    for a, b in true_runs(use > 1.0):
         start = times[a] if a == 0 else _crossing(times, use, a - 1, a)
         end = times[b] if b == times.size - 1 else _crossing(times, use, b, b + 1)
         k = a + int(np.argmax(use[a:b + 1]))

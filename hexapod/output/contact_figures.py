@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from hexapod.output.figures import gait_diagram_figure, ground_reaction_figure
+from hexapod.output.summary_parts import true_runs
 from hexapod.simulation.results import SimulationResult
 from hexapod.simulation.tracking import controller_names
 
@@ -34,10 +35,7 @@ def pushed_intervals(times: np.ndarray, forces: np.ndarray) -> list[list[tuple[f
     out = []
     for k in range(forces.shape[1]):
         pushed = np.linalg.norm(forces[:, k], axis=1) > 0.0
-        edges = np.diff(np.concatenate([[0], pushed.astype(int), [0]]))
-        starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1
-        out.append([(float(times[a]), float(times[b])) for a, b in zip(starts, stops,
-                                                                         strict=True)])
+        out.append([(float(times[a]), float(times[b])) for a, b in true_runs(pushed)])
     return out
 
 

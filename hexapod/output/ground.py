@@ -21,6 +21,7 @@ from hexapod.algorithms.inverse import InverseResult
 from hexapod.algorithms.kinematics import body_poses
 from hexapod.model.model import Model
 from hexapod.model.units import COORDINATE_UNITS, VELOCITY_UNITS
+from hexapod.output.summary_parts import true_runs
 from hexapod.simulation.results import Columns
 from hexapod.spatial import rpy_from_rotation
 
@@ -189,17 +190,8 @@ def foot_events(loads: FootLoads) -> list[FootEvent]:
     out = []
     for c, leg in enumerate(loads.legs):
         for kind, flags in kinds.items():
-            k = 0
-            while k < flags.shape[0]:
-                if not flags[k, c]:
-                    k += 1
-                    continue
-                end = k
-                while end + 1 < flags.shape[0] and flags[end + 1, c]:
-                    end += 1
-                out.append(FootEvent(leg, kind, float(loads.times[k]), float(loads.times[end]),
-                                     end - k + 1))
-                k = end + 1
+            out += [FootEvent(leg, kind, float(loads.times[k]), float(loads.times[end]),
+                              end - k + 1) for k, end in true_runs(flags[:, c])]
     return out
 
 

@@ -47,3 +47,11 @@ def time_rms(times: np.ndarray, x: np.ndarray) -> float:
     if times.size < 2:
         return float(np.abs(x).max(initial=0.0))
     return float(np.sqrt(time_integral(times, x**2) / (times[-1] - times[0])))
+
+
+def true_runs(flags: np.ndarray) -> list[tuple[int, int]]:
+    """The runs of consecutive true samples of ``flags`` (a 1-D bool array): each as the
+    indices of its first and last sample."""
+    edges = np.diff(np.concatenate([[0], np.asarray(flags, dtype=int), [0]]))
+    return [(int(a), int(b)) for a, b in zip(np.flatnonzero(edges == 1),
+                                             np.flatnonzero(edges == -1) - 1, strict=True)]
