@@ -1,6 +1,7 @@
-"""The time-stepping scheme's constrained solve in one CasADi call
-(:class:`hexapod.simulation.kernels.CompiledContactStep`) against the same equations formed
-from the model's own functions and solved densely by NumPy, on a planar rod hinged at one end
+"""The contact schemes' constrained solve in one CasADi call
+(:class:`hexapod.simulation.kernels.CompiledContactStep`: Moreau-Jean's step, the event-driven
+scheme's accelerations and impulses) against the same equations formed from the model's own
+functions and solved densely by NumPy, on a planar rod hinged at one end
 and driven by a PD controller (its gains make the stiffness ``K`` and damping ``C`` of the
 linearly implicit step nonzero); and its refusal of a row set that no longer serves."""
 
@@ -71,7 +72,7 @@ def test_the_kernel_solves_the_linearly_implicit_step_as_written(rod):
     expected, multipliers, K, C = _dense_step(rod, q, v, mid, end, G)
     assert np.abs(K).max() > 1.0 and np.abs(C).max() > 1.0  # the gains are in the step
     kernel = CompiledContactStep(rod, np.arange(rod.n_c), np.zeros(0, int), G.shape[1])
-    y, lam, Y, Lam = kernel(q, v, mid, end, G, H, THETA)
+    y, lam, Y, Lam = kernel(q, v, (*mid, *end[:2]), G, H, THETA)
     got = np.column_stack([y, Y])
     assert np.abs(got - expected).max() <= 1e-12 * np.abs(expected).max()
     got = np.column_stack([lam, Lam])
@@ -86,4 +87,32 @@ def test_a_row_left_out_that_is_independent_refuses_the_solve(rod):
     mid = tuple(np.asarray(x) for x in rod.law_values(T + THETA * H))
     end = tuple(np.asarray(x) for x in rod.law_values(T + H))
     kernel = CompiledContactStep(rod, np.array([0]), np.array([1]), 0)
-    assert kernel(q, v, mid, end, np.zeros((rod.n_v, 0)), H, THETA) is None
+    assert kernel(q, v, (*mid, *end[:2]), np.zeros((rod.n_v, 0)), H, THETA) is None
+
+
+@pytest.mark.parametrize("level", ["acceleration", "impulse"])
+def test_the_event_driven_levels_solve_their_saddle_point_systems(rod, level):
+    """The accelerations ``[M Phi_v^T; Phi_v 0] [a; lam] = [Q + J^T F; gamma]`` and an
+    impulse's velocities ``[M Phi_v^T; Phi_v 0] [x; lam] = [M v + J^T P; nu]``, each with two
+    arbitrary contact columns, against the dense solve (1e-12 of their size)."""
+    q, v = _state(rod)
+    w, wd, wdd = (np.asarray(x) for x in rod.law_values(T))
+    values = dict(q=q, v=v, w=w, wd=wd, wdd=wdd)
+    Phi_v, gamma, Q = _named(rod.dynamics_terms, **values)
+    M = rod.mass.dense()
+    m_sqrt = np.linalg.inv(rod.mass_inv_sqrt.dense())
+    G = np.random.default_rng(5).normal(size=(rod.n_v, 2))
+    n_v, n_c = rod.n_v, rod.n_c
+    rhs = np.zeros((n_v + n_c, 3))
+    if level == "acceleration":
+        rhs[:n_v, 0], rhs[n_v:, 0], laws = Q.ravel(), gamma.ravel(), (w, wd, wdd)
+    else:
+        nu = _named(rod.nu, q=q, w=w, wd=wd)[0].ravel()
+        rhs[:n_v, 0], rhs[n_v:, 0], laws = M @ v, nu, (w, wd)
+    rhs[:n_v, 1:] = m_sqrt @ G
+    x = np.linalg.solve(np.block([[M, Phi_v.T], [Phi_v, np.zeros((n_c, n_c))]]), rhs)
+    kernel = CompiledContactStep(rod, np.arange(n_c), np.zeros(0, int), 2, level)
+    y, lam, Y, Lam = kernel(q, v, laws, G)
+    expected = m_sqrt @ x[:n_v]
+    assert np.abs(np.column_stack([y, Y]) - expected).max() <= 1e-12 * np.abs(expected).max()
+    assert np.abs(np.column_stack([lam, Lam]) - x[n_v:]).max() <= 1e-12 * np.abs(x[n_v:]).max()

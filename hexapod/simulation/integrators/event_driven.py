@@ -6,7 +6,7 @@ fixed, events located on their conditions, impacts by an impulse map (Pfeiffer a
 is smooth and integrated by DOP853 with its error control and its projection (the embedded
 pair of :class:`~.embedded.DormandPrince853`), on accelerations that hold the closed contacts:
 the engine's constrained step with the contacts' forces ``F`` on its right-hand side
-(:func:`~hexapod.algorithms.contact_response.contact_response`), so that the contacts'
+(:class:`~hexapod.simulation.kernels.CompiledContactStep`), so that the contacts'
 accelerations are ``c + W F`` (``c = J a_free + J_dot v``, ``W`` the Delassus operator).
 A sticking contact keeps all its acceleration zero (``d`` unknowns); a slipping one its normal
 acceleration, with the tangential force ``-mu F_N s`` against its slip ``s`` (one unknown).
@@ -46,12 +46,11 @@ from hexapod.algorithms.contact_frames import (
     contact_frames,
     ground_contacts,
 )
-from hexapod.algorithms.contact_response import contact_response
 from hexapod.algorithms.frictional import solve_contacts
-from hexapod.algorithms.saddle import constraint_jacobian, dynamics_terms
 from hexapod.errors import HexapodError, IntegrationError
 from hexapod.simulation.integrators.embedded import DormandPrince853
 from hexapod.simulation.integrators.moreau_jean import GAP_TOLERANCE, ContactEvent
+from hexapod.simulation.kernels import CompiledContactStep, contact_solution
 from hexapod.simulation.methods import CONTACT_METHODS
 from hexapod.simulation.scales import ROUND_OFF
 
@@ -86,6 +85,7 @@ class EventDriven(DormandPrince853):
 
     def _start(self) -> None:
         model = self.model
+        self._kernels: dict = {}  # (level, columns) -> CompiledContactStep
         self.contacts = ground_contacts(model)
         self.contact_names = tuple(c.name for c in self.contacts)
         m, d = len(self.contacts), model.dimension
@@ -130,14 +130,11 @@ class EventDriven(DormandPrince853):
         (m d) and the Delassus operator ``W`` (m d, m d)."""
         model, data = self.model, self.data
         modes = self.modes if modes is None else modes
-        w, wd, wdd = (np.array(x) for x in model.law_values(t, data))
-        Phi_v, gamma, Q = dynamics_terms(model, {"q": q, "v": v, "w": w, "wd": wd, "wdd": wdd},
-                                         data)
+        laws = tuple(np.array(x) for x in model.law_values(t, data))
         half = model.mass_inv_sqrt
         frames = contact_frames(model, q, self.contacts)
         G = half @ frames.jacobian.T
-        y, lam, Y, Lam = contact_response(model, data, q, w, Phi_v, half @ np.asarray(Q).ravel(),
-                                          np.asarray(gamma).ravel(), G)
+        y, lam, Y, Lam = self._contact_solve("acceleration", t, q, v, laws, G)
         self.counters.rhs += 1
         self.counters.factorisations += 1
         free = G.T @ y + contact_bias(model, q, v, self.contacts)
@@ -519,17 +516,30 @@ class EventDriven(DormandPrince853):
         ``Phi_v v = nu``, ``y = M^1/2 v``) and its response ``Y`` to unit impulses along the
         contact ``rows`` (indices into the contacts' Jacobian), with the contacts' frames and
         ``G = M^-1/2 J_rows^T``: what an impact and the contact projection solve on."""
-        model, data = self.model, self.data
-        w, wd, _ = model.law_values(t, data)
-        Phi_v = constraint_jacobian(model, q, w, data)
-        nu = model.call("nu", data, q=q, w=w, wd=wd) if model.n_c else np.zeros(0)
-        half = model.mass_inv_sqrt
+        model = self.model
+        laws = model.law_values(t, self.data)[:2]
         frames = contact_frames(model, q, self.contacts)
-        G = half @ frames.jacobian[rows].T
-        y, _, Y, _ = contact_response(model, data, q, w, Phi_v, half @ (model.mass @ v),
-                                      np.asarray(nu).ravel(), G)
+        G = model.mass_inv_sqrt @ frames.jacobian[rows].T
+        y, _, Y, _ = self._contact_solve("impulse", t, q, v, laws, G)
         self.counters.factorisations += 1
         return frames, G, y, Y
+
+    def _contact_solve(self, level: str, t, q, v, laws, G) -> tuple:
+        """The engine's solve with the contacts' columns ``G`` at ``level``
+        (:class:`~hexapod.simulation.kernels.CompiledContactStep`: ``acceleration`` or
+        ``impulse``), its kernel kept per level and number of columns, its rows decided again
+        at ``(t, q)`` when they no longer serve."""
+        key = (level, G.shape[1])
+        kernel = self._kernels.get(key)
+        if kernel is None:
+            rows = self.data.independent_rows
+            none = np.zeros(0, int)
+            kernel = CompiledContactStep(self.model, none if rows is None else rows,
+                                         none if rows is None else self.data.redundant_rows,
+                                         G.shape[1], level)
+        self._kernels[key], solution = contact_solution(
+            kernel, lambda: self._rank_split(q, t), q, v, laws, G)
+        return solution
 
     def _onto_contacts(self, t, q, v) -> tuple[np.ndarray, np.ndarray]:
         """The closed contacts' gaps, normal velocities and (sticking) tangential velocities

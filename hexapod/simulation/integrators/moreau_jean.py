@@ -47,9 +47,8 @@ import numpy as np
 
 from hexapod.algorithms.contact_frames import armed, contact_frames, ground_contacts
 from hexapod.algorithms.frictional import solve_contacts
-from hexapod.errors import IntegrationError
 from hexapod.simulation.integrators.base import Integrator
-from hexapod.simulation.kernels import CompiledContactStep
+from hexapod.simulation.kernels import CompiledContactStep, contact_solution
 from hexapod.simulation.methods import CONTACT_METHODS
 from hexapod.simulation.scales import ROUND_OFF
 
@@ -152,16 +151,10 @@ class MoreauJean(Integrator):
         Brogliato 2008, 10.1): stable for gains an explicit force would need steps far shorter
         than the controller's period for. When the rows kept at the start no longer serve,
         they are decided again here."""
-        end = self.model.law_values(t1, self.data)
-        solution = self._kernel(q0, v0, mid, end, G, h, THETA)
-        if solution is None:
-            split = self._rank_split(q0, self.t)
-            self._kernel = CompiledContactStep(self.model, split.independent, split.redundant,
-                                               G.shape[1])
-            solution = self._kernel(q0, v0, mid, end, G, h, THETA)
-        if solution is None:
-            raise IntegrationError("the step's saddle-point system has no reliable solution "
-                                   "(a singular configuration)")
+        end = self.model.law_values(t1, self.data)[:2]
+        self._kernel, solution = contact_solution(
+            self._kernel, lambda: self._rank_split(q0, self.t), q0, v0, (*mid, *end), G, h,
+            THETA)
         return solution
 
     def _impulses(self, h, frames, v0, G, y, Y):
