@@ -454,6 +454,13 @@ class CompiledContactStep:
         self.function = model.built_once(key, lambda m: _evaluated(self._build(), to_c))
         self._fast = FastFunction(self.function)
 
+    @classmethod
+    def started(cls, model: Model, data, columns: int, level: str = "step"):
+        """The kernel of the rows a run's workspace ``data`` decided at its start."""
+        rows, none = data.independent_rows, np.zeros(0, int)
+        return cls(model, none if rows is None else rows,
+                   none if rows is None else data.redundant_rows, columns, level)
+
     def _build(self) -> ca.Function:
         model, level, n = self.model, self.level, self.model.n_w
         symbols = {"q": ca.MX.sym("q", model.n_q), "v": ca.MX.sym("v", model.n_v),
@@ -534,15 +541,9 @@ class CompiledContactStep:
 def contact_solution(kernel: CompiledContactStep, decide, *arguments
                      ) -> tuple[CompiledContactStep, tuple]:
     """``kernel``'s solution (:meth:`CompiledContactStep.__call__` of ``arguments``); when it
-    is refused, the rows decided again by ``decide()`` (a
-    :class:`~hexapod.algorithms.linalg.RowSplit`) and a kernel built for them. Returns the
-    kernel that solved and the solution.
-
-    Raises
-    ------
-    IntegrationError
-        The rows decided again do not serve either (a singular configuration).
-    """
+    is refused, the rows decided again by ``decide()`` (a ``RowSplit``) and a kernel built for
+    them. Returns the kernel that solved and the solution; raises :class:`IntegrationError`
+    when the rows decided again do not serve either (a singular configuration)."""
     solution = kernel(*arguments)
     if solution is None:
         split = decide()

@@ -530,13 +530,8 @@ class EventDriven(DormandPrince853):
         ``impulse``), its kernel kept per level and number of columns, its rows decided again
         at ``(t, q)`` when they no longer serve."""
         key = (level, G.shape[1])
-        kernel = self._kernels.get(key)
-        if kernel is None:
-            rows = self.data.independent_rows
-            none = np.zeros(0, int)
-            kernel = CompiledContactStep(self.model, none if rows is None else rows,
-                                         none if rows is None else self.data.redundant_rows,
-                                         G.shape[1], level)
+        kernel = self._kernels.get(key) or CompiledContactStep.started(self.model, self.data,
+                                                                       G.shape[1], level)
         self._kernels[key], solution = contact_solution(
             kernel, lambda: self._rank_split(q, t), q, v, laws, G)
         return solution

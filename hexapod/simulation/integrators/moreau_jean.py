@@ -109,10 +109,7 @@ class MoreauJean(Integrator):
             ROUND_OFF * max(np.abs(self.v).max(), 1.0))
         self.contact_states = tuple("open" if not c else "slip" if s else "stick"
                                     for c, s in zip(closed, sliding, strict=True))
-        rows = self.data.independent_rows
-        self._kernel = CompiledContactStep(
-            self.model, np.zeros(0, int) if rows is None else rows,
-            np.zeros(0, int) if rows is None else self.data.redundant_rows, len(self.contacts) * d)
+        self._kernel = CompiledContactStep.started(self.model, self.data, len(self.contacts) * d)
 
     def _step(self) -> None:
         model, data = self.model, self.data
