@@ -16,7 +16,7 @@ from hexapod.algorithms.contact_frames import refuse_contacts
 from hexapod.algorithms.ground import share_ground_forces
 from hexapod.algorithms.kinematics import state_split
 from hexapod.algorithms.liaison import policy_map
-from hexapod.algorithms.linalg import solve_saddle
+from hexapod.algorithms.linalg import RowSplit, SaddleSolution, solve_saddle
 from hexapod.algorithms.saddle import dynamics_terms
 from hexapod.model.model import Data, Model
 
@@ -99,17 +99,9 @@ def forward_dynamics(model: Model, data: Data, t: float, q: np.ndarray, v: np.nd
                 else None)
     tol = model.rank_tolerance if rank_tolerance is None else rank_tolerance
     split = state_split(model, data, q, w, Phi_v, tol)  # shared with the velocity analysis
-    priority, _ = model.rank_order(w)  # feet in swing have no rows to decide on
-    wrench_map = offset = None
-    if split.redundant.size and not model.contacts:
-        wrench_map, offset = policy_map(model, q, Phi_v, Q_across, data)
-    solution = solve_saddle(model.mass_inv_sqrt, Phi_v, Q, gamma, priority,
-                            tol, row_names=[r.name for r in model.rows],
-                            consistency_tol=consistency_tol,
-                            wrench_map=wrench_map, wrench_offset=offset, split=split)
-    lam, status = solution.lam, None
-    if model.contacts:  # the scene's ground-force policy
-        lam, status = share_ground_forces(model, data, t, q, Phi_v, Q_across, split, lam)
+    solution, lam, status = policy_solution(model, data, t, q, w, Phi_v, split, Q, gamma,
+                                            Q_across, tol=tol,
+                                            consistency_tol=consistency_tol)
     data.at(t, q, v)
     data.ground_status = status
     data.w, data.wd, data.wdd = w, wd, wdd
@@ -125,3 +117,29 @@ def forward_dynamics(model: Model, data: Data, t: float, q: np.ndarray, v: np.nd
         sigma = data.singular_values
         data.sigma_min = float(sigma[0]) if sigma.size else float("inf")
     return solution.v_dot
+
+
+def policy_solution(model: Model, data: Data, t: float, q: np.ndarray, w: np.ndarray, Phi_v,
+                    split: RowSplit, Q: np.ndarray, gamma: np.ndarray,
+                    Q_across: np.ndarray | None, *, tol: float, consistency_tol: float = 1e-6,
+                    status: bool = True) -> tuple[SaddleSolution, np.ndarray, tuple | None]:
+    """The saddle-point solution for the forces ``Q`` and the right-hand side ``gamma`` at
+    ``(t, q)``, and the multipliers the scene's redundancy policy chooses (the ground-force
+    policy with contacts: then also each foot's status when ``status`` asks, else None). The
+    policies but friction are linear in ``(Q, gamma, Q_across)``, and solve the columns of
+    matrices ``Q`` and ``gamma`` together: the design sensitivities
+    (:mod:`hexapod.algorithms.sensitivity`) solve their derivatives here."""
+    priority, _ = model.rank_order(w)  # feet in swing have no rows to decide on
+    wrench_map = offset = None
+    if split.redundant.size and not model.contacts:
+        wrench_map, offset = policy_map(model, q, Phi_v, Q_across, data)
+    solution = solve_saddle(model.mass_inv_sqrt, Phi_v, Q, gamma, priority,
+                            tol, row_names=[r.name for r in model.rows],
+                            consistency_tol=consistency_tol,
+                            wrench_map=wrench_map, wrench_offset=offset, split=split)
+    lam = solution.lam
+    if model.contacts:  # the scene's ground-force policy
+        lam, feet = share_ground_forces(model, data, t, q, Phi_v, Q_across, split, lam,
+                                        status=status)
+        return solution, lam, feet
+    return solution, lam, None

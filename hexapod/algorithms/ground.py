@@ -144,21 +144,25 @@ def feet_status(model: Model, times: np.ndarray, forces: np.ndarray) -> np.ndarr
 
 
 def share_ground_forces(model: Model, data, t: float, q: np.ndarray, Phi_v: np.ndarray,
-                        Q_across: np.ndarray | None, split: RowSplit,
-                        lam: np.ndarray) -> tuple[np.ndarray, tuple[str, ...]]:
-    """The multipliers chosen by the scene's ground-force policy among ``lam + N z``, and each
-    contact's status (:func:`feet_status`)."""
+                        Q_across: np.ndarray | None, split: RowSplit, lam: np.ndarray, *,
+                        status: bool = True) -> tuple[np.ndarray, tuple[str, ...] | None]:
+    """The multipliers chosen by the scene's ground-force policy among ``lam + N z`` (columns
+    of ``lam`` together, but for friction), and each contact's status (:func:`feet_status`;
+    None when ``status`` is false)."""
     chosen = ground_policy(model, data, t, q, terms_of(model).nonzeros(Phi_v), Q_across, lam,
                            multiplier_null_space(split, model.n_c))
-    status = feet_status(model, np.array([t]), ground_reactions(model, chosen)[None])[0]
-    return chosen, tuple(status.tolist())
+    if not status:
+        return chosen, None
+    feet = feet_status(model, np.array([t]), ground_reactions(model, chosen)[None])[0]
+    return chosen, tuple(feet.tolist())
 
 
 def ground_policy(model: Model, data, t: float, q: np.ndarray, Phi: np.ndarray,
                   Q_across: np.ndarray | None, lam: np.ndarray, N: np.ndarray) -> np.ndarray:
     """The multipliers among ``lam + N z`` of least policy objective at ``(t, q)``: ``N``
     (n_c x m) spans the multipliers that change no constraint force, ``Phi`` holds the
-    nonzeros of ``Phi_v``."""
+    nonzeros of ``Phi_v``. Columns of ``lam`` are chosen together (linear policies: not
+    friction)."""
     stance = np.array([bool(c.in_stance(t)) for c in model.contacts])
     weights = sharing_weights(contact_weights(model, t), stance)
     if N.shape[1] == 0:
@@ -169,12 +173,12 @@ def ground_policy(model: Model, data, t: float, q: np.ndarray, Phi: np.ndarray,
         rows = np.concatenate(idle)
         z0, K = _affine_solutions(N[rows], -lam[rows])
     else:
-        z0, K = np.zeros(N.shape[1]), np.eye(N.shape[1])
+        z0, K = np.zeros(N.shape[1:] + lam.shape[1:]), np.eye(N.shape[1])
     base = lam + N @ z0  # lam + N (z0 + K y)
     NK = _orthonormal(N @ K)  # the same multipliers, in directions the QP solvers handle well
     A, b = policy_objective(model, data, q, Phi, Q_across,
                             foot_values(model.ground.policy, weights))
-    AK, r = A @ NK, A @ base + b
+    AK, r = A @ NK, A @ base + b.reshape((-1,) + (1,) * (base.ndim - 1))
     policy = model.ground.policy
     if NK.shape[1] == 0:  # the feet that carry nothing take up all the freedom
         return base
@@ -196,7 +200,7 @@ def _affine_solutions(E: np.ndarray, e: np.ndarray) -> tuple[np.ndarray, np.ndar
     """``z0, K`` with ``E (z0 + K y) = e`` for every ``y`` (least squares when inconsistent)."""
     U, s, Vt = np.linalg.svd(E, full_matrices=True)
     rank = int(np.sum(s > s.max(initial=0.0) * 1e-12)) if s.size else 0
-    z0 = Vt[:rank].T @ ((U[:, :rank].T @ e) / s[:rank])
+    z0 = Vt[:rank].T @ ((U[:, :rank].T @ e) / s[:rank].reshape((-1,) + (1,) * (e.ndim - 1)))
     return z0, Vt[rank:].T
 
 

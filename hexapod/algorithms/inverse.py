@@ -42,6 +42,7 @@ from hexapod._support.compiled import compiled
 from hexapod._support.execution import current
 from hexapod._support.fastcall import InPlaceFunction
 from hexapod.algorithms.contact_frames import refuse_contacts
+from hexapod.algorithms.liaison import efforts_and_axes
 from hexapod.errors import HexapodError
 from hexapod.model.data import kept
 from hexapod.model.model import GROUND_INDEX, Data, Model
@@ -410,14 +411,8 @@ class TreePlan:
         wrench, rotation = np.empty((n, J, 6)), np.empty((n, J, 9))
         results = (q, v, v_dot, wrench, rotation)
         self._solve_mapped(data, (w, wd, wdd), results, current().compiled, progress)
-        force, torque = wrench[..., :3], wrench[..., 3:]
-        effort = np.full((n, J), np.nan)
-        for j, joint in enumerate(model.joints):
-            effort[:, j] = joint.type.effort(force[:, j], torque[:, j], model.dimension)
-        if frame == "world":
-            R = rotation.reshape(n, J, 3, 3).transpose(0, 1, 3, 2)  # column-major blocks
-            force = np.einsum("njab,njb->nja", R, force)
-            torque = np.einsum("njab,njb->nja", R, torque)
+        force, torque, effort = efforts_and_axes(model, wrench[..., :3], wrench[..., 3:],
+                                                 rotation, frame)
         phi_max = 0.0
         if model.n_c and n:
             rows = model.call("phi", q=q[0], w=w[:, 0]) / model.row_scale

@@ -232,3 +232,36 @@ def policy_map(model: Model, q: np.ndarray, Phi_v, Q_across: np.ndarray | None =
     terms = terms_of(model)
     (A,) = terms.evaluate(data, "wrench_map", q, terms.nonzeros(Phi_v))
     return A, terms.offset(data, q, Q_across)
+
+
+def efforts_and_axes(model: Model, force: np.ndarray, torque: np.ndarray,
+                     rotations: np.ndarray | None, frame: str
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The efforts of joint-frame wrenches, and the wrenches in the axes ``frame`` asks.
+
+    Parameters
+    ----------
+    model : Model
+    force, torque : ndarray, shape (..., J, 3)
+        Joint wrenches in the report convention, joint frames.
+    rotations : ndarray, shape (..., J, 9), or None
+        The joint frames' rotations, column-major (the ``frames`` of the wrench Function);
+        needed for ``frame="world"`` only.
+    frame : {"joint", "world"}
+
+    Returns
+    -------
+    force, torque : ndarray, shape (..., J, 3)
+        In the axes asked.
+    effort : ndarray, shape (..., J)
+        Along each joint's coordinate (NaN without one).
+    """
+    effort = np.full(force.shape[:-1], np.nan)
+    for j, joint in enumerate(model.joints):
+        effort[..., j] = joint.type.effort(force[..., j, :], torque[..., j, :], model.dimension)
+    if frame == "world":
+        R = rotations.reshape(rotations.shape[:-1] + (3, 3)).swapaxes(-1, -2)
+        force = np.einsum("...ab,...b->...a", R, force)
+        torque = np.einsum("...ab,...b->...a", R, torque)
+    return force, torque, effort
+

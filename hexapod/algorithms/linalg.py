@@ -226,7 +226,8 @@ def solve_saddle(mass_inv_sqrt, Phi_v: np.ndarray, Q: np.ndarray, gamma: np.ndar
                  priority: np.ndarray, tol: float, *, row_names=None,
                  wrench_map=None, wrench_offset=None, consistency_tol: float = 1e-6,
                  split: RowSplit | None = None) -> SaddleSolution:
-    """Solve ``[[M, Phi_v^T], [Phi_v, 0]] [v_dot; lam] = [Q; gamma]``.
+    """Solve ``[[M, Phi_v^T], [Phi_v, 0]] [v_dot; lam] = [Q; gamma]`` (``Q`` and ``gamma`` may
+    be matrices: their columns are solved together, on one rank decision).
 
     Parameters
     ----------
@@ -258,7 +259,8 @@ def solve_saddle(mass_inv_sqrt, Phi_v: np.ndarray, Q: np.ndarray, gamma: np.ndar
     W, d = split.W, split.scale
     I = split.independent
     y0 = mass_inv_sqrt @ Q
-    lam = np.zeros(W.shape[0])
+    lam = np.zeros(W.shape[:1] + np.shape(Q)[1:])
+    d = _columns(d, lam)
     if split.rank:
         y, scaled = split.kept_solve(y0, gamma[I] / d[I])
         lam[I] = scaled / d[I]
@@ -269,6 +271,12 @@ def solve_saddle(mass_inv_sqrt, Phi_v: np.ndarray, Q: np.ndarray, gamma: np.ndar
     if split.redundant.size and wrench_map is not None and split.rank:
         lam = distribute(split, lam, wrench_map, wrench_offset)
     return SaddleSolution(mass_inv_sqrt @ y, lam, split, inconsistency)
+
+
+def _columns(vector: np.ndarray, like: np.ndarray) -> np.ndarray:
+    """``vector`` shaped to broadcast over the columns of ``like`` (a vector, or a matrix of
+    right-hand sides solved together)."""
+    return np.reshape(vector, (-1,) + (1,) * (np.ndim(like) - 1))
 
 
 def check_consistency(split: RowSplit, y: np.ndarray, rhs: np.ndarray, size: float = 0.0,
@@ -282,7 +290,7 @@ def check_consistency(split: RowSplit, y: np.ndarray, rhs: np.ndarray, size: flo
     red = split.redundant
     if red.size == 0:
         return 0.0
-    d = split.scale
+    d = _columns(split.scale, rhs)
     violation = np.abs(split.W[red] @ y - rhs[red] / d[red])
     scale = max(size, np.linalg.norm(y), np.linalg.norm(rhs / d), np.finfo(float).tiny)
     inconsistency = float(violation.max() / scale)
@@ -316,7 +324,7 @@ def distribute(split: RowSplit, lam: np.ndarray, wrench_map: np.ndarray,
     N = multiplier_null_space(split, lam.size)
     offset = wrench_map @ lam
     if wrench_offset is not None:
-        offset = offset + wrench_offset
+        offset = offset + _columns(wrench_offset, offset)
     z = np.linalg.lstsq(wrench_map @ N, -offset, rcond=None)[0]
     return lam + N @ z
 

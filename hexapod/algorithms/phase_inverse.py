@@ -47,6 +47,7 @@ import numpy as np
 from hexapod._support import signals
 from hexapod._support.execution import current
 from hexapod.algorithms.ground import NO_LOAD, foot_values, sharing_weights
+from hexapod.algorithms.liaison import efforts_and_axes
 from hexapod.algorithms.linalg import as_dense, equilibrate, split_rows
 from hexapod.algorithms.phase_plan import MORE_NEWTON_STEPS, NEWTON_STEPS, PhasePlan, plan_for
 from hexapod.algorithms.sample_inverse import SampleResult, exact_forces, exact_sample
@@ -323,14 +324,9 @@ def _frames(model: Model, out: _Results, frame: str) -> None:
     compiled = np.flatnonzero(~out.exact)
     if compiled.size == 0:
         return
-    for j, joint in enumerate(model.joints):
-        out.effort[compiled, j] = joint.type.effort(out.force[compiled, j],
-                                                    out.torque[compiled, j], model.dimension)
-    if frame == "world":
-        R = out.frames[compiled].reshape(-1, len(model.joints), 3, 3)
-        R = R.transpose(0, 1, 3, 2)  # column-major blocks
-        out.force[compiled] = np.einsum("njab,njb->nja", R, out.force[compiled])
-        out.torque[compiled] = np.einsum("njab,njb->nja", R, out.torque[compiled])
+    rotations = out.frames[compiled] if frame == "world" else None
+    out.force[compiled], out.torque[compiled], out.effort[compiled] = efforts_and_axes(
+        model, out.force[compiled], out.torque[compiled], rotations, frame)
 
 
 def _friction(model: Model, data: Data, out: _Results, feet: _Feet, times, frame: str) -> None:

@@ -1,0 +1,184 @@
+"""Design sensitivities of an inverse-dynamics result: the derivatives of every joint effort,
+joint wrench and ground reaction with respect to the bodies' masses and inertias.
+
+Along a prescribed motion the positions, velocities and accelerations do not depend on the
+masses and inertias; only the multipliers do, through the right-hand side of
+
+    Phi_v^T lambda = Q - M v_dot,
+
+which is linear in them: a body's mass ``m`` and inertia ``J`` (centre-of-mass axes) enter it as
+``m (g - a)`` on its translation rows and ``-(J alpha + omega' x J omega')`` on its rotation rows.
+The scene's redundancy policies but friction (least wrench, least effort, with the feet's load
+sharing) choose multipliers linear in that right-hand side, and the wrenches and efforts are
+linear in the multipliers. So the derivative with respect to a parameter ``p`` that changes the
+inertia of one body by ``(dm/dp, dJ/dp)`` is the solution of the same saddle-point system and
+policy (:func:`hexapod.algorithms.dynamics.policy_solution`) for the forces
+``dm/dp (g - a) - (dJ/dp alpha + omega' x dJ/dp omega')``, with a zero ``gamma`` and without the
+force elements across joints: exact, not a difference quotient, and computed by the one solve
+the inverse dynamics uses. The friction policy (a QP) is piecewise linear: its derivative on
+the active set is not written yet, and it is refused.
+
+The kinematic parameters (lengths, joint positions, the gait's) move the motion itself; their
+derivatives need the motion's own equations differentiated (not written yet).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from hexapod.algorithms.dynamics import policy_solution
+from hexapod.algorithms.ground import ground_reactions
+from hexapod.algorithms.kinematics import state_split
+from hexapod.algorithms.liaison import efforts_and_axes
+from hexapod.algorithms.saddle import dynamics_terms
+from hexapod.algorithms.step_terms import terms_of
+from hexapod.errors import HexapodError
+from hexapod.model.model import Model
+
+__all__ = ["InertiaChange", "InverseSensitivity", "inverse_sensitivities"]
+
+
+@dataclass(frozen=True)
+class InertiaChange:
+    """How one design parameter changes one body's inertia.
+
+    Attributes
+    ----------
+    name : str
+        The parameter's name (a scene key, e.g. ``body.femur.mass``).
+    body : str
+        The body it belongs to.
+    mass : float
+        ``dm/dp``, kg per unit of the parameter.
+    inertia : ndarray, shape (3, 3) or (1, 1)
+        ``dJ/dp``, kg m^2 per unit of the parameter, in the body's centre-of-mass axes (a
+        planar body's is 1 x 1; zero for a particle).
+    unit : str
+        The parameter's unit (``kg``, ``kg m^2``...).
+    value : float
+        The parameter's value in the scene, in ``unit`` (for elasticities; NaN if unknown).
+    """
+
+    name: str
+    body: str
+    mass: float
+    inertia: np.ndarray
+    unit: str
+    value: float = float("nan")
+
+
+@dataclass
+class InverseSensitivity:
+    """Derivatives of an :class:`~hexapod.algorithms.inverse.InverseResult`'s forces, the
+    parameters along the last axis.
+
+    Attributes
+    ----------
+    parameters : tuple of InertiaChange
+        The parameters, in the order of the last axis.
+    effort : ndarray (N, J, P)
+        ``d tau / dp`` (NaN for the joints without a coordinate).
+    force, torque : ndarray (N, J, 3, P)
+        Derivatives of the joint wrenches, in the result's axes (``frame``).
+    ground_force : ndarray (N, C, 3, P)
+        Derivatives of the ground's force on each foot, world axes.
+    """
+
+    parameters: tuple[InertiaChange, ...]
+    effort: np.ndarray
+    force: np.ndarray
+    torque: np.ndarray
+    ground_force: np.ndarray
+
+
+def inertial_force_change(model: Model, change: InertiaChange, v: np.ndarray,
+                          v_dot: np.ndarray) -> np.ndarray:
+    """``d(Q - M v_dot)/dp`` (n_v) at the state ``(v, v_dot)`` for one parameter."""
+    info = model.bodies[model.body_index[change.body]]
+    out = np.zeros(model.n_v)
+    start, dim = info.v.start, model.gravity.size
+    linear = slice(start, start + (dim if info.kind != "particle" else info.v.stop - start))
+    out[linear] = change.mass * (model.gravity[:linear.stop - linear.start] - v_dot[linear])
+    if info.kind == "spatial":
+        omega, alpha = v[start + 3:start + 6], v_dot[start + 3:start + 6]
+        dJ = change.inertia
+        out[start + 3:start + 6] = -(dJ @ alpha) - np.cross(omega, dJ @ omega)
+    elif info.kind == "planar":
+        out[start + 2] = -float(change.inertia[0, 0]) * v_dot[start + 2]
+    return out
+
+
+def inverse_sensitivities(model: Model, result, parameters, *,
+                          progress: Callable[[int, int], None] | None = None
+                          ) -> InverseSensitivity:
+    """The derivatives of ``result``'s efforts, joint wrenches and ground forces with respect
+    to each parameter, sample by sample (see the module's text for the method).
+
+    Parameters
+    ----------
+    model : Model
+        The model ``result`` was computed with.
+    result : InverseResult
+        An inverse-dynamics result of ``model``.
+    parameters : sequence of InertiaChange
+        What each parameter changes.
+    progress : callable, optional
+        Called with ``(samples done, samples)``.
+
+    Returns
+    -------
+    InverseSensitivity
+
+    Raises
+    ------
+    HexapodError
+        The scene's ground-force policy is ``friction``, or a parameter names a body the model
+        does not have.
+    """
+    parameters = tuple(parameters)
+    if model.contacts and model.ground.policy == "friction":
+        raise HexapodError(f"model '{model.name}': sensitivities of the friction policy (the "
+                           "derivative of its QP on its active set) are not available yet; "
+                           "use the min-wrench or min-effort policy")
+    for change in parameters:
+        if change.body not in model.body_index:
+            raise HexapodError(f"parameter '{change.name}': model '{model.name}' has no body "
+                               f"'{change.body}'")
+    n, count = result.times.size, len(parameters)
+    joints, feet = len(model.joints), len(model.contacts)
+    wrench = np.zeros((n, count, joints, 6))
+    rotations = np.zeros((n, joints, 9))
+    ground = np.zeros((n, feet, 3, count))
+    data = model.create_data()
+    terms = terms_of(model)
+    no_offset, zero = np.zeros(6 * terms.owners), np.zeros((model.n_c, count))
+    laws = model.law_values(result.times)
+    laws = [np.asarray(x, dtype=float).reshape(model.n_w, n) for x in laws]
+    for k, t in enumerate(result.times):
+        q, v, v_dot = result.q[k], result.v[k], result.v_dot[k]
+        w, wd, wdd = (x[:, k] for x in laws)
+        Phi_v, _, _ = dynamics_terms(model, {"q": q, "v": v, "w": w, "wd": wd, "wdd": wdd},
+                                     data)
+        split = state_split(model, data, q, w, Phi_v)
+        forces = np.column_stack([inertial_force_change(model, change, v, v_dot)
+                                  for change in parameters]) if count else zero[:model.n_v]
+        _, lam, _ = policy_solution(model, data, float(t), q, w, Phi_v, split, forces, zero,
+                                    None, tol=model.rank_tolerance, status=False)
+        Phi = terms.nonzeros(Phi_v)
+        for p in range(count):  # the report's wrenches, without the forces across joints
+            six, frames = terms.evaluate(data, "report", q, Phi, lam[:, p], no_offset)
+            wrench[k, p] = np.reshape(six, (6, joints)).T  # as wrenches_from_multipliers
+            rotations[k] = np.reshape(frames, (9, joints)).T
+        if feet:
+            ground[k] = np.stack([ground_reactions(model, lam[:, p]) for p in range(count)],
+                                 axis=-1) if count else ground[k]
+        if progress is not None:
+            progress(k + 1, n)
+    force, torque, effort = efforts_and_axes(model, wrench[..., :3], wrench[..., 3:],
+                                             rotations[:, None], result.frame)
+    force, torque = force.transpose(0, 2, 3, 1), torque.transpose(0, 2, 3, 1)
+    effort = effort.transpose(0, 2, 1)
+    return InverseSensitivity(parameters, effort, force, torque, ground)
