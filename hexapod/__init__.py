@@ -56,6 +56,7 @@ __getattr__, __dir__, __all__ = attach(__name__, {
     "hexapod.algorithms.liaison": ["JointWrenches", "driver_efforts", "joint_wrenches",
                                    "wrenches_from_multipliers"],
     "hexapod.algorithms.inverse": ["InverseResult", "inverse_dynamics"],
+    "hexapod.algorithms.sensitivity": ["inverse_sensitivities"],
     "hexapod.algorithms.balance": ["BodyBalance", "body_balance"],
     "hexapod.algorithms.joint_inertia": ["reflected_inertias"],
     "hexapod.algorithms.ground": ["ground_reactions"],

@@ -204,6 +204,14 @@ def test_a_study_describes_its_tables():
                      "peak_effort:L1/ctr": "N m", "slip_samples": "1", "energy": "J"}
 
 
+def test_the_sensitivity_table_describes_its_columns(tmp_path, capsys):
+    out = tmp_path / "sensitivity"
+    assert main(["sensitivity", "front-leg", "--parameters", "body.femur.mass", "--samples",
+                 "5", "--metrics", "peak_effort", "--no-figures", "--out", str(out)]) == 0
+    units = check_described(out, out / "units.json", RECORD)
+    assert list(units) == ["sensitivities.csv"]
+
+
 def read_table_text(text: str) -> tuple[list[str], list[list[str]]]:
     header, *rows = list(csv.reader(io.StringIO(text)))
     return header, rows

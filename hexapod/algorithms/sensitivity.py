@@ -24,19 +24,22 @@ derivatives need the motion's own equations differentiated (not written yet).
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from hexapod.algorithms.dynamics import policy_solution
-from hexapod.algorithms.ground import ground_reactions
 from hexapod.algorithms.kinematics import state_split
 from hexapod.algorithms.liaison import efforts_and_axes
-from hexapod.algorithms.saddle import dynamics_terms
+from hexapod.algorithms.saddle import constraint_jacobian
 from hexapod.algorithms.step_terms import terms_of
 from hexapod.errors import HexapodError
 from hexapod.model.model import Model
+
+if TYPE_CHECKING:
+    from hexapod.algorithms.inverse import InverseResult
 
 __all__ = ["InertiaChange", "InverseSensitivity", "inverse_sensitivities"]
 
@@ -94,24 +97,26 @@ class InverseSensitivity:
     ground_force: np.ndarray
 
 
-def inertial_force_change(model: Model, change: InertiaChange, v: np.ndarray,
-                          v_dot: np.ndarray) -> np.ndarray:
-    """``d(Q - M v_dot)/dp`` (n_v) at the state ``(v, v_dot)`` for one parameter."""
+def inertial_force_changes(model: Model, change: InertiaChange, v: np.ndarray,
+                           v_dot: np.ndarray) -> np.ndarray:
+    """``d(Q - M v_dot)/dp`` (N, n_v) at the states ``(v, v_dot)`` (N, n_v) for one
+    parameter."""
     info = model.bodies[model.body_index[change.body]]
-    out = np.zeros(model.n_v)
+    out = np.zeros(v.shape)
     start, dim = info.v.start, model.gravity.size
-    linear = slice(start, start + (dim if info.kind != "particle" else info.v.stop - start))
-    out[linear] = change.mass * (model.gravity[:linear.stop - linear.start] - v_dot[linear])
+    linear = slice(start, info.v.stop if info.kind == "particle" else start + dim)
+    out[:, linear] = change.mass * (model.gravity[:linear.stop - start] - v_dot[:, linear])
     if info.kind == "spatial":
-        omega, alpha = v[start + 3:start + 6], v_dot[start + 3:start + 6]
+        omega, alpha = v[:, start + 3:start + 6], v_dot[:, start + 3:start + 6]
         dJ = change.inertia
-        out[start + 3:start + 6] = -(dJ @ alpha) - np.cross(omega, dJ @ omega)
+        out[:, start + 3:start + 6] = -(alpha @ dJ.T) - np.cross(omega, omega @ dJ.T)
     elif info.kind == "planar":
-        out[start + 2] = -float(change.inertia[0, 0]) * v_dot[start + 2]
+        out[:, start + 2] = -float(change.inertia[0, 0]) * v_dot[:, start + 2]
     return out
 
 
-def inverse_sensitivities(model: Model, result, parameters, *,
+def inverse_sensitivities(model: Model, result: InverseResult,
+                          parameters: Sequence[InertiaChange], *,
                           progress: Callable[[int, int], None] | None = None
                           ) -> InverseSensitivity:
     """The derivatives of ``result``'s efforts, joint wrenches and ground forces with respect
@@ -148,37 +153,37 @@ def inverse_sensitivities(model: Model, result, parameters, *,
             raise HexapodError(f"parameter '{change.name}': model '{model.name}' has no body "
                                f"'{change.body}'")
     n, count = result.times.size, len(parameters)
-    joints, feet = len(model.joints), len(model.contacts)
-    wrench = np.zeros((n, count, joints, 6))
+    joints = len(model.joints)
+    wrench = np.zeros((n, joints, 6, count))
     rotations = np.zeros((n, joints, 9))
-    ground = np.zeros((n, feet, 3, count))
+    lams = np.zeros((n, model.n_c, count))
     data = model.create_data()
     terms = terms_of(model)
-    no_offset, zero = np.zeros(6 * terms.owners), np.zeros((model.n_c, count))
-    laws = model.law_values(result.times)
-    laws = [np.asarray(x, dtype=float).reshape(model.n_w, n) for x in laws]
+    zero = np.zeros((model.n_c, count))
+    forces = np.stack([inertial_force_changes(model, change, result.v, result.v_dot)
+                       for change in parameters], axis=-1) if count \
+        else np.zeros((n, model.n_v, 0))
+    laws = [np.asarray(x, dtype=float).reshape(model.n_w, n)
+            for x in model.law_values(result.times)]  # w: the rows' values at each sample
     for k, t in enumerate(result.times):
-        q, v, v_dot = result.q[k], result.v[k], result.v_dot[k]
-        w, wd, wdd = (x[:, k] for x in laws)
-        Phi_v, _, _ = dynamics_terms(model, {"q": q, "v": v, "w": w, "wd": wd, "wdd": wdd},
-                                     data)
+        q, w = result.q[k], laws[0][:, k]
+        Phi_v = constraint_jacobian(model, q, w, data)
         split = state_split(model, data, q, w, Phi_v)
-        forces = np.column_stack([inertial_force_change(model, change, v, v_dot)
-                                  for change in parameters]) if count else zero[:model.n_v]
-        _, lam, _ = policy_solution(model, data, float(t), q, w, Phi_v, split, forces, zero,
-                                    None, tol=model.rank_tolerance, status=False)
-        Phi = terms.nonzeros(Phi_v)
-        for p in range(count):  # the report's wrenches, without the forces across joints
-            six, frames = terms.evaluate(data, "report", q, Phi, lam[:, p], no_offset)
-            wrench[k, p] = np.reshape(six, (6, joints)).T  # as wrenches_from_multipliers
-            rotations[k] = np.reshape(frames, (9, joints)).T
-        if feet:
-            ground[k] = np.stack([ground_reactions(model, lam[:, p]) for p in range(count)],
-                                 axis=-1) if count else ground[k]
+        _, lams[k], _ = policy_solution(model, data, float(t), q, w, Phi_v, split, forces[k],
+                                        zero, None, tol=model.rank_tolerance, status=False)
+        # the report's wrenches, without the forces across joints: linear in the multipliers
+        B, frames = terms.evaluate(data, "report_map", q, terms.nonzeros(Phi_v))
+        wrench[k] = (np.reshape(B, (6 * joints, model.n_c)) @ lams[k]).reshape(joints, 6,
+                                                                              count)
+        rotations[k] = np.reshape(frames, (9, joints)).T
         if progress is not None:
             progress(k + 1, n)
-    force, torque, effort = efforts_and_axes(model, wrench[..., :3], wrench[..., 3:],
+    force, torque, effort = efforts_and_axes(model, wrench[:, :, :3].transpose(0, 3, 1, 2),
+                                             wrench[:, :, 3:].transpose(0, 3, 1, 2),
                                              rotations[:, None], result.frame)
+    # (N, P, J, 3) -> (N, J, 3, P); the ground's forces: minus the contacts' multipliers
     force, torque = force.transpose(0, 2, 3, 1), torque.transpose(0, 2, 3, 1)
     effort = effort.transpose(0, 2, 1)
+    rows = np.array([c.rows for c in model.contacts], dtype=int).reshape(-1, 3)
+    ground = -lams[:, rows]
     return InverseSensitivity(parameters, effort, force, torque, ground)

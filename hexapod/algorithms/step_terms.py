@@ -371,20 +371,37 @@ class StepTerms:
         convention (6 x J: force, then moment about the joint origin, in the joint frame) and
         the joint frames' rotations (9 x J)."""
         model = self.model
-        J = len(model.joints)
         Phi_nz = ca.SX.sym("Phi", self.pattern.nnz())
         lam, offset = ca.SX.sym("lam", model.n_c), ca.SX.sym("offset", 6 * self.owners)
         A, frames = self._wrench_map(ca.SX(self.pattern, Phi_nz))
-        world = ca.mtimes(A, lam) + offset
-        length = model.characteristic_length
-        out = []
-        for k in range(J):
-            R = ca.reshape(frames[:, k], 3, 3)
-            force, moment = world[6 * k:6 * k + 3], world[6 * k + 3:6 * k + 6] * length
-            out.append(ca.vertcat(ca.mtimes(R.T, force), ca.mtimes(R.T, moment)))
+        out = self._in_joint_frames(ca.mtimes(A, lam) + offset, frames)
         return self._function("phase_report", [self.q, Phi_nz, lam, offset],
                               [ca.horzcat(*out) if out else ca.SX(6, 0), frames],
                               ["q", "Phi", "lam", "offset"], ["wrench", "frames"])
+
+    @cached_property
+    def report_map(self) -> ca.Function:
+        """``(q, Phi) -> (B, frames)``: the linear map from multipliers to :attr:`report`'s
+        wrenches (6 J x n_c, joint by joint: force, then moment, in the joint frame), for
+        wrenches without the forces across joints; the joint frames' rotations (9 x J)."""
+        Phi_nz = ca.SX.sym("Phi", self.pattern.nnz())
+        A, frames = self._wrench_map(ca.SX(self.pattern, Phi_nz))
+        out = self._in_joint_frames(A, frames)
+        B = ca.vertcat(*out) if out else ca.SX(0, self.model.n_c)
+        return self._function("phase_report_map", [self.q, Phi_nz], [ca.densify(B), frames],
+                              ["q", "Phi"], ["B", "frames"], to_c=False)
+
+    def _in_joint_frames(self, world, frames) -> list:
+        """The joints' blocks of ``world`` (policy wrenches, world axes, moments over the
+        characteristic length: a column, or a map's columns) as the report gives them: in
+        each joint's frame, moments in N m."""
+        length = self.model.characteristic_length
+        out = []
+        for k in range(len(self.model.joints)):
+            R = ca.reshape(frames[:, k], 3, 3)
+            force, moment = world[6 * k:6 * k + 3, :], world[6 * k + 3:6 * k + 6, :] * length
+            out.append(ca.vertcat(ca.mtimes(R.T, force), ca.mtimes(R.T, moment)))
+        return out
 
 
 def terms_of(model: Model) -> StepTerms:

@@ -15,9 +15,13 @@ import os
 import socket
 import time
 from collections import OrderedDict
+from typing import TYPE_CHECKING
 
 from hexapod.errors import HexapodError, InputFileError
 from hexapod.sweeps.spec import Case, Study, builder_parameters, spec_parameters_help
+
+if TYPE_CHECKING:
+    from hexapod.scene.scene import Scene
 
 #: Models kept per process (the most recently used), shared by the cases of equal structure.
 MODELS_KEPT = 4
@@ -92,6 +96,34 @@ def build_scene(study: Study, builder, arguments: dict, keys: dict):
     from hexapod.scene.builtin import load_scene
 
     scene = builder(**arguments) if builder is not None else load_scene(study.scene)
+    return with_scene_keys(scene, keys, study.source)
+
+
+def with_scene_keys(scene: Scene, keys: dict, source: str = "") -> Scene:
+    """A copy of ``scene`` with the dotted scene keys ``keys`` set (``body.femur.mass``,
+    ``ground.mu``, ``scene.gravity.2``: :func:`set_scene_key`), read back by the scene reader,
+    which checks it as it checks any file.
+
+    Parameters
+    ----------
+    scene : Scene
+    keys : dict
+        Scene key -> value.
+    source : str
+        What gave the keys, for the messages.
+
+    Returns
+    -------
+    Scene
+        ``scene`` itself when ``keys`` is empty.
+
+    Raises
+    ------
+    StudyError
+        A key that leads nowhere.
+    InputFileError
+        A value the scene reader refuses.
+    """
     if not keys:
         return scene
     import tomllib
@@ -101,7 +133,7 @@ def build_scene(study: Study, builder, arguments: dict, keys: dict):
 
     document = tomllib.loads(scene_text(scene))
     for key, value in keys.items():
-        set_scene_key(document, key, value, study.source)
+        set_scene_key(document, key, value, source)
     return scene_from_document(document, f"{scene.name} ({_shown(keys)})")
 
 

@@ -16,7 +16,9 @@ matches nothing, or a key sensitivities do not cover, is refused.
 from __future__ import annotations
 
 import tomllib
+from collections.abc import Sequence
 from fnmatch import fnmatchcase
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -24,13 +26,16 @@ from hexapod.algorithms.sensitivity import InertiaChange
 from hexapod.scene.bodies import Particle, PlanarBody, inertia_tensor
 from hexapod.sweeps.cases import StudyError
 
+if TYPE_CHECKING:
+    from hexapod.scene.scene import Scene
+
 _COVERED = ("masses and inertias, body.NAME.mass and body.NAME.inertia[.K] ('*' matches any "
             "NAME); lengths, joint positions and the gait's parameters move the motion itself, "
             "whose derivatives are not written yet")
 
 
-def inertia_parameters(scene, patterns, source: str = "--parameters") -> tuple[InertiaChange,
-                                                                              ...]:
+def inertia_parameters(scene: Scene, patterns: Sequence[str],
+                       source: str = "--parameters") -> tuple[InertiaChange, ...]:
     """The parameters ``patterns`` name in ``scene``, in the order named, each once.
 
     Parameters

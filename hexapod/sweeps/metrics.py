@@ -32,9 +32,16 @@ steps                  1       simulate: accepted steps
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from hexapod.output.summary_parts import time_integral, time_rms
+
+if TYPE_CHECKING:
+    from hexapod.algorithms.inverse import InverseResult
+    from hexapod.model.model import Model
 
 #: The metric families of each job kind, in the table's column order.
 FAMILIES = {
@@ -57,8 +64,26 @@ def metric_unit(model, column: str) -> str:
     return _UNITS.get(family, "")
 
 
-def inverse_metrics(model, result, families, strides: float) -> dict[str, float]:
-    """The metrics of an inverse-dynamics ``result`` over ``strides`` strides."""
+def inverse_metrics(model: Model, result: InverseResult, families: Sequence[str],
+                    strides: float) -> dict[str, float]:
+    """The metrics of an inverse-dynamics ``result`` over ``strides`` strides.
+
+    Parameters
+    ----------
+    model : Model
+        The model ``result`` was computed with.
+    result : InverseResult
+    families : sequence of str
+        The families kept (:data:`FAMILIES` ``["inverse"]``).
+    strides : float
+        The window in strides (the energy is per stride).
+
+    Returns
+    -------
+    dict
+        Metric column (``family`` or ``family:element``) -> value, in the units of
+        :func:`metric_unit`.
+    """
     out: dict[str, float] = {}
     t = result.times
     driven = [j for j in model.joints if j.driver_rows.size and j.type.drivable]

@@ -21,10 +21,18 @@ cost_of_transport      ``E / (m g d)``: the energy's derivative, and the mass's 
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from hexapod.output.summary_parts import time_integral
 from hexapod.sweeps.metrics import cost_of_transport, joint_rates, metric_unit, positive_work
+
+if TYPE_CHECKING:
+    from hexapod.algorithms.inverse import InverseResult
+    from hexapod.algorithms.sensitivity import InverseSensitivity
+    from hexapod.model.model import Model
 
 #: The families with a derivative, in the table's order.
 SENSITIVE_FAMILIES = ("peak_effort", "rms_effort", "peak_force", "peak_moment", "peak_ground",
@@ -44,7 +52,8 @@ def _peak(values: np.ndarray, derivatives: np.ndarray) -> np.ndarray:
     return values[k] @ derivatives[k] / size[k]
 
 
-def metric_sensitivities(model, result, sensitivity, families=SENSITIVE_FAMILIES,
+def metric_sensitivities(model: Model, result: InverseResult, sensitivity: InverseSensitivity,
+                         families: Sequence[str] = SENSITIVE_FAMILIES,
                          strides: float = 1.0) -> dict[str, np.ndarray]:
     """The derivative of each figure of merit with respect to each parameter.
 
@@ -157,7 +166,8 @@ def sensitivity_rows(model, metrics: dict[str, float], derivatives: dict[str, np
         metric = metrics[column]
         unit = metric_unit(model, column) or "1"
         for change, value in zip(parameters, values, strict=True):
+            per = f"({change.unit})" if " " in change.unit else change.unit
             elasticity = (change.value / metric * value) if metric else float("nan")
             rows.append({"metric": column, "parameter": change.name, "value": float(value),
-                         "unit": f"{unit}/({change.unit})", "elasticity": float(elasticity)})
+                         "unit": f"{unit}/{per}", "elasticity": float(elasticity)})
     return rows

@@ -1,0 +1,122 @@
+"""``hexapod sensitivity``: the derivatives of a driven scene's figures of merit with respect to
+design parameters."""
+
+from __future__ import annotations
+
+import sys
+
+from hexapod.cli.common import (
+    MAX_TIME,
+    at_least,
+    base_argument,
+    check_inverse_memory,
+    ground_arguments,
+    scene_of,
+    scene_positional,
+    seconds,
+    show_progress,
+    time_value,
+)
+from hexapod.cli.outputs import given_files, output_directory, suffixes
+
+HELP = "derivatives of the figures of merit with respect to design parameters"
+DESCRIPTION = (
+    "Design sensitivities of SCENE (a scene file or a built-in scene whose drivers prescribe "
+    "every degree of freedom): the inverse dynamics over a window, then the exact derivatives "
+    "of every joint effort, joint wrench and ground force with respect to each parameter, and "
+    "of the figures of merit (peak and RMS effort per driven joint, peak force and moment per "
+    "joint, peak ground force per foot, positive work per stride, cost of transport). "
+    "Parameters are scene keys, '*' matching any body: body.NAME.mass and body.NAME.inertia "
+    "(each component, or body.NAME.inertia.K). Writes the directory OUT: sensitivities.csv "
+    "(metric, parameter, value: the derivative, unit, elasticity (p / m) dm/dp), units.json, "
+    "summary.md and one tornado figure of elasticities per family of figures of merit "
+    "(tornado-FAMILY.png, its largest element). The directory is written whole or not at all.")
+
+
+def add_arguments(parser) -> None:
+    scene_positional(parser)
+    parser.add_argument("--parameters", nargs="+", required=True, metavar="KEY",
+                        help="scene keys, '*' matching any body name: body.NAME.mass, "
+                        "body.NAME.inertia, body.NAME.inertia.K (quote the '*' in a shell)")
+    parser.add_argument("--metrics", nargs="+", metavar="FAMILY",
+                        help="families of figures of merit (default: all: peak_effort, "
+                        "rms_effort, peak_force, peak_moment, peak_ground, energy, "
+                        "cost_of_transport)")
+    parser.add_argument("--out", metavar="DIR",
+                        help="the directory to write (default: SCENE-NAME-sensitivity); an "
+                        "earlier one there is replaced")
+    parser.add_argument("--start", type=time_value, default=0.0, metavar="S",
+                        help="first time in s (default 0)")
+    parser.add_argument("--duration", type=seconds, metavar="S",
+                        help="length of the window in s (default: one cycle of the scene's "
+                        "periodic laws, e.g. the gait's stride, or 1 s)")
+    parser.add_argument("--samples", type=at_least(2), default=501,
+                        help="samples over the window, ends included (default 501)")
+    parser.add_argument("--no-figures", dest="figures", action="store_false",
+                        help="write the table and the summary only")
+    parser.add_argument("--method", choices=("auto", "tree", "phase", "saddle"),
+                        default="auto", help="the inverse dynamics' path (as for 'hexapod "
+                        "report'; the derivatives do not depend on it)")
+    ground_arguments(parser)
+    base_argument(parser)
+
+
+def run(args) -> int:
+    from hexapod._support.files import write_directory_atomically
+    from hexapod.errors import HexapodError
+    from hexapod.model.assemble import assemble
+    from hexapod.output.sensitivity import (
+        SENSITIVITY_COLUMNS,
+        sensitivity_csv_text,
+        sensitivity_summary,
+        tornado_metrics,
+    )
+    from hexapod.simulation.results import units_json
+    from hexapod.sweeps.design import check_families, sensitivity_run
+    from hexapod.sweeps.design_parameters import inertia_parameters
+    from hexapod.sweeps.metric_derivatives import SENSITIVE_FAMILIES
+
+    scene = scene_of(args, args.scene)
+    families = check_families(args.metrics or SENSITIVE_FAMILIES)
+    inertia_parameters(scene, args.parameters)  # refused before the output is claimed
+    out = output_directory(args.out, f"{scene.name}-sensitivity",
+                           inputs=given_files(args.scene),
+                           ours=suffixes(".csv", ".md", ".png", ".json"))
+    if args.duration is not None and args.duration > MAX_TIME:
+        raise HexapodError(f"--duration {args.duration:g} s is longer than the {MAX_TIME:g} s "
+                           "a run may span")
+    progress = _progress if show_progress() else None
+    model = assemble(scene)
+    check_inverse_memory(model, args.samples, None, "ask for fewer --samples")
+    run = sensitivity_run(scene, args.parameters, families=families, samples=args.samples,
+                          start=args.start, duration=args.duration, method=args.method,
+                          progress=progress, model=model)
+    chosen = tornado_metrics(run.metrics, run.derivatives)
+    files = {"sensitivities.csv": sensitivity_csv_text(run.rows).encode(),
+             "units.json": units_json({"sensitivities.csv": SENSITIVITY_COLUMNS}).encode(),
+             "summary.md": sensitivity_summary(scene.name, run.metrics, run.rows, chosen,
+                                               args.samples, run.run_time).encode()}
+    if args.figures:
+        files.update(_figures(run, chosen))
+    write_directory_atomically(out, files)
+    if progress is not None:
+        print("\r" + " " * 60 + "\r", end="", file=sys.stderr)
+    print(f"wrote {out}/: {', '.join(files)}")
+    print(f"{len(run.sensitivity.parameters)} parameters, {len(run.derivatives)} figures of "
+          f"merit, {args.samples} samples ({run.result.method} path, {run.run_time:.3g} s CPU)")
+    return 0
+
+
+def _figures(run, chosen: dict[str, str]) -> dict[str, bytes]:
+    from hexapod.output.figures import png_bytes
+    from hexapod.output.sensitivity import tornado_figure
+    from hexapod.sweeps.metrics import metric_unit
+
+    return {f"tornado-{family}.png": png_bytes(tornado_figure(
+                run.rows, metric, run.metrics[metric], metric_unit(run.model, metric)))
+            for family, metric in chosen.items()}
+
+
+def _progress(stage: str, done: int, total: int) -> None:
+    if done == total or done % max(1, total // 100) == 0:
+        print(f"\r{stage}: {done}/{total} samples", end="", file=sys.stderr, flush=True)

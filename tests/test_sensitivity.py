@@ -1,0 +1,212 @@
+"""Design sensitivities (``hexapod sensitivity``): the derivatives of efforts, joint wrenches,
+ground forces and figures of merit with respect to the bodies' masses and inertias.
+
+References, each independent of the method (the saddle-point solve and policy applied to the
+derivatives of the forces):
+
+* central differences of whole runs on scenes re-read with the parameter moved (the forces
+  are linear in these parameters, so the differences are exact but for round-off: 1e-6 of the
+  value per relative change of the parameter is some five orders above it);
+* scaling every mass and inertia of the walking robot by s scales every force by s (its only
+  other forces are the ground's, which scale with them): ``sum_p p dF/dp = F``;
+* the momentum of each body: the summed vertical ground forces change with a body's mass by
+  ``g + a_z`` of its centre of mass, at every sample.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+
+import numpy as np
+import pytest
+
+import hexapod as hx
+from hexapod.cli import main
+from hexapod.sweeps.cases import StudyError
+from hexapod.sweeps.design_parameters import inertia_parameters
+from hexapod.sweeps.metric_derivatives import SENSITIVE_FAMILIES, metric_sensitivities
+from hexapod.sweeps.metrics import inverse_metrics
+from tests.robots import walking_robot
+
+#: Relative step of the central differences.
+STEP = 1e-4
+#: Agreement asked, per unit relative change of the parameter, of the array's largest value.
+TOLERANCE = 1e-6
+
+
+def moved(scene, key: str, value: float) -> hx.Model:
+    return hx.assemble(hx.sweeps.with_scene_keys(scene, {key: value}))
+
+
+def central_difference(scene, change, times, evaluate):
+    h = STEP * abs(change.value)
+    ahead, behind = (evaluate(moved(scene, change.name, change.value + s * h), times)
+                     for s in (1.0, -1.0))
+    return {k: (ahead[k] - behind[k]) / (2 * h) for k in ahead}
+
+
+def forces(model, times):
+    result = hx.inverse_dynamics(model, times)
+    out = {"effort": result.effort, "force": result.force, "torque": result.torque}
+    if model.contacts:
+        out["ground_force"] = result.ground_force
+    return out
+
+
+@pytest.fixture(scope="module")
+def front_leg():
+    scene = hx.load_scene("front-leg")
+    model = hx.assemble(scene)
+    times = np.linspace(0.0, model.time_window()[0], 41)
+    return scene, model, hx.inverse_dynamics(model, times)
+
+
+def test_front_leg_against_central_differences(front_leg):
+    scene, model, result = front_leg
+    changes = inertia_parameters(scene, ["body.*.mass", "body.*.inertia"])
+    assert len(changes) == 6 * 4  # six bodies, a mass and three moments each
+    picked = [changes[k] for k in np.random.default_rng(7).choice(len(changes), 4, False)]
+    picked.append(next(c for c in changes if c.name == "body.femur.inertia.1"))
+    sensitivity = hx.inverse_sensitivities(model, result, picked)
+    for p, change in enumerate(picked):
+        reference = central_difference(scene, change, result.times, forces)
+        for name, difference in reference.items():
+            value = getattr(result, name)
+            exact = getattr(sensitivity, name)[..., p]
+            finite = np.isfinite(value)
+            error = change.value * np.abs(exact[finite] - difference[finite]).max()
+            assert error <= TOLERANCE * np.abs(value[finite]).max(), (change.name, name)
+
+
+def test_front_leg_figures_of_merit_against_central_differences(front_leg):
+    scene, model, result = front_leg
+    changes = inertia_parameters(scene, ["body.femur.mass", "body.tibia.inertia.2"])
+    sensitivity = hx.inverse_sensitivities(model, result, changes)
+    derivatives = metric_sensitivities(model, result, sensitivity)
+    values = inverse_metrics(model, result, SENSITIVE_FAMILIES, 1.0)
+    assert {c.partition(":")[0] for c in derivatives} >= {"peak_effort", "rms_effort",
+                                                           "peak_force", "energy"}
+
+    def metrics(model, times):
+        return inverse_metrics(model, hx.inverse_dynamics(model, times), SENSITIVE_FAMILIES,
+                               1.0)
+
+    for p, change in enumerate(changes):
+        reference = central_difference(scene, change, result.times, metrics)
+        for column, exact in derivatives.items():
+            if np.isnan(values[column]):  # the leg stays put: no cost of transport
+                assert np.isnan(exact[p]) and np.isnan(reference[column])
+                continue
+            scale = abs(values[column]) or 1.0
+            assert abs(change.value * (exact[p] - reference[column])) <= TOLERANCE * scale, \
+                (change.name, column)
+
+
+@pytest.fixture(scope="module")
+def walking():
+    model = walking_robot()
+    scene = hx.load_scene("hexapod")
+    times = np.linspace(0.0, model.time_window()[0], 21)
+    result = hx.inverse_dynamics(model, times)
+    changes = inertia_parameters(scene, ["body.*.mass", "body.*.inertia"])
+    return model, result, changes, hx.inverse_sensitivities(model, result, changes)
+
+
+def test_walking_robot_scales_with_its_masses(walking):
+    model, result, changes, sensitivity = walking
+    p = np.array([c.value for c in changes])
+    assert len(changes) == 4 * len(model.bodies)
+    for name in ("effort", "force", "torque", "ground_force"):
+        value = getattr(result, name)
+        finite = np.isfinite(value)
+        scaled = getattr(sensitivity, name) @ p
+        assert np.abs(scaled[finite] - value[finite]).max() <= 1e-10 * np.abs(value[finite]).max()
+
+
+def test_walking_figures_of_merit_scale_with_the_masses(walking):
+    """Each figure of merit grows as the forces, by s (Euler's identity for a function
+    homogeneous of degree 1), but the cost of transport: work over weight, of degree 0."""
+    model, result, changes, sensitivity = walking
+    p = np.array([c.value for c in changes])
+    values = inverse_metrics(model, result, SENSITIVE_FAMILIES, 1.0)
+    derivatives = metric_sensitivities(model, result, sensitivity)
+    assert "cost_of_transport" in derivatives and "peak_ground:L1" in derivatives
+    for column, exact in derivatives.items():
+        degree = 0.0 if column == "cost_of_transport" else 1.0
+        assert abs(exact @ p - degree * values[column]) <= 1e-10 * abs(values[column]), column
+
+
+def test_ground_forces_follow_each_body_momentum(walking):
+    model, result, changes, sensitivity = walking
+    g = -model.gravity[2]
+    for k, change in enumerate(changes):
+        if not change.name.endswith(".mass"):
+            continue
+        body = model.bodies[model.body_index[change.body]]
+        vertical = sensitivity.ground_force[:, :, 2, k].sum(axis=1)
+        expected = g + result.v_dot[:, body.v.start + 2]
+        assert np.abs(vertical - expected).max() <= 1e-10 * g, change.name
+
+
+def test_parameters_by_scene_keys():
+    scene = hx.load_scene("front-leg")
+    every = inertia_parameters(scene, ["body.*.mass", "body.femur.inertia.2",
+                                       "body.femur.mass"])
+    assert [c.name for c in every][-1] == "body.femur.inertia.2"
+    assert sum(c.name == "body.femur.mass" for c in every) == 1  # named twice, kept once
+    femur = scene.bodies["femur"]
+    tensor = next(c for c in every if c.name == "body.femur.inertia.2").inertia
+    R = femur.inertia_rotation
+    assert np.allclose(tensor, R @ np.diag([0.0, 0.0, 1.0]) @ R.T, atol=1e-15)
+    for bad, said in (("body.nothing*.mass", "no body matches"),
+                      ("body.femur.com", "not a parameter"),
+                      ("joint.tita.origin", "not a parameter"),
+                      ("body.femur.inertia.3", "components 0 to 2")):
+        with pytest.raises(StudyError, match=said):
+            inertia_parameters(scene, [bad])
+
+
+def test_friction_policy_is_refused():
+    model = walking_robot(policy="friction")
+    result = hx.inverse_dynamics(model, np.linspace(0.0, 0.01, 3))
+    changes = inertia_parameters(hx.load_scene("hexapod"), ["body.trunk.mass"])
+    with pytest.raises(hx.HexapodError, match="friction policy"):
+        hx.inverse_sensitivities(model, result, changes)
+
+
+def test_command_writes_the_table(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["sensitivity", "front-leg", "--parameters", "body.*.mass", "body.tibia.inertia",
+                 "--samples", "21", "--out", str(out)]) == 0
+    assert "wrote" in capsys.readouterr().out
+    with open(out / "sensitivities.csv") as stream:
+        rows = list(csv.DictReader(stream))
+    assert list(rows[0]) == ["metric", "parameter", "value", "unit", "elasticity"]
+    units = json.loads((out / "units.json").read_text())
+    assert list(units["sensitivities.csv"]) == list(rows[0])
+    assert {r["parameter"] for r in rows} == {"body.thc_link_1.mass", "body.thc_link_2.mass",
+                                              "body.coxa.mass", "body.femur.mass",
+                                              "body.tibia.mass", "body.tarsus.mass",
+                                              "body.tibia.inertia.0", "body.tibia.inertia.1",
+                                              "body.tibia.inertia.2"}
+    row = next(r for r in rows if r["metric"] == "peak_effort:tita"
+               and r["parameter"] == "body.femur.mass")
+    assert row["unit"] == "N m/kg"
+    inertia = next(r for r in rows if r["parameter"] == "body.tibia.inertia.0")
+    assert inertia["unit"].endswith("/(kg m^2)")
+    assert (out / "tornado-peak_effort.png").stat().st_size > 0
+    assert "peak_effort" in (out / "summary.md").read_text()
+
+
+@pytest.mark.parametrize("args, said", [
+    (["--parameters", "body.femur.length"], "not a parameter sensitivities cover"),
+    (["--parameters", "body.wing.mass"], "no body matches 'wing'"),
+    (["--parameters", "body.femur.mass", "--metrics", "peak_fun"], "no figure of merit"),
+])
+def test_bad_input_is_one_message_and_nothing_written(tmp_path, capsys, args, said):
+    out = tmp_path / "out"
+    assert main(["sensitivity", "front-leg", "--samples", "5", "--out", str(out), *args]) == 1
+    error = capsys.readouterr().err
+    assert said in error and "Traceback" not in error
+    assert not out.exists()
