@@ -20,8 +20,8 @@ ROOT = Path(__file__).resolve().parents[1]
 SCENES = ROOT / "data" / "scenes"
 MALFORMED = Path(__file__).resolve().parent / "data" / "malformed_scene.toml"
 
-SUBCOMMANDS = ("dynamics", "info", "inverse", "report", "sensitivity", "simulate", "sweep", "check",
-               "export", "bench", "validate", "scenes", "cache")
+SUBCOMMANDS = ("dynamics", "info", "inverse", "report", "sensitivity", "optimize", "simulate",
+               "sweep", "check", "export", "bench", "validate", "scenes", "cache")
 #: What ``--help`` must not load (NumPy: the command line limits the BLAS threads before it).
 HEAVY = ("numpy", "casadi", "scipy")
 REPORT_KEYS = {"scene", "t", "dimension", "counts", "dof", "dof_with_drivers", "redundant_rows",

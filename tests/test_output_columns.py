@@ -23,7 +23,7 @@ SERIES = re.compile(r"^(t|[A-Za-z][A-Za-z0-9_]*:[A-Za-z0-9_./-]+)$")
 #: a record (one row per run or case): a field, or ``family:element``
 RECORD = re.compile(r"^[A-Za-z][A-Za-z0-9_]*(:[A-Za-z0-9_./-]+)?$")
 UNITS = {"s", "m", "rad", "kg", "N", "N m", "J", "m/s", "rad/s", "m/s^2", "rad/s^2", "N/m",
-         "1/s", "A", "W", "1", None}
+         "1/s", "A", "W", "kg m^2", "1", None}
 
 
 def read_table(path: Path) -> tuple[list[str], list[list[str]]]:
@@ -210,6 +210,19 @@ def test_the_sensitivity_table_describes_its_columns(tmp_path, capsys):
                  "5", "--metrics", "peak_effort", "--no-figures", "--out", str(out)]) == 0
     units = check_described(out, out / "units.json", RECORD)
     assert list(units) == ["sensitivities.csv"]
+
+
+def test_an_optimisation_describes_its_tables(tmp_path, capsys):
+    from tests.test_optimize import study
+
+    out = tmp_path / "optimum"
+    assert main(["optimize", str(study(tmp_path)), "--no-figures", "--out", str(out)]) == 0
+    units = check_described(out, out / "units.json", RECORD_OR_SERIES)
+    assert list(units)[:2] == ["optimization.csv", "optimum.csv"]
+
+
+#: the optimisation's folder holds its records and its optimum's report (time series)
+RECORD_OR_SERIES = re.compile(f"{RECORD.pattern}|{SERIES.pattern}")
 
 
 def read_table_text(text: str) -> tuple[list[str], list[list[str]]]:

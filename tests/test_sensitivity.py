@@ -40,8 +40,9 @@ def moved(scene, key: str, value: float) -> hx.Model:
 
 
 def central_difference(scene, change, times, evaluate):
-    h = STEP * abs(change.value)
-    ahead, behind = (evaluate(moved(scene, change.name, change.value + s * h), times)
+    h = STEP * abs(change.value)  # SI; the scene key in the scene's units
+    ahead, behind = (evaluate(moved(scene, change.name,
+                                    (change.value + s * h) / change.scene_scale), times)
                      for s in (1.0, -1.0))
     return {k: (ahead[k] - behind[k]) / (2 * h) for k in ahead}
 

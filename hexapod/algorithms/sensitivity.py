@@ -60,9 +60,12 @@ class InertiaChange:
         ``dJ/dp``, kg m^2 per unit of the parameter, in the body's centre-of-mass axes (a
         planar body's is 1 x 1; zero for a particle).
     unit : str
-        The parameter's unit (``kg``, ``kg m^2``...).
+        The parameter's SI unit (``kg``, ``kg m^2``).
     value : float
-        The parameter's value in the scene, in ``unit`` (for elasticities; NaN if unknown).
+        The parameter's value, in ``unit`` (for elasticities; NaN if unknown).
+    scene_scale : float
+        ``unit`` per unit of the value the scene writes (1, or the square of the scene's
+        length unit in metres for an inertia in kg L^2).
     """
 
     name: str
@@ -71,6 +74,7 @@ class InertiaChange:
     inertia: np.ndarray
     unit: str
     value: float = float("nan")
+    scene_scale: float = 1.0
 
 
 @dataclass

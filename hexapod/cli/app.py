@@ -23,6 +23,7 @@ from hexapod.cli import (
     export,
     info,
     inverse,
+    optimize,
     report,
     scenes,
     sensitivity,
@@ -33,8 +34,8 @@ from hexapod.cli import (
 from hexapod.errors import HexapodError
 
 #: The commands, in the order ``hexapod --help`` lists them; each is named by its module.
-COMMANDS = (dynamics, info, inverse, report, sensitivity, simulate, sweep, check, export, bench,
-            validate, scenes, cache)
+COMMANDS = (dynamics, info, inverse, report, sensitivity, optimize, simulate, sweep, check,
+            export, bench, validate, scenes, cache)
 
 
 def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:

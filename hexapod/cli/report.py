@@ -102,12 +102,10 @@ def run(args) -> int:
     import numpy as np
 
     from hexapod._support.files import write_directory_atomically
-    from hexapod.algorithms.balance import body_balance
     from hexapod.algorithms.inverse import inverse_dynamics
-    from hexapod.algorithms.kinematics import marker_trajectories
     from hexapod.errors import HexapodError
     from hexapod.model.assemble import assemble
-    from hexapod.output.report import FOOT_MARKER, RunInfo, report_files, walking_headlines
+    from hexapod.output.report import RunInfo, walking_headlines
     from hexapod.scene.actuators import read_actuators
 
     scene = scene_of(args, args.scene)
@@ -141,13 +139,9 @@ def run(args) -> int:
     run_time = time.perf_counter() - started
     if show and args.figures:
         print("\rdrawing the figures" + " " * 40, end="", file=sys.stderr, flush=True)
-    balance = body_balance(model, times, result.q, result.v, result.v_dot, result.force,
-                           result.torque, result.frame)
-    feet = marker_trajectories(model, result.q, FOOT_MARKER)
     run = RunInfo(scene.name, args.scene, run_time, f"{why}, {duration:g} s")
-    files = report_files(model, result, balance, run, feet, figures=args.figures,
-                         workers=_figure_workers(args.leg_figures),
-                         leg_figures=args.leg_figures, actuators=actuators)
+    files, balance = report_of(model, result, run, figures=args.figures,
+                               leg_figures=args.leg_figures, actuators=actuators)
     write_directory_atomically(out, files)
     if show:
         print("\r" + " " * 60 + "\r", end="", file=sys.stderr)
@@ -160,6 +154,22 @@ def run(args) -> int:
     for line in walking_headlines(model, result):
         print(line)
     return 0
+
+
+def report_of(model, result, run, *, figures: bool = True, leg_figures: bool = False,
+              actuators=None) -> tuple[dict[str, bytes], object]:
+    """The report's files of an inverse-dynamics ``result`` (what ``hexapod report`` writes;
+    ``hexapod optimize`` writes its optimum's), and the bodies' balance they summarise."""
+    from hexapod.algorithms.balance import body_balance
+    from hexapod.algorithms.kinematics import marker_trajectories
+    from hexapod.output.report import FOOT_MARKER, report_files
+
+    balance = body_balance(model, result.times, result.q, result.v, result.v_dot,
+                           result.force, result.torque, result.frame)
+    feet = marker_trajectories(model, result.q, FOOT_MARKER)
+    return report_files(model, result, balance, run, feet, figures=figures,
+                        workers=_figure_workers(leg_figures), leg_figures=leg_figures,
+                        actuators=actuators), balance
 
 
 def _figure_workers(leg_figures: bool) -> int:

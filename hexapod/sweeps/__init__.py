@@ -11,7 +11,8 @@ table with figures.
 * :mod:`~hexapod.sweeps.run`: running a study, resuming it;
 * :mod:`~hexapod.sweeps.design`, :mod:`~hexapod.sweeps.design_parameters` and
   :mod:`~hexapod.sweeps.metric_derivatives`: design by derivatives (``hexapod
-  sensitivity``, ``docs/design.md``).
+  sensitivity``, ``docs/design.md``), and :mod:`~hexapod.sweeps.optimize` (``hexapod
+  optimize``).
 
 ``hexapod.sweep`` is :func:`hexapod.sweeps.run.sweep`; ``docs/sweeps.md`` is the user's guide.
 """
@@ -26,5 +27,7 @@ __getattr__, __dir__, __all__ = attach(__name__, {
     "hexapod.sweeps.design": ["SensitivityRun", "sensitivity_run"],
     "hexapod.sweeps.design_parameters": ["inertia_parameters"],
     "hexapod.sweeps.cases": ["with_scene_keys"],
+    "hexapod.sweeps.optimize": ["OptimizationRun", "OptimizationStudy", "optimize",
+                                "read_optimization"],
     "hexapod.sweeps.metric_derivatives": ["SENSITIVE_FAMILIES", "metric_sensitivities"],
 })

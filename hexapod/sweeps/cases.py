@@ -90,6 +90,31 @@ def _shown(params: dict) -> str:
     return ", ".join(f"{k}={v}" for k, v in params.items()) or "the base scene"
 
 
+def base_scene(study: Study) -> Scene:
+    """The study's scene with its held values (``[fixed]``) applied: the built-in scene's
+    builder called with its arguments, or the scene file read, then the scene keys set.
+
+    Parameters
+    ----------
+    study : Study
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    StudyError
+        A held value that names nothing.
+    """
+    builder = _builder(study)
+    arguments, keys = case_values(study, builder, {})
+    try:
+        return build_scene(study, builder, arguments, keys)
+    except TypeError as error:
+        raise StudyError(f"{study.source}: {error}") from None
+
+
 def build_scene(study: Study, builder, arguments: dict, keys: dict):
     """The scene of a case: the builder called with its arguments (or the scene file read),
     then the scene keys applied."""

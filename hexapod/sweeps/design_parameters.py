@@ -6,8 +6,9 @@ the scene's TOML form. Sensitivities cover the bodies' inertia for now:
 * ``body.NAME.mass`` (kg);
 * ``body.NAME.inertia``: every component as the scene gives it (3 principal moments or the 6
   entries ``xx yy zz xy xz yz`` of a spatial body, in its ``inertia_rotation`` axes; a planar
-  body's one moment), each a parameter ``body.NAME.inertia.K`` (kg L^2, L the scene's length
-  unit); ``body.NAME.inertia.K`` names one.
+  body's one moment), each a parameter ``body.NAME.inertia.K``; ``body.NAME.inertia.K`` names
+  one. Values and derivatives are in SI (kg m^2) whatever the scene's length unit, as every
+  output (``InertiaChange.scene_scale`` converts to the scene's kg L^2).
 
 A glob that matches bodies without the key (a particle has no inertia) skips them; a name that
 matches nothing, or a key sensitivities do not cover, is refused.
@@ -90,14 +91,13 @@ def _changes(scene, entry: dict, parts: list[str], pattern: str, source: str, gl
         if glob:
             return []
         raise StudyError(f"{source}: '{pattern}': body '{name}' is a particle: it has no inertia")
-    unit = f"kg {scene.length_unit}^2" if scene.length_unit != "m" else "kg m^2"
-    to_si = scene.unit ** 2
+    unit, to_si = "kg m^2", scene.unit ** 2  # derivatives per SI unit, as every output
     if planar:
         if len(parts) == 4:
             raise StudyError(f"{source}: '{pattern}': the planar body '{name}' has one moment of "
                              f"inertia, body.{name}.inertia")
-        return [InertiaChange(f"body.{name}.inertia", name, 0.0, np.array([[to_si]]), unit,
-                              float(entry["inertia"]))]
+        return [InertiaChange(f"body.{name}.inertia", name, 0.0, np.ones((1, 1)), unit,
+                              float(entry["inertia"]) * to_si, to_si)]
     given = np.asarray(entry["inertia"], dtype=float)
     if given.ndim != 1:
         raise StudyError(f"{source}: '{pattern}': body '{name}' gives its inertia as a 3 x 3 "
@@ -115,6 +115,6 @@ def _changes(scene, entry: dict, parts: list[str], pattern: str, source: str, gl
         unit_entry = np.zeros(given.size)
         unit_entry[k] = 1.0
         changes.append(InertiaChange(f"body.{name}.inertia.{k}", name, 0.0,
-                                     R @ inertia_tensor(unit_entry) @ R.T * to_si, unit,
-                                     float(given[k])))
+                                     R @ inertia_tensor(unit_entry) @ R.T, unit,
+                                     float(given[k]) * to_si, to_si))
     return changes

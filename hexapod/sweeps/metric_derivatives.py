@@ -27,7 +27,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from hexapod.output.summary_parts import time_integral
-from hexapod.sweeps.metrics import cost_of_transport, joint_rates, metric_unit, positive_work
+from hexapod.sweeps.metrics import (
+    body_masses,
+    cost_of_transport,
+    joint_rates,
+    metric_unit,
+    positive_work,
+)
 
 if TYPE_CHECKING:
     from hexapod.algorithms.inverse import InverseResult
@@ -54,7 +60,8 @@ def _peak(values: np.ndarray, derivatives: np.ndarray) -> np.ndarray:
 
 def metric_sensitivities(model: Model, result: InverseResult, sensitivity: InverseSensitivity,
                          families: Sequence[str] = SENSITIVE_FAMILIES,
-                         strides: float = 1.0) -> dict[str, np.ndarray]:
+                         strides: float = 1.0, masses: np.ndarray | None = None
+                         ) -> dict[str, np.ndarray]:
     """The derivative of each figure of merit with respect to each parameter.
 
     Parameters
@@ -68,6 +75,9 @@ def metric_sensitivities(model: Model, result: InverseResult, sensitivity: Inver
         Families of :data:`SENSITIVE_FAMILIES`.
     strides : float
         The window in strides (the energy is per stride).
+    masses : ndarray, optional
+        The bodies' masses (default the model's), as for
+        :func:`~hexapod.sweeps.metrics.inverse_metrics`.
 
     Returns
     -------
@@ -105,7 +115,8 @@ def metric_sensitivities(model: Model, result: InverseResult, sensitivity: Inver
         if "energy" in families:
             out["energy"] = dwork / strides
         if "cost_of_transport" in families:
-            out["cost_of_transport"] = _transport(model, result, sensitivity, driven, dwork)
+            out["cost_of_transport"] = _transport(model, result, sensitivity, driven, dwork,
+                                                  body_masses(model, masses))
     return out
 
 
@@ -130,21 +141,21 @@ def _work(model, t, effort, deffort, driven) -> np.ndarray:
                      for p in range(deffort.shape[-1])])
 
 
-def _transport(model, result, sensitivity, driven, dwork) -> np.ndarray:
+def _transport(model, result, sensitivity, driven, dwork, masses) -> np.ndarray:
     """The derivative of :func:`hexapod.sweeps.metrics.cost_of_transport`."""
     work = positive_work(model, result.times, result.effort, driven)
-    value = cost_of_transport(model, result.q, work)
+    value = cost_of_transport(model, result.q, work, masses)
     if not np.isfinite(value):
         return np.full(dwork.shape, np.nan)
     g = np.asarray(model.gravity, dtype=float)
     down = g / np.linalg.norm(g)
-    mass, dim, q = model.total_mass, model.dimension, result.q
+    mass, dim, q = float(masses.sum()), model.dimension, result.q
 
     def horizontal(x):
         return x - (x @ down) * down
 
-    shift = horizontal(sum(b.mass * (q[-1, b.q][:dim] - q[0, b.q][:dim])
-                           for b in model.bodies) / mass)
+    shift = horizontal(sum(m * (q[-1, b.q][:dim] - q[0, b.q][:dim])
+                           for m, b in zip(masses, model.bodies, strict=True)) / mass)
     distance = np.linalg.norm(shift)
     out = np.empty(dwork.shape)
     for p, change in enumerate(sensitivity.parameters):

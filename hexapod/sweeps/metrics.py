@@ -65,7 +65,7 @@ def metric_unit(model, column: str) -> str:
 
 
 def inverse_metrics(model: Model, result: InverseResult, families: Sequence[str],
-                    strides: float) -> dict[str, float]:
+                    strides: float, masses: np.ndarray | None = None) -> dict[str, float]:
     """The metrics of an inverse-dynamics ``result`` over ``strides`` strides.
 
     Parameters
@@ -77,6 +77,9 @@ def inverse_metrics(model: Model, result: InverseResult, families: Sequence[str]
         The families kept (:data:`FAMILIES` ``["inverse"]``).
     strides : float
         The window in strides (the energy is per stride).
+    masses : ndarray, optional
+        The bodies' masses, kg (default the model's): the cost of transport's weight and
+        centre of mass when ``result`` holds the forces of other masses (a design's).
 
     Returns
     -------
@@ -115,7 +118,7 @@ def inverse_metrics(model: Model, result: InverseResult, families: Sequence[str]
         if "energy" in families:
             out["energy"] = work / strides
         if "cost_of_transport" in families:
-            out["cost_of_transport"] = cost_of_transport(model, result.q, work)
+            out["cost_of_transport"] = cost_of_transport(model, result.q, work, masses)
     if "max_violation" in families:
         out["max_violation"] = float(result.max_violation)
     return out
@@ -181,15 +184,18 @@ def positive_work(model, t, effort, joints) -> float:
     return time_integral(t, np.maximum(power, 0.0).sum(axis=1))
 
 
-def cost_of_transport(model, q: np.ndarray, work: float) -> float:
+def cost_of_transport(model, q: np.ndarray, work: float, masses=None) -> float:
     """``work / (m g d)``, ``d`` the horizontal displacement of the model's centre of mass
-    between the first and last samples; NaN when it does not move or there is no gravity."""
+    between the first and last samples; NaN when it does not move or there is no gravity.
+    ``masses``: the bodies' (default the model's)."""
     g = float(np.linalg.norm(model.gravity))
-    mass = model.total_mass
+    masses = body_masses(model, masses)
+    mass = float(masses.sum())
     if g == 0.0 or mass == 0.0:
         return float("nan")
     dim = model.dimension
-    centre = sum(b.mass * q[:, b.q][:, :dim] for b in model.bodies) / mass
+    centre = sum(m * q[:, b.q][:, :dim] for m, b in zip(masses, model.bodies, strict=True)) \
+        / mass
     shift = centre[-1] - centre[0]
     down = np.asarray(model.gravity, dtype=float) / g
     distance = float(np.linalg.norm(shift - (shift @ down) * down))
@@ -197,3 +203,10 @@ def cost_of_transport(model, q: np.ndarray, work: float) -> float:
     if distance <= 1e-9 * scale:
         return float("nan")
     return work / (mass * g * distance)
+
+
+def body_masses(model, masses=None) -> np.ndarray:
+    """The bodies' masses in model order: ``masses`` when given, else the model's."""
+    if masses is None:
+        return np.array([b.mass for b in model.bodies], dtype=float)
+    return np.asarray(masses, dtype=float).reshape(len(model.bodies))

@@ -92,7 +92,7 @@ def point_errors(scene, patterns, samples, checked, step, rng) -> float:
     for change in base:
         kind = change.name.rpartition(".mass")[0] or change.name.split(".inertia")[0] + "/J"
         factor = factors.setdefault(kind, rng.uniform(0.7, 1.3))
-        moved[change.name] = change.value * factor
+        moved[change.name] = change.value / change.scene_scale * factor
     scene = hx.sweeps.with_scene_keys(scene, moved)
     changes = hx.sweeps.inertia_parameters(scene, patterns)
     model = hx.assemble(scene)
@@ -106,8 +106,8 @@ def point_errors(scene, patterns, samples, checked, step, rng) -> float:
         h = step * abs(change.value)
         ends = []
         for sign in (1.0, -1.0):
-            moved = hx.assemble(hx.sweeps.with_scene_keys(scene, {change.name: change.value
-                                                                  + sign * h}))
+            value = (change.value + sign * h) / change.scene_scale  # the scene's units
+            moved = hx.assemble(hx.sweeps.with_scene_keys(scene, {change.name: value}))
             run = hx.inverse_dynamics(moved, times)
             ends.append((outputs(moved, run), inverse_metrics(moved, run)))
         for name, value in outputs(model, result).items():

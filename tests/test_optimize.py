@@ -1,0 +1,155 @@
+"""``hexapod optimize`` against closed-form optima: a lever swung about a horizontal hinge,
+``theta = A sin(w t)``, with a counterweight of mass ``p`` welded at ``r`` on the other side.
+Its torque is ``tau = a(t) + p b(t)``, ``a = (I_a + m_a l_a^2 + I_w) theta'' + m_a g l_a cos
+theta`` and ``b = r^2 theta'' - g r cos theta``; on the samples' trapezoidal rule the RMS torque
+is least at ``p* = -int(a b) / int(b^2)``, a bound on the peak torque makes an interval of ``p``
+(each sample's ``abs(a + p b) <= L``), and the constrained optimum is ``p*`` clipped to it. All
+computed from the closed form, not from the engine."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+
+import numpy as np
+import pytest
+
+from hexapod.cli import main
+from hexapod.sweeps.optimize import optimize, read_optimization
+
+G, A, W = 9.81, 0.6, 2 * math.pi
+M_ARM, L_ARM, I_ARM, R, I_WEIGHT = 1.0, 0.3, 0.02, 0.2, 0.001
+SAMPLES = 201
+LEVER = f"""
+[scene]
+name = "lever"
+dimension = 2
+
+[[body]]
+name = "arm"
+mass = {M_ARM}
+inertia = {I_ARM}
+com = [{L_ARM}, 0.0]
+
+[[body]]
+name = "weight"
+mass = 0.5
+inertia = {I_WEIGHT}
+position = [{-R}, 0.0]
+
+[[joint]]
+name = "hinge"
+type = "revolute"
+parent = "ground"
+child = "arm"
+
+[[joint]]
+name = "weld"
+type = "fixed"
+parent = "arm"
+child = "weight"
+
+[[driver]]
+name = "swing"
+type = "joint"
+joint = "hinge"
+law = {{ type = "harmonic", sin = [{A}], frequency = {W / (2 * math.pi)} }}
+"""
+
+
+def closed_form() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    t = np.linspace(0.0, 1.0, SAMPLES)
+    theta, acceleration = A * np.sin(W * t), -A * W**2 * np.sin(W * t)
+    a = (I_ARM + M_ARM * L_ARM**2 + I_WEIGHT) * acceleration + M_ARM * G * L_ARM * np.cos(theta)
+    b = R**2 * acceleration - G * R * np.cos(theta)
+    return t, a, b
+
+
+def trapezoid(t, x) -> float:
+    return float(np.sum((x[1:] + x[:-1]) * np.diff(t)) / 2)
+
+
+def least_rms() -> float:
+    t, a, b = closed_form()
+    return -trapezoid(t, a * b) / trapezoid(t, b * b)
+
+
+def study(tmp_path, vary: str = 'range = [0.0, 5.0]', optimize_table: str = "",
+          key: str = "body.weight.mass", minimize: str = "rms_effort:hinge"):
+    (tmp_path / "lever.toml").write_text(LEVER)
+    path = tmp_path / "study.toml"
+    path.write_text(f"""
+[study]
+name = "counterweight"
+scene = "lever.toml"
+
+[vary."{key}"]
+{vary}
+
+[optimize]
+minimize = "{minimize}"
+{optimize_table}
+
+[job]
+samples = {SAMPLES}
+""")
+    return path
+
+
+def test_least_rms_torque(tmp_path):
+    run = optimize(read_optimization(study(tmp_path)))
+    assert run.success
+    assert run.optimum[0] == pytest.approx(least_rms(), rel=1e-8)
+    assert run.agreement < 1e-12  # the optimum's own run gives the predicted figures
+
+
+def test_an_optimum_beyond_the_bounds_stops_at_them(tmp_path):
+    run = optimize(read_optimization(study(tmp_path, "range = [0.0, 0.5]\nstart = 0.1")))
+    assert least_rms() > 0.5 and run.optimum[0] == pytest.approx(0.5, rel=1e-9)
+
+
+def test_a_bound_on_the_peak_torque(tmp_path):
+    t, a, b = closed_form()
+    best = least_rms()
+    limit = 0.97 * float(np.max(np.abs(a + best * b)))  # the unconstrained optimum breaks it
+    ends = np.sort(np.stack([(-limit - a) / b, (limit - a) / b]), axis=0)
+    low, high = ends[0].max(), ends[1].min()
+    assert low < high  # a feasible interval, the least RMS outside it
+    expected = min(max(best, low), high)
+    path = study(tmp_path, optimize_table=f'constraints = {{ "peak_effort:*" = {{ max = '
+                                          f'{limit!r} }} }}')
+    run = optimize(read_optimization(path))
+    assert run.success and expected != best
+    assert run.optimum[0] == pytest.approx(expected, rel=1e-6)
+    assert run.checked["peak_effort:hinge"] <= limit * (1 + 1e-6)
+
+
+def test_command_writes_the_optimum_and_its_report(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["optimize", str(study(tmp_path)), "--out", str(out)]) == 0
+    assert "Solve_Succeeded" in capsys.readouterr().out
+    with open(out / "optimum.csv") as stream:
+        (row,) = list(csv.DictReader(stream))
+    assert float(row["optimum"]) == pytest.approx(least_rms(), rel=1e-8)
+    units = json.loads((out / "units.json").read_text())
+    assert {"optimization.csv", "optimum.csv", "optimum-inverse.csv"} <= set(units)
+    assert "mass = 0.97" in (out / "optimum.toml").read_text()
+    assert (out / "optimum-summary.md").exists() and (out / "optimization.png").exists()
+
+
+@pytest.mark.parametrize("change, said", [
+    ({"key": "body.wing.mass"}, "no body matches 'wing'"),
+    ({"key": "body.*.mass"}, "names one parameter"),
+    ({"vary": "range = [2.0, 1.0]"}, "low must be below high"),
+    ({"vary": "range = [0.0, inf]"}, "two finite numbers"),
+    ({"minimize": "rms_effort:knee"}, "no figure of merit 'rms_effort:knee'"),
+    ({"optimize_table": 'constraints = { "peak_ground:*" = { max = 1.0 } }'},
+     "matches no figure of merit"),
+])
+def test_bad_study_is_one_message_and_nothing_written(tmp_path, capsys, change, said):
+    out = tmp_path / "out"
+    assert main(["optimize", str(study(tmp_path, **change)), "--out", str(out)]) == 1
+    error = capsys.readouterr().err
+    assert said in error and "Traceback" not in error
+    assert not out.exists()
