@@ -168,11 +168,49 @@ def test_parameters_by_scene_keys():
             inertia_parameters(scene, [bad])
 
 
-def test_friction_policy_is_refused():
+@pytest.fixture(scope="module")
+def friction():
+    """The walking robot sharing its ground forces by least effort inside pyramids of
+    friction (a QP: piecewise linear in the masses, its derivative on each sample's active
+    set)."""
     model = walking_robot(policy="friction")
+    scene = hx.sweeps.with_scene_keys(hx.load_scene("hexapod"), {"ground.policy": "friction"})
+    times = np.linspace(0.0, model.time_window()[0], 11)
+    result = hx.inverse_dynamics(model, times)
+    changes = inertia_parameters(scene, ["body.*.mass", "body.*.inertia"])
+    return scene, model, result, changes, hx.inverse_sensitivities(model, result, changes)
+
+
+def test_friction_policy_scales_with_its_masses(friction):
+    """The QP's solution is positively homogeneous in the masses (its constraints are cones
+    through zero): ``sum_p p dF/dp = F`` holds on every active set."""
+    _, _, result, changes, sensitivity = friction
+    p = np.array([c.value for c in changes])
+    assert sensitivity.active_set_changes.size  # feet load and unload over the stride
+    for name in ("effort", "ground_force"):
+        value = getattr(result, name)
+        finite = np.isfinite(value)
+        scaled = getattr(sensitivity, name) @ p
+        assert np.abs(scaled[finite] - value[finite]).max() <= 1e-10 * np.abs(value[finite]).max()
+
+
+def test_friction_policy_against_central_differences(friction):
+    scene, _, result, changes, sensitivity = friction
+    k = next(i for i, c in enumerate(changes) if c.name == "body.L2/femur.mass")
+    reference = central_difference(scene, changes[k], result.times, forces)
+    for name in ("effort", "ground_force"):
+        value = getattr(result, name)
+        finite = np.isfinite(value)
+        error = np.abs(getattr(sensitivity, name)[..., k][finite] - reference[name][finite])
+        # the QP's solutions (DAQP) hold some 1e-12 of the weight: their differences 1e-8
+        assert changes[k].value * error.max() <= TOLERANCE * np.abs(value[finite]).max(), name
+
+
+def test_exact_cone_is_refused():
+    model = walking_robot(policy="friction", faces=0)
     result = hx.inverse_dynamics(model, np.linspace(0.0, 0.01, 3))
     changes = inertia_parameters(hx.load_scene("hexapod"), ["body.trunk.mass"])
-    with pytest.raises(hx.HexapodError, match="friction policy"):
+    with pytest.raises(hx.HexapodError, match="exact cone"):
         hx.inverse_sensitivities(model, result, changes)
 
 

@@ -13,11 +13,17 @@ from __future__ import annotations
 import numpy as np
 
 from hexapod.algorithms.contact_frames import refuse_contacts
-from hexapod.algorithms.ground import share_ground_forces
+from hexapod.algorithms.ground import friction_tangents, share_ground_forces
 from hexapod.algorithms.kinematics import state_split
 from hexapod.algorithms.liaison import policy_map
-from hexapod.algorithms.linalg import RowSplit, SaddleSolution, solve_saddle
+from hexapod.algorithms.linalg import (
+    RowSplit,
+    SaddleSolution,
+    multiplier_null_space,
+    solve_saddle,
+)
 from hexapod.algorithms.saddle import dynamics_terms
+from hexapod.algorithms.step_terms import terms_of
 from hexapod.model.model import Data, Model
 
 
@@ -143,3 +149,26 @@ def policy_solution(model: Model, data: Data, t: float, q: np.ndarray, w: np.nda
                                         status=status)
         return solution, lam, feet
     return solution, lam, None
+
+
+def policy_tangents(model: Model, data: Data, t: float, q: np.ndarray, w: np.ndarray, Phi_v,
+                    split: RowSplit, forces: np.ndarray, state=None, *,
+                    tol: float) -> tuple[np.ndarray, frozenset]:
+    """The derivatives of the multipliers the scene's policy chooses, for the derivatives of
+    the forces ``forces`` (columns; ``gamma`` and the forces across joints unchanged): for the
+    linear policies :func:`policy_solution` of them; for friction (a QP, piecewise linear) on
+    the active set of the solution at the state, whose ``(Q, gamma, Q_across)`` ``state``
+    gives (:func:`hexapod.algorithms.ground.friction_tangents`), with that active set."""
+    zero = np.zeros((model.n_c,) + forces.shape[1:])
+    if not (model.contacts and model.ground.policy == "friction"):
+        _, lam, _ = policy_solution(model, data, t, q, w, Phi_v, split, forces, zero, None,
+                                    tol=tol, status=False)
+        return lam, frozenset()
+    Q, gamma, Q_across = state
+    priority, _ = model.rank_order(w)
+    primal, along = (solve_saddle(model.mass_inv_sqrt, Phi_v, f, g, priority, tol,
+                                  split=split).lam for f, g in ((Q, gamma), (forces, zero)))
+    _, tangents, active = friction_tangents(model, data, t, q, terms_of(model).nonzeros(Phi_v),
+                                            Q_across, primal,
+                                            multiplier_null_space(split, model.n_c), along)
+    return tangents, active

@@ -36,6 +36,7 @@ import numpy as np
 
 from hexapod.algorithms.linalg import RowSplit, multiplier_null_space
 from hexapod.algorithms.step_terms import terms_of
+from hexapod.errors import HexapodError
 from hexapod.model.model import Model
 
 #: Below this weight a foot carries nothing.
@@ -45,6 +46,8 @@ INFEASIBLE_STATUSES = ("slip", "pull")
 #: Violation, relative to the robot's weight, above which a foot is reported as slipping or
 #: pulling (round-off in the forces stays some five orders below it).
 VIOLATION_TOL = 1e-7
+#: A friction constraint at most this far from equality (in the robot's weight) is active.
+ACTIVE_TOL = 1e-9
 
 
 def contact_weights(model: Model, t: float) -> np.ndarray:
@@ -163,28 +166,93 @@ def ground_policy(model: Model, data, t: float, q: np.ndarray, Phi: np.ndarray,
     (n_c x m) spans the multipliers that change no constraint force, ``Phi`` holds the
     nonzeros of ``Phi_v``. Columns of ``lam`` are chosen together (linear policies: not
     friction)."""
-    stance = np.array([bool(c.in_stance(t)) for c in model.contacts])
-    weights = sharing_weights(contact_weights(model, t), stance)
     if N.shape[1] == 0:
         return lam
-    # feet of weight zero carry nothing: lam + N z = 0 on their rows
-    idle = [c.rows for c, w in zip(model.contacts, weights, strict=True) if w <= NO_LOAD]
-    if idle:
-        rows = np.concatenate(idle)
-        z0, K = _affine_solutions(N[rows], -lam[rows])
-    else:
-        z0, K = np.zeros(N.shape[1:] + lam.shape[1:]), np.eye(N.shape[1])
-    base = lam + N @ z0  # lam + N (z0 + K y)
-    NK = _orthonormal(N @ K)  # the same multipliers, in directions the QP solvers handle well
-    A, b = policy_objective(model, data, q, Phi, Q_across,
-                            foot_values(model.ground.policy, weights))
-    AK, r = A @ NK, A @ base + b.reshape((-1,) + (1,) * (base.ndim - 1))
-    policy = model.ground.policy
-    if NK.shape[1] == 0:  # the feet that carry nothing take up all the freedom
-        return base
-    if policy != "friction":
-        return base + NK @ np.linalg.lstsq(AK, -r, rcond=None)[0]
-    return base + NK @ _friction(model, weights, base, NK, AK, r)
+    problem = _PolicyProblem(model, data, t, q, Phi, Q_across, lam, N)
+    if problem.NK.shape[1] == 0:  # the feet that carry nothing take up all the freedom
+        return problem.base
+    if model.ground.policy != "friction":
+        return problem.base + problem.NK @ np.linalg.lstsq(problem.AK, -problem.r,
+                                                           rcond=None)[0]
+    return problem.base + problem.NK @ problem.friction()[0]
+
+
+def friction_tangents(model: Model, data, t: float, q: np.ndarray, Phi: np.ndarray,
+                      Q_across: np.ndarray | None, lam: np.ndarray, N: np.ndarray,
+                      along: np.ndarray) -> tuple[np.ndarray, np.ndarray, frozenset]:
+    """The friction policy's multipliers (as :func:`ground_policy` chooses them among ``lam +
+    N z``) and their derivatives along the columns of ``along`` (particular multipliers of
+    the derivatives of the right-hand side, without forces across joints), on the active set
+    of that solution: the constraints held at equality stay so, the others stay slack. The
+    QP's solution is piecewise linear in its data: where the active set changes, these are
+    one-sided derivatives. Also the active set, as (contact, constraint) pairs.
+
+    Raises
+    ------
+    HexapodError
+        The exact cone (``faces = 0``), or no admissible forces at ``t`` (the relaxed
+        problem's solution has no derivative here).
+    """
+    if model.ground.faces == 0:
+        raise HexapodError(f"model '{model.name}': derivatives of the friction policy on the "
+                           "exact cone are not available; use a pyramid (faces = 4 or more)")
+    if N.shape[1] == 0:
+        return lam, along, frozenset()
+    problem = _PolicyProblem(model, data, t, q, Phi, Q_across, lam, N)
+    base_along = problem.shift(along)
+    if problem.NK.shape[1] == 0:
+        return problem.base, base_along, frozenset()
+    y, active, C, dc_dF0 = problem.friction()
+    if y is None:
+        raise HexapodError(f"model '{model.name}': at t = {t:.6g} s no ground forces are "
+                           "inside the friction cones (a foot slips): the friction policy's "
+                           "derivative is not defined there")
+    loaded = problem.loaded
+    rows = np.concatenate([model.contacts[k].rows for k in loaded]) if loaded \
+        else np.zeros(0, dtype=int)
+    H, n = problem.AK.T @ problem.AK, problem.NK.shape[1]
+    C_J = C[active]
+    kkt = np.block([[H, C_J.T], [C_J, np.zeros((active.size, active.size))]])
+    rhs = np.vstack([-problem.AK.T @ (problem.A @ base_along),
+                     dc_dF0[active] @ base_along[rows]])  # F0 = -base on the loaded rows
+    y_along = np.linalg.lstsq(kkt, rhs, rcond=None)[0][:n]
+    per_foot = 1 + model.ground.faces  # the least normal force, then the pyramid's faces
+    labels = frozenset((loaded[j // per_foot], j % per_foot) for j in active)
+    return problem.base + problem.NK @ y, base_along + problem.NK @ y_along, labels
+
+
+class _PolicyProblem:
+    """The policy's problem at a state: the multipliers ``base + NK y`` that keep the feet
+    of weight zero unloaded, and the objective ``|A (base + NK y) + b|^2 = |AK y + r|^2``."""
+
+    def __init__(self, model: Model, data, t: float, q, Phi, Q_across, lam, N):
+        self.model, self.N = model, N
+        stance = np.array([bool(c.in_stance(t)) for c in model.contacts])
+        self.weights = weights = sharing_weights(contact_weights(model, t), stance)
+        self.loaded = [k for k, w in enumerate(weights) if w > NO_LOAD]
+        # feet of weight zero carry nothing: lam + N z = 0 on their rows
+        idle = [c.rows for c, w in zip(model.contacts, weights, strict=True) if w <= NO_LOAD]
+        self.idle_rows = np.concatenate(idle) if idle else np.zeros(0, dtype=int)
+        self.unload, K = (_affine_solutions(N[self.idle_rows]) if idle
+                          else (None, np.eye(N.shape[1])))
+        self.base = self.shift(lam)
+        self.NK = _orthonormal(N @ K)  # the same multipliers, in directions a QP handles well
+        self.A, b = policy_objective(model, data, q, Phi, Q_across,
+                                     foot_values(model.ground.policy, weights))
+        base = self.base
+        self.AK, self.r = self.A @ self.NK, self.A @ base + b.reshape((-1,) + (1,) *
+                                                                      (base.ndim - 1))
+
+    def shift(self, lam: np.ndarray) -> np.ndarray:
+        """``lam + N z0``: the multipliers ``lam`` moved to unload the feet of weight zero
+        (linear in ``lam``; its columns together)."""
+        if self.unload is None:
+            return lam
+        return lam - self.N @ (self.unload @ lam[self.idle_rows])
+
+    def friction(self):
+        """:func:`_friction` on this problem."""
+        return _friction(self.model, self.weights, self.base, self.NK, self.AK, self.r)
 
 
 def _orthonormal(B: np.ndarray) -> np.ndarray:
@@ -196,12 +264,12 @@ def _orthonormal(B: np.ndarray) -> np.ndarray:
     return U[:, :int(np.sum(s > s[0] * 1e-12))]
 
 
-def _affine_solutions(E: np.ndarray, e: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``z0, K`` with ``E (z0 + K y) = e`` for every ``y`` (least squares when inconsistent)."""
+def _affine_solutions(E: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``P, K`` with ``E (P e + K y) = e`` for every ``y`` and every ``e`` (least squares when
+    inconsistent): ``P`` the pseudo-inverse of ``E``, ``K`` spanning its null space."""
     U, s, Vt = np.linalg.svd(E, full_matrices=True)
     rank = int(np.sum(s > s.max(initial=0.0) * 1e-12)) if s.size else 0
-    z0 = Vt[:rank].T @ ((U[:, :rank].T @ e) / s[:rank].reshape((-1,) + (1,) * (e.ndim - 1)))
-    return z0, Vt[rank:].T
+    return Vt[:rank].T @ (U[:, :rank].T / s[:rank, None]), Vt[rank:].T
 
 
 # ------------------------------------------------------------------ the friction policy
@@ -211,7 +279,9 @@ _SOLVERS: dict = {}
 
 def _friction(model: Model, weights, base, NK, AK, r):
     """``y`` of least ``|AK y + r|^2`` with every loaded foot's force ``F = F0 + G y`` inside
-    its cone and above its least normal force (of least violation where none is)."""
+    its cone and above its least normal force (of least violation where none is), and at that
+    ``y`` the constraints held at equality (indices), the constraints' Jacobians with respect
+    to ``y`` and to ``F0``; ``y`` None for these when no ``y`` is admissible."""
     ground = model.ground
     loaded = [k for k, w in enumerate(weights) if w > NO_LOAD]
     F0 = {k: -base[model.contacts[k].rows] for k in loaded}
@@ -225,11 +295,13 @@ def _friction(model: Model, weights, base, NK, AK, r):
 
 def _solve_cone(ground, loaded, weights, F0, G, H, g, n, reference):
     """The constrained least-effort ``y``; when no ``y`` is admissible, the one of least
-    violation (slacks on the normal and tangential conditions)."""
+    violation (slacks on the normal and tangential conditions). Returns ``y``, and for the
+    strict problem the active constraints and the constraints' Jacobians (see
+    :func:`_friction`)."""
     key = (ground.faces, n, len(loaded))
     if key not in _SOLVERS:
         _SOLVERS[key] = _build_solver(ground.faces, n, len(loaded))
-    solver, relaxed = _SOLVERS[key]
+    solver, relaxed, constraints = _SOLVERS[key]
     mu = ground.mu
     F0s = np.concatenate([F0[k] for k in loaded]) if loaded else np.zeros(0)
     Gs = np.vstack([G[k] for k in loaded]) if loaded else np.zeros((0, n))
@@ -239,7 +311,10 @@ def _solve_cone(ground, loaded, weights, F0, G, H, g, n, reference):
     y, ok = solver(*params)
     if not ok:
         y, _ = relaxed(*params)
-    return y
+        return y, None, None, None
+    c, dc_dy, dc_dF0 = constraints(y, *params)
+    active = np.flatnonzero(c <= ACTIVE_TOL)
+    return y, active, dc_dy, dc_dF0 / scale
 
 
 def _build_solver(faces: int, n: int, feet: int):
@@ -268,6 +343,8 @@ def _build_solver(faces: int, n: int, feet: int):
             constraints.append((fz, sn))
     objective = 0.5 * ca.mtimes([y.T, H, y]) + ca.dot(g, y)
     strict_g = ca.vertcat(*[c for c, _ in constraints]) if constraints else ca.SX(0, 1)
+    values = ca.Function("ground_constraints", [y, parameters],
+                         [strict_g, ca.jacobian(strict_g, y), ca.jacobian(strict_g, F0)])
     relaxed_g = (ca.vertcat(*[c + s for c, s in constraints]) if constraints
                  else ca.SX(0, 1))
     penalty = 1e6 * ca.sumsqr(slack) + ca.sum1(slack) * 1e3
@@ -296,6 +373,10 @@ def _build_solver(faces: int, n: int, feet: int):
         out = strict(x0=np.zeros(n), p=pack(*args), lbg=0.0, ubg=np.inf)
         return np.asarray(out["x"]).ravel(), bool(strict.stats()["success"])
 
+    def constraint_values(y_, *args):
+        c, dc_dy, dc_dF0 = values(y_, pack(*args))
+        return np.asarray(c).ravel(), np.asarray(dc_dy), np.asarray(dc_dF0)
+
     def run_relaxed(*args):
         x0 = np.zeros(n + 2 * feet)
         out = loose(x0=x0, p=pack(*args), lbg=0.0, ubg=np.inf,
@@ -303,4 +384,4 @@ def _build_solver(faces: int, n: int, feet: int):
                     ubx=np.inf)
         return np.asarray(out["x"]).ravel()[:n], bool(loose.stats()["success"])
 
-    return run_strict, run_relaxed
+    return run_strict, run_relaxed, constraint_values

@@ -8,15 +8,16 @@ masses and inertias; only the multipliers do, through the right-hand side of
 
 which is linear in them: a body's mass ``m`` and inertia ``J`` (centre-of-mass axes) enter it as
 ``m (g - a)`` on its translation rows and ``-(J alpha + omega' x J omega')`` on its rotation rows.
-The scene's redundancy policies but friction (least wrench, least effort, with the feet's load
-sharing) choose multipliers linear in that right-hand side, and the wrenches and efforts are
-linear in the multipliers. So the derivative with respect to a parameter ``p`` that changes the
-inertia of one body by ``(dm/dp, dJ/dp)`` is the solution of the same saddle-point system and
-policy (:func:`hexapod.algorithms.dynamics.policy_solution`) for the forces
+The scene's redundancy policies (least wrench, least effort, with the feet's load sharing)
+choose multipliers linear in that right-hand side, and the wrenches and efforts are linear in
+the multipliers. So the derivative with respect to a parameter ``p`` that changes the inertia
+of one body by ``(dm/dp, dJ/dp)`` is the solution of the same saddle-point system and policy
+(:func:`hexapod.algorithms.dynamics.policy_solution`) for the forces
 ``dm/dp (g - a) - (dJ/dp alpha + omega' x dJ/dp omega')``, with a zero ``gamma`` and without the
 force elements across joints: exact, not a difference quotient, and computed by the one solve
-the inverse dynamics uses. The friction policy (a QP) is piecewise linear: its derivative on
-the active set is not written yet, and it is refused.
+the inverse dynamics uses. The friction policy (a QP over a pyramid) is piecewise linear: its
+derivative is taken on the active set of each sample's solution (the constraints held at
+equality stay so), and the samples where that set changes are named.
 
 The kinematic parameters (lengths, joint positions, the gait's) move the motion itself; their
 derivatives need the motion's own equations differentiated (not written yet).
@@ -25,15 +26,15 @@ derivatives need the motion's own equations differentiated (not written yet).
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from hexapod.algorithms.dynamics import policy_solution
+from hexapod.algorithms.dynamics import policy_tangents
 from hexapod.algorithms.kinematics import state_split
 from hexapod.algorithms.liaison import efforts_and_axes
-from hexapod.algorithms.saddle import constraint_jacobian
+from hexapod.algorithms.saddle import constraint_jacobian, dynamics_terms
 from hexapod.algorithms.step_terms import terms_of
 from hexapod.errors import HexapodError
 from hexapod.model.model import Model
@@ -92,6 +93,10 @@ class InverseSensitivity:
         Derivatives of the joint wrenches, in the result's axes (``frame``).
     ground_force : ndarray (N, C, 3, P)
         Derivatives of the ground's force on each foot, world axes.
+    active_set_changes : ndarray
+        With the friction policy, the sample times where the constraints its QP holds at
+        equality differ from the sample before: there the forces are piecewise linear in the
+        parameters and the derivatives one-sided (empty for the other policies).
     """
 
     parameters: tuple[InertiaChange, ...]
@@ -99,6 +104,7 @@ class InverseSensitivity:
     force: np.ndarray
     torque: np.ndarray
     ground_force: np.ndarray
+    active_set_changes: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
 def inertial_force_changes(model: Model, change: InertiaChange, v: np.ndarray,
@@ -144,14 +150,10 @@ def inverse_sensitivities(model: Model, result: InverseResult,
     Raises
     ------
     HexapodError
-        The scene's ground-force policy is ``friction``, or a parameter names a body the model
-        does not have.
+        A parameter names a body the model does not have; with the friction policy, the exact
+        cone (``faces = 0``), or a sample where no forces are inside the cones.
     """
     parameters = tuple(parameters)
-    if model.contacts and model.ground.policy == "friction":
-        raise HexapodError(f"model '{model.name}': sensitivities of the friction policy (the "
-                           "derivative of its QP on its active set) are not available yet; "
-                           "use the min-wrench or min-effort policy")
     for change in parameters:
         if change.body not in model.body_index:
             raise HexapodError(f"parameter '{change.name}': model '{model.name}' has no body "
@@ -163,18 +165,27 @@ def inverse_sensitivities(model: Model, result: InverseResult,
     lams = np.zeros((n, model.n_c, count))
     data = model.create_data()
     terms = terms_of(model)
-    zero = np.zeros((model.n_c, count))
+    friction = bool(model.contacts) and model.ground.policy == "friction"
+    active: list[frozenset] = [frozenset()] * n
     forces = np.stack([inertial_force_changes(model, change, result.v, result.v_dot)
                        for change in parameters], axis=-1) if count \
         else np.zeros((n, model.n_v, 0))
     laws = [np.asarray(x, dtype=float).reshape(model.n_w, n)
             for x in model.law_values(result.times)]  # w: the rows' values at each sample
     for k, t in enumerate(result.times):
-        q, w = result.q[k], laws[0][:, k]
-        Phi_v = constraint_jacobian(model, q, w, data)
+        q, v, w = result.q[k], result.v[k], laws[0][:, k]
+        state = None
+        if friction:  # the QP's active set at this state: its forces and Q_across
+            values = {"q": q, "v": v, "w": w, "wd": laws[1][:, k], "wdd": laws[2][:, k]}
+            Phi_v, gamma, Q = dynamics_terms(model, values, data)
+            across = (model.call("Q_across", data, q=q, v=v, w=w)
+                      if model.Q_across is not None else None)
+            state = (Q, gamma, across)
+        else:
+            Phi_v = constraint_jacobian(model, q, w, data)
         split = state_split(model, data, q, w, Phi_v)
-        _, lams[k], _ = policy_solution(model, data, float(t), q, w, Phi_v, split, forces[k],
-                                        zero, None, tol=model.rank_tolerance, status=False)
+        lams[k], active[k] = policy_tangents(model, data, float(t), q, w, Phi_v, split,
+                                             forces[k], state, tol=model.rank_tolerance)
         # the report's wrenches, without the forces across joints: linear in the multipliers
         B, frames = terms.evaluate(data, "report_map", q, terms.nonzeros(Phi_v))
         wrench[k] = (np.reshape(B, (6 * joints, model.n_c)) @ lams[k]).reshape(joints, 6,
@@ -190,4 +201,6 @@ def inverse_sensitivities(model: Model, result: InverseResult,
     effort = effort.transpose(0, 2, 1)
     rows = np.array([c.rows for c in model.contacts], dtype=int).reshape(-1, 3)
     ground = -lams[:, rows]
-    return InverseSensitivity(parameters, effort, force, torque, ground)
+    changes = [k for k in range(1, n) if active[k] != active[k - 1]]
+    return InverseSensitivity(parameters, effort, force, torque, ground,
+                              result.times[np.array(changes, dtype=int)])

@@ -95,7 +95,8 @@ def run(args) -> int:
     files = {"sensitivities.csv": sensitivity_csv_text(run.rows).encode(),
              "units.json": units_json({"sensitivities.csv": SENSITIVITY_COLUMNS}).encode(),
              "summary.md": sensitivity_summary(scene.name, run.metrics, run.rows, chosen,
-                                               args.samples, run.run_time).encode()}
+                                               args.samples, run.run_time,
+                                               run.sensitivity.active_set_changes).encode()}
     if args.figures:
         files.update(_figures(run, chosen))
     write_directory_atomically(out, files)

@@ -103,14 +103,21 @@ def tornado_figure(rows: list[dict], metric: str, value: float, unit: str) -> Fi
 
 
 def sensitivity_summary(scene_name: str, metrics: dict[str, float], rows: list[dict],
-                        chosen: dict[str, str], samples: int, run_time: float) -> str:
+                        chosen: dict[str, str], samples: int, run_time: float,
+                        changes: np.ndarray | None = None) -> str:
     """``summary.md``: per figure of merit drawn, its value and its three largest
-    elasticities."""
+    elasticities; with the friction policy, the samples where its active set changes
+    (``changes``, s)."""
     lines = [f"# Design sensitivities: {scene_name}", "",
              f"{samples} samples of the inverse dynamics; the derivatives are exact (the "
              f"saddle-point solve and the policy applied to the derivatives of the forces), "
-             f"{run_time:.3g} s.", "",
-             "| figure of merit | value | largest elasticities |", "| --- | --- | --- |"]
+             f"{run_time:.3g} s.", ""]
+    if changes is not None and changes.size:
+        shown = ", ".join(f"{t:.4g}" for t in changes[:12]) + (", ..." if changes.size > 12
+                                                                else "")
+        lines += [f"The friction policy's active set changes at {changes.size} samples (t = "
+                  f"{shown} s): derivatives of peaks there are one-sided.", ""]
+    lines += ["| figure of merit | value | largest elasticities |", "| --- | --- | --- |"]
     for metric in chosen.values():
         mine = sorted((r for r in rows if r["metric"] == metric
                        and np.isfinite(r["elasticity"])), key=lambda r: -abs(r["elasticity"]))

@@ -106,7 +106,8 @@ def sensitivity_run(scene: Scene, parameters: Sequence[str], *,
     StudyError
         A parameter or family that names nothing (before any work).
     HexapodError
-        The inverse dynamics fails, or the scene's ground-force policy is ``friction``.
+        The inverse dynamics fails; with the friction policy, the exact cone, or a sample
+        where no forces are inside the cones.
     """
     from hexapod.algorithms.inverse import inverse_dynamics
     from hexapod.algorithms.sensitivity import inverse_sensitivities
