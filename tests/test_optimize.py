@@ -77,7 +77,8 @@ def least_rms() -> float:
 
 def study(tmp_path, vary: str = 'range = [0.0, 5.0]', optimize_table: str = "",
           key: str = "body.weight.mass", minimize: str = "rms_effort:hinge"):
-    (tmp_path / "lever.toml").write_text(LEVER)
+    if not (tmp_path / "lever.toml").exists():
+        (tmp_path / "lever.toml").write_text(LEVER)
     path = tmp_path / "study.toml"
     path.write_text(f"""
 [study]
@@ -136,6 +137,66 @@ def test_command_writes_the_optimum_and_its_report(tmp_path, capsys):
     assert {"optimization.csv", "optimum.csv", "optimum-inverse.csv"} <= set(units)
     assert "mass = 0.97" in (out / "optimum.toml").read_text()
     assert (out / "optimum-summary.md").exists() and (out / "optimization.png").exists()
+
+
+LEVER_3D = f"""
+[scene]
+name = "lever-3d"
+dimension = 3
+gravity = [0.0, {-G}, 0.0]
+
+[[body]]
+name = "arm"
+mass = {M_ARM}
+inertia = [0.001, {I_ARM}, {I_ARM}]
+com = [{L_ARM}, 0.0, 0.0]
+
+[[body]]
+name = "weight"
+mass = 0.5
+inertia = [{I_WEIGHT}, {I_WEIGHT}, {I_WEIGHT}]
+position = [{-R}, 0.0, 0.0]
+
+[[joint]]
+name = "hinge"
+type = "revolute"
+parent = "ground"
+child = "arm"
+axis = [0.0, 0.0, 1.0]
+
+[[joint]]
+name = "weld"
+type = "fixed"
+parent = "arm"
+child = "weight"
+parent_frame = {{ position = [{-R}, 0.0, 0.0] }}
+
+[[driver]]
+name = "swing"
+type = "joint"
+joint = "hinge"
+law = {{ type = "harmonic", sin = [{A}], frequency = {W / (2 * math.pi)} }}
+"""
+
+
+def test_where_to_weld_the_counterweight(tmp_path):
+    """The weight's place ``x`` on the arm (a joint's position: the motion moves with it, a
+    run per evaluation): ``tau = c0 + c1 x + c2 x^2``, ``c0 = (I_a + m_a l_a^2 + I_w)
+    theta'' + m_a g l_a cos theta``, ``c1 = m_w g cos theta``, ``c2 = m_w theta''``; the RMS
+    torque is least where the cubic ``int (c0 + c1 x + c2 x^2)(c1 + 2 c2 x) = 0`` says."""
+    t, _, _ = closed_form()
+    theta, acceleration = A * np.sin(W * t), -A * W**2 * np.sin(W * t)
+    c0 = (I_ARM + M_ARM * L_ARM**2 + I_WEIGHT) * acceleration + M_ARM * G * L_ARM * np.cos(theta)
+    c1, c2 = 0.5 * G * np.cos(theta), 0.5 * acceleration
+    cubic = [trapezoid(t, 2 * c2 * c2), trapezoid(t, 3 * c1 * c2),
+             trapezoid(t, c1 * c1 + 2 * c0 * c2), trapezoid(t, c0 * c1)]
+    roots = [r.real for r in np.roots(cubic) if abs(r.imag) < 1e-12 and -0.6 <= r.real <= 0]
+    expected = min(roots, key=lambda x: trapezoid(t, (c0 + c1 * x + c2 * x * x) ** 2))
+    (tmp_path / "lever.toml").write_text(LEVER_3D)
+    path = study(tmp_path, "range = [-0.6, 0.0]", key="joint.weld.parent_frame.position.0")
+    run = optimize(read_optimization(path))
+    assert run.success
+    assert run.optimum[0] == pytest.approx(expected, rel=1e-6)
 
 
 @pytest.mark.parametrize("change, said", [

@@ -304,8 +304,17 @@ class TreePlan:
 
     @cached_property
     def _expressions(self) -> tuple:
+        w, wd, wdd = (ca.SX.sym(n, self.model.n_w) for n in ("w", "wd", "wdd"))
+        frames = [(ca.DM(j.parent_frame.position), ca.DM(j.child_frame.position))
+                  for j in self.model.joints]
+        return ([w, wd, wdd], self.graph(w, wd, wdd, frames), ["w", "wd", "wdd"],
+                ["q", "v", "v_dot", "wrench", "rotation"])
+
+    def graph(self, w, wd, wdd, frames: list) -> list:
+        """``[q, v, v_dot, wrench, rotation]`` as expressions of the laws' values ``w, wd,
+        wdd`` and of each joint's frame origins on its parent and its child (``frames``, in
+        their centre-of-mass frames: numbers, or expressions of design parameters)."""
         model = self.model
-        w, wd, wdd = (ca.SX.sym(n, model.n_w) for n in ("w", "wd", "wdd"))
         law = ca.vertcat(w, wd)
         law_rate = ca.vertcat(wd, wdd)
         n_b = len(model.bodies)
@@ -320,7 +329,7 @@ class TreePlan:
                 p_p, r_p = p[joint.parent], r[joint.parent]
             A_p = rotation_from_euler_parameters(p_p)
             frame_p = quaternion_product(p_p, ca.DM(_quaternion(joint.parent_frame.rotation)))
-            point = r_p + ca.mtimes(A_p, ca.DM(joint.parent_frame.position))
+            point = r_p + ca.mtimes(A_p, frames[j][0])
             # the joint's step: the child frame's rotation and translation on the parent's
             turn, shift = joint.type.tree_step(self._driver_value(j, w))
             frame_c = frame_p if turn is None else quaternion_product(frame_p, turn)
@@ -330,7 +339,7 @@ class TreePlan:
             p_c = quaternion_product(frame_c, ca.DM(inverse_child))
             R_c = rotation_from_euler_parameters(p_c)
             p[joint.child] = p_c
-            r[joint.child] = origin - ca.mtimes(R_c, ca.DM(joint.child_frame.position))
+            r[joint.child] = origin - ca.mtimes(R_c, frames[j][1])
             origins[j] = origin
             rotations[j] = rotation_from_euler_parameters(frame_c)
         q = ca.vertcat(*[ca.vertcat(r[b], p[b]) for b in range(n_b)])
@@ -364,17 +373,15 @@ class TreePlan:
                 force = force + world[k][0]
                 moment = moment + world[k][1]
             world[j] = (force, moment)
-        wrench, frames = [], []
+        wrench, rotation_columns = [], []
         for j in range(len(model.joints)):
             force, moment = world[j]
             about_origin = moment - ca.cross(origins[j], force)
             R = rotations[j]
             wrench.append(ca.vertcat(ca.mtimes(R.T, force), ca.mtimes(R.T, about_origin)))
-            frames.append(ca.reshape(R, 9, 1))
+            rotation_columns.append(ca.reshape(R, 9, 1))
         # common subexpressions shared: about a third fewer instructions for a leg
-        outputs = ca.cse([q, v, v_dot, ca.horzcat(*wrench), ca.horzcat(*frames)])
-        return ([w, wd, wdd], outputs, ["w", "wd", "wdd"],
-                ["q", "v", "v_dot", "wrench", "rotation"])
+        return ca.cse([q, v, v_dot, ca.horzcat(*wrench), ca.horzcat(*rotation_columns)])
 
     def _driver_value(self, joint: int, w: ca.SX):
         if joint not in self.driver_of:

@@ -42,7 +42,7 @@ from hexapod.model.model import Model
 if TYPE_CHECKING:
     from hexapod.algorithms.inverse import InverseResult
 
-__all__ = ["InertiaChange", "InverseSensitivity", "inverse_sensitivities"]
+__all__ = ["FrameChange", "InertiaChange", "InverseSensitivity", "inverse_sensitivities"]
 
 
 @dataclass(frozen=True)
@@ -78,6 +78,38 @@ class InertiaChange:
     scene_scale: float = 1.0
 
 
+@dataclass(frozen=True)
+class FrameChange:
+    """How one design parameter moves one joint's origin (a segment's length, a joint's
+    position): the joint frame's origin on its parent and on its child, each in that body's
+    centre-of-mass frame, per unit of the parameter.
+
+    Attributes
+    ----------
+    name : str
+        The parameter's name (a scene key, e.g. ``joint.fti.origin.0``).
+    joint : str
+        The joint it moves.
+    parent, child : ndarray, shape (3,)
+        ``d origin / dp`` on the parent and on the child, m per m.
+    unit : str
+        ``m``.
+    value : float
+        The parameter's value, m.
+    scene_scale : float
+        Metres per unit of the value the scene writes.
+    """
+
+    name: str
+    joint: str
+    parent: np.ndarray
+    child: np.ndarray
+    unit: str = "m"
+    value: float = float("nan")
+    scene_scale: float = 1.0
+    mass: float = 0.0  # it changes no mass
+
+
 @dataclass
 class InverseSensitivity:
     """Derivatives of an :class:`~hexapod.algorithms.inverse.InverseResult`'s forces, the
@@ -93,17 +125,20 @@ class InverseSensitivity:
         Derivatives of the joint wrenches, in the result's axes (``frame``).
     ground_force : ndarray (N, C, 3, P)
         Derivatives of the ground's force on each foot, world axes.
+    q : ndarray (N, n_q, P)
+        Derivatives of the positions (zero but for parameters that move joints).
     active_set_changes : ndarray
         With the friction policy, the sample times where the constraints its QP holds at
         equality differ from the sample before: there the forces are piecewise linear in the
         parameters and the derivatives one-sided (empty for the other policies).
     """
 
-    parameters: tuple[InertiaChange, ...]
+    parameters: tuple[InertiaChange | FrameChange, ...]
     effort: np.ndarray
     force: np.ndarray
     torque: np.ndarray
     ground_force: np.ndarray
+    q: np.ndarray
     active_set_changes: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
@@ -126,7 +161,7 @@ def inertial_force_changes(model: Model, change: InertiaChange, v: np.ndarray,
 
 
 def inverse_sensitivities(model: Model, result: InverseResult,
-                          parameters: Sequence[InertiaChange], *,
+                          parameters: Sequence[InertiaChange | FrameChange], *,
                           progress: Callable[[int, int], None] | None = None
                           ) -> InverseSensitivity:
     """The derivatives of ``result``'s efforts, joint wrenches and ground forces with respect
@@ -138,7 +173,7 @@ def inverse_sensitivities(model: Model, result: InverseResult,
         The model ``result`` was computed with.
     result : InverseResult
         An inverse-dynamics result of ``model``.
-    parameters : sequence of InertiaChange
+    parameters : sequence of InertiaChange or FrameChange
         What each parameter changes.
     progress : callable, optional
         Called with ``(samples done, samples)``.
@@ -150,17 +185,48 @@ def inverse_sensitivities(model: Model, result: InverseResult,
     Raises
     ------
     HexapodError
-        A parameter names a body the model does not have; with the friction policy, the exact
-        cone (``faces = 0``), or a sample where no forces are inside the cones.
+        A parameter names a body or joint the model does not have; a joint moved in a model
+        the tree path does not solve; with the friction policy, the exact cone
+        (``faces = 0``), or a sample where no forces are inside the cones.
     """
     parameters = tuple(parameters)
     for change in parameters:
-        if change.body not in model.body_index:
-            raise HexapodError(f"parameter '{change.name}': model '{model.name}' has no body "
-                               f"'{change.body}'")
-    n, count = result.times.size, len(parameters)
-    joints = len(model.joints)
-    wrench = np.zeros((n, joints, 6, count))
+        known = (model.joint_index if isinstance(change, FrameChange) else model.body_index)
+        element = change.joint if isinstance(change, FrameChange) else change.body
+        if element not in known:
+            kind = "joint" if isinstance(change, FrameChange) else "body"
+            raise HexapodError(f"parameter '{change.name}': model '{model.name}' has no {kind} "
+                               f"'{element}'")
+    n, count, joints = result.times.size, len(parameters), len(model.joints)
+    wrench = np.zeros((n, count, joints, 6))
+    rotations = np.zeros((n, joints, 9))
+    ground = np.zeros((n, len(model.contacts), 3, count))
+    q = np.zeros((n, model.n_q, count))
+    laws = [np.asarray(x, dtype=float).reshape(model.n_w, n)
+            for x in model.law_values(result.times)]  # the laws' values at each sample
+    inertial = [k for k, c in enumerate(parameters) if isinstance(c, InertiaChange)]
+    moving = [k for k, c in enumerate(parameters) if isinstance(c, FrameChange)]
+    changes = np.zeros(0)
+    if inertial or not moving:
+        part = _inertial_part(model, result, [parameters[k] for k in inertial], laws, progress)
+        wrench[:, inertial], rotations, ground[..., inertial], changes = part
+    if moving:
+        wrench[:, moving], rotations, q[..., moving] = _moving_part(
+            model, result, [parameters[k] for k in moving], laws)
+    force, torque, effort = efforts_and_axes(model, wrench[..., :3], wrench[..., 3:],
+                                             rotations[:, None], result.frame)
+    # (N, P, J, 3) -> (N, J, 3, P)
+    return InverseSensitivity(parameters, effort.transpose(0, 2, 1),
+                              force.transpose(0, 2, 3, 1), torque.transpose(0, 2, 3, 1),
+                              ground, q, changes)
+
+
+def _inertial_part(model: Model, result, parameters, laws, progress):
+    """The masses' and inertias': joint-frame wrenches (N, P, J, 6), the joint frames'
+    rotations (N, J, 9), the ground forces (N, C, 3, P) and the friction QP's active-set
+    changes (times)."""
+    n, count, joints = result.times.size, len(parameters), len(model.joints)
+    wrench = np.zeros((n, count, joints, 6))
     rotations = np.zeros((n, joints, 9))
     lams = np.zeros((n, model.n_c, count))
     data = model.create_data()
@@ -170,8 +236,6 @@ def inverse_sensitivities(model: Model, result: InverseResult,
     forces = np.stack([inertial_force_changes(model, change, result.v, result.v_dot)
                        for change in parameters], axis=-1) if count \
         else np.zeros((n, model.n_v, 0))
-    laws = [np.asarray(x, dtype=float).reshape(model.n_w, n)
-            for x in model.law_values(result.times)]  # w: the rows' values at each sample
     for k, t in enumerate(result.times):
         q, v, w = result.q[k], result.v[k], laws[0][:, k]
         state = None
@@ -188,19 +252,58 @@ def inverse_sensitivities(model: Model, result: InverseResult,
                                              forces[k], state, tol=model.rank_tolerance)
         # the report's wrenches, without the forces across joints: linear in the multipliers
         B, frames = terms.evaluate(data, "report_map", q, terms.nonzeros(Phi_v))
-        wrench[k] = (np.reshape(B, (6 * joints, model.n_c)) @ lams[k]).reshape(joints, 6,
-                                                                              count)
+        B = np.reshape(B, (joints, 6, model.n_c))
+        wrench[k] = np.einsum("jic,cp->pji", B, lams[k])
         rotations[k] = np.reshape(frames, (9, joints)).T
         if progress is not None:
             progress(k + 1, n)
-    force, torque, effort = efforts_and_axes(model, wrench[:, :, :3].transpose(0, 3, 1, 2),
-                                             wrench[:, :, 3:].transpose(0, 3, 1, 2),
-                                             rotations[:, None], result.frame)
-    # (N, P, J, 3) -> (N, J, 3, P); the ground's forces: minus the contacts' multipliers
-    force, torque = force.transpose(0, 2, 3, 1), torque.transpose(0, 2, 3, 1)
-    effort = effort.transpose(0, 2, 1)
     rows = np.array([c.rows for c in model.contacts], dtype=int).reshape(-1, 3)
-    ground = -lams[:, rows]
     changes = [k for k in range(1, n) if active[k] != active[k - 1]]
-    return InverseSensitivity(parameters, effort, force, torque, ground,
-                              result.times[np.array(changes, dtype=int)])
+    return wrench, rotations, -lams[:, rows], result.times[np.array(changes, dtype=int)]
+
+
+def _moving_part(model: Model, result, parameters, laws):
+    """The moved joints': joint-frame wrenches (N, P, J, 6), rotations (N, J, 9) and
+    positions (N, n_q, P), by the tree path's one graph with the joints' frame origins as
+    expressions of the parameters, differentiated (forward mode, exact)."""
+    from hexapod.algorithms.inverse import tree_plan
+
+    plan = tree_plan(model)
+    if plan is None:
+        names = ", ".join(c.name for c in parameters[:3])
+        raise HexapodError(f"parameters {names}: a joint's position is differentiated through "
+                           f"the tree-ordered inverse dynamics, and model '{model.name}' is not "
+                           "an open tree with every joint driven (closed loops and feet on the "
+                           "ground are not covered yet)")
+    key = ("moving-joints", tuple((c.joint, tuple(c.parent), tuple(c.child))
+                                  for c in parameters))
+    function = model.built_once(key, lambda m: _moving_function(m, plan, parameters))
+    n, joints = result.times.size, len(model.joints)
+    mapped = function.map(n, "serial") if n > 1 else function
+    outputs = mapped(*[x for x in laws])
+    dq, dwrench, frames = (np.asarray(x) for x in outputs)
+    count = len(parameters)
+    dq = dq.reshape(model.n_q, count, n, order="F").transpose(2, 0, 1)
+    dwrench = dwrench.reshape(6, joints, count, n, order="F").transpose(3, 2, 1, 0)
+    rotations = frames.reshape(9, joints, n, order="F").transpose(2, 1, 0)
+    return dwrench, rotations, dq
+
+
+def _moving_function(model: Model, plan, parameters):
+    """``(w, wd, wdd) -> (dq/dp, d wrench/dp, rotations)`` at the scene's values."""
+    import casadi as ca
+
+    w, wd, wdd = (ca.SX.sym(name, model.n_w) for name in ("w", "wd", "wdd"))
+    p = ca.SX.sym("p", len(parameters))
+    frames = [[ca.DM(j.parent_frame.position), ca.DM(j.child_frame.position)]
+              for j in model.joints]
+    for k, change in enumerate(parameters):
+        j = model.joint_index[change.joint]
+        frames[j][0] = frames[j][0] + p[k] * ca.DM(change.parent)
+        frames[j][1] = frames[j][1] + p[k] * ca.DM(change.child)
+    q, _, _, wrench, rotation = plan.graph(w, wd, wdd, frames)
+    zero = {"p": ca.DM.zeros(len(parameters))}
+    dq = ca.substitute(ca.jacobian(q, p), p, zero["p"])
+    dwrench = ca.substitute(ca.jacobian(ca.vec(wrench), p), p, zero["p"])
+    return ca.Function("moving_joints", [w, wd, wdd], [dq, dwrench, rotation],
+                       ["w", "wd", "wdd"], ["dq", "dwrench", "rotation"])

@@ -7,7 +7,7 @@ import sys
 from hexapod.cli.common import show_progress
 from hexapod.cli.outputs import given_files, output_directory, suffixes
 
-HELP = "minimise a figure of merit over masses and inertias, with exact gradients"
+HELP = "minimise a figure of merit over masses, inertias and joints' positions"
 DESCRIPTION = (
     "Design optimisation of a study file (STUDY.toml, the sweep's format: [study] scene, "
     "[fixed] held values, [job] the inverse-dynamics window; [vary.KEY] each parameter's "

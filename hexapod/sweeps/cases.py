@@ -164,8 +164,9 @@ def with_scene_keys(scene: Scene, keys: dict, source: str = "") -> Scene:
 
 def set_scene_key(document: dict, key: str, value, source: str = "") -> None:
     """Set the dotted ``key`` of a scene document: ``section.key`` for the tables ``scene`` and
-    ``ground``, ``section.NAME.key`` for the arrays of elements, an integer last part for an
-    entry of a list (``scene.gravity.2``)."""
+    ``ground``, ``section.NAME.key`` for the arrays of elements, more parts into an element's
+    inline tables (``joint.fti.parent_frame.position``), an integer last part for an entry of
+    a list (``scene.gravity.2``)."""
     parts = key.split(".")
     where = f"{source}: {key}" if source else key
     section = parts[0]
@@ -186,15 +187,18 @@ def set_scene_key(document: dict, key: str, value, source: str = "") -> None:
     else:
         raise StudyError(f"{where}: a scene key starts with scene, ground, "
                          f"{', '.join(_ARRAYS)}; {spec_parameters_help()}")
-    if len(rest) == 2 and rest[1].isdigit():
-        current = table.get(rest[0])
-        if not isinstance(current, list) or int(rest[1]) >= len(current):
-            raise StudyError(f"{where}: '{rest[0]}' has no entry {rest[1]}")
-        current[int(rest[1])] = value
-    elif len(rest) == 1:
-        table[rest[0]] = value
-    else:
-        raise StudyError(f"{where}: too many parts after the element")
+    for k, part in enumerate(rest[:-1]):  # into inline tables: joint.J.parent_frame.position
+        inner = table.get(part)
+        if isinstance(inner, list) and k == len(rest) - 2 and rest[-1].isdigit():
+            if int(rest[-1]) >= len(inner):
+                raise StudyError(f"{where}: '{part}' has no entry {rest[-1]}")
+            inner[int(rest[-1])] = value
+            return
+        if not isinstance(inner, dict):
+            raise StudyError(f"{where}: '{'.'.join(rest[:k + 1])}' is not a table of the "
+                             "element")
+        table = inner
+    table[rest[-1]] = value
 
 
 def model_for(study: Study, arguments: dict, keys: dict, scene):

@@ -1,14 +1,18 @@
 """Design parameters named by scene keys (``body.femur.mass``), ``*`` matching any element name.
 
 The keys are those of a study (:func:`hexapod.sweeps.cases.set_scene_key`): a dotted path into
-the scene's TOML form. Sensitivities cover the bodies' inertia for now:
+the scene's TOML form. Sensitivities cover the bodies' inertia and the joints' positions:
 
 * ``body.NAME.mass`` (kg);
 * ``body.NAME.inertia``: every component as the scene gives it (3 principal moments or the 6
   entries ``xx yy zz xy xz yz`` of a spatial body, in its ``inertia_rotation`` axes; a planar
   body's one moment), each a parameter ``body.NAME.inertia.K``; ``body.NAME.inertia.K`` names
   one. Values and derivatives are in SI (kg m^2) whatever the scene's length unit, as every
-  output (``InertiaChange.scene_scale`` converts to the scene's kg L^2).
+  output (``InertiaChange.scene_scale`` converts to the scene's kg L^2);
+* ``joint.NAME.origin`` (``.K``: one component): a joint's origin, world axes at the initial
+  pose, moved on both its bodies; ``joint.NAME.parent_frame.position`` (``child_frame``): its
+  frame's origin on one body, in that body's axes, as a segment's length (m,
+  :class:`~hexapod.algorithms.sensitivity.FrameChange`).
 
 A glob that matches bodies without the key (a particle has no inertia) skips them; a name that
 matches nothing, or a key sensitivities do not cover, is refused.
@@ -23,20 +27,22 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from hexapod.algorithms.sensitivity import InertiaChange
+from hexapod.algorithms.sensitivity import FrameChange, InertiaChange
 from hexapod.scene.bodies import Particle, PlanarBody, inertia_tensor
+from hexapod.scene.element import GROUND
 from hexapod.sweeps.cases import StudyError
 
 if TYPE_CHECKING:
     from hexapod.scene.scene import Scene
 
-_COVERED = ("masses and inertias, body.NAME.mass and body.NAME.inertia[.K] ('*' matches any "
-            "NAME); lengths, joint positions and the gait's parameters move the motion itself, "
-            "whose derivatives are not written yet")
+_COVERED = ("masses and inertias, body.NAME.mass and body.NAME.inertia[.K], and joints' "
+            "positions, joint.NAME.origin[.K] or joint.NAME.parent_frame.position[.K] "
+            "(child_frame) ('*' matches any NAME); the gait's parameters are not covered yet")
 
 
 def inertia_parameters(scene: Scene, patterns: Sequence[str],
-                       source: str = "--parameters") -> tuple[InertiaChange, ...]:
+                       source: str = "--parameters") -> tuple[InertiaChange | FrameChange,
+                                                              ...]:
     """The parameters ``patterns`` name in ``scene``, in the order named, each once.
 
     Parameters
@@ -49,7 +55,7 @@ def inertia_parameters(scene: Scene, patterns: Sequence[str],
 
     Returns
     -------
-    tuple of InertiaChange
+    tuple of InertiaChange or FrameChange
 
     Raises
     ------
@@ -61,23 +67,78 @@ def inertia_parameters(scene: Scene, patterns: Sequence[str],
 
     document = tomllib.loads(scene_text(scene))
     bodies = {b["name"]: b for b in document.get("body", [])}
-    found: dict[str, InertiaChange] = {}
+    joints = {j["name"]: j for j in document.get("joint", [])}
+    found: dict[str, InertiaChange | FrameChange] = {}
     for pattern in patterns:
         parts = pattern.split(".")
-        if (parts[0] != "body" or len(parts) not in (3, 4) or parts[2] not in ("mass", "inertia")
-                or (len(parts) == 4 and parts[2] != "inertia")):
+        section = parts[0]
+        if _kind(parts) is None:
             raise StudyError(f"{source}: '{pattern}' is not a parameter sensitivities cover: "
                              f"{_COVERED}")
-        names = [n for n in bodies if fnmatchcase(n, parts[1])]
+        elements = bodies if section == "body" else joints
+        names = [n for n in elements if fnmatchcase(n, parts[1])]
         if not names:
-            shown = ", ".join(list(bodies)[:8]) + (", ..." if len(bodies) > 8 else "")
-            raise StudyError(f"{source}: '{pattern}': no body matches '{parts[1]}' (bodies: "
-                             f"{shown or 'none'})")
+            shown = ", ".join(list(elements)[:8]) + (", ..." if len(elements) > 8 else "")
+            raise StudyError(f"{source}: '{pattern}': no {section} matches '{parts[1]}' "
+                             f"({section}s: {shown or 'none'})")
         glob = len(names) > 1 or names[0] != parts[1]
         for name in names:
-            for change in _changes(scene, bodies[name], parts, pattern, source, glob):
+            changes = (_changes(scene, bodies[name], parts, pattern, source, glob)
+                       if section == "body" else
+                       _origin_changes(scene, joints[name], parts, pattern, source))
+            for change in changes:
                 found.setdefault(change.name, change)
     return tuple(found.values())
+
+
+def _kind(parts: list[str]) -> str | None:
+    """What a key names: ``mass``, ``inertia``, ``origin``, ``parent_frame`` or
+    ``child_frame`` (None: nothing sensitivities cover)."""
+    if parts[0] == "body" and len(parts) in (3, 4) and parts[2] in ("mass", "inertia") \
+            and (len(parts) == 3 or parts[2] == "inertia"):
+        return parts[2]
+    if parts[0] == "joint" and len(parts) in (3, 4) and parts[2] == "origin":
+        return "origin"
+    if parts[0] == "joint" and len(parts) in (4, 5) and parts[2] in ("parent_frame",
+                                                                     "child_frame") \
+            and parts[3] == "position":
+        return parts[2]
+    return None
+
+
+def _origin_changes(scene, entry: dict, parts: list[str], pattern: str, source: str):
+    """A joint's position: ``joint.NAME.origin[.K]``, its origin in world axes at the initial
+    pose, moved on both its bodies (the parent's segment grows by what the child's shrinks);
+    ``joint.NAME.parent_frame.position[.K]`` (``child_frame``), its frame's origin on one
+    body, in that body's axes (a segment's length)."""
+    name, kind = entry["name"], _kind(parts)
+    given = entry.get(kind, {})
+    values = given if kind == "origin" else (given.get("position")
+                                              if isinstance(given, dict) else None)
+    if scene.dimension != 3 or not isinstance(values, list) or len(values) != 3:
+        written = "origin" if kind == "origin" else f"{kind}.position"
+        raise StudyError(f"{source}: '{pattern}': joint '{name}' of a spatial scene gives no "
+                         f"{written} (a joint is placed by its origin, or by its frames)")
+    last = 3 if kind == "origin" else 4
+    components = range(3)
+    if len(parts) == last + 1:
+        if not parts[last].isdigit() or int(parts[last]) > 2:
+            raise StudyError(f"{source}: '{pattern}': a position has components 0 to 2")
+        components = [int(parts[last])]
+    joint = scene.joints[name]
+
+    def axes(body: str) -> np.ndarray:  # the body's centre-of-mass axes at the initial pose
+        return np.eye(3) if body == GROUND else scene.bodies[body].com_pose.rotation
+
+    zero = np.zeros((3, 3))
+    if kind == "origin":  # d (frame origin in each body's axes) / d (world origin)
+        parent, child = axes(joint.parent).T, axes(joint.child).T
+    else:  # a frame given in its body's axes, which are its centre-of-mass frame's axes
+        parent, child = (np.eye(3), zero) if kind == "parent_frame" else (zero, np.eye(3))
+    key = "origin" if kind == "origin" else f"{kind}.position"
+    return [FrameChange(f"joint.{name}.{key}.{k}", name, parent[:, k].copy(),
+                        child[:, k].copy(), "m", float(values[k]) * scene.unit, scene.unit)
+            for k in components]
 
 
 def _changes(scene, entry: dict, parts: list[str], pattern: str, source: str, glob: bool):

@@ -15,7 +15,7 @@ peak_ground:LEG
 energy                 ``int sum [tau w > 0] w dtau/dp dt`` per stride (the joint rates ``w`` do
                        not change)
 cost_of_transport      ``E / (m g d)``: the energy's derivative, and the mass's and the distance's
-                       (the centre of mass's path moves with the masses)
+                       (the centre of mass's path moves with the masses and the joints)
 =====================  ==========================================================================
 """
 
@@ -157,11 +157,15 @@ def _transport(model, result, sensitivity, driven, dwork, masses) -> np.ndarray:
     shift = horizontal(sum(m * (q[-1, b.q][:dim] - q[0, b.q][:dim])
                            for m, b in zip(masses, model.bodies, strict=True)) / mass)
     distance = np.linalg.norm(shift)
+    dq = sensitivity.q[[0, -1]]  # the ends' positions move with a joint's position
     out = np.empty(dwork.shape)
     for p, change in enumerate(sensitivity.parameters):
-        body = model.bodies[model.body_index[change.body]]
-        own = horizontal(q[-1, body.q][:dim] - q[0, body.q][:dim])
-        dshift = change.mass * (own - shift) / mass
+        dshift = horizontal(sum(m * (dq[1, b.q, p][:dim] - dq[0, b.q, p][:dim])
+                                for m, b in zip(masses, model.bodies, strict=True)) / mass)
+        if change.mass:
+            body = model.bodies[model.body_index[change.body]]
+            own = horizontal(q[-1, body.q][:dim] - q[0, body.q][:dim])
+            dshift = dshift + change.mass * (own - shift) / mass
         ddistance = shift @ dshift / distance
         out[p] = (dwork[p] / (mass * np.linalg.norm(g) * distance)
                   - value * (change.mass / mass + ddistance / distance))

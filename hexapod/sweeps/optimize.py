@@ -27,8 +27,9 @@ The study file shares the sweep's format (``docs/sweeps.md``): ``[study]`` (name
 Along a prescribed motion the forces are affine in the masses and inertias (see
 :mod:`hexapod.algorithms.sensitivity`): one inverse-dynamics run and its sensitivities give the
 forces, and so every figure of merit and its gradient, at any values of the parameters, exactly
-(:class:`AffineDesign`). The optimum is then checked by a run of the scene re-read with the
-optimal values.
+(:class:`AffineDesign`). A joint's position moves the motion itself: each evaluation then runs
+the scene re-read with the values (:class:`RerunDesign`). The optimum is checked by a run of
+the scene re-read with the optimal values.
 """
 
 from __future__ import annotations
@@ -43,6 +44,7 @@ from pathlib import Path
 import numpy as np
 
 from hexapod._support.files import read_text
+from hexapod.algorithms.sensitivity import InertiaChange
 from hexapod.errors import HexapodError, InputFileError
 from hexapod.sweeps.cases import StudyError
 from hexapod.sweeps.metric_derivatives import SENSITIVE_FAMILIES, metric_sensitivities
@@ -250,6 +252,52 @@ class AffineDesign:
                                      masses))
 
 
+@dataclass
+class RerunDesign:
+    """The figures of merit and their gradients at any values of parameters that move the
+    motion (joints' positions): the scene re-read with the values and run again at each, its
+    gradients exact there.
+
+    Attributes
+    ----------
+    scene : Scene
+    changes : tuple of InertiaChange or FrameChange
+        The parameters, at the scene's values.
+    times : ndarray
+        The samples.
+    strides : float
+    """
+
+    scene: object
+    changes: tuple
+    times: np.ndarray
+    strides: float
+    _cache: dict = field(default_factory=dict, repr=False)
+
+    def at(self, p: np.ndarray) -> tuple[dict, dict]:
+        """``(metrics, derivatives)`` at the parameters' values ``p``."""
+        from hexapod.algorithms.inverse import inverse_dynamics
+        from hexapod.algorithms.sensitivity import inverse_sensitivities
+        from hexapod.model.assemble import assemble
+        from hexapod.sweeps.cases import with_scene_keys
+        from hexapod.sweeps.design_parameters import inertia_parameters
+
+        key = tuple(np.asarray(p, dtype=float).tolist())
+        if key not in self._cache:
+            self._cache.clear()
+            scene = with_scene_keys(self.scene, {c.name: v / c.scene_scale for c, v in
+                                                 zip(self.changes, key, strict=True)})
+            model = assemble(scene)
+            result = inverse_dynamics(model, self.times)
+            sensitivity = inverse_sensitivities(
+                model, result, inertia_parameters(scene, [c.name for c in self.changes]))
+            self._cache[key] = (
+                inverse_metrics(model, result, SENSITIVE_FAMILIES, self.strides),
+                metric_sensitivities(model, result, sensitivity, SENSITIVE_FAMILIES,
+                                     self.strides))
+        return self._cache[key]
+
+
 def constrained_figures(metrics: dict, limits, source: str = "") -> list[tuple[str, Limit]]:
     """Each figure of merit a limit matches, with its limit; a limit that matches none is
     refused."""
@@ -375,7 +423,10 @@ def optimize(spec: OptimizationStudy,
     result = inverse_dynamics(model, times)
     sensitivity = inverse_sensitivities(model, result, changes)
     values = np.array([c.value for c in changes])
-    design = AffineDesign(model, result, sensitivity, strides, values)
+    if all(isinstance(c, InertiaChange) for c in changes):
+        design = AffineDesign(model, result, sensitivity, strides, values)
+    else:  # the motion moves with the joints: a run per evaluation
+        design = RerunDesign(scene, changes, times, strides)
     metrics, _ = design.at(values)
     check_objective(metrics, spec.minimize, source)
     constrained = constrained_figures(metrics, spec.limits, source)

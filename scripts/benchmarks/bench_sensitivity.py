@@ -13,9 +13,10 @@ Protocol
 * Agreement: at ``--points`` random parameter points (every parameter multiplied by a factor
   drawn in [0.7, 1.3], seeded), for the walking robot and the front leg, the derivatives of
   every effort, joint wrench, ground force and figure of merit against central differences of
-  whole runs on the scene re-read with one parameter moved by ``--step`` of its value
-  (``--checked`` parameters drawn per point; the forces are linear in masses and inertias, so
-  the differences are exact but for round-off). The error is ``p |exact - difference|`` over
+  whole runs on the scene re-read with one parameter moved by ``--step`` of its value, or by
+  1e-6 m for a joint's position (the front leg's ``ctr``, ``fti`` and ``tita`` origins;
+  ``--checked`` parameters drawn per point; the forces are linear in masses and inertias, so
+  those differences are exact but for round-off). The error is ``p |exact - difference|`` over
   the largest value of the array (or the metric's value): the change of the output per unit
   relative change of the parameter, relative. Target: 1e-6. A failed check ends with status 1.
 
@@ -43,7 +44,8 @@ FAMILIES = ("peak_effort", "rms_effort", "peak_force", "peak_moment", "peak_grou
             "cost_of_transport")
 ROBOT_PARAMETERS = ["body.trunk.mass", "body.trunk.inertia", "body.*/femur.mass",
                     "body.*/tibia.mass", "body.*/coxa.mass"]
-LEG_PARAMETERS = ["body.*.mass", "body.*.inertia"]
+LEG_PARAMETERS = ["body.*.mass", "body.*.inertia", "joint.ctr.origin", "joint.fti.origin",
+                  "joint.tita.origin"]
 TOLERANCE = 1e-6
 
 
@@ -82,8 +84,8 @@ def outputs(model, result):
     return out
 
 
-def point_errors(scene, patterns, samples, checked, step, rng) -> float:
-    """The worst error at one random point of the parameters."""
+def point_errors(scene, patterns, samples, checked, step, rng) -> tuple[float, str]:
+    """The worst error at one random point of the parameters, and where it is."""
     base = hx.sweeps.inertia_parameters(scene, patterns)
     # one factor per body's mass and one per body's inertia (a slender rod's moments, moved
     # apart, would break the triangle inequality the scene reader checks)
@@ -100,10 +102,12 @@ def point_errors(scene, patterns, samples, checked, step, rng) -> float:
     result = hx.inverse_dynamics(model, times)
     sensitivity, metric_derivatives = derivatives(model, result, changes)
     metrics = inverse_metrics(model, result)
-    worst = 0.0
+    worst, where = 0.0, ""
     for p in rng.choice(len(changes), checked, replace=False):
         change = changes[p]
-        h = step * abs(change.value)
+        # a relative step for the masses and inertias (the forces are linear in them), 1e-6 m
+        # for a joint's position (they are not: truncation then stays below round-off)
+        h = step * abs(change.value) if change.unit != "m" else 1e-6
         ends = []
         for sign in (1.0, -1.0):
             value = (change.value + sign * h) / change.scene_scale  # the scene's units
@@ -115,14 +119,18 @@ def point_errors(scene, patterns, samples, checked, step, rng) -> float:
             exact = getattr(sensitivity, name)[..., p]
             finite = np.isfinite(value)
             error = change.value * np.abs(exact[finite] - difference[finite]).max()
-            worst = max(worst, error / np.abs(value[finite]).max())
+            error /= np.abs(value[finite]).max()
+            if error > worst:
+                worst, where = error, f"{change.name}, {name}"
         for column, exact in metric_derivatives.items():
             if not np.isfinite(metrics[column]):
                 continue
             difference = (ends[0][1][column] - ends[1][1][column]) / (2 * h)
             scale = abs(metrics[column]) or 1.0
-            worst = max(worst, abs(change.value * (exact[p] - difference)) / scale)
-    return worst
+            error = abs(change.value * (exact[p] - difference)) / scale
+            if error > worst:
+                worst, where = error, f"{change.name}, {column}"
+    return worst, where
 
 
 def inverse_metrics(model, result):
@@ -152,9 +160,10 @@ def main() -> int:
             measure.log(f"{name}: point {point + 1} of {args.points}")
             errors.append(point_errors(scene, patterns, args.check_samples, args.checked,
                                        args.step, rng))
+        worst, where = max(errors)
         print(f"{name}: {args.points} random points, {args.checked} parameters each, step "
-              f"{args.step:g}: worst error {max(errors):.2e} (target {TOLERANCE:g})")
-        failed |= max(errors) > TOLERANCE
+              f"{args.step:g}: worst error {worst:.2e} ({where}; target {TOLERANCE:g})")
+        failed |= worst > TOLERANCE
     return 1 if failed else 0
 
 
