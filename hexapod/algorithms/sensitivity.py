@@ -252,8 +252,8 @@ def _inertial_part(model: Model, result, parameters, laws, progress):
                                              forces[k], state, tol=model.rank_tolerance)
         # the report's wrenches, without the forces across joints: linear in the multipliers
         B, frames = terms.evaluate(data, "report_map", q, terms.nonzeros(Phi_v))
-        B = np.reshape(B, (joints, 6, model.n_c))
-        wrench[k] = np.einsum("jic,cp->pji", B, lams[k])
+        B = np.reshape(B, (6 * joints, model.n_c))
+        wrench[k] = (B @ lams[k]).reshape(joints, 6, count).transpose(2, 0, 1)
         rotations[k] = np.reshape(frames, (9, joints)).T
         if progress is not None:
             progress(k + 1, n)
