@@ -308,6 +308,23 @@ def test_friction_policy_against_central_differences(friction):
         assert changes[k].value * error.max() <= TOLERANCE * np.abs(value[finite]).max(), name
 
 
+def test_friction_coefficient_against_central_differences(friction):
+    """``ground.mu`` moves the friction pyramids' faces: the forces follow on the active set
+    (zero derivative where no face is active)."""
+    scene, model, result, _, _ = friction
+    (change,) = inertia_parameters(scene, ["ground.mu"])
+    assert change.value == model.ground.mu
+    sensitivity = hx.inverse_sensitivities(model, result, [change])
+    reference = central_difference(scene, change, result.times, forces)
+    for name in ("effort", "ground_force"):
+        value = getattr(result, name)
+        finite = np.isfinite(value)
+        exact = getattr(sensitivity, name)[..., 0][finite]
+        error = np.abs(exact - reference[name][finite]).max()
+        assert change.value * error <= TOLERANCE * np.abs(value[finite]).max(), name
+        assert change.value * np.abs(exact).max() > 0.1 * np.abs(value[finite]).max()
+
+
 def test_exact_cone_is_refused():
     model = walking_robot(policy="friction", faces=0)
     result = hx.inverse_dynamics(model, np.linspace(0.0, 0.01, 3))

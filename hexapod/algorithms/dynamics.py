@@ -152,13 +152,15 @@ def policy_solution(model: Model, data: Data, t: float, q: np.ndarray, w: np.nda
 
 
 def policy_tangents(model: Model, data: Data, t: float, q: np.ndarray, w: np.ndarray, Phi_v,
-                    split: RowSplit, forces: np.ndarray, state=None, *,
-                    tol: float) -> tuple[np.ndarray, frozenset]:
+                    split: RowSplit, forces: np.ndarray, state=None, *, tol: float,
+                    along_mu: np.ndarray | None = None) -> tuple[np.ndarray, frozenset]:
     """The derivatives of the multipliers the scene's policy chooses, for the derivatives of
-    the forces ``forces`` (columns; ``gamma`` and the forces across joints unchanged): for the
-    linear policies :func:`policy_solution` of them; for friction (a QP, piecewise linear) on
-    the active set of the solution at the state, whose ``(Q, gamma, Q_across)`` ``state``
-    gives (:func:`hexapod.algorithms.ground.friction_tangents`), with that active set."""
+    the forces ``forces`` (columns; ``gamma`` and the forces across joints unchanged) and of
+    the friction coefficient (``along_mu``, per column): for the linear policies
+    :func:`policy_solution` of the forces (the coefficient changes nothing); for friction (a
+    QP, piecewise linear) on the active set of the solution at the state, whose ``(Q, gamma,
+    Q_across)`` ``state`` gives (:func:`hexapod.algorithms.ground.friction_tangents`), with
+    that active set."""
     zero = np.zeros((model.n_c,) + forces.shape[1:])
     if not (model.contacts and model.ground.policy == "friction"):
         _, lam, _ = policy_solution(model, data, t, q, w, Phi_v, split, forces, zero, None,
@@ -170,5 +172,6 @@ def policy_tangents(model: Model, data: Data, t: float, q: np.ndarray, w: np.nda
                                   split=split).lam for f, g in ((Q, gamma), (forces, zero)))
     _, tangents, active = friction_tangents(model, data, t, q, terms_of(model).nonzeros(Phi_v),
                                             Q_across, primal,
-                                            multiplier_null_space(split, model.n_c), along)
+                                            multiplier_null_space(split, model.n_c), along,
+                                            along_mu)
     return tangents, active

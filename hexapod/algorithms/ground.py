@@ -179,10 +179,12 @@ def ground_policy(model: Model, data, t: float, q: np.ndarray, Phi: np.ndarray,
 
 def friction_tangents(model: Model, data, t: float, q: np.ndarray, Phi: np.ndarray,
                       Q_across: np.ndarray | None, lam: np.ndarray, N: np.ndarray,
-                      along: np.ndarray) -> tuple[np.ndarray, np.ndarray, frozenset]:
+                      along: np.ndarray, along_mu: np.ndarray | None = None
+                      ) -> tuple[np.ndarray, np.ndarray, frozenset]:
     """The friction policy's multipliers (as :func:`ground_policy` chooses them among ``lam +
     N z``) and their derivatives along the columns of ``along`` (particular multipliers of
-    the derivatives of the right-hand side, without forces across joints), on the active set
+    the derivatives of the right-hand side, without forces across joints) and of the friction
+    coefficient (``along_mu``: its derivative per column, none by default), on the active set
     of that solution: the constraints held at equality stay so, the others stay slack. The
     QP's solution is piecewise linear in its data: where the active set changes, these are
     one-sided derivatives. Also the active set, as (contact, constraint) pairs.
@@ -202,8 +204,8 @@ def friction_tangents(model: Model, data, t: float, q: np.ndarray, Phi: np.ndarr
     base_along = problem.shift(along)
     if problem.NK.shape[1] == 0:
         return problem.base, base_along, frozenset()
-    y, active, C, dc_dF0 = problem.friction()
-    if y is None:
+    y, active, C, slopes = problem.friction()
+    if active is None:
         raise HexapodError(f"model '{model.name}': at t = {t:.6g} s no ground forces are "
                            "inside the friction cones (a foot slips): the friction policy's "
                            "derivative is not defined there")
@@ -213,8 +215,11 @@ def friction_tangents(model: Model, data, t: float, q: np.ndarray, Phi: np.ndarr
     H, n = problem.AK.T @ problem.AK, problem.NK.shape[1]
     C_J = C[active]
     kkt = np.block([[H, C_J.T], [C_J, np.zeros((active.size, active.size))]])
-    rhs = np.vstack([-problem.AK.T @ (problem.A @ base_along),
-                     dc_dF0[active] @ base_along[rows]])  # F0 = -base on the loaded rows
+    dc_dF0, dc_dmu = slopes
+    moved = dc_dF0[active] @ base_along[rows]  # F0 = -base on the loaded rows
+    if along_mu is not None:
+        moved = moved - np.outer(dc_dmu[active], along_mu)
+    rhs = np.vstack([-problem.AK.T @ (problem.A @ base_along), moved])
     y_along = np.linalg.lstsq(kkt, rhs, rcond=None)[0][:n]
     per_foot = 1 + model.ground.faces  # the least normal force, then the pyramid's faces
     labels = frozenset((loaded[j // per_foot], j % per_foot) for j in active)
@@ -281,7 +286,7 @@ def _friction(model: Model, weights, base, NK, AK, r):
     """``y`` of least ``|AK y + r|^2`` with every loaded foot's force ``F = F0 + G y`` inside
     its cone and above its least normal force (of least violation where none is), and at that
     ``y`` the constraints held at equality (indices), the constraints' Jacobians with respect
-    to ``y`` and to ``F0``; ``y`` None for these when no ``y`` is admissible."""
+    to ``y`` and to ``(F0, mu)``; None for these when no ``y`` is admissible."""
     ground = model.ground
     loaded = [k for k, w in enumerate(weights) if w > NO_LOAD]
     F0 = {k: -base[model.contacts[k].rows] for k in loaded}
@@ -312,9 +317,9 @@ def _solve_cone(ground, loaded, weights, F0, G, H, g, n, reference):
     if not ok:
         y, _ = relaxed(*params)
         return y, None, None, None
-    c, dc_dy, dc_dF0 = constraints(y, *params)
+    c, dc_dy, dc_dF0, dc_dmu = constraints(y, *params)
     active = np.flatnonzero(c <= ACTIVE_TOL)
-    return y, active, dc_dy, dc_dF0 / scale
+    return y, active, dc_dy, (dc_dF0 / scale, dc_dmu)
 
 
 def _build_solver(faces: int, n: int, feet: int):
@@ -344,7 +349,8 @@ def _build_solver(faces: int, n: int, feet: int):
     objective = 0.5 * ca.mtimes([y.T, H, y]) + ca.dot(g, y)
     strict_g = ca.vertcat(*[c for c, _ in constraints]) if constraints else ca.SX(0, 1)
     values = ca.Function("ground_constraints", [y, parameters],
-                         [strict_g, ca.jacobian(strict_g, y), ca.jacobian(strict_g, F0)])
+                         [strict_g, ca.jacobian(strict_g, y), ca.jacobian(strict_g, F0),
+                          ca.jacobian(strict_g, mu)])
     relaxed_g = (ca.vertcat(*[c + s for c, s in constraints]) if constraints
                  else ca.SX(0, 1))
     penalty = 1e6 * ca.sumsqr(slack) + ca.sum1(slack) * 1e3
@@ -374,8 +380,9 @@ def _build_solver(faces: int, n: int, feet: int):
         return np.asarray(out["x"]).ravel(), bool(strict.stats()["success"])
 
     def constraint_values(y_, *args):
-        c, dc_dy, dc_dF0 = values(y_, pack(*args))
-        return np.asarray(c).ravel(), np.asarray(dc_dy), np.asarray(dc_dF0)
+        c, dc_dy, dc_dF0, dc_dmu = values(y_, pack(*args))
+        return (np.asarray(c).ravel(), np.asarray(dc_dy), np.asarray(dc_dF0),
+                np.asarray(dc_dmu).ravel())
 
     def run_relaxed(*args):
         x0 = np.zeros(n + 2 * feet)

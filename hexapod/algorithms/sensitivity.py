@@ -42,7 +42,8 @@ from hexapod.model.model import Model
 if TYPE_CHECKING:
     from hexapod.algorithms.inverse import InverseResult
 
-__all__ = ["FrameChange", "InertiaChange", "InverseSensitivity", "inverse_sensitivities"]
+__all__ = ["FrameChange", "FrictionChange", "InertiaChange", "InverseSensitivity",
+           "inverse_sensitivities"]
 
 
 @dataclass(frozen=True)
@@ -110,6 +111,28 @@ class FrameChange:
     mass: float = 0.0  # it changes no mass
 
 
+@dataclass(frozen=True)
+class FrictionChange:
+    """The friction coefficient ``mu`` of the scene's ground (``ground.mu``) as a parameter:
+    it bounds the friction policy's forces (the other policies do not see it).
+
+    Attributes
+    ----------
+    name : str
+        ``ground.mu``.
+    value : float
+        Its value.
+    unit : str
+        ``1``.
+    """
+
+    name: str = "ground.mu"
+    value: float = float("nan")
+    unit: str = "1"
+    scene_scale: float = 1.0
+    mass: float = 0.0  # it changes no mass
+
+
 @dataclass
 class InverseSensitivity:
     """Derivatives of an :class:`~hexapod.algorithms.inverse.InverseResult`'s forces, the
@@ -133,7 +156,7 @@ class InverseSensitivity:
         parameters and the derivatives one-sided (empty for the other policies).
     """
 
-    parameters: tuple[InertiaChange | FrameChange, ...]
+    parameters: tuple[InertiaChange | FrameChange | FrictionChange, ...]
     effort: np.ndarray
     force: np.ndarray
     torque: np.ndarray
@@ -161,7 +184,8 @@ def inertial_force_changes(model: Model, change: InertiaChange, v: np.ndarray,
 
 
 def inverse_sensitivities(model: Model, result: InverseResult,
-                          parameters: Sequence[InertiaChange | FrameChange], *,
+                          parameters: Sequence[InertiaChange | FrameChange | FrictionChange],
+                          *,
                           progress: Callable[[int, int], None] | None = None
                           ) -> InverseSensitivity:
     """The derivatives of ``result``'s efforts, joint wrenches and ground forces with respect
@@ -173,7 +197,7 @@ def inverse_sensitivities(model: Model, result: InverseResult,
         The model ``result`` was computed with.
     result : InverseResult
         An inverse-dynamics result of ``model``.
-    parameters : sequence of InertiaChange or FrameChange
+    parameters : sequence of InertiaChange, FrameChange or FrictionChange
         What each parameter changes.
     progress : callable, optional
         Called with ``(samples done, samples)``.
@@ -191,6 +215,8 @@ def inverse_sensitivities(model: Model, result: InverseResult,
     """
     parameters = tuple(parameters)
     for change in parameters:
+        if isinstance(change, FrictionChange):
+            continue
         known = (model.joint_index if isinstance(change, FrameChange) else model.body_index)
         element = change.joint if isinstance(change, FrameChange) else change.body
         if element not in known:
@@ -204,7 +230,7 @@ def inverse_sensitivities(model: Model, result: InverseResult,
     q = np.zeros((n, model.n_q, count))
     laws = [np.asarray(x, dtype=float).reshape(model.n_w, n)
             for x in model.law_values(result.times)]  # the laws' values at each sample
-    inertial = [k for k, c in enumerate(parameters) if isinstance(c, InertiaChange)]
+    inertial = [k for k, c in enumerate(parameters) if not isinstance(c, FrameChange)]
     moving = [k for k, c in enumerate(parameters) if isinstance(c, FrameChange)]
     changes = np.zeros(0)
     if inertial or not moving:
@@ -222,9 +248,9 @@ def inverse_sensitivities(model: Model, result: InverseResult,
 
 
 def _inertial_part(model: Model, result, parameters, laws, progress):
-    """The masses' and inertias': joint-frame wrenches (N, P, J, 6), the joint frames'
-    rotations (N, J, 9), the ground forces (N, C, 3, P) and the friction QP's active-set
-    changes (times)."""
+    """The masses', inertias' and friction coefficient's: joint-frame wrenches (N, P, J, 6),
+    the joint frames' rotations (N, J, 9), the ground forces (N, C, 3, P) and the friction
+    QP's active-set changes (times)."""
     n, count, joints = result.times.size, len(parameters), len(model.joints)
     wrench = np.zeros((n, count, joints, 6))
     rotations = np.zeros((n, joints, 9))
@@ -233,9 +259,11 @@ def _inertial_part(model: Model, result, parameters, laws, progress):
     terms = terms_of(model)
     friction = bool(model.contacts) and model.ground.policy == "friction"
     active: list[frozenset] = [frozenset()] * n
-    forces = np.stack([inertial_force_changes(model, change, result.v, result.v_dot)
-                       for change in parameters], axis=-1) if count \
-        else np.zeros((n, model.n_v, 0))
+    forces = np.zeros((n, model.n_v, count))  # the friction coefficient changes no force
+    for p, change in enumerate(parameters):
+        if isinstance(change, InertiaChange):
+            forces[..., p] = inertial_force_changes(model, change, result.v, result.v_dot)
+    along_mu = np.array([isinstance(c, FrictionChange) for c in parameters], dtype=float)
     for k, t in enumerate(result.times):
         q, v, w = result.q[k], result.v[k], laws[0][:, k]
         state = None
@@ -249,7 +277,8 @@ def _inertial_part(model: Model, result, parameters, laws, progress):
             Phi_v = constraint_jacobian(model, q, w, data)
         split = state_split(model, data, q, w, Phi_v)
         lams[k], active[k] = policy_tangents(model, data, float(t), q, w, Phi_v, split,
-                                             forces[k], state, tol=model.rank_tolerance)
+                                             forces[k], state, tol=model.rank_tolerance,
+                                             along_mu=along_mu)
         # the report's wrenches, without the forces across joints: linear in the multipliers
         B, frames = terms.evaluate(data, "report_map", q, terms.nonzeros(Phi_v))
         B = np.reshape(B, (6 * joints, model.n_c))

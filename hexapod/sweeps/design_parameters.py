@@ -12,7 +12,8 @@ the scene's TOML form. Sensitivities cover the bodies' inertia and the joints' p
 * ``joint.NAME.origin`` (``.K``: one component): a joint's origin, world axes at the initial
   pose, moved on both its bodies; ``joint.NAME.parent_frame.position`` (``child_frame``): its
   frame's origin on one body, in that body's axes, as a segment's length (m,
-  :class:`~hexapod.algorithms.sensitivity.FrameChange`).
+  :class:`~hexapod.algorithms.sensitivity.FrameChange`);
+* ``ground.mu``: the friction coefficient, which bounds the friction policy's forces.
 
 A glob that matches bodies without the key (a particle has no inertia) skips them; a name that
 matches nothing, or a key sensitivities do not cover, is refused.
@@ -27,7 +28,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from hexapod.algorithms.sensitivity import FrameChange, InertiaChange
+from hexapod.algorithms.sensitivity import FrameChange, FrictionChange, InertiaChange
 from hexapod.scene.bodies import Particle, PlanarBody, inertia_tensor
 from hexapod.scene.element import GROUND
 from hexapod.sweeps.cases import StudyError
@@ -37,12 +38,13 @@ if TYPE_CHECKING:
 
 _COVERED = ("masses and inertias, body.NAME.mass and body.NAME.inertia[.K], and joints' "
             "positions, joint.NAME.origin[.K] or joint.NAME.parent_frame.position[.K] "
-            "(child_frame) ('*' matches any NAME); the gait's parameters are not covered yet")
+            "(child_frame) ('*' matches any NAME), and the friction coefficient, ground.mu; the "
+            "gait's parameters are not covered yet")
 
 
 def inertia_parameters(scene: Scene, patterns: Sequence[str],
-                       source: str = "--parameters") -> tuple[InertiaChange | FrameChange,
-                                                              ...]:
+                       source: str = "--parameters"
+                       ) -> tuple[InertiaChange | FrameChange | FrictionChange, ...]:
     """The parameters ``patterns`` name in ``scene``, in the order named, each once.
 
     Parameters
@@ -55,7 +57,7 @@ def inertia_parameters(scene: Scene, patterns: Sequence[str],
 
     Returns
     -------
-    tuple of InertiaChange or FrameChange
+    tuple of InertiaChange, FrameChange or FrictionChange
 
     Raises
     ------
@@ -68,8 +70,11 @@ def inertia_parameters(scene: Scene, patterns: Sequence[str],
     document = tomllib.loads(scene_text(scene))
     bodies = {b["name"]: b for b in document.get("body", [])}
     joints = {j["name"]: j for j in document.get("joint", [])}
-    found: dict[str, InertiaChange | FrameChange] = {}
+    found: dict[str, InertiaChange | FrameChange | FrictionChange] = {}
     for pattern in patterns:
+        if pattern == "ground.mu":
+            found.setdefault(pattern, FrictionChange(value=float(scene.ground.mu)))
+            continue
         parts = pattern.split(".")
         section = parts[0]
         if _kind(parts) is None:
