@@ -128,6 +128,24 @@ def read_bytes(path: str | Path, what: str, *, cost: float = 1.0) -> bytes:
     return b"".join(chunks)
 
 
+def read_toml(path: str | Path, what: str) -> dict:
+    """A user's TOML file parsed (``what``: the kind of file, e.g. ``"study file"``), or an
+    :class:`InputFileError` naming the file and why: unreadable (:func:`read_text`), not
+    valid TOML, or nested too deeply for the parser (tomllib recurses)."""
+    import tomllib
+
+    path = Path(path)
+    text = read_text(path, what)
+    try:
+        return tomllib.loads(text)
+    except ValueError as error:  # a TOMLDecodeError, or an integer of thousands of digits
+        reason = str(error).split(";")[0]  # not Python's advice on its digit limit
+        raise InputFileError(f"{path}: not valid TOML: {reason}") from None
+    except RecursionError:
+        raise InputFileError(f"{path}: arrays or tables nested too deeply to be read as a "
+                             "TOML file") from None
+
+
 def read_text(path: str | Path, what: str, *, cost: float = 50.0) -> str:
     """The text of a user's file, or an :class:`InputFileError` saying why it cannot be read
     (``what`` names the kind of file expected, e.g. ``"scene file"``). The file is checked

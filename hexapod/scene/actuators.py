@@ -25,12 +25,11 @@ from __future__ import annotations
 
 import fnmatch
 import math
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from hexapod._support.files import read_text
+from hexapod._support.files import read_toml
 from hexapod.errors import InputFileError
 
 if TYPE_CHECKING:
@@ -157,12 +156,7 @@ def read_actuators(path: str | Path) -> ActuatorTable:
         message, each naming the file, the entry and the key.
     """
     path = Path(path)
-    try:
-        document = tomllib.loads(read_text(path, "actuator table"))
-    except ValueError as error:
-        raise InputFileError(f"{path}: not valid TOML: {str(error).split(';')[0]}") from None
-    except RecursionError:
-        raise InputFileError(f"{path}: arrays or tables nested too deeply") from None
+    document = read_toml(path, "actuator table")
     entries = document.get("actuator")
     problems = [f"unknown key '{key}' (expected [[actuator]] entries)"
                 for key in document if key != "actuator"]

@@ -12,14 +12,13 @@ run; when it is required the element is dropped (and references to it are not re
 from __future__ import annotations
 
 import re
-import tomllib
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
-from hexapod._support.files import read_text
-from hexapod.errors import InputFileError, ModelError, Problem
+from hexapod._support.files import read_toml
+from hexapod.errors import ModelError, Problem
 from hexapod.scene.bodies import Particle, PlanarBody, SpatialBody
 from hexapod.scene.contacts import GroundForces
 from hexapod.scene.drivers import DRIVER_TYPES
@@ -574,16 +573,7 @@ def read_scene(path: str | Path) -> Scene:
         The file is TOML but describes an invalid scene; lists every problem with its key.
     """
     path = Path(path)
-    text = read_text(path, "scene file")
-    try:
-        document = tomllib.loads(text)
-    except ValueError as error:  # a TOMLDecodeError, or an integer of thousands of digits
-        reason = str(error).split(";")[0]  # not Python's advice on its digit limit
-        raise InputFileError(f"{path}: not valid TOML: {reason}") from None
-    except RecursionError:  # tomllib parses nested arrays and tables recursively
-        raise InputFileError(f"{path}: arrays or tables nested too deeply to be a scene") \
-            from None
-    return scene_from_document(document, path)
+    return scene_from_document(read_toml(path, "scene file"), path)
 
 
 def scene_from_document(document: dict, path: str | Path) -> Scene:

@@ -35,7 +35,6 @@ the scene re-read with the optimal values.
 from __future__ import annotations
 
 import math
-import tomllib
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from fnmatch import fnmatchcase
@@ -43,7 +42,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hexapod._support.files import read_text
+from hexapod._support.files import read_toml
 from hexapod.algorithms.sensitivity import InertiaChange
 from hexapod.errors import HexapodError, InputFileError
 from hexapod.sweeps.cases import StudyError
@@ -108,12 +107,7 @@ def read_optimization(path: str | Path) -> OptimizationStudy:
         The file cannot be read, is not TOML, or is not a valid study.
     """
     path = Path(path)
-    try:
-        document = tomllib.loads(read_text(path, "study file"))
-    except ValueError as error:
-        raise InputFileError(f"{path}: not valid TOML: {str(error).split(';')[0]}") from None
-    except RecursionError:
-        raise InputFileError(f"{path}: tables nested too deeply to be a study") from None
+    document = read_toml(path, "study file")
     problems: list[str] = []
     optimize = document.pop("optimize", None)
     vary = document.pop("vary", {})

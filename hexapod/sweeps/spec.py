@@ -38,11 +38,10 @@ import inspect
 import itertools
 import json
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from hexapod._support.files import read_text
+from hexapod._support.files import read_text, read_toml
 from hexapod._version import __version__
 from hexapod.errors import InputFileError
 
@@ -187,13 +186,7 @@ def read_study(path: str | Path, max_cases: int | None = None) -> Study:
         The study has more cases than the limit.
     """
     path = Path(path)
-    try:
-        document = tomllib.loads(read_text(path, "study file"))
-    except ValueError as error:
-        raise InputFileError(f"{path}: not valid TOML: {str(error).split(';')[0]}") from None
-    except RecursionError:  # tomllib parses nested arrays and tables recursively
-        raise InputFileError(f"{path}: arrays or tables nested too deeply to be a study") \
-            from None
+    document = read_toml(path, "study file")
     return study_from_document(document, path, max_cases)
 
 
