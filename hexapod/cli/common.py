@@ -232,6 +232,18 @@ def scene_arguments(parser: argparse.ArgumentParser, json_help: str) -> None:
     parser.add_argument("--json", action="store_true", help=json_help)
 
 
+def window_arguments(parser: argparse.ArgumentParser, samples: int | None = None) -> None:
+    """``--start``, ``--duration``, ``--samples``: the inverse dynamics' window (``report``,
+    ``sensitivity``); ``samples`` the default count (None: the command decides, 501)."""
+    parser.add_argument("--start", type=time_value, default=0.0, metavar="S",
+                        help="first time in s (default 0)")
+    parser.add_argument("--duration", type=seconds, metavar="S",
+                        help="length of the window in s (default: one cycle of the scene's "
+                        "periodic laws, e.g. the gait's stride, or 1 s)")
+    parser.add_argument("--samples", type=at_least(2), default=samples,
+                        help="samples over the window, ends included (default 501)")
+
+
 def inverse_arguments(parser: argparse.ArgumentParser, method_help: str) -> None:
     """``--frame`` and ``--method`` of the inverse dynamics (``inverse`` and ``report``)."""
     parser.add_argument("--frame", choices=("joint", "world"), default="joint",

@@ -7,15 +7,13 @@ import sys
 
 from hexapod.cli.common import (
     MAX_TIME,
-    at_least,
     base_argument,
     check_inverse_memory,
     ground_arguments,
     scene_of,
     scene_positional,
-    seconds,
     show_progress,
-    time_value,
+    window_arguments,
 )
 from hexapod.cli.outputs import given_files, output_directory, suffixes
 
@@ -51,13 +49,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--out", metavar="DIR",
                         help="the directory to write (default: SCENE-NAME-sensitivity); an "
                         "earlier one there is replaced")
-    parser.add_argument("--start", type=time_value, default=0.0, metavar="S",
-                        help="first time in s (default 0)")
-    parser.add_argument("--duration", type=seconds, metavar="S",
-                        help="length of the window in s (default: one cycle of the scene's "
-                        "periodic laws, e.g. the gait's stride, or 1 s)")
-    parser.add_argument("--samples", type=at_least(2), default=501,
-                        help="samples over the window, ends included (default 501)")
+    window_arguments(parser, 501)
     parser.add_argument("--no-figures", dest="figures", action="store_false",
                         help="write the table and the summary only")
     parser.add_argument("--method", choices=("auto", "tree", "phase", "saddle"),
