@@ -1,5 +1,6 @@
 """Design sensitivities of an inverse-dynamics result: the derivatives of every joint effort,
-joint wrench and ground reaction with respect to the bodies' masses and inertias.
+joint wrench and ground reaction with respect to the bodies' masses and inertias, the friction
+coefficient and the joints' positions.
 
 Along a prescribed motion the positions, velocities and accelerations do not depend on the
 masses and inertias; only the multipliers do, through the right-hand side of
@@ -17,10 +18,16 @@ of one body by ``(dm/dp, dJ/dp)`` is the solution of the same saddle-point syste
 force elements across joints: exact, not a difference quotient, and computed by the one solve
 the inverse dynamics uses. The friction policy (a QP over a pyramid) is piecewise linear: its
 derivative is taken on the active set of each sample's solution (the constraints held at
-equality stay so), and the samples where that set changes are named.
+equality stay so), and the samples where that set changes are named; the friction coefficient
+moves the active faces, and the forces follow on the same set.
 
-The kinematic parameters (lengths, joint positions, the gait's) move the motion itself; their
-derivatives need the motion's own equations differentiated (not written yet).
+A joint's position (a segment's length) moves the motion itself. For an open tree with every
+joint driven, the tree path builds the whole sample as one CasADi graph
+(:meth:`hexapod.algorithms.inverse.TreePlan.graph`): with the joints' frame origins as
+expressions of the parameters, its forward-mode derivative gives the positions', velocities',
+accelerations' and wrenches' derivatives exactly. Closed loops and feet on the ground need the
+positions' equations differentiated by the implicit function theorem (not written yet), and
+the gait's parameters their laws' (the built-in gait's inverse kinematics is not the engine's).
 """
 
 from __future__ import annotations
