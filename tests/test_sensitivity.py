@@ -357,6 +357,24 @@ def test_command_writes_the_table(tmp_path, capsys):
     assert "peak_effort" in (out / "summary.md").read_text()
 
 
+def test_command_writes_the_derivatives_per_sample(tmp_path, front_leg):
+    scene, model, result = front_leg
+    out = tmp_path / "out"
+    assert main(["sensitivity", "front-leg", "--parameters", "body.femur.mass",
+                 "joint.fti.origin.2", "--samples", str(result.times.size), "--per-sample",
+                 "--no-figures", "--out", str(out)]) == 0
+    changes = inertia_parameters(scene, ["body.femur.mass", "joint.fti.origin.2"])
+    sensitivity = hx.inverse_sensitivities(model, result, changes)
+    with np.load(out / "derivatives.npz") as saved:
+        assert list(saved["parameters"]) == [c.name for c in changes]
+        assert list(saved["parameter_units"]) == ["kg", "m"]
+        assert np.array_equal(saved["times"], result.times)
+        for name in ("effort", "force", "torque", "q"):
+            assert np.allclose(saved[name], getattr(sensitivity, name), rtol=1e-12,
+                               atol=1e-12 * np.nanmax(np.abs(getattr(sensitivity, name))),
+                               equal_nan=True), name
+
+
 @pytest.mark.parametrize("args, said", [
     (["--parameters", "body.femur.length"], "not a parameter sensitivities cover"),
     (["--parameters", "body.wing.mass"], "no body matches 'wing'"),

@@ -31,7 +31,8 @@ DESCRIPTION = (
     "coefficient. Writes the directory OUT: "
     "sensitivities.csv (metric, parameter, value: the derivative, unit, elasticity (p / m) "
     "dm/dp), units.json, summary.md and one tornado figure of elasticities per family of "
-    "figures of merit (tornado-FAMILY.png, its largest element). The directory is written "
+    "figures of merit (tornado-FAMILY.png, its largest element); with --per-sample also "
+    "derivatives.npz, every derivative at every sample. The directory is written "
     "whole or not at all.")
 
 
@@ -52,6 +53,9 @@ def add_arguments(parser) -> None:
     window_arguments(parser, 501)
     parser.add_argument("--no-figures", dest="figures", action="store_false",
                         help="write the table and the summary only")
+    parser.add_argument("--per-sample", action="store_true",
+                        help="also derivatives.npz: every effort's, joint wrench's, ground "
+                        "force's and position's derivative at every sample (docs/design.md)")
     parser.add_argument("--method", choices=("auto", "tree", "phase", "saddle"),
                         default="auto", help="the inverse dynamics' path (as for 'hexapod "
                         "report'; the derivatives do not depend on it)")
@@ -79,7 +83,7 @@ def run(args) -> int:
     inertia_parameters(scene, args.parameters)  # refused before the output is claimed
     out = output_directory(args.out, f"{scene.name}-sensitivity",
                            inputs=given_files(args.scene),
-                           ours=suffixes(".csv", ".md", ".png", ".json"))
+                           ours=suffixes(".csv", ".md", ".png", ".json", ".npz"))
     if args.duration is not None and args.duration > MAX_TIME:
         raise HexapodError(f"--duration {args.duration:g} s is longer than the {MAX_TIME:g} s "
                            "a run may span")
@@ -97,6 +101,10 @@ def run(args) -> int:
                                                run.sensitivity.active_set_changes).encode()}
     if args.figures:
         files.update(_figures(run, chosen))
+    if args.per_sample:
+        from hexapod.output.sensitivity import derivatives_npz_bytes
+
+        files["derivatives.npz"] = derivatives_npz_bytes(run.model, run.result, run.sensitivity)
     write_directory_atomically(out, files)
     if progress is not None:
         print("\r" + " " * 60 + "\r", end="", file=sys.stderr)

@@ -124,3 +124,35 @@ def sensitivity_summary(scene_name: str, metrics: dict[str, float], rows: list[d
         top = ", ".join(f"`{r['parameter']}` {r['elasticity']:+.3g}" for r in mine[:3])
         lines.append(f"| `{metric}` | {metrics[metric]:.4g} | {top or 'none'} |")
     return "\n".join(lines) + "\n"
+
+
+def derivatives_npz_bytes(model, result, sensitivity) -> bytes:
+    """``derivatives.npz``: the per-sample derivatives of an inverse-dynamics result, the
+    parameters along the last axis of each array, each array's unit its quantity's unit per
+    the parameter's: ``times`` (N), ``parameters`` and ``parameter_units`` (P), ``joints`` and
+    ``effort_units`` (J), ``effort`` (N, J, P), ``force`` (N, J, 3, P, N per unit) and
+    ``torque`` (N m per unit) in the axes ``frame`` names, ``contacts`` and ``ground_force``
+    (N, C, 3, P, world axes), ``coordinates``, ``coordinate_units`` and ``q`` (N, n_q, P), and
+    ``active_set_changes`` (the friction policy's, s)."""
+    from hexapod._support.signals import deferred
+    from hexapod.model.units import COORDINATE_UNITS, component
+
+    arrays = {"times": result.times,
+              "parameters": np.array([c.name for c in sensitivity.parameters], dtype=str),
+              "parameter_units": np.array([c.unit for c in sensitivity.parameters], dtype=str),
+              "joints": np.array([j.name for j in model.joints], dtype=str),
+              "effort_units": np.array([j.type.effort_unit or "" for j in model.joints],
+                                       dtype=str),
+              "effort": sensitivity.effort, "force": sensitivity.force,
+              "torque": sensitivity.torque, "frame": np.array(result.frame),
+              "contacts": np.array([c.name for c in model.contacts], dtype=str),
+              "ground_force": sensitivity.ground_force,
+              "coordinates": np.array(model.coordinate_names, dtype=str),
+              "coordinate_units": np.array([COORDINATE_UNITS[component(n)][0]
+                                            for n in model.coordinate_names], dtype=str),
+              "q": sensitivity.q, "active_set_changes": sensitivity.active_set_changes}
+    buffer = io.BytesIO()
+    with deferred():  # as the simulation's npz: a signal inside ZipFile is held back
+        np.savez_compressed(buffer, **arrays)
+    return buffer.getvalue()
+
