@@ -13,7 +13,7 @@ The study file shares the sweep's format (``docs/sweeps.md``): ``[study]`` (name
 
     [vary."body.weight.mass"]
     range = [0.0, 3.0]
-    start = 0.5                       # default: the scene's value
+    start = 0.5                       # default: the scene's value (clipped to the range)
 
     [optimize]
     minimize = "rms_effort:hinge"
@@ -427,8 +427,9 @@ def optimize(spec: OptimizationStudy,
     si = np.array([c.scene_scale for c in changes])  # the bounds are in the scene's units
     low, high = np.array([b.low for b in spec.bounds]) * si, \
         np.array([b.high for b in spec.bounds]) * si
-    start = np.array([v if math.isnan(b.start) else b.start * k
+    start = np.array([v if math.isnan(b.start) else b.start * k  # the scene's value, clipped
                       for v, b, k in zip(values, spec.bounds, si, strict=True)])
+    start = np.clip(start, low, high)
     optimum, status, iterations, log = _solve(spec, design, constrained, start, low, high,
                                               say)
     return _checked(spec, scene, changes, design, start, optimum, status, iterations, log,
