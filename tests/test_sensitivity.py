@@ -375,6 +375,16 @@ def test_command_writes_the_derivatives_per_sample(tmp_path, front_leg):
                                equal_nan=True), name
 
 
+def test_an_infeasible_motion_is_said(tmp_path, capsys):
+    """With mu = 0.2 the walking robot's feet would slip: the derivatives are computed, and
+    the summary and the command say first that they are not ones to size motors by."""
+    out = tmp_path / "out"
+    assert main(["sensitivity", "hexapod", "--mu", "0.2", "--parameters", "body.trunk.mass",
+                 "--samples", "3", "--no-figures", "--out", str(out)]) == 0
+    assert "infeasible at 3 samples" in capsys.readouterr().out
+    assert "**Infeasible**" in (out / "summary.md").read_text()
+
+
 @pytest.mark.parametrize("args, said", [
     (["--parameters", "body.femur.length"], "not a parameter sensitivities cover"),
     (["--parameters", "body.wing.mass"], "no body matches 'wing'"),

@@ -98,7 +98,8 @@ def run(args) -> int:
              "units.json": units_json({"sensitivities.csv": SENSITIVITY_COLUMNS}).encode(),
              "summary.md": sensitivity_summary(scene.name, run.metrics, run.rows, chosen,
                                                args.samples, run.run_time,
-                                               run.sensitivity.active_set_changes).encode()}
+                                               run.sensitivity.active_set_changes,
+                                               int(run.result.infeasible.sum())).encode()}
     if args.figures:
         files.update(_figures(run, chosen))
     if args.per_sample:
@@ -111,6 +112,9 @@ def run(args) -> int:
     print(f"wrote {out}/: {', '.join(files)}")
     print(f"{len(run.sensitivity.parameters)} parameters, {len(run.derivatives)} figures of "
           f"merit, {args.samples} samples ({run.result.method} path, {run.run_time:.3g} s CPU)")
+    if not run.result.feasible:
+        print(f"infeasible at {int(run.result.infeasible.sum())} samples: the ground cannot "
+              "give the feet their forces (a foot slips or is pulled); see summary.md")
     return 0
 
 

@@ -104,14 +104,19 @@ def tornado_figure(rows: list[dict], metric: str, value: float, unit: str) -> Fi
 
 def sensitivity_summary(scene_name: str, metrics: dict[str, float], rows: list[dict],
                         chosen: dict[str, str], samples: int, run_time: float,
-                        changes: np.ndarray | None = None) -> str:
+                        changes: np.ndarray | None = None, infeasible: int = 0) -> str:
     """``summary.md``: per figure of merit drawn, its value and its three largest
     elasticities; with the friction policy, the samples where its active set changes
-    (``changes``, s)."""
-    lines = [f"# Design sensitivities: {scene_name}", "",
-             f"{samples} samples of the inverse dynamics; the derivatives are exact (the "
-             f"saddle-point solve and the policy applied to the derivatives of the forces), "
-             f"{run_time:.3g} s.", ""]
+    (``changes``, s); the samples where the ground cannot give the feet their forces
+    (``infeasible``), said first."""
+    lines = [f"# Design sensitivities: {scene_name}", ""]
+    if infeasible:
+        lines += [f"**Infeasible**: at {infeasible} of {samples} samples the ground cannot give "
+                  "the feet their forces (a foot slips or is pulled, whatever the policy): "
+                  "these figures and their derivatives are not ones to size motors by.", ""]
+    lines += [f"{samples} samples of the inverse dynamics; the derivatives are exact (the "
+              f"saddle-point solve and the policy applied to the derivatives of the forces), "
+              f"{run_time:.3g} s.", ""]
     if changes is not None and changes.size:
         shown = ", ".join(f"{t:.4g}" for t in changes[:12]) + (", ..." if changes.size > 12
                                                                 else "")
