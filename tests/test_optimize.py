@@ -126,6 +126,27 @@ def test_a_bound_on_the_peak_torque(tmp_path):
     assert run.checked["peak_effort:hinge"] <= limit * (1 + 1e-6)
 
 
+def test_the_motors_bound_the_peak_torque(tmp_path):
+    """An actuator table: the hinge's motor (stall torque times its gear) bounds the peak
+    torque, as the constraint above does."""
+    t, a, b = closed_form()
+    best = least_rms()
+    limit = 0.97 * float(np.max(np.abs(a + best * b)))
+    ends = np.sort(np.stack([(-limit - a) / b, (limit - a) / b]), axis=0)
+    expected = min(max(best, ends[0].max()), ends[1].min())
+    (tmp_path / "motors.toml").write_text(f"""
+[[actuator]]
+name = "hinge motor"
+joints = ["hinge"]
+gear_ratio = 10.0
+stall_torque = {limit / 10.0!r}
+no_load_speed = 1000.0
+""")
+    run = optimize(read_optimization(study(tmp_path, optimize_table='actuators = "motors.toml"')))
+    assert run.success and [lim.pattern for lim in run.limits] == ["peak_effort:hinge"]
+    assert run.optimum[0] == pytest.approx(expected, rel=1e-6)
+
+
 def test_command_writes_the_optimum_and_its_report(tmp_path, capsys):
     out = tmp_path / "out"
     assert main(["optimize", str(study(tmp_path)), "--out", str(out)]) == 0

@@ -85,9 +85,9 @@ def optimization_summary(run, objective_unit: str) -> str:
         at_bound = " (at a bound)" if best in (low, high) else ""
         lines.append(f"| `{change.name}` | {low:g} | {high:g} | {start:.6g} | "
                      f"{best:.10g}{at_bound} | {change.unit} |")
-    if spec.limits:
+    if run.limits:
         lines += ["", "| constraint | min | max | at the optimum |", "| --- | --- | --- | --- |"]
-        for limit in spec.limits:
+        for limit in run.limits:
             matched = [c for c in run.checked if _matches(c, limit.pattern)]
             worst = max(matched, key=lambda c: run.checked[c], default=None)
             shown = f"{run.checked[worst]:.6g} (`{worst}`)" if worst else "none"

@@ -18,6 +18,7 @@ The study file shares the sweep's format (``docs/sweeps.md``): ``[study]`` (name
     [optimize]
     minimize = "rms_effort:hinge"
     constraints = { "peak_effort:*" = { max = 40.0 } }   # '*': any element
+    actuators = "motors.toml"         # optional: each driven joint's peak effort below its motor's
     tolerance = 1e-10                 # IPOPT's, on the scaled problem
     max_iterations = 200
 
@@ -50,7 +51,7 @@ from hexapod.sweeps.metric_derivatives import SENSITIVE_FAMILIES, metric_sensiti
 from hexapod.sweeps.metrics import body_masses, inverse_metrics
 from hexapod.sweeps.spec import Study, study_from_document
 
-_OPTIMIZE_KEYS = ("minimize", "constraints", "tolerance", "max_iterations")
+_OPTIMIZE_KEYS = ("minimize", "constraints", "actuators", "tolerance", "max_iterations")
 _BOUND_KEYS = ("range", "start")
 
 
@@ -86,6 +87,7 @@ class OptimizationStudy:
     tolerance: float = 1e-10
     max_iterations: int = 200
     source: str = ""
+    actuators: str = ""  # an actuator table: every driven joint's peak effort below its motor's
 
 
 def read_optimization(path: str | Path) -> OptimizationStudy:
@@ -128,6 +130,12 @@ def read_optimization(path: str | Path) -> OptimizationStudy:
         problems.append(f"optimize.minimize: a figure of merit, FAMILY or FAMILY:ELEMENT "
                         f"(families: {', '.join(SENSITIVE_FAMILIES)}), got {minimize!r}")
     limits = _limits(optimize.get("constraints", {}), problems)
+    actuators = optimize.get("actuators", "")
+    if not isinstance(actuators, str):
+        problems.append(f"optimize.actuators: an actuator table's file, got {actuators!r}")
+        actuators = ""
+    elif actuators:
+        actuators = str(path.parent / actuators)
     tolerance = optimize.get("tolerance", 1e-10)
     if not (isinstance(tolerance, int | float) and not isinstance(tolerance, bool)
             and 0 < tolerance < 1):
@@ -148,7 +156,7 @@ def read_optimization(path: str | Path) -> OptimizationStudy:
         body = "\n  ".join(problems)
         raise InputFileError(f"{path}: not a valid optimisation study:\n  {body}")
     return OptimizationStudy(study, minimize, tuple(bounds), tuple(limits), float(tolerance),
-                             iterations, str(path))
+                             iterations, str(path), actuators)
 
 
 def _number(value) -> bool:
@@ -361,6 +369,8 @@ class OptimizationRun:
         and the constrained figures).
     optimum_scene, optimum_model, optimum_result :
         That run.
+    limits : tuple of Limit
+        The constraints: the study's and its motors'.
     """
 
     spec: OptimizationStudy
@@ -378,6 +388,7 @@ class OptimizationRun:
     optimum_scene: object = None
     optimum_model: object = None
     optimum_result: object = None
+    limits: tuple = ()
 
 
 def optimize(spec: OptimizationStudy,
@@ -423,7 +434,8 @@ def optimize(spec: OptimizationStudy,
         design = RerunDesign(scene, changes, times, strides)
     metrics, _ = design.at(values)
     check_objective(metrics, spec.minimize, source)
-    constrained = constrained_figures(metrics, spec.limits, source)
+    limits = spec.limits + _motor_limits(model, spec.actuators)
+    constrained = constrained_figures(metrics, limits, source)
     si = np.array([c.scene_scale for c in changes])  # the bounds are in the scene's units
     low, high = np.array([b.low for b in spec.bounds]) * si, \
         np.array([b.high for b in spec.bounds]) * si
@@ -432,8 +444,23 @@ def optimize(spec: OptimizationStudy,
     start = np.clip(start, low, high)
     optimum, status, iterations, log = _solve(spec, design, constrained, start, low, high,
                                               say)
-    return _checked(spec, scene, changes, design, start, optimum, status, iterations, log,
-                    constrained, times, strides)
+    run = _checked(spec, scene, changes, design, start, optimum, status, iterations, log,
+                   constrained, times, strides)
+    run.limits = limits
+    return run
+
+
+def _motor_limits(model, table: str) -> tuple[Limit, ...]:
+    """Every driven joint's peak effort below its motor's at the joint (stall or rated torque
+    times the gear ratio), from the actuator table ``table`` ("" for none)."""
+    if not table:
+        return ()
+    from hexapod.scene.actuators import read_actuators
+
+    driven = [model.joints[d.joint].name for d in model.drivers if d.kind == "joint"]
+    motors = read_actuators(table).assign(driven)
+    return tuple(Limit(f"peak_effort:{joint}", -math.inf, motor.joint_limits()[0])
+                 for joint, motor in motors.items())
 
 
 def _parameters(scene, bounds, source: str):
