@@ -264,4 +264,3 @@ def efforts_and_axes(model: Model, force: np.ndarray, torque: np.ndarray,
         force = np.einsum("...ab,...b->...a", R, force)
         torque = np.einsum("...ab,...b->...a", R, torque)
     return force, torque, effort
-

@@ -316,7 +316,7 @@ def _moving_part(model: Model, result, parameters, laws):
     function = model.built_once(key, lambda m: _moving_function(m, plan, parameters))
     n, joints = result.times.size, len(model.joints)
     mapped = function.map(n, "serial") if n > 1 else function
-    outputs = mapped(*[x for x in laws])
+    outputs = mapped(*laws)
     dq, dwrench, frames = (np.asarray(x) for x in outputs)
     count = len(parameters)
     dq = dq.reshape(model.n_q, count, n, order="F").transpose(2, 0, 1)
@@ -338,8 +338,8 @@ def _moving_function(model: Model, plan, parameters):
         frames[j][0] = frames[j][0] + p[k] * ca.DM(change.parent)
         frames[j][1] = frames[j][1] + p[k] * ca.DM(change.child)
     q, _, _, wrench, rotation = plan.graph(w, wd, wdd, frames)
-    zero = {"p": ca.DM.zeros(len(parameters))}
-    dq = ca.substitute(ca.jacobian(q, p), p, zero["p"])
-    dwrench = ca.substitute(ca.jacobian(ca.vec(wrench), p), p, zero["p"])
+    at_scene = ca.DM.zeros(len(parameters))  # the derivatives at the scene's values
+    dq = ca.substitute(ca.jacobian(q, p), p, at_scene)
+    dwrench = ca.substitute(ca.jacobian(ca.vec(wrench), p), p, at_scene)
     return ca.Function("moving_joints", [w, wd, wdd], [dq, dwrench, rotation],
                        ["w", "wd", "wdd"], ["dq", "dwrench", "rotation"])

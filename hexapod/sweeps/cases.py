@@ -262,6 +262,18 @@ def run_case(study: Study, case: Case) -> dict:
     return row
 
 
+def inverse_window(model, job: dict):
+    """The samples of an inverse job (``job["duration"]`` s, or ``job["strides"]`` cycles of
+    the scene's periodic laws, from ``job["start"]``) and the window in strides."""
+    import numpy as np
+
+    cycle = model.cycle_time()
+    duration = job["duration"] or job["strides"] * (cycle or 1.0)
+    start = job["start"]
+    return (np.linspace(start, start + duration, job["samples"]),
+            duration / cycle if cycle else 1.0)
+
+
 def _run_job(job: dict, model) -> tuple[str, str, dict]:
     import numpy as np
 
@@ -272,11 +284,8 @@ def _run_job(job: dict, model) -> tuple[str, str, dict]:
     if job["kind"] == "inverse":
         from hexapod.algorithms.inverse import inverse_dynamics
 
-        duration = job["duration"] or job["strides"] * (cycle or 1.0)
-        start = job["start"]
-        times = np.linspace(start, start + duration, job["samples"])
+        times, strides = inverse_window(model, job)
         result = inverse_dynamics(model, times)
-        strides = duration / cycle if cycle else 1.0
         metrics = inverse_metrics(model, result, families, strides)
         if not result.feasible:
             bad = np.flatnonzero(result.infeasible)

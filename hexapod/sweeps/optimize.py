@@ -416,14 +416,14 @@ def optimize(spec: OptimizationStudy,
     from hexapod.algorithms.inverse import inverse_dynamics
     from hexapod.algorithms.sensitivity import inverse_sensitivities
     from hexapod.model.assemble import assemble
-    from hexapod.sweeps.cases import base_scene
+    from hexapod.sweeps.cases import base_scene, inverse_window
 
     say = progress or (lambda line: None)
     study, source = spec.study, spec.source
     scene = base_scene(study)
     changes = _parameters(scene, spec.bounds, source)
     model = assemble(scene)
-    times, strides = _window(model, study.job)
+    times, strides = inverse_window(model, study.job)
     say(f"inverse dynamics of {times.size} samples and its sensitivities")
     result = inverse_dynamics(model, times)
     sensitivity = inverse_sensitivities(model, result, changes)
@@ -473,13 +473,6 @@ def _parameters(scene, bounds, source: str):
                          f"written in full (body.NAME.mass, body.NAME.inertia.K); these name "
                          f"{named}")
     return changes
-
-
-def _window(model, job: dict) -> tuple[np.ndarray, float]:
-    cycle = model.cycle_time()
-    duration = job["duration"] or job["strides"] * (cycle or 1.0)
-    times = job["start"] + np.linspace(0.0, duration, job["samples"])
-    return times, (duration / cycle if cycle else 1.0)
 
 
 def _solve(spec, design, constrained, start, low, high, say):
