@@ -65,7 +65,7 @@ def optimum_csv_text(run) -> str:
 def optimization_summary(run, objective_unit: str) -> str:
     """``summary.md``: the problem, how IPOPT ended, the optimum and its check."""
     spec, name = run.spec, run.spec.minimize
-    start_value = run.design.at(run.start)[0][name]
+    start_value = run.start_objective
     unit = f" {objective_unit}" if objective_unit else ""
     lines = [f"# Optimisation: {spec.study.name}", "",
              f"Minimise `{name}` over {len(run.parameters)} parameter(s) by IPOPT "

@@ -371,6 +371,8 @@ class OptimizationRun:
         That run.
     limits : tuple of Limit
         The constraints: the study's and its motors'.
+    start_objective : float
+        The figure of merit at ``start``.
     """
 
     spec: OptimizationStudy
@@ -389,6 +391,7 @@ class OptimizationRun:
     optimum_model: object = None
     optimum_result: object = None
     limits: tuple = ()
+    start_objective: float = math.nan
 
 
 def optimize(spec: OptimizationStudy,
@@ -442,11 +445,12 @@ def optimize(spec: OptimizationStudy,
     start = np.array([v if math.isnan(b.start) else b.start * k  # the scene's value, clipped
                       for v, b, k in zip(values, spec.bounds, si, strict=True)])
     start = np.clip(start, low, high)
+    start_objective = design.at(start)[0][spec.minimize]  # _solve's first call: kept
     optimum, status, iterations, log = _solve(spec, design, constrained, start, low, high,
                                               say)
     run = _checked(spec, scene, changes, design, start, optimum, status, iterations, log,
                    constrained, times, strides)
-    run.limits = limits
+    run.limits, run.start_objective = limits, start_objective
     return run
 
 
