@@ -10,6 +10,7 @@ from hexapod.cli.common import (
     base_argument,
     check_inverse_memory,
     ground_arguments,
+    sample_progress,
     scene_of,
     scene_positional,
     show_progress,
@@ -80,17 +81,18 @@ def run(args) -> int:
 
     scene = scene_of(args, args.scene)
     families = check_families(args.metrics or SENSITIVE_FAMILIES)
-    inertia_parameters(scene, args.parameters)  # refused before the output is claimed
+    changes = inertia_parameters(scene, args.parameters)  # refused before any output
     out = output_directory(args.out, f"{scene.name}-sensitivity",
                            inputs=given_files(args.scene),
                            ours=suffixes(".csv", ".md", ".png", ".json", ".npz"))
     if args.duration is not None and args.duration > MAX_TIME:
         raise HexapodError(f"--duration {args.duration:g} s is longer than the {MAX_TIME:g} s "
                            "a run may span")
-    progress = _progress if show_progress() else None
+    progress = ((lambda stage, done, total: sample_progress(stage)(done, total))
+                if show_progress() else None)
     model = assemble(scene)
     check_inverse_memory(model, args.samples, None, "ask for fewer --samples")
-    run = sensitivity_run(scene, args.parameters, families=families, samples=args.samples,
+    run = sensitivity_run(scene, changes, families=families, samples=args.samples,
                           start=args.start, duration=args.duration, method=args.method,
                           progress=progress, model=model)
     chosen = tornado_metrics(run.metrics, run.derivatives)
@@ -126,8 +128,3 @@ def _figures(run, chosen: dict[str, str]) -> dict[str, bytes]:
     return {f"tornado-{family}.png": png_bytes(tornado_figure(
                 run.rows, metric, run.metrics[metric], metric_unit(run.model, metric)))
             for family, metric in chosen.items()}
-
-
-def _progress(stage: str, done: int, total: int) -> None:
-    if done == total or done % max(1, total // 100) == 0:
-        print(f"\r{stage}: {done}/{total} samples", end="", file=sys.stderr, flush=True)

@@ -69,7 +69,7 @@ def check_families(families: Sequence[str], source: str = "--metrics") -> tuple[
     return tuple(families)
 
 
-def sensitivity_run(scene: Scene, parameters: Sequence[str], *,
+def sensitivity_run(scene: Scene, parameters: Sequence, *,
                     families: Sequence[str] = SENSITIVE_FAMILIES, samples: int = 501,
                     start: float = 0.0, duration: float | None = None, method: str = "auto",
                     progress: Callable[[str, int, int], None] | None = None,
@@ -81,8 +81,10 @@ def sensitivity_run(scene: Scene, parameters: Sequence[str], *,
     ----------
     scene : Scene
         A driven scene (every degree of freedom prescribed).
-    parameters : sequence of str
-        Scene keys, ``*`` matching any body (:mod:`hexapod.sweeps.design_parameters`).
+    parameters : sequence of str, or of parameters
+        Scene keys, ``*`` matching any body or joint
+        (:mod:`hexapod.sweeps.design_parameters`), or what
+        :func:`~hexapod.sweeps.design_parameters.inertia_parameters` made of them.
     families : sequence of str
         Families of figures of merit
         (:data:`~hexapod.sweeps.metric_derivatives.SENSITIVE_FAMILIES`).
@@ -115,7 +117,8 @@ def sensitivity_run(scene: Scene, parameters: Sequence[str], *,
     from hexapod.sweeps.metrics import inverse_metrics
 
     families = check_families(families)
-    changes = inertia_parameters(scene, parameters)
+    changes = (inertia_parameters(scene, parameters)
+               if all(isinstance(p, str) for p in parameters) else tuple(parameters))
     model = assemble(scene) if model is None else model
     window, _ = model.time_window(duration)
     cycle = model.cycle_time()
