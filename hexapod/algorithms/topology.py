@@ -266,7 +266,9 @@ class _NetworkBuilder:
                 joint = model.joints[driver.joint]
                 self.chord(driver.name, "driver", *self.joint_points(driver.joint, joint.name))
             else:
-                self.chord(driver.name, "driver", GROUND, model.bodies[driver.body].name)
+                frame = (GROUND if driver.frame == GROUND_INDEX
+                         else model.bodies[driver.frame].name)
+                self.chord(driver.name, "driver", frame, model.bodies[driver.body].name)
         for force in model.forces:
             if force.joint is not None:
                 joint = model.joints[force.joint]

@@ -231,11 +231,29 @@ class _Assembly:
                 assert isinstance(driver, CoordinateDriver)
                 body = self.bodies[self.index[driver.body]]
                 unit = "angle" if driver.coordinate == "angle" else "length"
-                coordinate = self.q[body.q.start + offset[driver.coordinate]]
+                if driver.coordinate == "angle" or (driver.point is None
+                                                    and driver.frame in ("world", GROUND)):
+                    coordinate = self.q[body.q.start + offset[driver.coordinate]]
+                else:
+                    coordinate = self._measured_point(driver)[offset[driver.coordinate]]
                 row = self._add_row(driver.name, driver.name, unit, coordinate - f)
                 drivers.append(DriverInfo(driver.name, "coordinate", row, law, driver.law,
-                                          body=body.index, coordinate=driver.coordinate))
+                                          body=body.index, coordinate=driver.coordinate,
+                                          frame=self.index.get(driver.frame, GROUND_INDEX)))
         return drivers, on_joint
+
+    def _measured_point(self, driver: CoordinateDriver) -> ca.SX:
+        """A coordinate driver's point in world axes, or in the axes of its ``frame`` body's
+        reference frame from that frame's origin."""
+        local, _ = self._point(driver.body, driver.point)
+        world = self.states[driver.body].point(local)
+        if driver.frame in ("world", GROUND):
+            return world
+        reference = _com_frame(self.scene_bodies, driver.frame,
+                               Placement.identity(self.dim))  # its origin and axes
+        state = self.states[driver.frame]
+        axes = ca.mtimes(state.R, ca.DM(reference.rotation))
+        return ca.mtimes(axes.T, world - state.point(reference.position))
 
     def _point(self, body: str, ref) -> tuple[np.ndarray, np.ndarray]:
         """A point reference: in the body's centre-of-mass frame, and in the world initially."""

@@ -97,7 +97,8 @@ class ContactInfo:
 
 @dataclass(frozen=True)
 class DriverInfo:
-    """One driver row. ``joint`` for joint drivers; ``body`` and ``coordinate`` otherwise."""
+    """One driver row. ``joint`` for joint drivers; ``body``, ``coordinate`` and ``frame`` (the
+    body whose axes measure it, ``GROUND_INDEX`` for the world) otherwise."""
 
     name: str
     kind: str  # "joint" | "coordinate"
@@ -107,6 +108,7 @@ class DriverInfo:
     joint: int | None = None
     body: int | None = None
     coordinate: str | None = None
+    frame: int = GROUND_INDEX
 
 
 @dataclass(frozen=True)

@@ -113,7 +113,8 @@ def describe_model(model: Model, t: float = 0.0, graph: bool = False) -> dict:
                "across": list(j.across)} for j in model.joints]
     drivers = [{"name": d.name, "kind": d.kind, "row": rows[d.row],
                 "target": (model.joints[d.joint].name if d.kind == "joint"
-                           else f"{model.bodies[d.body].name}.{d.coordinate}"),
+                           else f"{model.bodies[d.body].name}.{d.coordinate}"
+                           + ("" if d.frame < 0 else f" in {model.bodies[d.frame].name}")),
                 "law": law_description(d.spec)} for d in model.drivers]
     forces = [{"name": f.name, "type": f.kind, "bodies": [_body(model, b) for b in f.bodies],
                "joint": None if f.joint is None else model.joints[f.joint].name}

@@ -2,15 +2,19 @@
 
 A driver on a revolute joint prescribes its angle with the **wrapped** row
 ``atan2(sin(theta - f), cos(theta - f))`` (correct past +-pi); on a prismatic joint its
-displacement, ``s - f``. A coordinate driver prescribes one coordinate of a body's centre of mass
-(``x``, ``y``, ``z``) or, in the plane, its ``angle``. Laws must be C2 (see :mod:`.laws`).
+displacement, ``s - f``. A coordinate driver prescribes one coordinate of a body point (``x``,
+``y``, ``z``: of its centre of mass by default, in world axes or in another body's frame) or, in
+the plane, the body's ``angle``. Laws must be C2 (see :mod:`.laws`).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-from hexapod.scene.element import Attachment, Element
+import numpy as np
+
+from hexapod.errors import ModelError
+from hexapod.scene.element import GROUND, Attachment, Element, check_finite, scaled_ref
 from hexapod.scene.laws import Law, LawOnJoint, as_law
 
 #: coordinates a :class:`CoordinateDriver` may prescribe
@@ -44,8 +48,13 @@ class JointDriver(LawOnJoint, Element):
 
 @dataclass(eq=False)
 class CoordinateDriver(Element):
-    """Prescribes ``coordinate`` (``x``, ``y``, ``z`` of the centre of mass, or the planar
-    ``angle``) of ``body`` by ``law``, in world axes.
+    """Prescribes ``coordinate`` (``x``, ``y``, ``z``) of a point of ``body`` by ``law``: of its
+    centre of mass in world axes by default, of another ``point``, and in the axes of another
+    body's reference frame (``frame``, relative to that frame's origin); or, in the plane, the
+    body's ``angle``.
+
+    Three coordinate drivers on a foot point, in the trunk's frame, are how a foot follows a
+    path: the engine's Newton solve then finds the joint angles that put it there, for any leg.
 
     Parameters
     ----------
@@ -54,11 +63,17 @@ class CoordinateDriver(Element):
     body : str
         The driven body.
     coordinate : {"x", "y", "z", "angle"}
-        Which coordinate of its centre of mass (world axes), or its planar angle.
+        Which coordinate of the point (along ``frame``'s axes), or the planar angle.
     law : Law or float
         The coordinate as a function of time (L, or rad for ``angle``), C2 at least.
     source : str
         Where the driver was written, named in messages; empty when built in Python.
+    point : str or array_like, optional
+        The driven point: a marker name or a point in the body's reference frame (L); default
+        the centre of mass.
+    frame : str
+        ``world``, or the body in whose reference frame the coordinate is measured (along its
+        axes, from its origin).
     """
 
     name: str
@@ -66,6 +81,8 @@ class CoordinateDriver(Element):
     coordinate: str
     law: Law
     source: str = ""
+    point: object = None
+    frame: str = "world"
     family = "driver"
     kind = "coordinate"
 
@@ -77,17 +94,35 @@ class CoordinateDriver(Element):
         if self.coordinate not in COORDINATES:
             out.append(self.problem("coordinate", f"must be one of {', '.join(COORDINATES)},"
                                     f" got {self.coordinate!r}"))
+        if self.coordinate == "angle" and (self.point is not None or self.frame != "world"):
+            out.append(self.problem("coordinate", "an angle is the body's, in world axes: "
+                                    "drop 'point' and 'frame', or drive x, y or z"))
+        if self.point is not None and not isinstance(self.point, str):
+            check_finite(self, "point", self.point, out)
+        if self.frame == self.body:
+            out.append(self.problem("frame", f"'{self.body}' cannot be measured in its own "
+                                    "frame: name another body, or 'world'"))
         return out
 
     def scaled(self, length):
         out = super().scaled(length)
         if self.coordinate != "angle":
             out.law = self.law.scaled(length)
+        out.point = scaled_ref(self.point, length)
         return out
 
     def attached(self, attachment: Attachment):
         out = super().attached(attachment)
         out.body = attachment.body(self.body)
+        placement = attachment.placement
+        if self.frame == GROUND and not (np.all(placement.position == 0)
+                                         and np.array_equal(placement.rotation,
+                                                            np.eye(placement.dimension))):
+            raise ModelError(self.label, [self.problem(
+                "frame", f"measured in the sub-model's ground, which is attached at a placed "
+                f"frame of '{attachment.base}': measure it in a body of the sub-model")])
+        if self.frame != "world":
+            out.frame = attachment.body(self.frame)
         return out
 
 

@@ -369,7 +369,9 @@ def _driver_schema(kind: str, dimension: int) -> Schema:
     if kind == "joint":
         return DRIVER_TYPES[kind], {**common, "joint": (_string, True)}
     return DRIVER_TYPES[kind], {**common, "body": (_string, True),
-                                "coordinate": (_string, True)}
+                                "coordinate": (_string, True),
+                                "point": (_point(dimension), False),
+                                "frame": (_string, False)}
 
 
 def _force_schema(kind: str, dimension: int) -> Schema:

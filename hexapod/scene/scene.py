@@ -517,6 +517,9 @@ class _ReferenceCheck:
                       "revolute joint instead")
         if driver.coordinate == "z" and self.scene.dimension == 2:
             self._add("coordinate", "no 'z' in a planar scene")
+        self._frame(driver.body, driver.point, "point")
+        if driver.frame != "world" and driver.frame != driver.body:
+            self._body_ref(driver.frame, "frame", ground_ok=True)
 
 
 # ------------------------------------------------------------------ magnitudes
