@@ -29,7 +29,7 @@ from hexapod.model.mass import BlockDiagonal
 from hexapod.model.model import Model, Symbolic
 from hexapod.scene.actuators import effort_limits
 from hexapod.scene.bodies import Particle, PlanarBody, SpatialBody
-from hexapod.scene.drivers import CoordinateDriver, JointDriver
+from hexapod.scene.drivers import ORIENTATIONS, CoordinateDriver, JointDriver
 from hexapod.scene.element import GROUND
 from hexapod.scene.forces import (
     AppliedForce,
@@ -231,29 +231,47 @@ class _Assembly:
                 assert isinstance(driver, CoordinateDriver)
                 body = self.bodies[self.index[driver.body]]
                 unit = "angle" if driver.coordinate == "angle" else "length"
-                if driver.coordinate == "angle" or (driver.point is None
-                                                    and driver.frame in ("world", GROUND)):
-                    coordinate = self.q[body.q.start + offset[driver.coordinate]]
+                if driver.coordinate in ORIENTATIONS:
+                    unit = "angle"
+                    delta = self._measured_angle(driver) - f
+                    row_expr = ca.atan2(ca.sin(delta), ca.cos(delta))  # correct past +-pi
+                elif driver.coordinate == "angle" or (driver.point is None
+                                                      and driver.frame in ("world", GROUND)):
+                    row_expr = self.q[body.q.start + offset[driver.coordinate]] - f
                 else:
-                    coordinate = self._measured_point(driver)[offset[driver.coordinate]]
-                row = self._add_row(driver.name, driver.name, unit, coordinate - f)
+                    row_expr = self._measured_point(driver)[offset[driver.coordinate]] - f
+                row = self._add_row(driver.name, driver.name, unit, row_expr)
                 drivers.append(DriverInfo(driver.name, "coordinate", row, law, driver.law,
                                           body=body.index, coordinate=driver.coordinate,
                                           frame=self.index.get(driver.frame, GROUND_INDEX)))
         return drivers, on_joint
 
+    def _reference_axes(self, body: str) -> tuple[ca.SX, ca.SX]:
+        """World origin and axes (columns) of a body's reference frame; the world's for
+        ``world`` or the ground."""
+        if body in ("world", GROUND):
+            return ca.DM.zeros(self.dim), ca.DM.eye(self.dim)
+        reference = _com_frame(self.scene_bodies, body, Placement.identity(self.dim))
+        state = self.states[body]
+        return state.point(reference.position), ca.mtimes(state.R, ca.DM(reference.rotation))
+
     def _measured_point(self, driver: CoordinateDriver) -> ca.SX:
         """A coordinate driver's point in world axes, or in the axes of its ``frame`` body's
         reference frame from that frame's origin."""
         local, _ = self._point(driver.body, driver.point)
-        world = self.states[driver.body].point(local)
-        if driver.frame in ("world", GROUND):
-            return world
-        reference = _com_frame(self.scene_bodies, driver.frame,
-                               Placement.identity(self.dim))  # its origin and axes
-        state = self.states[driver.frame]
-        axes = ca.mtimes(state.R, ca.DM(reference.rotation))
-        return ca.mtimes(axes.T, world - state.point(reference.position))
+        origin, axes = self._reference_axes(driver.frame)
+        return ca.mtimes(axes.T, self.states[driver.body].point(local) - origin)
+
+    def _measured_angle(self, driver: CoordinateDriver) -> ca.SX:
+        """A coordinate driver's Tait-Bryan angle (z-y-x) of its body's reference axes from its
+        ``frame``'s: ``R = Rz(yaw) Ry(pitch) Rx(roll)``."""
+        R = ca.mtimes(self._reference_axes(driver.frame)[1].T,
+                      self._reference_axes(driver.body)[1])
+        if driver.coordinate == "yaw":
+            return ca.atan2(R[1, 0], R[0, 0])
+        if driver.coordinate == "pitch":
+            return ca.atan2(-R[2, 0], ca.sqrt(R[0, 0] ** 2 + R[1, 0] ** 2))
+        return ca.atan2(R[2, 1], R[2, 2])
 
     def _point(self, body: str, ref) -> tuple[np.ndarray, np.ndarray]:
         """A point reference: in the body's centre-of-mass frame, and in the world initially."""

@@ -18,7 +18,10 @@ from hexapod.scene.element import GROUND, Attachment, Element, check_finite, sca
 from hexapod.scene.laws import Law, LawOnJoint, as_law
 
 #: coordinates a :class:`CoordinateDriver` may prescribe
-COORDINATES = ("x", "y", "z", "angle")
+COORDINATES = ("x", "y", "z", "angle", "roll", "pitch", "yaw")
+#: the angles among them: a spatial body's Tait-Bryan angles (z-y-x: yaw, then pitch, then
+#: roll), and a planar body's angle
+ORIENTATIONS = ("roll", "pitch", "yaw")
 
 
 @dataclass(eq=False)
@@ -50,8 +53,10 @@ class JointDriver(LawOnJoint, Element):
 class CoordinateDriver(Element):
     """Prescribes ``coordinate`` (``x``, ``y``, ``z``) of a point of ``body`` by ``law``: of its
     centre of mass in world axes by default, of another ``point``, and in the axes of another
-    body's reference frame (``frame``, relative to that frame's origin); or, in the plane, the
-    body's ``angle``.
+    body's reference frame (``frame``, relative to that frame's origin); or one angle of the
+    body's reference axes: in space its ``roll``, ``pitch`` or ``yaw`` (Tait-Bryan z-y-x, the
+    rotation ``Rz(yaw) Ry(pitch) Rx(roll)`` from ``frame``'s axes; singular at a pitch of
+    +-90 degrees), in the plane its ``angle``.
 
     Three coordinate drivers on a foot point, in the trunk's frame, are how a foot follows a
     path: the engine's Newton solve then finds the joint angles that put it there, for any leg.
@@ -62,10 +67,10 @@ class CoordinateDriver(Element):
         The driver's name, unique among the drivers.
     body : str
         The driven body.
-    coordinate : {"x", "y", "z", "angle"}
-        Which coordinate of the point (along ``frame``'s axes), or the planar angle.
+    coordinate : {"x", "y", "z", "angle", "roll", "pitch", "yaw"}
+        Which coordinate of the point (along ``frame``'s axes), or which angle.
     law : Law or float
-        The coordinate as a function of time (L, or rad for ``angle``), C2 at least.
+        The coordinate as a function of time (L, or rad for an angle), C2 at least.
     source : str
         Where the driver was written, named in messages; empty when built in Python.
     point : str or array_like, optional
@@ -97,6 +102,9 @@ class CoordinateDriver(Element):
         if self.coordinate == "angle" and (self.point is not None or self.frame != "world"):
             out.append(self.problem("coordinate", "an angle is the body's, in world axes: "
                                     "drop 'point' and 'frame', or drive x, y or z"))
+        if self.coordinate in ORIENTATIONS and self.point is not None:
+            out.append(self.problem("point", f"a {self.coordinate} angle is the body's "
+                                    "orientation, not a point's: drop 'point'"))
         if self.point is not None and not isinstance(self.point, str):
             check_finite(self, "point", self.point, out)
         if self.frame == self.body:
@@ -106,7 +114,7 @@ class CoordinateDriver(Element):
 
     def scaled(self, length):
         out = super().scaled(length)
-        if self.coordinate != "angle":
+        if self.coordinate in ("x", "y", "z"):
             out.law = self.law.scaled(length)
         out.point = scaled_ref(self.point, length)
         return out

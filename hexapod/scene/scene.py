@@ -15,7 +15,7 @@ from numpy.typing import ArrayLike
 from hexapod.errors import ModelError, Problem
 from hexapod.scene.bodies import Body, Particle, PlanarBody, SpatialBody
 from hexapod.scene.contacts import GroundForces
-from hexapod.scene.drivers import COORDINATES, CoordinateDriver, JointDriver
+from hexapod.scene.drivers import COORDINATES, ORIENTATIONS, CoordinateDriver, JointDriver
 from hexapod.scene.element import (
     GROUND,
     Attachment,
@@ -517,6 +517,9 @@ class _ReferenceCheck:
                       "revolute joint instead")
         if driver.coordinate == "z" and self.scene.dimension == 2:
             self._add("coordinate", "no 'z' in a planar scene")
+        if driver.coordinate in ORIENTATIONS and not isinstance(body, SpatialBody):
+            self._add("coordinate", f"only a spatial body has a {driver.coordinate} angle "
+                      "(a planar body's is 'angle')")
         self._frame(driver.body, driver.point, "point")
         if driver.frame != "world" and driver.frame != driver.body:
             self._body_ref(driver.frame, "frame", ground_ok=True)
