@@ -136,54 +136,76 @@ class _PathShape(Law):
                 self.factor * acceleration)
 
 
-def test_the_engine_solves_the_cockroach_leg_as_its_own_inverse_kinematics():
-    """The front leg on a trunk that moves and turns: the hand-written inverse kinematics
-    (joint drivers with the gait's exact laws) and the engine's (three of those laws, and
-    three coordinate drivers on the foot point in the trunk's frame) agree on every body's
-    motion to round-off (q to 1e-12 m, v and v_dot to 1e-10 of their largest)."""
+def _moving_trunk(leg: hx.Scene) -> hx.Scene:
+    """The leg hung from a trunk that turns (its own driver), in place of the ground."""
+    out = hx.Scene(leg.name, 3)
+    out.add(hx.scene.SpatialBody("trunk", 0.5, [1e-3, 2e-3, 2e-3]))
+    out.add(hx.scene.Revolute("yaw", "ground", "trunk", origin=[0, 0, 0], axis=[0, 0, 1]))
+    out.add(hx.scene.JointDriver("turn", "yaw", hx.scene.Expression("0.3 * sin(2 * t)")))
+    out.attach(leg, "leg", "trunk")
+    return out
+
+
+def cockroach_leg(duty: float, foot_drivers: str) -> hx.Scene:
+    """The front leg on a turning trunk walking with ``duty``: every joint driven by the gait's
+    exact laws (``foot_drivers`` "none": the leg's own inverse kinematics, :mod:`legs.stepping`),
+    or three of them and the foot's path as three coordinate drivers in the trunk's frame
+    (``"drivers"``), or as guides that the three other joints follow (``"guides"``)."""
     from legs.cockroach import FOOT_LIFT_MM, GAIT_LAWS, STANCE_LENGTH_MM
     from legs.leg import JOINTS, leg_scene
     from legs.stepping import SOLVED_JOINTS, Stepping, foot_path_rates, path_targets
 
-    duty = 0.6
+    if foot_drivers == "none":
+        return _moving_trunk(leg_scene("front", "L", 1.0, {j: Stepping("front", j, duty, 1.0, 0.0)
+                                                           for j in JOINTS}, "front-exact"))
     amplitude = {joint: np.radians(a) for joint, a, _ in GAIT_LAWS}
-    prescribed = {"thc_levation": _PathShape(1, duty, amplitude["thc_levation"]),
-                  "coxa_rotation": _PathShape(1, duty, amplitude["coxa_rotation"]),
-                  "tita": _PathShape(0, duty, 2 * amplitude["tita"])}
+    laws = {"thc_levation": _PathShape(1, duty, amplitude["thc_levation"]),
+            "coxa_rotation": _PathShape(1, duty, amplitude["coxa_rotation"]),
+            "tita": _PathShape(0, duty, 2 * amplitude["tita"])}
+    guides = foot_drivers == "guides"
+    if guides:
+        laws.update({joint: hx.scene.Guided() for joint in SOLVED_JOINTS})
     start = path_targets("front", np.array([0.0]), duty)[0]  # m, the leg's frame
     length, lift = STANCE_LENGTH_MM * 1e-3, FOOT_LIFT_MM * 1e-3
     fore_aft = foot_path_rates(0.0, duty, 1.0, 1.0)[0][0]
     foot = {"x": _PathShape(0, duty, length, float(start[0] - length * fore_aft)),
             "y": float(start[1]), "z": _PathShape(1, duty, lift, float(start[2]))}
+    leg = leg_scene("front", "L", 1.0, laws, "front-ik")
+    for axis, law in foot.items():  # in the sub-model's ground: the trunk, once attached
+        leg.add(hx.scene.CoordinateDriver(f"foot_{axis}", "tarsus", axis, law, point="foot",
+                                          frame="ground", guide=guides))
+    return _moving_trunk(leg)
 
-    def moving_trunk(scene: hx.Scene) -> hx.Scene:
-        """The leg hung from a trunk that slides and turns (its own drivers), in place of the
-        ground."""
-        out = hx.Scene(scene.name, 3)
-        out.add(hx.scene.SpatialBody("trunk", 0.5, [1e-3, 2e-3, 2e-3]))
-        out.add(hx.scene.Revolute("yaw", "ground", "trunk", origin=[0, 0, 0], axis=[0, 0, 1]))
-        out.add(hx.scene.JointDriver("turn", "yaw", hx.scene.Expression("0.3 * sin(2 * t)")))
-        out.attach(scene, "leg", "trunk")
-        return out
 
-    ik = leg_scene("front", "L", 1.0, prescribed, "front-ik")
-    for axis, law in foot.items():
-        ik.add(hx.scene.CoordinateDriver(f"foot_{axis}", "tarsus", axis, law, point="foot",
-                                         frame="ground"))
-    exact = leg_scene("front", "L", 1.0, {j: Stepping("front", j, duty, 1.0, 0.0)
-                                          for j in JOINTS}, "front-exact")
+def test_the_engine_solves_the_cockroach_leg_as_its_own_inverse_kinematics():
+    """The front leg on a trunk that moves and turns: the hand-written inverse kinematics
+    (joint drivers with the gait's exact laws) and the engine's (three of those laws, and
+    three coordinate drivers on the foot point in the trunk's frame) agree on every body's
+    motion to round-off (q to 1e-12 m, v and v_dot to 1e-10 of their largest)."""
+    ik = cockroach_leg(0.6, "drivers")
+    assert [d.frame for d in ik.drivers.values() if d.kind == "coordinate"] == ["trunk"] * 3
     times = np.linspace(0.0, 1.0, 121)
-    ik_turning = moving_trunk(ik)  # the foot's frame: the sub-model's ground, now the trunk
-    assert [d.frame for d in ik_turning.drivers.values() if d.kind == "coordinate"] == [
-        "trunk"] * len(SOLVED_JOINTS)
-    first = hx.inverse_dynamics(hx.assemble(ik_turning), times)
-    second = hx.inverse_dynamics(hx.assemble(moving_trunk(exact)), times)
+    first = hx.inverse_dynamics(hx.assemble(ik), times)
+    second = hx.inverse_dynamics(hx.assemble(cockroach_leg(0.6, "none")), times)
     assert np.abs(first.q - second.q).max() < 1e-12
     for name in ("v", "v_dot"):
         a, b = getattr(first, name), getattr(second, name)
         # the two scenes take different paths (the foot's drivers: the phase path; joint
         # drivers only: the tree path): 2e-11 of the largest apart when measured
         assert np.abs(a - b).max() < 1e-10 * np.abs(b).max()
+
+
+def test_the_cockroach_leg_guided_by_its_foot_carries_its_own_efforts():
+    """The same leg with its foot's path as guides and the three solved joints following them:
+    every joint's effort and wrench, the trunk's turning driver's included, are those of the
+    leg driven by its own inverse kinematics (to 1e-9 of the largest: the paths' agreement)."""
+    times = np.linspace(0.0, 1.0, 121)
+    guided = hx.inverse_dynamics(hx.assemble(cockroach_leg(0.6, "guides")), times)
+    exact = hx.inverse_dynamics(hx.assemble(cockroach_leg(0.6, "none")), times)
+    assert guided.joints == exact.joints
+    for name in ("effort", "force", "torque"):
+        a, b = getattr(guided, name), getattr(exact, name)
+        assert np.nanmax(np.abs(a - b)) <= 1e-9 * np.nanmax(np.abs(b)), name
 
 
 # ------------------------------------------------------------------ a body's orientation
@@ -249,3 +271,74 @@ def test_a_body_pose_driven_by_its_tait_bryan_angles():
     h = 1e-5
     difference = (_body_rates(times + h) - _body_rates(times - h)) / (2 * h)
     assert np.abs(result.v_dot[:, 3:6] - difference).max() < 1e-8
+
+
+# ------------------------------------------------------------------ guides and guided joints
+
+
+def guided_arm(guided: bool = True) -> hx.Scene:
+    """The arm with its tip guided round the circle and its two joints carrying the efforts
+    (``guided``), or driven by the closed-form angles written as expression laws."""
+    scene = arm_scene()
+    if guided:
+        for driver in scene.drivers.values():
+            driver.guide = True
+        for joint in ("shoulder", "elbow"):
+            scene.add(hx.scene.JointDriver(f"drive_{joint}", joint, hx.scene.Guided()))
+        return scene
+    out = hx.Scene("arm-joints", 2)
+    out.add(*[e for e in scene.elements if not isinstance(e, hx.scene.CoordinateDriver)])
+    th1, th2 = closed_form_arm(np.array([0.0]))[0][0]
+    x = f"({CENTRE[0]} + {RADIUS} * cos(pi * t))"
+    y = f"({CENTRE[1]} + {RADIUS} * sin(pi * t))"
+    elbow = f"acos(({x}^2 + {y}^2 - {UPPER**2 + FORE**2}) / {2 * UPPER * FORE})"
+    shoulder = f"atan2({y}, {x}) - atan2({FORE} * sin({elbow}), {UPPER} + {FORE} * cos({elbow}))"
+    for joint, expression, start in (("shoulder", shoulder, th1), ("elbow", elbow, th2)):
+        out.add(hx.scene.JointDriver(f"drive_{joint}", joint,
+                                     hx.scene.Expression(f"{expression} - ({float(start)!r})")))
+    return out
+
+
+def test_guided_joints_carry_the_efforts_of_the_closed_form_motion():
+    """The arm's joints, following its guided tip, carry the efforts of the same motion driven
+    joint by joint with the closed-form angles (exact derivatives of the expressions): to 1e-9
+    of the largest effort, every joint wrench likewise."""
+    times = np.linspace(0.0, 2.0, 41)
+    guided = hx.inverse_dynamics(hx.assemble(guided_arm()), times)
+    driven = hx.inverse_dynamics(hx.assemble(guided_arm(False)), times)
+    assert guided.joints == driven.joints
+    for name in ("effort", "force", "torque", "q", "v", "v_dot"):
+        a, b = getattr(guided, name), getattr(driven, name)
+        assert np.abs(a - b).max() <= 1e-9 * np.abs(b).max(), name
+
+
+def test_guides_and_guided_joints_come_together():
+    scene = arm_scene()
+    scene.drivers["tip_x"].guide = True
+    with pytest.raises(ModelError, match="no joint driver follows them"):
+        scene.validate()
+    scene = guided_arm()
+    for driver in scene.drivers.values():
+        if isinstance(driver, hx.scene.CoordinateDriver):
+            driver.guide = False
+    with pytest.raises(ModelError, match="follow the guides, but the scene has none"):
+        scene.validate()
+    scene = guided_arm()
+    scene.add(hx.scene.JointEffort("push", "elbow", hx.scene.Guided()))
+    with pytest.raises(ModelError, match="only a joint driver's law may be 'guided'"):
+        scene.validate()
+
+
+def test_a_guided_scene_reads_back_and_refuses_a_simulation(tmp_path):
+    path = tmp_path / "arm.toml"
+    write_scene(guided_arm(), path)
+    again = read_scene(path)
+    assert again.drivers["tip_x"].guide and isinstance(again.drivers["drive_elbow"].law,
+                                                      hx.scene.Guided)
+    times = np.linspace(0.0, 1.0, 6)
+    model = hx.assemble(again)
+    result = hx.inverse_dynamics(model, times)
+    reference = hx.inverse_dynamics(hx.assemble(guided_arm()), times)
+    assert np.array_equal(result.effort, reference.effort)
+    with pytest.raises(hx.HexapodError, match="guided joints move as its guides make them"):
+        hx.simulate(model, 0.1)

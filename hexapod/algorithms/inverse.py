@@ -190,6 +190,8 @@ def inverse_dynamics(model: Model, times: ArrayLike, *, method: str = "auto", fr
     refuse_contacts(model)
     if frame not in ("joint", "world"):
         raise ValueError(f"frame must be 'joint' or 'world', got {frame!r}")
+    if model.guidance is not None:  # the guides' kinematics first, then the joints' efforts
+        model, progress = _guided(model, times, progress)
     w, wd, wdd = (x.reshape(model.n_w, times.size) for x in model.law_values(times, data))
     plan = tree_plan(model)
     if method == "tree" and plan is None:
@@ -209,6 +211,18 @@ def inverse_dynamics(model: Model, times: ArrayLike, *, method: str = "auto", fr
 
         result = replace(result, ground_status=feet_status(model, times, result.ground_force))
     return result
+
+
+def _guided(model: Model, times: np.ndarray, progress):
+    """The twin of a guided model whose joints follow the motion the guides give them, and the
+    progress of its run as the second half of the whole."""
+    from hexapod.algorithms.guided import guided_twin
+
+    n = times.size
+    motion = inverse_dynamics(model.guidance.kinematics, times, progress=(
+        None if progress is None else lambda done, total: progress(done, 2 * n)))
+    twin = guided_twin(model, times, motion.q, motion.v, motion.v_dot)
+    return twin, (None if progress is None else lambda done, total: progress(n + done, 2 * n))
 
 
 def _check_finite(model: Model, result: InverseResult) -> None:

@@ -45,6 +45,7 @@ def add_arguments(parser) -> None:
 def run(args) -> int:
     import warnings
 
+    from hexapod.algorithms.guided import motion_model
     from hexapod.algorithms.inverse import inverse_dynamics
     from hexapod.model.assemble import assemble
     from hexapod.output.inverse_csv import units_path, write_inverse_files
@@ -66,6 +67,7 @@ def run(args) -> int:
     progress = sample_progress("inverse dynamics") if show_progress() else None
     result = inverse_dynamics(model, times, method=args.method, frame=args.frame,
                               progress=progress)
+    model = motion_model(model, result)  # a guided scene's laws: the motion found
     write_inverse_files(out, model, result)  # OUT.units.json, then OUT.csv
     if progress is not None:
         print(file=sys.stderr)

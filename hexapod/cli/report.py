@@ -94,6 +94,7 @@ def run(args) -> int:
     import numpy as np
 
     from hexapod._support.files import write_directory_atomically
+    from hexapod.algorithms.guided import motion_model
     from hexapod.algorithms.inverse import inverse_dynamics
     from hexapod.errors import HexapodError
     from hexapod.model.assemble import assemble
@@ -128,6 +129,7 @@ def run(args) -> int:
     started = time.perf_counter()
     result = inverse_dynamics(model, times, method=args.method, frame=args.frame,
                               progress=progress)
+    model = motion_model(model, result)  # a guided scene's laws: the motion found
     run_time = time.perf_counter() - started
     if show and args.figures:
         print("\rdrawing the figures" + " " * 40, end="", file=sys.stderr, flush=True)

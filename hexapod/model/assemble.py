@@ -7,6 +7,8 @@ the law inputs ``w, wd, wdd`` carry only the laws that change with time.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import casadi as ca
 import numpy as np
 
@@ -21,6 +23,7 @@ from hexapod.model.infos import (
     ContactInfo,
     DriverInfo,
     ForceInfo,
+    Guidance,
     JointInfo,
     RowInfo,
     SurfaceContact,
@@ -42,7 +45,7 @@ from hexapod.scene.forces import (
 )
 from hexapod.scene.joints import Contact, JointGeometry
 from hexapod.scene.joints.geometry import angle_rate, wrapped_angle
-from hexapod.scene.laws import Constant, Law
+from hexapod.scene.laws import Constant, Guided, Law
 from hexapod.scene.laws.base import rate_of
 from hexapod.scene.scene import Scene
 from hexapod.spatial import Placement, euler_parameters_from_rotation
@@ -172,6 +175,7 @@ class _Assembly:
         self.geometries: dict[str, JointGeometry] = {}
         self.joint_points: list[np.ndarray] = []  # world joint origins at the initial pose
         self.contacts: list[ContactInfo] = []
+        self.guided: list[tuple[int, ca.SX]] = []  # a guided law's index, its joint's coordinate
 
     def _add_row(self, name: str, owner: str, unit: str, expr: ca.SX) -> int:
         self.rows.append(RowInfo(name, owner, unit))
@@ -225,6 +229,8 @@ class _Assembly:
                 row = self._add_row(driver.name, driver.name, joint.coordinate_unit,
                                     joint.driver_row(self.geometries[joint.name], f))
                 on_joint.setdefault(joint.name, []).append(row)
+                if isinstance(driver.law, Guided):
+                    self.guided.append((law, joint.driver_row(self.geometries[joint.name], 0.0)))
                 drivers.append(DriverInfo(driver.name, "joint", row, law, driver.law,
                                           joint=joint_index[joint.name]))
             else:
@@ -397,7 +403,8 @@ class _Assembly:
         lower, upper = effort_limits(element.max_effort, element.no_load_speed, rate)
         return ca.fmin(ca.fmax(torque, lower), upper)
 
-    def model(self, rank_tolerance: float, digest: str = "", source: str = "") -> Model:
+    def model(self, rank_tolerance: float, digest: str = "", source: str = "",
+              kinematics: Model | None = None) -> Model:
         parts = self.joints()
         drivers, on_joint = self.drivers()
         builder, across, forces = self.forces()
@@ -418,7 +425,10 @@ class _Assembly:
             Q_across=ca.horzcat(*columns) if columns else None,
             potential=gravity_potential(self.bodies, self.q, self.si.gravity)
             + builder.potential,
-            tracking=ca.vertcat(*self.tracking) if self.tracking else None)
+            tracking=ca.vertcat(*self.tracking) if self.tracking else None,
+            guided=ca.vertcat(*[c for _, c in self.guided]) if self.guided else None)
+        guidance = None if kinematics is None else Guidance(
+            kinematics, np.array([law for law, _ in self.guided], dtype=int))
         # work is done by rheonomic drivers (time laws) and by the non-conservative elements
         working = [d.name for d in drivers if d.law >= 0] + builder.nonconservative
         return Model(name=self.si.name, dimension=self.dim, bodies=self.bodies,
@@ -429,7 +439,7 @@ class _Assembly:
                      forces=tuple(forces), rank_tolerance=rank_tolerance,
                      working_elements=tuple(working), report_forces=self.si.report_forces,
                      contacts=tuple(self.contacts), ground=self.si.ground, digest=digest,
-                     source=source)
+                     source=source, guidance=guidance)
 
 
 def assemble(scene: Scene, *, rank_tolerance: float = 1e-9) -> Model:
@@ -460,4 +470,35 @@ def assemble(scene: Scene, *, rank_tolerance: float = 1e-9) -> Model:
                      sum(j.kind == "contact" for j in scene.joints.values()))
     scene.validate()
     si = scene.in_si()
-    return _Assembly(si).model(rank_tolerance, scene_digest(si, rank_tolerance), scene.source)
+    kinematics = None
+    if any(isinstance(d, CoordinateDriver) and d.guide for d in si.drivers.values()):
+        guides = _guides_driving(si)
+        kinematics = _Assembly(guides).model(rank_tolerance,
+                                             scene_digest(guides, rank_tolerance), scene.source)
+        si = _guides_left_out(si)
+    return _Assembly(si).model(rank_tolerance, scene_digest(si, rank_tolerance), scene.source,
+                               kinematics)
+
+
+def _copy_with(scene: Scene, name: str, elements, ground) -> Scene:
+    out = Scene(name, scene.dimension, "m", scene.gravity, scene.characteristic_length,
+                scene.source, report_forces=scene.report_forces, ground=ground)
+    out.add(*elements)
+    return out
+
+
+def _guides_driving(si: Scene) -> Scene:
+    """The kinematics of a guided scene: its guides as drivers, the joints that follow them
+    free, and the cheapest ground policy (its forces serve nothing)."""
+    elements = [e.replace(guide=False) if isinstance(e, CoordinateDriver) else e
+                for e in si.elements
+                if not (isinstance(e, JointDriver) and isinstance(e.law, Guided))]
+    ground = si.ground if si.ground is None else replace(si.ground, policy="min-wrench")
+    return _copy_with(si, f"{si.name} (guides)", elements, ground)
+
+
+def _guides_left_out(si: Scene) -> Scene:
+    """The dynamics of a guided scene: the joints that follow the guides driven, the guides
+    left out (they exert nothing)."""
+    return _copy_with(si, si.name, [e for e in si.elements if not (
+        isinstance(e, CoordinateDriver) and e.guide)], si.ground)

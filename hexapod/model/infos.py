@@ -184,3 +184,14 @@ class Symbolic:
     Q_across: ca.SX | None = None  # n_v x (joints with force elements across them)
     potential: ca.SX | None = None  # potential energy of gravity and springs (scalar)
     tracking: ca.SX | None = None  # each joint controller's coordinate minus its target
+    guided: ca.SX | None = None  # the coordinates of the joints that follow the guides
+
+
+@dataclass(frozen=True)
+class Guidance:
+    """How a model's guided joints move: ``kinematics`` is the model of the same scene with the
+    guides as drivers and the guided joints free, whose motion gives the joints' coordinates
+    (``Symbolic.guided``, in order) that the laws ``laws`` (indices into ``Model.laws``) take."""
+
+    kinematics: object  # Model (defined above this module's users)
+    laws: np.ndarray

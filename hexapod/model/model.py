@@ -38,6 +38,7 @@ from hexapod.model.infos import (
     ContactInfo,
     DriverInfo,
     ForceInfo,
+    Guidance,
     JointInfo,
     RowInfo,
     Symbolic,
@@ -59,6 +60,8 @@ if TYPE_CHECKING:
 __all__ = ["GROUND_INDEX", "BodyInfo", "ContactInfo", "Data", "DriverInfo", "ForceInfo",
            "JointInfo", "Model", "RowInfo", "Symbolic"]
 _MATRIX_OUTPUTS = frozenset({"Phi_q", "Phi_v", "M", "Q_across"})
+#: what :meth:`Model.built_once` builds from the laws themselves (kept per set of laws)
+_FROM_LAWS = frozenset({"law batches", "driven laws", "tabulated laws"})
 #: outputs with more entries than this are evaluated on their nonzeros (ScatteredFunction)
 _DENSE_OUTPUT_ENTRIES = 100_000
 
@@ -107,7 +110,8 @@ class Model:
     rank_tolerance : float
         Of the rank decision on the equilibrated constraint matrix.
     digest : str
-        The content hash of what the model was built from (:mod:`hexapod.model.digest`).
+        The content hash of what the model was built from (:mod:`hexapod.model.digest`): the
+        key of its cached code; empty for a model not built by :func:`hexapod.assemble`.
     source : str
         The file the scene was read from (empty for a scene built in Python).
     symbolic : Symbolic
@@ -120,6 +124,9 @@ class Model:
         setting).
     ground : GroundForces or None
         The policy that shares the ground forces among the feet (None without contacts).
+    guidance : Guidance or None
+        The kinematics of the scene's guides and the laws of the joints that follow them
+        (:mod:`hexapod.scene.laws.guided`); None without guides.
     """
 
     def __init__(self, *, name: str, dimension: int, bodies: tuple[BodyInfo, ...],
@@ -129,35 +136,17 @@ class Model:
                  mass: BlockDiagonal, symbolic: Symbolic, forces: tuple[ForceInfo, ...],
                  rank_tolerance: float = 1e-9, working_elements: tuple[str, ...] = (),
                  report_forces: bool = False, contacts: tuple[ContactInfo, ...] = (),
-                 ground: GroundForces | None = None, digest: str = "", source: str = ""):
-        self.name = name
-        self.source = source
-        #: the content hash of what the model was built from (:mod:`hexapod.model.digest`):
-        #: equal for models whose Functions are the same, the key of their cached code; empty
-        #: for a model built otherwise than by :func:`hexapod.assemble` (nothing is cached)
-        self.digest = digest
-        #: the feet's contacts with the ground, and the policy sharing their forces
-        self.contacts = contacts
-        self.ground = ground
-        self.report_forces = report_forces
-        self.dimension = dimension
-        self.bodies = bodies
-        self.joints = joints
-        self.drivers = drivers
-        self.rows = rows
-        self.laws = laws
-        self.gravity = gravity
-        self.characteristic_length = characteristic_length
-        self.q0 = q0
-        self.v0 = v0
-        self.mass = mass
+                 ground: GroundForces | None = None, digest: str = "", source: str = "",
+                 guidance: Guidance | None = None):
+        self.name, self.source, self.digest, self.guidance = name, source, digest, guidance
+        self.contacts, self.ground, self.report_forces = contacts, ground, report_forces
+        self.dimension, self.bodies, self.joints, self.drivers = dimension, bodies, joints, drivers
+        self.rows, self.laws, self.gravity, self.forces = rows, laws, gravity, forces
+        self.characteristic_length, self.rank_tolerance = characteristic_length, rank_tolerance
+        self.q0, self.v0, self.mass = q0, v0, mass
         self.mass_inv = mass.map_blocks(np.linalg.inv)
         self.mass_inv_sqrt = mass.power(-0.5)
-        self.forces = forces
         self.force_names = tuple(f.name for f in forces)
-        self.rank_tolerance = rank_tolerance
-        #: drivers with time laws and force elements that do work not drawn from a potential
-        #: (dampers, loads, efforts): the energy is conserved when there are none
         self.working_elements = working_elements
         self._sym = symbolic
         self.n_q, self.n_v = q0.size, v0.size
@@ -167,6 +156,7 @@ class Model:
         self.driver_index = {d.name: i for i, d in enumerate(drivers)}
         self.row_index = {r.name: i for i, r in enumerate(rows)}
         self._built: dict = {}  # see built_once
+        self._built_from_laws: dict = {}  # the same, for what the laws decide
         self._lock = threading.RLock()
         self._recent_laws = RecentLaws()  # see law_values
         self._lie_indices()
@@ -302,18 +292,23 @@ class Model:
         return self._twin(_built_from(ground) == _built_from(self.ground), ground=ground,
                           digest=digest)
 
-    def with_laws(self, laws: tuple[Law, ...], digest: str) -> Model:
+    def with_laws(self, laws: tuple[Law, ...], digest: str, *,
+                  share_built: bool = False) -> Model:
         """This model with other time laws, as many (``digest``: a content hash that tells
-        them apart). Nothing built is shared: the tree path folds the laws in."""
+        them apart). With ``share_built``, what this model builds from its Functions alone
+        (the inverse dynamics' terms and plans) is shared with it, for laws that change only
+        the values of inputs (another motion of the same drivers); otherwise nothing is
+        (compiled time loops may hold the laws themselves)."""
         if len(laws) != self.n_w:
             raise ValueError(f"model '{self.name}' has {self.n_w} laws, got {len(laws)}")
-        return self._twin(False, laws=tuple(laws), digest=digest)
+        return self._twin(share_built, laws=tuple(laws), digest=digest)
 
     def _twin(self, share_built: bool, **changes) -> Model:
-        """A shallow copy with ``changes`` made (not the laws' recent values: its laws may
-        not be these), sharing what is built or not."""
+        """A shallow copy with ``changes`` made (not the laws' recent values, nor what was
+        built from them: its laws may not be these), sharing what is built or not."""
         twin = copy.copy(self)
-        for name, value in {**changes, "_recent_laws": RecentLaws()}.items():
+        for name, value in {**changes, "_recent_laws": RecentLaws(),
+                            "_built_from_laws": {}}.items():
             object.__setattr__(twin, name, value)
         if not share_built:
             object.__setattr__(twin, "_built", {})
@@ -325,10 +320,11 @@ class Model:
         immutable objects that are pure functions of the frozen model and cost a build (the
         tree path's Function, an integrator's Functions). Nothing of a run may go here (it goes
         in a :class:`Data`): no result depends on whether or when they were built."""
+        store = self._built_from_laws if key[0] in _FROM_LAWS else self._built
         with self._lock:
-            if key not in self._built:
-                self._built[key] = build(self)
-            return self._built[key]
+            if key not in store:
+                store[key] = build(self)
+            return store[key]
 
     def create_data(self) -> Data:
         """A new, empty :class:`Data` workspace for this model."""

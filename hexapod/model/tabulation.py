@@ -28,7 +28,9 @@ import numpy as np
 from hexapod.model.law_values import evaluate_together, law_breaks
 from hexapod.model.model import Model
 from hexapod.scene.laws.base import Rate
+from hexapod.scene.laws.closed_form import Polynomial
 from hexapod.scene.laws.table import LawTable
+from hexapod.scene.laws.tabulated import Hermite
 
 #: The table's tolerance, relative to the run's relative tolerance.
 TOLERANCE_PER_RTOL = 1e-2
@@ -109,3 +111,14 @@ def _tabulate(model: Model, costly: list[int], start: float, span: float,
     digest = (hashlib.sha256(f"{model.digest}/laws".encode() + times.tobytes() + table.tobytes())
               .hexdigest() if model.digest else "")
     return model.with_laws(tuple(replaced), digest), record
+
+
+def sampled_laws(times: np.ndarray, values: np.ndarray, rates: np.ndarray,
+                 accelerations: np.ndarray) -> list:
+    """Laws exact at the samples ``times`` (N,): one per row of ``values``, ``rates``,
+    ``accelerations`` (each (K, N)), the quintic Hermite interpolant (C2) of a motion file, or
+    for a single sample its second-order Taylor polynomial."""
+    if times.size == 1:
+        return [Polynomial((y[0], r[0], a[0] / 2), t0=float(times[0]))
+                for y, r, a in zip(values, rates, accelerations, strict=True)]
+    return [Hermite(times, y, r, a) for y, r, a in zip(values, rates, accelerations, strict=True)]

@@ -102,6 +102,11 @@ def describe_model(model: Model, t: float = 0.0, graph: bool = False) -> dict:
         No pose satisfies the constraints at ``t``, or redundant constraints contradict each
         other there.
     """
+    if model.guidance is not None:  # its guided joints' laws: the motion the guides give at t
+        from hexapod.algorithms.guided import motion_model
+        from hexapod.algorithms.inverse import inverse_dynamics
+
+        model = motion_model(model, inverse_dynamics(model, [t]))
     rows = [r.name for r in model.rows]
     drivers_on = {j.name: [model.rows[r].name for r in j.driver_rows] for j in model.joints}
     bodies = [{"name": b.name, "kind": b.kind, "mass": b.mass,

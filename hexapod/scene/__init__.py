@@ -23,7 +23,7 @@ __getattr__, __dir__, __all__ = attach(__name__, {
                              "JointController", "JointEffort", "RotationalSpringDamper",
                              "SpringDamper"],
     "hexapod.scene.contacts": ["POLICIES", "GroundForces"],
-    "hexapod.scene.laws": ["Constant", "Expression", "Gait", "Harmonic", "Hermite", "Law",
+    "hexapod.scene.laws": ["Constant", "Expression", "Gait", "Guided", "Harmonic", "Hermite", "Law",
                            "Polynomial", "Spline", "cycle_breaks"],
     # files, motions and the built-in scenes
     "hexapod.scene.reader": ["read_scene"],

@@ -9,13 +9,21 @@ the plane, the body's ``angle``. Laws must be C2 (see :mod:`.laws`).
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
-from hexapod.errors import ModelError
-from hexapod.scene.element import GROUND, Attachment, Element, check_finite, scaled_ref
-from hexapod.scene.laws import Law, LawOnJoint, as_law
+from hexapod.errors import ModelError, Problem
+from hexapod.scene.element import (
+    GROUND,
+    Attachment,
+    Element,
+    check_finite,
+    quoted,
+    scaled_ref,
+)
+from hexapod.scene.laws import Guided, Law, LawOnJoint, as_law
 
 #: coordinates a :class:`CoordinateDriver` may prescribe
 COORDINATES = ("x", "y", "z", "angle", "roll", "pitch", "yaw")
@@ -79,6 +87,10 @@ class CoordinateDriver(Element):
     frame : str
         ``world``, or the body in whose reference frame the coordinate is measured (along its
         axes, from its origin).
+    guide : bool
+        A guide prescribes the motion but exerts no force: in the inverse dynamics the joints
+        whose drivers follow the guides (law :class:`~hexapod.scene.laws.Guided`) carry the
+        efforts instead (see :mod:`hexapod.scene.laws.guided`).
     """
 
     name: str
@@ -88,6 +100,7 @@ class CoordinateDriver(Element):
     source: str = ""
     point: object = None
     frame: str = "world"
+    guide: bool = False
     family = "driver"
     kind = "coordinate"
 
@@ -132,6 +145,36 @@ class CoordinateDriver(Element):
         if self.frame != "world":
             out.frame = attachment.body(self.frame)
         return out
+
+
+def guidance_problems(elements, scene_problem) -> list[Problem]:
+    """Guides (coordinate drivers with ``guide``) and the joint drivers that follow them (law
+    :class:`~hexapod.scene.laws.Guided`) come together, and nothing else follows them.
+    ``scene_problem(key, message)`` makes a problem of the scene's own."""
+    out, guides, guided = [], [], []
+    for e in elements:
+        for f in dataclasses.fields(e):
+            value = getattr(e, f.name)
+            if isinstance(value, Guided) or (isinstance(value, tuple) and any(
+                    isinstance(x, Guided) for x in value)):
+                if isinstance(e, JointDriver) and f.name == "law":
+                    guided.append(e.name)
+                else:
+                    out.append(e.problem(f.name, "only a joint driver's law may be 'guided' "
+                                         "(its joint then follows the guides)"))
+        if isinstance(e, CoordinateDriver) and e.guide:
+            guides.append(e.name)
+    if guides and not guided:
+        out.append(scene_problem(
+            "driver", f"guide(s) {', '.join(map(quoted, guides))} exert no force, but no joint "
+            "driver follows them: give the joints that carry their load the law "
+            "{ type = \"guided\" }"))
+    if guided and not guides:
+        out.append(scene_problem(
+            "driver", f"joint driver(s) {', '.join(map(quoted, guided))} follow the guides, "
+            "but the scene has none: mark the coordinate drivers that prescribe the motion "
+            "with guide = true"))
+    return out
 
 
 DRIVER_TYPES: dict[str, type[Element]] = {"joint": JointDriver, "coordinate": CoordinateDriver}

@@ -237,6 +237,7 @@ def _constants(value) -> dict[str, float]:
 #: keys of each law table: converter and whether it is required
 _LAW_KEYS = {
     "constant": {"value": (_number, True)},
+    "guided": {},
     "polynomial": {"coefficients": (_numbers, True), "t0": (_number, False)},
     "harmonic": {"offset": (_number, False), "cos": (_amplitudes, False),
                  "sin": (_amplitudes, False), "frequency": (_number, True),
@@ -371,7 +372,7 @@ def _driver_schema(kind: str, dimension: int) -> Schema:
     return DRIVER_TYPES[kind], {**common, "body": (_string, True),
                                 "coordinate": (_string, True),
                                 "point": (_point(dimension), False),
-                                "frame": (_string, False)}
+                                "frame": (_string, False), "guide": (_boolean, False)}
 
 
 def _force_schema(kind: str, dimension: int) -> Schema:

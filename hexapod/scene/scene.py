@@ -15,7 +15,13 @@ from numpy.typing import ArrayLike
 from hexapod.errors import ModelError, Problem
 from hexapod.scene.bodies import Body, Particle, PlanarBody, SpatialBody
 from hexapod.scene.contacts import GroundForces
-from hexapod.scene.drivers import COORDINATES, ORIENTATIONS, CoordinateDriver, JointDriver
+from hexapod.scene.drivers import (
+    COORDINATES,
+    ORIENTATIONS,
+    CoordinateDriver,
+    JointDriver,
+    guidance_problems,
+)
 from hexapod.scene.element import (
     GROUND,
     Attachment,
@@ -271,6 +277,7 @@ class Scene:
         for element in self._elements:
             out.extend(element.problems())
         out.extend(self._name_problems())
+        out.extend(guidance_problems(self._elements, self._scene_problem))
         bodies = self.bodies
         for element in self._elements:
             out.extend(_ReferenceCheck(self, bodies, element).problems())

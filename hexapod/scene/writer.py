@@ -144,6 +144,8 @@ def _is_default(name: str, value) -> bool:
     if name in ("rotation", "inertia_rotation") and np.array_equal(
             np.asarray(value), np.eye(np.asarray(value).shape[0])):
         return True
+    if name == "guide":
+        return value is False
     return name == "frame" and value == "world"
 
 
@@ -162,6 +164,8 @@ def _value(name: str, value) -> str:
         return "[" + ", ".join(_law(law) for law in value) + "]"
     if isinstance(value, str):
         return _string(value)
+    if isinstance(value, bool):
+        return "true" if value else "false"
     if isinstance(value, Placement):
         return _frame(value)
     if np.ndim(value) >= 1:

@@ -282,10 +282,12 @@ def _run_job(job: dict, model) -> tuple[str, str, dict]:
     families = job.get("metrics") or FAMILIES[job["kind"]]
     cycle = model.cycle_time()
     if job["kind"] == "inverse":
+        from hexapod.algorithms.guided import motion_model
         from hexapod.algorithms.inverse import inverse_dynamics
 
         times, strides = inverse_window(model, job)
         result = inverse_dynamics(model, times)
+        model = motion_model(model, result)  # a guided scene's laws: the motion found
         metrics = inverse_metrics(model, result, families, strides)
         if not result.feasible:
             bad = np.flatnonzero(result.infeasible)

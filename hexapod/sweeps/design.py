@@ -111,6 +111,7 @@ def sensitivity_run(scene: Scene, parameters: Sequence, *,
         The inverse dynamics fails; with the friction policy, the exact cone, or a sample
         where no forces are inside the cones.
     """
+    from hexapod.algorithms.guided import motion_model
     from hexapod.algorithms.inverse import inverse_dynamics
     from hexapod.algorithms.sensitivity import inverse_sensitivities
     from hexapod.model.assemble import assemble
@@ -130,6 +131,7 @@ def sensitivity_run(scene: Scene, parameters: Sequence, *,
         return None if progress is None else (lambda done, total: progress(name, done, total))
 
     result = inverse_dynamics(model, times, method=method, progress=stage("inverse dynamics"))
+    model = motion_model(model, result)  # a guided scene's laws: the motion found
     sensitivity = inverse_sensitivities(model, result, changes, progress=stage("derivatives"))
     metrics = inverse_metrics(model, result, families, strides)
     derivatives = metric_sensitivities(model, result, sensitivity, families, strides)

@@ -10,8 +10,9 @@ from hexapod.scene.laws.base import Constant, Law, LawOnJoint, Scaled, as_law, c
 from hexapod.scene.laws.closed_form import Harmonic, Polynomial
 from hexapod.scene.laws.expression import Expression
 from hexapod.scene.laws.gait import Gait
+from hexapod.scene.laws.guided import Guided
 from hexapod.scene.laws.registry import LAW_TYPES, law_types
 from hexapod.scene.laws.tabulated import Hermite, Spline
 
-__all__ = ["LAW_TYPES", "Constant", "Expression", "Gait", "Harmonic", "Hermite", "Law",
+__all__ = ["LAW_TYPES", "Constant", "Expression", "Gait", "Guided", "Harmonic", "Hermite", "Law",
            "LawOnJoint", "Polynomial", "Scaled", "Spline", "as_law", "cycle_breaks", "law_types"]

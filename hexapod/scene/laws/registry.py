@@ -8,12 +8,13 @@ from hexapod.scene.laws.base import Constant, Law
 from hexapod.scene.laws.closed_form import Harmonic, Polynomial
 from hexapod.scene.laws.expression import Expression
 from hexapod.scene.laws.gait import Gait
+from hexapod.scene.laws.guided import Guided
 from hexapod.scene.laws.tabulated import Hermite, Spline
 
 #: Law classes by the ``type`` used in scene files.
 LAW_TYPES: dict[str, type[Law]] = {
     cls.kind: cls for cls in (Constant, Polynomial, Harmonic, Spline, Hermite, Gait,
-                              Expression)
+                              Expression, Guided)
 }
 
 
