@@ -42,8 +42,10 @@ from hexapod.scene import (
     AppliedForce,
     Constant,
     Contact,
+    CoordinateDriver,
     Fixed,
     GroundForces,
+    Guided,
     SpatialBody,
     Spherical,
 )
@@ -62,6 +64,7 @@ from legs.leg import JOINTS, NOMINAL_LENGTHS, SEGMENT_NAMES, leg_geometry, leg_s
 from legs.stepping import (
     SAMPLES,
     SOLVED_JOINTS,
+    FootPath,
     Stepping,
     exact_leg_motion,
     leg_spec,
@@ -167,7 +170,8 @@ def hexapod_scene(gait: str | None = "tripod", period: float | None = None,
                   trunk: str = "held", duty: float | None = None,
                   ground: GroundForces | None = None, *, speed: float | None = None,
                   payload: float = 0.0, coxa_length: float = 1.0, femur_length: float = 1.0,
-                  tibia_length: float = 1.0, tarsus_length: float = 1.0) -> Scene:
+                  tibia_length: float = 1.0, tarsus_length: float = 1.0,
+                  guided: bool = False) -> Scene:
     """The six-legged robot.
 
     Parameters
@@ -203,6 +207,10 @@ def hexapod_scene(gait: str | None = "tripod", period: float | None = None,
         its length (same cross-section and density), its inertias follow from both. Each foot's
         path keeps its definition in terms of the rest pose of the leg with the new lengths
         (:mod:`legs.stepping`); a leg that cannot follow it raises ``ValueError``.
+    guided : bool
+        Free robot: each foot's path as guides in the trunk's frame (coordinate drivers with
+        ``guide``), which the joints the leg's own inverse kinematics solves follow (law
+        ``guided``): the engine places them (:mod:`hexapod.scene.laws.guided`).
 
     Raises
     ------
@@ -220,7 +228,7 @@ def hexapod_scene(gait: str | None = "tripod", period: float | None = None,
             raise ValueError("a free trunk needs a gait (its legs carry it)")
         pattern = walking_pattern(gait, duty)
         period = stride_period(pattern, period, speed, scale)
-        return _walking_scene(pattern, period, scale, ground, name, payload, lengths)
+        return _walking_scene(pattern, period, scale, ground, name, payload, lengths, guided)
     pattern = None if gait is None else check_gait(gait)
     if duty is not None:
         if pattern is None:
@@ -256,7 +264,7 @@ def _thc_point(leg: str, scale: float) -> np.ndarray:
 
 def _walking_scene(pattern: GaitPattern, period: float, scale: float,
                    ground: GroundForces | None, name: str, payload: float = 0.0,
-                   lengths: tuple | None = None) -> Scene:
+                   lengths: tuple | None = None, guided: bool = False) -> Scene:
     duty = pattern.duty
     height = -GROUND_Z_MM * 1e-3 * scale  # the trunk's centre of mass above the ground
     speed = pattern.walking_speed(period, scale)
@@ -270,11 +278,17 @@ def _walking_scene(pattern: GaitPattern, period: float, scale: float,
         position, side = leg_of(leg)
         lift_off = pattern.lift_off[leg]
         spec = leg_spec(position, lengths)
-        laws = {joint: Stepping(spec, joint, duty, period, lift_off) for joint in JOINTS}
+        laws = {joint: Guided() if guided and joint in SOLVED_JOINTS else
+                Stepping(spec, joint, duty, period, lift_off) for joint in JOINTS}
         start = exact_leg_motion(position, duty, [(-lift_off) % 1.0], lengths)[0][0]
         sub = posed(leg_scene(position, side, scale, laws, lengths=lengths),
                     dict(zip(JOINTS, start, strict=True)))
         scene.attach(sub, leg, base="trunk", placement=Placement(_thc_point(leg, scale)))
+        for axis in range(3 if guided else 0):  # the foot on its path, in the trunk's frame
+            scene.add(CoordinateDriver(
+                f"{leg}/foot_{'xyz'[axis]}", f"{leg}/tarsus", "xyz"[axis],
+                FootPath(spec, side, axis, duty, period, lift_off, scale), point="foot",
+                frame="trunk", guide=True))
         # the stance that ends at lift_off * period began at (lift_off - duty) * period;
         # the foot then touched down where its path puts it, the trunk at speed * time
         touch_down = (lift_off - duty) * period

@@ -332,15 +332,8 @@ def exact_leg_motion(position: str, duty: float, tau,
     geometry = _unit_geometry(position, lengths)
     mm = 1e-3
     (fa, fa1, fa2), (h, h1, h2) = foot_path_rates(tau, duty, 1.0, 1.0)  # unit shapes
-    amplitude = {joint: np.radians(a) for joint, a, _ in GAIT_LAWS}
-    prescribed = {"thc_levation": (h, h1, h2), "coxa_rotation": (h, h1, h2),
-                  "tita": (2 * fa, 2 * fa1, 2 * fa2)}
     n = tau.size
-    angles, rates, accelerations = np.zeros((n, 6)), np.zeros((n, 6)), np.zeros((n, 6))
-    for joint, (value, d1, d2) in prescribed.items():
-        k = JOINTS.index(joint)
-        angles[:, k], rates[:, k], accelerations[:, k] = (amplitude[joint] * x
-                                                         for x in (value, d1, d2))
+    angles, rates, accelerations = prescribed_motion(duty, tau)
     harmonics = stepping_harmonics(position, duty, HARMONICS, lengths)
     solved = [JOINTS.index(j) for j in SOLVED_JOINTS]
     free = [k for k in range(6) if k not in solved]
@@ -373,6 +366,23 @@ def exact_leg_motion(position: str, duty: float, tau,
            - foot_bias(geometry, angles, rates, state))
     accelerations[:, solved] = _solve3(Js, rhs)
     return angles, rates, accelerations
+
+
+def prescribed_motion(duty: float, tau) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The angles (n, 6) at cycle fractions ``tau`` and their first and second derivatives in
+    ``tau`` of the joints the gait prescribes (``legs.cockroach.GAIT_LAWS``: the levation and
+    the coxa's rotation follow the foot's lift, the tita its fore-aft position); zero for the
+    joints :data:`SOLVED_JOINTS`."""
+    tau = np.atleast_1d(np.asarray(tau, dtype=float)) % 1.0
+    (fa, fa1, fa2), (h, h1, h2) = foot_path_rates(tau, duty, 1.0, 1.0)  # unit shapes
+    amplitude = {joint: np.radians(a) for joint, a, _ in GAIT_LAWS}
+    prescribed = {"thc_levation": (h, h1, h2), "coxa_rotation": (h, h1, h2),
+                  "tita": (2 * fa, 2 * fa1, 2 * fa2)}
+    out = np.zeros((3, tau.size, 6))
+    for joint, shapes in prescribed.items():
+        for m, x in enumerate(shapes):
+            out[m, :, JOINTS.index(joint)] = amplitude[joint] * x
+    return out[0], out[1], out[2]
 
 
 def _solve3(A: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -468,17 +478,20 @@ class Stepping(Law):
         return values[0, 0], values[1, 0], values[2, 0]
 
     def batch_key(self):
-        return (self.position, self.duty)
+        return (self.position, self.duty, self.joint in SOLVED_JOINTS)
 
     @classmethod
     def evaluate_batch(cls, laws, t):
         """The laws of legs of one shape and duty in one solve: each leg's phase (its period
         and lift-off) gives its cycle fractions, and the foot paths of all are solved
-        together (Newton's method costs little more for more samples)."""
+        together (Newton's method costs little more for more samples). The prescribed
+        joints' laws are closed forms of the path (no solve)."""
         t = np.asarray(t, dtype=float)
         phases = sorted({(law.period, law.lift_off) for law in laws})
         taus = [(np.atleast_1d(t) / period - lift_off) % 1.0 for period, lift_off in phases]
-        motion = _cached_motion(laws[0].position, laws[0].duty, np.concatenate(taus))
+        solve = (_cached_motion if laws[0].joint in SOLVED_JOINTS
+                 else lambda _, duty, tau: prescribed_motion(duty, tau))
+        motion = solve(laws[0].position, laws[0].duty, np.concatenate(taus))
         size = taus[0].size
         out = np.empty((3, len(laws)) + t.shape)
         for i, law in enumerate(laws):
@@ -517,4 +530,63 @@ class Stepping(Law):
             out.append(f"period must be positive, got {self.period}")
         if not 0.5 <= self.duty < 1:
             out.append(f"duty must be in [0.5, 1), got {self.duty}")
+        return out
+
+
+@dataclass(frozen=True)
+class FootPath(Law):
+    """One coordinate (m) of a walking leg's foot on its path (:func:`path_targets`), in the
+    trunk's frame of :func:`legs.robot.hexapod_scene` (from the trunk's origin: the leg's
+    thorax-coxa point plus the path, mirrored on the right): a guide's law, so that the engine
+    places the leg's joints (:mod:`hexapod.scene.laws.guided`). ``position`` names the leg and
+    its length factors as :class:`Stepping`'s; ``side`` ``L`` or ``R``; ``axis`` 0, 1, 2 (x
+    forward, y left, z up); the gait's ``duty``, ``period`` (s) and the leg's ``lift_off`` (a
+    fraction of the period); ``scale`` the robot's."""
+
+    position: str = "front"
+    side: str = "L"
+    axis: int = 0
+    duty: float = 0.5
+    period: float = 1.0
+    lift_off: float = 0.0
+    scale: float = 1.0
+    kind = "foot-path"
+
+    def evaluate(self, t):
+        from legs.cockroach import THC_POINT_MM
+
+        t = np.asarray(t, dtype=float)
+        tau = (np.atleast_1d(t) / self.period - self.lift_off) % 1.0
+        leg, lengths = parse_leg(self.position)
+        sign = -1.0 if (self.side == "R" and self.axis == 1) else 1.0
+        # the path is linear in the scale: solved at natural scale, where its geometry is kept
+        value = (path_targets(leg, tau, self.duty, 1.0, lengths)[:, self.axis]
+                 + 1e-3 * THC_POINT_MM[leg][self.axis]) * sign * self.scale
+        length, lift = (1e-3 * self.scale * x for x in (STANCE_LENGTH_MM, FOOT_LIFT_MM))
+        (_, fa1, fa2), (_, h1, h2) = foot_path_rates(tau, self.duty, length, lift)
+        rate, acceleration = {0: (fa1, fa2), 1: (0 * tau, 0 * tau), 2: (h1, h2)}[self.axis]
+        return (value.reshape(t.shape), (rate / self.period).reshape(t.shape),
+                (acceleration / self.period**2).reshape(t.shape))
+
+    def cycle_time(self):
+        return self.period
+
+    def breaks(self, start, stop):  # lift-off and touch-down: the path's pieces join
+        return cycle_breaks(self.period, (self.lift_off, self.lift_off + 1.0 - self.duty),
+                            start, stop)
+
+    def problems(self):
+        out = []
+        try:
+            parse_leg(self.position)
+        except ValueError as error:
+            out.append(str(error))
+        if self.side not in ("L", "R") or self.axis not in (0, 1, 2):
+            out.append(f"side must be L or R and axis 0, 1 or 2, got {self.side!r}, "
+                       f"{self.axis!r}")
+        for name in ("period", "scale"):
+            if not (np.isfinite(getattr(self, name)) and getattr(self, name) > 0):
+                out.append(f"{name} must be positive, got {getattr(self, name)}")
+        if not 0 < self.duty < 1:
+            out.append(f"duty must be in (0, 1), got {self.duty}")
         return out
