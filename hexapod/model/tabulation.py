@@ -22,12 +22,14 @@ result's options (``laws``).
 from __future__ import annotations
 
 import hashlib
+from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
 from hexapod.model.law_values import evaluate_together, law_breaks
 from hexapod.model.model import Model
-from hexapod.scene.laws.base import Rate
+from hexapod.scene.laws.base import Law, Rate
 from hexapod.scene.laws.closed_form import Polynomial
 from hexapod.scene.laws.table import LawTable
 from hexapod.scene.laws.tabulated import Hermite
@@ -122,3 +124,41 @@ def sampled_laws(times: np.ndarray, values: np.ndarray, rates: np.ndarray,
         return [Polynomial((y[0], r[0], a[0] / 2), t0=float(times[0]))
                 for y, r, a in zip(values, rates, accelerations, strict=True)]
     return [Hermite(times, y, r, a) for y, r, a in zip(values, rates, accelerations, strict=True)]
+
+
+@dataclass(frozen=True, eq=False)
+class ComputedLaw(Law):
+    """Row ``index`` of a motion another computation gives: ``solve(t)`` returns the values,
+    rates and accelerations (3, k, n) of ``k`` laws at the times ``t`` (n,), sorted. Costly:
+    a simulation tabulates it once. It repeats with ``period`` (None: it does not) and changes
+    regime where the laws ``regimes`` do (a guided joint's motion: its guides' laws)."""
+
+    solve: Callable[[np.ndarray], np.ndarray]
+    index: int
+    period: float | None = None
+    regimes: tuple = ()
+    kind = "computed"
+    costly = True
+
+    def evaluate(self, t):
+        values = type(self).evaluate_batch([self], t)
+        return values[0, 0], values[1, 0], values[2, 0]
+
+    def batch_key(self):
+        return id(self.solve)
+
+    @classmethod
+    def evaluate_batch(cls, laws, t):
+        t = np.asarray(t, dtype=float)
+        flat = np.atleast_1d(t).ravel()
+        order = np.argsort(flat, kind="stable")
+        values = np.empty((3, len(laws), flat.size))
+        values[:, :, order] = laws[0].solve(flat[order])[:, [law.index for law in laws]]
+        return values.reshape((3, len(laws)) + t.shape)
+
+    def cycle_time(self):
+        return self.period
+
+    def breaks(self, start, stop):
+        found = [law.breaks(start, stop) for law in self.regimes]
+        return np.unique(np.concatenate(found)) if found else np.zeros(0)

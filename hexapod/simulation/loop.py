@@ -28,6 +28,7 @@ from hexapod.algorithms.liaison import wrenches_from_multipliers
 from hexapod.errors import HexapodError
 from hexapod.model.model import Model
 from hexapod.model.tabulation import TOLERANCE_PER_RTOL, tabulated_model
+from hexapod.simulation.guided import simulated_model
 from hexapod.simulation.integrators import Integrator
 from hexapod.simulation.methods import DEFAULT_ATOL, DEFAULT_RTOL
 from hexapod.simulation.registry import default_method, get_integrator
@@ -151,8 +152,7 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] | Non
     Raises
     ------
     HexapodError
-        When the model's joints follow guides (:mod:`hexapod.scene.laws.guided`), the
-        initial state cannot be made consistent (the run has not started), or a
+        When the initial state cannot be made consistent (the run has not started), or a
         fixed-step run, or the states at the output times, would pass a limit.
     ValueError
         Bad arguments: ``every`` below 1, or with ``t_eval``; output times not finite, not
@@ -167,10 +167,7 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] | Non
     if grid is not None and every != 1:
         raise ValueError("every and t_eval cannot be given together: with output times the "
                          "states saved are those at the times")
-    if model.guidance is not None:
-        raise HexapodError(f"model '{model.name}': its guided joints move as its guides make "
-                           "them, which only the inverse dynamics solves: simulate the joints "
-                           "driven by laws or efforts (an inverse run's motion or efforts)")
+    model = simulated_model(model)  # guided joints: as their guides move them
     cls = get_integrator(default_method(model) if method is None else method)
     if grid is not None and not cls.has_dense_output():
         raise ValueError(f"{cls.name} has no dense output: it cannot save states at t_eval")
