@@ -286,9 +286,10 @@ stepping_harmonics.cache_clear = _stepping_harmonics.cache_clear
 
 _STEP9 = np.polynomial.Polynomial([0, 0, 0, 0, 0, 126, -420, 540, -315, 70])
 _BUMP = np.polynomial.Polynomial([0, 1]) ** 5 * np.polynomial.Polynomial([1, -1]) ** 5 * 1024
-#: each with its first and second derivatives
-_STEP9_RATES = tuple(_STEP9.deriv(m) for m in range(3))
-_BUMP_RATES = tuple(_BUMP.deriv(m) for m in range(3))
+#: the swing's fore-aft smooth step and its lift (unit shapes of its progress), each with its
+#: first and second derivatives: every walking foot's path is made of them
+STEP_RATES = tuple(_STEP9.deriv(m) for m in range(3))
+LIFT_RATES = tuple(_BUMP.deriv(m) for m in range(3))
 
 
 def foot_path_rates(tau, duty: float, length: float, lift: float):
@@ -299,8 +300,8 @@ def foot_path_rates(tau, duty: float, length: float, lift: float):
     stance = tau >= a
     u = np.where(stance, 0.0, tau / a)
     rate = -length * a / duty
-    step = [p(u) for p in _STEP9_RATES]
-    bump = [p(u) for p in _BUMP_RATES]
+    step = [p(u) for p in STEP_RATES]
+    bump = [p(u) for p in LIFT_RATES]
     fore_aft = (
         np.where(stance, length / 2 - length * (tau - a) / duty,
                  -length / 2 + rate * u + (length - rate) * step[0]),

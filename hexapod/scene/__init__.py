@@ -15,6 +15,7 @@ from hexapod._support.lazy import attach
 __getattr__, __dir__, __all__ = attach(__name__, {
     "hexapod.scene.scene": ["LENGTH_UNITS", "Scene"],
     "hexapod.scene.element": ["GROUND"],
+    "hexapod.errors": ["Problem"],  # one problem of a description, in a ModelError
     "hexapod.scene.bodies": ["Particle", "PlanarBody", "SpatialBody"],
     "hexapod.scene.joints": ["Contact", "Cylindrical", "Distance", "Fixed", "Joint", "PlanarJoint",
                              "PointOnPlane", "Prismatic", "Revolute", "Spherical", "Universal"],

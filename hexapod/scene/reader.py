@@ -557,7 +557,8 @@ class _Reader:
 
 
 def read_scene(path: str | Path) -> Scene:
-    """Read and validate a TOML scene file.
+    """Read and validate a TOML scene file (or a robot description: a file with a ``[robot]``
+    table, whose walking scene it builds).
 
     Parameters
     ----------
@@ -576,7 +577,23 @@ def read_scene(path: str | Path) -> Scene:
         The file is TOML but describes an invalid scene; lists every problem with its key.
     """
     path = Path(path)
-    return scene_from_document(read_toml(path, "scene file"), path)
+    document = read_toml(path, "scene file")
+    if "robot" in document:  # a robot description: its walking scene
+        return _robot_scene(document, path)
+    return scene_from_document(document, path)
+
+
+def _robot_scene(document: dict, path: Path) -> Scene:
+    """The walking scene of a robot description, by the reader a package registers in the entry
+    point group ``hexapod.robots`` (the ``legs`` package's)."""
+    from importlib.metadata import entry_points
+
+    readers = list(entry_points(group="hexapod.robots"))
+    if not readers:
+        raise ModelError(f"scene file {path}", [Problem(
+            "robot", "is a robot description, which needs a package that reads them (legs, "
+            "installed with hexapod)", str(path))])
+    return readers[0].load()(document, path)
 
 
 def scene_from_document(document: dict, path: str | Path) -> Scene:

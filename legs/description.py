@@ -1,0 +1,222 @@
+"""A robot description: a small TOML file beside a URDF that says how the robot walks.
+
+.. code-block:: toml
+
+    [robot]
+    name = "quadruped"
+    urdf = "quadruped.urdf"          # relative to this file
+    trunk = "trunk"                  # the URDF's root link (a free body)
+    rest = { "*_flexion" = 0.6, "*_knee" = -1.2 }   # joint angles (rad), names or patterns
+
+    [robot.feet]                     # each foot: a link and a point of it (m, link frame)
+    LF = { link = "LF_shank", point = [0.0, 0.0, -0.2] }
+
+    [gait]
+    pattern = "walk"                 # or phases = { LF = 0.25, ... } (lift-off fractions)
+    duty = 0.75                      # default: the pattern's
+    period = 0.8                     # s; or speed (m/s)
+    stride = 0.12                    # m, the trunk's advance per period
+    step_height = 0.04               # m
+
+    [ground]                         # optional: the ground-force policy, as in a scene file
+    policy = "min-wrench"
+
+:func:`read_robot` checks everything and lists every problem at once, naming the file and the
+key; :func:`robot_scene` builds the walking scene (:mod:`legs.walker`). A scene file whose
+document has a ``[robot]`` table is read as a robot description wherever a scene is
+(``hexapod report ROBOT.toml``), through the entry point ``hexapod.robots``.
+"""
+
+from __future__ import annotations
+
+import fnmatch
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from hexapod import ModelError
+from hexapod.scene import Problem
+from legs.walker import PATTERNS
+
+_ROBOT_KEYS = {"name", "urdf", "trunk", "rest", "feet"}
+_GAIT_KEYS = {"pattern", "phases", "duty", "period", "speed", "stride", "step_height"}
+
+
+@dataclass
+class Foot:
+    """A foot: the point ``point`` (m) of link ``link``, in the link's frame."""
+
+    link: str
+    point: np.ndarray
+
+
+@dataclass
+class Gait:
+    """How the robot walks: lift-off ``phases`` by foot, ``duty``, ``period`` (s), ``stride``
+    (m per period) and ``step_height`` (m)."""
+
+    phases: dict[str, float]
+    duty: float
+    period: float
+    stride: float
+    step_height: float
+    pattern: str = ""
+
+
+@dataclass
+class RobotDescription:
+    """A robot read by :func:`read_robot`: its URDF, trunk, feet, rest posture and gait."""
+
+    name: str
+    urdf: Path
+    trunk: str
+    feet: dict[str, Foot]
+    rest: dict[str, float]
+    gait: Gait
+    ground: dict = field(default_factory=dict)
+    source: str = ""
+
+
+class _Problems:
+    """Problems of one file, each with its key."""
+
+    def __init__(self, path: Path):
+        self.path, self.items = path, []
+
+    def add(self, key: str, message: str) -> None:
+        self.items.append(Problem(f"robot description {self.path.name}", message,
+                                  f"{self.path}, {key}"))
+
+    def number(self, table: dict, key: str, where: str, low=None, high=None, default=None):
+        value = table.get(key, default)
+        if value is None:
+            return None
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(
+                value):
+            self.add(f"{where}.{key}", f"must be a number, got {value!r}")
+            return None
+        if (low is not None and not value > low) or (high is not None and not value < high):
+            self.add(f"{where}.{key}", f"must be in ({low}, {high}), got {value}")
+            return None
+        return float(value)
+
+
+def read_robot(document: dict, path: str | Path) -> RobotDescription:
+    """The robot description of a parsed TOML ``document`` read from ``path`` (which names it in
+    messages; its URDF is found relative to it).
+
+    Raises
+    ------
+    ModelError
+        Every problem of the description: unknown keys, a missing URDF, feet without a link or
+        a point of three numbers, a gait that is no pattern for the robot's feet or a phase
+        table that forgets a foot, numbers out of range.
+    """
+    path = Path(path)
+    problems = _Problems(path)
+    robot = document.get("robot")
+    if not isinstance(robot, dict):
+        problems.add("robot", "must be a table")
+        raise ModelError(f"robot description {path}", problems.items)
+    for key in sorted(set(robot) - _ROBOT_KEYS):
+        problems.add(f"robot.{key}", f"unknown key (expected {', '.join(sorted(_ROBOT_KEYS))})")
+    urdf = path.parent / str(robot.get("urdf", ""))
+    if "urdf" not in robot or not urdf.is_file():
+        problems.add("robot.urdf", f"needs the robot's URDF file, relative to {path.name}"
+                     + (f": no file {urdf}" if "urdf" in robot else ""))
+    feet = _feet(robot.get("feet"), problems)
+    rest = robot.get("rest", {})
+    if not isinstance(rest, dict) or not all(isinstance(v, (int, float)) for v in rest.values()):
+        problems.add("robot.rest", "must be a table of joint names (or patterns) and angles")
+        rest = {}
+    gait = _gait(document.get("gait", {}), list(feet), problems)
+    ground = document.get("ground", {})
+    if problems.items:
+        raise ModelError(f"robot description {path}", problems.items)
+    return RobotDescription(str(robot.get("name", path.stem)), urdf, str(robot.get("trunk", "")),
+                            feet, {str(k): float(v) for k, v in rest.items()}, gait, ground,
+                            str(path))
+
+
+def _feet(table, problems: _Problems) -> dict[str, Foot]:
+    if not isinstance(table, dict) or not table:
+        problems.add("robot.feet", "must name each foot: FOOT = { link = ..., point = [x, y, "
+                     "z] }")
+        return {}
+    out = {}
+    for name, foot in table.items():
+        point = foot.get("point", [0.0, 0.0, 0.0]) if isinstance(foot, dict) else None
+        if (not isinstance(foot, dict) or not isinstance(foot.get("link"), str)
+                or not isinstance(point, list) or len(point) != 3
+                or not all(isinstance(x, (int, float)) for x in point)):
+            problems.add(f"robot.feet.{name}", "needs link = \"LINK\" and point = [x, y, z] "
+                         "(m, in the link's frame)")
+            continue
+        out[name] = Foot(foot["link"], np.array(point, dtype=float))
+    return out
+
+
+def _gait(table, feet: list[str], problems: _Problems) -> Gait | None:
+    if not isinstance(table, dict):
+        problems.add("gait", "must be a table")
+        return None
+    for key in sorted(set(table) - _GAIT_KEYS):
+        problems.add(f"gait.{key}", f"unknown key (expected {', '.join(sorted(_GAIT_KEYS))})")
+    pattern, phases = table.get("pattern"), table.get("phases")
+    default_duty = None
+    if phases is not None:
+        if not isinstance(phases, dict) or set(phases) != set(feet) or not all(
+                isinstance(v, (int, float)) and 0 <= v < 1 for v in phases.values()):
+            forgotten = sorted(set(feet) - set(phases)) if isinstance(phases, dict) else []
+            problems.add("gait.phases", "must give every foot a lift-off fraction in [0, 1)"
+                         + (f" (forgets {', '.join(forgotten)})" if forgotten else ""))
+            phases = None
+    else:
+        known = PATTERNS.get(len(feet), {})
+        pattern = "walk" if pattern is None and "walk" in known else pattern
+        if pattern not in known:
+            problems.add("gait.pattern", f"must be one of {', '.join(known) or 'none'} for "
+                         f"{len(feet)} feet, or give phases by foot; got {pattern!r}")
+        else:
+            default_duty = known[pattern][1]
+    duty = problems.number(table, "duty", "gait", 0.0, 1.0, default_duty)
+    stride = problems.number(table, "stride", "gait", 0.0, None, 0.1)
+    height = problems.number(table, "step_height", "gait", 0.0, None, 0.03)
+    period = problems.number(table, "period", "gait", 0.0)
+    speed = problems.number(table, "speed", "gait", 0.0)
+    if (period is None) == (speed is None):
+        problems.add("gait.period", "give the period (s) or the speed (m/s), one of them")
+    elif period is None and stride is not None:
+        period = stride / speed
+    if duty is None and phases is not None:
+        problems.add("gait.duty", "a phase table needs the duty factor")
+    if None in (duty, stride, height, period):
+        return None
+    return Gait(dict(phases) if phases else {}, duty, period, stride, height, pattern or "")
+
+
+def rest_angles(description: RobotDescription, joints) -> dict[str, float]:
+    """The rest angle of each of ``joints`` (names): the first entry of ``rest`` whose name or
+    pattern matches it, else 0."""
+    out = {}
+    for joint in joints:
+        for key, angle in description.rest.items():
+            if fnmatch.fnmatchcase(joint, key):
+                out[joint] = angle
+                break
+    return out
+
+
+def robot_from_document(document: dict, path: str | Path):
+    """The walking scene of the robot description ``document`` read from ``path`` (the entry
+    point ``hexapod.robots``: a scene file with a ``[robot]`` table).
+
+    Raises
+    ------
+    ModelError
+        Every problem of the description, or of its URDF.
+    """
+    from legs.walker import robot_scene
+
+    return robot_scene(read_robot(document, path))

@@ -1,0 +1,243 @@
+"""Any legged robot walking: gaits for any number of legs, the feet's paths, and the scene.
+
+A robot is its URDF and a small description (:mod:`legs.description`): the trunk, each foot
+(a link and a point), a rest posture. Walking it needs no inverse kinematics of its own: the
+trunk's pose and each foot's path are **guides** (:mod:`hexapod.scene.laws.guided`) and every
+actuated joint follows them, so the engine's Newton solve places the legs and the joints carry
+the efforts; each foot in stance is a contact whose ground force the scene's policy shares.
+
+**Gaits** (:data:`PATTERNS`): each foot lifts off at a fraction of the period (its phase) and
+is on the ground for the fraction ``duty`` before that. Patterns name the feet by role: on four
+legs ``LF RF LH RH`` (left/right, fore/hind), on six ``L1 L2 L3 R1 R2 R3`` (front to hind), on
+two ``L R``; the roles are the robot's feet sorted by their rest positions (left: ``y > 0``;
+front first). An explicit phase table names the feet themselves.
+
+**Paths** (:class:`StepPath`), in world axes, walking along ``x`` at the constant speed
+``stride / period``: a foot in stance stands still on its foothold; in swing it moves to the
+next foothold, ``stride`` ahead, along ``x0 + stride S(u)`` lifted by ``step_height B(u)``, with
+``u`` the swing's progress, ``S(u)`` the ninth-degree smooth step and ``B(u) = 1024 u^5 (1 -
+u)^5``: it leaves and rejoins the ground with zero velocity and acceleration (and third and
+fourth derivatives), C4 in time. Each foothold lies under the foot's rest position (relative to
+the trunk) at the middle of its stance, on the ground ``z = 0``; the trunk moves at its rest
+height above it, level.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from hexapod.scene import Law, cycle_breaks
+from legs.stepping import LIFT_RATES, STEP_RATES
+
+#: Lift-off phases (fractions of the period) by foot role, and the default duty factor, of
+#: each pattern, by the number of legs. A trot, a pace and a bound have two feet down: their
+#: point feet on a line cannot hold the trunk's moment about it.
+PATTERNS: dict[int, dict[str, tuple[dict[str, float], float]]] = {
+    2: {"walk": ({"L": 0.0, "R": 0.5}, 0.6)},
+    4: {"walk": ({"LH": 0.0, "LF": 0.25, "RH": 0.5, "RF": 0.75}, 0.75),
+        "trot": ({"LF": 0.0, "RH": 0.0, "RF": 0.5, "LH": 0.5}, 0.5),
+        "pace": ({"LF": 0.0, "LH": 0.0, "RF": 0.5, "RH": 0.5}, 0.5),
+        "bound": ({"LF": 0.0, "RF": 0.0, "LH": 0.5, "RH": 0.5}, 0.5)},
+    6: {"tripod": ({"L1": 0.0, "R2": 0.0, "L3": 0.0, "R1": 0.5, "L2": 0.5, "R3": 0.5}, 0.5),
+        "tetrapod": ({"L3": 0.0, "R2": 0.0, "L2": 1 / 3, "R1": 1 / 3, "L1": 2 / 3,
+                      "R3": 2 / 3}, 2 / 3),
+        "wave": ({"L3": 0.0, "L2": 1 / 6, "L1": 2 / 6, "R3": 3 / 6, "R2": 4 / 6, "R1": 5 / 6},
+                 5 / 6),
+        "ripple": ({"L1": 0.0, "R2": 1 / 6, "L3": 2 / 6, "R1": 3 / 6, "L2": 4 / 6,
+                    "R3": 5 / 6}, 2 / 3)},
+}
+
+
+def roles(rest: dict[str, np.ndarray]) -> dict[str, str]:
+    """Each foot's role in the patterns (foot name -> role), from the feet's rest positions in
+    the trunk's frame: left where ``y > 0``, then front to hind by ``x``. Raises ``ValueError``
+    for a number of feet no pattern knows, or sides of unequal numbers of feet."""
+    left = sorted((f for f, p in rest.items() if p[1] > 0), key=lambda f: -rest[f][0])
+    right = sorted((f for f, p in rest.items() if p[1] <= 0), key=lambda f: -rest[f][0])
+    if len(rest) not in PATTERNS or len(left) != len(right):
+        raise ValueError(f"the patterns are for 2, 4 or 6 feet, as many on each side (y > 0 on "
+                         f"the left); this robot has {len(left)} on the left and {len(right)} "
+                         "on the right: give the gait's phases by foot")
+    names = {1: ("",), 2: ("F", "H"), 3: ("1", "2", "3")}[len(left)]
+    out = {}
+    for side, feet in (("L", left), ("R", right)):
+        for foot, suffix in zip(feet, names, strict=True):
+            out[foot] = side + suffix
+    return out
+
+
+@dataclass(frozen=True)
+class StepPath(Law):
+    """One world coordinate (m) of a walking foot: standing on its foothold in stance, stepping
+    to the next in swing (see the module's notes). The foot lifts off at ``lift_off`` (a
+    fraction of the ``period``, s) from ``start`` (the value in the stance that ends then) and
+    is on the ground for ``duty`` of the period; each step moves it by ``advance``; ``lift``
+    is the swing's height (for the vertical coordinate; 0 otherwise)."""
+
+    start: float = 0.0
+    advance: float = 0.0
+    lift: float = 0.0
+    duty: float = 0.75
+    period: float = 1.0
+    lift_off: float = 0.0
+    kind = "step-path"
+
+    def evaluate(self, t):
+        t = np.asarray(t, dtype=float)
+        x = t / self.period - self.lift_off
+        k = np.floor(x)
+        tau = x - k  # 0 at lift-off; swing until 1 - duty
+        swing = 1.0 - self.duty
+        u = np.clip(tau / swing, 0.0, 1.0)
+        in_swing = tau < swing
+        step = [p(u) for p in STEP_RATES]
+        bump = [p(u) for p in LIFT_RATES]
+        value = self.start + self.advance * (k + np.where(in_swing, step[0], 1.0))
+        value = value + self.lift * np.where(in_swing, bump[0], 0.0)
+        rates = [np.where(in_swing, (self.advance * step[m] + self.lift * bump[m])
+                          / (swing * self.period) ** m, 0.0) for m in (1, 2)]
+        return value, rates[0], rates[1]
+
+    def cycle_time(self):
+        return self.period if self.advance == 0.0 else None
+
+    def breaks(self, start, stop):  # lift-off and touch-down
+        return cycle_breaks(self.period, (self.lift_off, self.lift_off + 1.0 - self.duty),
+                            start, stop)
+
+    def problems(self):
+        out = []
+        if not (np.isfinite(self.period) and self.period > 0):
+            out.append(f"period must be positive, got {self.period}")
+        if not 0 < self.duty < 1:
+            out.append(f"duty must be in (0, 1), got {self.duty}")
+        if not all(np.isfinite(v) for v in (self.start, self.advance, self.lift,
+                                            self.lift_off)):
+            out.append("start, advance, lift and lift_off must be finite")
+        return out
+
+
+def _posed(scene, angles: dict[str, float]):
+    """A copy of the tree ``scene`` with its bodies moved to the pose of the revolute joints'
+    ``angles`` (rad, from the joints' zero): the joint frames stay on the bodies as at zero."""
+    from dataclasses import replace
+
+    from hexapod import Scene
+    from hexapod.scene import GROUND
+    from hexapod.spatial import Placement, rotation_about_axis
+
+    out = Scene(scene.name, scene.dimension, scene.length_unit, scene.gravity)
+    children = {j.child for j in scene.joints.values()}
+    poses = {GROUND: Placement.identity(3)}
+    poses.update({b: scene.pose(b) for b in scene.bodies if b not in children})
+    pending, joints = list(scene.joints.values()), []
+    while pending:
+        joint = next(j for j in pending if j.parent in poses)  # tree order
+        pending.remove(joint)
+        parent_frame, child_frame = scene.joint_frames(joint)
+        angle = angles.get(joint.name, 0.0) if joint.kind == "revolute" else 0.0
+        turn = Placement(np.zeros(3), rotation_about_axis(joint.unit_axis(3), angle))
+        poses[joint.child] = poses[joint.parent] @ parent_frame @ turn @ child_frame.inverse()
+        joints.append(replace(joint, origin=None, rotation=None, parent_frame=parent_frame,
+                              child_frame=child_frame))
+    for body in scene.bodies.values():
+        out.add(replace(body, position=poses[body.name].position,
+                        rotation=poses[body.name].rotation))
+    out.add(*joints, *scene.drivers.values(), *scene.forces.values())
+    return out
+
+
+def robot_scene(description):
+    """The walking scene of a robot description (:class:`legs.description.RobotDescription`):
+    its URDF with a free trunk in its rest posture, the feet on the ground ``z = 0``, the
+    trunk's pose and each foot's path as guides, every revolute and prismatic joint following
+    them, each foot a contact by the gait's schedule.
+
+    Raises
+    ------
+    ModelError
+        The trunk or a foot's link is not a link of the URDF, or the URDF's own problems.
+    """
+    from hexapod import ModelError
+    from hexapod.scene import (
+        Contact,
+        CoordinateDriver,
+        GroundForces,
+        Guided,
+        JointDriver,
+        Polynomial,
+        Problem,
+        read_urdf,
+    )
+    from hexapod.spatial import Placement
+    from legs.description import rest_angles
+
+    urdf = read_urdf(description.urdf, base="free")
+    where = f"robot description {Path(description.source).name}"
+    missing = [Problem(where, f"no link '{foot.link}' in {description.urdf.name}",
+                       f"{description.source}, robot.feet.{name}")
+               for name, foot in description.feet.items() if foot.link not in urdf.bodies]
+    trunk = description.trunk or next(b for b in urdf.bodies if b not in {
+        j.child for j in urdf.joints.values()})
+    if trunk not in urdf.bodies:
+        missing.append(Problem(where, f"no link '{trunk}' in {description.urdf.name}",
+                               f"{description.source}, robot.trunk"))
+    if missing:
+        raise ModelError(where, missing)
+    scene = _posed(urdf, rest_angles(description, urdf.joints))
+    rest = {name: scene.pose(foot.link).transform_point(foot.point)
+            for name, foot in description.feet.items()}
+    height = -float(np.mean([p[2] for p in rest.values()]))  # the feet's mean on the ground
+    lifted = _posed_lifted(scene, height)
+    gait = description.gait
+    phases = gait.phases or _pattern_phases(gait.pattern, rest)
+    period, duty, stride = gait.period, gait.duty, gait.stride
+    speed = stride / period
+    origin = lifted.pose(trunk).position
+    for axis, law in zip("xyz", (Polynomial((origin[0], speed)), origin[1], origin[2]),
+                         strict=True):
+        lifted.add(CoordinateDriver(f"trunk/{axis}", trunk, axis, law, point=[0.0, 0.0, 0.0],
+                                    guide=True))
+    for angle in ("roll", "pitch", "yaw"):
+        lifted.add(CoordinateDriver(f"trunk/{angle}", trunk, angle, 0.0, guide=True))
+    for name, foot in description.feet.items():
+        phase = phases[name]
+        start = np.array([rest[name][0] + speed * (phase - duty / 2) * period, rest[name][1],
+                          0.0])
+        laws = (StepPath(start[0], stride, 0.0, duty, period, phase), start[1],
+                StepPath(0.0, 0.0, gait.step_height, duty, period, phase))
+        for axis, law in zip("xyz", laws, strict=True):
+            lifted.add(CoordinateDriver(f"{name}/{axis}", foot.link, axis, law,
+                                        point=foot.point, guide=True))
+        lifted.add(Contact(f"{name}/ground", "ground", foot.link,
+                           child_frame=Placement(foot.point), period=period, duty=duty,
+                           lift_off=phase, foothold=start, advance=[stride, 0.0, 0.0]))
+    for joint in urdf.joints.values():
+        if joint.drivable:
+            lifted.add(JointDriver(f"drive_{joint.name}", joint.name, Guided()))
+    lifted.ground = GroundForces(**description.ground)
+    lifted.name, lifted.source = description.name, description.source
+    return lifted
+
+
+def _posed_lifted(scene, height: float):
+    """``scene`` with every body raised by ``height`` (m)."""
+    from dataclasses import replace
+
+    from hexapod import Scene
+
+    out = Scene(scene.name, scene.dimension, scene.length_unit, scene.gravity)
+    for element in scene.elements:
+        if element in scene.bodies.values():
+            element = replace(element, position=element.position + np.array([0, 0, height]))
+        out.add(element)
+    return out
+
+
+def _pattern_phases(pattern: str, rest: dict[str, np.ndarray]) -> dict[str, float]:
+    """The lift-off phase of each foot in ``pattern``, by the feet's roles."""
+    by_role, _ = PATTERNS[len(rest)][pattern]
+    return {foot: by_role[role] for foot, role in roles(rest).items()}

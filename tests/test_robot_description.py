@@ -1,0 +1,133 @@
+"""A robot no one wrote code for: a URDF and a robot description walk through the engine's own
+kinematics (the trunk's pose and the feet's paths as guides), with no inverse kinematics of its
+own. Checked on the project's small quadruped (data/robots/quadruped.toml): stance feet stay on
+their footholds, the ground forces balance the rate of change of momentum computed from the
+bodies' motions alone, the trunk follows its path; bad descriptions are one clear message."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import hexapod as hx
+from hexapod.errors import ModelError
+from hexapod.spatial import rotation_from_euler_parameters
+from legs.walker import PATTERNS, StepPath, roles
+
+ROBOTS = Path(__file__).resolve().parents[1] / "data" / "robots"
+QUADRUPED = ROBOTS / "quadruped.toml"
+
+
+@pytest.fixture(scope="module")
+def walk():
+    scene = hx.load_scene(QUADRUPED)
+    model = hx.assemble(scene)
+    times = np.linspace(0.0, 1.0, 21)  # a stride: every foot lifts off and touches down
+    return scene, model, hx.inverse_dynamics(model, times)
+
+
+def foot_positions(scene, model, result, foot: str) -> np.ndarray:
+    """The world position of ``foot``'s point at every sample (N, 3)."""
+    contact = scene.joints[f"{foot}/ground"]
+    body = scene.bodies[contact.child]
+    point = contact.child_frame.position - np.asarray(body.com, dtype=float)
+    info = model.bodies[model.body_index[body.name]]
+    return np.array([q[info.q][:3] + np.asarray(rotation_from_euler_parameters(q[info.q][3:]))
+                     @ point for q in result.q])
+
+
+def test_stance_feet_stay_on_their_footholds(walk):
+    scene, model, result = walk
+    for foot in ("LF", "RF", "LH", "RH"):
+        contact = scene.joints[f"{foot}/ground"]
+        position = foot_positions(scene, model, result, foot)
+        stance = hx.scene.contacts.in_stance(contact, result.times)
+        k = np.floor(result.times / contact.period - contact.lift_off) + 1.0
+        foothold = contact.foothold + k[:, None] * contact.advance
+        assert stance.sum() >= 15  # three quarters of the stride
+        assert np.abs(position[stance] - foothold[stance]).max() < 1e-12
+
+
+def test_ground_forces_balance_the_momentum_of_the_bodies_motions(walk):
+    _, model, result = walk
+    weight = model.total_mass * 9.81
+    momentum_rate = sum(b.mass * result.v_dot[:, b.v][:, :3] for b in model.bodies)
+    gravity = model.total_mass * np.asarray(model.gravity)
+    balance = result.ground_force.sum(axis=1) + gravity - momentum_rate
+    assert np.abs(balance).max() < 1e-9 * weight
+
+
+def test_the_trunk_follows_its_path_and_the_joints_carry_the_efforts(walk):
+    scene, model, result = walk
+    trunk = model.bodies[model.body_index["trunk"]]
+    x = result.q[:, trunk.q][:, 0]
+    assert np.allclose(x - x[0], 0.12 * result.times, atol=1e-12)  # 0.12 m a stride of 1 s
+    efforts = result.effort[:, :12]  # the twelve joints: every one carries an effort
+    assert np.all(np.isfinite(efforts)) and np.all(np.abs(efforts).max(axis=0) > 0.1)
+
+
+def test_the_step_path_leaves_and_rejoins_the_ground_at_rest():
+    """Zero velocity and acceleration at lift-off and touch-down, standing still in stance, one
+    stride per period; the derivatives against central differences."""
+    law = StepPath(start=0.1, advance=0.12, lift=0.0, duty=0.75, period=1.0, lift_off=0.25)
+    lift = StepPath(start=0.0, advance=0.0, lift=0.04, duty=0.75, period=1.0, lift_off=0.25)
+    ends = np.array([0.25, 0.5, 1.25, 1.5])  # lift-offs and touch-downs
+    for path in (law, lift):
+        _, rate, acceleration = path.evaluate(ends)
+        assert np.abs(rate).max() < 1e-12 and np.abs(acceleration).max() < 1e-9
+        t = np.linspace(0.0, 2.0, 97) + 0.0031
+        h = 1e-5
+        value, rate, acceleration = path.evaluate(t)
+        assert np.abs((path(t + h) - path(t - h)) / (2 * h) - rate).max() < 1e-7
+        assert np.abs((path.evaluate(t + h)[1] - path.evaluate(t - h)[1]) / (2 * h)
+                      - acceleration).max() < 1e-6
+    stance = np.linspace(0.5, 1.24, 20)
+    assert np.ptp(law(stance)) == 0.0 and law(1.5) - law(0.5) == pytest.approx(0.12)
+    assert lift(0.375) == pytest.approx(0.04)  # the top of the swing
+
+
+def test_feet_take_their_roles_from_where_they_stand():
+    rest = {"a": np.array([0.2, 0.1, 0]), "b": np.array([0.2, -0.1, 0]),
+            "c": np.array([-0.2, 0.1, 0]), "d": np.array([-0.2, -0.1, 0])}
+    assert roles(rest) == {"a": "LF", "c": "LH", "b": "RF", "d": "RH"}
+    six = {f"f{k}": np.array([0.2 - 0.2 * (k % 3), 0.1 if k < 3 else -0.1, 0])
+           for k in range(6)}
+    assert sorted(roles(six).values()) == sorted(PATTERNS[6]["tripod"][0])
+    with pytest.raises(ValueError, match="as many on each side"):
+        roles({"a": np.array([0.2, 0.1, 0]), "b": np.array([0.2, 0.2, 0])})
+
+
+def _description(tmp_path, text: str) -> Path:
+    (tmp_path / "quadruped.urdf").write_text((ROBOTS / "quadruped.urdf").read_text())
+    path = tmp_path / "robot.toml"
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize("change, message", [
+    (('LF = { link = "LF_shank"', 'LF = { link = "LF_foot"'), "no link 'LF_foot'"),
+    (('pattern = "walk"', 'phases = { LF = 0.25, RF = 0.75, LH = 0.0 }'), "forgets RH"),
+    (('pattern = "walk"', 'pattern = "tripod"'), "must be one of walk, trot, pace, bound"),
+    (('urdf = "quadruped.urdf"', 'urdf = "nowhere.urdf"'), "no file"),
+    (('duty = 0.75', 'duty = 1.5'), "gait.duty"),
+])
+def test_a_bad_description_is_one_clear_message(tmp_path, change, message):
+    text = QUADRUPED.read_text()
+    assert change[0] in text
+    path = _description(tmp_path, text.replace(*change))
+    with pytest.raises(ModelError) as caught:
+        hx.load_scene(path)
+    assert message in str(caught.value) and str(path) in str(caught.value)
+
+
+def test_the_command_line_refuses_a_bad_description_and_writes_nothing(tmp_path):
+    from commands import in_process
+
+    path = _description(tmp_path, QUADRUPED.read_text().replace('LF = { link = "LF_shank"',
+                                                                 'LF = { link = "LF_foot"'))
+    before = set(tmp_path.iterdir())
+    done = in_process("report", str(path), "--no-figures", cwd=tmp_path)
+    assert done.returncode == 1 and "no link 'LF_foot'" in done.stderr
+    assert "Traceback" not in done.stderr and set(tmp_path.iterdir()) == before
