@@ -17,6 +17,7 @@
     period = 0.8                     # s; or speed (m/s)
     stride = 0.12                    # m, the trunk's advance per period
     step_height = 0.04               # m
+    trunk = "planned"                # or "level": straight at constant speed
 
     [ground]                         # optional: the ground-force policy, as in a scene file
     policy = "min-wrench"
@@ -40,7 +41,7 @@ from hexapod.scene import Problem
 from legs.walker import PATTERNS
 
 _ROBOT_KEYS = {"name", "urdf", "trunk", "rest", "feet"}
-_GAIT_KEYS = {"pattern", "phases", "duty", "period", "speed", "stride", "step_height"}
+_GAIT_KEYS = {"pattern", "phases", "duty", "period", "speed", "stride", "step_height", "trunk"}
 
 
 @dataclass
@@ -54,7 +55,9 @@ class Foot:
 @dataclass
 class Gait:
     """How the robot walks: lift-off ``phases`` by foot, ``duty``, ``period`` (s), ``stride``
-    (m per period) and ``step_height`` (m)."""
+    (m per period), ``step_height`` (m), and the ``trunk``'s motion: ``planned`` (swaying so
+    that the centre of pressure stays inside the support polygon, :mod:`legs.trunk_path`) or
+    ``level`` (straight, at constant speed)."""
 
     phases: dict[str, float]
     duty: float
@@ -62,6 +65,7 @@ class Gait:
     stride: float
     step_height: float
     pattern: str = ""
+    trunk: str = "planned"
 
 
 @dataclass
@@ -191,9 +195,13 @@ def _gait(table, feet: list[str], problems: _Problems) -> Gait | None:
         period = stride / speed
     if duty is None and phases is not None:
         problems.add("gait.duty", "a phase table needs the duty factor")
+    trunk = table.get("trunk", "planned")
+    if trunk not in ("planned", "level"):
+        problems.add("gait.trunk", f"must be 'planned' or 'level', got {trunk!r}")
     if None in (duty, stride, height, period):
         return None
-    return Gait(dict(phases) if phases else {}, duty, period, stride, height, pattern or "")
+    return Gait(dict(phases) if phases else {}, duty, period, stride, height, pattern or "",
+                trunk)
 
 
 def rest_angles(description: RobotDescription, joints) -> dict[str, float]:

@@ -168,12 +168,12 @@ def robot_scene(description):
         GroundForces,
         Guided,
         JointDriver,
-        Polynomial,
         Problem,
         read_urdf,
     )
     from hexapod.spatial import Placement
     from legs.description import rest_angles
+    from legs.trunk_path import TrunkPlan, plan_trunk
 
     urdf = read_urdf(description.urdf, base="free")
     where = f"robot description {Path(description.source).name}"
@@ -197,16 +197,22 @@ def robot_scene(description):
     period, duty, stride = gait.period, gait.duty, gait.stride
     speed = stride / period
     origin = lifted.pose(trunk).position
-    for axis, law in zip("xyz", (Polynomial((origin[0], speed)), origin[1], origin[2]),
-                         strict=True):
+    starts = {name: np.array([rest[name][0] + speed * (phases[name] - duty / 2) * period,
+                              rest[name][1], 0.0]) for name in description.feet}
+    plan = TrunkPlan.level(period) if gait.trunk == "level" else plan_trunk(
+        {name: (StepPath(starts[name][0], stride, 0.0, duty, period,
+                                phases[name]),
+                 StepPath(0.0, 0.0, gait.step_height, duty, period, phases[name]),
+                 rest[name][:2] - origin[:2]) for name in description.feet},
+        phases, duty, period, stride, height, _masses(lifted, trunk))
+    for axis, law in zip("xyz", (_sway(plan.x, origin[0], speed, period),
+                                 _sway(plan.y, origin[1], 0.0, period), origin[2]), strict=True):
         lifted.add(CoordinateDriver(f"trunk/{axis}", trunk, axis, law, point=[0.0, 0.0, 0.0],
                                     guide=True))
     for angle in ("roll", "pitch", "yaw"):
         lifted.add(CoordinateDriver(f"trunk/{angle}", trunk, angle, 0.0, guide=True))
     for name, foot in description.feet.items():
-        phase = phases[name]
-        start = np.array([rest[name][0] + speed * (phase - duty / 2) * period, rest[name][1],
-                          0.0])
+        phase, start = phases[name], starts[name]
         laws = (StepPath(start[0], stride, 0.0, duty, period, phase), start[1],
                 StepPath(0.0, 0.0, gait.step_height, duty, period, phase))
         for axis, law in zip("xyz", laws, strict=True):
@@ -241,3 +247,27 @@ def _pattern_phases(pattern: str, rest: dict[str, np.ndarray]) -> dict[str, floa
     """The lift-off phase of each foot in ``pattern``, by the feet's roles."""
     by_role, _ = PATTERNS[len(rest)][pattern]
     return {foot: by_role[role] for foot, role in roles(rest).items()}
+
+
+def _masses(scene, trunk: str) -> tuple[float, float]:
+    """The trunk's mass and the other bodies' (kg)."""
+    total = sum(body.mass for body in scene.bodies.values())
+    return scene.bodies[trunk].mass, total - scene.bodies[trunk].mass
+
+
+def _sway(series: tuple, start: float, speed: float, period: float):
+    """The law ``start + speed t`` plus a planned sway ``(offset, cos, sin)`` of ``period``: a
+    harmonic series, or with a drift an expression of it (exact derivatives either way)."""
+    from hexapod.scene import Expression, Harmonic, Polynomial
+
+    offset, cos, sin = series
+    if not cos:  # no sway
+        return Polynomial((start + offset, speed))
+    if speed == 0.0:
+        return Harmonic(start + offset, cos, sin, frequency=1.0 / period)
+    terms = " + ".join(f"a{k} * cos({k} * w * t) + b{k} * sin({k} * w * t)"
+                       for k in range(1, len(cos) + 1))
+    constants = {"x0": start + offset, "v": speed, "w": 2 * np.pi / period,
+                 **{f"a{k}": c for k, c in enumerate(cos, 1)},
+                 **{f"b{k}": c for k, c in enumerate(sin, 1)}}
+    return Expression(f"x0 + v * t + {terms}", tuple(constants.items()))
