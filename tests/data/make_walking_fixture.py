@@ -16,7 +16,10 @@ vanish: the reported ground reactions balance the robot. The conversion is check
 Pinocchio's placements, velocities and accelerations of every body frame against the hexapod's
 (from ``q``, ``v`` and ``v_dot``), and each joint angle from ``q`` against its driver law.
 
-    pip install ".[compare]" && python3 tests/data/make_walking_fixture.py
+    pip install ".[compare]" && python3 tests/data/make_walking_fixture.py [--quadruped]
+
+``--quadruped`` writes ``quadruped_rnea.npz`` for the project's quadruped instead
+(``data/robots/quadruped.toml``: a URDF robot whose joints follow its guides).
 """
 
 from __future__ import annotations
@@ -235,10 +238,9 @@ def pinocchio_rnea(model: hx.Model, result: hx.InverseResult) -> Comparison:
     feet = []  # (contact number, Pinocchio joint id, the foot in that joint's frame)
     for c, name in enumerate(result.contacts):
         joint = model.joints[model.joint_index[name]]
-        tarsus = model.bodies[joint.child]
-        foot = tarsus.markers["foot"].position
-        feet.append((c, robot.body_joint[tarsus.index],
-                     robot.body_frame[tarsus.index].inverse() @ hx.spatial.Placement(foot)))
+        foot = joint.child_frame.position  # the foot point, in its body's centre-of-mass frame
+        feet.append((c, robot.body_joint[joint.child],
+                     robot.body_frame[joint.child].inverse() @ hx.spatial.Placement(foot)))
     revolute = [j for j in model.joints if j.kind == "revolute"]
     n = result.times.size
     tau = np.zeros((n, len(revolute)))
@@ -261,29 +263,41 @@ def pinocchio_rnea(model: hx.Model, result: hx.InverseResult) -> Comparison:
                       q, v, a, angle_gap, placement_gap, motion_gap)
 
 
+def quadruped() -> tuple[hx.Model, np.ndarray]:
+    """The project's quadruped (data/robots/quadruped.toml: its joints follow guides) and one
+    stride of its walk."""
+    model = hx.assemble(hx.load_scene(ROOT / "data" / "robots" / "quadruped.toml"))
+    return model, np.linspace(0.0, 1.2, 24, endpoint=False)
+
+
 def main() -> None:
     import pinocchio as pin
 
-    model = walking_model()
-    times = sample_times()
+    if "--quadruped" in sys.argv:
+        model, times = quadruped()
+        out = OUT.with_name("quadruped_rnea.npz")
+    else:
+        model, times, out = walking_model(), sample_times(), OUT
     result = hx.inverse_dynamics(model, times)
-    comparison = pinocchio_rnea(model, result)
+    from hexapod.algorithms.guided import motion_model  # a guided robot's laws: its motion
+
+    comparison = pinocchio_rnea(motion_model(model, result), result)
     weight = sum(b.mass for b in model.bodies) * float(np.linalg.norm(model.gravity))
     size = model.characteristic_length
     residual = max(np.abs(comparison.base[:, :3]).max() / weight,
                    np.abs(comparison.base[:, 3:]).max() / (weight * size))
-    OUT.parent.mkdir(parents=True, exist_ok=True)
+    out.parent.mkdir(parents=True, exist_ok=True)
     note = (f"Pinocchio {pin.__version__} rnea with fext (tests/data/make_walking_fixture.py) on "
-            f"the hexapod inverse dynamics of hexapod_scene(trunk='free'), policy "
+            f"the hexapod inverse dynamics of {model.name}, policy "
             f"{result.policy}; torques in joint order, base = free-flyer force then moment "
             f"(local trunk frame)")
     np.savez_compressed(
-        OUT, times=times, joints=np.array(comparison.joints), hexapod=comparison.hexapod,
+        out, times=times, joints=np.array(comparison.joints), hexapod=comparison.hexapod,
         pinocchio=comparison.pinocchio, base=comparison.base, contacts=np.array(result.contacts),
         ground_force=result.ground_force, q=comparison.q, v=comparison.v, a=comparison.a,
         pinocchio_version=np.array(pin.__version__), policy=np.array(result.policy),
         note=np.array(note))
-    print(f"wrote {OUT.relative_to(ROOT)} ({OUT.stat().st_size} bytes): {times.size} samples, "
+    print(f"wrote {out.relative_to(ROOT)} ({out.stat().st_size} bytes): {times.size} samples, "
           f"{len(comparison.joints)} joints, Pinocchio {pin.__version__}")
     print(f"state conversion: joint angles (laws vs q) {comparison.angle_gap:.2e} rad, body "
           f"frames {comparison.placement_gap:.2e}, velocities and accelerations "
