@@ -453,8 +453,30 @@ def parse_leg(spec: str) -> tuple[str, tuple[float, float, float, float]]:
     return words[0], length_factors(tuple(factors.values()))
 
 
+class OnSchedule:
+    """What the laws of a walking foot's schedule share (``period``, s; ``duty`` and
+    ``lift_off``, fractions of it): they repeat every period and change regime at lift-off and
+    touch-down, where the path's pieces join."""
+
+    def cycle_time(self):
+        return self.period
+
+    def breaks(self, start, stop):
+        return cycle_breaks(self.period, (self.lift_off, self.lift_off + 1.0 - self.duty),
+                            start, stop)
+
+
+def _position_problems(position: str) -> list[str]:
+    """What is wrong with a leg's ``position`` (:func:`parse_leg`), as a list."""
+    try:
+        parse_leg(position)
+    except ValueError as error:
+        return [str(error)]
+    return []
+
+
 @dataclass(frozen=True)
-class Stepping(Law):
+class Stepping(OnSchedule, Law):
     """The law of one joint of a leg walking with its foot exactly on its path
     (:func:`exact_leg_motion`): a ``front``, ``middle`` or ``hind`` leg, the gait's ``duty``
     factor and ``period`` (s), the leg's ``lift_off`` (a fraction of the period). The same
@@ -512,19 +534,8 @@ class Stepping(Law):
         """The factors of the coxa, femur, tibia and tarsus lengths."""
         return parse_leg(self.position)[1]
 
-    def cycle_time(self):
-        return self.period
-
-    def breaks(self, start, stop):  # lift-off and touch-down: the foot path's pieces join
-        return cycle_breaks(self.period, (self.lift_off, self.lift_off + 1.0 - self.duty),
-                            start, stop)
-
     def problems(self):
-        out = []
-        try:
-            parse_leg(self.position)
-        except ValueError as error:
-            out.append(str(error))
+        out = _position_problems(self.position)
         if self.joint not in JOINTS:
             out.append(f"joint must be one of {', '.join(JOINTS)}, got {self.joint!r}")
         if not (np.isfinite(self.period) and self.period > 0):
@@ -535,7 +546,7 @@ class Stepping(Law):
 
 
 @dataclass(frozen=True)
-class FootPath(Law):
+class FootPath(OnSchedule, Law):
     """One coordinate (m) of a walking leg's foot on its path (:func:`path_targets`), in the
     trunk's frame of :func:`legs.robot.hexapod_scene` (from the trunk's origin: the leg's
     thorax-coxa point plus the path, mirrored on the right): a guide's law, so that the engine
@@ -569,19 +580,8 @@ class FootPath(Law):
         return (value.reshape(t.shape), (rate / self.period).reshape(t.shape),
                 (acceleration / self.period**2).reshape(t.shape))
 
-    def cycle_time(self):
-        return self.period
-
-    def breaks(self, start, stop):  # lift-off and touch-down: the path's pieces join
-        return cycle_breaks(self.period, (self.lift_off, self.lift_off + 1.0 - self.duty),
-                            start, stop)
-
     def problems(self):
-        out = []
-        try:
-            parse_leg(self.position)
-        except ValueError as error:
-            out.append(str(error))
+        out = _position_problems(self.position)
         if self.side not in ("L", "R") or self.axis not in (0, 1, 2):
             out.append(f"side must be L or R and axis 0, 1 or 2, got {self.side!r}, "
                        f"{self.axis!r}")

@@ -29,8 +29,8 @@ from pathlib import Path
 
 import numpy as np
 
-from hexapod.scene import Law, cycle_breaks
-from legs.stepping import LIFT_RATES, STEP_RATES
+from hexapod.scene import Law
+from legs.stepping import LIFT_RATES, STEP_RATES, OnSchedule
 
 #: Lift-off phases (fractions of the period) by foot role, and the default duty factor, of
 #: each pattern, by the number of legs. A trot, a pace and a bound have two feet down: their
@@ -70,7 +70,7 @@ def roles(rest: dict[str, np.ndarray]) -> dict[str, str]:
 
 
 @dataclass(frozen=True)
-class StepPath(Law):
+class StepPath(OnSchedule, Law):
     """One world coordinate (m) of a walking foot: standing on its foothold in stance, stepping
     to the next in swing (see the module's notes). The foot lifts off at ``lift_off`` (a
     fraction of the ``period``, s) from ``start`` (the value in the stance that ends then) and
@@ -101,12 +101,8 @@ class StepPath(Law):
                           / (swing * self.period) ** m, 0.0) for m in (1, 2)]
         return value, rates[0], rates[1]
 
-    def cycle_time(self):
+    def cycle_time(self):  # a foot that steps forward does not come back
         return self.period if self.advance == 0.0 else None
-
-    def breaks(self, start, stop):  # lift-off and touch-down
-        return cycle_breaks(self.period, (self.lift_off, self.lift_off + 1.0 - self.duty),
-                            start, stop)
 
     def problems(self):
         out = []
