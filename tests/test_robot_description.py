@@ -109,10 +109,8 @@ def test_the_joint_efforts_are_pinocchios_with_the_ground_reactions_at_the_feet(
     pytest.importorskip("pinocchio")
     from script_loader import load_script
 
-    from hexapod.algorithms.guided import motion_model
-
     script = load_script("tests/data/make_walking_fixture.py")
-    comparison = script.pinocchio_rnea(motion_model(model, result), result)
+    comparison = script.pinocchio_rnea(hx.simulation.motion_model(model, result), result)
     assert comparison.placement_gap < 1e-12 and comparison.motion_gap < 1e-10
     assert comparison.difference < 1e-8
     assert np.abs(comparison.base[:, :3]).max() < 1e-8 * model.total_mass * 9.81

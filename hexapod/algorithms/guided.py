@@ -52,12 +52,3 @@ def guided_twin(model: Model, times: np.ndarray, q: np.ndarray, v: np.ndarray,
                           strict=True):
         laws[index] = law
     return model.with_laws(tuple(laws), model.digest, share_built=True)
-
-
-def motion_model(model: Model, result) -> Model:
-    """The model whose laws are the motion of the inverse-dynamics ``result`` it gave: a guided
-    model's twin with its guided joints' laws exact at the result's samples (what reports,
-    balances and metrics of the result evaluate the laws on); any other model itself."""
-    if model.guidance is None:
-        return model
-    return guided_twin(model, result.times, result.q, result.v, result.v_dot)

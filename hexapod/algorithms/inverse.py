@@ -225,6 +225,31 @@ def _guided(model: Model, times: np.ndarray, progress):
     return twin, (None if progress is None else lambda done, total: progress(n + done, 2 * n))
 
 
+def motion_model(model: Model, result: InverseResult) -> Model:
+    """The model whose laws are the motion of the inverse-dynamics ``result`` it gave: a guided
+    model's twin with its guided joints' laws exact at the result's samples (what reports,
+    balances and metrics of the result evaluate the laws on); any other model itself.
+
+    Parameters
+    ----------
+    model : Model
+        The model of the run.
+    result : InverseResult
+        Its inverse dynamics (``hexapod.inverse_dynamics(model, times)``).
+
+    Returns
+    -------
+    Model
+        The guided joints driven by the motion found (quintic Hermite laws through the samples'
+        angles, rates and accelerations), or ``model`` itself when nothing follows guides.
+    """
+    if model.guidance is None:
+        return model
+    from hexapod.algorithms.guided import guided_twin
+
+    return guided_twin(model, result.times, result.q, result.v, result.v_dot)
+
+
 def _check_finite(model: Model, result: InverseResult) -> None:
     """A non-finite wrench or acceleration (an overflow: laws or loads too large) is an error
     naming the first sample's time and the quantity, not numbers written as NaN."""

@@ -94,8 +94,7 @@ def run(args) -> int:
     import numpy as np
 
     from hexapod._support.files import write_directory_atomically
-    from hexapod.algorithms.guided import motion_model
-    from hexapod.algorithms.inverse import inverse_dynamics
+    from hexapod.algorithms.inverse import inverse_dynamics, motion_model
     from hexapod.errors import HexapodError
     from hexapod.model.assemble import assemble
     from hexapod.output.report import RunInfo, walking_headlines

@@ -103,8 +103,7 @@ def describe_model(model: Model, t: float = 0.0, graph: bool = False) -> dict:
         other there.
     """
     if model.guidance is not None:  # its guided joints' laws: the motion the guides give at t
-        from hexapod.algorithms.guided import motion_model
-        from hexapod.algorithms.inverse import inverse_dynamics
+        from hexapod.algorithms.inverse import inverse_dynamics, motion_model
 
         model = motion_model(model, inverse_dynamics(model, [t]))
     rows = [r.name for r in model.rows]

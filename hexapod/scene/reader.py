@@ -27,6 +27,7 @@ from hexapod.scene.forces import FORCE_TYPES
 from hexapod.scene.joints import JOINT_TYPES
 from hexapod.scene.joints.base import NUMBER, VECTOR, VECTOR3
 from hexapod.scene.laws import Constant, Law, law_types
+from hexapod.scene.robots import robot_scene
 from hexapod.scene.scene import Scene
 from hexapod.spatial import (
     Placement,
@@ -427,9 +428,7 @@ _GROUND_KEYS = {"policy": (_string, False), "mu": (_number, False), "faces": (_i
 def _driver_kind(table: dict) -> str:
     """Drivers may state their type; otherwise a ``joint`` key makes a joint driver."""
     kind = table.get("type")
-    if isinstance(kind, str):
-        return kind
-    return "joint" if "joint" in table else "coordinate"
+    return kind if isinstance(kind, str) else ("joint" if "joint" in table else "coordinate")
 
 
 # ------------------------------------------------------------------ the reader
@@ -579,21 +578,8 @@ def read_scene(path: str | Path) -> Scene:
     path = Path(path)
     document = read_toml(path, "scene file")
     if "robot" in document:  # a robot description: its walking scene
-        return _robot_scene(document, path)
+        return robot_scene(document, path)
     return scene_from_document(document, path)
-
-
-def _robot_scene(document: dict, path: Path) -> Scene:
-    """The walking scene of a robot description, by the reader a package registers in the entry
-    point group ``hexapod.robots`` (the ``legs`` package's)."""
-    from importlib.metadata import entry_points
-
-    readers = list(entry_points(group="hexapod.robots"))
-    if not readers:
-        raise ModelError(f"scene file {path}", [Problem(
-            "robot", "is a robot description, which needs a package that reads them (legs, "
-            "installed with hexapod)", str(path))])
-    return readers[0].load()(document, path)
 
 
 def scene_from_document(document: dict, path: str | Path) -> Scene:

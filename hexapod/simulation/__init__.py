@@ -12,4 +12,6 @@ __getattr__, __dir__, __all__ = attach(__name__, {
     "hexapod.simulation.integrators": ["Integrator"],
     "hexapod.simulation.diagnostics": ["Diagnosis", "diagnose"],
     "hexapod.simulation.tracking": ["controller_names", "tracking_errors"],
+    # a guided model's laws as an inverse run found its motion (to replay or simulate it)
+    "hexapod.algorithms.inverse": ["motion_model"],
 })

@@ -282,8 +282,7 @@ def _run_job(job: dict, model) -> tuple[str, str, dict]:
     families = job.get("metrics") or FAMILIES[job["kind"]]
     cycle = model.cycle_time()
     if job["kind"] == "inverse":
-        from hexapod.algorithms.guided import motion_model
-        from hexapod.algorithms.inverse import inverse_dynamics
+        from hexapod.algorithms.inverse import inverse_dynamics, motion_model
 
         times, strides = inverse_window(model, job)
         result = inverse_dynamics(model, times)

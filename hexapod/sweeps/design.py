@@ -111,8 +111,7 @@ def sensitivity_run(scene: Scene, parameters: Sequence, *,
         The inverse dynamics fails; with the friction policy, the exact cone, or a sample
         where no forces are inside the cones.
     """
-    from hexapod.algorithms.guided import motion_model
-    from hexapod.algorithms.inverse import inverse_dynamics
+    from hexapod.algorithms.inverse import inverse_dynamics, motion_model
     from hexapod.algorithms.sensitivity import inverse_sensitivities
     from hexapod.model.assemble import assemble
     from hexapod.sweeps.metrics import inverse_metrics

@@ -279,9 +279,8 @@ def main() -> None:
     else:
         model, times, out = walking_model(), sample_times(), OUT
     result = hx.inverse_dynamics(model, times)
-    from hexapod.algorithms.guided import motion_model  # a guided robot's laws: its motion
-
-    comparison = pinocchio_rnea(motion_model(model, result), result)
+    # a guided robot's laws: the motion its run found
+    comparison = pinocchio_rnea(hx.simulation.motion_model(model, result), result)
     weight = sum(b.mass for b in model.bodies) * float(np.linalg.norm(model.gravity))
     size = model.characteristic_length
     residual = max(np.abs(comparison.base[:, :3]).max() / weight,
