@@ -1,8 +1,8 @@
 """Read a scene from a TOML file (the format is described in ``docs/scene-format.md``).
 
 Every problem, from a misspelt key to a non-positive mass, is collected with the file and the key
-it was found at, and reported in one :class:`~hexapod.errors.ModelError`. A file that cannot be
-read or parsed gives an :class:`~hexapod.errors.InputFileError`.
+it was found at, and reported in one :class:`~hexapod.errors.ModelError` (a file that cannot be
+read or parsed: an :class:`~hexapod.errors.InputFileError`).
 
 Each element is converted key by key. A key that cannot be converted is reported; when it is
 optional the element is still built without it, so its other problems are reported in the same
@@ -556,8 +556,7 @@ class _Reader:
 
 
 def read_scene(path: str | Path) -> Scene:
-    """Read and validate a TOML scene file (or a robot description: a file with a ``[robot]``
-    table, whose walking scene it builds).
+    """Read and validate a TOML scene file (a robot description's: its walking scene).
 
     Parameters
     ----------
