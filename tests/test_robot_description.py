@@ -97,8 +97,8 @@ def test_a_planned_trunk_is_carried_by_feet_that_push_where_a_level_one_is_not(t
 def test_the_joint_efforts_are_pinocchios_with_the_ground_reactions_at_the_feet(stored, walk):
     """Pinocchio's floating-base recursive Newton-Euler algorithm, on the same URDF robot's
     motion with the reported ground reactions applied at the feet, gives the joint efforts to
-    1e-8 of the largest (2.3e-15 when the fixture was made); live when Pinocchio is installed,
-    its free flyer then balanced to 1e-8 of the weight."""
+    1e-8 of the largest (2.3e-15 when the fixture was made); live when Pinocchio is installed
+    (the next test), its free flyer then balanced to 1e-8 of the weight."""
     _, model, result = walk
     index = {name: k for k, name in enumerate(result.joints)}
     efforts = result.effort[:, [index[str(name)] for name in stored["joints"]]]
@@ -106,8 +106,13 @@ def test_the_joint_efforts_are_pinocchios_with_the_ground_reactions_at_the_feet(
     assert str(stored["policy"]) == result.policy
     assert np.abs(efforts - stored["pinocchio"]).max() < 1e-8 * scale
     assert np.abs(stored["base"]).max() < 1e-8 * scale
+
+
+def test_the_joint_efforts_are_pinocchios_live(walk):
     pytest.importorskip("pinocchio")
     from script_loader import load_script
+
+    _, model, result = walk
 
     script = load_script("tests/data/make_walking_fixture.py")
     comparison = script.pinocchio_rnea(hx.simulation.motion_model(model, result), result)
