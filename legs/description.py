@@ -41,6 +41,7 @@ from hexapod.scene import Problem
 from legs.walker import PATTERNS
 
 _ROBOT_KEYS = {"name", "urdf", "trunk", "rest", "feet"}
+_GROUND_KEYS = {"policy", "mu", "faces", "min_normal", "default_reference", "reference_efforts"}
 _GAIT_KEYS = {"pattern", "phases", "duty", "period", "speed", "stride", "step_height", "trunk"}
 
 
@@ -136,6 +137,11 @@ def read_robot(document: dict, path: str | Path) -> RobotDescription:
         rest = {}
     gait = _gait(document.get("gait", {}), list(feet), problems)
     ground = document.get("ground", {})
+    if not isinstance(ground, dict):
+        problems.add("ground", "must be a table (the ground-force policy, as in a scene file)")
+        ground = {}
+    for key in sorted(set(ground) - _GROUND_KEYS):
+        problems.add(f"ground.{key}", f"unknown key (expected {', '.join(sorted(_GROUND_KEYS))})")
     if problems.items:
         raise ModelError(f"robot description {path}", problems.items)
     return RobotDescription(str(robot.get("name", path.stem)), urdf, str(robot.get("trunk", "")),
@@ -179,8 +185,11 @@ def _gait(table, feet: list[str], problems: _Problems) -> Gait | None:
     else:
         known = PATTERNS.get(len(feet), {})
         pattern = "walk" if pattern is None and "walk" in known else pattern
-        if pattern not in known:
-            problems.add("gait.pattern", f"must be one of {', '.join(known) or 'none'} for "
+        if not known:
+            problems.add("gait.pattern", f"no pattern is known for {len(feet)} feet (patterns "
+                         "are for 2, 4 or 6): give phases by foot")
+        elif pattern not in known:
+            problems.add("gait.pattern", f"must be one of {', '.join(known)} for "
                          f"{len(feet)} feet, or give phases by foot; got {pattern!r}")
         else:
             default_duty = known[pattern][1]

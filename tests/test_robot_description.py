@@ -166,6 +166,7 @@ def _description(tmp_path, text: str) -> Path:
     (('urdf = "quadruped.urdf"', 'urdf = "nowhere.urdf"'), "no file"),
     (('duty = 0.85', 'duty = 1.5'), "gait.duty"),
     (('trunk = "planned"', 'trunk = "bouncing"'), "gait.trunk"),
+    (('mu = 0.8', 'friction = 0.8'), "ground.friction"),
 ])
 def test_a_bad_description_is_one_clear_message(tmp_path, change, message):
     text = QUADRUPED.read_text()
