@@ -4,7 +4,7 @@
 
     [robot]
     name = "quadruped"
-    urdf = "quadruped.urdf"          # relative to this file
+    urdf = "quadruped.urdf"          # relative to this file, or { package = ..., path = ... }
     trunk = "trunk"                  # the URDF's root link (a free body)
     rest = { "*_flexion" = 0.6, "*_knee" = -1.2 }   # joint angles (rad), names or patterns
 
@@ -126,10 +126,7 @@ def read_robot(document: dict, path: str | Path) -> RobotDescription:
         raise ModelError(f"robot description {path}", problems.items)
     for key in sorted(set(robot) - _ROBOT_KEYS):
         problems.add(f"robot.{key}", f"unknown key (expected {', '.join(sorted(_ROBOT_KEYS))})")
-    urdf = path.parent / str(robot.get("urdf", ""))
-    if "urdf" not in robot or not urdf.is_file():
-        problems.add("robot.urdf", f"needs the robot's URDF file, relative to {path.name}"
-                     + (f": no file {urdf}" if "urdf" in robot else ""))
+    urdf = _urdf(robot.get("urdf"), path, problems)
     feet = _feet(robot.get("feet"), problems)
     rest = robot.get("rest", {})
     if not isinstance(rest, dict) or not all(isinstance(v, (int, float)) for v in rest.values()):
@@ -147,6 +144,33 @@ def read_robot(document: dict, path: str | Path) -> RobotDescription:
     return RobotDescription(str(robot.get("name", path.stem)), urdf, str(robot.get("trunk", "")),
                             feet, {str(k): float(v) for k, v in rest.items()}, gait, ground,
                             str(path))
+
+
+def _urdf(value, path: Path, problems: _Problems) -> Path:
+    """The URDF file: relative to the description, or ``{ package = NAME, path = PATH }``, a
+    file of an installed distribution (``example-robot-data``'s robots) whose path ends with
+    ``PATH``."""
+    if isinstance(value, dict) and set(value) == {"package", "path"}:
+        from importlib.metadata import PackageNotFoundError, distribution
+
+        try:
+            files = distribution(str(value["package"])).files or []
+        except PackageNotFoundError:
+            problems.add("robot.urdf", f"needs the package '{value['package']}' installed (pip "
+                         "install 'hexapod[robots]' for example-robot-data)")
+            return Path()
+        found = [f for f in files if str(f).replace("\\", "/").endswith(str(value["path"]))]
+        if found:
+            return Path(found[0].locate())
+        problems.add("robot.urdf", f"package '{value['package']}' has no file ending with "
+                     f"{value['path']}")
+        return Path()
+    urdf = path.parent / str(value or "")
+    if not isinstance(value, str) or not urdf.is_file():
+        problems.add("robot.urdf", f"needs the robot's URDF file, relative to {path.name}, or "
+                     "{ package = NAME, path = PATH } of an installed package"
+                     + (f": no file {urdf}" if isinstance(value, str) else ""))
+    return urdf
 
 
 def _feet(table, problems: _Problems) -> dict[str, Foot]:

@@ -134,8 +134,9 @@ def _posed(scene, angles: dict[str, float]):
         joint = next(j for j in pending if j.parent in poses)  # tree order
         pending.remove(joint)
         parent_frame, child_frame = scene.joint_frames(joint)
-        angle = angles.get(joint.name, 0.0) if joint.kind == "revolute" else 0.0
-        turn = Placement(np.zeros(3), rotation_about_axis(joint.unit_axis(3), angle))
+        turn = (Placement(np.zeros(3), rotation_about_axis(joint.unit_axis(3),
+                                                           angles.get(joint.name, 0.0)))
+                if joint.kind == "revolute" else Placement.identity(3))
         poses[joint.child] = poses[joint.parent] @ parent_frame @ turn @ child_frame.inverse()
         joints.append(replace(joint, origin=None, rotation=None, parent_frame=parent_frame,
                               child_frame=child_frame))

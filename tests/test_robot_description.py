@@ -186,3 +186,37 @@ def test_the_command_line_refuses_a_bad_description_and_writes_nothing(tmp_path)
     done = in_process("report", str(path), "--no-figures", cwd=tmp_path)
     assert done.returncode == 1 and "no link 'LF_foot'" in done.stderr
     assert "Traceback" not in done.stderr and set(tmp_path.iterdir()) == before
+
+
+def test_solo12_walks_with_its_feet_on_their_footholds_and_pinocchios_efforts():
+    """Solo12 from the installed example-robot-data (the robots extra; large, so not in the
+    default install): a stride of its walk keeps the stance feet on their footholds (1e-12 m),
+    its ground forces balance the bodies' momentum rate (1e-9 of the weight) and, with
+    Pinocchio installed, its efforts are Pinocchio's RNEA with the ground reactions at the feet
+    (1e-8 of the largest)."""
+    from importlib.metadata import PackageNotFoundError, distribution
+
+    try:
+        distribution("example-robot-data")
+    except PackageNotFoundError:
+        pytest.skip("example-robot-data is not installed (pip install 'hexapod[robots]')")
+    scene = hx.load_scene(ROBOTS / "solo12.toml")
+    model = hx.assemble(scene)
+    result = hx.inverse_dynamics(model, np.linspace(0.0, 2.0, 24, endpoint=False))
+    for foot in ("FL", "FR", "HL", "HR"):
+        contact = scene.joints[f"{foot}/ground"]
+        stance = hx.scene.contacts.in_stance(contact, result.times)
+        k = np.floor(result.times / contact.period - contact.lift_off) + 1.0
+        foothold = contact.foothold + k[:, None] * contact.advance
+        position = foot_positions(scene, model, result, foot)
+        assert np.abs(position[stance] - foothold[stance]).max() < 1e-12
+    momentum_rate = sum(b.mass * result.v_dot[:, b.v][:, :3] for b in model.bodies)
+    balance = (result.ground_force.sum(axis=1) + model.total_mass * np.asarray(model.gravity)
+               - momentum_rate)
+    assert np.abs(balance).max() < 1e-9 * model.total_mass * 9.81
+    pytest.importorskip("pinocchio")
+    from script_loader import load_script
+
+    script = load_script("tests/data/make_walking_fixture.py")
+    comparison = script.pinocchio_rnea(hx.simulation.motion_model(model, result), result)
+    assert comparison.difference < 1e-8

@@ -75,7 +75,8 @@ def pinocchio_robot(model: hx.Model) -> PinocchioRobot:
     import pinocchio as pin
 
     revolute = [j for j in model.joints if j.kind == "revolute"]
-    children = {j.child for j in revolute}
+    fixed = [j for j in model.joints if j.kind == "fixed"]  # a foot link on its leg
+    children = {j.child for j in revolute + fixed}
     free = [b.index for b in model.bodies if b.index not in children]
     if len(free) != 1:
         raise ValueError(f"expected one free body, found {[model.bodies[b].name for b in free]}")
@@ -96,12 +97,19 @@ def pinocchio_robot(model: hx.Model) -> PinocchioRobot:
                         model.bodies[trunk].name)
     pm.appendBodyToJoint(flyer, inertia(trunk, identity), pin.SE3.Identity())
     joint_id, body_joint, body_frame = {}, {trunk: flyer}, {trunk: identity}
-    pending = list(revolute)
+    pending = list(revolute + fixed)
     while pending:  # tree order: a joint after the joint carrying its parent
         ready = [j for j in pending if j.parent in body_joint]
         if not ready:
             raise ValueError("the revolute joints do not form a tree on the free body")
         for j in ready:
+            pending.remove(j)
+            if j.kind == "fixed":  # the child rides on its parent's Pinocchio joint
+                frame = j.child_frame @ j.parent_frame.inverse() @ body_frame[j.parent]
+                body_joint[j.child], body_frame[j.child] = body_joint[j.parent], frame
+                pm.appendBodyToJoint(body_joint[j.parent], inertia(j.child, frame),
+                                     pin.SE3.Identity())
+                continue
             axis = np.asarray(j.axis, dtype=float)
             if np.allclose(axis, [0.0, 0.0, 1.0], rtol=0.0, atol=1e-15):
                 kind = pin.JointModelRZ()
@@ -112,7 +120,6 @@ def pinocchio_robot(model: hx.Model) -> PinocchioRobot:
             pm.appendBodyToJoint(jid, inertia(j.child, j.child_frame), pin.SE3.Identity())
             joint_id[j.index], body_joint[j.child] = jid, jid
             body_frame[j.child] = j.child_frame
-            pending.remove(j)
     return PinocchioRobot(pm, joint_id, body_joint, body_frame, flyer, trunk)
 
 
