@@ -52,16 +52,16 @@ def tabulated_model(model: Model, t0: float, t_end: float,
     costly = [i for i, law in enumerate(model.laws) if law.costly]
     if not costly:
         return model, None
-    period = _period([model.laws[i] for i in costly])
+    period = shared_period([model.laws[i] for i in costly])
     start, span = (0.0, period) if period is not None else (float(t0), float(t_end - t0))
     return model.built_once(("tabulated laws", start, span, period, float(tolerance)),
                             lambda m: _tabulate(m, costly, start, span, period, tolerance))
 
 
-def _period(laws) -> float | None:
-    """The period the laws share (each repeats after it), or None."""
+def shared_period(laws) -> float | None:
+    """The period the laws share (each repeats after it), or None (none given included)."""
     cycles = [law.cycle_time() for law in laws]
-    if any(c is None for c in cycles):
+    if not cycles or any(c is None for c in cycles):
         return None
     longest = max(cycles)
     ratios = [longest / c for c in cycles]

@@ -15,17 +15,7 @@ import numpy as np
 from hexapod.algorithms.guided import guided_coordinates
 from hexapod.algorithms.inverse import inverse_dynamics
 from hexapod.model.model import Model
-from hexapod.model.tabulation import ComputedLaw
-
-
-def _shared_period(laws) -> float | None:
-    """The period every law of ``laws`` shares, else None."""
-    cycles = [law.cycle_time() for law in laws]
-    if not cycles or any(c is None for c in cycles):
-        return None
-    longest = max(cycles)
-    return longest if all(abs(longest / c - round(longest / c)) <= 1e-12 * longest / c
-                          for c in cycles) else None
+from hexapod.model.tabulation import ComputedLaw, shared_period
 
 
 def simulated_model(model: Model) -> Model:
@@ -39,7 +29,7 @@ def simulated_model(model: Model) -> Model:
         motion = inverse_dynamics(kinematics, t)
         return np.array(guided_coordinates(model, motion.q, motion.v, motion.v_dot))
 
-    period = _shared_period(kinematics.laws)
+    period = shared_period(kinematics.laws)
     laws = list(model.laws)
     for k, index in enumerate(model.guidance.laws):
         laws[index] = ComputedLaw(solve, k, period, tuple(kinematics.laws))
