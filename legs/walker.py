@@ -116,9 +116,10 @@ class StepPath(OnSchedule, Law):
         return out
 
 
-def _posed(scene, angles: dict[str, float]):
+def _posed(scene, angles: dict[str, float], lift: float = 0.0):
     """A copy of the tree ``scene`` with its bodies moved to the pose of the revolute joints'
-    ``angles`` (rad, from the joints' zero): the joint frames stay on the bodies as at zero."""
+    ``angles`` (rad, from the joints' zero), raised by ``lift`` (m): the joint frames stay on
+    the bodies as at zero."""
     from dataclasses import replace
 
     from hexapod import Scene
@@ -128,7 +129,8 @@ def _posed(scene, angles: dict[str, float]):
     out = Scene(scene.name, scene.dimension, scene.length_unit, scene.gravity)
     children = {j.child for j in scene.joints.values()}
     poses = {GROUND: Placement.identity(3)}
-    poses.update({b: scene.pose(b) for b in scene.bodies if b not in children})
+    raised = Placement(np.array([0.0, 0.0, lift]))
+    poses.update({b: raised @ scene.pose(b) for b in scene.bodies if b not in children})
     pending, joints = list(scene.joints.values()), []
     while pending:
         joint = next(j for j in pending if j.parent in poses)  # tree order
@@ -184,11 +186,12 @@ def robot_scene(description):
                                f"{description.source}, robot.trunk"))
     if missing:
         raise ModelError(where, missing)
-    scene = _posed(urdf, rest_angles(description, urdf.joints))
+    angles = rest_angles(description, urdf.joints)
+    scene = _posed(urdf, angles)
     rest = {name: scene.pose(foot.link).transform_point(foot.point)
             for name, foot in description.feet.items()}
     height = -float(np.mean([p[2] for p in rest.values()]))  # the feet's mean on the ground
-    lifted = _posed_lifted(scene, height)
+    lifted = _posed(urdf, angles, height)
     gait = description.gait
     phases = gait.phases or _pattern_phases(gait.pattern, rest)
     period, duty, stride = gait.period, gait.duty, gait.stride
@@ -224,20 +227,6 @@ def robot_scene(description):
     lifted.ground = GroundForces(**description.ground)
     lifted.name, lifted.source = description.name, description.source
     return lifted
-
-
-def _posed_lifted(scene, height: float):
-    """``scene`` with every body raised by ``height`` (m)."""
-    from dataclasses import replace
-
-    from hexapod import Scene
-
-    out = Scene(scene.name, scene.dimension, scene.length_unit, scene.gravity)
-    for element in scene.elements:
-        if element in scene.bodies.values():
-            element = replace(element, position=element.position + np.array([0, 0, height]))
-        out.add(element)
-    return out
 
 
 def _pattern_phases(pattern: str, rest: dict[str, np.ndarray]) -> dict[str, float]:
