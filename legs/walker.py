@@ -24,6 +24,7 @@ height above it, level.
 
 from __future__ import annotations
 
+import fnmatch
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -184,6 +185,10 @@ def robot_scene(description):
     if trunk not in urdf.bodies:
         missing.append(Problem(where, f"no link '{trunk}' in {description.urdf.name}",
                                f"{description.source}, robot.trunk"))
+    for key in description.rest:  # a rest angle that poses nothing is a typing error
+        if not any(fnmatch.fnmatchcase(joint, key) for joint in urdf.joints):
+            missing.append(Problem(where, f"matches no joint of {description.urdf.name}",
+                                   f"{description.source}, robot.rest.{key}"))
     if missing:
         raise ModelError(where, missing)
     angles = rest_angles(description, urdf.joints)

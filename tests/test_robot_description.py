@@ -167,6 +167,7 @@ def _description(tmp_path, text: str) -> Path:
     (('duty = 0.85', 'duty = 1.5'), "gait.duty"),
     (('trunk = "planned"', 'trunk = "bouncing"'), "gait.trunk"),
     (('mu = 0.8', 'friction = 0.8'), "ground.friction"),
+    (('"*_knee" = -1.2', '"*_kne" = -1.2'), "robot.rest.*_kne"),
 ])
 def test_a_bad_description_is_one_clear_message(tmp_path, change, message):
     text = QUADRUPED.read_text()
