@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import casadi as ca
 import numpy as np
+from scipy.linalg import block_diag
 
 from hexapod.algorithms.linalg import RowSplit, multiplier_null_space
 from hexapod.algorithms.step_terms import terms_of
@@ -112,6 +113,36 @@ def policy_objective(model: Model, data, q: np.ndarray, Phi: np.ndarray, Q_acros
                                 feet))
 
 
+def contact_axes(model: Model) -> np.ndarray | None:
+    """Each contact's axes as rows ``(t_1, t_2, n)`` (world), from the ground under it; None
+    when the ground is flat (the axes are the world's)."""
+    terrains = [c.schedule.terrain for c in model.contacts]
+    if all(terrain is None or terrain.flat for terrain in terrains):
+        return None
+    return np.array([np.eye(3) if terrain is None else terrain.axes() for terrain in terrains])
+
+
+def in_contact_axes(model: Model, forces: np.ndarray) -> np.ndarray:
+    """Forces on the feet ``(..., C, 3)``, world, in each contact's axes: tangential, then
+    normal last (the world's own axes on flat ground).
+
+    Parameters
+    ----------
+    model : Model
+        A model with foot contacts.
+    forces : ndarray, shape (..., C, 3)
+        N, world axes.
+
+    Returns
+    -------
+    ndarray, shape (..., C, 3)
+        ``(F . t_1, F . t_2, F . n)`` per contact.
+    """
+    axes = contact_axes(model)
+    forces = np.asarray(forces, dtype=float)
+    return forces if axes is None else np.einsum("cij,...cj->...ci", axes, forces)
+
+
 def feet_status(model: Model, times: np.ndarray, forces: np.ndarray) -> np.ndarray:
     """Each foot's status at each sample, from the ground's forces on the feet.
 
@@ -122,7 +153,8 @@ def feet_status(model: Model, times: np.ndarray, forces: np.ndarray) -> np.ndarr
     times : ndarray, shape (N,)
         s.
     forces : ndarray, shape (N, C, 3)
-        The ground's force on each foot, N, world axes (z the ground's normal).
+        The ground's force on each foot, N, world axes (the normal and tangential parts are
+        taken in each contact's axes, :func:`in_contact_axes`).
 
     Returns
     -------
@@ -133,7 +165,8 @@ def feet_status(model: Model, times: np.ndarray, forces: np.ndarray) -> np.ndarr
         robot's weight.
     """
     times = np.atleast_1d(np.asarray(times, dtype=float))
-    forces = np.asarray(forces, dtype=float).reshape(times.size, len(model.contacts), 3)
+    forces = in_contact_axes(model, np.asarray(forces, dtype=float).reshape(
+        times.size, len(model.contacts), 3))
     stance = np.array([np.asarray(c.in_stance(times), dtype=bool) for c in model.contacts])
     weights = np.array([np.asarray(c.weight(times), dtype=float) for c in model.contacts])
     stance, weights = stance.reshape(-1, times.size).T, sharing_weights(weights, stance).T
@@ -289,13 +322,18 @@ def _friction(model: Model, weights, base, NK, AK, r):
     to ``y`` and to ``(F0, mu)``; None for these when no ``y`` is admissible."""
     ground = model.ground
     loaded = [k for k, w in enumerate(weights) if w > NO_LOAD]
-    F0 = {k: -base[model.contacts[k].rows] for k in loaded}
-    G = {k: -NK[model.contacts[k].rows] for k in loaded}
+    axes = contact_axes(model)  # the cones are about each ground's normal
+    turn = (lambda k, F: F) if axes is None else (lambda k, F: axes[k] @ F)
+    F0 = {k: turn(k, -base[model.contacts[k].rows]) for k in loaded}
+    G = {k: turn(k, -NK[model.contacts[k].rows]) for k in loaded}
     n = NK.shape[1]
     H = AK.T @ AK
     g = AK.T @ r
     reference = robot_weight(model) or 1.0  # the forces' scale
-    return _solve_cone(ground, loaded, weights, F0, G, H, g, n, reference)
+    y, active, dc_dy, slopes = _solve_cone(ground, loaded, weights, F0, G, H, g, n, reference)
+    if slopes is not None and axes is not None and loaded:  # back to world axes
+        slopes = (slopes[0] @ block_diag(*[axes[k] for k in loaded]), slopes[1])
+    return y, active, dc_dy, slopes
 
 
 def _solve_cone(ground, loaded, weights, F0, G, H, g, n, reference):

@@ -190,8 +190,9 @@ def inverse_dynamics(model: Model, times: ArrayLike, *, method: str = "auto", fr
     refuse_contacts(model)
     if frame not in ("joint", "world"):
         raise ValueError(f"frame must be 'joint' or 'world', got {frame!r}")
+    known = None  # positions known at the samples: a guided model's, from its guides
     if model.guidance is not None:  # the guides' kinematics first, then the joints' efforts
-        model, progress = _guided(model, times, progress)
+        model, progress, known = _guided(model, times, progress)
     w, wd, wdd = (x.reshape(model.n_w, times.size) for x in model.law_values(times, data))
     plan = tree_plan(model)
     if method == "tree" and plan is None:
@@ -202,9 +203,9 @@ def inverse_dynamics(model: Model, times: ArrayLike, *, method: str = "auto", fr
     if plan is not None and method in ("auto", "tree"):
         result = plan.solve(data, times, w, wd, wdd, frame, progress=progress)
     elif method == "phase" or (method == "auto" and times.size >= PHASE_FROM_SAMPLES):
-        result = _phase(model, data, times, w, wd, wdd, frame, progress)
+        result = _phase(model, data, times, w, wd, wdd, frame, progress, known)
     else:
-        result = _saddle(model, data, times, frame, progress)
+        result = _saddle(model, data, times, frame, progress, known)
     _check_finite(model, result)
     if model.contacts:  # whatever the path and the policy: can the ground give these forces?
         from hexapod.algorithms.ground import feet_status
@@ -214,15 +215,17 @@ def inverse_dynamics(model: Model, times: ArrayLike, *, method: str = "auto", fr
 
 
 def _guided(model: Model, times: np.ndarray, progress):
-    """The twin of a guided model whose joints follow the motion the guides give them, and the
-    progress of its run as the second half of the whole."""
+    """The twin of a guided model whose joints follow the motion the guides give them, the
+    progress of its run as the second half of the whole, and the positions at the samples
+    (the twin's laws are exact there, not between: its Newton solves start from them)."""
     from hexapod.algorithms.guided import guided_twin
 
     n = times.size
     motion = inverse_dynamics(model.guidance.kinematics, times, progress=(
         None if progress is None else lambda done, total: progress(done, 2 * n)))
     twin = guided_twin(model, times, motion.q, motion.v, motion.v_dot)
-    return twin, (None if progress is None else lambda done, total: progress(n + done, 2 * n))
+    return twin, (None if progress is None else lambda done, total: progress(n + done, 2 * n)), \
+        motion.q
 
 
 def motion_model(model: Model, result: InverseResult) -> Model:
@@ -265,10 +268,11 @@ def _check_finite(model: Model, result: InverseResult) -> None:
 
 # ------------------------------------------------------------------ the saddle path
 
-def _phase(model, data, times, w, wd, wdd, frame, progress) -> InverseResult:
+def _phase(model, data, times, w, wd, wdd, frame, progress, known) -> InverseResult:
     from hexapod.algorithms.phase_inverse import phase_inverse  # loaded when it runs, as below
 
-    fields = phase_inverse(model, data, times, w, wd, wdd, frame, progress=progress)
+    fields = phase_inverse(model, data, times, w, wd, wdd, frame, progress=progress,
+                           known=known)
     return InverseResult(times, tuple(j.name for j in model.joints), fields["force"],
                          fields["torque"], fields["effort"], fields["q"], fields["v"],
                          fields["v_dot"], frame, "phase", fields["max_violation"],
@@ -276,7 +280,7 @@ def _phase(model, data, times, w, wd, wdd, frame, progress) -> InverseResult:
                          fields["ground"], None, model.ground.policy if model.contacts else "")
 
 
-def _saddle(model, data, times, frame, progress) -> InverseResult:
+def _saddle(model, data, times, frame, progress, known=None) -> InverseResult:
     # the saddle path's algorithms, loaded when it runs: the tree path (and 'hexapod inverse'
     # on a leg or a URDF robot) starts without them
     from hexapod.algorithms.sample_inverse import exact_sample
@@ -288,9 +292,13 @@ def _saddle(model, data, times, frame, progress) -> InverseResult:
     ground = np.zeros((n, len(model.contacts), 3))
     worst = 0.0
     for k, t in enumerate(times):
-        sample = exact_sample(model, data, times[k - 1] if k else t,
-                              Q[k - 1] if k else model.q0, t,
-                              (V[k - 1], A[k - 1]) if k else None, frame=frame, first=k == 0)
+        if known is not None:  # Newton from the positions known there
+            sample = exact_sample(model, data, t, known[k], t, frame=frame, first=k == 0)
+        else:
+            sample = exact_sample(model, data, times[k - 1] if k else t,
+                                  Q[k - 1] if k else model.q0, t,
+                                  (V[k - 1], A[k - 1]) if k else None, frame=frame,
+                                  first=k == 0)
         Q[k], V[k], A[k] = sample.q, sample.v, sample.v_dot
         force[k], torque[k], effort[k] = sample.force, sample.torque, sample.effort
         if model.contacts:

@@ -46,7 +46,7 @@ import numpy as np
 
 from hexapod._support import signals
 from hexapod._support.execution import current
-from hexapod.algorithms.ground import NO_LOAD, foot_values, sharing_weights
+from hexapod.algorithms.ground import NO_LOAD, foot_values, in_contact_axes, sharing_weights
 from hexapod.algorithms.liaison import efforts_and_axes
 from hexapod.algorithms.linalg import as_dense, equilibrate, split_rows
 from hexapod.algorithms.phase_plan import MORE_NEWTON_STEPS, NEWTON_STEPS, PhasePlan, plan_for
@@ -119,6 +119,7 @@ class _Results:
         self.force, self.torque = np.zeros((n, J, 3)), np.zeros((n, J, 3))
         self.effort, self.ground = np.zeros((n, J)), np.zeros((n, C, 3))
         self.violation = np.zeros(n)
+        self.known: np.ndarray | None = None  # positions known at the samples
         # the joint frames of the compiled samples, kept for world axes only
         self.frames = np.zeros((n, J, 9)) if world else None
         self.redundant: list[str] = []
@@ -141,21 +142,27 @@ class _Results:
         return np.concatenate([self.q[k], self.v[k], self.v_dot[k]])
 
     def predicted(self, k: int, times) -> np.ndarray:
-        """The positions at sample ``k`` predicted from ``k - 1``."""
+        """The positions at sample ``k``: known (a guided model's, from its guides'
+        kinematics), or predicted from ``k - 1``."""
+        if self.known is not None:
+            return self.known[k]
         h = times[k] - times[k - 1]
         return self.model.integrate(self.q[k - 1],
                                     h * self.v[k - 1] + h * h / 2 * self.v_dot[k - 1])
 
 
 def phase_inverse(model: Model, data: Data, times: np.ndarray, w, wd, wdd, frame: str, *,
-                  progress: Callable[[int, int], None] | None = None) -> dict:
+                  progress: Callable[[int, int], None] | None = None,
+                  known: np.ndarray | None = None) -> dict:
     """The phase path over ``times`` (laws ``w, wd, wdd`` given, n_w x N): the fields of an
     :class:`~hexapod.algorithms.inverse.InverseResult` as a dict, with ``exact_samples``, the
     number of samples solved by the exact path. Compiled or interpreted as the execution
-    setting says (:mod:`hexapod._support.execution`)."""
+    setting says (:mod:`hexapod._support.execution`). ``known``: the positions at the samples
+    when they are known already (a guided model's), Newton's starting points there."""
     to_c = current().compiled
     n = times.size
     out = _Results(model, n, frame == "world")
+    out.known = known
     feet = _Feet(model, times)
     out.store(0, exact_sample(model, data, times[0], model.q0, times[0], frame=frame,
                               first=True))
@@ -173,7 +180,8 @@ def phase_inverse(model: Model, data: Data, times: np.ndarray, w, wd, wdd, frame
             bad, blame = (k, "rank") if plan is None else failed
             out.store(bad, exact_sample(model, data, times[bad - 1], out.q[bad - 1],
                                         times[bad], (out.v[bad - 1], out.v_dot[bad - 1]),
-                                        frame=frame))
+                                        frame=frame) if known is None else exact_sample(
+                model, data, times[bad], known[bad], times[bad], frame=frame))
             if blame == "rank":  # the decision no longer holds: take the exact solve's
                 decisions.adopt(bad, data, w[:, bad], plan)
             elif blame == "newton":  # samples too far apart for the Newton steps taken
@@ -334,15 +342,17 @@ def _friction(model: Model, data: Data, out: _Results, feet: _Feet, times, frame
     asked): forces by the exact per-sample solve, QP included."""
     ground = model.ground
     for k in np.flatnonzero(~out.exact):
-        if ground.faces and _inside_cones(ground, feet, out.ground[k], k):
+        if ground.faces and _inside_cones(ground, feet, in_contact_axes(model, out.ground[k]),
+                                          k):
             continue
         sample = exact_forces(model, data, times[k], out.q[k], out.v[k], frame=frame)
         out.store(k, sample)
 
 
 def _inside_cones(ground, feet: _Feet, forces: np.ndarray, k: int) -> bool:
-    """Whether every loaded foot's force is inside its pyramid and above its least normal
-    force (then the least-effort forces are the QP's solution)."""
+    """Whether every loaded foot's force (``forces``, each in its contact's axes) is inside its
+    pyramid and above its least normal force (then the least-effort forces are the QP's
+    solution)."""
     angles = 2 * np.pi * (np.arange(ground.faces) + 0.5) / ground.faces
     for c in np.flatnonzero(feet.weights[:, k] > NO_LOAD):
         fx, fy, fz = forces[c]

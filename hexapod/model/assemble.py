@@ -198,6 +198,8 @@ class _Assembly:
             frame_p = _com_frame(self.scene_bodies, joint.parent, on_parent)
             frame_c = _com_frame(self.scene_bodies, joint.child, on_child)
             axis = joint.unit_axis(self.dim)
+            if isinstance(joint, Contact):  # a foot stands on the scene's ground
+                joint = replace(joint, terrain=si.ground.terrain)
             g = JointGeometry(self.states[joint.parent], self.states[joint.child], frame_p,
                               frame_c, axis, self.dim, (world_p, world_c))
             self.geometries[joint.name] = g

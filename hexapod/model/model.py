@@ -288,7 +288,11 @@ class Model:
         the scene they come from). What the model has built is shared when the settings differ
         only in numbers the solvers read at run time (``mu``, ``faces``, ``min_normal``: a
         sweep over friction reuses the built phase plans); a change of the policy or of the
-        reference efforts, which the policy's Functions are built from, starts from nothing."""
+        reference efforts, which the policy's Functions are built from, starts from nothing.
+        The ground's shape cannot change (the footholds are built on it): assemble again."""
+        if self.ground is not None and ground.terrain != self.ground.terrain:
+            raise ValueError(f"model '{self.name}': the ground's shape (slope, heading, steps) "
+                             "is built into its contacts; assemble the scene again")
         return self._twin(_built_from(ground) == _built_from(self.ground), ground=ground,
                           digest=digest)
 

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hexapod.algorithms.ground import INFEASIBLE_STATUSES, robot_weight
+from hexapod.algorithms.ground import INFEASIBLE_STATUSES, in_contact_axes, robot_weight
 from hexapod.algorithms.inverse import InverseResult
 from hexapod.algorithms.kinematics import body_poses
 from hexapod.model.model import Model
@@ -110,8 +110,9 @@ class FootLoads:
 def foot_loads(model: Model, result: InverseResult) -> FootLoads:
     """The feet's loads of an inverse-dynamics ``result`` of a model with contacts."""
     force = np.asarray(result.ground_force, dtype=float) + 0.0  # zero in swing, not -0
-    normal = force[..., 2]
-    tangential = np.hypot(force[..., 0], force[..., 1])
+    local = in_contact_axes(model, force)  # normal last, about each ground's normal
+    normal = local[..., 2]
+    tangential = np.hypot(local[..., 0], local[..., 1])
     mu = float(model.ground.mu)
     weight = robot_weight(model)
     loaded = np.linalg.norm(force, axis=-1) > NO_LOAD * (weight if weight > 0 else 1.0)

@@ -18,7 +18,7 @@ carries nothing.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from types import SimpleNamespace
 
@@ -29,6 +29,7 @@ from hexapod.catalog import MAX_FACES, POLICIES
 from hexapod.errors import Problem
 from hexapod.scene.laws import Law
 from hexapod.scene.laws.base import cycle_breaks
+from hexapod.scene.terrain import Terrain
 
 
 def _cycle(contact, t):
@@ -128,6 +129,8 @@ def _schedules(laws: tuple, ndim: int) -> SimpleNamespace:
         for key in ("foothold", "advance"):
             arrays[key] = np.array([getattr(law.contact, key)[law.axis]
                                     for law in laws]).reshape(shape)
+        arrays["raised"] = [i for i, law in enumerate(laws) if law.axis == 2 and not (
+            law.contact.terrain is None or law.contact.terrain.flat)]
     return SimpleNamespace(**arrays)
 
 
@@ -143,7 +146,16 @@ class Foothold(Law):
         t = np.asarray(t, dtype=float)
         _, k = _cycle(self.contact, t)
         value = self.contact.foothold[self.axis] + k * self.contact.advance[self.axis]
-        return value, np.zeros_like(t), np.zeros_like(t)
+        return self._on_ground(value, k), np.zeros_like(t), np.zeros_like(t)
+
+    def _on_ground(self, value, k):
+        """``value`` raised by the ground's height under the foothold, for the ``z`` axis on
+        a ground that is not flat."""
+        terrain = self.contact.terrain
+        if self.axis != 2 or terrain is None or terrain.flat:
+            return value
+        foothold, advance = self.contact.foothold, self.contact.advance
+        return value + terrain.height(foothold[0] + k * advance[0], foothold[1] + k * advance[1])
 
     def breaks(self, start, stop):  # the next stance's foothold from lift-off
         c = self.contact
@@ -159,7 +171,13 @@ class Foothold(Law):
         schedules = _schedules(tuple(laws), t.ndim)
         _, k = _cycle(schedules, t)
         value = schedules.foothold + k * schedules.advance
+        for i in schedules.raised:  # footholds on a ground that is not flat
+            value[i] = laws[i]._on_ground(value[i], k[i])
         return np.array([value, np.zeros_like(value), np.zeros_like(value)])
+
+
+#: The keys of ``[ground]`` that give the ground's shape (the others, its forces' policy).
+SHAPE_KEYS = ("slope", "heading", "steps")
 
 
 @dataclass
@@ -189,6 +207,10 @@ class GroundForces:
         and lift-off.
     default_reference : float
         The reference effort of the driven joints ``reference_efforts`` leaves out (N m, or N).
+    slope, heading, steps :
+        The ground's shape under the feet (:class:`~hexapod.scene.terrain.Terrain`): a plane
+        rising at ``slope`` degrees towards ``heading`` (degrees from world ``x``), with risers
+        ``(at, rise)`` (scene units); flat ``z = 0`` by default.
     source : str
         Where the settings were written (the scene file's ``[ground]``), named in messages.
     """
@@ -199,10 +221,25 @@ class GroundForces:
     mu: float = 0.8
     faces: int = 8
     min_normal: float = 0.0
+    slope: float = 0.0
+    heading: float = 0.0
+    steps: tuple = ()
     source: str = ""
 
     def reference(self, joint: str) -> float:
         return float(self.reference_efforts.get(joint, self.default_reference))
+
+    @property
+    def terrain(self) -> Terrain:
+        """The ground's shape under the feet."""
+        steps = self.steps if isinstance(self.steps, (list, tuple)) else (self.steps,)
+        return Terrain(self.slope, self.heading, tuple(
+            tuple(step) if isinstance(step, (list, tuple, np.ndarray)) else step
+            for step in steps))
+
+    def scaled(self, length: float) -> GroundForces:
+        """The settings with the steps' lengths multiplied by ``length`` (unit conversion)."""
+        return replace(self, steps=self.terrain.scaled(length).steps) if self.steps else self
 
     def problems(self) -> list[Problem]:
         def problem(key, message):
@@ -227,6 +264,7 @@ class GroundForces:
                 out.append(problem(key, f"must not be negative, got {value!r}"))
             elif key != "min_normal" and number <= 0:
                 out.append(problem(key, f"must be positive, got {value!r}"))
+        out.extend(problem(key, message) for key, message in self.terrain.problems())
         if not isinstance(self.faces, int) or isinstance(self.faces, bool) or not (
                 self.faces == 0 or 3 <= self.faces <= MAX_FACES):
             out.append(problem("faces", f"must be 0 (the exact cone) or at least 3 (at most "

@@ -223,7 +223,7 @@ def _point(dimension: int) -> Callable:
 
 
 def _constants(value) -> dict[str, float]:
-    """A table of names and numbers (the constants of an expression law)."""
+    """A table of names and numbers (an expression law's constants, reference efforts)."""
     if not isinstance(value, dict):
         raise _Invalid(f"must be a table of names and numbers, got {_shown(value)}")
     out = {}
@@ -231,7 +231,7 @@ def _constants(value) -> dict[str, float]:
         try:
             out[name] = _number(number)
         except _Invalid as error:
-            raise _Invalid(f"entry {_key(name)} {error}") from None
+            raise _Invalid(str(error), key=name) from None
     return out
 
 
@@ -260,7 +260,7 @@ def _plugin_keys(cls) -> dict:
     annotated type (``str``, ``int`` or ``float``), required when they have no default."""
     import dataclasses
 
-    readers = {"str": _string, "int": _integer, "float": _number}
+    readers = {"str": _string, "int": _integer, "float": _number, "tuple": _amplitudes}
     return {f.name: (readers.get(str(f.type), _number),
                      f.default is dataclasses.MISSING
                      and f.default_factory is dataclasses.MISSING)
@@ -290,7 +290,7 @@ def _law(value) -> Law:
         try:
             args[key] = spec[key][0](raw)
         except _Invalid as error:
-            raise _Invalid(f"{key} {error}") from None
+            raise _Invalid(f"{key}{('.' + _key(error.key)) if error.key else ''} {error}") from None
     law = types[kind](**args)
     problems = law.problems()
     if problems:
@@ -406,23 +406,16 @@ def _force_schema(kind: str, dimension: int) -> Schema:
                                **schemas[kind]}
 
 
-def _efforts(value) -> dict[str, float]:
-    """A table of joint names and numbers (reference efforts)."""
-    if not isinstance(value, dict):
-        raise _Invalid(f"must be a table of joint names and numbers, got {_shown(value)}")
-    out = {}
-    for name, number in value.items():
-        try:
-            out[name] = _number(number)
-        except _Invalid as error:
-            raise _Invalid(str(error), key=name) from None
-    return out
+def _steps(value) -> tuple:
+    """The ground's steps: a list of ``[at, rise]`` pairs, possibly empty."""
+    return tuple(tuple(_vector(2)(s)) for s in (value if isinstance(value, list) else [value]))
 
 
 #: keys of the [ground] table
 _GROUND_KEYS = {"policy": (_string, False), "mu": (_number, False), "faces": (_integer, False),
                 "min_normal": (_number, False), "default_reference": (_number, False),
-                "reference_efforts": (_efforts, False)}
+                "reference_efforts": (_constants, False), "slope": (_number, False),
+                "heading": (_number, False), "steps": (_steps, False)}
 
 
 def _driver_kind(table: dict) -> str:

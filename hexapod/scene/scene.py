@@ -219,7 +219,7 @@ class Scene:
         out = Scene(self.name, self.dimension, "m", self.gravity * factor,
                     None if self.characteristic_length is None
                     else self.characteristic_length * factor, self.source,
-                    report_forces=self.report_forces, ground=self.ground)
+                    report_forces=self.report_forces, ground=self.ground.scaled(factor))
         out._elements = list(self.scaled_elements(factor))
         return out
 

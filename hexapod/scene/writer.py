@@ -218,8 +218,11 @@ def _ground(ground: GroundForces) -> list[str]:
     default = GroundForces()
     with _at("ground"):
         settings = [f"{key} = {_setting(getattr(ground, key))}"
-                    for key in ("policy", "mu", "faces", "min_normal", "default_reference")
+                    for key in ("policy", "mu", "faces", "min_normal", "default_reference",
+                                "slope", "heading")
                     if getattr(ground, key) != getattr(default, key)]
+        if ground.steps:
+            settings.append(f"steps = [{', '.join(_array(step) for step in ground.steps)}]")
     lines = ["", "[ground]", *settings] if settings else []
     if ground.reference_efforts:
         lines += ["", "[ground.reference_efforts]"] + [

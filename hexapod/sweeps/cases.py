@@ -204,11 +204,14 @@ def set_scene_key(document: dict, key: str, value, source: str = "") -> None:
 def model_for(study: Study, arguments: dict, keys: dict, scene):
     """The assembled model of ``scene``, from this process's cache when a case of the same
     structure was run here before: cases whose scenes differ only in ground-force settings
-    share one model (compiled functions included), with its ground settings replaced."""
+    share one model (compiled functions included), with its ground settings replaced (not
+    the ground's shape: the feet's footholds are built on it)."""
     from hexapod.model import assemble
+    from hexapod.scene.contacts import SHAPE_KEYS
 
     structure = json.dumps([study.scene, study.scene_digest, arguments,
-                            {k: v for k, v in keys.items() if not k.startswith("ground.")}],
+                            {k: v for k, v in keys.items() if not k.startswith("ground.")
+                             or k.split(".")[1] in SHAPE_KEYS}],
                            sort_keys=True, default=repr)
     model = _models.get(structure)
     if model is None:

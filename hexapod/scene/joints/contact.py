@@ -56,6 +56,10 @@ class Contact(Joint):
     ramp : float
         The fraction of the stance over which the foot's share of the ground forces grows
         from or falls to zero, in (0, 0.5] (default 0.1).
+    terrain : Terrain, optional
+        The ground's shape (:class:`~hexapod.scene.terrain.Terrain`), set by the model from
+        the scene's ``[ground]``: the ground's height under each foothold is added to its
+        ``z``, and the friction cone is about the ground's normal. None: flat ``z = 0``.
     """
 
     period: float = 1.0
@@ -64,6 +68,7 @@ class Contact(Joint):
     foothold: np.ndarray | None = None
     advance: np.ndarray | None = None
     ramp: float = 0.1
+    terrain: object = None
     kind = "contact"
     plane_hint = "a point-on-plane joint (contacts are spatial)"
 
