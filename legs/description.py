@@ -17,10 +17,13 @@
     period = 0.8                     # s; or speed (m/s)
     stride = 0.12                    # m, the trunk's advance per period
     step_height = 0.04               # m
+    clearance = 0.01                 # m above a step's edge (default: step_height / 4)
     trunk = "planned"                # or "level": straight at constant speed
 
-    [ground]                         # optional: the ground-force policy, as in a scene file
-    policy = "min-wrench"
+    [ground]                         # optional: the ground, as in a scene file
+    policy = "min-wrench"            # how the feet share the load
+    slope = 10                       # degrees, rising along x (heading = 0 degrees)
+    steps = [[0.3, 0.03]]            # risers: [at, rise] (m) along the heading
 
 :func:`read_robot` checks everything and lists every problem at once, naming the file and the
 key; :func:`robot_scene` builds the walking scene (:mod:`legs.walker`). A scene file whose
@@ -37,12 +40,14 @@ from pathlib import Path
 import numpy as np
 
 from hexapod import ModelError
-from hexapod.scene import Problem
+from hexapod.scene import GroundForces, Problem
 from legs.walker import PATTERNS
 
 _ROBOT_KEYS = {"name", "urdf", "trunk", "rest", "feet"}
-_GROUND_KEYS = {"policy", "mu", "faces", "min_normal", "default_reference", "reference_efforts"}
-_GAIT_KEYS = {"pattern", "phases", "duty", "period", "speed", "stride", "step_height", "trunk"}
+_GROUND_KEYS = {"policy", "mu", "faces", "min_normal", "default_reference", "reference_efforts",
+                "slope", "heading", "steps"}
+_GAIT_KEYS = {"pattern", "phases", "duty", "period", "speed", "stride", "step_height", "trunk",
+              "clearance"}
 
 
 @dataclass
@@ -58,7 +63,8 @@ class Gait:
     """How the robot walks: lift-off ``phases`` by foot, ``duty``, ``period`` (s), ``stride``
     (m per period), ``step_height`` (m), and the ``trunk``'s motion: ``planned`` (swaying so
     that the centre of pressure stays inside the support polygon, :mod:`legs.trunk_path`) or
-    ``level`` (straight, at constant speed)."""
+    ``level`` (straight, at constant speed); a swing that crosses a step clears its edge by
+    at least ``clearance`` (m; default a quarter of the step height)."""
 
     phases: dict[str, float]
     duty: float
@@ -67,6 +73,7 @@ class Gait:
     step_height: float
     pattern: str = ""
     trunk: str = "planned"
+    clearance: float | None = None
 
 
 @dataclass
@@ -139,6 +146,9 @@ def read_robot(document: dict, path: str | Path) -> RobotDescription:
         ground = {}
     for key in sorted(set(ground) - _GROUND_KEYS):
         problems.add(f"ground.{key}", f"unknown key (expected {', '.join(sorted(_GROUND_KEYS))})")
+    ground = {key: value for key, value in ground.items() if key in _GROUND_KEYS}
+    for problem in GroundForces(**ground, source="ground").problems():  # the walk stands on it
+        problems.add(problem.where, problem.message)
     if problems.items:
         raise ModelError(f"robot description {path}", problems.items)
     return RobotDescription(str(robot.get("name", path.stem)), urdf, str(robot.get("trunk", "")),
@@ -231,10 +241,11 @@ def _gait(table, feet: list[str], problems: _Problems) -> Gait | None:
     trunk = table.get("trunk", "planned")
     if trunk not in ("planned", "level"):
         problems.add("gait.trunk", f"must be 'planned' or 'level', got {trunk!r}")
+    clearance = problems.number(table, "clearance", "gait", 0.0)
     if None in (duty, stride, height, period):
         return None
     return Gait(dict(phases) if phases else {}, duty, period, stride, height, pattern or "",
-                trunk)
+                trunk, clearance)
 
 
 def rest_angles(description: RobotDescription, joints) -> dict[str, float]:

@@ -76,7 +76,10 @@ class StepPath(OnSchedule, Law):
     to the next in swing (see the module's notes). The foot lifts off at ``lift_off`` (a
     fraction of the ``period``, s) from ``start`` (the value in the stance that ends then) and
     is on the ground for ``duty`` of the period; each step moves it by ``advance``; ``lift``
-    is the swing's height (for the vertical coordinate; 0 otherwise)."""
+    is the swing's height (for the vertical coordinate; 0 otherwise). Steps of the ground:
+    from stance ``rises_at[i]`` on (stance ``c`` lasts from the ``c``-th lift-off after
+    ``t = 0`` to the next; the stance ending at ``t = lift_off period`` is ``0``), the value is
+    raised by ``rises[i]``, reached along the swing before it as the advance is."""
 
     start: float = 0.0
     advance: float = 0.0
@@ -84,6 +87,8 @@ class StepPath(OnSchedule, Law):
     duty: float = 0.75
     period: float = 1.0
     lift_off: float = 0.0
+    rises_at: tuple = ()
+    rises: tuple = ()
     kind = "step-path"
 
     def evaluate(self, t):
@@ -96,14 +101,18 @@ class StepPath(OnSchedule, Law):
         in_swing = tau < swing
         step = [p(u) for p in STEP_RATES]
         bump = [p(u) for p in LIFT_RATES]
-        value = self.start + self.advance * (k + np.where(in_swing, step[0], 1.0))
-        value = value + self.lift * np.where(in_swing, bump[0], 0.0)
-        rates = [np.where(in_swing, (self.advance * step[m] + self.lift * bump[m])
+        stance = k + np.where(in_swing, step[0], 1.0)  # c + 1 along the swing to stance c + 1
+        value = self.start + self.advance * stance + self.lift * np.where(in_swing, bump[0], 0.0)
+        climb = np.full_like(stance, self.advance)  # the swing's advance, rises included
+        for at, rise in zip(self.rises_at, self.rises, strict=True):
+            value = value + rise * np.clip(stance - at + 1.0, 0.0, 1.0)
+            climb = climb + rise * (k == at - 1.0)
+        rates = [np.where(in_swing, (climb * step[m] + self.lift * bump[m])
                           / (swing * self.period) ** m, 0.0) for m in (1, 2)]
         return value, rates[0], rates[1]
 
-    def cycle_time(self):  # a foot that steps forward does not come back
-        return self.period if self.advance == 0.0 else None
+    def cycle_time(self):  # a foot that steps forward (or up) does not come back
+        return self.period if self.advance == 0.0 and not self.rises else None
 
     def problems(self):
         out = []
@@ -112,9 +121,93 @@ class StepPath(OnSchedule, Law):
         if not 0 < self.duty < 1:
             out.append(f"duty must be in (0, 1), got {self.duty}")
         if not all(np.isfinite(v) for v in (self.start, self.advance, self.lift,
-                                            self.lift_off)):
-            out.append("start, advance, lift and lift_off must be finite")
+                                            self.lift_off, *self.rises_at, *self.rises)):
+            out.append("start, advance, lift, lift_off, rises_at and rises must be finite")
+        if len(self.rises_at) != len(self.rises):
+            out.append("rises_at and rises must be as long as each other")
         return out
+
+
+@dataclass(frozen=True)
+class TrunkRise(Law):
+    """The trunk's height (m) over a ground that is not flat: ``start + speed t`` (up a plane)
+    plus each step's ``rises[i]`` (m), taken along the ninth-degree smooth step over ``width``
+    (s) centred on ``times[i]`` (s), when the trunk passes the step."""
+
+    start: float = 0.0
+    speed: float = 0.0
+    times: tuple = ()
+    rises: tuple = ()
+    width: float = 1.0
+    kind = "trunk-rise"
+
+    def evaluate(self, t):
+        t = np.asarray(t, dtype=float)
+        out = [self.start + self.speed * t, np.full_like(t, self.speed), np.zeros_like(t)]
+        for at, rise in zip(self.times, self.rises, strict=True):
+            u = (t - at) / self.width + 0.5
+            inside = (u > 0.0) & (u < 1.0)
+            v = np.clip(u, 0.0, 1.0)
+            for m, p in enumerate(STEP_RATES):
+                out[m] = out[m] + rise * (np.where(inside, p(v), v if m == 0 else 0.0)
+                                          / self.width**m)
+        return tuple(out)
+
+    def problems(self):
+        out = []
+        if not (np.isfinite(self.width) and self.width > 0):
+            out.append(f"width must be positive, got {self.width}")
+        if len(self.times) != len(self.rises):
+            out.append("times and rises must be as long as each other")
+        return out
+
+
+def _foot_levels(terrain, x0: float, y: float, stride: float) -> dict:
+    """The vertical :class:`StepPath` keys of a foot whose footholds are ``(x0 + c stride, y)``
+    on ``terrain``: the ground's height under foothold ``c`` is ``start + advance c`` up the
+    plane plus ``rises[i]`` from stance ``rises_at[i]`` on (where the foot crosses a step)."""
+
+    def beyond(edge, c):  # the contacts' own arithmetic: foothold c at or beyond the edge
+        return bool(terrain.distance(x0 + c * stride, y) >= edge)
+
+    tan = np.tan(np.radians(terrain.slope))
+    d0, step = float(terrain.distance(x0, y)), terrain.direction[0] * stride
+    start = tan * d0 + sum(rise for edge, rise in terrain.steps if beyond(edge, 0))
+    rises_at, rises = [], []
+    for edge, rise in terrain.steps:
+        if step == 0.0:
+            continue  # walking along the risers: never crossed
+        guess = np.ceil((edge - d0) / step)  # the stance it is crossed on, to round-off
+        rises_at.append(next(float(c) for c in (guess - 1, guess, guess + 1)
+                             if beyond(edge, c) != beyond(edge, c - 1)))
+        rises.append(rise if step > 0 else -rise)
+    start -= sum(r for at, r in zip(rises_at, rises, strict=True) if at <= 0)
+    return {"start": start, "advance": tan * step, "rises_at": tuple(rises_at),
+            "rises": tuple(rises)}
+
+
+def _swing_clearance(terrain, x0: float, y: float, stride: float, lift: float):
+    """For each step a foot crosses (footholds ``(x0 + c stride, y)``): the step's distance
+    along the heading, the stance ``c`` the foot lands on after crossing it, the swing's progress ``u`` over the edge and the height by which
+    the swing clears the edge (m; negative: it hits the riser). Along a swing the foot moves
+    on the straight line between its footholds (both coordinates follow ``S(u)``) lifted by
+    ``lift B(u)``; the treads are parallel to the plane, so only the steps' rises count."""
+
+    def level(d, before=False):  # the steps' part of the ground's height at (or before) d
+        return sum(rise for edge, rise in terrain.steps if (d > edge if before else d >= edge))
+
+    grid = np.linspace(0.0, 1.0, 2001)
+    s_grid = STEP_RATES[0](grid)
+    levels = _foot_levels(terrain, x0, y, stride)
+    out = []
+    for edge, c in zip((e for e, _ in terrain.steps), levels["rises_at"], strict=False):
+        before, after = (float(terrain.distance(x0 + k * stride, y)) for k in (c - 1, c))
+        fraction = (edge - before) / (after - before)
+        u = float(np.interp(fraction, s_grid, grid))
+        line = level(before) + (level(after) - level(before)) * fraction
+        corner = max(level(edge, before=True), level(edge))
+        out.append((edge, c, u, lift * float(LIFT_RATES[0](u)) - (corner - line)))
+    return out
 
 
 def _posed(scene, angles: dict[str, float], lift: float = 0.0):
@@ -152,23 +245,24 @@ def _posed(scene, angles: dict[str, float], lift: float = 0.0):
 
 def robot_scene(description):
     """The walking scene of a robot description (:class:`legs.description.RobotDescription`):
-    its URDF with a free trunk in its rest posture, the feet on the ground ``z = 0``, the
-    trunk's pose and each foot's path as guides, every revolute and prismatic joint following
-    them, each foot a contact by the gait's schedule.
+    its URDF with a free trunk in its rest posture, the feet on the ground, the trunk's pose and
+    each foot's path as guides, every revolute and prismatic joint following them, each foot a
+    contact by the gait's schedule. On a ground that is not flat (the description's
+    ``[ground]`` slope and steps) each foothold lies on it, under the foot's rest position, and
+    the trunk keeps its rest height above the plane, level, rising over each step as it passes.
 
     Raises
     ------
     ModelError
-        The trunk or a foot's link is not a link of the URDF, or the URDF's own problems.
+        The trunk or a foot's link is not a link of the URDF, the URDF's own problems, or a
+        swing that would not clear a step's edge.
     """
-    from hexapod import ModelError
     from hexapod.scene import (
         Contact,
         CoordinateDriver,
         GroundForces,
         Guided,
         JointDriver,
-        Problem,
         read_urdf,
     )
     from hexapod.spatial import Placement
@@ -176,6 +270,59 @@ def robot_scene(description):
     from legs.trunk_path import TrunkPlan, plan_trunk
 
     urdf = read_urdf(description.urdf, base="free")
+    trunk = _checked_links(description, urdf)
+    angles = rest_angles(description, urdf.joints)
+    scene = _posed(urdf, angles)
+    rest = {name: scene.pose(foot.link).transform_point(foot.point)
+            for name, foot in description.feet.items()}
+    height = -float(np.mean([p[2] for p in rest.values()]))  # the feet's mean on the ground
+    lifted = _posed(urdf, angles, height)
+    lifted.ground = GroundForces(**description.ground)
+    terrain, gait = lifted.ground.terrain, description.gait
+    phases = gait.phases or _pattern_phases(gait.pattern, rest)
+    period, duty, stride = gait.period, gait.duty, gait.stride
+    speed = stride / period
+    origin = lifted.pose(trunk).position
+    starts = {name: np.array([rest[name][0] + speed * (phases[name] - duty / 2) * period,
+                              rest[name][1], 0.0]) for name in description.feet}
+    plan = TrunkPlan.level(period) if gait.trunk == "level" else plan_trunk(
+        {name: (StepPath(starts[name][0], stride, 0.0, duty, period,
+                                phases[name]),
+                 StepPath(0.0, 0.0, gait.step_height, duty, period, phases[name]),
+                 rest[name][:2] - origin[:2]) for name in description.feet},
+        phases, duty, period, stride, height, _masses(lifted, trunk))
+    rise = _trunk_rise(terrain, origin, speed, starts)
+    for axis, law in zip("xyz", (_sway(plan.x, origin[0], speed, period),
+                                 _sway(plan.y, origin[1], 0.0, period), rise), strict=True):
+        lifted.add(CoordinateDriver(f"trunk/{axis}", trunk, axis, law, point=[0.0, 0.0, 0.0],
+                                    guide=True))
+    for angle in ("roll", "pitch", "yaw"):
+        lifted.add(CoordinateDriver(f"trunk/{angle}", trunk, angle, 0.0, guide=True))
+    for name, foot in description.feet.items():
+        phase, start = phases[name], starts[name]
+        _check_clearance(description, name, terrain, start, phase)
+        laws = (StepPath(start[0], stride, 0.0, duty, period, phase), start[1],
+                StepPath(lift=gait.step_height, duty=duty, period=period, lift_off=phase,
+                         **_foot_levels(terrain, start[0], start[1], stride)))
+        for axis, law in zip("xyz", laws, strict=True):
+            lifted.add(CoordinateDriver(f"{name}/{axis}", foot.link, axis, law,
+                                        point=foot.point, guide=True))
+        lifted.add(Contact(f"{name}/ground", "ground", foot.link,
+                           child_frame=Placement(foot.point), period=period, duty=duty,
+                           lift_off=phase, foothold=start, advance=[stride, 0.0, 0.0]))
+    for joint in urdf.joints.values():
+        if joint.drivable:
+            lifted.add(JointDriver(f"drive_{joint.name}", joint.name, Guided()))
+    lifted.name, lifted.source = description.name, description.source
+    return lifted
+
+
+def _checked_links(description, urdf) -> str:
+    """The trunk's link; raises ``ModelError`` naming every foot link, the trunk or a rest
+    angle's pattern that the URDF does not have."""
+    from hexapod import ModelError
+    from hexapod.scene import Problem
+
     where = f"robot description {Path(description.source).name}"
     missing = [Problem(where, f"no link '{foot.link}' in {description.urdf.name}",
                        f"{description.source}, robot.feet.{name}")
@@ -191,47 +338,45 @@ def robot_scene(description):
                                    f"{description.source}, robot.rest.{key}"))
     if missing:
         raise ModelError(where, missing)
-    angles = rest_angles(description, urdf.joints)
-    scene = _posed(urdf, angles)
-    rest = {name: scene.pose(foot.link).transform_point(foot.point)
-            for name, foot in description.feet.items()}
-    height = -float(np.mean([p[2] for p in rest.values()]))  # the feet's mean on the ground
-    lifted = _posed(urdf, angles, height)
+    return trunk
+
+
+def _trunk_rise(terrain, origin: np.ndarray, speed: float, starts: dict):
+    """The trunk's height: its rest height above the plane under it, at the trunk's mean
+    speed along ``x``, rising by each step over the time the feet take to pass it."""
+    if terrain.flat:
+        return float(origin[2])
+    tan, d0 = np.tan(np.radians(terrain.slope)), float(terrain.distance(*origin[:2]))
+    along = terrain.direction[0] * speed  # the trunk's speed along the heading
+    reach = [float(terrain.distance(*p[:2])) for p in starts.values()]
+    width = max(max(reach) - min(reach), 1e-3) / abs(along) if along else 1.0
+    if not along:  # walking along the risers: on the tread it starts on
+        return TrunkRise(origin[2] + float(terrain.height(*origin[:2])), 0.0)
+    # from t = -inf (every step ahead, or behind when walking down the heading) on
+    start = origin[2] + tan * d0 + (sum(r for _, r in terrain.steps) if along < 0 else 0.0)
+    times = tuple((e - d0) / along for e, _ in terrain.steps)
+    rises = tuple(r if along > 0 else -r for _, r in terrain.steps)
+    return TrunkRise(start, tan * along, times, rises, width)
+
+
+def _check_clearance(description, name: str, terrain, start: np.ndarray, phase: float):
+    """Raise ``ModelError`` where foot ``name``'s swing would pass a step's edge lower than
+    the gait's clearance, naming the foot, the time and the step."""
+    from hexapod import ModelError
+    from hexapod.scene import Problem
+
     gait = description.gait
-    phases = gait.phases or _pattern_phases(gait.pattern, rest)
-    period, duty, stride = gait.period, gait.duty, gait.stride
-    speed = stride / period
-    origin = lifted.pose(trunk).position
-    starts = {name: np.array([rest[name][0] + speed * (phases[name] - duty / 2) * period,
-                              rest[name][1], 0.0]) for name in description.feet}
-    plan = TrunkPlan.level(period) if gait.trunk == "level" else plan_trunk(
-        {name: (StepPath(starts[name][0], stride, 0.0, duty, period,
-                                phases[name]),
-                 StepPath(0.0, 0.0, gait.step_height, duty, period, phases[name]),
-                 rest[name][:2] - origin[:2]) for name in description.feet},
-        phases, duty, period, stride, height, _masses(lifted, trunk))
-    for axis, law in zip("xyz", (_sway(plan.x, origin[0], speed, period),
-                                 _sway(plan.y, origin[1], 0.0, period), origin[2]), strict=True):
-        lifted.add(CoordinateDriver(f"trunk/{axis}", trunk, axis, law, point=[0.0, 0.0, 0.0],
-                                    guide=True))
-    for angle in ("roll", "pitch", "yaw"):
-        lifted.add(CoordinateDriver(f"trunk/{angle}", trunk, angle, 0.0, guide=True))
-    for name, foot in description.feet.items():
-        phase, start = phases[name], starts[name]
-        laws = (StepPath(start[0], stride, 0.0, duty, period, phase), start[1],
-                StepPath(0.0, 0.0, gait.step_height, duty, period, phase))
-        for axis, law in zip("xyz", laws, strict=True):
-            lifted.add(CoordinateDriver(f"{name}/{axis}", foot.link, axis, law,
-                                        point=foot.point, guide=True))
-        lifted.add(Contact(f"{name}/ground", "ground", foot.link,
-                           child_frame=Placement(foot.point), period=period, duty=duty,
-                           lift_off=phase, foothold=start, advance=[stride, 0.0, 0.0]))
-    for joint in urdf.joints.values():
-        if joint.drivable:
-            lifted.add(JointDriver(f"drive_{joint.name}", joint.name, Guided()))
-    lifted.ground = GroundForces(**description.ground)
-    lifted.name, lifted.source = description.name, description.source
-    return lifted
+    clearance = gait.step_height / 4 if gait.clearance is None else gait.clearance
+    for edge, c, u, above in _swing_clearance(terrain, start[0], start[1], gait.stride,
+                                        gait.step_height):
+        if above < clearance:
+            t = (phase + c - 1.0 + u * (1.0 - gait.duty)) * gait.period
+            where = f"robot description {Path(description.source).name}"
+            raise ModelError(where, [Problem(where, (
+                f"foot {name}'s swing at t = {t:.3g} s passes the step at {edge:g} m "
+                f"{above * 1e3:.3g} mm above its edge, less than the clearance of "
+                f"{clearance * 1e3:.3g} mm: raise gait.step_height, or move the step"),
+                f"{description.source}, ground.steps")])
 
 
 def _pattern_phases(pattern: str, rest: dict[str, np.ndarray]) -> dict[str, float]:

@@ -1,0 +1,220 @@
+"""Ground that is not flat: a plane of any slope with steps (the scene's ``[ground]`` slope,
+heading and steps). Scheduled feet stand on it, their friction cones about its normal; a robot
+description walks up it. Checked against closed forms written here (not the terrain's code):
+heights and normals of the plane and the steps, stance feet on footholds on the slope and on
+each tread, the ground forces balancing the rate of change of momentum of the bodies' motions,
+Pinocchio's efforts (live when installed), friction judged about the slope's normal, a swing
+too low for a step's edge named with the foot and the time."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import hexapod as hx
+from hexapod.errors import ModelError
+from hexapod.scene import GroundForces
+from hexapod.spatial import rotation_from_euler_parameters
+from legs.walker import StepPath
+
+ROBOTS = Path(__file__).resolve().parents[1] / "data" / "robots"
+SLOPE = np.radians(10.0)
+FEET = ("LF", "RF", "LH", "RH")
+
+
+def _quadruped(tmp_path, ground: str, *changes) -> Path:
+    """The project's quadruped with ``ground`` lines added to its ``[ground]``."""
+    (tmp_path / "quadruped.urdf").write_text((ROBOTS / "quadruped.urdf").read_text())
+    text = (ROBOTS / "quadruped.toml").read_text().replace("[ground]\n", f"[ground]\n{ground}\n")
+    for old, new in changes:
+        assert old in text
+        text = text.replace(old, new)
+    path = tmp_path / "robot.toml"
+    path.write_text(text)
+    return path
+
+
+def _feet(scene, model, result) -> dict:
+    """Each foot's world position and its contact's foothold (x, y) and stance, per sample."""
+    out = {}
+    for foot in FEET:
+        contact = scene.joints[f"{foot}/ground"]
+        body = scene.bodies[contact.child]
+        point = contact.child_frame.position - np.asarray(body.com, dtype=float)
+        info = model.bodies[model.body_index[body.name]]
+        position = np.array([q[info.q][:3] + rotation_from_euler_parameters(q[info.q][3:])
+                             @ point for q in result.q])
+        k = np.floor(result.times / contact.period - contact.lift_off) + 1.0
+        foothold = contact.foothold + k[:, None] * contact.advance
+        out[foot] = position, foothold, hx.scene.contacts.in_stance(contact, result.times)
+    return out
+
+
+def _momentum_gap(model, result) -> float:
+    """The largest residual of ``sum F_ground + M g = sum m a_com``, over the weight."""
+    rate = sum(b.mass * result.v_dot[:, b.v][:, :3] for b in model.bodies)
+    gravity = model.total_mass * np.asarray(model.gravity)
+    gap = result.ground_force.sum(axis=1) + gravity - rate
+    return float(np.abs(gap).max() / (model.total_mass * 9.81))
+
+
+def test_the_ground_has_the_height_and_normal_of_a_plane_with_steps():
+    ground = GroundForces(slope=10.0, heading=30.0, steps=[[0.2, 0.03], [0.5, -0.01]])
+    terrain = ground.terrain
+    c, s = np.cos(np.radians(30.0)), np.sin(np.radians(30.0))
+    x, y = np.array([0.0, 0.3, 0.5, 1.0]), np.array([0.1, -0.2, 0.4, 0.2])
+    d = c * x + s * y
+    expected = np.tan(SLOPE) * d + 0.03 * (d >= 0.2) - 0.01 * (d >= 0.5)
+    assert np.abs(terrain.height(x, y) - expected).max() < 1e-15
+    normal = terrain.normal()  # normal to the plane's two tangents, pointing up
+    up_slope = np.array([c, s, np.tan(SLOPE)])
+    across = np.array([-s, c, 0.0])
+    assert abs(normal @ up_slope) < 1e-15 and abs(normal @ across) < 1e-15
+    assert normal[2] > 0 and np.linalg.norm(normal) == pytest.approx(1.0, abs=1e-15)
+    axes = terrain.axes()
+    assert np.abs(axes @ axes.T - np.eye(3)).max() < 1e-15 and np.linalg.det(axes) > 0
+    assert np.array_equal(axes[2], normal)
+    assert np.array_equal(GroundForces().terrain.axes(), np.eye(3))
+
+
+@pytest.mark.parametrize("key, value, message", [
+    ("slope", 75.0, "less than 60 degrees"),
+    ("steps", [[0.2]], "two finite numbers"),
+    ("heading", float("nan"), "finite number of degrees"),
+])
+def test_a_bad_ground_shape_is_named(key, value, message):
+    problems = GroundForces(**{key: value}, source="scene.toml, ground").problems()
+    assert len(problems) == 1 and message in problems[0].message
+    assert problems[0].where.startswith(f"scene.toml, ground.{key}")
+
+
+def test_the_ground_shape_is_written_read_and_converted_with_the_length_unit(tmp_path):
+    scene = hx.Scene("steps", length_unit="mm")
+    scene.ground = GroundForces(slope=5.0, heading=90.0, steps=((300.0, 30.0), (600.0, -20.0)))
+    path = hx.write_scene(scene, tmp_path / "steps.toml")
+    again = hx.read_scene(path)
+    assert again.ground.terrain == scene.ground.terrain
+    assert again.in_si().ground.terrain.steps == ((0.3, 0.03), (0.6, -0.02))
+    bad = tmp_path / "bad.toml"
+    bad.write_text(path.read_text().replace("steps = [", "steps = [7, "))
+    with pytest.raises(ModelError, match=r"ground\.steps.*list of 2 numbers, got 7"):
+        hx.read_scene(bad)
+
+
+def test_a_model_keeps_the_ground_shape_it_was_built_on(tmp_path):
+    model = hx.assemble(hx.load_scene(_quadruped(tmp_path, "")))
+    model.with_ground(GroundForces(policy="friction", mu=0.5), "")  # only the policy's numbers
+    with pytest.raises(ValueError, match="ground's shape"):
+        model.with_ground(GroundForces(policy="friction", slope=10.0), "")
+
+
+@pytest.fixture(scope="module")
+def slope(tmp_path_factory):
+    path = _quadruped(tmp_path_factory.mktemp("slope"), "slope = 10")
+    scene = hx.load_scene(path)
+    model = hx.assemble(scene)
+    return scene, model, hx.inverse_dynamics(model, np.linspace(0.0, 1.2, 24, endpoint=False))
+
+
+def test_stance_feet_stand_on_the_slope_and_the_forces_balance_the_motion(slope):
+    scene, model, result = slope
+    for position, foothold, stance in _feet(scene, model, result).values():
+        assert stance.sum() >= 19
+        on_slope = np.column_stack([foothold[:, :2], np.tan(SLOPE) * foothold[:, 0]])
+        assert np.abs(position[stance] - on_slope[stance]).max() < 1e-12
+    assert _momentum_gap(model, result) < 1e-9
+    trunk = scene.drivers["trunk/z"].law  # rest height above the plane, up it at the speed
+    assert trunk(1.2) - trunk(0.0) == pytest.approx(np.tan(SLOPE) * 0.1, abs=1e-15)
+
+
+def test_friction_is_judged_about_the_slope_s_normal(slope, tmp_path):
+    """Up a 10-degree slope the feet must push along it (the weight's component, tan 10 =
+    0.18 of the normal force on average): feasible at mu = 0.8, at every sample, the cones
+    about the slope's normal (checked here with the normal written out); at mu = 0.15 some
+    foot must slip at most samples (the trunk's sway helps at a few)."""
+    scene, model, result = slope
+    assert result.feasible
+    normal = np.array([-np.sin(SLOPE), 0.0, np.cos(SLOPE)])
+    force = result.ground_force
+    pushed = force @ normal
+    sliding = np.linalg.norm(force - pushed[..., None] * normal, axis=-1)
+    stance = result.ground_status != "swing"
+    assert np.all(sliding[stance] <= 0.8 * pushed[stance] + 1e-9)
+    up = np.array([np.cos(SLOPE), 0.0, np.sin(SLOPE)])  # on average the feet hold the weight's
+    held = (force @ up).sum(axis=1).mean() / (model.total_mass * 9.81 * np.sin(SLOPE))
+    assert 0.8 < held < 1.2  # component along the slope (the stride's accelerations average out)
+    slippery = _quadruped(tmp_path, "slope = 10", ("mu = 0.8", "mu = 0.15"))
+    times = result.times[::4]
+    steep = hx.inverse_dynamics(hx.assemble(hx.load_scene(slippery)), times)
+    slipping = (steep.ground_status == "slip").any(axis=1)
+    assert not steep.feasible and slipping.mean() >= 0.5  # the sway's pushes help at some
+
+
+def test_the_efforts_on_the_slope_are_pinocchios(slope):
+    pytest.importorskip("pinocchio")
+    from script_loader import load_script
+
+    _, model, result = slope
+    script = load_script("tests/data/make_walking_fixture.py")
+    comparison = script.pinocchio_rnea(hx.simulation.motion_model(model, result), result)
+    assert comparison.placement_gap < 1e-12 and comparison.motion_gap < 1e-10
+    assert comparison.difference < 1e-8
+    assert np.abs(comparison.base[:, :3]).max() < 1e-8 * model.total_mass * 9.81
+
+
+def test_the_quadruped_climbs_a_step_with_each_foot_on_its_tread(tmp_path):
+    """A 3 cm step at x = 0.35 m: every foot crosses it in one swing, lands on the upper
+    tread, and the trunk rises by the step's height as the robot passes it."""
+    path = _quadruped(tmp_path, "steps = [[0.35, 0.03]]", ("step_height = 0.04",
+                                                           "step_height = 0.05"))
+    scene = hx.load_scene(path)
+    model = hx.assemble(scene)
+    times = np.linspace(0.0, 7.2, 37)  # coarse: the guided joints' Newton starts are known
+    result = hx.inverse_dynamics(model, times)
+    for foot, (position, foothold, stance) in _feet(scene, model, result).items():
+        tread = 0.03 * (foothold[:, 0] >= 0.35)
+        on_tread = np.column_stack([foothold[:, :2], tread])
+        assert np.abs(position[stance] - on_tread[stance]).max() < 1e-12, foot
+        assert tread[0] == 0.0 and tread[-1] == 0.03, foot  # it crossed in the window
+    assert _momentum_gap(model, result) < 1e-9
+    assert result.feasible
+    trunk = scene.drivers["trunk/z"].law
+    assert trunk(60.0) - trunk(-60.0) == pytest.approx(0.03, abs=1e-15)
+
+
+def test_a_foot_path_over_a_step_is_smooth_and_on_both_treads():
+    """The rise is taken along the swing before the stance it starts: value, rate and
+    acceleration against the closed form and central differences, C2 at lift-off and
+    touch-down, standing on each tread in stance."""
+    path = StepPath(start=0.0, advance=0.0, lift=0.05, duty=0.75, period=1.0, lift_off=0.25,
+                    rises_at=(2.0,), rises=(0.03,))
+    # stance 1 ends at 1.25 s (lift-off), the swing to stance 2 lasts until 1.5 s
+    assert np.ptp(path(np.linspace(0.5, 1.25, 9))) == 0.0 and path(1.0) == 0.0
+    assert np.all(path(np.linspace(1.5, 2.25, 9)) == 0.03)
+    t = np.linspace(0.0, 3.0, 301) + 0.0007
+    h = 1e-5
+    value, rate, acceleration = path.evaluate(t)
+    assert np.abs((path(t + h) - path(t - h)) / (2 * h) - rate).max() < 1e-7
+    assert np.abs((path.evaluate(t + h)[1] - path.evaluate(t - h)[1]) / (2 * h)
+                  - acceleration).max() < 1e-5
+    _, rate, acceleration = path.evaluate(np.array([1.25, 1.5]))
+    assert np.abs(rate).max() < 1e-12 and np.abs(acceleration).max() < 1e-9
+
+
+def test_a_swing_too_low_for_a_step_is_one_clear_message(tmp_path):
+    """At x = 0.32 m the right fore foot's swing starts next to the riser: its straight path
+    and 4 cm lift pass below the edge (a negative clearance), named with the foot and time;
+    the command line says the same, exit 1, nothing written."""
+    from commands import in_process
+
+    path = _quadruped(tmp_path, "steps = [[0.32, 0.03]]")
+    with pytest.raises(ModelError, match=r"foot RF's swing at t = \S+ s passes the step at "
+                                         r"0.32 m -\S+ mm above its edge, less than the "
+                                         r"clearance of 10 mm"):
+        hx.load_scene(path)
+    before = set(tmp_path.iterdir())
+    done = in_process("report", str(path), "--no-figures", cwd=tmp_path)
+    assert done.returncode == 1 and "foot RF's swing" in done.stderr
+    assert "Traceback" not in done.stderr and set(tmp_path.iterdir()) == before
