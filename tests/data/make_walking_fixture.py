@@ -17,9 +17,12 @@ Pinocchio's placements, velocities and accelerations of every body frame against
 (from ``q``, ``v`` and ``v_dot``), and each joint angle from ``q`` against its driver law.
 
     pip install ".[compare]" && python3 tests/data/make_walking_fixture.py [--quadruped]
+    python3 tests/data/make_walking_fixture.py --hexapod3
 
 ``--quadruped`` writes ``quadruped_rnea.npz`` for the project's quadruped instead
-(``data/robots/quadruped.toml``: a URDF robot whose joints follow its guides).
+(``data/robots/quadruped.toml``: a URDF robot whose joints follow its guides, 24 samples of a
+stride), ``--hexapod3`` ``hexapod3_rnea.npz`` for its hexapod of three joints a leg
+(``data/robots/hexapod3.toml``, a tripod: 20 samples of a stride).
 """
 
 from __future__ import annotations
@@ -270,19 +273,27 @@ def pinocchio_rnea(model: hx.Model, result: hx.InverseResult) -> Comparison:
                       q, v, a, angle_gap, placement_gap, motion_gap)
 
 
-def quadruped() -> tuple[hx.Model, np.ndarray]:
-    """The project's quadruped (data/robots/quadruped.toml: its joints follow guides) and one
-    stride of its walk."""
-    model = hx.assemble(hx.load_scene(ROOT / "data" / "robots" / "quadruped.toml"))
-    return model, np.linspace(0.0, 1.2, 24, endpoint=False)
+#: The robot descriptions of data/robots with a fixture: the option, the description, the
+#: samples over one stride (its end left out).
+DESCRIBED = {"--quadruped": ("quadruped", 24), "--hexapod3": ("hexapod3", 20)}
+
+
+def described(name: str, samples: int) -> tuple[hx.Model, np.ndarray]:
+    """A robot of data/robots (``data/robots/NAME.toml``: its joints follow guides) and
+    ``samples`` instants over one stride of its gait."""
+    scene = hx.load_scene(ROOT / "data" / "robots" / f"{name}.toml")
+    period = scene.joints[next(j for j in scene.joints if j.endswith("/ground"))].period
+    return hx.assemble(scene), np.linspace(0.0, period, samples, endpoint=False)
 
 
 def main() -> None:
     import pinocchio as pin
 
-    if "--quadruped" in sys.argv:
-        model, times = quadruped()
-        out = OUT.with_name("quadruped_rnea.npz")
+    option = next((a for a in sys.argv[1:] if a in DESCRIBED), None)
+    if option is not None:
+        name, samples = DESCRIBED[option]
+        model, times = described(name, samples)
+        out = OUT.with_name(f"{name}_rnea.npz")
     else:
         model, times, out = walking_model(), sample_times(), OUT
     result = hx.inverse_dynamics(model, times)
