@@ -16,8 +16,18 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
+from hexapod.errors import HexapodError
 from hexapod.model.model import Model
 from hexapod.model.tabulation import sampled_laws
+
+#: A guided joint whose coordinate changes between two samples by more than its rates and
+#: accelerations at both account for (the quintic Hermite's integral), by this share of the
+#: change and at least :data:`JUMP_FLOOR`, has jumped to another solution of the guides (a knee
+#: flipped between samples too far apart for the Newton solves to follow the motion).
+JUMP_SHARE = 0.5
+JUMP_FLOOR = 1e-3
+#: How many times the samples are halved where the motion jumped before giving up.
+REFINEMENTS = 6
 
 
 def _coordinates(model: Model) -> ca.Function:
@@ -52,3 +62,37 @@ def guided_twin(model: Model, times: np.ndarray, q: np.ndarray, v: np.ndarray,
                           strict=True):
         laws[index] = law
     return model.with_laws(tuple(laws), model.digest, share_built=True)
+
+
+def guides_motion(model: Model, times: np.ndarray, solve) -> tuple:
+    """The guides' kinematics ``(q, v, v_dot)`` at ``times``, continuous along them: ``solve``
+    (``solve(kinematics_model, times) -> InverseResult``) runs the kinematics; where a guided
+    joint jumps to another solution between two samples (see :data:`JUMP_SHARE`) the motion
+    is solved again through their midpoint, until it follows one solution.
+
+    Raises
+    ------
+    HexapodError
+        The motion still jumps after :data:`REFINEMENTS` halvings (naming the joint and time).
+    """
+    grid = np.asarray(times, dtype=float)
+    for _ in range(REFINEMENTS + 1):
+        motion = solve(model.guidance.kinematics, grid)
+        theta, rate, acceleration = guided_coordinates(model, motion.q, motion.v,
+                                                       motion.v_dot)
+        h = np.diff(grid)
+        accounted = (h / 2 * (rate[:, :-1] + rate[:, 1:])
+                     + h**2 / 12 * (acceleration[:, :-1] - acceleration[:, 1:]))
+        change = np.diff(theta, axis=1)
+        jumps = np.abs(change - accounted) > np.maximum(JUMP_SHARE * np.abs(change), JUMP_FLOOR)
+        if not jumps.any():
+            kept = np.searchsorted(grid, times)
+            return motion.q[kept], motion.v[kept], motion.v_dot[kept]
+        bad = jumps.any(axis=0)
+        grid = np.sort(np.concatenate([grid, (grid[:-1][bad] + grid[1:][bad]) / 2]))
+    guided, k = np.unravel_index(np.argmax(jumps), jumps.shape)
+    law = int(model.guidance.laws[guided])
+    joint = next(model.joints[d.joint].name for d in model.drivers if d.law == law)
+    raise HexapodError(f"model '{model.name}': joint '{joint}' jumps between solutions of the "
+                       f"guides near t = {grid[k]:.6g} s even with samples {h[k]:.3g} s "
+                       "apart: the guides ask for a motion it cannot follow continuously")

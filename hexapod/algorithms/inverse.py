@@ -218,14 +218,14 @@ def _guided(model: Model, times: np.ndarray, progress):
     """The twin of a guided model whose joints follow the motion the guides give them, the
     progress of its run as the second half of the whole, and the positions at the samples
     (the twin's laws are exact there, not between: its Newton solves start from them)."""
-    from hexapod.algorithms.guided import guided_twin
+    from hexapod.algorithms.guided import guided_twin, guides_motion
 
     n = times.size
-    motion = inverse_dynamics(model.guidance.kinematics, times, progress=(
-        None if progress is None else lambda done, total: progress(done, 2 * n)))
-    twin = guided_twin(model, times, motion.q, motion.v, motion.v_dot)
-    return twin, (None if progress is None else lambda done, total: progress(n + done, 2 * n)), \
-        motion.q
+    q, v, v_dot = guides_motion(model, times, lambda kinematics, grid: inverse_dynamics(
+        kinematics, grid, progress=None if progress is None else
+        lambda done, total: progress(done * n // total, 2 * n)))
+    twin = guided_twin(model, times, q, v, v_dot)
+    return twin, (None if progress is None else lambda done, total: progress(n + done, 2 * n)), q
 
 
 def motion_model(model: Model, result: InverseResult) -> Model:
