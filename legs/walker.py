@@ -70,6 +70,18 @@ def roles(rest: dict[str, np.ndarray]) -> dict[str, str]:
     return out
 
 
+def rise_progress(u, rise: float) -> tuple:
+    """How much of a step's ``rise`` a swing has taken at its progress ``u`` (and the first
+    two derivatives in ``u``): up a step within the swing's first half, down one within its
+    second, along the ninth-degree smooth step, so the foot is over the upper tread's level
+    while it passes the edge."""
+    u = np.asarray(u, dtype=float)
+    w = np.clip(2.0 * u if rise > 0 else 2.0 * u - 1.0, 0.0, 1.0)
+    inside = (w > 0.0) & (w < 1.0)
+    return tuple(np.where(inside, 2.0**m * p(w), w if m == 0 else 0.0)
+                 for m, p in enumerate(STEP_RATES))
+
+
 @dataclass(frozen=True)
 class StepPath(OnSchedule, Law):
     """One world coordinate (m) of a walking foot: standing on its foothold in stance, stepping
@@ -79,7 +91,7 @@ class StepPath(OnSchedule, Law):
     is the swing's height (for the vertical coordinate; 0 otherwise). Steps of the ground:
     from stance ``rises_at[i]`` on (stance ``c`` lasts from the ``c``-th lift-off after
     ``t = 0`` to the next; the stance ending at ``t = lift_off period`` is ``0``), the value is
-    raised by ``rises[i]``, reached along the swing before it as the advance is."""
+    raised by ``rises[i]``, taken along the swing before it (:func:`rise_progress`)."""
 
     start: float = 0.0
     advance: float = 0.0
@@ -103,12 +115,15 @@ class StepPath(OnSchedule, Law):
         bump = [p(u) for p in LIFT_RATES]
         stance = k + np.where(in_swing, step[0], 1.0)  # c + 1 along the swing to stance c + 1
         value = self.start + self.advance * stance + self.lift * np.where(in_swing, bump[0], 0.0)
-        climb = np.full_like(stance, self.advance)  # the swing's advance, rises included
-        for at, rise in zip(self.rises_at, self.rises, strict=True):
-            value = value + rise * np.clip(stance - at + 1.0, 0.0, 1.0)
-            climb = climb + rise * (k == at - 1.0)
-        rates = [np.where(in_swing, (climb * step[m] + self.lift * bump[m])
+        rates = [np.where(in_swing, (self.advance * step[m] + self.lift * bump[m])
                           / (swing * self.period) ** m, 0.0) for m in (1, 2)]
+        for at, rise in zip(self.rises_at, self.rises, strict=True):
+            crossing = in_swing & (k == at - 1.0)
+            climb = rise_progress(u, rise)
+            value = value + rise * np.where(crossing, climb[0], stance >= at)
+            for m in (1, 2):
+                rates[m - 1] = rates[m - 1] + rise * np.where(
+                    crossing, climb[m] / (swing * self.period) ** m, 0.0)
         return value, rates[0], rates[1]
 
     def cycle_time(self):  # a foot that steps forward (or up) does not come back
@@ -186,27 +201,23 @@ def _foot_levels(terrain, x0: float, y: float, stride: float) -> dict:
             "rises": tuple(rises)}
 
 
-def _swing_clearance(terrain, x0: float, y: float, stride: float, lift: float):
-    """For each step a foot crosses (footholds ``(x0 + c stride, y)``): the step's distance
-    along the heading, the stance ``c`` the foot lands on after crossing it, the swing's progress ``u`` over the edge and the height by which
-    the swing clears the edge (m; negative: it hits the riser). Along a swing the foot moves
-    on the straight line between its footholds (both coordinates follow ``S(u)``) lifted by
-    ``lift B(u)``; the treads are parallel to the plane, so only the steps' rises count."""
-
-    def level(d, before=False):  # the steps' part of the ground's height at (or before) d
-        return sum(rise for edge, rise in terrain.steps if (d > edge if before else d >= edge))
-
-    grid = np.linspace(0.0, 1.0, 2001)
-    s_grid = STEP_RATES[0](grid)
-    levels = _foot_levels(terrain, x0, y, stride)
+def _swing_clearance(terrain, x_law, z_law, y: float):
+    """For each step a foot crosses (its paths ``x_law`` and ``z_law``, at ``y``): the step's
+    distance along the heading, the time the foot passes over its edge, and the height by
+    which it clears the edge (m; negative: it hits the riser)."""
+    tan = np.tan(np.radians(terrain.slope))
     out = []
-    for edge, c in zip((e for e, _ in terrain.steps), levels["rises_at"], strict=False):
-        before, after = (float(terrain.distance(x0 + k * stride, y)) for k in (c - 1, c))
-        fraction = (edge - before) / (after - before)
-        u = float(np.interp(fraction, s_grid, grid))
-        line = level(before) + (level(after) - level(before)) * fraction
-        corner = max(level(edge, before=True), level(edge))
-        out.append((edge, c, u, lift * float(LIFT_RATES[0](u)) - (corner - line)))
+    for at in z_law.rises_at:
+        lift_off = (z_law.lift_off + at - 1.0) * z_law.period  # the swing that crosses it
+        t = lift_off + np.linspace(0.0, 1.0, 4001) * (1.0 - z_law.duty) * z_law.period
+        d = terrain.distance(x_law(t), y)
+        for edge, _ in terrain.steps:
+            if min(d[0], d[-1]) < edge <= max(d[0], d[-1]):
+                when = float(np.interp(edge, d, t) if d[-1] > d[0] else np.interp(
+                    -edge, -d, t))
+                corner = tan * edge + max(sum(r for e, r in terrain.steps if e < edge),
+                                          sum(r for e, r in terrain.steps if e <= edge))
+                out.append((edge, when, float(z_law(when)) - corner))
     return out
 
 
@@ -300,10 +311,10 @@ def robot_scene(description):
         lifted.add(CoordinateDriver(f"trunk/{angle}", trunk, angle, 0.0, guide=True))
     for name, foot in description.feet.items():
         phase, start = phases[name], starts[name]
-        _check_clearance(description, name, terrain, start, phase)
         laws = (StepPath(start[0], stride, 0.0, duty, period, phase), start[1],
                 StepPath(lift=gait.step_height, duty=duty, period=period, lift_off=phase,
                          **_foot_levels(terrain, start[0], start[1], stride)))
+        _check_clearance(description, name, terrain, laws[0], laws[2], start[1])
         for axis, law in zip("xyz", laws, strict=True):
             lifted.add(CoordinateDriver(f"{name}/{axis}", foot.link, axis, law,
                                         point=foot.point, guide=True))
@@ -359,7 +370,7 @@ def _trunk_rise(terrain, origin: np.ndarray, speed: float, starts: dict):
     return TrunkRise(start, tan * along, times, rises, width)
 
 
-def _check_clearance(description, name: str, terrain, start: np.ndarray, phase: float):
+def _check_clearance(description, name: str, terrain, x_law, z_law, y: float):
     """Raise ``ModelError`` where foot ``name``'s swing would pass a step's edge lower than
     the gait's clearance, naming the foot, the time and the step."""
     from hexapod import ModelError
@@ -367,10 +378,8 @@ def _check_clearance(description, name: str, terrain, start: np.ndarray, phase: 
 
     gait = description.gait
     clearance = gait.step_height / 4 if gait.clearance is None else gait.clearance
-    for edge, c, u, above in _swing_clearance(terrain, start[0], start[1], gait.stride,
-                                        gait.step_height):
+    for edge, t, above in _swing_clearance(terrain, x_law, z_law, y):
         if above < clearance:
-            t = (phase + c - 1.0 + u * (1.0 - gait.duty)) * gait.period
             where = f"robot description {Path(description.source).name}"
             raise ModelError(where, [Problem(where, (
                 f"foot {name}'s swing at t = {t:.3g} s passes the step at {edge:g} m "

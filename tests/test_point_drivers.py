@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 import hexapod as hx
-from hexapod.errors import ModelError
+from hexapod.errors import HexapodError, ModelError
 from hexapod.scene.laws import Law
 from hexapod.scene.reader import read_scene
 from hexapod.scene.writer import write_scene
@@ -35,11 +35,12 @@ def tip_path(t):
             np.column_stack([-RADIUS * w * w * c, -RADIUS * w * w * s]))
 
 
-def closed_form_arm(t):
-    """Shoulder and elbow angles (elbow up: ``theta2 > 0``), rates and accelerations."""
+def closed_form_arm(t, elbow: float = 1.0):
+    """Shoulder and elbow angles (elbow up: ``theta2 > 0``; down with ``elbow = -1``), rates
+    and accelerations."""
     (x, y), (xd, yd), (xdd, ydd) = (p.T for p in tip_path(t))
     c2 = (x * x + y * y - UPPER**2 - FORE**2) / (2 * UPPER * FORE)
-    th2 = np.arccos(c2)
+    th2 = elbow * np.arccos(c2)
     th1 = np.arctan2(y, x) - np.arctan2(FORE * np.sin(th2), UPPER + FORE * np.cos(th2))
     s1, c1, s12, c12 = np.sin(th1), np.cos(th1), np.sin(th1 + th2), np.cos(th1 + th2)
     J = np.array([[-UPPER * s1 - FORE * s12, -FORE * s12],
@@ -373,3 +374,60 @@ def test_the_walking_robot_guided_by_its_feet_reproduces_the_built_in_robot():
     for name in ("effort", "force", "torque", "ground_force"):
         a, b = getattr(guided, name), getattr(built_in, name)
         assert np.nanmax(np.abs(a - b)) <= 1e-9 * np.nanmax(np.abs(b)), name
+
+
+def _arm_motion(model, t, elbow):
+    """The arm's absolute coordinates, velocities and accelerations (N, n) along the tip's
+    circle on the branch ``elbow`` (each planar body: its centre's x, y and its angle)."""
+    th, w, a = closed_form_arm(t, elbow)
+    q, v, v_dot = (np.zeros((t.size, n)) for n in (model.n_q, model.n_v, model.n_v))
+    along = {"upper": (th[:, 0], w[:, 0], a[:, 0], 0.0),
+             "fore": (th.sum(1), w.sum(1), a.sum(1), UPPER)}
+    for name, (phi, phi_d, phi_dd, _) in along.items():
+        body = model.bodies[model.body_index[name]]
+        half = (UPPER if name == "upper" else FORE) / 2
+        e, n = np.column_stack([np.cos(phi), np.sin(phi)]), np.column_stack(
+            [-np.sin(phi), np.cos(phi)])
+        e1, n1 = (np.column_stack([np.cos(th[:, 0]), np.sin(th[:, 0])]),
+                  np.column_stack([-np.sin(th[:, 0]), np.cos(th[:, 0])]))
+        base = (UPPER * e1, UPPER * w[:, :1] * n1,
+                UPPER * (a[:, :1] * n1 - w[:, :1] ** 2 * e1)) if name == "fore" else (0, 0, 0)
+        q[:, body.q] = np.column_stack([base[0] + half * e, phi])
+        v[:, body.v] = np.column_stack([base[1] + half * phi_d[:, None] * n, phi_d])
+        v_dot[:, body.v] = np.column_stack([base[2] + half * (phi_dd[:, None] * n - phi_d[
+            :, None] ** 2 * e), phi_dd])
+    return q, v, v_dot
+
+
+def test_a_guided_joint_that_jumps_to_another_solution_between_samples_is_followed():
+    """Between samples too far apart a Newton solve may land on the other branch of the legs'
+    kinematics (the elbow down): the guides' motion is solved again through the midpoint
+    where a guided coordinate changes by more than its rates and accelerations account for,
+    and the motion returned stays on one branch; a motion that keeps jumping is named."""
+    from types import SimpleNamespace
+
+    from hexapod.algorithms.guided import guides_motion
+
+    model = hx.assemble(guided_arm())
+    times = np.linspace(0.0, 1.0, 11)
+    calls = []
+
+    def flipping(always):
+        def solve(kinematics, grid):
+            calls.append(grid.size)
+            q, v, v_dot = _arm_motion(model, grid, 1.0)
+            if always or grid.size == times.size:  # the elbow goes down from t = 0.5 s
+                down = _arm_motion(model, grid, -1.0)
+                late = grid >= 0.5
+                q[late], v[late], v_dot[late] = (x[late] for x in down)
+            return SimpleNamespace(q=q, v=v, v_dot=v_dot)
+        return solve
+
+    q, v, v_dot = guides_motion(model, times, flipping(False))
+    assert calls == [11, 12]  # once more, through the midpoint of (0.4, 0.5)
+    expected = _arm_motion(model, times, 1.0)
+    for got, want in zip((q, v, v_dot), expected, strict=True):
+        assert np.array_equal(got, want)
+    with pytest.raises(HexapodError, match=r"joint '(shoulder|elbow)' jumps between solutions "
+                                           r"of the guides near t = 0.4"):
+        guides_motion(model, times, flipping(True))

@@ -18,11 +18,15 @@ Pinocchio's placements, velocities and accelerations of every body frame against
 
     pip install ".[compare]" && python3 tests/data/make_walking_fixture.py [--quadruped]
     python3 tests/data/make_walking_fixture.py --hexapod3
+    python3 tests/data/make_walking_fixture.py --quadruped-slope
+    python3 tests/data/make_walking_fixture.py --hexapod3-steps
 
 ``--quadruped`` writes ``quadruped_rnea.npz`` for the project's quadruped instead
 (``data/robots/quadruped.toml``: a URDF robot whose joints follow its guides, 24 samples of a
 stride), ``--hexapod3`` ``hexapod3_rnea.npz`` for its hexapod of three joints a leg
-(``data/robots/hexapod3.toml``, a tripod: 20 samples of a stride).
+(``data/robots/hexapod3.toml``, a tripod: 20 samples of a stride); ``--quadruped-slope``
+and ``--hexapod3-steps`` the same robots up a 10-degree slope (24 samples of a stride) and up
+two 3 cm steps (90 samples over 9 s).
 """
 
 from __future__ import annotations
@@ -274,16 +278,19 @@ def pinocchio_rnea(model: hx.Model, result: hx.InverseResult) -> Comparison:
 
 
 #: The robot descriptions of data/robots with a fixture: the option, the description, the
-#: samples over one stride (its end left out).
-DESCRIBED = {"--quadruped": ("quadruped", 24), "--hexapod3": ("hexapod3", 20)}
+#: samples over the window (its end left out) and the window (s; None: one stride).
+DESCRIBED = {"--quadruped": ("quadruped", 24, None), "--hexapod3": ("hexapod3", 20, None),
+             "--quadruped-slope": ("quadruped-slope", 24, None),
+             "--hexapod3-steps": ("hexapod3-steps", 90, 9.0)}
 
 
-def described(name: str, samples: int) -> tuple[hx.Model, np.ndarray]:
+def described(name: str, samples: int, window: float | None = None
+              ) -> tuple[hx.Model, np.ndarray]:
     """A robot of data/robots (``data/robots/NAME.toml``: its joints follow guides) and
-    ``samples`` instants over one stride of its gait."""
+    ``samples`` instants over ``window`` (s; default one stride of its gait)."""
     scene = hx.load_scene(ROOT / "data" / "robots" / f"{name}.toml")
     period = scene.joints[next(j for j in scene.joints if j.endswith("/ground"))].period
-    return hx.assemble(scene), np.linspace(0.0, period, samples, endpoint=False)
+    return hx.assemble(scene), np.linspace(0.0, window or period, samples, endpoint=False)
 
 
 def main() -> None:
@@ -291,8 +298,8 @@ def main() -> None:
 
     option = next((a for a in sys.argv[1:] if a in DESCRIBED), None)
     if option is not None:
-        name, samples = DESCRIBED[option]
-        model, times = described(name, samples)
+        name, samples, window = DESCRIBED[option]
+        model, times = described(name, samples, window)
         out = OUT.with_name(f"{name}_rnea.npz")
     else:
         model, times, out = walking_model(), sample_times(), OUT
