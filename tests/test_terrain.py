@@ -238,3 +238,31 @@ def test_a_swing_too_low_for_a_step_is_one_clear_message(tmp_path):
     done = in_process("report", str(path), "--no-figures", cwd=tmp_path)
     assert done.returncode == 1 and "foot RF's swing" in done.stderr
     assert "Traceback" not in done.stderr and set(tmp_path.iterdir()) == before
+
+
+def test_a_study_varies_a_robot_description_s_ground_and_gait(tmp_path):
+    """A study of a robot description sets its own keys (ground.slope, gait.step_height)
+    before it walks and a scene key (the trunk's mass, a payload) on its scene after: each
+    case equals the description written with those values and walked by hand."""
+    from hexapod.sweeps import read_study, run_study
+
+    _quadruped(tmp_path, "")
+    study = tmp_path / "study.toml"
+    study.write_text('[study]\nscene = "robot.toml"\n[fixed]\n"gait.step_height" = 0.05\n'
+                     '"body.trunk.mass" = 9.0\n[vary."ground.slope"]\nvalues = [0.0, 10.0]\n'
+                     '[job]\nsamples = 3\nduration = 0.2\nmetrics = ["peak_ground"]\n')
+    rows = run_study(read_study(study)).rows
+    for row in rows:
+        assert row["status"] == "ok", row["message"]
+        slope = row["params"]["ground.slope"]
+        folder = tmp_path / f"{slope:g}"
+        folder.mkdir()
+        path = _quadruped(folder, f"slope = {slope}", ("step_height = 0.04",
+                                                       "step_height = 0.05"))
+        scene = hx.load_scene(path)
+        scene.bodies["trunk"].mass = 9.0
+        result = hx.inverse_dynamics(hx.assemble(scene), np.linspace(0.0, 0.2, 3))
+        peak = np.linalg.norm(result.ground_force, axis=-1).max(axis=0)
+        np.testing.assert_allclose([row["metrics"][f"peak_ground:{foot}"] for foot in FEET],
+                                   peak, rtol=1e-9)
+    assert rows[0]["metrics"]["peak_ground:LF"] != rows[1]["metrics"]["peak_ground:LF"]

@@ -14,6 +14,7 @@ import json
 import os
 import socket
 import time
+from pathlib import Path
 from collections import OrderedDict
 from typing import TYPE_CHECKING
 
@@ -120,6 +121,19 @@ def build_scene(study: Study, builder, arguments: dict, keys: dict):
     then the scene keys applied."""
     from hexapod.scene.builtin import load_scene
 
+    if builder is None and str(study.scene).lower().endswith(".toml"):
+        from hexapod._support.files import read_toml
+
+        document = read_toml(study.scene, "scene file")
+        if "robot" in document:  # a robot description: its own keys before it walks
+            from hexapod.scene.robots import robot_scene
+
+            own = {k: v for k, v in keys.items() if k.split(".")[0] in _DESCRIPTION}
+            for key, value in own.items():
+                set_scene_key(document, key, value, study.source)
+            scene = robot_scene(document, Path(study.scene))
+            return with_scene_keys(scene, {k: v for k, v in keys.items() if k not in own},
+                                   study.source)
     scene = builder(**arguments) if builder is not None else load_scene(study.scene)
     return with_scene_keys(scene, keys, study.source)
 
@@ -162,11 +176,17 @@ def with_scene_keys(scene: Scene, keys: dict, source: str = "") -> Scene:
     return scene_from_document(document, f"{scene.name} ({_shown(keys)})")
 
 
+#: The tables of a robot description a study's keys set before the robot walks
+#: (``gait.duty``, ``ground.slope``, ``robot.rest.*_knee``); its scene's keys are set after.
+_DESCRIPTION = ("robot", "gait", "ground")
+
+
 def set_scene_key(document: dict, key: str, value, source: str = "") -> None:
     """Set the dotted ``key`` of a scene document: ``section.key`` for the tables ``scene`` and
-    ``ground``, ``section.NAME.key`` for the arrays of elements, more parts into an element's
-    inline tables (``joint.fti.parent_frame.position``), an integer last part for an entry of
-    a list (``scene.gravity.2``)."""
+    ``ground`` (and a robot description's ``robot`` and ``gait``), ``section.NAME.key`` for the
+    arrays of elements, more parts into an element's inline tables
+    (``joint.fti.parent_frame.position``), an integer last part for an entry of a list
+    (``scene.gravity.2``)."""
     parts = key.split(".")
     where = f"{source}: {key}" if source else key
     section = parts[0]
@@ -180,7 +200,7 @@ def set_scene_key(document: dict, key: str, value, source: str = "") -> None:
             raise StudyError(f"{where}: the scene has no {section} named '{parts[1]}' "
                              f"({section}s: {shown or 'none'})")
         table, rest = elements[names.index(parts[1])], parts[2:]
-    elif section in ("scene", "ground"):
+    elif section in ("scene", "ground") or (section in _DESCRIPTION and "robot" in document):
         if len(parts) < 2:
             raise StudyError(f"{where}: name a key of [{section}], {section}.KEY")
         table, rest = document.setdefault(section, {}), parts[1:]
