@@ -14,8 +14,8 @@ import json
 import os
 import socket
 import time
-from pathlib import Path
 from collections import OrderedDict
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 from hexapod.errors import HexapodError, InputFileError
