@@ -339,7 +339,7 @@ def scene_text_string(text: str) -> str:
     ('{ type = "expression", expression = "t", constants = [1] }', "driver[0].law",
      "constants must be a table of names and numbers"),
     ('{ type = "expression", expression = "w*t", constants = { w = "ten" } }', "driver[0].law",
-     "constants entry w must be a number"),
+     "constants.w must be a number"),
     ('{ type = "expression", expression = "w*t", constants = { w = nan } }', "driver[0].law",
      "constants: 'w' is not finite"),
     ('{ type = "expression", expression = "t", constants = { sin = 1 } }', "driver[0].law",
