@@ -132,6 +132,8 @@ def plan_trunk(feet: dict, phases: dict[str, float], duty: float, period: float,
     for j in range(samples):
         points = np.array([[feet[n][0](t[j]), feet[n][2][1]]
                            for i, n in enumerate(names) if weights[i, j] >= loaded])
+        if not len(points):  # the load passes between feet (duty 0.5): nothing to hold to
+            continue
         for normal, d, with_margin in _edges(points):
             # unknowns: the x and y coefficients, the margin s, the slack e of the sides of
             # a segment (on which p must lie: held to zero as far as it can be)

@@ -259,3 +259,17 @@ def test_solo12_walks_with_its_feet_on_their_footholds_and_pinocchios_efforts():
     script = load_script("tests/data/make_walking_fixture.py")
     comparison = script.pinocchio_rnea(hx.simulation.motion_model(model, result), result)
     assert comparison.difference < 1e-8
+
+
+def test_a_tripod_of_duty_one_half_plans_its_trunk(tmp_path):
+    """At duty 0.5 the load passes from one tripod to the other with no foot fully loaded: the
+    trunk's plan holds to the feet where there are some (it once raised an IndexError)."""
+    for name in ("hexapod3.urdf", "hexapod3.toml"):
+        (tmp_path / name).write_text((ROBOTS / name).read_text())
+    path = tmp_path / "hexapod3.toml"
+    path.write_text(path.read_text().replace("duty = 0.6", "duty = 0.5").replace(
+        'trunk = "level"', 'trunk = "planned"'))
+    scene = hx.load_scene(path)
+    x = scene.drivers["trunk/x"].law
+    assert x(1.0) - x(0.0) == pytest.approx(0.08)  # a stride a period, swaying about it
+    assert np.all(np.isfinite(x(np.linspace(0.0, 1.0, 101))))
