@@ -49,6 +49,8 @@ INFEASIBLE_STATUSES = ("slip", "pull")
 VIOLATION_TOL = 1e-7
 #: A friction constraint at most this far from equality (in the robot's weight) is active.
 ACTIVE_TOL = 1e-9
+#: How far the friction QP's solution may leave its constraints (in the robot's weight).
+PRIMAL_TOL = 1e-10
 
 
 def contact_weights(model: Model, t: float) -> np.ndarray:
@@ -393,8 +395,9 @@ def _build_solver(faces: int, n: int, feet: int):
                  else ca.SX(0, 1))
     penalty = 1e6 * ca.sumsqr(slack) + ca.sum1(slack) * 1e3
     quiet = {"print_time": False}
-    if faces:
-        options = {**quiet, "error_on_fail": False}
+    if faces:  # DAQP's primal tolerance (1e-6 by default) in forces over the robot's weight:
+        # below the statuses' VIOLATION_TOL, so that a solved foot is never called slipping
+        options = {**quiet, "error_on_fail": False, "daqp": {"primal_tol": PRIMAL_TOL}}
         strict = ca.qpsol("ground_strict", "daqp",
                           {"x": y, "p": parameters, "f": objective, "g": strict_g}, options)
         loose = ca.qpsol("ground_relaxed", "daqp",
