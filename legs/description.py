@@ -7,6 +7,7 @@
     urdf = "quadruped.urdf"          # relative to this file, or { package = ..., path = ... }
     trunk = "trunk"                  # the URDF's root link (a free body)
     rest = { "*_flexion" = 0.6, "*_knee" = -1.2 }   # joint angles (rad), names or patterns
+    actuators = "motors.toml"        # optional: the motors' table (docs/report.md)
 
     [robot.feet]                     # each foot: a link and a point of it (m, link frame)
     LF = { link = "LF_shank", point = [0.0, 0.0, -0.2] }
@@ -40,10 +41,10 @@ from pathlib import Path
 import numpy as np
 
 from hexapod import ModelError
-from hexapod.scene import GroundForces, Problem
+from hexapod.scene import ActuatorTable, GroundForces, Problem, read_actuators
 from legs.walker import PATTERNS
 
-_ROBOT_KEYS = {"name", "urdf", "trunk", "rest", "feet"}
+_ROBOT_KEYS = {"name", "urdf", "trunk", "rest", "feet", "actuators"}
 _GROUND_KEYS = {"policy", "mu", "faces", "min_normal", "default_reference", "reference_efforts",
                 "slope", "heading", "steps"}
 _GAIT_KEYS = {"pattern", "phases", "duty", "period", "speed", "stride", "step_height", "trunk",
@@ -78,7 +79,8 @@ class Gait:
 
 @dataclass
 class RobotDescription:
-    """A robot read by :func:`read_robot`: its URDF, trunk, feet, rest posture and gait."""
+    """A robot read by :func:`read_robot`: its URDF, trunk, feet, rest posture, gait, ground,
+    and its motors (an actuator table, :func:`hexapod.scene.read_actuators`), if any."""
 
     name: str
     urdf: Path
@@ -88,6 +90,7 @@ class RobotDescription:
     gait: Gait
     ground: dict = field(default_factory=dict)
     source: str = ""
+    actuators: ActuatorTable | None = None
 
 
 class _Problems:
@@ -149,11 +152,16 @@ def read_robot(document: dict, path: str | Path) -> RobotDescription:
     ground = {key: value for key, value in ground.items() if key in _GROUND_KEYS}
     for problem in GroundForces(**ground, source="ground").problems():  # the walk stands on it
         problems.add(problem.where, problem.message)
+    motors = robot.get("actuators")
+    if motors is not None and not (isinstance(motors, str) and (path.parent / motors).is_file()):
+        problems.add("robot.actuators", f"needs an actuator table file, relative to {path.name} "
+                     f"(docs/report.md), got {motors!r}")
     if problems.items:
         raise ModelError(f"robot description {path}", problems.items)
     return RobotDescription(str(robot.get("name", path.stem)), urdf, str(robot.get("trunk", "")),
                             feet, {str(k): float(v) for k, v in rest.items()}, gait, ground,
-                            str(path))
+                            str(path), None if motors is None else read_actuators(
+                                (path.parent / motors).resolve()))
 
 
 def _urdf(value, path: Path, problems: _Problems) -> Path:

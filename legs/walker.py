@@ -325,6 +325,7 @@ def robot_scene(description):
         if joint.drivable:
             lifted.add(JointDriver(f"drive_{joint.name}", joint.name, Guided()))
     lifted.name, lifted.source = description.name, description.source
+    lifted.actuators = description.actuators  # the report checks the motors when there are
     return lifted
 
 

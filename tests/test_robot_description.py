@@ -191,7 +191,8 @@ def test_feet_take_their_roles_from_where_they_stand():
 
 
 def _description(tmp_path, text: str) -> Path:
-    (tmp_path / "quadruped.urdf").write_text((ROBOTS / "quadruped.urdf").read_text())
+    for name in ("quadruped.urdf", "quadruped-motors.toml"):
+        (tmp_path / name).write_text((ROBOTS / name).read_text())
     path = tmp_path / "robot.toml"
     path.write_text(text)
     return path
@@ -203,6 +204,8 @@ def _description(tmp_path, text: str) -> Path:
     (('pattern = "walk"', 'pattern = "tripod"'), "must be one of walk, trot, pace, bound"),
     (('urdf = "quadruped.urdf"', 'urdf = "nowhere.urdf"'), "no file"),
     (('duty = 0.85', 'duty = 1.5'), "gait.duty"),
+    (('actuators = "quadruped-motors.toml"', 'actuators = "motors.toml"'),
+     "needs an actuator table file"),
     (('trunk = "planned"', 'trunk = "bouncing"'), "gait.trunk"),
     (('mu = 0.8', 'friction = 0.8'), "ground.friction"),
     (('"*_knee" = -1.2', '"*_kne" = -1.2'), "robot.rest.*_kne"),
@@ -273,6 +276,20 @@ def test_a_tripod_of_duty_one_half_plans_its_trunk(tmp_path):
     x = scene.drivers["trunk/x"].law
     assert x(1.0) - x(0.0) == pytest.approx(0.08)  # a stride a period, swaying about it
     assert np.all(np.isfinite(x(np.linspace(0.0, 1.0, 101))))
+
+
+def test_the_report_checks_the_motors_the_description_names(tmp_path):
+    """The quadruped's description names its motors (quadruped-motors.toml): its report
+    checks every joint against them, as --actuators does, without being told."""
+    from commands import in_process
+
+    done = in_process("report", str(QUADRUPED), "--samples", "13", "--no-figures", "--out",
+                      str(tmp_path / "out"), cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    header = (tmp_path / "out" / "motors.csv").read_text().splitlines()[0].split(",")
+    joints = {column.split(":", 1)[1] for column in header[1:]}
+    assert len(joints) == 12 and {"use:LF_knee", "I:RH_abduction"} <= set(header)
+    assert "24 V motor, 10:1" in (tmp_path / "out" / "summary.md").read_text()
 
 
 def test_a_foot_about_to_lift_off_is_not_called_slipping_for_the_solver_s_tolerance():

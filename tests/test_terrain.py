@@ -27,7 +27,8 @@ FEET = ("LF", "RF", "LH", "RH")
 
 def _quadruped(tmp_path, ground: str, *changes) -> Path:
     """The project's quadruped with ``ground`` lines added to its ``[ground]``."""
-    (tmp_path / "quadruped.urdf").write_text((ROBOTS / "quadruped.urdf").read_text())
+    for name in ("quadruped.urdf", "quadruped-motors.toml"):
+        (tmp_path / name).write_text((ROBOTS / name).read_text())
     text = (ROBOTS / "quadruped.toml").read_text().replace("[ground]\n", f"[ground]\n{ground}\n")
     for old, new in changes:
         assert old in text

@@ -101,7 +101,8 @@ def run(args) -> int:
     from hexapod.scene.actuators import read_actuators
 
     scene = scene_of(args, args.scene)
-    actuators = None if args.actuators is None else read_actuators(args.actuators)
+    actuators = (scene.actuators if args.actuators is None  # a robot description's own
+                 else read_actuators(args.actuators))
     out = output_directory(args.out, f"{scene.name}-report",
                            inputs=given_files(args.scene, args.motion, args.actuators),
                            ours=suffixes(".csv", ".md", ".png", ".json"))

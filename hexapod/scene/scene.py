@@ -93,6 +93,12 @@ class Scene:
     ground : GroundForces, optional
         How the forces of feet on the ground are shared when they are statically indeterminate
         (:class:`~hexapod.scene.contacts.GroundForces`; default ``min-wrench``).
+
+    Attributes
+    ----------
+    actuators : ActuatorTable or None
+        The driven joints' motors when the scene's file names them (a robot description's
+        ``actuators``); ``hexapod report`` checks them as it checks ``--actuators``.
     """
 
     def __init__(self, name: str = "scene", dimension: int = 3, length_unit: str = "m",
@@ -101,6 +107,7 @@ class Scene:
                  ground: GroundForces | None = None):
         self.name = name
         self.ground = ground if ground is not None else GroundForces()
+        self.actuators = None  # the driven joints' motors, when the scene's file names them
         self.report_forces = bool(report_forces)
         self.dimension = dimension
         self.length_unit = length_unit
