@@ -11,8 +11,10 @@ lumped model keeps the largest margin inside the polygon of the loaded feet over
 **The lumped model.** The trunk's mass at its height ``h``, each leg's at the middle of its hip
 (the trunk's point above the foot's rest position) and its foot, moving with them: the centre of
 pressure of point masses on flat ground, ``p = sum m_i (x_i (z_i'' + g) - z_i x_i'') /
-sum m_i (z_i'' + g)``, is then ``(a T - b T'' + c) / den`` with ``a, b, c, den`` known from the
-feet's paths: linear in the trunk's horizontal position ``T`` and so in the series'
+sum m_i (z_i'' + g)`` (on a slope, in its plane: ``g`` its normal part, and
+``- z_i (x_i'' - g_t)`` with ``g_t`` gravity's part along it), is then ``(a T - b T'' + c) /
+den`` with ``a, b, c, den`` known from the feet's paths: linear in the trunk's horizontal
+position ``T`` and so in the series'
 coefficients (the swinging legs' weight and inertia count).
 
 **The plan** is two linear programs (SciPy's HiGHS): the largest margin ``s`` such that, at
@@ -81,7 +83,8 @@ def _edges(points: np.ndarray) -> list[tuple[np.ndarray, float, bool]]:
 def plan_trunk(feet: dict, phases: dict[str, float], duty: float, period: float,
                stride: float, height: float, masses: tuple[float, float], *,
                samples: int = 240, harmonics: int = 8, loaded: float = 0.5,
-               ramp: float = 0.1, gravity: float = 9.81) -> TrunkPlan:
+               ramp: float = 0.1, gravity: float = 9.81,
+               slope: tuple[float, float] = (0.0, 0.0)) -> TrunkPlan:
     """The trunk's sway for a robot walking along ``x`` (see the module's notes).
 
     Parameters
@@ -95,6 +98,11 @@ def plan_trunk(feet: dict, phases: dict[str, float], duty: float, period: float,
         The gait's duty factor, period (s), stride (m) and the trunk's height (m).
     masses : (float, float)
         The trunk's and all the legs' mass (kg).
+    slope : (float, float)
+        The ground's slope and heading (degrees): heights are then above the ground's plane
+        (the feet's ``z`` paths their lift above it), and gravity has a component along the
+        plane, which moves the centre of pressure downhill by the heights times the slope's
+        tangent (horizontal coordinates stand for the plane's: a stretch of ``1 / cos``).
 
     Returns
     -------
@@ -107,9 +115,13 @@ def plan_trunk(feet: dict, phases: dict[str, float], duty: float, period: float,
     trunk_mass, legs_mass = masses
     leg = legs_mass / len(names)
     # p = (a T - b T'' + c) / den, T the trunk's horizontal position (see the module's notes)
+    angle, heading = np.radians(slope)
+    along = -gravity * np.sin(angle) * np.array([np.cos(heading), np.sin(heading)])
+    gravity = gravity * np.cos(angle)  # across the ground's plane; along it, ``along``
     a = np.full(samples, trunk_mass * gravity)
     b = np.full(samples, trunk_mass * height)
-    c, den = np.zeros((samples, 2)), np.full(samples, trunk_mass * gravity)
+    c = np.tile(trunk_mass * height * along, (samples, 1))
+    den = np.full(samples, trunk_mass * gravity)
     for name in names:
         x_law, z_law, rest = feet[name]
         f = np.column_stack([x_law(t), np.full(samples, rest[1])])
@@ -119,7 +131,8 @@ def plan_trunk(feet: dict, phases: dict[str, float], duty: float, period: float,
         a += leg * lift / 2
         b += leg * (height + z) / 4
         den += leg * lift
-        c += leg * ((rest + f) * (lift / 2)[:, None] - ((height + z) / 4)[:, None] * f_dd)
+        c += leg * ((rest + f) * (lift / 2)[:, None]
+                    - ((height + z) / 4)[:, None] * (f_dd - 2 * along))
     nominal = np.column_stack([stride / period * t, np.zeros(samples)])
     fixed = (a[:, None] * nominal + c) / den[:, None]  # p without the sway
     k = np.arange(1, harmonics + 1)

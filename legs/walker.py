@@ -301,7 +301,8 @@ def robot_scene(description):
                                 phases[name]),
                  StepPath(0.0, 0.0, gait.step_height, duty, period, phases[name]),
                  rest[name][:2] - origin[:2]) for name in description.feet},
-        phases, duty, period, stride, height, _masses(lifted, trunk))
+        phases, duty, period, stride, height, _masses(lifted, trunk),
+        slope=(terrain.slope, terrain.heading))
     rise = _trunk_rise(terrain, origin, speed, starts)
     for axis, law in zip("xyz", (_sway(plan.x, origin[0], speed, period),
                                  _sway(plan.y, origin[1], 0.0, period), rise), strict=True):

@@ -162,21 +162,38 @@ def test_stance_feet_stand_on_the_slope_and_the_forces_balance_the_motion(slope)
     _check_pinocchio(model, result, stored)
 
 
-def test_friction_is_judged_about_the_slope_s_normal(slope, tmp_path):
-    """Up a 10-degree slope the feet must push along it (the weight's component, tan 10 =
-    0.18 of the normal force on average): feasible at mu = 0.8, at every sample, the cones
-    about the slope's normal (checked here with the normal written out); at mu = 0.15 some
-    foot must slip at most samples (the trunk's sway helps at a few)."""
-    scene, model, result, _ = slope
-    assert result.feasible
-    normal = np.array([-np.sin(SLOPE), 0.0, np.cos(SLOPE)])
-    force = result.ground_force
+def _statuses_about(normal, mu, force, stance, weight) -> np.ndarray:
+    """The feet's statuses judged here, the slope's normal written out: ``pull`` below zero
+    normal force, ``slip`` outside the exact cone, by 1e-7 of the weight (the statuses')."""
     pushed = force @ normal
     sliding = np.linalg.norm(force - pushed[..., None] * normal, axis=-1)
-    stance = result.ground_status != "swing"
-    assert np.all(sliding[stance] <= 0.8 * pushed[stance] + 1e-9)
+    tolerance = 1e-7 * weight
+    out = np.where(stance, "ok", "swing").astype("<U5")
+    out[stance & (sliding > mu * np.maximum(pushed, 0.0) + tolerance)] = "slip"
+    out[stance & (pushed < -tolerance)] = "pull"
+    return out
+
+
+def test_friction_is_judged_about_the_slope_s_normal(slope, tmp_path):
+    """Up a 10-degree slope the feet must push along it (the weight's component, tan 10 =
+    0.18 of the normal force on average); the statuses are those of cones about the slope's
+    normal. Just before a fore foot touches down the walk needs more friction than mu = 0.8
+    gives (the feet's tangential forces reach 0.82 of their normal ones), said there (10 of
+    201 samples: scripts/studies/trunk_planning.py); at mu = 0.15 some foot slips at most
+    samples."""
+    scene, model, result, _ = slope
+    normal = np.array([-np.sin(SLOPE), 0.0, np.cos(SLOPE)])
+    weight = model.total_mass * 9.81
+    edge = hx.inverse_dynamics(model, [0.4632, 0.4776, 0.4848])
+    for run in (result, edge):
+        stance = run.ground_status != "swing"
+        assert np.array_equal(run.ground_status, _statuses_about(
+            normal, 0.8, run.ground_force, stance, weight))
+    assert result.infeasible.sum() <= 2  # of 24: the few around the fore feet's touch-downs
+    assert (edge.ground_status[1:] == "slip").any(axis=1).all()
+    force = result.ground_force
     up = np.array([np.cos(SLOPE), 0.0, np.sin(SLOPE)])  # on average the feet hold the weight's
-    held = (force @ up).sum(axis=1).mean() / (model.total_mass * 9.81 * np.sin(SLOPE))
+    held = (force @ up).sum(axis=1).mean() / (weight * np.sin(SLOPE))
     assert 0.8 < held < 1.2  # component along the slope (the stride's accelerations average out)
     slippery = _quadruped(tmp_path, "slope = 10", ("mu = 0.8", "mu = 0.15"))
     times = result.times[::4]
