@@ -3,7 +3,8 @@
 :func:`hexapod.assemble` builds a model from the scene in SI units alone, so the hash is taken
 over that scene's canonical description: the dimension, gravity and settings, and every element
 in order (its type and every field, numbers written exactly; dictionaries by sorted keys, so
-the order they were filled in does not count), without where each was written (``source``) and
+the order they were filled in does not count), without where each was written (``source``),
+without the joints' ranges (``limits``: checked against the results, in no Function) and
 without the scene's name. A time law enters the Functions as an input (its values ``w, wd,
 wdd`` at each sample), so only its place counts, not its type or numbers: another motion of the
 same robot has the same hash. A constant law is folded into the expressions as a number, so its
@@ -24,6 +25,7 @@ import json
 
 import numpy as np
 
+from hexapod.scene.joints import Joint
 from hexapod.scene.laws import Constant, Law
 from hexapod.scene.scene import Scene
 from hexapod.spatial import Placement
@@ -32,6 +34,9 @@ from hexapod.spatial import Placement
 FORMAT = 1
 #: Fields that say where an element was written, not what it is.
 _WHERE = frozenset({"source"})
+#: A joint's fields that no Function is built from: its range, which the inverse dynamics
+#: checks its results against (another range compiles nothing again).
+_CHECKED_ONLY = frozenset({"limits"})
 
 
 def scene_digest(scene: Scene, rank_tolerance: float) -> str:
@@ -93,8 +98,9 @@ def describe(value, *, time_laws: bool = False):
     if isinstance(value, (list, tuple)):
         return [describe(v, time_laws=time_laws) for v in value]
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        left_out = _WHERE | _CHECKED_ONLY if isinstance(value, Joint) else _WHERE
         fields = {f.name: describe(getattr(value, f.name), time_laws=time_laws)
-                  for f in dataclasses.fields(value) if f.name not in _WHERE}
+                  for f in dataclasses.fields(value) if f.name not in left_out}
         return {"type": f"{type(value).__module__}.{type(value).__qualname__}", **fields}
     raise TypeError(f"cannot describe a {type(value).__name__} for a model's content hash")
 

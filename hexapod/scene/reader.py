@@ -25,7 +25,7 @@ from hexapod.scene.drivers import DRIVER_TYPES
 from hexapod.scene.element import Element, quoted
 from hexapod.scene.forces import FORCE_TYPES
 from hexapod.scene.joints import JOINT_TYPES
-from hexapod.scene.joints.base import NUMBER, VECTOR, VECTOR3
+from hexapod.scene.joints.base import NUMBER, PAIR, VECTOR, VECTOR3
 from hexapod.scene.laws import Constant, Law, law_types
 from hexapod.scene.robots import robot_scene
 from hexapod.scene.scene import Scene
@@ -360,7 +360,7 @@ def _joint_schema(kind: str, dimension: int) -> Schema:
               "child_frame": (_frame(dimension), False), "origin": (_vector(dimension), False),
               "rotation": (_rotation(dimension), False)}
     cls = JOINT_TYPES[kind]
-    readers = {NUMBER: _number, VECTOR: _vector(dimension), VECTOR3: _vector(3)}
+    readers = {NUMBER: _number, VECTOR: _vector(dimension), VECTOR3: _vector(3), PAIR: _vector(2)}
     schema.update({key: (readers[value], required)
                    for key, (value, required) in cls.file_keys(dimension).items()})
     return cls, schema

@@ -33,6 +33,8 @@ ask about a joint (the Pinocchio and SymPy way: no code elsewhere switches on a 
 ``tree_step(value)``       the child frame on the parent's for a coordinate value (tree path)
 ``turns``                  whether it has an angle about its axis (for a torsion spring)
 ``urdf_types``             its types in URDF files (the first is written), when URDF has it
+``limits``                 the range of its coordinate, when given (a field of the types whose
+                           ``file_keys`` hold it: revolute and prismatic joints)
 =========================  =====================================================================
 """
 
@@ -54,14 +56,16 @@ from hexapod.scene.element import (
     ground_ref,
     scaled_ref,
 )
-from hexapod.scene.joints.geometry import JointGeometry, Row, embedded
+from hexapod.scene.joints.geometry import LENGTH, JointGeometry, Row, embedded
 from hexapod.spatial import Placement, is_rotation
 
 #: the kinds of value a scene file's joint key takes (see :meth:`Joint.file_keys`): a number,
-#: as many numbers as the scene has dimensions, three numbers
-NUMBER, VECTOR, VECTOR3 = "number", "vector", "vector3"
+#: as many numbers as the scene has dimensions, three numbers, two numbers
+NUMBER, VECTOR, VECTOR3, PAIR = "number", "vector", "vector3", "pair"
 #: an optional key holding an axis
 AXIS = (VECTOR, False)
+#: an optional key holding the range of the joint's coordinate, ``[lower, upper]``
+LIMITS = (PAIR, False)
 
 
 class LawSymbols(Protocol):
@@ -112,6 +116,9 @@ class Joint(Element):
     drivable: ClassVar[bool] = False
     #: the joint frame's axis along which the joint moves (a field of the types that have one)
     axis = None
+    #: ``[lower, upper]``, the range of the joint's coordinate (rad, or L for a length); None:
+    #: no range (a field of the types that have one)
+    limits = None
     #: per dimension in which the joint has an axis, its default (joint frame)
     default_axis: ClassVar[dict[int, tuple[float, ...]]] = {}
     #: whether the joint exists in a planar scene, and what to use there instead
@@ -139,6 +146,8 @@ class Joint(Element):
             self.rotation = np.array(self.rotation, dtype=float)
         if self.axis is not None:
             self.axis = np.array(self.axis, dtype=float).reshape(-1)
+        if self.limits is not None:
+            self.limits = np.array(self.limits, dtype=float).reshape(-1)
 
     # ---------------------------------------------------------------- the description
 
@@ -162,6 +171,13 @@ class Joint(Element):
                                     "child_frame (body coordinates), not both"))
         if self.axis is not None:
             check_axis(self, "axis", self.axis, out)
+        if self.limits is not None and check_finite(self, "limits", self.limits, out):
+            if self.limits.size != 2:
+                out.append(self.problem("limits", f"needs 2 numbers [lower, upper], got "
+                                        f"{self.limits.size}"))
+            elif not self.limits[0] < self.limits[1]:
+                out.append(self.problem("limits", f"the lower limit must be below the upper, "
+                                        f"got [{self.limits[0]:g}, {self.limits[1]:g}]"))
         return out
 
     def scaled(self, length):
@@ -169,6 +185,8 @@ class Joint(Element):
         out.parent_frame = scaled_ref(self.parent_frame, length)
         out.child_frame = scaled_ref(self.child_frame, length)
         out.origin = scaled_ref(self.origin, length)
+        if self.limits is not None and self.coordinate_unit == LENGTH:
+            out.limits = self.limits * length
         return out
 
     def attached(self, attachment: Attachment):
@@ -188,8 +206,8 @@ class Joint(Element):
     def file_keys(cls, dimension: int) -> dict[str, tuple[str, bool]]:
         """The keys a scene file may give for this type beyond the common ones (name, type,
         parent, child, parent_frame, child_frame, origin, rotation), each with the kind of its
-        value (:data:`NUMBER`, :data:`VECTOR`, :data:`VECTOR3`) and whether it is required.
-        Each is a field of the class; the writer writes these and no other."""
+        value (:data:`NUMBER`, :data:`VECTOR`, :data:`VECTOR3`, :data:`PAIR`) and whether it
+        is required. Each is a field of the class; the writer writes these and no other."""
         return {}
 
     def unit_axis(self, dimension: int) -> np.ndarray | None:

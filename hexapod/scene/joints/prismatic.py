@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from hexapod.scene.joints.base import AXIS, Joint, register
+from hexapod.scene.joints.base import AXIS, LIMITS, Joint, register
 from hexapod.scene.joints.geometry import (
     ANGLE,
     LENGTH,
@@ -34,9 +34,12 @@ class Prismatic(Joint):
         As for every joint (:class:`~hexapod.scene.joints.base.Joint`).
     axis : array_like, shape (3,) or (2,), optional
         The sliding axis in the joint frame (default z in space, x in the plane).
+    limits : array_like, shape (2,), optional
+        ``[lower, upper]``, the range of the displacement, L (default: none).
     """
 
     axis: np.ndarray | None = None
+    limits: np.ndarray | None = None
     kind = "prismatic"
     drivable = True
     default_axis = {3: (0.0, 0.0, 1.0), 2: (1.0, 0.0)}
@@ -46,7 +49,7 @@ class Prismatic(Joint):
 
     @classmethod
     def file_keys(cls, dimension):
-        return {"axis": AXIS}
+        return {"axis": AXIS, "limits": LIMITS}
 
     def rows(self, g: JointGeometry, laws=None):
         d = g.gap

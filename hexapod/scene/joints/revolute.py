@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from hexapod.scene.joints.base import AXIS, Joint, register
+from hexapod.scene.joints.base import AXIS, LIMITS, Joint, register
 from hexapod.scene.joints.geometry import (
     ANGLE,
     JointGeometry,
@@ -34,9 +34,12 @@ class Revolute(Joint):
         As for every joint (:class:`~hexapod.scene.joints.base.Joint`).
     axis : array_like, shape (3,), optional
         The rotation axis in the joint frame (default z); ignored in the plane.
+    limits : array_like, shape (2,), optional
+        ``[lower, upper]``, the range of the joint angle, rad (default: none).
     """
 
     axis: np.ndarray | None = None
+    limits: np.ndarray | None = None
     kind = "revolute"
     drivable = True
     default_axis = {3: (0.0, 0.0, 1.0)}  # in the plane: the plane's normal, not stored
@@ -53,7 +56,7 @@ class Revolute(Joint):
 
     @classmethod
     def file_keys(cls, dimension):
-        return {"axis": AXIS} if dimension == 3 else {}
+        return {"axis": AXIS, "limits": LIMITS} if dimension == 3 else {"limits": LIMITS}
 
     def rows(self, g: JointGeometry, laws=None):
         if g.dimension == 2:

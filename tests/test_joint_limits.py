@@ -1,0 +1,113 @@
+"""Joint ranges: the ``limits`` of revolute and prismatic joints in scene files (read, scaled with
+the length unit, written back, refused when wrong)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import hexapod as hx
+from hexapod.scene.reader import read_scene
+from hexapod.scene.writer import write_scene
+
+ARM = """
+[scene]
+name = "arm"
+length_unit = "cm"
+
+[[body]]
+name = "upper"
+mass = 1.0
+inertia = [100.0, 100.0, 100.0]
+position = [20.0, 0.0, 0.0]
+
+[[body]]
+name = "slider"
+mass = 0.5
+inertia = [50.0, 50.0, 50.0]
+position = [40.0, 0.0, 0.0]
+
+[[joint]]
+name = "shoulder"
+type = "revolute"
+parent = "ground"
+child = "upper"
+origin = [0.0, 0.0, 0.0]
+axis = [0.0, 1.0, 0.0]
+limits = [-0.5, 0.8]
+
+[[joint]]
+name = "extension"
+type = "prismatic"
+parent = "upper"
+child = "slider"
+origin = [40.0, 0.0, 0.0]
+axis = [1.0, 0.0, 0.0]
+limits = [-5.0, 4.0]
+"""
+
+
+def _arm(tmp_path, text: str = ARM) -> Path:
+    path = tmp_path / "arm.toml"
+    path.write_text(text)
+    return path
+
+
+def test_a_scene_file_gives_ranges_in_its_own_units_and_writes_them_back(tmp_path):
+    """Angles in rad whatever the unit; a prismatic range in the scene's length unit (cm here),
+    converted to SI with the rest; written and read back the same."""
+    scene = read_scene(_arm(tmp_path))
+    assert scene.joints["shoulder"].limits.tolist() == [-0.5, 0.8]
+    assert scene.joints["extension"].limits.tolist() == [-5.0, 4.0]
+    si = scene.in_si()
+    assert si.joints["shoulder"].limits.tolist() == [-0.5, 0.8]
+    assert np.allclose(si.joints["extension"].limits, [-0.05, 0.04], rtol=1e-15)
+    copy = read_scene(write_scene(scene, tmp_path / "copy.toml"))
+    for name in ("shoulder", "extension"):
+        assert copy.joints[name].limits.tolist() == scene.joints[name].limits.tolist()
+    no_range = read_scene(_arm(tmp_path, ARM.replace("limits = [-0.5, 0.8]\n", "")))
+    assert no_range.joints["shoulder"].limits is None
+    assert "limits" not in (tmp_path / "copy.toml").read_text().split("shoulder")[0]
+
+
+@pytest.mark.parametrize("limits, message", [
+    ("[0.8, -0.5]", "the lower limit must be below the upper, got [0.8, -0.5]"),
+    ("[0.5, 0.5]", "the lower limit must be below the upper, got [0.5, 0.5]"),
+    ("[nan, 0.5]", "must be finite"),
+    ("[-inf, 0.5]", "must be finite"),
+    ("[0.5]", "must be a list of 2 numbers"),
+    ("[0.0, 0.5, 1.0]", "must be a list of 2 numbers"),
+    ('"wide"', "must be a list of 2 numbers"),
+])
+def test_a_wrong_range_is_one_problem_naming_the_joint_and_the_key(tmp_path, limits, message):
+    path = _arm(tmp_path, ARM.replace("limits = [-0.5, 0.8]", f"limits = {limits}"))
+    with pytest.raises(hx.ModelError) as caught:
+        read_scene(path)
+    problems = caught.value.problems
+    assert len(problems) == 1, problems
+    assert problems[0].element == "joint 'shoulder' (revolute)"
+    assert problems[0].where == f"{path}, joint[0].limits" and message in problems[0].message
+
+
+def test_only_revolute_and_prismatic_joints_take_a_range(tmp_path):
+    text = ARM.replace('type = "revolute"', 'type = "spherical"').replace(
+        'axis = [0.0, 1.0, 0.0]\n', "")
+    with pytest.raises(hx.ModelError, match=r"joint\[0\]\.limits.*unknown key 'limits'"):
+        read_scene(_arm(tmp_path, text))
+    with pytest.raises(TypeError, match="limits"):  # in Python: no such field
+        hx.scene.Spherical("ball", "ground", "b", limits=[-1.0, 1.0])
+    scene = hx.Scene("one")
+    scene.add(hx.scene.SpatialBody("b", 1.0, [0.1, 0.1, 0.1]),
+              hx.scene.Prismatic("slide", "ground", "b", limits=[1.0, -1.0]))
+    with pytest.raises(hx.ModelError, match=r"joint 'slide' \(prismatic\) \(limits\): the lower"):
+        scene.validate()
+
+
+def test_a_range_is_in_no_function_so_the_content_hash_leaves_it_out(tmp_path):
+    """Another range compiles nothing again; another axis does."""
+    digests = [hx.assemble(read_scene(_arm(tmp_path, text))).digest for text in (
+        ARM, ARM.replace("[-0.5, 0.8]", "[-0.4, 0.9]"), ARM.replace("limits = [-0.5, 0.8]\n", ""),
+        ARM.replace("axis = [0.0, 1.0, 0.0]", "axis = [0.0, 0.0, 1.0]"))]
+    assert digests[0] == digests[1] == digests[2] != digests[3]
