@@ -1,5 +1,5 @@
 """Joint ranges: the ``limits`` of revolute and prismatic joints in scene files (read, scaled with
-the length unit, written back, refused when wrong)."""
+the length unit, written back, refused when wrong) and in URDF files (``<limit lower upper>``)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,10 @@ import pytest
 
 import hexapod as hx
 from hexapod.scene.reader import read_scene
+from hexapod.scene.urdf import read_urdf, urdf_text
 from hexapod.scene.writer import write_scene
+
+ROOT = Path(__file__).resolve().parents[1]
 
 ARM = """
 [scene]
@@ -111,3 +114,62 @@ def test_a_range_is_in_no_function_so_the_content_hash_leaves_it_out(tmp_path):
         ARM, ARM.replace("[-0.5, 0.8]", "[-0.4, 0.9]"), ARM.replace("limits = [-0.5, 0.8]\n", ""),
         ARM.replace("axis = [0.0, 1.0, 0.0]", "axis = [0.0, 0.0, 1.0]"))]
     assert digests[0] == digests[1] == digests[2] != digests[3]
+
+
+# ------------------------------------------------------------------ URDF
+
+def _urdf(tmp_path, joint_type: str, limit: str) -> Path:
+    path = tmp_path / "robot.urdf"
+    path.write_text(f"""<?xml version="1.0"?>
+<robot name="arm">
+  <link name="base"/>
+  <link name="link"><inertial><mass value="1"/>
+    <inertia ixx="0.1" iyy="0.1" izz="0.1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="j" type="{joint_type}"><parent link="base"/><child link="link"/>
+    <axis xyz="0 0 1"/>{limit}</joint>
+</robot>
+""")
+    return path
+
+
+@pytest.mark.parametrize("joint_type, limit, expected", [
+    ("revolute", '<limit lower="-2.6" upper="0" effort="20" velocity="20"/>', [-2.6, 0.0]),
+    ("prismatic", '<limit lower="-0.1" upper="0.25" effort="20" velocity="1"/>', [-0.1, 0.25]),
+    ("revolute", '<limit lower="-1e9" upper="1e9" effort="1" velocity="1"/>', [-1e9, 1e9]),
+    ("revolute", '<limit upper="1.5" effort="1" velocity="1"/>', [0.0, 1.5]),  # URDF's 0
+    ("revolute", '<limit effort="1" velocity="1"/>', None),
+    ("revolute", "", None),
+    ("continuous", '<limit lower="-1" upper="1" effort="1" velocity="1"/>', None),
+])
+def test_urdf_limits_are_the_range_of_revolute_and_prismatic_joints(tmp_path, joint_type,
+                                                                     limit, expected):
+    joint = read_urdf(_urdf(tmp_path, joint_type, limit)).joints["j"]
+    assert (None if joint.limits is None else joint.limits.tolist()) == expected
+
+
+@pytest.mark.parametrize("limit, message", [
+    ('<limit lower="1" upper="-1" effort="1" velocity="1"/>',
+     '<limit> lower="1" upper="-1": the lower limit must be below the upper'),
+    ('<limit lower="0" upper="0" effort="1" velocity="1"/>',
+     '<limit> lower="0" upper="0": the lower limit must be below the upper'),
+    ('<limit lower="low" upper="1" effort="1" velocity="1"/>',
+     '<limit> lower="low" must be a finite number'),
+])
+def test_a_wrong_urdf_limit_is_one_problem_naming_the_joint(tmp_path, limit, message):
+    path = _urdf(tmp_path, "revolute", limit)
+    with pytest.raises(hx.ModelError) as caught:
+        read_urdf(path)
+    assert [str(p) for p in caught.value.problems] == [f'<joint name="j"> ({path}): {message}']
+
+
+def test_the_quadruped_urdf_ranges_and_a_urdf_written_back(tmp_path):
+    scene = read_urdf(ROOT / "data" / "robots" / "quadruped.urdf")
+    ranges = {name: joint.limits.tolist() for name, joint in scene.joints.items()}
+    assert ranges["LF_knee"] == [-2.6, 0.0] and ranges["RH_flexion"] == [-2.0, 2.0]
+    assert ranges["LH_abduction"] == [-0.8, 0.8] and len(ranges) == 12
+    scene.joints["LF_knee"].limits = None  # written as a range no motion leaves
+    path = tmp_path / "copy.urdf"
+    path.write_text(urdf_text(scene))
+    copy = read_urdf(path)
+    assert copy.joints["LF_knee"].limits.tolist() == [-1e9, 1e9]
+    assert all(copy.joints[n].limits.tolist() == r for n, r in ranges.items() if n != "LF_knee")

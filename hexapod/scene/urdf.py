@@ -14,8 +14,12 @@ Policy (stated here and in the scene reference):
 * ``revolute`` and ``continuous`` joints become revolute joints, ``prismatic`` prismatic and
   ``fixed`` fixed joints (their wrenches are reported too). The **joint frame is the child link
   frame**; ``<origin xyz rpy>`` (``R = Rz(yaw) Ry(pitch) Rx(roll)``) places it in the parent link
-  frame at zero joint coordinate; ``<axis xyz>`` (default x) is normalised; ``<limit>``,
-  ``<dynamics>``, ``<mimic>``, visuals and collisions are ignored;
+  frame at zero joint coordinate; ``<axis xyz>`` (default x) is normalised; ``<limit lower
+  upper>`` of a ``revolute`` or ``prismatic`` joint is the joint's range (``limits``: rad or m,
+  as the file says, whatever its size; an attribute left out is URDF's default 0, a ``<limit>``
+  without either gives no range, and ``lower`` must be below ``upper``; a ``continuous``
+  joint has none); the ``<limit>``'s ``effort`` and ``velocity``, ``<dynamics>``,
+  ``<mimic>``, visuals and collisions are ignored;
 * a link **without an inertial** (or with zero mass) hanging from its parent by a fixed joint is
   **merged into the parent** as a frame: the joints below it hang from the parent; a massless
   link that moves would make the mass matrix singular, and is **rejected** with an error naming
@@ -76,6 +80,12 @@ class _Joint:
     child: str
     origin: Placement
     axis: np.ndarray
+    limits: np.ndarray | None = None  # [lower, upper], revolute and prismatic joints only
+
+
+#: The URDF joint types whose ``<limit lower upper>`` is a range of the coordinate (a
+#: ``continuous`` joint has none).
+_RANGED = ("revolute", "prismatic")
 
 
 #: How the root link is attached (see the module's description).
@@ -163,7 +173,25 @@ class _UrdfReader:
             self.add(label, "<axis> has zero length")
         unit = axis / largest if largest > 1e-12 else np.array([1.0, 0.0, 0.0])
         return _Joint(name, kind, ends["parent"], ends["child"], self.origin(node, label),
-                      unit / np.linalg.norm(unit))
+                      unit / np.linalg.norm(unit),
+                      self.limits(node.find("limit"), label) if kind in _RANGED else None)
+
+    def limits(self, node, element: str) -> np.ndarray | None:
+        """``[lower, upper]`` of a ``<limit>`` (an attribute left out: URDF's default 0); None
+        without the element or both attributes, or when they are wrong (and reported)."""
+        if node is None or (node.get("lower") is None and node.get("upper") is None):
+            return None
+        count = len(self.problems)
+        values = np.array([self.numbers(node, key, 1, [0.0], element)[0]
+                           for key in ("lower", "upper")])
+        if len(self.problems) > count:
+            return None
+        if not values[0] < values[1]:
+            self.add(element, f"<limit> lower={_quoted(node.get('lower', '0'))} upper="
+                     f"{_quoted(node.get('upper', '0'))}: the lower limit must be below the "
+                     "upper")
+            return None
+        return values
 
     def read(self, root_node) -> Scene:
         if root_node.tag != "robot":
@@ -273,6 +301,8 @@ class _UrdfReader:
                                   source=f"{self.path}, {_tag('link', link.name)}"))
             cls = _joint_types()[joint.kind]
             extra = {"axis": joint.axis} if "axis" in cls.file_keys(3) else {}
+            if joint.limits is not None:
+                extra["limits"] = joint.limits
             scene.add(cls(joint.name, body, link.name, parent_frame=in_body @ joint.origin,
                           child_frame=Placement.identity(),
                           source=f"{self.path}, {_tag('joint', joint.name)}", **extra))
@@ -338,7 +368,9 @@ def urdf_text(scene: Scene) -> str:
     """The URDF of a spatial tree of joints URDF has (revolute, prismatic and fixed: the types
     with ``urdf_types``) hanging from the ground, or from one free body (a floating base, the
     tree's root link: a walking robot's trunk); each link frame is its body's joint frame
-    (URDF's rule; the root's, its reference frame), at the initial pose.
+    (URDF's rule; the root's, its reference frame), at the initial pose. A revolute or
+    prismatic joint's ``<limit lower upper>`` is its range (``limits``), or -1e9 to 1e9 (which
+    read back is a range no motion leaves) when it has none.
 
     Parameters
     ----------
@@ -413,8 +445,11 @@ def urdf_text(scene: Scene) -> str:
                   f'    <origin xyz="{_xyz(origin.position)}" rpy="{_rpy(origin.rotation)}"/>']
         if joint.drivable:
             axis = np.asarray(joint.axis, dtype=float)
+            # URDF asks for a <limit>: the joint's range, or one no motion leaves
+            limits = ('lower="-1e9" upper="1e9"' if joint.limits is None else
+                      'lower="{!r}" upper="{!r}"'.format(*map(float, joint.limits)))
             lines += [f'    <axis xyz="{_xyz(axis / np.linalg.norm(axis))}"/>',
-                      '    <limit lower="-1e9" upper="1e9" effort="1e9" velocity="1e9"/>']
+                      f'    <limit {limits} effort="1e9" velocity="1e9"/>']
         lines += ["  </joint>"]
     lines.append("</robot>")
     return "\n".join(lines) + "\n"
