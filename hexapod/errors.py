@@ -70,3 +70,28 @@ class SingularSystemError(HexapodError):
 
 class IntegrationError(HexapodError):
     """A time integration cannot proceed."""
+
+
+class JointLimitError(HexapodError):
+    """A motion takes a joint out of its range (its ``limits``: a scene file's, or a URDF's
+    ``<limit>``).
+
+    Parameters
+    ----------
+    message : str
+        The message: the model, the joint, the time, the value and the range.
+    joint : str
+        The joint that leaves its range first (the earliest sample; of two at once, the first
+        in the model's order).
+    time : float
+        The first sample outside, s.
+    value : float
+        The joint's coordinate there, rad or m.
+    limits : tuple of float
+        Its range ``(lower, upper)``, rad or m.
+    """
+
+    def __init__(self, message: str, joint: str, time: float, value: float,
+                 limits: tuple[float, float]):
+        super().__init__(message)
+        self.joint, self.time, self.value, self.limits = joint, time, value, limits

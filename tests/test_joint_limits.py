@@ -1,5 +1,7 @@
 """Joint ranges: the ``limits`` of revolute and prismatic joints in scene files (read, scaled with
-the length unit, written back, refused when wrong) and in URDF files (``<limit lower upper>``)."""
+the length unit, written back, refused when wrong) and in URDF files (``<limit lower upper>``),
+and the inverse dynamics' check of a motion against them: the first joint to leave its range,
+the sample, the value and the amount, against closed forms."""
 
 from __future__ import annotations
 
@@ -9,6 +11,7 @@ import numpy as np
 import pytest
 
 import hexapod as hx
+from hexapod.errors import JointLimitError
 from hexapod.scene.reader import read_scene
 from hexapod.scene.urdf import read_urdf, urdf_text
 from hexapod.scene.writer import write_scene
@@ -173,3 +176,102 @@ def test_the_quadruped_urdf_ranges_and_a_urdf_written_back(tmp_path):
     copy = read_urdf(path)
     assert copy.joints["LF_knee"].limits.tolist() == [-1e9, 1e9]
     assert all(copy.joints[n].limits.tolist() == r for n, r in ranges.items() if n != "LF_knee")
+
+
+# ------------------------------------------------------------------ the check of a motion
+
+def _driven_arm(tmp_path, swing: hx.scene.Law, push: hx.scene.Law, shoulder=None) -> hx.Model:
+    """The arm of :data:`ARM` (cm), its shoulder driven by ``swing`` (rad), its extension by
+    ``push`` (cm); ``shoulder`` another range of the shoulder (rad)."""
+    text = ARM if shoulder is None else ARM.replace("[-0.5, 0.8]", str(list(shoulder)))
+    scene = read_scene(_arm(tmp_path, text))
+    scene.add(hx.scene.JointDriver("swing", "shoulder", swing),
+              hx.scene.JointDriver("push", "extension", push))
+    return hx.assemble(scene)
+
+
+@pytest.mark.parametrize("method", ["tree", "saddle"])
+def test_the_first_joint_to_leave_its_range_is_named_with_the_sample_and_the_amount(tmp_path,
+                                                                                    method):
+    """theta = 1.2 sin(pi t) leaves [-0.5, 0.8] rad after asin(2/3)/pi = 0.232 s: first at the
+    sample t = 0.25 s, at 1.2 sin(pi/4) = 0.8485 rad; the extension s = 10 t cm leaves
+    [-5, 4] cm after 0.4 s (the sample at 0.4 s, on its limit to round-off, is inside): first
+    at 0.425 s, 0.0425 m, 2.5 mm above."""
+    times = np.linspace(0.0, 1.0, 41)
+    model = _driven_arm(tmp_path, hx.scene.Harmonic(sin=(1.2,), frequency=0.5),
+                        hx.scene.Polynomial((0.0, 10.0)))
+    with pytest.raises(JointLimitError) as caught:
+        hx.inverse_dynamics(model, times, method=method)
+    error = caught.value
+    assert isinstance(error, hx.HexapodError)
+    assert (error.joint, error.time, error.limits) == ("shoulder", 0.25, (-0.5, 0.8))
+    assert error.value == pytest.approx(1.2 * np.sin(np.pi / 4), abs=1e-12)
+    assert str(error) == (
+        f"model 'arm' ({tmp_path / 'arm.toml'}): joint 'shoulder' leaves its range [-0.5, 0.8] "
+        "rad at t = 0.25 s (0.848528 rad, 0.0485 rad above); also leaving theirs: "
+        "'extension' at t = 0.425 s")
+    inside = _driven_arm(tmp_path, hx.scene.Constant(0.0), hx.scene.Polynomial((0.0, 10.0)))
+    with pytest.raises(JointLimitError, match=r"joint 'extension' leaves its range \[-0.05, "
+                       r"0.04\] m at t = 0.425 s \(0.0425 m, 0.0025 m above\)$"):
+        hx.inverse_dynamics(inside, times, method=method)
+    result = hx.inverse_dynamics(model, times, method=method, check_limits=False)
+    assert np.allclose(result.times, times)  # the result, whatever the ranges
+
+
+@pytest.mark.parametrize("rate, when, value, side", [(2.0, 2.6, 9.2, "0.2 rad above"),
+                                                     (-2.0, 0.3, 3.4, "0.1 rad below")])
+def test_a_range_beyond_half_a_turn_is_taken_on_the_turn_the_motion_starts_in(tmp_path, rate,
+                                                                              when, value, side):
+    """theta = 4 + rate t in [3.5, 9] rad: 4 rad is -2.28 on the principal turn, outside, and
+    inside one turn up: the joint stays in its range until theta passes 9 (or 3.5)."""
+    model = _driven_arm(tmp_path, hx.scene.Polynomial((4.0, rate)), hx.scene.Constant(0.0),
+                        shoulder=(3.5, 9.0))
+    with pytest.raises(JointLimitError) as caught:
+        hx.inverse_dynamics(model, np.linspace(0.0, 5.0, 51))
+    error = caught.value
+    assert error.joint == "shoulder" and error.time == pytest.approx(when, abs=1e-12)
+    assert error.value == pytest.approx(value, abs=1e-9) and side in str(error)
+
+
+def test_a_joint_no_driver_moves_is_checked_from_the_positions():
+    """The four-bar's rocker pivot (no driver) turns by minus the rocker's angle: closed form
+    from the crank angle 1 + 2 t - 1.5 t^2, down to -0.264 rad at t = 0.65 s; out of
+    [-0.2, 1] rad first at the sample t = 0.4 s (-0.2139 rad)."""
+    from mechanisms import four_bar, four_bar_points
+
+    def rocker(theta):
+        _, _, C, D = four_bar_points(theta)
+        return np.arctan2(C[1] - D[1], C[0] - D[0])
+
+    times = np.linspace(0.0, 1.0, 21)
+    pivot = -(np.array([rocker(1.0 + 2 * t - 1.5 * t**2) for t in times]) - rocker(1.0))
+    k = int(np.argmax(pivot < -0.2))
+    assert times[k] == 0.4 and pivot[k] == pytest.approx(-0.2139, abs=1e-4)
+    scene = four_bar(2, 1.0)
+    scene.joints["rocker_ground"].limits = np.array([-0.2, 1.0])
+    with pytest.raises(JointLimitError) as caught:
+        hx.inverse_dynamics(hx.assemble(scene), times)
+    error = caught.value
+    assert (error.joint, error.time) == ("rocker_ground", times[k])
+    assert error.value == pytest.approx(pivot[k], abs=1e-9)
+
+
+def test_the_command_line_refuses_a_motion_out_of_range_and_writes_nothing(tmp_path):
+    """A URDF joint of range [-1, 1] rad driven by 1.5 sin(t): out after asin(2/3) = 0.730 s,
+    first at the sample t = 0.75 s, 1.0224 rad."""
+    from commands import in_process
+
+    model = _urdf(tmp_path, "revolute", '<limit lower="-1" upper="1" effort="1" velocity="1"/>')
+    t = np.linspace(0.0, 1.5, 61)
+    np.savetxt(tmp_path / "motion.csv", np.column_stack(
+        [t, 1.5 * np.sin(t), 1.5 * np.cos(t), -1.5 * np.sin(t)]), delimiter=",",
+        header="t,j,qd:j,qdd:j", comments="", fmt="%.17g")
+    before = set(tmp_path.iterdir())
+    done = in_process("inverse", str(model), "--motion", "motion.csv", "--out", "out.csv",
+                      cwd=tmp_path)
+    assert done.returncode == 1 and "Traceback" not in done.stderr
+    assert done.stderr.strip().splitlines() == [
+        f"hexapod: error: model 'arm' ({model}, driven by motion.csv): joint 'j' leaves its "
+        f"range [-1, 1] rad at t = 0.75 s ({1.5 * np.sin(0.75):.6g} rad, "
+        f"{1.5 * np.sin(0.75) - 1:.3g} rad above)"]
+    assert set(tmp_path.iterdir()) == before

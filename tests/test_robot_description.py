@@ -219,15 +219,49 @@ def test_a_bad_description_is_one_clear_message(tmp_path, change, message):
     assert message in str(caught.value) and str(path) in str(caught.value)
 
 
-def test_the_command_line_refuses_a_bad_description_and_writes_nothing(tmp_path):
+@pytest.mark.parametrize("change, message", [
+    (('LF = { link = "LF_shank"', 'LF = { link = "LF_foot"'), "no link 'LF_foot'"),
+    # the knees bent backwards: out of the URDF's range from the start
+    (('"*_flexion" = 0.6, "*_knee" = -1.2', '"*_flexion" = -0.6, "*_knee" = 1.2'),
+     "): joint 'LF_knee' leaves its range [-2.6, 0] rad at t = 0 s ("),
+])
+def test_the_command_line_refuses_a_bad_description_and_writes_nothing(tmp_path, change,
+                                                                       message):
     from commands import in_process
 
-    path = _description(tmp_path, QUADRUPED.read_text().replace('LF = { link = "LF_shank"',
-                                                                 'LF = { link = "LF_foot"'))
+    path = _description(tmp_path, QUADRUPED.read_text().replace(*change))
     before = set(tmp_path.iterdir())
     done = in_process("report", str(path), "--no-figures", cwd=tmp_path)
-    assert done.returncode == 1 and "no link 'LF_foot'" in done.stderr
+    error = done.stderr[done.stderr.index("hexapod: error:"):]  # one error, nothing after
+    assert done.returncode == 1 and error.count("hexapod: error:") == 1 and message in error
     assert "Traceback" not in done.stderr and set(tmp_path.iterdir()) == before
+
+
+def test_a_knee_leaves_its_range_at_the_first_sample_its_angle_passes_it(walk):
+    """The walk's left fore knee, its angle measured from the thigh's and the shank's poses
+    (the rotation between their joint frames about the axis), passes -1.15 rad first at a
+    sample inside the stride: a URDF range of [-2.6, -1.15] rad names it there, with the
+    angle."""
+    from hexapod.algorithms.joint_limits import check_joint_limits
+    from hexapod.errors import JointLimitError
+
+    scene, model, result = walk
+    _, rotation = hx.body_poses(model, result.q)
+    joint = next(j for j in model.joints if j.name == "LF_knee")
+    R = (np.swapaxes(rotation[:, joint.parent] @ joint.parent_frame.rotation, 1, 2)
+         @ rotation[:, joint.child] @ joint.child_frame.rotation)
+    sine = np.stack([R[:, 2, 1] - R[:, 1, 2], R[:, 0, 2] - R[:, 2, 0],
+                     R[:, 1, 0] - R[:, 0, 1]], axis=1) @ joint.axis / 2
+    angle = np.arctan2(sine, (np.trace(R, axis1=1, axis2=2) - 1) / 2)
+    k = int(np.argmax(angle > -1.15))
+    assert 0 < k and np.all(angle < 0)  # inside the stride, bent forwards throughout
+    tight = hx.load_scene(QUADRUPED)
+    tight.joints["LF_knee"].limits = np.array([-2.6, -1.15])
+    with pytest.raises(JointLimitError) as caught:
+        check_joint_limits(hx.assemble(tight), result.times, result.q)
+    error = caught.value
+    assert (error.joint, error.time) == ("LF_knee", result.times[k])
+    assert error.value == pytest.approx(angle[k], abs=1e-12)
 
 
 def test_solo12_walks_with_its_feet_on_their_footholds_and_pinocchios_efforts():

@@ -42,6 +42,7 @@ from hexapod._support.compiled import compiled
 from hexapod._support.execution import current
 from hexapod._support.fastcall import InPlaceFunction
 from hexapod.algorithms.contact_frames import refuse_contacts
+from hexapod.algorithms.joint_limits import check_joint_limits
 from hexapod.algorithms.liaison import efforts_and_axes
 from hexapod.errors import HexapodError
 from hexapod.model.data import kept
@@ -141,7 +142,8 @@ PHASE_FROM_SAMPLES = 32
 
 def inverse_dynamics(model: Model, times: ArrayLike, *, method: str = "auto", frame: str = "joint",
                      data: Data | None = None,
-                     progress: Callable[[int, int], None] | None = None) -> InverseResult:
+                     progress: Callable[[int, int], None] | None = None,
+                     check_limits: bool = True) -> InverseResult:
     """Joint wrenches and driver efforts of the prescribed motion at ``times``.
 
     The drivers' laws give the motion (a motion file becomes laws exact at its samples, see
@@ -169,6 +171,9 @@ def inverse_dynamics(model: Model, times: ArrayLike, *, method: str = "auto", fr
         Called as ``progress(done, total)`` as samples are done (after each block of samples
         on the tree path, see :data:`BLOCK_FACTOR`; after each run of samples sharing one
         rank decision on the phase path).
+    check_limits : bool
+        Whether a joint leaving its range (``limits``) is an error (the default; a guided
+        model's positions are checked before its dynamics runs).
 
     Returns
     -------
@@ -179,6 +184,8 @@ def inverse_dynamics(model: Model, times: ArrayLike, *, method: str = "auto", fr
     ------
     SingularSystemError
         When the drivers leave degrees of freedom free (the motion is not prescribed).
+    JointLimitError
+        A joint leaves its range (``check_limits``): the first, when and how far.
     HexapodError
         When ``method="tree"`` and the model is not an open tree with every joint driven, or
         when it has unilateral contacts (whose forces only a contact scheme decides).
@@ -191,8 +198,8 @@ def inverse_dynamics(model: Model, times: ArrayLike, *, method: str = "auto", fr
     if frame not in ("joint", "world"):
         raise ValueError(f"frame must be 'joint' or 'world', got {frame!r}")
     known = None  # positions known at the samples: a guided model's, from its guides
-    if model.guidance is not None:  # the guides' kinematics first, then the joints' efforts
-        model, progress, known = _guided(model, times, progress)
+    if guided := model.guidance is not None:  # the guides' kinematics first, then the efforts
+        model, progress, known = _guided(model, times, progress, check_limits)
     w, wd, wdd = (x.reshape(model.n_w, times.size) for x in model.law_values(times, data))
     plan = tree_plan(model)
     if method == "tree" and plan is None:
@@ -207,6 +214,8 @@ def inverse_dynamics(model: Model, times: ArrayLike, *, method: str = "auto", fr
     else:
         result = _saddle(model, data, times, frame, progress, known)
     _check_finite(model, result)
+    if check_limits and not guided:
+        check_joint_limits(model, times, result.q)
     if model.contacts:  # whatever the path and the policy: can the ground give these forces?
         from hexapod.algorithms.ground import feet_status
 
@@ -214,16 +223,20 @@ def inverse_dynamics(model: Model, times: ArrayLike, *, method: str = "auto", fr
     return result
 
 
-def _guided(model: Model, times: np.ndarray, progress):
+def _guided(model: Model, times: np.ndarray, progress, check_limits: bool):
     """The twin of a guided model whose joints follow the motion the guides give them, the
     progress of its run as the second half of the whole, and the positions at the samples
-    (the twin's laws are exact there, not between: its Newton solves start from them)."""
+    (the twin's laws are exact there, not between: its Newton solves start from them); the
+    motion's joints checked against their ranges (``check_limits``), in the name of
+    ``model``."""
     from hexapod.algorithms.guided import guided_twin, guides_motion
 
     n = times.size
     q, v, v_dot = guides_motion(model, times, lambda kinematics, grid: inverse_dynamics(
-        kinematics, grid, progress=None if progress is None else
+        kinematics, grid, check_limits=False, progress=None if progress is None else
         lambda done, total: progress(done * n // total, 2 * n)))
+    if check_limits:  # the same bodies and joints: the kinematics' positions are the model's
+        check_joint_limits(model, times, q)
     twin = guided_twin(model, times, q, v, v_dot)
     return twin, (None if progress is None else lambda done, total: progress(n + done, 2 * n)), q
 

@@ -176,6 +176,7 @@ class _Assembly:
         self.joint_points: list[np.ndarray] = []  # world joint origins at the initial pose
         self.contacts: list[ContactInfo] = []
         self.guided: list[tuple[int, ca.SX]] = []  # a guided law's index, its joint's coordinate
+        self.ranged: list[ca.SX] = []  # the coordinate of each joint with a range
 
     def _add_row(self, name: str, owner: str, unit: str, expr: ca.SX) -> int:
         self.rows.append(RowInfo(name, owner, unit))
@@ -205,6 +206,8 @@ class _Assembly:
             self.geometries[joint.name] = g
             rows = [self._add_row(f"{joint.name}/{name}", joint.name, unit, expr)
                     for name, expr, unit in joint.rows(g, self.laws)]
+            if joint.limits is not None:  # its coordinate, as its driver's row measures it
+                self.ranged.append(joint.driver_row(g, 0.0))
             if isinstance(joint, Contact):  # a foot: its gate's index among the laws
                 gate = self.laws.where.index(("gate", joint.name))
                 self.contacts.append(ContactInfo(joint.name, k, np.array(rows, dtype=int),
@@ -428,7 +431,8 @@ class _Assembly:
             potential=gravity_potential(self.bodies, self.q, self.si.gravity)
             + builder.potential,
             tracking=ca.vertcat(*self.tracking) if self.tracking else None,
-            guided=ca.vertcat(*[c for _, c in self.guided]) if self.guided else None)
+            guided=ca.vertcat(*[c for _, c in self.guided]) if self.guided else None,
+            ranged=ca.vertcat(*self.ranged) if self.ranged else None)
         guidance = None if kinematics is None else Guidance(
             kinematics, np.array([law for law, _ in self.guided], dtype=int))
         # work is done by rheonomic drivers (time laws) and by the non-conservative elements

@@ -185,6 +185,7 @@ class Symbolic:
     potential: ca.SX | None = None  # potential energy of gravity and springs (scalar)
     tracking: ca.SX | None = None  # each joint controller's coordinate minus its target
     guided: ca.SX | None = None  # the coordinates of the joints that follow the guides
+    ranged: ca.SX | None = None  # the coordinates of the joints with a range, in joint order
 
 
 @dataclass(frozen=True)

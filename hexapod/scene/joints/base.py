@@ -116,8 +116,9 @@ class Joint(Element):
     drivable: ClassVar[bool] = False
     #: the joint frame's axis along which the joint moves (a field of the types that have one)
     axis = None
-    #: ``[lower, upper]``, the range of the joint's coordinate (rad, or L for a length); None:
-    #: no range (a field of the types that have one)
+    #: ``[lower, upper]``, the range of the joint's coordinate (rad, or L for a length), which
+    #: the inverse dynamics checks a motion against; None: no range (a field of the types
+    #: that have one)
     limits = None
     #: per dimension in which the joint has an axis, its default (joint frame)
     default_axis: ClassVar[dict[int, tuple[float, ...]]] = {}

@@ -35,7 +35,8 @@ class Prismatic(Joint):
     axis : array_like, shape (3,) or (2,), optional
         The sliding axis in the joint frame (default z in space, x in the plane).
     limits : array_like, shape (2,), optional
-        ``[lower, upper]``, the range of the displacement, L (default: none).
+        ``[lower, upper]``, the range of the displacement, L, which the inverse dynamics
+        checks a motion against (default: none).
     """
 
     axis: np.ndarray | None = None

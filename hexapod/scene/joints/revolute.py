@@ -35,7 +35,8 @@ class Revolute(Joint):
     axis : array_like, shape (3,), optional
         The rotation axis in the joint frame (default z); ignored in the plane.
     limits : array_like, shape (2,), optional
-        ``[lower, upper]``, the range of the joint angle, rad (default: none).
+        ``[lower, upper]``, the range of the joint angle, rad, which the inverse dynamics
+        checks a motion against (default: none).
     """
 
     axis: np.ndarray | None = None
