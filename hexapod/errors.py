@@ -8,6 +8,10 @@ may raise the usual ``TypeError`` / ``ValueError``.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    import numpy as np
 
 
 class HexapodError(Exception):
@@ -61,7 +65,23 @@ class InputFileError(HexapodError):
 
 
 class AssemblyError(HexapodError):
-    """No configuration satisfies the constraints from the given guess."""
+    """No configuration satisfies the constraints from the given guess.
+
+    Parameters
+    ----------
+    message : str
+        What failed, where.
+    time : float, optional
+        The time at which Newton's method stalled, s, when it did.
+    positions : ndarray, optional
+        Where it stalled (n_q), when it did: a start for finding which constraints cannot be
+        met together.
+    """
+
+    def __init__(self, message: str, time: float | None = None,
+                 positions: np.ndarray | None = None):
+        super().__init__(message)
+        self.time, self.positions = time, positions
 
 
 class SingularSystemError(HexapodError):

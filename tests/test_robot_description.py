@@ -231,10 +231,38 @@ def test_the_command_line_refuses_a_bad_description_and_writes_nothing(tmp_path,
 
     path = _description(tmp_path, QUADRUPED.read_text().replace(*change))
     before = set(tmp_path.iterdir())
-    done = in_process("report", str(path), "--no-figures", cwd=tmp_path)
+    done = in_process("report", str(path), "--no-figures", "--samples", "25", cwd=tmp_path)
     error = done.stderr[done.stderr.index("hexapod: error:"):]  # one error, nothing after
     assert done.returncode == 1 and error.count("hexapod: error:") == 1 and message in error
     assert "Traceback" not in done.stderr and set(tmp_path.iterdir()) == before
+
+
+def test_a_stride_too_long_names_the_foot_out_of_reach_and_how_far_and_writes_nothing(
+        tmp_path):
+    """A stride of 0.6 m puts the left hind foot's path 0.440 m from its hip at t = 0 (both
+    from the guides' laws: the hip is the trunk's origin plus (-0.18, 0.1, 0) m): its leg of
+    0.4 m, straight and pointing at it, leaves it 40.3 mm off, along the hip-to-path line.
+    `hexapod report` says so in one message naming the foot and the time, and writes
+    nothing."""
+    from commands import in_process
+
+    path = _description(tmp_path, QUADRUPED.read_text().replace("stride = 0.1", "stride = 0.6"))
+    scene = hx.load_scene(path)
+    guides = {name: float(np.ravel(scene.drivers[name].law(0.0))[0])
+              for name in ("trunk/x", "trunk/y", "trunk/z", "LH/x", "LH/y", "LH/z")}
+    hip = np.array([guides[f"trunk/{a}"] for a in "xyz"]) + [-0.18, 0.1, 0.0]
+    target = np.array([guides[f"LH/{a}"] for a in "xyz"])
+    far = np.linalg.norm(target - hip)
+    miss = -(far - 0.4) * (target - hip) / far * 1e3  # reached - asked, mm
+    before = set(tmp_path.iterdir())
+    done = in_process("report", str(path), "--no-figures", cwd=tmp_path)
+    assert done.returncode == 1 and "Traceback" not in done.stderr
+    assert done.stderr.strip().splitlines()[-1] == (
+        f"hexapod: error: model 'quadruped' ({path}): at t = 0 s the guides ask for a pose out "
+        f"of the joints' reach; as near as they come, guide 'LH' is {(far - 0.4) * 1e3:.3g} mm "
+        f"off (LH/x {miss[0]:+.3g} mm, LH/y {miss[1]:+.3g} mm, LH/z {miss[2]:+.3g} mm) (check "
+        "the gait: a stride or a step too long for the legs, or the rest posture)")
+    assert set(tmp_path.iterdir()) == before
 
 
 def test_a_knee_leaves_its_range_at_the_first_sample_its_angle_passes_it(walk):

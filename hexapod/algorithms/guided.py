@@ -8,7 +8,9 @@ acceleration there (the joint coordinate of the joint's own driver row, differen
 motion); a twin of the model takes them as laws exact at the samples (the quintic Hermite
 interpolant of a motion file), and its inverse dynamics gives the joints' efforts with the guides
 left out. Both models have the same bodies and coordinates, so the kinematics' positions are the
-twin's to round-off.
+twin's to round-off. When the guides ask for a pose the joints cannot reach (a foot's path
+beyond its leg's length), the error names the guides and how far out they are
+(:mod:`hexapod.algorithms.reach`).
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from hexapod.errors import HexapodError
+from hexapod.errors import AssemblyError, HexapodError
 from hexapod.model.model import Model
 from hexapod.model.tabulation import sampled_laws
 
@@ -96,3 +98,39 @@ def guides_motion(model: Model, times: np.ndarray, solve) -> tuple:
     raise HexapodError(f"model '{model.name}': joint '{joint}' jumps between solutions of the "
                        f"guides near t = {grid[k]:.6g} s even with samples {h[k]:.3g} s "
                        "apart: the guides ask for a motion it cannot follow continuously")
+
+
+#: How many of the guides out of reach a message names.
+NAMED = 3
+
+
+def unreachable_guides(model: Model, error: AssemblyError) -> AssemblyError:
+    """The error of a guided ``model`` whose guides' kinematics ``error`` could not assemble
+    (Newton's method stalled at ``error.time``): the guides the joints cannot follow there,
+    the farthest first, with how far off they are as near as the joints come; ``error``
+    itself when that cannot be told (the joints' own rows do not assemble)."""
+    from hexapod.algorithms.reach import driver_misses
+
+    if error.time is None or error.positions is None:
+        return error
+    kinematics = model.guidance.kinematics
+    found = driver_misses(kinematics, kinematics.create_data(), error.time, error.positions)
+    if not found:
+        return error
+    named = "; ".join(_miss(name, rows) for name, rows in found[:NAMED])
+    more = f"; and {len(found) - NAMED} more" if len(found) > NAMED else ""
+    where = f" ({model.source})" if model.source else ""
+    return AssemblyError(
+        f"model '{model.name}'{where}: at t = {error.time:g} s the guides ask for a pose out of "
+        f"the joints' reach; as near as they come, {named}{more} (check the gait: a stride or "
+        "a step too long for the legs, or the rest posture)", error.time, error.positions)
+
+
+def _miss(name: str, rows: list[tuple[str, float, str]]) -> str:
+    """``guide 'LH' is 40.3 mm off (LH/x +26.6 mm, LH/y -0.724 mm, LH/z +30.2 mm)``: the
+    distance when every row is a length."""
+    shown = ", ".join(f"{row} {value * 1e3:+.3g} mm" if kind == "length" else
+                      f"{row} {value:+.3g} rad" for row, value, kind in rows)
+    lengths = [value for _, value, kind in rows if kind == "length"]
+    off = f" {np.linalg.norm(lengths) * 1e3:.3g} mm" if len(lengths) == len(rows) else ""
+    return f"guide '{name}' is{off} off ({shown})"

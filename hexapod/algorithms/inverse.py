@@ -44,7 +44,7 @@ from hexapod._support.fastcall import InPlaceFunction
 from hexapod.algorithms.contact_frames import refuse_contacts
 from hexapod.algorithms.joint_limits import check_joint_limits
 from hexapod.algorithms.liaison import efforts_and_axes
-from hexapod.errors import HexapodError
+from hexapod.errors import AssemblyError, HexapodError
 from hexapod.model.data import kept
 from hexapod.model.model import GROUND_INDEX, Data, Model
 from hexapod.spatial import (
@@ -228,13 +228,16 @@ def _guided(model: Model, times: np.ndarray, progress, check_limits: bool):
     progress of its run as the second half of the whole, and the positions at the samples
     (the twin's laws are exact there, not between: its Newton solves start from them); the
     motion's joints checked against their ranges (``check_limits``), in the name of
-    ``model``."""
-    from hexapod.algorithms.guided import guided_twin, guides_motion
+    ``model``, and guides out of the joints' reach named."""
+    from hexapod.algorithms.guided import guided_twin, guides_motion, unreachable_guides
 
     n = times.size
-    q, v, v_dot = guides_motion(model, times, lambda kinematics, grid: inverse_dynamics(
-        kinematics, grid, check_limits=False, progress=None if progress is None else
-        lambda done, total: progress(done * n // total, 2 * n)))
+    try:
+        q, v, v_dot = guides_motion(model, times, lambda kinematics, grid: inverse_dynamics(
+            kinematics, grid, check_limits=False, progress=None if progress is None else
+            lambda done, total: progress(done * n // total, 2 * n)))
+    except AssemblyError as error:  # a pose out of reach: which guides, how far
+        raise unreachable_guides(model, error) from None
     if check_limits:  # the same bodies and joints: the kinematics' positions are the model's
         check_joint_limits(model, times, q)
     twin = guided_twin(model, times, q, v, v_dot)

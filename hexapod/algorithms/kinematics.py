@@ -202,7 +202,7 @@ def _closest(model: Model, data: Data, t: float, w: np.ndarray, lifted: np.ndarr
     leave the trunk a roll), each step followed by Newton back onto the others."""
     for _ in range(steps):
         Phi_v = np.asarray(as_dense(constraint_jacobian(model, q, w, data)))
-        free = _null_space(model, np.delete(Phi_v, contact.rows, axis=0))
+        free = null_space(model, np.delete(Phi_v, contact.rows, axis=0))
         offset = model.call("phi", data, q=q, w=w)[contact.rows]
         if free.shape[1] == 0 or np.linalg.norm(offset) <= tol * model.characteristic_length:
             return q
@@ -215,7 +215,7 @@ def _closest(model: Model, data: Data, t: float, w: np.ndarray, lifted: np.ndarr
     return q
 
 
-def _null_space(model: Model, matrix: np.ndarray) -> np.ndarray:
+def null_space(model: Model, matrix: np.ndarray) -> np.ndarray:
     """An orthonormal basis (n_v, k) of the motions ``matrix`` (rows of ``Phi_v``) leaves
     free: singular values below the model's rank tolerance (relative, at least 1) count as
     zero."""
@@ -271,7 +271,7 @@ def _newton(model: Model, data: Data, t: float, w: np.ndarray, q: np.ndarray, to
     raise AssemblyError(
         f"{_subject(model)}: cannot assemble the constraints at t = {t:g} from the given "
         f"guess (largest violations: {_violations(model, residual)}); check the joint "
-        "frames and initial poses, or the driver laws at that time")
+        "frames and initial poses, or the driver laws at that time", t, q)
 
 
 def _line_search(model: Model, data: Data, w, q, dv, merit: float, tol: float,
@@ -456,7 +456,7 @@ def free_motions(model: Model, Phi_v: np.ndarray) -> list[str]:
     the components a pivoted QR picks, weighted by their bodies' masses so that a robot's
     trunk leads: each vector is 1 on its own component and 0 on the others') and naming every
     body it moves, e.g. ``trunk translating along world x (moves trunk, leg0)``."""
-    N = _null_space(model, np.asarray(as_dense(Phi_v), dtype=float).reshape(-1, model.n_v))
+    N = null_space(model, np.asarray(as_dense(Phi_v), dtype=float).reshape(-1, model.n_v))
     if N.shape[1] == 0:
         return []
     from scipy.linalg import qr
