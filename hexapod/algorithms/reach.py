@@ -25,8 +25,8 @@ from hexapod.model.model import Data, Model
 #: Scaled residual (rows of lengths divided by the characteristic length) below which a driver
 #: is met.
 MET = 1e-6
-#: The most damped Gauss-Newton steps, and the step (rad, or m over the characteristic length)
-#: below which they stop.
+#: The most damped Gauss-Newton steps, and the step (m or rad, the largest component of the
+#: velocity-space step) below which they stop.
 STEPS, SMALLEST_STEP = 100, 1e-10
 
 
@@ -57,20 +57,28 @@ class _Reach:
                                                         rcond=None)[0])
         return None
 
-    def step(self, q: np.ndarray, groups: list[np.ndarray], damping: float) -> np.ndarray:
-        """The task-priority step: each group's damped least squares in the motions the kept
-        rows and the groups before it leave free."""
+    def directions(self, q: np.ndarray, groups: list[np.ndarray]) -> list[tuple]:
+        """Per group, in order: its rows' scaled residuals and Jacobian, and the motions the
+        kept rows and the groups before it leave free (a basis, n_v x k)."""
         r, Phi = self.residual(q), self.jacobian(q)
-        step, free = np.zeros(self.model.n_v), null_space(self.model, Phi[self.kept])
+        out, free = [], null_space(self.model, Phi[self.kept])
         for rows in groups:
             if free.shape[1] == 0:
                 break
-            J = Phi[rows] @ free
-            error = -r[rows] - Phi[rows] @ step
-            step += free @ (J.T @ np.linalg.solve(J @ J.T + damping**2 * np.eye(rows.size),
-                                                  error))
-            free = free @ null_space(self.model, J)
-        return step
+            out.append((r[rows], Phi[rows], free))
+            free = free @ null_space(self.model, Phi[rows] @ free)
+        return out
+
+
+def _step(directions: list[tuple], n_v: int, damping: float) -> np.ndarray:
+    """The task-priority step: each group's damped least squares in its free motions, after
+    the steps of the groups before it."""
+    step = np.zeros(n_v)
+    for r, Phi, free in directions:
+        J = Phi @ free
+        step += free @ (J.T @ np.linalg.solve(J @ J.T + damping**2 * np.eye(r.size),
+                                              -r - Phi @ step))
+    return step
 
 
 def _nearer(trial: list[float], before: list[float]) -> bool:
@@ -116,9 +124,9 @@ def driver_misses(model: Model, data: Data, t: float, q: np.ndarray
         return None
     damping = 0.5
     for _ in range(STEPS):
-        before = misses(q)
+        before, directions = misses(q), reach.directions(q, groups)
         while damping < 1e3:  # more damping, shorter steps, until one brings them nearer
-            step = reach.step(q, groups, damping)
+            step = _step(directions, model.n_v, damping)
             trial = reach.onto_kept(model.integrate(q, step))
             if trial is not None and _nearer(misses(trial), before):
                 damping = max(damping / 3, 1e-3)
