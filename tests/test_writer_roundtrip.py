@@ -1,12 +1,12 @@
 """Every scene the writer accepts reads back as the same scene; every other one is refused.
 
-Hypothesis draws scenes (bodies of each kind with markers and meshes, joints, drivers with
-laws, force elements) with names from any text, hostile characters included, and numbers from
-5e-324 to the largest double, -0.0, infinities and NaN. The writer either refuses the scene with
-a HexapodError (and then the scene is invalid, or holds text no UTF-8 file can hold) or writes
-a file that the reader reads without a problem, and writing what was read gives the same
-document again (the rotations, written as roll, pitch and yaw, to round-off). No model is
-assembled: it takes a few seconds.
+Hypothesis draws scenes (bodies of each kind with markers and meshes, joints with ranges or
+none, drivers with laws, force elements) with names from any text, hostile characters included,
+and numbers from 5e-324 to the largest double, -0.0, infinities and NaN. The writer either
+refuses the scene with a HexapodError (and then the scene is invalid, or holds text no UTF-8
+file can hold) or writes a file that the reader reads without a problem, and writing what was
+read gives the same document again (the rotations, written as roll, pitch and yaw, to
+round-off). No model is assembled: it takes a few seconds.
 """
 
 from __future__ import annotations
@@ -147,6 +147,9 @@ def joints(draw, dimension: int, bodies, name, serials, real) -> list:
             kind = draw(st.sampled_from((hx.scene.Revolute, hx.scene.Prismatic)))
         if kind is hx.scene.Prismatic or (kind is hx.scene.Revolute and dimension == 3):
             options["axis"] = draw(vector(dimension, st.floats(0.1, 1)))
+        if kind in (hx.scene.Prismatic, hx.scene.Revolute):  # a range, or none
+            options["limits"] = draw(st.none() | st.tuples(real, real).map(sorted).filter(
+                lambda pair: pair[0] < pair[1]))
         out.append(kind(draw(name) + next(serials), parent.name if parent else "ground",
                         child.name, **options))
     return out
