@@ -292,19 +292,24 @@ def test_a_knee_leaves_its_range_at_the_first_sample_its_angle_passes_it(walk):
     assert error.value == pytest.approx(angle[k], abs=1e-12)
 
 
-def test_solo12_walks_with_its_feet_on_their_footholds_and_pinocchios_efforts():
+@pytest.mark.parametrize("slope", [0.0, 10.0])
+def test_solo12_walks_with_its_feet_on_their_footholds_and_pinocchios_efforts(tmp_path, slope):
     """Solo12 from the installed example-robot-data (the robots extra; large, so not in the
-    default install): a stride of its walk keeps the stance feet on their footholds (1e-12 m),
-    its ground forces balance the bodies' momentum rate (1e-9 of the weight) and, with
-    Pinocchio installed, its efforts are Pinocchio's RNEA with the ground reactions at the feet
-    (1e-8 of the largest)."""
+    default install), on flat ground and up 10 degrees: a stride of its walk keeps the stance
+    feet on their footholds (on the slope: ``z = tan(10) x``; 1e-12 m), its ground forces
+    balance the bodies' momentum rate (1e-9 of the weight) and, with Pinocchio installed, its
+    efforts are Pinocchio's RNEA with the ground reactions at the feet (1e-8 of the
+    largest)."""
     from importlib.metadata import PackageNotFoundError, distribution
 
     try:
         distribution("example-robot-data")
     except PackageNotFoundError:
         pytest.skip("example-robot-data is not installed (pip install 'hexapod[robots]')")
-    scene = hx.load_scene(ROBOTS / "solo12.toml")
+    path = tmp_path / "solo12.toml"
+    path.write_text((ROBOTS / "solo12.toml").read_text().replace(
+        "[ground]\n", f"[ground]\nslope = {slope}\n"))
+    scene = hx.load_scene(path)
     model = hx.assemble(scene)
     result = hx.inverse_dynamics(model, np.linspace(0.0, 2.0, 24, endpoint=False))
     for foot in ("FL", "FR", "HL", "HR"):
@@ -312,6 +317,7 @@ def test_solo12_walks_with_its_feet_on_their_footholds_and_pinocchios_efforts():
         stance = hx.scene.contacts.in_stance(contact, result.times)
         k = np.floor(result.times / contact.period - contact.lift_off) + 1.0
         foothold = contact.foothold + k[:, None] * contact.advance
+        foothold[:, 2] += np.tan(np.radians(slope)) * foothold[:, 0]
         position = foot_positions(scene, model, result, foot)
         assert np.abs(position[stance] - foothold[stance]).max() < 1e-12
     momentum_rate = sum(b.mass * result.v_dot[:, b.v][:, :3] for b in model.bodies)
