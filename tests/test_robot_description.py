@@ -267,7 +267,7 @@ def test_a_stride_too_long_names_the_foot_out_of_reach_and_how_far_and_writes_no
     assert set(tmp_path.iterdir()) == before
 
 
-def test_a_knee_leaves_its_range_at_the_first_sample_its_angle_passes_it(walk):
+def test_a_knee_leaves_its_range_at_the_first_sample_its_angle_passes_it():
     """The walk's left fore knee, its angle measured from the thigh's and the shank's poses
     (the rotation between their joint frames about the axis), passes -1.15 rad first at a
     sample inside the stride: a URDF range of [-2.6, -1.15] rad names it there, with the
@@ -275,7 +275,8 @@ def test_a_knee_leaves_its_range_at_the_first_sample_its_angle_passes_it(walk):
     from hexapod.algorithms.joint_limits import check_joint_limits
     from hexapod.errors import JointLimitError
 
-    scene, model, result = walk
+    walk = walking("quadruped")
+    model, result = walk.model, walk.result
     _, rotation = hx.body_poses(model, result.q)
     joint = next(j for j in model.joints if j.name == "LF_knee")
     R = (np.swapaxes(rotation[:, joint.parent] @ joint.parent_frame.rotation, 1, 2)
