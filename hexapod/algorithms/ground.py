@@ -117,7 +117,12 @@ def policy_objective(model: Model, data, q: np.ndarray, Phi: np.ndarray, Q_acros
 
 def contact_axes(model: Model) -> np.ndarray | None:
     """Each contact's axes as rows ``(t_1, t_2, n)`` (world), from the ground under it; None
-    when the ground is flat (the axes are the world's)."""
+    when the ground is flat (the axes are the world's). Built once per model: its ground's
+    shape is built into its contacts and never changes."""
+    return model.built_once(("contact axes",), _contact_axes)
+
+
+def _contact_axes(model: Model) -> np.ndarray | None:
     terrains = [c.schedule.terrain for c in model.contacts]
     if all(terrain is None or terrain.flat for terrain in terrains):
         return None
