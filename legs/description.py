@@ -20,6 +20,8 @@
     step_height = 0.04               # m
     clearance = 0.01                 # m above a step's edge (default: step_height / 4)
     trunk = "planned"                # or "level": straight at constant speed
+    yaw_rate = 10                    # degrees per second, turning left (flat ground)
+    pitch = 0                        # degrees, the trunk's tilt (and roll)
 
     [ground]                         # optional: the ground, as in a scene file
     policy = "min-wrench"            # how the feet share the load
@@ -48,7 +50,7 @@ _ROBOT_KEYS = {"name", "urdf", "trunk", "rest", "feet", "actuators"}
 _GROUND_KEYS = {"policy", "mu", "faces", "min_normal", "default_reference", "reference_efforts",
                 "slope", "heading", "steps"}
 _GAIT_KEYS = {"pattern", "phases", "duty", "period", "speed", "stride", "step_height", "trunk",
-              "clearance"}
+              "clearance", "yaw_rate", "pitch", "roll"}
 
 
 @dataclass
@@ -65,7 +67,9 @@ class Gait:
     (m per period), ``step_height`` (m), and the ``trunk``'s motion: ``planned`` (swaying so
     that the centre of pressure stays inside the support polygon, :mod:`legs.trunk_path`) or
     ``level`` (straight, at constant speed); a swing that crosses a step clears its edge by
-    at least ``clearance`` (m; default a quarter of the step height)."""
+    at least ``clearance`` (m; default a quarter of the step height). The trunk turns at
+    ``yaw_rate`` (degrees per second, counter-clockwise seen from above; flat ground) and is
+    tilted by ``pitch`` and ``roll`` (degrees)."""
 
     phases: dict[str, float]
     duty: float
@@ -75,6 +79,9 @@ class Gait:
     pattern: str = ""
     trunk: str = "planned"
     clearance: float | None = None
+    yaw_rate: float = 0.0
+    pitch: float = 0.0
+    roll: float = 0.0
 
 
 @dataclass
@@ -152,6 +159,9 @@ def read_robot(document: dict, path: str | Path) -> RobotDescription:
     ground = {key: value for key, value in ground.items() if key in _GROUND_KEYS}
     for problem in GroundForces(**ground, source="ground").problems():  # the walk stands on it
         problems.add(problem.where, problem.message)
+    if gait is not None and gait.yaw_rate and any(ground.get(key) for key in ("slope", "steps")):
+        problems.add("gait.yaw_rate", "a robot turns on flat ground only, for now: give "
+                     "ground.slope and ground.steps or the yaw rate, not both")
     motors = robot.get("actuators")
     if motors is not None and not (isinstance(motors, str) and (path.parent / motors).is_file()):
         problems.add("robot.actuators", f"needs an actuator table file, relative to {path.name} "
@@ -250,10 +260,13 @@ def _gait(table, feet: list[str], problems: _Problems) -> Gait | None:
     if trunk not in ("planned", "level"):
         problems.add("gait.trunk", f"must be 'planned' or 'level', got {trunk!r}")
     clearance = problems.number(table, "clearance", "gait", 0.0)
-    if None in (duty, stride, height, period):
+    yaw_rate = problems.number(table, "yaw_rate", "gait", default=0.0)
+    pitch, roll = (problems.number(table, key, "gait", -45.0, 45.0, 0.0)
+                   for key in ("pitch", "roll"))
+    if None in (duty, stride, height, period, yaw_rate, pitch, roll):
         return None
     return Gait(dict(phases) if phases else {}, duty, period, stride, height, pattern or "",
-                trunk, clearance)
+                trunk, clearance, yaw_rate, pitch, roll)
 
 
 def rest_angles(description: RobotDescription, joints) -> dict[str, float]:

@@ -32,6 +32,7 @@ import numpy as np
 
 from hexapod.scene import Law
 from legs.stepping import LIFT_RATES, STEP_RATES, OnSchedule
+from legs.turning import stance_progress, swing_schedule
 
 #: Lift-off phases (fractions of the period) by foot role, and the default duty factor, of
 #: each pattern, by the number of legs. A trot, a pace and a bound have two feet down: their
@@ -104,23 +105,19 @@ class StepPath(OnSchedule, Law):
     kind = "step-path"
 
     def evaluate(self, t):
-        t = np.asarray(t, dtype=float)
-        x = t / self.period - self.lift_off
-        k = np.floor(x)
-        tau = x - k  # 0 at lift-off; swing until 1 - duty
+        k, u, in_swing = swing_schedule(t, self.duty, self.period, self.lift_off)
         swing = 1.0 - self.duty
-        u = np.clip(tau / swing, 0.0, 1.0)
-        in_swing = tau < swing
-        step = [p(u) for p in STEP_RATES]
+        stance = stance_progress(t, self.duty, self.period, self.lift_off)
         bump = [p(u) for p in LIFT_RATES]
-        stance = k + np.where(in_swing, step[0], 1.0)  # c + 1 along the swing to stance c + 1
-        value = self.start + self.advance * stance + self.lift * np.where(in_swing, bump[0], 0.0)
-        rates = [np.where(in_swing, (self.advance * step[m] + self.lift * bump[m])
-                          / (swing * self.period) ** m, 0.0) for m in (1, 2)]
+        value = self.start + self.advance * stance[0] + self.lift * np.where(in_swing, bump[0],
+                                                                               0.0)
+        rates = [self.advance * stance[m] + np.where(in_swing, self.lift * bump[m]
+                                                     / (swing * self.period) ** m, 0.0)
+                 for m in (1, 2)]
         for at, rise in zip(self.rises_at, self.rises, strict=True):
             crossing = in_swing & (k == at - 1.0)
             climb = rise_progress(u, rise)
-            value = value + rise * np.where(crossing, climb[0], stance >= at)
+            value = value + rise * np.where(crossing, climb[0], stance[0] >= at)
             for m in (1, 2):
                 rates[m - 1] = rates[m - 1] + rise * np.where(
                     crossing, climb[m] / (swing * self.period) ** m, 0.0)
@@ -260,7 +257,8 @@ def robot_scene(description):
     each foot's path as guides, every revolute and prismatic joint following them, each foot a
     contact by the gait's schedule. On a ground that is not flat (the description's
     ``[ground]`` slope and steps) each foothold lies on it, under the foot's rest position, and
-    the trunk keeps its rest height above the plane, level, rising over each step as it passes.
+    the trunk keeps its rest height above the plane, rising over each step as it passes. A gait
+    with a yaw rate turns (:mod:`legs.turning`); its pitch and roll tilt the trunk.
 
     Raises
     ------
@@ -268,17 +266,8 @@ def robot_scene(description):
         The trunk or a foot's link is not a link of the URDF, the URDF's own problems, or a
         swing that would not clear a step's edge.
     """
-    from hexapod.scene import (
-        Contact,
-        CoordinateDriver,
-        GroundForces,
-        Guided,
-        JointDriver,
-        read_urdf,
-    )
-    from hexapod.spatial import Placement
+    from hexapod.scene import GroundForces, Guided, JointDriver, read_urdf
     from legs.description import rest_angles
-    from legs.trunk_path import TrunkPlan, plan_trunk
 
     urdf = read_urdf(description.urdf, base="free")
     trunk = _checked_links(description, urdf)
@@ -289,45 +278,113 @@ def robot_scene(description):
     height = -float(np.mean([p[2] for p in rest.values()]))  # the feet's mean on the ground
     lifted = _posed(urdf, angles, height)
     lifted.ground = GroundForces(**description.ground)
-    terrain, gait = lifted.ground.terrain, description.gait
-    phases = gait.phases or _pattern_phases(gait.pattern, rest)
-    period, duty, stride = gait.period, gait.duty, gait.stride
-    speed = stride / period
-    origin = lifted.pose(trunk).position
-    starts = {name: np.array([rest[name][0] + speed * (phases[name] - duty / 2) * period,
-                              rest[name][1], 0.0]) for name in description.feet}
-    plan = TrunkPlan.level(period) if gait.trunk == "level" else plan_trunk(
-        {name: (StepPath(starts[name][0], stride, 0.0, duty, period,
-                                phases[name]),
-                 StepPath(0.0, 0.0, gait.step_height, duty, period, phases[name]),
-                 rest[name][:2] - origin[:2]) for name in description.feet},
-        phases, duty, period, stride, height, _masses(lifted, trunk),
-        slope=(terrain.slope, terrain.heading))
-    rise = _trunk_rise(terrain, origin, speed, starts)
-    for axis, law in zip("xyz", (_sway(plan.x, origin[0], speed, period),
-                                 _sway(plan.y, origin[1], 0.0, period), rise), strict=True):
-        lifted.add(CoordinateDriver(f"trunk/{axis}", trunk, axis, law, point=[0.0, 0.0, 0.0],
-                                    guide=True))
-    for angle in ("roll", "pitch", "yaw"):
-        lifted.add(CoordinateDriver(f"trunk/{angle}", trunk, angle, 0.0, guide=True))
-    for name, foot in description.feet.items():
-        phase, start = phases[name], starts[name]
-        laws = (StepPath(start[0], stride, 0.0, duty, period, phase), start[1],
-                StepPath(lift=gait.step_height, duty=duty, period=period, lift_off=phase,
-                         **_foot_levels(terrain, start[0], start[1], stride)))
-        _check_clearance(description, name, terrain, laws[0], laws[2], start[1])
-        for axis, law in zip("xyz", laws, strict=True):
-            lifted.add(CoordinateDriver(f"{name}/{axis}", foot.link, axis, law,
-                                        point=foot.point, guide=True))
-        lifted.add(Contact(f"{name}/ground", "ground", foot.link,
-                           child_frame=Placement(foot.point), period=period, duty=duty,
-                           lift_off=phase, foothold=start, advance=[stride, 0.0, 0.0]))
+    gait = description.gait
+    walk = _Walk(gait, gait.phases or _pattern_phases(gait.pattern, rest),
+                 lifted.pose(trunk).position, lifted.ground.terrain)
+    _add_trunk(lifted, trunk, walk, rest, height)
+    for name in description.feet:
+        _add_foot(lifted, description, name, walk, rest[name])
     for joint in urdf.joints.values():
         if joint.drivable:
             lifted.add(JointDriver(f"drive_{joint.name}", joint.name, Guided()))
     lifted.name, lifted.source = description.name, description.source
     lifted.actuators = description.actuators  # the report checks the motors when there are
     return lifted
+
+
+@dataclass(frozen=True)
+class _Walk:
+    """A gait's schedule laid on the ground: the feet's lift-off ``phases``, the trunk's
+    ``origin`` at ``t = 0``, the ``terrain``; walking along ``x`` at ``speed``, turning about
+    ``centre`` at ``rate`` (rad/s) when the gait has a yaw rate."""
+
+    gait: object
+    phases: dict
+    origin: np.ndarray
+    terrain: object
+
+    @property
+    def speed(self) -> float:
+        return self.gait.stride / self.gait.period
+
+    @property
+    def rate(self) -> float:
+        return float(np.radians(self.gait.yaw_rate))
+
+    @property
+    def centre(self) -> np.ndarray:
+        from legs.turning import turn_centre
+
+        return turn_centre(self.origin, self.speed, self.rate)
+
+    def foothold(self, name: str, rest: np.ndarray) -> np.ndarray:
+        """The foothold of foot ``name``'s stance 0 (the one ending at its lift-off): its rest
+        position where the trunk is at the middle of that stance, on ``z = 0``."""
+        from legs.turning import turned
+
+        middle = (self.phases[name] - self.gait.duty / 2) * self.gait.period
+        if self.rate:
+            return turned(np.r_[rest[:2], 0.0], self.centre, self.rate * middle)
+        return np.array([rest[0] + self.speed * middle, rest[1], 0.0])
+
+
+def _add_trunk(scene, trunk: str, walk: _Walk, rest: dict, height: float) -> None:
+    """The trunk's six guides: its sway planned (or level), along ``x`` or round the turn;
+    its height over the terrain; its yaw (turning), pitch and roll."""
+    from hexapod.scene import CoordinateDriver, Polynomial
+    from legs.trunk_path import TrunkPlan, plan_trunk
+    from legs.turning import turning_sway
+
+    gait, terrain, origin = walk.gait, walk.terrain, walk.origin
+    period, duty, stride = gait.period, gait.duty, gait.stride
+    # planned as a straight walk; a turning trunk sways along its own axes (legs.turning)
+    straight = {name: rest[name][0] + walk.speed * (walk.phases[name] - duty / 2) * period
+                for name in rest}
+    plan = TrunkPlan.level(period) if gait.trunk == "level" else plan_trunk(
+        {name: (StepPath(straight[name], stride, 0.0, duty, period, walk.phases[name]),
+                StepPath(0.0, 0.0, gait.step_height, duty, period, walk.phases[name]),
+                p[:2] - origin[:2]) for name, p in rest.items()},
+        walk.phases, duty, period, stride, height, _masses(scene, trunk),
+        slope=(terrain.slope, terrain.heading))
+    if walk.rate:
+        horizontal = turning_sway(plan, origin, walk.centre, walk.rate)
+    else:
+        horizontal = (_sway(plan.x, origin[0], walk.speed, period),
+                      _sway(plan.y, origin[1], 0.0, period))
+    starts = {name: walk.foothold(name, p) for name, p in rest.items()}
+    rise = _trunk_rise(terrain, origin, walk.speed, starts)
+    for axis, law in zip("xyz", (*horizontal, rise), strict=True):
+        scene.add(CoordinateDriver(f"trunk/{axis}", trunk, axis, law, point=[0.0, 0.0, 0.0],
+                                   guide=True))
+    yaw = Polynomial((0.0, walk.rate)) if walk.rate else 0.0
+    for angle, law in (("roll", np.radians(gait.roll)), ("pitch", np.radians(gait.pitch)),
+                       ("yaw", yaw)):
+        scene.add(CoordinateDriver(f"trunk/{angle}", trunk, angle, law, guide=True))
+
+
+def _add_foot(scene, description, name: str, walk: _Walk, rest: np.ndarray) -> None:
+    """Foot ``name``'s three guides (its path) and its contact."""
+    from hexapod.scene import Contact, CoordinateDriver
+    from hexapod.spatial import Placement
+    from legs.turning import foot_turn_paths
+
+    gait, foot, terrain = walk.gait, description.feet[name], walk.terrain
+    phase, start = walk.phases[name], walk.foothold(name, rest)
+    duty, period, stride = gait.duty, gait.period, gait.stride
+    vertical = StepPath(lift=gait.step_height, duty=duty, period=period, lift_off=phase,
+                        **_foot_levels(terrain, start[0], start[1], stride))
+    if walk.rate:
+        horizontal = foot_turn_paths(start, walk.centre, walk.rate, duty, period, phase)
+    else:
+        horizontal = (StepPath(start[0], stride, 0.0, duty, period, phase), start[1])
+        _check_clearance(description, name, terrain, horizontal[0], vertical, start[1])
+    for axis, law in zip("xyz", (*horizontal, vertical), strict=True):
+        scene.add(CoordinateDriver(f"{name}/{axis}", foot.link, axis, law, point=foot.point,
+                                   guide=True))
+    turning = dict(turn=np.degrees(walk.rate * period), centre=np.r_[walk.centre, 0.0]) if (
+        walk.rate) else dict(advance=[stride, 0.0, 0.0])
+    scene.add(Contact(f"{name}/ground", "ground", foot.link, child_frame=Placement(foot.point),
+                      period=period, duty=duty, lift_off=phase, foothold=start, **turning))
 
 
 def _checked_links(description, urdf) -> str:

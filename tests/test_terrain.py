@@ -12,15 +12,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from robots import check_pinocchio, described_walk, foot_on_ground, momentum_gap
 
 import hexapod as hx
 from hexapod.errors import ModelError
 from hexapod.scene import GroundForces
-from hexapod.spatial import rotation_from_euler_parameters
 from legs.walker import StepPath
 
 ROBOTS = Path(__file__).resolve().parents[1] / "data" / "robots"
-DATA = Path(__file__).resolve().parent / "data"
 SLOPE = np.radians(10.0)
 FEET = ("LF", "RF", "LH", "RH")
 
@@ -38,25 +37,7 @@ def _quadruped(tmp_path, ground: str, *changes) -> Path:
     return path
 
 
-def _foot(scene, model, result, contact) -> tuple:
-    """A contact's foot world position, its foothold and whether it is in stance, per
-    sample."""
-    body = scene.bodies[contact.child]
-    point = contact.child_frame.position - np.asarray(body.com, dtype=float)
-    info = model.bodies[model.body_index[body.name]]
-    position = np.array([q[info.q][:3] + rotation_from_euler_parameters(q[info.q][3:])
-                         @ point for q in result.q])
-    k = np.floor(result.times / contact.period - contact.lift_off) + 1.0
-    foothold = contact.foothold + k[:, None] * contact.advance
-    return position, foothold, hx.scene.contacts.in_stance(contact, result.times)
 
-
-def _momentum_gap(model, result) -> float:
-    """The largest residual of ``sum F_ground + M g = sum m a_com``, over the weight."""
-    rate = sum(b.mass * result.v_dot[:, b.v][:, :3] for b in model.bodies)
-    gravity = model.total_mass * np.asarray(model.gravity)
-    gap = result.ground_force.sum(axis=1) + gravity - rate
-    return float(np.abs(gap).max() / (model.total_mass * 9.81))
 
 
 def test_the_ground_has_the_height_and_normal_of_a_plane_with_steps():
@@ -109,57 +90,24 @@ def test_a_model_keeps_the_ground_shape_it_was_built_on(tmp_path):
         model.with_ground(GroundForces(policy="friction", slope=10.0), "")
 
 
-def _stored(name: str) -> dict:
-    """Pinocchio's torques for a robot of data/robots (tests/data/make_walking_fixture.py
-    --NAME; CI has no Pinocchio)."""
-    with np.load(DATA / f"{name}_rnea.npz", allow_pickle=False) as data:
-        return {key: data[key] for key in data.files}
-
-
-def _walk(name: str) -> tuple:
-    stored = _stored(name)
-    scene = hx.load_scene(ROBOTS / f"{name}.toml")
-    model = hx.assemble(scene)
-    return scene, model, hx.inverse_dynamics(model, stored["times"]), stored
-
-
-def _check_pinocchio(model, result, stored) -> None:
-    """The efforts equal Pinocchio's floating-base RNEA with the reported ground reactions at
-    the feet (the fixture always: 1e-8 of the largest; live when Pinocchio is installed)."""
-    index = {name: k for k, name in enumerate(result.joints)}
-    efforts = result.effort[:, [index[str(name)] for name in stored["joints"]]]
-    scale = np.abs(stored["pinocchio"]).max()
-    assert np.abs(efforts - stored["pinocchio"]).max() < 1e-8 * scale
-    assert np.abs(stored["base"]).max() < 1e-8 * scale
-    try:
-        import pinocchio  # noqa: F401
-    except ImportError:
-        return
-    from script_loader import load_script
-
-    script = load_script("tests/data/make_walking_fixture.py")
-    comparison = script.pinocchio_rnea(hx.simulation.motion_model(model, result), result)
-    assert comparison.placement_gap < 1e-12 and comparison.motion_gap < 1e-10
-    assert comparison.difference < 1e-8
-
-
 @pytest.fixture(scope="module")
 def slope():
-    return _walk("quadruped-slope")
+    return described_walk("quadruped-slope")
 
 
 def test_stance_feet_stand_on_the_slope_and_the_forces_balance_the_motion(slope):
     """data/robots/quadruped-slope.toml: its walk up 10 degrees, a stride."""
     scene, model, result, stored = slope
     for foot in FEET:
-        position, foothold, stance = _foot(scene, model, result, scene.joints[f"{foot}/ground"])
+        contact = scene.joints[f"{foot}/ground"]
+        position, foothold, stance = foot_on_ground(scene, model, result, contact)
         assert stance.sum() >= 19
         on_slope = np.column_stack([foothold[:, :2], np.tan(SLOPE) * foothold[:, 0]])
         assert np.abs(position[stance] - on_slope[stance]).max() < 1e-12
-    assert _momentum_gap(model, result) < 1e-9
+    assert momentum_gap(model, result) < 1e-9
     trunk = scene.drivers["trunk/z"].law  # rest height above the plane, up it at the speed
     assert trunk(1.2) - trunk(0.0) == pytest.approx(np.tan(SLOPE) * 0.1, abs=1e-15)
-    _check_pinocchio(model, result, stored)
+    check_pinocchio(model, result, stored)
 
 
 def _statuses_about(normal, mu, force, stance, weight) -> np.ndarray:
@@ -207,19 +155,19 @@ def test_the_hexapod_climbs_two_steps_with_each_foot_on_its_tread():
     (x = 0.27 and 0.43 m), sampled every 0.1 s over 9 s. Every foot lands on the treads
     beyond each step as it crosses, the forces balance the motion, the friction policy
     carries it, the efforts are Pinocchio's, the trunk rises by both steps."""
-    scene, model, result, stored = _walk("hexapod3-steps")
+    scene, model, result, stored = described_walk("hexapod3-steps")
     for foot in ("L1", "L2", "L3", "R1", "R2", "R3"):
         contact = scene.joints[f"{foot}/ground"]
-        position, foothold, stance = _foot(scene, model, result, contact)
+        position, foothold, stance = foot_on_ground(scene, model, result, contact)
         tread = 0.03 * (foothold[:, 0] >= 0.27) + 0.03 * (foothold[:, 0] >= 0.43)
         on_tread = np.column_stack([foothold[:, :2], tread])
         assert np.abs(position[stance] - on_tread[stance]).max() < 1e-12, foot
         assert tread[0] < 0.06 and tread[-1] == 0.06, foot  # it climbed in the window
-    assert _momentum_gap(model, result) < 1e-9
+    assert momentum_gap(model, result) < 1e-9
     assert result.feasible
     trunk = scene.drivers["trunk/z"].law
     assert trunk(100.0) - trunk(-100.0) == pytest.approx(0.06, abs=1e-15)
-    _check_pinocchio(model, result, stored)
+    check_pinocchio(model, result, stored)
 
 
 def test_a_foot_path_over_a_step_is_smooth_and_on_both_treads():

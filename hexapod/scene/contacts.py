@@ -121,7 +121,8 @@ class StanceGate(Law):
 def _schedules(laws: tuple, ndim: int) -> SimpleNamespace:
     """The schedules of the laws' contacts as arrays (k, 1, ...) that broadcast against times
     of ``ndim`` dimensions: the same arithmetic as one contact's, for all at once; and, for
-    footholds, their first positions and advances per stance (``start``, ``advance``)."""
+    footholds, their first positions and advances per stance (``foothold``, ``advance``) and the
+    laws whose footholds turn or are raised by the ground (``apart``: each evaluated alone)."""
     shape = (len(laws),) + (1,) * ndim
     arrays = {key: np.array([getattr(law.contact, key) for law in laws]).reshape(shape)
               for key in ("period", "lift_off", "duty")}
@@ -129,9 +130,24 @@ def _schedules(laws: tuple, ndim: int) -> SimpleNamespace:
         for key in ("foothold", "advance"):
             arrays[key] = np.array([getattr(law.contact, key)[law.axis]
                                     for law in laws]).reshape(shape)
-        arrays["raised"] = [i for i, law in enumerate(laws) if law.axis == 2 and not (
-            law.contact.terrain is None or law.contact.terrain.flat)]
+        arrays["apart"] = [i for i, law in enumerate(laws) if not law.straight]
     return SimpleNamespace(**arrays)
+
+
+def foothold_point(contact, k) -> tuple:
+    """The world foothold ``(x, y, z)`` of the contact's stance ``k`` (an array of indices):
+    ``foothold + k advance``, turned by ``k turn`` about the vertical through ``centre``, its
+    ``z`` raised by the ground's height under it."""
+    c, k = contact, np.asarray(k, dtype=float)
+    x, y, z = (c.foothold[i] + k * c.advance[i] for i in range(3))
+    if c.turn:
+        angle = np.radians(c.turn) * k
+        dx, dy = c.foothold[0] - c.centre[0], c.foothold[1] - c.centre[1]
+        x = c.centre[0] + np.cos(angle) * dx - np.sin(angle) * dy + k * c.advance[0]
+        y = c.centre[1] + np.sin(angle) * dx + np.cos(angle) * dy + k * c.advance[1]
+    if c.terrain is not None and not c.terrain.flat:
+        z = z + c.terrain.height(x, y)
+    return x, y, z
 
 
 @dataclass(frozen=True, eq=False)
@@ -142,20 +158,19 @@ class Foothold(Law):
     axis: int
     kind = "foothold"
 
+    @property
+    def straight(self) -> bool:
+        """Whether the component is ``foothold + k advance`` (no turn; for ``z``, flat)."""
+        c = self.contact
+        if self.axis == 2:
+            return c.terrain is None or c.terrain.flat
+        return not c.turn
+
     def evaluate(self, t):
         t = np.asarray(t, dtype=float)
         _, k = _cycle(self.contact, t)
-        value = self.contact.foothold[self.axis] + k * self.contact.advance[self.axis]
-        return self._on_ground(value, k), np.zeros_like(t), np.zeros_like(t)
-
-    def _on_ground(self, value, k):
-        """``value`` raised by the ground's height under the foothold, for the ``z`` axis on
-        a ground that is not flat."""
-        terrain = self.contact.terrain
-        if self.axis != 2 or terrain is None or terrain.flat:
-            return value
-        foothold, advance = self.contact.foothold, self.contact.advance
-        return value + terrain.height(foothold[0] + k * advance[0], foothold[1] + k * advance[1])
+        value = foothold_point(self.contact, k)[self.axis]
+        return value * np.ones_like(t), np.zeros_like(t), np.zeros_like(t)
 
     def breaks(self, start, stop):  # the next stance's foothold from lift-off
         c = self.contact
@@ -171,8 +186,8 @@ class Foothold(Law):
         schedules = _schedules(tuple(laws), t.ndim)
         _, k = _cycle(schedules, t)
         value = schedules.foothold + k * schedules.advance
-        for i in schedules.raised:  # footholds on a ground that is not flat
-            value[i] = laws[i]._on_ground(value[i], k[i])
+        for i in schedules.apart:  # footholds that turn, or on a ground that is not flat
+            value[i] = foothold_point(laws[i].contact, k[i])[laws[i].axis]
         return np.array([value, np.zeros_like(value), np.zeros_like(value)])
 
 

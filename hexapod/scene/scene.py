@@ -64,6 +64,7 @@ LARGEST = {"length": (1e6, "m"), "speed": (1e6, "m/s"), "rate": (1e6, "rad/s"),
 #: the quantity of each element attribute a magnitude is checked for
 _QUANTITIES = {"position": "length", "com": "length", "origin": "length", "length": "length",
                "free_length": "length", "foothold": "length", "advance": "length",
+               "centre": "length",
                "point": "length", "point_a": "length", "point_b": "length",
                "parent_frame": "length", "child_frame": "length", "velocity": "speed",
                "angular_velocity": "rate", "mass": "mass", "inertia": "inertia",

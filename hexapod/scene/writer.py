@@ -139,7 +139,8 @@ def _is_default(name: str, value) -> bool:
     if value is None:
         return True
     if name in ("com", "position", "velocity", "angular_velocity", "angle", "damping", "stiffness",
-                "free_angle", "advance") and np.all(np.asarray(value, dtype=float) == 0):
+                "free_angle", "advance", "turn", "centre") and np.all(
+                    np.asarray(value, dtype=float) == 0):
         return True
     if name in ("rotation", "inertia_rotation") and np.array_equal(
             np.asarray(value), np.eye(np.asarray(value).shape[0])):

@@ -28,7 +28,9 @@ class Contact(Joint):
     lasts from ``(lift_off + k - duty) period`` to ``(lift_off + k) period``. Its foothold is
     ``foothold + k advance`` (world, scene units): ``foothold`` is where the foot stands in the
     stance that ends at ``t = lift_off period``, ``advance`` how far the footholds move each
-    cycle (the stride, for a robot walking straight).
+    cycle (the stride, for a robot walking straight). A robot turning at a constant rate sets
+    ``turn``: the footholds then also turn by ``k turn`` (degrees) about the vertical through
+    ``centre``, ``centre + Rz(k turn) (foothold - centre) + k advance``.
 
     A foot's share of the ground forces grows from zero at touch-down and falls to zero at
     lift-off over ``ramp`` (a fraction of the stance), so the forces are continuous in time
@@ -53,6 +55,11 @@ class Contact(Joint):
         default the origin.
     advance : array_like, shape (3,), optional
         How far the footholds move each cycle, world (L); default zero.
+    turn : float
+        How far the footholds turn about the vertical through ``centre`` each cycle, degrees
+        (default 0).
+    centre : array_like, shape (3,), optional
+        A point of the vertical axis the footholds turn about, world (L); default the origin.
     ramp : float
         The fraction of the stance over which the foot's share of the ground forces grows
         from or falls to zero, in (0, 0.5] (default 0.1).
@@ -67,6 +74,8 @@ class Contact(Joint):
     lift_off: float = 0.0
     foothold: np.ndarray | None = None
     advance: np.ndarray | None = None
+    turn: float = 0.0
+    centre: np.ndarray | None = None
     ramp: float = 0.1
     terrain: object = None
     kind = "contact"
@@ -78,17 +87,19 @@ class Contact(Joint):
             self.foothold, dtype=float).reshape(-1)
         self.advance = np.zeros(3) if self.advance is None else np.array(
             self.advance, dtype=float).reshape(-1)
+        self.centre = np.zeros(3) if self.centre is None else np.array(
+            self.centre, dtype=float).reshape(-1)
 
     def problems(self):
         out = super().problems()
         if self.parent != "ground":
             out.append(self.problem("parent", f"a contact's parent is the ground, got "
                                     f"'{self.parent}'"))
-        for key in ("foothold", "advance"):
+        for key in ("foothold", "advance", "centre"):
             value = getattr(self, key)
             if check_finite(self, key, value, out) and value.size != 3:
                 out.append(self.problem(key, f"needs 3 numbers, got {value.size}"))
-        numbers = {k: getattr(self, k) for k in ("period", "duty", "lift_off", "ramp")}
+        numbers = {k: getattr(self, k) for k in ("period", "duty", "lift_off", "ramp", "turn")}
         if not all(check_finite(self, k, v, out) for k, v in numbers.items()):
             return out
         if not self.period >= SHORTEST_PERIOD:
@@ -106,6 +117,7 @@ class Contact(Joint):
         out = super().scaled(length)
         out.foothold = self.foothold * length
         out.advance = self.advance * length
+        out.centre = self.centre * length
         return out
 
     def attached(self, attachment: Attachment):
@@ -115,6 +127,7 @@ class Contact(Joint):
         T = attachment.transform
         out.foothold = T.transform_point(self.foothold)
         out.advance = T.rotation @ self.advance
+        out.centre = T.transform_point(self.centre)
         return out
 
     @classmethod
@@ -122,7 +135,8 @@ class Contact(Joint):
         # footholds are world points, 3 numbers (contacts exist in space only)
         return {"period": (NUMBER, False), "duty": (NUMBER, False),
                 "lift_off": (NUMBER, False), "foothold": (VECTOR3, False),
-                "advance": (VECTOR3, False), "ramp": (NUMBER, False)}
+                "advance": (VECTOR3, False), "turn": (NUMBER, False),
+                "centre": (VECTOR3, False), "ramp": (NUMBER, False)}
 
     def rows(self, g, laws):
         gate = laws.value(StanceGate(self), f"{self.name}/gate", ("gate", self.name))[0]
