@@ -8,6 +8,8 @@
     trunk = "trunk"                  # the URDF's root link (a free body)
     rest = { "*_flexion" = 0.6, "*_knee" = -1.2 }   # joint angles (rad), names or patterns
     actuators = "motors.toml"        # optional: the motors' table (docs/report.md)
+    weights = { "*_ankle" = 4.0 }    # a leg of more than three joints: the posture nearest
+                                     # the rest one, these weights on the joints (default 1)
 
     [robot.feet]                     # each foot: a link and a point of it (m, link frame)
     LF = { link = "LF_shank", point = [0.0, 0.0, -0.2] }
@@ -46,7 +48,7 @@ from hexapod import ModelError
 from hexapod.scene import ActuatorTable, GroundForces, Problem, read_actuators
 from legs.walker import PATTERNS
 
-_ROBOT_KEYS = {"name", "urdf", "trunk", "rest", "feet", "actuators"}
+_ROBOT_KEYS = {"name", "urdf", "trunk", "rest", "feet", "actuators", "weights"}
 _GROUND_KEYS = {"policy", "mu", "faces", "min_normal", "default_reference", "reference_efforts",
                 "slope", "heading", "steps"}
 _GAIT_KEYS = {"pattern", "phases", "duty", "period", "speed", "stride", "step_height", "trunk",
@@ -87,7 +89,8 @@ class Gait:
 @dataclass
 class RobotDescription:
     """A robot read by :func:`read_robot`: its URDF, trunk, feet, rest posture, gait, ground,
-    and its motors (an actuator table, :func:`hexapod.scene.read_actuators`), if any."""
+    its motors (an actuator table, :func:`hexapod.scene.read_actuators`), if any, and the
+    joints' weights in the posture rule of a leg with more than three joints."""
 
     name: str
     urdf: Path
@@ -98,6 +101,7 @@ class RobotDescription:
     ground: dict = field(default_factory=dict)
     source: str = ""
     actuators: ActuatorTable | None = None
+    weights: dict[str, float] = field(default_factory=dict)
 
 
 class _Problems:
@@ -149,6 +153,13 @@ def read_robot(document: dict, path: str | Path) -> RobotDescription:
     if not isinstance(rest, dict) or not all(isinstance(v, (int, float)) for v in rest.values()):
         problems.add("robot.rest", "must be a table of joint names (or patterns) and angles")
         rest = {}
+    weights = robot.get("weights", {})
+    if not isinstance(weights, dict) or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0
+            for v in weights.values()):
+        problems.add("robot.weights", "must be a table of joint names (or patterns) and "
+                     "positive weights")
+        weights = {}
     gait = _gait(document.get("gait", {}), list(feet), problems)
     ground = document.get("ground", {})
     if not isinstance(ground, dict):
@@ -171,7 +182,8 @@ def read_robot(document: dict, path: str | Path) -> RobotDescription:
     return RobotDescription(str(robot.get("name", path.stem)), urdf, str(robot.get("trunk", "")),
                             feet, {str(k): float(v) for k, v in rest.items()}, gait, ground,
                             str(path), None if motors is None else read_actuators(
-                                (path.parent / motors).resolve()))
+                                (path.parent / motors).resolve()),
+                            {str(k): float(v) for k, v in weights.items()})
 
 
 def _urdf(value, path: Path, problems: _Problems) -> Path:

@@ -287,6 +287,8 @@ def robot_scene(description):
     for joint in urdf.joints.values():
         if joint.drivable:
             lifted.add(JointDriver(f"drive_{joint.name}", joint.name, Guided()))
+    for name, foot in description.feet.items():
+        _add_posture(lifted, description, name, _leg_joints(urdf, trunk, foot.link), angles)
     lifted.name, lifted.source = description.name, description.source
     lifted.actuators = description.actuators  # the report checks the motors when there are
     return lifted
@@ -387,6 +389,33 @@ def _add_foot(scene, description, name: str, walk: _Walk, rest: np.ndarray) -> N
                       period=period, duty=duty, lift_off=phase, foothold=start, **turning))
 
 
+def _leg_joints(urdf, trunk: str, link: str) -> list[str]:
+    """The drivable joints from the trunk down to ``link``, in that order."""
+    parent_joint = {j.child: j for j in urdf.joints.values()}
+    chain = []
+    while link != trunk and link in parent_joint:
+        joint = parent_joint[link]
+        if joint.drivable:
+            chain.append(joint.name)
+        link = joint.parent
+    return chain[::-1]
+
+
+def _add_posture(scene, description, name: str, joints: list[str], angles: dict) -> None:
+    """For a leg of more than three joints, the rule that resolves it: the posture nearest
+    its rest posture (the description's ``rest``), weighted by ``robot.weights``."""
+    from hexapod.scene import PostureDriver
+
+    if len(joints) <= 3:
+        return
+    weights = [next((w for key, w in description.weights.items()
+                     if fnmatch.fnmatchcase(joint, key)), 1.0) for joint in joints]
+    foot = description.feet[name]
+    scene.add(PostureDriver(f"{name}/posture", foot.link, joints,
+                            [angles.get(joint, 0.0) for joint in joints], weights,
+                            point=foot.point))
+
+
 def _checked_links(description, urdf) -> str:
     """The trunk's link; raises ``ModelError`` naming every foot link, the trunk or a rest
     angle's pattern that the URDF does not have."""
@@ -402,10 +431,11 @@ def _checked_links(description, urdf) -> str:
     if trunk not in urdf.bodies:
         missing.append(Problem(where, f"no link '{trunk}' in {description.urdf.name}",
                                f"{description.source}, robot.trunk"))
-    for key in description.rest:  # a rest angle that poses nothing is a typing error
-        if not any(fnmatch.fnmatchcase(joint, key) for joint in urdf.joints):
-            missing.append(Problem(where, f"matches no joint of {description.urdf.name}",
-                                   f"{description.source}, robot.rest.{key}"))
+    for table in ("rest", "weights"):  # a key that matches no joint is a typing error
+        for key in getattr(description, table):
+            if not any(fnmatch.fnmatchcase(joint, key) for joint in urdf.joints):
+                missing.append(Problem(where, f"matches no joint of {description.urdf.name}",
+                                       f"{description.source}, robot.{table}.{key}"))
     if missing:
         raise ModelError(where, missing)
     return trunk

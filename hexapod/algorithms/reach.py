@@ -37,7 +37,7 @@ class _Reach:
         self.model, self.data = model, data
         self.w = model.law_values(t, data)[0].copy()
         self.w[[c.gate for c in model.contacts]] = 0.0
-        driven = {d.row for d in model.drivers}
+        driven = {d.row for d in model.drivers if d.kind != "posture"}  # a rule is kept
         self.kept = np.array([i for i in range(model.n_c) if i not in driven], dtype=int)
 
     def residual(self, q: np.ndarray) -> np.ndarray:
@@ -111,7 +111,7 @@ def driver_misses(model: Model, data: Data, t: float, q: np.ndarray
     """
     reach = _Reach(model, data, t)
     order: dict[str, list[int]] = {}
-    for driver in model.drivers:
+    for driver in (d for d in model.drivers if d.kind != "posture"):
         order.setdefault(driver.name.rsplit("/", 1)[0], []).append(driver.row)
     groups = [np.array(rows, dtype=int) for rows in order.values()]
 

@@ -30,9 +30,10 @@ from hexapod.model.infos import (
 )
 from hexapod.model.mass import BlockDiagonal
 from hexapod.model.model import Model, Symbolic
+from hexapod.model.posture import posture_rows
 from hexapod.scene.actuators import effort_limits
 from hexapod.scene.bodies import Particle, PlanarBody, SpatialBody
-from hexapod.scene.drivers import ORIENTATIONS, CoordinateDriver, JointDriver
+from hexapod.scene.drivers import ORIENTATIONS, CoordinateDriver, JointDriver, PostureDriver
 from hexapod.scene.element import GROUND
 from hexapod.scene.forces import (
     AppliedForce,
@@ -228,6 +229,9 @@ class _Assembly:
         offset = {"x": 0, "y": 1, "z": 2, "angle": 2}
         drivers, on_joint = [], {}
         for driver in si.drivers.values():
+            if isinstance(driver, PostureDriver):
+                drivers += self._posture(driver)
+                continue
             f, law = self.laws.value(driver.law, driver.name, ("driver", driver.name))
             if isinstance(driver, JointDriver):
                 joint = joints[driver.joint]
@@ -256,6 +260,23 @@ class _Assembly:
                                           body=body.index, coordinate=driver.coordinate,
                                           frame=self.index.get(driver.frame, GROUND_INDEX)))
         return drivers, on_joint
+
+    def _posture(self, driver: PostureDriver) -> list[DriverInfo]:
+        """The rows of a posture rule (:mod:`hexapod.model.posture`), one per joint beyond
+        three, each a driver row named after its joint."""
+        local, _ = self._point(driver.body, driver.point)
+        foot = self.states[driver.body].point(local)
+        columns, offsets = [], []
+        for name, rest, weight in zip(driver.joints, driver.rest, driver.weights, strict=True):
+            g = self.geometries[name]
+            pivot = g.child.point(g.child_frame.position)
+            columns.append(ca.cross(g.parent_vector(g.axis), foot - pivot))
+            offsets.append(weight * self.si.joints[name].driver_row(g, rest))
+        body = self.bodies[self.index[driver.body]].index
+        return [DriverInfo(f"{driver.name}/{driver.joints[j]}", "posture",
+                           self._add_row(f"{driver.name}/{driver.joints[j]}", driver.name,
+                                         "angle", row), -1, body=body)
+                for j, row in posture_rows(columns, offsets, self.q, self.q0)]
 
     def _reference_axes(self, body: str) -> tuple[ca.SX, ca.SX]:
         """World origin and axes (columns) of a body's reference frame; the world's for
@@ -505,6 +526,7 @@ def _guides_driving(si: Scene) -> Scene:
 
 def _guides_left_out(si: Scene) -> Scene:
     """The dynamics of a guided scene: the joints that follow the guides driven, the guides
-    left out (they exert nothing)."""
+    and the posture rules left out (they exert nothing)."""
     return _copy_with(si, si.name, [e for e in si.elements if not (
-        isinstance(e, CoordinateDriver) and e.guide)], si.ground)
+        isinstance(e, CoordinateDriver) and e.guide) and not isinstance(e, PostureDriver)],
+        si.ground)

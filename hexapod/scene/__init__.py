@@ -19,7 +19,7 @@ __getattr__, __dir__, __all__ = attach(__name__, {
     "hexapod.scene.bodies": ["Particle", "PlanarBody", "SpatialBody"],
     "hexapod.scene.joints": ["Contact", "Cylindrical", "Distance", "Fixed", "Joint", "PlanarJoint",
                              "PointOnPlane", "Prismatic", "Revolute", "Spherical", "Universal"],
-    "hexapod.scene.drivers": ["CoordinateDriver", "JointDriver"],
+    "hexapod.scene.drivers": ["CoordinateDriver", "JointDriver", "PostureDriver"],
     "hexapod.scene.forces": ["AppliedForce", "AppliedTorque", "GroundContact",
                              "JointController", "JointEffort", "RotationalSpringDamper",
                              "SpringDamper"],

@@ -147,11 +147,91 @@ class CoordinateDriver(Element):
         return out
 
 
+@dataclass(eq=False)
+class PostureDriver(Element):
+    """The rule that resolves a leg with more joints than its foot's guides need: of the
+    joint coordinates that put the foot where its three guides say, the one nearest the rest
+    posture, weighted (the least ``sum w_i (theta_i - rest_i)^2`` over ``joints``).
+
+    It serves the guides' kinematics only (:mod:`hexapod.scene.laws.guided`; it exerts no
+    force). Its rows are the optimality conditions, one per joint beyond three: with ``G``
+    the foot point's velocity per joint rate (columns ``a_i x (r - p_i)``, joint ``i``'s
+    world axis ``a_i`` through ``p_i``, ``r`` the foot point), the weighted
+    offsets ``w_i (theta_i - rest_i)`` have no component along the null space of ``G``,
+    spanned by one vector per extra joint from the three joints whose columns are best
+    conditioned at the initial pose (Cramer's rule: :mod:`hexapod.model.assemble`). The
+    solution is continuous in time while those three columns stay independent.
+
+    Parameters
+    ----------
+    name : str
+        The driver's name, unique among the drivers.
+    body : str
+        The foot's body: the guides' driven body.
+    joints : tuple of str
+        The leg's revolute joints, more than three, each following the guides (law
+        ``guided``).
+    rest : array_like
+        Each joint's rest angle, rad.
+    weights : array_like, optional
+        Each joint's weight, positive; default all 1.
+    point : str or array_like, optional
+        The foot point (a marker or a point in the body's reference frame, L); default the
+        centre of mass.
+    source : str
+        Where the driver was written, named in messages; empty when built in Python.
+    """
+
+    name: str
+    body: str
+    joints: tuple
+    rest: np.ndarray
+    weights: np.ndarray | None = None
+    point: object = None
+    source: str = ""
+    family = "driver"
+    kind = "posture"
+
+    def __post_init__(self):
+        self.joints = tuple(self.joints)
+        self.rest = np.array(self.rest, dtype=float).reshape(-1)
+        self.weights = (np.ones(len(self.joints)) if self.weights is None
+                        else np.array(self.weights, dtype=float).reshape(-1))
+
+    def problems(self):
+        out = []
+        if len(self.joints) < 4 or not all(isinstance(j, str) for j in self.joints):
+            out.append(self.problem("joints", "needs the names of more than three joints (the "
+                                    "foot's three guides decide three)"))
+        for key in ("rest", "weights"):
+            value = getattr(self, key)
+            if check_finite(self, key, value, out) and value.size != len(self.joints):
+                out.append(self.problem(key, f"needs {len(self.joints)} numbers, one per "
+                                        f"joint, got {value.size}"))
+        if np.all(np.isfinite(self.weights)) and not np.all(self.weights > 0):
+            out.append(self.problem("weights", "must be positive"))
+        if self.point is not None and not isinstance(self.point, str):
+            check_finite(self, "point", self.point, out)
+        return out
+
+    def scaled(self, length):
+        out = super().scaled(length)
+        out.point = scaled_ref(self.point, length)
+        return out
+
+    def attached(self, attachment: Attachment):
+        out = super().attached(attachment)
+        out.body = attachment.body(self.body)
+        out.joints = tuple(attachment.name(j) for j in self.joints)
+        return out
+
+
 def guidance_problems(elements, scene_problem) -> list[Problem]:
     """Guides (coordinate drivers with ``guide``) and the joint drivers that follow them (law
-    :class:`~hexapod.scene.laws.Guided`) come together, and nothing else follows them.
+    :class:`~hexapod.scene.laws.Guided`) come together, and nothing else follows them; a
+    posture rule needs guides.
     ``scene_problem(key, message)`` makes a problem of the scene's own."""
-    out, guides, guided = [], [], []
+    out, guides, guided, postures = [], [], [], []
     for e in elements:
         for f in dataclasses.fields(e):
             value = getattr(e, f.name)
@@ -164,6 +244,8 @@ def guidance_problems(elements, scene_problem) -> list[Problem]:
                                          "(its joint then follows the guides)"))
         if isinstance(e, CoordinateDriver) and e.guide:
             guides.append(e.name)
+        if isinstance(e, PostureDriver):
+            postures.append(e.name)
     if guides and not guided:
         out.append(scene_problem(
             "driver", f"guide(s) {', '.join(map(quoted, guides))} exert no force, but no joint "
@@ -174,7 +256,12 @@ def guidance_problems(elements, scene_problem) -> list[Problem]:
             "driver", f"joint driver(s) {', '.join(map(quoted, guided))} follow the guides, "
             "but the scene has none: mark the coordinate drivers that prescribe the motion "
             "with guide = true"))
+    if postures and not guides:
+        out.append(scene_problem(
+            "driver", f"posture rule(s) {', '.join(map(quoted, postures))} choose among the "
+            "poses the guides allow, but the scene has no guides"))
     return out
 
 
-DRIVER_TYPES: dict[str, type[Element]] = {"joint": JointDriver, "coordinate": CoordinateDriver}
+DRIVER_TYPES: dict[str, type[Element]] = {"joint": JointDriver, "coordinate": CoordinateDriver,
+                                          "posture": PostureDriver}

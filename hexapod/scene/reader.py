@@ -4,13 +4,14 @@ Every problem, from a misspelt key to a non-positive mass, is collected with the
 it was found at, and reported in one :class:`~hexapod.errors.ModelError` (a file that cannot be
 read or parsed: an :class:`~hexapod.errors.InputFileError`).
 
-Each element is converted key by key. A key that cannot be converted is reported; when it is
-optional the element is still built without it, so its other problems are reported in the same
-run; when it is required the element is dropped (and references to it are not reported again).
+Each element is converted key by key. A key that cannot be converted is reported; an optional
+one is left out so the element's other problems are reported in the same run, a required one
+drops the element (and references to it are not reported again).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from collections.abc import Callable
 from pathlib import Path
@@ -47,8 +48,7 @@ class _Invalid(ValueError):
 
 
 def _shown(value, limit: int = 60) -> str:
-    """A value as a message shows it: its repr, cut short when long (a list of thousands of
-    numbers, a string with line breaks), so that each problem stays on one line."""
+    """A value as a message shows it, its repr cut short: each problem stays on one line."""
     text = repr(value)
     return text if len(text) <= limit else text[:limit - 3] + "..."
 
@@ -111,6 +111,12 @@ def _string(value) -> str:
     if not isinstance(value, str):
         raise _Invalid(f"must be a string, got {_shown(value)}")
     return value
+
+
+def _strings(value) -> tuple[str, ...]:
+    if isinstance(value, list) and value and all(isinstance(x, str) for x in value):
+        return tuple(value)
+    raise _Invalid(f"must be a non-empty list of names, got {_shown(value)}")
 
 
 def _boolean(value) -> bool:
@@ -241,8 +247,7 @@ _LAW_KEYS = {
     "guided": {},
     "polynomial": {"coefficients": (_numbers, True), "t0": (_number, False)},
     "harmonic": {"offset": (_number, False), "cos": (_amplitudes, False),
-                 "sin": (_amplitudes, False), "frequency": (_number, True),
-                 "t0": (_number, False)},
+                 "sin": (_amplitudes, False), "frequency": (_number, True), "t0": (_number, False)},
     "spline": {"times": (_numbers, True), "values": (_numbers, True),
                "degree": (_integer, False), "boundary": (_string, False)},
     "hermite": {"times": (_numbers, True), "values": (_numbers, True),
@@ -258,8 +263,6 @@ _LAW_KEYS = {
 def _plugin_keys(cls) -> dict:
     """The keys of a law class registered by a package: its dataclass fields, read by their
     annotated type (``str``, ``int`` or ``float``), required when they have no default."""
-    import dataclasses
-
     readers = {"str": _string, "int": _integer, "float": _number, "tuple": _amplitudes}
     return {f.name: (readers.get(str(f.type), _number),
                      f.default is dataclasses.MISSING
@@ -370,6 +373,11 @@ def _driver_schema(kind: str, dimension: int) -> Schema:
     common = {"name": (_string, True), "type": (_string, False), "law": (_law, True)}
     if kind == "joint":
         return DRIVER_TYPES[kind], {**common, "joint": (_string, True)}
+    if kind == "posture":  # a rule: no law
+        return DRIVER_TYPES[kind], {"name": (_string, True), "type": (_string, True),
+                                    "body": (_string, True), "joints": (_strings, True),
+                                    "rest": (_numbers, True), "weights": (_numbers, False),
+                                    "point": (_point(dimension), False)}
     return DRIVER_TYPES[kind], {**common, "body": (_string, True),
                                 "coordinate": (_string, True),
                                 "point": (_point(dimension), False),
@@ -583,11 +591,10 @@ def scene_from_document(document: dict, path: str | Path) -> Scene:
     ModelError
         The document describes an invalid scene; lists every problem with its key.
     """
-    path = Path(path)
-    reader = _Reader(path)
+    reader = _Reader(Path(path))
     with np.errstate(all="ignore"):  # huge values overflow in the checks, which report them
         scene = reader.read(document)
         problems = reader.problems + reader.follow_up(scene.problems())
     if problems:
-        raise ModelError(f"scene file {path}", problems)
+        raise ModelError(f"scene file {Path(path)}", problems)
     return scene

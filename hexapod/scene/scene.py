@@ -20,6 +20,7 @@ from hexapod.scene.drivers import (
     ORIENTATIONS,
     CoordinateDriver,
     JointDriver,
+    PostureDriver,
     guidance_problems,
 )
 from hexapod.scene.element import (
@@ -41,6 +42,7 @@ from hexapod.scene.forces import (
     SpringDamper,
 )
 from hexapod.scene.joints import Joint, kinds_that
+from hexapod.scene.laws import Guided
 from hexapod.spatial import Placement
 
 #: Length units a scene may use, in metres.
@@ -153,7 +155,7 @@ class Scene:
 
     @property
     def drivers(self) -> dict[str, Element]:
-        return self._of((JointDriver, CoordinateDriver))
+        return self._of((JointDriver, CoordinateDriver, PostureDriver))
 
     @property
     def forces(self) -> dict[str, ForceElement]:
@@ -381,6 +383,8 @@ class _ReferenceCheck:
                 self._add("joint", f"joint '{e.joint}' is already driven by '{driven[0].name}'")
         elif isinstance(e, CoordinateDriver):
             self._coordinate_driver(e)
+        elif isinstance(e, PostureDriver):
+            self._posture(e)
         elif isinstance(e, SpringDamper):
             self._point(e.body_a, e.point_a, "point_a", "body_a")
             self._point(e.body_b, e.point_b, "point_b", "body_b")
@@ -522,6 +526,17 @@ class _ReferenceCheck:
         elif joint.coordinate_unit == "angle" and any(isinstance(self.bodies.get(b), Particle)
                                                       for b in (joint.parent, joint.child)):
             self._add(key, f"joint '{name}' joins a particle, which has no angle to drive")
+
+    def _posture(self, driver: PostureDriver):
+        if self._body_ref(driver.body, "body"):
+            self._frame(driver.body, driver.point, "point")
+        guided = {d.joint for d in self.scene.elements
+                  if isinstance(d, JointDriver) and isinstance(d.law, Guided)}
+        for name in driver.joints:
+            joint = self.scene.joints.get(name)
+            if joint is None or joint.kind != "revolute" or name not in guided:
+                self._add("joints", f"'{name}' must be a revolute joint that follows the "
+                          "guides (a joint driver of law 'guided')")
 
     def _coordinate_driver(self, driver: CoordinateDriver):
         if not self._body_ref(driver.body, "body") or driver.coordinate not in COORDINATES:

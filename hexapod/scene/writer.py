@@ -24,7 +24,6 @@ from hexapod._support.files import write_atomically
 from hexapod.errors import HexapodError, ModelError
 from hexapod.scene.bodies import Body
 from hexapod.scene.contacts import GroundForces
-from hexapod.scene.drivers import CoordinateDriver, JointDriver
 from hexapod.scene.element import Element, character, quoted
 from hexapod.scene.forces import ForceElement
 from hexapod.scene.joints import Joint
@@ -161,6 +160,8 @@ def _value(name: str, value) -> str:
         return "{ " + ", ".join(f"{_string(k)} = {_frame(v)}" for k, v in value.items()) + " }"
     if isinstance(value, Law):
         return _law(value)
+    if isinstance(value, tuple) and value and all(isinstance(x, str) for x in value):
+        return "[" + ", ".join(_string(x) for x in value) + "]"  # a posture's joints
     if isinstance(value, tuple):  # force and torque components
         return "[" + ", ".join(_law(law) for law in value) + "]"
     if isinstance(value, str):
@@ -183,7 +184,7 @@ def _section(element: Element) -> str:
         return "body"
     if isinstance(element, Joint):
         return "joint"
-    if isinstance(element, (JointDriver, CoordinateDriver)):
+    if getattr(element, "family", None) == "driver":
         return "driver"
     assert isinstance(element, ForceElement)
     return "force"

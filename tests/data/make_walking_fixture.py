@@ -21,6 +21,7 @@ Pinocchio's placements, velocities and accelerations of every body frame against
     python3 tests/data/make_walking_fixture.py --quadruped-slope
     python3 tests/data/make_walking_fixture.py --hexapod3-steps
     python3 tests/data/make_walking_fixture.py --quadruped-turn
+    python3 tests/data/make_walking_fixture.py --quadruped-ankles
 
 ``--quadruped`` writes ``quadruped_rnea.npz`` for the project's quadruped instead
 (``data/robots/quadruped.toml``: a URDF robot whose joints follow its guides, 24 samples of a
@@ -28,7 +29,8 @@ stride), ``--hexapod3`` ``hexapod3_rnea.npz`` for its hexapod of three joints a 
 (``data/robots/hexapod3.toml``, a tripod: 20 samples of a stride); ``--quadruped-slope``
 and ``--hexapod3-steps`` the same robots up a 10-degree slope (24 samples of a stride) and up
 two 3 cm steps (90 samples over 9 s); ``--quadruped-turn`` the quadruped turning left at 10
-degrees a second (24 samples of a stride).
+degrees a second, ``--quadruped-ankles`` the quadruped with four joints a leg (24 samples of a
+stride each).
 """
 
 from __future__ import annotations
@@ -284,7 +286,8 @@ def pinocchio_rnea(model: hx.Model, result: hx.InverseResult) -> Comparison:
 DESCRIBED = {"--quadruped": ("quadruped", 24, None), "--hexapod3": ("hexapod3", 20, None),
              "--quadruped-slope": ("quadruped-slope", 24, None),
              "--hexapod3-steps": ("hexapod3-steps", 90, 9.0),
-             "--quadruped-turn": ("quadruped-turn", 24, None)}
+             "--quadruped-turn": ("quadruped-turn", 24, None),
+             "--quadruped-ankles": ("quadruped-ankles", 24, None)}
 
 
 def described(name: str, samples: int, window: float | None = None
