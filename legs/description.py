@@ -21,7 +21,8 @@
     stride = 0.12                    # m, the trunk's advance per period
     step_height = 0.04               # m
     clearance = 0.01                 # m above a step's edge (default: step_height / 4)
-    trunk = "planned"                # or "level": straight at constant speed
+    trunk = "planned"                # or "whole-body" (the plan corrected by the whole
+                                     # robot's centre of pressure), or "level"
     yaw_rate = 10                    # degrees per second, turning left (flat ground)
     pitch = 0                        # degrees, the trunk's tilt (and roll)
 
@@ -67,11 +68,12 @@ class Foot:
 class Gait:
     """How the robot walks: lift-off ``phases`` by foot, ``duty``, ``period`` (s), ``stride``
     (m per period), ``step_height`` (m), and the ``trunk``'s motion: ``planned`` (swaying so
-    that the centre of pressure stays inside the support polygon, :mod:`legs.trunk_path`) or
-    ``level`` (straight, at constant speed); a swing that crosses a step clears its edge by
-    at least ``clearance`` (m; default a quarter of the step height). The trunk turns at
-    ``yaw_rate`` (degrees per second, counter-clockwise seen from above; flat ground) and is
-    tilted by ``pitch`` and ``roll`` (degrees)."""
+    that the centre of pressure stays inside the support polygon, :mod:`legs.trunk_path`),
+    ``whole-body`` (that plan corrected by the whole robot's centre of pressure,
+    :mod:`legs.balance`) or ``level`` (straight, at constant speed); a swing that crosses a
+    step clears its edge by at least ``clearance`` (m; default a quarter of the step
+    height). The trunk turns at ``yaw_rate`` (degrees per second, counter-clockwise seen from
+    above; flat ground) and is tilted by ``pitch`` and ``roll`` (degrees)."""
 
     phases: dict[str, float]
     duty: float
@@ -269,8 +271,8 @@ def _gait(table, feet: list[str], problems: _Problems) -> Gait | None:
     if duty is None and phases is not None:
         problems.add("gait.duty", "a phase table needs the duty factor")
     trunk = table.get("trunk", "planned")
-    if trunk not in ("planned", "level"):
-        problems.add("gait.trunk", f"must be 'planned' or 'level', got {trunk!r}")
+    if trunk not in ("planned", "whole-body", "level"):
+        problems.add("gait.trunk", f"must be 'planned', 'whole-body' or 'level', got {trunk!r}")
     clearance = problems.number(table, "clearance", "gait", 0.0)
     yaw_rate = problems.number(table, "yaw_rate", "gait", default=0.0)
     pitch, roll = (problems.number(table, key, "gait", -45.0, 45.0, 0.0)

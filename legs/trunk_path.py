@@ -21,18 +21,30 @@ coefficients (the swinging legs' weight and inertia count).
 ``samples`` times of the stride, ``p`` is at least ``s`` inside every edge of the polygon of the
 feet whose load-sharing weight is at least ``loaded`` (a foot near touch-down or lift-off
 carries little: :mod:`hexapod.scene`'s ramps); then, keeping ``0.9 s``, the least sway (the sum
-of the coefficients' magnitudes weighted by their harmonic's square). With two feet loaded the
-polygon is their segment: ``p`` must lie on it (a trot's diagonal).
+of the coefficients' magnitudes weighted by their harmonic's square, the offsets by one: an
+offset left free was any the solver met, 4.5 cm on a hexapod). With two feet loaded the
+polygon is their segment: ``p`` must lie on it (a trot's diagonal). Given the friction
+coefficient ``mu``, the ground's total tangential force in the lumped model (the trunk's and
+the legs' accelerations, gravity's part along the ground) stays within
+:data:`FRICTION_SHARE` of ``mu`` times its normal force along each axis: the largest margin
+alone took Solo12's trunk up 10 degrees to 5.8 m/s^2, and its feet slipped.
+Where the ground cannot give that (a slope steeper than the share), the excess is held as
+small as it can be, and the inverse dynamics says which feet slip.
 
-The margin is that of the lumped model; the inverse dynamics then gives the real ground forces
-and says where a foot would still pull.
+The margin is that of the lumped model; ``correction`` adds the whole robot's centre of pressure
+less the lumped one's, where it is known (:mod:`legs.balance`); the inverse dynamics then gives
+the real ground forces and says where a foot would still pull.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
+
+#: The share of the friction coefficient the ground's total tangential force may use along each
+#: axis (a pyramid inside the cone, with room for the feet's unequal loads).
+FRICTION_SHARE = 0.5
 
 
 @dataclass(frozen=True)
@@ -46,6 +58,7 @@ class TrunkPlan:
     y: tuple[float, tuple, tuple]
     period: float
     margin: float
+    pressure: np.ndarray | None = field(default=None, compare=False, repr=False)
 
     @classmethod
     def level(cls, period: float) -> TrunkPlan:
@@ -84,7 +97,8 @@ def plan_trunk(feet: dict, phases: dict[str, float], duty: float, period: float,
                stride: float, height: float, masses: tuple[float, float], *,
                samples: int = 240, harmonics: int = 8, loaded: float = 0.5,
                ramp: float = 0.1, gravity: float = 9.81,
-               slope: tuple[float, float] = (0.0, 0.0)) -> TrunkPlan:
+               slope: tuple[float, float] = (0.0, 0.0),
+               correction: np.ndarray | None = None, mu: float | None = None) -> TrunkPlan:
     """The trunk's sway for a robot walking along ``x`` (see the module's notes).
 
     Parameters
@@ -98,6 +112,11 @@ def plan_trunk(feet: dict, phases: dict[str, float], duty: float, period: float,
         The gait's duty factor, period (s), stride (m) and the trunk's height (m).
     masses : (float, float)
         The trunk's and all the legs' mass (kg).
+    correction : ndarray (samples, 2), optional
+        Added to the lumped model's centre of pressure at the samples (m).
+    mu : float, optional
+        The ground's friction coefficient: the total tangential force's bound (see the
+        module's notes); None: no bound.
     slope : (float, float)
         The ground's slope and heading (degrees): heights are then above the ground's plane
         (the feet's ``z`` paths their lift above it), and gravity has a component along the
@@ -122,6 +141,9 @@ def plan_trunk(feet: dict, phases: dict[str, float], duty: float, period: float,
     b = np.full(samples, trunk_mass * height)
     c = np.tile(trunk_mass * height * along, (samples, 1))
     den = np.full(samples, trunk_mass * gravity)
+    # the ground's tangential force: push T'' + pushed, T'' the trunk's acceleration
+    push = trunk_mass + legs_mass / 2
+    pushed = np.tile(-(trunk_mass + legs_mass) * along, (samples, 1))
     for name in names:
         x_law, z_law, rest = feet[name]
         f = np.column_stack([x_law(t), np.full(samples, rest[1])])
@@ -133,8 +155,11 @@ def plan_trunk(feet: dict, phases: dict[str, float], duty: float, period: float,
         den += leg * lift
         c += leg * ((rest + f) * (lift / 2)[:, None]
                     - ((height + z) / 4)[:, None] * (f_dd - 2 * along))
+        pushed += leg * f_dd / 2
     nominal = np.column_stack([stride / period * t, np.zeros(samples)])
     fixed = (a[:, None] * nominal + c) / den[:, None]  # p without the sway
+    if correction is not None:  # the whole body's centre of pressure less the lumped one's
+        fixed = fixed + correction
     k = np.arange(1, harmonics + 1)
     phase = 2 * np.pi * np.outer(t / period, k)
     gain = (a[:, None] + b[:, None] * (2 * np.pi * k / period) ** 2) / den[:, None]
@@ -153,27 +178,39 @@ def plan_trunk(feet: dict, phases: dict[str, float], duty: float, period: float,
             rows.append(np.r_[normal[0] * basis[j], normal[1] * basis[j],
                               (1.0, 0.0) if with_margin else (0.0, -1.0)])
             bounds_b.append(d - normal @ fixed[j])
+    rows = [np.r_[row, 0.0] for row in rows]  # the last unknown: the friction's slack
+    if mu is not None:  # |F_x|, |F_y| <= share mu F_n for the ground's total force
+        w = 2 * np.pi * k / period
+        accelerate = np.hstack([np.zeros((samples, 1)), -w**2 * np.cos(phase),
+                                -w**2 * np.sin(phase)]) * (push / den)[:, None]
+        zero = np.zeros_like(accelerate)
+        for axis, block in ((0, (accelerate, zero)), (1, (zero, accelerate))):
+            for sign in (1.0, -1.0):
+                rows.extend(np.c_[sign * block[0], sign * block[1], np.zeros((samples, 2)),
+                                  -np.ones(samples)])
+                bounds_b.extend(FRICTION_SHARE * mu - sign * pushed[:, axis] / den)
     A, b = np.array(rows), np.array(bounds_b)
-    box = [(-stride, stride)] * (2 * m) + [(None, stride), (0.0, None)]
-    slack_cost = 100.0  # per metre of a segment's side: before any margin
-    first = linprog(np.r_[np.zeros(2 * m), -1.0, slack_cost], A_ub=A, b_ub=b, bounds=box,
-                    method="highs")
+    box = [(-stride, stride)] * (2 * m) + [(None, stride), (0.0, None), (0.0, None)]
+    slack_cost = 100.0  # per metre of a segment's side, per unit of friction: before margin
+    first = linprog(np.r_[np.zeros(2 * m), -1.0, slack_cost, slack_cost], A_ub=A, b_ub=b,
+                    bounds=box, method="highs")
     if not first.success:
         raise ValueError(f"the trunk's path cannot be planned: {first.message}")
-    margin, slack = float(first.x[-2]), float(first.x[-1])
-    # then the least sway keeping nine tenths of the margin and the slack found
-    cost = np.r_[np.zeros(2 * m + 2), np.tile(np.r_[0.0, k**2, k**2], 2)]
+    margin, slack, friction = (float(x) for x in first.x[-3:])
+    # then the least sway keeping nine tenths of the margin and the slacks found
+    cost = np.r_[np.zeros(2 * m + 3), np.tile(np.r_[1.0, k**2, k**2], 2)]  # offsets too
     A2 = np.vstack([np.hstack([A, np.zeros((len(A), 2 * m))]),
-                    np.hstack([np.eye(2 * m), np.zeros((2 * m, 2)), -np.eye(2 * m)]),
-                    np.hstack([-np.eye(2 * m), np.zeros((2 * m, 2)), -np.eye(2 * m)])])
+                    np.hstack([np.eye(2 * m), np.zeros((2 * m, 3)), -np.eye(2 * m)]),
+                    np.hstack([-np.eye(2 * m), np.zeros((2 * m, 3)), -np.eye(2 * m)])])
     b2 = np.r_[b, np.zeros(4 * m)]
-    keep = [(margin - 0.1 * abs(margin), None), (0.0, slack + 1e-9)]
+    keep = [(margin - 0.1 * abs(margin), None), (0.0, slack + 1e-9), (0.0, friction + 1e-9)]
     second = linprog(cost, A_ub=A2, b_ub=b2, bounds=box[:2 * m] + keep + [(0, None)] * (2 * m),
                      method="highs")
     coefficients = (second if second.success else first).x[:2 * m]
-    margin_rows = A[:, -2] == 1.0
+    margin_rows = A[:, 2 * m] == 1.0
     margin = float(np.min((b - A[:, :2 * m] @ coefficients)[margin_rows]))
     x, y = coefficients[:m], coefficients[m:]
     split_series = [(float(c[0]), tuple(c[1:harmonics + 1].tolist()),
                      tuple(c[harmonics + 1:].tolist())) for c in (x, y)]
-    return TrunkPlan(split_series[0], split_series[1], period, margin)
+    pressure = fixed + np.column_stack([basis @ x, basis @ y])
+    return TrunkPlan(split_series[0], split_series[1], period, margin, pressure)

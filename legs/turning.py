@@ -142,3 +142,14 @@ def turning_sway(plan, origin, centre, rate: float):
     y = f"cy + sin(w * t) * (dx + {sway[0]}) + cos(w * t) * (dy + {sway[1]})"
     pairs = tuple(constants.items())
     return Expression(x, pairs), Expression(y, pairs)
+
+
+def straight_frame(points, t, centre, rate: float, speed: float) -> np.ndarray:
+    """World points ``x, y`` (N, 2) at times ``t`` (N,) in the frame of the straight walk
+    the turn is planned as (:func:`turning_sway`, whose map is ``W = C + Rz(rate t) (P -
+    (speed t, 0) - C)``): turned back about the centre ``C`` by ``rate t``, the trunk's
+    advance ``speed t`` along ``x`` added."""
+    d = np.asarray(points, dtype=float) - centre
+    c, s = np.cos(rate * t), np.sin(rate * t)
+    back = np.column_stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]])
+    return back + centre + np.column_stack([speed * t, np.zeros_like(t)])

@@ -280,7 +280,7 @@ def robot_scene(description):
     lifted.ground = GroundForces(**description.ground)
     gait = description.gait
     walk = _Walk(gait, gait.phases or _pattern_phases(gait.pattern, rest),
-                 lifted.pose(trunk).position, lifted.ground.terrain)
+                 lifted.pose(trunk).position, lifted.ground.terrain, lifted.ground.mu)
     _add_trunk(lifted, trunk, walk, rest, height)
     for name in description.feet:
         _add_foot(lifted, description, name, walk, rest[name])
@@ -289,6 +289,8 @@ def robot_scene(description):
             lifted.add(JointDriver(f"drive_{joint.name}", joint.name, Guided()))
     for name, foot in description.feet.items():
         _add_posture(lifted, description, name, _leg_joints(urdf, trunk, foot.link), angles)
+    if gait.trunk == "whole-body":
+        _whole_body(lifted, trunk, walk, rest, height)
     lifted.name, lifted.source = description.name, description.source
     lifted.actuators = description.actuators  # the report checks the motors when there are
     return lifted
@@ -304,6 +306,7 @@ class _Walk:
     phases: dict
     origin: np.ndarray
     terrain: object
+    mu: float
 
     @property
     def speed(self) -> float:
@@ -334,34 +337,62 @@ def _add_trunk(scene, trunk: str, walk: _Walk, rest: dict, height: float) -> Non
     """The trunk's six guides: its sway planned (or level), along ``x`` or round the turn;
     its height over the terrain; its yaw (turning), pitch and roll."""
     from hexapod.scene import CoordinateDriver, Polynomial
-    from legs.trunk_path import TrunkPlan, plan_trunk
-    from legs.turning import turning_sway
+    from legs.trunk_path import TrunkPlan
 
     gait, terrain, origin = walk.gait, walk.terrain, walk.origin
-    period, duty, stride = gait.period, gait.duty, gait.stride
-    # planned as a straight walk; a turning trunk sways along its own axes (legs.turning)
-    straight = {name: rest[name][0] + walk.speed * (walk.phases[name] - duty / 2) * period
-                for name in rest}
-    plan = TrunkPlan.level(period) if gait.trunk == "level" else plan_trunk(
-        {name: (StepPath(straight[name], stride, 0.0, duty, period, walk.phases[name]),
-                StepPath(0.0, 0.0, gait.step_height, duty, period, walk.phases[name]),
-                p[:2] - origin[:2]) for name, p in rest.items()},
-        walk.phases, duty, period, stride, height, _masses(scene, trunk),
-        slope=(terrain.slope, terrain.heading))
-    if walk.rate:
-        horizontal = turning_sway(plan, origin, walk.centre, walk.rate)
-    else:
-        horizontal = (_sway(plan.x, origin[0], walk.speed, period),
-                      _sway(plan.y, origin[1], 0.0, period))
+    plan = TrunkPlan.level(gait.period) if gait.trunk == "level" else _plan(
+        walk, rest, height, _masses(scene, trunk))
     starts = {name: walk.foothold(name, p) for name, p in rest.items()}
     rise = _trunk_rise(terrain, origin, walk.speed, starts)
-    for axis, law in zip("xyz", (*horizontal, rise), strict=True):
+    for axis, law in zip("xyz", (*_sway_laws(walk, plan), rise), strict=True):
         scene.add(CoordinateDriver(f"trunk/{axis}", trunk, axis, law, point=[0.0, 0.0, 0.0],
                                    guide=True))
     yaw = Polynomial((0.0, walk.rate)) if walk.rate else 0.0
     for angle, law in (("roll", np.radians(gait.roll)), ("pitch", np.radians(gait.pitch)),
                        ("yaw", yaw)):
         scene.add(CoordinateDriver(f"trunk/{angle}", trunk, angle, law, guide=True))
+
+
+def _plan(walk: _Walk, rest: dict, height: float, masses: tuple, correction=None):
+    """The trunk's sway (:func:`legs.trunk_path.plan_trunk`), planned as a straight walk (a
+    turning trunk sways along its own axes, :mod:`legs.turning`); ``correction``: the whole
+    body's centre of pressure less the lumped model's, at the plan's samples."""
+    from legs.trunk_path import plan_trunk
+
+    gait, terrain, origin = walk.gait, walk.terrain, walk.origin
+    period, duty, stride = gait.period, gait.duty, gait.stride
+    straight = {name: rest[name][0] + walk.speed * (walk.phases[name] - duty / 2) * period
+                for name in rest}
+    return plan_trunk(
+        {name: (StepPath(straight[name], stride, 0.0, duty, period, walk.phases[name]),
+                StepPath(0.0, 0.0, gait.step_height, duty, period, walk.phases[name]),
+                p[:2] - origin[:2]) for name, p in rest.items()},
+        walk.phases, duty, period, stride, height, masses,
+        slope=(terrain.slope, terrain.heading), correction=correction, mu=walk.mu)
+
+
+def _whole_body(scene, trunk: str, walk: _Walk, rest: dict, height: float) -> None:
+    """The trunk's plan corrected by the whole robot's centre of pressure
+    (:mod:`legs.balance`)."""
+    from legs.balance import refine_plan
+    from legs.turning import straight_frame
+
+    masses = _masses(scene, trunk)
+    plan = _plan(walk, rest, height, masses)
+    refine_plan(scene, plan, lambda correction: _plan(walk, rest, height, masses, correction),
+                lambda plan: _sway_laws(walk, plan),
+                lambda points, t: straight_frame(points, t, walk.centre, walk.rate,
+                                                 walk.speed) if walk.rate else points)
+
+
+def _sway_laws(walk: _Walk, plan) -> tuple:
+    """The trunk's ``x`` and ``y`` laws of ``plan``: along ``x``, or round the turn."""
+    from legs.turning import turning_sway
+
+    if walk.rate:
+        return turning_sway(plan, walk.origin, walk.centre, walk.rate)
+    return (_sway(plan.x, walk.origin[0], walk.speed, walk.gait.period),
+            _sway(plan.y, walk.origin[1], 0.0, walk.gait.period))
 
 
 def _add_foot(scene, description, name: str, walk: _Walk, rest: np.ndarray) -> None:

@@ -125,20 +125,17 @@ def _statuses_about(normal, mu, force, stance, weight) -> np.ndarray:
 def test_friction_is_judged_about_the_slope_s_normal(slope, tmp_path):
     """Up a 10-degree slope the feet must push along it (the weight's component, tan 10 =
     0.18 of the normal force on average); the statuses are those of cones about the slope's
-    normal. Just before a fore foot touches down the walk needs more friction than mu = 0.8
-    gives (the feet's tangential forces reach 0.82 of their normal ones), said there (10 of
-    201 samples: scripts/studies/trunk_planning.py); at mu = 0.15 some foot slips at most
+    normal. The trunk planned with the whole robot and the friction (``trunk = "whole-body"``)
+    is carried at every sample by mu = 0.8 (the lumped plan alone fell short just before the
+    fore feet touched down: 10 of 201 samples); at mu = 0.15 some foot slips at most
     samples."""
     scene, model, result, _ = slope
     normal = np.array([-np.sin(SLOPE), 0.0, np.cos(SLOPE)])
     weight = model.total_mass * 9.81
-    edge = hx.inverse_dynamics(model, [0.4632, 0.4776, 0.4848])
-    for run in (result, edge):
-        stance = run.ground_status != "swing"
-        assert np.array_equal(run.ground_status, _statuses_about(
-            normal, 0.8, run.ground_force, stance, weight))
-    assert result.infeasible.sum() <= 2  # of 24: the few around the fore feet's touch-downs
-    assert (edge.ground_status[1:] == "slip").any(axis=1).all()
+    stance = result.ground_status != "swing"
+    assert np.array_equal(result.ground_status, _statuses_about(
+        normal, 0.8, result.ground_force, stance, weight))
+    assert result.feasible
     force = result.ground_force
     up = np.array([np.cos(SLOPE), 0.0, np.sin(SLOPE)])  # on average the feet hold the weight's
     held = (force @ up).sum(axis=1).mean() / (weight * np.sin(SLOPE))
@@ -148,6 +145,8 @@ def test_friction_is_judged_about_the_slope_s_normal(slope, tmp_path):
     steep = hx.inverse_dynamics(hx.assemble(hx.load_scene(slippery)), times)
     slipping = (steep.ground_status == "slip").any(axis=1)
     assert not steep.feasible and slipping.mean() >= 0.5  # the sway's pushes help at some
+    assert np.array_equal(steep.ground_status, _statuses_about(
+        normal, 0.15, steep.ground_force, steep.ground_status != "swing", weight))
 
 
 def test_the_hexapod_climbs_two_steps_with_each_foot_on_its_tread():

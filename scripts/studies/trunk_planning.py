@@ -1,18 +1,22 @@
-"""Whether a robot's feet can carry its trunk: a planned trunk against a level one (not a test).
+"""Whether a robot's feet can carry its trunk: the trunk planned with the whole robot, with
+the lumped model alone, and level (not a test).
 
-For a robot description (default the project's quadruped, ``data/robots/quadruped.toml``) the
-walk is run twice over one stride at ``--samples`` samples, its trunk swaying as planned
-(``legs.trunk_path``) and level at constant speed, with the description's ground-force policy:
-the samples where a foot would pull or slip (the ground cannot give the forces) and the smallest
-normal force of a foot in stance.
+For a robot description (default the project's quadruped, ``data/robots/quadruped.toml``;
+``--slope`` sets its ground's slope, degrees) the walk is run over one stride at ``--samples``
+samples three times: its trunk swaying as planned with the whole robot's centre of pressure
+(``whole-body``, ``legs.balance``), as planned by the lumped model alone (``planned``,
+``legs.trunk_path``) and level at constant speed, with the description's ground-force policy:
+the samples where a foot would pull or slip (the ground cannot give the forces), the smallest
+normal force of a foot in stance, and the CPU time of building the scene (the plan).
 
-    python3 scripts/studies/trunk_planning.py [ROBOT.toml] [--samples 201]
+    python3 scripts/studies/trunk_planning.py [ROBOT.toml] [--samples 201] [--slope DEG]
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
+import time
 import tomllib
 from pathlib import Path
 
@@ -29,22 +33,30 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("robot", nargs="?", type=Path, default=ROBOT)
     parser.add_argument("--samples", type=int, default=201)
+    parser.add_argument("--slope", type=float, default=None)
     args = parser.parse_args()
     document = tomllib.loads(args.robot.read_text())
+    if args.slope is not None:
+        document.setdefault("ground", {})["slope"] = args.slope
     description = read_robot(document, args.robot)
     times = np.linspace(0.0, description.gait.period, args.samples)
     print(f"{description.name}: {description.gait.pattern or 'phases'}, duty "
           f"{description.gait.duty}, period {description.gait.period} s, stride "
           f"{description.gait.stride} m, {args.samples} samples, ground policy "
-          f"{description.ground.get('policy', 'min-wrench')}")
-    print("| trunk | samples a foot would pull or slip | least normal force in stance (N) |")
-    print("| --- | ---: | ---: |")
-    for trunk in ("planned", "level"):
+          f"{description.ground.get('policy', 'min-wrench')}, slope "
+          f"{description.ground.get('slope', 0.0)} degrees")
+    print("| trunk | samples a foot would pull or slip | least normal force in stance (N) "
+          "| plan (CPU s) |")
+    print("| --- | ---: | ---: | ---: |")
+    for trunk in ("whole-body", "planned", "level"):
         description.gait.trunk = trunk
-        result = hx.inverse_dynamics(hx.assemble(robot_scene(description)), times)
+        tic = time.process_time()
+        scene = robot_scene(description)
+        planning = time.process_time() - tic
+        result = hx.inverse_dynamics(hx.assemble(scene), times)
         stance = np.asarray(result.ground_status) != "swing"
         print(f"| {trunk} | {int(result.infeasible.sum())} of {times.size} | "
-              f"{result.ground_force[:, :, 2][stance].min():.2f} |")
+              f"{result.ground_force[:, :, 2][stance].min():.2f} | {planning:.1f} |")
     return 0
 
 
