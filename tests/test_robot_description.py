@@ -226,6 +226,10 @@ def test_a_bad_description_is_one_clear_message(tmp_path, change, message):
     # the knees bent backwards: out of the URDF's range from the start
     (('"*_flexion" = 0.6, "*_knee" = -1.2', '"*_flexion" = -0.6, "*_knee" = 1.2'),
      "): joint 'LF_knee' leaves its range [-2.6, 0] rad at t = 0 s ("),
+    # a trot of duty 0.6: at t = 0 the diagonal RF, LH holds the trunk alone
+    (('pattern = "walk"', 'pattern = "trot"'),
+     "at t = 0 s only the feet RF and LH are on the ground, leaving 1 degree(s) of freedom "
+     "free: trunk turning about its own x axis"),
 ])
 def test_the_command_line_refuses_a_bad_description_and_writes_nothing(tmp_path, change,
                                                                        message):

@@ -85,17 +85,30 @@ def exact_forces(model: Model, data: Data, t: float, q: np.ndarray, v: np.ndarra
 def require_prescribed(model: Model, data: Data, t: float, q: np.ndarray) -> None:
     """Raise when the drivers leave degrees of freedom free at ``(t, q)``."""
     free = degrees_of_freedom(model, data, t, q)["dof_with_drivers"]
-    if free:
-        driven = {d.joint for d in model.drivers if d.kind == "joint"}
-        idle = [j.name for j in model.joints
-                if j.type.drivable and j.index not in driven]
-        hint = f" (joints without a driver: {', '.join(idle)})" if idle else ""
-        motions = "; ".join(free_motions(model, data.Phi_v))
+    if not free:
+        return
+    motions = "; ".join(free_motions(model, data.Phi_v))
+    gates = model.law_values(t)[0]
+    down = [c.name.removesuffix("/ground") for c in model.contacts if gates[c.gate] >= 0.5]
+    if 0 < len(down) < 3:  # a walking robot's trunk on one or two point feet
         raise SingularSystemError(
-            f"model '{model.name}': the drivers leave {free} degree(s) of freedom "
-            f"free{hint}: {motions}; inverse dynamics needs the motion of every degree of "
-            "freedom (drive them, or hold the bodies that move: a free base of a URDF model "
-            "is held by reading it with a fixed base, --base fixed)")
+            f"model '{model.name}': at t = {t:g} s only "
+            f"{'the foot' if len(down) == 1 else 'the feet'} {' and '.join(down)} "
+            f"{'is' if len(down) == 1 else 'are'} on the ground, leaving {free} degree(s) of "
+            f"freedom free: {motions}; point feet on a line cannot hold the trunk's moment "
+            "about it, so the "
+            "trunk cannot follow an arbitrary path there (a trot, a pace or a bound: its "
+            "motion the feet can carry is not planned yet, docs/robots.md; a walk or a "
+            "duty factor that keeps three feet down is)")
+    driven = {d.joint for d in model.drivers if d.kind == "joint"}
+    idle = [j.name for j in model.joints
+            if j.type.drivable and j.index not in driven]
+    hint = f" (joints without a driver: {', '.join(idle)})" if idle else ""
+    raise SingularSystemError(
+        f"model '{model.name}': the drivers leave {free} degree(s) of freedom "
+        f"free{hint}: {motions}; inverse dynamics needs the motion of every degree of "
+        "freedom (drive them, or hold the bodies that move: a free base of a URDF model "
+        "is held by reading it with a fixed base, --base fixed)")
 
 
 def next_positions(model: Model, data, t0: float, q0: np.ndarray, t: float, rates):
