@@ -243,6 +243,21 @@ def test_the_command_line_refuses_a_bad_description_and_writes_nothing(tmp_path,
     assert "Traceback" not in done.stderr and set(tmp_path.iterdir()) == before
 
 
+def test_a_trot_stops_where_two_feet_hold_the_trunk_not_with_the_dynamics_motion(tmp_path):
+    """The quadruped's trot from t = 0.2 s, four feet down until the diagonal RF, LH lifts off
+    at 0.6 s. There the feet leave the trunk's turning about their line free; the inverse
+    dynamics once went on with that turning's acceleration from the dynamics (3.1 away from the
+    prescribed motion's) and reported efforts for a motion it was not asked: it now stops at
+    the first sample after (0.61 s), naming the feet (both paths)."""
+    path = _description(tmp_path, QUADRUPED.read_text().replace('pattern = "walk"',
+                                                                'pattern = "trot"'))
+    model = hx.assemble(hx.load_scene(path))
+    for method in ("phase", "saddle"):
+        with pytest.raises(hx.SingularSystemError,
+                           match=r"at t = 0\.61 s only the feet LF and RH are on the ground"):
+            hx.inverse_dynamics(model, np.linspace(0.2, 0.7, 51), method=method)
+
+
 def test_a_stride_too_long_names_the_foot_out_of_reach_and_how_far_and_writes_nothing(
         tmp_path):
     """A stride of 0.6 m puts the left hind foot's path 0.440 m from its hip at t = 0 (both

@@ -62,7 +62,12 @@ def exact_sample(model: Model, data: Data, t0: float, q0: np.ndarray, t: float,
     if first:
         require_prescribed(model, data, t, q)
     v = solve_velocities(model, data, t, q)
-    return exact_forces(model, data, t, q, v, frame=frame)
+    out = exact_forces(model, data, t, q, v, frame=frame)
+    if data.independent_rows is not None and data.independent_rows.size < model.n_v:
+        # the constraints left a motion free here (a foot lifted off): its accelerations
+        # would be the dynamics', not the prescribed motion's
+        require_prescribed(model, data, t, q)
+    return out
 
 
 def exact_forces(model: Model, data: Data, t: float, q: np.ndarray, v: np.ndarray, *,
