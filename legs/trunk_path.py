@@ -22,12 +22,12 @@ coefficients (the swinging legs' weight and inertia count).
 feet whose load-sharing weight is at least ``loaded`` (a foot near touch-down or lift-off
 carries little: :mod:`hexapod.scene`'s ramps); then, keeping ``0.9 s``, the least sway (the sum
 of the coefficients' magnitudes weighted by their harmonic's square, the offsets by one: an
-offset left free was any the solver met, 4.5 cm on a hexapod). With two feet loaded the
+offset left free was any the solver met, centimetres on a hexapod). With two feet loaded the
 polygon is their segment: ``p`` must lie on it (a trot's diagonal). Given the friction
 coefficient ``mu``, the ground's total tangential force in the lumped model (the trunk's and
 the legs' accelerations, gravity's part along the ground) stays within
 :data:`FRICTION_SHARE` of ``mu`` times its normal force along each axis: the largest margin
-alone took Solo12's trunk up 10 degrees to 5.8 m/s^2, and its feet slipped.
+alone swung Solo12's trunk up 10 degrees hard enough for its feet to slip.
 Where the ground cannot give that (a slope steeper than the share), the excess is held as
 small as it can be, and the inverse dynamics says which feet slip.
 

@@ -246,7 +246,7 @@ def test_the_command_line_refuses_a_bad_description_and_writes_nothing(tmp_path,
 def test_a_trot_stops_where_two_feet_hold_the_trunk_not_with_the_dynamics_motion(tmp_path):
     """The quadruped's trot from t = 0.2 s, four feet down until the diagonal RF, LH lifts off
     at 0.6 s. There the feet leave the trunk's turning about their line free; the inverse
-    dynamics once went on with that turning's acceleration from the dynamics (3.1 away from the
+    dynamics once went on with that turning's acceleration from the dynamics (not the
     prescribed motion's) and reported efforts for a motion it was not asked: it now stops at
     the first sample after (0.61 s), naming the feet (both paths)."""
     path = _description(tmp_path, QUADRUPED.read_text().replace('pattern = "walk"',
