@@ -3,15 +3,16 @@
 The trunk planner (:mod:`legs.trunk_path`) predicts the centre of pressure with a lumped model
 (the trunk's mass, each leg's at the middle of its hip and foot). The whole robot's differs by
 centimetres where the legs' own inertia counts (a foot carried ahead of an ankle, Solo12's
-legs), enough for a foot to slip or pull near a touch-down. With ``gait.trunk = "whole-body"`` the plan is corrected by the whole
-robot (:func:`refine_plan`): the walk's kinematics at the plan's samples (the guides' motion,
-every body's position, velocity and acceleration) gives the whole robot's zero-moment point
-(:func:`zero_moment_point`: where on the ground the ground's wrench, every body's momentum
-rate less its weight, has no moment along the ground), whose difference from the lumped
-model's prediction is added to the lumped model as a known term; the sway is planned again,
-until the two agree within :data:`TOLERANCE`. The difference depends on the sway only through
-the legs' motion relative to the trunk, so a few rounds settle it. The guides' kinematics is assembled once; each round's
-trunk laws are swapped into it, its builds shared (:meth:`hexapod.Model.with_laws`).
+legs), enough for a foot to slip or pull near a touch-down. With ``gait.trunk = "whole-body"``
+the plan is corrected by the whole robot (:func:`refine_plan`): the walk's kinematics at the
+plan's samples (the guides' motion, every body's position, velocity and acceleration) gives the
+whole robot's zero-moment point (:func:`zero_moment_point`: where on the ground the ground's
+wrench, every body's momentum rate less its weight, has no moment along the ground), whose
+difference from the lumped model's prediction is added to the lumped model as a known term; the
+sway is planned again, until the two agree within :data:`TOLERANCE`. The difference depends on
+the sway only through the legs' motion relative to the trunk, so a few rounds settle it. The
+guides' kinematics is assembled once; each round's trunk laws are swapped into it, its builds
+shared (:meth:`hexapod.Model.with_laws`).
 """
 
 from __future__ import annotations
