@@ -465,6 +465,19 @@ class OnSchedule:
         return cycle_breaks(self.period, (self.lift_off, self.lift_off + 1.0 - self.duty),
                             start, stop)
 
+    def schedule_problems(self, lowest_duty: float = 0.0) -> list[str]:
+        """What is wrong with the schedule: a period that is not positive, a duty outside
+        ``(lowest_duty, 1)`` (``[lowest_duty, 1)`` when it is not 0)."""
+        out = []
+        if not (np.isfinite(self.period) and self.period > 0):
+            out.append(f"period must be positive, got {self.period}")
+        inside = lowest_duty < self.duty < 1 if lowest_duty == 0.0 else (
+            lowest_duty <= self.duty < 1)
+        if not inside:
+            bracket = "(" if lowest_duty == 0.0 else "["
+            out.append(f"duty must be in {bracket}{lowest_duty:g}, 1), got {self.duty}")
+        return out
+
 
 def _position_problems(position: str) -> list[str]:
     """What is wrong with a leg's ``position`` (:func:`parse_leg`), as a list."""
@@ -538,11 +551,7 @@ class Stepping(OnSchedule, Law):
         out = _position_problems(self.position)
         if self.joint not in JOINTS:
             out.append(f"joint must be one of {', '.join(JOINTS)}, got {self.joint!r}")
-        if not (np.isfinite(self.period) and self.period > 0):
-            out.append(f"period must be positive, got {self.period}")
-        if not 0.5 <= self.duty < 1:
-            out.append(f"duty must be in [0.5, 1), got {self.duty}")
-        return out
+        return out + self.schedule_problems(lowest_duty=0.5)
 
 
 @dataclass(frozen=True)

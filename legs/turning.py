@@ -81,11 +81,7 @@ class TurnPath(OnSchedule, Law):
         return self.period if self.turn == 0.0 else None
 
     def problems(self):
-        out = []
-        if not (np.isfinite(self.period) and self.period > 0):
-            out.append(f"period must be positive, got {self.period}")
-        if not 0 < self.duty < 1:
-            out.append(f"duty must be in (0, 1), got {self.duty}")
+        out = self.schedule_problems()
         if self.axis not in (0, 1):
             out.append(f"axis must be 0 (x) or 1 (y), got {self.axis!r}")
         if not all(np.isfinite(v) for v in (self.centre_x, self.centre_y, self.radius,

@@ -127,11 +127,7 @@ class StepPath(OnSchedule, Law):
         return self.period if self.advance == 0.0 and not self.rises else None
 
     def problems(self):
-        out = []
-        if not (np.isfinite(self.period) and self.period > 0):
-            out.append(f"period must be positive, got {self.period}")
-        if not 0 < self.duty < 1:
-            out.append(f"duty must be in (0, 1), got {self.duty}")
+        out = self.schedule_problems()
         if not all(np.isfinite(v) for v in (self.start, self.advance, self.lift,
                                             self.lift_off, *self.rises_at, *self.rises)):
             out.append("start, advance, lift, lift_off, rises_at and rises must be finite")
