@@ -283,16 +283,22 @@ def _gait(table, feet: list[str], problems: _Problems) -> Gait | None:
                 trunk, clearance, yaw_rate, pitch, roll)
 
 
-def rest_angles(description: RobotDescription, joints) -> dict[str, float]:
-    """The rest angle of each of ``joints`` (names): the first entry of ``rest`` whose name or
-    pattern matches it, else 0."""
+def by_pattern(table: dict[str, float], joints) -> dict[str, float]:
+    """The value of each of ``joints`` (names) in ``table``: the first entry whose name or
+    pattern matches it (joints that none matches are left out)."""
     out = {}
     for joint in joints:
-        for key, angle in description.rest.items():
+        for key, value in table.items():
             if fnmatch.fnmatchcase(joint, key):
-                out[joint] = angle
+                out[joint] = value
                 break
     return out
+
+
+def rest_angles(description: RobotDescription, joints) -> dict[str, float]:
+    """The rest angle of each of ``joints`` (names): the first entry of ``rest`` whose name or
+    pattern matches it, else 0 (left out)."""
+    return by_pattern(description.rest, joints)
 
 
 def robot_from_document(document: dict, path: str | Path):

@@ -277,7 +277,7 @@ def robot_scene(description):
     gait = description.gait
     walk = _Walk(gait, gait.phases or _pattern_phases(gait.pattern, rest),
                  lifted.pose(trunk).position, lifted.ground.terrain, lifted.ground.mu)
-    _add_trunk(lifted, trunk, walk, rest, height)
+    plan = _add_trunk(lifted, trunk, walk, rest, height)
     for name in description.feet:
         _add_foot(lifted, description, name, walk, rest[name])
     for joint in urdf.joints.values():
@@ -286,7 +286,7 @@ def robot_scene(description):
     for name, foot in description.feet.items():
         _add_posture(lifted, description, name, _leg_joints(urdf, trunk, foot.link), angles)
     if gait.trunk == "whole-body":
-        _whole_body(lifted, trunk, walk, rest, height)
+        _whole_body(lifted, trunk, walk, rest, height, plan)
     lifted.name, lifted.source = description.name, description.source
     lifted.actuators = description.actuators  # the report checks the motors when there are
     return lifted
@@ -326,12 +326,17 @@ class _Walk:
         middle = (self.phases[name] - self.gait.duty / 2) * self.gait.period
         if self.rate:
             return turned(np.r_[rest[:2], 0.0], self.centre, self.rate * middle)
-        return np.array([rest[0] + self.speed * middle, rest[1], 0.0])
+        return np.array([self.straight(name, rest), rest[1], 0.0])
+
+    def straight(self, name: str, rest: np.ndarray) -> float:
+        """The ``x`` of foot ``name``'s stance-0 foothold on the straight walk (the one a
+        turning walk is planned as)."""
+        return rest[0] + self.speed * (self.phases[name] - self.gait.duty / 2) * self.gait.period
 
 
-def _add_trunk(scene, trunk: str, walk: _Walk, rest: dict, height: float) -> None:
+def _add_trunk(scene, trunk: str, walk: _Walk, rest: dict, height: float):
     """The trunk's six guides: its sway planned (or level), along ``x`` or round the turn;
-    its height over the terrain; its yaw (turning), pitch and roll."""
+    its height over the terrain; its yaw (turning), pitch and roll. Returns the plan."""
     from hexapod.scene import CoordinateDriver, Polynomial
     from legs.trunk_path import TrunkPlan
 
@@ -347,6 +352,7 @@ def _add_trunk(scene, trunk: str, walk: _Walk, rest: dict, height: float) -> Non
     for angle, law in (("roll", np.radians(gait.roll)), ("pitch", np.radians(gait.pitch)),
                        ("yaw", yaw)):
         scene.add(CoordinateDriver(f"trunk/{angle}", trunk, angle, law, guide=True))
+    return plan
 
 
 def _plan(walk: _Walk, rest: dict, height: float, masses: tuple, correction=None):
@@ -357,24 +363,21 @@ def _plan(walk: _Walk, rest: dict, height: float, masses: tuple, correction=None
 
     gait, terrain, origin = walk.gait, walk.terrain, walk.origin
     period, duty, stride = gait.period, gait.duty, gait.stride
-    straight = {name: rest[name][0] + walk.speed * (walk.phases[name] - duty / 2) * period
-                for name in rest}
     return plan_trunk(
-        {name: (StepPath(straight[name], stride, 0.0, duty, period, walk.phases[name]),
+        {name: (StepPath(walk.straight(name, p), stride, 0.0, duty, period, walk.phases[name]),
                 StepPath(0.0, 0.0, gait.step_height, duty, period, walk.phases[name]),
                 p[:2] - origin[:2]) for name, p in rest.items()},
         walk.phases, duty, period, stride, height, masses,
         slope=(terrain.slope, terrain.heading), correction=correction, mu=walk.mu)
 
 
-def _whole_body(scene, trunk: str, walk: _Walk, rest: dict, height: float) -> None:
-    """The trunk's plan corrected by the whole robot's centre of pressure
+def _whole_body(scene, trunk: str, walk: _Walk, rest: dict, height: float, plan) -> None:
+    """The trunk's lumped ``plan`` corrected by the whole robot's centre of pressure
     (:mod:`legs.balance`)."""
     from legs.balance import refine_plan
     from legs.turning import straight_frame
 
     masses = _masses(scene, trunk)
-    plan = _plan(walk, rest, height, masses)
     refine_plan(scene, plan, lambda correction: _plan(walk, rest, height, masses, correction),
                 lambda plan: _sway_laws(walk, plan),
                 lambda points, t: straight_frame(points, t, walk.centre, walk.rate,
@@ -432,11 +435,12 @@ def _add_posture(scene, description, name: str, joints: list[str], angles: dict)
     """For a leg of more than three joints, the rule that resolves it: the posture nearest
     its rest posture (the description's ``rest``), weighted by ``robot.weights``."""
     from hexapod.scene import PostureDriver
+    from legs.description import by_pattern
 
     if len(joints) <= 3:
         return
-    weights = [next((w for key, w in description.weights.items()
-                     if fnmatch.fnmatchcase(joint, key)), 1.0) for joint in joints]
+    weighted = by_pattern(description.weights, joints)
+    weights = [weighted.get(joint, 1.0) for joint in joints]
     foot = description.feet[name]
     scene.add(PostureDriver(f"{name}/posture", foot.link, joints,
                             [angles.get(joint, 0.0) for joint in joints], weights,
