@@ -197,7 +197,7 @@ def inverse_dynamics(model: Model, times: ArrayLike, *, method: str = "auto", fr
     refuse_contacts(model)
     if frame not in ("joint", "world"):
         raise ValueError(f"frame must be 'joint' or 'world', got {frame!r}")
-    known = None  # positions known at the samples: a guided model's, from its guides
+    known = None  # the motion known at the samples (q, v, v_dot): a guided model's
     if guided := model.guidance is not None:  # the guides' kinematics first, then the efforts
         model, progress, known = _guided(model, times, progress, check_limits)
     w, wd, wdd = (x.reshape(model.n_w, times.size) for x in model.law_values(times, data))
@@ -225,8 +225,9 @@ def inverse_dynamics(model: Model, times: ArrayLike, *, method: str = "auto", fr
 
 def _guided(model: Model, times: np.ndarray, progress, check_limits: bool):
     """The twin of a guided model whose joints follow the motion the guides give them, the
-    progress of its run as the second half of the whole, and the positions at the samples
-    (the twin's laws are exact there, not between: its Newton solves start from them); the
+    progress of its run as the second half of the whole, and the motion ``(q, v, v_dot)`` at
+    the samples (the twin's laws are exact there, not between: its Newton solves start from
+    its positions, and a motion its constraints leave free takes its velocities); the
     motion's joints checked against their ranges (``check_limits``), in the name of
     ``model``, and guides out of the joints' reach named."""
     from hexapod.algorithms.guided import guided_twin, guides_motion, unreachable_guides
@@ -241,7 +242,8 @@ def _guided(model: Model, times: np.ndarray, progress, check_limits: bool):
     if check_limits:  # the same bodies and joints: the kinematics' positions are the model's
         check_joint_limits(model, times, q)
     twin = guided_twin(model, times, q, v, v_dot)
-    return twin, (None if progress is None else lambda done, total: progress(n + done, 2 * n)), q
+    return (twin, None if progress is None else lambda done, total: progress(n + done, 2 * n),
+            (q, v, v_dot))
 
 
 def motion_model(model: Model, result: InverseResult) -> Model:
@@ -309,7 +311,8 @@ def _saddle(model, data, times, frame, progress, known=None) -> InverseResult:
     worst = 0.0
     for k, t in enumerate(times):
         if known is not None:  # Newton from the positions known there
-            sample = exact_sample(model, data, t, known[k], t, frame=frame, first=k == 0)
+            sample = exact_sample(model, data, t, known[0][k], t, frame=frame,
+                                  known=(known[1][k], known[2][k]))
         else:
             sample = exact_sample(model, data, times[k - 1] if k else t,
                                   Q[k - 1] if k else model.q0, t,

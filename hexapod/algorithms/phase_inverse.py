@@ -119,7 +119,7 @@ class _Results:
         self.force, self.torque = np.zeros((n, J, 3)), np.zeros((n, J, 3))
         self.effort, self.ground = np.zeros((n, J)), np.zeros((n, C, 3))
         self.violation = np.zeros(n)
-        self.known: np.ndarray | None = None  # positions known at the samples
+        self.known: tuple | None = None  # the motion known at the samples (q, v, v_dot)
         # the joint frames of the compiled samples, kept for world axes only
         self.frames = np.zeros((n, J, 9)) if world else None
         self.redundant: list[str] = []
@@ -145,7 +145,7 @@ class _Results:
         """The positions at sample ``k``: known (a guided model's, from its guides'
         kinematics), or predicted from ``k - 1``."""
         if self.known is not None:
-            return self.known[k]
+            return self.known[0][k]
         h = times[k] - times[k - 1]
         return self.model.integrate(self.q[k - 1],
                                     h * self.v[k - 1] + h * h / 2 * self.v_dot[k - 1])
@@ -153,19 +153,21 @@ class _Results:
 
 def phase_inverse(model: Model, data: Data, times: np.ndarray, w, wd, wdd, frame: str, *,
                   progress: Callable[[int, int], None] | None = None,
-                  known: np.ndarray | None = None) -> dict:
+                  known: tuple | None = None) -> dict:
     """The phase path over ``times`` (laws ``w, wd, wdd`` given, n_w x N): the fields of an
     :class:`~hexapod.algorithms.inverse.InverseResult` as a dict, with ``exact_samples``, the
     number of samples solved by the exact path. Compiled or interpreted as the execution
-    setting says (:mod:`hexapod._support.execution`). ``known``: the positions at the samples
-    when they are known already (a guided model's), Newton's starting points there."""
+    setting says (:mod:`hexapod._support.execution`). ``known``: the motion ``(q, v, v_dot)``
+    at the samples when it is known already (a guided model's): Newton's starting points, and
+    where the constraints leave a motion free, its velocities (by the exact path)."""
     to_c = current().compiled
     n = times.size
     out = _Results(model, n, frame == "world")
     out.known = known
     feet = _Feet(model, times)
     out.store(0, exact_sample(model, data, times[0], model.q0, times[0], frame=frame,
-                              first=True))
+                              first=True) if known is None else _known_sample(
+        model, data, times, known, 0, frame))
     decisions = _Decisions(model, data, terms_of(model), feet, to_c)
     decisions.adopt(0, data, w[:, 0])
     newton = NEWTON_STEPS  # Newton steps per sample: more once samples prove far apart
@@ -180,8 +182,8 @@ def phase_inverse(model: Model, data: Data, times: np.ndarray, w, wd, wdd, frame
             bad, blame = (k, "rank") if plan is None else failed
             out.store(bad, exact_sample(model, data, times[bad - 1], out.q[bad - 1],
                                         times[bad], (out.v[bad - 1], out.v_dot[bad - 1]),
-                                        frame=frame) if known is None else exact_sample(
-                model, data, times[bad], known[bad], times[bad], frame=frame))
+                                        frame=frame) if known is None else _known_sample(
+                model, data, times, known, bad, frame))
             if blame == "rank":  # the decision no longer holds: take the exact solve's
                 decisions.adopt(bad, data, w[:, bad], plan)
             elif blame == "newton":  # samples too far apart for the Newton steps taken
@@ -200,6 +202,13 @@ def phase_inverse(model: Model, data: Data, times: np.ndarray, w, wd, wdd, frame
             "torque": out.torque, "effort": out.effort, "ground": out.ground,
             "max_violation": float(out.violation.max()),
             "redundant_rows": tuple(out.redundant), "exact_samples": int(out.exact.sum())}
+
+
+def _known_sample(model: Model, data: Data, times, known: tuple, k: int,
+                  frame: str) -> SampleResult:
+    """The exact sample ``k`` of a motion known at the samples (``known``: q, v, v_dot)."""
+    return exact_sample(model, data, times[k], known[0][k], times[k], frame=frame,
+                        known=(known[1][k], known[2][k]))
 
 
 class _Decisions:

@@ -24,7 +24,7 @@ from hexapod.algorithms.kinematics import (
     solve_velocities,
 )
 from hexapod.algorithms.liaison import joint_wrenches
-from hexapod.errors import AssemblyError, SingularSystemError
+from hexapod.errors import AssemblyError, HexapodError, SingularSystemError
 from hexapod.model.model import Data, Model
 
 
@@ -46,24 +46,33 @@ class SampleResult:
 
 
 def exact_sample(model: Model, data: Data, t0: float, q0: np.ndarray, t: float,
-                 rates=None, *, frame: str = "joint", first: bool = False) -> SampleResult:
+                 rates=None, *, frame: str = "joint", first: bool = False,
+                 known: tuple | None = None) -> SampleResult:
     """The sample at ``t`` from the solved positions ``q0`` at ``t0`` (and their velocities
     and accelerations ``rates``, for a second-order prediction); ``first`` checks that the
-    drivers leave no degree of freedom free.
+    drivers leave no degree of freedom free. ``known``: the velocities and accelerations at
+    ``t`` when the motion is known already (a guided model's, from its guides' kinematics,
+    ``q0`` its positions there): a motion the constraints leave free (a trunk on two feet
+    turning about the line through them) then takes the known velocities, and the dynamics'
+    accelerations must be the known ones (:func:`require_followed`).
 
     Raises
     ------
     SingularSystemError
-        When ``first`` and the drivers leave degrees of freedom free.
+        When ``first`` and the drivers leave degrees of freedom free (without ``known``).
+    HexapodError
+        When the dynamics does not follow the ``known`` motion.
     AssemblyError
         When the positions cannot be found.
     """
     q = next_positions(model, data, t0, q0, t, rates)
-    if first:
+    if first and known is None:
         require_prescribed(model, data, t, q)
-    v = solve_velocities(model, data, t, q)
+    v = solve_velocities(model, data, t, q, None if known is None else known[0])
     out = exact_forces(model, data, t, q, v, frame=frame)
-    if data.independent_rows is not None and data.independent_rows.size < model.n_v:
+    if known is not None:
+        require_followed(model, data, t, q, out.v_dot, known[1])
+    elif data.independent_rows is not None and data.independent_rows.size < model.n_v:
         # the constraints left a motion free here (a foot lifted off): its accelerations
         # would be the dynamics', not the prescribed motion's
         require_prescribed(model, data, t, q)
@@ -87,8 +96,34 @@ def exact_forces(model: Model, data: Data, t: float, q: np.ndarray, v: np.ndarra
                         wrenches.effort, ground, violation, redundant)
 
 
-def require_prescribed(model: Model, data: Data, t: float, q: np.ndarray) -> None:
-    """Raise when the drivers leave degrees of freedom free at ``(t, q)``."""
+#: m/s^2 and rad/s^2: the most the dynamics' accelerations may differ from a known motion's
+#: (a guided model's). Where every degree of freedom is driven they agree to round-off; where
+#: the constraints leave a motion free (a trunk on two feet), the dynamics decides it, and a
+#: motion planned so that the feet can carry it (:mod:`legs.carried`) agrees to about 1e-9.
+FOLLOWED_TOL = 1e-6
+
+
+def require_followed(model: Model, data: Data, t: float, q: np.ndarray, v_dot: np.ndarray,
+                     known: np.ndarray) -> None:
+    """Raise when the dynamics' accelerations ``v_dot`` at ``(t, q)`` leave the known motion's
+    ``known`` by more than :data:`FOLLOWED_TOL`: where the constraints leave a motion free,
+    as :func:`require_prescribed` does, else naming the body and by how much."""
+    gap = np.abs(np.asarray(v_dot) - np.asarray(known))
+    if not gap.max(initial=0.0) > FOLLOWED_TOL:
+        return
+    i = int(np.argmax(gap))
+    body = next(b.name for b in model.bodies if b.v.start <= i < b.v.stop)
+    departure = (f"body '{body}' accelerates {gap[i]:.3g} (m/s^2 or rad/s^2) away from the "
+                 "motion the guides give")
+    require_prescribed(model, data, t, q, departure)
+    raise HexapodError(f"model '{model.name}': at t = {t:g} s the dynamics does not follow "
+                       f"the known motion: {departure}")
+
+
+def require_prescribed(model: Model, data: Data, t: float, q: np.ndarray,
+                       departure: str = "") -> None:
+    """Raise when the drivers leave degrees of freedom free at ``(t, q)`` (``departure``: how
+    the dynamics leaves the motion asked of them, when it is known)."""
     free = degrees_of_freedom(model, data, t, q)["dof_with_drivers"]
     if not free:
         return
@@ -101,10 +136,9 @@ def require_prescribed(model: Model, data: Data, t: float, q: np.ndarray) -> Non
             f"{'the foot' if len(down) == 1 else 'the feet'} {' and '.join(down)} "
             f"{'is' if len(down) == 1 else 'are'} on the ground, leaving {free} degree(s) of "
             f"freedom free: {motions}; point feet on a line cannot hold the trunk's moment "
-            "about it, so the "
-            "trunk cannot follow an arbitrary path there (a trot, a pace or a bound: its "
-            "motion the feet can carry is not planned yet, docs/robots.md; a walk or a "
-            "duty factor that keeps three feet down is)")
+            "about it, so the trunk cannot follow an arbitrary path there"
+            f"{': ' + departure if departure else ''} (plan the trunk's motion so that the "
+            "feet can carry it, as a robot description's gait does: docs/robots.md)")
     driven = {d.joint for d in model.drivers if d.kind == "joint"}
     idle = [j.name for j in model.joints
             if j.type.drivable and j.index not in driven]
