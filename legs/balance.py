@@ -27,13 +27,11 @@ TOLERANCE = 5e-3
 ROUNDS = 4
 
 
-def zero_moment_point(model, result, axes) -> np.ndarray:
-    """The world ``x, y`` (N, 2) of the zero-moment point of the motion of ``result`` (an
-    inverse dynamics of ``model``, or of its guides' kinematics) on the ground plane through
-    the origin whose axes are the rows of ``axes`` (``t_1``, ``t_2``, the normal ``n``): with
-    ``F`` and ``M`` (about the origin) the sum of every body's ``m (a - g)`` at its centre of
-    mass and ``R (I w' + w x I w)`` (``w`` its body-frame angular velocity), the point ``a t_1
-    + b t_2`` with ``a = -M.t_2 / F.n`` and ``b = M.t_1 / F.n``."""
+def momentum_rates(model, result) -> tuple[np.ndarray, np.ndarray]:
+    """The sums over the bodies of ``m (a - g)`` at each centre of mass and of their moments
+    about the world's origin plus ``R (I w' + w x I w)`` (``w`` the body-frame angular
+    velocity), each (N, 3), for the motion of ``result`` (an inverse dynamics of ``model``, or
+    of its guides' kinematics): the wrench the ground and the other external forces give."""
     from hexapod.spatial import rotation_from_euler_parameters
 
     gravity = np.asarray(model.gravity, dtype=float)
@@ -47,6 +45,16 @@ def zero_moment_point(model, result, axes) -> np.ndarray:
         rotation = np.array([rotation_from_euler_parameters(e) for e in q[:, 3:]])
         force += f
         moment += np.cross(q[:, :3], f) + np.einsum("nij,nj->ni", rotation, spin)
+    return force, moment
+
+
+def zero_moment_point(model, result, axes) -> np.ndarray:
+    """The world ``x, y`` (N, 2) of the zero-moment point of the motion of ``result`` (an
+    inverse dynamics of ``model``, or of its guides' kinematics) on the ground plane through
+    the origin whose axes are the rows of ``axes`` (``t_1``, ``t_2``, the normal ``n``): with
+    ``F`` and ``M`` the :func:`momentum_rates`, the point ``a t_1 + b t_2`` with ``a =
+    -M.t_2 / F.n`` and ``b = M.t_1 / F.n``."""
+    force, moment = momentum_rates(model, result)
     t1, t2, n = np.asarray(axes, dtype=float)
     pushed = force @ n
     point = (-(moment @ t2) / pushed)[:, None] * t1 + ((moment @ t1) / pushed)[:, None] * t2

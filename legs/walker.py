@@ -40,9 +40,9 @@ from legs.turning import stance_progress, swing_schedule
 PATTERNS: dict[int, dict[str, tuple[dict[str, float], float]]] = {
     2: {"walk": ({"L": 0.0, "R": 0.5}, 0.6)},
     4: {"walk": ({"LH": 0.0, "LF": 0.25, "RH": 0.5, "RF": 0.75}, 0.75),
-        "trot": ({"LF": 0.0, "RH": 0.0, "RF": 0.5, "LH": 0.5}, 0.5),
-        "pace": ({"LF": 0.0, "LH": 0.0, "RF": 0.5, "RH": 0.5}, 0.5),
-        "bound": ({"LF": 0.0, "RF": 0.0, "LH": 0.5, "RH": 0.5}, 0.5)},
+        "trot": ({"LF": 0.0, "RH": 0.0, "RF": 0.5, "LH": 0.5}, 0.6),
+        "pace": ({"LF": 0.0, "LH": 0.0, "RF": 0.5, "RH": 0.5}, 0.6),
+        "bound": ({"LF": 0.0, "RF": 0.0, "LH": 0.5, "RH": 0.5}, 0.6)},
     6: {"tripod": ({"L1": 0.0, "R2": 0.0, "L3": 0.0, "R1": 0.5, "L2": 0.5, "R3": 0.5}, 0.5),
         "tetrapod": ({"L3": 0.0, "R2": 0.0, "L2": 1 / 3, "R1": 1 / 3, "L1": 2 / 3,
                       "R3": 2 / 3}, 2 / 3),
@@ -287,6 +287,7 @@ def robot_scene(description):
         _add_posture(lifted, description, name, _leg_joints(urdf, trunk, foot.link), angles)
     if gait.trunk == "whole-body":
         _whole_body(lifted, trunk, walk, rest, height, plan)
+    _carry(lifted, description, walk, height)
     lifted.name, lifted.source = description.name, description.source
     lifted.actuators = description.actuators  # the report checks the motors when there are
     return lifted
@@ -521,18 +522,38 @@ def _masses(scene, trunk: str) -> tuple[float, float]:
 
 
 def _sway(series: tuple, start: float, speed: float, period: float):
-    """The law ``start + speed t`` plus a planned sway ``(offset, cos, sin)`` of ``period``: a
-    harmonic series, or with a drift an expression of it (exact derivatives either way)."""
-    from hexapod.scene import Expression, Harmonic, Polynomial
+    """The law ``start + speed t`` plus a planned sway ``(offset, cos, sin)`` of ``period``."""
+    from legs.carried import TrunkSway
 
     offset, cos, sin = series
-    if not cos:  # no sway
-        return Polynomial((start + offset, speed))
-    if speed == 0.0:
-        return Harmonic(start + offset, cos, sin, frequency=1.0 / period)
-    terms = " + ".join(f"a{k} * cos({k} * w * t) + b{k} * sin({k} * w * t)"
-                       for k in range(1, len(cos) + 1))
-    constants = {"x0": start + offset, "v": speed, "w": 2 * np.pi / period,
-                 **{f"a{k}": c for k, c in enumerate(cos, 1)},
-                 **{f"b{k}": c for k, c in enumerate(sin, 1)}}
-    return Expression(f"x0 + v * t + {terms}", tuple(constants.items()))
+    return TrunkSway(start + offset, speed, cos, sin, period)
+
+
+def _carry(scene, description, walk: _Walk, height: float) -> None:
+    """Where only two feet are down (a trot, a pace, a bound), the trunk's sway corrected so
+    that they can carry it (:mod:`legs.carried`)."""
+    import hexapod as hx
+    from hexapod import ModelError
+    from hexapod.scene import Problem
+    from legs.carried import carry, free_axis, two_feet_phases
+
+    gait = walk.gait
+    where = f"robot description {Path(description.source).name}"
+    try:
+        phases = two_feet_phases(walk.phases, gait.duty, gait.period)
+    except ValueError as error:
+        raise ModelError(where, [Problem(where, str(error),
+                                         f"{description.source}, gait.duty")]) from None
+    if not phases:
+        return
+    if walk.rate:
+        raise ModelError(where, [Problem(where, "a gait with two feet down cannot turn yet: "
+                                         "drop yaw_rate", f"{description.source}, gait.yaw_rate")])
+    feet = {name: tuple(scene.drivers[f"{name}/{axis}"].law for axis in "xyz")
+            for name in walk.phases}
+    driver = f"trunk/{'xy'[free_axis(phases, feet)]}"
+    weight = sum(body.mass for body in scene.bodies.values()) * float(
+        np.linalg.norm(scene.gravity))
+    kinematics = hx.assemble(scene).guidance.kinematics
+    scene.drivers[driver].law = carry(kinematics, driver, scene.drivers[driver].law, phases,
+                                      feet, weight * height)

@@ -59,8 +59,8 @@ def test_a_guide_s_law_swapped_into_built_kinematics_gives_a_fresh_assembly_s_mo
     scene, model, before = quadruped
     kinematics = model.guidance.kinematics
     law = scene.drivers["trunk/x"].law
-    swayed = dataclasses.replace(law, constants=tuple(
-        (k, v * 1.05 if k[:1] in "ab" else v) for k, v in law.constants))
+    swayed = dataclasses.replace(law, cos=tuple(1.05 * c for c in law.cos),
+                                 sin=tuple(1.05 * c for c in law.sin))
     index = next(d.law for d in kinematics.drivers if d.name == "trunk/x")
     laws = list(kinematics.laws)
     laws[index] = swayed

@@ -22,6 +22,7 @@ Pinocchio's placements, velocities and accelerations of every body frame against
     python3 tests/data/make_walking_fixture.py --hexapod3-steps
     python3 tests/data/make_walking_fixture.py --quadruped-turn
     python3 tests/data/make_walking_fixture.py --quadruped-ankles
+    python3 tests/data/make_walking_fixture.py --quadruped-trot
 
 ``--quadruped`` writes ``quadruped_rnea.npz`` for the project's quadruped instead
 (``data/robots/quadruped.toml``: a URDF robot whose joints follow its guides, 24 samples of a
@@ -30,7 +31,8 @@ stride), ``--hexapod3`` ``hexapod3_rnea.npz`` for its hexapod of three joints a 
 and ``--hexapod3-steps`` the same robots up a 10-degree slope (24 samples of a stride) and up
 two 3 cm steps (90 samples over 9 s); ``--quadruped-turn`` the quadruped turning left at 10
 degrees a second, ``--quadruped-ankles`` the quadruped with four joints a leg (24 samples of a
-stride each).
+stride each); ``--quadruped-trot`` the quadruped trotting (30 samples of a stride: two feet
+down at 24 of them).
 """
 
 from __future__ import annotations
@@ -287,7 +289,8 @@ DESCRIBED = {"--quadruped": ("quadruped", 24, None), "--hexapod3": ("hexapod3", 
              "--quadruped-slope": ("quadruped-slope", 24, None),
              "--hexapod3-steps": ("hexapod3-steps", 90, 9.0),
              "--quadruped-turn": ("quadruped-turn", 24, None),
-             "--quadruped-ankles": ("quadruped-ankles", 24, None)}
+             "--quadruped-ankles": ("quadruped-ankles", 24, None),
+             "--quadruped-trot": ("quadruped-trot", 30, None)}
 
 
 def described(name: str, samples: int, window: float | None = None
