@@ -35,8 +35,9 @@ from legs.stepping import LIFT_RATES, STEP_RATES, OnSchedule
 from legs.turning import stance_progress, swing_schedule
 
 #: Lift-off phases (fractions of the period) by foot role, and the default duty factor, of
-#: each pattern, by the number of legs. A trot, a pace and a bound have two feet down: their
-#: point feet on a line cannot hold the trunk's moment about it.
+#: each pattern, by the number of legs. A trot, a pace and a bound have two feet down, whose
+#: line the trunk's motion must not tip about (:mod:`legs.carried`), and four while the load
+#: passes from one pair to the other: a duty factor above one half.
 PATTERNS: dict[int, dict[str, tuple[dict[str, float], float]]] = {
     2: {"walk": ({"L": 0.0, "R": 0.5}, 0.6)},
     4: {"walk": ({"LH": 0.0, "LF": 0.25, "RH": 0.5, "RF": 0.75}, 0.75),
