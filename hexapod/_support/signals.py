@@ -33,16 +33,28 @@ def _handler(number, frame) -> None:
 
 def handle_signals():
     """SIGINT and SIGTERM raise ``KeyboardInterrupt`` and are remembered (main thread only);
-    returns a function that puts back the handlers found."""
+    returns a function that puts back the handlers found. Both are held back while the
+    handlers are installed and stay so until :func:`deliver_signals`, called inside the
+    caller's ``try``: a signal in between (a shell's SIGTERM right after the start) once
+    raised between the two installations, outside any handling of it."""
     if threading.current_thread() is not threading.main_thread():
         return lambda: None
     _received.clear()
+    signal.pthread_sigmask(signal.SIG_BLOCK, ENDING)
     earlier = {number: signal.signal(number, _handler) for number in ENDING}
 
     def restore() -> None:
+        deliver_signals()
         for number, handler in earlier.items():
             signal.signal(number, handler)
     return restore
+
+
+def deliver_signals() -> None:
+    """Let SIGINT and SIGTERM through again (after :func:`handle_signals`): one that arrived
+    meanwhile is handled now."""
+    if threading.current_thread() is threading.main_thread():
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, ENDING)
 
 
 def ignore_signals() -> None:

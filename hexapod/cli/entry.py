@@ -21,6 +21,7 @@ def main(argv: list[str] | None = None) -> int:
     restore = signals.handle_signals()
     try:
         try:
+            signals.deliver_signals()  # one that came while the handlers were installed: here
             from hexapod.cli import app
         except KeyboardInterrupt:
             print(signals.interruption(), file=sys.stderr)
