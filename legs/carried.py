@@ -21,7 +21,7 @@ Each phase's end values are free (two per phase); they are chosen so that the qu
 join the phases where more feet are down (value, rate and acceleration continuous: the motion
 is C2) are the least accelerated, the least integral of ``d''^2`` over them, to first order in
 the phases' homogeneous solutions, then the equations are solved again with them. (Ends held
-at zero instead made the joins swing the trunk at 4 m/s^2 and the quadruped's feet pull.)
+at zero instead made the joins swing the trunk hard enough for the quadruped's feet to pull.)
 The correction is one period's, repeated (:class:`TrunkSway`).
 
 The inverse dynamics takes the accelerations of the motion the two feet leave free (the trunk
