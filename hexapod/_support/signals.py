@@ -24,37 +24,45 @@ import threading
 ENDING = (signal.SIGINT, signal.SIGTERM)
 
 _received: list[int] = []
+#: Whether the handlers raise (from :func:`deliver_signals` on); before, they only remember.
+_armed: list[bool] = []
 
 
 def _handler(number, frame) -> None:
     _received.append(number)
-    raise KeyboardInterrupt
+    if _armed:
+        raise KeyboardInterrupt
 
 
 def handle_signals():
     """SIGINT and SIGTERM raise ``KeyboardInterrupt`` and are remembered (main thread only);
-    returns a function that puts back the handlers found. Both are held back while the
-    handlers are installed and stay so until :func:`deliver_signals`, called inside the
-    caller's ``try``: a signal in between (a shell's SIGTERM right after the start) once
-    raised between the two installations, outside any handling of it."""
+    returns a function that puts back the handlers found (and forgets the signal). Until
+    :func:`deliver_signals`, called first thing inside the caller's ``try``, a signal is only
+    remembered: one right after the start (a shell's, between the two installations) once
+    raised inside this function, outside any handling of it. (Blocking the signals would not
+    do: in a process with threads the kernel hands a signal to a thread that does not block
+    it.)"""
     if threading.current_thread() is not threading.main_thread():
         return lambda: None
     _received.clear()
-    signal.pthread_sigmask(signal.SIG_BLOCK, ENDING)
+    _armed.clear()
     earlier = {number: signal.signal(number, _handler) for number in ENDING}
 
-    def restore() -> None:
-        deliver_signals()
+    def restore() -> None:  # and forget the signal: a later call in this process is new
         for number, handler in earlier.items():
             signal.signal(number, handler)
+        _received.clear()
+        _armed.clear()
     return restore
 
 
 def deliver_signals() -> None:
-    """Let SIGINT and SIGTERM through again (after :func:`handle_signals`): one that arrived
-    meanwhile is handled now."""
-    if threading.current_thread() is threading.main_thread():
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, ENDING)
+    """From now on the signals raise; one that came since :func:`handle_signals` raises
+    ``KeyboardInterrupt`` here."""
+    if not _armed:
+        _armed.append(True)
+        if _received:
+            raise KeyboardInterrupt
 
 
 def ignore_signals() -> None:
