@@ -181,13 +181,16 @@ def two_feet_phases(phases: dict[str, float], duty: float, period: float) -> lis
             if len(down) == 2]
 
 
-def free_axis(phases: list[tuple], feet: dict) -> int:
-    """The trunk's horizontal axis (0: ``x``, 1: ``y``) that moves it most across every
-    two-feet phase's line (``feet``: per foot, its path's ``(x, y, z)`` laws)."""
+def free_axis(phases: list[tuple], feet: dict, rate: float = 0.0) -> int:
+    """The trunk's horizontal axis (0: ``x``, 1: ``y``, its own) that moves it most across
+    every two-feet phase's line (``feet``: per foot, its path's ``(x, y, z)`` laws; the trunk
+    turning at ``rate``, rad/s, from yaw zero)."""
     worst = np.ones(2)
     for start, stop, (a, b) in phases:
         t = (start + stop) / 2
-        along = np.array([feet[b][i](t) - feet[a][i](t) for i in (0, 1)])
+        world = np.array([feet[b][i](t) - feet[a][i](t) for i in (0, 1)])
+        c, s = np.cos(rate * t), np.sin(rate * t)
+        along = np.array([c * world[0] + s * world[1], -s * world[0] + c * world[1]])
         across = np.abs(along[::-1]) / np.linalg.norm(along)
         worst = np.minimum(worst, across)
     return int(np.argmax(worst))
@@ -220,20 +223,20 @@ def differentiation(a: float, b: float, degree: int) -> tuple[np.ndarray, np.nda
     return tuple(chebyshev.chebval(x, chebyshev.chebder(fit, m)).T * scale**m for m in (1, 2))
 
 
-def carry(kinematics, driver: str, sway: TrunkSway, phases: list[tuple], feet: dict,
-          scale: float, degree: int = DEGREE) -> TrunkSway:
-    """``sway``, the law of the trunk's guide ``driver`` in the guides' ``kinematics`` model,
-    corrected so that the robot's motion has no tipping moment about the two feet's line
-    wherever only two are down (see the module's notes).
+def carry(kinematics, sways: dict, phases: list[tuple], feet: dict, scale: float,
+          degree: int = DEGREE) -> dict:
+    """``sways``, the laws of the trunk's guides in the guides' ``kinematics`` model that hold
+    the correction (``trunk/x`` or ``trunk/y`` walking straight, both turning), corrected so
+    that the robot's motion has no tipping moment about the two feet's line wherever only two
+    are down (see the module's notes).
 
     Parameters
     ----------
     kinematics : Model
         The walking scene's guides' kinematics (``hexapod.assemble(scene).guidance.kinematics``).
-    driver : str
-        The trunk's guide whose law is corrected (``trunk/x`` or ``trunk/y``).
-    sway : TrunkSway
-        Its law, without a correction.
+    sways : dict of str to Law
+        The laws without a correction by their guides' names (:class:`TrunkSway`, or
+        :class:`legs.turning.TurnedSway`: laws with ``bounds`` and ``values``).
     phases : list of (float, float, (str, str))
         The two-feet phases of a period (:func:`two_feet_phases`).
     feet : dict of str to (Law, Law, Law)
@@ -253,13 +256,13 @@ def carry(kinematics, driver: str, sway: TrunkSway, phases: list[tuple], feet: d
     from hexapod import HexapodError
 
     while True:
-        problem = _Collocation(kinematics, driver, sway, phases, feet, scale, degree)
+        problem = _Collocation(kinematics, sways, phases, feet, scale, degree)
         d, _ = problem.solve(np.zeros(problem.nodes.size))
         d, worst = problem.solve(problem.gentle_ends(d))
         middles = np.concatenate([(g[1:] + g[:-1]) / 2 for g in problem.grids])
         between = float(np.abs(problem.tipping(middles, d, "between")).max())
         if worst < TOLERANCE and between < BETWEEN:
-            return problem.law(d)
+            return problem.laws(d)
         if degree >= HIGHEST_DEGREE or worst >= TOLERANCE:
             raise HexapodError(
                 f"model '{kinematics.name}': the trunk's motion two feet can carry was not "
@@ -273,10 +276,12 @@ class _Collocation:
     """The correction's equations at one degree: the tipping moment at each phase's
     interior Lobatto points (the ends' values given), by Newton's method."""
 
-    def __init__(self, kinematics, driver, sway, phases, feet, scale, degree):
-        self.kinematics, self.sway, self.phases, self.feet = kinematics, sway, phases, feet
+    def __init__(self, kinematics, sways, phases, feet, scale, degree):
+        self.kinematics, self.sways, self.phases, self.feet = kinematics, sways, phases, feet
         self.scale, self.degree = scale, degree
-        self.slot = next(d.law for d in kinematics.drivers if d.name == driver)
+        self.period = next(iter(sways.values())).period
+        self.slots = {name: next(d.law for d in kinematics.drivers if d.name == name)
+                      for name in sways}
         self.grids = [lobatto(a, b, degree) for a, b, _ in phases]
         self.nodes = np.concatenate(self.grids)
         self.matrices = [differentiation(a, b, degree) for a, b, _ in phases]
@@ -285,9 +290,11 @@ class _Collocation:
                       for j in range(len(phases))]
         self.jacobians = None
 
-    def law(self, d: np.ndarray) -> TrunkSway:
-        return replace(self.sway, bounds=tuple(x for a, b, _ in self.phases for x in (a, b)),
-                       values=tuple(d))
+    def laws(self, d: np.ndarray) -> dict:
+        """The guides' laws with the correction's values ``d`` at the nodes."""
+        bounds = tuple(x for a, b, _ in self.phases for x in (a, b))
+        return {name: replace(law, bounds=bounds, values=tuple(d))
+                for name, law in self.sways.items()}
 
     def tipping(self, times: np.ndarray, d: np.ndarray, tag) -> np.ndarray:
         """The tipping moment (a share of the scale) at ``times`` with the correction's values
@@ -295,7 +302,8 @@ class _Collocation:
         import hexapod as hx
 
         laws = list(self.kinematics.laws)
-        laws[self.slot] = self.law(d)
+        for name, law in self.laws(d).items():
+            laws[self.slots[name]] = law
         digest = hashlib.sha256(repr((self.kinematics.digest, "carried", self.degree, tag,
                                       d.tobytes())).encode()).hexdigest()
         model = self.kinematics.with_laws(tuple(laws), digest, share_built=True)
@@ -351,7 +359,7 @@ class _Collocation:
             moves.append([at(grid[:, 0]), at(grid[:, 1])])
         rows, rhs = [], []
         for j in range(n):  # the join from phase j's stop to phase j + 1's start
-            length = (phases[(j + 1) % n][0] + (self.sway.period if j == n - 1 else 0.0)
+            length = (phases[(j + 1) % n][0] + (self.period if j == n - 1 else 0.0)
                       - phases[j][1])
             root = _bending(length)
             block = np.zeros((6, 2 * n))

@@ -18,7 +18,7 @@ turning frame (:func:`turning_sway`).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -117,27 +117,84 @@ def foot_turn_paths(foothold, centre, rate: float, duty: float, period: float,
     return TurnPath(axis=0, **keys), TurnPath(axis=1, **keys)
 
 
-def turning_sway(plan, origin, centre, rate: float):
+def turning_sway(plan, origin, centre, rate: float) -> tuple:
     """The trunk's ``x`` and ``y`` laws turning at ``rate`` (rad/s) about ``centre``, with the
     planned sway ``plan`` (:class:`legs.trunk_path.TrunkPlan`) along the trunk's own axes:
-    ``C + Rz(rate t) (origin - C + sway(t))``, exact derivatives (expressions)."""
-    from hexapod.scene import Expression
+    ``C + Rz(rate t) (origin - C + sway(t))`` (:class:`TurnedSway`)."""
+    keys = dict(rate=rate, cx=float(centre[0]), cy=float(centre[1]),
+                dx=float(origin[0] - centre[0]), dy=float(origin[1] - centre[1]),
+                period=plan.period, x0=plan.x[0], xcos=plan.x[1], xsin=plan.x[2],
+                y0=plan.y[0], ycos=plan.y[1], ysin=plan.y[2])
+    return TurnedSway(axis=0, **keys), TurnedSway(axis=1, **keys)
 
-    constants = {"w": rate, "cx": float(centre[0]), "cy": float(centre[1]),
-                 "dx": float(origin[0] - centre[0]), "dy": float(origin[1] - centre[1]),
-                 "f": 2 * np.pi / plan.period}
-    sway = []
-    for axis, (offset, cos, sin) in zip("xy", (plan.x, plan.y), strict=True):
-        constants[f"{axis}0"] = offset
-        terms = [f"{axis}0"]
-        for k, (a, b) in enumerate(zip(cos, sin, strict=True), 1):
-            constants.update({f"{axis}a{k}": a, f"{axis}b{k}": b})
-            terms.append(f"{axis}a{k} * cos({k} * f * t) + {axis}b{k} * sin({k} * f * t)")
-        sway.append(" + ".join(terms))
-    x = f"cx + cos(w * t) * (dx + {sway[0]}) - sin(w * t) * (dy + {sway[1]})"
-    y = f"cy + sin(w * t) * (dx + {sway[0]}) + cos(w * t) * (dy + {sway[1]})"
-    pairs = tuple(constants.items())
-    return Expression(x, pairs), Expression(y, pairs)
+
+@dataclass(frozen=True, eq=False)
+class TurnedSway(Law):
+    """One world coordinate (``axis`` 0: ``x``, 1: ``y``; m) of a trunk turning at ``rate``
+    (rad/s) about ``(cx, cy)``: ``C + Rz(rate t) (d + s(t))`` with ``d = (dx, dy)`` its start
+    from the centre and ``s`` its sway along its own axes, each the series ``x0, xcos, xsin``
+    and ``y0, ycos, ysin`` of ``period`` (s) as :class:`legs.carried.TrunkSway` has them; the
+    sway's component ``free`` (0 or 1) takes the correction ``bounds, values`` that lets two
+    feet carry it (none when empty)."""
+
+    axis: int = 0
+    rate: float = 0.0
+    cx: float = 0.0
+    cy: float = 0.0
+    dx: float = 0.0
+    dy: float = 0.0
+    period: float = 1.0
+    x0: float = 0.0
+    xcos: tuple = ()
+    xsin: tuple = ()
+    y0: float = 0.0
+    ycos: tuple = ()
+    ysin: tuple = ()
+    free: int = 1
+    bounds: tuple = ()
+    values: tuple = ()
+    _sway: object = field(default=None, init=False, repr=False, compare=False)
+    kind = "turned-sway"
+
+    def __post_init__(self):
+        from legs.carried import TrunkSway
+
+        for key in ("xcos", "xsin", "ycos", "ysin", "bounds", "values"):
+            object.__setattr__(self, key, tuple(float(x) for x in np.ravel(getattr(self, key))))
+        if not self.problems():
+            sway = [TrunkSway(start, 0.0, cos, sin, self.period,
+                              self.bounds if k == self.free else (),
+                              self.values if k == self.free else ())
+                    for k, (start, cos, sin) in enumerate(((self.x0, self.xcos, self.xsin),
+                                                           (self.y0, self.ycos, self.ysin)))]
+            object.__setattr__(self, "_sway", sway)
+
+    def evaluate(self, t):
+        t = np.asarray(t, dtype=float)
+        (u, u1, u2), (v, v1, v2) = (law.evaluate(t) for law in self._sway)
+        a, b = self.dx + u, self.dy + v  # the trunk from the centre, in its own axes
+        c, s, w = np.cos(self.rate * t), np.sin(self.rate * t), self.rate
+        if self.axis == 0:  # x = cx + c a - s b
+            return (self.cx + c * a - s * b,
+                    c * (u1 - w * b) - s * (v1 + w * a),
+                    c * (u2 - 2 * w * v1 - w * w * a) - s * (v2 + 2 * w * u1 - w * w * b))
+        return (self.cy + s * a + c * b,  # y = cy + s a + c b
+                s * (u1 - w * b) + c * (v1 + w * a),
+                s * (u2 - 2 * w * v1 - w * w * a) + c * (v2 + 2 * w * u1 - w * w * b))
+
+    def problems(self):
+        from legs.carried import TrunkSway
+
+        out = []
+        if self.axis not in (0, 1) or self.free not in (0, 1):
+            out.append(f"axis and free must be 0 or 1, got {self.axis!r} and {self.free!r}")
+        if not all(np.isfinite(v) for v in (self.rate, self.cx, self.cy, self.dx, self.dy)):
+            out.append("rate, cx, cy, dx and dy must be finite")
+        for start, cos, sin in ((self.x0, self.xcos, self.xsin), (self.y0, self.ycos,
+                                                                  self.ysin)):
+            out += TrunkSway(start, 0.0, cos, sin, self.period, self.bounds,
+                             self.values).problems()
+        return list(dict.fromkeys(out))
 
 
 def straight_frame(points, t, centre, rate: float, speed: float) -> np.ndarray:

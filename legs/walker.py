@@ -533,6 +533,8 @@ def _sway(series: tuple, start: float, speed: float, period: float):
 def _carry(scene, description, walk: _Walk, height: float) -> None:
     """Where only two feet are down (a trot, a pace, a bound), the trunk's sway corrected so
     that they can carry it (:mod:`legs.carried`)."""
+    from dataclasses import replace
+
     import hexapod as hx
     from hexapod import ModelError
     from hexapod.scene import Problem
@@ -547,14 +549,16 @@ def _carry(scene, description, walk: _Walk, height: float) -> None:
                                          f"{description.source}, gait.duty")]) from None
     if not phases:
         return
-    if walk.rate:
-        raise ModelError(where, [Problem(where, "a gait with two feet down cannot turn yet: "
-                                         "drop yaw_rate", f"{description.source}, gait.yaw_rate")])
     feet = {name: tuple(scene.drivers[f"{name}/{axis}"].law for axis in "xyz")
             for name in walk.phases}
-    driver = f"trunk/{'xy'[free_axis(phases, feet)]}"
+    axis = free_axis(phases, feet, walk.rate)
+    if walk.rate:  # both world coordinates hold the sway's correction along the trunk's axis
+        sways = {name: replace(scene.drivers[name].law, free=axis)
+                 for name in ("trunk/x", "trunk/y")}
+    else:
+        sways = {f"trunk/{'xy'[axis]}": scene.drivers[f"trunk/{'xy'[axis]}"].law}
     weight = sum(body.mass for body in scene.bodies.values()) * float(
         np.linalg.norm(scene.gravity))
     kinematics = hx.assemble(scene).guidance.kinematics
-    scene.drivers[driver].law = carry(kinematics, driver, scene.drivers[driver].law, phases,
-                                      feet, weight * height)
+    for name, law in carry(kinematics, sways, phases, feet, weight * height).items():
+        scene.drivers[name].law = law

@@ -153,3 +153,27 @@ def test_a_bound_is_carried_along_the_walk(tmp_path):
     result = hx.inverse_dynamics(model, np.linspace(0.0, 0.6, 31))
     assert _two_feet(scene, result.times).sum() >= 20
     assert result.feasible and momentum_gap(model, result) < 1e-9
+
+
+def test_a_trot_turns_carried_by_its_feet(tmp_path):
+    """The quadruped trotting and turning left at 20 degrees a second: both world coordinates
+    of the trunk hold the correction along its own lateral axis; every sample carried by
+    pushing feet inside their cones, the momentum balanced, the trunk's accelerations where
+    two feet leave it free its planned ones (1e-6 m/s^2) and its laws' rates and accelerations
+    their central differences."""
+    path = _variant(tmp_path, "period = 0.6\n", "period = 0.6\nyaw_rate = 20\n")
+    scene = hx.load_scene(path)
+    laws = [scene.drivers[f"trunk/{axis}"].law for axis in "xy"]
+    assert all(law.bounds and law.free == 1 for law in laws)
+    model = hx.assemble(scene)
+    result = hx.inverse_dynamics(model, np.linspace(0.0, 0.6, 31))
+    two = _two_feet(scene, result.times)
+    assert two.sum() >= 20 and result.feasible and momentum_gap(model, result) < 1e-9
+    trunk = model.bodies[model.body_index["trunk"]]
+    h, t = 1e-5, np.linspace(0.005, 0.595, 60)  # off the phases' bounds
+    for k, law in enumerate(laws):
+        acceleration = law.evaluate(result.times)[2]
+        assert np.abs(result.v_dot[two][:, trunk.v][:, k] - acceleration[two]).max() < 1e-6
+        value, rate, acceleration = law.evaluate(t)
+        assert np.abs((law(t + h) - law(t - h)) / (2 * h) - rate).max() < 1e-6
+        assert np.abs((law(t + h) - 2 * value + law(t - h)) / h**2 - acceleration).max() < 1e-3
