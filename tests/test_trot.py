@@ -47,6 +47,21 @@ def test_two_feet_carry_the_trot_with_pinocchios_efforts(trot):
     check_pinocchio(model, result, stored)
 
 
+def test_the_centre_of_pressure_is_on_the_two_feet_line_not_outside(trot):
+    """Where two feet carry the trot, the centre of pressure lies on their segment (a
+    round-off's distance from it: 1e-12 m), and the report counts no sample outside; the
+    centre of mass is off the segment there (a trot is not statically stable)."""
+    from hexapod.output.stability import stability_margins, stability_section
+
+    scene, model, result, _ = trot
+    margins = stability_margins(model, result)
+    two = _two_feet(scene, result.times)
+    assert np.abs(margins.cop_margin[two]).max() < 1e-12
+    assert np.all(margins.static_margin[two] < -1e-3)
+    section = "\n".join(stability_section(margins))
+    assert f"| 0 of {result.times.size} |" in section
+
+
 def test_the_trunk_tips_as_planned_where_two_feet_leave_it_free(trot):
     """Where two feet are down the dynamics decides the trunk's tipping about their line
     (the constraints leave it free): its accelerations are the planned sway's to 1e-6 m/s^2

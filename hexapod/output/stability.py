@@ -32,6 +32,12 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 
+#: m: a point this close to the support polygon is on its edge, not outside it. Two feet
+#: support the robot on a segment, which has no inside: a centre of pressure on it (a trot's,
+#: the weighted mean of the two feet) is a round-off's distance away, never more.
+ON_THE_EDGE = 1e-9
+
+
 @dataclass(frozen=True)
 class Stability:
     """The support polygons and the two margins at every sample (see the module's
@@ -194,13 +200,13 @@ def margins_csv_text(margins: Stability) -> str:
 
 def stability_section(margins: Stability) -> list[str]:
     """The summary's section: each margin's smallest value and when, and how long the point
-    is outside the support polygon."""
+    is outside the support polygon (by more than :data:`ON_THE_EDGE`)."""
     rows = []
     for name, margin in (("static (centre of mass)", margins.static_margin),
                          ("centre of pressure (ZMP)", margins.cop_margin)):
         valid = np.isfinite(margin)
         k = int(np.flatnonzero(valid)[np.argmin(margin[valid])]) if valid.any() else 0
-        outside = int(np.count_nonzero(margin[valid] < 0))
+        outside = int(np.count_nonzero(margin[valid] < -ON_THE_EDGE))
         rows.append([name, f"{1e3 * margin[k]:.4g}", f"{margins.times[k]:.4g}",
                      f"{outside} of {margin.size}"])
     return (["", "## Stability", "",
