@@ -301,7 +301,7 @@ def _phase(model, data, times, w, wd, wdd, frame, progress, known) -> InverseRes
 def _saddle(model, data, times, frame, progress, known=None) -> InverseResult:
     # the saddle path's algorithms, loaded when it runs: the tree path (and 'hexapod inverse'
     # on a leg or a URDF robot) starts without them
-    from hexapod.algorithms.sample_inverse import exact_sample
+    from hexapod.algorithms.sample_inverse import exact_sample, known_sample
 
     n, J = times.size, len(model.joints)
     force, torque, effort = np.zeros((n, J, 3)), np.zeros((n, J, 3)), np.zeros((n, J))
@@ -311,8 +311,7 @@ def _saddle(model, data, times, frame, progress, known=None) -> InverseResult:
     worst = 0.0
     for k, t in enumerate(times):
         if known is not None:  # Newton from the positions known there
-            sample = exact_sample(model, data, t, known[0][k], t, frame=frame,
-                                  known=(known[1][k], known[2][k]))
+            sample = known_sample(model, data, times, known, k, frame)
         else:
             sample = exact_sample(model, data, times[k - 1] if k else t,
                                   Q[k - 1] if k else model.q0, t,

@@ -50,7 +50,12 @@ from hexapod.algorithms.ground import NO_LOAD, foot_values, in_contact_axes, sha
 from hexapod.algorithms.liaison import efforts_and_axes
 from hexapod.algorithms.linalg import as_dense, equilibrate, split_rows
 from hexapod.algorithms.phase_plan import MORE_NEWTON_STEPS, NEWTON_STEPS, PhasePlan, plan_for
-from hexapod.algorithms.sample_inverse import SampleResult, exact_forces, exact_sample
+from hexapod.algorithms.sample_inverse import (
+    SampleResult,
+    exact_forces,
+    exact_sample,
+    known_sample,
+)
 from hexapod.algorithms.static_lu import StaticLU
 from hexapod.algorithms.step_terms import StepTerms, terms_of
 from hexapod.model.model import Data, Model
@@ -166,7 +171,7 @@ def phase_inverse(model: Model, data: Data, times: np.ndarray, w, wd, wdd, frame
     out.known = known
     feet = _Feet(model, times)
     out.store(0, exact_sample(model, data, times[0], model.q0, times[0], frame=frame,
-                              first=True) if known is None else _known_sample(
+                              first=True) if known is None else known_sample(
         model, data, times, known, 0, frame))
     decisions = _Decisions(model, data, terms_of(model), feet, to_c)
     decisions.adopt(0, data, w[:, 0])
@@ -182,7 +187,7 @@ def phase_inverse(model: Model, data: Data, times: np.ndarray, w, wd, wdd, frame
             bad, blame = (k, "rank") if plan is None else failed
             out.store(bad, exact_sample(model, data, times[bad - 1], out.q[bad - 1],
                                         times[bad], (out.v[bad - 1], out.v_dot[bad - 1]),
-                                        frame=frame) if known is None else _known_sample(
+                                        frame=frame) if known is None else known_sample(
                 model, data, times, known, bad, frame))
             if blame == "rank":  # the decision no longer holds: take the exact solve's
                 decisions.adopt(bad, data, w[:, bad], plan)
@@ -202,13 +207,6 @@ def phase_inverse(model: Model, data: Data, times: np.ndarray, w, wd, wdd, frame
             "torque": out.torque, "effort": out.effort, "ground": out.ground,
             "max_violation": float(out.violation.max()),
             "redundant_rows": tuple(out.redundant), "exact_samples": int(out.exact.sum())}
-
-
-def _known_sample(model: Model, data: Data, times, known: tuple, k: int,
-                  frame: str) -> SampleResult:
-    """The exact sample ``k`` of a motion known at the samples (``known``: q, v, v_dot)."""
-    return exact_sample(model, data, times[k], known[0][k], times[k], frame=frame,
-                        known=(known[1][k], known[2][k]))
 
 
 class _Decisions:

@@ -79,6 +79,14 @@ def exact_sample(model: Model, data: Data, t0: float, q0: np.ndarray, t: float,
     return out
 
 
+def known_sample(model: Model, data: Data, times: np.ndarray, known: tuple, k: int,
+                 frame: str = "joint") -> SampleResult:
+    """The exact sample ``k`` of a motion known at the samples ``times`` (``known``: its
+    ``q, v, v_dot``, each (N, size)): Newton from its positions there (:func:`exact_sample`)."""
+    return exact_sample(model, data, times[k], known[0][k], times[k], frame=frame,
+                        known=(known[1][k], known[2][k]))
+
+
 def exact_forces(model: Model, data: Data, t: float, q: np.ndarray, v: np.ndarray, *,
                  frame: str = "joint") -> SampleResult:
     """Accelerations, multipliers by the scene's policy, joint wrenches and ground forces at a
