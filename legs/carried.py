@@ -37,7 +37,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from hexapod.scene import Hermite, Law
+from hexapod.scene import Harmonic, Hermite, Law
 
 #: The correction's degree on each two-feet phase at first, and at most.
 DEGREE, HIGHEST_DEGREE = 48, 96
@@ -67,25 +67,22 @@ class TrunkSway(Law):
     period: float = 1.0
     bounds: tuple = ()
     values: tuple = ()
+    _series: object = field(default=None, init=False, repr=False, compare=False)
     _pieces: object = field(default=None, init=False, repr=False, compare=False)
     kind = "trunk-sway"
 
     def __post_init__(self):
         for key in ("cos", "sin", "bounds", "values"):
             object.__setattr__(self, key, tuple(float(x) for x in np.ravel(getattr(self, key))))
+        object.__setattr__(self, "_series", Harmonic(self.start, self.cos, self.sin,
+                                                     1.0 / self.period if self.period else 0.0))
         if self.bounds and not self.problems():
             object.__setattr__(self, "_pieces", _correction_pieces(self))
 
     def evaluate(self, t):
         t = np.asarray(t, dtype=float)
-        w = 2 * np.pi / self.period
-        out = [self.start + self.speed * t, np.full_like(t, self.speed), np.zeros_like(t)]
-        for k, (a, b) in enumerate(zip(self.cos, self.sin, strict=True), 1):
-            c, s = np.cos(k * w * t), np.sin(k * w * t)
-            kw = k * w
-            out[0] = out[0] + a * c + b * s
-            out[1] = out[1] + kw * (b * c - a * s)
-            out[2] = out[2] - kw * kw * (a * c + b * s)
+        value, rate, acceleration = self._series.evaluate(t)
+        out = [value + self.speed * t, rate + self.speed, acceleration]
         if self._pieces is not None:
             tau = self.bounds[0] + np.mod(t - self.bounds[0], self.period)
             for (a, b), closed, piece in self._pieces:
@@ -97,6 +94,12 @@ class TrunkSway(Law):
 
     def cycle_time(self):
         return self.period if self.speed == 0.0 else None
+
+    def symbolic(self, t):  # a closed form without a correction: the series and the drift
+        if self.bounds:
+            return None
+        value, rate, acceleration = self._series.symbolic(t)
+        return value + self.speed * t, rate + self.speed, acceleration
 
     def problems(self):
         out = []
@@ -130,7 +133,7 @@ def _correction_pieces(sway: TrunkSway) -> list:
     values = np.array(sway.values).reshape(len(bounds), -1)
     out, ends = [], []
     for (a, b), y in zip(bounds, values, strict=True):
-        x = -np.cos(np.pi * np.arange(y.size) / (y.size - 1))
+        x = _unit_lobatto(y.size - 1)
         c = chebyshev.chebfit(x, y, y.size - 1)
         scale = 2.0 / (b - a)
         series = (c, chebyshev.chebder(c) * scale, chebyshev.chebder(c, 2) * scale**2)
@@ -207,9 +210,14 @@ def tipping(model, result, lines: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
     return np.einsum("ni,ni->n", moment - np.cross(point, force), unit)
 
 
+def _unit_lobatto(degree: int) -> np.ndarray:
+    """The Chebyshev-Lobatto points of ``[-1, 1]`` in increasing order (``degree + 1``)."""
+    return -np.cos(np.pi * np.arange(degree + 1) / degree)
+
+
 def lobatto(a: float, b: float, degree: int) -> np.ndarray:
     """The Chebyshev-Lobatto points of ``[a, b]`` in time order (``degree + 1``)."""
-    return a + (b - a) * (1.0 - np.cos(np.pi * np.arange(degree + 1) / degree)) / 2.0
+    return a + (b - a) * (_unit_lobatto(degree) + 1.0) / 2.0
 
 
 def differentiation(a: float, b: float, degree: int) -> tuple[np.ndarray, np.ndarray]:
@@ -217,7 +225,7 @@ def differentiation(a: float, b: float, degree: int) -> tuple[np.ndarray, np.nda
     through values there, as matrices on the values (as :class:`TrunkSway` evaluates it)."""
     from numpy.polynomial import chebyshev
 
-    x = -np.cos(np.pi * np.arange(degree + 1) / degree)
+    x = _unit_lobatto(degree)
     fit = chebyshev.chebfit(x, np.eye(degree + 1), degree)  # columns: each value's series
     scale = 2.0 / (b - a)
     return tuple(chebyshev.chebval(x, chebyshev.chebder(fit, m)).T * scale**m for m in (1, 2))
@@ -348,13 +356,15 @@ class _Collocation:
         end values' squares), to first order: each phase's solution moves with its end values
         along the homogeneous solutions of its linearised equations."""
         n, phases = len(self.phases), self.phases
-        ends, moves = [], []  # per phase: (value, rate, acceleration) at start and stop
+        ends, moves, grids = [], [], []  # per phase: (value, rate, acceleration) at its
+        # start and stop; how they move with its end values; its homogeneous solutions
         for k, jacobian, (d1, d2) in zip(self.spans, self.jacobians, self.matrices,
                                          strict=True):
             def at(y, d1=d1, d2=d2):  # value, rate and acceleration at the phase's ends
                 return np.array([[y[i], (d1 @ y)[i], (d2 @ y)[i]] for i in (0, -1)])
 
             grid = _homogeneous(jacobian)
+            grids.append(grid)
             ends.append(at(d[k]))
             moves.append([at(grid[:, 0]), at(grid[:, 1])])
         rows, rhs = [], []
@@ -373,8 +383,8 @@ class _Collocation:
         rhs.append(-weight * np.concatenate([[end[0][0], end[1][0]] for end in ends]))
         shift = np.linalg.lstsq(np.vstack(rows), np.concatenate(rhs), rcond=None)[0]
         out = d.copy()
-        for j, (k, jacobian) in enumerate(zip(self.spans, self.jacobians, strict=True)):
-            out[k] = out[k] + _homogeneous(jacobian) @ shift[2 * j:2 * j + 2]
+        for j, (k, grid) in enumerate(zip(self.spans, grids, strict=True)):
+            out[k] = out[k] + grid @ shift[2 * j:2 * j + 2]
         return out
 
 

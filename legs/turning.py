@@ -161,13 +161,12 @@ class TurnedSway(Law):
 
         for key in ("xcos", "xsin", "ycos", "ysin", "bounds", "values"):
             object.__setattr__(self, key, tuple(float(x) for x in np.ravel(getattr(self, key))))
-        if not self.problems():
-            sway = [TrunkSway(start, 0.0, cos, sin, self.period,
-                              self.bounds if k == self.free else (),
-                              self.values if k == self.free else ())
-                    for k, (start, cos, sin) in enumerate(((self.x0, self.xcos, self.xsin),
-                                                           (self.y0, self.ycos, self.ysin)))]
-            object.__setattr__(self, "_sway", sway)
+        # the sway along the trunk's own axes, the correction on its component ``free``
+        object.__setattr__(self, "_sway", [
+            TrunkSway(start, 0.0, cos, sin, self.period, self.bounds if k == self.free else (),
+                      self.values if k == self.free else ())
+            for k, (start, cos, sin) in enumerate(((self.x0, self.xcos, self.xsin),
+                                                   (self.y0, self.ycos, self.ysin)))])
 
     def evaluate(self, t):
         t = np.asarray(t, dtype=float)
@@ -183,17 +182,13 @@ class TurnedSway(Law):
                 s * (u2 - 2 * w * v1 - w * w * a) + c * (v2 + 2 * w * u1 - w * w * b))
 
     def problems(self):
-        from legs.carried import TrunkSway
-
         out = []
         if self.axis not in (0, 1) or self.free not in (0, 1):
             out.append(f"axis and free must be 0 or 1, got {self.axis!r} and {self.free!r}")
         if not all(np.isfinite(v) for v in (self.rate, self.cx, self.cy, self.dx, self.dy)):
             out.append("rate, cx, cy, dx and dy must be finite")
-        for start, cos, sin in ((self.x0, self.xcos, self.xsin), (self.y0, self.ycos,
-                                                                  self.ysin)):
-            out += TrunkSway(start, 0.0, cos, sin, self.period, self.bounds,
-                             self.values).problems()
+        for sway in self._sway:
+            out += sway.problems()
         return list(dict.fromkeys(out))
 
 
