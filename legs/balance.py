@@ -62,8 +62,9 @@ def zero_moment_point(model, result, axes) -> np.ndarray:
 
 
 def refine_plan(scene, plan, replan, laws, to_plan) -> tuple:
-    """The trunk's plan corrected by the whole robot (see the module's notes), and the
-    largest difference left (m).
+    """The trunk's plan corrected by the whole robot (see the module's notes), the largest
+    difference left (m), and the guides' kinematics with the plan's laws (for more work on
+    the walk's motion without assembling it again).
 
     Parameters
     ----------
@@ -86,9 +87,7 @@ def refine_plan(scene, plan, replan, laws, to_plan) -> tuple:
     times = np.arange(samples) * plan.period / samples
     axes = scene.ground.terrain.axes()
     kinematics = hx.assemble(scene).guidance.kinematics  # the guides as drivers
-    index = {d.name: d.law for d in kinematics.drivers}
-    if min(index["trunk/x"], index["trunk/y"]) < 0:  # a constant law is built into its row
-        return plan, float("nan")
+    index = {d.name: d.law for d in kinematics.drivers}  # the trunk's sway: never constant
     correction, model = np.zeros((samples, 2)), kinematics
     for done in range(ROUNDS + 1):
         result = hx.inverse_dynamics(model, times, check_limits=False)
@@ -104,4 +103,4 @@ def refine_plan(scene, plan, replan, laws, to_plan) -> tuple:
             scene.drivers[name].law = changed[index[name]] = law
         digest = hashlib.sha256(repr((kinematics.digest, done, trunk)).encode()).hexdigest()
         model = kinematics.with_laws(tuple(changed), digest, share_built=True)
-    return plan, gap
+    return plan, gap, model

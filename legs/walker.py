@@ -286,9 +286,9 @@ def robot_scene(description):
             lifted.add(JointDriver(f"drive_{joint.name}", joint.name, Guided()))
     for name, foot in description.feet.items():
         _add_posture(lifted, description, name, _leg_joints(urdf, trunk, foot.link), angles)
-    if gait.trunk == "whole-body":
-        _whole_body(lifted, trunk, walk, rest, height, plan)
-    _carry(lifted, description, walk, height)
+    kinematics = (_whole_body(lifted, trunk, walk, rest, height, plan)
+                  if gait.trunk == "whole-body" else None)
+    _carry(lifted, description, walk, height, kinematics)
     lifted.name, lifted.source = description.name, description.source
     lifted.actuators = description.actuators  # the report checks the motors when there are
     return lifted
@@ -373,17 +373,18 @@ def _plan(walk: _Walk, rest: dict, height: float, masses: tuple, correction=None
         slope=(terrain.slope, terrain.heading), correction=correction, mu=walk.mu)
 
 
-def _whole_body(scene, trunk: str, walk: _Walk, rest: dict, height: float, plan) -> None:
+def _whole_body(scene, trunk: str, walk: _Walk, rest: dict, height: float, plan):
     """The trunk's lumped ``plan`` corrected by the whole robot's centre of pressure
-    (:mod:`legs.balance`)."""
+    (:mod:`legs.balance`); returns the guides' kinematics with the corrected laws."""
     from legs.balance import refine_plan
     from legs.turning import straight_frame
 
     masses = _masses(scene, trunk)
-    refine_plan(scene, plan, lambda correction: _plan(walk, rest, height, masses, correction),
-                lambda plan: _sway_laws(walk, plan),
-                lambda points, t: straight_frame(points, t, walk.centre, walk.rate,
-                                                 walk.speed) if walk.rate else points)
+    return refine_plan(
+        scene, plan, lambda correction: _plan(walk, rest, height, masses, correction),
+        lambda plan: _sway_laws(walk, plan),
+        lambda points, t: straight_frame(points, t, walk.centre, walk.rate,
+                                         walk.speed) if walk.rate else points)[2]
 
 
 def _sway_laws(walk: _Walk, plan) -> tuple:
@@ -530,9 +531,10 @@ def _sway(series: tuple, start: float, speed: float, period: float):
     return TrunkSway(start + offset, speed, cos, sin, period)
 
 
-def _carry(scene, description, walk: _Walk, height: float) -> None:
+def _carry(scene, description, walk: _Walk, height: float, kinematics=None) -> None:
     """Where only two feet are down (a trot, a pace, a bound), the trunk's sway corrected so
-    that they can carry it (:mod:`legs.carried`)."""
+    that they can carry it (:mod:`legs.carried`); ``kinematics``: the scene's guides'
+    kinematics when it is assembled already (the whole-body plan's)."""
     from dataclasses import replace
 
     import hexapod as hx
@@ -559,6 +561,7 @@ def _carry(scene, description, walk: _Walk, height: float) -> None:
         sways = {f"trunk/{'xy'[axis]}": scene.drivers[f"trunk/{'xy'[axis]}"].law}
     weight = sum(body.mass for body in scene.bodies.values()) * float(
         np.linalg.norm(scene.gravity))
-    kinematics = hx.assemble(scene).guidance.kinematics
+    if kinematics is None:
+        kinematics = hx.assemble(scene).guidance.kinematics
     for name, law in carry(kinematics, sways, phases, feet, weight * height).items():
         scene.drivers[name].law = law
