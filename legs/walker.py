@@ -278,6 +278,7 @@ def robot_scene(description):
     gait = description.gait
     walk = _Walk(gait, gait.phases or _pattern_phases(gait.pattern, rest),
                  lifted.pose(trunk).position, lifted.ground.terrain, lifted.ground.mu)
+    two_feet = _two_feet_phases(description, walk)  # checked before any planning
     plan = _add_trunk(lifted, trunk, walk, rest, height)
     for name in description.feet:
         _add_foot(lifted, description, name, walk, rest[name])
@@ -288,7 +289,8 @@ def robot_scene(description):
         _add_posture(lifted, description, name, _leg_joints(urdf, trunk, foot.link), angles)
     kinematics = (_whole_body(lifted, trunk, walk, rest, height, plan)
                   if gait.trunk == "whole-body" else None)
-    _carry(lifted, description, walk, height, kinematics)
+    if two_feet:
+        _carry(lifted, walk, two_feet, height, kinematics)
     lifted.name, lifted.source = description.name, description.source
     lifted.actuators = description.actuators  # the report checks the motors when there are
     return lifted
@@ -531,26 +533,32 @@ def _sway(series: tuple, start: float, speed: float, period: float):
     return TrunkSway(start + offset, speed, cos, sin, period)
 
 
-def _carry(scene, description, walk: _Walk, height: float, kinematics=None) -> None:
-    """Where only two feet are down (a trot, a pace, a bound), the trunk's sway corrected so
-    that they can carry it (:mod:`legs.carried`); ``kinematics``: the scene's guides'
-    kinematics when it is assembled already (the whole-body plan's)."""
+def _two_feet_phases(description, walk: _Walk) -> list:
+    """The gait's phases with two feet down (:func:`legs.carried.two_feet_phases`); a gait
+    with one foot down, or whose pairs hand the robot over in no time, is a ``ModelError``
+    naming ``gait.duty``."""
+    from hexapod import ModelError
+    from hexapod.scene import Problem
+    from legs.carried import two_feet_phases
+
+    gait = walk.gait
+    try:
+        return two_feet_phases(walk.phases, gait.duty, gait.period)
+    except ValueError as error:
+        where = f"robot description {Path(description.source).name}"
+        raise ModelError(where, [Problem(where, str(error),
+                                         f"{description.source}, gait.duty")]) from None
+
+
+def _carry(scene, walk: _Walk, phases: list, height: float, kinematics=None) -> None:
+    """Where only two feet are down (a trot, a pace, a bound: ``phases``), the trunk's sway
+    corrected so that they can carry it (:mod:`legs.carried`); ``kinematics``: the scene's
+    guides' kinematics when it is assembled already (the whole-body plan's)."""
     from dataclasses import replace
 
     import hexapod as hx
-    from hexapod import ModelError
-    from hexapod.scene import Problem
-    from legs.carried import carry, free_axis, two_feet_phases
+    from legs.carried import carry, free_axis
 
-    gait = walk.gait
-    where = f"robot description {Path(description.source).name}"
-    try:
-        phases = two_feet_phases(walk.phases, gait.duty, gait.period)
-    except ValueError as error:
-        raise ModelError(where, [Problem(where, str(error),
-                                         f"{description.source}, gait.duty")]) from None
-    if not phases:
-        return
     feet = {name: tuple(scene.drivers[f"{name}/{axis}"].law for axis in "xyz")
             for name in walk.phases}
     axis = free_axis(phases, feet, walk.rate)
