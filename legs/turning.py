@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hexapod.scene import Law
+from legs.carried import TrunkSway
 from legs.stepping import STEP_RATES, OnSchedule
 
 
@@ -157,8 +158,6 @@ class TurnedSway(Law):
     kind = "turned-sway"
 
     def __post_init__(self):
-        from legs.carried import TrunkSway
-
         for key in ("xcos", "xsin", "ycos", "ysin", "bounds", "values"):
             object.__setattr__(self, key, tuple(float(x) for x in np.ravel(getattr(self, key))))
         # the sway along the trunk's own axes, the correction on its component ``free``
