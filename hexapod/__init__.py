@@ -47,7 +47,8 @@ __getattr__, __dir__, __all__ = attach(__name__, {
     "hexapod.scene.urdf": ["read_urdf"],
     "hexapod.scene.motion": ["apply_motion", "read_motion"],
     # the model
-    "hexapod.model": ["Data", "Model", "assemble"],
+    "hexapod.model": ["Data", "Model"],
+    "hexapod.algorithms.assembly": ["assemble"],
     # algorithms at a state, and over a motion
     "hexapod.algorithms.kinematics": ["assemble_positions", "body_poses", "consistent_state",
                                       "degrees_of_freedom", "marker_trajectories",

@@ -68,9 +68,9 @@ def test_gates_and_footholds_evaluated_together_are_those_evaluated_alone():
 def test_tabulation_meets_its_tolerance_between_the_times_it_checked():
     model = hx.assemble(hx.load_scene("front-leg"))
     costly = [i for i, law in enumerate(model.laws) if law.costly]
-    assert len(costly) == 6  # the six joints' gait laws
+    assert len(costly) == 3  # the three joints that follow the foot's guides
     twin, record = tabulated_model(model, 0.0, 1.2, 1e-8)
-    assert record["tabulated"] == 6 and record["period_s"] == pytest.approx(PERIOD)
+    assert record["tabulated"] == 3 and record["period_s"] == pytest.approx(PERIOD)
     assert max(record["error"].values()) <= 1e-8
     assert twin.digest != model.digest and twin.n_w == model.n_w
     t = np.random.default_rng(1).uniform(0.0, 1.2, 400)  # over two periods and more
@@ -116,7 +116,7 @@ def test_a_simulation_with_tabulated_laws_agrees_with_the_exact_laws():
     exact = hx.simulate(model, 0.14, exact_laws=True, **options)
     assert fast.status == exact.status == "finished"
     record = fast.options["laws"]
-    assert record["tabulated"] == 6 and "laws" not in exact.options
+    assert record["tabulated"] == 3 and "laws" not in exact.options
     assert record["tolerance"] == pytest.approx(1e-2 * hx.simulation.DEFAULT_RTOL)
     assert fast.model is model  # the result speaks of the user's model
     assert np.array_equal(fast.t, exact.t)
@@ -155,9 +155,10 @@ def test_a_controllers_target_speed_is_the_rate_of_its_targets_table():
     every step (which made the walking robot's time-stepping spend half its time in the gait's
     inverse kinematics), and agrees with the exact rate to the table's tolerance."""
     scene = hx.load_scene("front-leg")
-    driver = next(e for e in scene.elements if getattr(e, "law", None) is not None
-                  and e.law.costly)
-    scene.add(JointController("servo", driver.joint, target=driver.law, kp=1.0))
+    leg = hx.assemble(scene)  # a joint that follows the foot's guides: its motion, costly
+    driver = next(d for d in leg.drivers if d.kind == "joint" and leg.laws[d.law].costly)
+    scene.add(JointController("servo", leg.joints[driver.joint].name,
+                              target=leg.laws[driver.law], kp=1.0))
     model = hx.assemble(scene)
     rates = [i for i, law in enumerate(model.laws) if isinstance(law, Rate)]
     assert len(rates) == 1 and model.laws[rates[0]].law.costly

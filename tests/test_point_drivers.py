@@ -147,23 +147,18 @@ def _moving_trunk(leg: hx.Scene) -> hx.Scene:
     return out
 
 
-def cockroach_leg(duty: float, foot_drivers: str) -> hx.Scene:
-    """The front leg on a turning trunk walking with ``duty``: every joint driven by the gait's
-    exact laws (``foot_drivers`` "none": the leg's own inverse kinematics, :mod:`legs.stepping`),
-    or three of them and the foot's path as three coordinate drivers in the trunk's frame
-    (``"drivers"``), or as guides that the three other joints follow (``"guides"``)."""
+def cockroach_leg(duty: float, guides: bool) -> hx.Scene:
+    """The front leg on a turning trunk walking with ``duty``: three joints driven by the gait's
+    laws and the foot's path as three coordinate drivers in the trunk's frame, either driving
+    the foot (the three other joints free) or as guides that the three other joints follow."""
     from legs.cockroach import FOOT_LIFT_MM, GAIT_LAWS, STANCE_LENGTH_MM
-    from legs.leg import JOINTS, leg_scene
-    from legs.stepping import SOLVED_JOINTS, Stepping, foot_path_rates, path_targets
+    from legs.leg import leg_scene
+    from legs.stepping import SOLVED_JOINTS, foot_path_rates, path_targets
 
-    if foot_drivers == "none":
-        return _moving_trunk(leg_scene("front", "L", 1.0, {j: Stepping("front", j, duty, 1.0, 0.0)
-                                                           for j in JOINTS}, "front-exact"))
     amplitude = {joint: np.radians(a) for joint, a, _ in GAIT_LAWS}
     laws = {"thc_levation": _PathShape(1, duty, amplitude["thc_levation"]),
             "coxa_rotation": _PathShape(1, duty, amplitude["coxa_rotation"]),
             "tita": _PathShape(0, duty, 2 * amplitude["tita"])}
-    guides = foot_drivers == "guides"
     if guides:
         laws.update({joint: hx.scene.Guided() for joint in SOLVED_JOINTS})
     start = path_targets("front", np.array([0.0]), duty)[0]  # m, the leg's frame
@@ -178,35 +173,22 @@ def cockroach_leg(duty: float, foot_drivers: str) -> hx.Scene:
     return _moving_trunk(leg)
 
 
-def test_the_engine_solves_the_cockroach_leg_as_its_own_inverse_kinematics():
-    """The front leg on a trunk that moves and turns: the hand-written inverse kinematics
-    (joint drivers with the gait's exact laws) and the engine's (three of those laws, and
-    three coordinate drivers on the foot point in the trunk's frame) agree on every body's
-    motion to round-off (q to 1e-12 m, v and v_dot to 1e-10 of their largest)."""
-    ik = cockroach_leg(0.6, "drivers")
-    assert [d.frame for d in ik.drivers.values() if d.kind == "coordinate"] == ["trunk"] * 3
+def test_the_foot_driven_or_guided_moves_the_cockroach_leg_alike():
+    """The front leg on a trunk that moves and turns, its foot on its path by three coordinate
+    drivers in the trunk's frame (one model: the phase path) or by three guides the other
+    joints follow (the guides' kinematics, then the joints' twin): every body's motion is the
+    same to round-off (q to 1e-12 m, v and v_dot to 1e-10 of their largest). (That the
+    guided joints follow the motion the cockroach's own inverse kinematics gave, and carry
+    the same efforts, is ``tests/test_cockroach_data.py``.)"""
+    driven = cockroach_leg(0.6, guides=False)
+    assert [d.frame for d in driven.drivers.values() if d.kind == "coordinate"] == ["trunk"] * 3
     times = np.linspace(0.0, 1.0, 121)
-    first = hx.inverse_dynamics(hx.assemble(ik), times)
-    second = hx.inverse_dynamics(hx.assemble(cockroach_leg(0.6, "none")), times)
+    first = hx.inverse_dynamics(hx.assemble(driven), times)
+    second = hx.inverse_dynamics(hx.assemble(cockroach_leg(0.6, guides=True)), times)
     assert np.abs(first.q - second.q).max() < 1e-12
     for name in ("v", "v_dot"):
         a, b = getattr(first, name), getattr(second, name)
-        # the two scenes take different paths (the foot's drivers: the phase path; joint
-        # drivers only: the tree path): 2e-11 of the largest apart when measured
         assert np.abs(a - b).max() < 1e-10 * np.abs(b).max()
-
-
-def test_the_cockroach_leg_guided_by_its_foot_carries_its_own_efforts():
-    """The same leg with its foot's path as guides and the three solved joints following them:
-    every joint's effort and wrench, the trunk's turning driver's included, are those of the
-    leg driven by its own inverse kinematics (to 1e-9 of the largest: the paths' agreement)."""
-    times = np.linspace(0.0, 1.0, 121)
-    guided = hx.inverse_dynamics(hx.assemble(cockroach_leg(0.6, "guides")), times)
-    exact = hx.inverse_dynamics(hx.assemble(cockroach_leg(0.6, "none")), times)
-    assert guided.joints == exact.joints
-    for name in ("effort", "force", "torque"):
-        a, b = getattr(guided, name), getattr(exact, name)
-        assert np.nanmax(np.abs(a - b)) <= 1e-9 * np.nanmax(np.abs(b)), name
 
 
 # ------------------------------------------------------------------ a body's orientation
@@ -343,6 +325,31 @@ def test_a_guided_scene_reads_back(tmp_path):
     assert np.array_equal(result.effort, reference.effort)
 
 
+def test_a_guided_models_joint_laws_are_its_guides_motion_at_any_time():
+    """In the model each guided joint's law is the motion the guides give it, solved by the
+    engine's kinematics at the times asked: the closed-form angles (counted from the joint's
+    zero, the written pose), rates and accelerations at times in any order (1e-9 of their
+    largest), and an analysis at an instant (the state the constraints and laws give at t)
+    has the arm's tip on its circle."""
+    model = hx.assemble(guided_arm())
+    t = np.array([0.7, 0.1, 0.35, 1.9])
+    law = {model.joints[d.joint].name: d.law for d in model.drivers if d.kind == "joint"}
+    values = np.array(model.law_values(t))  # (3, n_w, 4)
+    closed = closed_form_arm(t)
+    for k, joint in enumerate(("shoulder", "elbow")):
+        for m in range(3):
+            got, want = values[m, law[joint]], closed[m][:, k]
+            if m == 0:  # an angle from the joint's zero, up to whole turns
+                got, want = got - got[0], want - want[0]
+                got = want + np.angle(np.exp(1j * (got - want)))
+            assert np.abs(got - want).max() <= 1e-9 * np.abs(closed[m]).max(), (joint, m)
+    data = model.create_data()
+    q, _ = hx.consistent_state(model, data, 0.35)
+    th = closed_form_arm(np.array([0.35]))[0][0]
+    assert abs(np.angle(np.exp(1j * (q[2] - th[0])))) < 1e-9
+    assert abs(np.angle(np.exp(1j * (q[5] - q[2] - th[1])))) < 1e-9
+
+
 def test_a_guided_scene_simulates_its_guides_motion():
     """A simulation of the guided arm: the joints move as the guides make them (their laws
     tabulated from the guides' kinematics to a hundredth of the run's tolerance), so the tip
@@ -354,26 +361,6 @@ def test_a_guided_scene_simulates_its_guides_motion():
     assert np.abs(np.unwrap(run.q[:, 2]) - angles[:, 0]).max() < 1e-7
     assert np.abs(run.q[:, 5] - run.q[:, 2] - angles[:, 1]).max() < 1e-7
     assert run.options["laws"]["tabulated"] == 2
-
-
-def test_the_walking_robot_guided_by_its_feet_reproduces_the_built_in_robot():
-    """The built-in walking robot (free trunk, feet on the ground by the tripod's schedule)
-    with each foot's path as guides in the trunk's frame and the three joints per leg its own
-    inverse kinematics solves following them: the engine places the legs, and the efforts,
-    joint wrenches and ground forces are the built-in robot's to 1e-9 of their largest (7e-13
-    when measured over 101 samples)."""
-    from robots import builtin_model
-
-    from legs.robot import hexapod_scene
-
-    times = np.linspace(0.0, 0.5, 11)  # a stride, both tripods' stances
-    guided = hx.inverse_dynamics(hx.assemble(hexapod_scene("tripod", trunk="free",
-                                                           guided=True)), times)
-    built_in = hx.inverse_dynamics(builtin_model("hexapod"), times)
-    assert guided.joints == built_in.joints and guided.contacts == built_in.contacts
-    for name in ("effort", "force", "torque", "ground_force"):
-        a, b = getattr(guided, name), getattr(built_in, name)
-        assert np.nanmax(np.abs(a - b)) <= 1e-9 * np.nanmax(np.abs(b)), name
 
 
 def _arm_motion(model, t, elbow):

@@ -63,6 +63,26 @@ def front_leg():
     return scene, model, hx.inverse_dynamics(model, times)
 
 
+@pytest.fixture(scope="module")
+def front_leg_on_laws():
+    """The front leg on its harmonic joint laws (``legs.front_leg_scene``), its foot loaded as
+    the built-in leg's: joints moved by a parameter keep their laws (the built-in leg's follow
+    its foot's guides, whose derivatives through the kinematics are not computed)."""
+    from legs import front_leg_scene
+
+    scene = front_leg_scene()
+    scene.add(hx.load_scene("front-leg").forces["ground_reaction"])
+    model = hx.assemble(scene)
+    times = np.linspace(0.0, 0.5, 41)
+    return scene, model, hx.inverse_dynamics(model, times)
+
+
+def test_a_guided_joint_moved_by_a_parameter_is_refused(front_leg):
+    scene, model, result = front_leg
+    with pytest.raises(hx.HexapodError, match="follow its guides.*not computed"):
+        hx.inverse_sensitivities(model, result, inertia_parameters(scene, ["joint.fti.origin"]))
+
+
 def test_front_leg_against_central_differences(front_leg):
     scene, model, result = front_leg
     changes = inertia_parameters(scene, ["body.*.mass", "body.*.inertia"])
@@ -80,11 +100,11 @@ def test_front_leg_against_central_differences(front_leg):
             assert error <= TOLERANCE * np.abs(value[finite]).max(), (change.name, name)
 
 
-def test_front_leg_joint_positions_against_central_differences(front_leg):
+def test_front_leg_joint_positions_against_central_differences(front_leg_on_laws):
     """A joint's origin moves the motion itself: positions, velocities, accelerations and
     the wrenches, differentiated through the tree path's one graph (forward mode). The
     dependence is not linear: central differences of step 1e-6 m are good to some 1e-9."""
-    scene, model, result = front_leg
+    scene, model, result = front_leg_on_laws
     changes = inertia_parameters(scene, ["joint.fti.origin", "joint.tita.origin.2"])
     sensitivity = hx.inverse_sensitivities(model, result, changes)
     for p, change in enumerate(changes):
@@ -172,16 +192,17 @@ def test_a_segment_length_against_central_differences(tmp_path):
     assert np.mean(result.effort[:, shoulder] * sensitivity.effort[:, shoulder, 0]) > 0
 
 
-def test_joint_positions_need_the_tree_path(walking):
-    model, result, _, _ = walking
-    changes = inertia_parameters(hx.load_scene("hexapod"),
-                                 ["joint.L1/tita.parent_frame.position.0"])
+def test_joint_positions_need_the_tree_path():
+    scene = hx.load_scene("hexapod-standing")  # feet pinned: closed loops
+    model = hx.assemble(scene)
+    result = hx.inverse_dynamics(model, np.array([0.0, 0.1]))
+    changes = inertia_parameters(scene, ["joint.L1/tita.parent_frame.position.0"])
     with pytest.raises(hx.HexapodError, match="tree"):
         hx.inverse_sensitivities(model, result, changes)
 
 
-def test_front_leg_figures_of_merit_against_central_differences(front_leg):
-    scene, model, result = front_leg
+def test_front_leg_figures_of_merit_against_central_differences(front_leg_on_laws):
+    scene, model, result = front_leg_on_laws
     changes = inertia_parameters(scene, ["body.femur.mass", "body.tibia.inertia.2",
                                          "joint.fti.origin.1"])
     sensitivity = hx.inverse_sensitivities(model, result, changes)
@@ -357,10 +378,11 @@ def test_command_writes_the_table(tmp_path, capsys):
     assert "peak_effort" in (out / "summary.md").read_text()
 
 
-def test_command_writes_the_derivatives_per_sample(tmp_path, front_leg):
-    scene, model, result = front_leg
+def test_command_writes_the_derivatives_per_sample(tmp_path, front_leg_on_laws):
+    scene, model, result = front_leg_on_laws
     out = tmp_path / "out"
-    assert main(["sensitivity", "front-leg", "--parameters", "body.femur.mass",
+    path = hx.write_scene(scene, tmp_path / "front-leg.toml")
+    assert main(["sensitivity", str(path), "--parameters", "body.femur.mass",
                  "joint.fti.origin.2", "--samples", str(result.times.size), "--per-sample",
                  "--no-figures", "--out", str(out)]) == 0
     changes = inertia_parameters(scene, ["body.femur.mass", "joint.fti.origin.2"])

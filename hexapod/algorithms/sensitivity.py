@@ -217,7 +217,8 @@ def inverse_sensitivities(model: Model, result: InverseResult,
     ------
     HexapodError
         A parameter names a body or joint the model does not have; a joint moved in a model
-        the tree path does not solve; with the friction policy, the exact cone
+        the tree path does not solve, or whose joints follow guides (their motion would change
+        with it: not derived yet); with the friction policy, the exact cone
         (``faces = 0``), or a sample where no forces are inside the cones.
     """
     parameters = tuple(parameters)
@@ -230,6 +231,12 @@ def inverse_sensitivities(model: Model, result: InverseResult,
             kind = "joint" if isinstance(change, FrameChange) else "body"
             raise HexapodError(f"parameter '{change.name}': model '{model.name}' has no {kind} "
                                f"'{element}'")
+        if isinstance(change, FrameChange) and model.guidance is not None:
+            raise HexapodError(
+                f"parameter '{change.name}': model '{model.name}' has joints that follow its "
+                "guides, whose motion a moved joint changes, and derivatives through the "
+                "guides' kinematics are not computed: drive its joints by explicit laws "
+                "(masses, inertias and the friction coefficient are derived)")
     n, count, joints = result.times.size, len(parameters), len(model.joints)
     wrench = np.zeros((n, count, joints, 6))
     rotations = np.zeros((n, joints, 9))

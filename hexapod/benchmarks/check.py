@@ -102,7 +102,7 @@ class CaseRun:
 
 def _from_mechanism(case, step_count: int | None = None, rtol: float = 1e-6) -> SuiteCase:
     """A case of :mod:`hexapod.benchmarks`, assembled, judged against its reference."""
-    from hexapod.model.assemble import assemble
+    from hexapod.algorithms.assembly import assemble
 
     model = assemble(case.scene)
 
@@ -118,8 +118,8 @@ def _standing_case(scene, t_end: float, step: float | None = None) -> SuiteCase:
     """The hexapod standing on its feet: its exact motion is rest (the pose is an equilibrium:
     gravity is vertical and the feet carry it); the error is the largest displacement of any
     body's centre of mass relative to the legs' size."""
+    from hexapod.algorithms.assembly import assemble
     from hexapod.algorithms.kinematics import body_poses
-    from hexapod.model.assemble import assemble
 
     model = assemble(scene)
     data = model.create_data()

@@ -116,7 +116,7 @@ def stability_study(scene_of: Callable[[float], object], stiffnesses=(1e3, 1e5, 
                     assemble: Callable | None = None) -> list[StabilityRow]:
     """Predicted and observed largest stable steps of the explicit ``methods`` on the scenes
     ``scene_of(stiffness)`` (damped, released away from rest)."""
-    from hexapod.model.assemble import assemble as default_assemble
+    from hexapod.algorithms.assembly import assemble as default_assemble
 
     build = assemble or default_assemble
     rows = []

@@ -39,10 +39,10 @@ from pathlib import Path
 import numpy as np
 
 from hexapod._support.files import read_text
+from hexapod.algorithms.assembly import assemble
 from hexapod.benchmarks.pendulums import ClosedLoopPendulum, pendulum_exact, pendulum_period
 from hexapod.catalog import PROBLEMS
 from hexapod.errors import HexapodError, InputFileError
-from hexapod.model.assemble import assemble
 from hexapod.model.model import Model
 from hexapod.scene import Scene
 from hexapod.scene.reader import read_scene

@@ -49,6 +49,7 @@ def add_arguments(parser) -> None:
 
 def run(args) -> int:
     from hexapod._support.files import write_directory_atomically
+    from hexapod.algorithms.assembly import assemble
     from hexapod.algorithms.kinematics import consistent_state
     from hexapod.benchmarks.check import (
         BUDGET,
@@ -60,7 +61,6 @@ def run(args) -> int:
         time_total,
     )
     from hexapod.benchmarks.stable_steps import stability_study, stiff_spring
-    from hexapod.model.assemble import assemble
     from hexapod.scene.builtin import builtin_scenes, load_scene
     from hexapod.simulation.diagnostics import diagnose
 

@@ -26,7 +26,7 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
-    from hexapod.model.assemble import assemble
+    from hexapod.algorithms.assembly import assemble
     from hexapod.output.describe import describe_state, format_state
 
     model = assemble(scene_of(args, args.scene))

@@ -56,8 +56,8 @@ def mesh_size(text: str) -> int:
 def run(args) -> int:
     from hexapod._support.files import write_directory_atomically
     from hexapod._support.limits import check_instants
+    from hexapod.algorithms.assembly import assemble
     from hexapod.errors import InputFileError
-    from hexapod.model.assemble import assemble
     from hexapod.output.recording import read_recording
     from hexapod.output.vtk import frames, read_mesh, scene_meshes, vtk_files
     from hexapod.scene.builtin import load_scene

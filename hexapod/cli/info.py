@@ -30,7 +30,7 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
-    from hexapod.model.assemble import assemble
+    from hexapod.algorithms.assembly import assemble
     from hexapod.output.describe import describe_model, format_model
 
     model = assemble(scene_of(args, args.scene))

@@ -45,8 +45,8 @@ def add_arguments(parser) -> None:
 def run(args) -> int:
     import warnings
 
+    from hexapod.algorithms.assembly import assemble
     from hexapod.algorithms.inverse import inverse_dynamics, motion_model
-    from hexapod.model.assemble import assemble
     from hexapod.output.inverse_csv import units_path, write_inverse_files
     from hexapod.scene.motion import MotionWarning, apply_motion, read_motion
 

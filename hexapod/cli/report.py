@@ -94,9 +94,9 @@ def run(args) -> int:
     import numpy as np
 
     from hexapod._support.files import write_directory_atomically
+    from hexapod.algorithms.assembly import assemble
     from hexapod.algorithms.inverse import inverse_dynamics, motion_model
     from hexapod.errors import HexapodError
-    from hexapod.model.assemble import assemble
     from hexapod.output.report import RunInfo, walking_headlines
     from hexapod.scene.actuators import read_actuators
 

@@ -66,8 +66,8 @@ def add_arguments(parser) -> None:
 
 def run(args) -> int:
     from hexapod._support.files import write_directory_atomically
+    from hexapod.algorithms.assembly import assemble
     from hexapod.errors import HexapodError
-    from hexapod.model.assemble import assemble
     from hexapod.output.sensitivity import (
         SENSITIVITY_COLUMNS,
         sensitivity_csv_text,

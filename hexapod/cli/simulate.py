@@ -126,7 +126,7 @@ def add_arguments(parser) -> None:
 
 def run(args) -> int:
     from hexapod._support.files import write_directory_atomically
-    from hexapod.model.assemble import assemble
+    from hexapod.algorithms.assembly import assemble
     from hexapod.simulation.loop import simulate
     from hexapod.simulation.registry import default_method
     from hexapod.simulation.results import EVENT_COLUMNS, scene_reference, units_json

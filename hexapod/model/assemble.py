@@ -17,6 +17,7 @@ from hexapod._support.limits import check_model_size
 from hexapod.model.digest import scene_digest
 from hexapod.model.forces import ForceBuilder, gravity_potential, inertial_forces
 from hexapod.model.frames import BodyState
+from hexapod.model.guided_motion import with_guided_laws
 from hexapod.model.infos import (
     GROUND_INDEX,
     BodyInfo,
@@ -503,8 +504,8 @@ def assemble(scene: Scene, *, rank_tolerance: float = 1e-9) -> Model:
         kinematics = _Assembly(guides).model(rank_tolerance,
                                              scene_digest(guides, rank_tolerance), scene.source)
         si = _guides_left_out(si)
-    return _Assembly(si).model(rank_tolerance, scene_digest(si, rank_tolerance), scene.source,
-                               kinematics)
+    return with_guided_laws(_Assembly(si).model(
+        rank_tolerance, scene_digest(si, rank_tolerance), scene.source, kinematics))
 
 
 def _copy_with(scene: Scene, name: str, elements, ground) -> Scene:
@@ -516,10 +517,13 @@ def _copy_with(scene: Scene, name: str, elements, ground) -> Scene:
 
 def _guides_driving(si: Scene) -> Scene:
     """The kinematics of a guided scene: its guides as drivers, the joints that follow them
-    free, and the cheapest ground policy (its forces serve nothing)."""
+    free, no force element and the cheapest ground policy (its forces serve nothing; a large
+    load would only put its round-off into the accelerations)."""
+    forces = set(si.forces)
     elements = [e.replace(guide=False) if isinstance(e, CoordinateDriver) else e
                 for e in si.elements
-                if not (isinstance(e, JointDriver) and isinstance(e.law, Guided))]
+                if not (isinstance(e, JointDriver) and isinstance(e.law, Guided))
+                and e.name not in forces]
     ground = si.ground if si.ground is None else replace(si.ground, policy="min-wrench")
     return _copy_with(si, f"{si.name} (guides)", elements, ground)
 

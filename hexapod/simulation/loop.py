@@ -28,7 +28,6 @@ from hexapod.algorithms.liaison import wrenches_from_multipliers
 from hexapod.errors import HexapodError
 from hexapod.model.model import Model
 from hexapod.model.tabulation import TOLERANCE_PER_RTOL, tabulated_model
-from hexapod.simulation.guided import simulated_model
 from hexapod.simulation.integrators import Integrator
 from hexapod.simulation.methods import DEFAULT_ATOL, DEFAULT_RTOL
 from hexapod.simulation.registry import default_method, get_integrator
@@ -167,7 +166,6 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] | Non
     if grid is not None and every != 1:
         raise ValueError("every and t_eval cannot be given together: with output times the "
                          "states saved are those at the times")
-    model = simulated_model(model)  # guided joints: as their guides move them
     cls = get_integrator(default_method(model) if method is None else method)
     if grid is not None and not cls.has_dense_output():
         raise ValueError(f"{cls.name} has no dense output: it cannot save states at t_eval")

@@ -226,7 +226,7 @@ def model_for(study: Study, arguments: dict, keys: dict, scene):
     structure was run here before: cases whose scenes differ only in ground-force settings
     share one model (compiled functions included), with its ground settings replaced (not
     the ground's shape: the feet's footholds are built on it)."""
-    from hexapod.model import assemble
+    from hexapod.algorithms.assembly import assemble
     from hexapod.scene.contacts import SHAPE_KEYS
 
     structure = json.dumps([study.scene, study.scene_digest, arguments,

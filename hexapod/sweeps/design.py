@@ -111,9 +111,9 @@ def sensitivity_run(scene: Scene, parameters: Sequence, *,
         The inverse dynamics fails; with the friction policy, the exact cone, or a sample
         where no forces are inside the cones.
     """
+    from hexapod.algorithms.assembly import assemble
     from hexapod.algorithms.inverse import inverse_dynamics, motion_model
     from hexapod.algorithms.sensitivity import inverse_sensitivities
-    from hexapod.model.assemble import assemble
     from hexapod.sweeps.metrics import inverse_metrics
 
     families = check_families(families)

@@ -278,9 +278,9 @@ class RerunDesign:
 
     def at(self, p: np.ndarray) -> tuple[dict, dict]:
         """``(metrics, derivatives)`` at the parameters' values ``p``."""
+        from hexapod.algorithms.assembly import assemble
         from hexapod.algorithms.inverse import inverse_dynamics
         from hexapod.algorithms.sensitivity import inverse_sensitivities
-        from hexapod.model.assemble import assemble
         from hexapod.sweeps.cases import with_scene_keys
         from hexapod.sweeps.design_parameters import inertia_parameters
 
@@ -416,9 +416,9 @@ def optimize(spec: OptimizationStudy,
         A parameter that names no mass or inertia of the scene, a figure of merit that does
         not exist, a constraint that matches none (before the optimisation).
     """
+    from hexapod.algorithms.assembly import assemble
     from hexapod.algorithms.inverse import inverse_dynamics
     from hexapod.algorithms.sensitivity import inverse_sensitivities
-    from hexapod.model.assemble import assemble
     from hexapod.sweeps.cases import base_scene, inverse_window
 
     say = progress or (lambda line: None)
@@ -587,8 +587,8 @@ def _merit(evaluate, n: int, m: int):
 def _checked(spec, scene, changes, design, start, optimum, status, iterations, log,
              constrained, times, strides) -> OptimizationRun:
     """The run, with the optimum checked by the scene re-read with the optimal values."""
+    from hexapod.algorithms.assembly import assemble
     from hexapod.algorithms.inverse import inverse_dynamics
-    from hexapod.model.assemble import assemble
     from hexapod.sweeps.cases import with_scene_keys
 
     keys = {c.name: float(v) / c.scene_scale for c, v in zip(changes, optimum, strict=True)}
