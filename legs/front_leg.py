@@ -27,7 +27,7 @@ from hexapod import Scene
 from hexapod.scene import AppliedForce
 from legs.cockroach import MODEL_SCALE, STRIDE_PERIOD
 from legs.gait import GAITS
-from legs.leg import JOINTS, leg_scene
+from legs.leg import leg_scene
 
 
 def front_leg_scene(scale: float = MODEL_SCALE, gait: bool = True, phase: float = 0.0,
@@ -58,16 +58,15 @@ def walking_leg_scene(leg: str = "L1", gait: str = "tripod", period: float = STR
     from legs.gait import leg_of
     from legs.loads import ground_load_laws
     from legs.robot import WALKING_DUTY, check_gait, check_number
-    from legs.stepping import Stepping
+    from legs.stepping import guided_leg
 
     check_gait(gait)
     period = check_number("period", period, 0.0, unit="s, the stride period")
     scale = check_number("scale", scale, 0.0, unit="geometric scale")
     position, side = leg_of(leg)
     lift_off = GAITS[gait].lift_off[leg]
-    laws = {joint: Stepping(position, joint, WALKING_DUTY[gait], period, lift_off)
-            for joint in JOINTS}
-    scene = leg_scene(position, side, scale, laws, name or f"{position}-leg")
+    scene = guided_leg(position, WALKING_DUTY[gait], side=side, scale=scale, period=period,
+                       lift_off=lift_off, name=name or f"{position}-leg")
     scene.add(AppliedForce("ground_reaction", "tarsus",
                            ground_load_laws(leg, gait, period, scale), point="foot"))
     return scene

@@ -68,12 +68,14 @@ from hexapod import Scene
 from hexapod.scene import (
     Contact,
     GroundContact,
+    Guided,
     Joint,
     JointController,
     JointDriver,
     JointEffort,
     Particle,
     PlanarBody,
+    PostureDriver,
     SpatialBody,
 )
 from legs.cockroach import STRIDE_PERIOD
@@ -100,6 +102,21 @@ EVERY = 10
 LIFT_OFF_GAP = 1e-12
 def _drivers(scene: Scene) -> dict[str, JointDriver]:
     return {d.joint: d for d in scene.drivers.values() if isinstance(d, JointDriver)}
+
+
+def joint_laws(scene: Scene) -> dict[str, object]:
+    """Each driven joint's law (joint name -> law): its driver's, or, for a joint that follows
+    the scene's guides, the motion the guides give it (the assembled model's law, solved by
+    the engine's kinematics at the times asked)."""
+    drivers = _drivers(scene)
+    out = {joint: d.law for joint, d in drivers.items() if not isinstance(d.law, Guided)}
+    if len(out) < len(drivers):
+        model = hx.assemble(scene)
+        for d in model.drivers:
+            joint = model.joints[d.joint].name if d.kind == "joint" else None
+            if joint in drivers and joint not in out:
+                out[joint] = model.laws[d.law]
+    return out
 
 
 def replay_scene(scene: Scene, result, *, breaks=None, degree: int = EFFORT_DEGREE,
@@ -150,6 +167,8 @@ def replay_scene(scene: Scene, result, *, breaks=None, degree: int = EFFORT_DEGR
     q0, v0 = np.asarray(result.q[0], dtype=float), np.asarray(result.v[0], dtype=float)
     offsets = _body_slices(scene)
     for element in scene.elements:
+        if getattr(element, "guide", False) or isinstance(element, PostureDriver):
+            continue  # a guide and a posture rule exert nothing: the efforts replace them
         if isinstance(element, JointDriver):
             twin.add(JointEffort(f"{element.name}/effort", element.joint, law[element.joint]))
         elif isinstance(element, Joint):
@@ -194,7 +213,7 @@ def grounded_scene(scene: Scene, result, *, kp, kd, mu: float | None = None,
     no-load speed over it; a rated envelope limits the effort alone)."""
     twin = replay_scene(scene, result, breaks=breaks, degree=degree,
                         name=f"{scene.name}-on-ground", periodic=periodic)
-    drivers = _drivers(scene)
+    drivers, targets = _drivers(scene), joint_laws(scene)
     out = Scene(twin.name, twin.dimension, twin.length_unit, twin.gravity,
                 twin.characteristic_length, twin.source, report_forces=twin.report_forces,
                 ground=twin.ground)
@@ -208,7 +227,8 @@ def grounded_scene(scene: Scene, result, *, kp, kd, mu: float | None = None,
             if element.joint in motors:
                 limit, no_load, _ = motors[element.joint].joint_limits()
                 limit *= gain
-            out.add(JointController(f"{driver.name}/servo", element.joint, target=driver.law,
+            out.add(JointController(f"{driver.name}/servo", element.joint,
+                                    target=targets[element.joint],
                                     kp=p * gain, kd=d * gain, feedforward=element.law,
                                     max_effort=limit, no_load_speed=no_load))
         elif isinstance(element, Contact):
@@ -290,11 +310,11 @@ def joint_angles(model, q: np.ndarray, joints) -> np.ndarray:
 
 
 def prescribed_angles(scene: Scene, times) -> tuple[tuple[str, ...], np.ndarray]:
-    """The driven joints of ``scene`` (names) and their drivers' angles (rad) at ``times``
-    (N x J)."""
-    drivers = _drivers(scene)
+    """The driven joints of ``scene`` (names) and their laws' angles (rad) at ``times``
+    (N x J, :func:`joint_laws`)."""
+    laws = joint_laws(scene)
     times = np.atleast_1d(np.asarray(times, dtype=float))
-    return tuple(drivers), np.column_stack([drivers[j].law.evaluate(times)[0] for j in drivers])
+    return tuple(laws), np.column_stack([laws[j].evaluate(times)[0] for j in laws])
 
 
 def wrapped(x: np.ndarray) -> np.ndarray:

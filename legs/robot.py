@@ -4,8 +4,9 @@ Each leg is :func:`legs.leg.leg_scene` placed at its thorax-coxa point (an estim
 the trunk's reference frame is its centre of mass (x forward, y left, z up).
 
 **Walking** (``trunk="free"``, the built-in ``hexapod``): the trunk is a free body. Every joint
-is driven by the gait's exact laws (:class:`legs.stepping.Stepping`: each foot on its path to
-round-off), and each foot in stance is held at its foothold by a
+follows its foot: each foot's path is a guide in the trunk's frame, three joints of each leg
+follow it as the engine's kinematics places them and the other three follow the foot's lift
+and reach (:mod:`legs.stepping`), and each foot in stance is held at its foothold by a
 :class:`hexapod.scene.Contact` (no slip). The footholds are where the feet touch down when the trunk
 walks straight ahead at the gait's speed, level, from the origin at ``t = 0`` at the height that
 puts the ground at ``z = 0``; the trunk's motion itself is not prescribed but follows from the
@@ -38,7 +39,6 @@ import numpy as np
 
 from hexapod import Scene
 from hexapod.scene import (
-    GROUND,
     AppliedForce,
     Constant,
     Contact,
@@ -49,7 +49,7 @@ from hexapod.scene import (
     SpatialBody,
     Spherical,
 )
-from hexapod.spatial import Placement, rotation_about_axis
+from hexapod.spatial import Placement
 from legs.cockroach import (
     GROUND_Z_MM,
     MODEL_SCALE,
@@ -60,16 +60,16 @@ from legs.cockroach import (
     bracket,
 )
 from legs.gait import GAITS, LEG_NAMES, GaitPattern, leg_of
-from legs.leg import JOINTS, NOMINAL_LENGTHS, SEGMENT_NAMES, leg_geometry, leg_scene
+from legs.leg import JOINTS, NOMINAL_LENGTHS, SEGMENT_NAMES, leg_scene
+from legs.posing import at_start, posed
 from legs.stepping import (
     SAMPLES,
     SOLVED_JOINTS,
     FootPath,
-    Stepping,
-    exact_leg_motion,
+    coupled_laws,
+    leg_motion,
     leg_spec,
     path_targets,
-    solve_joints,
 )
 
 GRAVITY = 9.81
@@ -153,8 +153,8 @@ def stride_period(pattern: GaitPattern | None, period, speed, scale: float) -> f
 
 def walking_pattern(gait: str, duty) -> GaitPattern:
     """The walking robot's pattern: ``gait`` with ``duty`` (default :data:`WALKING_DUTY`),
-    which must keep three feet or more on the ground at every instant (and be at least 1/2,
-    as :class:`legs.stepping.Stepping` requires)."""
+    which must keep three feet or more on the ground at every instant (and be at least
+    1/2)."""
     pattern = check_gait(gait)
     if duty is None:
         return replace(pattern, duty=WALKING_DUTY[gait])
@@ -170,8 +170,7 @@ def hexapod_scene(gait: str | None = "tripod", period: float | None = None,
                   trunk: str = "held", duty: float | None = None,
                   ground: GroundForces | None = None, *, speed: float | None = None,
                   payload: float = 0.0, coxa_length: float = 1.0, femur_length: float = 1.0,
-                  tibia_length: float = 1.0, tarsus_length: float = 1.0,
-                  guided: bool = False) -> Scene:
+                  tibia_length: float = 1.0, tarsus_length: float = 1.0) -> Scene:
     """The six-legged robot.
 
     Parameters
@@ -207,10 +206,6 @@ def hexapod_scene(gait: str | None = "tripod", period: float | None = None,
         its length (same cross-section and density), its inertias follow from both. Each foot's
         path keeps its definition in terms of the rest pose of the leg with the new lengths
         (:mod:`legs.stepping`); a leg that cannot follow it raises ``ValueError``.
-    guided : bool
-        Free robot: each foot's path as guides in the trunk's frame (coordinate drivers with
-        ``guide``), which the joints the leg's own inverse kinematics solves follow (law
-        ``guided``): the engine places them (:mod:`hexapod.scene.laws.guided`).
 
     Raises
     ------
@@ -228,7 +223,7 @@ def hexapod_scene(gait: str | None = "tripod", period: float | None = None,
             raise ValueError("a free trunk needs a gait (its legs carry it)")
         pattern = walking_pattern(gait, duty)
         period = stride_period(pattern, period, speed, scale)
-        return _walking_scene(pattern, period, scale, ground, name, payload, lengths, guided)
+        return _walking_scene(pattern, period, scale, ground, name, payload, lengths)
     pattern = None if gait is None else check_gait(gait)
     if duty is not None:
         if pattern is None:
@@ -264,27 +259,26 @@ def _thc_point(leg: str, scale: float) -> np.ndarray:
 
 def _walking_scene(pattern: GaitPattern, period: float, scale: float,
                    ground: GroundForces | None, name: str, payload: float = 0.0,
-                   lengths: tuple | None = None, guided: bool = False) -> Scene:
+                   lengths: tuple | None = None) -> Scene:
     duty = pattern.duty
     height = -GROUND_Z_MM * 1e-3 * scale  # the trunk's centre of mass above the ground
     speed = pattern.walking_speed(period, scale)
-    if lengths is not None:  # every leg follows its exact path over the whole cycle
-        tau = (np.arange(SAMPLES) + 0.5) / SAMPLES  # between the fit's own samples
+    if lengths is not None:  # every leg follows its path over the whole cycle
+        tau = (np.arange(SAMPLES) + 0.5) / SAMPLES
         for position in ("front", "middle", "hind"):
-            exact_leg_motion(position, duty, tau, lengths)
+            leg_motion(position, duty, tau, lengths)
     scene = Scene(name, dimension=3, length_unit="m", ground=ground)
     scene.add(_trunk(scale, (0.0, 0.0, height), payload))
     for leg in LEG_NAMES:
         position, side = leg_of(leg)
         lift_off = pattern.lift_off[leg]
         spec = leg_spec(position, lengths)
-        laws = {joint: Guided() if guided and joint in SOLVED_JOINTS else
-                Stepping(spec, joint, duty, period, lift_off) for joint in JOINTS}
-        start = exact_leg_motion(position, duty, [(-lift_off) % 1.0], lengths)[0][0]
-        sub = posed(leg_scene(position, side, scale, laws, lengths=lengths),
-                    dict(zip(JOINTS, start, strict=True)))
+        laws = coupled_laws(duty, period, lift_off) | {joint: Guided()
+                                                       for joint in SOLVED_JOINTS}
+        sub = leg_scene(position, side, scale, {joint: laws[joint] for joint in JOINTS},
+                        lengths=lengths)
         scene.attach(sub, leg, base="trunk", placement=Placement(_thc_point(leg, scale)))
-        for axis in range(3 if guided else 0):  # the foot on its path, in the trunk's frame
+        for axis in range(3):  # the foot on its path, in the trunk's frame
             scene.add(CoordinateDriver(
                 f"{leg}/foot_{'xyz'[axis]}", f"{leg}/tarsus", "xyz"[axis],
                 FootPath(spec, side, axis, duty, period, lift_off, scale), point="foot",
@@ -297,7 +291,7 @@ def _walking_scene(pattern: GaitPattern, period: float, scale: float,
         scene.add(Contact(f"{leg}/ground", "ground", f"{leg}/tarsus", child_frame="foot",
                           period=period, duty=duty, lift_off=lift_off, foothold=foothold,
                           advance=[speed * period, 0.0, 0.0]))
-    return scene
+    return at_start(scene)
 
 
 def hexapod_walking(*, gait: str = "tripod", period: float | None = None,
@@ -401,14 +395,12 @@ def standing_pose(position: str, scale: float = MODEL_SCALE,
     """Joint angles (rad) of a ``front``, ``middle`` or ``hind`` leg with its foot at the
     middle of its tripod stance line, on the ground (``GROUND_Z_MM`` below the trunk's centre of
     mass): ``thc_levation``, ``coxa_rotation`` and ``tita`` at zero (their gait laws' values at
-    mid-stance), the others by inverse kinematics (:func:`legs.stepping.solve_joints`). The
+    mid-stance), the others where the engine's kinematics places the foot
+    (:func:`legs.stepping.leg_motion`). The
     right legs take the same angles (their axes mirror the left's). The segments' lengths are
     multiplied by ``lengths`` (coxa, femur, tibia, tarsus; None: all 1)."""
     duty = GAITS["tripod"].duty
-    geometry = leg_geometry(position, "L", scale, lengths)
-    target = path_targets(position, np.array([1.0 - duty / 2]), duty, scale, lengths)
-    solved = tuple(JOINTS.index(j) for j in SOLVED_JOINTS)
-    angles = solve_joints(geometry, target, np.zeros((1, 6)), solved)[0]
+    angles = leg_motion(position, duty, [1.0 - duty / 2], lengths)[0][0]
     return dict(zip(JOINTS, (float(a) for a in angles), strict=True))
 
 
@@ -423,28 +415,6 @@ def standing_feet(scale: float = MODEL_SCALE, lengths=None) -> dict[str, np.ndar
         if side == "R":
             foot[1], thc[1] = -foot[1], -thc[1]
         out[leg] = foot + thc
-    return out
-
-
-def posed(scene: Scene, angles: dict[str, float]) -> Scene:
-    """A copy of a chain ``scene`` (joints in tree order, revolute) with its bodies moved to
-    the pose of the joint ``angles``: the joint frames are kept on the bodies as they are at the
-    rest pose, so the angles still count from it, and only the initial guess changes."""
-    out = Scene(scene.name, scene.dimension, scene.length_unit)
-    out.gravity = scene.gravity
-    poses = {GROUND: Placement.identity(3)}
-    joints = []
-    for joint in scene.joints.values():
-        parent_frame, child_frame = scene.joint_frames(joint)
-        turn = Placement(np.zeros(3), rotation_about_axis(joint.axis, angles.get(joint.name,
-                                                                                 0.0)))
-        poses[joint.child] = poses[joint.parent] @ parent_frame @ turn @ child_frame.inverse()
-        joints.append(replace(joint, origin=None, rotation=None, parent_frame=parent_frame,
-                              child_frame=child_frame))
-    for body in scene.bodies.values():
-        pose = poses[body.name]
-        out.add(replace(body, position=pose.position, rotation=pose.rotation))
-    out.add(*joints, *scene.drivers.values(), *scene.forces.values())
     return out
 
 

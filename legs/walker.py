@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from hexapod.scene import Law
+from legs.posing import posed
 from legs.stepping import LIFT_RATES, STEP_RATES, OnSchedule
 from legs.turning import stance_progress, swing_schedule
 
@@ -215,39 +216,6 @@ def _swing_clearance(terrain, x_law, z_law, y: float):
     return out
 
 
-def _posed(scene, angles: dict[str, float], lift: float = 0.0):
-    """A copy of the tree ``scene`` with its bodies moved to the pose of the revolute joints'
-    ``angles`` (rad, from the joints' zero), raised by ``lift`` (m): the joint frames stay on
-    the bodies as at zero."""
-    from dataclasses import replace
-
-    from hexapod import Scene
-    from hexapod.scene import GROUND
-    from hexapod.spatial import Placement, rotation_about_axis
-
-    out = Scene(scene.name, scene.dimension, scene.length_unit, scene.gravity)
-    children = {j.child for j in scene.joints.values()}
-    poses = {GROUND: Placement.identity(3)}
-    raised = Placement(np.array([0.0, 0.0, lift]))
-    poses.update({b: raised @ scene.pose(b) for b in scene.bodies if b not in children})
-    pending, joints = list(scene.joints.values()), []
-    while pending:
-        joint = next(j for j in pending if j.parent in poses)  # tree order
-        pending.remove(joint)
-        parent_frame, child_frame = scene.joint_frames(joint)
-        turn = (Placement(np.zeros(3), rotation_about_axis(joint.unit_axis(3),
-                                                           angles.get(joint.name, 0.0)))
-                if joint.kind == "revolute" else Placement.identity(3))
-        poses[joint.child] = poses[joint.parent] @ parent_frame @ turn @ child_frame.inverse()
-        joints.append(replace(joint, origin=None, rotation=None, parent_frame=parent_frame,
-                              child_frame=child_frame))
-    for body in scene.bodies.values():
-        out.add(replace(body, position=poses[body.name].position,
-                        rotation=poses[body.name].rotation))
-    out.add(*joints, *scene.drivers.values(), *scene.forces.values())
-    return out
-
-
 def robot_scene(description):
     """The walking scene of a robot description (:class:`legs.description.RobotDescription`):
     its URDF with a free trunk in its rest posture, the feet on the ground, the trunk's pose and
@@ -269,11 +237,11 @@ def robot_scene(description):
     urdf = read_urdf(description.urdf, base="free")
     trunk = _checked_links(description, urdf)
     angles = rest_angles(description, urdf.joints)
-    scene = _posed(urdf, angles)
+    scene = posed(urdf, angles)
     rest = {name: scene.pose(foot.link).transform_point(foot.point)
             for name, foot in description.feet.items()}
     height = -float(np.mean([p[2] for p in rest.values()]))  # the feet's mean on the ground
-    lifted = _posed(urdf, angles, height)
+    lifted = posed(urdf, angles, height)
     lifted.ground = GroundForces(**description.ground)
     gait = description.gait
     walk = _Walk(gait, gait.phases or _pattern_phases(gait.pattern, rest),

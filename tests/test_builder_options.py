@@ -33,7 +33,7 @@ from legs.robot import (
     robot_mass,
     walking_pattern,
 )
-from legs.stepping import Stepping, leg_spec, parse_leg
+from legs.stepping import FootPath, leg_spec, parse_leg
 
 ROOT = Path(__file__).resolve().parent.parent
 PERIOD = 0.5
@@ -244,25 +244,25 @@ def test_segment_factors_round_trip_through_scene_files(tmp_path):
     scene = hexapod_walking(gait="wave", **FACTORS)
     copy = hx.read_scene(hx.write_scene(scene, tmp_path / "long-legs.toml"))
 
-    def stepping_lines(text):  # (the rest of a scene reads back to round-off and reordered)
-        return sorted(line for line in text.splitlines() if '"stepping"' in line)
+    def path_lines(text):  # (the rest of a scene reads back to round-off and reordered)
+        return sorted(line for line in text.splitlines() if '"foot-path"' in line)
 
-    assert len(stepping_lines(hx.scene.scene_text(scene))) == 36
-    assert stepping_lines(hx.scene.scene_text(copy)) == stepping_lines(hx.scene.scene_text(scene))
-    laws = {name: d.law for name, d in copy.drivers.items() if isinstance(d.law, Stepping)}
-    assert len(laws) == 36
+    assert len(path_lines(hx.scene.scene_text(scene))) == 18
+    assert path_lines(hx.scene.scene_text(copy)) == path_lines(hx.scene.scene_text(scene))
+    laws = {name: d.law for name, d in copy.drivers.items() if isinstance(d.law, FootPath)}
+    assert len(laws) == 18
     expected = tuple(FACTORS[f"{s}_length"] for s in SEGMENT_NAMES)
-    assert {law.lengths for law in laws.values()} == {expected}
-    assert {law.leg for law in laws.values()} == {"front", "middle", "hind"}
+    assert {parse_leg(law.position)[1] for law in laws.values()} == {expected}
+    assert {parse_leg(law.position)[0] for law in laws.values()} == {"front", "middle", "hind"}
     t = np.linspace(0.0, 1.0, 7)
-    for name in list(laws)[::6]:
+    for name in list(laws)[::3]:
         assert laws[name] == scene.drivers[name].law
-        assert np.array_equal(laws[name].evaluate(t)[2], scene.drivers[name].law.evaluate(t)[2])
-    laws = list(laws.values())
-    # and they differ from the nominal leg's laws: the factors are part of the law
-    nominal = Stepping(laws[0].leg, laws[0].joint, laws[0].duty, laws[0].period,
-                       laws[0].lift_off)
-    assert not np.allclose(nominal.evaluate(t)[0], laws[0].evaluate(t)[0])
+        assert np.array_equal(laws[name].evaluate(t)[0], scene.drivers[name].law.evaluate(t)[0])
+    # and they differ from the nominal leg's paths: the factors are part of the law
+    law = next(law for law in laws.values() if law.axis == 0)
+    nominal = FootPath(parse_leg(law.position)[0], law.side, 0, law.duty, law.period,
+                       law.lift_off, law.scale)
+    assert not np.allclose(nominal.evaluate(t)[0], law.evaluate(t)[0])
 
 
 def test_leg_specs_name_only_the_factors_that_are_not_one():
@@ -273,15 +273,19 @@ def test_leg_specs_name_only_the_factors_that_are_not_one():
     assert parse_leg(spec) == ("hind", (1.0, 1.2, 0.1 + 0.2, 1.0))
     for bad in ("fore", "front femur=1.2", "front femur_length=x", "front tibia_length=0",
                 "front tibia_length=nan", "front coxa_length=2 coxa_length=2"):
-        assert Stepping(bad).problems(), bad
+        assert FootPath(bad).problems(), bad
         with pytest.raises(ValueError):
             parse_leg(bad)
 
 
 def test_an_unreachable_path_names_the_leg_and_the_factors():
-    with pytest.raises(ValueError, match=r"middle leg \(.*tibia_length=0\.8.*out of reach"):
+    """The engine's kinematics finds the path out of reach: the message names the leg, its
+    factors, where in its cycle and by how much it misses."""
+    with pytest.raises(ValueError, match=r"middle leg \(.*tibia_length=0\.8.*cannot follow "
+                       r"its path.*fractions of its cycle.*t = 0\.29.*out of the joints' "
+                       r"reach.*foot_z"):
         hexapod_walking(tibia_length=0.8)
-    with pytest.raises(ValueError, match=r"middle leg \(.*tibia_length=0\.5.*out of reach"):
+    with pytest.raises(ValueError, match=r"middle leg \(.*tibia_length=0\.5.*cannot follow"):
         hexapod_standing(tibia_length=0.5)
 
 

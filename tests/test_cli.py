@@ -409,7 +409,8 @@ def test_progress_is_drawn_when_stderr_is_a_terminal(tmp_path, monkeypatch, caps
 
     monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
     assert cli_main(["report", "--out", str(tmp_path / "report"), "--samples", "11"]) == 0
-    assert "inverse dynamics: 11/11 samples" in capsys.readouterr().err
+    # the default scene is guided: its guides' kinematics, then its efforts, 11 samples each
+    assert "inverse dynamics: 22/22 samples" in capsys.readouterr().err
 
 
 def test_progress_is_drawn_where_hexapod_progress_asks(tmp_path, monkeypatch, capsys):

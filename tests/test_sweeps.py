@@ -386,9 +386,10 @@ def test_builder_arguments_and_scene_keys_reach_the_walking_robot(tmp_path):
     assert row["status"] == "infeasible" and "first at t = 0 s" in row["message"]
     peak = np.linalg.norm(result.ground_force, axis=-1).max(axis=0)
     # a scene key sends the scene through its TOML form, whose rotations are written as
-    # angles: the same robot to the last bits
+    # angles: the same robot to the last bits, its legs placed by Newton solves from poses
+    # that differ in them (the ground forces agree to some 1e-12)
     np.testing.assert_allclose([row["metrics"][f"peak_ground:{leg}"] for leg in
-                                ("L1", "L2", "L3", "R1", "R2", "R3")], peak, rtol=1e-12)
+                                ("L1", "L2", "L3", "R1", "R2", "R3")], peak, rtol=1e-10)
     with pytest.raises(StudyError, match="takes gait, period, speed, duty"):
         check_study(read_study(study_file(tmp_path, "[study]\nscene='hexapod'\n"
                                           "[vary.velocity]\nvalues=[1.0]\n")))

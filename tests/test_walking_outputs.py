@@ -125,15 +125,18 @@ def test_hexapod_inverse_on_a_walking_scene_writes_the_ground_forces_of_the_poli
     """The walking robot without its drivers, written as a scene file and driven by a motion
     file of the same laws (values, rates and accelerations at the samples): the command's CSV
     has the GR columns, zero in swing, carrying the weight, shared by the policy given."""
+    from legs.replay import joint_laws
+
     model, result = walking
     scene = load_scene("hexapod")
-    drivers = [e for e in scene.elements if isinstance(e, JointDriver)]
-    scene._elements = [e for e in scene.elements if not isinstance(e, JointDriver)]
+    laws = joint_laws(scene)  # (the feet's guides place three joints a leg: their motion)
+    scene._elements = [e for e in scene.elements if not isinstance(e, JointDriver)
+                       and not getattr(e, "guide", False)]
     write_scene(scene, tmp_path / "walking.toml")
     header, table = ["t"], [result.times]
-    for driver in drivers:
-        header += [driver.joint, f"qd:{driver.joint}", f"qdd:{driver.joint}"]
-        table += list(driver.law.evaluate(result.times))
+    for joint, law in laws.items():
+        header += [joint, f"qd:{joint}", f"qdd:{joint}"]
+        table += list(law.evaluate(result.times))
     np.savetxt(tmp_path / "motion.csv", np.column_stack(table), delimiter=",", fmt="%.17g",
                header=",".join(header), comments="")
     assert main(["inverse", str(tmp_path / "walking.toml"), "--motion",

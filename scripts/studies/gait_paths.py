@@ -6,7 +6,7 @@ over one stride, with the paths the laws were designed for (``legs.stepping``): 
 distance to the path, the largest height above the ground in stance, the stance velocity's
 largest deviation from the walking speed (central differences of the engine's positions,
 h = 1e-6 s, relative), and the lift reached in swing. Also the solved joints' ranges and the
-time to design one leg's laws (inverse kinematics and fit, natural scale).
+time to design one leg's laws (the engine's kinematics over a cycle and the fit, natural scale).
 
     python3 scripts/studies/gait_paths.py [--samples 1001] [--plot FIGURE.png]
 """

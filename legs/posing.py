@@ -1,0 +1,86 @@
+"""Where a scene's bodies start: at joint angles counted from their zero (a tree, posed through
+its joints' frames), or at the start of the scene's own motion, as the engine's kinematics
+solves it.
+
+A scene's written pose is the initial guess of every solve, and more: the characteristic length
+of the ground-force policies (:func:`hexapod.assemble`) is measured on it. A walking scene is
+therefore written at the pose its motion has at ``t = 0`` (:func:`at_start`), found by the same
+Newton solve that places the legs along the motion, so that how it was first posed leaves no
+trace in its results.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+import hexapod as hx
+from hexapod import Scene
+from hexapod.scene import GROUND
+from hexapod.spatial import Placement, rotation_about_axis
+
+
+def moved(scene: Scene, poses: dict[str, Placement]) -> Scene:
+    """A copy of ``scene`` with each body's reference frame at ``poses[name]`` (scene units),
+    its joints' frames kept on their bodies as they are at its current pose, every other
+    element and setting unchanged."""
+    out = Scene(scene.name, scene.dimension, scene.length_unit, scene.gravity,
+                scene.characteristic_length, scene.source, report_forces=scene.report_forces,
+                ground=scene.ground)
+    out.actuators = scene.actuators
+    for body in scene.bodies.values():
+        pose = poses.get(body.name, body.pose)
+        out.add(replace(body, position=pose.position, rotation=pose.rotation))
+    for joint in scene.joints.values():
+        parent_frame, child_frame = scene.joint_frames(joint)
+        out.add(replace(joint, origin=None, rotation=None, parent_frame=parent_frame,
+                        child_frame=child_frame))
+    placed = set(scene.bodies) | set(scene.joints)
+    out.add(*(e for e in scene.elements if e.name not in placed))
+    return out
+
+
+def posed(scene: Scene, angles: dict[str, float], lift: float = 0.0) -> Scene:
+    """A copy of the tree ``scene`` with its bodies moved to the pose of the revolute joints'
+    ``angles`` (rad, from the joints' zero; others at zero), the bodies no joint moves raised
+    by ``lift`` (scene units): the joint frames stay on the bodies as at zero, so the angles
+    still count from there."""
+    children = {j.child for j in scene.joints.values()}
+    poses = {GROUND: Placement.identity(3)}
+    raised = Placement(np.array([0.0, 0.0, lift]))
+    poses.update({b: raised @ scene.pose(b) for b in scene.bodies if b not in children})
+    pending = list(scene.joints.values())
+    while pending:
+        joint = next(j for j in pending if j.parent in poses)  # tree order
+        pending.remove(joint)
+        parent_frame, child_frame = scene.joint_frames(joint)
+        turn = (Placement(np.zeros(3), rotation_about_axis(joint.unit_axis(3),
+                                                           angles.get(joint.name, 0.0)))
+                if joint.kind == "revolute" else Placement.identity(3))
+        poses[joint.child] = poses[joint.parent] @ parent_frame @ turn @ child_frame.inverse()
+    return moved(scene, poses)
+
+
+def at_start(scene: Scene, kinematics: hx.Model | None = None, t: float = 0.0) -> Scene:
+    """A copy of ``scene`` with its bodies where its motion has them at ``t``: the engine's
+    Newton solve of its constraints and drivers (of its guides', for a guided scene) from the
+    pose it is written at. ``kinematics``: the scene's model (its guides' kinematics for a
+    guided scene) when it is assembled already, with the scene's laws.
+
+    Raises
+    ------
+    AssemblyError
+        No pose satisfies the constraints at ``t`` (the message names the guides out of reach).
+    """
+    if kinematics is None:
+        model = hx.assemble(scene)
+        kinematics = model if model.guidance is None else model.guidance.kinematics
+    q = hx.assemble_positions(kinematics, kinematics.create_data(), t)
+    positions, rotations = hx.body_poses(kinematics, q)
+    poses = {}
+    for k, info in enumerate(kinematics.bodies):
+        rotation = rotations[0, k]
+        centre = positions[0, k] / scene.unit  # the model is in SI
+        poses[info.name] = Placement(centre - rotation @ scene.bodies[info.name].com, rotation)
+    return moved(scene, poses)
