@@ -10,9 +10,13 @@
     actuators = "motors.toml"        # optional: the motors' table (docs/report.md)
     weights = { "*_ankle" = 4.0 }    # a leg of more than three joints: the posture nearest
                                      # the rest one, these weights on the joints (default 1)
+    coupled = { "*_wrist" = { lift = 8 } }   # or: joints that follow their foot through the
+                                     # cycle, degrees at the top of the swing (lift) or at
+                                     # touch-down (reach: minus that at lift-off)
 
     [robot.feet]                     # each foot: a link and a point of it (m, link frame)
-    LF = { link = "LF_shank", point = [0.0, 0.0, -0.2] }
+    LF = { link = "LF_shank", point = [0.0, 0.0, -0.2] }   # offset = [dx, dy]: the stance's
+                                     # middle that far from under the rest foot (m)
 
     [gait]
     pattern = "walk"                 # or phases = { LF = 0.25, ... } (lift-off fractions)
@@ -25,6 +29,8 @@
                                      # robot's centre of pressure), or "level"
     yaw_rate = 10                    # degrees per second, turning left (flat ground)
     pitch = 0                        # degrees, the trunk's tilt (and roll)
+    height = 0.28                    # m, the trunk's frame above the ground (default: where
+                                     # the rest posture puts the feet on it)
 
     [ground]                         # optional: the ground, as in a scene file
     policy = "min-wrench"            # how the feet share the load
@@ -45,23 +51,25 @@ from pathlib import Path
 
 import numpy as np
 
-from hexapod import ModelError
+from hexapod import ModelError, Scene
 from hexapod.scene import ActuatorTable, GroundForces, Problem, read_actuators
 from legs.walker import PATTERNS
 
-_ROBOT_KEYS = {"name", "urdf", "trunk", "rest", "feet", "actuators", "weights"}
+_ROBOT_KEYS = {"name", "urdf", "trunk", "rest", "feet", "actuators", "weights", "coupled"}
 _GROUND_KEYS = {"policy", "mu", "faces", "min_normal", "default_reference", "reference_efforts",
                 "slope", "heading", "steps"}
 _GAIT_KEYS = {"pattern", "phases", "duty", "period", "speed", "stride", "step_height", "trunk",
-              "clearance", "yaw_rate", "pitch", "roll"}
+              "clearance", "yaw_rate", "pitch", "roll", "height"}
 
 
 @dataclass
 class Foot:
-    """A foot: the point ``point`` (m) of link ``link``, in the link's frame."""
+    """A foot: the point ``point`` (m) of link ``link``, in the link's frame; the middle of its
+    stance lies ``offset`` (m, along the trunk's x and y) from under its rest position."""
 
     link: str
     point: np.ndarray
+    offset: np.ndarray = field(default_factory=lambda: np.zeros(2))
 
 
 @dataclass
@@ -73,7 +81,8 @@ class Gait:
     :mod:`legs.balance`) or ``level`` (straight, at constant speed); a swing that crosses a
     step clears its edge by at least ``clearance`` (m; default a quarter of the step
     height). The trunk turns at ``yaw_rate`` (degrees per second, counter-clockwise seen from
-    above; flat ground) and is tilted by ``pitch`` and ``roll`` (degrees)."""
+    above; flat ground) and is tilted by ``pitch`` and ``roll`` (degrees); its frame's origin
+    is ``height`` (m) above the ground (None: where the rest posture puts the feet on it)."""
 
     phases: dict[str, float]
     duty: float
@@ -86,13 +95,17 @@ class Gait:
     yaw_rate: float = 0.0
     pitch: float = 0.0
     roll: float = 0.0
+    height: float | None = None
 
 
 @dataclass
 class RobotDescription:
     """A robot read by :func:`read_robot`: its URDF, trunk, feet, rest posture, gait, ground,
-    its motors (an actuator table, :func:`hexapod.scene.read_actuators`), if any, and the
-    joints' weights in the posture rule of a leg with more than three joints."""
+    its motors (an actuator table, :func:`hexapod.scene.read_actuators`), if any, the joints'
+    weights in the posture rule of a leg with more than three joints, and the joints that
+    follow their foot through the cycle (``coupled``: name or pattern -> ``("lift" or
+    "reach", amplitude in rad)``, see :class:`legs.stepping.GaitCoupled`). ``body``: the
+    robot's bodies and joints as a scene (a free trunk), in place of the URDF's."""
 
     name: str
     urdf: Path
@@ -104,6 +117,8 @@ class RobotDescription:
     source: str = ""
     actuators: ActuatorTable | None = None
     weights: dict[str, float] = field(default_factory=dict)
+    coupled: dict[str, tuple[str, float]] = field(default_factory=dict)
+    body: Scene | None = None
 
 
 class _Problems:
@@ -162,6 +177,7 @@ def read_robot(document: dict, path: str | Path) -> RobotDescription:
         problems.add("robot.weights", "must be a table of joint names (or patterns) and "
                      "positive weights")
         weights = {}
+    coupled = _coupled(robot.get("coupled", {}), problems)
     gait = _gait(document.get("gait", {}), list(feet), problems)
     ground = document.get("ground", {})
     if not isinstance(ground, dict):
@@ -185,7 +201,7 @@ def read_robot(document: dict, path: str | Path) -> RobotDescription:
                             feet, {str(k): float(v) for k, v in rest.items()}, gait, ground,
                             str(path), None if motors is None else read_actuators(
                                 (path.parent / motors).resolve()),
-                            {str(k): float(v) for k, v in weights.items()})
+                            {str(k): float(v) for k, v in weights.items()}, coupled)
 
 
 def _urdf(value, path: Path, problems: _Problems) -> Path:
@@ -215,6 +231,22 @@ def _urdf(value, path: Path, problems: _Problems) -> Path:
     return urdf
 
 
+def _coupled(table, problems: _Problems) -> dict[str, tuple[str, float]]:
+    """``robot.coupled``: joint name or pattern -> ``{ lift = DEG }`` or ``{ reach = DEG }``."""
+    out = {}
+    for name, law in (table.items() if isinstance(table, dict) else [(None, None)]):
+        value = next(iter(law.values())) if isinstance(law, dict) and law else None
+        if (not isinstance(law, dict) or len(law) != 1 or next(iter(law)) not in (
+                "lift", "reach") or isinstance(value, bool)
+                or not isinstance(value, (int, float)) or not np.isfinite(value)):
+            problems.add("robot.coupled" + ("" if name is None else f".{name}"),
+                         "must be a table of joint names (or patterns) and { lift = DEGREES } "
+                         "or { reach = DEGREES }")
+            continue
+        out[str(name)] = (next(iter(law)), float(np.radians(value)))
+    return out
+
+
 def _feet(table, problems: _Problems) -> dict[str, Foot]:
     if not isinstance(table, dict) or not table:
         problems.add("robot.feet", "must name each foot: FOOT = { link = ..., point = [x, y, "
@@ -223,14 +255,22 @@ def _feet(table, problems: _Problems) -> dict[str, Foot]:
     out = {}
     for name, foot in table.items():
         point = foot.get("point", [0.0, 0.0, 0.0]) if isinstance(foot, dict) else None
+        offset = foot.get("offset", [0.0, 0.0]) if isinstance(foot, dict) else None
         if (not isinstance(foot, dict) or not isinstance(foot.get("link"), str)
-                or not isinstance(point, list) or len(point) != 3
-                or not all(isinstance(x, (int, float)) for x in point)):
+                or not _numbers(point, 3) or not _numbers(offset, 2)
+                or set(foot) - {"link", "point", "offset"}):
             problems.add(f"robot.feet.{name}", "needs link = \"LINK\" and point = [x, y, z] "
-                         "(m, in the link's frame)")
+                         "(m, in the link's frame), and may give offset = [dx, dy] (m)")
             continue
-        out[name] = Foot(foot["link"], np.array(point, dtype=float))
+        out[name] = Foot(foot["link"], np.array(point, dtype=float),
+                         np.array(offset, dtype=float))
     return out
+
+
+def _numbers(value, size: int) -> bool:
+    return (isinstance(value, list) and len(value) == size and all(
+        isinstance(x, (int, float)) and not isinstance(x, bool) and np.isfinite(x)
+        for x in value))
 
 
 def _gait(table, feet: list[str], problems: _Problems) -> Gait | None:
@@ -277,10 +317,11 @@ def _gait(table, feet: list[str], problems: _Problems) -> Gait | None:
     yaw_rate = problems.number(table, "yaw_rate", "gait", default=0.0)
     pitch, roll = (problems.number(table, key, "gait", -45.0, 45.0, 0.0)
                    for key in ("pitch", "roll"))
+    trunk_height = problems.number(table, "height", "gait", 0.0)
     if None in (duty, stride, height, period, yaw_rate, pitch, roll):
         return None
     return Gait(dict(phases) if phases else {}, duty, period, stride, height, pattern or "",
-                trunk, clearance, yaw_rate, pitch, roll)
+                trunk, clearance, yaw_rate, pitch, roll, trunk_height)
 
 
 def by_pattern(table: dict[str, float], joints) -> dict[str, float]:

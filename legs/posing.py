@@ -62,24 +62,20 @@ def posed(scene: Scene, angles: dict[str, float], lift: float = 0.0) -> Scene:
     return moved(scene, poses)
 
 
-def at_start(scene: Scene, kinematics: hx.Model | None = None, t: float = 0.0) -> Scene:
+def at_start(scene: Scene, t: float = 0.0) -> Scene:
     """A copy of ``scene`` with its bodies where its motion has them at ``t``: the engine's
     Newton solve of its constraints and drivers (of its guides', for a guided scene) from the
-    pose it is written at. ``kinematics``: the scene's model (its guides' kinematics for a
-    guided scene) when it is assembled already, with the scene's laws.
-
-    Raises
-    ------
-    AssemblyError
-        No pose satisfies the constraints at ``t`` (the message names the guides out of reach).
-    """
-    if kinematics is None:
-        model = hx.assemble(scene)
-        kinematics = model if model.guidance is None else model.guidance.kinematics
-    q = hx.assemble_positions(kinematics, kinematics.create_data(), t)
-    positions, rotations = hx.body_poses(kinematics, q)
+    pose it is written at, as its inverse dynamics solves it. Where no pose satisfies them
+    (guides out of the joints' reach), ``scene`` itself: the analysis of it says so, naming
+    the guides, the time and how far off they are."""
+    model = hx.assemble(scene)
+    try:
+        q = hx.inverse_dynamics(model, np.array([float(t)]), check_limits=False).q
+    except hx.AssemblyError:
+        return scene
+    positions, rotations = hx.body_poses(model, q)
     poses = {}
-    for k, info in enumerate(kinematics.bodies):
+    for k, info in enumerate(model.bodies):
         rotation = rotations[0, k]
         centre = positions[0, k] / scene.unit  # the model is in SI
         poses[info.name] = Placement(centre - rotation @ scene.bodies[info.name].com, rotation)

@@ -3,15 +3,15 @@
 Each leg is :func:`legs.leg.leg_scene` placed at its thorax-coxa point (an estimate [E], scaled);
 the trunk's reference frame is its centre of mass (x forward, y left, z up).
 
-**Walking** (``trunk="free"``, the built-in ``hexapod``): the trunk is a free body. Every joint
-follows its foot: each foot's path is a guide in the trunk's frame, three joints of each leg
-follow it as the engine's kinematics places them and the other three follow the foot's lift
-and reach (:mod:`legs.stepping`), and each foot in stance is held at its foothold by a
-:class:`hexapod.scene.Contact` (no slip). The footholds are where the feet touch down when the trunk
-walks straight ahead at the gait's speed, level, from the origin at ``t = 0`` at the height that
-puts the ground at ``z = 0``; the trunk's motion itself is not prescribed but follows from the
-legs and the feet in stance. Three or more feet are always down, so the ground forces are shared
-by the scene's policy (``hexapod.scene.GroundForces``).
+**Walking** (``trunk="free"``, the built-in ``hexapod``): a robot description among others
+(:func:`cockroach_description`, the same as ``data/robots/cockroach.toml``), walked by the path
+every robot takes (:func:`legs.walker.robot_scene`): the trunk a free body whose pose is a guide
+(level, straight ahead at the gait's speed, its centre of mass ``-GROUND_Z_MM`` above the ground
+``z = 0``), each foot's path a guide (on its foothold in stance, stepping to the next in swing),
+three joints of each leg following the guides as the engine's kinematics places them and the
+other three the foot's lift and reach (:mod:`legs.stepping`), each foot in stance held at its
+foothold by a :class:`hexapod.scene.Contact` (no slip). Three or more feet are always down, so
+the ground forces are shared by the scene's policy (``hexapod.scene.GroundForces``).
 
 **Bench-top** (``trunk="held"``): the trunk is welded to the world, every joint driven by the
 gait's harmonic laws and each foot in stance loaded by an invented ``sin^2`` pulse (the
@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 
@@ -41,36 +42,30 @@ from hexapod import Scene
 from hexapod.scene import (
     AppliedForce,
     Constant,
-    Contact,
-    CoordinateDriver,
     Fixed,
     GroundForces,
-    Guided,
     SpatialBody,
     Spherical,
 )
 from hexapod.spatial import Placement
 from legs.cockroach import (
+    FOOT_LIFT_MM,
+    GAIT_LAWS,
     GROUND_Z_MM,
     MODEL_SCALE,
     SEGMENTS,
+    STANCE_OFFSET_MM,
     STRIDE_PERIOD,
     THC_POINT_MM,
     TRUNK,
     bracket,
 )
+from legs.description import Foot, Gait, RobotDescription
 from legs.gait import GAITS, LEG_NAMES, GaitPattern, leg_of
-from legs.leg import JOINTS, NOMINAL_LENGTHS, SEGMENT_NAMES, leg_scene
-from legs.posing import at_start, posed
-from legs.stepping import (
-    SAMPLES,
-    SOLVED_JOINTS,
-    FootPath,
-    coupled_laws,
-    leg_motion,
-    leg_spec,
-    path_targets,
-)
+from legs.leg import JOINTS, NOMINAL_LENGTHS, SEGMENT_NAMES, leg_geometry, leg_scene
+from legs.posing import posed
+from legs.stepping import COUPLED_JOINTS, SAMPLES, leg_motion, path_targets
+from legs.walker import robot_scene
 
 GRAVITY = 9.81
 
@@ -257,41 +252,61 @@ def _thc_point(leg: str, scale: float) -> np.ndarray:
     return np.array([x, y if leg_of(leg)[1] == "L" else -y, z]) * 1e-3 * scale
 
 
+def cockroach_body(scale: float = MODEL_SCALE, lengths: tuple | None = None,
+                   payload: float = 0.0, name: str = "cockroach") -> Scene:
+    """The robot's bodies and joints: a free trunk carrying ``payload`` (kg) and the six legs
+    at their rest poses (joint angles zero), each at its thorax-coxa point, no driver; its
+    segments' ``lengths`` as in :func:`hexapod_scene`."""
+    scene = Scene(name, dimension=3, length_unit="m")
+    scene.add(_trunk(scale, payload=payload))
+    for leg in LEG_NAMES:
+        position, side = leg_of(leg)
+        scene.attach(leg_scene(position, side, scale, None, lengths=lengths), leg,
+                     base="trunk", placement=Placement(_thc_point(leg, scale)))
+    return scene
+
+
+def cockroach_description(pattern: GaitPattern, period: float, scale: float = MODEL_SCALE,
+                          name: str = "hexapod", payload: float = 0.0,
+                          lengths: tuple | None = None) -> RobotDescription:
+    """The walking robot as a robot description (:mod:`legs.description`), the built-in one
+    among others: its body (:func:`cockroach_body`), each foot the tarsus's end with its stance
+    line ``STANCE_OFFSET_MM`` fore-aft of the rest pose's foot, the joints of
+    ``legs.stepping.COUPLED_JOINTS`` following the foot through the cycle with the amplitudes
+    of ``GAIT_LAWS``, the gait ``pattern`` (its lift-offs and duty) at ``period``, a stride of
+    ``STANCE_LENGTH_MM`` over the duty, a lift of ``FOOT_LIFT_MM``, the trunk level at
+    ``-GROUND_Z_MM`` above the ground (all scaled), the least-wrench policy."""
+    mm = 1e-3 * scale
+    feet = {}
+    for leg in LEG_NAMES:
+        position, side = leg_of(leg)
+        tarsus = leg_geometry(position, side, scale, lengths).lengths[3]
+        feet[leg] = Foot(f"{leg}/tarsus", np.array([tarsus, 0.0, 0.0]),
+                         np.array([STANCE_OFFSET_MM[position] * mm, 0.0]))
+    amplitude = {joint: np.radians(a) for joint, a, _ in GAIT_LAWS}
+    coupled = {f"*/{joint}": (follows, float(amplitude[joint]))
+               for joint, follows in COUPLED_JOINTS.items()}
+    gait = Gait(dict(pattern.lift_off), pattern.duty, period,
+                pattern.walking_speed(period, scale) * period, FOOT_LIFT_MM * mm,
+                trunk="level", height=-GROUND_Z_MM * mm)
+    return RobotDescription(name, Path(), "trunk", feet, {}, gait, coupled=coupled,
+                            body=cockroach_body(scale, lengths, payload, name))
+
+
 def _walking_scene(pattern: GaitPattern, period: float, scale: float,
                    ground: GroundForces | None, name: str, payload: float = 0.0,
                    lengths: tuple | None = None) -> Scene:
-    duty = pattern.duty
-    height = -GROUND_Z_MM * 1e-3 * scale  # the trunk's centre of mass above the ground
-    speed = pattern.walking_speed(period, scale)
-    if lengths is not None:  # every leg follows its path over the whole cycle
+    """The walking robot through the general path: its description walked by
+    :func:`legs.walker.robot_scene`; a leg whose lengths cannot follow its path over the cycle
+    is said first (``ValueError``)."""
+    if lengths is not None:
         tau = (np.arange(SAMPLES) + 0.5) / SAMPLES
         for position in ("front", "middle", "hind"):
-            leg_motion(position, duty, tau, lengths)
-    scene = Scene(name, dimension=3, length_unit="m", ground=ground)
-    scene.add(_trunk(scale, (0.0, 0.0, height), payload))
-    for leg in LEG_NAMES:
-        position, side = leg_of(leg)
-        lift_off = pattern.lift_off[leg]
-        spec = leg_spec(position, lengths)
-        laws = coupled_laws(duty, period, lift_off) | {joint: Guided()
-                                                       for joint in SOLVED_JOINTS}
-        sub = leg_scene(position, side, scale, {joint: laws[joint] for joint in JOINTS},
-                        lengths=lengths)
-        scene.attach(sub, leg, base="trunk", placement=Placement(_thc_point(leg, scale)))
-        for axis in range(3):  # the foot on its path, in the trunk's frame
-            scene.add(CoordinateDriver(
-                f"{leg}/foot_{'xyz'[axis]}", f"{leg}/tarsus", "xyz"[axis],
-                FootPath(spec, side, axis, duty, period, lift_off, scale), point="foot",
-                frame="trunk", guide=True))
-        # the stance that ends at lift_off * period began at (lift_off - duty) * period;
-        # the foot then touched down where its path puts it, the trunk at speed * time
-        touch_down = (lift_off - duty) * period
-        foot = pattern.foot_targets(np.array([touch_down]), period, scale, lengths)[leg][0]
-        foothold = foot + np.array([speed * touch_down, 0.0, height])
-        scene.add(Contact(f"{leg}/ground", "ground", f"{leg}/tarsus", child_frame="foot",
-                          period=period, duty=duty, lift_off=lift_off, foothold=foothold,
-                          advance=[speed * period, 0.0, 0.0]))
-    return at_start(scene)
+            leg_motion(position, pattern.duty, tau, lengths)
+    scene = robot_scene(cockroach_description(pattern, period, scale, name, payload, lengths))
+    if ground is not None:
+        scene.ground = ground
+    return scene
 
 
 def hexapod_walking(*, gait: str = "tripod", period: float | None = None,

@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from hexapod.scene import Law
-from legs.posing import posed
+from legs.posing import at_start, posed
 from legs.stepping import LIFT_RATES, STEP_RATES, OnSchedule
 from legs.turning import stance_progress, swing_schedule
 
@@ -218,12 +218,16 @@ def _swing_clearance(terrain, x_law, z_law, y: float):
 
 def robot_scene(description):
     """The walking scene of a robot description (:class:`legs.description.RobotDescription`):
-    its URDF with a free trunk in its rest posture, the feet on the ground, the trunk's pose and
-    each foot's path as guides, every revolute and prismatic joint following them, each foot a
-    contact by the gait's schedule. On a ground that is not flat (the description's
-    ``[ground]`` slope and steps) each foothold lies on it, under the foot's rest position, and
-    the trunk keeps its rest height above the plane, rising over each step as it passes. A gait
-    with a yaw rate turns (:mod:`legs.turning`); its pitch and roll tilt the trunk.
+    its URDF (or body scene) with a free trunk, the trunk's pose and each foot's path as
+    guides, every revolute and prismatic joint following them (or its foot through the cycle,
+    the description's ``coupled`` joints), each foot a contact by the gait's schedule, the
+    bodies written where the motion has them at ``t = 0`` (:func:`legs.posing.at_start`). Each
+    stance's middle lies under the foot's rest position (moved by the foot's ``offset``) on the
+    ground, the trunk at the gait's ``height`` above it (default: its rest height, the feet's
+    mean on the ground). On a ground that is not flat (the description's ``[ground]`` slope
+    and steps) each foothold lies on it, and the trunk keeps its height above the plane, rising
+    over each step as it passes. A gait with a yaw rate turns (:mod:`legs.turning`); its pitch
+    and roll tilt the trunk.
 
     Raises
     ------
@@ -234,13 +238,15 @@ def robot_scene(description):
     from hexapod.scene import GroundForces, Guided, JointDriver, read_urdf
     from legs.description import rest_angles
 
-    urdf = read_urdf(description.urdf, base="free")
+    urdf = (description.body if description.body is not None
+            else read_urdf(description.urdf, base="free"))
     trunk = _checked_links(description, urdf)
     angles = rest_angles(description, urdf.joints)
     scene = posed(urdf, angles)
-    rest = {name: scene.pose(foot.link).transform_point(foot.point)
-            for name, foot in description.feet.items()}
-    height = -float(np.mean([p[2] for p in rest.values()]))  # the feet's mean on the ground
+    rest = {name: scene.pose(foot.link).transform_point(foot.point) + np.r_[foot.offset, 0.0]
+            for name, foot in description.feet.items()}  # each stance's middle
+    height = description.gait.height  # else the feet's mean on the ground:
+    height = -float(np.mean([p[2] for p in rest.values()])) if height is None else height
     lifted = posed(urdf, angles, height)
     lifted.ground = GroundForces(**description.ground)
     gait = description.gait
@@ -250,18 +256,21 @@ def robot_scene(description):
     plan = _add_trunk(lifted, trunk, walk, rest, height)
     for name in description.feet:
         _add_foot(lifted, description, name, walk, rest[name])
+    coupled = _coupled_laws(description, urdf, trunk, walk)
     for joint in urdf.joints.values():
         if joint.drivable:
-            lifted.add(JointDriver(f"drive_{joint.name}", joint.name, Guided()))
+            lifted.add(JointDriver(f"drive_{joint.name}", joint.name,
+                                   coupled.get(joint.name, Guided())))
     for name, foot in description.feet.items():
-        _add_posture(lifted, description, name, _leg_joints(urdf, trunk, foot.link), angles)
+        _add_posture(lifted, description, name, [j for j in _leg_joints(
+            urdf, trunk, foot.link) if j not in coupled], angles)
     kinematics = (_whole_body(lifted, trunk, walk, rest, height, plan)
                   if gait.trunk == "whole-body" else None)
     if two_feet:
         _carry(lifted, walk, two_feet, height, kinematics)
     lifted.name, lifted.source = description.name, description.source
     lifted.actuators = description.actuators  # the report checks the motors when there are
-    return lifted
+    return at_start(lifted)  # written at its motion's start: nothing of the rest pose stays
 
 
 @dataclass(frozen=True)
@@ -390,6 +399,21 @@ def _add_foot(scene, description, name: str, walk: _Walk, rest: np.ndarray) -> N
         walk.rate) else dict(advance=[stride, 0.0, 0.0])
     scene.add(Contact(f"{name}/ground", "ground", foot.link, child_frame=Placement(foot.point),
                       period=period, duty=duty, lift_off=phase, foothold=start, **turning))
+
+
+def _coupled_laws(description, urdf, trunk: str, walk: _Walk) -> dict:
+    """The laws of the joints that follow their foot through the cycle (the description's
+    ``coupled``): joint name -> :class:`legs.stepping.GaitCoupled` on its foot's schedule."""
+    from legs.description import by_pattern
+    from legs.stepping import GaitCoupled
+
+    gait, out = walk.gait, {}
+    for name, foot in description.feet.items():
+        chain = _leg_joints(urdf, trunk, foot.link)
+        for joint, (follows, amplitude) in by_pattern(description.coupled, chain).items():
+            out[joint] = GaitCoupled(amplitude, follows, gait.duty, gait.period,
+                                     walk.phases[name])
+    return out
 
 
 def _leg_joints(urdf, trunk: str, link: str) -> list[str]:

@@ -66,6 +66,25 @@ def described_walk(name: str) -> tuple:
     return scene, model, hx.inverse_dynamics(model, stored["times"]), stored
 
 
+def rest_feet(name: str) -> dict[str, np.ndarray]:
+    """Where each foot of ``data/robots/<name>.toml`` is (world, m) with the robot in its rest
+    posture, its trunk's frame over the origin at its walking height: where the walk's
+    footholds are measured from (the scene itself is written at the motion's start)."""
+    import tomllib
+
+    from legs.description import read_robot, rest_angles
+    from legs.posing import posed
+
+    path = ROBOTS / f"{name}.toml"
+    description = read_robot(tomllib.loads(path.read_text()), path)
+    urdf = hx.read_urdf(description.urdf, base="free")
+    scene = posed(urdf, rest_angles(description, urdf.joints))
+    feet = {foot: scene.pose(f.link).transform_point(f.point)
+            for foot, f in description.feet.items()}
+    height = -np.mean([p[2] for p in feet.values()])
+    return {foot: p + [0.0, 0.0, height] for foot, p in feet.items()}
+
+
 def foot_on_ground(scene, model, result, contact) -> tuple:
     """A contact's foot world position, its foothold on a straight walk (``foothold + k
     advance``) and whether it is in stance, per sample."""

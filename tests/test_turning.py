@@ -8,7 +8,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from robots import ROBOTS, check_pinocchio, described_walk, foot_on_ground, momentum_gap
+from robots import (
+    ROBOTS,
+    check_pinocchio,
+    described_walk,
+    foot_on_ground,
+    momentum_gap,
+    rest_feet,
+)
 
 import hexapod as hx
 from hexapod.errors import ModelError
@@ -52,16 +59,14 @@ def test_stance_feet_stand_on_footholds_round_the_turn_and_forces_balance(turn):
 
 
 def _centre(scene) -> complex:
-    """The turn's centre: ``RADIUS`` left of the trunk's frame at rest (the scene's pose, its
+    """The turn's centre: ``RADIUS`` left of the trunk's frame at rest (over the origin, its
     sway not added), heading along ``x``."""
-    origin = scene.pose("trunk").position
-    return complex(origin[0], origin[1] + RADIUS)
+    return complex(0.0, RADIUS)
 
 
 def _rest_foot(scene, name: str) -> np.ndarray:
-    """Foot ``name``'s point in the world with the robot at its start pose (t = 0 rests)."""
-    contact = scene.joints[f"{name}/ground"]
-    return scene.pose(contact.child).transform_point(contact.child_frame.position)
+    """Foot ``name``'s point in the world with the robot in its rest posture at t = 0."""
+    return rest_feet("quadruped-turn")[name]
 
 
 def test_the_trunk_turns_at_the_yaw_rate_and_repeats_a_stride_later_turned(turn):
@@ -81,7 +86,7 @@ def test_the_trunk_turns_at_the_yaw_rate_and_repeats_a_stride_later_turned(turn)
     assert np.abs(later - _turned(now, centre, RATE * PERIOD)).max() < 1e-12
     # the sway along the trunk's axes is the straight walk's (planned the same way)
     straight = hx.load_scene(ROBOTS / "quadruped.toml")
-    origin = straight.pose("trunk").position
+    origin = np.zeros(3)  # the trunk's frame at rest, over the origin
     sway = (straight.drivers["trunk/x"].law(t) - origin[0] - STRIDE / PERIOD * t
             + 1j * (straight.drivers["trunk/y"].law(t) - origin[1]))
     assert np.abs(sway).max() > 0.02  # it sways by centimetres

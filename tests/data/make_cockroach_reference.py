@@ -8,13 +8,16 @@ samples): every joint's force and moment (joint frame), every driven joint's eff
 walking robot, the ground's force on each foot. The file committed was written by the
 cockroach's own inverse kinematics (a product of exponentials solved by Newton's method, before
 the engine's kinematics replaced it); run again, this script records what the code of the day
-gives.
+gives; with ``--compare`` it writes nothing and prints, case by case, how far the code of the
+day is from the committed figures (the largest difference over the largest value of each
+quantity, joints and contacts matched by name).
 
-    python3 tests/data/make_cockroach_reference.py
+    python3 tests/data/make_cockroach_reference.py [--compare]
 """
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -47,7 +50,27 @@ def figures(scene: hx.Scene) -> dict[str, np.ndarray]:
     return out
 
 
+def compare() -> None:
+    """Print the largest relative difference of each quantity from the committed file."""
+    reference = np.load(OUT)
+    for name, build in cases().items():
+        now, row = figures(build()), []
+        for key in ("effort", "force", "torque", "ground_force"):
+            if key not in now:
+                continue
+            names = "contacts" if key == "ground_force" else "joints"
+            after = list(now[names])
+            order = [after.index(n) for n in reference[f"{name}:{names}"]]
+            before = reference[f"{name}:{key}"]
+            difference = np.nanmax(np.abs(now[key][:, order] - before))
+            row.append(f"{key} {difference / np.nanmax(np.abs(before)):.1e}")
+        print(f"{name}: " + ", ".join(row), flush=True)
+
+
 def main() -> None:
+    if "--compare" in sys.argv[1:]:
+        compare()
+        return
     arrays = {"times": TIMES}
     for name, build in cases().items():
         print(name, flush=True)
