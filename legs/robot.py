@@ -314,10 +314,10 @@ def hexapod_walking(*, gait: str = "tripod", period: float | None = None,
                     scale: float = MODEL_SCALE, payload: float = 0.0, coxa_length: float = 1.0,
                     femur_length: float = 1.0, tibia_length: float = 1.0,
                     tarsus_length: float = 1.0) -> Scene:
-    """Built-in ``hexapod``: the six-legged robot at 20:1 walking in a tripod gait (duty 0.6):
-    a free trunk, 36 joints driven so that each foot follows its path exactly, the feet in
-    stance held to the ground by contacts, the ground forces shared by the least-wrench
-    policy.
+    """Built-in ``hexapod``: the six-legged robot at 20:1 walking in a tripod gait (duty 0.6),
+    as its robot description (data/robots/cockroach.toml): a free trunk, each foot on its path
+    exactly as the engine's kinematics places its leg's 6 joints, the feet in stance held to the
+    ground by contacts, the ground forces shared by the least-wrench policy.
 
     With no arguments, the built-in scene.
 
