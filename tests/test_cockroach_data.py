@@ -12,6 +12,7 @@ rates and accelerations) and so is everything computed from it.
 
 from __future__ import annotations
 
+import importlib.util
 from pathlib import Path
 
 import numpy as np
@@ -22,7 +23,17 @@ REFERENCE = Path(__file__).resolve().parent / "data" / "cockroach_reference.npz"
 TOLERANCE = 1e-9
 
 
-SCRIPT = load_script("tests/data/make_cockroach_reference.py")
+def _fixture_script():
+    """The fixture's maker as a module, without its folder on ``sys.path`` (tests/data holds a
+    folder named ``pinocchio``, which would pass for the package where it is not installed)."""
+    spec = importlib.util.spec_from_file_location(
+        "make_cockroach_reference", REFERENCE.parent / "make_cockroach_reference.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+SCRIPT = _fixture_script()
 
 
 @pytest.mark.parametrize("name", ["front-leg", "middle-leg", "hind-leg", "hexapod",
