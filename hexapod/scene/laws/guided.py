@@ -6,7 +6,8 @@ law is :class:`Guided` follows whatever the guides make of its joint: the invers
 solves the scene's kinematics with the guides as drivers (the engine's Newton solve, velocity and
 acceleration equations, :func:`hexapod.inverse_dynamics`), then the dynamics with these joints
 driven by the motion found and the guides left out, so that the efforts are the joints' and the
-guides exert nothing.
+guides exert nothing. Every other analysis reads the joint's law in the assembled model: the
+guides' kinematics solved at the times it asks (:mod:`hexapod.model.guided_motion`).
 """
 
 from __future__ import annotations
@@ -21,14 +22,13 @@ from hexapod.scene.laws.base import Law
 class Guided(Law):
     """The motion the scene's guides give a driven joint (no parameters).
 
-    It is not a function of time on its own: only the inverse dynamics, which solves the guides'
-    kinematics first, evaluates it (a simulation or an instant's analysis of such a scene is
-    refused, saying so)."""
+    It is not a function of time on its own: the assembled model (``hexapod.assemble``) gives
+    the joint the motion its guides give it, solved by the engine's kinematics at the times
+    asked; the law alone has no value."""
 
     kind = "guided"
 
     def evaluate(self, t):
         raise HexapodError("a 'guided' law is the motion the scene's guides give its joint, "
-                           "which the inverse dynamics solves first (hexapod inverse, hexapod "
-                           "report, hexapod.inverse_dynamics): simulate, or analyse an instant "
-                           "of, the motion an inverse run found instead")
+                           "which the engine's kinematics solves: evaluate it in the scene's "
+                           "model (hexapod.assemble), not alone")
