@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-FIXTURE = ROOT / "tests" / "data" / "pinocchio" / "chain-3"
+FIXTURE = ROOT / "tests" / "data" / "pinocchio-fixtures" / "chain-3"
 #: Only compiled libraries are kept: the tests that fill the cache compile.
 needs_compiler = pytest.mark.skipif(not (shutil.which("gcc") or shutil.which("cc")),
                                     reason="no C compiler")
@@ -88,7 +88,7 @@ def test_compile_yes_leaves_compiled_code_that_the_next_run_loads(tmp_path):
 
 
 def inverse_of(tmp_path: Path, cache: Path, fixture: str) -> None:
-    folder = ROOT / "tests" / "data" / "pinocchio" / fixture
+    folder = ROOT / "tests" / "data" / "pinocchio-fixtures" / fixture
     done = run("inverse", str(folder / "model.urdf"), "--motion", str(folder / "motion.csv"),
                "--out", f"{fixture}.csv", "--compile", "yes", cache=cache, cwd=tmp_path)
     assert done.returncode == 0, done.stderr

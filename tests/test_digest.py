@@ -20,7 +20,7 @@ from legs import front_leg_scene
 from mechanisms import random_tree
 
 ROOT = Path(__file__).resolve().parents[1]
-FIXTURE = ROOT / "tests" / "data" / "pinocchio" / "tree-7"
+FIXTURE = ROOT / "tests" / "data" / "pinocchio-fixtures" / "tree-7"
 
 
 def digest(scene: hx.Scene, rank_tolerance: float = 1e-9) -> str:
@@ -39,7 +39,7 @@ def test_assemble_gives_the_model_its_digest():
 
 def test_the_digest_is_the_same_in_another_process():
     code = ("import hexapod as hx; from legs import front_leg_scene; "
-            "from pathlib import Path; f = Path('tests/data/pinocchio/tree-7'); "
+            "from pathlib import Path; f = Path('tests/data/pinocchio-fixtures/tree-7'); "
             "print(hx.assemble(front_leg_scene()).digest); print(hx.assemble(hx.apply_motion("
             "hx.read_urdf(f / 'model.urdf'), hx.read_motion(f / 'motion.csv'))).digest)")
     out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True,

@@ -29,7 +29,7 @@ from hexapod.scene.urdf import read_urdf
 from mechanisms import four_bar, random_tree
 
 ROOT = Path(__file__).resolve().parent
-CHAIN_3 = ROOT / "data" / "pinocchio" / "chain-3" / "model.urdf"
+CHAIN_3 = ROOT / "data" / "pinocchio-fixtures" / "chain-3" / "model.urdf"
 
 
 # ------------------------------------------------------------------ motion files

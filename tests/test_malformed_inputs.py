@@ -36,7 +36,7 @@ fuzz = load_script("tests/fuzz/fuzz_inputs.py")  # the mutations and the TOML wr
 ROOT = Path(__file__).resolve().parents[1]
 
 
-FIXTURE = ROOT / "tests" / "data" / "pinocchio" / "chain-3"
+FIXTURE = ROOT / "tests" / "data" / "pinocchio-fixtures" / "chain-3"
 PENDULUM = ROOT / "data" / "scenes" / "pendulum.toml"
 
 # Reproducible (derandomize), no example database written into the checkout, no deadline: a

@@ -17,7 +17,7 @@ import hexapod as hx
 from hexapod.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
-CHAIN = ROOT / "tests" / "data" / "pinocchio" / "chain-3"
+CHAIN = ROOT / "tests" / "data" / "pinocchio-fixtures" / "chain-3"
 #: a time series: ``t``, then ``quantity:element`` (element: a scene name, '/'-joined parts)
 SERIES = re.compile(r"^(t|[A-Za-z][A-Za-z0-9_]*:[A-Za-z0-9_./-]+)$")
 #: a record (one row per run or case): a field, or ``family:element``

@@ -24,7 +24,7 @@ from hexapod.errors import InputFileError
 
 ROOT = Path(__file__).resolve().parents[1]
 hostile = load_script("tests/fuzz/fuzz_hostile.py")
-FIXTURE = ROOT / "tests" / "data" / "pinocchio" / "chain-3"
+FIXTURE = ROOT / "tests" / "data" / "pinocchio-fixtures" / "chain-3"
 PENDULUM = ROOT / "data" / "scenes" / "pendulum.toml"
 
 

@@ -326,7 +326,7 @@ def test_particles_balance_forces_only():
 def test_a_report_driven_by_a_motion_file_writes_what_inverse_writes(tmp_path):
     """``hexapod report MODEL --motion FILE`` spans the motion's samples; its inverse.csv is
     ``hexapod inverse``'s on the same files, to the last digit; window options are refused."""
-    fixture = ROOT / "tests" / "data" / "pinocchio" / "chain-3"
+    fixture = ROOT / "tests" / "data" / "pinocchio-fixtures" / "chain-3"
     model, motion = str(fixture / "model.urdf"), str(fixture / "motion.csv")
     done = run_cli("report", model, "--motion", motion, "--out", "report", cwd=tmp_path)
     assert done.returncode == 0, done.stderr

@@ -21,7 +21,7 @@ from legs import front_leg_scene
 
 from mechanisms import random_tree
 
-FIXTURES = sorted((Path(__file__).resolve().parent / "data" / "pinocchio").iterdir())
+FIXTURES = sorted((Path(__file__).resolve().parent / "data" / "pinocchio-fixtures").iterdir())
 
 
 def read_csv(path) -> tuple[list[str], np.ndarray]:

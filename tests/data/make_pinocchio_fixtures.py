@@ -1,9 +1,9 @@
 """Write the Pinocchio fixtures of the tests: URDF, motion and expected CSV (needs `pin`).
 
-Each fixture in ``tests/data/pinocchio/<name>/`` is a URDF written here directly (random trees
-and chains: revolute, continuous, prismatic and fixed joints, joint origins and inertials with
-random ``xyz`` and ``rpy``, unnormalised axes, full inertia tensors, a massless link on a fixed
-joint), a motion with exact derivatives, and ``expected.csv``: Pinocchio's ``tau`` and
+Each fixture in ``tests/data/pinocchio-fixtures/<name>/`` is a URDF written here directly (random
+trees and chains: revolute, continuous, prismatic and fixed joints, joint origins and inertials
+with random ``xyz`` and ``rpy``, unnormalised axes, full inertia tensors, a massless link on a
+fixed joint), a motion with exact derivatives, and ``expected.csv``: Pinocchio's ``tau`` and
 ``data.f`` in the `hexapod inverse` format. The tests compare `hexapod inverse` with them
 (CI has no Pinocchio). Re-run after changing the generator:
 
@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[2]
-OUT = Path(__file__).resolve().parent / "pinocchio"  # the fixtures, beside this file
+OUT = Path(__file__).resolve().parent / "pinocchio-fixtures"  # beside this file
 
 sys.path.insert(0, str(ROOT / "scripts" / "peers"))
 from pinocchio_inverse import pinocchio_table  # noqa: E402

@@ -41,7 +41,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
-CHAIN = ROOT / "tests" / "data" / "pinocchio" / "chain-3"
+CHAIN = ROOT / "tests" / "data" / "pinocchio-fixtures" / "chain-3"
 PENDULUM = ROOT / "data" / "scenes" / "pendulum.toml"
 TIME_LIMIT = 30.0
 

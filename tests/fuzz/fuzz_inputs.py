@@ -6,8 +6,8 @@
 
 Protocol
 --------
-Each input is made from a valid file of the repository -- a scene (``data/scenes/*.toml``), a
-URDF or a motion CSV (``tests/data/pinocchio/*/``) -- by one to three random mutations: on the
+Each input is made from a valid file of the repository -- a scene (``data/scenes/*.toml``), a URDF
+or a motion CSV (``tests/data/pinocchio-fixtures/*/``) -- by one to three random mutations: on the
 parsed document (delete a key or an element, replace a value by NaN, infinity, -1, 0, 1e308, a
 string, a list or a table, rename a reference to an unknown name, make a joint join a body to
 itself, duplicate an element, change a type, a unit or an inertia), or on the bytes (truncate,

@@ -16,7 +16,8 @@ from fuzz_toml import mutate_toml
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENES = sorted((ROOT / "data" / "scenes").glob("*.toml"))
-FIXTURES = sorted(p for p in (ROOT / "tests" / "data" / "pinocchio").iterdir() if p.is_dir())
+FIXTURES = sorted(p for p in (ROOT / "tests" / "data" / "pinocchio-fixtures").iterdir()
+                  if p.is_dir())
 URDFS = [p / "model.urdf" for p in FIXTURES]
 MOTIONS = [p / "motion.csv" for p in FIXTURES]
 
