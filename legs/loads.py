@@ -99,6 +99,6 @@ def ground_load_laws(leg: str, gait: str = "tripod", period: float = STRIDE_PERI
         times, forces = computed_reactions(gait, period, scale)
     t = np.append(times, period)
     table = np.concatenate([forces[leg], forces[leg][:1]])  # closed: periodic
-    laws = [Hermite(t, table[:, 0, axis], table[:, 1, axis], table[:, 2, axis])
+    laws = [Hermite(t, table[:, 0, axis], table[:, 1, axis], table[:, 2, axis], periodic=True)
             for axis in range(3)]
     return laws[0], laws[1], laws[2]

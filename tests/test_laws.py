@@ -152,3 +152,30 @@ def test_symbolic_form_equals_the_numeric_law(name):
     for other in (hx.scene.Gait(sin=[1.0]), hx.scene.Hermite([0.0, 1.0], [0.0, 1.0], [0.0, 0.0],
                                                              [0.0, 0.0])):
         assert other.symbolic(ca.SX.sym("t")) is None
+
+
+def test_a_periodic_hermite_table_repeats_and_round_trips(tmp_path):
+    """A closed table of sin(2 pi t) over one second, periodic: a time k periods later reads
+    the same value, rate and acceleration to round-off, where the open table's end
+    polynomial runs away; a table that does not close is refused; written and read back, the
+    same law."""
+    t = np.linspace(0.0, 1.0, 41)
+    w = 2 * np.pi
+    table = (t, np.sin(w * t), w * np.cos(w * t), -w * w * np.sin(w * t))
+    table[1][-1], table[3][-1] = table[1][0], table[3][0]  # closed exactly
+    periodic, open_ = hx.scene.Hermite(*table, periodic=True), hx.scene.Hermite(*table)
+    assert periodic.cycle_time() == 1.0 and open_.cycle_time() is None
+    inside = np.linspace(0.0, 1.0, 97)
+    for k in (1.0, 3.0, -2.0):
+        for a, b in zip(periodic.evaluate(inside + k), periodic.evaluate(inside), strict=True):
+            assert np.abs(a - b).max() < 1e-9 * np.abs(b).max()
+    assert abs(open_(2.5)) > 10 * abs(periodic(2.5))
+    assert hx.scene.Hermite(t, t, t, t, periodic=True).problems()  # does not close
+    scene = hx.Scene("beam")
+    scene.add(hx.scene.SpatialBody("beam", 1.0, [0.1, 0.1, 0.1]))
+    scene.add(hx.scene.Revolute("hinge", "ground", "beam", origin=[0, 0, 0], axis=[0, 0, 1]))
+    scene.add(hx.scene.JointDriver("turn", "hinge", periodic))
+    copy = hx.read_scene(hx.write_scene(scene, tmp_path / "beam.toml"))
+    assert "periodic = true" in (tmp_path / "beam.toml").read_text()
+    assert np.array_equal(copy.drivers["turn"].law.evaluate(inside + 2.0)[2],
+                          periodic.evaluate(inside + 2.0)[2])

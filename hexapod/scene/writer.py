@@ -120,7 +120,9 @@ def _law(law: Law) -> str:
                 parts.append(f"{f.name} = {_array(value)}")
         elif isinstance(value, str):
             parts.append(f"{f.name} = {_string(value)}")
-        elif isinstance(value, int) and not isinstance(value, bool):
+        elif isinstance(value, bool):
+            parts.append(f"{f.name} = {'true' if value else 'false'}")
+        elif isinstance(value, int):
             parts.append(f"{f.name} = {value}")
         else:
             parts.append(f"{f.name} = {_number(value)}")

@@ -135,7 +135,9 @@ _BASIS_RATES = np.vstack([_BASIS,
 class Hermite(Law):
     """Tabulated values with their first and second derivatives: the quintic Hermite
     interpolant, C2, equal to the given values, rates and accelerations at every sample (a
-    motion file with exact derivatives). Outside the table the end polynomials are continued.
+    motion file with exact derivatives). Outside the table the end polynomials are continued,
+    or, ``periodic``, the table repeats (its last sample must then equal its first: values,
+    rates and accelerations).
 
     Parameters
     ----------
@@ -144,12 +146,15 @@ class Hermite(Law):
     values, rates, accelerations : array_like, shape (N,)
         The values there, in the law's unit, and their first and second time derivatives (per
         s and per s^2).
+    periodic : bool, optional
+        The table repeats with the period ``times[-1] - times[0]`` (None: it does not).
     """
 
     times: np.ndarray
     values: np.ndarray
     rates: np.ndarray
     accelerations: np.ndarray
+    periodic: bool | None = None
     _pieces: object = field(default=None, init=False, repr=False, compare=False)
     kind = "hermite"
 
@@ -166,12 +171,18 @@ class Hermite(Law):
         Hermite basis); outside the table the end interval's polynomial continues."""
         if self._pieces is None:
             raise ValueError("hermite law is invalid: " + "; ".join(self.problems()))
+        if self.periodic:
+            start = self.times[0]
+            t = start + np.mod(np.asarray(t, dtype=float) - start, self.times[-1] - start)
         f, fd, fdd = read_pieces(self.times, self._pieces, t)
         return f, fd, fdd
 
+    def cycle_time(self):
+        return self.times[-1] - self.times[0] if self.periodic else None
+
     def _scaled(self, factor):
         return Hermite(self.times, self.values * factor, self.rates * factor,
-                       self.accelerations * factor)
+                       self.accelerations * factor, self.periodic)
 
     def problems(self):
         n = self.times.size
@@ -185,6 +196,9 @@ class Hermite(Law):
             return ["times, values, rates or accelerations are not finite"]
         if np.any(np.diff(self.times) <= 0):
             return ["times must be strictly increasing"]
+        if self.periodic and any(getattr(self, k)[0] != getattr(self, k)[-1]
+                                 for k in ("values", "rates", "accelerations")):
+            return ["a periodic table must end as it starts (values, rates and accelerations)"]
         numbers = (_size_problem(self.times, self.values, self.rates, self.accelerations)
                    or _spacing_problem(self.times))
         return [numbers] if numbers else []
