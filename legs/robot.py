@@ -33,7 +33,7 @@ raises ``ValueError`` naming the argument and the range.
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+from dataclasses import fields, replace
 from pathlib import Path
 
 import numpy as np
@@ -268,14 +268,16 @@ def cockroach_body(scale: float = MODEL_SCALE, lengths: tuple | None = None,
 
 def cockroach_description(pattern: GaitPattern, period: float, scale: float = MODEL_SCALE,
                           name: str = "hexapod", payload: float = 0.0,
-                          lengths: tuple | None = None) -> RobotDescription:
+                          lengths: tuple | None = None,
+                          ground: GroundForces | None = None) -> RobotDescription:
     """The walking robot as a robot description (:mod:`legs.description`), the built-in one
     among others: its body (:func:`cockroach_body`), each foot the tarsus's end with its stance
     line ``STANCE_OFFSET_MM`` fore-aft of the rest pose's foot, the joints of
     ``legs.stepping.COUPLED_JOINTS`` following the foot through the cycle with the amplitudes
     of ``GAIT_LAWS``, the gait ``pattern`` (its lift-offs and duty) at ``period``, a stride of
     ``STANCE_LENGTH_MM`` over the duty, a lift of ``FOOT_LIFT_MM``, the trunk level at
-    ``-GROUND_Z_MM`` above the ground (all scaled), the least-wrench policy."""
+    ``-GROUND_Z_MM`` above the ground (all scaled), the ``ground``'s policy (default
+    least-wrench)."""
     mm = 1e-3 * scale
     feet = {}
     for leg in LEG_NAMES:
@@ -289,7 +291,8 @@ def cockroach_description(pattern: GaitPattern, period: float, scale: float = MO
     gait = Gait(dict(pattern.lift_off), pattern.duty, period,
                 pattern.walking_speed(period, scale) * period, FOOT_LIFT_MM * mm,
                 trunk="level", height=-GROUND_Z_MM * mm)
-    return RobotDescription(name, Path(), "trunk", feet, {}, gait, coupled=coupled,
+    settings = {} if ground is None else {f.name: getattr(ground, f.name) for f in fields(ground)}
+    return RobotDescription(name, Path(), "trunk", feet, {}, gait, settings, coupled=coupled,
                             body=cockroach_body(scale, lengths, payload, name))
 
 
@@ -303,10 +306,8 @@ def _walking_scene(pattern: GaitPattern, period: float, scale: float,
         tau = (np.arange(SAMPLES) + 0.5) / SAMPLES
         for position in ("front", "middle", "hind"):
             leg_motion(position, pattern.duty, tau, lengths)
-    scene = robot_scene(cockroach_description(pattern, period, scale, name, payload, lengths))
-    if ground is not None:
-        scene.ground = ground
-    return scene
+    return robot_scene(cockroach_description(pattern, period, scale, name, payload, lengths,
+                                             ground))
 
 
 def hexapod_walking(*, gait: str = "tripod", period: float | None = None,

@@ -256,14 +256,15 @@ def robot_scene(description):
     plan = _add_trunk(lifted, trunk, walk, rest, height)
     for name in description.feet:
         _add_foot(lifted, description, name, walk, rest[name])
-    coupled = _coupled_laws(description, urdf, trunk, walk)
+    chains = {name: _leg_joints(urdf, trunk, foot.link)
+              for name, foot in description.feet.items()}
+    coupled = _coupled_laws(description, chains, walk)
     for joint in urdf.joints.values():
         if joint.drivable:
             lifted.add(JointDriver(f"drive_{joint.name}", joint.name,
                                    coupled.get(joint.name, Guided())))
-    for name, foot in description.feet.items():
-        _add_posture(lifted, description, name, [j for j in _leg_joints(
-            urdf, trunk, foot.link) if j not in coupled], angles)
+    for name, chain in chains.items():
+        _add_posture(lifted, description, name, [j for j in chain if j not in coupled], angles)
     kinematics = (_whole_body(lifted, trunk, walk, rest, height, plan)
                   if gait.trunk == "whole-body" else None)
     if two_feet:
@@ -401,15 +402,15 @@ def _add_foot(scene, description, name: str, walk: _Walk, rest: np.ndarray) -> N
                       period=period, duty=duty, lift_off=phase, foothold=start, **turning))
 
 
-def _coupled_laws(description, urdf, trunk: str, walk: _Walk) -> dict:
+def _coupled_laws(description, chains: dict, walk: _Walk) -> dict:
     """The laws of the joints that follow their foot through the cycle (the description's
-    ``coupled``): joint name -> :class:`legs.stepping.GaitCoupled` on its foot's schedule."""
+    ``coupled``, among each foot's leg joints ``chains``): joint name ->
+    :class:`legs.stepping.GaitCoupled` on its foot's schedule."""
     from legs.description import by_pattern
     from legs.stepping import GaitCoupled
 
     gait, out = walk.gait, {}
-    for name, foot in description.feet.items():
-        chain = _leg_joints(urdf, trunk, foot.link)
+    for name, chain in chains.items():
         for joint, (follows, amplitude) in by_pattern(description.coupled, chain).items():
             out[joint] = GaitCoupled(amplitude, follows, gait.duty, gait.period,
                                      walk.phases[name])
