@@ -212,6 +212,14 @@ def _description(tmp_path, text: str) -> Path:
     (('trunk = "planned"', 'trunk = "bouncing"'), "gait.trunk"),
     (('mu = 0.8', 'friction = 0.8'), "ground.friction"),
     (('"*_knee" = -1.2', '"*_kne" = -1.2'), "robot.rest.*_kne"),
+    # the keys a robot's feet, gait and coupled joints gained with the cockroach
+    (('point = [0.0, 0.0, -0.2] }', 'point = [0.0, 0.0, -0.2], offset = [0.1] }'),
+     "robot.feet.LF"),
+    (('trunk = "planned"', 'trunk = "planned"\nheight = -0.3'), "gait.height"),
+    (('trunk = "trunk"', 'trunk = "trunk"\ncoupled = { "*_knee" = { bend = 8 } }'),
+     "robot.coupled.*_knee"),
+    (('trunk = "trunk"', 'trunk = "trunk"\ncoupled = { "*_knee" = { lift = "up" } }'),
+     "{ lift = DEGREES }"),
 ])
 def test_a_bad_description_is_one_clear_message(tmp_path, change, message):
     text = QUADRUPED.read_text()
