@@ -391,8 +391,6 @@ def test_a_guided_joint_that_jumps_to_another_solution_between_samples_is_follow
     kinematics (the elbow down): the guides' motion is solved again through the midpoint
     where a guided coordinate changes by more than its rates and accelerations account for,
     and the motion returned stays on one branch; a motion that keeps jumping is named."""
-    from types import SimpleNamespace
-
     from hexapod.algorithms.guided import guides_motion
 
     model = hx.assemble(guided_arm())
@@ -400,21 +398,21 @@ def test_a_guided_joint_that_jumps_to_another_solution_between_samples_is_follow
     calls = []
 
     def flipping(always):
-        def solve(kinematics, grid):
+        def solve(kinematics, grid, progress=None):
             calls.append(grid.size)
             q, v, v_dot = _arm_motion(model, grid, 1.0)
             if always or grid.size == times.size:  # the elbow goes down from t = 0.5 s
                 down = _arm_motion(model, grid, -1.0)
                 late = grid >= 0.5
                 q[late], v[late], v_dot[late] = (x[late] for x in down)
-            return SimpleNamespace(q=q, v=v, v_dot=v_dot)
+            return q, v, v_dot
         return solve
 
-    q, v, v_dot = guides_motion(model, times, flipping(False))
+    q, v, v_dot = guides_motion(model, times, solve=flipping(False))
     assert calls == [11, 12]  # once more, through the midpoint of (0.4, 0.5)
     expected = _arm_motion(model, times, 1.0)
     for got, want in zip((q, v, v_dot), expected, strict=True):
         assert np.array_equal(got, want)
     with pytest.raises(HexapodError, match=r"joint '(shoulder|elbow)' jumps between solutions "
                                            r"of the guides near t = 0.4"):
-        guides_motion(model, times, flipping(True))
+        guides_motion(model, times, solve=flipping(True))

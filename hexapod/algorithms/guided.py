@@ -18,6 +18,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
+from hexapod.algorithms.prescribed import prescribed_motion
 from hexapod.errors import AssemblyError, HexapodError
 from hexapod.model.model import Model
 from hexapod.model.tabulation import sampled_laws
@@ -66,22 +67,28 @@ def guided_twin(model: Model, times: np.ndarray, q: np.ndarray, v: np.ndarray,
     return model.with_laws(tuple(laws), model.digest, share_built=True)
 
 
-def guides_motion(model: Model, times: np.ndarray, solve) -> tuple:
-    """The guides' kinematics ``(q, v, v_dot)`` at ``times``, continuous along them: ``solve``
-    (``solve(kinematics_model, times) -> InverseResult``) runs the kinematics; where a guided
-    joint jumps to another solution between two samples (see :data:`JUMP_SHARE`) the motion
-    is solved again through their midpoint, until it follows one solution.
+def guides_motion(model: Model, times: np.ndarray, progress=None, *,
+                  solve=prescribed_motion) -> tuple:
+    """The guides' kinematics ``(q, v, v_dot)`` of a guided ``model`` at ``times``, continuous
+    along them (``solve(kinematics, grid, progress=progress)``, by default
+    :func:`hexapod.algorithms.prescribed.prescribed_motion`); where a guided joint jumps to
+    another solution between two samples (see :data:`JUMP_SHARE`) the motion is solved again
+    through their midpoint, until it follows one solution.
 
     Raises
     ------
     HexapodError
         The motion still jumps after :data:`REFINEMENTS` halvings (naming the joint and time).
+    AssemblyError
+        The guides ask for a pose out of the joints' reach (naming the guides, how far off).
     """
     grid = np.asarray(times, dtype=float)
     for _ in range(REFINEMENTS + 1):
-        motion = solve(model.guidance.kinematics, grid)
-        theta, rate, acceleration = guided_coordinates(model, motion.q, motion.v,
-                                                       motion.v_dot)
+        try:
+            q, v, v_dot = solve(model.guidance.kinematics, grid, progress=progress)
+        except AssemblyError as error:  # a pose out of reach: which guides, how far
+            raise unreachable_guides(model, error) from None
+        theta, rate, acceleration = guided_coordinates(model, q, v, v_dot)
         h = np.diff(grid)
         accounted = (h / 2 * (rate[:, :-1] + rate[:, 1:])
                      + h**2 / 12 * (acceleration[:, :-1] - acceleration[:, 1:]))
@@ -89,7 +96,7 @@ def guides_motion(model: Model, times: np.ndarray, solve) -> tuple:
         jumps = np.abs(change - accounted) > np.maximum(JUMP_SHARE * np.abs(change), JUMP_FLOOR)
         if not jumps.any():
             kept = np.searchsorted(grid, times)
-            return motion.q[kept], motion.v[kept], motion.v_dot[kept]
+            return q[kept], v[kept], v_dot[kept]
         bad = jumps.any(axis=0)
         grid = np.sort(np.concatenate([grid, (grid[:-1][bad] + grid[1:][bad]) / 2]))
     guided, k = np.unravel_index(np.argmax(jumps), jumps.shape)

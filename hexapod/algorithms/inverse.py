@@ -44,7 +44,7 @@ from hexapod._support.fastcall import InPlaceFunction
 from hexapod.algorithms.contact_frames import refuse_contacts
 from hexapod.algorithms.joint_limits import check_joint_limits
 from hexapod.algorithms.liaison import efforts_and_axes
-from hexapod.errors import AssemblyError, HexapodError
+from hexapod.errors import HexapodError
 from hexapod.model.data import kept
 from hexapod.model.model import GROUND_INDEX, Data, Model
 from hexapod.spatial import (
@@ -223,19 +223,6 @@ def inverse_dynamics(model: Model, times: ArrayLike, *, method: str = "auto", fr
     return result
 
 
-def solved_guides(model: Model, times: np.ndarray, progress=None) -> tuple:
-    """The guides' kinematics ``(q, v, v_dot)`` of a guided ``model`` at ``times``, continuous
-    along them (:func:`hexapod.algorithms.guided.guides_motion`), its runs' progress reported
-    to ``progress``; guides out of the joints' reach are named, with how far off they are."""
-    from hexapod.algorithms.guided import guides_motion, unreachable_guides
-
-    try:
-        return guides_motion(model, times, lambda kinematics, grid: inverse_dynamics(
-            kinematics, grid, check_limits=False, progress=progress))
-    except AssemblyError as error:  # a pose out of reach: which guides, how far
-        raise unreachable_guides(model, error) from None
-
-
 def _guided(model: Model, times: np.ndarray, progress, check_limits: bool):
     """The twin of a guided model whose joints follow the motion the guides give them, the
     progress of its run as the second half of the whole, and the motion ``(q, v, v_dot)`` at
@@ -243,10 +230,10 @@ def _guided(model: Model, times: np.ndarray, progress, check_limits: bool):
     its positions, and a motion its constraints leave free takes its velocities); the
     motion's joints checked against their ranges (``check_limits``), in the name of
     ``model``, and guides out of the joints' reach named."""
-    from hexapod.algorithms.guided import guided_twin
+    from hexapod.algorithms.guided import guided_twin, guides_motion
 
     n = times.size
-    q, v, v_dot = solved_guides(model, times, None if progress is None else (
+    q, v, v_dot = guides_motion(model, times, None if progress is None else (
         lambda done, total: progress(done * n // total, 2 * n)))
     if check_limits:  # the same bodies and joints: the kinematics' positions are the model's
         check_joint_limits(model, times, q)

@@ -368,7 +368,7 @@ def solve_accelerations(model: Model, data: Data, t: float, q: np.ndarray,
     w, wd, wdd = model.law_values(t, data)
     Phi_v = constraint_jacobian(model, q, w, data)
     gamma = model.call("gamma", data, q=q, v=v, w=w, wd=wd, wdd=wdd)
-    split = rank_split(model, Phi_v, w)
+    split = state_split(model, data, q, w, Phi_v)  # the velocities' decision, when at q
     y = split.min_norm_correction(gamma)
     _check(model, split, y, gamma, "acceleration constraints")
     data.at(t, q, v)

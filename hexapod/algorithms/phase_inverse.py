@@ -53,6 +53,7 @@ from hexapod.algorithms.phase_plan import MORE_NEWTON_STEPS, NEWTON_STEPS, Phase
 from hexapod.algorithms.sample_inverse import (
     SampleResult,
     exact_forces,
+    exact_motion,
     exact_sample,
     known_sample,
 )
@@ -77,13 +78,14 @@ class _Feet:
     """The per-sample inputs of the contacts: stance, weights, idle feet and the policy's
     per-foot values (see :meth:`PhasePlan._objective`)."""
 
-    def __init__(self, model: Model, times: np.ndarray):
+    def __init__(self, model: Model, times: np.ndarray, motion: bool = False):
         contacts = model.contacts
         n = times.size
         self.stance = np.array([c.in_stance(times) for c in contacts], dtype=bool).reshape(-1, n)
         weights = np.array([c.weight(times) for c in contacts], dtype=float).reshape(-1, n)
         self.weights = weights = sharing_weights(weights, self.stance)
-        self.idle = self.stance & (weights <= NO_LOAD)
+        # a foot that carries nothing has its multipliers held at zero (none in a motion run)
+        self.idle = self.stance & (weights <= NO_LOAD) & (not motion)
         self.values = foot_values(model.ground.policy if contacts else "min-wrench", weights)
         self.owner = np.full(model.n_c, -1)  # the contact of each row
         for k, c in enumerate(contacts):
@@ -116,9 +118,9 @@ class _Results:
     """The arrays of an :class:`~hexapod.algorithms.inverse.InverseResult`, filled sample by
     sample or by runs of samples."""
 
-    def __init__(self, model: Model, n: int, world: bool):
+    def __init__(self, model: Model, n: int, world: bool, motion: bool = False):
         self.model = model
-        J, C = len(model.joints), len(model.contacts)
+        J, C = (0, 0) if motion else (len(model.joints), len(model.contacts))
         self.q, self.v = np.zeros((n, model.n_q)), np.zeros((n, model.n_v))
         self.v_dot = np.zeros((n, model.n_v))
         self.force, self.torque = np.zeros((n, J, 3)), np.zeros((n, J, 3))
@@ -158,22 +160,22 @@ class _Results:
 
 def phase_inverse(model: Model, data: Data, times: np.ndarray, w, wd, wdd, frame: str, *,
                   progress: Callable[[int, int], None] | None = None,
-                  known: tuple | None = None) -> dict:
+                  known: tuple | None = None, motion: bool = False) -> dict:
     """The phase path over ``times`` (laws ``w, wd, wdd`` given, n_w x N): the fields of an
     :class:`~hexapod.algorithms.inverse.InverseResult` as a dict, with ``exact_samples``, the
     number of samples solved by the exact path. Compiled or interpreted as the execution
     setting says (:mod:`hexapod._support.execution`). ``known``: the motion ``(q, v, v_dot)``
     at the samples when it is known already (a guided model's): Newton's starting points, and
-    where the constraints leave a motion free, its velocities (by the exact path)."""
+    where the constraints leave a motion free, its velocities (by the exact path). ``motion``:
+    the motion alone (a kinematics run: the fields of forces are empty, and the drivers must
+    prescribe every degree of freedom), as :func:`phase_motion` gives it."""
     to_c = current().compiled
     n = times.size
-    out = _Results(model, n, frame == "world")
+    out = _Results(model, n, frame == "world", motion)
     out.known = known
-    feet = _Feet(model, times)
-    out.store(0, exact_sample(model, data, times[0], model.q0, times[0], frame=frame,
-                              first=True) if known is None else known_sample(
-        model, data, times, known, 0, frame))
-    decisions = _Decisions(model, data, terms_of(model), feet, to_c)
+    feet = _Feet(model, times, motion)
+    out.store(0, _exact(model, data, out, times, 0, frame, known, motion))
+    decisions = _Decisions(model, data, terms_of(model), feet, to_c, motion)
     decisions.adopt(0, data, w[:, 0])
     newton = NEWTON_STEPS  # Newton steps per sample: more once samples prove far apart
     k, chunk = 1, CHUNK
@@ -185,10 +187,7 @@ def phase_inverse(model: Model, data: Data, times: np.ndarray, w, wd, wdd, frame
             failed = _run(plan, data, newton, out, feet, times, w, wd, wdd, k, stop)
         if plan is None or failed is not None:
             bad, blame = (k, "rank") if plan is None else failed
-            out.store(bad, exact_sample(model, data, times[bad - 1], out.q[bad - 1],
-                                        times[bad], (out.v[bad - 1], out.v_dot[bad - 1]),
-                                        frame=frame) if known is None else known_sample(
-                model, data, times, known, bad, frame))
+            out.store(bad, _exact(model, data, out, times, bad, frame, known, motion))
             if blame == "rank":  # the decision no longer holds: take the exact solve's
                 decisions.adopt(bad, data, w[:, bad], plan)
             elif blame == "newton":  # samples too far apart for the Newton steps taken
@@ -200,6 +199,10 @@ def phase_inverse(model: Model, data: Data, times: np.ndarray, w, wd, wdd, frame
             raise KeyboardInterrupt
         if progress is not None:
             progress(k, n)
+    if motion:
+        return {"q": out.q, "v": out.v, "v_dot": out.v_dot,
+                "max_violation": float(out.violation.max()),
+                "redundant_rows": tuple(out.redundant), "exact_samples": int(out.exact.sum())}
     _frames(model, out, frame)
     if model.contacts and model.ground.policy == "friction":
         _friction(model, data, out, feet, times, frame)
@@ -207,6 +210,37 @@ def phase_inverse(model: Model, data: Data, times: np.ndarray, w, wd, wdd, frame
             "torque": out.torque, "effort": out.effort, "ground": out.ground,
             "max_violation": float(out.violation.max()),
             "redundant_rows": tuple(out.redundant), "exact_samples": int(out.exact.sum())}
+
+
+def phase_motion(model: Model, data: Data, times: np.ndarray, w, wd, wdd, *,
+                 progress: Callable[[int, int], None] | None = None) -> tuple:
+    """The motion ``(q, v, v_dot)`` (each (N, size)) the drivers of ``model`` prescribe at
+    ``times`` (laws ``w, wd, wdd`` given, n_w x N), continuous along them: the phase path's
+    positions, velocities and accelerations without the multipliers, the policy or the
+    wrenches (a guided model's guides' kinematics, :mod:`hexapod.algorithms.guided`).
+
+    Raises
+    ------
+    SingularSystemError
+        When the drivers leave degrees of freedom free.
+    """
+    fields = phase_inverse(model, data, times, w, wd, wdd, "joint", progress=progress,
+                           motion=True)
+    return fields["q"], fields["v"], fields["v_dot"]
+
+
+def _exact(model: Model, data: Data, out: _Results, times: np.ndarray, k: int, frame: str,
+           known: tuple | None, motion: bool) -> SampleResult:
+    """Sample ``k`` by the exact path: Newton from the positions known there, or predicted
+    from the sample before (the first from the scene's guess, checking that the drivers leave
+    no degree of freedom free)."""
+    if known is not None:
+        return known_sample(model, data, times, known, k, frame)
+    t0, q0, rates = ((times[0], model.q0, None) if k == 0 else
+                     (times[k - 1], out.q[k - 1], (out.v[k - 1], out.v_dot[k - 1])))
+    if motion:
+        return exact_motion(model, data, t0, q0, times[k], rates, first=k == 0)
+    return exact_sample(model, data, t0, q0, times[k], rates, frame=frame, first=k == 0)
 
 
 class _Decisions:
@@ -218,8 +252,10 @@ class _Decisions:
     the ground as the exact decision chooses them (the farthest from the span of those kept
     first), the feet that carry nothing last, so that their multipliers can be held at zero."""
 
-    def __init__(self, model: Model, data: Data, terms: StepTerms, feet: _Feet, to_c: bool):
+    def __init__(self, model: Model, data: Data, terms: StepTerms, feet: _Feet, to_c: bool,
+                 motion: bool = False):
         self.model, self.data, self.terms, self.feet, self.to_c = model, data, terms, feet, to_c
+        self.motion = motion
         self.plans: dict = {}
         self.base = None  # the kept and left-out rows that are no foot's
         self.generation: dict = {}  # per kept and left-out rows: plans whose pivots failed
@@ -291,7 +327,8 @@ class _Decisions:
 
         key = (tuple(kept.tolist()), tuple(left.tolist()))
         try:
-            return plan_for(terms, kept, left, make, self.generation.get(key, 0), self.to_c)
+            return plan_for(terms, kept, left, make, self.generation.get(key, 0), self.to_c,
+                            self.motion)
         except RuntimeError:  # exactly singular there
             return None
 
@@ -321,10 +358,10 @@ def _run(plan: PhasePlan, data: Data, newton: int, out: _Results, feet: _Feet, t
     out.q[done], out.v[done] = state[:count, :n_q], state[:count, n_q:n_q + n_v]
     out.v_dot[done] = state[:count, n_q + n_v:]
     out.force[done], out.torque[done] = wrench[:count, :, :3], wrench[:count, :, 3:]
-    if out.frames is not None:
+    if out.frames is not None and not plan.motion:
         out.frames[done] = frames[:count]
     out.violation[done] = checks[:count, 0]
-    for c, contact in enumerate(model.contacts):
+    for c, contact in enumerate(model.contacts if not plan.motion else ()):
         out.ground[done, c] = -lam[:count][:, contact.rows]
     if count:
         out.name([model.rows[i].name for i in plan.left_out])

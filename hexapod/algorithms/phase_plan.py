@@ -79,10 +79,14 @@ class PhasePlan:
         The factorisation's pattern and pivots for ``Phi_v[kept]``, chosen at the decision.
     to_c : bool
         Compile the plan's own SX Functions to C (kept in the execution setting's cache).
+    motion : bool
+        The motion alone (steps 1, 2 without the multipliers, and 5): a kinematics run, such as
+        a guided model's guides' (:func:`hexapod.algorithms.phase_inverse.phase_motion`).
     """
 
-    def __init__(self, terms: StepTerms, kept, left_out, lu: StaticLU, to_c: bool = False):
-        self.terms, self.model = terms, terms.model
+    def __init__(self, terms: StepTerms, kept, left_out, lu: StaticLU, to_c: bool = False,
+                 motion: bool = False):
+        self.terms, self.model, self.motion = terms, terms.model, motion
         self.kept = np.asarray(kept, dtype=int)
         self.left_out = np.asarray(left_out, dtype=int)
         self.lu, self.to_c = lu, to_c
@@ -108,11 +112,19 @@ class PhasePlan:
         factors = lu.factor(Phi[self._J_entries])
         self.factor = self._sx("phase_lu", [Phi], [factors])
         packed = ca.SX.sym("F", factors.numel())
-        b, Q, a = ca.SX.sym("b", n_c), ca.SX.sym("Q", n_v), ca.SX.sym("a", n_v)
-        y = ca.SX.sym("y", n_v)
+        b, y = ca.SX.sym("b", n_c), ca.SX.sym("y", n_v)
         # the transposed solve, formed once and called (inlined) where needed
         solve_t = ca.Function("solve_t", [packed, y], [lu.solve(packed, y, True)])
         self.solve = self._sx("phase_solve", [packed, b], [lu.solve(packed, b[self.kept])])
+        if not self.motion:
+            self._build_multipliers(Phi, packed, solve_t)
+        self._build_checks()
+
+    def _build_multipliers(self, Phi, packed, solve_t) -> None:
+        """The multipliers of the kept rows and the coefficients of the left-out ones."""
+        model, terms = self.model, self.terms
+        n_v, n_c = model.n_v, model.n_c
+        Q, a = ca.SX.sym("Q", n_v), ca.SX.sym("a", n_v)
         lam = ca.SX(n_c, 1)
         lam[self.kept.tolist()] = solve_t(packed, Q - ca.mtimes(sparse_dm(model.mass.dense()), a))
         self.multipliers = self._sx("phase_multipliers", [packed, Q, a], [lam])
@@ -128,6 +140,10 @@ class PhasePlan:
             for i, row in enumerate(self.left_out):
                 N[int(row), i] = 1.0
             self.null_space = self._sx("phase_null_space", [packed, Phi], [N])
+
+    def _build_checks(self) -> None:
+        model = self.model
+        n_v, n_c = model.n_v, model.n_c
         self._probe = np.zeros(n_c)
         probe = np.random.default_rng(0).standard_normal(n_v)
         self._probe[self.kept] = probe / np.linalg.norm(probe)
@@ -182,18 +198,22 @@ class PhasePlan:
         v = self.solve(F, nu)
         gamma, Q, offset = terms.forces(q, v, w, wd, wdd)
         a = self.solve(F, gamma)
-        lam = self.multipliers(F, Q, a)
-        if self.left_out.size:
-            lam = self._policy(q, F, Phi, offset, lam, feet, mask)
-        wrench, frames = terms.report(q, Phi, lam, offset)
         d = terms.row_norms(Phi)  # the rows' scales at this sample
         velocity, acceleration, position, presence = terms.residuals(Phi, phi, v, nu, a,
                                                                      gamma, d)
         checks = self.checks(self.solve(F, d * ca.DM(self._probe)), velocity,
                              acceleration, position, presence)
+        names = ["x", "h", "w", "wd", "wdd", "feet", "mask"]
+        if self.motion:
+            return ca.Function("phase_motion_step", [x, h, w, wd, wdd, feet, mask],
+                               [ca.densify(ca.vertcat(q, v, a)), ca.densify(checks)],
+                               names, ["x_next", "checks"])
+        lam = self.multipliers(F, Q, a)
+        if self.left_out.size:
+            lam = self._policy(q, F, Phi, offset, lam, feet, mask)
+        wrench, frames = terms.report(q, Phi, lam, offset)
         outputs = [ca.densify(y) for y in (ca.vertcat(q, v, a), lam, wrench, frames, checks)]
-        return ca.Function("phase_step", [x, h, w, wd, wdd, feet, mask], outputs,
-                           ["x", "h", "w", "wd", "wdd", "feet", "mask"],
+        return ca.Function("phase_step", [x, h, w, wd, wdd, feet, mask], outputs, names,
                            ["x_next", "lam", "wrench", "frames", "checks"])
 
     # ---------------------------------------------------------------- evaluation
@@ -215,7 +235,8 @@ class PhasePlan:
         ``h`` (N,) the time steps, laws and per-foot inputs (rows x N). Returns arrays with the
         samples first: states (N, n_q + 2 n_v), multipliers (N, n_c), wrenches (N, J, 6) in
         the joint frames, the joint frames' rotations (N, J, 9, column-major) and the checks
-        (N, 6), all NaN when the evaluation fails."""
+        (N, 6), all NaN when the evaluation fails; a motion plan's multipliers, wrenches and
+        rotations are empty (N, 0, ...)."""
         model, n = self.model, h.size
         run = self._evaluator(data, n, newton)
         # CasADi's column-major (rows x n) is NumPy's C-order (n x rows)
@@ -223,11 +244,11 @@ class PhasePlan:
                   np.ascontiguousarray(np.reshape(h, (n, 1)), dtype=float)]
         inputs += [np.ascontiguousarray(np.asarray(x, dtype=float).T)
                    for x in (w, wd, wdd, feet, mask)]
-        J = len(model.joints)
-        outputs = [np.empty((n, model.n_q + 2 * model.n_v)), np.empty((n, model.n_c)),
+        J, n_c = (0, 0) if self.motion else (len(model.joints), model.n_c)
+        outputs = [np.empty((n, model.n_q + 2 * model.n_v)), np.empty((n, n_c)),
                    np.empty((n, J, 6)), np.empty((n, J, 9)), np.empty((n, len(CHECKS)))]
         try:
-            run(inputs, outputs)
+            run(inputs, [outputs[0], outputs[4]] if self.motion else outputs)
         except RuntimeError:  # a singular solve: the samples are redone exactly
             for y in outputs:
                 y[...] = np.nan
@@ -240,13 +261,15 @@ class PhasePlan:
 
 
 def plan_for(terms: StepTerms, kept, left_out, make, generation: int = 0,
-             to_c: bool = False) -> PhasePlan:
+             to_c: bool = False, motion: bool = False) -> PhasePlan:
     """The :class:`PhasePlan` of a rank decision, built once per model and ``generation``:
     ``make()`` gives the factorisation's pivots (:class:`StaticLU`) when it is built. A later
     decision with the same rows reuses it, whatever the positions it was taken at (its pivots
     are checked at every sample); a new ``generation`` takes new pivots. The pivots are those
     of the first decision of these rows the model saw, so results may differ from run to run
-    by round-off (never more: every sample is checked against the constraints)."""
+    by round-off (never more: every sample is checked against the constraints). ``motion``:
+    the plan of the motion alone (see :class:`PhasePlan`)."""
     key = ("phase-plan", tuple(int(r) for r in kept), tuple(int(r) for r in left_out),
-           generation, to_c)
-    return terms.model.built_once(key, lambda m: PhasePlan(terms, kept, left_out, make(), to_c))
+           generation, to_c, motion)
+    return terms.model.built_once(key, lambda m: PhasePlan(terms, kept, left_out, make(), to_c,
+                                                           motion))

@@ -21,7 +21,9 @@ from hexapod.algorithms.kinematics import (
     assemble_positions,
     degrees_of_freedom,
     free_motions,
+    solve_accelerations,
     solve_velocities,
+    state_split,
 )
 from hexapod.algorithms.liaison import joint_wrenches
 from hexapod.errors import AssemblyError, HexapodError, SingularSystemError
@@ -77,6 +79,37 @@ def exact_sample(model: Model, data: Data, t0: float, q0: np.ndarray, t: float,
         # would be the dynamics', not the prescribed motion's
         require_prescribed(model, data, t, q)
     return out
+
+
+def exact_motion(model: Model, data: Data, t0: float, q0: np.ndarray, t: float,
+                 rates=None, *, first: bool = False) -> SampleResult:
+    """The motion alone at ``t`` (positions as :func:`exact_sample` finds them, velocities and
+    accelerations by the constraints), for a kinematics run: no multipliers, wrenches or
+    ground forces (empty arrays). The rank decision taken is left in ``data``
+    (``independent_rows``, ``redundant_rows``) as the dynamics leaves its own.
+
+    Raises
+    ------
+    SingularSystemError
+        When the drivers leave degrees of freedom free (checked at ``first`` and wherever the
+        constraints' rank falls short).
+    AssemblyError
+        When the positions cannot be found.
+    """
+    q = next_positions(model, data, t0, q0, t, rates)
+    if first:
+        require_prescribed(model, data, t, q)
+    v = solve_velocities(model, data, t, q)
+    v_dot = solve_accelerations(model, data, t, q, v)  # leaves Phi_v in data
+    w = model.law_values(t, data)[0]
+    split = state_split(model, data, q, w, data.Phi_v)  # the velocities' own decision
+    if split.independent.size < model.n_v:
+        require_prescribed(model, data, t, q)
+    data.independent_rows, data.redundant_rows = split.independent, split.redundant
+    violation = float(np.max(np.abs(model.call("phi", data, q=q, w=w) / model.row_scale)))
+    empty = np.zeros((0, 3))
+    return SampleResult(q, v, v_dot, np.zeros(0), empty, empty, np.zeros(0), empty, violation,
+                        tuple(model.rows[i].name for i in split.redundant))
 
 
 def known_sample(model: Model, data: Data, times: np.ndarray, known: tuple, k: int,
