@@ -83,6 +83,23 @@ def test_four_bars_agree_with_the_saddle_path(dimension):
     assert result.method == "phase" and result.redundant_rows == exact.redundant_rows
 
 
+def test_a_run_goes_in_blocks_that_carry_the_state_from_one_to_the_next(monkeypatch):
+    """The samples are evaluated in blocks (phase_plan.blocks: BLOCK samples, then the binary
+    digits of the rest), each starting from the last state of the block before: small blocks
+    give the saddle path's numbers as one block does."""
+    for n in range(1, 300):
+        sizes = phase_plan.blocks(n)
+        assert sum(sizes) == n and sizes == sorted(sizes, reverse=True)
+        assert set(sizes) <= {phase_plan.BLOCK >> k for k in range(7)}
+    model = four_bar_model(3)
+    times = np.linspace(0.0, 1.2, 25)
+    exact = inverse_dynamics(model, times, method="saddle")
+    monkeypatch.setattr(phase_plan, "BLOCK", 4)  # 24 compiled samples: six blocks of 4
+    fields = phase(model, times)
+    assert_agree(fields, exact)
+    assert fields["exact_samples"] == 1
+
+
 def test_the_standing_hexapod_agrees_with_the_saddle_path():
     """Six feet pinned, every joint held: twelve redundant drivers, forces by the least-wrench
     policy."""
