@@ -177,7 +177,8 @@ def phase_inverse(model: Model, data: Data, times: np.ndarray, w, wd, wdd, frame
     out.store(0, _exact(model, data, out, times, 0, frame, known, motion))
     decisions = _Decisions(model, data, terms_of(model), feet, to_c, motion)
     decisions.adopt(0, data, w[:, 0])
-    newton = NEWTON_STEPS  # Newton steps per sample: more once samples prove far apart
+    # Newton steps per sample (none from known positions): more once samples prove far apart
+    newton = NEWTON_STEPS if known is None else 0
     k, chunk = 1, CHUNK
     while k < n:
         plan = decisions.plan(k, out.predicted(k, times), w[:, k])
@@ -345,7 +346,7 @@ def _run(plan: PhasePlan, data: Data, newton: int, out: _Results, feet: _Feet, t
     mask = (~feet.rows_idle_over(plan.left_out, k, stop)).astype(float).T
     state, lam, wrench, frames, checks = plan.evaluate(
         data, out.state(k - 1), np.diff(times[k - 1:stop]), w[:, span], wd[:, span], wdd[:, span],
-        feet.values[:, span], mask, newton)
+        feet.values[:, span], mask, newton, None if out.known is None else out.known[0][span])
     checks = np.nan_to_num(checks, nan=np.inf)
     finite = np.all(np.isfinite(state), axis=1) & np.all(np.isfinite(wrench), axis=(1, 2))
     idle_kept = feet.rows_idle_over(plan.kept, k, stop).any(axis=1)

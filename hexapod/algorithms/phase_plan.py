@@ -169,29 +169,40 @@ class PhasePlan:
 
     # ---------------------------------------------------------------- one sample
 
-    def step(self, newton: int = NEWTON_STEPS, expanded: bool = False) -> ca.Function:
+    def step(self, newton: int = NEWTON_STEPS, expanded: bool = False,
+             known: bool = False) -> ca.Function:
         """The Function of one sample with ``newton`` Newton steps (built once per count), or
-        the same expanded into one SX Function (see :data:`EXPAND_AFTER`)."""
+        the same expanded into one SX Function (see :data:`EXPAND_AFTER`); ``known``: its
+        Newton steps start from the positions of a last input ``q_known`` (a motion known at
+        the samples, a guided model's) instead of those predicted from the sample before."""
         cache = self.__dict__.setdefault("_steps", {})
-        if (newton, expanded) not in cache:
-            cache[newton, expanded] = (self.step(newton).expand() if expanded else
-                                       self._build_step(newton))
-        return cache[newton, expanded]
+        key = (newton, expanded, known)
+        if key not in cache:
+            cache[key] = (self.step(newton, False, known).expand() if expanded else
+                          self._build_step(newton, known))
+        return cache[key]
 
     @property
     def function(self) -> ca.Function:
         return self.step()
 
-    def _build_step(self, newton: int) -> ca.Function:
+    def _build_step(self, newton: int, known: bool) -> ca.Function:
         model, terms = self.model, self.terms
         n_q, n_v, n_w = model.n_q, model.n_v, model.n_w
         x = ca.MX.sym("x", n_q + 2 * n_v)
         h, w, wd, wdd = ca.MX.sym("h"), *(ca.MX.sym(n, n_w) for n in ("w", "wd", "wdd"))
         feet = ca.MX.sym("feet", len(model.contacts))
         mask = ca.MX.sym("mask", self.left_out.size)
-        q = terms.predict(x[:n_q], x[n_q:n_q + n_v], x[n_q + n_v:], h)
-        phi, Phi = terms.jacobian(q, w)
-        F = self.factor(Phi)
+        inputs, names = [x, h, w, wd, wdd, feet, mask], ["x", "h", "w", "wd", "wdd", "feet",
+                                                          "mask"]
+        if known:
+            q = ca.MX.sym("q_known", n_q)
+            inputs, names = [*inputs, q], [*names, "q_known"]
+        else:
+            q = terms.predict(x[:n_q], x[n_q:n_q + n_v], x[n_q + n_v:], h)
+        if newton:
+            phi, Phi = terms.jacobian(q, w)
+            F = self.factor(Phi)
         for step in range(newton):
             if step:
                 phi = terms.residual(q, w)
@@ -207,9 +218,8 @@ class PhasePlan:
                                                                      gamma, d)
         checks = self.checks(self.solve(F, d * ca.DM(self._probe)), velocity,
                              acceleration, position, presence)
-        names = ["x", "h", "w", "wd", "wdd", "feet", "mask"]
         if self.motion:
-            return ca.Function("phase_motion_step", [x, h, w, wd, wdd, feet, mask],
+            return ca.Function("phase_motion_step", inputs,
                                [ca.densify(ca.vertcat(q, v, a)), ca.densify(checks)],
                                names, ["x_next", "checks"])
         lam = self.multipliers(F, Q, a)
@@ -217,23 +227,25 @@ class PhasePlan:
             lam = self._policy(q, F, Phi, offset, lam, feet, mask)
         wrench, frames = terms.report(q, Phi, lam, offset)
         outputs = [ca.densify(y) for y in (ca.vertcat(q, v, a), lam, wrench, frames, checks)]
-        return ca.Function("phase_step", [x, h, w, wd, wdd, feet, mask], outputs, names,
+        return ca.Function("phase_step", inputs, outputs, names,
                            ["x_next", "lam", "wrench", "frames", "checks"])
 
     # ---------------------------------------------------------------- evaluation
 
-    def _evaluator(self, data: Data, n: int, newton: int, expanded: bool):
+    def _evaluator(self, data: Data, n: int, newton: int, expanded: bool, known: bool):
         """The step mapped over ``n`` samples (each from the one before), built once per plan,
         and its buffer, made once per workspace ``data``."""
         cache = self.__dict__.setdefault("_mapped", {})
-        key = (n, newton, expanded)
+        key = (n, newton, expanded, known)
         if key not in cache:
-            cache[key] = self.step(newton, expanded).mapaccum("phase_steps", n)
+            cache[key] = self.step(newton, expanded, known).mapaccum("phase_steps", n)
         return kept(data, ("phase-buffer", id(self), *key), lambda: InPlaceFunction(cache[key]))
 
-    def evaluate(self, data: Data, x0, h, w, wd, wdd, feet, mask, newton: int = NEWTON_STEPS):
+    def evaluate(self, data: Data, x0, h, w, wd, wdd, feet, mask, newton: int = NEWTON_STEPS,
+                 q_known=None):
         """The samples of one run: ``x0`` the state ``[q; v; v_dot]`` of the sample before,
-        ``h`` (N,) the time steps, laws and per-foot inputs (rows x N). Returns arrays with the
+        ``h`` (N,) the time steps, laws and per-foot inputs (rows x N), and ``q_known`` (N,
+        n_q) the positions Newton's method starts from when they are known. Returns arrays with the
         samples first: states (N, n_q + 2 n_v), multipliers (N, n_c), wrenches (N, J, 6) in
         the joint frames, the joint frames' rotations (N, J, 9, column-major) and the checks
         (N, 6), NaN from the block of samples where the evaluation fails on; a motion plan's
@@ -247,6 +259,9 @@ class PhasePlan:
         mapped = [np.ascontiguousarray(np.reshape(h, (n, 1)), dtype=float)]
         mapped += [np.ascontiguousarray(np.asarray(x, dtype=float).T)
                    for x in (w, wd, wdd, feet, mask)]
+        known = q_known is not None
+        if known:
+            mapped.append(np.ascontiguousarray(q_known, dtype=float))
         J, n_c = (0, 0) if self.motion else (len(model.joints), model.n_c)
         outputs = [np.empty((n, model.n_q + 2 * model.n_v)), np.empty((n, n_c)),
                    np.empty((n, J, 6)), np.empty((n, J, 9)), np.empty((n, len(CHECKS)))]
@@ -256,8 +271,8 @@ class PhasePlan:
             written = [outputs[0][span], outputs[4][span]] if self.motion else [
                 y[span] for y in outputs]
             try:
-                self._evaluator(data, size, newton, expanded)([x, *(y[span] for y in mapped)],
-                                                              written)
+                self._evaluator(data, size, newton, expanded, known)(
+                    [x, *(y[span] for y in mapped)], written)
             except RuntimeError:  # a singular solve: the samples are redone exactly
                 for y in outputs:
                     y[start:] = np.nan
