@@ -7,10 +7,11 @@ Function per sample,
     step(x, h, w, wd, wdd, feet, mask) -> (x, lam, wrench, frames, checks),  x = [q; v; v_dot]
 
 evaluated over the samples of a phase with ``mapaccum`` (each sample starts from the one
-before). One sample:
+before; in blocks, :func:`blocks`). One sample:
 
-1. positions: ``q_p = q (+) (h v + h^2/2 v_dot)`` predicted from the sample before, then
-   :data:`NEWTON_STEPS` Newton steps on ``phi_I = 0`` with the Jacobian of ``q_p`` (one
+1. positions: ``q_p = q (+) (h v + h^2/2 v_dot)`` predicted from the sample before (or known:
+   a guided model's, an input ``q_known``), then :data:`NEWTON_STEPS` Newton steps on
+   ``phi_I = 0`` (none from known positions) with the Jacobian of ``q_p`` (one
    factorisation), each step applied with the retraction;
 2. ``J = Phi_v[I]`` at the positions found, factorised once (:class:`StaticLU`: pivots chosen
    at the decision, the elimination written out as straight-line code, about 1 400
