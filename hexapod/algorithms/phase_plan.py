@@ -212,7 +212,10 @@ class PhasePlan:
         F = self.factor(Phi)
         nu = terms.rates(q, w, wd)
         v = self.solve(F, nu)
-        gamma, Q, offset = terms.forces(q, v, w, wd, wdd)
+        if self.motion:
+            gamma = terms.gamma(q, v, w, wd, wdd)
+        else:
+            gamma, Q, offset = terms.forces(q, v, w, wd, wdd)
         a = self.solve(F, gamma)
         d = terms.row_norms(Phi)  # the rows' scales at this sample
         velocity, acceleration, position, presence = terms.residuals(Phi, phi, v, nu, a,

@@ -10,7 +10,8 @@ once (:func:`hexapod.algorithms.liaison.policy_map`, :func:`~.liaison.wrenches_f
 * ``predict(q, v, a, h)``: ``q (+) (h v + h^2/2 a)``, the positions a sample ahead;
 * ``correct(q, dq)``: ``q (+) (-dq)`` (a Newton step; :func:`hexapod.algorithms.step.retract`);
 * ``residual(q, w)``: ``phi``; ``jacobian(q, w)``: ``phi`` and the nonzeros of ``Phi_v``;
-* ``rates(q, w, wd)``: ``nu``; ``forces(q, v, w, wd, wdd)``: ``gamma``, ``Q`` and the wrenches
+* ``rates(q, w, wd)``: ``nu``; ``gamma(q, v, w, wd, wdd)`` alone (a kinematics run's), or
+  ``forces(q, v, w, wd, wdd)``: ``gamma``, ``Q`` and the wrenches
   of the force elements acting across joints;
 * ``policy(m)(q, Phi, offset, feet, lam, N, mask)``: the redundancy policy, among ``lam + N
   z`` the least ``|A (lam + N z) + b|^2`` (``m`` the columns of ``N``, one Function per
@@ -84,6 +85,10 @@ class StepTerms:
                                                    self.pattern.get_triplet())
 
     def _function(self, name, inputs, outputs, names_in, names_out, cse=True, to_c=None):
+        # common subexpressions removed where they are many (a fifth to a third of the
+        # Jacobian's, the forces' and the report's operations); not in the row norms, the
+        # residuals or the policy's objective, which have almost none (under 2 %) for a tenth
+        # of a second each to look for them
         outputs = ca.cse(outputs) if cse else outputs
         to_c = self.to_c if to_c is None else to_c
         return sx_function(name, inputs, outputs, to_c, names_in, names_out)
@@ -135,13 +140,21 @@ class StepTerms:
         return self._function("phase_residuals", [Phi_nz, phi, v, nu, a, gamma, d],
                               [relative(v, nu), relative(a, gamma), position, presence],
                               ["Phi", "phi", "v", "nu", "a", "gamma", "d"],
-                              ["velocity", "acceleration", "position", "presence"])
+                              ["velocity", "acceleration", "position", "presence"], cse=False)
 
     @cached_property
     def rates(self) -> ca.Function:
         nu = _call(self.model.nu, q=self.q, w=self.w, wd=self.wd)
         return self._function("phase_rates", [self.q, self.w, self.wd], [nu],
                               ["q", "w", "wd"], ["nu"])
+
+    @cached_property
+    def gamma(self) -> ca.Function:
+        """``(q, v, w, wd, wdd) -> gamma``: the acceleration constraints' right-hand side alone
+        (a kinematics run's, :class:`~hexapod.algorithms.phase_plan.PhasePlan`)."""
+        gamma = _call(self.model.gamma, q=self.q, v=self.v, w=self.w, wd=self.wd, wdd=self.wdd)
+        return self._function("phase_gamma", [self.q, self.v, self.w, self.wd, self.wdd],
+                              [gamma], ["q", "v", "w", "wd", "wdd"], ["gamma"])
 
     @cached_property
     def forces(self) -> ca.Function:
@@ -197,7 +210,7 @@ class StepTerms:
         A, b = self._objective(ca.SX(self.pattern, Phi_nz), offset, feet)
         return self._function("phase_objective", [self.q, Phi_nz, offset, feet],
                               [ca.densify(A), b], ["q", "Phi", "offset", "feet"], ["A", "b"],
-                              to_c=False)
+                              cse=False, to_c=False)
 
     @cached_property
     def row_norms(self) -> ca.Function:
@@ -205,7 +218,7 @@ class StepTerms:
         equilibration of :mod:`hexapod.algorithms.linalg`, at the state of ``Phi``."""
         Phi_nz = ca.SX.sym("Phi", self.pattern.nnz())
         _, d, _ = equilibrated(ca.SX(self.pattern, Phi_nz), mass_factors(self.model)[0])
-        return self._function("phase_row_norms", [Phi_nz], [d], ["Phi"], ["d"])
+        return self._function("phase_row_norms", [Phi_nz], [d], ["Phi"], ["d"], cse=False)
 
     def evaluate(self, data, name: str, *arguments) -> list[np.ndarray]:
         """The Function ``name`` on numbers, through call buffers kept in the workspace
