@@ -350,6 +350,27 @@ def test_a_guided_models_joint_laws_are_its_guides_motion_at_any_time():
     assert abs(np.angle(np.exp(1j * (q[5] - q[2] - th[1])))) < 1e-9
 
 
+def test_guided_laws_evaluated_one_by_one_share_one_solve_of_the_guides(monkeypatch):
+    """Each guided joint's law evaluated alone at the same times (a replay's motion file)
+    solves the guides once, and gives what the laws evaluated together give; other times
+    solve them again."""
+    from hexapod.model import guided_motion
+
+    model = hx.assemble(guided_arm())
+    solver, calls = guided_motion._SOLVER[0], []
+    monkeypatch.setattr(guided_motion, "_SOLVER", [
+        lambda m, t: calls.append(t.size) or solver(m, t)])
+    t = np.linspace(0.0, 1.0, 7)
+    together = np.array(model.law_values(t))
+    guided = [d.law for d in model.drivers if d.kind == "joint"]
+    for index in guided:
+        values = model.laws[index].evaluate(t)
+        assert all(np.array_equal(v, together[m, index]) for m, v in enumerate(values))
+    assert calls == [7]
+    model.laws[guided[0]].evaluate(t[:3])
+    assert calls == [7, 3]
+
+
 def test_a_guided_scene_simulates_its_guides_motion():
     """A simulation of the guided arm: the joints move as the guides make them (their laws
     tabulated from the guides' kinematics to a hundredth of the run's tolerance), so the tip

@@ -32,17 +32,25 @@ def register_guides_solver(solver: Callable[[Model, np.ndarray], np.ndarray]) ->
 
 
 class _GuidesMotion:
-    """``t -> (3, G, n)`` of one guided model, by the registered solver."""
+    """``t -> (3, G, n)`` of one guided model, by the registered solver. The last times asked
+    and their motion are kept: the guided joints' laws evaluated one by one at the same times
+    (a replay's, a plot's) share one solve of the guides instead of one each."""
 
     def __init__(self, model: Model):
         self.model = model
+        self._last: tuple[np.ndarray, np.ndarray] | None = None
 
     def __call__(self, t: np.ndarray) -> np.ndarray:
         if not _SOLVER:
             raise HexapodError(f"model '{self.model.name}': its guided joints move as the "
                                "guides' kinematics solves them, which the algorithms do: "
                                "assemble with hexapod.assemble")
-        return _SOLVER[0](self.model, t)
+        last = self._last  # one read: another thread may replace it
+        if last is not None and np.array_equal(last[0], t):
+            return last[1].copy()
+        motion = _SOLVER[0](self.model, t)
+        self._last = (np.array(t, dtype=float), motion.copy())
+        return motion
 
 
 def with_guided_laws(model: Model) -> Model:
