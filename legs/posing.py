@@ -65,9 +65,9 @@ def posed(scene: Scene, angles: dict[str, float], lift: float = 0.0) -> Scene:
 def at_start(scene: Scene, t: float = 0.0) -> Scene:
     """A copy of ``scene`` with its bodies where its motion has them at ``t``: the engine's
     Newton solve of its constraints and drivers (its guides' first, for a guided scene) from
-    the pose it is written at, as its inverse dynamics solves its first sample. Where no pose satisfies them
-    (guides out of the joints' reach), ``scene`` itself: the analysis of it says so, naming
-    the guides, the time and how far off they are."""
+    the pose it is written at, as its inverse dynamics solves its first sample. Where no pose
+    satisfies them (guides out of the joints' reach), ``scene`` itself: the analysis of it
+    says so, naming the guides, the time and how far off they are."""
     model = hx.assemble(scene)
     try:  # the positions alone: the inverse dynamics' first sample less its dynamics
         q = hx.assemble_positions(model, model.create_data(), float(t))

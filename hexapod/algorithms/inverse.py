@@ -44,6 +44,7 @@ from hexapod._support.fastcall import InPlaceFunction
 from hexapod.algorithms.contact_frames import refuse_contacts
 from hexapod.algorithms.joint_limits import check_joint_limits
 from hexapod.algorithms.liaison import efforts_and_axes
+from hexapod.algorithms.prescribed import PHASE_FROM_SAMPLES
 from hexapod.errors import HexapodError
 from hexapod.model.data import kept
 from hexapod.model.model import GROUND_INDEX, Data, Model
@@ -134,10 +135,6 @@ class InverseResult:
 #: them: for the front leg, 4.9 ms against 1.5 ms in blocks at 1000 samples, 194 ms against
 #: 25 ms at 20 000.
 BLOCK_FACTOR, SMALLEST_BLOCK = 12, 64
-#: ``method="auto"`` takes the phase path for closed loops and contacts from this many samples
-#: (below, building its Functions costs about as much as the saddle path's samples: some two
-#: seconds for the walking hexapod, whose samples cost 70 ms each on the saddle path).
-PHASE_FROM_SAMPLES = 32
 
 
 def inverse_dynamics(model: Model, times: ArrayLike, *, method: str = "auto", frame: str = "joint",
@@ -158,9 +155,10 @@ def inverse_dynamics(model: Model, times: ArrayLike, *, method: str = "auto", fr
         Sample times, s.
     method : str
         ``"auto"`` (the tree path when the model allows it, else the phase path from
-        :data:`PHASE_FROM_SAMPLES` samples, else the saddle path), ``"tree"``, ``"phase"``
-        (closed loops and contacts, batched: :mod:`hexapod.algorithms.phase_inverse`) or
-        ``"saddle"`` (any mechanism, every sample solved exactly: the reference).
+        :data:`~hexapod.algorithms.prescribed.PHASE_FROM_SAMPLES` samples, else the saddle
+        path), ``"tree"``, ``"phase"`` (closed loops and contacts, batched:
+        :mod:`hexapod.algorithms.phase_inverse`) or ``"saddle"`` (any mechanism, every sample
+        solved exactly: the reference).
     frame : str
         ``"joint"`` (the report convention) or ``"world"``.
     data : Data, optional

@@ -359,7 +359,7 @@ def _run(plan: PhasePlan, data: Data, newton: int, out: _Results, feet: _Feet, t
     out.q[done], out.v[done] = state[:count, :n_q], state[:count, n_q:n_q + n_v]
     out.v_dot[done] = state[:count, n_q + n_v:]
     out.force[done], out.torque[done] = wrench[:count, :, :3], wrench[:count, :, 3:]
-    if out.frames is not None and not plan.motion:
+    if out.frames is not None:
         out.frames[done] = frames[:count]
     out.violation[done] = checks[:count, 0]
     for c, contact in enumerate(model.contacts if not plan.motion else ()):

@@ -106,9 +106,9 @@ def exact_motion(model: Model, data: Data, t0: float, q0: np.ndarray, t: float,
     if split.independent.size < model.n_v:
         require_prescribed(model, data, t, q)
     data.independent_rows, data.redundant_rows = split.independent, split.redundant
-    violation = float(np.max(np.abs(model.call("phi", data, q=q, w=w) / model.row_scale)))
     empty = np.zeros((0, 3))
-    return SampleResult(q, v, v_dot, np.zeros(0), empty, empty, np.zeros(0), empty, violation,
+    return SampleResult(q, v, v_dot, np.zeros(0), empty, empty, np.zeros(0), empty,
+                        _violation(model, data, q, w),
                         tuple(model.rows[i].name for i in split.redundant))
 
 
@@ -128,13 +128,16 @@ def exact_forces(model: Model, data: Data, t: float, q: np.ndarray, v: np.ndarra
     wrenches = joint_wrenches(model, data, frame=frame)
     ground = (ground_reactions(model, data.lam) if model.contacts
               else np.zeros((0, 3)))
-    violation = 0.0
-    if model.n_c:
-        violation = float(np.max(np.abs(model.call("phi", data, q=q, w=data.w)
-                                         / model.row_scale)))
     redundant = tuple(model.rows[i].name for i in data.redundant_rows)
     return SampleResult(q, v, v_dot, data.lam, wrenches.force, wrenches.torque,
-                        wrenches.effort, ground, violation, redundant)
+                        wrenches.effort, ground, _violation(model, data, q, data.w), redundant)
+
+
+def _violation(model: Model, data: Data, q: np.ndarray, w: np.ndarray) -> float:
+    """The largest scaled constraint residual at ``(q, w)`` (0 without constraints)."""
+    if not model.n_c:
+        return 0.0
+    return float(np.max(np.abs(model.call("phi", data, q=q, w=w) / model.row_scale)))
 
 
 #: m/s^2 and rad/s^2: the most the dynamics' accelerations may differ from a known motion's
