@@ -85,12 +85,14 @@ class StepTerms:
                                                    self.pattern.get_triplet())
 
     def _function(self, name, inputs, outputs, names_in, names_out, cse=True, to_c=None):
-        # common subexpressions removed where they are many (a fifth to a third of the
-        # Jacobian's, the forces' and the report's operations); not in the row norms, the
-        # residuals or the policy's objective, which have almost none (under 2 %) for a tenth
-        # of a second each to look for them
-        outputs = ca.cse(outputs) if cse else outputs
+        # common subexpressions removed (a fifth to a third of the Jacobian's, the forces' and
+        # the report's operations) only where the graph is compiled: there they shorten the C
+        # compiler's work by far more than the search costs. Interpreted, the search (0.15 to
+        # 0.2 s for each of them) costs more than a report's samples save; the residuals
+        # themselves are shared where they are formed (the model's phi). Never in the row norms,
+        # the residuals or the policy's objective, which have almost none (under 2 %).
         to_c = self.to_c if to_c is None else to_c
+        outputs = ca.cse(outputs) if cse and to_c else outputs
         return sx_function(name, inputs, outputs, to_c, names_in, names_out)
 
     @cached_property

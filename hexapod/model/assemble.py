@@ -447,7 +447,7 @@ class _Assembly:
         w, wd, wdd = self.laws.symbols()
         symbolic = Symbolic(
             q=self.q, v=self.v, w=w, wd=wd, wdd=wdd, qdot=self.qdot,
-            phi=ca.vertcat(*self.residuals) if self.residuals else ca.SX(0, 1),
+            phi=ca.cse(ca.vertcat(*self.residuals)) if self.residuals else ca.SX(0, 1),
             Q=inertial_forces(self.bodies, self.v, self.si.gravity, n_v) + builder.total(),
             Q_across=ca.horzcat(*columns) if columns else None,
             potential=gravity_potential(self.bodies, self.q, self.si.gravity)

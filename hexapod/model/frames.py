@@ -33,6 +33,7 @@ class BodyState:
         self.angle = angle
         self.omega = omega
         self.qdot = qdot
+        self._vectors: dict = {}  # one expression per body-fixed vector: rows share it
 
     @classmethod
     def ground(cls, dimension: int) -> BodyState:
@@ -57,11 +58,21 @@ class BodyState:
 
     def point(self, s) -> ca.SX:
         """World position of the body point ``s`` (centre-of-mass frame)."""
-        return self.r + ca.mtimes(self.R, ca.DM(np.asarray(s, dtype=float)))
+        return self._world("point", s)
 
     def direction(self, u) -> ca.SX:
         """World components of the body-fixed vector ``u``."""
-        return ca.mtimes(self.R, ca.DM(np.asarray(u, dtype=float)))
+        return self._world("direction", u)
+
+    def _world(self, kind: str, vector):
+        # the same point or axis asked by several rows (a joint's, its driver's, a marker's)
+        # is one expression, not a copy each: its derivatives are then formed once too
+        vector = np.asarray(vector, dtype=float)
+        key = (kind, vector.tobytes())
+        if key not in self._vectors:
+            turned = ca.mtimes(self.R, ca.DM(vector))
+            self._vectors[key] = self.r + turned if kind == "point" else turned
+        return self._vectors[key]
 
     def frame_angle(self, rotation: np.ndarray):
         """Planar: world angle of a body-fixed frame with the given 2 x 2 rotation."""
