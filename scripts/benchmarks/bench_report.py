@@ -6,8 +6,8 @@ Protocol
   samples, its 7 figures), done in this process as the command does them (``hexapod/cli/
   report.py``), each timed by ``time.process_time``: imports (NumPy, hexapod, the report's
   modules; not matplotlib, which the figures load), assembly (scene and model), inverse dynamics
-  (interpreted, the command's default), tables (body balance, feet paths, every file but the
-  figures: ``report_files(figures=False)``).
+  (interpreted, the command's default), tables (the model of the motion found, body balance,
+  feet paths, every file but the figures: ``report_files(figures=False)``).
 * Figures: ``render_figures`` of the report's builders (``figure_builders``) with 1 worker
   process (the command's choice for these 7 sheets) and with ``--workers``, each in a process
   forked from this one before matplotlib is loaded, as the command would draw them; its CPU
@@ -89,6 +89,7 @@ def stages() -> tuple[dict[str, float], dict, object]:
 
     from hexapod import assemble, body_balance, inverse_dynamics, load_scene, marker_trajectories
     from hexapod.output import FOOT_MARKER, RunInfo, report_files
+    from hexapod.simulation import motion_model
 
     cpu = {"imports": time.process_time() - started}
     model, cpu["assembly"] = timed(lambda: assemble(load_scene(SCENE)))
@@ -97,14 +98,17 @@ def stages() -> tuple[dict[str, float], dict, object]:
     result, cpu["inverse dynamics"] = timed(lambda: inverse_dynamics(model, times))
 
     def tables():
-        balance = body_balance(model, times, result.q, result.v, result.v_dot, result.force,
-                               result.torque, result.frame)
-        feet = marker_trajectories(model, result.q, FOOT_MARKER)
+        # as the command: a guided scene's laws are the motion found (the guides are not
+        # solved again for the balance)
+        model_of_run = motion_model(model, result)
+        balance = body_balance(model_of_run, times, result.q, result.v, result.v_dot,
+                               result.force, result.torque, result.frame)
+        feet = marker_trajectories(model_of_run, result.q, FOOT_MARKER)
         run = RunInfo(SCENE, SCENE, 0.0, f"{why}, {duration:g} s")
-        report_files(model, result, balance, run, feet, figures=False)
-        return feet
+        report_files(model_of_run, result, balance, run, feet, figures=False)
+        return model_of_run, feet
 
-    feet, cpu["tables"] = timed(tables)
+    (model, feet), cpu["tables"] = timed(tables)
     return cpu, builders_of(model, result, feet), times
 
 
