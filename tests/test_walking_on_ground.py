@@ -17,6 +17,7 @@ import pytest
 from robots import builtin_model
 
 import hexapod as hx
+from hexapod.output.ground import ground_columns
 from legs.replay import grounded_scene
 from legs.robot import hexapod_scene
 
@@ -62,3 +63,12 @@ def test_the_first_steps_on_the_ground_carry_the_inverse_dynamics_forces(on_grou
     assert stance.sum() == 3
     assert np.all(simulated[stance, 2] > 10.0) and np.all(simulated[~stance] == 0.0)
     assert np.abs(simulated[stance, 2] - expected[stance, 2]).max() < 1.0
+
+
+def test_the_ground_forces_are_named_as_the_inverse_dynamics_names_them(on_ground):
+    """``GRx:<leg>`` in both: a designer lays the simulated feet's forces over the inverse
+    dynamics' column by column."""
+    driven, inverse, _, _, run = on_ground
+    simulated = [c for c in run.column_units() if c.startswith("GR")]
+    expected = [c for c in ground_columns(driven) if c.startswith("GR")]
+    assert simulated == expected and "GRz:L1" in simulated

@@ -22,6 +22,16 @@ ROW_UNITS = {"length": ("N", "Lagrange multiplier of the constraint row (a force
              "angle": ("N m", "Lagrange multiplier of the constraint row (a moment)")}
 
 
+#: The suffix of a foot contact's name that its leg's name leaves out.
+CONTACT_SUFFIX = "/ground"
+
+
+def leg_name(contact: str) -> str:
+    """The leg a contact belongs to: its name without the ``/ground`` suffix (the ground-force
+    columns ``GRx:<leg>`` of the inverse dynamics and of a simulation with contacts)."""
+    return contact[:-len(CONTACT_SUFFIX)] if contact.endswith(CONTACT_SUFFIX) else contact
+
+
 def component(name: str) -> str:
     """``x`` of ``trunk.x`` (a body's name may hold dots; the component follows the last)."""
     return name.rpartition(".")[2]

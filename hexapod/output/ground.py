@@ -20,22 +20,15 @@ from hexapod.algorithms.ground import INFEASIBLE_STATUSES, in_contact_axes, robo
 from hexapod.algorithms.inverse import InverseResult
 from hexapod.algorithms.kinematics import body_poses
 from hexapod.model.model import Model
-from hexapod.model.units import COORDINATE_UNITS, VELOCITY_UNITS
+from hexapod.model.units import COORDINATE_UNITS, VELOCITY_UNITS, leg_name
 from hexapod.output.summary_parts import true_runs
 from hexapod.simulation.results import Columns
 from hexapod.spatial import rpy_from_rotation
 
-#: The suffix of a contact's name that its leg's name leaves out.
-CONTACT_SUFFIX = "/ground"
 #: The ground-force columns of the inverse-dynamics CSV, per foot.
 GROUND_COMPONENTS = ("GRx", "GRy", "GRz")
 #: Forces below this fraction of the robot's weight count as no load (no friction ratio).
 NO_LOAD = 1e-9
-
-
-def leg_name(contact: str) -> str:
-    """The leg a contact belongs to: its name without the ``/ground`` suffix."""
-    return contact[:-len(CONTACT_SUFFIX)] if contact.endswith(CONTACT_SUFFIX) else contact
 
 
 #: The feet's statuses as numbers, in the inverse CSV's ``status:<leg>`` columns.

@@ -56,7 +56,8 @@ from hexapod.algorithms.kinematics import assemble_positions, body_poses
 from hexapod.algorithms.liaison import joint_origin, wrenches_from_multipliers
 from hexapod.errors import HexapodError, InputFileError
 from hexapod.model.model import Model
-from hexapod.output.ground import GROUND_COMPONENTS, leg_name
+from hexapod.model.units import leg_name
+from hexapod.output.ground import GROUND_COMPONENTS
 from hexapod.output.recording import Recording
 from hexapod.output.report import inverse_columns
 from hexapod.simulation.results import units_json

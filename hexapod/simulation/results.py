@@ -13,8 +13,10 @@ Columns of ``results.csv`` (names built from the elements' names; SI units):
                      N for a length row, N m for an angle row
 ``tau:<joint>``,     with ``forces``: each joint's wrench, exerted by the parent on the child
 ``Fx:<joint>`` ...   about the joint origin in the child's joint frame, as ``hexapod inverse``
-``GRx:<contact>``    with unilateral contacts (a contact scheme): the force of the ground on
-...                  the body at each contact, world axes, N (the step's impulse over the step)
+``GRx:<leg>``        with unilateral contacts (a contact scheme): the force of the ground on
+...                  the body at each contact, world axes, N (the step's impulse over the
+                     step); named as the inverse dynamics' columns, by the contact's leg
+                     (``L1`` for ``L1/ground``)
 ===================  ===================================================================
 
 A contact scheme's run also has its contact events (:meth:`SimulationResult.events_csv_text`,
@@ -49,6 +51,7 @@ from hexapod.model.units import (
     ROW_UNITS,
     VELOCITY_UNITS,
     component,
+    leg_name,
 )
 from hexapod.simulation.tracking import controller_names
 
@@ -237,10 +240,10 @@ class SimulationResult:
         out: Columns = {"t": ("s", "time"), **state_columns(self.model)}
         if self.force is not None:
             out.update(wrench_columns(self.model))
-        for name in self.contact_names:
+        for name, column in zip(self.contact_names, self._ground_columns(), strict=True):
             for axis in "xyz"[:self.model.dimension]:
-                out[f"GR{axis}:{name}"] = ("N", f"force of the ground on the body at contact "
-                                                f"'{name}', {axis} in world axes")
+                out[f"GR{axis}:{column}"] = ("N", f"force of the ground on the body at contact "
+                                                  f"'{name}', {axis} in world axes")
         if self.tracking is not None:
             for name in controller_names(self.model):
                 out[f"err:{name}"] = ("rad", f"tracking error of controller '{name}': its "
@@ -253,6 +256,13 @@ class SimulationResult:
         if self.contact_forces is None:
             return ()
         return tuple(f.name for f in self.model.forces if f.contact is not None)
+
+    def _ground_columns(self) -> list[str]:
+        """The name each contact's ground-force columns carry: its leg's (``GRx:L1`` for the
+        contact ``L1/ground``, as the inverse dynamics writes them), or the contact's own when
+        two contacts would share a leg's name."""
+        legs = [leg_name(name) for name in self.contact_names]
+        return legs if len(set(legs)) == len(legs) else list(self.contact_names)
 
     def events_csv_text(self) -> str:
         """The contact events as CSV (``events.csv``): ``t, kind, contact, Px, Py, Pz``."""
