@@ -352,6 +352,25 @@ class GaitCoupled(OnSchedule, Law):
         return tuple((self.amplitude * x / self.period**m).reshape(t.shape)
                      for m, x in enumerate(shape))
 
+    def batch_key(self):
+        return ("gait-coupled", self.duty, self.period)
+
+    @classmethod
+    def evaluate_batch(cls, laws, t):
+        """The laws of one schedule shape (duty, period) in one pass over the foot's path: a
+        simulation asks for the robot's 18 of them at every stage (one by one, half of its
+        steps' time); the same arithmetic as :meth:`evaluate`, element by element."""
+        t = np.asarray(t, dtype=float)
+        shape = (len(laws),) + (1,) * t.ndim
+        first = laws[0]
+        lift_off, amplitude = (np.array([getattr(law, name) for law in laws]).reshape(shape)
+                               for name in ("lift_off", "amplitude"))
+        lifts = np.array([law.follows == "lift" for law in laws]).reshape(shape)
+        tau = (t[None] / first.period - lift_off) % 1.0
+        fore_aft, height = foot_path_rates(tau, first.duty, 1.0, 1.0)
+        return np.array([amplitude * np.where(lifts, h, 2.0 * f) / first.period**m
+                         for m, (f, h) in enumerate(zip(fore_aft, height, strict=True))])
+
     def problems(self):
         out = []
         if self.follows not in ("lift", "reach"):

@@ -50,12 +50,12 @@ def test_a_periodic_table_repeats():
     assert (np.abs(read - exact) / scale).max() < 1e-7
 
 
-def test_gates_and_footholds_evaluated_together_are_those_evaluated_alone():
+def test_gates_footholds_and_gait_laws_evaluated_together_are_those_evaluated_alone():
     model = builtin_model("hexapod")
     t = np.linspace(0.0, 1.3, 53)
-    kinds = {"stance-gate", "foothold"}
+    kinds = {"stance-gate", "foothold", "gait-coupled"}
     chosen = [i for i, law in enumerate(model.laws) if law.kind in kinds]
-    assert len(chosen) == 24
+    assert len(chosen) == 42
     w, wd, wdd = model.law_values(t)
     for i in chosen:
         alone = model.laws[i].evaluate(t)
