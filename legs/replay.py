@@ -240,6 +240,32 @@ def grounded_scene(scene: Scene, result, *, kp, kd, mu: float | None = None,
     return out
 
 
+#: The gains of the built-in ``hexapod-on-ground`` (N m/rad, N m s/rad, every joint): its
+#: joints track their laws to 3 mrad over a stride (``scripts/studies/walking_on_ground.py``).
+GROUND_KP, GROUND_KD = 200.0, 2.0
+#: Its efforts' sampling tolerance: the study's stride at 1e-4 (197 samples) and at 3e-6 (317)
+#: gives the same touch-downs, normal forces and tracking errors to three digits, in half the
+#: inverse dynamics' time.
+ON_GROUND_TOL = 1e-4
+
+
+def hexapod_on_ground(*, gait: str = "tripod", kp: float = GROUND_KP, kd: float = GROUND_KD,
+                      mu: float | None = None, tol: float = ON_GROUND_TOL) -> Scene:
+    """Built-in ``hexapod-on-ground``: the walking robot on real ground under joint control,
+    its feet landing and lifting off where the controlled motion takes them (simulate it:
+    Moreau-Jean, the ground's forces and the contact events written).
+
+    The free-trunk hexapod walking its ``gait`` over strides of
+    :data:`legs.cockroach.STRIDE_PERIOD` (:func:`grounded_scene`): each joint a controller
+    (target its law, feedforward the inverse dynamics' efforts at samples chosen to ``tol`` by
+    :func:`adaptive_inverse`, repeating with the stride; gains ``kp`` N m/rad, ``kd`` N m
+    s/rad), each foot a unilateral contact with Coulomb friction ``mu`` (default the scene's)
+    and plastic impacts. Building it runs the inverse dynamics of a stride (seconds)."""
+    scene = hexapod_scene(gait=gait, trunk="free", period=STRIDE_PERIOD)
+    inverse, _ = adaptive_inverse(hx.assemble(scene), scene, 0.0, STRIDE_PERIOD, tol=tol)
+    return grounded_scene(scene, inverse, kp=kp, kd=kd, mu=mu, periodic=True)
+
+
 def _body_slices(scene: Scene) -> dict[str, tuple[slice, slice]]:
     """Each body's slices of ``q`` and ``v`` (the model's order: the scene's bodies in order)."""
     out, nq, nv = {}, 0, 0

@@ -72,3 +72,27 @@ def test_the_ground_forces_are_named_as_the_inverse_dynamics_names_them(on_groun
     simulated = [c for c in run.column_units() if c.startswith("GR")]
     expected = [c for c in ground_columns(driven) if c.startswith("GR")]
     assert simulated == expected and "GRz:L1" in simulated
+
+
+def test_the_built_in_walking_robot_on_ground_simulates_from_the_command_line(tmp_path):
+    """``hexapod simulate hexapod-on-ground``: Moreau-Jean by default, the ground's force on
+    each foot under its leg's name, three feet pushed (the tripod in stance), the events and
+    the figures a designer reads."""
+    import csv
+    import json
+
+    from hexapod.cli.app import main
+
+    out = tmp_path / "walk"
+    assert main(["simulate", "hexapod-on-ground", "--t-end", "0.01", "--step", "1e-3", "--out",
+                 str(out)]) == 0
+    assert json.loads((out / "stats.json").read_text())["method"] == "moreau-jean"
+    with open(out / "results.csv", newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    legs = ("L1", "L2", "L3", "R1", "R2", "R3")
+    assert all(f"GRz:{leg}" in rows[0] for leg in legs)
+    pushed = [leg for leg in legs if float(rows[-1][f"GRz:{leg}"]) > 10.0]
+    assert pushed == ["L2", "R1", "R3"]  # the tripod the gait keeps down at first
+    assert all(float(rows[-1][f"GRz:{leg}"]) == 0.0 for leg in legs if leg not in pushed)
+    for name in ("events.csv", "contacts.png", "gait.png", "tracking.png"):
+        assert (out / name).is_file(), name

@@ -60,7 +60,7 @@ def contact_figure_builders(result: SimulationResult,
     if result.contact_forces is None or not result.contact_names:
         return {}
     model = result.model
-    names = list(result.contact_names)
+    names = result.ground_names()  # the legs', as the GRx:<leg> columns
     forces = result.contact_forces
     if model.dimension == 2:  # the plane's x and y: fore-aft and vertical
         forces = np.stack([forces[..., 0], np.zeros_like(forces[..., 0]), forces[..., 1]],

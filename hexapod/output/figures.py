@@ -558,7 +558,9 @@ def gait_diagram_figure(legs: list[str], stance: list, start: float, stop: float
     width, height = 8.0, 0.45 * len(legs) + 1.3
     figure = Figure(figsize=(width, height))
     ax = figure.subplots()
-    figure.subplots_adjust(left=0.8 / width, right=1 - 0.25 / width, bottom=0.55 / height,
+    # room for the longest row label (some 0.085 inch a character at 10 points)
+    left = max(0.8, 0.25 + 0.085 * max((len(leg) for leg in legs), default=0))
+    figure.subplots_adjust(left=left / width, right=1 - 0.25 / width, bottom=0.55 / height,
                            top=1 - 0.45 / height)
     for row, intervals in enumerate(stance):
         y = len(legs) - 1 - row

@@ -240,7 +240,7 @@ class SimulationResult:
         out: Columns = {"t": ("s", "time"), **state_columns(self.model)}
         if self.force is not None:
             out.update(wrench_columns(self.model))
-        for name, column in zip(self.contact_names, self._ground_columns(), strict=True):
+        for name, column in zip(self.contact_names, self.ground_names(), strict=True):
             for axis in "xyz"[:self.model.dimension]:
                 out[f"GR{axis}:{column}"] = ("N", f"force of the ground on the body at contact "
                                                   f"'{name}', {axis} in world axes")
@@ -257,10 +257,10 @@ class SimulationResult:
             return ()
         return tuple(f.name for f in self.model.forces if f.contact is not None)
 
-    def _ground_columns(self) -> list[str]:
-        """The name each contact's ground-force columns carry: its leg's (``GRx:L1`` for the
-        contact ``L1/ground``, as the inverse dynamics writes them), or the contact's own when
-        two contacts would share a leg's name."""
+    def ground_names(self) -> list[str]:
+        """The name each contact's ground-force columns and figures carry: its leg's
+        (``GRx:L1`` for the contact ``L1/ground``, as the inverse dynamics writes them), or the
+        contact's own when two contacts would share a leg's name."""
         legs = [leg_name(name) for name in self.contact_names]
         return legs if len(set(legs)) == len(legs) else list(self.contact_names)
 
