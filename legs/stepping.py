@@ -345,21 +345,17 @@ class GaitCoupled(OnSchedule, Law):
     kind = "gait-coupled"
 
     def evaluate(self, t):
-        t = np.asarray(t, dtype=float)
-        tau = (np.atleast_1d(t) / self.period - self.lift_off) % 1.0
-        fore_aft, height = foot_path_rates(tau, self.duty, 1.0, 1.0)  # unit shapes
-        shape = height if self.follows == "lift" else tuple(2.0 * x for x in fore_aft)
-        return tuple((self.amplitude * x / self.period**m).reshape(t.shape)
-                     for m, x in enumerate(shape))
+        value, rate, acceleration = type(self).evaluate_batch([self], t)[:, 0]
+        return value, rate, acceleration
 
     def batch_key(self):
         return ("gait-coupled", self.duty, self.period)
 
     @classmethod
     def evaluate_batch(cls, laws, t):
-        """The laws of one schedule shape (duty, period) in one pass over the foot's path: a
-        simulation asks for the robot's 18 of them at every stage (one by one, half of its
-        steps' time); the same arithmetic as :meth:`evaluate`, element by element."""
+        """The laws of one schedule shape (duty, period) in one pass over the foot's path (a
+        simulation asks for the robot's 18 of them at every stage: one by one, they took half
+        of its steps' time); :meth:`evaluate` is this for one law."""
         t = np.asarray(t, dtype=float)
         shape = (len(laws),) + (1,) * t.ndim
         first = laws[0]
