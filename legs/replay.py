@@ -183,17 +183,6 @@ def replay_scene(scene: Scene, result, *, breaks=None, degree: int = EFFORT_DEGR
     return twin
 
 
-def critical_gains(model, q: np.ndarray, bandwidth: float) -> tuple[dict, dict]:
-    """Gains by the rule "critically damped on each joint's reflected inertia": ``kp = I w^2``
-    and ``kd = 2 I w`` at ``w = 2 pi bandwidth`` (Hz), ``I`` the joint's reflected inertia at
-    the positions ``q`` (:func:`hexapod.reflected_inertias`, the feet in the air): each joint
-    alone would follow a step of its target as ``1 - (1 + w t) e^(-w t)``. Returns ``(kp,
-    kd)``, each a dict of joint name to N m/rad and N m s/rad (SI)."""
-    w = 2 * np.pi * float(bandwidth)
-    inertia = hx.reflected_inertias(model, q)
-    return ({j: i * w**2 for j, i in inertia.items()}, {j: 2 * i * w for j, i in inertia.items()})
-
-
 def grounded_scene(scene: Scene, result, *, kp, kd, mu: float | None = None,
                    breaks=None, degree: int = EFFORT_DEGREE, periodic: bool = False,
                    actuators=None) -> Scene:
@@ -202,7 +191,7 @@ def grounded_scene(scene: Scene, result, *, kp, kd, mu: float | None = None,
     replaced by a :class:`hexapod.scene.JointController` named ``<driver>/servo`` (target the
     driver's law, feedforward the efforts of ``result``, gains ``kp`` (N m/rad) and ``kd``
     (N m s/rad): one number for every joint, or a dict by joint name, e.g.
-    :func:`critical_gains`), and each foot's scheduled contact by a
+    :func:`hexapod.simulation.critical_gains`), and each foot's scheduled contact by a
     :class:`hexapod.scene.GroundContact` on the same foot point, against the horizontal plane
     of its footholds, friction ``mu`` (default the scene's ``[ground] mu``), plastic. The feet then
     land and lift off where the controlled motion takes them, not where the schedule says;

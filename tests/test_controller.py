@@ -174,3 +174,28 @@ def test_reflected_inertias_are_the_closed_forms_and_refuse_a_loop(tmp_path):
     four_bar = hexapod.assemble(hexapod.load_scene(scenes / "four_bar_3d.toml"))
     with pytest.raises(hexapod.HexapodError, match="closes a loop"):
         hexapod.reflected_inertias(four_bar, four_bar.q0)
+
+
+def test_the_bandwidth_option_sets_critically_damped_gains(tmp_path):
+    """``hexapod simulate --bandwidth 1``: the rod's servo gets ``kp = I_O w^2`` and ``kd = 2
+    I_O w`` (``w = 2 pi``; the scene's own gains, far off, are replaced), so a step target of
+    0.5 rad is followed as ``0.5 (1 - (1 + w t) e^(-w t))``; a scene without controllers is
+    refused by name, nothing written."""
+    from commands import in_process
+
+    rod(tmp_path, "target = 0.5\nkp = 100.0\nkd = 0.0\n")
+    done = in_process("simulate", str(tmp_path / "rod.toml"), "--bandwidth", "1", "--t-end",
+                      "2", "--method", "dop853", "--rtol", "1e-10", "--atol", "1e-12",
+                      "--out", "run", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    run = np.load(tmp_path / "run" / "results.npz")
+    w = 2 * np.pi
+    exact = 0.5 * (1 - (1 + w * run["t"]) * np.exp(-w * run["t"]))
+    assert np.max(np.abs(run["q"][:, 2] - exact)) < 1e-8
+    plain = tmp_path / "plain.toml"
+    plain.write_text(ROD.format(controller="target = 0.5", gravity=0.0)
+                     .split("[[force]]")[0])
+    done = in_process("simulate", str(plain), "--bandwidth", "1", "--out", "none",
+                      cwd=tmp_path)
+    assert done.returncode == 1 and "no joint controllers" in done.stderr
+    assert "Traceback" not in done.stderr and not (tmp_path / "none").exists()

@@ -87,3 +87,29 @@ def _beyond(model: Model, joint) -> list[int]:
                 seen.add(b)
                 stack.append(b)
     return sorted(seen)
+
+
+def critical_gains(model: Model, q: np.ndarray, bandwidth: float) -> tuple[dict, dict]:
+    """Servo gains by the rule "critically damped on each joint's reflected inertia":
+    ``kp = I w^2`` and ``kd = 2 I w`` at ``w = 2 pi bandwidth``, ``I`` the joint's reflected
+    inertia at the positions ``q`` (:func:`reflected_inertias`): each joint alone would follow
+    a step of its target as ``1 - (1 + w t) e^(-w t)``.
+
+    Parameters
+    ----------
+    model : Model
+    q : ndarray, shape (n_q,)
+    bandwidth : float
+        Hz, positive.
+
+    Returns
+    -------
+    tuple of dict
+        ``(kp, kd)``: joint name to N m/rad and N m s/rad (N and N s/m along a prismatic
+        joint), SI.
+    """
+    if not (np.isfinite(bandwidth) and bandwidth > 0):
+        raise HexapodError(f"a bandwidth must be a positive number of Hz, got {bandwidth}")
+    w = 2 * np.pi * float(bandwidth)
+    inertia = reflected_inertias(model, q)
+    return ({j: i * w**2 for j, i in inertia.items()}, {j: 2 * i * w for j, i in inertia.items()})

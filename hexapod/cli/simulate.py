@@ -123,6 +123,11 @@ def add_arguments(parser) -> None:
                         "that cost far more than a table, a gait's inverse kinematics, are "
                         "tabulated once and interpolated to a hundredth of --rtol; stats.json "
                         "says how, under options.laws)")
+    parser.add_argument("--bandwidth", type=positive(float), metavar="HZ",
+                        help="the joint controllers' gains by the rule 'critically damped on "
+                        "each joint's reflected inertia' at the start's pose (the other joints "
+                        "locked, the feet in the air): kp = I w^2, kd = 2 I w with w = 2 pi HZ, "
+                        "in place of the scene's kp and kd")
     compile_argument(parser, "the integrators' kernels (the right-hand side and the "
                      "projection, one per set of feet down)")
     limit_arguments(parser, steps=True)
@@ -142,6 +147,9 @@ def run(args) -> int:
                            inputs=given_files(args.scene),
                            ours=suffixes(".csv", ".npz", ".json"))
     model = assemble(scene)
+    if args.bandwidth is not None:
+        scene = _critically_damped(scene, model, args.bandwidth, args.start)
+        model = assemble(scene)
     args.method = args.method or default_method(model)
     duration, why = model.time_window(args.t_end)
     _check_step(args, duration)
@@ -200,6 +208,32 @@ def run(args) -> int:
               file=sys.stderr)
         return 1
     return 0
+
+
+def _critically_damped(scene, model, bandwidth: float, start: float):
+    """``scene`` with each joint controller's gains by the rule of ``--bandwidth``
+    (:func:`hexapod.simulation.critical_gains` at the positions the run starts from)."""
+    import dataclasses
+
+    from hexapod.algorithms.joint_inertia import critical_gains
+    from hexapod.algorithms.kinematics import assemble_positions
+    from hexapod.errors import HexapodError
+    from hexapod.scene import JointController
+
+    if not any(isinstance(f, JointController) for f in scene.forces.values()):
+        raise HexapodError(f"--bandwidth: scene '{scene.name}' has no joint controllers "
+                           "(type = \"controller\" force elements) to tune")
+    kp, kd = critical_gains(model, assemble_positions(model, model.create_data(), start),
+                            bandwidth)
+    for e in scene.forces.values():
+        if isinstance(e, JointController) and e.joint not in kp:
+            raise HexapodError(f"--bandwidth: controller '{e.name}': joint '{e.joint}' has no "
+                               "reflected inertia of its own (in a closed loop, or without "
+                               "an axis): give its kp and kd in the scene")
+    to_scene = 1.0 / scene.unit  # N m per rad to the scene's N L per rad
+    return scene.with_elements(
+        dataclasses.replace(e, kp=kp[e.joint] * to_scene, kd=kd[e.joint] * to_scene)
+        if isinstance(e, JointController) else e for e in scene.elements)
 
 
 def _check_step(args, duration: float) -> None:

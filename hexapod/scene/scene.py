@@ -173,6 +173,16 @@ class Scene:
             self._elements.append(element)
         return elements[-1] if elements else None
 
+    def with_elements(self, elements) -> Scene:
+        """A copy holding ``elements`` (in order) instead of this scene's, every setting kept:
+        its name, units, gravity, ground and actuators."""
+        out = Scene(self.name, self.dimension, self.length_unit, self._gravity,
+                    self.characteristic_length, self.source, report_forces=self.report_forces,
+                    ground=self.ground)
+        out.actuators = self.actuators
+        out.add(*elements)
+        return out
+
     def attach(self, sub: Scene, prefix: str, base: str = GROUND,
                placement: Placement | None = None) -> None:
         """Add a copy of ``sub`` with every name prefixed by ``prefix + "/"``.

@@ -14,4 +14,6 @@ __getattr__, __dir__, __all__ = attach(__name__, {
     "hexapod.simulation.tracking": ["controller_names", "tracking_errors"],
     # a guided model's laws as an inverse run found its motion (to replay or simulate it)
     "hexapod.algorithms.inverse": ["motion_model"],
+    # the joint controllers' gain rule (critically damped on each joint's reflected inertia)
+    "hexapod.algorithms.joint_inertia": ["critical_gains"],
 })

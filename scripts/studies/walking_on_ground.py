@@ -42,7 +42,6 @@ import hexapod as hx  # noqa: E402
 from legs.cockroach import STRIDE_PERIOD  # noqa: E402
 from legs.efforts import EFFORT_TOL, adaptive_inverse  # noqa: E402
 from legs.replay import (  # noqa: E402
-    critical_gains,
     grounded_scene,
     joint_angles,
     prescribed_angles,
@@ -174,7 +173,7 @@ def main() -> None:
     inverse, _ = adaptive_inverse(model, scene, 0.0, period, tol=args.tol)
     print(f"inverse dynamics: {inverse.times.size} samples, "
           f"{time.process_time() - mark:.1f} s CPU")
-    kp, kd = (args.kp, args.kd) if args.bandwidth is None else critical_gains(
+    kp, kd = (args.kp, args.kd) if args.bandwidth is None else hx.simulation.critical_gains(
         model, inverse.q[0], args.bandwidth)
     if args.bandwidth is not None:
         print(f"gains at {args.bandwidth:g} Hz: kp {min(kp.values()):.3g} to "
