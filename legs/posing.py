@@ -25,20 +25,16 @@ def moved(scene: Scene, poses: dict[str, Placement]) -> Scene:
     """A copy of ``scene`` with each body's reference frame at ``poses[name]`` (scene units),
     its joints' frames kept on their bodies as they are at its current pose, every other
     element and setting unchanged."""
-    out = Scene(scene.name, scene.dimension, scene.length_unit, scene.gravity,
-                scene.characteristic_length, scene.source, report_forces=scene.report_forces,
-                ground=scene.ground)
-    out.actuators = scene.actuators
+    elements = []
     for body in scene.bodies.values():
         pose = poses.get(body.name, body.pose)
-        out.add(replace(body, position=pose.position, rotation=pose.rotation))
+        elements.append(replace(body, position=pose.position, rotation=pose.rotation))
     for joint in scene.joints.values():
         parent_frame, child_frame = scene.joint_frames(joint)
-        out.add(replace(joint, origin=None, rotation=None, parent_frame=parent_frame,
-                        child_frame=child_frame))
+        elements.append(replace(joint, origin=None, rotation=None, parent_frame=parent_frame,
+                                child_frame=child_frame))
     placed = set(scene.bodies) | set(scene.joints)
-    out.add(*(e for e in scene.elements if e.name not in placed))
-    return out
+    return scene.with_elements(elements + [e for e in scene.elements if e.name not in placed])
 
 
 def posed(scene: Scene, angles: dict[str, float], lift: float = 0.0) -> Scene:

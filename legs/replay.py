@@ -203,12 +203,10 @@ def grounded_scene(scene: Scene, result, *, kp, kd, mu: float | None = None,
     twin = replay_scene(scene, result, breaks=breaks, degree=degree,
                         name=f"{scene.name}-on-ground", periodic=periodic)
     drivers, targets = _drivers(scene), joint_laws(scene)
-    out = Scene(twin.name, twin.dimension, twin.length_unit, twin.gravity,
-                twin.characteristic_length, twin.source, report_forces=twin.report_forces,
-                ground=twin.ground)
     gain = 1.0 / scene.unit  # N m per rad in the scene's unit of length (N L)
     motors = actuators.assign(list(drivers)) if actuators is not None else {}
-    for element in twin.elements:
+
+    def grounded(element):
         if isinstance(element, JointEffort):
             driver = drivers[element.joint]
             p, d = ((g[element.joint] if isinstance(g, dict) else g) for g in (kp, kd))
@@ -216,17 +214,17 @@ def grounded_scene(scene: Scene, result, *, kp, kd, mu: float | None = None,
             if element.joint in motors:
                 limit, no_load, _ = motors[element.joint].joint_limits()
                 limit *= gain
-            out.add(JointController(f"{driver.name}/servo", element.joint,
-                                    target=targets[element.joint],
-                                    kp=p * gain, kd=d * gain, feedforward=element.law,
-                                    max_effort=limit, no_load_speed=no_load))
-        elif isinstance(element, Contact):
-            out.add(GroundContact(element.name, element.child,  # the plane of its footholds
-                                  point=element.child_frame.position,
-                                  surface_point=element.foothold, mu=mu))
-        else:
-            out.add(element)
-    return out
+            return JointController(f"{driver.name}/servo", element.joint,
+                                   target=targets[element.joint], kp=p * gain, kd=d * gain,
+                                   feedforward=element.law, max_effort=limit,
+                                   no_load_speed=no_load)
+        if isinstance(element, Contact):
+            return GroundContact(element.name, element.child,  # the plane of its footholds
+                                 point=element.child_frame.position,
+                                 surface_point=element.foothold, mu=mu)
+        return element
+
+    return twin.with_elements(grounded(element) for element in twin.elements)
 
 
 #: The gains of the built-in ``hexapod-on-ground`` (N m/rad, N m s/rad, every joint): its
