@@ -39,7 +39,8 @@ def _coordinates(model: Model) -> ca.Function:
     v_dot = ca.SX.sym("v_dot", model.n_v)
     rate = ca.jtimes(s.guided, s.q, s.qdot)
     state, state_rate = ca.vertcat(s.q, s.v), ca.vertcat(s.qdot, v_dot)
-    # common subexpressions: 11,829 operations a sample for the walking robot, 8,393 without
+    # common subexpressions merged: 8,393 operations a sample for the walking robot, 11,829
+    # without
     return ca.Function("guided_coordinates", [s.q, s.v, v_dot],
                        ca.cse([s.guided, rate, ca.jtimes(rate, state, state_rate)]))
 

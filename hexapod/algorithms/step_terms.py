@@ -89,8 +89,8 @@ class StepTerms:
         # the report's operations) only where the graph is compiled: there they shorten the C
         # compiler's work by far more than the search costs. Interpreted, the search (0.15 to
         # 0.2 s for each of them) costs more than a report's samples save; the residuals
-        # themselves are shared where they are formed (the model's phi). Never in the row norms,
-        # the residuals or the policy's objective, which have almost none (under 2 %).
+        # themselves are shared where they are formed (the model's phi). Never in the row norms
+        # or the residuals, which have almost none (under 2 %).
         to_c = self.to_c if to_c is None else to_c
         outputs = ca.cse(outputs) if cse and to_c else outputs
         return sx_function(name, inputs, outputs, to_c, names_in, names_out)
@@ -212,7 +212,7 @@ class StepTerms:
         A, b = self._objective(ca.SX(self.pattern, Phi_nz), offset, feet)
         return self._function("phase_objective", [self.q, Phi_nz, offset, feet],
                               [ca.densify(A), b], ["q", "Phi", "offset", "feet"], ["A", "b"],
-                              cse=False, to_c=False)
+                              to_c=False)
 
     @cached_property
     def row_norms(self) -> ca.Function:

@@ -42,6 +42,8 @@ import hexapod as hx  # noqa: E402
 from legs.cockroach import STRIDE_PERIOD  # noqa: E402
 from legs.efforts import EFFORT_TOL, adaptive_inverse  # noqa: E402
 from legs.replay import (  # noqa: E402
+    GROUND_KD,
+    GROUND_KP,
     grounded_scene,
     joint_angles,
     prescribed_angles,
@@ -152,8 +154,10 @@ def write_figures(folder: Path, model, result, t_end: float) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--gait", default="tripod")
-    parser.add_argument("--kp", type=float, default=200.0, help="N m/rad (default 200)")
-    parser.add_argument("--kd", type=float, default=2.0, help="N m s/rad (default 2)")
+    parser.add_argument("--kp", type=float, default=GROUND_KP,
+                        help=f"N m/rad (default {GROUND_KP:g})")
+    parser.add_argument("--kd", type=float, default=GROUND_KD,
+                        help=f"N m s/rad (default {GROUND_KD:g})")
     parser.add_argument("--mu", type=float, default=0.8)
     parser.add_argument("--step", type=float, default=1e-3, help="s (default 1e-3)")
     parser.add_argument("--tol", type=float, default=EFFORT_TOL)
