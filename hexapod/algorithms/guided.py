@@ -58,24 +58,35 @@ def guided_coordinates(model: Model, q: np.ndarray, v: np.ndarray, v_dot: np.nda
 
 
 def guided_twin(model: Model, times: np.ndarray, q: np.ndarray, v: np.ndarray,
-                v_dot: np.ndarray) -> Model:
+                v_dot: np.ndarray, joints: tuple | None = None) -> Model:
     """``model`` with its guided joints' laws the motion ``q, v, v_dot`` (at ``times``) gives
-    them, exact at the samples; what it has built is shared (only the laws' values differ)."""
+    them, exact at the samples; what it has built is shared (only the laws' values differ).
+    ``joints``: the guided joints' coordinates, rates and accelerations along that motion when
+    they are known already (:func:`followed_guides`)."""
+    if joints is None:
+        joints = guided_coordinates(model, q, v, v_dot)
     laws = list(model.laws)
-    for index, law in zip(model.guidance.laws,
-                          sampled_laws(times, *guided_coordinates(model, q, v, v_dot)),
-                          strict=True):
+    for index, law in zip(model.guidance.laws, sampled_laws(times, *joints), strict=True):
         laws[index] = law
     return model.with_laws(tuple(laws), model.digest, share_built=True)
 
 
 def guides_motion(model: Model, times: np.ndarray, progress=None, *,
                   solve=prescribed_motion) -> tuple:
+    """The guides' kinematics ``(q, v, v_dot)`` of a guided ``model`` at ``times``: those of
+    :func:`followed_guides`."""
+    return followed_guides(model, times, progress, solve=solve)[:3]
+
+
+def followed_guides(model: Model, times: np.ndarray, progress=None, *,
+                    solve=prescribed_motion) -> tuple:
     """The guides' kinematics ``(q, v, v_dot)`` of a guided ``model`` at ``times``, continuous
     along them (``solve(kinematics, grid, progress=progress)``, by default
-    :func:`hexapod.algorithms.prescribed.prescribed_motion`); where a guided joint jumps to
-    another solution between two samples (see :data:`JUMP_SHARE`) the motion is solved again
-    through their midpoint, until it follows one solution.
+    :func:`hexapod.algorithms.prescribed.prescribed_motion`), and the guided joints'
+    coordinates, rates and accelerations there (:func:`guided_coordinates`, the fourth item,
+    found on the way); where a guided joint jumps to another solution between two samples
+    (see :data:`JUMP_SHARE`) the motion is solved again through their midpoint, until it
+    follows one solution.
 
     Raises
     ------
@@ -98,7 +109,8 @@ def guides_motion(model: Model, times: np.ndarray, progress=None, *,
         jumps = np.abs(change - accounted) > np.maximum(JUMP_SHARE * np.abs(change), JUMP_FLOOR)
         if not jumps.any():
             kept = np.searchsorted(grid, times)
-            return q[kept], v[kept], v_dot[kept]
+            return (q[kept], v[kept], v_dot[kept],
+                    (theta[:, kept], rate[:, kept], acceleration[:, kept]))
         bad = jumps.any(axis=0)
         grid = np.sort(np.concatenate([grid, (grid[:-1][bad] + grid[1:][bad]) / 2]))
     guided, k = np.unravel_index(np.argmax(jumps), jumps.shape)

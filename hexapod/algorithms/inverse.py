@@ -228,14 +228,14 @@ def _guided(model: Model, times: np.ndarray, progress, check_limits: bool):
     its positions, and a motion its constraints leave free takes its velocities); the
     motion's joints checked against their ranges (``check_limits``), in the name of
     ``model``, and guides out of the joints' reach named."""
-    from hexapod.algorithms.guided import guided_twin, guides_motion
+    from hexapod.algorithms.guided import followed_guides, guided_twin
 
     n = times.size
-    q, v, v_dot = guides_motion(model, times, None if progress is None else (
+    q, v, v_dot, joints = followed_guides(model, times, None if progress is None else (
         lambda done, total: progress(done * n // total, 2 * n)))
     if check_limits:  # the same bodies and joints: the kinematics' positions are the model's
         check_joint_limits(model, times, q)
-    twin = guided_twin(model, times, q, v, v_dot)
+    twin = guided_twin(model, times, q, v, v_dot, joints)
     return (twin, None if progress is None else lambda done, total: progress(n + done, 2 * n),
             (q, v, v_dot))
 
