@@ -188,3 +188,19 @@ def test_a_controllers_target_speed_is_the_rate_of_its_targets_table():
     read = np.array(twin.law_values(t))[:2, rates[0]]
     scale = np.abs(exact).max(axis=1, keepdims=True)
     assert (np.abs(read - exact) / scale).max() <= 10 * max(record["error"].values())
+
+
+def test_a_rate_of_a_law_in_the_same_list_is_read_from_its_values():
+    """A controller's target speed is its target's rate: evaluated with its target, it is read
+    from the target's rate and acceleration, the same numbers as its own evaluation."""
+    from hexapod.model.law_values import batches, evaluate_together
+
+    law = Harmonic(offset=0.1, cos=(0.3, 0.05), sin=(0.2,), frequency=1 / PERIOD)
+    alone = Rate(Harmonic(offset=0.2, cos=(0.1,), frequency=2.0))  # its law not in the list
+    laws = [Rate(law), law, alone]
+    plan = batches(laws)
+    assert plan.rates.tolist() == [[0, 1]]
+    t = np.linspace(0.0, 1.0, 7)
+    values = evaluate_together(laws, t)
+    for k, each in enumerate(laws):
+        assert np.array_equal(values[:, k], np.array(each.evaluate(t)))

@@ -5,10 +5,12 @@ law and the time (a simulation then ends as failed, saying them)."""
 from __future__ import annotations
 
 import threading
+from typing import NamedTuple
 
 import numpy as np
 
 from hexapod.errors import HexapodError
+from hexapod.scene.laws.base import Rate
 
 #: The fastest a driver may move a joint or a coordinate, rad/s or m/s (SI): the largest speed
 #: and angular rate a scene may hold (``hexapod.scene.scene.LARGEST``). A law beyond it is
@@ -59,14 +61,32 @@ def _driven(model) -> np.ndarray:
     return np.array(sorted({d.law for d in model.drivers if d.law >= 0}), dtype=int)
 
 
-def batches(laws) -> list[tuple[np.ndarray, list]]:
-    """``laws`` grouped for evaluation: the indices and laws of each batch (the laws of one
-    class and one :meth:`~hexapod.scene.laws.Law.batch_key`; a law without one alone)."""
+class LawBatches(NamedTuple):
+    """How a list of laws is evaluated (:func:`batches`): ``groups``, the indices and laws of
+    each batch evaluated in one call, and ``rates``, pairs ``(i, j)`` of a
+    :class:`~hexapod.scene.laws.base.Rate` ``i`` of law ``j`` of the same list, read from
+    ``j``'s values (a controller's target speed is its target's rate: evaluated once)."""
+
+    groups: list[tuple[np.ndarray, list]]
+    rates: np.ndarray
+
+
+def batches(laws) -> LawBatches:
+    """``laws`` grouped for evaluation: the laws of one class and one
+    :meth:`~hexapod.scene.laws.Law.batch_key` together, a law without one alone, and the rates
+    of laws in the list read from theirs."""
+    position = {id(law): i for i, law in enumerate(laws)}
     groups: dict = {}
+    rates = []
     for i, law in enumerate(laws):
+        if isinstance(law, Rate) and (inner := position.get(id(law.law))) is not None:
+            rates.append((i, inner))
+            continue
         key = law.batch_key()
         groups.setdefault(i if key is None else (type(law), key), []).append(i)
-    return [(np.array(indices), [laws[i] for i in indices]) for indices in groups.values()]
+    return LawBatches([(np.array(indices), [laws[i] for i in indices])
+                       for indices in groups.values()],
+                      np.array(rates, dtype=int).reshape(-1, 2))
 
 
 def law_breaks(laws, start: float, stop: float) -> np.ndarray:
@@ -80,16 +100,20 @@ def law_breaks(laws, start: float, stop: float) -> np.ndarray:
     return times[np.concatenate([[True], ~close])]
 
 
-def evaluate_together(laws, t, grouped: list | None = None) -> np.ndarray:
+def evaluate_together(laws, t, grouped: LawBatches | None = None) -> np.ndarray:
     """Values, rates and accelerations of ``laws`` at ``t``, (3, len(laws), *t.shape), each
     batch in one call (``grouped``: their :func:`batches`, when already made)."""
     t = np.asarray(t, dtype=float)
     out = np.empty((3, len(laws)) + t.shape)
-    for indices, batch in batches(laws) if grouped is None else grouped:
+    grouped = batches(laws) if grouped is None else grouped
+    for indices, batch in grouped.groups:
         if len(batch) == 1:  # most laws: their own evaluation, no batch array
             out[0, indices[0]], out[1, indices[0]], out[2, indices[0]] = batch[0].evaluate(t)
         else:
             out[:, indices] = type(batch[0]).evaluate_batch(batch, t)
+    if grouped.rates.size:  # as Rate.evaluate gives them: its own rate's rate is zero
+        rate, law = grouped.rates.T
+        out[0, rate], out[1, rate], out[2, rate] = out[1, law], out[2, law], 0.0
     return out
 
 
