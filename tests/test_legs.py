@@ -227,3 +227,13 @@ def test_the_standing_hexapod_holds_still_on_statically_indeterminate_feet(feet)
     wrenches = hx.joint_wrenches(model, data, frame="world").as_dict()
     vertical = sum(wrenches[f"{leg}/ground"]["Fz"] for leg in STANDING_FEET[:feet])
     assert vertical == pytest.approx(robot_weight(), rel=1e-9)
+
+
+def test_the_foot_paths_shapes_are_their_polynomials_bit_for_bit():
+    """The swing's step and lift and their derivatives, evaluated all six at once by Horner's
+    rule (what a simulation's every stage asks), are numpy's evaluation of each polynomial."""
+    from legs.stepping import LIFT_RATES, STEP_RATES, _shapes
+
+    for u in (np.linspace(0.0, 1.0, 101), np.float64(0.37), np.full((3, 4), 0.61)):
+        expected = np.array([p(u) for p in STEP_RATES + LIFT_RATES])
+        assert np.array_equal(_shapes(u), expected)
