@@ -3,11 +3,12 @@
 The acceleration-level equations are integrated as an ODE in ``(q, v)`` (``q_dot = B(q) v``);
 the difference between the pair's two solutions estimates the local error, and the step is
 accepted when its weighted RMS norm, with weights ``atol + rtol max(|y_n|, |y_n+1|)``, is at
-most one (Hairer, Norsett and Wanner, *Solving ODEs I*, II.4). After every accepted step the
-state is projected back onto the constraints, positions onto ``phi = 0`` by Newton's method and
-velocities onto ``Phi_v v = nu``, both in the kinetic-energy norm (Hairer and Wanner, *Solving
-ODEs II*, VII.2): the constraints then hold to round-off at every step, and the projection
-does not lower the order.
+most one (Hairer, Norsett and Wanner, *Solving ODEs I*, II.4); the next step's size is chosen
+by Gustafsson's PI control (ibid., IV.2). After every accepted step the state is projected
+back onto the constraints, positions onto ``phi = 0`` by Newton's method and velocities onto
+``Phi_v v = nu``, both in the kinetic-energy norm (Hairer and Wanner, *Solving ODEs II*,
+VII.2): the constraints then hold to round-off at every step, and the projection does not
+lower the order.
 """
 
 from __future__ import annotations
