@@ -181,8 +181,9 @@ def _shapes(u: np.ndarray) -> np.ndarray:
     u = np.asarray(u, dtype=float)
     column = (slice(None),) + (None,) * u.ndim
     y = np.zeros((6,) + u.shape)
-    for c in _SHAPES.T:
-        y = y * u + c[column]
+    for c in _SHAPES.T:  # in place: a batch of times makes these arrays large
+        y *= u
+        y += c[column]
     return y
 
 
