@@ -346,7 +346,8 @@ def _run(plan: PhasePlan, data: Data, newton: int, out: _Results, feet: _Feet, t
     mask = (~feet.rows_idle_over(plan.left_out, k, stop)).astype(float).T
     state, lam, wrench, frames, checks = plan.evaluate(
         data, out.state(k - 1), np.diff(times[k - 1:stop]), w[:, span], wd[:, span], wdd[:, span],
-        feet.values[:, span], mask, newton, None if out.known is None else out.known[0][span])
+        feet.values[:, span], mask, newton,
+        None if out.known is None else np.hstack([x[span] for x in out.known]))
     checks = np.nan_to_num(checks, nan=np.inf)
     finite = np.all(np.isfinite(state), axis=1) & np.all(np.isfinite(wrench), axis=(1, 2))
     idle_kept = feet.rows_idle_over(plan.kept, k, stop).any(axis=1)

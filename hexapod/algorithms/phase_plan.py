@@ -10,14 +10,15 @@ evaluated over the samples of a phase with ``mapaccum`` (each sample starts from
 before; in blocks, :func:`blocks`). One sample:
 
 1. positions: ``q_p = q (+) (h v + h^2/2 v_dot)`` predicted from the sample before (or known:
-   a guided model's, an input ``q_known``), then :data:`NEWTON_STEPS` Newton steps on
+   a guided model's, an input ``known``), then :data:`NEWTON_STEPS` Newton steps on
    ``phi_I = 0`` (none from known positions) with the Jacobian of ``q_p`` (one
    factorisation), each step applied with the retraction;
 2. ``J = Phi_v[I]`` at the positions found, factorised once (:class:`StaticLU`: pivots chosen
    at the decision, the elimination written out as straight-line code, about 1 400
    multiply-adds for the walking hexapod where a sparse QR of the same matrix takes some
    25 000; the checks below catch pivots gone stale): ``v = J^-1 nu_I``,
-   ``v_dot = J^-1 gamma_I``, ``lam_I = J^-T (Q - M v_dot)``;
+   ``v_dot = J^-1 gamma_I`` (or both known: a guided model's twin's), ``lam_I = J^-T (Q - M
+   v_dot)``;
 3. the redundancy policy (when rows are left out): every multiplier vector that balances the
    bodies is ``lam0 + N z`` with ``N = [e_R - L_I J^-T Phi_R^T]``; ``z`` minimises the policy's
    ``|A (lam0 + N z) + b|^2`` (the least joint wrenches, each foot's block over the square root
@@ -173,9 +174,13 @@ class PhasePlan:
     def step(self, newton: int = NEWTON_STEPS, expanded: bool = False,
              known: bool = False) -> ca.Function:
         """The Function of one sample with ``newton`` Newton steps (built once per count), or
-        the same expanded into one SX Function (see :data:`EXPAND_AFTER`); ``known``: its
-        Newton steps start from the positions of a last input ``q_known`` (a motion known at
-        the samples, a guided model's) instead of those predicted from the sample before."""
+        the same expanded into one SX Function (see :data:`EXPAND_AFTER`); ``known``: a last
+        input ``known``, the motion ``[q; v; v_dot]`` known at the sample (a guided model's
+        twin's, from its guides' kinematics): Newton's steps start from its positions instead
+        of those predicted from the sample before, and a plan with forces takes its velocities
+        and accelerations as they are (the constraints' velocity residuals still checked),
+        leaving out the acceleration constraints' right-hand side and two solves, a fifth of
+        the walking robot's sample."""
         cache = self.__dict__.setdefault("_steps", {})
         key = (newton, expanded, known)
         if key not in cache:
@@ -197,8 +202,9 @@ class PhasePlan:
         inputs, names = [x, h, w, wd, wdd, feet, mask], ["x", "h", "w", "wd", "wdd", "feet",
                                                           "mask"]
         if known:
-            q = ca.MX.sym("q_known", n_q)
-            inputs, names = [*inputs, q], [*names, "q_known"]
+            state = ca.MX.sym("known", n_q + 2 * n_v)
+            q = state[:n_q]
+            inputs, names = [*inputs, state], [*names, "known"]
         else:
             q = terms.predict(x[:n_q], x[n_q:n_q + n_v], x[n_q + n_v:], h)
         if newton:
@@ -211,15 +217,24 @@ class PhasePlan:
         phi, Phi = terms.jacobian(q, w)
         F = self.factor(Phi)
         nu = terms.rates(q, w, wd)
-        v = self.solve(F, nu)
-        if self.motion:
-            gamma = terms.gamma(q, v, w, wd, wdd)
-        else:
-            gamma, Q, offset = terms.forces(q, v, w, wd, wdd)
-        a = self.solve(F, gamma)
         d = terms.row_norms(Phi)  # the rows' scales at this sample
-        velocity, acceleration, position, presence = terms.residuals(Phi, phi, v, nu, a,
-                                                                     gamma, d)
+        if known and not self.motion:
+            # the guides' kinematics solved this sample's velocities and accelerations on the
+            # same bodies already (a twin's laws are exact at its samples): its dynamics alone,
+            # the velocities checked against these rows
+            v, a = state[n_q:n_q + n_v], state[n_q + n_v:]
+            Q, offset = terms.loads(q, v, w)
+            velocity, acceleration, position, presence = terms.velocity_residuals(
+                Phi, phi, v, nu, d)
+        else:
+            v = self.solve(F, nu)
+            if self.motion:
+                gamma = terms.gamma(q, v, w, wd, wdd)
+            else:
+                gamma, Q, offset = terms.forces(q, v, w, wd, wdd)
+            a = self.solve(F, gamma)
+            velocity, acceleration, position, presence = terms.residuals(Phi, phi, v, nu, a,
+                                                                         gamma, d)
         checks = self.checks(self.solve(F, d * ca.DM(self._probe)), velocity,
                              acceleration, position, presence)
         if self.motion:
@@ -246,10 +261,12 @@ class PhasePlan:
         return kept(data, ("phase-buffer", id(self), *key), lambda: InPlaceFunction(cache[key]))
 
     def evaluate(self, data: Data, x0, h, w, wd, wdd, feet, mask, newton: int = NEWTON_STEPS,
-                 q_known=None):
+                 state_known=None):
         """The samples of one run: ``x0`` the state ``[q; v; v_dot]`` of the sample before,
-        ``h`` (N,) the time steps, laws and per-foot inputs (rows x N), and ``q_known`` (N,
-        n_q) the positions Newton's method starts from when they are known. Returns arrays with the
+        ``h`` (N,) the time steps, laws and per-foot inputs (rows x N), and ``state_known``
+        (N, n_q + 2 n_v) the motion ``[q; v; v_dot]`` at the samples when it is known (its
+        positions are Newton's start; a plan with forces takes its velocities and
+        accelerations as they are, see :meth:`step`). Returns arrays with the
         samples first: states (N, n_q + 2 n_v), multipliers (N, n_c), wrenches (N, J, 6) in
         the joint frames, the joint frames' rotations (N, J, 9, column-major) and the checks
         (N, 6), NaN from the block of samples where the evaluation fails on; a motion plan's
@@ -263,9 +280,9 @@ class PhasePlan:
         mapped = [np.ascontiguousarray(np.reshape(h, (n, 1)), dtype=float)]
         mapped += [np.ascontiguousarray(np.asarray(x, dtype=float).T)
                    for x in (w, wd, wdd, feet, mask)]
-        known = q_known is not None
+        known = state_known is not None
         if known:
-            mapped.append(np.ascontiguousarray(q_known, dtype=float))
+            mapped.append(np.ascontiguousarray(state_known, dtype=float))
         J, n_c = (0, 0) if self.motion else (len(model.joints), model.n_c)
         outputs = [np.empty((n, model.n_q + 2 * model.n_v)), np.empty((n, n_c)),
                    np.empty((n, J, 6)), np.empty((n, J, 9)), np.empty((n, len(CHECKS)))]

@@ -125,6 +125,19 @@ class StepTerms:
 
     @cached_property
     def residuals(self) -> ca.Function:
+        """``(Phi, phi, v, nu, a, gamma, d) -> (velocity, acceleration, position,
+        presence)``: each row's relative residual of the velocity and acceleration
+        constraints, the largest scaled position residual and each row's size."""
+        return self._residuals(accelerations=True)
+
+    @cached_property
+    def velocity_residuals(self) -> ca.Function:
+        """:attr:`residuals` without the accelerations' (zero): ``(Phi, phi, v, nu, d)``, for
+        a motion known at the sample, whose accelerations the constraints were solved for
+        already (:meth:`loads`)."""
+        return self._residuals(accelerations=False)
+
+    def _residuals(self, accelerations: bool) -> ca.Function:
         model = self.model
         n_c, n_v = model.n_c, model.n_v
         Phi_nz = ca.SX.sym("Phi", self.pattern.nnz())
@@ -139,9 +152,14 @@ class StepTerms:
 
         position = ca.mmax(ca.fabs(phi / ca.DM(model.row_scale))) if n_c else ca.SX(0)
         presence = ca.sum2(ca.fabs(Phi)) + ca.fabs(phi)
-        return self._function("phase_residuals", [Phi_nz, phi, v, nu, a, gamma, d],
-                              [relative(v, nu), relative(a, gamma), position, presence],
-                              ["Phi", "phi", "v", "nu", "a", "gamma", "d"],
+        names = ["Phi", "phi", "v", "nu", "a", "gamma", "d"]
+        inputs = [Phi_nz, phi, v, nu, a, gamma, d]
+        acceleration = relative(a, gamma)
+        if not accelerations:
+            names, inputs = names[:4] + names[6:], inputs[:4] + inputs[6:]
+            acceleration = ca.SX.zeros(n_c)
+        return self._function("phase_residuals", inputs,
+                              [relative(v, nu), acceleration, position, presence], names,
                               ["velocity", "acceleration", "position", "presence"], cse=False)
 
     @cached_property
@@ -165,12 +183,23 @@ class StepTerms:
         model = self.model
         q, v, w, wd, wdd = self.q, self.v, self.w, self.wd, self.wdd
         gamma = _call(model.gamma, q=q, v=v, w=w, wd=wd, wdd=wdd)
+        return self._function("phase_forces", [q, v, w, wd, wdd], [gamma, *self._loads()],
+                              ["q", "v", "w", "wd", "wdd"], ["gamma", "Q", "offset"])
+
+    @cached_property
+    def loads(self) -> ca.Function:
+        """``(q, v, w) -> (Q, offset)``: :attr:`forces` without ``gamma``, for a motion known
+        at the sample (a guided model's twin: its accelerations are its guides')."""
+        return self._function("phase_loads", [self.q, self.v, self.w], self._loads(),
+                              ["q", "v", "w"], ["Q", "offset"])
+
+    def _loads(self) -> list:
+        model, q, v, w = self.model, self.q, self.v, self.w
         Q = _call(model.Q, q=q, v=v, w=w)
         offset = ca.SX.zeros(6 * self.owners)
         if model.Q_across is not None:
             offset = self._across(_call(model.Q_across, q=q, v=v, w=w))
-        return self._function("phase_forces", [q, v, w, wd, wdd], [gamma, Q, offset],
-                              ["q", "v", "w", "wd", "wdd"], ["gamma", "Q", "offset"])
+        return [Q, offset]
 
     def _across(self, across):
         """The wrenches (6 per block, the wrench map's blocks) of the generalized forces of the
