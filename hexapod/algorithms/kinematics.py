@@ -112,7 +112,7 @@ def _violations(model: Model, scaled: np.ndarray, count: int = 5) -> str:
 
 def assemble_positions(model: Model, data: Data, t: float = 0.0, q: np.ndarray | None = None,
                        *, tol: float = 1e-12, max_iterations: int = 60,
-                       counts: dict | None = None) -> np.ndarray:
+                       counts: dict | None = None, diagnose: bool = True) -> np.ndarray:
     """A configuration satisfying every constraint at time ``t``, near the guess ``q``; left in
     ``data.t`` and ``data.q``.
 
@@ -132,6 +132,11 @@ def assemble_positions(model: Model, data: Data, t: float = 0.0, q: np.ndarray |
     counts : dict, optional
         Receives the work done: ``newton`` (iterations, each a Jacobian evaluation and a
         factorisation) added to what it holds.
+    diagnose : bool
+        When Newton's method stalls on a model with feet, find which footholds keep the rest
+        from assembling, for the error's message (a Newton solve per foot and more: seconds
+        for the walking robot). False for a caller that catches the error and tries another
+        way.
 
     Returns
     -------
@@ -145,17 +150,19 @@ def assemble_positions(model: Model, data: Data, t: float = 0.0, q: np.ndarray |
     """
     model.check(data)
     q = _assemble(model, data, t, model.normalize(model.q0 if q is None else q), tol,
-                  max_iterations, counts)
+                  max_iterations, counts, diagnose)
     data.at(t, q)
     return q
 
 
 def _assemble(model: Model, data: Data, t: float, q: np.ndarray, tol: float,
-              max_iterations: int, counts: dict | None) -> np.ndarray:
+              max_iterations: int, counts: dict | None, diagnose: bool) -> np.ndarray:
     w, _, _ = model.law_values(t, data)
     try:
         return _newton(model, data, t, w, q, tol, max_iterations, counts)
     except AssemblyError as error:
+        if not diagnose:
+            raise
         feet = _feet_off(model, data, t, w, q, tol, max_iterations)
         if not feet:
             raise

@@ -202,8 +202,8 @@ def next_positions(model: Model, data, t0: float, q0: np.ndarray, t: float, rate
         h = t - t0
         guess = model.integrate(q0, h * rates[0] + h * h / 2 * rates[1])
         if np.all(np.isfinite(guess)):
-            try:
-                return assemble_positions(model, data, t, guess)
+            try:  # a failure here is not reported (follow tries): no diagnosis
+                return assemble_positions(model, data, t, guess, diagnose=False)
             except AssemblyError:
                 pass
     return follow(model, data, t0, q0, t)
@@ -213,10 +213,11 @@ def follow(model: Model, data, t0: float, q0: np.ndarray, t: float, depth: int =
     """Positions at ``t`` from those at ``t0``: Newton's method from ``q0``, and when the
     samples are too far apart for it (a robot's legs swing a long way between coarse samples),
     through the time halfway first."""
+    last = depth == 0 or t == t0  # only its failure is reported: diagnosed
     try:
-        return assemble_positions(model, data, t, q0)
+        return assemble_positions(model, data, t, q0, diagnose=last)
     except AssemblyError:
-        if depth == 0 or t == t0:
+        if last:
             raise
     middle = follow(model, data, t0, q0, (t0 + t) / 2, depth - 1)
     return follow(model, data, (t0 + t) / 2, middle, t, depth - 1)
