@@ -28,6 +28,7 @@ import numpy as np
 from hexapod.errors import HexapodError
 from hexapod.model.infos import ForceInfo
 from hexapod.model.model import Model
+from hexapod.spatial import rotation_2d, rotation_from_euler_parameters
 
 
 @dataclass(frozen=True)
@@ -91,29 +92,50 @@ def contact_frames(model: Model, q: np.ndarray,
     ContactFrames
     """
     contacts = ground_contacts(model) if contacts is None else contacts
+    fixed = model.built_once(("contact statics",), _statics)
     d = model.dimension
+    q = np.asarray(q, dtype=float)
     gaps = np.zeros(len(contacts))
     jacobian = np.zeros((len(contacts) * d, model.n_v))
     points = np.zeros((len(contacts), d))
     axes = np.zeros((len(contacts), d, d))
     for k, element in enumerate(contacts):
-        surface = element.contact
-        info = model.bodies[element.bodies[0]]
-        pose = model.body_pose(q, info.index)
-        local = np.asarray(element.points[0], dtype=float)
-        arm = pose.rotation @ local if info.kind != "particle" else local
-        point = pose.position + arm
-        if info.kind == "spatial":
-            J_P = np.hstack([np.eye(3), -pose.rotation @ _skew(local)])
-        elif info.kind == "planar":
-            J_P = np.hstack([np.eye(2), np.array([[-arm[1]], [arm[0]]])])
-        else:
-            J_P = np.eye(d)
-        frame = np.vstack([surface.normal, surface.tangents])
-        gaps[k] = surface.normal @ (point - surface.surface_point)
-        jacobian[k * d:(k + 1) * d, info.v] = frame @ J_P
+        info, columns, local, frame, skew_local, surface = fixed[id(element)]
+        rows = slice(k * d, (k + 1) * d)
+        qb = q[info.q]
+        if info.kind == "spatial":  # J_P = [I, -R [s]x]
+            rotation = rotation_from_euler_parameters(qb[3:])
+            point = qb[:3] + rotation @ local
+            jacobian[rows, columns[:3]] = frame
+            jacobian[rows, columns[3:]] = frame @ (-rotation @ skew_local)
+        elif info.kind == "planar":  # J_P = [I, k x R s]
+            arm = rotation_2d(float(qb[2])) @ local
+            point = qb[:2] + arm
+            jacobian[rows, columns] = frame @ np.array([[1.0, 0.0, -arm[1]],
+                                                        [0.0, 1.0, arm[0]]])
+        else:  # a particle: J_P = I
+            point = qb + local
+            jacobian[rows, columns] = frame
+        gaps[k] = frame[0] @ (point - surface)
         points[k], axes[k] = point, frame
     return ContactFrames(gaps, jacobian, points, axes)
+
+
+def _statics(model: Model) -> dict:
+    """Per contact element (by identity): its body's info and velocity columns, the touching
+    point in the body's centre-of-mass frame, its axes as rows (normal, tangents), the point's
+    cross-product matrix (a spatial body's) and a point of its surface: what
+    :func:`contact_frames` reads at every state, formed once per model."""
+    out = {}
+    for element in ground_contacts(model):
+        surface = element.contact
+        local = np.asarray(element.points[0], dtype=float)
+        info = model.bodies[element.bodies[0]]
+        out[id(element)] = (info, np.arange(model.n_v)[info.v], local,
+                            np.vstack([surface.normal, surface.tangents]),
+                            _skew(local) if local.size == 3 else None,
+                            np.asarray(surface.surface_point, dtype=float))
+    return out
 
 
 def contact_bias(model: Model, q: np.ndarray, v: np.ndarray,
