@@ -133,8 +133,8 @@ class StepTerms:
     @cached_property
     def velocity_residuals(self) -> ca.Function:
         """:attr:`residuals` without the accelerations' (zero): ``(Phi, phi, v, nu, d)``, for
-        a motion known at the sample, whose accelerations the constraints were solved for
-        already (:meth:`loads`)."""
+        a motion known at the sample whose accelerations another plan solved and checked (a
+        guided model's twin's: its guides')."""
         return self._residuals(accelerations=False)
 
     def _residuals(self, accelerations: bool) -> ca.Function:
@@ -154,8 +154,9 @@ class StepTerms:
         presence = ca.sum2(ca.fabs(Phi)) + ca.fabs(phi)
         names = ["Phi", "phi", "v", "nu", "a", "gamma", "d"]
         inputs = [Phi_nz, phi, v, nu, a, gamma, d]
-        acceleration = relative(a, gamma)
-        if not accelerations:
+        if accelerations:
+            acceleration = relative(a, gamma)
+        else:
             names, inputs = names[:4] + names[6:], inputs[:4] + inputs[6:]
             acceleration = ca.SX.zeros(n_c)
         return self._function("phase_residuals", inputs,
