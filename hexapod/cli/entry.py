@@ -22,14 +22,21 @@ def main(argv: list[str] | None = None) -> int:
     try:
         try:
             signals.deliver_signals()  # one that came while the handlers were installed: here
-            from hexapod.cli import app
+            app = _load()
         except KeyboardInterrupt:
             print(signals.interruption(), file=sys.stderr)
             status = signals.exit_status()
-        except (MemoryError, ImportError, OSError) as error:
-            print(f"hexapod: error: cannot start: {type(error).__name__}: {error} (too little "
-                  "memory, e.g. under 'ulimit -v', or a broken installation)", file=sys.stderr)
-            return 1
+        except Exception as error:
+            if _interrupted(error):  # an import turned the interruption into another error
+                print(signals.interruption(), file=sys.stderr)
+                status = signals.exit_status()
+            elif isinstance(error, (MemoryError, ImportError, OSError)):
+                print(f"hexapod: error: cannot start: {type(error).__name__}: {error} (too "
+                      "little memory, e.g. under 'ulimit -v', or a broken installation)",
+                      file=sys.stderr)
+                return 1
+            else:
+                raise
         else:
             try:
                 status = app.main(argv)
@@ -48,6 +55,27 @@ def main(argv: list[str] | None = None) -> int:
             stream.flush()
         os._exit(status)
     return status
+
+
+def _load():
+    """The command's module, imported (most of the start-up: NumPy, SciPy, CasADi)."""
+    from hexapod.cli import app
+
+    return app
+
+
+def _interrupted(error: BaseException) -> bool:
+    """Whether ``error`` is an interruption or was caused by one. Python wraps a
+    ``KeyboardInterrupt`` raised while a class is being created in a ``RuntimeError`` ("Error
+    calling __set_name__", seen with SIGINT during the standard library's ``ipaddress``
+    import)."""
+    seen = set()
+    while error is not None and id(error) not in seen:
+        if isinstance(error, KeyboardInterrupt):
+            return True
+        seen.add(id(error))
+        error = error.__cause__ or error.__context__
+    return False
 
 
 def _ignore_late_signals(signals) -> None:
