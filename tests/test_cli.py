@@ -484,3 +484,36 @@ def test_an_interruption_an_import_wraps_in_another_error_ends_the_command_clean
     monkeypatch.setattr(entry, "_load", broken)
     with pytest.raises(RuntimeError, match="a bug"):
         entry.main(["--version"])
+
+
+def test_an_interruption_in_a_finalizer_prints_no_traceback(monkeypatch):
+    """A signal whose handler raises inside a callback or a finalizer (seen in importlib's
+    module-lock callback during the imports: "Exception ignored in ... Traceback" on stderr,
+    the command otherwise ending as interrupted) does not reach the unraisable-exception hook
+    while the command's handlers are in; other exceptions there do, and the hook is put back
+    after."""
+    import gc
+    import sys
+
+    from hexapod._support import signals
+
+    class Raising:
+        def __init__(self, error):
+            self.error = error
+
+        def __del__(self):
+            raise self.error
+
+    seen = []
+    monkeypatch.setattr(sys, "unraisablehook", seen.append)
+    restore = signals.handle_signals()
+    try:
+        Raising(KeyboardInterrupt())
+        gc.collect()
+        assert seen == []
+        Raising(ValueError("a finalizer's own bug"))
+        gc.collect()
+        assert [type(u.exc_value) for u in seen] == [ValueError]
+    finally:
+        restore()
+    assert sys.unraisablehook == seen.append

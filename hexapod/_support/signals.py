@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import contextlib
 import signal
+import sys
 import threading
 
 #: The signals that end a run.
@@ -47,13 +48,28 @@ def handle_signals():
     _received.clear()
     _armed.clear()
     earlier = {number: signal.signal(number, _handler) for number in ENDING}
+    hook = sys.unraisablehook
+    sys.unraisablehook = _quiet_interruptions(hook)
 
     def restore() -> None:  # and forget the signal: a later call in this process is new
         for number, handler in earlier.items():
             signal.signal(number, handler)
+        sys.unraisablehook = hook
         _received.clear()
         _armed.clear()
     return restore
+
+
+def _quiet_interruptions(hook):
+    """``hook`` (``sys.unraisablehook``) except for a ``KeyboardInterrupt``: a signal whose
+    handler raised inside a callback or a finalizer (seen in importlib's module-lock callback
+    during the imports), where Python can only print the exception and go on. The signal is
+    remembered all the same, and the command ends as interrupted: the printed traceback was
+    the only trace it left."""
+    def quiet(unraisable) -> None:
+        if not issubclass(unraisable.exc_type, KeyboardInterrupt):
+            hook(unraisable)
+    return quiet
 
 
 def deliver_signals() -> None:
