@@ -23,11 +23,9 @@ def main(argv: list[str] | None = None) -> int:
         try:
             signals.deliver_signals()  # one that came while the handlers were installed: here
             app = _load()
-        except KeyboardInterrupt:
-            print(signals.interruption(), file=sys.stderr)
-            status = signals.exit_status()
-        except Exception as error:
-            if _interrupted(error):  # an import turned the interruption into another error
+        except BaseException as error:
+            # an interruption, or another error an import made of one (see _interrupted)
+            if _interrupted(error):
                 print(signals.interruption(), file=sys.stderr)
                 status = signals.exit_status()
             elif isinstance(error, (MemoryError, ImportError, OSError)):
