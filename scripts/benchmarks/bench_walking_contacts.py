@@ -50,7 +50,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 import hexapod as hx  # noqa: E402
 from legs.cockroach import STRIDE_PERIOD  # noqa: E402
 from legs.efforts import EFFORT_TOL, adaptive_inverse  # noqa: E402
-from legs.replay import grounded_scene  # noqa: E402
+from legs.replay import GROUND_KD, GROUND_KP, grounded_scene  # noqa: E402
 from legs.robot import hexapod_scene  # noqa: E402
 
 #: the radius of MuJoCo's foot spheres (m): small against the leg, so that the contact point
@@ -266,8 +266,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--strides", type=int, default=1)
     parser.add_argument("--step", type=float, default=1e-3)
-    parser.add_argument("--kp", type=float, default=200.0)
-    parser.add_argument("--kd", type=float, default=2.0)
+    parser.add_argument("--kp", type=float, default=GROUND_KP)
+    parser.add_argument("--kd", type=float, default=GROUND_KD)
     parser.add_argument("--mu", type=float, default=0.8)
     parser.add_argument("--budget", type=float, default=60.0)
     parser.add_argument("--mujoco-step", type=float, default=1e-3)
