@@ -88,9 +88,9 @@ class StaticLU:
     def _positions(self) -> None:
         """Where each factor entry lies in the packed vector (row by row, columns ascending),
         where each matrix entry goes there, the triangles' patterns (column-major, with the
-        positions of their entries) and per pivot the entries its elimination reads and
-        writes: the factorisation is then a few vector operations per pivot instead of one per
-        entry."""
+        positions of their entries) and the elimination's operations by level
+        (:func:`_levels`): the factorisation is then a few vector operations per level instead
+        of one per entry."""
         self._at: list[dict[int, int]] = []
         k = 0
         for row in self.structure:
@@ -106,15 +106,9 @@ class StaticLU:
                                               enumerate(self.structure) for j in row if j < i]),
                            _sparsity(self.n, [(j, i, at[i][j]) for i, row in
                                               enumerate(self.structure) for j in row if j >= i]))
-        self._eliminations = []
-        for k in range(self.n):
-            below = [i for i in range(k + 1, self.n) if k in at[i]]
-            upper = [j for j in self.structure[k] if j > k]
-            targets = [at[i][j] for i in below for j in upper]
-            left = [at[i][k] for i in below for _ in upper]
-            right = [at[k][j] for _ in below for j in upper]
-            self._eliminations.append(tuple(np.array(x, dtype=int).tolist() for x in (
-                [at[i][k] for i in below], targets, left, right)))
+        self._eliminations = _levels([
+            ([i for i in range(k + 1, self.n) if k in at[i]],
+             [j for j in self.structure[k] if j > k]) for k in range(self.n)], at)
 
     def factor(self, values: ca.SX) -> ca.SX:
         """The factors of the matrix with these values (SX, one per pattern entry), packed:
@@ -122,10 +116,8 @@ class StaticLU:
         columns ascending."""
         F = ca.SX.zeros(self.nnz)
         F[self._entries] = values  # one call: indexing SX entry by entry costs 20 us each
-        for k, (column, targets, left, right) in enumerate(self._eliminations):
-            if not column:
-                continue
-            F[column] = F[column] / F[int(self._diagonal[k])]
+        for column, pivot, targets, left, right in self._eliminations:
+            F[column] = F[column] / F[pivot]
             if targets:
                 F[targets] = F[targets] - F[left] * F[right]
         return F
@@ -154,3 +146,36 @@ def _sparsity(n: int, entries: list[tuple[int, int, int]]) -> tuple[ca.Sparsity,
     colind = np.concatenate([[0], np.cumsum(counts)]).tolist()
     return (ca.Sparsity(n, n, colind, [i for _, i, _ in entries]),
             [position for _, _, position in entries])
+
+
+def _levels(pivots, at) -> list[tuple[list[int], ...]]:
+    """The elimination's operations grouped by level: per level, the entries of ``L`` that
+    its pivots divide and the pivot each is divided by, then the entries their updates
+    write, with the two factors of each update (positions in the packed factors, ``at[i][j]``
+    that of entry ``(i, j)``). ``pivots[k]`` gives the rows below pivot ``k`` with an entry
+    in its column and the columns right of it with one in its row. A pivot's level is one more
+    than that of the last pivot that wrote any entry it reads or writes, so that a level's
+    operations are independent and every entry sees its updates in the pivots' order: the
+    same operations in the same order per entry as pivot by pivot (the same numbers), in a
+    few dozen vector operations instead of several per pivot (building a plan's factors took
+    0.05 s of SX indexing for the walking robot)."""
+    written: dict[int, int] = {}  # entry -> level of its last write
+    levels: list[list[list[int]]] = []
+    for k, (below, upper) in enumerate(pivots):
+        if not below:
+            continue
+        column = [at[i][k] for i in below]
+        targets = [at[i][j] for i in below for j in upper]
+        reads = column + [at[k][k]] + [at[k][j] for j in upper]
+        level = 1 + max((written.get(e, -1) for e in reads + targets), default=-1)
+        for e in column + targets:
+            written[e] = level
+        while len(levels) <= level:
+            levels.append([[], [], [], [], []])
+        batch = levels[level]
+        batch[0] += column
+        batch[1] += [at[k][k]] * len(column)
+        batch[2] += targets
+        batch[3] += [at[i][k] for i in below for _ in upper]
+        batch[4] += [at[k][j] for _ in below for j in upper]
+    return [tuple(batch) for batch in levels]
