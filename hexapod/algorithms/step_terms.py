@@ -225,7 +225,7 @@ class StepTerms:
         (see :meth:`_wrench_map`; world axes, moments over the characteristic length). Never
         compiled, as :attr:`objective`: the standing robot's took gcc 65 s."""
         Phi_nz = ca.SX.sym("Phi", self.pattern.nnz())
-        A, _ = self._wrench_map(ca.SX(self.pattern, Phi_nz))
+        A, _ = self._wrench_map(Phi_nz)
         return self._function("phase_wrench_map", [self.q, Phi_nz], [ca.densify(A)],
                               ["q", "Phi"], ["A"], to_c=False)
 
@@ -239,7 +239,7 @@ class StepTerms:
         Phi_nz = ca.SX.sym("Phi", self.pattern.nnz())
         offset = ca.SX.sym("offset", 6 * self.owners)
         feet = ca.SX.sym("feet", len(self.model.contacts))
-        A, b = self._objective(ca.SX(self.pattern, Phi_nz), offset, feet)
+        A, b = self._objective(Phi_nz, offset, feet)
         return self._function("phase_objective", [self.q, Phi_nz, offset, feet],
                               [ca.densify(A), b], ["q", "Phi", "offset", "feet"], ["A", "b"],
                               to_c=False)
@@ -331,9 +331,20 @@ class StepTerms:
             return self._wrench(joint.child, g, origin)
         return -self._wrench(joint.parent, g, origin)
 
-    def _wrench_map(self, Phi):
+    def _wrench_map(self, Phi_nz):
         """The (6 owners x n_c) map from multipliers to the policy's wrenches, and the joint
-        frames' rotations (9 x J, column-major)."""
+        frames' rotations (9 x J, column-major), at ``q`` and the nonzeros ``Phi_nz`` of
+        ``Phi_v`` (SX)."""
+        A, frames = self._wrench_terms(self.q, Phi_nz)
+        return A, frames
+
+    @cached_property
+    def _wrench_terms(self) -> ca.Function:
+        """``(q, Phi) -> (A, frames)`` of :meth:`_wrench_map`, formed once per model and
+        called (inlined) by the objective, the policy of each size and the report: forming it
+        took 0.07 s for the walking robot."""
+        Phi_nz = ca.SX.sym("Phi", self.pattern.nnz())
+        Phi = ca.SX(self.pattern, Phi_nz)
         model = self.model
         A = ca.SX(6 * self.owners, model.n_c)
         frames = []
@@ -349,14 +360,16 @@ class StepTerms:
                 A[6 * block:6 * block + 6, driver.row] = self._wrench(
                     driver.body, -Phi[driver.row, :].T, centre)
                 block += 1
-        return A, (ca.horzcat(*frames) if frames else ca.SX(9, 0))
+        frames = ca.horzcat(*frames) if frames else ca.SX(9, 0)
+        return ca.Function("wrench_terms", [self.q, Phi_nz], [A, frames])
 
-    def _objective(self, Phi, offset, feet):
-        """``A, b`` of the policy's objective ``|A lam + b|^2`` (SX)."""
+    def _objective(self, Phi_nz, offset, feet):
+        """``A, b`` of the policy's objective ``|A lam + b|^2`` (SX), ``Phi_nz`` the
+        nonzeros of ``Phi_v``."""
         model = self.model
         policy = model.ground.policy if model.contacts else "min-wrench"
         if policy == "min-wrench":
-            A, _ = self._wrench_map(Phi)
+            A, _ = self._wrench_map(Phi_nz)
             scale = ca.SX.ones(A.shape[0])
             for k, contact in enumerate(model.contacts):
                 scale[6 * contact.joint:6 * contact.joint + 6] = feet[k]
@@ -392,7 +405,7 @@ class StepTerms:
                                                                         len(model.contacts))
         lam, N, mask = ca.SX.sym("lam", model.n_c), ca.SX.sym("N", model.n_c, m), \
             ca.SX.sym("mask", m)
-        A, b = self._objective(ca.SX(self.pattern, Phi_nz), offset, feet)
+        A, b = self._objective(Phi_nz, offset, feet)
         G = ca.mtimes(A, N)
         H = ca.SX(m, m)
         for i in range(m):
@@ -418,7 +431,7 @@ class StepTerms:
         model = self.model
         Phi_nz = ca.SX.sym("Phi", self.pattern.nnz())
         lam, offset = ca.SX.sym("lam", model.n_c), ca.SX.sym("offset", 6 * self.owners)
-        A, frames = self._wrench_map(ca.SX(self.pattern, Phi_nz))
+        A, frames = self._wrench_map(Phi_nz)
         out = self._in_joint_frames(ca.mtimes(A, lam) + offset, frames)
         return self._function("phase_report", [self.q, Phi_nz, lam, offset],
                               [ca.horzcat(*out) if out else ca.SX(6, 0), frames],
@@ -430,7 +443,7 @@ class StepTerms:
         wrenches (6 J x n_c, joint by joint: force, then moment, in the joint frame), for
         wrenches without the forces across joints; the joint frames' rotations (9 x J)."""
         Phi_nz = ca.SX.sym("Phi", self.pattern.nnz())
-        A, frames = self._wrench_map(ca.SX(self.pattern, Phi_nz))
+        A, frames = self._wrench_map(Phi_nz)
         out = self._in_joint_frames(A, frames)
         B = ca.vertcat(*out) if out else ca.SX(0, self.model.n_c)
         return self._function("phase_report_map", [self.q, Phi_nz], [ca.densify(B), frames],
