@@ -13,7 +13,11 @@ times).
 midpoint of every interval (where a Hermite interpolant's error is near its largest) to
 ``tolerance`` relative to each law's largest value, rate and acceleration over the run: a
 simulation asks for a hundredth of its relative tolerance (:data:`TOLERANCE_PER_RTOL`), so the
-table moves the result by far less than the integrator's own error. The acceleration's error
+table moves the result by far less than the integrator's own error. The last grid is not
+checked at all its midpoints, which would cost as much as the table itself: its error is
+predicted from the grid before's (measured everywhere) and the fall the last halving showed,
+and measured around the places where the grid before's was largest; a prediction or a
+measurement that misses is followed by the full check. The acceleration's error
 falls as ``h^4``; when it no longer falls (round-off in the exact values, amplified by
 ``1 / h^2``, has taken over) or the grid would pass :data:`MOST_INTERVALS`, the laws are
 evaluated exactly, and the run says so. The table and the error it reached are recorded in the
@@ -92,13 +96,9 @@ def _tabulate(model: Model, costly: list[int], start: float, span: float,
     while True:
         middle = 0.5 * (times[:-1] + times[1:])
         exact = evaluate_together(laws, middle)
-        scale = np.maximum(np.abs(table).max(axis=2), np.abs(exact).max(axis=2))  # (3, k)
-        interpolated = LawTable(times, table).evaluate(middle)
-        previous, errors = errors, (np.abs(interpolated - exact).max(axis=2)
-                                    / np.maximum(scale, np.finfo(float).tiny)).max(axis=1)
-        record.update(intervals=intervals, error={"value": float(errors[0]),
-                                                  "rate": float(errors[1]),
-                                                  "acceleration": float(errors[2])})
+        per_interval = _midpoint_errors(times, table, middle, exact)
+        previous, errors = errors, per_interval.max(axis=1)
+        record.update(intervals=intervals, error=_error_record(errors))
         if errors.max() <= tolerance:
             break
         stalled = previous is not None and errors.max() > 0.5 * previous.max()
@@ -111,6 +111,13 @@ def _tabulate(model: Model, costly: list[int], start: float, span: float,
         times = np.insert(times, np.arange(1, times.size), middle)
         table = np.insert(table, np.arange(1, table.shape[2]), exact, axis=2)
         intervals *= 2
+        if previous is not None:
+            checked = _checked_by_prediction(laws, times, table, per_interval, previous,
+                                             tolerance)
+            if checked is not None:
+                record.update(intervals=intervals, error=_error_record(checked[0]),
+                              checked=checked[1])
+                break
     columns = LawTable(times, table, period, breaks).laws()
     replaced = list(model.laws)
     tabulated = {}
@@ -125,6 +132,63 @@ def _tabulate(model: Model, costly: list[int], start: float, span: float,
     digest = (hashlib.sha256(f"{model.digest}/laws".encode() + times.tobytes() + table.tobytes())
               .hexdigest() if model.digest else "")
     return model.with_laws(tuple(replaced), digest), record
+
+
+#: How fast the error of a quintic Hermite interpolant falls when its grid is halved, at most:
+#: its values, rates and accelerations (``h^6``, ``h^5``, ``h^4``).
+HALVING_GAINS = np.array([64.0, 32.0, 16.0])
+#: The intervals of the grid before (either side of its largest error) whose halves the
+#: prediction is checked on.
+CHECKED_EITHER_SIDE = 8
+
+
+def _midpoint_errors(times, table, middle, exact) -> np.ndarray:
+    """Per interval (3, k): the largest error of the table's interpolant at its midpoint over
+    the laws, for the values, rates and accelerations, each relative to the law's largest."""
+    scale = np.maximum(np.abs(table).max(axis=2), np.abs(exact).max(axis=2))  # (3, laws)
+    interpolated = LawTable(times, table).evaluate(middle)
+    return (np.abs(interpolated - exact) / np.maximum(scale, np.finfo(float).tiny)[:, :, None]
+            ).max(axis=1)
+
+
+def _error_record(errors) -> dict:
+    return {"value": float(errors[0]), "rate": float(errors[1]),
+            "acceleration": float(errors[2])}
+
+
+def _checked_by_prediction(laws, times, table, coarse, previous, tolerance):
+    """Whether the grid ``times`` just halved meets ``tolerance`` without the laws solved at
+    all its midpoints (half the cost of a table): its error predicted from the grid before's
+    (``coarse``, per interval), divided by the fall the last halving showed (never more than
+    :data:`HALVING_GAINS`), and measured where it is largest, at the midpoints of the halves
+    of the intervals around the grid before's largest error of each kind. Returns the errors
+    (the larger of predicted and measured) and how they were found, or None when the
+    prediction or the measurement misses (the full check then follows)."""
+    errors = coarse.max(axis=1)
+    gains = np.minimum(previous / np.maximum(errors, np.finfo(float).tiny), HALVING_GAINS)
+    predicted = errors / np.maximum(gains, 1.0)
+    if predicted.max() > tolerance:
+        return None
+    fine = set()
+    for worst in np.argmax(coarse, axis=1):  # per kind, the halves of the intervals around
+        low, high = max(0, worst - CHECKED_EITHER_SIDE), min(coarse.shape[1],
+                                                            worst + CHECKED_EITHER_SIDE + 1)
+        fine.update(range(2 * low, 2 * high))
+    fine = np.array(sorted(fine))
+    middle = 0.5 * (times[fine] + times[fine + 1])
+    # each window in a call of its own: a costly law solves its times by continuation from
+    # one to the next, and a gap between windows costs it more than a window does
+    runs = np.split(np.arange(fine.size), np.flatnonzero(np.diff(fine) > 1) + 1)
+    exact = np.concatenate([evaluate_together(laws, middle[run]) for run in runs], axis=2)
+    scale = np.maximum(np.abs(table).max(axis=2), np.abs(exact).max(axis=2))
+    measured = (np.abs(LawTable(times, table).evaluate(middle) - exact)
+                / np.maximum(scale, np.finfo(float).tiny)[:, :, None]).max(axis=(1, 2))
+    if measured.max() > tolerance:
+        return None
+    return np.maximum(predicted, measured), (
+        f"predicted from the grid of {coarse.shape[1]} intervals and the fall of its error "
+        f"({', '.join(f'{g:.3g}' for g in gains)} for values, rates and accelerations), and "
+        f"measured at {fine.size} midpoints around its largest errors")
 
 
 def sampled_laws(times: np.ndarray, values: np.ndarray, rates: np.ndarray,
