@@ -290,6 +290,28 @@ def test_motion_without_derivatives_warns_and_uses_a_spline(tmp_path):
     assert result.returncode == 0 and "hexapod: warning:" in result.stderr
 
 
+def test_a_driven_scene_keeps_every_setting_of_the_scene_it_drives(tmp_path):
+    """The scene a motion drives is its scene with the motion's drivers added: the actuator
+    table, a gravity left to the default (it follows the units), the ground's policy and the
+    units stay as they were, and its source names both files."""
+    fixture = FIXTURES[0]
+    scene = read_urdf(fixture / "model.urdf")
+    (tmp_path / "motors.toml").write_text('[[actuator]]\nname = "motor"\njoints = ["j*"]\n'
+                                          "stall_torque = 2.0\nno_load_speed = 10.0\n")
+    scene.actuators = hx.scene.read_actuators(tmp_path / "motors.toml")
+    scene.ground = hx.scene.GroundForces(policy="min-effort")
+    driven = apply_motion(scene, read_motion(fixture / "motion.csv"))
+    assert driven.actuators is scene.actuators and driven.ground is scene.ground
+    assert driven._gravity is None and scene._gravity is None  # left to the default
+    assert (driven.name, driven.dimension, driven.length_unit, driven.characteristic_length,
+            driven.report_forces) == (scene.name, scene.dimension, scene.length_unit,
+                                      scene.characteristic_length, scene.report_forces)
+    added = [e for e in driven.elements if e.name.startswith("motion/")]
+    assert list(driven.elements) == [*scene.elements, *added] and added
+    assert driven.source == f"{scene.source}, driven by {fixture / 'motion.csv'}"
+    assert [e.name for e in scene.elements if e.name.startswith("motion/")] == []
+
+
 def test_contract_columns_and_digits(tmp_path):
     fixture = FIXTURES[2]
     out = tmp_path / "out.csv"

@@ -313,12 +313,10 @@ def apply_motion(scene: Scene, motion: Motion) -> Scene:
         raise _error(where, problems)
     # both files, so that an error of the driven model (it cannot be assembled) names them
     source = ", driven by ".join(s for s in (scene.source, motion.source) if s)
-    out = Scene(scene.name, scene.dimension, scene.length_unit, scene.gravity,
-                scene.characteristic_length, source, report_forces=scene.report_forces,
-                ground=scene.ground)
-    out._elements = list(scene.elements)
-    for joint, law in laws.items():
-        out.add(JointDriver(f"motion/{joint}", joint, law, source=f"{where}, column '{joint}'"))
+    out = scene.with_elements(
+        [*scene.elements, *(JointDriver(f"motion/{joint}", joint, law,
+                                        source=f"{where}, column '{joint}'")
+                            for joint, law in laws.items())], source=source)
     if _estimated(motion):
         warnings.warn(_estimated(motion), MotionWarning, stacklevel=2)
     return out

@@ -173,12 +173,13 @@ class Scene:
             self._elements.append(element)
         return elements[-1] if elements else None
 
-    def with_elements(self, elements) -> Scene:
+    def with_elements(self, elements, source: str | None = None) -> Scene:
         """A copy holding ``elements`` (in order) instead of this scene's, every setting kept:
-        its name, units, gravity, ground and actuators."""
+        its name, units, gravity, ground and actuators; its source too unless ``source`` is
+        given (where the copy's contents now come from, for error messages)."""
         out = Scene(self.name, self.dimension, self.length_unit, self._gravity,
-                    self.characteristic_length, self.source, report_forces=self.report_forces,
-                    ground=self.ground)
+                    self.characteristic_length, self.source if source is None else source,
+                    report_forces=self.report_forces, ground=self.ground)
         out.actuators = self.actuators
         out.add(*elements)
         return out
