@@ -14,7 +14,7 @@ effort is within ``tol`` of its largest.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -215,28 +215,6 @@ class TabulatedEffort(Law):
 
 # ------------------------------------------------------------------ adaptive sampling
 
-def merge_results(first, second):
-    """Two inverse results of one model (:class:`hexapod.InverseResult`) as one, its samples
-    in time order: every per-sample array joined, ``max_violation`` the larger, the redundant
-    rows of both."""
-    times = np.concatenate([first.times, second.times])
-    order = np.argsort(times, kind="stable")
-    n1, n = first.times.size, times.size
-    values = {}
-    for f in fields(first):
-        a, b = getattr(first, f.name), getattr(second, f.name)
-        if (isinstance(a, np.ndarray) and isinstance(b, np.ndarray) and a.ndim
-                and a.shape[0] == n1 and b.shape[0] == n - n1):
-            values[f.name] = np.concatenate([a, b])[order]
-        elif f.name == "max_violation":
-            values[f.name] = max(a, b)
-        elif f.name == "redundant_rows":
-            values[f.name] = tuple(dict.fromkeys((*a, *b)))
-        else:
-            values[f.name] = a
-    return replace(first, **values)
-
-
 def _effort_columns(result) -> np.ndarray:
     """The joints whose efforts ``result`` reports (driven revolute and prismatic joints)."""
     return np.flatnonzero(np.all(np.isfinite(result.effort), axis=0))
@@ -285,10 +263,14 @@ def adaptive_inverse(model, source, t0: float, t1: float, *, tol: float = EFFORT
             break
         table = EffortTable(result.times, result.effort[:, columns], breaks, degree)
         middles = np.array([(a + b) / 2 for a, b in pending])
-        added = hx.inverse_dynamics(model, middles)
-        miss = (np.abs(table.evaluate(middles)[0] - added.effort[:, columns]) / scale).max(axis=1)
+        # the samples so far solved again with the midpoints among them, so that the motion is
+        # followed from sample to sample: midpoints alone lie in scattered clusters, and every
+        # gap between them cost a walking robot exact solves and its guides' kinematics solved
+        # again to check that no joint had jumped to another solution across it
+        result = hx.inverse_dynamics(model, np.union1d(result.times, middles))
+        added = result.effort[np.searchsorted(result.times, middles)][:, columns]
+        miss = (np.abs(table.evaluate(middles)[0] - added) / scale).max(axis=1)
         sampling.errors.append(float(miss.max()))
-        result = merge_results(result, added)
         sampling.samples.append(result.times.size)
         # halving an interval divides a spline's error by about 2^(degree + 1): the spline
         # through the midpoint too is good enough when the miss is below that many tol
