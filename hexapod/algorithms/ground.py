@@ -106,13 +106,13 @@ def foot_values(policy: str, weights: np.ndarray) -> np.ndarray:
 
 def policy_objective(model: Model, data, q: np.ndarray, Phi: np.ndarray, Q_across,
                      feet: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``A, b`` of the policy's objective ``|A lam + b|^2`` at a state, from its one
-    definition (:meth:`hexapod.algorithms.step_terms.StepTerms.objective`); ``Phi`` the
-    nonzeros of ``Phi_v`` (:meth:`~hexapod.algorithms.step_terms.StepTerms.nonzeros`),
-    ``feet`` as :func:`foot_values` gives them."""
+    """``A`` (a SciPy CSR array) and ``b`` of the policy's objective ``|A lam + b|^2`` at a
+    state, from its one definition (:meth:`hexapod.algorithms.step_terms.StepTerms.objective`);
+    ``Phi`` the nonzeros of ``Phi_v`` (:meth:`~hexapod.algorithms.step_terms.StepTerms.
+    nonzeros`), ``feet`` as :func:`foot_values` gives them."""
     terms = terms_of(model)
-    return tuple(terms.evaluate(data, "objective", q, Phi, terms.offset(data, q, Q_across),
-                                feet))
+    return tuple(terms.evaluate_sparse(data, "objective", q, Phi,
+                                       terms.offset(data, q, Q_across), feet))
 
 
 def contact_axes(model: Model) -> np.ndarray | None:
