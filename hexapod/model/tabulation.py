@@ -143,8 +143,9 @@ CHECKED_EITHER_SIDE = 8
 
 
 def _midpoint_errors(times, table, middle, exact) -> np.ndarray:
-    """Per interval (3, k): the largest error of the table's interpolant at its midpoint over
-    the laws, for the values, rates and accelerations, each relative to the law's largest."""
+    """Per time of ``middle`` (3, k; the intervals' midpoints): the largest error over the
+    laws of the interpolant of ``table`` on ``times`` against their ``exact`` values there,
+    for the values, rates and accelerations, each relative to the law's largest."""
     scale = np.maximum(np.abs(table).max(axis=2), np.abs(exact).max(axis=2))  # (3, laws)
     interpolated = LawTable(times, table).evaluate(middle)
     return (np.abs(interpolated - exact) / np.maximum(scale, np.finfo(float).tiny)[:, :, None]
@@ -180,9 +181,7 @@ def _checked_by_prediction(laws, times, table, coarse, previous, tolerance):
     # one to the next, and a gap between windows costs it more than a window does
     runs = np.split(np.arange(fine.size), np.flatnonzero(np.diff(fine) > 1) + 1)
     exact = np.concatenate([evaluate_together(laws, middle[run]) for run in runs], axis=2)
-    scale = np.maximum(np.abs(table).max(axis=2), np.abs(exact).max(axis=2))
-    measured = (np.abs(LawTable(times, table).evaluate(middle) - exact)
-                / np.maximum(scale, np.finfo(float).tiny)[:, :, None]).max(axis=(1, 2))
+    measured = _midpoint_errors(times, table, middle, exact).max(axis=1)
     if measured.max() > tolerance:
         return None
     return np.maximum(predicted, measured), (
