@@ -27,8 +27,7 @@ once (:func:`hexapod.algorithms.liaison.policy_map`, :func:`~.liaison.wrenches_f
 * ``residuals(Phi, phi, v, nu, a, gamma, d)``: what the checks need: the velocity and
   acceleration residuals per row, over the row scales ``d`` (the norms of the rows of
   ``Phi_v M^-1/2`` at the rank decision, the equilibration of :mod:`hexapod.algorithms.linalg`)
-  and relative to the solution's size, the largest scaled position residual, and per row
-  ``|Phi_v row|_1 + |phi|``, zero for the rows of feet in swing.
+  and relative to the solution's size, and the largest scaled position residual.
 
 ``gamma`` is formed as ``-d/dq (Phi_v v) B v - 2 d/dt (Phi_v v) - Phi_tt`` through directional
 derivatives of ``phi`` (``Phi_v v`` by one forward derivative along ``B(q) v``), the same
@@ -125,9 +124,9 @@ class StepTerms:
 
     @cached_property
     def residuals(self) -> ca.Function:
-        """``(Phi, phi, v, nu, a, gamma, d) -> (velocity, acceleration, position,
-        presence)``: each row's relative residual of the velocity and acceleration
-        constraints, the largest scaled position residual and each row's size."""
+        """``(Phi, phi, v, nu, a, gamma, d) -> (velocity, acceleration, position)``: each
+        row's relative residual of the velocity and acceleration constraints and the largest
+        scaled position residual."""
         return self._residuals(accelerations=True)
 
     @cached_property
@@ -151,7 +150,6 @@ class StepTerms:
             return ca.fabs(ca.mtimes(Phi, x) - rhs) / d / size
 
         position = ca.mmax(ca.fabs(phi / ca.DM(model.row_scale))) if n_c else ca.SX(0)
-        presence = ca.sum2(ca.fabs(Phi)) + ca.fabs(phi)
         names = ["Phi", "phi", "v", "nu", "a", "gamma", "d"]
         inputs = [Phi_nz, phi, v, nu, a, gamma, d]
         if accelerations:
@@ -160,8 +158,8 @@ class StepTerms:
             names, inputs = names[:4] + names[6:], inputs[:4] + inputs[6:]
             acceleration = ca.SX.zeros(n_c)
         return self._function("phase_residuals", inputs,
-                              [relative(v, nu), acceleration, position, presence], names,
-                              ["velocity", "acceleration", "position", "presence"], cse=False)
+                              [relative(v, nu), acceleration, position], names,
+                              ["velocity", "acceleration", "position"], cse=False)
 
     @cached_property
     def rates(self) -> ca.Function:
