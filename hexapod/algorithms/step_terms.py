@@ -13,16 +13,19 @@ once (:func:`hexapod.algorithms.liaison.policy_map`, :func:`~.liaison.wrenches_f
 * ``rates(q, w, wd)``: ``nu``; ``gamma(q, v, w, wd, wdd)`` alone (a kinematics run's), or
   ``forces(q, v, w, wd, wdd)``: ``gamma``, ``Q`` and the wrenches
   of the force elements acting across joints;
-* ``policy(m)(q, Phi, offset, feet, lam, N, mask)``: the redundancy policy, among ``lam + N
+* ``wrench_terms(q, Phi)``: the wrench map ``W`` (below) and the joint frames' rotations,
+  formed once a sample for the two that follow;
+* ``policy(m)(W, offset, feet, lam, N, mask)``: the redundancy policy, among ``lam + N
   z`` the least ``|A (lam + N z) + b|^2`` (``m`` the columns of ``N``, one Function per
-  ``m``): for ``min-wrench`` ``A`` maps multipliers to the joint wrenches
+  ``m``): for ``min-wrench`` ``A = W`` maps multipliers to the joint wrenches
   (force and moment about the joint origin over the characteristic length, world axes, one
   block of 6 rows per joint and per coordinate driver), each foot's block times ``feet``
   (one over the square root of its weight); for
   ``min-effort`` to the actuator efforts over their references and the feet's load-sharing
   terms (coefficients ``feet``), as in :mod:`hexapod.algorithms.ground`;
-* ``report(q, Phi, lam, offset)``: the joint wrenches in the report convention (joint frames)
-  and the joint frames' rotations; ``wrench_map(q, Phi)``, ``objective(q, Phi, offset, feet)``
+* ``joint_wrenches(W, frames, lam, offset)``: the joint wrenches in the report convention
+  (joint frames); ``report(q, Phi, lam, offset)`` the same and the frames from the positions,
+  on numbers; ``wrench_map(q, Phi)``, ``objective(q, Phi, offset, feet)``
   and ``across(q, Q_across)``: the policy's map, its objective and its constant term on numbers;
 * ``residuals(Phi, phi, v, nu, a, gamma, d)``: what the checks need: the velocity and
   acceleration residuals per row, over the row scales ``d`` (the norms of the rows of
@@ -237,7 +240,7 @@ class StepTerms:
         Phi_nz = ca.SX.sym("Phi", self.pattern.nnz())
         offset = ca.SX.sym("offset", 6 * self.owners)
         feet = ca.SX.sym("feet", len(self.model.contacts))
-        A, b = self._objective(Phi_nz, offset, feet)
+        A, b = self._objective(self._wrench_map(Phi_nz)[0], offset, feet)
         # A sparse: densified, the walking robot's (444 x 234, under 2 % nonzero) took two
         # thirds of its 67,000 operations to write zeros
         return self._function("phase_objective", [self.q, Phi_nz, offset, feet],
@@ -369,13 +372,13 @@ class StepTerms:
         frames = ca.horzcat(*frames) if frames else ca.SX(9, 0)
         return ca.Function("wrench_terms", [self.q, Phi_nz], [A, frames])
 
-    def _objective(self, Phi_nz, offset, feet):
-        """``A, b`` of the policy's objective ``|A lam + b|^2`` (SX), ``Phi_nz`` the
-        nonzeros of ``Phi_v``."""
+    def _objective(self, W, offset, feet):
+        """``A, b`` of the policy's objective ``|A lam + b|^2`` (SX), ``W`` the wrench map
+        (:meth:`_wrench_map`; the least-effort policy does not use it)."""
         model = self.model
         policy = model.ground.policy if model.contacts else "min-wrench"
         if policy == "min-wrench":
-            A, _ = self._wrench_map(Phi_nz)
+            A = W
             scale = ca.SX.ones(A.shape[0])
             for k, contact in enumerate(model.contacts):
                 scale[6 * contact.joint:6 * contact.joint + 6] = feet[k]
@@ -396,22 +399,23 @@ class StepTerms:
         return A, ca.SX.zeros(A.shape[0])
 
     def policy(self, m: int) -> ca.Function:
-        """``(q, Phi, offset, feet, lam, N, mask) -> lam``: among ``lam + N z`` (``N``, n_c x
-        m, spanning the multipliers that change no constraint force), the one of least
-        objective, the entries of ``z`` where ``mask`` is 0 held at zero; by the normal
-        equations, scaled to unit diagonal, and with feet on the ground (whose small weights
-        near touch-down and lift-off make the problem ill-conditioned) refined once (corrected
-        semi-normal equations). Built once per ``m``."""
+        """``(W, offset, feet, lam, N, mask) -> lam``: among ``lam + N z`` (``N``, n_c x m,
+        spanning the multipliers that change no constraint force), the one of least
+        objective (``W`` the wrench map of :attr:`wrench_terms`), the entries of ``z`` where
+        ``mask`` is 0 held at zero; by the normal equations, scaled to unit diagonal, and with
+        feet on the ground (whose small weights near touch-down and lift-off make the problem
+        ill-conditioned) refined once (corrected semi-normal equations). Built once per
+        ``m``."""
         cache = self.__dict__.setdefault("_policies", {})
         if m in cache:
             return cache[m]
         model = self.model
-        Phi_nz = ca.SX.sym("Phi", self.pattern.nnz())
+        W = ca.SX.sym("W", self._wrench_terms.sparsity_out(0))
         offset, feet = ca.SX.sym("offset", 6 * self.owners), ca.SX.sym("feet",
                                                                         len(model.contacts))
         lam, N, mask = ca.SX.sym("lam", model.n_c), ca.SX.sym("N", model.n_c, m), \
             ca.SX.sym("mask", m)
-        A, b = self._objective(Phi_nz, offset, feet)
+        A, b = self._objective(W, offset, feet)
         G = ca.mtimes(A, N)
         H = ca.SX(m, m)
         for i in range(m):
@@ -422,10 +426,9 @@ class StepTerms:
         z = solve(H, ca.mtimes(G.T, g), mask)
         if model.contacts:  # feet of small weight make G ill-conditioned: refine once
             z = z + solve(H, ca.mtimes(G.T, ca.mtimes(G, z) + g), mask)
-        cache[m] = self._function(f"phase_policy_{m}",
-                                  [self.q, Phi_nz, offset, feet, lam, N, mask],
+        cache[m] = self._function(f"phase_policy_{m}", [W, offset, feet, lam, N, mask],
                                   [lam + ca.mtimes(N, z)],
-                                  ["q", "Phi", "offset", "feet", "lam", "N", "mask"],
+                                  ["W", "offset", "feet", "lam", "N", "mask"],
                                   ["lam_policy"], cse=False)  # it would save 2 %
         return cache[m]
 
@@ -437,11 +440,37 @@ class StepTerms:
         model = self.model
         Phi_nz = ca.SX.sym("Phi", self.pattern.nnz())
         lam, offset = ca.SX.sym("lam", model.n_c), ca.SX.sym("offset", 6 * self.owners)
-        A, frames = self._wrench_map(Phi_nz)
-        out = self._in_joint_frames(ca.mtimes(A, lam) + offset, frames)
+        W, frames = self._wrench_map(Phi_nz)
         return self._function("phase_report", [self.q, Phi_nz, lam, offset],
-                              [ca.horzcat(*out) if out else ca.SX(6, 0), frames],
+                              [self._joint_wrenches(W, frames, lam, offset), frames],
                               ["q", "Phi", "lam", "offset"], ["wrench", "frames"])
+
+    @cached_property
+    def wrench_terms(self) -> ca.Function:
+        """``(q, Phi) -> (W, frames)``: the wrench map (sparse) and the joint frames'
+        rotations (:meth:`_wrench_map`), for a step that forms them once and gives them to
+        the policy and to :attr:`joint_wrenches` (each formed them again: 11,000 operations a
+        sample for the walking robot)."""
+        Phi_nz = ca.SX.sym("Phi", self.pattern.nnz())
+        return self._function("phase_wrench_terms", [self.q, Phi_nz],
+                              list(self._wrench_map(Phi_nz)), ["q", "Phi"], ["W", "frames"])
+
+    @cached_property
+    def joint_wrenches(self) -> ca.Function:
+        """``(W, frames, lam, offset) -> wrench``: :attr:`report`'s wrenches from the wrench
+        map and the joint frames of :attr:`wrench_terms`."""
+        W = ca.SX.sym("W", self._wrench_terms.sparsity_out(0))
+        frames = ca.SX.sym("frames", self._wrench_terms.size_out(1))
+        lam, offset = ca.SX.sym("lam", self.model.n_c), ca.SX.sym("offset", 6 * self.owners)
+        return self._function("phase_joint_wrenches", [W, frames, lam, offset],
+                              [self._joint_wrenches(W, frames, lam, offset)],
+                              ["W", "frames", "lam", "offset"], ["wrench"])
+
+    def _joint_wrenches(self, W, frames, lam, offset):
+        """Every joint's wrench in the report convention (6 x J), from the policy's wrenches
+        ``W lam + offset``."""
+        out = self._in_joint_frames(ca.mtimes(W, lam) + offset, frames)
+        return ca.horzcat(*out) if out else ca.SX(6, 0)
 
     @cached_property
     def report_map(self) -> ca.Function:
