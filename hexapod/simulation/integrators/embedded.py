@@ -173,8 +173,9 @@ class EmbeddedRungeKutta(Integrator):
         self.t += h
         self.q, self.v = self._project(self.t, model.normalize(y1[:n_q]), y1[n_q:])
         self._end_crossing()
-        # the accelerations start the next step; the multipliers are solved when asked
-        self.v_dot, self.lam = self._rates(self.t, self.q, self.v)[1], None
+        # the accelerations start the next step; the multipliers come with them or are solved
+        # when asked
+        self.v_dot, self.lam = self._end_rates(self.t, self.q, self.v)
         # a crossing's steps stay within its cap (Integrator._cross_singular), the one that
         # jumped over the pose too
         self.h = h * factor if self._crossing is None else min(h * factor, self._crossing_cap)
