@@ -138,7 +138,9 @@ def _tabulate(model: Model, costly: list[int], start: float, span: float,
 #: its values, rates and accelerations (``h^6``, ``h^5``, ``h^4``).
 HALVING_GAINS = np.array([64.0, 32.0, 16.0])
 #: The intervals of the grid before (either side of its largest error) whose halves the
-#: prediction is checked on.
+#: prediction is checked on: a window of 34 midpoints, moved inside the grid at its ends. A
+#: shorter one cost more: the guides' kinematics solves fewer than 32 times one by one (26 of
+#: the on-ground robot's at 12 ms each, against 34 in 0.08 s by its plans).
 CHECKED_EITHER_SIDE = 8
 
 
@@ -171,10 +173,10 @@ def _checked_by_prediction(laws, times, table, coarse, previous, tolerance):
     if predicted.max() > tolerance:
         return None
     fine = set()
+    width = min(2 * CHECKED_EITHER_SIDE + 1, coarse.shape[1])
     for worst in np.argmax(coarse, axis=1):  # per kind, the halves of the intervals around
-        low, high = max(0, worst - CHECKED_EITHER_SIDE), min(coarse.shape[1],
-                                                            worst + CHECKED_EITHER_SIDE + 1)
-        fine.update(range(2 * low, 2 * high))
+        low = min(max(0, worst - CHECKED_EITHER_SIDE), coarse.shape[1] - width)
+        fine.update(range(2 * low, 2 * (low + width)))
     fine = np.array(sorted(fine))
     middle = 0.5 * (times[fine] + times[fine + 1])
     # each window in a call of its own: a costly law solves its times by continuation from
