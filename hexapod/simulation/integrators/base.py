@@ -207,18 +207,16 @@ class Integrator(SingularPoses):
             return np.asarray(solution[1], dtype=float)
         return self._dynamics(t, q, v)[1]
 
-    def _end_rates(self, t: float, q: np.ndarray,
-                   v: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
-        """The accelerations at a step's end (:meth:`_rates`), and its multipliers where the
-        same compiled solve gives them as :meth:`multipliers` would (every row kept, so that
-        they are unique, and the kernels serve ``t``): a method that saves every step then
-        solves once a step, not twice. Else None: solved when asked."""
-        if self._crossing is None and self._compiled.complete and self._kernels_serve(t):
-            solution = self._compiled.solve(t, q, v)
-            if solution is not None:
-                self.counters.rhs += 1
-                return solution[1], solution[2]
-        return self._rates(t, q, v)[1], None
+    def _end_rates(self, t: float, q: np.ndarray, v: np.ndarray) -> tuple:
+        """A step end's accelerations (:meth:`_rates`) and, where the same compiled solve gives
+        them as :meth:`multipliers` would (every row kept; the kernels serve ``t``), its
+        multipliers: saving every step then costs one solve a step, not two. Else None."""
+        solution = (self._compiled.solve(t, q, v) if self._compiled.complete
+                    and self._kernels_serve(t) else None)
+        if solution is None:
+            return self._rates(t, q, v)[1], None
+        self.counters.rhs += 1
+        return solution[1], solution[2]
 
     def _kernels_serve(self, t: float) -> bool:
         """Whether the compiled kernels give the accelerations and multipliers of a state to
