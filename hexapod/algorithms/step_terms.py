@@ -241,8 +241,8 @@ class StepTerms:
         offset = ca.SX.sym("offset", 6 * self.owners)
         feet = ca.SX.sym("feet", len(self.model.contacts))
         A, b = self._objective(self._wrench_map(Phi_nz)[0], offset, feet)
-        # A sparse: densified, the walking robot's (444 x 234, under 2 % nonzero) took two
-        # thirds of its 67,000 operations to write zeros
+        # A sparse: the walking robot's is 252 x 234 with 792 nonzeros, and densified the
+        # Function took 67,086 operations against 8,910
         return self._function("phase_objective", [self.q, Phi_nz, offset, feet],
                               [A, ca.densify(b)], ["q", "Phi", "offset", "feet"], ["A", "b"],
                               to_c=False)
