@@ -242,14 +242,16 @@ def adaptive_inverse(model, source, t0: float, t1: float, *, tol: float = EFFORT
 
     Starts from :func:`sample_times` at ``spacing`` (``source``: the scene or model whose
     contacts give the breaks), then, round after round, computes the efforts at the midpoint
-    of every interval still to check, compares them with the spline through the samples so
-    far, keeps them as samples, and marks the two halves of every interval whose midpoint
-    missed by more than ``2^(degree + 1) tol`` to be checked next round (an adaptive
-    bisection, as adaptive quadrature does): halving an interval divides the error of a spline
-    of ``degree`` by about ``2^(degree + 1)``, so the spline through the midpoint too is then
-    within about ``tol`` there. Stops when no interval is left to check.
+    of every interval still to check (in one run with the samples so far, solved again),
+    compares them with the spline through the samples so far, keeps them as samples, and
+    marks the two halves of every interval whose midpoint missed by more than ``2^(degree +
+    1) tol`` to be checked next round (an adaptive bisection, as adaptive quadrature does):
+    halving an interval divides the error of a spline of ``degree`` by about
+    ``2^(degree + 1)``, so the spline through the midpoint too is then within about ``tol``
+    there. Stops when no interval is left to check.
 
-    Returns the merged :class:`hexapod.InverseResult` and a :class:`Sampling`.
+    Returns the last round's :class:`hexapod.InverseResult` (every sample) and a
+    :class:`Sampling`.
     """
     breaks = effort_breaks(source, t0, t1)
     result = hx.inverse_dynamics(model, sample_times(source, t0, t1, spacing, min_intervals))
