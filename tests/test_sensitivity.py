@@ -22,12 +22,16 @@ import numpy as np
 import pytest
 
 import hexapod as hx
+from hexapod.algorithms.sensitivity import PeriodChange
 from hexapod.cli import main
 from hexapod.sweeps.cases import StudyError
 from hexapod.sweeps.design_parameters import inertia_parameters
 from hexapod.sweeps.metric_derivatives import SENSITIVE_FAMILIES, metric_sensitivities
 from hexapod.sweeps.metrics import inverse_metrics
+from legs.cockroach import STRIDE_PERIOD
+from legs.robot import hexapod_scene
 from tests.robots import walking_robot
+from tests.scene_documents import SCENES
 
 #: Relative step of the central differences.
 STEP = 1e-4
@@ -272,6 +276,49 @@ def test_ground_forces_follow_each_body_momentum(walking):
         assert np.abs(vertical - expected).max() <= 1e-10 * g, change.name
 
 
+def _walking_at(period: float) -> hx.Model:
+    return hx.assemble(hexapod_scene(gait="tripod", trunk="free", period=period))
+
+
+def test_the_gait_period_against_central_differences():
+    """The period at fixed phase: the robot rebuilt with periods ``T (1 +- STEP)``, sampled at
+    the same fractions of its stride, gives the derivatives of every force and figure of merit
+    (the period moves no position: the motion is the same, faster or slower)."""
+    period = STRIDE_PERIOD
+    model = _walking_at(period)
+    phases = np.linspace(0.0, 1.0, 21)
+    result = hx.inverse_dynamics(model, phases * period)
+    change = PeriodChange(value=period)
+    sensitivity = hx.inverse_sensitivities(model, result, [change])
+    assert not sensitivity.q.any()
+    derivatives = metric_sensitivities(model, result, sensitivity)
+    h = STEP * period
+
+    def run(sign: float):
+        moved = _walking_at(period + sign * h)
+        ahead = hx.inverse_dynamics(moved, phases * (period + sign * h))
+        return ahead, inverse_metrics(moved, ahead, SENSITIVE_FAMILIES, 1.0)
+
+    (ahead, metrics_ahead), (behind, metrics_behind) = run(1.0), run(-1.0)
+    for name in ("effort", "force", "torque", "ground_force"):
+        value, exact = getattr(result, name), getattr(sensitivity, name)[..., 0]
+        reference = (getattr(ahead, name) - getattr(behind, name)) / (2 * h)
+        finite = np.isfinite(value)
+        assert np.abs(period * (exact - reference)[finite]).max() <= \
+            TOLERANCE * np.abs(value[finite]).max(), name
+    values = inverse_metrics(model, result, SENSITIVE_FAMILIES, 1.0)
+    assert {"energy", "cost_of_transport", "peak_ground:L1"} <= set(derivatives)
+    for column, exact in derivatives.items():
+        reference = (metrics_ahead[column] - metrics_behind[column]) / (2 * h)
+        assert abs(period * (exact[0] - reference)) <= TOLERANCE * abs(values[column]), column
+
+
+def test_a_period_the_gait_does_not_have_is_refused(walking):
+    model, result, _, _ = walking
+    with pytest.raises(hx.HexapodError, match="no gait of period 0.3 s.*0.5 s"):
+        hx.inverse_sensitivities(model, result, [PeriodChange(value=0.3)])
+
+
 def test_parameters_by_scene_keys():
     scene = hx.load_scene("front-leg")
     every = inertia_parameters(scene, ["body.*.mass", "body.femur.inertia.2",
@@ -376,6 +423,26 @@ def test_command_writes_the_table(tmp_path, capsys):
     assert inertia["unit"].endswith("/(kg m^2)")
     assert (out / "tornado-peak_effort.png").stat().st_size > 0
     assert "peak_effort" in (out / "summary.md").read_text()
+
+
+def test_command_derives_by_the_gait_period(tmp_path, capsys):
+    """``gait.period`` from the command line: the walking robot's table, in N m per s, the
+    derivatives the library gives at the same samples."""
+    out = tmp_path / "out"
+    assert main(["sensitivity", "hexapod", "--parameters", "gait.period", "body.trunk.mass",
+                 "--samples", "11", "--no-figures", "--out", str(out)]) == 0
+    with open(out / "sensitivities.csv") as stream:
+        rows = list(csv.DictReader(stream))
+    row = next(r for r in rows if r["metric"] == "energy" and r["parameter"] == "gait.period")
+    assert row["unit"] == "J/s"
+    model = walking_robot()
+    result = hx.inverse_dynamics(model, np.linspace(0.0, model.cycle_time(), 11))
+    derivatives = metric_sensitivities(
+        model, result, hx.inverse_sensitivities(model, result, [PeriodChange(value=0.5)]))
+    assert float(row["value"]) == pytest.approx(derivatives["energy"][0], rel=1e-9)
+    assert main(["sensitivity", str(SCENES / "pendulum.toml"), "--parameters", "gait.period",
+                 "--no-figures", "--out", str(tmp_path / "none")]) == 1
+    assert "has no gait" in capsys.readouterr().err and not (tmp_path / "none").exists()
 
 
 def test_command_writes_the_derivatives_per_sample(tmp_path, front_leg_on_laws):

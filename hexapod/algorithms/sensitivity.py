@@ -28,6 +28,16 @@ expressions of the parameters, its forward-mode derivative gives the positions',
 accelerations' and wrenches' derivatives exactly. Closed loops and feet on the ground need the
 positions' equations differentiated by the implicit function theorem (not written yet), and
 the gait's parameters their laws' (the built-in gait's inverse kinematics is not the engine's).
+
+The gait's period ``T`` is the exception among them: a scene whose time laws are all functions
+of the gait's phase ``t / T`` (as the gait builders make them: each foot's path, the coupled
+joints, the stance schedule, the trunk's advance of one stride per period) passes, with
+another period, through the same poses at the same fractions of the stride, its velocities
+scaled by ``1 / T`` and its accelerations by ``1 / T^2``. At a fixed phase the positions do not
+move, and the right-hand side ``Q(q, v) - M v_dot`` changes by
+``(-dQ/dv v + 2 M v_dot) / T``: the derivative with respect to the period is the same
+policy solve for these forces (:class:`PeriodChange`; derivatives at fixed phase, as the
+figures of merit over a stride compare them).
 """
 
 from __future__ import annotations
@@ -50,7 +60,7 @@ if TYPE_CHECKING:
     from hexapod.algorithms.inverse import InverseResult
 
 __all__ = ["FrameChange", "FrictionChange", "InertiaChange", "InverseSensitivity",
-           "inverse_sensitivities"]
+           "PeriodChange", "inverse_sensitivities"]
 
 
 @dataclass(frozen=True)
@@ -140,6 +150,31 @@ class FrictionChange:
     mass: float = 0.0  # it changes no mass
 
 
+@dataclass(frozen=True)
+class PeriodChange:
+    """The gait's period ``T`` (``gait.period``) as a parameter, the motion kept at the same
+    fractions of the stride (see the module's text): derivatives at fixed phase. For a scene
+    whose time laws are all functions of the phase ``t / T`` (the gait builders' scenes);
+    :func:`inverse_sensitivities` checks that the model's periodic laws repeat with ``value``
+    and that no force acts across its joints.
+
+    Attributes
+    ----------
+    name : str
+        ``gait.period``.
+    value : float
+        The period, s.
+    unit : str
+        ``s``.
+    """
+
+    name: str = "gait.period"
+    value: float = float("nan")
+    unit: str = "s"
+    scene_scale: float = 1.0
+    mass: float = 0.0  # it changes no mass
+
+
 @dataclass
 class InverseSensitivity:
     """Derivatives of an :class:`~hexapod.algorithms.inverse.InverseResult`'s forces, the
@@ -163,7 +198,7 @@ class InverseSensitivity:
         parameters and the derivatives one-sided (empty for the other policies).
     """
 
-    parameters: tuple[InertiaChange | FrameChange | FrictionChange, ...]
+    parameters: tuple[InertiaChange | FrameChange | FrictionChange | PeriodChange, ...]
     effort: np.ndarray
     force: np.ndarray
     torque: np.ndarray
@@ -190,8 +225,37 @@ def inertial_force_changes(model: Model, change: InertiaChange, v: np.ndarray,
     return out
 
 
+def period_force_changes(model: Model, change: PeriodChange, q: np.ndarray, v: np.ndarray,
+                         v_dot: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """``d(Q - M v_dot)/dT`` (N, n_v) at fixed phase, at the states ``(q, v, v_dot)`` (N, n_v)
+    with the laws' values ``w`` (n_w, N): ``(C v + 2 M v_dot) / T``, ``C = -dQ/dv`` (the
+    tangent damping of :attr:`~hexapod.model.model.Model.tangent_matrices`)."""
+    lam = np.zeros(model.n_c)
+    damping = np.stack([
+        np.asarray(model.tangent_matrices(*[{"q": q[k], "v": v[k], "lam": lam, "w": w[:, k]}[n]
+                                            for n in model.tangent_matrices.name_in()])[1])
+        @ v[k] for k in range(v.shape[0])])
+    return (damping + 2.0 * (model.mass @ v_dot.T).T) / change.value
+
+
+def _check_period(model: Model, change: PeriodChange) -> None:
+    """Refuse a period the model's laws do not repeat with, or a model with forces across
+    joints (they may depend on the velocities, and the joint wrenches leave them out)."""
+    periods = {c for law in model.laws if (c := law.cycle_time()) is not None}
+    if not (np.isfinite(change.value) and change.value > 0
+            and all(abs(p - change.value) <= 1e-12 * change.value for p in periods)
+            and periods):
+        shown = ", ".join(f"{p:g} s" for p in sorted(periods)) or "none"
+        raise HexapodError(f"parameter '{change.name}': model '{model.name}' has no gait of "
+                           f"period {change.value:g} s (its laws repeat with: {shown})")
+    if model.Q_across is not None:
+        raise HexapodError(f"parameter '{change.name}': model '{model.name}' has forces across "
+                           "its joints, whose change with the period is not derived")
+
+
 def inverse_sensitivities(model: Model, result: InverseResult,
-                          parameters: Sequence[InertiaChange | FrameChange | FrictionChange],
+                          parameters: Sequence[InertiaChange | FrameChange | FrictionChange
+                                               | PeriodChange],
                           *,
                           progress: Callable[[int, int], None] | None = None
                           ) -> InverseSensitivity:
@@ -204,7 +268,7 @@ def inverse_sensitivities(model: Model, result: InverseResult,
         The model ``result`` was computed with.
     result : InverseResult
         An inverse-dynamics result of ``model``.
-    parameters : sequence of InertiaChange, FrameChange or FrictionChange
+    parameters : sequence of InertiaChange, FrameChange, FrictionChange or PeriodChange
         What each parameter changes.
     progress : callable, optional
         Called with ``(samples done, samples)``.
@@ -223,7 +287,9 @@ def inverse_sensitivities(model: Model, result: InverseResult,
     """
     parameters = tuple(parameters)
     for change in parameters:
-        if isinstance(change, FrictionChange):
+        if isinstance(change, PeriodChange):
+            _check_period(model, change)
+        if isinstance(change, FrictionChange | PeriodChange):
             continue
         known = (model.joint_index if isinstance(change, FrameChange) else model.body_index)
         element = change.joint if isinstance(change, FrameChange) else change.body
@@ -277,6 +343,9 @@ def _inertial_part(model: Model, result, parameters, laws, progress):
     for p, change in enumerate(parameters):
         if isinstance(change, InertiaChange):
             forces[..., p] = inertial_force_changes(model, change, result.v, result.v_dot)
+        elif isinstance(change, PeriodChange):
+            forces[..., p] = period_force_changes(model, change, result.q, result.v,
+                                                  result.v_dot, laws[0])
     along_mu = np.array([isinstance(c, FrictionChange) for c in parameters], dtype=float)
     for k, t in enumerate(result.times):
         q, v, w = result.q[k], result.v[k], laws[0][:, k]

@@ -13,7 +13,10 @@ the scene's TOML form. Sensitivities cover the bodies' inertia and the joints' p
   pose, moved on both its bodies; ``joint.NAME.parent_frame.position`` (``child_frame``): its
   frame's origin on one body, in that body's axes, as a segment's length (m,
   :class:`~hexapod.algorithms.sensitivity.FrameChange`);
-* ``ground.mu``: the friction coefficient, which bounds the friction policy's forces.
+* ``ground.mu``: the friction coefficient, which bounds the friction policy's forces;
+* ``gait.period`` (s): the gait's period, the motion kept at the same fractions of the stride
+  (:class:`~hexapod.algorithms.sensitivity.PeriodChange`: a scene whose laws all follow the
+  gait's phase, as the gait builders make them).
 
 A glob that matches bodies without the key (a particle has no inertia) skips them; a name that
 matches nothing, or a key sensitivities do not cover, is refused.
@@ -28,7 +31,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from hexapod.algorithms.sensitivity import FrameChange, FrictionChange, InertiaChange
+from hexapod.algorithms.sensitivity import (
+    FrameChange,
+    FrictionChange,
+    InertiaChange,
+    PeriodChange,
+)
 from hexapod.scene.bodies import Particle, PlanarBody, inertia_tensor
 from hexapod.scene.element import GROUND
 from hexapod.sweeps.cases import StudyError
@@ -38,8 +46,8 @@ if TYPE_CHECKING:
 
 _COVERED = ("masses and inertias, body.NAME.mass and body.NAME.inertia[.K], and joints' "
             "positions, joint.NAME.origin[.K] or joint.NAME.parent_frame.position[.K] "
-            "(child_frame) ('*' matches any NAME), and the friction coefficient, ground.mu; the "
-            "gait's parameters are not covered yet")
+            "(child_frame) ('*' matches any NAME), the friction coefficient, ground.mu, and the "
+            "gait's period, gait.period; the gait's other parameters are not covered yet")
 
 
 def inertia_parameters(scene: Scene, patterns: Sequence[str],
@@ -75,6 +83,9 @@ def inertia_parameters(scene: Scene, patterns: Sequence[str],
         if pattern == "ground.mu":
             found.setdefault(pattern, FrictionChange(value=float(scene.ground.mu)))
             continue
+        if pattern == "gait.period":
+            found.setdefault(pattern, _period(scene, source))
+            continue
         parts = pattern.split(".")
         section = parts[0]
         if _kind(parts) is None:
@@ -94,6 +105,17 @@ def inertia_parameters(scene: Scene, patterns: Sequence[str],
             for change in changes:
                 found.setdefault(change.name, change)
     return tuple(found.values())
+
+
+def _period(scene: Scene, source: str) -> PeriodChange:
+    """The gait's period: the one its periodic laws share."""
+    from hexapod.model.assemble import assemble
+
+    period = assemble(scene).cycle_time()
+    if period is None:
+        raise StudyError(f"{source}: 'gait.period': scene '{scene.name}' has no gait (no law "
+                         "of it repeats)")
+    return PeriodChange(value=float(period))
 
 
 def _kind(parts: list[str]) -> str | None:
