@@ -286,7 +286,7 @@ def test_the_gait_period_against_central_differences():
     (the period moves no position: the motion is the same, faster or slower)."""
     period = STRIDE_PERIOD
     model = _walking_at(period)
-    phases = np.linspace(0.0, 1.0, 21)
+    phases = np.linspace(0.0, 1.0, 11)
     result = hx.inverse_dynamics(model, phases * period)
     change = PeriodChange(value=period)
     sensitivity = hx.inverse_sensitivities(model, result, [change])
@@ -311,6 +311,24 @@ def test_the_gait_period_against_central_differences():
     for column, exact in derivatives.items():
         reference = (metrics_ahead[column] - metrics_behind[column]) / (2 * h)
         assert abs(period * (exact[0] - reference)) <= TOLERANCE * abs(values[column]), column
+
+
+def test_the_period_scales_the_dynamic_forces_as_its_inverse_square():
+    """Exact at fixed phase under the least-wrench policy (linear in the right-hand side, whose
+    inertial and gyroscopic terms go as ``1 / T^2`` and whose weight does not): ``F(T) = F_s +
+    (T0 / T)^2 (F(T0) - F_s)``, so ``T dF/dT = -2 (F - F_s)``, ``F_s`` the forces of the same
+    poses held still: the robot walking a million times slower (``(1e-6)^2`` off it)."""
+    period, phases = STRIDE_PERIOD, np.linspace(0.0, 1.0, 11)
+    model = _walking_at(period)
+    result = hx.inverse_dynamics(model, phases * period)
+    still = hx.inverse_dynamics(_walking_at(1e6 * period), phases * 1e6 * period)
+    sensitivity = hx.inverse_sensitivities(model, result, [PeriodChange(value=period)])
+    for name in ("effort", "force", "torque", "ground_force"):
+        value, static = getattr(result, name), getattr(still, name)
+        exact = getattr(sensitivity, name)[..., 0]
+        finite = np.isfinite(value)
+        assert np.abs(period * exact + 2.0 * (value - static))[finite].max() <= \
+            1e-10 * np.abs(value[finite]).max(), name
 
 
 def test_a_period_the_gait_does_not_have_is_refused(walking):
