@@ -54,7 +54,7 @@ def _dense_step(model, q, v, mid, end, G):
     n_v, n_c = model.n_v, model.n_c
     S = np.block([[iteration, Phi_v.T], [Phi_v, np.zeros((n_c, n_c))]])
     rhs = np.zeros((n_v + n_c, 1 + G.shape[1]))
-    rhs[:n_v, 0] = iteration @ v + H * Q.ravel() - H * a * (K @ v)
+    rhs[:n_v, 0] = iteration @ v + H * Q.ravel()  # q: where the step's forces act
     rhs[n_v:, 0] = nu
     rhs[:n_v, 1:] = m_sqrt @ G  # J^T = M^1/2 G
     x = np.linalg.solve(S, rhs)

@@ -4,8 +4,9 @@ Coulomb friction, simulated by Moreau-Jean. The study of many strides is
 ``scripts/studies/walking_on_ground.py``; here the first 20 ms of a stride, where the forward
 run and the inverse dynamics must agree: the feet the gait keeps down are pushed by the
 ground, those it lifts are not, and each stance foot's normal force is the inverse dynamics'
-to 1 N (0.5 % of the weight: the joints track to 0.2 mrad; measured 0.2 N). With the robot's
-actuator table each controller is limited by its motor.
+to 1 N (0.5 % of the weight: the joints track to 0.1 mrad, measured 0.07 with the step's
+forces and Jacobians at mid-step, 0.14 at its start; the forces measured within 0.24 N). With
+the robot's actuator table each controller is limited by its motor.
 """
 
 from __future__ import annotations
@@ -54,7 +55,7 @@ def test_the_controllers_take_their_motors_limits(on_ground):
 def test_the_first_steps_on_the_ground_carry_the_inverse_dynamics_forces(on_ground):
     driven, inverse, _, _, run = on_ground
     assert run.status == "finished"
-    assert np.abs(run.tracking).max() < 2e-4
+    assert np.abs(run.tracking).max() < 1e-4
     k = int(np.argmin(np.abs(run.t - RUN)))
     j = int(np.argmin(np.abs(inverse.times - RUN)))
     assert run.t[k] == pytest.approx(RUN) and inverse.times[j] == pytest.approx(RUN)

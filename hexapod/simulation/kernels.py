@@ -429,12 +429,14 @@ class CompiledContactStep:
       ``x`` the new velocity, the forces that depend on the state linearly implicit at
       ``theta``,
 
-          (M + h theta C + (h theta)^2 K) (v1 - v) + Phi_v^T lam = h Q - h^2 theta K v + J^T P,
+          (M + h theta C + (h theta)^2 K) (v1 - v) + Phi_v^T lam = h Q + J^T P,
           Phi_v v1 = nu(t + h),
 
       ``K`` and ``C`` the derivatives of ``-Q`` along the positions and in the velocities,
-      all at ``(q, v)``, the laws' values, rates and accelerations at ``t + theta h`` and the
-      values and rates at ``t + h`` given (``laws``: the five arrays);
+      all at ``(q, v)``, ``q`` the positions where the step's forces act (mid-step: their
+      change over the step's second half, ``theta h (v1 - v)``, is the ``K`` term), the laws'
+      values, rates and accelerations at ``t + theta h`` and the values and rates at ``t + h``
+      given (``laws``: the five arrays);
     * ``"acceleration"`` (the event-driven scheme's smooth phases): ``x`` the acceleration,
       ``M a + Phi_v^T lam = Q + J^T F``, ``Phi_v a = gamma`` (``laws``: values, rates,
       accelerations);
@@ -486,7 +488,7 @@ class CompiledContactStep:
             _, _, Q = call(model.dynamics_terms)
             K, C = call(model.tangent_matrices)
             a = h * theta
-            force = h * Q + ca.mtimes(a * C + (a * a - h * a) * K, v)
+            force = h * Q + ca.mtimes(a * C + a * a * K, v)
             first = ca.mtimes(m_sqrt, v) + ca.mtimes(m_inv_sqrt, force)
             bottom = call(model.nu, **end) if model.n_c else None
             extra = ca.mtimes(ca.mtimes(m_inv_sqrt, a * C + a * a * K), m_inv_sqrt)

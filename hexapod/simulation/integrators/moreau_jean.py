@@ -5,15 +5,19 @@ Dynamical Systems*, 2008, ch. 10).
 Each step of ``h`` from ``(t_k, q_k, v_k)`` is one saddle-point solve of the engine's
 constrained step with the contacts' impulses ``P`` on its right-hand side, at velocity level:
 
-    M (v_k+1 - v_k) = h Q(t_k+theta, q_k, v_k) - Phi_v^T Lambda + J^T P,
-    Phi_v v_k+1 = nu(t_k+1),                          the bilateral rows, at q_k
+    M (v_k+1 - v_k) = h Q(t_k+theta, q_k+theta, v_k) - Phi_v^T Lambda + J^T P,
+    Phi_v v_k+1 = nu(t_k+1),                          the bilateral rows, at q_k+theta
     q_k+1 = q_k (+) h ((1 - theta) v_k + theta v_k+1),  theta = 1/2
 
-with ``J`` the contacts' Jacobian in their own axes (:mod:`hexapod.algorithms.contact_frames`)
-and the time laws taken at ``t_k+theta = t_k + theta h``, where the step's forces act on
-average: a controller's target read at the step's start lagged it by ``theta h`` (the walking
-robot's joints, turning at up to 18 rad/s, trailed their targets by 10 mrad at a 1 ms step;
-3 mrad at mid-step).
+with ``J`` the contacts' Jacobian in their own axes (:mod:`hexapod.algorithms.contact_frames`),
+everything taken where the step's forces act on average: the time laws at ``t_k+theta = t_k +
+theta h``, the positions (the forces, the rows' and the contacts' Jacobians, the contacts'
+gaps) at ``q_k+theta = q_k (+) theta h v_k`` (Acary and Brogliato's theta-gamma scheme,
+gamma = theta). A controller's target read at the step's start lagged it by ``theta h`` (the
+walking robot's joints, turning at up to 18 rad/s, trailed their targets by 10 mrad at a 1 ms
+step; 3 mrad with the laws at mid-step), and the Jacobians at the step's start turned the
+rows' and the feet's forces by half a step's rotation (3.06 mrad; 1.48 at mid-step, the
+error still of order 1: ``scripts/benchmarks/bench_walking_contacts.py``).
 The solve is linear in ``P``: ``v_k+1 = v_free + A J^T P``, ``A`` the mechanism's inverse mass
 under its bilateral rows, so the contacts see ``u = J v_k+1 = b + W P`` with the Delassus
 operator ``W = J A J^T``; the impulses come from the frictional contact problem
@@ -118,9 +122,10 @@ class MoreauJean(Integrator):
         t1 = t0 + h
         mid = tuple(np.array(x) for x in model.law_values(t0 + THETA * h, data))
         half = model.mass_inv_sqrt
-        frames = contact_frames(model, q0, self.contacts)
+        q_mid = model.integrate(q0, THETA * h * v0)
+        frames = contact_frames(model, q_mid, self.contacts)
         G = half @ frames.jacobian.T  # M^-1/2 J^T
-        y, lam, Y, Lam = self._constrained(t1, q0, v0, mid, G, h)
+        y, lam, Y, Lam = self._constrained(t1, q_mid, v0, mid, G, h)
         self.counters.rhs += 1
         self.counters.jacobians += 1
         self.counters.factorisations += 1
@@ -139,9 +144,10 @@ class MoreauJean(Integrator):
         self.t, self.q, self.v = t1, q1, v1
         self.v_dot, self.lam = (v1 - v0) / h, lam / h
 
-    def _constrained(self, t1, q0, v0, mid, G, h):
-        """The saddle-point solve of the step on the bilateral rows kept at ``q0``, in one
-        call (:class:`~hexapod.simulation.kernels.CompiledContactStep`): the free velocity
+    def _constrained(self, t1, q_mid, v0, mid, G, h):
+        """The saddle-point solve of the step on the bilateral rows kept, at the mid-step
+        positions ``q_mid``, in one call
+        (:class:`~hexapod.simulation.kernels.CompiledContactStep`): the free velocity
         (``y = M^1/2 v``, with the rows' impulses ``lam``) and the response to the contacts'
         unit impulses (``Y``, ``Lam``). Forces that depend on the state (a controller's gains,
         dampers, springs, the gyroscopic terms) enter linearly implicit at ``theta`` (Acary and
@@ -150,8 +156,8 @@ class MoreauJean(Integrator):
         they are decided again here."""
         end = self.model.law_values(t1, self.data)[:2]
         self._kernel, solution = contact_solution(
-            self._kernel, lambda: self._rank_split(q0, self.t), q0, v0, (*mid, *end), G, h,
-            THETA)
+            self._kernel, lambda: self._rank_split(q_mid, self.t + THETA * h), q_mid, v0,
+            (*mid, *end), G, h, THETA)
         return solution
 
     def _impulses(self, h, frames, v0, G, y, Y):
@@ -161,7 +167,8 @@ class MoreauJean(Integrator):
         states = ["open"] * m
         normal_speed = (frames.jacobian @ v0)[::d]
         free_speed = (G.T @ y)[::d]  # the normal speeds at the step's end without contact
-        predicted = frames.gaps + h * ((1 - THETA) * normal_speed + THETA * free_speed)
+        # the gaps at mid-step (frames at q_k+theta) and the rest of the way (theta = 1/2)
+        predicted = frames.gaps + h * THETA * free_speed
         # a contact with an arming condition may touch down ahead of its other contact once
         # above the ground there (a scuffing swing foot, below it when it passes, is not
         # pushed out); one closed stays so whatever its condition
