@@ -220,6 +220,53 @@ def test_where_to_weld_the_counterweight(tmp_path):
     assert run.optimum[0] == pytest.approx(expected, rel=1e-6)
 
 
+@pytest.mark.slow  # ten runs of the walking robot, built again at each period: 20 s
+def test_the_gait_period_of_least_rms_torque(tmp_path):
+    """The walking robot's period that minimises a knee's RMS torque (samples at the same
+    phases). At fixed phase each effort is ``s + (T0 / T)^2 d`` under the least-wrench policy
+    (``s`` the same poses held still, ``d`` the rest at ``T0``: its weight does not change with
+    the period, its inertial forces go as ``1 / T^2``), so on the samples' trapezoidal rule the
+    RMS is least at ``(T0 / T*)^2 = -int(s d) / int(d^2)``: computed from two runs, at ``T0``
+    and a million times slower, by NumPy, not by the optimiser."""
+    import hexapod as hx
+    from hexapod.scene.builtin import builtin_scenes
+
+    samples, joint = 11, "L3/fti"
+    builder = builtin_scenes()["hexapod"].load()
+    phases = np.linspace(0.0, 1.0, samples)
+
+    def efforts(period):
+        model = hx.assemble(builder(period=period))
+        result = hx.inverse_dynamics(model, phases * period)
+        return result.effort[:, [j.name for j in model.joints].index(joint)]
+
+    t0 = 0.5
+    s = efforts(1e6 * t0)
+    d = efforts(t0) - s
+    weights = np.full(samples, 1.0)
+    weights[[0, -1]] = 0.5
+    expected = t0 / math.sqrt(-np.sum(weights * s * d) / np.sum(weights * d * d))
+    path = tmp_path / "study.toml"
+    path.write_text(f"""
+[study]
+name = "period"
+scene = "hexapod"
+
+[vary.period]
+range = [0.3, 0.8]
+
+[optimize]
+minimize = "rms_effort:{joint}"
+
+[job]
+samples = {samples}
+""")
+    run = optimize(read_optimization(path))
+    assert run.success and 0.3 < expected < 0.8 and abs(expected - t0) > 0.02
+    assert run.optimum[0] == pytest.approx(expected, rel=1e-6)
+    assert run.agreement < 1e-12
+
+
 @pytest.mark.parametrize("change, said", [
     ({"key": "body.wing.mass"}, "no body matches 'wing'"),
     ({"key": "body.*.mass"}, "names one parameter"),

@@ -91,13 +91,16 @@ def _shown(params: dict) -> str:
     return ", ".join(f"{k}={v}" for k, v in params.items()) or "the base scene"
 
 
-def base_scene(study: Study) -> Scene:
-    """The study's scene with its held values (``[fixed]``) applied: the built-in scene's
-    builder called with its arguments, or the scene file read, then the scene keys set.
+def base_scene(study: Study, values: dict | None = None) -> Scene:
+    """The study's scene with its held values (``[fixed]``) and ``values`` applied: the
+    built-in scene's builder called with its arguments, or the scene file read, then the scene
+    keys set.
 
     Parameters
     ----------
     study : Study
+    values : dict, optional
+        Builder arguments and scene keys set over the held ones (an optimiser's point).
 
     Returns
     -------
@@ -109,7 +112,7 @@ def base_scene(study: Study) -> Scene:
         A held value that names nothing.
     """
     builder = _builder(study)
-    arguments, keys = case_values(study, builder, {})
+    arguments, keys = case_values(study, builder, dict(values or {}))
     try:
         return build_scene(study, builder, arguments, keys)
     except TypeError as error:

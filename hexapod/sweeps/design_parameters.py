@@ -14,7 +14,8 @@ the scene's TOML form. Sensitivities cover the bodies' inertia and the joints' p
   frame's origin on one body, in that body's axes, as a segment's length (m,
   :class:`~hexapod.algorithms.sensitivity.FrameChange`);
 * ``ground.mu``: the friction coefficient, which bounds the friction policy's forces;
-* ``gait.period`` (s): the gait's period, the motion kept at the same fractions of the stride
+* ``gait.period`` (s; ``period``, the built-in walking scenes' builder argument, alike): the
+  gait's period, the motion kept at the same fractions of the stride
   (:class:`~hexapod.algorithms.sensitivity.PeriodChange`: a scene whose laws all follow the
   gait's phase, as the gait builders make them).
 
@@ -47,7 +48,8 @@ if TYPE_CHECKING:
 _COVERED = ("masses and inertias, body.NAME.mass and body.NAME.inertia[.K], and joints' "
             "positions, joint.NAME.origin[.K] or joint.NAME.parent_frame.position[.K] "
             "(child_frame) ('*' matches any NAME), the friction coefficient, ground.mu, and the "
-            "gait's period, gait.period; the gait's other parameters are not covered yet")
+            "gait's period, gait.period (or period); the gait's other parameters are not "
+            "covered yet")
 
 
 def inertia_parameters(scene: Scene, patterns: Sequence[str],
@@ -83,8 +85,8 @@ def inertia_parameters(scene: Scene, patterns: Sequence[str],
         if pattern == "ground.mu":
             found.setdefault(pattern, FrictionChange(value=float(scene.ground.mu)))
             continue
-        if pattern == "gait.period":
-            found.setdefault(pattern, _period(scene, source))
+        if pattern in ("gait.period", "period"):  # a scene key, or a builder's argument
+            found.setdefault(pattern, _period(scene, pattern, source))
             continue
         parts = pattern.split(".")
         section = parts[0]
@@ -107,15 +109,15 @@ def inertia_parameters(scene: Scene, patterns: Sequence[str],
     return tuple(found.values())
 
 
-def _period(scene: Scene, source: str) -> PeriodChange:
-    """The gait's period: the one its periodic laws share."""
+def _period(scene: Scene, name: str, source: str) -> PeriodChange:
+    """The gait's period (parameter ``name``): the one its periodic laws share."""
     from hexapod.model.assemble import assemble
 
     period = assemble(scene).cycle_time()
     if period is None:
-        raise StudyError(f"{source}: 'gait.period': scene '{scene.name}' has no gait (no law "
-                         "of it repeats)")
-    return PeriodChange(value=float(period))
+        raise StudyError(f"{source}: '{name}': scene '{scene.name}' has no gait (no law of it "
+                         "repeats)")
+    return PeriodChange(name=name, value=float(period))
 
 
 def _kind(parts: list[str]) -> str | None:

@@ -19,7 +19,7 @@ The study file shares the sweep's format (``docs/sweeps.md``): ``[study]`` (name
     minimize = "rms_effort:hinge"
     constraints = { "peak_effort:*" = { max = 40.0 } }   # '*': any element
     actuators = "motors.toml"         # optional: each driven joint's peak effort below its motor's
-    tolerance = 1e-10                 # IPOPT's, on the scaled problem
+    tolerance = 1e-10                 # IPOPT's, on the scaled problem (default: see TOLERANCE)
     max_iterations = 200
 
     [job]
@@ -28,9 +28,10 @@ The study file shares the sweep's format (``docs/sweeps.md``): ``[study]`` (name
 Along a prescribed motion the forces are affine in the masses and inertias (see
 :mod:`hexapod.algorithms.sensitivity`): one inverse-dynamics run and its sensitivities give the
 forces, and so every figure of merit and its gradient, at any values of the parameters, exactly
-(:class:`AffineDesign`). A joint's position moves the motion itself: each evaluation then runs
-the scene re-read with the values (:class:`RerunDesign`). The optimum is checked by a run of
-the scene re-read with the optimal values.
+(:class:`AffineDesign`). A joint's position or the gait's period moves the motion itself:
+each evaluation then runs the scene built again with the values
+(:class:`~hexapod.sweeps.rerun_design.RerunDesign`; the period at fixed phase). The optimum is
+checked by a run of the scene built again with the optimal values.
 """
 
 from __future__ import annotations
@@ -44,12 +45,22 @@ from pathlib import Path
 import numpy as np
 
 from hexapod._support.files import read_toml
-from hexapod.algorithms.sensitivity import InertiaChange
+from hexapod.algorithms.sensitivity import InertiaChange, PeriodChange
 from hexapod.errors import HexapodError, InputFileError
 from hexapod.sweeps.cases import StudyError
 from hexapod.sweeps.metric_derivatives import SENSITIVE_FAMILIES, metric_sensitivities
 from hexapod.sweeps.metrics import body_masses, inverse_metrics
+from hexapod.sweeps.rerun_design import RerunDesign, scene_at, times_at
 from hexapod.sweeps.spec import Study, study_from_document
+
+#: IPOPT's tolerance on the scaled problem by default: the gradients of masses, inertias and
+#: joints' positions are exact to round-off ...
+TOLERANCE = 1e-10
+#: ... and those of the gait's period carry the inverse dynamics' own accuracy (the motion
+#: solved by Newton's method: 3.7e-10 of the scaled gradient at the walking robot's optimum
+#: of a knee's RMS torque, where the objective no longer changes), so that IPOPT asked for
+#: 1e-10 searched its line for hundreds of evaluations there
+PERIOD_TOLERANCE = 1e-8
 
 _OPTIMIZE_KEYS = ("minimize", "constraints", "actuators", "tolerance", "max_iterations")
 _BOUND_KEYS = ("range", "start")
@@ -84,7 +95,7 @@ class OptimizationStudy:
     minimize: str
     bounds: tuple[Bound, ...]
     limits: tuple[Limit, ...] = ()
-    tolerance: float = 1e-10
+    tolerance: float | None = None  # None: TOLERANCE, or PERIOD_TOLERANCE with a period
     max_iterations: int = 200
     source: str = ""
     actuators: str = ""  # an actuator table: every driven joint's peak effort below its motor's
@@ -136,9 +147,9 @@ def read_optimization(path: str | Path) -> OptimizationStudy:
         actuators = ""
     elif actuators:
         actuators = str(path.parent / actuators)
-    tolerance = optimize.get("tolerance", 1e-10)
-    if not (isinstance(tolerance, int | float) and not isinstance(tolerance, bool)
-            and 0 < tolerance < 1):
+    tolerance = optimize.get("tolerance")
+    if tolerance is not None and not (isinstance(tolerance, int | float)
+                                      and not isinstance(tolerance, bool) and 0 < tolerance < 1):
         problems.append(f"optimize.tolerance: a number in (0, 1), got {tolerance!r}")
     iterations = optimize.get("max_iterations", 200)
     if not (isinstance(iterations, int) and not isinstance(iterations, bool)
@@ -155,8 +166,9 @@ def read_optimization(path: str | Path) -> OptimizationStudy:
     if problems:
         body = "\n  ".join(problems)
         raise InputFileError(f"{path}: not a valid optimisation study:\n  {body}")
-    return OptimizationStudy(study, minimize, tuple(bounds), tuple(limits), float(tolerance),
-                             iterations, str(path), actuators)
+    return OptimizationStudy(study, minimize, tuple(bounds), tuple(limits),
+                             None if tolerance is None else float(tolerance), iterations,
+                             str(path), actuators)
 
 
 def _number(value) -> bool:
@@ -231,6 +243,11 @@ class AffineDesign:
     values: np.ndarray
     _cache: dict = field(default_factory=dict, repr=False)
 
+    @property
+    def changes(self) -> tuple:
+        """The parameters."""
+        return self.sensitivity.parameters
+
     def at(self, p: np.ndarray) -> tuple[dict, dict]:
         """``(metrics, derivatives)`` at the parameters' values ``p``."""
         key = tuple(np.asarray(p, dtype=float).tolist())
@@ -252,52 +269,6 @@ class AffineDesign:
         return (inverse_metrics(model, result, SENSITIVE_FAMILIES, self.strides, masses),
                 metric_sensitivities(model, result, s, SENSITIVE_FAMILIES, self.strides,
                                      masses))
-
-
-@dataclass
-class RerunDesign:
-    """The figures of merit and their gradients at any values of parameters that move the
-    motion (joints' positions): the scene re-read with the values and run again at each, its
-    gradients exact there.
-
-    Attributes
-    ----------
-    scene : Scene
-    changes : tuple of InertiaChange or FrameChange
-        The parameters, at the scene's values.
-    times : ndarray
-        The samples.
-    strides : float
-    """
-
-    scene: object
-    changes: tuple
-    times: np.ndarray
-    strides: float
-    _cache: dict = field(default_factory=dict, repr=False)
-
-    def at(self, p: np.ndarray) -> tuple[dict, dict]:
-        """``(metrics, derivatives)`` at the parameters' values ``p``."""
-        from hexapod.algorithms.assembly import assemble
-        from hexapod.algorithms.inverse import inverse_dynamics
-        from hexapod.algorithms.sensitivity import inverse_sensitivities
-        from hexapod.sweeps.cases import with_scene_keys
-        from hexapod.sweeps.design_parameters import inertia_parameters
-
-        key = tuple(np.asarray(p, dtype=float).tolist())
-        if key not in self._cache:
-            self._cache.clear()
-            scene = with_scene_keys(self.scene, {c.name: v / c.scene_scale for c, v in
-                                                 zip(self.changes, key, strict=True)})
-            model = assemble(scene)
-            result = inverse_dynamics(model, self.times)
-            sensitivity = inverse_sensitivities(
-                model, result, inertia_parameters(scene, [c.name for c in self.changes]))
-            self._cache[key] = (
-                inverse_metrics(model, result, SENSITIVE_FAMILIES, self.strides),
-                metric_sensitivities(model, result, sensitivity, SENSITIVE_FAMILIES,
-                                     self.strides))
-        return self._cache[key]
 
 
 def constrained_figures(metrics: dict, limits, source: str = "") -> list[tuple[str, Limit]]:
@@ -433,8 +404,8 @@ def optimize(spec: OptimizationStudy,
     values = np.array([c.value for c in changes])
     if all(isinstance(c, InertiaChange) for c in changes):
         design = AffineDesign(model, result, sensitivity, strides, values)
-    else:  # the motion moves with the joints: a run per evaluation
-        design = RerunDesign(scene, changes, times, strides)
+    else:  # the motion moves with the joints or the period: a run per evaluation
+        design = RerunDesign(study, changes, times, strides, values)
     metrics, _ = design.at(values)
     check_objective(metrics, spec.minimize, source)
     limits = spec.limits + _motor_limits(model, spec.actuators)
@@ -449,7 +420,7 @@ def optimize(spec: OptimizationStudy,
     optimum, status, iterations, log = _solve(spec, design, constrained, start, low, high,
                                               say)
     run = _checked(spec, scene, changes, design, start, optimum, status, iterations, log,
-                   constrained, times, strides)
+                   constrained, times, strides, values)
     run.limits, run.start_objective = limits, start_objective
     return run
 
@@ -509,12 +480,15 @@ def _solve(spec, design, constrained, start, low, high, say):
 
     n, m = scale.size, len(constrained)
     merit = _merit(evaluate, n, m)
+    tolerance = spec.tolerance or (
+        PERIOD_TOLERANCE if any(isinstance(c, PeriodChange) for c in design.changes)
+        else TOLERANCE)
     x = ca.MX.sym("x", n)
     f, g = merit(x)
     problem = {"x": x, "f": f} | ({"g": g} if m else {})
     options = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes",
-               "ipopt.hessian_approximation": "limited-memory", "ipopt.tol": spec.tolerance,
-               "ipopt.constr_viol_tol": spec.tolerance, "ipopt.max_iter": spec.max_iterations}
+               "ipopt.hessian_approximation": "limited-memory", "ipopt.tol": tolerance,
+               "ipopt.constr_viol_tol": tolerance, "ipopt.max_iter": spec.max_iterations}
     solver = ca.nlpsol("design", "ipopt", problem, options)
     bounds = {"lbx": low / scale, "ubx": high / scale}
     if m:
@@ -585,16 +559,16 @@ def _merit(evaluate, n: int, m: int):
 
 
 def _checked(spec, scene, changes, design, start, optimum, status, iterations, log,
-             constrained, times, strides) -> OptimizationRun:
-    """The run, with the optimum checked by the scene re-read with the optimal values."""
+             constrained, times, strides, values) -> OptimizationRun:
+    """The run, with the optimum checked by the study's scene built again with the optimal
+    values."""
     from hexapod.algorithms.assembly import assemble
     from hexapod.algorithms.inverse import inverse_dynamics
-    from hexapod.sweeps.cases import with_scene_keys
 
-    keys = {c.name: float(v) / c.scene_scale for c, v in zip(changes, optimum, strict=True)}
-    optimum_scene = with_scene_keys(scene, keys, f"{spec.source}: the optimum")
+    optimum_scene = scene_at(spec.study, changes, optimum, f"{spec.source}: the optimum")
     optimum_model = assemble(optimum_scene)
-    optimum_result = inverse_dynamics(optimum_model, times)
+    optimum_result = inverse_dynamics(optimum_model,
+                                      times_at(times, changes, values, optimum))
     checked = inverse_metrics(optimum_model, optimum_result, SENSITIVE_FAMILIES, strides)
     predicted, _ = design.at(optimum)
     compared = [spec.minimize] + [c for c, _ in constrained]
