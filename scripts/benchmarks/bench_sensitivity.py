@@ -18,7 +18,11 @@ Protocol
   its joint laws, ``legs.front_leg_scene``: the built-in leg's joints follow its foot's guides,
   whose derivatives through the kinematics are not computed;
   ``--checked`` parameters drawn per point; the forces are linear in masses and inertias, so
-  those differences are exact but for round-off). The error is ``p |exact - difference|`` over
+  those differences are exact but for round-off); and the gait's period (``gait.period``) of
+  the walking robot built by ``legs.hexapod_scene`` at a random period in [0.35, 0.7] s with
+  its masses moved as at the other points, derived at fixed phase, against the robot built
+  again at the period moved by ``--step`` of it, sampled at the same fractions of the
+  stride. The error is ``p |exact - difference|`` over
   the largest value of the array (or the metric's value): the change of the output per unit
   relative change of the parameter, relative. Target: 1e-6. A figure of merit is smooth but
   for kinks (a sample's power changing sign in the positive work, the peak moving to another
@@ -94,44 +98,97 @@ def outputs(model, result):
     return out
 
 
-def point_errors(scene, patterns, samples, checked, step, rng) -> tuple[float, str, int]:
-    """The worst error at one random point of the parameters, where it is, and how many
-    figures of merit agreed only at a smaller step (a kink straddled)."""
-    base = hx.sweeps.inertia_parameters(scene, patterns)
-    # one factor per body's mass and one per body's inertia (a slender rod's moments, moved
-    # apart, would break the triangle inequality the scene reader checks)
+def random_point(scene, patterns, rng) -> dict:
+    """The scene keys of a random point: one factor in [0.7, 1.3] per body's mass and one per
+    body's inertia (a slender rod's moments, moved apart, would break the triangle inequality
+    the scene reader checks)."""
     factors: dict[str, float] = {}
     moved = {}
-    for change in base:
+    for change in hx.sweeps.inertia_parameters(scene, patterns):
         kind = change.name.rpartition(".mass")[0] or change.name.split(".inertia")[0] + "/J"
         factor = factors.setdefault(kind, rng.uniform(0.7, 1.3))
         moved[change.name] = change.value / change.scene_scale * factor
-    scene = hx.sweeps.with_scene_keys(scene, moved)
+    return moved
+
+
+def point_errors(scene, patterns, samples, checked, step, rng) -> tuple[float, str, int]:
+    """The worst error at one random point of the parameters, where it is, and how many
+    figures of merit agreed only at a smaller step (a kink straddled)."""
+    scene = hx.sweeps.with_scene_keys(scene, random_point(scene, patterns, rng))
     changes = hx.sweeps.inertia_parameters(scene, patterns)
     model = hx.assemble(scene)
     times = np.linspace(0.0, model.time_window()[0], samples)
-    result = hx.inverse_dynamics(model, times)
-    sensitivity, metric_derivatives = derivatives(model, result, changes)
-    metrics = inverse_metrics(model, result)
+    run = Run(model, hx.inverse_dynamics(model, times), changes)
     worst, where, kinks = 0.0, "", 0
     for p in rng.choice(len(changes), checked, replace=False):
         change = changes[p]
         # a relative step for the masses and inertias (the forces are linear in them), 1e-6 m
         # for a joint's position (they are not: truncation then stays below round-off)
         h = step * abs(change.value) if change.unit != "m" else 1e-6
-        ends = moved_runs(scene, change, h, times)
-        for name, value in outputs(model, result).items():
+        found = run.errors(p, h, lambda h, change=change: moved_runs(scene, change, h, times))
+        worst, where = max((worst, where), found[:2])
+        kinks += found[2]
+    return worst, where, kinks
+
+
+def period_errors(samples, step, rng) -> tuple[float, str, int]:
+    """The gait's period at one random point: the walking robot (``legs.hexapod_scene``) built
+    at a period drawn in [0.35, 0.7] s, its masses and inertias moved as at the other points,
+    derived at fixed phase, against central differences of the robot built again at the
+    period moved by ``step`` of it and sampled at the same fractions of the stride."""
+    from legs import hexapod_scene
+
+    period = rng.uniform(0.35, 0.7)
+    moved = random_point(hexapod_scene(gait="tripod", trunk="free"), ROBOT_PARAMETERS, rng)
+
+    def built(value):
+        return hx.sweeps.with_scene_keys(hexapod_scene(gait="tripod", trunk="free",
+                                                       period=value), moved)
+
+    phases = np.linspace(0.0, 1.0, samples)
+    scene = built(period)
+    model = hx.assemble(scene)
+    run = Run(model, hx.inverse_dynamics(model, phases * period),
+              hx.sweeps.inertia_parameters(scene, ["gait.period"]))
+
+    def ends(h):
+        out = []
+        for value in (period + h, period - h):
+            moved_model = hx.assemble(built(value))
+            result = hx.inverse_dynamics(moved_model, phases * value)
+            out.append((outputs(moved_model, result), inverse_metrics(moved_model, result)))
+        return out
+
+    return run.errors(0, step * period, ends)
+
+
+class Run:
+    """A run at a point, its derivatives and figures of merit, and their errors against the
+    central differences of runs with one parameter moved."""
+
+    def __init__(self, model, result, changes):
+        self.model, self.result, self.changes = model, result, changes
+        self.sensitivity, self.metric_derivatives = derivatives(model, result, changes)
+        self.metrics = inverse_metrics(model, result)
+
+    def errors(self, p: int, h: float, runs) -> tuple[float, str, int]:
+        """The worst error of parameter ``p``'s derivatives against the differences of
+        ``runs(h)`` (the outputs and figures of merit at ``+h`` and ``-h``), where it is, and
+        whether a figure of merit agreed only at a smaller step."""
+        change, worst, where, kinks = self.changes[p], 0.0, "", 0
+        ends = runs(h)
+        for name, value in outputs(self.model, self.result).items():
             difference = (ends[0][0][name] - ends[1][0][name]) / (2 * h)
-            exact = getattr(sensitivity, name)[..., p]
+            exact = getattr(self.sensitivity, name)[..., p]
             finite = np.isfinite(value)
             error = change.value * np.abs(exact[finite] - difference[finite]).max()
             error /= np.abs(value[finite]).max()
             if error > worst:
                 worst, where = error, f"{change.name}, {name}"
-        for column, exact in metric_derivatives.items():
-            if not np.isfinite(metrics[column]):
+        for column, exact in self.metric_derivatives.items():
+            if not np.isfinite(self.metrics[column]):
                 continue
-            weight = abs(change.value) / (abs(metrics[column]) or 1.0)  # relative
+            weight = abs(change.value) / (abs(self.metrics[column]) or 1.0)  # relative
             error = metric_error(ends, h, column, exact[p], weight)
             # a figure of merit is smooth but for kinks (a sample's power changing sign in the
             # positive work, the peak moving to another sample): a kink within the step moves
@@ -140,12 +197,11 @@ def point_errors(scene, patterns, samples, checked, step, rng) -> tuple[float, s
             smaller = h
             while error > TOLERANCE and smaller > h / 1000:
                 smaller /= 10
-                error = metric_error(moved_runs(scene, change, smaller, times), smaller, column,
-                                     exact[p], weight)
+                error = metric_error(runs(smaller), smaller, column, exact[p], weight)
             kinks += smaller < h and error <= TOLERANCE
             if error > worst:
                 worst, where = error, f"{change.name}, {column}"
-    return worst, where, kinks
+        return worst, where, kinks
 
 
 def metric_error(ends, h, column, exact, weight) -> float:
@@ -205,14 +261,26 @@ def main() -> int:
             measure.log(f"{name}: point {point + 1} of {args.points}")
             errors.append(point_errors(scene, patterns, args.check_samples, args.checked,
                                        args.step, rng))
-        worst, where, _ = max(errors)
-        kinks = sum(e[2] for e in errors)
-        print(f"{name}: {args.points} random points, {args.checked} parameters each, step "
-              f"{args.step:g}: worst error {worst:.2e} ({where}; target {TOLERANCE:g})"
-              + (f"; {kinks} figures of merit agreed at a tenth to a thousandth of the step "
-                 "(a kink within it)" if kinks else ""))
-        failed |= worst > TOLERANCE
+        failed |= report(f"{name}: {args.points} random points, {args.checked} parameters "
+                         f"each", errors, args.step)
+    if args.points > 0:
+        errors = []
+        for point in range(args.points):
+            measure.log(f"hexapod, the gait's period: point {point + 1} of {args.points}")
+            errors.append(period_errors(args.check_samples, args.step, rng))
+        failed |= report(f"hexapod, the gait's period (gait.period, at fixed phase): "
+                         f"{args.points} random points", errors, args.step)
     return 1 if failed else 0
+
+
+def report(what: str, errors: list, step: float) -> bool:
+    """Print the worst of ``errors`` (``point_errors``'s); whether it fails the target."""
+    worst, where, _ = max(errors)
+    kinks = sum(e[2] for e in errors)
+    print(f"{what}, step {step:g}: worst error {worst:.2e} ({where}; target {TOLERANCE:g})"
+          + (f"; {kinks} figures of merit agreed at a tenth to a thousandth of the step "
+             "(a kink within it)" if kinks else ""))
+    return worst > TOLERANCE
 
 
 if __name__ == "__main__":
