@@ -156,7 +156,8 @@ class PeriodChange:
     fractions of the stride (see the module's text): derivatives at fixed phase. For a scene
     whose time laws are all functions of the phase ``t / T`` (the gait builders' scenes);
     :func:`inverse_sensitivities` checks that the model's periodic laws repeat with ``value``
-    and that no force acts across its joints.
+    and that it has no force element (a load's, a spring's or a controller's change with the
+    period is not known: only gravity and the inertial forces are derived).
 
     Attributes
     ----------
@@ -239,8 +240,8 @@ def period_force_changes(model: Model, change: PeriodChange, q: np.ndarray, v: n
 
 
 def _check_period(model: Model, change: PeriodChange) -> None:
-    """Refuse a period the model's laws do not repeat with, or a model with forces across
-    joints (they may depend on the velocities, and the joint wrenches leave them out)."""
+    """Refuse a period the model's laws do not repeat with, or a model with force elements
+    (gravity and the inertial forces alone are derived at fixed phase)."""
     periods = {c for law in model.laws if (c := law.cycle_time()) is not None}
     if not (np.isfinite(change.value) and change.value > 0
             and all(abs(p - change.value) <= 1e-12 * change.value for p in periods)
@@ -248,9 +249,12 @@ def _check_period(model: Model, change: PeriodChange) -> None:
         shown = ", ".join(f"{p:g} s" for p in sorted(periods)) or "none"
         raise HexapodError(f"parameter '{change.name}': model '{model.name}' has no gait of "
                            f"period {change.value:g} s (its laws repeat with: {shown})")
-    if model.Q_across is not None:
-        raise HexapodError(f"parameter '{change.name}': model '{model.name}' has forces across "
-                           "its joints, whose change with the period is not derived")
+    if model.forces:  # loads, springs, dampers, controllers: gravity and inertia alone
+        raise HexapodError(
+            f"parameter '{change.name}': model '{model.name}' has forces of its own (the "
+            f"{model.forces[0].kind} '{model.forces[0].name}'), whose change with the period "
+            "is not derived (a load may follow the period otherwise than by its phase: the "
+            "front leg's ground reaction is the walking robot's at that period)")
 
 
 def inverse_sensitivities(model: Model, result: InverseResult,
