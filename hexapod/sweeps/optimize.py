@@ -50,7 +50,7 @@ from hexapod.errors import HexapodError, InputFileError
 from hexapod.sweeps.cases import StudyError
 from hexapod.sweeps.metric_derivatives import SENSITIVE_FAMILIES, metric_sensitivities
 from hexapod.sweeps.metrics import body_masses, inverse_metrics
-from hexapod.sweeps.rerun_design import RerunDesign, scene_at, times_at
+from hexapod.sweeps.rerun_design import RerunDesign, run_at
 from hexapod.sweeps.spec import Study, study_from_document
 
 #: IPOPT's tolerance on the scaled problem by default: the gradients of masses, inertias and
@@ -562,13 +562,8 @@ def _checked(spec, scene, changes, design, start, optimum, status, iterations, l
              constrained, times, strides, values) -> OptimizationRun:
     """The run, with the optimum checked by the study's scene built again with the optimal
     values."""
-    from hexapod.algorithms.assembly import assemble
-    from hexapod.algorithms.inverse import inverse_dynamics
-
-    optimum_scene = scene_at(spec.study, changes, optimum, f"{spec.source}: the optimum")
-    optimum_model = assemble(optimum_scene)
-    optimum_result = inverse_dynamics(optimum_model,
-                                      times_at(times, changes, values, optimum))
+    optimum_scene, optimum_model, optimum_result = run_at(
+        spec.study, changes, times, values, optimum, f"{spec.source}: the optimum")
     checked = inverse_metrics(optimum_model, optimum_result, SENSITIVE_FAMILIES, strides)
     predicted, _ = design.at(optimum)
     compared = [spec.minimize] + [c for c, _ in constrained]

@@ -41,6 +41,18 @@ def times_at(times: np.ndarray, changes, base_values, values) -> np.ndarray:
     return np.asarray(times, dtype=float) * ratio
 
 
+def run_at(study, changes, times, base_values, values, source: str = "") -> tuple:
+    """``(scene, model, result)``: the study's scene with the parameters ``changes`` at
+    ``values``, run at the samples ``times`` (those at ``base_values``) moved with the
+    period."""
+    from hexapod.algorithms.assembly import assemble
+    from hexapod.algorithms.inverse import inverse_dynamics
+
+    scene = scene_at(study, changes, values, source)
+    model = assemble(scene)
+    return scene, model, inverse_dynamics(model, times_at(times, changes, base_values, values))
+
+
 def changes_at(scene, model, changes) -> tuple:
     """``changes`` at the values of ``scene`` (its ``model`` assembled): each parameter's
     change read again from the scene, the period from the model's laws."""
@@ -76,16 +88,6 @@ class RerunDesign:
     values: np.ndarray
     _cache: dict = field(default_factory=dict, repr=False)
 
-    def run(self, p: np.ndarray, source: str = "") -> tuple:
-        """``(scene, model, result)``: the scene at the parameters' values ``p``, run."""
-        from hexapod.algorithms.assembly import assemble
-        from hexapod.algorithms.inverse import inverse_dynamics
-
-        scene = scene_at(self.study, self.changes, p, source)
-        model = assemble(scene)
-        times = times_at(self.times, self.changes, self.values, p)
-        return scene, model, inverse_dynamics(model, times)
-
     def at(self, p: np.ndarray) -> tuple[dict, dict]:
         """``(metrics, derivatives)`` at the parameters' values ``p``."""
         from hexapod.algorithms.sensitivity import inverse_sensitivities
@@ -93,7 +95,8 @@ class RerunDesign:
         key = tuple(np.asarray(p, dtype=float).tolist())
         if key not in self._cache:
             self._cache.clear()
-            scene, model, result = self.run(np.array(key))
+            scene, model, result = run_at(self.study, self.changes, self.times, self.values,
+                                          np.array(key))
             sensitivity = inverse_sensitivities(model, result,
                                                 changes_at(scene, model, self.changes))
             self._cache[key] = (
