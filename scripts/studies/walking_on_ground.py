@@ -215,8 +215,10 @@ def main() -> None:
         write_figures(args.figures, model, result, float(result.t[-1]))
     trunk = [b.name for b in grounded.bodies].index("trunk")
     sl = grounded.bodies[trunk].q
+    start, end = (inverse.q[k][model.bodies[trunk].q][:3] for k in (0, -1))
+    prescribed = start + args.strides * (end - start)  # a stride's advance, repeated
     print(f"trunk at the end {np.round(result.q[-1][sl][:3], 5)} m, prescribed "
-          f"{np.round(inverse.q[-1][model.bodies[trunk].q][:3], 5)} m")
+          f"{np.round(prescribed, 5)} m")
 
 
 if __name__ == "__main__":
