@@ -231,11 +231,12 @@ def period_force_changes(model: Model, change: PeriodChange, q: np.ndarray, v: n
     """``d(Q - M v_dot)/dT`` (N, n_v) at fixed phase, at the states ``(q, v, v_dot)`` (N, n_v)
     with the laws' values ``w`` (n_w, N): ``(C v + 2 M v_dot) / T``, ``C = -dQ/dv`` (the
     tangent damping of :attr:`~hexapod.model.model.Model.tangent_matrices`)."""
-    lam = np.zeros(model.n_c)
-    damping = np.stack([
-        np.asarray(model.tangent_matrices(*[{"q": q[k], "v": v[k], "lam": lam, "w": w[:, k]}[n]
-                                            for n in model.tangent_matrices.name_in()])[1])
-        @ v[k] for k in range(v.shape[0])])
+    tangents, lam = model.tangent_matrices, np.zeros(model.n_c)
+    damping = np.empty_like(v)
+    for k in range(v.shape[0]):
+        values = {"q": q[k], "v": v[k], "lam": lam, "w": w[:, k]}
+        C = np.asarray(tangents(*[values[n] for n in tangents.name_in()])[1])
+        damping[k] = C @ v[k]
     return (damping + 2.0 * (model.mass @ v_dot.T).T) / change.value
 
 
