@@ -335,6 +335,31 @@ def wrapped(x: np.ndarray) -> np.ndarray:
     return np.arctan2(np.sin(x), np.cos(x))
 
 
+def event_times(events) -> dict:
+    """Contact events (``t``, ``kind``, ``contact``: a simulation's) as the times of each
+    kind per contact, ``{contact: {kind: [t, ...]}}``."""
+    times: dict = {}
+    for event in events or ():
+        times.setdefault(event.contact, {}).setdefault(event.kind, []).append(event.t)
+    return times
+
+
+def schedule_lateness(model, times: dict, t_end: float) -> dict[str, float]:
+    """The largest ``|simulated - scheduled|`` time (s) of the touch-downs and of the
+    lift-offs of ``model``'s contacts up to ``t_end``, each scheduled one matched with its
+    foot's nearest simulated event of its kind (``times``: :func:`event_times`; a foot that
+    never touches or leaves: infinite)."""
+    worst = {"touch-down": 0.0, "lift-off": 0.0}
+    for contact in model.contacts:
+        for start, stop in contact.stances(0.0, t_end):
+            for kind, when in (("touch-down", start), ("lift-off", stop)):
+                if 0.0 < when < t_end:  # not the run's own ends
+                    near = np.asarray(times.get(contact.name, {}).get(kind, []))
+                    gap = float(np.abs(near - when).min()) if near.size else np.inf
+                    worst[kind] = max(worst[kind], gap)
+    return worst
+
+
 # ------------------------------------------------------------------ the forward run
 
 @dataclass

@@ -50,7 +50,13 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 import hexapod as hx  # noqa: E402
 from legs.cockroach import STRIDE_PERIOD  # noqa: E402
 from legs.efforts import EFFORT_TOL, adaptive_inverse  # noqa: E402
-from legs.replay import GROUND_KD, GROUND_KP, grounded_scene  # noqa: E402
+from legs.replay import (  # noqa: E402
+    GROUND_KD,
+    GROUND_KP,
+    event_times,
+    grounded_scene,
+    schedule_lateness,
+)
 from legs.robot import hexapod_scene  # noqa: E402
 
 #: the radius of MuJoCo's foot spheres (m): small against the leg, so that the contact point
@@ -61,29 +67,12 @@ COMPILER = ('<mujoco><compiler balanceinertia="false" discardvisual="true" fuses
             'inertiafromgeom="false"/></mujoco>')
 
 
-def lateness(model, events: dict, t_end: float) -> tuple[float, float]:
-    """The largest |simulated - scheduled| touch-down and lift-off times (s): each scheduled
-    one (inside the run) matched with the foot's nearest simulated event of its kind.
-    ``events``: per foot name, ``{"touch-down": times, "lift-off": times}``."""
-    worst = {"touch-down": 0.0, "lift-off": 0.0}
-    for contact in model.contacts:
-        for a, b in contact.stances(0.0, t_end):
-            for kind, when in (("touch-down", a), ("lift-off", b)):
-                if 0.0 < when < t_end:
-                    near = np.asarray(events.get(contact.name, {}).get(kind, []))
-                    gap = float(np.abs(near - when).min()) if near.size else np.inf
-                    worst[kind] = max(worst[kind], gap)
-    return worst["touch-down"], worst["lift-off"]
-
-
 def project_run(grounded, driven, t_end: float, method: str, **options) -> dict:
     log(f"{method}: {t_end:g} s ...")
     result = hx.simulate(grounded, t_end, method=method, **options)
     reached = float(result.t[-1])
-    events: dict = {}
-    for event in result.events or ():
-        events.setdefault(event.contact, {}).setdefault(event.kind, []).append(event.t)
-    touch, lift = lateness(driven, events, reached)
+    worst = schedule_lateness(driven, event_times(result.events), reached)
+    touch, lift = worst["touch-down"], worst["lift-off"]
     trunk = [b.name for b in grounded.bodies].index("trunk")
     if result.message:
         log(f"{method}: {result.message}")
@@ -255,7 +244,8 @@ def mujoco_run(robot: MujocoRobot, scene: hx.Scene, model: hx.Model, driven, t_e
     bare = time.process_time()
     mj.mj_step(m, d, 1000)
     bare = (time.process_time() - bare) / (1000 * step)
-    touch, lift = lateness(driven, events, t_end)
+    worst = schedule_lateness(driven, events, t_end)
+    touch, lift = worst["touch-down"], worst["lift-off"]
     return {"run": "MuJoCo mj_step (soft contacts, implicitfast)", "status": "finished",
             "reached": t_end, "cpu_per_s": cpu / t_end, "bare_per_s": bare,
             "trunk": d.xipos[robot.trunk].copy(), "touch": touch, "lift": lift,

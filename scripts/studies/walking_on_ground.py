@@ -44,9 +44,11 @@ from legs.efforts import EFFORT_TOL, adaptive_inverse  # noqa: E402
 from legs.replay import (  # noqa: E402
     GROUND_KD,
     GROUND_KP,
+    event_times,
     grounded_scene,
     joint_angles,
     prescribed_angles,
+    schedule_lateness,
     wrapped,
 )
 from legs.robot import hexapod_scene  # noqa: E402
@@ -66,24 +68,6 @@ def schedule_table(model, result, period: float) -> list[str]:
                      f"{' '.join(f'{x:.0f}' for x in times['touch-down']):22} "
                      f"{' '.join(f'{x:.0f}' for x in times['lift-off'])}")
     return lines
-
-
-def lateness(model, result, t_end: float) -> dict[str, float]:
-    """The largest |simulated - scheduled| time (s) of the touch-downs and of the lift-offs,
-    each scheduled one matched with the foot's nearest simulated event of its kind (a foot
-    that never touches or leaves: infinite)."""
-    worst = {"touch-down": 0.0, "lift-off": 0.0}
-    for contact in model.contacts:
-        simulated = {kind: np.array([e.t for e in result.events
-                                     if e.contact == contact.name and e.kind == kind])
-                     for kind in worst}
-        for start, stop in contact.stances(0.0, t_end):
-            for kind, when in (("touch-down", start), ("lift-off", stop)):
-                if 0.0 < when < t_end:  # not the run's own ends
-                    near = simulated[kind]
-                    gap = np.abs(near - when).min() if near.size else np.inf
-                    worst[kind] = max(worst[kind], float(gap))
-    return worst
 
 
 def slips(model, inverse, result, mu: float, margin: float = 5e-3) -> list[str]:
@@ -197,7 +181,7 @@ def main() -> None:
     print("\n".join(schedule_table(model, result, period)))
     print("\n".join(slips(model, inverse, result, args.mu)))
     print(normal_force_gap(model, inverse, result))
-    worst = lateness(model, result, float(result.t[-1]))
+    worst = schedule_lateness(model, event_times(result.events), float(result.t[-1]))
     print(f"over {result.t[-1]:.3f} s: touch-downs within {1e3 * worst['touch-down']:.1f} ms "
           f"of the schedule, lift-offs within {1e3 * worst['lift-off']:.1f} ms")
     for event in result.events:
