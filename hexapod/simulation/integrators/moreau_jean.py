@@ -167,8 +167,9 @@ class MoreauJean(Integrator):
         states = ["open"] * m
         normal_speed = (frames.jacobian @ v0)[::d]
         free_speed = (G.T @ y)[::d]  # the normal speeds at the step's end without contact
-        # the gaps at mid-step (frames at q_k+theta) and the rest of the way (theta = 1/2)
-        predicted = frames.gaps + h * THETA * free_speed
+        # the gaps at q_k+theta (the frames') and the rest of the way, q_k+1 = q_k+theta (+)
+        # h ((1 - 2 theta) v_k + theta v_k+1)
+        predicted = frames.gaps + h * ((1 - 2 * THETA) * normal_speed + THETA * free_speed)
         # a contact with an arming condition may touch down ahead of its other contact once
         # above the ground there (a scuffing swing foot, below it when it passes, is not
         # pushed out); one closed stays so whatever its condition
