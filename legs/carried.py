@@ -50,6 +50,17 @@ ITERATIONS = 8
 STEPS = (1e-6, 1e-5, 1e-4)
 
 
+def sway_design_parameter(bounds: tuple, key: str) -> None:
+    """A trunk's sway as a design parameter sees it (:meth:`hexapod.scene.Law.
+    design_parameter`): corrected (``bounds``), it depends on every gait parameter through
+    the whole motion (the two feet must carry it), which is not derived."""
+    if bounds and key.startswith("gait."):
+        raise ValueError("the trunk's sway is corrected so that two feet carry the robot, a "
+                         f"solve over the whole motion whose derivative with respect to {key} "
+                         "is not derived (a gait with three feet down or more has no "
+                         "correction)")
+
+
 @dataclass(frozen=True, eq=False)
 class TrunkSway(Law):
     """One horizontal coordinate of the trunk (m): ``start + speed t`` plus its planned sway
@@ -70,6 +81,9 @@ class TrunkSway(Law):
     _series: object = field(default=None, init=False, repr=False, compare=False)
     _pieces: object = field(default=None, init=False, repr=False, compare=False)
     kind = "trunk-sway"
+
+    def design_parameter(self, key):
+        return sway_design_parameter(self.bounds, key)
 
     def __post_init__(self):
         for key in ("cos", "sin", "bounds", "values"):

@@ -165,7 +165,8 @@ def hexapod_scene(gait: str | None = "tripod", period: float | None = None,
                   trunk: str = "held", duty: float | None = None,
                   ground: GroundForces | None = None, *, speed: float | None = None,
                   payload: float = 0.0, coxa_length: float = 1.0, femur_length: float = 1.0,
-                  tibia_length: float = 1.0, tarsus_length: float = 1.0) -> Scene:
+                  tibia_length: float = 1.0, tarsus_length: float = 1.0,
+                  step_height: float | None = None) -> Scene:
     """The six-legged robot.
 
     Parameters
@@ -201,6 +202,9 @@ def hexapod_scene(gait: str | None = "tripod", period: float | None = None,
         its length (same cross-section and density), its inertias follow from both. Each foot's
         path keeps its definition in terms of the rest pose of the leg with the new lengths
         (:mod:`legs.stepping`); a leg that cannot follow it raises ``ValueError``.
+    step_height : float, optional
+        The free robot's feet's lift in swing (m, > 0; default ``FOOT_LIFT_MM``, scaled: 0.05
+        m at scale 20); the held robot's joint laws are fitted to its own.
 
     Raises
     ------
@@ -218,7 +222,13 @@ def hexapod_scene(gait: str | None = "tripod", period: float | None = None,
             raise ValueError("a free trunk needs a gait (its legs carry it)")
         pattern = walking_pattern(gait, duty)
         period = stride_period(pattern, period, speed, scale)
-        return _walking_scene(pattern, period, scale, ground, name, payload, lengths)
+        if step_height is not None:
+            step_height = check_number("step_height", step_height, 0.0, unit="m")
+        return _walking_scene(pattern, period, scale, ground, name, payload, lengths,
+                              step_height)
+    if step_height is not None:
+        raise ValueError("step_height is the walking robot's (trunk='free'): the held robot's "
+                         "joint laws are fitted to its own feet's paths")
     pattern = None if gait is None else check_gait(gait)
     if duty is not None:
         if pattern is None:
@@ -269,13 +279,15 @@ def cockroach_body(scale: float = MODEL_SCALE, lengths: tuple | None = None,
 def cockroach_description(pattern: GaitPattern, period: float, scale: float = MODEL_SCALE,
                           name: str = "hexapod", payload: float = 0.0,
                           lengths: tuple | None = None,
-                          ground: GroundForces | None = None) -> RobotDescription:
+                          ground: GroundForces | None = None,
+                          step_height: float | None = None) -> RobotDescription:
     """The walking robot as a robot description (:mod:`legs.description`), the built-in one
     among others: its body (:func:`cockroach_body`), each foot the tarsus's end with its stance
     line ``STANCE_OFFSET_MM`` fore-aft of the rest pose's foot, the joints of
     ``legs.stepping.COUPLED_JOINTS`` following the foot through the cycle with the amplitudes
     of ``GAIT_LAWS``, the gait ``pattern`` (its lift-offs and duty) at ``period``, a stride of
-    ``STANCE_LENGTH_MM`` over the duty, a lift of ``FOOT_LIFT_MM``, the trunk level at
+    ``STANCE_LENGTH_MM`` over the duty, a lift of ``step_height`` (m; default
+    ``FOOT_LIFT_MM``), the trunk level at
     ``-GROUND_Z_MM`` above the ground (all scaled), the ``ground``'s policy (default
     least-wrench)."""
     mm = 1e-3 * scale
@@ -289,7 +301,8 @@ def cockroach_description(pattern: GaitPattern, period: float, scale: float = MO
     coupled = {f"*/{joint}": (follows, float(amplitude[joint]))
                for joint, follows in COUPLED_JOINTS.items()}
     gait = Gait(dict(pattern.lift_off), pattern.duty, period,
-                pattern.walking_speed(period, scale) * period, FOOT_LIFT_MM * mm,
+                pattern.walking_speed(period, scale) * period,
+                FOOT_LIFT_MM * mm if step_height is None else step_height,
                 trunk="level", height=-GROUND_Z_MM * mm)
     settings = {} if ground is None else {f.name: getattr(ground, f.name) for f in fields(ground)}
     return RobotDescription(name, Path(), "trunk", feet, {}, gait, settings, coupled=coupled,
@@ -298,7 +311,7 @@ def cockroach_description(pattern: GaitPattern, period: float, scale: float = MO
 
 def _walking_scene(pattern: GaitPattern, period: float, scale: float,
                    ground: GroundForces | None, name: str, payload: float = 0.0,
-                   lengths: tuple | None = None) -> Scene:
+                   lengths: tuple | None = None, step_height: float | None = None) -> Scene:
     """The walking robot through the general path: its description walked by
     :func:`legs.walker.robot_scene`; a leg whose lengths cannot follow its path over the cycle
     is said first (``ValueError``)."""
@@ -307,14 +320,14 @@ def _walking_scene(pattern: GaitPattern, period: float, scale: float,
         for position in ("front", "middle", "hind"):
             leg_motion(position, pattern.duty, tau, lengths)
     return robot_scene(cockroach_description(pattern, period, scale, name, payload, lengths,
-                                             ground))
+                                             ground, step_height))
 
 
 def hexapod_walking(*, gait: str = "tripod", period: float | None = None,
                     speed: float | None = None, duty: float | None = None,
                     scale: float = MODEL_SCALE, payload: float = 0.0, coxa_length: float = 1.0,
                     femur_length: float = 1.0, tibia_length: float = 1.0,
-                    tarsus_length: float = 1.0) -> Scene:
+                    tarsus_length: float = 1.0, step_height: float | None = None) -> Scene:
     """Built-in ``hexapod``: the six-legged robot at 20:1 walking in a tripod gait (duty 0.6),
     as its robot description (data/robots/cockroach.toml): a free trunk, each foot on its path
     exactly as the engine's kinematics places its leg's 6 joints, the feet in stance held to the
@@ -344,6 +357,8 @@ def hexapod_walking(*, gait: str = "tripod", period: float | None = None,
         the lengths. Each foot's path is defined from the rest pose of the leg with the new
         lengths (stance line ``STANCE_OFFSET_MM`` fore-aft of its rest foot, same ground,
         stride and lift); a leg that cannot follow it raises ``ValueError``.
+    step_height : float, optional
+        The feet's lift in swing (m, > 0; default 0.05 at scale 20: ``FOOT_LIFT_MM`` scaled).
 
     Raises
     ------
@@ -353,7 +368,8 @@ def hexapod_walking(*, gait: str = "tripod", period: float | None = None,
     """
     return hexapod_scene(gait, period, scale, trunk="free", duty=duty, speed=speed,
                          payload=payload, coxa_length=coxa_length, femur_length=femur_length,
-                         tibia_length=tibia_length, tarsus_length=tarsus_length)
+                         tibia_length=tibia_length, tarsus_length=tarsus_length,
+                         step_height=step_height)
 
 
 def hexapod_held(*, gait: str = "tripod", period: float | None = None,

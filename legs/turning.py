@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hexapod.scene import Law
-from legs.carried import TrunkSway
+from legs.carried import TrunkSway, sway_design_parameter
 from legs.stepping import STEP_RATES, OnSchedule
 
 
@@ -156,6 +156,9 @@ class TurnedSway(Law):
     values: tuple = ()
     _sway: object = field(default=None, init=False, repr=False, compare=False)
     kind = "turned-sway"
+
+    def design_parameter(self, key):
+        return sway_design_parameter(self.bounds, key)
 
     def __post_init__(self):
         for key in ("xcos", "xsin", "ycos", "ysin", "bounds", "values"):

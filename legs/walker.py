@@ -25,7 +25,7 @@ height above it, level.
 from __future__ import annotations
 
 import fnmatch
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -124,6 +124,15 @@ class StepPath(OnSchedule, Law):
                 rates[m - 1] = rates[m - 1] + rise * np.where(
                     crossing, climb[m] / (swing * self.period) ** m, 0.0)
         return value, rates[0], rates[1]
+
+    def design_parameter(self, key):
+        """``gait.step_height``: the swing's height ``lift`` (m), of which the path is linear
+        (its derivative: the swing's bump, zero in stance); a path without lift (a
+        horizontal coordinate) does not depend on it."""
+        if key != "gait.step_height" or self.lift == 0.0:
+            return None
+        return self.lift, replace(self, start=0.0, advance=0.0, lift=1.0, rises_at=(),
+                                  rises=())
 
     def cycle_time(self):  # a foot that steps forward (or up) does not come back
         return self.period if self.advance == 0.0 and not self.rises else None

@@ -57,6 +57,25 @@ def guided_coordinates(model: Model, q: np.ndarray, v: np.ndarray, v_dot: np.nda
     return np.unwrap(theta, axis=1), rate, acceleration
 
 
+def guided_coordinate_tangents(model: Model, q: np.ndarray, v: np.ndarray,
+                               v_dot: np.ndarray, dq: np.ndarray, dv: np.ndarray,
+                               dv_dot: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The derivatives of the guided joints' coordinates, rates and accelerations (each
+    (G, N, P)) along a change ``dq, dv, dv_dot`` (each (N, size, P)) of the motion ``q, v,
+    v_dot`` (each (N, size)): the forward derivative of :func:`guided_coordinates`'s
+    Function, exact."""
+    function = model.built_once(("guided coordinates",), _coordinates)
+    n, count = q.shape[0], dq.shape[-1]
+    tangent = function.forward(count)
+    out = np.zeros((3, function.size1_out(0), n, count))
+    for k in range(n):
+        nominal = function(q[k], v[k], v_dot[k])
+        for m, x in enumerate(tangent(q[k], v[k], v_dot[k], *nominal, dq[k], dv[k],
+                                      dv_dot[k])):
+            out[m, :, k] = np.asarray(x)
+    return out[0], out[1], out[2]
+
+
 def guided_twin(model: Model, times: np.ndarray, q: np.ndarray, v: np.ndarray,
                 v_dot: np.ndarray, joints: tuple | None = None) -> Model:
     """``model`` with its guided joints' laws the motion ``q, v, v_dot`` (at ``times``) gives

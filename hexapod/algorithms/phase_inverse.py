@@ -59,6 +59,7 @@ from hexapod.algorithms.sample_inverse import (
 )
 from hexapod.algorithms.static_lu import StaticLU
 from hexapod.algorithms.step_terms import StepTerms, terms_of
+from hexapod.errors import HexapodError
 from hexapod.model.model import Data, Model
 
 #: A sample is redone exactly when its scaled position residual is above this (a tenth of the
@@ -228,6 +229,43 @@ def phase_motion(model: Model, data: Data, times: np.ndarray, w, wd, wdd, *,
     fields = phase_inverse(model, data, times, w, wd, wdd, "joint", progress=progress,
                            motion=True)
     return fields["q"], fields["v"], fields["v_dot"]
+
+
+def sample_plans(model: Model, data: Data, times: np.ndarray, w, known: tuple, *,
+                 motion: bool = False) -> list[tuple[PhasePlan, np.ndarray, np.ndarray]]:
+    """The phase path's plan at each sample of a motion ``known`` there (``q, v, v_dot``,
+    each (N, size); laws ``w``, n_w x N), with the mask of its left-out rows (1: free, 0: a
+    foot that carries nothing) and the feet's policy values: one rank decision per run of
+    samples with one contact set, the exact solve's at the run's first sample, the feet
+    chosen again where one stops carrying (as :func:`phase_inverse` decides). For
+    evaluating the plans' Functions at known samples (their derivatives:
+    :mod:`hexapod.algorithms.law_tangents`).
+
+    Raises
+    ------
+    HexapodError
+        At a sample where the drivers and contacts do not fix every degree of freedom (a
+        trunk on two feet): no plan covers it.
+    """
+    feet = _Feet(model, times, motion)
+    decisions = _Decisions(model, data, terms_of(model), feet, current().compiled, motion)
+    out, run = [], -1
+    for k in range(times.size):
+        if feet.run[k] != run:  # a new contact set: the exact solve's decision
+            run = feet.run[k]
+            if motion:
+                exact_motion(model, data, times[k], known[0][k], times[k])
+            else:
+                known_sample(model, data, times, known, k)
+            decisions.adopt(k, data, w[:, k])
+        plan = decisions.plan(k, known[0][k], w[:, k])
+        if plan is None:
+            raise HexapodError(f"model '{model.name}' at t = {times[k]:.6g} s: its drivers and "
+                               "contacts leave a motion free (its dynamics decides it), which "
+                               "the phase path's plans do not cover")
+        mask = (~feet.rows_idle(plan.left_out, k)).astype(float)
+        out.append((plan, mask, feet.values[:, k]))
+    return out
 
 
 def _exact(model: Model, data: Data, out: _Results, times: np.ndarray, k: int, frame: str,

@@ -26,8 +26,13 @@ joint driven, the tree path builds the whole sample as one CasADi graph
 (:meth:`hexapod.algorithms.inverse.TreePlan.graph`): with the joints' frame origins as
 expressions of the parameters, its forward-mode derivative gives the positions', velocities',
 accelerations' and wrenches' derivatives exactly. Closed loops and feet on the ground need the
-positions' equations differentiated by the implicit function theorem (not written yet), and
-the gait's parameters their laws' (the built-in gait's inverse kinematics is not the engine's).
+joints' frames as parameters of the model's Functions (not written yet).
+
+A parameter that changes the laws alone (the gait's step height: the feet's paths, which the
+walking robot's legs follow) moves the motion through them: :class:`LawChange`, derived by the
+phase path's sample Function differentiated in forward mode
+(:mod:`hexapod.algorithms.law_tangents`: the implicit function theorem on the positions, then
+the same solves and policy).
 
 The gait's period ``T`` is the exception among them: a scene whose time laws are all functions
 of the gait's phase ``t / T`` (as the gait builders make them: each foot's path, the coupled
@@ -59,8 +64,8 @@ from hexapod.model.model import Model
 if TYPE_CHECKING:
     from hexapod.algorithms.inverse import InverseResult
 
-__all__ = ["FrameChange", "FrictionChange", "InertiaChange", "InverseSensitivity",
-           "PeriodChange", "inverse_sensitivities"]
+__all__ = ["FrameChange", "FrictionChange", "InertiaChange", "InverseSensitivity", "LawChange",
+           "PeriodChange", "check_parameters", "inverse_sensitivities"]
 
 
 @dataclass(frozen=True)
@@ -176,6 +181,35 @@ class PeriodChange:
     mass: float = 0.0  # it changes no mass
 
 
+@dataclass(frozen=True, eq=False)
+class LawChange:
+    """A parameter that changes the scene's laws (``gait.step_height``: the feet's paths),
+    the rest of the scene kept: each law it changes and the law of its derivative (value,
+    rate and acceleration per unit of the parameter, SI). The motion moves with it: its
+    derivatives are the phase path's, differentiated (:mod:`hexapod.algorithms.law_tangents`).
+
+    Attributes
+    ----------
+    name : str
+        The parameter's name (a scene key, or a builder's argument).
+    laws : dict
+        Scene law -> its derivative's law.
+    unit : str
+        The parameter's SI unit.
+    value : float
+        Its value, in ``unit``.
+    scene_scale : float
+        ``unit`` per unit of the value the scene writes.
+    """
+
+    name: str
+    laws: dict
+    unit: str = "m"
+    value: float = float("nan")
+    scene_scale: float = 1.0
+    mass: float = 0.0  # it changes no mass
+
+
 @dataclass
 class InverseSensitivity:
     """Derivatives of an :class:`~hexapod.algorithms.inverse.InverseResult`'s forces, the
@@ -192,20 +226,25 @@ class InverseSensitivity:
     ground_force : ndarray (N, C, 3, P)
         Derivatives of the ground's force on each foot, world axes.
     q : ndarray (N, n_q, P)
-        Derivatives of the positions (zero but for parameters that move joints).
+        Derivatives of the positions (zero but for parameters that move joints or change
+        laws).
     active_set_changes : ndarray
         With the friction policy, the sample times where the constraints its QP holds at
         equality differ from the sample before: there the forces are piecewise linear in the
         parameters and the derivatives one-sided (empty for the other policies).
     """
 
-    parameters: tuple[InertiaChange | FrameChange | FrictionChange | PeriodChange, ...]
+    parameters: tuple[InertiaChange | FrameChange | FrictionChange | PeriodChange | LawChange,
+                      ...]
     effort: np.ndarray
     force: np.ndarray
     torque: np.ndarray
     ground_force: np.ndarray
     q: np.ndarray
     active_set_changes: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    #: (N, n_w, P): the derivatives of the laws' rates (those of a guided model's guided
+    #: joints: their coordinates'), nonzero for the parameters that change laws only
+    rates: np.ndarray | None = None
 
 
 def inertial_force_changes(model: Model, change: InertiaChange, v: np.ndarray,
@@ -258,9 +297,37 @@ def _check_period(model: Model, change: PeriodChange) -> None:
             "front leg's ground reaction is the walking robot's at that period)")
 
 
+def check_parameters(model: Model, parameters) -> None:
+    """Raise what :func:`inverse_sensitivities` refuses before it computes anything (a run's
+    caller checks first: see its ``Raises``)."""
+    for change in parameters:
+        if isinstance(change, PeriodChange):
+            _check_period(model, change)
+        if isinstance(change, LawChange) and model.contacts and \
+                model.ground.policy == "friction":
+            raise HexapodError(
+                f"parameter '{change.name}': model '{model.name}' shares its ground forces by "
+                "the friction policy, a QP solved sample by sample whose derivative along a "
+                "moving motion is not derived (the least-wrench and least-effort policies are)")
+        if isinstance(change, FrictionChange | PeriodChange | LawChange):
+            continue
+        known = (model.joint_index if isinstance(change, FrameChange) else model.body_index)
+        element = change.joint if isinstance(change, FrameChange) else change.body
+        if element not in known:
+            kind = "joint" if isinstance(change, FrameChange) else "body"
+            raise HexapodError(f"parameter '{change.name}': model '{model.name}' has no {kind} "
+                               f"'{element}'")
+        if isinstance(change, FrameChange) and model.guidance is not None:
+            raise HexapodError(
+                f"parameter '{change.name}': model '{model.name}' has joints that follow its "
+                "guides, whose motion a moved joint changes, and derivatives through the "
+                "guides' kinematics are not computed: drive its joints by explicit laws "
+                "(masses, inertias and the friction coefficient are derived)")
+
+
 def inverse_sensitivities(model: Model, result: InverseResult,
                           parameters: Sequence[InertiaChange | FrameChange | FrictionChange
-                                               | PeriodChange],
+                                               | PeriodChange | LawChange],
                           *,
                           progress: Callable[[int, int], None] | None = None
                           ) -> InverseSensitivity:
@@ -288,26 +355,12 @@ def inverse_sensitivities(model: Model, result: InverseResult,
         A parameter names a body or joint the model does not have; a joint moved in a model
         the tree path does not solve, or whose joints follow guides (their motion would change
         with it: not derived yet); with the friction policy, the exact cone
-        (``faces = 0``), or a sample where no forces are inside the cones.
+        (``faces = 0``), a sample where no forces are inside the cones, or a parameter that
+        changes the laws; a parameter that changes the laws at a sample the phase path's
+        plans do not cover (a trunk on two feet).
     """
     parameters = tuple(parameters)
-    for change in parameters:
-        if isinstance(change, PeriodChange):
-            _check_period(model, change)
-        if isinstance(change, FrictionChange | PeriodChange):
-            continue
-        known = (model.joint_index if isinstance(change, FrameChange) else model.body_index)
-        element = change.joint if isinstance(change, FrameChange) else change.body
-        if element not in known:
-            kind = "joint" if isinstance(change, FrameChange) else "body"
-            raise HexapodError(f"parameter '{change.name}': model '{model.name}' has no {kind} "
-                               f"'{element}'")
-        if isinstance(change, FrameChange) and model.guidance is not None:
-            raise HexapodError(
-                f"parameter '{change.name}': model '{model.name}' has joints that follow its "
-                "guides, whose motion a moved joint changes, and derivatives through the "
-                "guides' kinematics are not computed: drive its joints by explicit laws "
-                "(masses, inertias and the friction coefficient are derived)")
+    check_parameters(model, parameters)
     n, count, joints = result.times.size, len(parameters), len(model.joints)
     wrench = np.zeros((n, count, joints, 6))
     rotations = np.zeros((n, joints, 9))
@@ -315,21 +368,46 @@ def inverse_sensitivities(model: Model, result: InverseResult,
     q = np.zeros((n, model.n_q, count))
     laws = [np.asarray(x, dtype=float).reshape(model.n_w, n)
             for x in model.law_values(result.times)]  # the laws' values at each sample
-    inertial = [k for k, c in enumerate(parameters) if not isinstance(c, FrameChange)]
+    inertial = [k for k, c in enumerate(parameters)
+                if not isinstance(c, FrameChange | LawChange)]
     moving = [k for k, c in enumerate(parameters) if isinstance(c, FrameChange)]
+    changing = [k for k, c in enumerate(parameters) if isinstance(c, LawChange)]
     changes = np.zeros(0)
-    if inertial or not moving:
+    rates = np.zeros((n, model.n_w, count))
+    turning = np.zeros((n, count, joints, 9))  # the joint frames' rotations' derivatives
+    if inertial or not (moving or changing):
         part = _inertial_part(model, result, [parameters[k] for k in inertial], laws, progress)
         wrench[:, inertial], rotations, ground[..., inertial], changes = part
     if moving:
         wrench[:, moving], rotations, q[..., moving] = _moving_part(
             model, result, [parameters[k] for k in moving], laws)
+    if changing:
+        from hexapod.algorithms.law_tangents import law_tangents
+
+        tangents = law_tangents(model, result, [parameters[k].laws for k in changing])
+        wrench[:, changing], rotations, q[..., changing] = (tangents.wrench, tangents.frames,
+                                                           tangents.q)
+        ground[..., changing], rates[..., changing] = tangents.ground, tangents.rates
+        turning[:, changing] = tangents.dframes
     force, torque, effort = efforts_and_axes(model, wrench[..., :3], wrench[..., 3:],
                                              rotations[:, None], result.frame)
+    if result.frame == "world" and changing:  # the frames turn: d(R F) = R dF + dR F
+        dR = turning.reshape(n, count, joints, 3, 3).swapaxes(-1, -2)
+        force = force + np.einsum("npjab,njb->npja", dR, _in_joint_frames(
+            result.force, rotations))
+        torque = torque + np.einsum("npjab,njb->npja", dR, _in_joint_frames(
+            result.torque, rotations))
     # (N, P, J, 3) -> (N, J, 3, P)
     return InverseSensitivity(parameters, effort.transpose(0, 2, 1),
                               force.transpose(0, 2, 3, 1), torque.transpose(0, 2, 3, 1),
-                              ground, q, changes)
+                              ground, q, changes, rates)
+
+
+def _in_joint_frames(world: np.ndarray, rotations: np.ndarray) -> np.ndarray:
+    """Vectors ``world`` (N, J, 3) in world axes in the joint frames ``rotations`` (N, J, 9,
+    column-major)."""
+    R = rotations.reshape(rotations.shape[:-1] + (3, 3)).swapaxes(-1, -2)
+    return np.einsum("njba,njb->nja", R, world)
 
 
 def _inertial_part(model: Model, result, parameters, laws, progress):

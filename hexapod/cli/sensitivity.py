@@ -28,8 +28,10 @@ DESCRIPTION = (
     "Parameters are scene keys, '*' matching any body or joint: body.NAME.mass and "
     "body.NAME.inertia (each component, or body.NAME.inertia.K); for an open tree with every "
     "joint driven (a leg) also a joint's position, joint.NAME.origin[.K] or "
-    "joint.NAME.parent_frame.position[.K] (child_frame); and ground.mu, the friction policy's "
-    "coefficient. Writes the directory OUT: "
+    "joint.NAME.parent_frame.position[.K] (child_frame); ground.mu, the friction policy's "
+    "coefficient; and the gait's period and step height, gait.period and gait.step_height "
+    "(period and step_height, the built-in walking robot's builder arguments). Writes the "
+    "directory OUT: "
     "sensitivities.csv (metric, parameter, value: the derivative, unit, elasticity (p / m) "
     "dm/dp), units.json, summary.md and one tornado figure of elasticities per family of "
     "figures of merit (tornado-FAMILY.png, its largest element); with --per-sample also "
@@ -42,8 +44,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("--parameters", nargs="+", required=True, metavar="KEY",
                         help="scene keys, '*' matching any body or joint name: "
                         "body.NAME.mass, body.NAME.inertia[.K], joint.NAME.origin[.K], "
-                        "joint.NAME.parent_frame.position[.K], ground.mu (quote the '*' in a "
-                        "shell)")
+                        "joint.NAME.parent_frame.position[.K], ground.mu, gait.period, "
+                        "gait.step_height (quote the '*' in a shell)")
     parser.add_argument("--metrics", nargs="+", metavar="FAMILY",
                         help="families of figures of merit (default: all: peak_effort, "
                         "rms_effort, peak_force, peak_moment, peak_ground, energy, "

@@ -113,13 +113,14 @@ def sensitivity_run(scene: Scene, parameters: Sequence, *,
     """
     from hexapod.algorithms.assembly import assemble
     from hexapod.algorithms.inverse import inverse_dynamics, motion_model
-    from hexapod.algorithms.sensitivity import inverse_sensitivities
+    from hexapod.algorithms.sensitivity import check_parameters, inverse_sensitivities
     from hexapod.sweeps.metrics import inverse_metrics
 
     families = check_families(families)
     changes = (inertia_parameters(scene, parameters)
                if all(isinstance(p, str) for p in parameters) else tuple(parameters))
     model = assemble(scene) if model is None else model
+    check_parameters(model, changes)  # before the run
     window, _ = model.time_window(duration)
     cycle = model.cycle_time()
     strides = window / cycle if cycle else 1.0

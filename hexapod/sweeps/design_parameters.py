@@ -17,7 +17,12 @@ the scene's TOML form. Sensitivities cover the bodies' inertia and the joints' p
 * ``gait.period`` (s; ``period``, the built-in walking scenes' builder argument, alike): the
   gait's period, the motion kept at the same fractions of the stride
   (:class:`~hexapod.algorithms.sensitivity.PeriodChange`: a scene whose laws all follow the
-  gait's phase, as the gait builders make them).
+  gait's phase, as the gait builders make them);
+* ``gait.step_height`` (m; ``step_height``, alike): the feet's lift in swing, held by the
+  feet's paths (the laws whose :meth:`~hexapod.scene.Law.design_parameter` answers to it;
+  :class:`~hexapod.algorithms.sensitivity.LawChange`): the joints follow the paths, and the
+  motion's and forces' derivatives are the phase path's
+  (:mod:`hexapod.algorithms.law_tangents`).
 
 A glob that matches bodies without the key (a particle has no inertia) skips them; a name that
 matches nothing, or a key sensitivities do not cover, is refused.
@@ -36,6 +41,7 @@ from hexapod.algorithms.sensitivity import (
     FrameChange,
     FrictionChange,
     InertiaChange,
+    LawChange,
     PeriodChange,
 )
 from hexapod.scene.bodies import Particle, PlanarBody, inertia_tensor
@@ -48,8 +54,8 @@ if TYPE_CHECKING:
 _COVERED = ("masses and inertias, body.NAME.mass and body.NAME.inertia[.K], and joints' "
             "positions, joint.NAME.origin[.K] or joint.NAME.parent_frame.position[.K] "
             "(child_frame) ('*' matches any NAME), the friction coefficient, ground.mu, and the "
-            "gait's period, gait.period (or period); the gait's other parameters are not "
-            "covered yet")
+            "gait's period and step height, gait.period and gait.step_height (or period and "
+            "step_height); the gait's other parameters are not covered yet")
 
 
 def inertia_parameters(scene: Scene, patterns: Sequence[str],
@@ -88,6 +94,9 @@ def inertia_parameters(scene: Scene, patterns: Sequence[str],
         if pattern in ("gait.period", "period"):  # a scene key, or a builder's argument
             found.setdefault(pattern, _period(scene, pattern, source))
             continue
+        if pattern in _LAW_PARAMETERS:
+            found.setdefault(pattern, _law_change(scene, pattern, source))
+            continue
         parts = pattern.split(".")
         section = parts[0]
         if _kind(parts) is None:
@@ -118,6 +127,40 @@ def _period(scene: Scene, name: str, source: str) -> PeriodChange:
         raise StudyError(f"{source}: '{name}': scene '{scene.name}' has no gait (no law of it "
                          "repeats)")
     return PeriodChange(name=name, value=float(period))
+
+
+#: The parameters that change the scene's laws: name -> (the scene key the laws answer to
+#: (:meth:`hexapod.scene.Law.design_parameter`), its SI unit, whether a length). A builder's
+#: argument (``step_height``) names its scene key's parameter.
+_LAW_PARAMETERS = {"gait.step_height": ("gait.step_height", "m", True),
+                   "step_height": ("gait.step_height", "m", True)}
+
+
+def _law_change(scene: Scene, name: str, source: str) -> LawChange:
+    """The parameter ``name`` that the scene's laws hold (:data:`_LAW_PARAMETERS`): each law
+    that depends on it and its derivative, per SI unit; its value, which they must share."""
+    key, unit, length = _LAW_PARAMETERS[name]
+    per_si = 1.0 / scene.unit if length else 1.0  # the laws are in the scene's units
+    laws, values = {}, set()
+    for driver in scene.drivers.values():
+        law = getattr(driver, "law", None)
+        try:
+            held = law.design_parameter(key) if law is not None else None
+        except ValueError as error:
+            raise StudyError(f"{source}: '{name}': driver '{driver.name}' of scene "
+                             f"'{scene.name}': {error}") from None
+        if held is not None:
+            values.add(float(held[0]))
+            laws[law] = held[1].scaled(per_si)
+    if not laws:
+        raise StudyError(f"{source}: '{name}': no law of scene '{scene.name}' depends on "
+                         f"{key} (a walking robot's feet's paths do)")
+    if len(values) > 1:
+        shown = ", ".join(f"{v:g}" for v in sorted(values))
+        raise StudyError(f"{source}: '{name}': the laws of scene '{scene.name}' hold {key} "
+                         f"at different values ({shown}): one parameter cannot move them all")
+    value = values.pop() * (scene.unit if length else 1.0)
+    return LawChange(name, laws, unit, value, scene.unit if length else 1.0)
 
 
 def _kind(parts: list[str]) -> str | None:

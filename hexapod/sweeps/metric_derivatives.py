@@ -12,8 +12,8 @@ rms_effort:J           ``int tau dtau/dp dt / (T rms)`` (trapezoidal, as the val
 peak_force:J,          at the peak sample: ``F . dF/dp / |F|``
 peak_moment:J,
 peak_ground:LEG
-energy                 ``int sum [tau w > 0] w dtau/dp dt`` per stride (the joint rates ``w`` do
-                       not change)
+energy                 ``int sum [tau w > 0] (w dtau/dp + tau dw/dp) dt`` per stride (the joint
+                       rates ``w`` change with the parameters that change the laws only)
 cost_of_transport      ``E / (m g d)``: the energy's derivative, and the mass's and the distance's
                        (the centre of mass's path moves with the masses and the joints)
 =====================  ==========================================================================
@@ -111,7 +111,7 @@ def metric_sensitivities(model: Model, result: InverseResult, sensitivity: Inver
             out[f"peak_ground:{leg}"] = _peak(result.ground_force[:, c],
                                               sensitivity.ground_force[:, c])
     if {"energy", "cost_of_transport"} & set(families):
-        dwork = _work(model, t, result.effort, sensitivity.effort, driven)
+        dwork = _work(model, t, result.effort, sensitivity, driven)
         if "energy" in families:
             out["energy"] = dwork / strides
         if "cost_of_transport" in families:
@@ -130,15 +130,36 @@ def _rms(t: np.ndarray, tau: np.ndarray, dtau: np.ndarray) -> np.ndarray:
     return np.array([time_integral(t, tau * d) for d in dtau.T]) / (span * rms)
 
 
-def _work(model, t, effort, deffort, driven) -> np.ndarray:
-    """The derivative of :func:`hexapod.sweeps.metrics.positive_work`."""
+def _work(model, t, effort, sensitivity, driven) -> np.ndarray:
+    """The derivative of :func:`hexapod.sweeps.metrics.positive_work`: ``int sum [tau w > 0]
+    (w dtau + tau dw) dt``, ``dw`` the joint rates' derivatives (nonzero for parameters that
+    change the laws)."""
+    deffort = sensitivity.effort
     if len(t) < 2 or not driven:
         return np.zeros(deffort.shape[-1])
     columns = [j.index for j in driven]
     rates = joint_rates(model, t, driven)
-    spending = (effort[:, columns] * rates) > 0.0
-    return np.array([time_integral(t, (spending * rates * deffort[:, columns, p]).sum(axis=1))
+    tau = effort[:, columns]
+    spending = (tau * rates) > 0.0
+    drates = _joint_rate_changes(model, sensitivity, driven)
+    return np.array([time_integral(t, (spending * (rates * deffort[:, columns, p]
+                                                   + tau * drates[..., p])).sum(axis=1))
                      for p in range(deffort.shape[-1])])
+
+
+def _joint_rate_changes(model, sensitivity, joints) -> np.ndarray:
+    """The derivatives of the driven ``joints``' rates (N, len(joints), P), from those of
+    their drivers' laws (as :func:`hexapod.sweeps.metrics.joint_rates` reads the rates)."""
+    n, count = sensitivity.effort.shape[0], sensitivity.effort.shape[-1]
+    out = np.zeros((n, len(joints), count))
+    if sensitivity.rates is None:
+        return out
+    for k, joint in enumerate(joints):
+        for row in joint.driver_rows:
+            driver = next(d for d in model.drivers if d.row == row)
+            if driver.law >= 0:
+                out[:, k] = sensitivity.rates[:, driver.law]
+    return out
 
 
 def _transport(model, result, sensitivity, driven, dwork, masses) -> np.ndarray:

@@ -47,6 +47,21 @@ class Law:
         Default: none."""
         return np.zeros(0)
 
+    def design_parameter(self, key: str) -> tuple[float, Law] | None:
+        """The design parameter ``key`` (a scene key, e.g. ``gait.step_height``) as this law
+        holds it: its value, and the law's derivative with respect to it (value, rate and
+        acceleration per unit of it, a law of time), for design sensitivities
+        (:mod:`hexapod.algorithms.law_tangents`); None when the law does not depend on it
+        (the default).
+
+        Raises
+        ------
+        ValueError
+            The law depends on it in a way not derived (a trunk's sway solved from the whole
+            motion); the message says how.
+        """
+        return None
+
     def symbolic(self, t):
         """Value, first and second derivatives as CasADi expressions of the symbol ``t`` (SX or
         MX), for integrators whose time loop runs in compiled code; None when the law has no

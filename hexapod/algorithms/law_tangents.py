@@ -1,0 +1,194 @@
+"""Derivatives of an inverse-dynamics result along a change of its scene's laws (a gait's step
+height: the feet's paths), by the phase path's sample Function differentiated in forward mode.
+
+At a sample, the Function of a :class:`~hexapod.algorithms.phase_plan.PhasePlan` maps the
+laws' values, rates and accelerations to the positions (Newton's steps on the kept rows), the
+velocities and accelerations, the multipliers (the saddle-point solve and the redundancy
+policy) and the joint wrenches. Started from the sample's own solution with no time step, one
+Newton step leaves the positions where they are, and its forward derivative along the laws'
+change ``(dw, dwd, dwdd)`` is the implicit function theorem's: ``dq = -Phi_q^-1 phi_w dw`` on
+the kept rows, then the velocities', accelerations' and multipliers' derivatives through the
+same solves, and the policy's through its small least-squares problem, whose Jacobian, wrench
+map and weights move with the positions. Exact to round-off, no difference quotient, and no
+second copy of any of it: the derivative of the one step.
+
+A guided model (the walking robot: the trunk's pose and the feet's paths are guides, and its
+joints follow them) goes in two stages, as its inverse dynamics does
+(:mod:`hexapod.algorithms.guided`): the guides' kinematics (a motion plan) gives the motion's
+derivative; the guided joints' coordinates' derivatives follow from it; the twin (its guided
+joints driven by those coordinates) takes the motion and the laws with their derivatives and
+gives the forces'.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import casadi as ca
+import numpy as np
+
+from hexapod._support.execution import executing
+from hexapod.algorithms.phase_inverse import POSITION_TOL, RESIDUAL_TOL, SIGMA_TOL, sample_plans
+from hexapod.errors import HexapodError
+from hexapod.model.model import Model
+from hexapod.scene.laws.base import Scaled
+
+if TYPE_CHECKING:
+    from hexapod.algorithms.inverse import InverseResult
+    from hexapod.scene.laws.base import Law
+
+__all__ = ["LawTangents", "law_tangents"]
+
+
+@dataclass(frozen=True)
+class LawTangents:
+    """The derivatives of an inverse-dynamics result along ``P`` changes of its laws.
+
+    Attributes
+    ----------
+    q : ndarray (N, n_q, P)
+        The positions'.
+    wrench : ndarray (N, P, J, 6)
+        The joint wrenches', joint frames (force then moment).
+    frames, dframes : ndarray (N, J, 9) and (N, P, J, 9)
+        The joint frames' rotations (column-major) and their derivatives.
+    ground : ndarray (N, C, 3, P)
+        The ground's forces on the feet's, world axes.
+    rates : ndarray (N, n_w, P)
+        The laws' rates' (the guided joints' coordinates' rates for a guided model).
+    """
+
+    q: np.ndarray
+    wrench: np.ndarray
+    frames: np.ndarray
+    dframes: np.ndarray
+    ground: np.ndarray
+    rates: np.ndarray
+
+
+def law_tangents(model: Model, result: InverseResult,
+                 changes: Sequence[Mapping[Law, Law]]) -> LawTangents:
+    """The derivatives of ``result`` (an inverse dynamics of ``model``) along each change of
+    ``changes``: a mapping from each law the parameter changes to the law of its derivative
+    (value, rate and acceleration per unit of the parameter).
+
+    Raises
+    ------
+    HexapodError
+        At a sample the phase path's plans do not cover (a motion the drivers leave free), or
+        where a plan's checks fail at the result's own state.
+    """
+    times, n = result.times, result.times.size
+    motion = (result.q, result.v, result.v_dot)
+    with executing(compiled=False):  # compiled Functions carry no derivatives
+        if model.guidance is None:
+            seeds = _seeds(model, times, changes)
+            dx, lam, dwrench, frames, dframes = _tangents(model, times, motion, seeds)
+        else:
+            from hexapod.algorithms.guided import guided_coordinate_tangents
+            from hexapod.algorithms.inverse import motion_model
+
+            kinematics = model.guidance.kinematics
+            dx = _tangents(kinematics, times, motion, _seeds(kinematics, times, changes),
+                           kinematics_only=True)[0]
+            twin = motion_model(model, result)
+            seeds = _seeds(twin, times, changes)
+            n_q, n_v = model.n_q, model.n_v
+            joints = guided_coordinate_tangents(model, *motion, dx[:, :n_q],
+                                                dx[:, n_q:n_q + n_v], dx[:, n_q + n_v:])
+            for m in range(3):
+                seeds[m][model.guidance.laws] = joints[m]
+            dx, lam, dwrench, frames, dframes = _tangents(twin, times, motion, seeds, known=dx)
+    rows = np.array([c.rows for c in model.contacts], dtype=int).reshape(-1, 3)
+    return LawTangents(dx[:, :model.n_q], dwrench, frames, dframes, -lam[:, rows],
+                       seeds[1].transpose(1, 0, 2).reshape(n, model.n_w, -1))
+
+
+def _seeds(model: Model, times: np.ndarray, changes) -> list[np.ndarray]:
+    """The laws' derivatives: values, rates, accelerations, each (n_w, N, P)."""
+    out = [np.zeros((model.n_w, times.size, len(changes))) for _ in range(3)]
+    for p, change in enumerate(changes):
+        for index, law in enumerate(model.laws):
+            derivative = change.get(law)
+            if derivative is None and isinstance(law, Scaled):  # in the scene's units
+                derivative = change.get(law.law)
+                derivative = None if derivative is None else derivative.scaled(law.factor)
+            if derivative is not None:
+                for m, x in enumerate(derivative.evaluate(times)):
+                    out[m][index, :, p] = x
+    return out
+
+
+def _tangents(model: Model, times, motion, seeds, *, kinematics_only: bool = False,
+              known: np.ndarray | None = None):
+    """The forward derivatives at each sample of the state ``[q; v; v_dot]`` (N, n_x, P), and
+    with forces of the multipliers (N, n_c, P), the joint wrenches (N, P, J, 6), the frames
+    (N, J, 9) and their derivatives (N, P, J, 9). ``known``: the motion's derivative (the
+    twin of a guided model takes its motion as known)."""
+    n, count = times.size, seeds[0].shape[-1]
+    data = model.create_data()
+    w, wd, wdd = (np.asarray(x, dtype=float).reshape(model.n_w, n)
+                  for x in model.law_values(times, data))
+    plans = sample_plans(model, data, times, w, motion, motion=kinematics_only)
+    state = np.hstack(motion)
+    joints, n_c = len(model.joints), model.n_c
+    dx = np.zeros((n, state.shape[1], count))
+    lam, dwrench = np.zeros((n, n_c, count)), np.zeros((n, count, joints, 6))
+    frames, dframes = np.zeros((n, joints, 9)), np.zeros((n, count, joints, 9))
+    for k, (plan, mask, feet) in enumerate(plans):
+        function = _tangent_function(plan, count, known is not None)
+        inputs = [state[k], 0.0, w[:, k], wd[:, k], wdd[:, k], feet, mask]
+        directions = [np.zeros((state.shape[1], count)), np.zeros((1, count)),
+                      seeds[0][:, k], seeds[1][:, k], seeds[2][:, k],
+                      np.zeros((feet.size, count)), np.zeros((mask.size, count))]
+        if known is not None:
+            inputs.append(state[k])
+            directions.append(known[k])
+        outputs = [np.asarray(x) for x in function(*inputs, *directions)]
+        _check(model, times[k], outputs[1 if kinematics_only else 4].ravel())
+        if kinematics_only:
+            dx[k] = outputs[2]
+            continue
+        if known is not None:
+            dx[k] = known[k]
+        else:
+            dx[k] = outputs[5]
+        # CasADi's column-major matrices (6 x J, and 6 x J P for P directions)
+        frames[k] = outputs[3].ravel(order="F").reshape(joints, 9)
+        lam[k] = outputs[6]
+        dwrench[k] = outputs[7].ravel(order="F").reshape(count, joints, 6)
+        dframes[k] = outputs[8].ravel(order="F").reshape(count, joints, 9)
+    return dx, lam, dwrench, frames, dframes
+
+
+def _tangent_function(plan, count: int, known: bool) -> ca.Function:
+    """The plan's step (one Newton step, or none from known positions) with its forward
+    derivative in ``count`` directions: ``(inputs, directions) -> (outputs, derivatives)``,
+    built once per plan."""
+    cache = plan.__dict__.setdefault("_tangent_functions", {})
+    key = (count, known)
+    if key not in cache:
+        step = plan.step(0 if known else 1, False, known)
+        inputs = [ca.MX.sym(step.name_in(i), step.sparsity_in(i)) for i in range(step.n_in())]
+        directions = [ca.MX.sym("d_" + step.name_in(i), step.size1_in(i), count)
+                      for i in range(step.n_in())]
+        outputs = step.call(inputs)
+        derivatives = step.forward(count).call([*inputs, *outputs, *directions])
+        kept = 1 if plan.motion else 3  # of the state, or of the state, lam and wrench
+        frames = [derivatives[3]] if not plan.motion else []
+        cache[key] = ca.Function("phase_tangent", [*inputs, *directions],
+                                 [*outputs, *derivatives[:kept], *frames])
+    return cache[key]
+
+
+def _check(model: Model, t: float, checks: np.ndarray) -> None:
+    """The plan's checks at the result's own state (:data:`~hexapod.algorithms.phase_plan.
+    CHECKS`): the derivative is its rows' only where they hold."""
+    position, residuals, outside, sigma = checks[0], checks[1:5], checks[5], checks[6]
+    if not (position <= 10 * POSITION_TOL and np.all(residuals <= RESIDUAL_TOL)
+            and outside == 0 and sigma >= SIGMA_TOL):
+        raise HexapodError(f"model '{model.name}' at t = {t:.6g} s: the phase path's rank "
+                           "decision does not hold at the result's state (a singular pose, or "
+                           "a foot that touches down unweighed): no derivative there")

@@ -1,0 +1,162 @@
+"""Design sensitivities with respect to parameters that change the scene's laws: the walking
+robot's step height, which moves its feet's paths and so the whole motion of its legs.
+
+References, independent of the method (the phase path's sample Function differentiated in
+forward mode at the result's samples, :mod:`hexapod.algorithms.law_tangents`):
+
+* central differences of whole runs of the robot rebuilt with the step height moved: with a
+  relative step of 1e-4 their truncation error is some 1e-8 of the values (measured 1e-9),
+  so 1e-6 of the largest value per unit relative change leaves a margin of 100;
+* the feet's paths themselves: a foot's height moves by the swing's bump ``B(u)`` per metre of
+  step height and by nothing in stance, its ground position does not move, nor the trunk
+  (its pose is a guide): positions of the differentiated motion, to round-off.
+"""
+
+from __future__ import annotations
+
+import csv
+
+import numpy as np
+import pytest
+
+import hexapod as hx
+from hexapod.cli import main
+from hexapod.sweeps.cases import StudyError
+from hexapod.sweeps.design_parameters import inertia_parameters
+from hexapod.sweeps.metric_derivatives import SENSITIVE_FAMILIES, metric_sensitivities
+from hexapod.sweeps.metrics import inverse_metrics
+from legs.robot import hexapod_walking
+from legs.walker import StepPath
+from tests.scene_documents import SCENES
+
+#: Relative step of the central differences.
+STEP = 1e-4
+#: Agreement asked, per unit relative change of the parameter, of the largest value.
+TOLERANCE = 1e-6
+#: The built-in robot's step height (m) and the samples: a stride, both tripods' swings.
+HEIGHT = 0.05
+TIMES = np.linspace(0.0, 0.5, 11)
+
+
+@pytest.fixture(scope="module")
+def walking():
+    scene = hexapod_walking(step_height=HEIGHT)
+    model = hx.assemble(scene)
+    result = hx.inverse_dynamics(model, TIMES, frame="world")
+    change, = inertia_parameters(scene, ["step_height"])
+    return scene, model, result, change
+
+
+def test_the_step_height_is_held_by_the_feet_paths(walking):
+    scene, _, _, change = walking
+    assert (change.name, change.unit, change.value) == ("step_height", "m", HEIGHT)
+    assert {law.lift for law in change.laws} == {HEIGHT}  # each foot's vertical path
+    assert all(isinstance(law, StepPath) for law in change.laws)
+    assert inertia_parameters(scene, ["gait.step_height"])[0].laws == change.laws
+
+
+def test_the_step_height_against_central_differences(walking):
+    """Every force, effort and ground force (world axes: the joint frames turn with the
+    motion), every position and every figure of merit."""
+    _, model, result, change = walking
+    sensitivity = hx.inverse_sensitivities(model, result, [change])
+    derivatives = metric_sensitivities(model, result, sensitivity)
+    h = STEP * HEIGHT
+
+    def run(sign: float):
+        moved = hx.assemble(hexapod_walking(step_height=HEIGHT + sign * h))
+        ahead = hx.inverse_dynamics(moved, TIMES, frame="world")
+        return ahead, inverse_metrics(moved, ahead, SENSITIVE_FAMILIES, 1.0)
+
+    (ahead, metrics_ahead), (behind, metrics_behind) = run(1.0), run(-1.0)
+    for name in ("effort", "force", "torque", "ground_force", "q"):
+        value, exact = getattr(result, name), getattr(sensitivity, name)[..., 0]
+        reference = (getattr(ahead, name) - getattr(behind, name)) / (2 * h)
+        finite = np.isfinite(value)
+        assert np.abs(HEIGHT * (exact - reference)[finite]).max() <= \
+            TOLERANCE * np.abs(value[finite]).max(), name
+    values = inverse_metrics(model, result, SENSITIVE_FAMILIES, 1.0)
+    assert {"energy", "cost_of_transport", "peak_ground:L1"} <= set(derivatives)
+    for column, exact in derivatives.items():
+        reference = (metrics_ahead[column] - metrics_behind[column]) / (2 * h)
+        assert abs(HEIGHT * (exact[0] - reference)) <= TOLERANCE * abs(values[column]), column
+
+
+def test_the_feet_rise_by_the_swing_bump(walking):
+    """The differentiated motion puts each foot where its path's derivative says: up by the
+    swing's bump ``B(u)`` per metre (the vertical path is linear in its lift), nowhere in
+    stance, never sideways; the trunk, whose pose is a guide, does not move. The feet's
+    positions from the bodies' (centre of mass and Euler parameters)."""
+    scene, model, result, change = walking
+    dq = hx.inverse_sensitivities(model, result, [change]).q[..., 0]
+    trunk = model.bodies[model.body_index["trunk"]]
+    assert np.abs(dq[:, trunk.q]).max() <= 1e-12
+    for contact in model.contacts:
+        joint = model.joints[contact.joint]
+        body = model.bodies[joint.child]
+        law = scene.drivers[contact.name.replace("/ground", "/z")].law
+        lifted = law.evaluate(TIMES)[0] - law.start
+        bump = change.laws[law].evaluate(TIMES)[0]
+        assert np.allclose(lifted, law.lift * bump, rtol=0, atol=1e-15)
+        moved = np.array([_point_change(result.q[k, body.q], dq[k, body.q],
+                                        joint.child_frame.position)
+                          for k in range(TIMES.size)])
+        assert np.abs(moved[:, :2]).max() <= 1e-12, contact.name
+        assert np.abs(moved[:, 2] - bump).max() <= 1e-12, contact.name
+        assert bump.max() > 0.5 and (bump == 0).sum() >= 5  # swings near their top, stances
+
+
+def _point_change(x, dx, point):
+    """The change along ``dx`` of the world position of a body's ``point`` (its centre of
+    mass's axes) at ``x`` (centre of mass, Euler parameters ``e0, e``): ``dr + dA point``."""
+    def cross(e):
+        return np.array([[0, -e[2], e[1]], [e[2], 0, -e[0]], [-e[1], e[0], 0]])
+
+    e0, e, de0, de = x[3], x[4:7], dx[3], dx[4:7]
+    dA = 4 * e0 * de0 * np.eye(3) + 2 * (np.outer(de, e) + np.outer(e, de) + de0 * cross(e)
+                                         + e0 * cross(de))
+    return dx[:3] + dA @ point
+
+
+def test_command_derives_by_the_step_height(tmp_path, walking):
+    """``step_height`` (the built-in robot's builder argument) from the command line: the
+    table in J per m, the library's derivatives at the same samples (a stride)."""
+    _, model, result, change = walking
+    out = tmp_path / "out"
+    assert main(["sensitivity", "hexapod", "--parameters", "step_height", "--samples",
+                 str(TIMES.size), "--metrics", "energy", "--no-figures", "--out",
+                 str(out)]) == 0
+    with open(out / "sensitivities.csv") as stream:
+        row, = csv.DictReader(stream)
+    assert (row["metric"], row["parameter"], row["unit"]) == ("energy", "step_height", "J/m")
+    derivative = metric_sensitivities(model, result, hx.inverse_sensitivities(
+        model, result, [change]), ["energy"])["energy"][0]
+    energy = inverse_metrics(model, result, ["energy"], 1.0)["energy"]
+    assert float(row["value"]) == pytest.approx(derivative, rel=1e-9)
+    assert float(row["elasticity"]) == pytest.approx(HEIGHT * derivative / energy, rel=1e-9)
+
+
+def test_a_scene_without_feet_paths_is_refused(tmp_path, capsys):
+    assert main(["sensitivity", str(SCENES / "pendulum.toml"), "--parameters",
+                 "gait.step_height", "--no-figures", "--out", str(tmp_path / "none")]) == 1
+    error = capsys.readouterr().err
+    assert "no law of scene" in error and "Traceback" not in error
+    assert not (tmp_path / "none").exists()
+
+
+def test_a_trunk_carried_by_two_feet_is_refused():
+    """A trot's trunk sway is solved from the whole motion so that two feet carry it: its
+    dependence on the step height is not derived, and said."""
+    scene = hx.load_scene(str(SCENES.parent / "robots" / "quadruped-trot.toml"))
+    with pytest.raises(StudyError, match="two feet carry the robot"):
+        inertia_parameters(scene, ["gait.step_height"])
+
+
+def test_the_friction_policy_is_refused_before_the_run(tmp_path, capsys):
+    """Its QP is solved sample by sample: no derivative along a moving motion (the other
+    policies are the plans' own), refused before the inverse dynamics runs."""
+    assert main(["sensitivity", "hexapod", "--policy", "friction", "--parameters",
+                 "step_height", "--no-figures", "--out", str(tmp_path / "none")]) == 1
+    error = capsys.readouterr().err
+    assert "friction policy" in error and "Traceback" not in error
+    assert not (tmp_path / "none").exists()
