@@ -82,6 +82,51 @@ def test_the_step_height_against_central_differences(walking):
         assert abs(HEIGHT * (exact[0] - reference)) <= TOLERANCE * abs(values[column]), column
 
 
+@pytest.mark.slow  # four runs of the robot, 7 s: the benchmark checks lengths at 10 points
+def test_a_segment_length_of_the_walking_robot_against_central_differences(walking):
+    """The left front femur's length (the ``fti`` joint's frame on the femur): its foot keeps
+    its path, so the leg's joints change along the stride, and with them every force.
+    Against central differences of the robot read again with the length moved, Richardson
+    extrapolated from steps h and h/2 (the figures of merit depend strongly on it, an
+    elasticity of 14 for the joint's RMS effort: a plain difference's error, measured
+    4.6e-6 at h = 1e-5 m, falls as h^2 to a round-off floor of 6e-7 at 1e-6 m)."""
+    scene, model, result, _ = walking
+    change, = inertia_parameters(scene, ["joint.L1/fti.parent_frame.position.0"])
+    sensitivity = hx.inverse_sensitivities(model, result, [change], scene=scene)
+    derivatives = metric_sensitivities(model, result, sensitivity)
+
+    def run(value):
+        moved = hx.assemble(hx.sweeps.with_scene_keys(scene, {change.name: value}))
+        outcome = hx.inverse_dynamics(moved, TIMES, frame="world")
+        return outcome, inverse_metrics(moved, outcome, SENSITIVE_FAMILIES, 1.0)
+
+    def difference(h, get):
+        (ahead, ahead_metrics), (behind, behind_metrics) = (run(change.value + h),
+                                                            run(change.value - h))
+        return {k: (get(ahead, ahead_metrics, k) - get(behind, behind_metrics, k)) / (2 * h)
+                for k in keys}
+
+    def extrapolated(get):
+        coarse, fine = difference(2e-5, get), difference(1e-5, get)
+        return {k: (4 * fine[k] - coarse[k]) / 3 for k in keys}
+
+    keys = ["effort", "force", "torque", "ground_force", "q", *derivatives]
+
+    def get(outcome, metrics, key):
+        return metrics[key] if key in metrics else getattr(outcome, key)
+
+    reference = extrapolated(get)
+    values = inverse_metrics(model, result, SENSITIVE_FAMILIES, 1.0)
+    for name in ("effort", "force", "torque", "ground_force", "q"):
+        value, exact = getattr(result, name), getattr(sensitivity, name)[..., 0]
+        finite = np.isfinite(value)
+        assert np.abs(change.value * (exact - reference[name])[finite]).max() <= \
+            TOLERANCE * np.abs(value[finite]).max(), name
+    for column, exact in derivatives.items():
+        assert abs(change.value * (exact[0] - reference[column])) <= \
+            TOLERANCE * abs(values[column]), column
+
+
 def test_the_feet_rise_by_the_swing_bump(walking):
     """The differentiated motion puts each foot where its path's derivative says: up by the
     swing's bump ``B(u)`` per metre (the vertical path is linear in its lift), nowhere in
@@ -104,6 +149,41 @@ def test_the_feet_rise_by_the_swing_bump(walking):
         assert np.abs(moved[:, :2]).max() <= 1e-12, contact.name
         assert np.abs(moved[:, 2] - bump).max() <= 1e-12, contact.name
         assert bump.max() > 0.5 and (bump == 0).sum() >= 5  # swings near their top, stances
+
+
+def test_a_longer_femur_keeps_the_feet_on_their_paths(walking):
+    """The femur's length moves the leg's joints, not its foot (a guide) nor the trunk (a
+    guide): the differentiated motion keeps every foot where it was, to round-off, and the
+    knee (the ``fti`` joint) moves with the femur's end, along the femur, per metre: the same
+    point seen from the tibia side, which the joint's rows tie to it."""
+    scene, model, result, _ = walking
+    change, = inertia_parameters(scene, ["joint.L1/fti.parent_frame.position.0"])
+    dq = hx.inverse_sensitivities(model, result, [change], scene=scene).q[..., 0]
+    trunk = model.bodies[model.body_index["trunk"]]
+    assert np.abs(dq[:, trunk.q]).max() <= 1e-12
+    for contact in model.contacts:
+        joint = model.joints[contact.joint]
+        body = model.bodies[joint.child]
+        moved = np.array([_point_change(result.q[k, body.q], dq[k, body.q],
+                                        joint.child_frame.position)
+                          for k in range(TIMES.size)])
+        assert np.abs(moved).max() <= 1e-12, contact.name
+    knee = model.joints[model.joint_index["L1/fti"]]
+    femur, tibia = model.bodies[knee.parent], model.bodies[knee.child]
+    for k in range(TIMES.size):
+        on_tibia = _point_change(result.q[k, tibia.q], dq[k, tibia.q],
+                                 knee.child_frame.position)
+        on_femur = _point_change(result.q[k, femur.q], dq[k, femur.q],
+                                 knee.parent_frame.position)
+        along = _rotation(result.q[k, femur.q]) @ change.parent  # the femur's axis, world
+        assert np.abs(on_tibia - (on_femur + along)).max() <= 1e-12
+        assert np.abs(on_tibia).max() > 0.1  # the knee moves
+
+
+def _rotation(x):
+    e0, e = x[3], x[4:7]
+    cross = np.array([[0, -e[2], e[1]], [e[2], 0, -e[0]], [-e[1], e[0], 0]])
+    return (2 * e0**2 - 1) * np.eye(3) + 2 * (np.outer(e, e) + e0 * cross)
 
 
 def _point_change(x, dx, point):

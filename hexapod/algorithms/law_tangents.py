@@ -160,7 +160,40 @@ def _tangents(model: Model, times, motion, seeds, *, kinematics_only: bool = Fal
         lam[k] = outputs[6]
         dwrench[k] = outputs[7].ravel(order="F").reshape(count, joints, 6)
         dframes[k] = outputs[8].ravel(order="F").reshape(count, joints, 9)
+    _check_consistent(model, times, state, dx, w, seeds[0], plans)
     return dx, lam, dwrench, frames, dframes
+
+
+#: The most a row left out of a rank decision may move per unit of the parameter (scaled as
+#: the position checks scale rows, relative to the motion's change) for the derivative to be
+#: the scene's: a change the drivers' laws cannot follow moves it by order one.
+CONSISTENT_TOL = 1e-8
+
+
+def _check_consistent(model: Model, times, state, dx, w, dw, plans) -> None:
+    """Where the drivers fix the motion with rows to spare (closed loops, feet on the
+    ground), the rows left out must follow the change too: a joint moved in a robot standing
+    on pinned feet with its joints' laws fixed has no motion (the scene moved cannot be
+    assembled), though the kept rows give one. Checked on the positions' change, which
+    solved the kept rows; raised naming the row and the time."""
+    from hexapod.algorithms.step_terms import terms_of
+
+    residual, n_q = terms_of(model).residual, model.n_q
+    tangent = residual.forward(dw.shape[-1])
+    scale = np.asarray(model.row_scale, dtype=float)[:, None]
+    for k, (plan, _, _) in enumerate(plans):
+        q = state[k, :n_q]
+        moved = np.asarray(tangent(q, w[:, k], residual(q, w[:, k]), dx[k, :n_q],
+                                   dw[:, k])) / scale
+        size = 1.0 + np.abs(dx[k]).max()
+        rows = plan.left_out
+        if rows.size and np.abs(moved[rows]).max() > CONSISTENT_TOL * size:
+            row = int(rows[np.argmax(np.abs(moved[rows]).max(axis=1))])
+            raise HexapodError(
+                f"model '{model.name}' at t = {times[k]:.6g} s: the parameter moves its row "
+                f"'{model.rows[row].name}' (left out as redundant) where its drivers cannot "
+                "follow: with the parameter moved the scene has no motion (closed loops whose "
+                "drivers' laws were written for the scene's values): no derivative")
 
 
 def _tangent_function(plan, count: int, known: bool) -> ca.Function:

@@ -25,14 +25,19 @@ A joint's position (a segment's length) moves the motion itself. For an open tre
 joint driven, the tree path builds the whole sample as one CasADi graph
 (:meth:`hexapod.algorithms.inverse.TreePlan.graph`): with the joints' frame origins as
 expressions of the parameters, its forward-mode derivative gives the positions', velocities',
-accelerations' and wrenches' derivatives exactly. Closed loops and feet on the ground need the
-joints' frames as parameters of the model's Functions (not written yet).
+accelerations' and wrenches' derivatives exactly.
 
 A parameter that changes the laws alone (the gait's step height: the feet's paths, which the
 walking robot's legs follow) moves the motion through them: :class:`LawChange`, derived by the
 phase path's sample Function differentiated in forward mode
 (:mod:`hexapod.algorithms.law_tangents`: the implicit function theorem on the positions, then
-the same solves and policy).
+the same solves and policy). Where loops close, feet stand or joints follow guides (the
+walking robot), a joint's frame moved on its parent becomes such a parameter: the scene is
+assembled again with the frame's origin shifted by a symbol held as a law (zero:
+:class:`~hexapod.scene.laws.base.DesignShift`), whose derivative is one. Its frame on the child
+is the point the policy weighs the joint's wrench about: not derived there. Where the rows a
+rank decision leaves out cannot follow the change (a robot on pinned feet whose joints' laws
+were written for the scene's lengths), there is no moved motion, and that is said.
 
 The gait's period ``T`` is the exception among them: a scene whose time laws are all functions
 of the gait's phase ``t / T`` (as the gait builders make them: each foot's path, the coupled
@@ -297,14 +302,15 @@ def _check_period(model: Model, change: PeriodChange) -> None:
             "front leg's ground reaction is the walking robot's at that period)")
 
 
-def check_parameters(model: Model, parameters) -> None:
+def check_parameters(model: Model, parameters, scene=None) -> None:
     """Raise what :func:`inverse_sensitivities` refuses before it computes anything (a run's
     caller checks first: see its ``Raises``)."""
     for change in parameters:
         if isinstance(change, PeriodChange):
             _check_period(model, change)
-        if isinstance(change, LawChange) and model.contacts and \
-                model.ground.policy == "friction":
+        through_motion = isinstance(change, LawChange) or (
+            isinstance(change, FrameChange) and not _tree_solved(model))
+        if through_motion and model.contacts and model.ground.policy == "friction":
             raise HexapodError(
                 f"parameter '{change.name}': model '{model.name}' shares its ground forces by "
                 "the friction policy, a QP solved sample by sample whose derivative along a "
@@ -317,20 +323,45 @@ def check_parameters(model: Model, parameters) -> None:
             kind = "joint" if isinstance(change, FrameChange) else "body"
             raise HexapodError(f"parameter '{change.name}': model '{model.name}' has no {kind} "
                                f"'{element}'")
-        if isinstance(change, FrameChange) and model.guidance is not None:
-            raise HexapodError(
-                f"parameter '{change.name}': model '{model.name}' has joints that follow its "
-                "guides, whose motion a moved joint changes, and derivatives through the "
-                "guides' kinematics are not computed: drive its joints by explicit laws "
-                "(masses, inertias and the friction coefficient are derived)")
+        if through_motion:
+            _check_shifted(model, change, scene)
+
+
+def _tree_solved(model: Model) -> bool:
+    """Whether a joint's position is derived by the tree path's graph: an open tree with
+    every joint driven by its own laws (else through the phase path's step)."""
+    from hexapod.algorithms.inverse import tree_plan
+
+    return model.guidance is None and tree_plan(model) is not None
+
+
+def _check_shifted(model: Model, change: FrameChange, scene) -> None:
+    """A joint moved in a model the tree path does not solve: on its parent only (its frame on
+    the child is the joint wrench's reference point, whose move the least-wrench policy's
+    objective would see: not derived), not a foot, the scene at hand (the model is assembled
+    again with the shift as a symbol)."""
+    joint = model.joints[model.joint_index[change.joint]]
+    if np.any(change.child):
+        raise HexapodError(
+            f"parameter '{change.name}': model '{model.name}' is not an open tree with every "
+            "joint driven, and a joint's frame moved on its child moves the point its wrench is "
+            "reported about, which the policy sharing the forces weighs: not derived; move the "
+            f"frame on the parent (joint.{change.joint}.parent_frame.position)")
+    if joint.kind == "contact":
+        raise HexapodError(f"parameter '{change.name}': joint '{change.joint}' is a foot's "
+                           "contact: moving it is not derived")
+    if scene is None:
+        raise HexapodError(f"parameter '{change.name}': model '{model.name}' is not an open tree "
+                           "with every joint driven: the derivative assembles its scene again "
+                           "with the joint's frame as a symbol; give the scene")
 
 
 def inverse_sensitivities(model: Model, result: InverseResult,
                           parameters: Sequence[InertiaChange | FrameChange | FrictionChange
                                                | PeriodChange | LawChange],
                           *,
-                          progress: Callable[[int, int], None] | None = None
-                          ) -> InverseSensitivity:
+                          progress: Callable[[int, int], None] | None = None,
+                          scene=None) -> InverseSensitivity:
     """The derivatives of ``result``'s efforts, joint wrenches and ground forces with respect
     to each parameter, sample by sample (see the module's text for the method).
 
@@ -344,6 +375,9 @@ def inverse_sensitivities(model: Model, result: InverseResult,
         What each parameter changes.
     progress : callable, optional
         Called with ``(samples done, samples)``.
+    scene : Scene, optional
+        The scene ``model`` was assembled from: needed for a joint moved in a model the tree
+        path does not solve (assembled again with the joint's frame as a symbol).
 
     Returns
     -------
@@ -353,14 +387,14 @@ def inverse_sensitivities(model: Model, result: InverseResult,
     ------
     HexapodError
         A parameter names a body or joint the model does not have; a joint moved in a model
-        the tree path does not solve, or whose joints follow guides (their motion would change
-        with it: not derived yet); with the friction policy, the exact cone
+        the tree path does not solve: on its child, a foot's, without ``scene``, or where the
+        rows left out cannot follow; with the friction policy, the exact cone
         (``faces = 0``), a sample where no forces are inside the cones, or a parameter that
-        changes the laws; a parameter that changes the laws at a sample the phase path's
-        plans do not cover (a trunk on two feet).
+        moves the motion (changes the laws, or a joint outside the tree path); such a
+        parameter at a sample the phase path's plans do not cover (a trunk on two feet).
     """
     parameters = tuple(parameters)
-    check_parameters(model, parameters)
+    check_parameters(model, parameters, scene)
     n, count, joints = result.times.size, len(parameters), len(model.joints)
     wrench = np.zeros((n, count, joints, 6))
     rotations = np.zeros((n, joints, 9))
@@ -371,27 +405,34 @@ def inverse_sensitivities(model: Model, result: InverseResult,
     inertial = [k for k, c in enumerate(parameters)
                 if not isinstance(c, FrameChange | LawChange)]
     moving = [k for k, c in enumerate(parameters) if isinstance(c, FrameChange)]
+    shifted: list[int] = []  # moved joints derived through the phase path's step
+    if moving and not _tree_solved(model):
+        moving, shifted = [], moving
     changing = [k for k, c in enumerate(parameters) if isinstance(c, LawChange)]
     changes = np.zeros(0)
     rates = np.zeros((n, model.n_w, count))
     turning = np.zeros((n, count, joints, 9))  # the joint frames' rotations' derivatives
-    if inertial or not (moving or changing):
+    if inertial or not (moving or changing or shifted):
         part = _inertial_part(model, result, [parameters[k] for k in inertial], laws, progress)
         wrench[:, inertial], rotations, ground[..., inertial], changes = part
     if moving:
         wrench[:, moving], rotations, q[..., moving] = _moving_part(
             model, result, [parameters[k] for k in moving], laws)
-    if changing:
+    if changing or shifted:
         from hexapod.algorithms.law_tangents import law_tangents
 
-        tangents = law_tangents(model, result, [parameters[k].laws for k in changing])
-        wrench[:, changing], rotations, q[..., changing] = (tangents.wrench, tangents.frames,
-                                                           tangents.q)
-        ground[..., changing], rates[..., changing] = tangents.ground, tangents.rates
-        turning[:, changing] = tangents.dframes
+        design, shifts = _shifted_model(model, scene, [parameters[k] for k in shifted])
+        tangents = law_tangents(design, result,
+                                [parameters[k].laws for k in changing] + shifts)
+        through = changing + shifted
+        wrench[:, through], rotations, q[..., through] = (tangents.wrench, tangents.frames,
+                                                         tangents.q)
+        ground[..., through] = tangents.ground
+        rates[..., through] = tangents.rates[:, :model.n_w]  # the shifts come last
+        turning[:, through] = tangents.dframes
     force, torque, effort = efforts_and_axes(model, wrench[..., :3], wrench[..., 3:],
                                              rotations[:, None], result.frame)
-    if result.frame == "world" and changing:  # the frames turn: d(R F) = R dF + dR F
+    if result.frame == "world" and (changing or shifted):  # the frames turn: R dF + dR F
         dR = turning.reshape(n, count, joints, 3, 3).swapaxes(-1, -2)
         force = force + np.einsum("npjab,njb->npja", dR, _in_joint_frames(
             result.force, rotations))
@@ -401,6 +442,24 @@ def inverse_sensitivities(model: Model, result: InverseResult,
     return InverseSensitivity(parameters, effort.transpose(0, 2, 1),
                               force.transpose(0, 2, 3, 1), torque.transpose(0, 2, 3, 1),
                               ground, q, changes, rates)
+
+
+def _shifted_model(model: Model, scene, changes) -> tuple[Model, list[dict]]:
+    """``model``, or with joints moved (``changes``) its scene assembled again with each
+    joint's frame origin shifted by a symbol along the parameter's direction (a law, zero
+    at the scene's values), and the law changes that move them (one per parameter)."""
+    if not changes:
+        return model, []
+    from hexapod.model.assemble import assemble
+    from hexapod.scene.laws.base import Constant, DesignShift
+
+    shifts = [DesignShift(c.name) for c in changes]
+    moved = tuple((c.joint, c.parent, c.child, law)
+                  for c, law in zip(changes, shifts, strict=True))
+    design = assemble(scene, rank_tolerance=model.rank_tolerance, moved_frames=moved)
+    if model.contacts:  # the ground's settings as the run had them
+        design = design.with_ground(model.ground, design.digest)
+    return design, [{law: Constant(1.0)} for law in shifts]
 
 
 def _in_joint_frames(world: np.ndarray, rotations: np.ndarray) -> np.ndarray:

@@ -14,6 +14,7 @@ import numpy as np
 
 from hexapod._support.graphs import spanning_forest
 from hexapod._support.limits import check_model_size
+from hexapod.errors import HexapodError
 from hexapod.model.digest import scene_digest
 from hexapod.model.forces import ForceBuilder, gravity_potential, inertial_forces
 from hexapod.model.frames import BodyState
@@ -64,6 +65,7 @@ class _Laws:
         self.w: list[ca.SX] = []
         self.wd: list[ca.SX] = []
         self.wdd: list[ca.SX] = []
+        self.pending: list[tuple] = []  # laws whose slots come last (:meth:`last`)
 
     def value(self, law: Law, label: str, where: tuple = ()) -> tuple[ca.SX, int]:
         """The law's value as an expression, and its index (-1 for a constant); ``where`` says
@@ -77,7 +79,20 @@ class _Laws:
             symbols.append(ca.SX.sym(f"{label}{suffix}"))
         return self.w[index], index
 
+    def last(self, law: Law, label: str) -> ca.SX:
+        """The law's value as a symbol whose slot comes after every other law's (a design
+        shift's: the model's other laws keep the slots they have without it)."""
+        self.pending.append((law, label, ca.SX.sym(label)))
+        return self.pending[-1][2]
+
     def symbols(self) -> tuple[ca.SX, ca.SX, ca.SX]:
+        for law, label, w in self.pending:
+            self.laws.append(law)
+            self.where.append(())
+            self.w.append(w)
+            self.wd.append(ca.SX.sym(f"{label}_d"))
+            self.wdd.append(ca.SX.sym(f"{label}_dd"))
+        self.pending = []
         return tuple(ca.vertcat(*s) if s else ca.SX(0, 1) for s in (self.w, self.wd, self.wdd))
 
 
@@ -158,8 +173,9 @@ def _characteristic_length(scene: Scene, joint_points: list[np.ndarray]) -> floa
 class _Assembly:
     """The symbols and expressions of one model, built one concern at a time."""
 
-    def __init__(self, si: Scene):
+    def __init__(self, si: Scene, moved_frames: tuple = ()):
         self.si = si
+        self.moved_frames = moved_frames
         self.dim = si.dimension
         self.scene_bodies = si.bodies  # looked up once: the scene builds the dict on each call
         self.bodies, self.q0, self.v0, self.mass = _bodies(si)
@@ -204,7 +220,8 @@ class _Assembly:
             if isinstance(joint, Contact):  # a foot stands on the scene's ground
                 joint = replace(joint, terrain=si.ground.terrain)
             g = JointGeometry(self.states[joint.parent], self.states[joint.child], frame_p,
-                              frame_c, axis, self.dim, (world_p, world_c))
+                              frame_c, axis, self.dim, (world_p, world_c),
+                              self._shifts(joint.name))
             self.geometries[joint.name] = g
             rows = [self._add_row(f"{joint.name}/{name}", joint.name, unit, expr)
                     for name, expr, unit in joint.rows(g, self.laws)]
@@ -221,6 +238,18 @@ class _Assembly:
                               rows=np.array(rows, dtype=int), loop_closing=k in chords,
                               type=joint))
         return parts
+
+    def _shifts(self, joint: str) -> tuple | None:
+        """The symbolic shifts of a moved joint's frame origins on its parent and child (each
+        shift a law symbol times its direction), None for a joint not moved."""
+        moves = [m for m in self.moved_frames if m[0] == joint]
+        if not moves:
+            return None
+        parent, child = ca.SX.zeros(self.dim), ca.SX.zeros(self.dim)
+        for _, on_parent, on_child, law in moves:
+            w = self.laws.last(law, f"{joint}/shift")
+            parent, child = parent + w * ca.DM(on_parent), child + w * ca.DM(on_child)
+        return parent, child
 
     def drivers(self) -> tuple[list[DriverInfo], dict[str, list[int]]]:
         """Driver rows, and the rows of the drivers acting on each joint."""
@@ -470,7 +499,7 @@ class _Assembly:
                      source=source, guidance=guidance)
 
 
-def assemble(scene: Scene, *, rank_tolerance: float = 1e-9) -> Model:
+def assemble(scene: Scene, *, rank_tolerance: float = 1e-9, moved_frames: tuple = ()) -> Model:
     """Validate ``scene`` and build its :class:`~hexapod.model.model.Model` (SI units).
 
     Parameters
@@ -480,6 +509,12 @@ def assemble(scene: Scene, *, rank_tolerance: float = 1e-9) -> Model:
     rank_tolerance : float
         Rows of the equilibrated ``Phi_v`` whose distance to the span of the rows kept before
         them is below this are redundant (see :mod:`hexapod.algorithms.linalg`).
+    moved_frames : tuple, optional
+        ``(joint, on_parent, on_child, law)``: the joint's frame origins shifted by ``law``'s
+        value (a :class:`~hexapod.scene.laws.base.DesignShift`, zero) times the directions
+        ``on_parent`` and ``on_child`` (in each body's centre-of-mass axes, SI): the same model
+        with the shifts as symbols, whose derivatives give a joint's position's
+        (:mod:`hexapod.algorithms.law_tangents`).
 
     Returns
     -------
@@ -499,13 +534,18 @@ def assemble(scene: Scene, *, rank_tolerance: float = 1e-9) -> Model:
     scene.validate()
     si = scene.in_si()
     kinematics = None
+    moved = tuple(moved_frames)
+    unknown = sorted({m[0] for m in moved} - set(si.joints))
+    if unknown:
+        raise HexapodError(f"scene '{scene.name}'{where}: no joint '{unknown[0]}' to move")
+    tag = "" if not moved else "|moved:" + ",".join(f"{m[0]}:{id(m[3])}" for m in moved)
     if any(isinstance(d, CoordinateDriver) and d.guide for d in si.drivers.values()):
         guides = _guides_driving(si)
-        kinematics = _Assembly(guides).model(rank_tolerance,
-                                             scene_digest(guides, rank_tolerance), scene.source)
+        kinematics = _Assembly(guides, moved).model(
+            rank_tolerance, scene_digest(guides, rank_tolerance) + tag, scene.source)
         si = _guides_left_out(si)
-    return with_guided_laws(_Assembly(si).model(
-        rank_tolerance, scene_digest(si, rank_tolerance), scene.source, kinematics))
+    return with_guided_laws(_Assembly(si, moved).model(
+        rank_tolerance, scene_digest(si, rank_tolerance) + tag, scene.source, kinematics))
 
 
 def _copy_with(scene: Scene, name: str, elements, ground) -> Scene:

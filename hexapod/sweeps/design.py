@@ -120,7 +120,7 @@ def sensitivity_run(scene: Scene, parameters: Sequence, *,
     changes = (inertia_parameters(scene, parameters)
                if all(isinstance(p, str) for p in parameters) else tuple(parameters))
     model = assemble(scene) if model is None else model
-    check_parameters(model, changes)  # before the run
+    check_parameters(model, changes, scene)  # before the run
     window, _ = model.time_window(duration)
     cycle = model.cycle_time()
     strides = window / cycle if cycle else 1.0
@@ -132,7 +132,8 @@ def sensitivity_run(scene: Scene, parameters: Sequence, *,
 
     result = inverse_dynamics(model, times, method=method, progress=stage("inverse dynamics"))
     model = motion_model(model, result)  # a guided scene's laws: the motion found
-    sensitivity = inverse_sensitivities(model, result, changes, progress=stage("derivatives"))
+    sensitivity = inverse_sensitivities(model, result, changes, progress=stage("derivatives"),
+                                        scene=scene)
     metrics = inverse_metrics(model, result, families, strides)
     derivatives = metric_sensitivities(model, result, sensitivity, families, strides)
     run_time = time.process_time() - began

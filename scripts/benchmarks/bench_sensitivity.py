@@ -16,13 +16,16 @@ Protocol
   whole runs on the scene re-read with one parameter moved by ``--step`` of its value, or by
   1e-6 m for a joint's position (the ``ctr``, ``fti`` and ``tita`` origins of the front leg on
   its joint laws, ``legs.front_leg_scene``: the built-in leg's joints follow its foot's guides,
-  whose derivatives through the kinematics are not computed;
+  whose derivatives through the kinematics are not computed; and the walking robot's coxa,
+  femur and tibia lengths, ``joint.*/ctr|fti|tita.parent_frame.position.0``, checked at its
+  points but not moved there);
   ``--checked`` parameters drawn per point; the forces are linear in masses and inertias, so
-  those differences are exact but for round-off); and the gait's period (``gait.period``) of
-  the walking robot built by ``legs.hexapod_scene`` at a random period in [0.35, 0.7] s with
-  its masses moved as at the other points, derived at fixed phase, against the robot built
-  again at the period moved by ``--step`` of it, sampled at the same fractions of the
-  stride. The error is ``p |exact - difference|`` over
+  those differences are exact but for round-off); and the walking robot's builder arguments
+  ``period`` (drawn in [0.35, 0.7] s, derived at fixed phase) and ``step_height`` (drawn in
+  [0.03, 0.07] m, derived through the motion: the feet's paths move the legs), the robot
+  built by ``legs.hexapod_walking`` at the value drawn with its masses moved as at the other
+  points, against the robot built again with the value moved by ``--step`` of it (sampled at
+  the same fractions of the stride for the period). The error is ``p |exact - difference|`` over
   the largest value of the array (or the metric's value): the change of the output per unit
   relative change of the parameter, relative. Target: 1e-6. A figure of merit is smooth but
   for kinks (a sample's power changing sign in the positive work, the peak moving to another
@@ -56,6 +59,10 @@ FAMILIES = ("peak_effort", "rms_effort", "peak_force", "peak_moment", "peak_grou
             "cost_of_transport")
 ROBOT_PARAMETERS = ["body.trunk.mass", "body.trunk.inertia", "body.*/femur.mass",
                     "body.*/tibia.mass", "body.*/coxa.mass"]
+#: the walking robot's segment lengths (coxa, femur, tibia: the joints' frames on their
+#: parents), checked at its random points (not moved: a leg moved 30 % may not reach its path)
+ROBOT_LENGTHS = ["joint.*/ctr.parent_frame.position.0", "joint.*/fti.parent_frame.position.0",
+                 "joint.*/tita.parent_frame.position.0"]
 LEG_PARAMETERS = ["body.*.mass", "body.*.inertia"]
 #: the front leg on its joint laws also moves its joints: derivatives through the motion
 LAW_LEG_PARAMETERS = LEG_PARAMETERS + ["joint.ctr.origin", "joint.fti.origin",
@@ -63,8 +70,8 @@ LAW_LEG_PARAMETERS = LEG_PARAMETERS + ["joint.ctr.origin", "joint.fti.origin",
 TOLERANCE = 1e-6
 
 
-def derivatives(model, result, changes):
-    sensitivity = hx.inverse_sensitivities(model, result, changes)
+def derivatives(model, result, changes, scene=None):
+    sensitivity = hx.inverse_sensitivities(model, result, changes, scene=scene)
     return sensitivity, hx.sweeps.metric_sensitivities(model, result, sensitivity, FAMILIES)
 
 
@@ -73,9 +80,11 @@ def cost(samples: int, count: int, repeats: int) -> float:
     model = hx.assemble(scene)
     times = np.linspace(0.0, model.time_window()[0], samples)
     changes = hx.sweeps.inertia_parameters(scene, ROBOT_PARAMETERS)[:count]
+    height = hx.sweeps.inertia_parameters(scene, ["step_height"])
     result = hx.inverse_dynamics(model, times)  # the warm-up: the phase plans built
     derivatives(model, result, changes)
-    run, gradients = [], []
+    derivatives(model, result, height)
+    run, gradients, lifted = [], [], []
     for _ in range(repeats):
         began = time.process_time()
         result = hx.inverse_dynamics(model, times)
@@ -83,11 +92,17 @@ def cost(samples: int, count: int, repeats: int) -> float:
         began = time.process_time()
         derivatives(model, result, changes)
         gradients.append(time.process_time() - began)
+        began = time.process_time()
+        derivatives(model, result, height)
+        lifted.append(time.process_time() - began)
     ratio = statistics.median(gradients) / statistics.median(run)
     print(f"walking robot, {samples} samples, {len(changes)} parameters, {len(FAMILIES)} "
           f"families: inverse dynamics {statistics.median(run):.3f} s CPU, every figure of "
           f"merit's gradient {statistics.median(gradients):.3f} s: {ratio:.2f} x "
           "(target: at most 5)")
+    print(f"  the step height alone (the motion moves: the phase step differentiated): "
+          f"{statistics.median(lifted):.3f} s, "
+          f"{statistics.median(lifted) / statistics.median(run):.2f} x")
     return ratio
 
 
@@ -111,14 +126,16 @@ def random_point(scene, patterns, rng) -> dict:
     return moved
 
 
-def point_errors(scene, patterns, samples, checked, step, rng) -> tuple[float, str, int]:
-    """The worst error at one random point of the parameters, where it is, and how many
-    figures of merit agreed only at a smaller step (a kink straddled)."""
+def point_errors(scene, patterns, lengths, samples, checked, step, rng
+                 ) -> tuple[float, str, int]:
+    """The worst error at one random point of the parameters ``patterns`` (``lengths``
+    checked there, not moved), where it is, and how many figures of merit agreed only at a
+    smaller step (a kink straddled)."""
     scene = hx.sweeps.with_scene_keys(scene, random_point(scene, patterns, rng))
-    changes = hx.sweeps.inertia_parameters(scene, patterns)
+    changes = hx.sweeps.inertia_parameters(scene, patterns + lengths)
     model = hx.assemble(scene)
     times = np.linspace(0.0, model.time_window()[0], samples)
-    run = Run(model, hx.inverse_dynamics(model, times), changes)
+    run = Run(model, hx.inverse_dynamics(model, times), changes, scene)
     worst, where, kinks = 0.0, "", 0
     for p in rng.choice(len(changes), checked, replace=False):
         change = changes[p]
@@ -131,44 +148,55 @@ def point_errors(scene, patterns, samples, checked, step, rng) -> tuple[float, s
     return worst, where, kinks
 
 
-def period_errors(samples, step, rng) -> tuple[float, str, int]:
-    """The gait's period at one random point: the walking robot (``legs.hexapod_scene``) built
-    at a period drawn in [0.35, 0.7] s, its masses and inertias moved as at the other points,
-    derived at fixed phase, against central differences of the robot built again at the
-    period moved by ``step`` of it and sampled at the same fractions of the stride."""
-    from legs import hexapod_scene
+#: The walking robot's builder arguments checked by rebuilding it: name -> (the range the
+#: value is drawn in, whether the samples stay at the same fractions of the stride).
+REBUILT = {"period": ((0.35, 0.7), True), "step_height": ((0.03, 0.07), False)}
 
-    period = rng.uniform(0.35, 0.7)
-    moved = random_point(hexapod_scene(gait="tripod", trunk="free"), ROBOT_PARAMETERS, rng)
 
-    def built(value):
-        return hx.sweeps.with_scene_keys(hexapod_scene(gait="tripod", trunk="free",
-                                                       period=value), moved)
+def rebuilt_errors(argument, samples, step, rng) -> tuple[float, str, int]:
+    """A builder argument of the walking robot (``legs.hexapod_walking``) at one random point:
+    the robot built at a value drawn in its range (:data:`REBUILT`), its masses and inertias
+    moved as at the other points, derived (the period at fixed phase, the step height through
+    the motion), against central differences of the robot built again with the value moved by
+    ``step`` of it; over a stride, sampled at the same fractions of it for the period."""
+    from legs.robot import hexapod_walking
 
-    phases = np.linspace(0.0, 1.0, samples)
-    scene = built(period)
+    (low, high), with_phase = REBUILT[argument]
+    value = rng.uniform(low, high)
+    moved = random_point(hexapod_walking(), ROBOT_PARAMETERS, rng)
+
+    def built(x):
+        return hx.sweeps.with_scene_keys(hexapod_walking(**{argument: x}), moved)
+
+    scene = built(value)
     model = hx.assemble(scene)
-    run = Run(model, hx.inverse_dynamics(model, phases * period),
-              hx.sweeps.inertia_parameters(scene, ["gait.period"]))
+    period = model.cycle_time()
+    phases = np.linspace(0.0, 1.0, samples)
+
+    def times(x):
+        return phases * (x if with_phase else period)
+
+    run = Run(model, hx.inverse_dynamics(model, times(value)),
+              hx.sweeps.inertia_parameters(scene, [argument]))
 
     def ends(h):
         out = []
-        for value in (period + h, period - h):
-            moved_model = hx.assemble(built(value))
-            result = hx.inverse_dynamics(moved_model, phases * value)
+        for x in (value + h, value - h):
+            moved_model = hx.assemble(built(x))
+            result = hx.inverse_dynamics(moved_model, times(x))
             out.append((outputs(moved_model, result), inverse_metrics(moved_model, result)))
         return out
 
-    return run.errors(0, step * period, ends)
+    return run.errors(0, step * value, ends)
 
 
 class Run:
     """A run at a point, its derivatives and figures of merit, and their errors against the
     central differences of runs with one parameter moved."""
 
-    def __init__(self, model, result, changes):
+    def __init__(self, model, result, changes, scene=None):
         self.model, self.result, self.changes = model, result, changes
-        self.sensitivity, self.metric_derivatives = derivatives(model, result, changes)
+        self.sensitivity, self.metric_derivatives = derivatives(model, result, changes, scene)
         self.metrics = inverse_metrics(model, result)
 
     def errors(self, p: int, h: float, runs) -> tuple[float, str, int]:
@@ -226,17 +254,19 @@ def inverse_metrics(model, result):
 
 
 def checked_scenes():
-    """``(name, scene, parameter patterns)`` of the agreement check: the built-in front leg and
-    walking robot (their guided joints follow the guides' kinematics, whose derivatives are not
-    computed: masses and inertias), and the front leg on its harmonic joint laws, its foot
-    loaded as the built-in leg's (``legs.front_leg_scene``), with its joints' positions."""
+    """``(name, scene, parameter patterns moved and checked, patterns checked)`` of the
+    agreement check: the built-in front leg (its guided joints follow the guides' kinematics:
+    masses and inertias), the front leg on its harmonic joint laws, its foot loaded as the
+    built-in leg's (``legs.front_leg_scene``), with its joints' positions, and the walking
+    robot with its segment lengths (its joints' frames on their parents: through the phase
+    path's step differentiated)."""
     from legs import front_leg_scene
 
     on_laws = front_leg_scene()
     on_laws.add(hx.load_scene("front-leg").forces["ground_reaction"])
-    return [("front-leg", hx.load_scene("front-leg"), LEG_PARAMETERS),
-            ("front leg on its joint laws", on_laws, LAW_LEG_PARAMETERS),
-            ("hexapod", hx.load_scene("hexapod"), ROBOT_PARAMETERS)]
+    return [("front-leg", hx.load_scene("front-leg"), LEG_PARAMETERS, []),
+            ("front leg on its joint laws", on_laws, LAW_LEG_PARAMETERS, []),
+            ("hexapod", hx.load_scene("hexapod"), ROBOT_PARAMETERS, ROBOT_LENGTHS)]
 
 
 def main() -> int:
@@ -255,21 +285,21 @@ def main() -> int:
     ratio = cost(args.samples, args.parameters, args.repeats)
     rng = np.random.default_rng(args.seed)
     failed = ratio > 5.0
-    for name, scene, patterns in checked_scenes() if args.points > 0 else ():
+    for name, scene, patterns, lengths in checked_scenes() if args.points > 0 else ():
         errors = []
         for point in range(args.points):
             measure.log(f"{name}: point {point + 1} of {args.points}")
-            errors.append(point_errors(scene, patterns, args.check_samples, args.checked,
-                                       args.step, rng))
+            errors.append(point_errors(scene, patterns, lengths, args.check_samples,
+                                       args.checked, args.step, rng))
         failed |= report(f"{name}: {args.points} random points, {args.checked} parameters "
                          f"each", errors, args.step)
-    if args.points > 0:
+    for argument in REBUILT if args.points > 0 else ():
         errors = []
         for point in range(args.points):
-            measure.log(f"hexapod, the gait's period: point {point + 1} of {args.points}")
-            errors.append(period_errors(args.check_samples, args.step, rng))
-        failed |= report(f"hexapod, the gait's period (gait.period, at fixed phase): "
-                         f"{args.points} random points", errors, args.step)
+            measure.log(f"hexapod, its {argument}: point {point + 1} of {args.points}")
+            errors.append(rebuilt_errors(argument, args.check_samples, args.step, rng))
+        failed |= report(f"hexapod, its {argument} (the robot built again): {args.points} "
+                         "random points", errors, args.step)
     return 1 if failed else 0
 
 

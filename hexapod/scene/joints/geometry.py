@@ -45,6 +45,9 @@ class JointGeometry:
         3 in space, 2 in the plane.
     initial : tuple of ndarray (d,), optional
         World positions of the parent's and the child's frame origins at the initial pose.
+    shifts : tuple of SX (d,), optional
+        Symbolic shifts of the parent's and the child's frame origins, in each body's axes
+        (design parameters: zero at the scene's values).
     """
 
     parent: Any
@@ -54,12 +57,17 @@ class JointGeometry:
     axis: np.ndarray | None
     dimension: int
     initial: tuple[np.ndarray, np.ndarray] | None = None
+    shifts: tuple | None = None
 
     @property
     def gap(self):
         """``d``: world vector from the parent frame's origin to the child frame's origin."""
-        return (self.child.point(self.child_frame.position)
-                - self.parent.point(self.parent_frame.position))
+        gap = (self.child.point(self.child_frame.position)
+               - self.parent.point(self.parent_frame.position))
+        if self.shifts is None:
+            return gap
+        parent, child = self.shifts
+        return gap + ca.mtimes(self.child.R, child) - ca.mtimes(self.parent.R, parent)
 
     def parent_vector(self, u):
         """Joint-frame vector ``u`` fixed to the parent, in world axes."""

@@ -147,6 +147,25 @@ def _horner(s, coefficients):
     return out
 
 
+@dataclass(frozen=True, eq=False)
+class DesignShift(Law):
+    """A design parameter's change from the scene's value, zero at every time, but a symbol of
+    the model where a :class:`Constant` is folded in as a number: the model's Functions then
+    depend on it and can be differentiated with respect to it (a joint's frame moved along a
+    direction, :func:`hexapod.model.assemble.assemble`'s ``moved_frames``). Compared by
+    identity: each is its own parameter."""
+
+    name: str = ""
+    kind = "design-shift"
+
+    def evaluate(self, t):
+        t = np.asarray(t, dtype=float)
+        return np.zeros_like(t), np.zeros_like(t), np.zeros_like(t)
+
+    def symbolic(self, t):
+        return 0 * t, 0 * t, 0 * t
+
+
 @dataclass(frozen=True)
 class Constant(Law):
     """``f(t) = value``.
