@@ -92,7 +92,8 @@ def test_a_segment_length_of_the_walking_robot_against_central_differences(walki
     4.6e-6 at h = 1e-5 m, falls as h^2 to a round-off floor of 6e-7 at 1e-6 m)."""
     scene, model, result, _ = walking
     change, = inertia_parameters(scene, ["joint.L1/fti.parent_frame.position.0"])
-    sensitivity = hx.inverse_sensitivities(model, result, [change], scene=scene)
+    sensitivity = hx.inverse_sensitivities(model, result, [change],
+                                           moved=hx.sweeps.moved_model(scene, model, [change]))
     derivatives = metric_sensitivities(model, result, sensitivity)
 
     def run(value):
@@ -158,7 +159,8 @@ def test_a_longer_femur_keeps_the_feet_on_their_paths(walking):
     point seen from the tibia side, which the joint's rows tie to it."""
     scene, model, result, _ = walking
     change, = inertia_parameters(scene, ["joint.L1/fti.parent_frame.position.0"])
-    dq = hx.inverse_sensitivities(model, result, [change], scene=scene).q[..., 0]
+    moved = hx.sweeps.moved_model(scene, model, [change])
+    dq = hx.inverse_sensitivities(model, result, [change], moved=moved).q[..., 0]
     trunk = model.bodies[model.body_index["trunk"]]
     assert np.abs(dq[:, trunk.q]).max() <= 1e-12
     for contact in model.contacts:

@@ -33,11 +33,10 @@ from hexapod._support.execution import executing
 from hexapod.algorithms.phase_inverse import POSITION_TOL, RESIDUAL_TOL, SIGMA_TOL, sample_plans
 from hexapod.errors import HexapodError
 from hexapod.model.model import Model
-from hexapod.scene.laws.base import Scaled
 
 if TYPE_CHECKING:
     from hexapod.algorithms.inverse import InverseResult
-    from hexapod.scene.laws.base import Law
+    from hexapod.model.model import Law
 
 __all__ = ["LawTangents", "law_tangents"]
 
@@ -111,11 +110,10 @@ def _seeds(model: Model, times: np.ndarray, changes) -> list[np.ndarray]:
     out = [np.zeros((model.n_w, times.size, len(changes))) for _ in range(3)]
     for p, change in enumerate(changes):
         for index, law in enumerate(model.laws):
-            derivative = change.get(law)
-            if derivative is None and isinstance(law, Scaled):  # in the scene's units
-                derivative = change.get(law.law)
-                derivative = None if derivative is None else derivative.scaled(law.factor)
+            base, factor = law.unscaled()  # a scene law in the scene's units, converted
+            derivative = change.get(base)
             if derivative is not None:
+                derivative = derivative.scaled(factor)
                 for m, x in enumerate(derivative.evaluate(times)):
                     out[m][index, :, p] = x
     return out

@@ -70,7 +70,8 @@ if TYPE_CHECKING:
     from hexapod.algorithms.inverse import InverseResult
 
 __all__ = ["FrameChange", "FrictionChange", "InertiaChange", "InverseSensitivity", "LawChange",
-           "PeriodChange", "check_parameters", "inverse_sensitivities"]
+           "PeriodChange", "check_parameters", "inverse_sensitivities", "moved_laws",
+           "tree_solved"]
 
 
 @dataclass(frozen=True)
@@ -302,14 +303,14 @@ def _check_period(model: Model, change: PeriodChange) -> None:
             "front leg's ground reaction is the walking robot's at that period)")
 
 
-def check_parameters(model: Model, parameters, scene=None) -> None:
+def check_parameters(model: Model, parameters, moved: Model | None = None) -> None:
     """Raise what :func:`inverse_sensitivities` refuses before it computes anything (a run's
     caller checks first: see its ``Raises``)."""
     for change in parameters:
         if isinstance(change, PeriodChange):
             _check_period(model, change)
         through_motion = isinstance(change, LawChange) or (
-            isinstance(change, FrameChange) and not _tree_solved(model))
+            isinstance(change, FrameChange) and not tree_solved(model))
         if through_motion and model.contacts and model.ground.policy == "friction":
             raise HexapodError(
                 f"parameter '{change.name}': model '{model.name}' shares its ground forces by "
@@ -324,10 +325,10 @@ def check_parameters(model: Model, parameters, scene=None) -> None:
             raise HexapodError(f"parameter '{change.name}': model '{model.name}' has no {kind} "
                                f"'{element}'")
         if through_motion:
-            _check_shifted(model, change, scene)
+            _check_shifted(model, change, moved)
 
 
-def _tree_solved(model: Model) -> bool:
+def tree_solved(model: Model) -> bool:
     """Whether a joint's position is derived by the tree path's graph: an open tree with
     every joint driven by its own laws (else through the phase path's step)."""
     from hexapod.algorithms.inverse import tree_plan
@@ -335,11 +336,11 @@ def _tree_solved(model: Model) -> bool:
     return model.guidance is None and tree_plan(model) is not None
 
 
-def _check_shifted(model: Model, change: FrameChange, scene) -> None:
+def _check_shifted(model: Model, change: FrameChange, moved: Model | None) -> None:
     """A joint moved in a model the tree path does not solve: on its parent only (its frame on
     the child is the joint wrench's reference point, whose move the least-wrench policy's
-    objective would see: not derived), not a foot, the scene at hand (the model is assembled
-    again with the shift as a symbol)."""
+    objective would see: not derived), not a foot, and the model assembled again with the
+    shift as a symbol at hand."""
     joint = model.joints[model.joint_index[change.joint]]
     if np.any(change.child):
         raise HexapodError(
@@ -350,10 +351,17 @@ def _check_shifted(model: Model, change: FrameChange, scene) -> None:
     if joint.kind == "contact":
         raise HexapodError(f"parameter '{change.name}': joint '{change.joint}' is a foot's "
                            "contact: moving it is not derived")
-    if scene is None:
-        raise HexapodError(f"parameter '{change.name}': model '{model.name}' is not an open tree "
-                           "with every joint driven: the derivative assembles its scene again "
-                           "with the joint's frame as a symbol; give the scene")
+    if moved is None or change.name not in {law.name for law in moved_laws(model, moved)}:
+        raise HexapodError(
+            f"parameter '{change.name}': model '{model.name}' is not an open tree with every "
+            "joint driven: the derivative needs its scene assembled again with the joint's "
+            "frame shifted by a symbol (moved, from hexapod.sweeps.moved_model)")
+
+
+def moved_laws(model: Model, moved: Model) -> tuple:
+    """The shifts of the joints' frames in ``moved`` (``model`` assembled again with them):
+    its laws after ``model``'s."""
+    return tuple(moved.laws[model.n_w:])
 
 
 def inverse_sensitivities(model: Model, result: InverseResult,
@@ -361,7 +369,7 @@ def inverse_sensitivities(model: Model, result: InverseResult,
                                                | PeriodChange | LawChange],
                           *,
                           progress: Callable[[int, int], None] | None = None,
-                          scene=None) -> InverseSensitivity:
+                          moved: Model | None = None) -> InverseSensitivity:
     """The derivatives of ``result``'s efforts, joint wrenches and ground forces with respect
     to each parameter, sample by sample (see the module's text for the method).
 
@@ -375,9 +383,9 @@ def inverse_sensitivities(model: Model, result: InverseResult,
         What each parameter changes.
     progress : callable, optional
         Called with ``(samples done, samples)``.
-    scene : Scene, optional
-        The scene ``model`` was assembled from: needed for a joint moved in a model the tree
-        path does not solve (assembled again with the joint's frame as a symbol).
+    moved : Model, optional
+        ``model``'s scene assembled again with the joints moved outside the tree path shifted
+        by symbols (:func:`hexapod.sweeps.moved_model`): needed for them.
 
     Returns
     -------
@@ -387,14 +395,14 @@ def inverse_sensitivities(model: Model, result: InverseResult,
     ------
     HexapodError
         A parameter names a body or joint the model does not have; a joint moved in a model
-        the tree path does not solve: on its child, a foot's, without ``scene``, or where the
+        the tree path does not solve: on its child, a foot's, without ``moved``, or where the
         rows left out cannot follow; with the friction policy, the exact cone
         (``faces = 0``), a sample where no forces are inside the cones, or a parameter that
         moves the motion (changes the laws, or a joint outside the tree path); such a
         parameter at a sample the phase path's plans do not cover (a trunk on two feet).
     """
     parameters = tuple(parameters)
-    check_parameters(model, parameters, scene)
+    check_parameters(model, parameters, moved)
     n, count, joints = result.times.size, len(parameters), len(model.joints)
     wrench = np.zeros((n, count, joints, 6))
     rotations = np.zeros((n, joints, 9))
@@ -406,7 +414,7 @@ def inverse_sensitivities(model: Model, result: InverseResult,
                 if not isinstance(c, FrameChange | LawChange)]
     moving = [k for k, c in enumerate(parameters) if isinstance(c, FrameChange)]
     shifted: list[int] = []  # moved joints derived through the phase path's step
-    if moving and not _tree_solved(model):
+    if moving and not tree_solved(model):
         moving, shifted = [], moving
     changing = [k for k, c in enumerate(parameters) if isinstance(c, LawChange)]
     changes = np.zeros(0)
@@ -421,7 +429,12 @@ def inverse_sensitivities(model: Model, result: InverseResult,
     if changing or shifted:
         from hexapod.algorithms.law_tangents import law_tangents
 
-        design, shifts = _shifted_model(model, scene, [parameters[k] for k in shifted])
+        design, shifts = model, []
+        if shifted:  # each shift a law of the moved model, named as its parameter
+            design = moved
+            laws = {law.name: law for law in moved_laws(model, moved)}
+            shifts = [{laws[parameters[k].name]: laws[parameters[k].name].design_parameter(
+                parameters[k].name)[1]} for k in shifted]
         tangents = law_tangents(design, result,
                                 [parameters[k].laws for k in changing] + shifts)
         through = changing + shifted
@@ -442,24 +455,6 @@ def inverse_sensitivities(model: Model, result: InverseResult,
     return InverseSensitivity(parameters, effort.transpose(0, 2, 1),
                               force.transpose(0, 2, 3, 1), torque.transpose(0, 2, 3, 1),
                               ground, q, changes, rates)
-
-
-def _shifted_model(model: Model, scene, changes) -> tuple[Model, list[dict]]:
-    """``model``, or with joints moved (``changes``) its scene assembled again with each
-    joint's frame origin shifted by a symbol along the parameter's direction (a law, zero
-    at the scene's values), and the law changes that move them (one per parameter)."""
-    if not changes:
-        return model, []
-    from hexapod.model.assemble import assemble
-    from hexapod.scene.laws.base import Constant, DesignShift
-
-    shifts = [DesignShift(c.name) for c in changes]
-    moved = tuple((c.joint, c.parent, c.child, law)
-                  for c, law in zip(changes, shifts, strict=True))
-    design = assemble(scene, rank_tolerance=model.rank_tolerance, moved_frames=moved)
-    if model.contacts:  # the ground's settings as the run had them
-        design = design.with_ground(model.ground, design.digest)
-    return design, [{law: Constant(1.0)} for law in shifts]
 
 
 def _in_joint_frames(world: np.ndarray, rotations: np.ndarray) -> np.ndarray:

@@ -25,7 +25,7 @@ __getattr__, __dir__, __all__ = attach(__name__, {
     "hexapod.sweeps.table": ["SweepTable"],
     "hexapod.sweeps.metrics": ["FAMILIES", "inverse_metrics"],
     "hexapod.sweeps.design": ["SensitivityRun", "sensitivity_run"],
-    "hexapod.sweeps.design_parameters": ["inertia_parameters"],
+    "hexapod.sweeps.design_parameters": ["inertia_parameters", "moved_model"],
     "hexapod.sweeps.cases": ["with_scene_keys"],
     "hexapod.sweeps.optimize": ["OptimizationRun", "OptimizationStudy", "optimize",
                                 "read_optimization"],

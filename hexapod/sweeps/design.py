@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from hexapod.sweeps.cases import StudyError
-from hexapod.sweeps.design_parameters import inertia_parameters
+from hexapod.sweeps.design_parameters import inertia_parameters, moved_model
 from hexapod.sweeps.metric_derivatives import (
     SENSITIVE_FAMILIES,
     metric_sensitivities,
@@ -120,7 +120,8 @@ def sensitivity_run(scene: Scene, parameters: Sequence, *,
     changes = (inertia_parameters(scene, parameters)
                if all(isinstance(p, str) for p in parameters) else tuple(parameters))
     model = assemble(scene) if model is None else model
-    check_parameters(model, changes, scene)  # before the run
+    moved = moved_model(scene, model, changes)
+    check_parameters(model, changes, moved)  # before the run
     window, _ = model.time_window(duration)
     cycle = model.cycle_time()
     strides = window / cycle if cycle else 1.0
@@ -133,7 +134,7 @@ def sensitivity_run(scene: Scene, parameters: Sequence, *,
     result = inverse_dynamics(model, times, method=method, progress=stage("inverse dynamics"))
     model = motion_model(model, result)  # a guided scene's laws: the motion found
     sensitivity = inverse_sensitivities(model, result, changes, progress=stage("derivatives"),
-                                        scene=scene)
+                                        moved=moved)
     metrics = inverse_metrics(model, result, families, strides)
     derivatives = metric_sensitivities(model, result, sensitivity, families, strides)
     run_time = time.process_time() - began

@@ -49,6 +49,7 @@ from hexapod.scene.element import GROUND
 from hexapod.sweeps.cases import StudyError
 
 if TYPE_CHECKING:
+    from hexapod.model.model import Model
     from hexapod.scene.scene import Scene
 
 _COVERED = ("masses and inertias, body.NAME.mass and body.NAME.inertia[.K], and joints' "
@@ -116,6 +117,22 @@ def inertia_parameters(scene: Scene, patterns: Sequence[str],
             for change in changes:
                 found.setdefault(change.name, change)
     return tuple(found.values())
+
+
+def moved_model(scene: Scene, model, changes) -> Model | None:
+    """``scene`` assembled again with the joints ``changes`` move outside the tree path (a
+    model whose loops close, feet stand or joints follow guides: ``model``, assembled from
+    it) shifted by symbols, for :func:`hexapod.inverse_sensitivities` (``moved``); None when
+    none does."""
+    from hexapod.algorithms.sensitivity import tree_solved
+    from hexapod.model.assemble import assemble
+    from hexapod.scene.laws.base import DesignShift
+
+    frames = [c for c in changes if isinstance(c, FrameChange)]
+    if not frames or tree_solved(model):
+        return None
+    moved = tuple((c.joint, c.parent, c.child, DesignShift(c.name)) for c in frames)
+    return assemble(scene, rank_tolerance=model.rank_tolerance, moved_frames=moved)
 
 
 def _period(scene: Scene, name: str, source: str) -> PeriodChange:

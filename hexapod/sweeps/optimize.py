@@ -391,6 +391,7 @@ def optimize(spec: OptimizationStudy,
     from hexapod.algorithms.inverse import inverse_dynamics
     from hexapod.algorithms.sensitivity import inverse_sensitivities
     from hexapod.sweeps.cases import base_scene, inverse_window
+    from hexapod.sweeps.design_parameters import moved_model
 
     say = progress or (lambda line: None)
     study, source = spec.study, spec.source
@@ -400,7 +401,8 @@ def optimize(spec: OptimizationStudy,
     times, strides = inverse_window(model, study.job)
     say(f"inverse dynamics of {times.size} samples and its sensitivities")
     result = inverse_dynamics(model, times)
-    sensitivity = inverse_sensitivities(model, result, changes)
+    sensitivity = inverse_sensitivities(model, result, changes,
+                                        moved=moved_model(scene, model, changes))
     values = np.array([c.value for c in changes])
     if all(isinstance(c, InertiaChange) for c in changes):
         design = AffineDesign(model, result, sensitivity, strides, values)

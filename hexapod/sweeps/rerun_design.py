@@ -91,14 +91,16 @@ class RerunDesign:
     def at(self, p: np.ndarray) -> tuple[dict, dict]:
         """``(metrics, derivatives)`` at the parameters' values ``p``."""
         from hexapod.algorithms.sensitivity import inverse_sensitivities
+        from hexapod.sweeps.design_parameters import moved_model
 
         key = tuple(np.asarray(p, dtype=float).tolist())
         if key not in self._cache:
             self._cache.clear()
             scene, model, result = run_at(self.study, self.changes, self.times, self.values,
                                           np.array(key))
-            sensitivity = inverse_sensitivities(model, result,
-                                                changes_at(scene, model, self.changes))
+            changes = changes_at(scene, model, self.changes)
+            sensitivity = inverse_sensitivities(model, result, changes,
+                                                moved=moved_model(scene, model, changes))
             self._cache[key] = (
                 inverse_metrics(model, result, SENSITIVE_FAMILIES, self.strides),
                 metric_sensitivities(model, result, sensitivity, SENSITIVE_FAMILIES,

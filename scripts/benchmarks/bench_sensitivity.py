@@ -71,7 +71,8 @@ TOLERANCE = 1e-6
 
 
 def derivatives(model, result, changes, scene=None):
-    sensitivity = hx.inverse_sensitivities(model, result, changes, scene=scene)
+    moved = None if scene is None else hx.sweeps.moved_model(scene, model, changes)
+    sensitivity = hx.inverse_sensitivities(model, result, changes, moved=moved)
     return sensitivity, hx.sweeps.metric_sensitivities(model, result, sensitivity, FAMILIES)
 
 

@@ -47,6 +47,10 @@ class Law:
         Default: none."""
         return np.zeros(0)
 
+    def unscaled(self) -> tuple[Law, float]:
+        """The law before a unit conversion and the factor applied (itself and 1)."""
+        return self, 1.0
+
     def design_parameter(self, key: str) -> tuple[float, Law] | None:
         """The design parameter ``key`` (a scene key, e.g. ``gait.step_height``) as this law
         holds it: its value, and the law's derivative with respect to it (value, rate and
@@ -165,6 +169,10 @@ class DesignShift(Law):
     def symbolic(self, t):
         return 0 * t, 0 * t, 0 * t
 
+    def design_parameter(self, key):
+        """Its own parameter (``key``: its name): the value zero, the derivative one."""
+        return (0.0, Constant(1.0)) if key == self.name else None
+
 
 @dataclass(frozen=True)
 class Constant(Law):
@@ -210,6 +218,9 @@ class Scaled(Law):
 
     def _scaled(self, factor):
         return Scaled(self.law, self.factor * factor)
+
+    def unscaled(self):
+        return self.law, self.factor
 
     def cycle_time(self):
         return self.law.cycle_time()
