@@ -45,7 +45,7 @@ from pathlib import Path
 import numpy as np
 
 from hexapod._support.files import read_toml
-from hexapod.algorithms.sensitivity import InertiaChange, PeriodChange
+from hexapod.algorithms.sensitivity import InertiaChange
 from hexapod.errors import HexapodError, InputFileError
 from hexapod.sweeps.cases import StudyError
 from hexapod.sweeps.metric_derivatives import SENSITIVE_FAMILIES, metric_sensitivities
@@ -53,14 +53,16 @@ from hexapod.sweeps.metrics import body_masses, inverse_metrics
 from hexapod.sweeps.rerun_design import RerunDesign, run_at
 from hexapod.sweeps.spec import Study, study_from_document
 
-#: IPOPT's tolerance on the scaled problem by default: the gradients of masses, inertias and
-#: joints' positions are exact to round-off ...
+#: IPOPT's tolerance on the scaled problem by default: the gradients of masses and inertias
+#: along a fixed motion are exact to round-off ...
 TOLERANCE = 1e-10
-#: ... and those of the gait's period carry the inverse dynamics' own accuracy (the motion
-#: solved by Newton's method: 3.7e-10 of the scaled gradient at the walking robot's optimum
-#: of a knee's RMS torque, where the objective no longer changes), so that IPOPT asked for
-#: 1e-10 searched its line for hundreds of evaluations there
-PERIOD_TOLERANCE = 1e-8
+#: ... and those of parameters that move the motion (the gait's period, its step height, a
+#: joint's position: each evaluation a run of the scene built again) carry the inverse
+#: dynamics' own accuracy (the motion solved by Newton's method: 3.7e-10 of the scaled
+#: gradient at the walking robot's optimum of a knee's RMS torque over the period, where the
+#: objective no longer changes), so that IPOPT asked for 1e-10 searched its line for hundreds
+#: of evaluations there
+MOVING_TOLERANCE = 1e-8
 
 _OPTIMIZE_KEYS = ("minimize", "constraints", "actuators", "tolerance", "max_iterations")
 _BOUND_KEYS = ("range", "start")
@@ -95,7 +97,7 @@ class OptimizationStudy:
     minimize: str
     bounds: tuple[Bound, ...]
     limits: tuple[Limit, ...] = ()
-    tolerance: float | None = None  # None: TOLERANCE, or PERIOD_TOLERANCE with a period
+    tolerance: float | None = None  # None: TOLERANCE, or MOVING_TOLERANCE (a moving motion)
     max_iterations: int = 200
     source: str = ""
     actuators: str = ""  # an actuator table: every driven joint's peak effort below its motor's
@@ -482,9 +484,8 @@ def _solve(spec, design, constrained, start, low, high, say):
 
     n, m = scale.size, len(constrained)
     merit = _merit(evaluate, n, m)
-    tolerance = spec.tolerance or (
-        PERIOD_TOLERANCE if any(isinstance(c, PeriodChange) for c in design.changes)
-        else TOLERANCE)
+    tolerance = spec.tolerance or (MOVING_TOLERANCE if isinstance(design, RerunDesign)
+                                   else TOLERANCE)
     x = ca.MX.sym("x", n)
     f, g = merit(x)
     problem = {"x": x, "f": f} | ({"g": g} if m else {})

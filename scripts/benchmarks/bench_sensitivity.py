@@ -9,7 +9,8 @@ Protocol
   merit with respect to ``--parameters`` parameters (default 20: the trunk's mass and inertia,
   the femurs', tibias' and coxas' masses): ``hx.inverse_sensitivities`` and
   ``hx.sweeps.metric_sensitivities`` on that run. CPU time (``time.process_time``), the median
-  of ``--repeats`` runs. Target: at most 5 times one run.
+  of ``--repeats`` runs. Target: at most 5 times one run. Also printed: the step height's
+  alone, and once the robot's 18 segment lengths' (parameters that move the motion).
 * Agreement: at ``--points`` random parameter points (every parameter multiplied by a factor
   drawn in [0.7, 1.3], seeded), for the walking robot and the front leg, the derivatives of
   every effort, joint wrench, ground force and figure of merit against central differences of
@@ -104,6 +105,13 @@ def cost(samples: int, count: int, repeats: int) -> float:
     print(f"  the step height alone (the motion moves: the phase step differentiated): "
           f"{statistics.median(lifted):.3f} s, "
           f"{statistics.median(lifted) / statistics.median(run):.2f} x")
+    lengths = hx.sweeps.inertia_parameters(scene, ROBOT_LENGTHS)
+    began = time.process_time()  # once, the moved model's assembly and plans included
+    derivatives(model, result, lengths, scene)
+    spent = time.process_time() - began
+    print(f"  its {len(lengths)} segment lengths (the same, on the scene assembled again with "
+          f"the joints' frames shifted by symbols): {spent:.3f} s, "
+          f"{spent / statistics.median(run):.2f} x")
     return ratio
 
 
