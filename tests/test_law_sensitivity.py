@@ -152,6 +152,27 @@ def test_the_feet_rise_by_the_swing_bump(walking):
         assert bump.max() > 0.5 and (bump == 0).sum() >= 5  # swings near their top, stances
 
 
+def test_a_frame_moved_on_its_child_against_central_differences(walking):
+    """The knee's frame moved along the tibia (``child_frame``, zero in the scene): it moves
+    the point the knee's wrench is reported about and the least-wrench policy weighs, and the
+    characteristic length the policy divides moments by (measured on the joints' points),
+    both expressions of the shift; against the robot read again with it moved by 1e-6 m, per
+    0.1 m of it (a segment's length): round-off 1e-9 of the largest value."""
+    scene, model, result, _ = walking
+    change, = inertia_parameters(scene, ["joint.L1/fti.child_frame.position.0"])
+    moved = hx.sweeps.moved_model(scene, model, [change])
+    sensitivity = hx.inverse_sensitivities(model, result, [change], moved=moved)
+    h = 1e-6
+    ahead, behind = (hx.inverse_dynamics(hx.assemble(hx.sweeps.with_scene_keys(
+        scene, {change.name: s * h})), TIMES, frame="world") for s in (1.0, -1.0))
+    for name in ("effort", "force", "torque", "ground_force", "q"):
+        value, exact = getattr(result, name), getattr(sensitivity, name)[..., 0]
+        reference = (getattr(ahead, name) - getattr(behind, name)) / (2 * h)
+        finite = np.isfinite(value)
+        assert np.abs(0.1 * (exact - reference)[finite]).max() <= \
+            TOLERANCE * np.abs(value[finite]).max(), name
+
+
 def test_a_longer_femur_keeps_the_feet_on_their_paths(walking):
     """The femur's length moves the leg's joints, not its foot (a guide) nor the trunk (a
     guide): the differentiated motion keeps every foot where it was, to round-off, and the

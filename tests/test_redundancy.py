@@ -108,7 +108,7 @@ def test_scaling_a_row_changes_no_reported_force():
         scale[k] = 37.0
         Phi_v = data.Phi_v * scale[:, None]
         gamma = data.gamma * scale
-        wrench_map, offset = policy_map(model, q, Phi_v)
+        wrench_map, offset = policy_map(model, q, data.w, Phi_v)
         solution = solve_saddle(model.mass_inv_sqrt, Phi_v, data.Q, gamma, model.row_priority,
                                 model.rank_tolerance, wrench_map=wrench_map,
                                 wrench_offset=offset)

@@ -138,7 +138,7 @@ def policy_solution(model: Model, data: Data, t: float, q: np.ndarray, w: np.nda
     priority, _ = model.rank_order(w)  # feet in swing have no rows to decide on
     wrench_map = offset = None
     if split.redundant.size and not model.contacts:
-        wrench_map, offset = policy_map(model, q, Phi_v, Q_across, data)
+        wrench_map, offset = policy_map(model, q, w, Phi_v, Q_across, data)
     solution = solve_saddle(model.mass_inv_sqrt, Phi_v, Q, gamma, priority,
                             tol, row_names=[r.name for r in model.rows],
                             consistency_tol=consistency_tol,

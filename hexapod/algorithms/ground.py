@@ -104,15 +104,15 @@ def foot_values(policy: str, weights: np.ndarray) -> np.ndarray:
                     np.sqrt(np.maximum(1.0 / safe - 1.0, 0.0)), 0.0)
 
 
-def policy_objective(model: Model, data, q: np.ndarray, Phi: np.ndarray, Q_across,
-                     feet: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def policy_objective(model: Model, data, q: np.ndarray, w: np.ndarray, Phi: np.ndarray,
+                     Q_across, feet: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``A`` (a SciPy CSR array) and ``b`` of the policy's objective ``|A lam + b|^2`` at a
     state, from its one definition (:meth:`hexapod.algorithms.step_terms.StepTerms.objective`);
     ``Phi`` the nonzeros of ``Phi_v`` (:meth:`~hexapod.algorithms.step_terms.StepTerms.
     nonzeros`), ``feet`` as :func:`foot_values` gives them."""
     terms = terms_of(model)
-    return tuple(terms.evaluate_sparse(data, "objective", q, Phi,
-                                       terms.offset(data, q, Q_across), feet))
+    return tuple(terms.evaluate_sparse(data, "objective", q, w, Phi,
+                                       terms.offset(data, q, w, Q_across), feet))
 
 
 def contact_axes(model: Model) -> np.ndarray | None:
@@ -282,7 +282,9 @@ class _PolicyProblem:
                           else (None, np.eye(N.shape[1])))
         self.base = self.shift(lam)
         self.NK = _orthonormal(N @ K)  # the same multipliers, in directions a QP handles well
-        self.A, b = policy_objective(model, data, q, Phi, Q_across,
+        # the laws matter only where a design parameter moves a joint's frame (zero there)
+        w = data.w if data is not None and data.w is not None else np.zeros(model.n_w)
+        self.A, b = policy_objective(model, data, q, w, Phi, Q_across,
                                      foot_values(model.ground.policy, weights))
         base = self.base
         self.AK, self.r = self.A @ self.NK, self.A @ base + b.reshape((-1,) + (1,) *

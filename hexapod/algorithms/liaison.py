@@ -118,7 +118,7 @@ def joint_wrenches(model: Model, data: Data, *, frame: str = "joint",
     """
     _require_solved(model, data, "joint_wrenches")
     return wrenches_from_multipliers(model, data.q, data.lam, data.Phi_v, data.Q_across,
-                                     frame=frame, on=on)
+                                     frame=frame, on=on, w=data.w)
 
 
 def driver_efforts(model: Model, data: Data) -> dict[str, float]:
@@ -160,7 +160,8 @@ def _require_solved(model: Model, data: Data, caller: str) -> None:
 def wrenches_from_multipliers(model: Model, q: np.ndarray, lam: np.ndarray,
                               Phi_v: np.ndarray | sparray,
                               Q_across: np.ndarray | None = None, *, frame: str = "joint",
-                              on: str = "child", data: Data | None = None) -> JointWrenches:
+                              on: str = "child", data: Data | None = None,
+                              w: np.ndarray | None = None) -> JointWrenches:
     """:func:`joint_wrenches` from explicit multipliers (n_c) at positions ``q`` (n_q), e.g.
     those of a recorded simulation; ``Q_across`` is ``model.Q_across`` at the same state (None
     leaves out the force elements acting across joints). The wrenches come from their one
@@ -182,6 +183,10 @@ def wrenches_from_multipliers(model: Model, q: np.ndarray, lam: np.ndarray,
         As for :func:`joint_wrenches`.
     data : Data, optional
         A workspace of ``model`` whose call buffers to use.
+    w : ndarray, shape (n_w,), optional
+        The laws' values at the state; they matter only where a design parameter moves a
+        joint's frame (a model of ``assemble(moved_frames=...)``), zero at the scene's
+        values, which None takes.
 
     Returns
     -------
@@ -198,8 +203,9 @@ def wrenches_from_multipliers(model: Model, q: np.ndarray, lam: np.ndarray,
         raise ValueError(f"frame must be 'joint' or 'world', got {frame!r}")
     terms = terms_of(model)
     n = len(model.joints)
-    wrench, frames = terms.evaluate(data, "report", q, terms.nonzeros(Phi_v), lam,
-                                    terms.offset(data, q, Q_across))
+    w = np.zeros(model.n_w) if w is None else w
+    wrench, frames = terms.evaluate(data, "report", q, w, terms.nonzeros(Phi_v), lam,
+                                    terms.offset(data, q, w, Q_across))
     wrench, frames = wrench.reshape(6, n), frames.reshape(9, n)
     force, torque, effort = np.zeros((n, 3)), np.zeros((n, 3)), np.full(n, np.nan)
     for k, joint in enumerate(model.joints):
@@ -220,7 +226,8 @@ def wrenches_from_multipliers(model: Model, q: np.ndarray, lam: np.ndarray,
     return JointWrenches(tuple(j.name for j in model.joints), force, torque, effort, frame)
 
 
-def policy_map(model: Model, q: np.ndarray, Phi_v, Q_across: np.ndarray | None = None,
+def policy_map(model: Model, q: np.ndarray, w: np.ndarray, Phi_v,
+               Q_across: np.ndarray | None = None,
                data: Data | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The linear map from multipliers to the wrenches of the least-wrench redundancy policy,
     and its offset: one block of 6 rows per joint (force, moment about the joint origin divided
@@ -230,8 +237,8 @@ def policy_map(model: Model, q: np.ndarray, Phi_v, Q_across: np.ndarray | None =
     (:meth:`hexapod.algorithms.step_terms.StepTerms.wrench_map`), evaluated here on numbers
     (through the call buffers of ``data``, when given)."""
     terms = terms_of(model)
-    (A,) = terms.evaluate(data, "wrench_map", q, terms.nonzeros(Phi_v))
-    return A, terms.offset(data, q, Q_across)
+    (A,) = terms.evaluate(data, "wrench_map", q, w, terms.nonzeros(Phi_v))
+    return A, terms.offset(data, q, w, Q_across)
 
 
 def efforts_and_axes(model: Model, force: np.ndarray, torque: np.ndarray,

@@ -245,10 +245,10 @@ class PhasePlan:
                                [ca.densify(ca.vertcat(q, v, a)), ca.densify(checks)],
                                names, ["x_next", "checks"])
         lam = self.multipliers(F, Q, a)
-        W, frames = terms.wrench_terms(q, Phi)  # once, for the policy and the wrenches
+        W, frames = terms.wrench_terms(q, w, Phi)  # once, for the policy and the wrenches
         if self.left_out.size:
-            lam = self._policy(W, F, Phi, offset, lam, feet, mask)
-        wrench = terms.joint_wrenches(W, frames, lam, offset)
+            lam = self._policy(W, F, Phi, offset, lam, feet, mask, w)
+        wrench = terms.joint_wrenches(W, frames, lam, offset, w)
         outputs = [ca.densify(y) for y in (ca.vertcat(q, v, a), lam, wrench, frames, checks)]
         return ca.Function("phase_step", inputs, outputs, names,
                            ["x_next", "lam", "wrench", "frames", "checks"])
@@ -305,10 +305,10 @@ class PhasePlan:
             x, start = outputs[0][start + size - 1], start + size
         return outputs
 
-    def _policy(self, W, F, Phi, offset, lam0, feet, mask):
+    def _policy(self, W, F, Phi, offset, lam0, feet, mask, w):
         """``lam0 + N z`` of least policy objective, ``z`` zero where ``mask`` is."""
         policy = self.terms.policy(self.left_out.size)
-        return policy(W, offset, feet, lam0, self.null_space(F, Phi), mask)
+        return policy(W, offset, feet, lam0, self.null_space(F, Phi), mask, w)
 
 
 def blocks(n: int) -> list[int]:

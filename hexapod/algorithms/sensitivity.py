@@ -32,12 +32,14 @@ walking robot's legs follow) moves the motion through them: :class:`LawChange`, 
 phase path's sample Function differentiated in forward mode
 (:mod:`hexapod.algorithms.law_tangents`: the implicit function theorem on the positions, then
 the same solves and policy). Where loops close, feet stand or joints follow guides (the
-walking robot), a joint's frame moved on its parent becomes such a parameter: the scene is
-assembled again with the frame's origin shifted by a symbol held as a law (zero:
-:class:`~hexapod.scene.laws.base.DesignShift`), whose derivative is one. Its frame on the child
-is the point the policy weighs the joint's wrench about: not derived there. Where the rows a
-rank decision leaves out cannot follow the change (a robot on pinned feet whose joints' laws
-were written for the scene's lengths), there is no moved motion, and that is said.
+walking robot), a joint's position becomes such a parameter: the scene is assembled again
+with the joint's frame origins shifted by a symbol held as a law (zero:
+:class:`~hexapod.scene.laws.base.DesignShift`), whose derivative is one. On the child, the
+shift also moves the point the joint's wrench is reported (and weighed by the least-wrench
+policy) about, and the characteristic length the policy weighs moments by, which the scene
+measures on the joints' points: both follow it. Where the rows a rank decision leaves out
+cannot follow the change (a robot on pinned feet whose joints' laws were written for the
+scene's lengths), there is no moved motion, and that is said.
 
 The gait's period ``T`` is the exception among them: a scene whose time laws are all functions
 of the gait's phase ``t / T`` (as the gait builders make them: each foot's path, the coupled
@@ -337,17 +339,9 @@ def tree_solved(model: Model) -> bool:
 
 
 def _check_shifted(model: Model, change: FrameChange, moved: Model | None) -> None:
-    """A joint moved in a model the tree path does not solve: on its parent only (its frame on
-    the child is the joint wrench's reference point, whose move the least-wrench policy's
-    objective would see: not derived), not a foot, and the model assembled again with the
-    shift as a symbol at hand."""
+    """A joint moved in a model the tree path does not solve: not a foot, and the model
+    assembled again with the shift as a symbol at hand."""
     joint = model.joints[model.joint_index[change.joint]]
-    if np.any(change.child):
-        raise HexapodError(
-            f"parameter '{change.name}': model '{model.name}' is not an open tree with every "
-            "joint driven, and a joint's frame moved on its child moves the point its wrench is "
-            "reported about, which the policy sharing the forces weighs: not derived; move the "
-            f"frame on the parent (joint.{change.joint}.parent_frame.position)")
     if joint.kind == "contact":
         raise HexapodError(f"parameter '{change.name}': joint '{change.joint}' is a foot's "
                            "contact: moving it is not derived")
@@ -395,7 +389,7 @@ def inverse_sensitivities(model: Model, result: InverseResult,
     ------
     HexapodError
         A parameter names a body or joint the model does not have; a joint moved in a model
-        the tree path does not solve: on its child, a foot's, without ``moved``, or where the
+        the tree path does not solve: a foot's, without ``moved``, or where the
         rows left out cannot follow; with the friction policy, the exact cone
         (``faces = 0``), a sample where no forces are inside the cones, or a parameter that
         moves the motion (changes the laws, or a joint outside the tree path); such a
@@ -500,7 +494,7 @@ def _inertial_part(model: Model, result, parameters, laws, progress):
                                              forces[k], state, tol=model.rank_tolerance,
                                              along_mu=along_mu)
         # the report's wrenches, without the forces across joints: linear in the multipliers
-        B, frames = terms.evaluate(data, "report_map", q, terms.nonzeros(Phi_v))
+        B, frames = terms.evaluate(data, "report_map", q, w, terms.nonzeros(Phi_v))
         B = np.reshape(B, (6 * joints, model.n_c))
         wrench[k] = (B @ lams[k]).reshape(joints, 6, count).transpose(2, 0, 1)
         rotations[k] = np.reshape(frames, (9, joints)).T

@@ -13,7 +13,7 @@ once (:func:`hexapod.algorithms.liaison.policy_map`, :func:`~.liaison.wrenches_f
 * ``rates(q, w, wd)``: ``nu``; ``gamma(q, v, w, wd, wdd)`` alone (a kinematics run's), or
   ``forces(q, v, w, wd, wdd)``: ``gamma``, ``Q`` and the wrenches
   of the force elements acting across joints;
-* ``wrench_terms(q, Phi)``: the wrench map ``W`` (below) and the joint frames' rotations,
+* ``wrench_terms(q, w, Phi)``: the wrench map ``W`` (below) and the joint frames' rotations,
   formed once a sample for the two that follow;
 * ``policy(m)(W, offset, feet, lam, N, mask)``: the redundancy policy, among ``lam + N
   z`` the least ``|A (lam + N z) + b|^2`` (``m`` the columns of ``N``, one Function per
@@ -23,9 +23,9 @@ once (:func:`hexapod.algorithms.liaison.policy_map`, :func:`~.liaison.wrenches_f
   (one over the square root of its weight); for
   ``min-effort`` to the actuator efforts over their references and the feet's load-sharing
   terms (coefficients ``feet``), as in :mod:`hexapod.algorithms.ground`;
-* ``joint_wrenches(W, frames, lam, offset)``: the joint wrenches in the report convention
-  (joint frames); ``report(q, Phi, lam, offset)`` the same and the frames from the positions,
-  on numbers; ``wrench_map(q, Phi)``, ``objective(q, Phi, offset, feet)``
+* ``joint_wrenches(W, frames, lam, offset, w)``: the joint wrenches in the report convention
+  (joint frames); ``report(q, w, Phi, lam, offset)`` the same and the frames from the positions,
+  on numbers; ``wrench_map(q, w, Phi)``, ``objective(q, w, Phi, offset, feet)``
   and ``across(q, Q_across)``: the policy's map, its objective and its constant term on numbers;
 * ``residuals(Phi, phi, v, nu, a, gamma, d)``: what the checks need: the velocity and
   acceleration residuals per row, over the row scales ``d`` (the norms of the rows of
@@ -83,6 +83,9 @@ class StepTerms:
         s = model._sym
         self.q, self.v, self.w, self.wd, self.wdd = s.q, s.v, s.w, s.wd, s.wdd
         self.pattern = model._Phi_v_expr.sparsity()  # of Phi_v, fixed
+        # the characteristic length, an expression of the laws where design parameters move
+        # the points it is measured on
+        self.length = s.length if s.length is not None else model.characteristic_length
         self.pattern_rows, self.pattern_columns = (np.asarray(x, dtype=int) for x in
                                                    self.pattern.get_triplet())
 
@@ -214,25 +217,25 @@ class StepTerms:
 
     @cached_property
     def across(self) -> ca.Function:
-        """``(q, Q_across) -> offset``: the policy's constant term from the forces of the
+        """``(q, w, Q_across) -> offset``: the policy's constant term from the forces of the
         elements acting across joints (the numbers of ``Model.Q_across``)."""
         across = ca.SX.sym("Q_across", self.model.Q_across.size_out(0))
-        return self._function("phase_across", [self.q, across], [self._across(across)],
-                              ["q", "Q_across"], ["offset"])
+        return self._function("phase_across", [self.q, self.w, across],
+                              [self._across(across)], ["q", "w", "Q_across"], ["offset"])
 
     @cached_property
     def wrench_map(self) -> ca.Function:
-        """``(q, Phi) -> A``: the map from multipliers to the wrenches of the least-wrench policy
+        """``(q, w, Phi) -> A``: the map from multipliers to the wrenches of the least-wrench policy
         (see :meth:`_wrench_map`; world axes, moments over the characteristic length). Never
         compiled, as :attr:`objective`: the standing robot's took gcc 65 s."""
         Phi_nz = ca.SX.sym("Phi", self.pattern.nnz())
         A, _ = self._wrench_map(Phi_nz)
-        return self._function("phase_wrench_map", [self.q, Phi_nz], [ca.densify(A)],
-                              ["q", "Phi"], ["A"], to_c=False)
+        return self._function("phase_wrench_map", [self.q, self.w, Phi_nz], [ca.densify(A)],
+                              ["q", "w", "Phi"], ["A"], to_c=False)
 
     @cached_property
     def objective(self) -> ca.Function:
-        """``(q, Phi, offset, feet) -> (A, b)``: the redundancy policy's objective
+        """``(q, w, Phi, offset, feet) -> (A, b)``: the redundancy policy's objective
         ``|A lam + b|^2`` (see :meth:`_objective`), ``Phi`` the nonzeros of ``Phi_v``. Never
         compiled: the batched driver evaluates it once per call (its exact first sample), the
         exact one once per sample (0.2 ms interpreted for the walking robot), and its graph
@@ -243,9 +246,9 @@ class StepTerms:
         A, b = self._objective(self._wrench_map(Phi_nz)[0], offset, feet)
         # A sparse: the walking robot's is 252 x 234 with 792 nonzeros, and densified the
         # Function took 67,086 operations against 8,910
-        return self._function("phase_objective", [self.q, Phi_nz, offset, feet],
-                              [A, ca.densify(b)], ["q", "Phi", "offset", "feet"], ["A", "b"],
-                              to_c=False)
+        return self._function("phase_objective", [self.q, self.w, Phi_nz, offset, feet],
+                              [A, ca.densify(b)], ["q", "w", "Phi", "offset", "feet"],
+                              ["A", "b"], to_c=False)
 
     @cached_property
     def row_norms(self) -> ca.Function:
@@ -268,12 +271,13 @@ class StepTerms:
                          lambda: ScatteredFunction(getattr(self, name)))
         return scattered.sparse(*arguments)
 
-    def offset(self, data, q, Q_across) -> np.ndarray:
-        """The policy's constant term at ``q`` on numbers: the wrenches of the force elements
-        acting across joints (``across``), zero without them (``Q_across`` None)."""
+    def offset(self, data, q, w, Q_across) -> np.ndarray:
+        """The policy's constant term at ``q`` (laws ``w``) on numbers: the wrenches of the
+        force elements acting across joints (``across``), zero without them (``Q_across``
+        None)."""
         if Q_across is None:
             return np.zeros(6 * self.owners)
-        return self.evaluate(data, "across", q, Q_across)[0]
+        return self.evaluate(data, "across", q, w, Q_across)[0]
 
     def nonzeros(self, Phi_v) -> np.ndarray:
         """The entries of a numeric ``Phi_v`` (dense, or SciPy sparse) at the pattern's
@@ -305,15 +309,19 @@ class StepTerms:
         return ca.vertcat(qb, ca.SX.zeros(3 - qb.numel())), ca.SX.eye(3)
 
     def _frame(self, joint):
-        """World origin and rotation of the joint frame (fixed to the child)."""
+        """World origin and rotation of the joint frame (fixed to the child; its origin shifted
+        by the model's design symbols where a parameter moves it: ``JointInfo.child_shift``)."""
         r, R = self._pose(joint.child)
         frame = joint.child_frame
-        position = np.concatenate([frame.position, np.zeros(3 - frame.position.size)])
+        position = ca.DM(np.concatenate([frame.position, np.zeros(3 - frame.position.size)]))
+        if joint.child_shift is not None:
+            position = position + ca.vertcat(joint.child_shift,
+                                             ca.SX.zeros(3 - joint.child_shift.numel()))
         rotation = frame.rotation if frame.rotation.shape == (3, 3) else np.pad(
             frame.rotation, ((0, 1), (0, 1)))
         if frame.rotation.shape != (3, 3):
             rotation[2, 2] = 1.0
-        return r + ca.mtimes(R, ca.DM(position)), ca.mtimes(R, ca.DM(rotation))
+        return r + ca.mtimes(R, position), ca.mtimes(R, ca.DM(rotation))
 
     def _wrench(self, body: int, g, point):
         """Force and moment about ``point`` (world) of generalized forces ``g`` (n_v x m) on a
@@ -332,7 +340,7 @@ class StepTerms:
             moment = ca.SX.zeros(3, m)
         arm = ca.repmat(r - point, 1, m)
         moment = moment + ca.cross(arm, force)
-        return ca.vertcat(force, moment / self.model.characteristic_length)
+        return ca.vertcat(force, moment / self.length)
 
     def _on_child(self, joint, g):
         origin, _ = self._frame(joint)
@@ -344,12 +352,12 @@ class StepTerms:
         """The (6 owners x n_c) map from multipliers to the policy's wrenches, and the joint
         frames' rotations (9 x J, column-major), at ``q`` and the nonzeros ``Phi_nz`` of
         ``Phi_v`` (SX)."""
-        A, frames = self._wrench_terms(self.q, Phi_nz)
+        A, frames = self._wrench_terms(self.q, self.w, Phi_nz)
         return A, frames
 
     @cached_property
     def _wrench_terms(self) -> ca.Function:
-        """``(q, Phi) -> (A, frames)`` of :meth:`_wrench_map`, formed once per model and
+        """``(q, w, Phi) -> (A, frames)`` of :meth:`_wrench_map`, formed once per model and
         called (inlined) by the objective, the policy of each size and the report: forming it
         took 0.07 s for the walking robot."""
         Phi_nz = ca.SX.sym("Phi", self.pattern.nnz())
@@ -370,7 +378,7 @@ class StepTerms:
                     driver.body, -Phi[driver.row, :].T, centre)
                 block += 1
         frames = ca.horzcat(*frames) if frames else ca.SX(9, 0)
-        return ca.Function("wrench_terms", [self.q, Phi_nz], [A, frames])
+        return ca.Function("wrench_terms", [self.q, self.w, Phi_nz], [A, frames])
 
     def _objective(self, W, offset, feet):
         """``A, b`` of the policy's objective ``|A lam + b|^2`` (SX), ``W`` the wrench map
@@ -392,14 +400,14 @@ class StepTerms:
         # efforts: in the efforts' own units, so the load-sharing term outweighs them as soon as
         # the foot's weight falls, whatever the robot's size (F / (m g) made it count only in
         # the last percent of a ramp: 60 N gone in 2 ms)
-        lever = model.characteristic_length / model.ground.default_reference
+        lever = self.length / model.ground.default_reference
         for k, contact in enumerate(model.contacts):
             for i, row in enumerate(contact.rows):
                 A[len(efforts) + 3 * k + i, int(row)] = feet[k] * lever
         return A, ca.SX.zeros(A.shape[0])
 
     def policy(self, m: int) -> ca.Function:
-        """``(W, offset, feet, lam, N, mask) -> lam``: among ``lam + N z`` (``N``, n_c x m,
+        """``(W, offset, feet, lam, N, mask, w) -> lam``: among ``lam + N z`` (``N``, n_c x m,
         spanning the multipliers that change no constraint force), the one of least
         objective (``W`` the wrench map of :attr:`wrench_terms`), the entries of ``z`` where
         ``mask`` is 0 held at zero; by the normal equations, scaled to unit diagonal, and with
@@ -426,45 +434,46 @@ class StepTerms:
         z = solve(H, ca.mtimes(G.T, g), mask)
         if model.contacts:  # feet of small weight make G ill-conditioned: refine once
             z = z + solve(H, ca.mtimes(G.T, ca.mtimes(G, z) + g), mask)
-        cache[m] = self._function(f"phase_policy_{m}", [W, offset, feet, lam, N, mask],
+        cache[m] = self._function(f"phase_policy_{m}", [W, offset, feet, lam, N, mask, self.w],
                                   [lam + ca.mtimes(N, z)],
-                                  ["W", "offset", "feet", "lam", "N", "mask"],
+                                  ["W", "offset", "feet", "lam", "N", "mask", "w"],
                                   ["lam_policy"], cse=False)  # it would save 2 %
         return cache[m]
 
     @cached_property
     def report(self) -> ca.Function:
-        """``(q, Phi, lam, offset) -> (wrench, frames)``: every joint's wrench in the report
+        """``(q, w, Phi, lam, offset) -> (wrench, frames)``: every joint's wrench in the report
         convention (6 x J: force, then moment about the joint origin, in the joint frame) and
         the joint frames' rotations (9 x J)."""
         model = self.model
         Phi_nz = ca.SX.sym("Phi", self.pattern.nnz())
         lam, offset = ca.SX.sym("lam", model.n_c), ca.SX.sym("offset", 6 * self.owners)
         W, frames = self._wrench_map(Phi_nz)
-        return self._function("phase_report", [self.q, Phi_nz, lam, offset],
+        return self._function("phase_report", [self.q, self.w, Phi_nz, lam, offset],
                               [self._joint_wrenches(W, frames, lam, offset), frames],
-                              ["q", "Phi", "lam", "offset"], ["wrench", "frames"])
+                              ["q", "w", "Phi", "lam", "offset"], ["wrench", "frames"])
 
     @cached_property
     def wrench_terms(self) -> ca.Function:
-        """``(q, Phi) -> (W, frames)``: the wrench map (sparse) and the joint frames'
+        """``(q, w, Phi) -> (W, frames)``: the wrench map (sparse) and the joint frames'
         rotations (:meth:`_wrench_map`), for a step that forms them once and gives them to
         the policy and to :attr:`joint_wrenches` (each formed them again: 11,000 operations a
         sample for the walking robot)."""
         Phi_nz = ca.SX.sym("Phi", self.pattern.nnz())
-        return self._function("phase_wrench_terms", [self.q, Phi_nz],
-                              list(self._wrench_map(Phi_nz)), ["q", "Phi"], ["W", "frames"])
+        return self._function("phase_wrench_terms", [self.q, self.w, Phi_nz],
+                              list(self._wrench_map(Phi_nz)), ["q", "w", "Phi"],
+                              ["W", "frames"])
 
     @cached_property
     def joint_wrenches(self) -> ca.Function:
-        """``(W, frames, lam, offset) -> wrench``: :attr:`report`'s wrenches from the wrench
+        """``(W, frames, lam, offset, w) -> wrench``: :attr:`report`'s wrenches from the wrench
         map and the joint frames of :attr:`wrench_terms`."""
         W = ca.SX.sym("W", self._wrench_terms.sparsity_out(0))
         frames = ca.SX.sym("frames", self._wrench_terms.size_out(1))
         lam, offset = ca.SX.sym("lam", self.model.n_c), ca.SX.sym("offset", 6 * self.owners)
-        return self._function("phase_joint_wrenches", [W, frames, lam, offset],
+        return self._function("phase_joint_wrenches", [W, frames, lam, offset, self.w],
                               [self._joint_wrenches(W, frames, lam, offset)],
-                              ["W", "frames", "lam", "offset"], ["wrench"])
+                              ["W", "frames", "lam", "offset", "w"], ["wrench"])
 
     def _joint_wrenches(self, W, frames, lam, offset):
         """Every joint's wrench in the report convention (6 x J), from the policy's wrenches
@@ -474,21 +483,22 @@ class StepTerms:
 
     @cached_property
     def report_map(self) -> ca.Function:
-        """``(q, Phi) -> (B, frames)``: the linear map from multipliers to :attr:`report`'s
+        """``(q, w, Phi) -> (B, frames)``: the linear map from multipliers to :attr:`report`'s
         wrenches (6 J x n_c, joint by joint: force, then moment, in the joint frame), for
         wrenches without the forces across joints; the joint frames' rotations (9 x J)."""
         Phi_nz = ca.SX.sym("Phi", self.pattern.nnz())
         A, frames = self._wrench_map(Phi_nz)
         out = self._in_joint_frames(A, frames)
         B = ca.vertcat(*out) if out else ca.SX(0, self.model.n_c)
-        return self._function("phase_report_map", [self.q, Phi_nz], [ca.densify(B), frames],
-                              ["q", "Phi"], ["B", "frames"], to_c=False)
+        return self._function("phase_report_map", [self.q, self.w, Phi_nz],
+                              [ca.densify(B), frames], ["q", "w", "Phi"], ["B", "frames"],
+                              to_c=False)
 
     def _in_joint_frames(self, world, frames) -> list:
         """The joints' blocks of ``world`` (policy wrenches, world axes, moments over the
         characteristic length: a column, or a map's columns) as the report gives them: in
         each joint's frame, moments in N m."""
-        length = self.model.characteristic_length
+        length = self.length
         out = []
         for k in range(len(self.model.joints)):
             R = ca.reshape(frames[:, k], 3, 3)

@@ -176,6 +176,9 @@ class _Assembly:
     def __init__(self, si: Scene, moved_frames: tuple = ()):
         self.si = si
         self.moved_frames = moved_frames
+        # (index into joint_points, the point's world change per unit, its shift symbol) of
+        # each frame moved on its child: the characteristic length moves with them
+        self.moved_points: list[tuple[int, np.ndarray, ca.SX]] = []
         self.dim = si.dimension
         self.scene_bodies = si.bodies  # looked up once: the scene builds the dict on each call
         self.bodies, self.q0, self.v0, self.mass = _bodies(si)
@@ -219,9 +222,9 @@ class _Assembly:
             axis = joint.unit_axis(self.dim)
             if isinstance(joint, Contact):  # a foot stands on the scene's ground
                 joint = replace(joint, terrain=si.ground.terrain)
+            shifts = self._shifts(joint.name)
             g = JointGeometry(self.states[joint.parent], self.states[joint.child], frame_p,
-                              frame_c, axis, self.dim, (world_p, world_c),
-                              self._shifts(joint.name))
+                              frame_c, axis, self.dim, (world_p, world_c), shifts)
             self.geometries[joint.name] = g
             rows = [self._add_row(f"{joint.name}/{name}", joint.name, unit, expr)
                     for name, expr, unit in joint.rows(g, self.laws)]
@@ -236,7 +239,7 @@ class _Assembly:
                               child=self.index.get(joint.child, GROUND_INDEX),
                               parent_frame=frame_p, child_frame=frame_c, axis=axis,
                               rows=np.array(rows, dtype=int), loop_closing=k in chords,
-                              type=joint))
+                              type=joint, child_shift=None if shifts is None else shifts[1]))
         return parts
 
     def _shifts(self, joint: str) -> tuple | None:
@@ -246,10 +249,30 @@ class _Assembly:
         if not moves:
             return None
         parent, child = ca.SX.zeros(self.dim), ca.SX.zeros(self.dim)
+        body = self.si.joints[joint].child
         for _, on_parent, on_child, law in moves:
             w = self.laws.last(law, f"{joint}/shift")
             parent, child = parent + w * ca.DM(on_parent), child + w * ca.DM(on_child)
+            if np.any(on_child):  # the joint's point, as the characteristic length sees it
+                turned = self._pose(body).rotation @ np.asarray(on_child, dtype=float)
+                self.moved_points.append((len(self.joint_points) - 1, turned, w))
         return parent, child
+
+    def _length(self) -> tuple[float, ca.SX | None]:
+        """The characteristic length, and where frames moved on their children move the
+        joint points it is the RMS spread of, its first-order expression in their shifts
+        (``Symbolic.length``: exact for derivatives)."""
+        length = _characteristic_length(self.si, self.joint_points)
+        if not self.moved_points or self.si.characteristic_length is not None:
+            return length, None
+        points = np.array(self.joint_points + [b.com_pose.position
+                                               for b in self.si.bodies.values()])
+        spread = points - points.mean(axis=0)
+        if not float(np.abs(spread).max()) > 0 or length <= 1e-12:
+            return length, None
+        # d rms = sum_i spread_i . d point_i / (n rms): the centroid's move is orthogonal
+        change = sum(w * float(spread[i] @ turned) for i, turned, w in self.moved_points)
+        return length, length + change / (len(points) * length)
 
     def drivers(self) -> tuple[list[DriverInfo], dict[str, list[int]]]:
         """Driver rows, and the rows of the drivers acting on each joint."""
@@ -474,6 +497,7 @@ class _Assembly:
                                                                  dtype=int),
                                     across=names, across_column=len(columns) - 1 if names else -1))
         w, wd, wdd = self.laws.symbols()
+        length, length_expression = self._length()
         symbolic = Symbolic(
             q=self.q, v=self.v, w=w, wd=wd, wdd=wdd, qdot=self.qdot,
             phi=ca.cse(ca.vertcat(*self.residuals)) if self.residuals else ca.SX(0, 1),
@@ -483,7 +507,8 @@ class _Assembly:
             + builder.potential,
             tracking=ca.vertcat(*self.tracking) if self.tracking else None,
             guided=ca.vertcat(*[c for _, c in self.guided]) if self.guided else None,
-            ranged=ca.vertcat(*self.ranged) if self.ranged else None)
+            ranged=ca.vertcat(*self.ranged) if self.ranged else None,
+            length=length_expression)
         guidance = None if kinematics is None else Guidance(
             kinematics, np.array([law for law, _ in self.guided], dtype=int))
         # work is done by rheonomic drivers (time laws) and by the non-conservative elements
@@ -491,7 +516,7 @@ class _Assembly:
         return Model(name=self.si.name, dimension=self.dim, bodies=self.bodies,
                      joints=tuple(joints), drivers=tuple(drivers), rows=tuple(self.rows),
                      laws=tuple(self.laws.laws), gravity=self.si.gravity,
-                     characteristic_length=_characteristic_length(self.si, self.joint_points),
+                     characteristic_length=length,
                      q0=self.q0, v0=self.v0, mass=self.mass, symbolic=symbolic,
                      forces=tuple(forces), rank_tolerance=rank_tolerance,
                      working_elements=tuple(working), report_forces=self.si.report_forces,

@@ -60,6 +60,9 @@ class JointInfo:
     type: Joint
     across: tuple[str, ...] = ()  # force elements acting across the joint
     across_column: int = -1  # column of Q_across holding them, -1 when none
+    #: the shift of the frame's origin on the child (SX of the laws ``w``, child axes) where a
+    #: design parameter moves it (``assemble(moved_frames=...)``), None otherwise
+    child_shift: object = None
 
 
 @dataclass(frozen=True)
@@ -186,6 +189,9 @@ class Symbolic:
     tracking: ca.SX | None = None  # each joint controller's coordinate minus its target
     guided: ca.SX | None = None  # the coordinates of the joints that follow the guides
     ranged: ca.SX | None = None  # the coordinates of the joints with a range, in joint order
+    #: the characteristic length as an expression of the laws where design parameters move
+    #: the joint points it is measured on (``assemble(moved_frames=...)``); else the number
+    length: ca.SX | None = None
 
 
 @dataclass(frozen=True)

@@ -16,10 +16,10 @@ Protocol
   every effort, joint wrench, ground force and figure of merit against central differences of
   whole runs on the scene re-read with one parameter moved by ``--step`` of its value, or by
   1e-6 m for a joint's position (the ``ctr``, ``fti`` and ``tita`` origins of the front leg on
-  its joint laws, ``legs.front_leg_scene``: the built-in leg's joints follow its foot's guides,
-  whose derivatives through the kinematics are not computed; and the walking robot's coxa,
-  femur and tibia lengths, ``joint.*/ctr|fti|tita.parent_frame.position.0``, checked at its
-  points but not moved there);
+  its joint laws, ``legs.front_leg_scene``, and of the built-in leg, whose joints follow its
+  foot's guides; the walking robot's coxa, femur and tibia lengths,
+  ``joint.*/ctr|fti|tita.parent_frame.position.0``; the last two checked at the points but
+  not moved there);
   ``--checked`` parameters drawn per point; the forces are linear in masses and inertias, so
   those differences are exact but for round-off); and the walking robot's builder arguments
   ``period`` (drawn in [0.35, 0.7] s, derived at fixed phase) and ``step_height`` (drawn in
@@ -65,6 +65,9 @@ ROBOT_PARAMETERS = ["body.trunk.mass", "body.trunk.inertia", "body.*/femur.mass"
 ROBOT_LENGTHS = ["joint.*/ctr.parent_frame.position.0", "joint.*/fti.parent_frame.position.0",
                  "joint.*/tita.parent_frame.position.0"]
 LEG_PARAMETERS = ["body.*.mass", "body.*.inertia"]
+#: the built-in front leg's joints' origins, checked at its points (its joints follow the
+#: foot's guides: through the phase path's step)
+LEG_ORIGINS = ["joint.ctr.origin", "joint.fti.origin", "joint.tita.origin"]
 #: the front leg on its joint laws also moves its joints: derivatives through the motion
 LAW_LEG_PARAMETERS = LEG_PARAMETERS + ["joint.ctr.origin", "joint.fti.origin",
                                        "joint.tita.origin"]
@@ -264,16 +267,16 @@ def inverse_metrics(model, result):
 
 def checked_scenes():
     """``(name, scene, parameter patterns moved and checked, patterns checked)`` of the
-    agreement check: the built-in front leg (its guided joints follow the guides' kinematics:
-    masses and inertias), the front leg on its harmonic joint laws, its foot loaded as the
-    built-in leg's (``legs.front_leg_scene``), with its joints' positions, and the walking
-    robot with its segment lengths (its joints' frames on their parents: through the phase
-    path's step differentiated)."""
+    agreement check: the built-in front leg with its joints' origins (its joints follow the
+    foot's guides: through the phase path's step differentiated), the front leg on its
+    harmonic joint laws, its foot loaded as the built-in leg's (``legs.front_leg_scene``),
+    with its joints' positions (the tree path), and the walking robot with its segment
+    lengths (its joints' frames on their parents: the phase path's step)."""
     from legs import front_leg_scene
 
     on_laws = front_leg_scene()
     on_laws.add(hx.load_scene("front-leg").forces["ground_reaction"])
-    return [("front-leg", hx.load_scene("front-leg"), LEG_PARAMETERS, []),
+    return [("front-leg", hx.load_scene("front-leg"), LEG_PARAMETERS, LEG_ORIGINS),
             ("front leg on its joint laws", on_laws, LAW_LEG_PARAMETERS, []),
             ("hexapod", hx.load_scene("hexapod"), ROBOT_PARAMETERS, ROBOT_LENGTHS)]
 

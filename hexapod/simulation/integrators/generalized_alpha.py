@@ -496,7 +496,7 @@ class LieGroupGeneralizedAlpha(Integrator):
             return lam
         Q_across = (model.call("Q_across", self.data, q=q, v=v, w=w) if model.Q_across is not None
                     else None)
-        wrench_map, offset = policy_map(model, q, as_dense(Phi_v), Q_across, self.data)
+        wrench_map, offset = policy_map(model, q, w, as_dense(Phi_v), Q_across, self.data)
         return distribute(split, lam, wrench_map, offset)
 
     def dense_output(self) -> Interpolant:
