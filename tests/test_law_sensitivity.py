@@ -14,8 +14,6 @@ forward mode at the result's samples, :mod:`hexapod.algorithms.law_tangents`):
 
 from __future__ import annotations
 
-import csv
-
 import numpy as np
 import pytest
 
@@ -221,24 +219,6 @@ def _point_change(x, dx, point):
     return dx[:3] + dA @ point
 
 
-def test_command_derives_by_the_step_height(tmp_path, walking):
-    """``step_height`` (the built-in robot's builder argument) from the command line: the
-    table in J per m, the library's derivatives at the same samples (a stride)."""
-    _, model, result, change = walking
-    out = tmp_path / "out"
-    assert main(["sensitivity", "hexapod", "--parameters", "step_height", "--samples",
-                 str(TIMES.size), "--metrics", "energy", "--no-figures", "--out",
-                 str(out)]) == 0
-    with open(out / "sensitivities.csv") as stream:
-        row, = csv.DictReader(stream)
-    assert (row["metric"], row["parameter"], row["unit"]) == ("energy", "step_height", "J/m")
-    derivative = metric_sensitivities(model, result, hx.inverse_sensitivities(
-        model, result, [change]), ["energy"])["energy"][0]
-    energy = inverse_metrics(model, result, ["energy"], 1.0)["energy"]
-    assert float(row["value"]) == pytest.approx(derivative, rel=1e-9)
-    assert float(row["elasticity"]) == pytest.approx(HEIGHT * derivative / energy, rel=1e-9)
-
-
 def test_a_scene_without_feet_paths_is_refused(tmp_path, capsys):
     assert main(["sensitivity", str(SCENES / "pendulum.toml"), "--parameters",
                  "gait.step_height", "--no-figures", "--out", str(tmp_path / "none")]) == 1
@@ -263,3 +243,34 @@ def test_the_friction_policy_is_refused_before_the_run(tmp_path, capsys):
     error = capsys.readouterr().err
     assert "friction policy" in error and "Traceback" not in error
     assert not (tmp_path / "none").exists()
+
+
+#: The powers of the scale ``s`` by which each result grows under Froude scaling.
+FROUDE = {"force": 3, "torque": 4, "ground_force": 3, "effort": 4, "peak_effort": 4,
+          "rms_effort": 4, "peak_force": 3, "peak_moment": 4, "peak_ground": 3, "energy": 4,
+          "cost_of_transport": 0}
+
+
+def test_froude_scaling(walking):
+    """Lengths times ``s``, masses times ``s^3`` (inertias ``s^5``), times times ``sqrt(s)``:
+    the geometric scale's derivative and half the period's, elasticities that must sum to 3
+    for every force, 4 for every torque and effort, energy per stride and peak torque, 0 for
+    the cost of transport, exactly (the scale's lengths move the motion through the phase
+    path's step, its masses along it; the period at fixed phase)."""
+    scene, model, result, _ = walking
+    changes = inertia_parameters(scene, ["geometric_scale", "gait.period"])
+    moved = hx.sweeps.moved_model(scene, model, changes)
+    sensitivity = hx.inverse_sensitivities(model, result, changes, moved=moved)
+    period = changes[1].value
+    for name in ("force", "torque", "ground_force", "effort"):
+        value, derivative = getattr(result, name), getattr(sensitivity, name)
+        froude = derivative[..., 0] + 0.5 * period * derivative[..., 1]
+        finite = np.isfinite(value)
+        assert np.abs(froude - FROUDE[name] * value)[finite].max() <= \
+            1e-10 * np.abs(value[finite]).max(), name
+    derivatives = metric_sensitivities(model, result, sensitivity)
+    values = inverse_metrics(model, result, SENSITIVE_FAMILIES, 1.0)
+    for column, derivative in derivatives.items():
+        froude = derivative[0] + 0.5 * period * derivative[1]
+        assert abs(froude - FROUDE[column.split(":")[0]] * values[column]) <= \
+            1e-10 * abs(values[column]), column

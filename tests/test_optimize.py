@@ -270,6 +270,7 @@ samples = {samples}
 @pytest.mark.parametrize("change, said", [
     ({"key": "body.wing.mass"}, "no body matches 'wing'"),
     ({"key": "body.*.mass"}, "names one parameter"),
+    ({"key": "geometric_scale"}, "vary the builder's scale"),
     ({"vary": "range = [2.0, 1.0]"}, "low must be below high"),
     ({"vary": "range = [0.0, inf]"}, "two finite numbers"),
     ({"minimize": "rms_effort:knee"}, "no figure of merit 'rms_effort:knee'"),

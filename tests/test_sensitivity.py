@@ -474,21 +474,29 @@ def test_command_writes_the_table(tmp_path, capsys):
     assert "peak_effort" in (out / "summary.md").read_text()
 
 
-def test_command_derives_by_the_gait_period(tmp_path, capsys):
-    """``gait.period`` from the command line: the walking robot's table, in N m per s, the
-    derivatives the library gives at the same samples."""
+def test_command_derives_by_the_gait_period_and_step_height(tmp_path, capsys):
+    """``gait.period`` and ``step_height`` (the built-in robot's builder argument) from the
+    command line: the walking robot's table, in J per s and J per m, the derivatives and
+    elasticities the library gives at the same samples."""
     out = tmp_path / "out"
-    assert main(["sensitivity", "hexapod", "--parameters", "gait.period", "body.trunk.mass",
-                 "--samples", "11", "--no-figures", "--out", str(out)]) == 0
+    assert main(["sensitivity", "hexapod", "--parameters", "gait.period", "step_height",
+                 "--samples", "11", "--metrics", "energy", "--no-figures", "--out",
+                 str(out)]) == 0
     with open(out / "sensitivities.csv") as stream:
-        rows = list(csv.DictReader(stream))
-    row = next(r for r in rows if r["metric"] == "energy" and r["parameter"] == "gait.period")
-    assert row["unit"] == "J/s"
+        rows = {r["parameter"]: r for r in csv.DictReader(stream)}
+    assert (rows["gait.period"]["unit"], rows["step_height"]["unit"]) == ("J/s", "J/m")
     model = walking_robot()
     result = hx.inverse_dynamics(model, np.linspace(0.0, model.cycle_time(), 11))
+    changes = [PeriodChange(value=0.5), *inertia_parameters(hx.load_scene("hexapod"),
+                                                            ["step_height"])]
     derivatives = metric_sensitivities(
-        model, result, hx.inverse_sensitivities(model, result, [PeriodChange(value=0.5)]))
-    assert float(row["value"]) == pytest.approx(derivatives["energy"][0], rel=1e-9)
+        model, result, hx.inverse_sensitivities(model, result, changes), ["energy"])["energy"]
+    energy = inverse_metrics(model, result, ["energy"], 1.0)["energy"]
+    for change, derivative in zip(changes, derivatives, strict=True):
+        row = rows[change.name]
+        assert float(row["value"]) == pytest.approx(derivative, rel=1e-9)
+        assert float(row["elasticity"]) == pytest.approx(change.value * derivative / energy,
+                                                         rel=1e-9)
     assert main(["sensitivity", str(SCENES / "pendulum.toml"), "--parameters", "gait.period",
                  "--no-figures", "--out", str(tmp_path / "none")]) == 1
     assert "has no gait" in capsys.readouterr().err and not (tmp_path / "none").exists()

@@ -72,7 +72,7 @@ if TYPE_CHECKING:
     from hexapod.algorithms.inverse import InverseResult
 
 __all__ = ["FrameChange", "FrictionChange", "InertiaChange", "InverseSensitivity", "LawChange",
-           "PeriodChange", "check_parameters", "inverse_sensitivities", "moved_laws",
+           "PeriodChange", "ScaleChange", "check_parameters", "inverse_sensitivities", "moved_laws",
            "tree_solved"]
 
 
@@ -218,6 +218,27 @@ class LawChange:
     mass: float = 0.0  # it changes no mass
 
 
+@dataclass(frozen=True)
+class ScaleChange:
+    """The geometric scale ``s`` (``scale``), relative to the scene as given (``value`` 1):
+    every length times ``s``, masses times ``s^3``, inertias times ``s^5`` (as the robot
+    builders' ``scale`` argument), the motion's times kept. Its lengths move the motion
+    (the scene assembled again with them scaled by a symbol: ``moved``); its masses and
+    inertias are the inertial forces' change along the motion.
+
+    Attributes
+    ----------
+    mass : float
+        ``dm/ds``, the model's total mass times 3 (kg).
+    """
+
+    name: str = "scale"
+    value: float = 1.0
+    unit: str = "1"
+    scene_scale: float = 1.0
+    mass: float = 0.0
+
+
 @dataclass
 class InverseSensitivity:
     """Derivatives of an :class:`~hexapod.algorithms.inverse.InverseResult`'s forces, the
@@ -273,6 +294,14 @@ def inertial_force_changes(model: Model, change: InertiaChange, v: np.ndarray,
     return out
 
 
+def scale_force_changes(model: Model, v: np.ndarray, v_dot: np.ndarray) -> np.ndarray:
+    """``d(Q - M v_dot)/ds`` of the masses (``3 m``) and inertias (``5 J``) under the
+    geometric scale, every body's, along the states ``(v, v_dot)`` (N, n_v)."""
+    return sum((inertial_force_changes(model, InertiaChange(
+        "scale", body.name, 3.0 * body.mass, 5.0 * body.inertia, "1"), v, v_dot)
+        for body in model.bodies), np.zeros(v.shape))
+
+
 def period_force_changes(model: Model, change: PeriodChange, q: np.ndarray, v: np.ndarray,
                          v_dot: np.ndarray, w: np.ndarray) -> np.ndarray:
     """``d(Q - M v_dot)/dT`` (N, n_v) at fixed phase, at the states ``(q, v, v_dot)`` (N, n_v)
@@ -311,14 +340,16 @@ def check_parameters(model: Model, parameters, moved: Model | None = None) -> No
     for change in parameters:
         if isinstance(change, PeriodChange):
             _check_period(model, change)
-        through_motion = isinstance(change, LawChange) or (
+        through_motion = isinstance(change, LawChange | ScaleChange) or (
             isinstance(change, FrameChange) and not tree_solved(model))
         if through_motion and model.contacts and model.ground.policy == "friction":
             raise HexapodError(
                 f"parameter '{change.name}': model '{model.name}' shares its ground forces by "
                 "the friction policy, a QP solved sample by sample whose derivative along a "
                 "moving motion is not derived (the least-wrench and least-effort policies are)")
-        if isinstance(change, FrictionChange | PeriodChange | LawChange):
+        if isinstance(change, ScaleChange):
+            _check_scaled(model, change, moved)
+        if isinstance(change, FrictionChange | PeriodChange | LawChange | ScaleChange):
             continue
         known = (model.joint_index if isinstance(change, FrameChange) else model.body_index)
         element = change.joint if isinstance(change, FrameChange) else change.body
@@ -350,6 +381,24 @@ def _check_shifted(model: Model, change: FrameChange, moved: Model | None) -> No
             f"parameter '{change.name}': model '{model.name}' is not an open tree with every "
             "joint driven: the derivative needs its scene assembled again with the joint's "
             "frame shifted by a symbol (moved, from hexapod.sweeps.moved_model)")
+
+
+def _check_scaled(model: Model, change: ScaleChange, moved: Model | None) -> None:
+    """The scale: its model at hand; only gravity and the inertial forces scale as derived
+    (a load's or a spring's change with the scale is not known), on flat ground."""
+    if model.forces:
+        raise HexapodError(
+            f"parameter '{change.name}': model '{model.name}' has forces of its own (the "
+            f"{model.forces[0].kind} '{model.forces[0].name}'), whose change with the scale is "
+            "not derived")
+    if model.contacts and model.ground.terrain is not None and \
+            not getattr(model.ground.terrain, "flat", True):
+        raise HexapodError(f"parameter '{change.name}': model '{model.name}' stands on "
+                           "terrain that is not flat, whose heights' scaling is not derived")
+    if moved is None or change.name not in {law.name for law in moved_laws(model, moved)}:
+        raise HexapodError(
+            f"parameter '{change.name}': the derivative needs the scene assembled again with "
+            "its lengths scaled by a symbol (moved, from hexapod.sweeps.moved_model)")
 
 
 def moved_laws(model: Model, moved: Model) -> tuple:
@@ -411,6 +460,8 @@ def inverse_sensitivities(model: Model, result: InverseResult,
     if moving and not tree_solved(model):
         moving, shifted = [], moving
     changing = [k for k, c in enumerate(parameters) if isinstance(c, LawChange)]
+    # the scale: its masses' and inertias' part along the motion, and its lengths' moving it
+    shifted += [k for k, c in enumerate(parameters) if isinstance(c, ScaleChange)]
     changes = np.zeros(0)
     rates = np.zeros((n, model.n_w, count))
     turning = np.zeros((n, count, joints, 9))  # the joint frames' rotations' derivatives
@@ -424,7 +475,7 @@ def inverse_sensitivities(model: Model, result: InverseResult,
         from hexapod.algorithms.law_tangents import law_tangents
 
         design, shifts = model, []
-        if shifted:  # each shift a law of the moved model, named as its parameter
+        if shifted:  # each shift (or the scale) a law of the moved model, named as it
             design = moved
             laws = {law.name: law for law in moved_laws(model, moved)}
             shifts = [{laws[parameters[k].name]: laws[parameters[k].name].design_parameter(
@@ -432,9 +483,9 @@ def inverse_sensitivities(model: Model, result: InverseResult,
         tangents = law_tangents(design, result,
                                 [parameters[k].laws for k in changing] + shifts)
         through = changing + shifted
-        wrench[:, through], rotations, q[..., through] = (tangents.wrench, tangents.frames,
-                                                         tangents.q)
-        ground[..., through] = tangents.ground
+        rotations, q[..., through] = tangents.frames, tangents.q
+        wrench[:, through] += tangents.wrench  # to the scale's inertial part
+        ground[..., through] += tangents.ground
         rates[..., through] = tangents.rates[:, :model.n_w]  # the shifts come last
         turning[:, through] = tangents.dframes
     force, torque, effort = efforts_and_axes(model, wrench[..., :3], wrench[..., 3:],
@@ -477,6 +528,8 @@ def _inertial_part(model: Model, result, parameters, laws, progress):
         elif isinstance(change, PeriodChange):
             forces[..., p] = period_force_changes(model, change, result.q, result.v,
                                                   result.v_dot, laws[0])
+        elif isinstance(change, ScaleChange):
+            forces[..., p] = scale_force_changes(model, result.v, result.v_dot)
     along_mu = np.array([isinstance(c, FrictionChange) for c in parameters], dtype=float)
     for k, t in enumerate(result.times):
         q, v, w = result.q[k], result.v[k], laws[0][:, k]

@@ -317,6 +317,8 @@ class StepTerms:
         if joint.child_shift is not None:
             position = position + ca.vertcat(joint.child_shift,
                                              ca.SX.zeros(3 - joint.child_shift.numel()))
+        if self.model._sym.scale is not None:  # a design parameter scales every length
+            position = self.model._sym.scale * position
         rotation = frame.rotation if frame.rotation.shape == (3, 3) else np.pad(
             frame.rotation, ((0, 1), (0, 1)))
         if frame.rotation.shape != (3, 3):

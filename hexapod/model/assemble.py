@@ -173,7 +173,7 @@ def _characteristic_length(scene: Scene, joint_points: list[np.ndarray]) -> floa
 class _Assembly:
     """The symbols and expressions of one model, built one concern at a time."""
 
-    def __init__(self, si: Scene, moved_frames: tuple = ()):
+    def __init__(self, si: Scene, moved_frames: tuple = (), scaled: Law | None = None):
         self.si = si
         self.moved_frames = moved_frames
         # (index into joint_points, the point's world change per unit, its shift symbol) of
@@ -198,6 +198,11 @@ class _Assembly:
         self.contacts: list[ContactInfo] = []
         self.guided: list[tuple[int, ca.SX]] = []  # a guided law's index, its joint's coordinate
         self.ranged: list[ca.SX] = []  # the coordinate of each joint with a range
+        # every length times 1 + sigma, sigma the law ``scaled`` (zero), or 1 (a number)
+        self.scale = 1.0 if scaled is None else 1.0 + self.laws.last(scaled, "scale")
+        if scaled is not None:
+            for state in self.states.values():
+                state.scale = self.scale
 
     def _add_row(self, name: str, owner: str, unit: str, expr: ca.SX) -> int:
         self.rows.append(RowInfo(name, owner, unit))
@@ -224,7 +229,7 @@ class _Assembly:
                 joint = replace(joint, terrain=si.ground.terrain)
             shifts = self._shifts(joint.name)
             g = JointGeometry(self.states[joint.parent], self.states[joint.child], frame_p,
-                              frame_c, axis, self.dim, (world_p, world_c), shifts)
+                              frame_c, axis, self.dim, (world_p, world_c), shifts, self.scale)
             self.geometries[joint.name] = g
             rows = [self._add_row(f"{joint.name}/{name}", joint.name, unit, expr)
                     for name, expr, unit in joint.rows(g, self.laws)]
@@ -263,6 +268,9 @@ class _Assembly:
         joint points it is the RMS spread of, its first-order expression in their shifts
         (``Symbolic.length``: exact for derivatives)."""
         length = _characteristic_length(self.si, self.joint_points)
+        if not isinstance(self.scale, float) and self.si.characteristic_length is None:
+            # every point scaled: the length measured on them with them
+            return length, self.scale * length
         if not self.moved_points or self.si.characteristic_length is not None:
             return length, None
         points = np.array(self.joint_points + [b.com_pose.position
@@ -288,6 +296,8 @@ class _Assembly:
             f, law = self.laws.value(driver.law, driver.name, ("driver", driver.name))
             if isinstance(driver, JointDriver):
                 joint = joints[driver.joint]
+                if joint.coordinate_unit == "length":
+                    f = self.scale * f
                 row = self._add_row(driver.name, driver.name, joint.coordinate_unit,
                                     joint.driver_row(self.geometries[joint.name], f))
                 on_joint.setdefault(joint.name, []).append(row)
@@ -299,6 +309,8 @@ class _Assembly:
                 assert isinstance(driver, CoordinateDriver)
                 body = self.bodies[self.index[driver.body]]
                 unit = "angle" if driver.coordinate == "angle" else "length"
+                if driver.coordinate in ("x", "y", "z"):
+                    f = self.scale * f
                 if driver.coordinate in ORIENTATIONS:
                     unit = "angle"
                     delta = self._measured_angle(driver) - f
@@ -508,7 +520,8 @@ class _Assembly:
             tracking=ca.vertcat(*self.tracking) if self.tracking else None,
             guided=ca.vertcat(*[c for _, c in self.guided]) if self.guided else None,
             ranged=ca.vertcat(*self.ranged) if self.ranged else None,
-            length=length_expression)
+            length=length_expression,
+            scale=None if isinstance(self.scale, float) else self.scale)
         guidance = None if kinematics is None else Guidance(
             kinematics, np.array([law for law, _ in self.guided], dtype=int))
         # work is done by rheonomic drivers (time laws) and by the non-conservative elements
@@ -524,7 +537,8 @@ class _Assembly:
                      source=source, guidance=guidance)
 
 
-def assemble(scene: Scene, *, rank_tolerance: float = 1e-9, moved_frames: tuple = ()) -> Model:
+def assemble(scene: Scene, *, rank_tolerance: float = 1e-9, moved_frames: tuple = (),
+             scaled: Law | None = None) -> Model:
     """Validate ``scene`` and build its :class:`~hexapod.model.model.Model` (SI units).
 
     Parameters
@@ -540,6 +554,10 @@ def assemble(scene: Scene, *, rank_tolerance: float = 1e-9, moved_frames: tuple 
         ``on_parent`` and ``on_child`` (in each body's centre-of-mass axes, SI): the same model
         with the shifts as symbols, whose derivatives give a joint's position's
         (:mod:`hexapod.algorithms.law_tangents`).
+    scaled : DesignShift, optional
+        Every length of the model (its bodies' points, the world's, the length-valued laws
+        and the characteristic length) times ``1 + sigma``, ``sigma`` this law's value (zero):
+        the derivative with respect to the geometric scale at fixed masses.
 
     Returns
     -------
@@ -564,12 +582,13 @@ def assemble(scene: Scene, *, rank_tolerance: float = 1e-9, moved_frames: tuple 
     if unknown:
         raise HexapodError(f"scene '{scene.name}'{where}: no joint '{unknown[0]}' to move")
     tag = "" if not moved else "|moved:" + ",".join(f"{m[0]}:{id(m[3])}" for m in moved)
+    tag += "" if scaled is None else f"|scaled:{id(scaled)}"
     if any(isinstance(d, CoordinateDriver) and d.guide for d in si.drivers.values()):
         guides = _guides_driving(si)
-        kinematics = _Assembly(guides, moved).model(
+        kinematics = _Assembly(guides, moved, scaled).model(
             rank_tolerance, scene_digest(guides, rank_tolerance) + tag, scene.source)
         si = _guides_left_out(si)
-    return with_guided_laws(_Assembly(si, moved).model(
+    return with_guided_laws(_Assembly(si, moved, scaled).model(
         rank_tolerance, scene_digest(si, rank_tolerance) + tag, scene.source, kinematics))
 
 

@@ -34,6 +34,9 @@ class BodyState:
         self.omega = omega
         self.qdot = qdot
         self._vectors: dict = {}  # one expression per body-fixed vector: rows share it
+        #: every length times this where a design parameter scales the model (its points
+        #: from the centre of mass; the ground's from the origin), else None
+        self.scale = None
 
     @classmethod
     def ground(cls, dimension: int) -> BodyState:
@@ -71,6 +74,8 @@ class BodyState:
         key = (kind, vector.tobytes())
         if key not in self._vectors:
             turned = ca.mtimes(self.R, ca.DM(vector))
+            if kind == "point" and self.scale is not None:
+                turned = self.scale * turned
             self._vectors[key] = self.r + turned if kind == "point" else turned
         return self._vectors[key]
 

@@ -192,6 +192,9 @@ class Symbolic:
     #: the characteristic length as an expression of the laws where design parameters move
     #: the joint points it is measured on (``assemble(moved_frames=...)``); else the number
     length: ca.SX | None = None
+    #: what every length is multiplied by where a design parameter scales the model
+    #: (``assemble(scaled=...)``: ``1 + sigma``), else None
+    scale: ca.SX | None = None
 
 
 @dataclass(frozen=True)

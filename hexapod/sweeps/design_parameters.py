@@ -18,6 +18,10 @@ the scene's TOML form. Sensitivities cover the bodies' inertia and the joints' p
   gait's period, the motion kept at the same fractions of the stride
   (:class:`~hexapod.algorithms.sensitivity.PeriodChange`: a scene whose laws all follow the
   gait's phase, as the gait builders make them);
+* ``geometric_scale`` (1: the scene as given): every length times ``s``, masses times
+  ``s^3``, inertias times ``s^5``, the motion's times kept
+  (:class:`~hexapod.algorithms.sensitivity.ScaleChange`); with the period's half, the Froude
+  scaling whose forces go as ``s^3`` and torques as ``s^4``;
 * ``gait.step_height`` (m; ``step_height``, alike): the feet's lift in swing, held by the
   feet's paths (the laws whose :meth:`~hexapod.scene.Law.design_parameter` answers to it;
   :class:`~hexapod.algorithms.sensitivity.LawChange`): the joints follow the paths, and the
@@ -43,6 +47,7 @@ from hexapod.algorithms.sensitivity import (
     InertiaChange,
     LawChange,
     PeriodChange,
+    ScaleChange,
 )
 from hexapod.scene.bodies import Particle, PlanarBody, inertia_tensor
 from hexapod.scene.element import GROUND
@@ -56,7 +61,8 @@ _COVERED = ("masses and inertias, body.NAME.mass and body.NAME.inertia[.K], and 
             "positions, joint.NAME.origin[.K] or joint.NAME.parent_frame.position[.K] "
             "(child_frame) ('*' matches any NAME), the friction coefficient, ground.mu, and the "
             "gait's period and step height, gait.period and gait.step_height (or period and "
-            "step_height); the gait's other parameters are not covered yet")
+            "step_height), and the geometric scale, geometric_scale; the gait's other "
+            "parameters are not covered yet")
 
 
 def inertia_parameters(scene: Scene, patterns: Sequence[str],
@@ -98,6 +104,10 @@ def inertia_parameters(scene: Scene, patterns: Sequence[str],
         if pattern in _LAW_PARAMETERS:
             found.setdefault(pattern, _law_change(scene, pattern, source))
             continue
+        if pattern == "geometric_scale":  # every length, masses and inertias with them
+            total = sum(float(b.mass) for b in scene.bodies.values())
+            found.setdefault(pattern, ScaleChange(pattern, mass=3.0 * total))
+            continue
         parts = pattern.split(".")
         section = parts[0]
         if _kind(parts) is None:
@@ -128,11 +138,14 @@ def moved_model(scene: Scene, model, changes) -> Model | None:
     from hexapod.model.assemble import assemble
     from hexapod.scene.laws.base import DesignShift
 
-    frames = [c for c in changes if isinstance(c, FrameChange)]
-    if not frames or tree_solved(model):
+    frames = [c for c in changes if isinstance(c, FrameChange)] if not tree_solved(model) \
+        else []
+    scaled = next((DesignShift(c.name) for c in changes if isinstance(c, ScaleChange)), None)
+    if not frames and scaled is None:
         return None
     moved = tuple((c.joint, c.parent, c.child, DesignShift(c.name)) for c in frames)
-    return assemble(scene, rank_tolerance=model.rank_tolerance, moved_frames=moved)
+    return assemble(scene, rank_tolerance=model.rank_tolerance, moved_frames=moved,
+                    scaled=scaled)
 
 
 def _period(scene: Scene, name: str, source: str) -> PeriodChange:

@@ -183,7 +183,8 @@ def _transport(model, result, sensitivity, driven, dwork, masses) -> np.ndarray:
     for p, change in enumerate(sensitivity.parameters):
         dshift = horizontal(sum(m * (dq[1, b.q, p][:dim] - dq[0, b.q, p][:dim])
                                 for m, b in zip(masses, model.bodies, strict=True)) / mass)
-        if change.mass:
+        if change.mass and getattr(change, "body", None) is not None:  # one body's mass
+            # (the scale's, every body's in proportion, leaves the centre of mass in place)
             body = model.bodies[model.body_index[change.body]]
             own = horizontal(q[-1, body.q][:dim] - q[0, body.q][:dim])
             dshift = dshift + change.mass * (own - shift) / mass

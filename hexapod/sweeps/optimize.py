@@ -45,7 +45,7 @@ from pathlib import Path
 import numpy as np
 
 from hexapod._support.files import read_toml
-from hexapod.algorithms.sensitivity import InertiaChange
+from hexapod.algorithms.sensitivity import InertiaChange, ScaleChange
 from hexapod.errors import HexapodError, InputFileError
 from hexapod.sweeps.cases import StudyError
 from hexapod.sweeps.metric_derivatives import SENSITIVE_FAMILIES, metric_sensitivities
@@ -449,6 +449,10 @@ def _parameters(scene, bounds, source: str):
     from hexapod.sweeps.design_parameters import inertia_parameters
 
     changes = inertia_parameters(scene, [b.name for b in bounds], source=f"{source}: vary")
+    if any(isinstance(c, ScaleChange) for c in changes):
+        raise StudyError(f"{source}: vary: geometric_scale is a sensitivity relative to the "
+                         "scene as given, not a value a scene can be built with: vary the "
+                         "builder's scale (a built-in robot's 'scale') instead")
     if [c.name for c in changes] != [b.name for b in bounds]:
         named = ", ".join(c.name for c in changes)
         raise StudyError(f"{source}: vary: each [vary] key names one parameter, as it is "

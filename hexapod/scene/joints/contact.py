@@ -141,6 +141,6 @@ class Contact(Joint):
     def rows(self, g, laws):
         gate = laws.value(StanceGate(self), f"{self.name}/gate", ("gate", self.name))[0]
         point = g.child.point(g.child_frame.position)
-        return [(axis, gate * (point[i] - laws.value(
+        return [(axis, gate * (point[i] - g.scale * laws.value(
             Foothold(self, i), f"{self.name}/{axis}0", ("foothold", self.name, i))[0]), LENGTH)
                 for i, axis in enumerate("xyz")]

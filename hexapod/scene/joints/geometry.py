@@ -48,6 +48,9 @@ class JointGeometry:
     shifts : tuple of SX (d,), optional
         Symbolic shifts of the parent's and the child's frame origins, in each body's axes
         (design parameters: zero at the scene's values).
+    scale : SX or float
+        What every length is multiplied by (a design parameter's ``1 + sigma``; 1): the body
+        states scale their points themselves, a joint type its own world lengths with it.
     """
 
     parent: Any
@@ -58,6 +61,7 @@ class JointGeometry:
     dimension: int
     initial: tuple[np.ndarray, np.ndarray] | None = None
     shifts: tuple | None = None
+    scale: Any = 1.0
 
     @property
     def gap(self):
@@ -67,7 +71,8 @@ class JointGeometry:
         if self.shifts is None:
             return gap
         parent, child = self.shifts
-        return gap + ca.mtimes(self.child.R, child) - ca.mtimes(self.parent.R, parent)
+        return gap + self.scale * (ca.mtimes(self.child.R, child)
+                                   - ca.mtimes(self.parent.R, parent))
 
     def parent_vector(self, u):
         """Joint-frame vector ``u`` fixed to the parent, in world axes."""
