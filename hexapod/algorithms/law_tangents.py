@@ -22,7 +22,7 @@ gives the forces'.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -68,10 +68,12 @@ class LawTangents:
 
 
 def law_tangents(model: Model, result: InverseResult,
-                 changes: Sequence[Mapping[Law, Law]]) -> LawTangents:
+                 changes: Sequence[Mapping[Law, Law]], *,
+                 progress: Callable[[int, int], None] | None = None) -> LawTangents:
     """The derivatives of ``result`` (an inverse dynamics of ``model``) along each change of
     ``changes``: a mapping from each law the parameter changes to the law of its derivative
-    (value, rate and acceleration per unit of the parameter).
+    (value, rate and acceleration per unit of the parameter). ``progress`` is called with
+    ``(samples done, samples)`` (a guided model's two stages: twice the samples).
 
     Raises
     ------
@@ -84,14 +86,15 @@ def law_tangents(model: Model, result: InverseResult,
     with executing(compiled=False):  # compiled Functions carry no derivatives
         if model.guidance is None:
             seeds = _seeds(model, times, changes)
-            dx, lam, dwrench, frames, dframes = _tangents(model, times, motion, seeds)
+            dx, lam, dwrench, frames, dframes = _tangents(model, times, motion, seeds,
+                                                          progress=_stage(progress, 0, n))
         else:
             from hexapod.algorithms.guided import guided_coordinate_tangents
             from hexapod.algorithms.inverse import motion_model
 
             kinematics = model.guidance.kinematics
             dx = _tangents(kinematics, times, motion, _seeds(kinematics, times, changes),
-                           kinematics_only=True)[0]
+                           kinematics_only=True, progress=_stage(progress, 0, 2 * n))[0]
             twin = motion_model(model, result)
             seeds = _seeds(twin, times, changes)
             n_q, n_v = model.n_q, model.n_v
@@ -99,7 +102,8 @@ def law_tangents(model: Model, result: InverseResult,
                                                 dx[:, n_q:n_q + n_v], dx[:, n_q + n_v:])
             for m in range(3):
                 seeds[m][model.guidance.laws] = joints[m]
-            dx, lam, dwrench, frames, dframes = _tangents(twin, times, motion, seeds, known=dx)
+            dx, lam, dwrench, frames, dframes = _tangents(twin, times, motion, seeds, known=dx,
+                                                          progress=_stage(progress, n, 2 * n))
     rows = np.array([c.rows for c in model.contacts], dtype=int).reshape(-1, 3)
     return LawTangents(dx[:, :model.n_q], dwrench, frames, dframes, -lam[:, rows],
                        seeds[1].transpose(1, 0, 2).reshape(n, model.n_w, -1))
@@ -119,8 +123,13 @@ def _seeds(model: Model, times: np.ndarray, changes) -> list[np.ndarray]:
     return out
 
 
+def _stage(progress, start: int, total: int):
+    """``progress`` of one stage: its samples counted from ``start`` of ``total``."""
+    return None if progress is None else (lambda done: progress(start + done, total))
+
+
 def _tangents(model: Model, times, motion, seeds, *, kinematics_only: bool = False,
-              known: np.ndarray | None = None):
+              known: np.ndarray | None = None, progress=None):
     """The forward derivatives at each sample of the state ``[q; v; v_dot]`` (N, n_x, P), and
     with forces of the multipliers (N, n_c, P), the joint wrenches (N, P, J, 6), the frames
     (N, J, 9) and their derivatives (N, P, J, 9). ``known``: the motion's derivative (the
@@ -145,6 +154,8 @@ def _tangents(model: Model, times, motion, seeds, *, kinematics_only: bool = Fal
             inputs.append(state[k])
             directions.append(known[k])
         outputs = [np.asarray(x) for x in function(*inputs, *directions)]
+        if progress is not None and (k % 50 == 49 or k == len(plans) - 1):
+            progress(k + 1)
         _check(model, times[k], outputs[1 if kinematics_only else 4].ravel())
         if kinematics_only:
             dx[k] = outputs[2]

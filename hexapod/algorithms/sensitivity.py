@@ -481,7 +481,8 @@ def inverse_sensitivities(model: Model, result: InverseResult,
             shifts = [{laws[parameters[k].name]: laws[parameters[k].name].design_parameter(
                 parameters[k].name)[1]} for k in shifted]
         tangents = law_tangents(design, result,
-                                [parameters[k].laws for k in changing] + shifts)
+                                [parameters[k].laws for k in changing] + shifts,
+                                progress=progress)
         through = changing + shifted
         rotations, q[..., through] = tangents.frames, tangents.q
         wrench[:, through] += tangents.wrench  # to the scale's inertial part

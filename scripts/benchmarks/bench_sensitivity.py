@@ -22,8 +22,9 @@ Protocol
   not moved there);
   ``--checked`` parameters drawn per point; the forces are linear in masses and inertias, so
   those differences are exact but for round-off); and the walking robot's builder arguments
-  ``period`` (drawn in [0.35, 0.7] s, derived at fixed phase) and ``step_height`` (drawn in
-  [0.03, 0.07] m, derived through the motion: the feet's paths move the legs), the robot
+  ``period`` (drawn in [0.35, 0.7] s, derived at fixed phase), ``step_height`` (drawn in
+  [0.03, 0.07] m, derived through the motion: the feet's paths move the legs) and ``scale``
+  (drawn in [15, 25], against ``geometric_scale``, relative to the robot built), the robot
   built by ``legs.hexapod_walking`` at the value drawn with its masses moved as at the other
   points, against the robot built again with the value moved by ``--step`` of it (sampled at
   the same fractions of the stride for the period). The error is ``p |exact - difference|`` over
@@ -161,8 +162,10 @@ def point_errors(scene, patterns, lengths, samples, checked, step, rng
 
 
 #: The walking robot's builder arguments checked by rebuilding it: name -> (the range the
-#: value is drawn in, whether the samples stay at the same fractions of the stride).
-REBUILT = {"period": ((0.35, 0.7), True), "step_height": ((0.03, 0.07), False)}
+#: value is drawn in, whether the samples stay at the same fractions of the stride, the
+#: parameter derived: the builder's own, or the geometric scale relative to the robot built).
+REBUILT = {"period": ((0.35, 0.7), True, None), "step_height": ((0.03, 0.07), False, None),
+           "scale": ((15.0, 25.0), False, "geometric_scale")}
 
 
 def rebuilt_errors(argument, samples, step, rng) -> tuple[float, str, int]:
@@ -173,7 +176,7 @@ def rebuilt_errors(argument, samples, step, rng) -> tuple[float, str, int]:
     ``step`` of it; over a stride, sampled at the same fractions of it for the period."""
     from legs.robot import hexapod_walking
 
-    (low, high), with_phase = REBUILT[argument]
+    (low, high), with_phase, relative = REBUILT[argument]
     value = rng.uniform(low, high)
     moved = random_point(hexapod_walking(), ROBOT_PARAMETERS, rng)
 
@@ -188,18 +191,18 @@ def rebuilt_errors(argument, samples, step, rng) -> tuple[float, str, int]:
     def times(x):
         return phases * (x if with_phase else period)
 
-    run = Run(model, hx.inverse_dynamics(model, times(value)),
-              hx.sweeps.inertia_parameters(scene, [argument]))
+    changes = hx.sweeps.inertia_parameters(scene, [relative or argument])
+    run = Run(model, hx.inverse_dynamics(model, times(value)), changes, scene)
 
-    def ends(h):
+    def ends(h):  # h in the parameter's units (relative for the geometric scale)
         out = []
-        for x in (value + h, value - h):
+        for x in ((value * (1 + h), value * (1 - h)) if relative else (value + h, value - h)):
             moved_model = hx.assemble(built(x))
             result = hx.inverse_dynamics(moved_model, times(x))
             out.append((outputs(moved_model, result), inverse_metrics(moved_model, result)))
         return out
 
-    return run.errors(0, step * value, ends)
+    return run.errors(0, step * changes[0].value, ends)
 
 
 class Run:
