@@ -70,8 +70,9 @@ def front_leg():
 @pytest.fixture(scope="module")
 def front_leg_on_laws():
     """The front leg on its harmonic joint laws (``legs.front_leg_scene``), its foot loaded as
-    the built-in leg's: joints moved by a parameter keep their laws (the built-in leg's follow
-    its foot's guides, whose derivatives through the kinematics are not computed)."""
+    the built-in leg's: joints moved by a parameter keep their laws (an open tree: the tree
+    path's graph differentiated; the built-in leg's follow its foot's guides, through the
+    phase path's step)."""
     from legs import front_leg_scene
 
     scene = front_leg_scene()

@@ -26,8 +26,9 @@ Protocol
   [0.03, 0.07] m, derived through the motion: the feet's paths move the legs) and ``scale``
   (drawn in [15, 25], against ``geometric_scale``, relative to the robot built), the robot
   built by ``legs.hexapod_walking`` at the value drawn with its masses moved as at the other
-  points, against the robot built again with the value moved by ``--step`` of it (sampled at
-  the same fractions of the stride for the period). The error is ``p |exact - difference|`` over
+  points (not the scale's: its masses follow the scale), against the robot built again with
+  the value moved by ``--step`` of it (sampled at the same fractions of the stride for the
+  period). The error is ``p |exact - difference|`` over
   the largest value of the array (or the metric's value): the change of the output per unit
   relative change of the parameter, relative. Target: 1e-6. A figure of merit is smooth but
   for kinks (a sample's power changing sign in the positive work, the peak moving to another
@@ -178,7 +179,9 @@ def rebuilt_errors(argument, samples, step, rng) -> tuple[float, str, int]:
 
     (low, high), with_phase, relative = REBUILT[argument]
     value = rng.uniform(low, high)
-    moved = random_point(hexapod_walking(), ROBOT_PARAMETERS, rng)
+    # the masses moved as at the other points: scene keys, fixed values, which the builder's
+    # scale would no longer scale (the scale's point keeps the built robot's masses)
+    moved = random_point(hexapod_walking(), ROBOT_PARAMETERS, rng) if not relative else {}
 
     def built(x):
         return hx.sweeps.with_scene_keys(hexapod_walking(**{argument: x}), moved)
