@@ -33,7 +33,7 @@ STEP = 1e-4
 TOLERANCE = 1e-6
 #: The built-in robot's step height (m) and the samples: a stride, both tripods' swings.
 HEIGHT = 0.05
-TIMES = np.linspace(0.0, 0.5, 11)
+TIMES = np.linspace(0.0, 0.5, 6)
 
 
 @pytest.fixture(scope="module")
@@ -53,6 +53,7 @@ def test_the_step_height_is_held_by_the_feet_paths(walking):
     assert inertia_parameters(scene, ["gait.step_height"])[0].laws == change.laws
 
 
+@pytest.mark.slow  # two robots built again, 5 s; bench_sensitivity checks it at 10 points
 def test_the_step_height_against_central_differences(walking):
     """Every force, effort and ground force (world axes: the joint frames turn with the
     motion), every position and every figure of merit."""
@@ -88,7 +89,9 @@ def test_a_segment_length_of_the_walking_robot_against_central_differences(walki
     extrapolated from steps h and h/2 (the figures of merit depend strongly on it, an
     elasticity of 14 for the joint's RMS effort: a plain difference's error, measured
     4.6e-6 at h = 1e-5 m, falls as h^2 to a round-off floor of 6e-7 at 1e-6 m)."""
-    scene, model, result, _ = walking
+    scene, model, _, _ = walking
+    times = np.linspace(0.0, 0.5, 11)  # the peaks as this check's differences were measured
+    result = hx.inverse_dynamics(model, times, frame="world")
     change, = inertia_parameters(scene, ["joint.L1/fti.parent_frame.position.0"])
     sensitivity = hx.inverse_sensitivities(model, result, [change],
                                            moved=hx.sweeps.moved_model(scene, model, [change]))
@@ -96,7 +99,7 @@ def test_a_segment_length_of_the_walking_robot_against_central_differences(walki
 
     def run(value):
         moved = hx.assemble(hx.sweeps.with_scene_keys(scene, {change.name: value}))
-        outcome = hx.inverse_dynamics(moved, TIMES, frame="world")
+        outcome = hx.inverse_dynamics(moved, times, frame="world")
         return outcome, inverse_metrics(moved, outcome, SENSITIVE_FAMILIES, 1.0)
 
     def difference(h, get):
@@ -147,7 +150,7 @@ def test_the_feet_rise_by_the_swing_bump(walking):
                           for k in range(TIMES.size)])
         assert np.abs(moved[:, :2]).max() <= 1e-12, contact.name
         assert np.abs(moved[:, 2] - bump).max() <= 1e-12, contact.name
-        assert bump.max() > 0.5 and (bump == 0).sum() >= 5  # swings near their top, stances
+        assert bump.max() > 0.2 and (bump == 0).sum() >= 3  # a swing sampled, stances
 
 
 def test_a_frame_moved_on_its_child_against_central_differences(walking):
