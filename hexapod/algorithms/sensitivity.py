@@ -562,16 +562,11 @@ def _inertial_part(model: Model, result, parameters, laws, progress):
 def _moving_part(model: Model, result, parameters, laws):
     """The moved joints': joint-frame wrenches (N, P, J, 6), rotations (N, J, 9) and
     positions (N, n_q, P), by the tree path's one graph with the joints' frame origins as
-    expressions of the parameters, differentiated (forward mode, exact)."""
+    expressions of the parameters, differentiated (forward mode, exact): for a model the
+    tree path solves (:func:`tree_solved`)."""
     from hexapod.algorithms.inverse import tree_plan
 
     plan = tree_plan(model)
-    if plan is None:
-        names = ", ".join(c.name for c in parameters[:3])
-        raise HexapodError(f"parameters {names}: a joint's position is differentiated through "
-                           f"the tree-ordered inverse dynamics, and model '{model.name}' is not "
-                           "an open tree with every joint driven (closed loops and feet on the "
-                           "ground are not covered yet)")
     key = ("moving-joints", tuple((c.joint, tuple(c.parent), tuple(c.child))
                                   for c in parameters))
     function = model.built_once(key, lambda m: _moving_function(m, plan, parameters))
