@@ -158,11 +158,14 @@ def test_a_frame_moved_on_its_child_against_central_differences(walking):
     the point the knee's wrench is reported about and the least-wrench policy weighs, and the
     characteristic length the policy divides moments by (measured on the joints' points),
     both expressions of the shift; against the robot read again with it moved by 1e-6 m, per
-    0.1 m of it (a segment's length): round-off 1e-9 of the largest value."""
+    0.1 m of it (a segment's length): round-off 1e-9 of the largest value. Derived with the
+    geometric scale in the same model (which scales that length too)."""
     scene, model, result, _ = walking
-    change, = inertia_parameters(scene, ["joint.L1/fti.child_frame.position.0"])
-    moved = hx.sweeps.moved_model(scene, model, [change])
-    sensitivity = hx.inverse_sensitivities(model, result, [change], moved=moved)
+    changes = inertia_parameters(scene, ["joint.L1/fti.child_frame.position.0",
+                                         "geometric_scale"])
+    change = changes[0]
+    moved = hx.sweeps.moved_model(scene, model, changes)
+    sensitivity = hx.inverse_sensitivities(model, result, changes, moved=moved)
     h = 1e-6
     ahead, behind = (hx.inverse_dynamics(hx.assemble(hx.sweeps.with_scene_keys(
         scene, {change.name: s * h})), TIMES, frame="world") for s in (1.0, -1.0))

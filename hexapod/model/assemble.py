@@ -264,23 +264,24 @@ class _Assembly:
         return parent, child
 
     def _length(self) -> tuple[float, ca.SX | None]:
-        """The characteristic length, and where frames moved on their children move the
-        joint points it is the RMS spread of, its first-order expression in their shifts
-        (``Symbolic.length``: exact for derivatives)."""
+        """The characteristic length, and where design parameters move the joint points it
+        is the RMS spread of (frames moved on their children, every point scaled), its
+        first-order expression in them (``Symbolic.length``: exact for derivatives); None
+        when nothing moves it or the scene gives it."""
         length = _characteristic_length(self.si, self.joint_points)
-        if not isinstance(self.scale, float) and self.si.characteristic_length is None:
-            # every point scaled: the length measured on them with them
-            return length, self.scale * length
-        if not self.moved_points or self.si.characteristic_length is not None:
+        scaled = not isinstance(self.scale, float)
+        if not (self.moved_points or scaled) or self.si.characteristic_length is not None:
             return length, None
+        expression = length
         points = np.array(self.joint_points + [b.com_pose.position
                                                for b in self.si.bodies.values()])
         spread = points - points.mean(axis=0)
-        if not float(np.abs(spread).max()) > 0 or length <= 1e-12:
-            return length, None
-        # d rms = sum_i spread_i . d point_i / (n rms): the centroid's move is orthogonal
-        change = sum(w * float(spread[i] @ turned) for i, turned, w in self.moved_points)
-        return length, length + change / (len(points) * length)
+        if self.moved_points and float(np.abs(spread).max()) > 0 and length > 1e-12:
+            # d rms = sum_i spread_i . d point_i / (n rms): the centroid's move is orthogonal
+            change = sum(w * float(spread[i] @ turned) for i, turned, w in self.moved_points)
+            expression = length + change / (len(points) * length)
+        # every point scaled: the length measured on them with them
+        return length, self.scale * expression if scaled else expression
 
     def drivers(self) -> tuple[list[DriverInfo], dict[str, list[int]]]:
         """Driver rows, and the rows of the drivers acting on each joint."""
