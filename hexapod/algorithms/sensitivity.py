@@ -220,7 +220,8 @@ class LawChange:
 
 @dataclass(frozen=True)
 class ScaleChange:
-    """The geometric scale ``s`` (``scale``), relative to the scene as given (``value`` 1):
+    """The geometric scale ``s`` (``geometric_scale``), relative to the scene as given
+    (``value`` 1):
     every length times ``s``, masses times ``s^3``, inertias times ``s^5`` (as the robot
     builders' ``scale`` argument), the motion's times kept. Its lengths move the motion
     (the scene assembled again with them scaled by a symbol: ``moved``); its masses and
@@ -232,7 +233,7 @@ class ScaleChange:
         ``dm/ds``, the model's total mass times 3 (kg).
     """
 
-    name: str = "scale"
+    name: str = "geometric_scale"
     value: float = 1.0
     unit: str = "1"
     scene_scale: float = 1.0
@@ -263,8 +264,8 @@ class InverseSensitivity:
         parameters and the derivatives one-sided (empty for the other policies).
     """
 
-    parameters: tuple[InertiaChange | FrameChange | FrictionChange | PeriodChange | LawChange,
-                      ...]
+    parameters: tuple[InertiaChange | FrameChange | FrictionChange | PeriodChange | LawChange
+                      | ScaleChange, ...]
     effort: np.ndarray
     force: np.ndarray
     torque: np.ndarray
@@ -376,11 +377,10 @@ def _check_shifted(model: Model, change: FrameChange, moved: Model | None) -> No
     if joint.kind == "contact":
         raise HexapodError(f"parameter '{change.name}': joint '{change.joint}' is a foot's "
                            "contact: moving it is not derived")
-    if moved is None or change.name not in {law.name for law in moved_laws(model, moved)}:
-        raise HexapodError(
-            f"parameter '{change.name}': model '{model.name}' is not an open tree with every "
-            "joint driven: the derivative needs its scene assembled again with the joint's "
-            "frame shifted by a symbol (moved, from hexapod.sweeps.moved_model)")
+    _require_moved(model, change, moved,
+                   f"model '{model.name}' is not an open tree with every joint driven: the "
+                   "derivative needs its scene assembled again with the joint's frame shifted "
+                   "by a symbol")
 
 
 def _check_scaled(model: Model, change: ScaleChange, moved: Model | None) -> None:
@@ -391,19 +391,23 @@ def _check_scaled(model: Model, change: ScaleChange, moved: Model | None) -> Non
             f"parameter '{change.name}': model '{model.name}' has forces of its own (the "
             f"{model.forces[0].kind} '{model.forces[0].name}'), whose change with the scale is "
             "not derived")
-    if model.contacts and model.ground.terrain is not None and \
-            not getattr(model.ground.terrain, "flat", True):
+    if model.contacts and model.ground.terrain is not None and not model.ground.terrain.flat:
         raise HexapodError(f"parameter '{change.name}': model '{model.name}' stands on "
                            "terrain that is not flat, whose heights' scaling is not derived")
+    _require_moved(model, change, moved, "the derivative needs the scene assembled again with "
+                   "its lengths scaled by a symbol")
+
+
+def _require_moved(model: Model, change, moved: Model | None, why: str) -> None:
+    """Raise ``why`` unless ``moved`` holds the symbol of ``change``."""
     if moved is None or change.name not in {law.name for law in moved_laws(model, moved)}:
-        raise HexapodError(
-            f"parameter '{change.name}': the derivative needs the scene assembled again with "
-            "its lengths scaled by a symbol (moved, from hexapod.sweeps.moved_model)")
+        raise HexapodError(f"parameter '{change.name}': {why} (moved, from "
+                           "hexapod.sweeps.moved_model)")
 
 
 def moved_laws(model: Model, moved: Model) -> tuple:
-    """The shifts of the joints' frames in ``moved`` (``model`` assembled again with them):
-    its laws after ``model``'s."""
+    """The symbols of ``moved`` (``model`` assembled again with joints' frames shifted, or its
+    lengths scaled, by symbols): its laws after ``model``'s."""
     return tuple(moved.laws[model.n_w:])
 
 
@@ -477,8 +481,8 @@ def inverse_sensitivities(model: Model, result: InverseResult,
         design, shifts = model, []
         if shifted:  # each shift (or the scale) a law of the moved model, named as it
             design = moved
-            laws = {law.name: law for law in moved_laws(model, moved)}
-            shifts = [{laws[parameters[k].name]: laws[parameters[k].name].design_parameter(
+            symbols = {law.name: law for law in moved_laws(model, moved)}
+            shifts = [{symbols[parameters[k].name]: symbols[parameters[k].name].design_parameter(
                 parameters[k].name)[1]} for k in shifted]
         tangents = law_tangents(design, result,
                                 [parameters[k].laws for k in changing] + shifts,

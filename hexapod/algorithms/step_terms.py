@@ -15,7 +15,7 @@ once (:func:`hexapod.algorithms.liaison.policy_map`, :func:`~.liaison.wrenches_f
   of the force elements acting across joints;
 * ``wrench_terms(q, w, Phi)``: the wrench map ``W`` (below) and the joint frames' rotations,
   formed once a sample for the two that follow;
-* ``policy(m)(W, offset, feet, lam, N, mask)``: the redundancy policy, among ``lam + N
+* ``policy(m)(W, offset, feet, lam, N, mask, w)``: the redundancy policy, among ``lam + N
   z`` the least ``|A (lam + N z) + b|^2`` (``m`` the columns of ``N``, one Function per
   ``m``): for ``min-wrench`` ``A = W`` maps multipliers to the joint wrenches
   (force and moment about the joint origin over the characteristic length, world axes, one
@@ -26,7 +26,7 @@ once (:func:`hexapod.algorithms.liaison.policy_map`, :func:`~.liaison.wrenches_f
 * ``joint_wrenches(W, frames, lam, offset, w)``: the joint wrenches in the report convention
   (joint frames); ``report(q, w, Phi, lam, offset)`` the same and the frames from the positions,
   on numbers; ``wrench_map(q, w, Phi)``, ``objective(q, w, Phi, offset, feet)``
-  and ``across(q, Q_across)``: the policy's map, its objective and its constant term on numbers;
+  and ``across(q, w, Q_across)``: the policy's map, its objective and its constant term on numbers;
 * ``residuals(Phi, phi, v, nu, a, gamma, d)``: what the checks need: the velocity and
   acceleration residuals per row, over the row scales ``d`` (the norms of the rows of
   ``Phi_v M^-1/2`` at the rank decision, the equilibration of :mod:`hexapod.algorithms.linalg`)

@@ -29,6 +29,7 @@ import numpy as np
 from hexapod.output.summary_parts import time_integral
 from hexapod.sweeps.metrics import (
     body_masses,
+    by_driver_law,
     cost_of_transport,
     joint_rates,
     metric_unit,
@@ -150,16 +151,11 @@ def _work(model, t, effort, sensitivity, driven) -> np.ndarray:
 def _joint_rate_changes(model, sensitivity, joints) -> np.ndarray:
     """The derivatives of the driven ``joints``' rates (N, len(joints), P), from those of
     their drivers' laws (as :func:`hexapod.sweeps.metrics.joint_rates` reads the rates)."""
-    n, count = sensitivity.effort.shape[0], sensitivity.effort.shape[-1]
-    out = np.zeros((n, len(joints), count))
     if sensitivity.rates is None:
-        return out
-    for k, joint in enumerate(joints):
-        for row in joint.driver_rows:
-            driver = next(d for d in model.drivers if d.row == row)
-            if driver.law >= 0:
-                out[:, k] = sensitivity.rates[:, driver.law]
-    return out
+        n, count = sensitivity.effort.shape[0], sensitivity.effort.shape[-1]
+        return np.zeros((n, len(joints), count))
+    # (N, n_w, P) -> laws first -> (J, N, P) -> (N, J, P)
+    return by_driver_law(model, sensitivity.rates.transpose(1, 0, 2), joints).transpose(1, 0, 2)
 
 
 def _transport(model, result, sensitivity, driven, dwork, masses) -> np.ndarray:

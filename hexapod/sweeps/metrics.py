@@ -165,14 +165,19 @@ def joint_rates(model, t, joints) -> np.ndarray:
     """The rates of the driven joints' coordinates at ``t`` (N, len(joints)): their drivers'
     law derivatives (zero for a constant law)."""
     _, wd, _ = model.law_values(t)
-    wd = np.asarray(wd).reshape(model.n_w, -1)
-    rates = np.zeros((np.size(t), len(joints)))
+    return by_driver_law(model, np.asarray(wd).reshape(model.n_w, -1), joints).T
+
+
+def by_driver_law(model, values: np.ndarray, joints) -> np.ndarray:
+    """Each of ``joints``' entry of ``values`` (laws first: n_w x ...), that of its driver's
+    law, zero for a constant law: (len(joints), ...)."""
+    out = np.zeros((len(joints),) + values.shape[1:])
     for k, joint in enumerate(joints):
         for row in joint.driver_rows:
             driver = next(d for d in model.drivers if d.row == row)
             if driver.law >= 0:
-                rates[:, k] = wd[driver.law]
-    return rates
+                out[k] = values[driver.law]
+    return out
 
 
 def positive_work(model, t, effort, joints) -> float:
