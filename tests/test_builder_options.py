@@ -28,6 +28,7 @@ from legs.leg import SEGMENT_NAMES, leg_geometry
 from legs.robot import (
     WALKING_DUTY,
     hexapod_held,
+    hexapod_scene,
     hexapod_standing,
     hexapod_walking,
     robot_mass,
@@ -350,6 +351,8 @@ def test_the_walking_robot_needs_three_feet_down(options, message):
     (hind_leg_walking, {"speed": 0.0}, r"speed must be a finite number > 0"),
     (hind_leg_walking, {"speed": 1.0, "period": 0.5}, r"give period or speed, not both"),
     (front_leg_walking, {"scale": 0.0}, r"scale must be a finite number > 0"),
+    (hexapod_walking, {"step_height": -0.01}, r"step_height must be a finite number > 0"),
+    (hexapod_scene, {"step_height": 0.05}, r"step_height is the walking robot's"),
 ])
 def test_the_other_builders_check_their_options(builder, options, message):
     with pytest.raises(ValueError, match=message):
