@@ -253,7 +253,8 @@ def hexapod_scene(gait: str | None = "tripod", period: float | None = None,
 def _trunk(scale: float, position=(0.0, 0.0, 0.0), payload: float = 0.0) -> SpatialBody:
     """The trunk, carrying ``payload`` (kg) at its centre of mass."""
     return SpatialBody("trunk", TRUNK["mass_g"] * 1e-3 * scale**3 + payload,
-                       np.array(TRUNK["inertia"]) * scale**5, position=position)
+                       np.array(TRUNK["inertia"]) * scale**5, position=position,
+                       payload=payload)
 
 
 def _thc_point(leg: str, scale: float) -> np.ndarray:

@@ -57,6 +57,10 @@ class Body(Element):
         for key in ("position", "com", "velocity", "angular_velocity", "angle"):
             if hasattr(self, key):
                 check_finite(self, key, getattr(self, key), out)
+        if self.payload is not None and check_finite(self, "payload", self.payload, out) and \
+                not 0.0 <= self.payload < self.mass:
+            out.append(self.problem("payload", f"must be in [0, mass = {self.mass:g}), got "
+                                    f"{self.payload}"))
         for name, frame in self.markers.items():
             check_frame(self, f"markers.{name}", frame, out)
             if frame.dimension != self.dimension:
@@ -117,6 +121,10 @@ class SpatialBody(Body):
         A mesh file (any format meshio reads) that ``hexapod export`` draws for the body, its
         points in the reference frame (L); a relative path is taken from the scene file's
         directory. Optional: without it the body is drawn as its box of inertia.
+    payload : float, optional
+        Of ``mass``, the load the body carries at its centre of mass (kg), as a robot builder's
+        ``payload`` puts it on the trunk: what the design parameter ``payload`` names. None:
+        the body carries none.
     source : str
         Where the body was written (file and entry), named in messages; empty for a body built
         in Python.
@@ -135,6 +143,7 @@ class SpatialBody(Body):
     angular_velocity: np.ndarray = None  # type: ignore[assignment]
     markers: dict = field(default_factory=dict)
     mesh: str = ""
+    payload: float | None = None
     source: str = ""
     dimension = 3
     kind = "spatial"
@@ -238,6 +247,7 @@ class PlanarBody(Body):
     angular_velocity: float = 0.0
     markers: dict = field(default_factory=dict)
     mesh: str = ""
+    payload: float | None = None
     source: str = ""
     dimension = 2
     kind = "planar"
@@ -309,6 +319,7 @@ class Particle(Body):
     velocity: np.ndarray = None  # type: ignore[assignment]
     markers: dict = field(default_factory=dict)
     mesh: str = ""
+    payload: float | None = None
     source: str = ""
     kind = "particle"
 

@@ -345,7 +345,8 @@ def _body_schema(kind: str, scene_dimension: int) -> Schema:
     dim = {"spatial": 3, "planar": 2}.get(kind, scene_dimension)
     common = {"name": (_string, True), "type": (_string, False), "mass": (_number, True),
               "position": (_vector(dim), False), "velocity": (_vector(dim), False),
-              "markers": (_markers(dim), False), "mesh": (_string, False)}
+              "markers": (_markers(dim), False), "mesh": (_string, False),
+              "payload": (_number, False)}
     if kind == "particle":
         return Particle, common
     if kind == "planar":

@@ -22,6 +22,8 @@ the scene's TOML form. Sensitivities cover the bodies' inertia and the joints' p
   ``s^3``, inertias times ``s^5``, the motion's times kept
   (:class:`~hexapod.algorithms.sensitivity.ScaleChange`); with the period's half, the Froude
   scaling whose forces go as ``s^3`` and torques as ``s^4``;
+* ``payload`` (kg): the load the body with a ``payload`` key carries at its centre of mass
+  (the walking robot's builders put it on the trunk), part of its mass;
 * ``gait.step_height`` (m; ``step_height``, alike): the feet's lift in swing, held by the
   feet's paths (the laws whose :meth:`~hexapod.scene.Law.design_parameter` answers to it;
   :class:`~hexapod.algorithms.sensitivity.LawChange`): the joints follow the paths, and the
@@ -59,10 +61,10 @@ if TYPE_CHECKING:
 
 _COVERED = ("masses and inertias, body.NAME.mass and body.NAME.inertia[.K], and joints' "
             "positions, joint.NAME.origin[.K] or joint.NAME.parent_frame.position[.K] "
-            "(child_frame) ('*' matches any NAME), the friction coefficient, ground.mu, and the "
+            "(child_frame) ('*' matches any NAME), the friction coefficient, ground.mu, the "
             "gait's period and step height, gait.period and gait.step_height (or period and "
-            "step_height), and the geometric scale, geometric_scale; the gait's other "
-            "parameters are not covered yet")
+            "step_height), the geometric scale, geometric_scale, and the payload, payload; the "
+            "gait's other parameters are not covered yet")
 
 
 def inertia_parameters(scene: Scene, patterns: Sequence[str],
@@ -103,6 +105,9 @@ def inertia_parameters(scene: Scene, patterns: Sequence[str],
             continue
         if pattern in _LAW_PARAMETERS:
             found.setdefault(pattern, _law_change(scene, pattern, source))
+            continue
+        if pattern == "payload":  # a builder's argument: the load its body carries
+            found.setdefault(pattern, _payload(scene, source))
             continue
         if pattern == "geometric_scale":  # every length, masses and inertias with them
             total = sum(float(b.mass) for b in scene.bodies.values())
@@ -191,6 +196,22 @@ def _law_change(scene: Scene, name: str, source: str) -> LawChange:
                          f"at different values ({shown}): one parameter cannot move them all")
     value = values.pop() * (scene.unit if length else 1.0)
     return LawChange(name, laws, unit, value, scene.unit if length else 1.0)
+
+
+def _payload(scene: Scene, source: str) -> InertiaChange:
+    """The load a body carries at its centre of mass (``payload``, kg, a robot builder's
+    argument: :attr:`~hexapod.scene.SpatialBody.payload`): its body's mass, the rest kept."""
+    carriers = [b for b in scene.bodies.values() if b.payload is not None]
+    if len(carriers) != 1:
+        named = ", ".join(b.name for b in carriers)
+        raise StudyError(f"{source}: 'payload': scene '{scene.name}' has "
+                         f"{'no body' if not carriers else 'bodies ' + named} with a payload "
+                         "(a body's 'payload' key; the walking robot's builders put theirs on "
+                         "the trunk): one body must carry it")
+    body = carriers[0]
+    size = 1 if isinstance(body, (PlanarBody, Particle)) else 3
+    return InertiaChange("payload", body.name, 1.0, np.zeros((size, size)), "kg",
+                         float(body.payload))
 
 
 def _kind(parts: list[str]) -> str | None:
