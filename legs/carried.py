@@ -50,15 +50,21 @@ ITERATIONS = 8
 STEPS = (1e-6, 1e-5, 1e-4)
 
 
-def sway_design_parameter(bounds: tuple, key: str) -> None:
+def sway_design_parameter(bounds: tuple, key: str, swaying: bool = False) -> None:
     """A trunk's sway as a design parameter sees it (:meth:`hexapod.scene.Law.
     design_parameter`): corrected (``bounds``), it depends on every gait parameter through
-    the whole motion (the two feet must carry it), which is not derived."""
+    the whole motion (the two feet must carry it), which is not derived; ``swaying`` (its
+    series not zero), it is planned from the feet's schedule, which the duty factor
+    changes."""
     if bounds and key.startswith("gait."):
         raise ValueError("the trunk's sway is corrected so that two feet carry the robot, a "
                          f"solve over the whole motion whose derivative with respect to {key} "
                          "is not derived (a gait with three feet down or more has no "
                          "correction)")
+    if swaying and key == "gait.duty":
+        raise ValueError("the trunk's sway is planned from the feet's schedule, a solve over "
+                         "the stride whose derivative with respect to the duty factor is not "
+                         "derived (a level trunk, the gait's trunk = \"level\", has none)")
 
 
 @dataclass(frozen=True, eq=False)
@@ -83,7 +89,7 @@ class TrunkSway(Law):
     kind = "trunk-sway"
 
     def design_parameter(self, key):
-        return sway_design_parameter(self.bounds, key)
+        return sway_design_parameter(self.bounds, key, any(self.cos) or any(self.sin))
 
     def __post_init__(self):
         for key in ("cos", "sin", "bounds", "values"):

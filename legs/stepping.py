@@ -51,6 +51,7 @@ from legs.cockroach import (
     STANCE_OFFSET_MM,
     THC_POINT_MM,
 )
+from legs.duty import GaitCoupledDuty, duty_parameter
 from legs.leg import (
     JOINTS,
     SEGMENT_NAMES,
@@ -59,6 +60,7 @@ from legs.leg import (
     leg_geometry,
     length_factors,
 )
+from legs.swing import LIFT_RATES, STEP_RATES
 
 #: The joints the foot's path places (protraction swings the leg, CTr and FTi set its reach and
 #: height), found by the engine's kinematics; the others follow the foot through the cycle.
@@ -163,16 +165,11 @@ stepping_harmonics.cache_clear = _stepping_harmonics.cache_clear
 
 # ------------------------------------------------------------------ the exact gait
 
-_STEP9 = np.polynomial.Polynomial([0, 0, 0, 0, 0, 126, -420, 540, -315, 70])
-_BUMP = np.polynomial.Polynomial([0, 1]) ** 5 * np.polynomial.Polynomial([1, -1]) ** 5 * 1024
-#: the swing's fore-aft smooth step and its lift (unit shapes of its progress), each with its
-#: first and second derivatives: every walking foot's path is made of them
-STEP_RATES = tuple(_STEP9.deriv(m) for m in range(3))
-LIFT_RATES = tuple(_BUMP.deriv(m) for m in range(3))
-#: their coefficients, highest power first and padded with zeros to one length, for Horner's
-#: rule on all six at once: the same operations, in the same order, as each polynomial's own
-#: evaluation (a leading zero adds exactly nothing), at a tenth of its cost
-_SHAPES = np.array([np.pad(p.coef[::-1], (_BUMP.coef.size - p.coef.size, 0))
+#: the swing's shapes' coefficients (:mod:`legs.swing`), highest power first and padded with
+#: zeros to one length, for Horner's rule on all six at once: the same operations, in the same
+#: order, as each polynomial's own evaluation (a leading zero adds exactly nothing), at a tenth
+#: of its cost
+_SHAPES = np.array([np.pad(p.coef[::-1], (LIFT_RATES[0].coef.size - p.coef.size, 0))
                     for p in STEP_RATES + LIFT_RATES])
 
 
@@ -320,6 +317,14 @@ class OnSchedule:
         return cycle_breaks(self.period, (self.lift_off, self.lift_off + 1.0 - self.duty),
                             start, stop)
 
+    def design_parameter(self, key):
+        """``gait.duty``: refused unless the law derives it (its path changes with it)."""
+        if key == "gait.duty":
+            raise ValueError(f"a {self.kind} law's dependence on the duty factor is not "
+                             "derived (a walking robot's feet's paths and coupled joints "
+                             "are, on a straight walk)")
+        return None
+
     def schedule_problems(self, lowest_duty: float = 0.0) -> list[str]:
         """What is wrong with the schedule: a period that is not positive, a duty outside
         ``(lowest_duty, 1)`` (``[lowest_duty, 1)`` when it is not 0)."""
@@ -366,6 +371,10 @@ class GaitCoupled(OnSchedule, Law):
 
     def batch_key(self):
         return ("gait-coupled", self.duty, self.period)
+
+    def design_parameter(self, key):
+        """``gait.duty`` (:class:`legs.duty.GaitCoupledDuty`)."""
+        return duty_parameter(self, key, GaitCoupledDuty(self))
 
     @classmethod
     def evaluate_batch(cls, laws, t):

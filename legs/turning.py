@@ -158,7 +158,8 @@ class TurnedSway(Law):
     kind = "turned-sway"
 
     def design_parameter(self, key):
-        return sway_design_parameter(self.bounds, key)
+        return sway_design_parameter(self.bounds, key, any(self.xcos + self.xsin + self.ycos
+                                                           + self.ysin))
 
     def __post_init__(self):
         for key in ("xcos", "xsin", "ycos", "ysin", "bounds", "values"):

@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from hexapod.scene import Law
+from legs.duty import StepPathDuty, duty_parameter
 from legs.posing import at_start, posed
 from legs.stepping import LIFT_RATES, STEP_RATES, OnSchedule
 from legs.turning import stance_progress, swing_schedule
@@ -128,7 +129,14 @@ class StepPath(OnSchedule, Law):
     def design_parameter(self, key):
         """``gait.step_height``: the swing's height ``lift`` (m), of which the path is linear
         (its derivative: the swing's bump, zero in stance); a path without lift (a
-        horizontal coordinate) does not depend on it."""
+        horizontal coordinate) does not depend on it. ``gait.duty``: the swing stretched
+        and the footholds moved (:class:`legs.duty.StepPathDuty`), on a ground without
+        steps."""
+        if key == "gait.duty":
+            if self.rises:
+                raise ValueError("a foot's path over steps of the ground: its dependence on "
+                                 "the duty factor is not derived")
+            return duty_parameter(self, key, StepPathDuty(self))
         if key != "gait.step_height" or self.lift == 0.0:
             return None
         return self.lift, replace(self, start=0.0, advance=0.0, lift=1.0, rises_at=(),
