@@ -92,6 +92,18 @@ def sharing_weights(weights: np.ndarray, stance: np.ndarray) -> np.ndarray:
     return weights
 
 
+def foot_value_rates(policy: str, weights: np.ndarray, rates: np.ndarray) -> np.ndarray:
+    """The derivative of :func:`foot_values` along a change ``rates`` of the ``weights``
+    (zero where a foot carries nothing, or, for the effort policies, where its weight is 1)."""
+    carrying = weights > NO_LOAD
+    safe = np.where(carrying, weights, 1.0)
+    if policy == "min-wrench":
+        return np.where(carrying, -0.5 * rates / safe**1.5, 0.0)
+    ramping = carrying & (weights < 1.0)
+    root = np.sqrt(np.where(ramping, 1.0 / safe - 1.0, 1.0))
+    return np.where(ramping, -0.5 * rates / (safe**2 * root), 0.0)
+
+
 def foot_values(policy: str, weights: np.ndarray) -> np.ndarray:
     """The ``feet`` input of the policy's objective for the feet's weights ``w``: for
     ``min-wrench`` the factor of each foot's wrench block, ``1 / sqrt(w)`` (1 where the foot

@@ -68,24 +68,29 @@ class LawTangents:
 
 
 def law_tangents(model: Model, result: InverseResult,
-                 changes: Sequence[Mapping[Law, Law]], *,
+                 changes: Sequence[Mapping[Law, Law]], *, keys: Sequence[str] | None = None,
                  progress: Callable[[int, int], None] | None = None) -> LawTangents:
     """The derivatives of ``result`` (an inverse dynamics of ``model``) along each change of
     ``changes``: a mapping from each law the parameter changes to the law of its derivative
-    (value, rate and acceleration per unit of the parameter). ``progress`` is called with
-    ``(samples done, samples)`` (a guided model's two stages: twice the samples).
+    (value, rate and acceleration per unit of the parameter). ``keys``, one per change (""
+    for none): the parameter's scene key, which the laws the model makes of its contacts (the
+    footholds) and the feet's load-sharing weights answer too (``gait.duty``).
+    ``progress`` is called with ``(samples done, samples)`` (a guided model's two stages:
+    twice the samples).
 
     Raises
     ------
     HexapodError
         At a sample the phase path's plans do not cover (a motion the drivers leave free), or
-        where a plan's checks fail at the result's own state.
+        where a plan's checks fail at the result's own state; a contact's law that depends on
+        the key in a way not derived.
     """
     times, n = result.times, result.times.size
     motion = (result.q, result.v, result.v_dot)
+    keys = list(keys) if keys is not None else [""] * len(changes)
     with executing(compiled=False):  # compiled Functions carry no derivatives
         if model.guidance is None:
-            seeds = _seeds(model, times, changes)
+            seeds = _seeds(model, times, changes, keys)
             dx, lam, dwrench, frames, dframes = _tangents(model, times, motion, seeds,
                                                           progress=_stage(progress, 0, n))
         else:
@@ -93,10 +98,10 @@ def law_tangents(model: Model, result: InverseResult,
             from hexapod.algorithms.inverse import motion_model
 
             kinematics = model.guidance.kinematics
-            dx = _tangents(kinematics, times, motion, _seeds(kinematics, times, changes),
+            dx = _tangents(kinematics, times, motion, _seeds(kinematics, times, changes, keys),
                            kinematics_only=True, progress=_stage(progress, 0, 2 * n))[0]
             twin = motion_model(model, result)
-            seeds = _seeds(twin, times, changes)
+            seeds = _seeds(twin, times, changes, keys)
             n_q, n_v = model.n_q, model.n_v
             joints = guided_coordinate_tangents(model, *motion, dx[:, :n_q],
                                                 dx[:, n_q:n_q + n_v], dx[:, n_q + n_v:])
@@ -109,17 +114,50 @@ def law_tangents(model: Model, result: InverseResult,
                        seeds[1].transpose(1, 0, 2).reshape(n, model.n_w, -1))
 
 
-def _seeds(model: Model, times: np.ndarray, changes) -> list[np.ndarray]:
-    """The laws' derivatives: values, rates, accelerations, each (n_w, N, P)."""
+def _seeds(model: Model, times: np.ndarray, changes, keys) -> list[np.ndarray]:
+    """The laws' derivatives: values, rates, accelerations, each (n_w, N, P); then the feet's
+    policy values' (C, N, P)."""
     out = [np.zeros((model.n_w, times.size, len(changes))) for _ in range(3)]
-    for p, change in enumerate(changes):
+    for p, (change, key) in enumerate(zip(changes, keys, strict=True)):
         for index, law in enumerate(model.laws):
             base, factor = law.unscaled()  # a scene law in the scene's units, converted
             derivative = change.get(base)
+            if derivative is None and key and law.kind == "foothold":
+                derivative = _held(model, law, key)
             if derivative is not None:
                 derivative = derivative.scaled(factor)
                 for m, x in enumerate(derivative.evaluate(times)):
                     out[m][index, :, p] = x
+    return [*out, _feet_seeds(model, times, keys)]
+
+
+def _held(model: Model, law: Law, key: str) -> Law | None:
+    """The derivative of a law the model made of a contact, along the parameter ``key``."""
+    try:
+        held = law.design_parameter(key)
+    except ValueError as error:
+        raise HexapodError(f"model '{model.name}': {key}: {error}") from None
+    return None if held is None else held[1]
+
+
+def _feet_seeds(model: Model, times: np.ndarray, keys) -> np.ndarray:
+    """The derivatives of the feet's policy values (:func:`~hexapod.algorithms.ground.
+    foot_values`) along each key (C, N, P): their load-sharing weights' change."""
+    from hexapod.algorithms.ground import NO_LOAD, foot_value_rates, sharing_weights
+
+    contacts, n = model.contacts, times.size
+    out = np.zeros((len(contacts), n, len(keys)))
+    if not contacts:
+        return out
+    raw = np.array([c.weight(times) for c in contacts], dtype=float).reshape(-1, n)
+    stance = np.array([c.in_stance(times) for c in contacts], dtype=bool).reshape(-1, n)
+    weights = sharing_weights(raw, stance)
+    shared = ~np.any(raw > NO_LOAD, axis=0)  # the feet down share the load equally there
+    for p, key in enumerate(keys):
+        if key:
+            rates = np.array([c.weight_rate(times, key) for c in contacts]).reshape(-1, n)
+            rates[:, shared] = 0.0
+            out[..., p] = foot_value_rates(model.ground.policy, weights, rates)
     return out
 
 
@@ -149,7 +187,7 @@ def _tangents(model: Model, times, motion, seeds, *, kinematics_only: bool = Fal
         inputs = [state[k], 0.0, w[:, k], wd[:, k], wdd[:, k], feet, mask]
         directions = [np.zeros((state.shape[1], count)), np.zeros((1, count)),
                       seeds[0][:, k], seeds[1][:, k], seeds[2][:, k],
-                      np.zeros((feet.size, count)), np.zeros((mask.size, count))]
+                      seeds[3][:, k].reshape(feet.size, count), np.zeros((mask.size, count))]
         if known is not None:
             inputs.append(state[k])
             directions.append(known[k])

@@ -208,6 +208,10 @@ class LawChange:
         Its value, in ``unit``.
     scene_scale : float
         ``unit`` per unit of the value the scene writes.
+    key : str
+        The scene key the laws answer to (:meth:`hexapod.scene.Law.design_parameter`), which
+        the model's contacts answer too (their footholds and load-sharing weights: the duty
+        factor); "" for none.
     """
 
     name: str
@@ -216,6 +220,7 @@ class LawChange:
     value: float = float("nan")
     scene_scale: float = 1.0
     mass: float = 0.0  # it changes no mass
+    key: str = ""
 
 
 @dataclass(frozen=True)
@@ -486,6 +491,7 @@ def inverse_sensitivities(model: Model, result: InverseResult,
                 parameters[k].name)[1]} for k in shifted]
         tangents = law_tangents(design, result,
                                 [parameters[k].laws for k in changing] + shifts,
+                                keys=[parameters[k].key for k in changing] + [""] * len(shifts),
                                 progress=progress)
         through = changing + shifted
         rotations, q[..., through] = tangents.frames, tangents.q

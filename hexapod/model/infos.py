@@ -91,6 +91,16 @@ class ContactInfo:
 
         return stance_weight(self.schedule, t)
 
+    def weight_rate(self, t, key: str) -> np.ndarray:
+        """The derivative of :meth:`weight` with respect to the design parameter ``key``
+        (``gait.duty``: :func:`hexapod.scene.contacts.stance_weight_rate`; zero for
+        another)."""
+        from hexapod.scene.contacts import stance_weight_rate
+
+        if key == "gait.duty":
+            return stance_weight_rate(self.schedule, t)
+        return np.zeros_like(np.asarray(t, dtype=float))
+
     def stances(self, start: float, stop: float) -> list[tuple[float, float]]:
         """The stances (touch-down to lift-off) overlapping ``[start, stop]``, clipped to it."""
         from hexapod.scene.contacts import stance_intervals

@@ -233,7 +233,7 @@ class PlanarBody(Body):
         Initial velocity of the reference frame's origin (L/s).
     angular_velocity : float
         Initial angular velocity, rad/s.
-    markers, mesh, source :
+    markers, mesh, payload, source :
         As for a :class:`SpatialBody`, in the plane.
     """
 
@@ -309,7 +309,7 @@ class Particle(Body):
         Its initial velocity (L/s; default zero).
     markers : dict
         Named points, relative to the particle (L).
-    mesh, source :
+    mesh, payload, source :
         As for a :class:`SpatialBody`.
     """
 

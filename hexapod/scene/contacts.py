@@ -28,7 +28,7 @@ from hexapod._support import limits
 from hexapod.catalog import MAX_FACES, POLICIES
 from hexapod.errors import Problem
 from hexapod.scene.laws import Law
-from hexapod.scene.laws.base import cycle_breaks
+from hexapod.scene.laws.base import Constant, cycle_breaks
 from hexapod.scene.terrain import Terrain
 
 
@@ -63,6 +63,19 @@ def stance_weight(contact, t) -> np.ndarray:
         return np.ones_like(np.asarray(t, dtype=float))
     u = np.clip(np.minimum(s, 1.0 - s) / contact.ramp, 0.0, 1.0)
     return np.where(np.isnan(s), 0.0, u**3 * (10 - 15 * u + 6 * u**2))
+
+
+def stance_weight_rate(contact, t) -> np.ndarray:
+    """The derivative of :func:`stance_weight` at ``t`` with respect to the duty factor, the
+    lift-off kept (the design parameter ``gait.duty``): the stance progress ``s`` grows by
+    ``(1 - s) / duty`` per unit of duty."""
+    s = stance_progress(contact, t)
+    if contact.duty >= 1.0:
+        return np.zeros_like(np.asarray(t, dtype=float))
+    u = np.minimum(s, 1.0 - s) / contact.ramp
+    along = np.where(s < 0.5, 1.0, -1.0) * (1.0 - s) / (contact.duty * contact.ramp)
+    ramping = ~np.isnan(s) & (u < 1.0)
+    return np.where(ramping, 30.0 * u**2 * (1.0 - u) ** 2 * along, 0.0)
 
 
 def stance_intervals(contact, start: float, stop: float) -> list[tuple[float, float]]:
@@ -165,6 +178,18 @@ class Foothold(Law):
         if self.axis == 2:
             return c.terrain is None or c.terrain.flat
         return not c.turn
+
+    def design_parameter(self, key):
+        """``gait.duty``: the stances kept centred on the footholds' times as the walking
+        builders place them, each foothold moves back by half the ``advance`` per unit of
+        duty (a constant); refused where the footholds turn or the ground is not flat."""
+        if key != "gait.duty" or self.contact.duty >= 1.0:
+            return None
+        if not self.straight:
+            raise ValueError(f"contact '{self.contact.name}': footholds that turn, or on a "
+                             "ground that is not flat: their dependence on the duty factor "
+                             "is not derived")
+        return float(self.contact.duty), Constant(-0.5 * float(self.contact.advance[self.axis]))
 
     def evaluate(self, t):
         t = np.asarray(t, dtype=float)

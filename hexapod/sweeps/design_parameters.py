@@ -22,6 +22,9 @@ the scene's TOML form. Sensitivities cover the bodies' inertia and the joints' p
   ``s^3``, inertias times ``s^5``, the motion's times kept
   (:class:`~hexapod.algorithms.sensitivity.ScaleChange`); with the period's half, the Froude
   scaling whose forces go as ``s^3`` and torques as ``s^4``;
+* ``gait.duty`` (1): the gait's duty factor, its stride and period kept, the footholds centred
+  on their stances (:mod:`legs.duty`): the feet's paths, the coupled joints, the contacts'
+  footholds and load-sharing weights all follow; the scene's characteristic length held;
 * ``payload`` (kg): the load the body with a ``payload`` key carries at its centre of mass
   (the walking robot's builders put it on the trunk), part of its mass;
 * ``gait.step_height`` (m; ``step_height``, alike): the feet's lift in swing, held by the
@@ -62,9 +65,9 @@ if TYPE_CHECKING:
 _COVERED = ("masses and inertias, body.NAME.mass and body.NAME.inertia[.K], and joints' "
             "positions, joint.NAME.origin[.K] or joint.NAME.parent_frame.position[.K] "
             "(child_frame) ('*' matches any NAME), the friction coefficient, ground.mu, the "
-            "gait's period and step height, gait.period and gait.step_height (or period and "
-            "step_height), the geometric scale, geometric_scale, and the payload, payload; the "
-            "gait's other parameters are not covered yet")
+            "gait's period, step height and duty factor, gait.period, gait.step_height and "
+            "gait.duty (or period and step_height), the geometric scale, geometric_scale, and "
+            "the payload, payload")
 
 
 def inertia_parameters(scene: Scene, patterns: Sequence[str],
@@ -103,6 +106,11 @@ def inertia_parameters(scene: Scene, patterns: Sequence[str],
         if pattern in ("gait.period", "period"):  # a scene key, or a builder's argument
             found.setdefault(pattern, _period(scene, pattern, source))
             continue
+        if pattern == "duty":  # the built-in walking robot's builder argument: not gait.duty
+            raise StudyError(f"{source}: 'duty', the built-in walking robot's builder argument, "
+                             "keeps its stance's length, so its stride changes with it: not a "
+                             "parameter sensitivities cover; gait.duty keeps the stride and "
+                             "period (the footholds centred on their stances)")
         if pattern in _LAW_PARAMETERS:
             found.setdefault(pattern, _law_change(scene, pattern, source))
             continue
@@ -168,7 +176,8 @@ def _period(scene: Scene, name: str, source: str) -> PeriodChange:
 #: (:meth:`hexapod.scene.Law.design_parameter`), its SI unit, whether a length). A builder's
 #: argument (``step_height``) names its scene key's parameter.
 _LAW_PARAMETERS = {"gait.step_height": ("gait.step_height", "m", True),
-                   "step_height": ("gait.step_height", "m", True)}
+                   "step_height": ("gait.step_height", "m", True),
+                   "gait.duty": ("gait.duty", "1", False)}
 
 
 def _law_change(scene: Scene, name: str, source: str) -> LawChange:
@@ -187,6 +196,8 @@ def _law_change(scene: Scene, name: str, source: str) -> LawChange:
         if held is not None:
             values.add(float(held[0]))
             laws[law] = held[1].scaled(per_si)
+    if key == "gait.duty":  # the contacts' schedules hold it too
+        values.update(_contact_duties(scene, name, source))
     if not laws:
         raise StudyError(f"{source}: '{name}': no law of scene '{scene.name}' depends on "
                          f"{key} (a walking robot's feet's paths do)")
@@ -195,7 +206,20 @@ def _law_change(scene: Scene, name: str, source: str) -> LawChange:
         raise StudyError(f"{source}: '{name}': the laws of scene '{scene.name}' hold {key} "
                          f"at different values ({shown}): one parameter cannot move them all")
     value = values.pop() * (scene.unit if length else 1.0)
-    return LawChange(name, laws, unit, value, scene.unit if length else 1.0)
+    return LawChange(name, laws, unit, value, scene.unit if length else 1.0, key=key)
+
+
+def _contact_duties(scene: Scene, name: str, source: str) -> set[float]:
+    """The duty factors of the scene's contacts, whose footholds and load-sharing weights
+    follow it: refused where the footholds turn or the ground is not flat."""
+    from hexapod.scene.joints import Contact
+
+    contacts = [j for j in scene.joints.values() if isinstance(j, Contact)]
+    if contacts and (not scene.ground.terrain.flat or any(c.turn for c in contacts)):
+        raise StudyError(f"{source}: '{name}': the contacts of scene '{scene.name}' turn or "
+                         "stand on a ground that is not flat: their footholds' dependence on "
+                         "the duty factor is not derived (a straight walk on flat ground is)")
+    return {float(c.duty) for c in contacts}
 
 
 def _payload(scene: Scene, source: str) -> InertiaChange:
