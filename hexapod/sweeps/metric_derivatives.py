@@ -134,14 +134,17 @@ def _rms(t: np.ndarray, tau: np.ndarray, dtau: np.ndarray) -> np.ndarray:
 def _work(model, t, effort, sensitivity, driven) -> np.ndarray:
     """The derivative of :func:`hexapod.sweeps.metrics.positive_work`: ``int sum [tau w > 0]
     (w dtau + tau dw) dt``, ``dw`` the joint rates' derivatives (nonzero for parameters that
-    change the laws)."""
+    change the laws). Where a sample's power is exactly zero (a joint at rest there, as a
+    coupled joint at the top of its swing) ``max(P, 0)`` has a kink: the mean of its
+    one-sided derivatives, which central differences see."""
     deffort = sensitivity.effort
     if len(t) < 2 or not driven:
         return np.zeros(deffort.shape[-1])
     columns = [j.index for j in driven]
     rates = joint_rates(model, t, driven)
     tau = effort[:, columns]
-    spending = (tau * rates) > 0.0
+    power = tau * rates
+    spending = (power > 0.0) + 0.5 * (power == 0.0)
     drates = _joint_rate_changes(model, sensitivity, driven)
     return np.array([time_integral(t, (spending * (rates * deffort[:, columns, p]
                                                    + tau * drates[..., p])).sum(axis=1))

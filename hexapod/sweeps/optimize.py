@@ -45,12 +45,12 @@ from pathlib import Path
 import numpy as np
 
 from hexapod._support.files import read_toml
-from hexapod.algorithms.sensitivity import InertiaChange, ScaleChange
+from hexapod.algorithms.sensitivity import FrameChange, InertiaChange, ScaleChange
 from hexapod.errors import HexapodError, InputFileError
 from hexapod.sweeps.cases import StudyError
 from hexapod.sweeps.metric_derivatives import SENSITIVE_FAMILIES, metric_sensitivities
 from hexapod.sweeps.metrics import body_masses, inverse_metrics
-from hexapod.sweeps.rerun_design import RerunDesign, run_at
+from hexapod.sweeps.rerun_design import RerunDesign, held_length, run_at
 from hexapod.sweeps.spec import Study, study_from_document
 
 #: IPOPT's tolerance on the scaled problem by default: the gradients of masses and inertias
@@ -412,7 +412,8 @@ def optimize(spec: OptimizationStudy,
     if all(isinstance(c, InertiaChange) for c in changes):
         design = AffineDesign(model, result, sensitivity, strides, values)
     else:  # the motion moves with the joints or the period: a run per evaluation
-        design = RerunDesign(study, changes, times, strides, values)
+        design = RerunDesign(study, changes, times, strides, values,
+                             held_length(changes, model))
     metrics, _ = design.at(values)
     check_objective(metrics, spec.minimize, source)
     limits = spec.limits + _motor_limits(model, spec.actuators)
@@ -453,6 +454,11 @@ def _parameters(scene, bounds, source: str):
         raise StudyError(f"{source}: vary: geometric_scale is a sensitivity relative to the "
                          "scene as given, not a value a scene can be built with: vary the "
                          "builder's scale (a built-in robot's 'scale') instead")
+    if any(getattr(c, "key", "") == "gait.duty" for c in changes) and any(
+            isinstance(c, FrameChange) for c in changes):
+        raise StudyError(f"{source}: vary: the duty factor holds the scene's characteristic "
+                         "length (its legs' pose at t = 0 moves with it, no length does), "
+                         "which a joint's position moves: vary them in separate studies")
     if [c.name for c in changes] != [b.name for b in bounds]:
         named = ", ".join(c.name for c in changes)
         raise StudyError(f"{source}: vary: each [vary] key names one parameter, as it is "
@@ -581,7 +587,8 @@ def _checked(spec, scene, changes, design, start, optimum, status, iterations, l
     """The run, with the optimum checked by the study's scene built again with the optimal
     values."""
     optimum_scene, optimum_model, optimum_result = run_at(
-        spec.study, changes, times, values, optimum, f"{spec.source}: the optimum")
+        spec.study, changes, times, values, optimum, f"{spec.source}: the optimum",
+        getattr(design, "length", None))
     checked = inverse_metrics(optimum_model, optimum_result, SENSITIVE_FAMILIES, strides)
     predicted, _ = design.at(optimum)
     compared = [spec.minimize] + [c for c, _ in constrained]

@@ -18,16 +18,30 @@ from hexapod.sweeps.metric_derivatives import SENSITIVE_FAMILIES, metric_sensiti
 from hexapod.sweeps.metrics import inverse_metrics
 
 
-def scene_at(study, changes, values, source: str = ""):
+def scene_at(study, changes, values, source: str = "", length: float | None = None):
     """The study's scene with the parameters ``changes`` at ``values`` (SI; builder arguments
-    or scene keys, in the scene's units)."""
+    or scene keys, in the scene's units); its characteristic length set to ``length`` (SI)
+    when given (:func:`held_length`)."""
     from hexapod.sweeps.cases import StudyError, base_scene
 
     try:
-        return base_scene(study, {c.name: float(v) / c.scene_scale
-                                  for c, v in zip(changes, values, strict=True)})
+        scene = base_scene(study, {c.name: float(v) / c.scene_scale
+                                   for c, v in zip(changes, values, strict=True)})
     except StudyError as error:
         raise StudyError(f"{source}: {error}" if source else str(error)) from None
+    if length is not None:
+        scene.characteristic_length = length / scene.unit
+    return scene
+
+
+def held_length(changes, model) -> float | None:
+    """The characteristic length to hold while ``changes`` vary: ``model``'s (the study's
+    scene's, SI) with the duty factor among them, None otherwise. A walking scene measures it
+    where its legs are at ``t = 0``, which the duty factor moves though it changes no length:
+    held, the reruns are what the derivatives (which take it as a constant) derive."""
+    if any(getattr(c, "key", "") == "gait.duty" for c in changes):
+        return float(model.characteristic_length)
+    return None
 
 
 def times_at(times: np.ndarray, changes, base_values, values) -> np.ndarray:
@@ -41,14 +55,15 @@ def times_at(times: np.ndarray, changes, base_values, values) -> np.ndarray:
     return np.asarray(times, dtype=float) * ratio
 
 
-def run_at(study, changes, times, base_values, values, source: str = "") -> tuple:
+def run_at(study, changes, times, base_values, values, source: str = "",
+           length: float | None = None) -> tuple:
     """``(scene, model, result)``: the study's scene with the parameters ``changes`` at
-    ``values``, run at the samples ``times`` (those at ``base_values``) moved with the
-    period."""
+    ``values`` (its characteristic length ``length`` when given), run at the samples
+    ``times`` (those at ``base_values``) moved with the period."""
     from hexapod.algorithms.assembly import assemble
     from hexapod.algorithms.inverse import inverse_dynamics
 
-    scene = scene_at(study, changes, values, source)
+    scene = scene_at(study, changes, values, source, length)
     model = assemble(scene)
     return scene, model, inverse_dynamics(model, times_at(times, changes, base_values, values))
 
@@ -79,6 +94,8 @@ class RerunDesign:
     strides : float
     values : ndarray (P,)
         The parameters' values of the study's scene, SI.
+    length : float or None
+        The characteristic length held (:func:`held_length`), SI.
     """
 
     study: object
@@ -86,6 +103,7 @@ class RerunDesign:
     times: np.ndarray
     strides: float
     values: np.ndarray
+    length: float | None = None
     _cache: dict = field(default_factory=dict, repr=False)
 
     def at(self, p: np.ndarray) -> tuple[dict, dict]:
@@ -97,7 +115,7 @@ class RerunDesign:
         if key not in self._cache:
             self._cache.clear()
             scene, model, result = run_at(self.study, self.changes, self.times, self.values,
-                                          np.array(key))
+                                          np.array(key), length=self.length)
             changes = changes_at(scene, model, self.changes)
             sensitivity = inverse_sensitivities(model, result, changes,
                                                 moved=moved_model(scene, model, changes))
