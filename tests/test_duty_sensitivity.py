@@ -31,7 +31,6 @@ from legs.carried import TrunkSway
 from legs.robot import cockroach_description, walking_pattern
 from legs.stepping import GaitCoupled
 from legs.walker import StepPath, robot_scene
-from tests.test_law_sensitivity import _point_change
 
 PERIOD = 0.5
 TIMES = np.linspace(0.0, 2 * PERIOD, 4001)
@@ -105,42 +104,8 @@ def _robot(duty: float, length: float | None = None) -> hx.Scene:
     return scene
 
 
-@pytest.fixture(scope="module")
-def walking():
-    scene = _robot(0.6)
-    model = hx.assemble(scene)
-    result = hx.inverse_dynamics(model, SAMPLES, frame="world")
-    change, = inertia_parameters(scene, ["gait.duty"])
-    return scene, model, result, change, hx.inverse_sensitivities(model, result, [change])
-
-
-def test_feet_in_stance_move_back_by_half_the_stride(walking):
-    """Each stance stays centred on its foothold's time: a foot down moves back by half the
-    stride per unit of duty, a foot in swing as its path's derivative says (the swing
-    stretched over a shorter time), never sideways; the trunk does not move."""
-    scene, model, result, change, sensitivity = walking
-    assert (change.name, change.value, change.key) == ("gait.duty", 0.6, "gait.duty")
-    dq = sensitivity.q[..., 0]
-    trunk = model.bodies[model.body_index["trunk"]]
-    assert np.abs(dq[:, trunk.q]).max() <= 1e-12
-    stride = scene.drivers["L1/x"].law.advance
-    for contact in model.contacts:
-        joint = model.joints[contact.joint]
-        body = model.bodies[joint.child]
-        foot = contact.name.replace("/ground", "")
-        expected = np.array([change.laws[scene.drivers[f"{foot}/{axis}"].law].evaluate(
-            SAMPLES)[0] for axis in "xz"])
-        moved = np.array([_point_change(result.q[k, body.q], dq[k, body.q],
-                                        joint.child_frame.position)
-                          for k in range(SAMPLES.size)])
-        assert np.abs(moved[:, 1]).max() <= 1e-12, contact.name
-        assert np.abs(moved[:, [0, 2]] - expected.T).max() <= 1e-12, contact.name
-        down = contact.in_stance(SAMPLES)
-        assert np.abs(moved[down, 0] + stride / 2).max() <= 1e-12, contact.name
-
-
 @pytest.mark.slow  # four robots built again and run, 8 s; bench_sensitivity checks 10 points
-def test_the_duty_against_central_differences(walking):
+def test_the_duty_against_central_differences():
     """Every position, force, effort and ground force (1e-6 of the largest per unit relative
     change), and every figure of merit (1e-6 of its derivative), against the
     robot rebuilt at ``0.6 +- h`` (its characteristic length held), Richardson-extrapolated
@@ -148,7 +113,11 @@ def test_the_duty_against_central_differences(walking):
     touches down at a sample (its weight's ramp, a cubic over 6 % of the stance, has third
     derivatives of order 1e4 in the duty): 2.6e-5 of the largest effort at h = 1e-5, falling
     as h^2, and round-off takes over below 1e-6."""
-    scene, model, result, _, sensitivity = walking
+    scene = _robot(0.6)
+    model = hx.assemble(scene)
+    result = hx.inverse_dynamics(model, SAMPLES, frame="world")
+    sensitivity = hx.inverse_sensitivities(model, result,
+                                           inertia_parameters(scene, ["gait.duty"]))
     derivatives = metric_sensitivities(model, result, sensitivity)
 
     def run(duty: float):

@@ -153,6 +153,33 @@ def test_the_feet_rise_by_the_swing_bump(walking):
         assert bump.max() > 0.2 and (bump == 0).sum() >= 3  # a swing sampled, stances
 
 
+def test_feet_in_stance_move_back_by_half_the_stride_per_unit_of_duty(walking):
+    """The duty factor, stride and period kept: each stance stays centred on its foothold's
+    time, so a foot down moves back by half the stride per unit of duty, a foot in swing as
+    its path's derivative says (the swing stretched over a shorter time), never sideways; the
+    trunk does not move (``tests/test_duty_sensitivity.py`` checks the rest)."""
+    scene, model, result, _ = walking
+    change, = inertia_parameters(scene, ["gait.duty"])
+    assert (change.name, change.value, change.key) == ("gait.duty", 0.6, "gait.duty")
+    dq = hx.inverse_sensitivities(model, result, [change]).q[..., 0]
+    trunk = model.bodies[model.body_index["trunk"]]
+    assert np.abs(dq[:, trunk.q]).max() <= 1e-12
+    stride = scene.drivers["L1/x"].law.advance
+    for contact in model.contacts:
+        joint = model.joints[contact.joint]
+        body = model.bodies[joint.child]
+        foot = contact.name.replace("/ground", "")
+        expected = np.array([change.laws[scene.drivers[f"{foot}/{axis}"].law].evaluate(
+            TIMES)[0] for axis in "xz"])
+        moved = np.array([_point_change(result.q[k, body.q], dq[k, body.q],
+                                        joint.child_frame.position)
+                          for k in range(TIMES.size)])
+        assert np.abs(moved[:, 1]).max() <= 1e-12, contact.name
+        assert np.abs(moved[:, [0, 2]] - expected.T).max() <= 1e-12, contact.name
+        down = contact.in_stance(TIMES)
+        assert down.sum() >= 2 and np.abs(moved[down, 0] + stride / 2).max() <= 1e-12
+
+
 def test_a_frame_moved_on_its_child_against_central_differences(walking):
     """The knee's frame moved along the tibia (``child_frame``, zero in the scene): it moves
     the point the knee's wrench is reported about and the least-wrench policy weighs, and the

@@ -303,6 +303,8 @@ def _walking_at(period: float) -> hx.Model:
     return hx.assemble(hexapod_scene(gait="tripod", trunk="free", period=period))
 
 
+@pytest.mark.slow  # three robots, 6 s: the exact identity below is the fast check, and
+# bench_sensitivity checks the period at 10 random points
 def test_the_gait_period_against_central_differences():
     """The period at fixed phase: the robot rebuilt with periods ``T (1 +- STEP)``, sampled at
     the same fractions of its stride, gives the derivatives of every force and figure of merit

@@ -23,22 +23,26 @@ Protocol
   ``--checked`` parameters drawn per point; the forces are linear in masses and inertias, so
   those differences are exact but for round-off); and the walking robot's builder arguments
   ``period`` (drawn in [0.35, 0.7] s, derived at fixed phase), ``step_height`` (drawn in
-  [0.03, 0.07] m, derived through the motion: the feet's paths move the legs) and ``scale``
-  (drawn in [15, 25], against ``geometric_scale``, relative to the robot built), the robot
-  built by ``legs.hexapod_walking`` at the value drawn with its masses moved as at the other
-  points (not the scale's: its masses follow the scale), against the robot built again with
-  the value moved by ``--step`` of it (sampled at the same fractions of the stride for the
-  period). The error is ``p |exact - difference|`` over
-  the largest value of the array (or the metric's value): the change of the output per unit
-  relative change of the parameter, relative. Target: 1e-6. A figure of merit is smooth but
-  for kinks (a sample's power changing sign in the positive work, the peak moving to another
-  sample): one that misses it is checked again at a tenth, a hundredth and a thousandth of the
-  step, and the count of those that then agree (a kink within the step) is printed. A failed
-  check ends with status 1.
+  [0.03, 0.07] m, derived through the motion: the feet's paths move the legs), ``scale``
+  (drawn in [15, 25], against ``geometric_scale``, relative to the robot built) and
+  ``payload`` (drawn in [0.5, 5] kg), and its description's ``gait.duty`` (drawn in [0.55,
+  0.65], its stride and period kept: a longer stance leaves the legs' reach), the robot
+  built by ``legs.hexapod_walking`` (or its description walked) at the value drawn with its
+  masses moved as at the other points (not
+  the scale's: its masses follow the scale), against the robot built again with the value
+  moved by ``--step`` of it (sampled at the same fractions of the stride for the period; the
+  duty's differences of fourth order and its characteristic length held, as derived). The
+  error is ``p |exact - difference|`` over the largest value of the array (or the metric's
+  value): the change of the output per unit relative change of the parameter, relative.
+  Target: 1e-6. A figure of merit is smooth but for kinks (a sample's power changing sign in
+  the positive work, the peak moving to another sample): one that misses it is checked again
+  at a tenth, a hundredth and a thousandth of the step, and the count of those that then
+  agree (a kink within the step) is printed. A failed check ends with status 1.
 
 Everything goes to temporary folders; nothing is written.
 
     python3 scripts/benchmarks/bench_sensitivity.py [--samples 501] [--points 10]
+        [--rebuilt gait.duty payload] [--no-scenes]
 
 ``--points 0``: the cost alone.
 """
@@ -162,32 +166,55 @@ def point_errors(scene, patterns, lengths, samples, checked, step, rng
     return worst, where, kinks
 
 
-#: The walking robot's builder arguments checked by rebuilding it: name -> (the range the
-#: value is drawn in, whether the samples stay at the same fractions of the stride, the
-#: parameter derived: the builder's own, or the geometric scale relative to the robot built).
+#: The walking robot's parameters checked by rebuilding it: name -> (the range the value is
+#: drawn in, whether the samples stay at the same fractions of the stride, the parameter
+#: derived: the builder's own, or the geometric scale relative to the robot built). The duty
+#: factor is its description's (``gait.duty``: stride and period kept), rebuilt with its
+#: characteristic length held, as derived, and differenced to fourth order (a foot's weight
+#: ramps up as a cubic over 6 % of its stance: second-order differences of touch-down samples
+#: are 1e-4 off at the step).
 REBUILT = {"period": ((0.35, 0.7), True, None), "step_height": ((0.03, 0.07), False, None),
-           "scale": ((15.0, 25.0), False, "geometric_scale")}
+           "scale": ((15.0, 25.0), False, "geometric_scale"), "payload": ((0.5, 5.0), False, None),
+           "gait.duty": ((0.55, 0.65), False, None)}
+
+
+def walking_robot(argument: str, value: float, length: float | None = None):
+    """The built-in walking robot with ``argument`` at ``value``: its builder's, or for
+    ``gait.duty`` its description's gait (its characteristic length ``length`` when given)."""
+    from dataclasses import replace
+
+    from legs.robot import cockroach_description, hexapod_walking, walking_pattern
+    from legs.walker import robot_scene
+
+    if argument != "gait.duty":
+        return hexapod_walking(**{argument: value})
+    description = cockroach_description(walking_pattern("tripod", None), 0.5)
+    scene = robot_scene(replace(description, gait=replace(description.gait, duty=value)))
+    scene.characteristic_length = length
+    return scene
 
 
 def rebuilt_errors(argument, samples, step, rng) -> tuple[float, str, int]:
-    """A builder argument of the walking robot (``legs.hexapod_walking``) at one random point:
-    the robot built at a value drawn in its range (:data:`REBUILT`), its masses and inertias
-    moved as at the other points, derived (the period at fixed phase, the step height through
-    the motion), against central differences of the robot built again with the value moved by
-    ``step`` of it; over a stride, sampled at the same fractions of it for the period."""
-    from legs.robot import hexapod_walking
-
+    """A parameter of the walking robot at one random point (:data:`REBUILT`): the robot
+    built at a value drawn in its range, its masses and inertias moved as at the other points,
+    derived (the period at fixed phase, the step height and the duty through the motion),
+    against central differences of the robot built again with the value moved by ``step`` of
+    it; over a stride, sampled at the same fractions of it for the period."""
     (low, high), with_phase, relative = REBUILT[argument]
     value = rng.uniform(low, high)
     # the masses moved as at the other points: scene keys, fixed values, which the builder's
     # scale would no longer scale (the scale's point keeps the built robot's masses)
-    moved = random_point(hexapod_walking(), ROBOT_PARAMETERS, rng) if not relative else {}
+    moved = random_point(hx.load_scene("hexapod"), ROBOT_PARAMETERS, rng) \
+        if not relative else {}
+    if argument == "payload":  # on the trunk's mass, which the point keeps
+        moved.pop("body.trunk.mass", None)
+    scene = hx.sweeps.with_scene_keys(walking_robot(argument, value), moved)
+    model = hx.assemble(scene)
+    held = model.characteristic_length if argument == "gait.duty" else None
 
     def built(x):
-        return hx.sweeps.with_scene_keys(hexapod_walking(**{argument: x}), moved)
+        return hx.sweeps.with_scene_keys(walking_robot(argument, x, held), moved)
 
-    scene = built(value)
-    model = hx.assemble(scene)
     period = model.cycle_time()
     phases = np.linspace(0.0, 1.0, samples)
 
@@ -197,15 +224,26 @@ def rebuilt_errors(argument, samples, step, rng) -> tuple[float, str, int]:
     changes = hx.sweeps.inertia_parameters(scene, [relative or argument])
     run = Run(model, hx.inverse_dynamics(model, times(value)), changes, scene)
 
-    def ends(h):  # h in the parameter's units (relative for the geometric scale)
-        out = []
-        for x in ((value * (1 + h), value * (1 - h)) if relative else (value + h, value - h)):
-            moved_model = hx.assemble(built(x))
-            result = hx.inverse_dynamics(moved_model, times(x))
-            out.append((outputs(moved_model, result), inverse_metrics(moved_model, result)))
-        return out
+    def at(x):
+        moved_model = hx.assemble(built(x))
+        result = hx.inverse_dynamics(moved_model, times(x))
+        return outputs(moved_model, result), inverse_metrics(moved_model, result)
 
-    return run.errors(0, step * changes[0].value, ends)
+    def ends(h):  # h in the parameter's units (relative for the geometric scale)
+        if relative:
+            return [at(value * (1 + h)), at(value * (1 - h))]
+        if argument != "gait.duty":
+            return [at(value + h), at(value - h)]
+        # fourth order: ends whose central difference is (8 (f(h) - f(-h)) - f(2h) + f(-2h))
+        # / 12 h
+        near, far = (at(value + h), at(value - h)), (at(value + 2 * h), at(value - 2 * h))
+        return [tuple({k: (8 * n[i][k] - f[i][k]) / 6 for k in n[i]} for i in range(2))
+                for n, f in zip(near, far, strict=True)]
+
+    # the duty's fourth-order difference at a tenth of the step: its truncation at a
+    # touch-down sample (the weight's quartic term one-sided) falls as the step cubed
+    return run.errors(0, step * changes[0].value * (0.1 if argument == "gait.duty" else 1.0),
+                      ends)
 
 
 class Run:
@@ -298,12 +336,18 @@ def main() -> int:
     parser.add_argument("--check-samples", type=int, default=101)
     parser.add_argument("--step", type=float, default=1e-4)
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--rebuilt", nargs="*", choices=list(REBUILT), default=list(REBUILT),
+                        help="the walking robot's parameters checked against the robot built "
+                        "again (default: all)")
+    parser.add_argument("--no-scenes", action="store_true",
+                        help="skip the scenes' random points (masses, inertias, lengths)")
     args = parser.parse_args()
     measure.start("bench_sensitivity")
     ratio = cost(args.samples, args.parameters, args.repeats)
     rng = np.random.default_rng(args.seed)
     failed = ratio > 5.0
-    for name, scene, patterns, lengths in checked_scenes() if args.points > 0 else ():
+    scenes = checked_scenes() if args.points > 0 and not args.no_scenes else ()
+    for name, scene, patterns, lengths in scenes:
         errors = []
         for point in range(args.points):
             measure.log(f"{name}: point {point + 1} of {args.points}")
@@ -311,7 +355,7 @@ def main() -> int:
                                        args.checked, args.step, rng))
         failed |= report(f"{name}: {args.points} random points, {args.checked} parameters "
                          f"each", errors, args.step)
-    for argument in REBUILT if args.points > 0 else ():
+    for argument in args.rebuilt if args.points > 0 else ():
         errors = []
         for point in range(args.points):
             measure.log(f"hexapod, its {argument}: point {point + 1} of {args.points}")
