@@ -92,6 +92,7 @@ def cost(samples: int, count: int, repeats: int) -> float:
     times = np.linspace(0.0, model.time_window()[0], samples)
     changes = hx.sweeps.inertia_parameters(scene, ROBOT_PARAMETERS)[:count]
     height = hx.sweeps.inertia_parameters(scene, ["step_height"])
+    gait = hx.sweeps.inertia_parameters(scene, ["gait.step_height", "gait.duty"])
     result = hx.inverse_dynamics(model, times)  # the warm-up: the phase plans built
     derivatives(model, result, changes)
     derivatives(model, result, height)
@@ -114,6 +115,11 @@ def cost(samples: int, count: int, repeats: int) -> float:
     print(f"  the step height alone (the motion moves: the phase step differentiated): "
           f"{statistics.median(lifted):.3f} s, "
           f"{statistics.median(lifted) / statistics.median(run):.2f} x")
+    began = time.process_time()
+    derivatives(model, result, gait)
+    spent = time.process_time() - began
+    print(f"  the step height and the duty factor together (one forward sweep, two "
+          f"directions): {spent:.3f} s, {spent / statistics.median(run):.2f} x")
     lengths = hx.sweeps.inertia_parameters(scene, ROBOT_LENGTHS)
     began = time.process_time()  # once, the moved model's assembly and plans included
     derivatives(model, result, lengths, scene)
