@@ -54,16 +54,17 @@ def sway_design_parameter(bounds: tuple, key: str, swaying: bool = False) -> Non
     """A trunk's sway as a design parameter sees it (:meth:`hexapod.scene.Law.
     design_parameter`): corrected (``bounds``), it depends on every gait parameter through
     the whole motion (the two feet must carry it), which is not derived; ``swaying`` (its
-    series not zero), it is planned from the feet's schedule, which the duty factor
-    changes."""
+    series not zero), it is planned from the feet's schedule and paths and the gait's period
+    (its centre of pressure sees the accelerations), which the duty factor, the step height
+    and the period change."""
     if bounds and key.startswith("gait."):
         raise ValueError("the trunk's sway is corrected so that two feet carry the robot, a "
                          f"solve over the whole motion whose derivative with respect to {key} "
                          "is not derived (a gait with three feet down or more has no "
                          "correction)")
-    if swaying and key == "gait.duty":
-        raise ValueError("the trunk's sway is planned from the feet's schedule, a solve over "
-                         "the stride whose derivative with respect to the duty factor is not "
+    if swaying and key in ("gait.duty", "gait.step_height", "gait.period"):
+        raise ValueError("the trunk's sway is planned from the feet's schedule and paths over "
+                         f"the stride, a solve whose derivative with respect to {key} is not "
                          "derived (a level trunk, the gait's trunk = \"level\", has none)")
 
 

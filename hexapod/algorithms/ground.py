@@ -278,6 +278,65 @@ def friction_tangents(model: Model, data, t: float, q: np.ndarray, Phi: np.ndarr
     return problem.base + problem.NK @ y, base_along + problem.NK @ y_along, labels
 
 
+def friction_active_set(model: Model, data, t: float, q: np.ndarray, Phi: np.ndarray,
+                        Q_across: np.ndarray | None, lam: np.ndarray, N: np.ndarray) -> tuple:
+    """The friction policy's multipliers (among ``lam + N z``, as :func:`friction_tangents`)
+    and its active set as constraints on the multipliers: ``D`` (active x n_c, the
+    constraints' scaled Jacobian, linear in the feet's forces ``F = -lam``), the rows of ``D``
+    that are least normal forces with their contact (``(row, contact)``: their value is the
+    contact's weight times ``min_normal``, over ``scale``), ``scale``, the feet's weights and
+    the labels ((contact, constraint) pairs).
+
+    Raises
+    ------
+    HexapodError
+        As :func:`friction_tangents`.
+    """
+    base, _, labels = friction_tangents(model, data, t, q, Phi, Q_across, lam, N,
+                                        np.zeros((lam.size, 0)))
+    problem = _PolicyProblem(model, data, t, q, Phi, Q_across, lam, N)
+    per_foot = 1 + model.ground.faces
+    loaded = problem.loaded
+    order = sorted(labels, key=lambda pair: (loaded.index(pair[0]), pair[1]))
+    D = np.zeros((len(order), model.n_c))
+    if not order:
+        return base, D, [], robot_weight(model) or 1.0, problem.weights, labels
+    F0 = {k: -base[model.contacts[k].rows] for k in loaded}
+    params = _cone_parameters(model, problem, F0)
+    _, _, dc_dF0, _ = params[0](np.zeros(problem.NK.shape[1]), *params[1])
+    dc_dF0 = np.asarray(dc_dF0) / params[2]
+    axes = contact_axes(model)
+    minimum_rows = []
+    for i, (k, j) in enumerate(order):
+        row = loaded.index(k) * per_foot + j
+        slope = dc_dF0[row, 3 * loaded.index(k):3 * loaded.index(k) + 3]
+        if axes is not None:
+            slope = slope @ axes[k]
+        D[i, model.contacts[k].rows] = -slope  # F = -lam on the foot's rows
+        if j == 0:
+            minimum_rows.append((i, k))
+    return base, D, minimum_rows, params[2], problem.weights, labels
+
+
+def _cone_parameters(model: Model, problem, F0: dict) -> tuple:
+    """The constraints' Function of the friction QP of ``problem``'s shape and its parameters
+    but ``y`` (forces in units of ``scale``), and ``scale``: for their Jacobian in the
+    forces (linear: the same at any ``y``)."""
+    ground, loaded = model.ground, problem.loaded
+    key = (ground.faces, problem.NK.shape[1], len(loaded))
+    if key not in _SOLVERS:
+        _SOLVERS[key] = _build_solver(*key)
+    constraints = _SOLVERS[key][2]
+    scale = robot_weight(model) or 1.0
+    axes = contact_axes(model)
+    turn = (lambda k, F: F) if axes is None else (lambda k, F: axes[k] @ F)
+    F0s = np.concatenate([turn(k, F0[k]) for k in loaded])
+    Gs = np.vstack([turn(k, -problem.NK[model.contacts[k].rows]) for k in loaded])
+    minimum = np.array([problem.weights[k] * ground.min_normal for k in loaded])
+    H, g = problem.AK.T @ problem.AK, problem.AK.T @ problem.r
+    return constraints, (H, g, F0s / scale, Gs / scale, minimum / scale, ground.mu), scale
+
+
 class _PolicyProblem:
     """The policy's problem at a state: the multipliers ``base + NK y`` that keep the feet
     of weight zero unloaded, and the objective ``|A (base + NK y) + b|^2 = |AK y + r|^2``."""

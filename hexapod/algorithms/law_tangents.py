@@ -57,6 +57,9 @@ class LawTangents:
         The ground's forces on the feet's, world axes.
     rates : ndarray (N, n_w, P)
         The laws' rates' (the guided joints' coordinates' rates for a guided model).
+    changes : ndarray
+        With the friction policy, the sample times where its active set changes (there the
+        derivatives are one-sided); empty otherwise.
     """
 
     q: np.ndarray
@@ -65,6 +68,7 @@ class LawTangents:
     dframes: np.ndarray
     ground: np.ndarray
     rates: np.ndarray
+    changes: np.ndarray
 
 
 def law_tangents(model: Model, result: InverseResult,
@@ -91,8 +95,8 @@ def law_tangents(model: Model, result: InverseResult,
     with executing(compiled=False):  # compiled Functions carry no derivatives
         if model.guidance is None:
             seeds = _seeds(model, times, changes, keys)
-            dx, lam, dwrench, frames, dframes = _tangents(model, times, motion, seeds,
-                                                          progress=_stage(progress, 0, n))
+            dx, lam, dwrench, frames, dframes, switches = _tangents(
+                model, times, motion, seeds, progress=_stage(progress, 0, n))
         else:
             from hexapod.algorithms.guided import guided_coordinate_tangents
             from hexapod.algorithms.inverse import motion_model
@@ -107,16 +111,16 @@ def law_tangents(model: Model, result: InverseResult,
                                                 dx[:, n_q:n_q + n_v], dx[:, n_q + n_v:])
             for m in range(3):
                 seeds[m][model.guidance.laws] = joints[m]
-            dx, lam, dwrench, frames, dframes = _tangents(twin, times, motion, seeds, known=dx,
-                                                          progress=_stage(progress, n, 2 * n))
+            dx, lam, dwrench, frames, dframes, switches = _tangents(
+                twin, times, motion, seeds, known=dx, progress=_stage(progress, n, 2 * n))
     rows = np.array([c.rows for c in model.contacts], dtype=int).reshape(-1, 3)
     return LawTangents(dx[:, :model.n_q], dwrench, frames, dframes, -lam[:, rows],
-                       seeds[1].transpose(1, 0, 2).reshape(n, model.n_w, -1))
+                       seeds[1].transpose(1, 0, 2).reshape(n, model.n_w, -1), switches)
 
 
 def _seeds(model: Model, times: np.ndarray, changes, keys) -> list[np.ndarray]:
     """The laws' derivatives: values, rates, accelerations, each (n_w, N, P); then the feet's
-    policy values' (C, N, P)."""
+    policy values' and load-sharing weights' (C, N, P each)."""
     out = [np.zeros((model.n_w, times.size, len(changes))) for _ in range(3)]
     for p, (change, key) in enumerate(zip(changes, keys, strict=True)):
         for index, law in enumerate(model.laws):
@@ -128,7 +132,7 @@ def _seeds(model: Model, times: np.ndarray, changes, keys) -> list[np.ndarray]:
                 derivative = derivative.scaled(factor)
                 for m, x in enumerate(derivative.evaluate(times)):
                     out[m][index, :, p] = x
-    return [*out, _feet_seeds(model, times, keys)]
+    return [*out, *_feet_seeds(model, times, keys)]
 
 
 def _held(model: Model, law: Law, key: str) -> Law | None:
@@ -140,15 +144,16 @@ def _held(model: Model, law: Law, key: str) -> Law | None:
     return None if held is None else held[1]
 
 
-def _feet_seeds(model: Model, times: np.ndarray, keys) -> np.ndarray:
+def _feet_seeds(model: Model, times: np.ndarray, keys) -> tuple[np.ndarray, np.ndarray]:
     """The derivatives of the feet's policy values (:func:`~hexapod.algorithms.ground.
-    foot_values`) along each key (C, N, P): their load-sharing weights' change."""
+    foot_values`) and of their load-sharing weights along each key (C, N, P each)."""
     from hexapod.algorithms.ground import NO_LOAD, foot_value_rates, sharing_weights
 
     contacts, n = model.contacts, times.size
     out = np.zeros((len(contacts), n, len(keys)))
+    along = np.zeros_like(out)
     if not contacts:
-        return out
+        return out, along
     raw = np.array([c.weight(times) for c in contacts], dtype=float).reshape(-1, n)
     stance = np.array([c.in_stance(times) for c in contacts], dtype=bool).reshape(-1, n)
     weights = sharing_weights(raw, stance)
@@ -157,8 +162,9 @@ def _feet_seeds(model: Model, times: np.ndarray, keys) -> np.ndarray:
         if key:
             rates = np.array([c.weight_rate(times, key) for c in contacts]).reshape(-1, n)
             rates[:, shared] = 0.0
+            along[..., p] = rates
             out[..., p] = foot_value_rates(model.ground.policy, weights, rates)
-    return out
+    return out, along
 
 
 def _stage(progress, start: int, total: int):
@@ -182,6 +188,9 @@ def _tangents(model: Model, times, motion, seeds, *, kinematics_only: bool = Fal
     dx = np.zeros((n, state.shape[1], count))
     lam, dwrench = np.zeros((n, n_c, count)), np.zeros((n, count, joints, 6))
     frames, dframes = np.zeros((n, joints, 9)), np.zeros((n, count, joints, 9))
+    friction = bool(model.contacts) and model.ground.policy == "friction" and \
+        not kinematics_only
+    active: list[frozenset] = [frozenset()] * n
     for k, (plan, mask, feet) in enumerate(plans):
         function = _tangent_function(plan, count, known is not None)
         inputs = [state[k], 0.0, w[:, k], wd[:, k], wdd[:, k], feet, mask]
@@ -207,8 +216,17 @@ def _tangents(model: Model, times, motion, seeds, *, kinematics_only: bool = Fal
         lam[k] = outputs[6]
         dwrench[k] = outputs[7].ravel(order="F").reshape(count, joints, 6)
         dframes[k] = outputs[8].ravel(order="F").reshape(count, joints, 9)
+        if friction:  # the step's multipliers are the least-squares policy's: the QP's own
+            from hexapod.algorithms.friction_motion import friction_motion_tangents
+
+            _, lam[k], dwrench[k], frames[k], dframes[k], active[k] = \
+                friction_motion_tangents(model, data, float(times[k]), state[k],
+                                         (w[:, k], wd[:, k], wdd[:, k]), dx[k],
+                                         tuple(seeds[m][:, k] for m in range(3)),
+                                         seeds[4][:, k])
     _check_consistent(model, times, state, dx, w, seeds[0], plans)
-    return dx, lam, dwrench, frames, dframes
+    changes = times[[k for k in range(1, n) if active[k] != active[k - 1]]]
+    return dx, lam, dwrench, frames, dframes, changes
 
 
 #: The most a row left out of a rank decision may move per unit of the parameter (scaled as

@@ -348,11 +348,6 @@ def check_parameters(model: Model, parameters, moved: Model | None = None) -> No
             _check_period(model, change)
         through_motion = isinstance(change, LawChange | ScaleChange) or (
             isinstance(change, FrameChange) and not tree_solved(model))
-        if through_motion and model.contacts and model.ground.policy == "friction":
-            raise HexapodError(
-                f"parameter '{change.name}': model '{model.name}' shares its ground forces by "
-                "the friction policy, a QP solved sample by sample whose derivative along a "
-                "moving motion is not derived (the least-wrench and least-effort policies are)")
         if isinstance(change, ScaleChange):
             _check_scaled(model, change, moved)
         if isinstance(change, FrictionChange | PeriodChange | LawChange | ScaleChange):
@@ -499,6 +494,7 @@ def inverse_sensitivities(model: Model, result: InverseResult,
         ground[..., through] += tangents.ground
         rates[..., through] = tangents.rates[:, :model.n_w]  # the shifts come last
         turning[:, through] = tangents.dframes
+        changes = np.union1d(changes, tangents.changes)
     force, torque, effort = efforts_and_axes(model, wrench[..., :3], wrench[..., 3:],
                                              rotations[:, None], result.frame)
     if result.frame == "world" and (changing or shifted):  # the frames turn: R dF + dR F

@@ -169,6 +169,14 @@ def _period(scene: Scene, name: str, source: str) -> PeriodChange:
     if period is None:
         raise StudyError(f"{source}: '{name}': scene '{scene.name}' has no gait (no law of it "
                          "repeats)")
+    for driver in scene.drivers.values():  # a law planned for its period does not follow it
+        law = getattr(driver, "law", None)
+        try:
+            if law is not None:
+                law.design_parameter("gait.period")
+        except ValueError as error:
+            raise StudyError(f"{source}: '{name}': driver '{driver.name}' of scene "
+                             f"'{scene.name}': {error}") from None
     return PeriodChange(name=name, value=float(period))
 
 
