@@ -89,28 +89,28 @@ def friction_motion_tangents(model, data, t: float, x: np.ndarray, laws: tuple,
     size = Psi.shape[1]
     kkt = np.block([[H, Psi], [Psi.T, np.zeros((size, size))]])
     count = dx.shape[1]
-    dPhi = _forward(model.Phi_v, [q, w], dx[:n_q], dlaws[0])
-    dQ = _forward(model.Q, [q, v, w], dx[:n_q], dx[n_q:n_q + n_v], dlaws[0])[:, :, 0].T
+    dPhi = _forward(model, "Phi_v", [q, w], dx[:n_q], dlaws[0])
+    dQ = _forward(model, "Q", [q, v, w], dx[:n_q], dx[n_q:n_q + n_v], dlaws[0])[:, :, 0].T
     dfeet = _foot_value_rates(model, weights, dweights)
-    objective = terms.objective.forward(count)
+    objective = _forwards(model, "objective", count)
     dPhi_nz = np.array([terms.nonzeros(dPhi[p]) for p in range(count)]).T
     dA, db = objective(q, w, Phi_nz, np.zeros(6 * terms.owners), foot_values(
         model.ground.policy, weights), A, b, dx[:n_q], dlaws[0], dPhi_nz,
         np.zeros((6 * terms.owners, count)), dfeet)
     dA = _columns(dA, A.shape, count)
     db = ca.DM(db).full().reshape(-1, count, order="F")
-    dlam = np.zeros((model.n_c, count))
+    rhs = np.zeros((kkt.shape[0], count))
     for p in range(count):
         top = -(dA[p].T @ residual + A.T @ (dA[p] @ lam + db[:, p])) - dPhi[p] @ nu
         force = dQ[:, p] - model.mass.dense() @ dx[n_q + n_v:, p] - dPhi[p].T @ lam
         moved = np.zeros(D.shape[0])  # the least normal forces follow the feet's weights
         for row, foot in minimum_rows:
             moved[row] = dweights[foot, p] * model.ground.min_normal / scale
-        rhs = np.concatenate([top, force, np.zeros(idle.size), moved])
-        dlam[:, p] = np.linalg.lstsq(kkt, rhs, rcond=None)[0][:model.n_c]
-    report = terms.report_map
-    B, frames = (np.asarray(x) for x in report(q, w, Phi_nz))
-    dB, dF = report.forward(count)(q, w, Phi_nz, B, frames, dx[:n_q], dlaws[0], dPhi_nz)
+        rhs[:, p] = np.concatenate([top, force, np.zeros(idle.size), moved])
+    dlam = np.linalg.lstsq(kkt, rhs, rcond=None)[0][:model.n_c]
+    B, frames = (np.asarray(x) for x in terms.report_map(q, w, Phi_nz))
+    dB, dF = _forwards(model, "report_map", count)(q, w, Phi_nz, B, frames, dx[:n_q],
+                                                     dlaws[0], dPhi_nz)
     dB = _columns(dB, B.shape, count)
     dF = np.asarray(dF).reshape(9, len(model.joints), count, order="F")
     joints = len(model.joints)
@@ -130,12 +130,24 @@ def _columns(derivative, shape, count) -> list[np.ndarray]:
     return [full[:, p * shape[1]:(p + 1) * shape[1]] for p in range(count)]
 
 
-def _forward(function: ca.Function, inputs: list, *seeds) -> np.ndarray:
-    """``function``'s one output's forward derivatives along the columns of ``seeds`` (one per
-    input): (P, rows, columns)."""
+def _forwards(model, name: str, count: int) -> ca.Function:
+    """The forward derivative in ``count`` directions of the model's Function ``name`` (the
+    step terms' ``objective`` and ``report_map``, else the model's own), built once."""
+    def build(m):
+        terms = terms_of(m)
+        function = getattr(terms, name) if name in ("objective", "report_map") else \
+            getattr(m, name)
+        return function, function.forward(count)
+
+    return model.built_once(("friction motion", name, count), build)[1]
+
+
+def _forward(model, name: str, inputs: list, *seeds) -> np.ndarray:
+    """The model's Function ``name``'s one output's forward derivatives along the columns of
+    ``seeds`` (one per input): (P, rows, columns)."""
     count = seeds[0].shape[1]
-    nominal = function(*inputs)
-    full = ca.DM(function.forward(count)(*inputs, nominal, *seeds)).full()
+    nominal = getattr(model, name)(*inputs)
+    full = ca.DM(_forwards(model, name, count)(*inputs, nominal, *seeds)).full()
     cols = nominal.shape[1]
     return np.array([full[:, p * cols:(p + 1) * cols] for p in range(count)])
 
