@@ -23,6 +23,7 @@ from hexapod.sweeps.cases import StudyError
 from hexapod.sweeps.design_parameters import inertia_parameters
 from hexapod.sweeps.metric_derivatives import SENSITIVE_FAMILIES, metric_sensitivities
 from hexapod.sweeps.metrics import inverse_metrics
+from legs.carried import sway_design_parameter
 from legs.robot import hexapod_walking
 from legs.walker import StepPath
 from tests.scene_documents import SCENES
@@ -291,27 +292,29 @@ def test_a_scene_without_feet_paths_is_refused(tmp_path, capsys):
 
 
 def test_a_trunk_carried_by_two_feet_is_refused():
-    """A trot's trunk sway is solved from the whole motion so that two feet carry it: its
-    dependence on the step height is not derived, and said."""
-    scene = hx.load_scene(str(SCENES.parent / "robots" / "quadruped-trot.toml"))
-    corrected = [d.law for d in scene.drivers.values() if getattr(d.law, "bounds", ())]
-    assert corrected
-    for law in corrected:
+    """A trot's trunk sway is corrected, solved from the whole motion so that two feet carry
+    it: its dependence on the gait's parameters is not derived, and said."""
+    for key in ("gait.step_height", "gait.duty", "gait.period"):
         with pytest.raises(ValueError, match="two feet carry the robot"):
-            law.design_parameter("gait.step_height")
-    with pytest.raises(StudyError, match="trunk's sway is"):
-        inertia_parameters(scene, ["gait.step_height"])
+            sway_design_parameter((0.1, 0.2), key)
+    assert sway_design_parameter((0.1, 0.2), "geometric_scale") is None
 
 
-def test_the_friction_policy_along_a_segment_length_against_central_differences():
+@pytest.fixture(scope="module")
+def quadruped():
+    """The quadruped (friction policy, a planned trunk sway) and its model."""
+    scene = hx.load_scene(str(SCENES.parent / "robots" / "quadruped.toml"))
+    return scene, hx.assemble(scene)
+
+
+def test_the_friction_policy_along_a_segment_length_against_central_differences(quadruped):
     """The quadruped shares its ground forces by the friction policy, a QP over each foot's
     pyramid: along its left front shank's length (its knee's frame on the thigh, moving the
     legs' motion) the QP's solution is derived on its active set, whose matrices move with
     the motion (:mod:`hexapod.algorithms.friction_motion`). Against the robot read again with
     the length moved by +-1e-6 m: every effort and ground force within 1e-7 of the largest
     (measured 1e-8 at 21 samples), the active set changing between the samples named."""
-    scene = hx.load_scene(str(SCENES.parent / "robots" / "quadruped.toml"))
-    model = hx.assemble(scene)
+    scene, model = quadruped
     assert model.ground.policy == "friction"
     times = np.linspace(0.0, model.cycle_time(), 7)
     result = hx.inverse_dynamics(model, times, frame="world")
@@ -330,11 +333,11 @@ def test_the_friction_policy_along_a_segment_length_against_central_differences(
             1e-7 * np.abs(value_[finite]).max(), name
 
 
-def test_a_planned_trunk_sway_refuses_the_gait_parameters():
+def test_a_planned_trunk_sway_refuses_the_gait_parameters(quadruped):
     """The quadruped's trunk sway is planned from its feet's paths and its period (its centre
     of pressure sees the accelerations): a derivative that held it would be wrong (its
     coefficients move by 2.2 % per percent of step height), so it is refused, naming why."""
-    scene = hx.load_scene(str(SCENES.parent / "robots" / "quadruped.toml"))
+    scene, _ = quadruped
     for key in ("gait.step_height", "gait.period", "gait.duty"):
         with pytest.raises(StudyError, match="planned from the feet's schedule"):
             inertia_parameters(scene, [key])
