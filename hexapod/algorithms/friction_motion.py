@@ -24,7 +24,12 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from hexapod.algorithms.ground import NO_LOAD, foot_values, friction_active_set
+from hexapod.algorithms.ground import (
+    NO_LOAD,
+    foot_value_rates,
+    foot_values,
+    friction_active_set,
+)
 from hexapod.algorithms.kinematics import state_split
 from hexapod.algorithms.linalg import multiplier_null_space, solve_saddle
 from hexapod.algorithms.saddle import constraint_jacobian
@@ -91,7 +96,7 @@ def friction_motion_tangents(model, data, t: float, x: np.ndarray, laws: tuple,
     count = dx.shape[1]
     dPhi = _forward(model, "Phi_v", [q, w], dx[:n_q], dlaws[0])
     dQ = _forward(model, "Q", [q, v, w], dx[:n_q], dx[n_q:n_q + n_v], dlaws[0])[:, :, 0].T
-    dfeet = _foot_value_rates(model, weights, dweights)
+    dfeet = foot_value_rates(model.ground.policy, weights[:, None], dweights)
     objective = _forwards(model, "objective", count)
     dPhi_nz = np.array([terms.nonzeros(dPhi[p]) for p in range(count)]).T
     dA, db = objective(q, w, Phi_nz, np.zeros(6 * terms.owners), foot_values(
@@ -150,9 +155,3 @@ def _forward(model, name: str, inputs: list, *seeds) -> np.ndarray:
     full = ca.DM(_forwards(model, name, count)(*inputs, nominal, *seeds)).full()
     cols = nominal.shape[1]
     return np.array([full[:, p * cols:(p + 1) * cols] for p in range(count)])
-
-
-def _foot_value_rates(model, weights: np.ndarray, dweights: np.ndarray) -> np.ndarray:
-    from hexapod.algorithms.ground import foot_value_rates
-
-    return foot_value_rates(model.ground.policy, weights[:, None], dweights)

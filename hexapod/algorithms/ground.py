@@ -247,20 +247,13 @@ def friction_tangents(model: Model, data, t: float, q: np.ndarray, Phi: np.ndarr
         The exact cone (``faces = 0``), or no admissible forces at ``t`` (the relaxed
         problem's solution has no derivative here).
     """
-    if model.ground.faces == 0:
-        raise HexapodError(f"model '{model.name}': derivatives of the friction policy on the "
-                           "exact cone are not available; use a pyramid (faces = 4 or more)")
-    if N.shape[1] == 0:
+    problem, solution = _friction_solution(model, data, t, q, Phi, Q_across, lam, N)
+    if problem is None:
         return lam, along, frozenset()
-    problem = _PolicyProblem(model, data, t, q, Phi, Q_across, lam, N)
     base_along = problem.shift(along)
-    if problem.NK.shape[1] == 0:
+    if solution is None:
         return problem.base, base_along, frozenset()
-    y, active, C, slopes = problem.friction()
-    if active is None:
-        raise HexapodError(f"model '{model.name}': at t = {t:.6g} s no ground forces are "
-                           "inside the friction cones (a foot slips): the friction policy's "
-                           "derivative is not defined there")
+    y, active, C, slopes = solution
     loaded = problem.loaded
     rows = np.concatenate([model.contacts[k].rows for k in loaded]) if loaded \
         else np.zeros(0, dtype=int)
@@ -282,59 +275,62 @@ def friction_active_set(model: Model, data, t: float, q: np.ndarray, Phi: np.nda
                         Q_across: np.ndarray | None, lam: np.ndarray, N: np.ndarray) -> tuple:
     """The friction policy's multipliers (among ``lam + N z``, as :func:`friction_tangents`)
     and its active set as constraints on the multipliers: ``D`` (active x n_c, the
-    constraints' scaled Jacobian, linear in the feet's forces ``F = -lam``), the rows of ``D``
-    that are least normal forces with their contact (``(row, contact)``: their value is the
-    contact's weight times ``min_normal``, over ``scale``), ``scale``, the feet's weights and
-    the labels ((contact, constraint) pairs).
+    constraints' Jacobian over ``scale``, linear in the feet's forces ``F = -lam``), the rows
+    of ``D`` that hold a least normal force with their contact (``(row, contact)``: there
+    ``D lam`` is the contact's weight times ``min_normal`` over ``scale``), ``scale``, the
+    feet's weights and the labels ((contact, constraint) pairs).
 
     Raises
     ------
     HexapodError
         As :func:`friction_tangents`.
     """
-    base, _, labels = friction_tangents(model, data, t, q, Phi, Q_across, lam, N,
-                                        np.zeros((lam.size, 0)))
-    problem = _PolicyProblem(model, data, t, q, Phi, Q_across, lam, N)
-    per_foot = 1 + model.ground.faces
+    scale = robot_weight(model) or 1.0  # the constraints' forces are in the robot's weight
+    problem, solution = _friction_solution(model, data, t, q, Phi, Q_across, lam, N)
+    if problem is None or solution is None:
+        weights = sharing_weights(contact_weights(model, t), np.array(
+            [bool(c.in_stance(t)) for c in model.contacts])) if problem is None \
+            else problem.weights
+        return (lam if problem is None else problem.base), np.zeros((0, model.n_c)), [], \
+            scale, weights, frozenset()
+    y, active, _, (dc_dF0, _) = solution
+    per_foot = 1 + model.ground.faces  # the least normal force, then the pyramid's faces
     loaded = problem.loaded
-    order = sorted(labels, key=lambda pair: (loaded.index(pair[0]), pair[1]))
-    D = np.zeros((len(order), model.n_c))
-    if not order:
-        return base, D, [], robot_weight(model) or 1.0, problem.weights, labels
-    F0 = {k: -base[model.contacts[k].rows] for k in loaded}
-    params = _cone_parameters(model, problem, F0)
-    _, _, dc_dF0, _ = params[0](np.zeros(problem.NK.shape[1]), *params[1])
-    dc_dF0 = np.asarray(dc_dF0) / params[2]
-    axes = contact_axes(model)
+    D = np.zeros((active.size, model.n_c))
     minimum_rows = []
-    for i, (k, j) in enumerate(order):
-        row = loaded.index(k) * per_foot + j
-        slope = dc_dF0[row, 3 * loaded.index(k):3 * loaded.index(k) + 3]
-        if axes is not None:
-            slope = slope @ axes[k]
-        D[i, model.contacts[k].rows] = -slope  # F = -lam on the foot's rows
-        if j == 0:
+    for i, j in enumerate(active):
+        k = loaded[j // per_foot]
+        D[i, model.contacts[k].rows] = -dc_dF0[j, 3 * (j // per_foot):3 * (j // per_foot) + 3]
+        if j % per_foot == 0:
             minimum_rows.append((i, k))
-    return base, D, minimum_rows, params[2], problem.weights, labels
+    labels = frozenset((loaded[j // per_foot], j % per_foot) for j in active)
+    return problem.base + problem.NK @ y, D, minimum_rows, scale, problem.weights, labels
 
 
-def _cone_parameters(model: Model, problem, F0: dict) -> tuple:
-    """The constraints' Function of the friction QP of ``problem``'s shape and its parameters
-    but ``y`` (forces in units of ``scale``), and ``scale``: for their Jacobian in the
-    forces (linear: the same at any ``y``)."""
-    ground, loaded = model.ground, problem.loaded
-    key = (ground.faces, problem.NK.shape[1], len(loaded))
-    if key not in _SOLVERS:
-        _SOLVERS[key] = _build_solver(*key)
-    constraints = _SOLVERS[key][2]
-    scale = robot_weight(model) or 1.0
-    axes = contact_axes(model)
-    turn = (lambda k, F: F) if axes is None else (lambda k, F: axes[k] @ F)
-    F0s = np.concatenate([turn(k, F0[k]) for k in loaded])
-    Gs = np.vstack([turn(k, -problem.NK[model.contacts[k].rows]) for k in loaded])
-    minimum = np.array([problem.weights[k] * ground.min_normal for k in loaded])
-    H, g = problem.AK.T @ problem.AK, problem.AK.T @ problem.r
-    return constraints, (H, g, F0s / scale, Gs / scale, minimum / scale, ground.mu), scale
+def _friction_solution(model: Model, data, t: float, q, Phi, Q_across, lam, N) -> tuple:
+    """The friction policy's problem at a state (None where the multipliers have no freedom)
+    and its solution: ``y``, the active constraints, their Jacobians in ``y`` and in ``(F0,
+    mu)`` (None where no multipliers are free once the idle feet are unloaded).
+
+    Raises
+    ------
+    HexapodError
+        The exact cone (``faces = 0``), or no admissible forces at ``t``.
+    """
+    if model.ground.faces == 0:
+        raise HexapodError(f"model '{model.name}': derivatives of the friction policy on the "
+                           "exact cone are not available; use a pyramid (faces = 4 or more)")
+    if N.shape[1] == 0:
+        return None, None
+    problem = _PolicyProblem(model, data, t, q, Phi, Q_across, lam, N)
+    if problem.NK.shape[1] == 0:
+        return problem, None
+    y, active, C, slopes = problem.friction()
+    if active is None:
+        raise HexapodError(f"model '{model.name}': at t = {t:.6g} s no ground forces are "
+                           "inside the friction cones (a foot slips): the friction policy's "
+                           "derivative is not defined there")
+    return problem, (y, active, C, slopes)
 
 
 class _PolicyProblem:
