@@ -333,6 +333,21 @@ def test_the_friction_policy_along_a_segment_length_against_central_differences(
             1e-7 * np.abs(value_[finite]).max(), name
 
 
+def test_friction_along_a_moving_motion_with_forces_across_joints_is_refused():
+    """The friction policy weighs the wrenches of forces across joints (springs between
+    bodies), whose derivative along a moving motion is not written: refused before the run."""
+    from types import SimpleNamespace
+
+    from hexapod.algorithms.sensitivity import LawChange, check_parameters
+
+    model = SimpleNamespace(name="sprung", contacts=[object()], Q_across=object(),
+                            ground=SimpleNamespace(policy="friction"))
+    with pytest.raises(hx.HexapodError, match="forces across joints"):
+        check_parameters(model, [LawChange("gait.duty", {}, "1", key="gait.duty")])
+    model.ground.policy = "min-wrench"
+    check_parameters(model, [LawChange("gait.duty", {}, "1", key="gait.duty")])
+
+
 def test_a_planned_trunk_sway_refuses_the_gait_parameters(quadruped):
     """The quadruped's trunk sway is planned from its feet's paths and its period (its centre
     of pressure sees the accelerations): a derivative that held it would be wrong (its

@@ -348,6 +348,12 @@ def check_parameters(model: Model, parameters, moved: Model | None = None) -> No
             _check_period(model, change)
         through_motion = isinstance(change, LawChange | ScaleChange) or (
             isinstance(change, FrameChange) and not tree_solved(model))
+        if through_motion and model.contacts and model.ground.policy == "friction" and (
+                model.Q_across is not None):
+            raise HexapodError(
+                f"parameter '{change.name}': model '{model.name}' shares its ground forces by "
+                "the friction policy and has forces across joints, whose wrenches the policy "
+                "weighs: its derivative along a moving motion is not derived with them")
         if isinstance(change, ScaleChange):
             _check_scaled(model, change, moved)
         if isinstance(change, FrictionChange | PeriodChange | LawChange | ScaleChange):
