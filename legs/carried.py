@@ -62,7 +62,7 @@ def sway_design_parameter(bounds: tuple, key: str, swaying: bool = False) -> Non
                          f"solve over the whole motion whose derivative with respect to {key} "
                          "is not derived (a gait with three feet down or more has no "
                          "correction)")
-    if swaying and key in ("gait.duty", "gait.step_height", "gait.period"):
+    if swaying and key in ("gait.duty", "gait.step_height", "gait.period", "gait.stride"):
         raise ValueError("the trunk's sway is planned from the feet's schedule and paths over "
                          f"the stride, a solve whose derivative with respect to {key} is not "
                          "derived (a level trunk, the gait's trunk = \"level\", has none)")
@@ -90,7 +90,13 @@ class TrunkSway(Law):
     kind = "trunk-sway"
 
     def design_parameter(self, key):
-        return sway_design_parameter(self.bounds, key, any(self.cos) or any(self.sin))
+        """The gait's parameters (:func:`sway_design_parameter`); ``gait.stride`` on a level
+        trunk: its speed, ``stride / period``."""
+        sway_design_parameter(self.bounds, key, any(self.cos) or any(self.sin))
+        if key == "gait.stride" and self.speed:
+            return self.speed * self.period, TrunkSway(speed=1.0 / self.period,
+                                                       period=self.period)
+        return None
 
     def __post_init__(self):
         for key in ("cos", "sin", "bounds", "values"):

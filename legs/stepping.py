@@ -318,11 +318,12 @@ class OnSchedule:
                             start, stop)
 
     def design_parameter(self, key):
-        """``gait.duty``: refused unless the law derives it (its path changes with it)."""
-        if key == "gait.duty":
-            raise ValueError(f"a {self.kind} law's dependence on the duty factor is not "
-                             "derived (a walking robot's feet's paths and coupled joints "
-                             "are, on a straight walk)")
+        """``gait.duty`` and ``gait.stride``: refused unless the law derives them (its path
+        changes with them)."""
+        if key in ("gait.duty", "gait.stride"):
+            raise ValueError(f"a {self.kind} law's dependence on {key} is not derived (a "
+                             "walking robot's feet's paths and coupled joints are, on a "
+                             "straight walk)")
         return None
 
     def schedule_problems(self, lowest_duty: float = 0.0) -> list[str]:

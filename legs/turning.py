@@ -158,6 +158,9 @@ class TurnedSway(Law):
     kind = "turned-sway"
 
     def design_parameter(self, key):
+        if key == "gait.stride":
+            raise ValueError("a turning trunk: its dependence on the stride (the circle's "
+                             "radius) is not derived")
         return sway_design_parameter(self.bounds, key, any(self.xcos + self.xsin + self.ycos
                                                            + self.ysin))
 

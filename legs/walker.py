@@ -131,12 +131,23 @@ class StepPath(OnSchedule, Law):
         (its derivative: the swing's bump, zero in stance); a path without lift (a
         horizontal coordinate) does not depend on it. ``gait.duty``: the swing stretched
         and the footholds moved (:class:`legs.duty.StepPathDuty`), on a ground without
-        steps."""
+        steps. ``gait.stride``: the path along the walk is linear in it (the footholds
+        ``rest + stride (lift_off - duty / 2 + c)``), on flat ground."""
+        if key in ("gait.duty", "gait.stride") and self.rises:
+            raise ValueError(f"a foot's path over steps of the ground: its dependence on {key} "
+                             "is not derived")
         if key == "gait.duty":
-            if self.rises:
-                raise ValueError("a foot's path over steps of the ground: its dependence on "
-                                 "the duty factor is not derived")
             return duty_parameter(self, key, StepPathDuty(self))
+        if key == "gait.stride":
+            if self.advance == 0.0:
+                return None
+            if self.lift != 0.0:
+                raise ValueError("a foot's height up a slope: its dependence on the stride is "
+                                 "not derived")
+            # the footholds advance by the stride, stance 0's centred on its middle's time:
+            # start = rest + stride (lift_off - duty / 2), linear in the stride
+            return self.advance, replace(self, start=self.lift_off - self.duty / 2,
+                                         advance=1.0)
         if key != "gait.step_height" or self.lift == 0.0:
             return None
         return self.lift, replace(self, start=0.0, advance=0.0, lift=1.0, rises_at=(),
@@ -167,6 +178,14 @@ class TrunkRise(Law):
     rises: tuple = ()
     width: float = 1.0
     kind = "trunk-rise"
+
+    def design_parameter(self, key):
+        """``gait.stride``: refused up a slope or over steps (the trunk passes them at times
+        the speed sets); on flat ground the height does not depend on it."""
+        if key == "gait.stride" and (self.speed or self.rises):
+            raise ValueError("the trunk's height over a ground that is not flat: its "
+                             "dependence on the stride is not derived")
+        return None
 
     def evaluate(self, t):
         t = np.asarray(t, dtype=float)

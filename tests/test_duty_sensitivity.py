@@ -95,13 +95,38 @@ def test_laws_whose_duty_is_not_derived_say_so():
         StepPath(lift=0.05, rises_at=(1.0,), rises=(0.02,)).design_parameter("gait.duty")
 
 
-def _robot(duty: float, length: float | None = None) -> hx.Scene:
-    """The built-in walking robot at ``duty``, its stride and period kept (its description's
-    gait changed), and its characteristic length ``length`` when given."""
+def _robot(duty: float, length: float | None = None, stride: float | None = None) -> hx.Scene:
+    """The built-in walking robot at ``duty``, its stride (or ``stride``) and period kept (its
+    description's gait changed), and its characteristic length ``length`` when given."""
     description = cockroach_description(walking_pattern("tripod", None), PERIOD)
-    scene = robot_scene(replace(description, gait=replace(description.gait, duty=duty)))
+    gait = replace(description.gait, duty=duty)
+    if stride is not None:
+        gait = replace(gait, stride=stride)
+    scene = robot_scene(replace(description, gait=gait))
     scene.characteristic_length = length
     return scene
+
+
+@pytest.mark.slow  # two robots built again and run, 4 s
+def test_the_stride_against_central_differences():
+    """The stride (the period and duty kept: the speed changes) against the robot rebuilt at
+    ``s (1 +- 1e-5)``, its characteristic length held: every force, effort and ground force
+    within 1e-6 of the largest per unit relative change (the motion is smooth in it)."""
+    scene = _robot(0.6)
+    model = hx.assemble(scene)
+    result = hx.inverse_dynamics(model, SAMPLES, frame="world")
+    change, = inertia_parameters(scene, ["gait.stride"])
+    sensitivity = hx.inverse_sensitivities(model, result, [change])
+    h = 1e-5 * change.value
+    ahead, behind = (hx.inverse_dynamics(hx.assemble(_robot(
+        0.6, model.characteristic_length, change.value + s * h)), SAMPLES, frame="world")
+        for s in (1.0, -1.0))
+    for name in ("effort", "force", "torque", "ground_force"):
+        value, exact = getattr(result, name), getattr(sensitivity, name)[..., 0]
+        reference = (getattr(ahead, name) - getattr(behind, name)) / (2 * h)
+        finite = np.isfinite(value)
+        assert np.abs(change.value * (exact - reference)[finite]).max() <= \
+            1e-6 * np.abs(value[finite]).max(), name
 
 
 @pytest.mark.slow  # four robots built again and run, 8 s; bench_sensitivity checks 10 points

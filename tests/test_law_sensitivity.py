@@ -181,6 +181,33 @@ def test_feet_in_stance_move_back_by_half_the_stride_per_unit_of_duty(walking):
         assert down.sum() >= 2 and np.abs(moved[down, 0] + stride / 2).max() <= 1e-12
 
 
+def test_the_stride_moves_the_footholds_and_the_trunk(walking):
+    """The stride, period and duty kept: the trunk moves by ``t / T`` per metre of stride, a
+    foot in stance by its foothold's ``lift_off - duty / 2 + k`` (its stance's index ``k``:
+    each stance centred under the foot's rest position), never sideways or up; the laws
+    and contacts agree on its value."""
+    scene, model, result, _ = walking
+    change, = inertia_parameters(scene, ["gait.stride"])
+    stride = scene.drivers["L1/x"].law.advance
+    assert change.value == pytest.approx(stride, rel=1e-15)
+    dq = hx.inverse_sensitivities(model, result, [change]).q[..., 0]
+    trunk = model.bodies[model.body_index["trunk"]]
+    period = scene.drivers["L1/x"].law.period
+    assert np.abs(dq[:, trunk.q.start] - TIMES / period).max() <= 1e-12
+    assert np.abs(dq[:, trunk.q.start + 1:trunk.q.start + 3]).max() <= 1e-12
+    for contact in model.contacts:
+        joint = model.joints[contact.joint]
+        body = model.bodies[joint.child]
+        law = scene.drivers[contact.name.replace("/ground", "/x")].law
+        moved = np.array([_point_change(result.q[k, body.q], dq[k, body.q],
+                                        joint.child_frame.position)
+                          for k in range(TIMES.size)])
+        expected = (law.evaluate(TIMES)[0] - law.start) / law.advance + law.lift_off \
+            - law.duty / 2
+        assert np.abs(moved[:, 0] - expected).max() <= 1e-12, contact.name
+        assert np.abs(moved[:, 1:]).max() <= 1e-12, contact.name
+
+
 def test_a_frame_moved_on_its_child_against_central_differences(walking):
     """The knee's frame moved along the tibia (``child_frame``, zero in the scene): it moves
     the point the knee's wrench is reported about and the least-wrench policy weighs, and the

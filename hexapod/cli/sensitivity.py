@@ -29,9 +29,10 @@ DESCRIPTION = (
     "body.NAME.inertia (each component, or body.NAME.inertia.K); a joint's position, "
     "joint.NAME.origin[.K] or joint.NAME.parent_frame.position[.K] (a segment's length; "
     "child_frame on the child); ground.mu, the friction policy's "
-    "coefficient; the gait's period, step height and duty factor, gait.period, "
-    "gait.step_height and gait.duty (period and step_height, the built-in walking robot's "
-    "builder arguments; gait.duty keeps the stride and period); "
+    "coefficient; the gait's period, step height, duty factor and stride, gait.period, "
+    "gait.step_height, gait.duty and gait.stride (period and step_height, the built-in "
+    "walking robot's builder arguments; gait.duty keeps the stride and period, gait.stride "
+    "the period and duty); "
     "geometric_scale, every length times s, masses s^3 and inertias s^5 (relative: 1); and "
     "payload, the load the trunk carries (a body's payload key). "
     "Writes the "
@@ -49,8 +50,8 @@ def add_arguments(parser) -> None:
                         help="scene keys, '*' matching any body or joint name: "
                         "body.NAME.mass, body.NAME.inertia[.K], joint.NAME.origin[.K], "
                         "joint.NAME.parent_frame.position[.K], ground.mu, gait.period, "
-                        "gait.step_height, gait.duty, geometric_scale, payload (quote the '*' in a "
-                        "shell)")
+                        "gait.step_height, gait.duty, gait.stride, geometric_scale, payload (quote "
+                        "the '*' in a shell)")
     parser.add_argument("--metrics", nargs="+", metavar="FAMILY",
                         help="families of figures of merit (default: all: peak_effort, "
                         "rms_effort, peak_force, peak_moment, peak_ground, energy, "

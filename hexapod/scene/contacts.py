@@ -180,16 +180,27 @@ class Foothold(Law):
         return not c.turn
 
     def design_parameter(self, key):
-        """``gait.duty``: the stances kept centred on the footholds' times as the walking
-        builders place them, each foothold moves back by half the ``advance`` per unit of
-        duty (a constant); refused where the footholds turn or the ground is not flat."""
-        if key != "gait.duty" or self.contact.duty >= 1.0:
+        """The stances kept centred on the footholds' times, as the walking builders place
+        them: ``gait.duty``, each foothold moves back by half the ``advance`` per unit of duty
+        (a constant); ``gait.stride`` (footholds advancing along ``x``), the footholds are
+        ``rest + stride (lift_off - duty / 2 + k)`` along ``x``. Refused where the footholds
+        turn or the ground is not flat."""
+        c = self.contact
+        if key not in ("gait.duty", "gait.stride") or c.duty >= 1.0:
             return None
         if not self.straight:
-            raise ValueError(f"contact '{self.contact.name}': footholds that turn, or on a "
-                             "ground that is not flat: their dependence on the duty factor "
-                             "is not derived")
-        return float(self.contact.duty), Constant(-0.5 * float(self.contact.advance[self.axis]))
+            raise ValueError(f"contact '{c.name}': footholds that turn, or on a ground that "
+                             f"is not flat: their dependence on {key} is not derived")
+        if key == "gait.duty":
+            return float(c.duty), Constant(-0.5 * float(c.advance[self.axis]))
+        if np.any(c.advance[1:]):
+            raise ValueError(f"contact '{c.name}': footholds advancing otherwise than along "
+                             "x: their dependence on the stride is not derived")
+        if self.axis != 0:
+            return None
+        along = replace(c, foothold=np.array([c.lift_off - c.duty / 2, 0.0, 0.0]),
+                        advance=np.array([1.0, 0.0, 0.0]))
+        return float(c.advance[0]), Foothold(along, 0)
 
     def evaluate(self, t):
         t = np.asarray(t, dtype=float)

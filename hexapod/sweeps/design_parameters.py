@@ -25,6 +25,9 @@ the scene's TOML form. Sensitivities cover the bodies' inertia and the joints' p
 * ``gait.duty`` (1): the gait's duty factor, its stride and period kept, the footholds centred
   on their stances (:mod:`legs.duty`): the feet's paths, the coupled joints, the contacts'
   footholds and load-sharing weights all follow; the scene's characteristic length held;
+* ``gait.stride`` (m): the gait's stride, its period and duty factor kept (so its speed
+  changes), the footholds centred on their stances: the feet's paths along the walk, the
+  contacts' footholds and the trunk's speed follow;
 * ``payload`` (kg): the load the body with a ``payload`` key carries at its centre of mass
   (the walking robot's builders put it on the trunk), part of its mass;
 * ``gait.step_height`` (m; ``step_height``, alike): the feet's lift in swing, held by the
@@ -65,9 +68,9 @@ if TYPE_CHECKING:
 _COVERED = ("masses and inertias, body.NAME.mass and body.NAME.inertia[.K], and joints' "
             "positions, joint.NAME.origin[.K] or joint.NAME.parent_frame.position[.K] "
             "(child_frame) ('*' matches any NAME), the friction coefficient, ground.mu, the "
-            "gait's period, step height and duty factor, gait.period, gait.step_height and "
-            "gait.duty (or period and step_height), the geometric scale, geometric_scale, and "
-            "the payload, payload")
+            "gait's period, step height, duty factor and stride, gait.period, "
+            "gait.step_height, gait.duty and gait.stride (or period and step_height), the "
+            "geometric scale, geometric_scale, and the payload, payload")
 
 
 def inertia_parameters(scene: Scene, patterns: Sequence[str],
@@ -110,7 +113,8 @@ def inertia_parameters(scene: Scene, patterns: Sequence[str],
             raise StudyError(f"{source}: 'duty', the built-in walking robot's builder argument, "
                              "keeps its stance's length, so its stride changes with it: not a "
                              "parameter sensitivities cover; gait.duty keeps the stride and "
-                             "period (the footholds centred on their stances)")
+                             "period (the footholds centred on their stances), and the "
+                             "builder's duty is gait.duty - (stride / duty) gait.stride")
         if pattern in _LAW_PARAMETERS:
             found.setdefault(pattern, _law_change(scene, pattern, source))
             continue
@@ -185,7 +189,8 @@ def _period(scene: Scene, name: str, source: str) -> PeriodChange:
 #: argument (``step_height``) names its scene key's parameter.
 _LAW_PARAMETERS = {"gait.step_height": ("gait.step_height", "m", True),
                    "step_height": ("gait.step_height", "m", True),
-                   "gait.duty": ("gait.duty", "1", False)}
+                   "gait.duty": ("gait.duty", "1", False),
+                   "gait.stride": ("gait.stride", "m", True)}
 
 
 def _law_change(scene: Scene, name: str, source: str) -> LawChange:
@@ -204,30 +209,34 @@ def _law_change(scene: Scene, name: str, source: str) -> LawChange:
         if held is not None:
             values.add(float(held[0]))
             laws[law] = held[1].scaled(per_si)
-    if key == "gait.duty":  # the contacts' schedules hold it too
-        values.update(_contact_duties(scene, name, source))
+    if key in ("gait.duty", "gait.stride"):  # the contacts' schedules hold them too
+        values.update(_contact_values(scene, key, name, source))
     if not laws:
         raise StudyError(f"{source}: '{name}': no law of scene '{scene.name}' depends on "
                          f"{key} (a walking robot's feet's paths do)")
-    if len(values) > 1:
-        shown = ", ".join(f"{v:g}" for v in sorted(values))
+    ordered = sorted(values)  # alike to round-off (a trunk's speed times its period)
+    if ordered[-1] - ordered[0] > 1e-12 * max(abs(ordered[0]), abs(ordered[-1])):
+        shown = ", ".join(f"{v:g}" for v in ordered)
         raise StudyError(f"{source}: '{name}': the laws of scene '{scene.name}' hold {key} "
                          f"at different values ({shown}): one parameter cannot move them all")
-    value = values.pop() * (scene.unit if length else 1.0)
+    value = ordered[0] * (scene.unit if length else 1.0)
     return LawChange(name, laws, unit, value, scene.unit if length else 1.0, key=key)
 
 
-def _contact_duties(scene: Scene, name: str, source: str) -> set[float]:
-    """The duty factors of the scene's contacts, whose footholds and load-sharing weights
-    follow it: refused where the footholds turn or the ground is not flat."""
+def _contact_values(scene: Scene, key: str, name: str, source: str) -> set[float]:
+    """The duty factors (``gait.duty``) or strides (``gait.stride``: their advance along
+    ``x``, scene units) of the scene's contacts, whose footholds (and load-sharing weights)
+    follow them: refused where the footholds turn or the ground is not flat."""
     from hexapod.scene.joints import Contact
 
-    contacts = [j for j in scene.joints.values() if isinstance(j, Contact)]
+    contacts = [j for j in scene.joints.values() if isinstance(j, Contact) and j.duty < 1.0]
     if contacts and (not scene.ground.terrain.flat or any(c.turn for c in contacts)):
         raise StudyError(f"{source}: '{name}': the contacts of scene '{scene.name}' turn or "
                          "stand on a ground that is not flat: their footholds' dependence on "
-                         "the duty factor is not derived (a straight walk on flat ground is)")
-    return {float(c.duty) for c in contacts}
+                         f"{key} is not derived (a straight walk on flat ground is)")
+    if key == "gait.duty":
+        return {float(c.duty) for c in contacts}
+    return {float(c.advance[0]) for c in contacts}
 
 
 def _payload(scene: Scene, source: str) -> InertiaChange:

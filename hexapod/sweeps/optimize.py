@@ -454,11 +454,12 @@ def _parameters(scene, bounds, source: str):
         raise StudyError(f"{source}: vary: geometric_scale is a sensitivity relative to the "
                          "scene as given, not a value a scene can be built with: vary the "
                          "builder's scale (a built-in robot's 'scale') instead")
-    if any(getattr(c, "key", "") == "gait.duty" for c in changes) and any(
+    if any(getattr(c, "key", "") in ("gait.duty", "gait.stride") for c in changes) and any(
             isinstance(c, FrameChange) for c in changes):
-        raise StudyError(f"{source}: vary: the duty factor holds the scene's characteristic "
-                         "length (its legs' pose at t = 0 moves with it, no length does), "
-                         "which a joint's position moves: vary them in separate studies")
+        raise StudyError(f"{source}: vary: the duty factor and the stride hold the scene's "
+                         "characteristic length (its legs' pose at t = 0 moves with them, no "
+                         "segment does), which a joint's position moves: vary them in "
+                         "separate studies")
     if [c.name for c in changes] != [b.name for b in bounds]:
         named = ", ".join(c.name for c in changes)
         raise StudyError(f"{source}: vary: each [vary] key names one parameter, as it is "

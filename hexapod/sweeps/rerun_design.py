@@ -36,10 +36,11 @@ def scene_at(study, changes, values, source: str = "", length: float | None = No
 
 def held_length(changes, model) -> float | None:
     """The characteristic length to hold while ``changes`` vary: ``model``'s (the study's
-    scene's, SI) with the duty factor among them, None otherwise. A walking scene measures it
-    where its legs are at ``t = 0``, which the duty factor moves though it changes no length:
+    scene's, SI) with the duty factor or the stride among them, None otherwise. A walking
+    scene measures it where its legs are at ``t = 0``, which these move though they change
+    no segment's length:
     held, the reruns are what the derivatives (which take it as a constant) derive."""
-    if any(getattr(c, "key", "") == "gait.duty" for c in changes):
+    if any(getattr(c, "key", "") in ("gait.duty", "gait.stride") for c in changes):
         return float(model.characteristic_length)
     return None
 
