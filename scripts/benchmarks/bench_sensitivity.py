@@ -18,26 +18,26 @@ Protocol
   1e-6 m for a joint's position (the ``ctr``, ``fti`` and ``tita`` origins of the front leg on
   its joint laws, ``legs.front_leg_scene``, and of the built-in leg, whose joints follow its
   foot's guides; the walking robot's coxa, femur and tibia lengths,
-  ``joint.*/ctr|fti|tita.parent_frame.position.0``; the last two checked at the points but
-  not moved there);
-  ``--checked`` parameters drawn per point; the forces are linear in masses and inertias, so
-  those differences are exact but for round-off); and the walking robot's builder arguments
-  ``period`` (drawn in [0.35, 0.7] s, derived at fixed phase), ``step_height`` (drawn in
-  [0.03, 0.07] m, derived through the motion: the feet's paths move the legs), ``scale``
-  (drawn in [15, 25], against ``geometric_scale``, relative to the robot built) and
+  ``joint.*/ctr|fti|tita.parent_frame.position.0``; the last two checked at the points but not
+  moved there); ``--checked`` parameters drawn per point; the forces are linear in masses and
+  inertias, so those differences are exact but for round-off); and the walking robot's builder
+  arguments ``period`` (drawn in [0.35, 0.7] s, derived at fixed phase), ``step_height``
+  (drawn in [0.03, 0.07] m, derived through the motion: the feet's paths move the legs),
+  ``scale`` (drawn in [15, 25], against ``geometric_scale``, relative to the robot built) and
   ``payload`` (drawn in [0.5, 5] kg), and its description's ``gait.duty`` (drawn in [0.55,
-  0.65], its stride and period kept: a longer stance leaves the legs' reach), the robot
-  built by ``legs.hexapod_walking`` (or its description walked) at the value drawn with its
-  masses moved as at the other points (not
-  the scale's: its masses follow the scale), against the robot built again with the value
-  moved by ``--step`` of it (sampled at the same fractions of the stride for the period; the
-  duty's differences of fourth order and its characteristic length held, as derived). The
-  error is ``p |exact - difference|`` over the largest value of the array (or the metric's
-  value): the change of the output per unit relative change of the parameter, relative.
-  Target: 1e-6. A figure of merit is smooth but for kinks (a sample's power changing sign in
-  the positive work, the peak moving to another sample): one that misses it is checked again
-  at a tenth, a hundredth and a thousandth of the step, and the count of those that then
-  agree (a kink within the step) is printed. A failed check ends with status 1.
+  0.65], its stride and period kept: a longer stance leaves the legs' reach) and
+  ``gait.stride`` (drawn in [0.40, 0.46] m, its period and duty kept), the robot built by
+  ``legs.hexapod_walking`` (or its description walked) at the value drawn with its masses
+  moved as at the other points (not the scale's: its masses follow the scale), against the
+  robot built again with the value moved by ``--step`` of it (sampled at the same fractions of
+  the stride for the period; the duty's differences of fourth order; the duty's and stride's
+  characteristic length held, as derived). The error is ``p |exact - difference|`` over the
+  largest value of the array (or the metric's value): the change of the output per unit
+  relative change of the parameter, relative. Target: 1e-6. A figure of merit is smooth but
+  for kinks (a sample's power changing sign in the positive work, the peak moving to another
+  sample): one that misses it is checked again at a tenth, a hundredth and a thousandth of the
+  step, and the count of those that then agree (a kink within the step) is printed. A failed
+  check ends with status 1.
 
 Everything goes to temporary folders; nothing is written.
 
@@ -181,21 +181,23 @@ def point_errors(scene, patterns, lengths, samples, checked, step, rng
 #: are 1e-4 off at the step).
 REBUILT = {"period": ((0.35, 0.7), True, None), "step_height": ((0.03, 0.07), False, None),
            "scale": ((15.0, 25.0), False, "geometric_scale"), "payload": ((0.5, 5.0), False, None),
-           "gait.duty": ((0.55, 0.65), False, None)}
+           "gait.duty": ((0.55, 0.65), False, None), "gait.stride": ((0.40, 0.46), False, None)}
 
 
 def walking_robot(argument: str, value: float, length: float | None = None):
     """The built-in walking robot with ``argument`` at ``value``: its builder's, or for
-    ``gait.duty`` its description's gait (its characteristic length ``length`` when given)."""
+    ``gait.duty`` and ``gait.stride`` its description's gait (its characteristic length
+    ``length`` when given)."""
     from dataclasses import replace
 
     from legs.robot import cockroach_description, hexapod_walking, walking_pattern
     from legs.walker import robot_scene
 
-    if argument != "gait.duty":
+    if not argument.startswith("gait."):
         return hexapod_walking(**{argument: value})
     description = cockroach_description(walking_pattern("tripod", None), 0.5)
-    scene = robot_scene(replace(description, gait=replace(description.gait, duty=value)))
+    gait = replace(description.gait, **{argument.split(".")[1]: value})
+    scene = robot_scene(replace(description, gait=gait))
     scene.characteristic_length = length
     return scene
 
@@ -216,7 +218,7 @@ def rebuilt_errors(argument, samples, step, rng) -> tuple[float, str, int]:
         moved.pop("body.trunk.mass", None)
     scene = hx.sweeps.with_scene_keys(walking_robot(argument, value), moved)
     model = hx.assemble(scene)
-    held = model.characteristic_length if argument == "gait.duty" else None
+    held = model.characteristic_length if argument.startswith("gait.") else None
 
     def built(x):
         return hx.sweeps.with_scene_keys(walking_robot(argument, x, held), moved)
