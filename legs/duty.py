@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hexapod.scene import Law
-from legs.swing import LIFT_JERK, LIFT_RATES, STEP_JERK, STEP_RATES
+from legs.swing import LIFT_JERK, LIFT_RATES, STEP_JERK, STEP_RATES, swing_schedule
 
 #: The swing's unit shapes (:mod:`legs.swing`) and the progress itself, each with its first
 #: three derivatives.
@@ -32,11 +32,10 @@ _SHAPES = {"step": (*STEP_RATES, STEP_JERK), "lift": (*LIFT_RATES, LIFT_JERK),
 
 
 def _cycle(t, duty: float, period: float, lift_off: float) -> tuple:
-    """``(tau, u, in_swing)`` at ``t``: the cycle fraction from lift-off, the swing's progress
-    (clipped to ``[0, 1]``), and whether the foot is in swing."""
-    x = np.asarray(t, dtype=float) / period - lift_off
-    tau = x - np.floor(x)
-    return tau, np.clip(tau / (1.0 - duty), 0.0, 1.0), tau < 1.0 - duty
+    """``(tau, u, in_swing)`` at ``t``: the cycle fraction from lift-off, and the swing's
+    progress and whether the foot is in swing (:func:`legs.swing.swing_schedule`)."""
+    k, u, in_swing = swing_schedule(t, duty, period, lift_off)
+    return np.asarray(t, dtype=float) / period - lift_off - k, u, in_swing
 
 
 def shape_rates(shape: str, u, duty: float, period: float) -> np.ndarray:

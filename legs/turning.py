@@ -24,28 +24,8 @@ import numpy as np
 
 from hexapod.scene import Law
 from legs.carried import TrunkSway, sway_design_parameter
-from legs.stepping import STEP_RATES, OnSchedule
-
-
-def swing_schedule(t, duty: float, period: float, lift_off: float) -> tuple:
-    """A foot's cycle at ``t``: the index ``k`` of the cycle from a lift-off (stance ``k + 1``
-    follows the swing of cycle ``k``; stance 0 ends at ``t = lift_off period``), the swing's
-    progress ``u`` (0 to 1; 1 in stance) and whether the foot is in swing."""
-    x = np.asarray(t, dtype=float) / period - lift_off
-    k = np.floor(x)
-    tau = x - k  # 0 at lift-off; swing until 1 - duty
-    return k, np.clip(tau / (1.0 - duty), 0.0, 1.0), tau < 1.0 - duty
-
-
-def stance_progress(t, duty: float, period: float, lift_off: float) -> tuple:
-    """How many steps a foot has taken at ``t`` and the first two rates (1/s, 1/s^2): ``c``
-    in stance ``c``, rising from ``c`` to ``c + 1`` along the smooth step over the swing
-    between them."""
-    k, u, in_swing = swing_schedule(t, duty, period, lift_off)
-    step = [p(u) for p in STEP_RATES]
-    value = k + np.where(in_swing, step[0], 1.0)
-    swing = (1.0 - duty) * period
-    return (value, *(np.where(in_swing, step[m] / swing**m, 0.0) for m in (1, 2)))
+from legs.stepping import OnSchedule
+from legs.swing import stance_progress
 
 
 @dataclass(frozen=True)

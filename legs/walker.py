@@ -34,7 +34,7 @@ from hexapod.scene import Law
 from legs.duty import StepPathDuty, duty_parameter
 from legs.posing import at_start, posed
 from legs.stepping import LIFT_RATES, STEP_RATES, OnSchedule
-from legs.turning import stance_progress, swing_schedule
+from legs.swing import stance_progress, swing_schedule
 
 #: Lift-off phases (fractions of the period) by foot role, and the default duty factor, of
 #: each pattern, by the number of legs. A trot, a pace and a bound have two feet down, whose
