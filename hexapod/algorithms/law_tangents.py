@@ -30,6 +30,7 @@ import casadi as ca
 import numpy as np
 
 from hexapod._support.execution import executing
+from hexapod.algorithms.friction_motion import friction_motion_tangents
 from hexapod.algorithms.phase_inverse import POSITION_TOL, RESIDUAL_TOL, SIGMA_TOL, sample_plans
 from hexapod.errors import HexapodError
 from hexapod.model.model import Model
@@ -217,8 +218,6 @@ def _tangents(model: Model, times, motion, seeds, *, kinematics_only: bool = Fal
         dwrench[k] = outputs[7].ravel(order="F").reshape(count, joints, 6)
         dframes[k] = outputs[8].ravel(order="F").reshape(count, joints, 9)
         if friction:  # the step's multipliers are the least-squares policy's: the QP's own
-            from hexapod.algorithms.friction_motion import friction_motion_tangents
-
             _, lam[k], dwrench[k], frames[k], dframes[k], active[k] = \
                 friction_motion_tangents(model, data, float(times[k]), state[k],
                                          (w[:, k], wd[:, k], wdd[:, k]), dx[k],
