@@ -12,12 +12,14 @@ Protocol
   of ``--repeats`` runs. Target: at most 5 times one run. Also printed: the step height's
   alone, and once the robot's 18 segment lengths' (parameters that move the motion).
 * Agreement: at ``--points`` random parameter points (every parameter multiplied by a factor
-  drawn in [0.7, 1.3], seeded), for the walking robot and the front leg, the derivatives of
-  every effort, joint wrench, ground force and figure of merit against central differences of
-  whole runs on the scene re-read with one parameter moved by ``--step`` of its value, or by
-  1e-6 m for a joint's position (the ``ctr``, ``fti`` and ``tita`` origins of the front leg on
-  its joint laws, ``legs.front_leg_scene``, and of the built-in leg, whose joints follow its
-  foot's guides; the walking robot's coxa, femur and tibia lengths,
+  drawn in [0.7, 1.3], seeded), for the walking robot, the front leg and the quadruped
+  (``data/robots/quadruped.toml``, its friction policy: its masses moved, its shanks' lengths
+  ``joint.*_knee.parent_frame.position.2`` checked, one at least at each point), the
+  derivatives of every effort, joint wrench, ground force and figure of merit against central
+  differences of whole runs on the scene re-read with one parameter moved by ``--step`` of its
+  value, or by 1e-6 m for a joint's position (the ``ctr``, ``fti`` and ``tita`` origins of the
+  front leg on its joint laws, ``legs.front_leg_scene``, and of the built-in leg, whose joints
+  follow its foot's guides; the walking robot's coxa, femur and tibia lengths,
   ``joint.*/ctr|fti|tita.parent_frame.position.0``; the last two checked at the points but not
   moved there); ``--checked`` parameters drawn per point; the forces are linear in masses and
   inertias, so those differences are exact but for round-off); and the walking robot's builder
@@ -42,7 +44,7 @@ Protocol
 Everything goes to temporary folders; nothing is written.
 
     python3 scripts/benchmarks/bench_sensitivity.py [--samples 501] [--points 10]
-        [--rebuilt gait.duty payload] [--no-scenes]
+        [--rebuilt gait.duty payload] [--no-scenes | --scenes hexapod ...]
 
 ``--points 0``: the cost alone.
 """
@@ -53,6 +55,7 @@ import argparse
 import statistics
 import sys
 import time
+from pathlib import Path
 
 import measure
 
@@ -78,6 +81,9 @@ LEG_ORIGINS = ["joint.ctr.origin", "joint.fti.origin", "joint.tita.origin"]
 LAW_LEG_PARAMETERS = LEG_PARAMETERS + ["joint.ctr.origin", "joint.fti.origin",
                                        "joint.tita.origin"]
 TOLERANCE = 1e-6
+#: the quadruped's shank lengths (its knees' frames on the thighs), derived through the
+#: friction policy's QP on its active set (its scene's default policy)
+QUADRUPED_LENGTHS = ["joint.*_knee.parent_frame.position.2"]
 
 
 def derivatives(model, result, changes, scene=None):
@@ -153,15 +159,19 @@ def random_point(scene, patterns, rng) -> dict:
 def point_errors(scene, patterns, lengths, samples, checked, step, rng
                  ) -> tuple[float, str, int]:
     """The worst error at one random point of the parameters ``patterns`` (``lengths``
-    checked there, not moved), where it is, and how many figures of merit agreed only at a
-    smaller step (a kink straddled)."""
+    checked there, not moved: one of them at least), where it is, and how many figures of
+    merit agreed only at a smaller step (a kink straddled)."""
     scene = hx.sweeps.with_scene_keys(scene, random_point(scene, patterns, rng))
     changes = hx.sweeps.inertia_parameters(scene, patterns + lengths)
     model = hx.assemble(scene)
     times = np.linspace(0.0, model.time_window()[0], samples)
     run = Run(model, hx.inverse_dynamics(model, times), changes, scene)
     worst, where, kinks = 0.0, "", 0
-    for p in rng.choice(len(changes), checked, replace=False):
+    chosen = rng.choice(len(changes), checked, replace=False)
+    moved = len(hx.sweeps.inertia_parameters(scene, patterns)) if patterns else 0
+    if lengths and chosen.max() < moved:  # a length among them at every point
+        chosen[-1] = rng.integers(moved, len(changes))
+    for p in chosen:
         change = changes[p]
         # a relative step for the masses and inertias (the forces are linear in them), 1e-6 m
         # for a joint's position (they are not: truncation then stays below round-off)
@@ -323,14 +333,19 @@ def checked_scenes():
     foot's guides: through the phase path's step differentiated), the front leg on its
     harmonic joint laws, its foot loaded as the built-in leg's (``legs.front_leg_scene``),
     with its joints' positions (the tree path), and the walking robot with its segment
-    lengths (its joints' frames on their parents: the phase path's step)."""
+    lengths (its joints' frames on their parents: the phase path's step), and the quadruped
+    (``data/robots/quadruped.toml``) with its masses and its shanks' lengths through its
+    friction policy."""
     from legs import front_leg_scene
 
     on_laws = front_leg_scene()
     on_laws.add(hx.load_scene("front-leg").forces["ground_reaction"])
+    quadruped = hx.load_scene(str(Path(__file__).resolve().parents[2] / "data" / "robots"
+                                  / "quadruped.toml"))
     return [("front-leg", hx.load_scene("front-leg"), LEG_PARAMETERS, LEG_ORIGINS),
             ("front leg on its joint laws", on_laws, LAW_LEG_PARAMETERS, []),
-            ("hexapod", hx.load_scene("hexapod"), ROBOT_PARAMETERS, ROBOT_LENGTHS)]
+            ("hexapod", hx.load_scene("hexapod"), ROBOT_PARAMETERS, ROBOT_LENGTHS),
+            ("quadruped, friction policy", quadruped, ["body.*.mass"], QUADRUPED_LENGTHS)]
 
 
 def main() -> int:
@@ -349,12 +364,17 @@ def main() -> int:
                         "again (default: all)")
     parser.add_argument("--no-scenes", action="store_true",
                         help="skip the scenes' random points (masses, inertias, lengths)")
+    parser.add_argument("--scenes", nargs="*", default=None, metavar="NAME",
+                        help="the scenes whose random points are checked (default: all: "
+                        "front-leg, 'front leg on its joint laws', hexapod, 'quadruped, "
+                        "friction policy')")
     args = parser.parse_args()
     measure.start("bench_sensitivity")
     ratio = cost(args.samples, args.parameters, args.repeats)
     rng = np.random.default_rng(args.seed)
     failed = ratio > 5.0
-    scenes = checked_scenes() if args.points > 0 and not args.no_scenes else ()
+    scenes = [entry for entry in checked_scenes() if args.scenes is None
+              or entry[0] in args.scenes] if args.points > 0 and not args.no_scenes else ()
     for name, scene, patterns, lengths in scenes:
         errors = []
         for point in range(args.points):
