@@ -378,7 +378,7 @@ def test_friction_along_a_moving_motion_with_forces_across_joints_is_refused():
 def test_a_planned_trunk_sway_refuses_the_gait_parameters(quadruped):
     """The quadruped's trunk sway is planned from its feet's paths and its period (its centre
     of pressure sees the accelerations): a derivative that held it would be wrong (its
-    coefficients move by 2.2 % per percent of step height), so it is refused, naming why."""
+    coefficients move with the step height), so it is refused, naming why."""
     scene, _ = quadruped
     for key in ("gait.step_height", "gait.period", "gait.duty"):
         with pytest.raises(StudyError, match="planned from the feet's schedule"):
