@@ -32,7 +32,7 @@ from hexapod.algorithms.ground import (
 )
 from hexapod.algorithms.kinematics import state_split
 from hexapod.algorithms.linalg import multiplier_null_space, solve_saddle
-from hexapod.algorithms.saddle import constraint_jacobian
+from hexapod.algorithms.saddle import dynamics_terms
 from hexapod.algorithms.step_terms import terms_of
 from hexapod.errors import HexapodError
 
@@ -68,11 +68,9 @@ def friction_motion_tangents(model, data, t: float, x: np.ndarray, laws: tuple,
     q, v = x[:n_q], x[n_q:n_q + n_v]
     w, wd, wdd = laws
     terms = terms_of(model)
-    values = {"q": q, "v": v, "w": w, "wd": wd, "wdd": wdd}
-    Phi_v = _dense(constraint_jacobian(model, q, w, data))
-    Q = np.asarray(model.call("Q", data, q=q, v=v, w=w)).reshape(-1)
-    gamma = np.asarray(model.call("gamma", data, **{n: values[n] for n in
-                                                     model.gamma.name_in()})).reshape(-1)
+    Phi_v, gamma, Q = dynamics_terms(model, {"q": q, "v": v, "w": w, "wd": wd, "wdd": wdd},
+                                     data)
+    Phi_v = _dense(Phi_v)
     split = state_split(model, data, q, w, Phi_v)
     priority, _ = model.rank_order(w)
     primal = solve_saddle(model.mass_inv_sqrt, Phi_v, Q, gamma, priority,
@@ -152,6 +150,5 @@ def _forward(model, name: str, inputs: list, *seeds) -> np.ndarray:
     ``seeds`` (one per input): (P, rows, columns)."""
     count = seeds[0].shape[1]
     nominal = getattr(model, name)(*inputs)
-    full = ca.DM(_forwards(model, name, count)(*inputs, nominal, *seeds)).full()
-    cols = nominal.shape[1]
-    return np.array([full[:, p * cols:(p + 1) * cols] for p in range(count)])
+    derivative = _forwards(model, name, count)(*inputs, nominal, *seeds)
+    return np.array(_columns(derivative, nominal.shape, count))
