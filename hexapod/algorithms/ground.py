@@ -288,9 +288,7 @@ def friction_active_set(model: Model, data, t: float, q: np.ndarray, Phi: np.nda
     scale = robot_weight(model) or 1.0  # the constraints' forces are in the robot's weight
     problem, solution = _friction_solution(model, data, t, q, Phi, Q_across, lam, N)
     if problem is None or solution is None:
-        weights = sharing_weights(contact_weights(model, t), np.array(
-            [bool(c.in_stance(t)) for c in model.contacts])) if problem is None \
-            else problem.weights
+        weights = _policy_weights(model, t) if problem is None else problem.weights
         return (lam if problem is None else problem.base), np.zeros((0, model.n_c)), [], \
             scale, weights, frozenset()
     y, active, _, (dc_dF0, _) = solution
@@ -333,14 +331,20 @@ def _friction_solution(model: Model, data, t: float, q, Phi, Q_across, lam, N) -
     return problem, (y, active, C, slopes)
 
 
+def _policy_weights(model: Model, t: float) -> np.ndarray:
+    """The feet's weights in the policy at ``t`` (:func:`sharing_weights` of their
+    load-sharing weights)."""
+    stance = np.array([bool(c.in_stance(t)) for c in model.contacts])
+    return sharing_weights(contact_weights(model, t), stance)
+
+
 class _PolicyProblem:
     """The policy's problem at a state: the multipliers ``base + NK y`` that keep the feet
     of weight zero unloaded, and the objective ``|A (base + NK y) + b|^2 = |AK y + r|^2``."""
 
     def __init__(self, model: Model, data, t: float, q, Phi, Q_across, lam, N):
         self.model, self.N = model, N
-        stance = np.array([bool(c.in_stance(t)) for c in model.contacts])
-        self.weights = weights = sharing_weights(contact_weights(model, t), stance)
+        self.weights = weights = _policy_weights(model, t)
         self.loaded = [k for k, w in enumerate(weights) if w > NO_LOAD]
         # feet of weight zero carry nothing: lam + N z = 0 on their rows
         idle = [c.rows for c, w in zip(model.contacts, weights, strict=True) if w <= NO_LOAD]
