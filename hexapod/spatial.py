@@ -121,10 +121,15 @@ def quaternion_product(p, q):
         return ca.vertcat(s, p[0] * q[1:4] + q[0] * p[1:4] + ca.cross(p[1:4], q[1:4]))
     p = np.asarray(p, dtype=float)
     q = np.asarray(q, dtype=float)
-    s = p[..., 0] * q[..., 0] - np.sum(p[..., 1:] * q[..., 1:], axis=-1)
-    v = (p[..., :1] * q[..., 1:] + q[..., :1] * p[..., 1:]
-         + np.cross(p[..., 1:], q[..., 1:]))
-    return np.concatenate([s[..., None], v], axis=-1)
+    p0, p1, p2, p3 = p[..., 0], p[..., 1], p[..., 2], p[..., 3]
+    q0, q1, q2, q3 = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    # by components: NumPy's sum and cross cost three times the arithmetic on a few bodies
+    out = np.empty(np.broadcast_shapes(p.shape, q.shape))
+    out[..., 0] = p0 * q0 - (p1 * q1 + p2 * q2 + p3 * q3)
+    out[..., 1] = p0 * q1 + q0 * p1 + (p2 * q3 - p3 * q2)
+    out[..., 2] = p0 * q2 + q0 * p2 + (p3 * q1 - p1 * q3)
+    out[..., 3] = p0 * q3 + q0 * p3 + (p1 * q2 - p2 * q1)
+    return out
 
 
 def retract_symbolic(q, dv, lin_q, lin_v, quat_q, omega_v):

@@ -99,16 +99,23 @@ def contact_frames(model: Model, q: np.ndarray,
     jacobian = np.zeros((len(contacts) * d, model.n_v))
     points = np.zeros((len(contacts), d))
     axes = np.zeros((len(contacts), d, d))
+    spatial = model.built_once(("spatial contacts", tuple(id(c) for c in contacts)),
+                               lambda m: _spatial_layout(m, contacts))
+    if spatial is not None:  # J_P = [I, -R [s]x], every spatial contact at once
+        k, position, quaternion, local, frame, skew_local, surface, rows, linear, angular = spatial
+        rotation = np.moveaxis(rotation_from_euler_parameters(q[quaternion].T), -1, 0)
+        point = q[position] + np.einsum("mij,mj->mi", rotation, local)
+        jacobian[rows, linear] = frame
+        jacobian[rows, angular] = -(frame @ rotation @ skew_local)
+        gaps[k] = np.einsum("mi,mi->m", frame[:, 0], point - surface)
+        points[k], axes[k] = point, frame
     for k, element in enumerate(contacts):
         info, columns, local, frame, skew_local, surface = fixed[id(element)]
+        if info.kind == "spatial":
+            continue
         rows = slice(k * d, (k + 1) * d)
         qb = q[info.q]
-        if info.kind == "spatial":  # J_P = [I, -R [s]x]
-            rotation = rotation_from_euler_parameters(qb[3:])
-            point = qb[:3] + rotation @ local
-            jacobian[rows, columns[:3]] = frame
-            jacobian[rows, columns[3:]] = frame @ (-rotation @ skew_local)
-        elif info.kind == "planar":  # J_P = [I, k x R s]
+        if info.kind == "planar":  # J_P = [I, k x R s]
             arm = rotation_2d(float(qb[2])) @ local
             point = qb[:2] + arm
             jacobian[rows, columns] = frame @ np.array([[1.0, 0.0, -arm[1]],
@@ -119,6 +126,25 @@ def contact_frames(model: Model, q: np.ndarray,
         gaps[k] = frame[0] @ (point - surface)
         points[k], axes[k] = point, frame
     return ContactFrames(gaps, jacobian, points, axes)
+
+
+def _spatial_layout(model: Model, contacts) -> tuple | None:
+    """The contacts among ``contacts`` on spatial bodies, stacked for :func:`contact_frames`:
+    their indices, their bodies' position and Euler-parameter coordinates, their points,
+    axes, points' cross-product matrices and surface points, and the Jacobian's row and
+    column indices of their linear and angular blocks; None when there is none."""
+    fixed = model.built_once(("contact statics",), _statics)
+    chosen = [(k, fixed[id(c)]) for k, c in enumerate(contacts)
+              if fixed[id(c)][0].kind == "spatial"]
+    if not chosen:
+        return None
+    k = np.array([i for i, _ in chosen])
+    coordinates = np.array([np.arange(model.n_q)[info.q] for _, (info, *_) in chosen])
+    columns = np.array([c for _, (_, c, *_) in chosen])
+    stacked = [np.array([entry[j] for _, entry in chosen]) for j in (2, 3, 4, 5)]
+    rows = (3 * k[:, None] + np.arange(3))[:, :, None]
+    return (k, coordinates[:, :3], coordinates[:, 3:], *stacked, rows,
+            columns[:, None, :3], columns[:, None, 3:])
 
 
 def _statics(model: Model) -> dict:
