@@ -41,6 +41,41 @@ def on_ground():
     return driven, inverse, grounded, table, run
 
 
+def test_the_laws_read_ahead_give_the_run_of_laws_read_one_time_at_a_time(on_ground,
+                                                                          monkeypatch):
+    """Moreau-Jean evaluates its fixed steps' laws in batches ahead of them: the run is the
+    same, bit for bit, as one that evaluates them at each step."""
+    from hexapod.simulation.integrators.moreau_jean import MoreauJean
+
+    *_, grounded, _, run = on_ground
+    monkeypatch.setattr(MoreauJean, "_laws_ahead", lambda self: None)
+    alone = hx.simulate(hx.assemble(grounded), RUN, method="moreau-jean", step=1e-3)
+    assert np.array_equal(alone.q, run.q) and np.array_equal(alone.v, run.v)
+    assert np.array_equal(alone.contact_forces, run.contact_forces)
+
+
+def test_a_projected_states_residuals_are_those_the_model_measures_there(on_ground):
+    """The projection's residuals serve the run's watch in place of three more calls: they
+    are the model's own ``phi`` and ``Phi_v v - nu`` at the state it returned, scaled, and
+    are not given for another state."""
+    *_, grounded, _, _ = on_ground
+    model = hx.assemble(grounded)
+    integrator = hx.simulation.get_integrator("moreau-jean")(model, 0.0, RUN, step=1e-3)
+    for _ in range(3):
+        integrator.step()
+    phi, rate = integrator.state_residuals()
+    t, q, v = integrator.t, integrator.q, integrator.v
+    w, wd, _ = model.law_values(t)
+    scale = model.row_scale
+    expected_phi = np.abs(model.call("phi", q=q, w=w) / scale).max()
+    expected_rate = np.abs((model.call("Phi_v", q=q, w=w) @ v
+                            - model.call("nu", q=q, w=w, wd=wd)) / scale).max()
+    assert 0.0 < phi < 1e-12 and 0.0 < rate < 1e-12  # round-off, measured
+    assert abs(phi - expected_phi) <= 1e-14 and abs(rate - expected_rate) <= 1e-13
+    integrator.v = v.copy()
+    assert integrator.state_residuals() is None
+
+
 def test_the_controllers_take_their_motors_limits(on_ground):
     _, _, grounded, table, _ = on_ground
     servos = [f for f in grounded.forces.values() if isinstance(f, hx.scene.JointController)]

@@ -312,11 +312,11 @@ def period_force_changes(model: Model, change: PeriodChange, q: np.ndarray, v: n
                          v_dot: np.ndarray, w: np.ndarray) -> np.ndarray:
     """``d(Q - M v_dot)/dT`` (N, n_v) at fixed phase, at the states ``(q, v, v_dot)`` (N, n_v)
     with the laws' values ``w`` (n_w, N): ``(C v + 2 M v_dot) / T``, ``C = -dQ/dv`` (the
-    tangent damping of :attr:`~hexapod.model.model.Model.tangent_matrices`)."""
-    tangents, lam = model.tangent_matrices, np.zeros(model.n_c)
+    tangent damping of :attr:`~hexapod.model.model.Model.force_tangents`)."""
+    tangents = model.force_tangents
     damping = np.empty_like(v)
     for k in range(v.shape[0]):
-        values = {"q": q[k], "v": v[k], "lam": lam, "w": w[:, k]}
+        values = {"q": q[k], "v": v[k], "w": w[:, k]}
         C = np.asarray(tangents(*[values[n] for n in tangents.name_in()])[1])
         damping[k] = C @ v[k]
     return (damping + 2.0 * (model.mass @ v_dot.T).T) / change.value

@@ -485,13 +485,29 @@ class Model:
         stiffness and damping of implicit integrators."""
         s = self._sym
         lam = ca.SX.sym("lam", self.n_c)
-        g = ca.mtimes(self._Phi_v_expr.T, lam) - s.Q
-        K = ca.mtimes(ca.jacobian(g, s.q), self._B_expr)
-        C = ca.jacobian(g, s.v)
         names = [n for n in ("q", "v", "lam", "w") if n != "w" or self.n_w > 0]
         symbols = {"q": s.q, "v": s.v, "lam": lam, "w": s.w}
-        return ca.Function("tangent_matrices", [symbols[n] for n in names], [K, C], names,
+        return ca.Function("tangent_matrices", [symbols[n] for n in names],
+                           self._tangents(ca.mtimes(self._Phi_v_expr.T, lam) - s.Q), names,
                            ["K", "C"])
+
+    @cached_property
+    def force_tangents(self) -> ca.Function:
+        """``force_tangents(q, v, w) -> (K, C)``: :attr:`tangent_matrices` with no multiplier,
+        the derivatives of ``-Q`` alone (what a linearly implicit step takes), without the
+        constraints' second derivatives that zero multipliers would multiply (on the walking
+        robot half the instructions)."""
+        s = self._sym
+        names = [n for n in ("q", "v", "w") if n != "w" or self.n_w > 0]
+        symbols = {"q": s.q, "v": s.v, "w": s.w}
+        return ca.Function("force_tangents", [symbols[n] for n in names], self._tangents(-s.Q),
+                           names, ["K", "C"])
+
+    def _tangents(self, g: ca.SX) -> list[ca.SX]:
+        """``[dg/dq B(q), dg/dv]``: ``g``'s derivatives along a Lie-group displacement of the
+        positions and in the velocities."""
+        s = self._sym
+        return [ca.mtimes(ca.jacobian(g, s.q), self._B_expr), ca.jacobian(g, s.v)]
 
     @cached_property
     def qdot(self) -> ca.Function:

@@ -381,7 +381,7 @@ class CompiledProjection:
             return function(*[values.get(n, symbols[n]) for n in function.name_in()])
 
         if model.n_c == 0:  # nothing to project on
-            return ca.Function("project", [q, v, *laws], [q, v, ca.MX(0.0), ca.MX(0.0)])
+            return ca.Function("project", [q, v, *laws], [q, v] + [ca.MX(0.0)] * 3)
 
         def saddle(position, top, bottom_all):
             """Solve [[I, W^T], [W, 0]] [y; mu] = [top; bottom / d] on the kept rows."""
@@ -398,22 +398,28 @@ class CompiledProjection:
         velocity = ca.mtimes(m_inv_sqrt, y)
         rate_error = (ca.mtimes(call(model.Phi_v, q=position), velocity) - nu) / scale
         size = ca.norm_inf(velocity) + ca.norm_inf(nu / scale) + 1e-300
+        rate_error = ca.mmax(ca.fabs(rate_error))
         return ca.Function("project", [q, v, *laws], [position, velocity, phi_error,
-                                                      ca.mmax(ca.fabs(rate_error)) / size])
+                                                      rate_error / size, rate_error])
 
-    def __call__(self, t: float, q: np.ndarray,
-                 v: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    def __call__(self, t: float, q: np.ndarray, v: np.ndarray,
+                 data=None) -> tuple[np.ndarray, np.ndarray] | None:
+        """The projected ``(q, v)``, or None (see the class's description); ``data``: the run's
+        workspace, whose laws kept ahead serve ``t``. :attr:`residuals` then holds the
+        projected state's largest scaled residuals of the positions and velocities (what a
+        run's watch measures)."""
         values = {"q": q, "v": v}
         if self.model.n_w:
-            values["w"], values["wd"], _ = self.model.law_values(t)
+            values["w"], values["wd"], _ = self.model.law_values(t, data)
         try:
-            position, velocity, phi_error, rate_error = self._fast(
+            position, velocity, phi_error, relative, rate_error = self._fast(
                 *[values[n] for n in self._args])
         except RuntimeError:  # the factorisation failed: a singular matrix, or NaN in it
             return None
-        if not (phi_error[0] <= self.tol and rate_error[0] <= RESIDUAL_TOLERANCE
+        if not (phi_error[0] <= self.tol and relative[0] <= RESIDUAL_TOLERANCE
                 and np.all(np.isfinite(position)) and np.all(np.isfinite(velocity))):
             return None  # the maxima skip NaN (C's fmax): the outputs say it
+        self.residuals = (float(phi_error[0]), float(rate_error[0]))
         return position, velocity
 
 
@@ -479,35 +485,37 @@ class CompiledContactStep:
         extra = None
         laws = {"step": ["w", "wd", "wdd", "w1", "wd1"], "acceleration": ["w", "wd", "wdd"],
                 "impulse": ["w", "wd"]}[level] if n else []
+        Phi_v = None  # the rows' Jacobian, when a level's terms give it
         if level == "acceleration":
-            _, bottom, Q = call(model.dynamics_terms)
+            Phi_v, bottom, Q = call(model.dynamics_terms)
             first = ca.mtimes(m_inv_sqrt, Q)
         elif level == "impulse":
             first, bottom = ca.mtimes(m_sqrt, v), call(model.nu) if model.n_c else None
         else:
-            _, _, Q = call(model.dynamics_terms)
-            K, C = call(model.tangent_matrices)
+            Q = call(model.Q)  # not dynamics_terms: gamma would be computed for nothing
+            K, C = call(model.force_tangents)
             a = h * theta
             force = h * Q + ca.mtimes(a * C + a * a * K, v)
             first = ca.mtimes(m_sqrt, v) + ca.mtimes(m_inv_sqrt, force)
             bottom = call(model.nu, **end) if model.n_c else None
             extra = ca.mtimes(ca.mtimes(m_inv_sqrt, a * C + a * a * K), m_inv_sqrt)
         top = ca.horzcat(first, G)
-        y, lam, residual = self._solve(top, bottom, extra, call)
+        y, lam, residual = self._solve(top, bottom, extra, call, Phi_v)
         named = {**symbols, "w1": end["w"], "wd1": end["wd"], "G": G, "h": h, "theta": theta}
         inputs = ["q", "v", *laws, "G"] + (["h", "theta"] if level == "step" else [])
         return ca.Function("contact_" + level, [named[k] for k in inputs], [y, lam, residual],
                            inputs, ["y", "lam", "residual"])
 
-    def _solve(self, top, bottom, extra, call) -> tuple:
-        """``(y, lam, residual)`` of the kept rows' system (see the class's description)."""
+    def _solve(self, top, bottom, extra, call, Phi_v=None) -> tuple:
+        """``(y, lam, residual)`` of the kept rows' system (see the class's description);
+        ``Phi_v`` the rows' Jacobian when already formed."""
         model, rows, columns = self.model, self.rows.tolist(), self.columns
         if model.n_c == 0:
             solved = extra is not None and extra.nnz()
             y = ca.solve(ca.MX.eye(model.n_v) + extra, top, "qr") if solved else top
             return y, ca.MX(0, columns + 1), ca.MX.zeros(2)
         m_inv_sqrt, _ = mass_factors(model)
-        Phi_v = call(model.Phi_v)
+        Phi_v = call(model.Phi_v) if Phi_v is None else Phi_v
         W_all, d, zero = equilibrated(Phi_v, m_inv_sqrt)
         y, mu = solve_kept(W_all, d, zero, rows, top,
                            ca.horzcat(bottom, ca.MX(model.n_c, columns)), extra=extra)

@@ -59,7 +59,11 @@ class Watch:
         """Measure the integrator's current state."""
         model, integrator, worst = self.model, self.integrator, self.worst
         t, q, v = integrator.t, integrator.q, integrator.v
-        if model.n_c:
+        measured = integrator.state_residuals() if model.n_c else None
+        if measured is not None:  # by the projection that returned this state
+            worst["phi"] = max(worst["phi"], measured[0])
+            worst["velocity"] = max(worst["velocity"], measured[1])
+        elif model.n_c:
             data = integrator.data  # its call buffers: the integrator is between steps
             w, wd, _ = model.law_values(t, data)
             phi = model.call("phi", data, q=q, w=w) / model.row_scale

@@ -331,12 +331,14 @@ class Integrator(SingularPoses):
         h = min(100 * h0, h1, self.max_step, remaining)
         return h if np.isfinite(h) and h > 0 else h0
 
-    def next_step(self) -> float:
-        """The step to take now: the method's current step, cut to end at ``t_bound`` or, for
-        an adaptive method, at the laws' next break (a foot's touch-down: a kink its error
-        control would otherwise find by rejected steps); a step that would leave a sliver of
-        less than 1 % is stretched to the end."""
-        remaining = self._next_stop() - self.t
+    def next_step(self, t: float | None = None) -> float:
+        """The step to take now (or, for a fixed-step method, from ``t``): the method's current
+        step, cut to end at ``t_bound`` or, for an adaptive method, at the laws' next break (a
+        foot's touch-down: a kink its error control would otherwise find by rejected steps); a
+        step that would leave a sliver of less than 1 % is stretched to the end."""
+        if t is not None and self.adaptive:
+            raise ValueError("an adaptive method's steps ahead are not known")
+        remaining = self._next_stop() - (self.t if t is None else t)
         h = min(self.h, self.max_step)
         return remaining if h >= 0.99 * remaining else h
 
@@ -488,8 +490,9 @@ class Integrator(SingularPoses):
         ``phi = 0`` (Newton's method), then velocities onto ``Phi_v v = nu``."""
         projector = getattr(self, "_compiled_projection", None)  # None: the start
         if projector is not None and q is not None and v is not None:
-            state = projector(t, q, v)
+            state = projector(t, q, v, self.data)
             if state is not None:
+                self._projected = (t, *state, projector.residuals)
                 self.counters.newton += projector.newton
                 self.counters.jacobians += projector.newton + 1
                 self.counters.factorisations += projector.newton + 1
@@ -502,6 +505,16 @@ class Integrator(SingularPoses):
         self.counters.jacobians += iterations + 1
         self.counters.factorisations += iterations + 1
         return q, v
+
+    def state_residuals(self) -> tuple[float, float] | None:
+        """The current state's largest scaled residuals of ``phi = 0`` and ``Phi_v v = nu``
+        when its compiled projection measured them (the state is the one it returned), else
+        None: a run's watch then measures them itself."""
+        projected = getattr(self, "_projected", None)
+        if projected is None:
+            return None
+        t, q, v, residuals = projected
+        return residuals if t == self.t and q is self.q and v is self.v else None
 
     @classmethod
     def describe(cls) -> dict:

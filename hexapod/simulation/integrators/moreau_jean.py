@@ -58,6 +58,9 @@ from hexapod.simulation.scales import ROUND_OFF
 
 #: the weight of the new velocity in the position update (1/2: the trapezoidal rule)
 THETA = 0.5
+#: how many steps' time laws are evaluated together, ahead of them (a fixed step's times are
+#: known): one batch costs about what two steps' laws cost one time at a time
+LAWS_AHEAD = 256
 #: the gap (relative to the scene's characteristic length) past which a closed contact's
 #: position is corrected onto the ground
 GAP_TOLERANCE = 1e-12
@@ -120,6 +123,8 @@ class MoreauJean(Integrator):
         h = self.next_step()
         t0, q0, v0 = self.t, self.q, self.v
         t1 = t0 + h
+        if model.n_w and not self._laws_kept(t0 + THETA * h):
+            self._laws_ahead()
         mid = tuple(np.array(x) for x in model.law_values(t0 + THETA * h, data))
         half = model.mass_inv_sqrt
         q_mid = model.integrate(q0, THETA * h * v0)
@@ -143,6 +148,23 @@ class MoreauJean(Integrator):
         self._record(t1, h, frames, impulses, states, v0, G, y_free, y)
         self.t, self.q, self.v = t1, q1, v1
         self.v_dot, self.lam = (v1 - v0) / h, lam / h
+
+    def _laws_kept(self, t: float) -> bool:
+        kept = self.data.laws
+        return kept is not None and float(t) in kept[0]
+
+    def _laws_ahead(self) -> None:
+        """The laws at the mid-step and end times of the next :data:`LAWS_AHEAD` steps, as
+        :meth:`next_step` will take them, evaluated in one call and kept in the run's
+        workspace, where each step reads its own (the same values as one time at a time)."""
+        times, t = [], self.t
+        for _ in range(LAWS_AHEAD):
+            h = self.next_step(t)
+            times += [t + THETA * h, t + h]
+            t = t + h
+            if t >= self.t_bound - 1e-12 * max(1.0, abs(self.t_bound)):
+                break
+        self.model.law_values(np.array(times), self.data)
 
     def _constrained(self, t1, q_mid, v0, mid, G, h):
         """The saddle-point solve of the step on the bilateral rows kept, at the mid-step
