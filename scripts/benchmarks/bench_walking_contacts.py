@@ -10,7 +10,8 @@ Protocol
   one stride, repeated; gains ``--kp``, ``--kd``), each foot a unilateral point contact (Coulomb
   ``--mu``, plastic). Simulated over ``--strides`` strides from the first sample's state.
 * The project: Moreau-Jean time-stepping at ``--step`` (``hexapod.simulate``, method
-  ``moreau-jean``); the event-driven scheme at ``rtol = 1e-6`` stopped by ``--budget`` CPU
+  ``moreau-jean``; with ``--compiled`` also with its kernels compiled to C, in a temporary
+  cache); the event-driven scheme at ``rtol = 1e-6`` stopped by ``--budget`` CPU
   seconds and counted per simulated second up to where it got. The CPU is the time loop's
   (``SimulationResult.cpu_time``: the steps and saves; the laws' table is built before).
 * MuJoCo: the same robot from the same scene: its URDF (``hexapod.scene.urdf_text``: the trunk
@@ -30,13 +31,14 @@ Protocol
   error. Progress and the load on stderr. Nothing is written.
 
     python3 scripts/benchmarks/bench_walking_contacts.py [--strides 1] [--step 1e-3]
-        [--kp 200] [--kd 2] [--mu 0.8] [--budget 60] [--mujoco-step 1e-3]
+        [--kp 200] [--kd 2] [--mu 0.8] [--budget 60] [--mujoco-step 1e-3] [--compiled]
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -261,6 +263,8 @@ def main() -> None:
     parser.add_argument("--mu", type=float, default=0.8)
     parser.add_argument("--budget", type=float, default=60.0)
     parser.add_argument("--mujoco-step", type=float, default=1e-3)
+    parser.add_argument("--compiled", action="store_true",
+                        help="also run Moreau-Jean with its kernels compiled to C")
     args = parser.parse_args()
     start("bench_walking_contacts")
     scene = hexapod_scene(gait="tripod", trunk="free", period=STRIDE_PERIOD)
@@ -270,9 +274,13 @@ def main() -> None:
                                periodic=True)
     grounded = hx.assemble(on_ground)
     t_end = args.strides * STRIDE_PERIOD
-    runs = [project_run(grounded, driven, t_end, "moreau-jean", step=args.step),
-            project_run(grounded, driven, t_end, "event-driven", rtol=1e-6,
-                        cpu_budget=args.budget)]
+    runs = [project_run(grounded, driven, t_end, "moreau-jean", step=args.step)]
+    if args.compiled:  # its kernels compiled to C (the compiler's time is not the loop's)
+        with tempfile.TemporaryDirectory() as cache, hx.executing(compiled=True, cache=cache):
+            runs.append(project_run(grounded, driven, t_end, "moreau-jean", step=args.step))
+        runs[-1]["run"] = "moreau-jean, compiled"
+    runs.append(project_run(grounded, driven, t_end, "event-driven", rtol=1e-6,
+                            cpu_budget=args.budget))
     log("MuJoCo ...")
     robot = MujocoRobot(on_ground, grounded, args.mu, args.mujoco_step)
     runs.append(mujoco_run(robot, on_ground, grounded, driven, t_end, args.mujoco_step))
