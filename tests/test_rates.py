@@ -225,6 +225,27 @@ def test_kernels_compiled_with_pivots_solve_by_lu_to_the_exact_numbers():
     assert np.abs(model.call("phi", q=state[0], w=reference[1]) / model.row_scale).max() <= 1e-12
 
 
+def test_a_states_pivots_are_chosen_once_for_its_kernels_and_kept_for_a_few_states():
+    """The rates' and the projection's kernels of one state (an integrator's start) share one
+    choice of pivots; a model keeps its last eight states' (a pure function of the rows, the
+    positions and the laws' values)."""
+    from hexapod.simulation.kernels import _RecentPivots, pivots_near
+
+    scene = four_bar(3, 0.7, driven=False, gravity=[0, -9.81, 0])
+    model, q, _, _, data = solve_state(scene, 0.2)
+    rows, w = data.independent_rows, model.law_values(0.2)[0]
+    first = pivots_near(model, rows, (q, w))
+    assert pivots_near(model, rows, (q.copy(), w.copy())) is first
+    moved = [model.integrate(q, 1e-3 * k * np.ones(model.n_v)) for k in range(1, 9)]
+    chosen = [pivots_near(model, rows, (x, w)) for x in moved]
+    assert all(lu is not first for lu in chosen) and _RecentPivots.size == 8
+    assert pivots_near(model, rows, (moved[-1], w)) is chosen[-1]
+    assert pivots_near(model, rows, (q, w)) is not first  # the oldest was let go
+    again = pivots_near(model, rows, (q, w))
+    assert np.array_equal(again.row_order, first.row_order)
+    assert np.array_equal(again.column_order, first.column_order)
+
+
 def test_kernels_refuse_what_gives_nan_though_their_residual_maxima_skip_it():
     """CasADi's maxima skip NaN (C's fmax: all NaN gives -inf), so a residual test alone let a
     projection through a singular matrix return NaN positions (a compiled walking run, at the
