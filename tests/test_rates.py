@@ -229,7 +229,7 @@ def test_a_states_pivots_are_chosen_once_for_its_kernels_and_kept_for_a_few_stat
     """The rates' and the projection's kernels of one state (an integrator's start) share one
     choice of pivots; a model keeps its last eight states' (a pure function of the rows, the
     positions and the laws' values)."""
-    from hexapod.simulation.kernels import _RecentPivots, pivots_near
+    from hexapod.simulation.kernels import RECENT_PIVOTS, pivots_near
 
     scene = four_bar(3, 0.7, driven=False, gravity=[0, -9.81, 0])
     model, q, _, _, data = solve_state(scene, 0.2)
@@ -238,7 +238,7 @@ def test_a_states_pivots_are_chosen_once_for_its_kernels_and_kept_for_a_few_stat
     assert pivots_near(model, rows, (q.copy(), w.copy())) is first
     moved = [model.integrate(q, 1e-3 * k * np.ones(model.n_v)) for k in range(1, 9)]
     chosen = [pivots_near(model, rows, (x, w)) for x in moved]
-    assert all(lu is not first for lu in chosen) and _RecentPivots.size == 8
+    assert all(lu is not first for lu in chosen) and RECENT_PIVOTS == 8
     assert pivots_near(model, rows, (moved[-1], w)) is chosen[-1]
     assert pivots_near(model, rows, (q, w)) is not first  # the oldest was let go
     again = pivots_near(model, rows, (q, w))

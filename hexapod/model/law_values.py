@@ -4,11 +4,11 @@ law and the time (a simulation then ends as failed, saying them)."""
 
 from __future__ import annotations
 
-import threading
 from typing import NamedTuple
 
 import numpy as np
 
+from hexapod._support.recent import Recent
 from hexapod.errors import HexapodError
 from hexapod.scene.laws.base import Rate
 
@@ -33,27 +33,21 @@ def _arithmetic(error: ArithmeticError) -> str:
     return f"a value beyond the floating-point range ({error or type(error).__name__})"
 
 
-class RecentLaws:
+class RecentLaws(Recent):
     """The law values of a model's last :attr:`size` single times (a pure function of the
     time): an adaptive step asks for its end's four or five times (its projection, its rates
     there, the saved state's multipliers, the next step's contact set), half of a walking
-    run's evaluations. Copies go in and out; threads share it under a lock."""
-
-    size = 4
+    run's evaluations. Copies go in and out."""
 
     def __init__(self):
-        self._values: dict[float, tuple] = {}
-        self._lock = threading.Lock()
+        super().__init__(4)
 
     def get(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-        values = self._values.get(t)
+        values = super().get(t)
         return None if values is None else tuple(x.copy() for x in values)
 
     def keep(self, t: float, values: tuple) -> None:
-        with self._lock:
-            if len(self._values) >= self.size:
-                del self._values[next(iter(self._values))]  # the oldest
-            self._values[t] = tuple(np.array(x, dtype=float) for x in values)
+        super().keep(t, tuple(np.array(x, dtype=float) for x in values))
 
 
 def _driven(model) -> np.ndarray:

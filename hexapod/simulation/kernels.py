@@ -31,14 +31,13 @@ rank-deciding solve of :func:`hexapod.algorithms.dynamics.forward_dynamics`.
 
 from __future__ import annotations
 
-import threading
-
 import casadi as ca
 import numpy as np
 
 from hexapod._support.compiled import compiled_graph
 from hexapod._support.execution import current
 from hexapod._support.fastcall import FastFunction
+from hexapod._support.recent import Recent
 from hexapod.algorithms.ground import ground_policy
 from hexapod.algorithms.static_lu import StaticLU
 from hexapod.algorithms.step import (
@@ -64,6 +63,8 @@ REDUNDANT_TOLERANCE = 1e-3
 #: the exact solve's default (``consistency_tol`` of
 #: :func:`~hexapod.algorithms.dynamics.forward_dynamics`), which then says which rows disagree
 CONSISTENCY_TOLERANCE = 1e-6
+#: how many states' pivots a model keeps (:func:`pivots_near`)
+RECENT_PIVOTS = 8
 
 
 class CompiledRates:
@@ -592,34 +593,12 @@ def pivots_near(model: Model, rows: np.ndarray, reference: tuple | None) -> Stat
     # for the model's last few states, so that the rates' and the projection's kernels, and
     # runs from the same state, choose them once (symbolic analysis in Python: 8 ms for a
     # 10-link chain, 26 ms for 30 links)
-    recent = model.built_once(("recent pivots",), lambda m: _RecentPivots())
+    recent = model.built_once(("recent pivots",), lambda m: Recent(RECENT_PIVOTS))
     key = (rows.tobytes(), q.tobytes(), w.tobytes())
     lu = recent.get(key)
     if lu is None:
         lu = recent.keep(key, kept_pivots(model, rows.tolist(), q, w))
     return lu
-
-
-class _RecentPivots:
-    """A model's pivots of its last :attr:`size` row sets and states (a pure function of
-    them); threads share it under a lock."""
-
-    size = 8
-
-    def __init__(self):
-        self._values: dict = {}
-        self._lock = threading.Lock()
-
-    def get(self, key: tuple) -> StaticLU | None:
-        with self._lock:
-            return self._values.get(key)
-
-    def keep(self, key: tuple, lu: StaticLU) -> StaticLU:
-        with self._lock:
-            if len(self._values) >= self.size:
-                del self._values[next(iter(self._values))]  # the oldest
-            self._values[key] = lu
-        return lu
 
 
 def _pivot_key(lu: StaticLU | None) -> tuple:
