@@ -59,7 +59,8 @@ from hexapod.simulation.scales import ROUND_OFF
 #: the weight of the new velocity in the position update (1/2: the trapezoidal rule)
 THETA = 0.5
 #: how many steps' time laws are evaluated together, ahead of them (a fixed step's times are
-#: known): one batch costs about what two steps' laws cost one time at a time
+#: known): on the walking robot, its 512 times cost what 19 cost one at a time (6 against
+#: 157 us a time)
 LAWS_AHEAD = 256
 #: the gap (relative to the scene's characteristic length) past which a closed contact's
 #: position is corrected onto the ground
