@@ -295,6 +295,27 @@ def test_guided_joints_carry_the_efforts_of_the_closed_form_motion():
         assert np.abs(a - b).max() <= 1e-9 * np.abs(b).max(), name
 
 
+def test_guided_coordinates_in_blocks_compiled_are_those_mapped_over_every_sample():
+    """The guided joints' coordinates go in the phase path's blocks (64, then the rest's
+    binary digits), compiled to C when asked: the numbers of the Function mapped over every
+    sample at once (bit for bit interpreted, to round-off compiled), the coordinates
+    unwrapped."""
+    from hexapod.algorithms.guided import _coordinates, guided_coordinates
+
+    model = hx.assemble(guided_arm())
+    times = np.linspace(0.0, 1.0, 101)  # blocks of 64, 32, 4 and 1
+    q, v, v_dot = hx.algorithms.guided.guides_motion(model, times)
+    whole = [np.asarray(x.full()) for x in _coordinates(model).map(times.size)(q.T, v.T,
+                                                                                 v_dot.T)]
+    whole[0] = np.unwrap(whole[0], axis=1)
+    interpreted = guided_coordinates(model, q, v, v_dot)
+    assert all(np.array_equal(a, b) for a, b in zip(interpreted, whole, strict=True))
+    with hx.executing(compiled=True):
+        compiled = guided_coordinates(model, q, v, v_dot)
+    for a, b in zip(compiled, whole, strict=True):
+        assert np.abs(a - b).max() <= 1e-12 * np.abs(b).max()
+
+
 def test_guides_and_guided_joints_come_together():
     scene = arm_scene()
     scene.drivers["tip_x"].guide = True
