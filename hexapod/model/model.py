@@ -523,8 +523,9 @@ class Model:
         """
         function = self.fast(name, data)
         (array,) = function(*[values[n] for n in function.name_in])
-        if name in _MATRIX_OUTPUTS:
-            return array.reshape(getattr(self, name).size_out(0))
+        if name in _MATRIX_OUTPUTS:  # the shape of what is built (a twin may not have built
+            # the Function itself: forming Phi_v's expressions cost the walking robot 17 ms)
+            return array.reshape(self._evaluated(name).size_out(0))
         return array.reshape(-1)
 
     def fast(self, name: str, data: Data | None = None) -> FastFunction | ScatteredFunction:
