@@ -154,6 +154,36 @@ def test_symbolic_form_equals_the_numeric_law(name):
         assert other.symbolic(ca.SX.sym("t")) is None
 
 
+@pytest.mark.parametrize("periodic", [False, True])
+def test_hermite_laws_on_one_array_of_times_read_together_give_their_own_bits(periodic):
+    """A motion's joints (one array of times) are read together, the basis at the times once:
+    each law's values, rates and accelerations are those it gives alone, bit for bit, at a
+    time alone or among others, inside the table and outside it; laws on another array are
+    not batched with them."""
+    from hexapod.model.law_values import batches, evaluate_together
+    from hexapod.model.tabulation import sampled_laws
+
+    rng = np.random.default_rng(3)
+    t = np.sort(rng.uniform(0.0, 1.0, 17))
+    t[0], t[-1] = 0.0, 1.0
+    table = rng.normal(size=(3, 4, t.size))
+    if periodic:
+        table[..., -1] = table[..., 0]
+    laws = sampled_laws(t, *table)
+    if periodic:
+        laws = [hx.scene.Hermite(law.times, law.values, law.rates, law.accelerations,
+                                 periodic=True) for law in laws]
+    other = hx.scene.Hermite(t.copy(), *table[:, 0])
+    mixed = [*laws, other]
+    assert len({law.batch_key() for law in laws}) == 1
+    assert [len(group) for _, group in batches(mixed).groups] == [4, 1]
+    for times in (np.linspace(-0.3, 2.2, 53), np.float64(0.61)):
+        together = evaluate_together(mixed, times)
+        for k, law in enumerate(mixed):
+            for m, alone in enumerate(law.evaluate(times)):
+                assert np.array_equal(together[m, k], alone), (k, m)
+
+
 def test_a_periodic_hermite_table_repeats_and_round_trips(tmp_path):
     """A closed table of sin(2 pi t) over one second, periodic: a time k periods later reads
     the same value, rate and acceleration to round-off, where the open table's end

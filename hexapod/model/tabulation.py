@@ -200,6 +200,7 @@ def sampled_laws(times: np.ndarray, values: np.ndarray, rates: np.ndarray,
     if times.size == 1:
         return [Polynomial((y[0], r[0], a[0] / 2), t0=float(times[0]))
                 for y, r, a in zip(values, rates, accelerations, strict=True)]
+    times = np.asarray(times, dtype=float)  # one array for all: they are read together
     return [Hermite(times, y, r, a) for y, r, a in zip(values, rates, accelerations, strict=True)]
 
 

@@ -177,6 +177,22 @@ class Hermite(Law):
         f, fd, fdd = read_pieces(self.times, self._pieces, t)
         return f, fd, fdd
 
+    def batch_key(self):
+        """Laws on one array of times (a motion's joints, :func:`~hexapod.model.tabulation.
+        sampled_laws`) are read together: the basis at the times once, not once a law."""
+        if self._pieces is None:
+            return None
+        return (self.times.__array_interface__["data"][0], self.times.size,
+                bool(self.periodic))
+
+    @classmethod
+    def evaluate_batch(cls, laws, t):
+        first = laws[0]
+        if first.periodic:
+            start = first.times[0]
+            t = start + np.mod(np.asarray(t, dtype=float) - start, first.times[-1] - start)
+        return read_pieces(first.times, np.stack([law._pieces for law in laws]), t)
+
     def cycle_time(self):
         return self.times[-1] - self.times[0] if self.periodic else None
 
