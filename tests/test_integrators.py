@@ -365,6 +365,12 @@ def test_tangent_matrices_are_the_derivatives_on_the_group(which):
     # central differences: error O(eps^2) plus round-off O(1e-16 / eps) of the entries
     assert np.abs(K - K_fd).max() < 1e-7 * max(np.abs(K).max(), 1.0)
     assert np.abs(C - C_fd).max() < 1e-7 * max(np.abs(C).max(), 1.0)
+    # the forces' part alone (a linearly implicit step's): the same with no multiplier
+    laws = [w] if model.n_w else []
+    at_zero = model.tangent_matrices(q, v, np.zeros(model.n_c), *laws)
+    for alone, full in zip(model.force_tangents(q, v, *laws), at_zero, strict=True):
+        alone, full = np.array(alone), np.array(full)
+        assert np.abs(alone - full).max() <= 1e-14 * max(np.abs(full).max(), 1.0)
 
 
 @pytest.mark.parametrize("method", INTEGRATORS)
