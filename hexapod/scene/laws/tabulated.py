@@ -171,11 +171,15 @@ class Hermite(Law):
         Hermite basis); outside the table the end interval's polynomial continues."""
         if self._pieces is None:
             raise ValueError("hermite law is invalid: " + "; ".join(self.problems()))
-        if self.periodic:
-            start = self.times[0]
-            t = start + np.mod(np.asarray(t, dtype=float) - start, self.times[-1] - start)
-        f, fd, fdd = read_pieces(self.times, self._pieces, t)
+        f, fd, fdd = read_pieces(self.times, self._pieces, self._in_table(t))
         return f, fd, fdd
+
+    def _in_table(self, t):
+        """``t``, or for a periodic table the same phase within its period."""
+        if not self.periodic:
+            return t
+        start = self.times[0]
+        return start + np.mod(np.asarray(t, dtype=float) - start, self.times[-1] - start)
 
     def batch_key(self):
         """Laws on one array of times (a motion's joints, :func:`~hexapod.model.tabulation.
@@ -188,10 +192,8 @@ class Hermite(Law):
     @classmethod
     def evaluate_batch(cls, laws, t):
         first = laws[0]
-        if first.periodic:
-            start = first.times[0]
-            t = start + np.mod(np.asarray(t, dtype=float) - start, first.times[-1] - start)
-        return read_pieces(first.times, np.stack([law._pieces for law in laws]), t)
+        return read_pieces(first.times, np.stack([law._pieces for law in laws]),
+                           first._in_table(t))
 
     def cycle_time(self):
         return self.times[-1] - self.times[0] if self.periodic else None
