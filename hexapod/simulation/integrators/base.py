@@ -296,7 +296,7 @@ class Integrator(SingularPoses):
                             "its largest kinetic energy: the step is too long for the motion"
                             + (f"; {where}" if (where := self._singular_pose()) else ""))
             return
-        elif self.t >= self.t_bound - 1e-12 * max(1.0, abs(self.t_bound)):
+        elif self._at_end(self.t):
             self.t = self.t_bound
             self.status = "finished"
         elif self.adaptive:  # a step cut to end at a break ends on it, not an ulp before
@@ -330,6 +330,10 @@ class Integrator(SingularPoses):
                 h1 = (0.01 / largest) ** (1.0 / (error_order + 1))
         h = min(100 * h0, h1, self.max_step, remaining)
         return h if np.isfinite(h) and h > 0 else h0
+
+    def _at_end(self, t: float) -> bool:
+        """Whether a step that reached ``t`` ends the run (``t_bound`` to round-off)."""
+        return t >= self.t_bound - 1e-12 * max(1.0, abs(self.t_bound))
 
     def next_step(self, t: float | None = None) -> float:
         """The step to take now (or, for a fixed-step method, from ``t``): the method's current

@@ -163,7 +163,7 @@ class MoreauJean(Integrator):
             h = self.next_step(t)
             times += [t + THETA * h, t + h]
             t = t + h
-            if t >= self.t_bound - 1e-12 * max(1.0, abs(self.t_bound)):
+            if self._at_end(t):
                 break
         self.model.law_values(np.array(times), self.data)
 
