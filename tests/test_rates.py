@@ -308,3 +308,26 @@ def test_the_kernels_ground_policy_multipliers_are_the_exact_solves():
     (first, *_), t, q, v = list(kernels), run.t[-1], run.q[-1], run.v[-1]
     stale = policy_multipliers(model, np.array(first[0]), np.array(first[1]))
     assert stale(t, q, v) is None
+
+
+def test_steps_ending_on_a_touch_down_or_lift_off_are_taken_by_the_kernels(monkeypatch):
+    """A step cut to end on a break of the laws integrates the regime before it: its last
+    stages read the laws just before the break (at a lift-off itself the foot's gate is 0
+    already, its rows vanish and the old contact set's kernels refused those stages), and the
+    state it ends on, in the new regime, is projected, solved and saved by the new set's
+    kernels. From the start across a touch-down (0.2 s) and the tripods' switch (0.25 s,
+    a lift-off), no state needs the exact solve or the exact projection but the start's
+    (before, ten a stride, each a rank decision); the saved multipliers at both breaks are
+    the exact solve's (the test above)."""
+    import hexapod.simulation.integrators.base as base
+
+    exact = []
+    dynamics, positions = base.forward_dynamics, base.assemble_positions
+    monkeypatch.setattr(base, "forward_dynamics",
+                        lambda *a, **k: exact.append(("dynamics", a[2])) or dynamics(*a, **k))
+    monkeypatch.setattr(base, "assemble_positions",
+                        lambda *a, **k: exact.append(("positions", a[2])) or positions(*a, **k))
+    run = hx.simulate(builtin_model("hexapod"), 0.26)
+    assert run.success, run.message
+    assert {0.2, 0.25} <= set(run.t.tolist())  # steps ended on both breaks
+    assert [t for _, t in exact] == [0.0, 0.0], exact  # the start's projection and solve

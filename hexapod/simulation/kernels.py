@@ -160,18 +160,20 @@ class CompiledRates:
         return self._policy(t, q, v)
 
     def stages(self, A: np.ndarray, c: np.ndarray, t: float, h: float, y0: np.ndarray,
-               f0: np.ndarray, left_out: float = REDUNDANT_TOLERANCE) -> np.ndarray | None:
+               f0: np.ndarray, left_out: float = REDUNDANT_TOLERANCE,
+               until: float = np.inf) -> np.ndarray | None:
         """The stages after the first of an explicit Runge-Kutta step ``h`` from ``(t, y0)``
         (``f0`` its rate there; ``A``, ``c`` the tableau), as rows, in one call of a Function
         that evaluates this kernel once per stage (:class:`CompiledStages`): the same numbers
         as the stages called one by one, without their Python overhead. None when a stage's
         solve would be refused (see :meth:`solve`): the caller then takes its stages one by
-        one, each refused one by the exact solve."""
+        one, each refused one by the exact solve. The laws are read at the stages' times, none
+        later than ``until`` (a step that ends on a break of the laws reads them before it)."""
         key = (A.tobytes(), c.tobytes())
         stages = self.__dict__.setdefault("_stages", {})
         if key not in stages:
             stages[key] = CompiledStages(self, A, c)
-        return stages[key](t, h, y0, f0, left_out)
+        return stages[key](t, h, y0, f0, left_out, until)
 
     @property
     def complete(self) -> bool:
@@ -224,11 +226,14 @@ class CompiledStages:
         self._fast = FastFunction(self.function)
 
     def __call__(self, t: float, h: float, y0: np.ndarray, f0: np.ndarray,
-                 left_out: float) -> np.ndarray | None:
+                 left_out: float, until: float = np.inf) -> np.ndarray | None:
+        """The stages after the first, as rows, or None (see :meth:`CompiledRates.stages`);
+        the laws read at the stages' times, none later than ``until``."""
         model = self.model
         arguments = [h, y0, f0]
         if model.n_w:  # the laws at the stages' times, read together (the same bits)
-            arguments.append(np.concatenate(model.law_values(t + self.c[1:] * h)))
+            times = np.minimum(t + self.c[1:] * h, until)
+            arguments.append(np.concatenate(model.law_values(times)))
         try:
             K, residual = self._fast(*arguments)
         except RuntimeError:  # a factorisation failed: a singular matrix, or NaN in it

@@ -300,10 +300,7 @@ class Integrator(SingularPoses):
             self.t = self.t_bound
             self.status = "finished"
         elif self.adaptive:  # a step cut to end at a break ends on it, not an ulp before
-            k = np.searchsorted(self._breaks, self.t)
-            for near in self._breaks[max(k - 1, 0):k + 1]:
-                if abs(near - self.t) <= self._break_tolerance:
-                    self.t = float(near)
+            self.t = self._on_break(self.t)
         if self.model.energy_conserved:
             self._kinetic_peak = max(self._kinetic_peak, self._energy(self.q, self.v)[0])
 
@@ -356,7 +353,32 @@ class Integrator(SingularPoses):
 
     @cached_property
     def _breaks(self) -> np.ndarray:
-        return law_breaks(self.model.laws, self.t0, self.t_bound)
+        """The laws' breaks after the start, one at the end included (the last step reads
+        its laws before it too, :meth:`_laws_until`)."""
+        return law_breaks(self.model.laws, self.t0, self.t_bound + 2 * self._break_tolerance)
+
+    def _break_near(self, t: float) -> float | None:
+        """The break of the laws ``t`` is on (to :attr:`_break_tolerance`), or None."""
+        k = np.searchsorted(self._breaks, t)
+        for near in self._breaks[max(k - 1, 0):k + 1]:
+            if abs(near - t) <= self._break_tolerance:
+                return float(near)
+        return None
+
+    def _on_break(self, t: float) -> float:
+        """``t``, or the break it is on (a step cut to end at a break ends on it)."""
+        near = self._break_near(t) if self.adaptive else None
+        return t if near is None else near
+
+    def _laws_until(self, t_end: float) -> float:
+        """The latest time a step ending at ``t_end`` reads its laws at: ``t_end``, or just
+        before it (:attr:`_break_tolerance`) where it is a break of the laws. A step that ends
+        on a touch-down or lift-off integrates the regime before it, in which the compiled
+        kernels were built; read at the break itself, a lifting foot's gate is already 0,
+        its rows vanish, and the kernels refuse the last stages (the exact solve, a rank
+        decision each, took them: 2 of the 10 ms such a step cost the walking robot)."""
+        near = self._break_near(t_end) if self.adaptive else None
+        return t_end if near is None else near - self._break_tolerance
 
     @cached_property
     def _break_tolerance(self) -> float:
@@ -372,24 +394,27 @@ class Integrator(SingularPoses):
         w = self.model.law_values(t, self.data)[0]
         return tuple(bool(w[c.gate] > 0.5) for c in self.model.contacts)
 
-    def _follow_contacts(self) -> None:
+    def _follow_contacts(self, q: np.ndarray | None = None) -> None:
         """When feet have touched down or lifted off since the compiled kernels were built,
-        build them (once per contact set) for the rows independent now: a foot in swing has
-        no rows, and one that touched down has rows the old set leaves out."""
+        build them (once per contact set) for the rows independent at ``(t, q)`` (default
+        the current positions): a foot in swing has no rows, and one that touched down has
+        rows the old set leaves out. A method whose step ends on a touch-down or lift-off
+        calls it with the step's end positions before projecting them, so that the new set's
+        kernels project, solve and save that state."""
         feet = self._contact_set(self.t)
         if feet == self._feet_down:
             return
         self._feet_down = feet
-        split = self._rank_split()
+        split = self._rank_split(q)
         rows = split.independent
-        here = self._here()
+        here = self._here(q)
         self._compiled = compiled_rates(self.model, rows, here, split.redundant)
         self._compiled_projection = compiled_projection(self.model, rows, here)
 
-    def _here(self) -> tuple[np.ndarray, np.ndarray]:
-        """The current positions and law values: where compiled kernels choose their
-        factorisation's pivots."""
-        return self.q, self.model.law_values(self.t, self.data)[0]
+    def _here(self, q: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """The positions (default the current ones) and the current law values: where compiled
+        kernels choose their factorisation's pivots."""
+        return self.q if q is None else q, self.model.law_values(self.t, self.data)[0]
 
     def _dynamics(self, t: float, q: np.ndarray, v: np.ndarray,
                   baumgarte: tuple[float, float] | None = None,

@@ -120,19 +120,22 @@ class EmbeddedRungeKutta(Integrator):
         (:meth:`~hexapod.simulation.kernels.CompiledRates.stages`), else one by one."""
         kernel, left_out = ((self._compiled, REDUNDANT_TOLERANCE) if self._crossing is None
                             else (self._crossing_rates, np.inf))
-        later = kernel.stages(self.A, self.c, t, h, y0, f0, left_out)
+        until = self._laws_until(t + h)
+        later = kernel.stages(self.A, self.c, t, h, y0, f0, left_out, until)
         if later is not None:
             self.counters.rhs += later.shape[0]
             K = np.vstack([f0, later])
             return K, y0 + h * (self.b @ K)
-        return self._stages_one_by_one(t, h, y0, f0)
+        return self._stages_one_by_one(t, h, y0, f0, until)
 
-    def _stages_one_by_one(self, t: float, h: float, y0: np.ndarray,
-                           f0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`_stages`, each stage's rate from :meth:`_derivative`."""
+    def _stages_one_by_one(self, t: float, h: float, y0: np.ndarray, f0: np.ndarray,
+                           until: float = np.inf) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`_stages`, each stage's rate from :meth:`_derivative` (its laws read no later
+        than ``until``)."""
         n_q = self.model.n_q
         K = np.array(explicit_stages(
-            lambda i, y: self._derivative(t + self.c[i] * h, y[:n_q], y[n_q:]), h, y0, f0,
+            lambda i, y: self._derivative(min(t + self.c[i] * h, until), y[:n_q], y[n_q:]),
+            h, y0, f0,
             self.A))
         return K, y0 + h * (self.b @ K)
 
@@ -170,8 +173,10 @@ class EmbeddedRungeKutta(Integrator):
                 self.min_factor, self.safety * error ** (-1.0 / (self.error_order + 1)))
             self.h = h * factor
         self._dense_step = (self.t, h, y0, K, y1)  # for dense_output
-        self.t += h
-        self.q, self.v = self._project(self.t, model.normalize(y1[:n_q]), y1[n_q:])
+        self.t = self._on_break(self.t + h)
+        q1 = model.normalize(y1[:n_q])
+        self._follow_contacts(q1)  # ended on a touch-down or lift-off: the new set's kernels
+        self.q, self.v = self._project(self.t, q1, y1[n_q:])
         self._end_crossing()
         # the accelerations start the next step; the multipliers come with them or are solved
         # when asked
