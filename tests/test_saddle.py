@@ -111,6 +111,33 @@ def test_the_smallest_singular_value_of_a_sparse_split_is_the_dense_one(name, sp
     assert sparse.smallest_singular_value() == pytest.approx(dense, rel=1e-6)
 
 
+@pytest.mark.parametrize("name", ["closed loop (planar N-four-bar)", "Bricard",
+                                  "spatial N-four-bar (loops, redundant)"])
+@pytest.mark.parametrize("sparse", [False, True])
+def test_a_split_tells_a_bound_below_its_smallest_singular_value(name, sparse, monkeypatch):
+    """``smallest_exceeds`` (a Cholesky factorisation of the Gram matrix shifted, for the
+    integrators' test of a singular pose) agrees with the SVD's value: true for bounds below
+    it by more than the certificate's margin (a thousandth, and round-off), false for every
+    bound at or above it (a large model's, by ARPACK's value); near a pose (its value 1e-4 of
+    the standing one) likewise."""
+    if sparse:
+        monkeypatch.setattr(sparse_qr, "SPARSE_ABOVE", 0)
+        monkeypatch.setattr(sparse_qr, "SPARSE_DENSITY", 2.0)
+    for model in (hx.assemble(SCENES[name]()),
+                  hx.assemble(n_four_bar(4, start_angle=np.pi / 2 - 1e-4, start_rate=0.0).scene)):
+        q, _ = _state(model, 0.0)
+        w = model.law_values(0.0)[0]
+        split = rank_split(model, saddle.constraint_jacobian(model, q, w), w)
+        kept = split.W[split.independent]
+        smallest = np.linalg.svd(kept.toarray() if hasattr(kept, "toarray") else kept,
+                                 compute_uv=False).min()
+        for factor in (0.5, 0.99):
+            assert split.smallest_exceeds(factor * smallest), (name, factor)
+        for factor in (1.001 if sparse else 1.0, 1.01, 2.0):  # ARPACK's: to 1e-5
+            assert not split.smallest_exceeds(factor * smallest), (name, factor)
+    assert split.smallest_exceeds(0.0) and smallest < 1e-3
+
+
 def test_near_a_singular_pose_the_smallest_singular_value_is_found_to_round_off(sparse_path):
     """The integrators take differences of it along the motion there: ARPACK's value is
     refined below 1e-3."""

@@ -61,6 +61,26 @@ class RowSplit:
         s = self.singular_values()
         return float(s.min()) if s.size else float("inf")
 
+    def smallest_exceeds(self, bound: float) -> bool:
+        """Whether the smallest singular value of the kept rows of ``W`` is above ``bound`` by
+        more than round-off could hide: ``R R^T - s I`` has a Cholesky factor, ``s`` above
+        ``bound^2`` by a thousandth of it and by ``10 r eps trace(R R^T)`` (a bound on the
+        product's and the factorisation's errors). A fifth of an SVD's cost, or less (the
+        walking robot's 222 rows: 0.6 against 3.7 ms); False where it cannot tell, so that
+        a caller decides by :meth:`smallest_singular_value` there, as it would have."""
+        if not self.rank:
+            return True  # no row: the smallest is inf
+        if "_sigma" in self.__dict__:
+            return self.smallest_singular_value() > bound
+        from scipy.linalg import lapack
+
+        if "_gram" not in self.__dict__:  # R R^T, its upper triangle (R's singular values)
+            self._gram = lapack.dlauum(self.R, lower=0)[0]
+        gram, r = self._gram, self.rank
+        shift = bound**2 * (1.0 + 1e-3) + 10.0 * r * np.finfo(float).eps * np.trace(gram)
+        shifted = gram - shift * np.eye(r)
+        return lapack.dpotrf(shifted, lower=0, clean=0, overwrite_a=1)[1] == 0
+
     def condition_number(self, n_v: int) -> float:
         """2-norm condition number of the equilibrated saddle-point matrix
         ``[[I, W_I^T], [W_I, 0]]`` of the kept rows, from the singular values of ``W_I``: its

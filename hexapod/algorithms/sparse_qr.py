@@ -289,6 +289,10 @@ class SparseRowSplit(RowSplit):
             return self.smallest_singular_value(_REFINED_TOL)
         return self._smallest[tol]
 
+    def smallest_exceeds(self, bound: float) -> bool:
+        """By the smallest singular value itself (ARPACK: linear in the bodies already)."""
+        return self.smallest_singular_value() > bound
+
     def condition_number(self, n_v: int) -> float:
         if self.rank == 0:
             return 1.0

@@ -94,6 +94,13 @@ class SingularPoses:
         if not self.model.n_c:
             return False
         split = self._rank_split()
+        # most rejections are far from any pose, and a Cholesky factorisation says so at a
+        # fifth of an SVD's cost (the decisions are the same: near the bounds the singular
+        # value itself decides)
+        if split.smallest_exceeds(SINGULAR_BAND) or (
+                self._crossing is None
+                and split.smallest_exceeds(FALLEN * self._spectrum_start[0])):
+            return False
         # the smallest singular value alone (ARPACK on a large model's sparse factor) decides
         # whether to go on: all of them (a dense SVD, cubic in the bodies) only near a pose
         smallest = split.smallest_singular_value()
