@@ -331,3 +331,27 @@ def test_steps_ending_on_a_touch_down_or_lift_off_are_taken_by_the_kernels(monke
     assert run.success, run.message
     assert {0.2, 0.25} <= set(run.t.tolist())  # steps ended on both breaks
     assert [t for _, t in exact] == [0.0, 0.0], exact  # the start's projection and solve
+
+
+def test_a_step_ends_accelerations_and_its_saved_multipliers_come_from_one_call():
+    """With feet on the ground and redundant rows left out, a step's end takes its
+    accelerations from the ground-force policy's kernel, and the multipliers saved there
+    come from that same call: one kernel call a saved step instead of two (the rates
+    kernel's, then the policy's), the same numbers as the two apart (bit for bit)."""
+    from hexapod.simulation.kernels import policy_multipliers
+
+    model = builtin_model("hexapod")
+    integrator = hx.simulation.get_integrator("dopri5-projection")(model, 0.0, 0.1)
+    for _ in range(2):
+        integrator.step()
+    t, q, v = integrator.t, integrator.q, integrator.v
+    kernel = integrator._compiled
+    policy = kernel.policy
+    assert policy is not None and policy.holds(t, q, v)
+    evaluate, calls = policy._fast, []
+    policy._fast = lambda *a: calls.append(1) or evaluate(*a)
+    lam = integrator.lam
+    assert not calls  # the step end's call served
+    assert np.array_equal(integrator.v_dot, kernel.solve(t, q, v)[1])
+    apart = policy_multipliers(model, kernel.rows, kernel.left_out)(t, q.copy(), v.copy())
+    assert np.array_equal(lam, apart[1]) and np.array_equal(integrator.v_dot, apart[0])

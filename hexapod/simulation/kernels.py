@@ -153,11 +153,18 @@ class CompiledRates:
         if self.complete:
             solution = self.solve(t, q, v)
             return None if solution is None else (solution[1], solution[2])
-        if not (self.left_out.size and self.model.contacts):
-            return None  # no redundant rows; or the least-wrench policy of solve_saddle
+        policy = self.policy
+        return None if policy is None else policy(t, q, v)
+
+    @property
+    def policy(self) -> PolicyMultipliers | None:
+        """The ground-force policy's kernel of this decision, where :meth:`dynamics` takes the
+        multipliers from it (rows left out and feet on the ground), else None."""
+        if self.complete or not (self.left_out.size and self.model.contacts):
+            return None  # every row kept; no redundant rows; or solve_saddle's least wrench
         if self._policy is None:
             self._policy = policy_multipliers(self.model, self.rows, self.left_out)
-        return self._policy(t, q, v)
+        return self._policy
 
     def stages(self, A: np.ndarray, c: np.ndarray, t: float, h: float, y0: np.ndarray,
                f0: np.ndarray, left_out: float = REDUNDANT_TOLERANCE,
@@ -295,6 +302,7 @@ class PolicyMultipliers:
         self.function = model.built_once(key, lambda m: self._build())
         self._fast = FastFunction(self.function)
         self.data = model.create_data()  # the objective's and Q_across's call buffers
+        self._last = None  # (t, q, v, terms) of the last call (see terms)
 
     def _build(self) -> ca.Function:
         model, rows, left = self.model, self.rows.tolist(), self.left_out.tolist()
@@ -327,24 +335,48 @@ class PolicyMultipliers:
                            [ca.mtimes(m_inv_sqrt, y[:, 0]), lam0, ca.densify(N), Phi_v.nz[:],
                             checks], args, ["v_dot", "lam0", "N", "Phi", "checks"])
 
-    def __call__(self, t: float, q: np.ndarray,
-                 v: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
-        """``(v_dot, lam)``, or None (see :meth:`CompiledRates.dynamics`)."""
+    def holds(self, t: float, q: np.ndarray, v: np.ndarray) -> bool:
+        """Whether :meth:`terms` keeps this state's (the same arrays)."""
+        last = self._last
+        return last is not None and last[0] == t and last[1] is q and last[2] is v
+
+    def terms(self, t: float, q: np.ndarray, v: np.ndarray) -> tuple | None:
+        """The kernel's part at ``(t, q, v)``: ``(v_dot, lam0, N, Phi)`` (the accelerations,
+        a particular solution for the multipliers, the multipliers that change no constraint
+        force, ``Phi_v``'s nonzeros), or None where refused (see
+        :meth:`CompiledRates.dynamics`). The last state's are kept (by the identity of its
+        arrays): a step's end takes its accelerations here, and the multipliers saved there
+        come from the same call."""
+        if self.holds(t, q, v):
+            return self._last[3]
         model = self.model
         w, wd, wdd = model.law_values(t) if model.n_w else ((),) * 3
+        found = None
         try:
             v_dot, lam0, N, Phi, checks = self._fast(
                 *[q, v, *((w, wd, wdd) if model.n_w else ())])
         except RuntimeError:  # the factorisation failed: a singular matrix, or NaN in it
-            return None
-        if not (checks[0] <= RESIDUAL_TOLERANCE and checks[1] <= CONSISTENCY_TOLERANCE
+            v_dot = None
+        if v_dot is not None and (
+                checks[0] <= RESIDUAL_TOLERANCE and checks[1] <= CONSISTENCY_TOLERANCE
                 and checks[2] <= model.rank_tolerance and np.all(np.isfinite(N))
                 and np.all(np.isfinite(lam0)) and np.all(np.isfinite(v_dot))):
-            return None  # the maxima skip NaN (C's fmax): the outputs say it
-        Q_across = (model.call("Q_across", self.data, q=q, v=v, w=w)
+            found = v_dot, lam0, N.reshape(model.n_c, -1, order="F"), Phi
+        # (else refused: the maxima skip NaN, C's fmax, and the outputs say it)
+        self._last = (t, q, v, found)
+        return found
+
+    def __call__(self, t: float, q: np.ndarray,
+                 v: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """``(v_dot, lam)``, or None (see :meth:`CompiledRates.dynamics`)."""
+        terms = self.terms(t, q, v)
+        if terms is None:
+            return None
+        model = self.model
+        v_dot, lam0, N, Phi = terms
+        Q_across = (model.call("Q_across", self.data, q=q, v=v, w=model.law_values(t)[0])
                     if model.Q_across is not None else None)
-        return v_dot, ground_policy(model, self.data, t, q, Phi, Q_across, lam0,
-                                    N.reshape(model.n_c, -1, order="F"))
+        return v_dot, ground_policy(model, self.data, t, q, Phi, Q_across, lam0, N)
 
 
 def policy_multipliers(model: Model, rows: np.ndarray,

@@ -201,18 +201,30 @@ class Integrator(SingularPoses):
         compiled kernel's where it can give them
         (:meth:`~hexapod.simulation.kernels.CompiledRates.dynamics`, see
         :meth:`_kernels_serve`), else the exact solve's."""
-        solution = self._compiled.dynamics(t, q, v) if self._kernels_serve(t) else None
+        serve = self._kernels_serve(t)
+        policy = self._compiled.policy
+        solved = serve and policy is not None and policy.holds(t, q, v)  # by _end_rates
+        solution = self._compiled.dynamics(t, q, v) if serve else None
         if solution is not None:
-            self.counters.rhs += 1
+            self.counters.rhs += 0 if solved else 1
             return np.asarray(solution[1], dtype=float)
         return self._dynamics(t, q, v)[1]
 
     def _end_rates(self, t: float, q: np.ndarray, v: np.ndarray) -> tuple:
         """A step end's accelerations (:meth:`_rates`) and, where the same compiled solve gives
         them as :meth:`multipliers` would (every row kept; the kernels serve ``t``), its
-        multipliers: saving every step then costs one solve a step, not two. Else None."""
-        solution = (self._compiled.solve(t, q, v) if self._compiled.complete
-                    and self._kernels_serve(t) else None)
+        multipliers: saving every step then costs one solve a step, not two. With rows left
+        out and feet on the ground, the accelerations come from the ground-force policy's
+        kernel, whose call the multipliers then reuse (:meth:`PolicyMultipliers.terms`);
+        the policy's choice is made only if they are asked for. Else None."""
+        serve = self._kernels_serve(t)
+        policy = self._compiled.policy if serve else None
+        if policy is not None:
+            terms = policy.terms(t, q, v)
+            if terms is not None:
+                self.counters.rhs += 1
+                return terms[0], None
+        solution = self._compiled.solve(t, q, v) if self._compiled.complete and serve else None
         if solution is None:
             return self._rates(t, q, v)[1], None
         self.counters.rhs += 1
