@@ -170,3 +170,30 @@ def test_the_duty_against_central_differences():
         # relative to the derivative, or to the value per unit relative change if larger
         assert abs(exact[0] - reference) <= 1e-6 * max(abs(reference),
                                                        abs(values[column]) / 0.6), column
+
+
+def test_all_feet_weights_in_one_pass_are_each_feets_own():
+    """The ground-force policy reads every foot's stance and weight at a state in one pass
+    (:class:`~hexapod.model.infos.ContactSchedules`): the same arithmetic as each contact's
+    own on an array of times (the inverse dynamics' samples), bit for bit, at touch-downs,
+    lift-offs and inside the ramps, a foot always down (duty 1) weighing 1; one contact at a
+    scalar time differs by round-off (NumPy's scalar power: 1 ulp in a twentieth of cases)."""
+    from types import SimpleNamespace
+
+    from hexapod.model.infos import ContactSchedules
+    from hexapod.scene.contacts import in_stance
+
+    contacts = [Contact(f"c{k}", "ground", "foot", period=PERIOD, duty=duty, lift_off=lift,
+                        ramp=ramp)
+                for k, (duty, lift, ramp) in enumerate([(0.6, 0.0, 0.1), (0.6, 0.5, 0.25),
+                                                         (0.75, 0.3, 0.1), (1.0, 0.0, 0.1)])]
+    together = ContactSchedules([SimpleNamespace(schedule=c) for c in contacts])
+    times = np.concatenate([TIMES, [0.2 * PERIOD, 0.4 * PERIOD, 0.15 * PERIOD]])
+    each = np.array([stance_weight(c, times) for c in contacts])
+    for k, t in enumerate(times):
+        stance, weight = together(float(t))
+        assert np.array_equal(stance, [bool(in_stance(c, t)) for c in contacts])
+        assert np.array_equal(weight, each[:, k])
+        assert np.allclose(weight, [float(stance_weight(c, t)) for c in contacts],
+                           rtol=0, atol=1e-15)
+    assert together(0.123)[1][-1] == 1.0

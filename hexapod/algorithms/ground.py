@@ -38,6 +38,7 @@ from scipy.linalg import block_diag
 from hexapod.algorithms.linalg import RowSplit, multiplier_null_space
 from hexapod.algorithms.step_terms import terms_of
 from hexapod.errors import HexapodError
+from hexapod.model.infos import ContactSchedules
 from hexapod.model.model import Model
 
 #: Below this weight a foot carries nothing.
@@ -333,9 +334,10 @@ def _friction_solution(model: Model, data, t: float, q, Phi, Q_across, lam, N) -
 
 def _policy_weights(model: Model, t: float) -> np.ndarray:
     """The feet's weights in the policy at ``t`` (:func:`sharing_weights` of their
-    load-sharing weights)."""
-    stance = np.array([bool(c.in_stance(t)) for c in model.contacts])
-    return sharing_weights(contact_weights(model, t), stance)
+    load-sharing weights), all feet in one pass (a simulation asks at every saved state)."""
+    schedules = model.built_once(("contact schedules",), lambda m: ContactSchedules(m.contacts))
+    stance, weights = schedules(float(t))
+    return sharing_weights(weights, stance)
 
 
 class _PolicyProblem:

@@ -108,6 +108,23 @@ class ContactInfo:
         return stance_intervals(self.schedule, start, stop)
 
 
+class ContactSchedules:
+    """The schedules of a model's contacts together: whether each foot is down at a time and
+    its weight, all feet in one pass (:func:`hexapod.scene.contacts.schedule_arrays`: the same
+    arithmetic as :meth:`ContactInfo.in_stance` and :meth:`ContactInfo.weight`, each)."""
+
+    def __init__(self, contacts):
+        from hexapod.scene.contacts import schedule_arrays
+
+        self._arrays = schedule_arrays([c.schedule for c in contacts])
+
+    def __call__(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """``(stance, weight)`` at ``t``: booleans and weights, one per contact."""
+        from hexapod.scene.contacts import in_stance, stance_weight
+
+        return in_stance(self._arrays, t), stance_weight(self._arrays, t)
+
+
 @dataclass(frozen=True)
 class DriverInfo:
     """One driver row. ``joint`` for joint drivers; ``body``, ``coordinate`` and ``frame`` (the
