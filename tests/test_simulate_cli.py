@@ -81,7 +81,7 @@ def test_simulate_writes_its_files_and_says_what_it_did(seed002_run):
     assert result.stderr == ""
     assert {p.name for p in (cwd / "run").iterdir()} == FILES
     assert [p.name for p in cwd.iterdir()] == ["run"]  # no temporary directory left behind
-    assert "wrote run/" in result.stdout and "dopri5-projection over 1 s" in result.stdout
+    assert "wrote run/" in result.stdout and "dop853-projection over 1 s" in result.stdout
     stats = strict_json((cwd / "run" / "stats.json").read_text())
     assert set(stats) == STATISTICS
     assert stats["status"] == "finished" and stats["t_end"] == 1.0
@@ -109,7 +109,7 @@ def test_simulate_csv_follows_the_lagrange_equation_and_matches_the_npz(seed002_
         assert np.array_equal(saved["t"], t) and np.array_equal(saved["q"], table[:, 1:5])
         assert np.array_equal(saved["lam"], table[:, 13:16])
         assert list(saved["rows"]) == ["rod1/length", "rod2/length", "coupler/length"]
-        assert strict_json(str(saved["statistics"]))["method"] == "dopri5-projection"
+        assert strict_json(str(saved["statistics"]))["method"] == "dop853-projection"
 
 
 def test_simulate_forces_balance_every_body(seed002_run):
@@ -162,7 +162,7 @@ def test_a_failed_run_writes_the_states_up_to_it_and_says_why(tmp_path):
     assert result.returncode == 1
     assert "Traceback" not in result.stderr
     errors = result.stderr.strip().splitlines()
-    assert len(errors) == 1 and errors[0].startswith("hexapod: error: dopri5-projection failed")
+    assert len(errors) == 1 and errors[0].startswith("hexapod: error: dop853-projection failed")
     stats = strict_json((tmp_path / "run" / "stats.json").read_text())
     # the reach is exhausted at 0.5 s; a step may end past it by the assembly tolerance
     assert stats["status"] == "failed" and 0.49 < stats["t_reached"] <= 0.5 + 1e-9

@@ -88,7 +88,7 @@ def simulate(model: Model, t_end: float, *, method: str | type[Integrator] | Non
         contact scheme of :data:`~hexapod.simulation.registry.CONTACT_SCHEMES`), its short
         name (:data:`~hexapod.simulation.methods.ALIASES`: ``rk4``, ``dopri5``, ``dop853``,
         ``radau``, ``idas``, ``gen-alpha``) or class; the result records the registered name.
-        Default: :func:`~hexapod.simulation.registry.default_method` (``dopri5-projection``,
+        Default: :func:`~hexapod.simulation.registry.default_method` (``dop853-projection``,
         or ``moreau-jean`` for a scene with unilateral contacts).
     rtol, atol, step : float, float or mapping, float; optional
         Tolerances of adaptive methods (default :data:`~hexapod.simulation.methods.DEFAULT_RTOL`

@@ -13,7 +13,7 @@ from __future__ import annotations
 from typing import NamedTuple
 
 #: The method used when none is named: adaptive, constraints held to round-off.
-DEFAULT_METHOD = "dopri5-projection"
+DEFAULT_METHOD = "dop853-projection"
 #: Default relative tolerance of the adaptive methods.
 DEFAULT_RTOL = 1e-6
 #: Default absolute tolerance of the adaptive methods (SI units of each coordinate).

@@ -5,9 +5,9 @@ Protocol
 * Model: the built-in ``hexapod`` scene (the free-trunk robot of ``legs``, its 36 joints on the
   tripod gait's laws, the feet held by the contact schedule), assembled once.
 * Runs, in one process, one after the other: ``hexapod.simulate`` over ``--strides`` strides
-  from ``t = 0`` by ``--method`` (default ``dopri5-projection``) at ``rtol = 1e-6`` (the
-  defaults), (a) as the command line runs it, the gait laws tabulated once and interpolated
-  (:mod:`hexapod.model.tabulation`), every step's state saved, and (b) with
+  from ``t = 0`` by ``--method`` (default: the library's, ``dop853-projection``) at
+  ``rtol = 1e-6`` (the defaults), (a) as the command line runs it, the gait laws tabulated
+  once and interpolated (:mod:`hexapod.model.tabulation`), every step's state saved, and (b) with
   ``exact_laws=True``, every law solved at every stage, stopped by ``--budget`` CPU seconds
   (default 60) and counted per simulated second up to where it got. Each run starts from a
   fresh assembly, so that neither reuses what the other built; the set-up (the table, the
@@ -58,7 +58,7 @@ def _run(label: str, t_end: float, method: str, budget: float, exact: bool,
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--strides", type=float, default=1.0)
-    parser.add_argument("--method", default="dopri5-projection")
+    parser.add_argument("--method", default=hx.simulation.DEFAULT_METHOD)
     parser.add_argument("--budget", type=float, default=60.0,
                         help="CPU seconds for the run with exact laws")
     args = parser.parse_args()

@@ -226,8 +226,10 @@ class DormandPrince853(EmbeddedRungeKutta):
 
     def _error(self, h, K, y0, y1):
         n_q = self.model.n_q
-        K = np.vstack([K, self._derivative(self.t + h, y1[:n_q], y1[n_q:])])
-        self._stages_at_end = K  # with the rate at y1: the dense output's too
+        # the rate at y1, in the step's regime (a step ending on a break reads its laws before
+        # it, as its stages do): the dense output's too
+        K = np.vstack([K, self._derivative(self._laws_until(self.t + h), y1[:n_q], y1[n_q:])])
+        self._stages_at_end = K
         weight = self.atol_vector + self.rtol * np.maximum(np.abs(y0), np.abs(y1))
         err5 = np.sum((self.E5 @ K / weight) ** 2)
         err3 = np.sum((self.E3 @ K / weight) ** 2)
