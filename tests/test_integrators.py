@@ -475,3 +475,22 @@ def test_a_particle_pendulum_follows_the_exact_swing(method, dimension):
     assert result.energy_drift <= max(1e-10, 10 * level)
     assert result.max_position_violation <= max(1e-10, 10 * level)
     assert result.max_velocity_violation <= max(1e-9, 10 * level / tau)
+
+
+def test_dop853_takes_the_rate_at_a_steps_end_only_for_its_dense_output():
+    """DOP853's error estimates give the rate at the step's end no weight (the last
+    coefficients of E3 and E5 are zero): an attempted step costs its eleven later stages, an
+    accepted one also the rate at its projected end, and the rate at the unprojected end is
+    taken once for the dense output (with its three more stages), however often it is asked
+    (8 % of the walking robot's right-hand sides went to it at every attempt)."""
+    method = get_integrator("dop853-projection")(spatial_pendulum()[0], 0.0, 1.0)
+    for _ in range(5):
+        method.step()
+    counters = method.counters
+    start = counters.rhs - 11 * (counters.steps + counters.rejected) - counters.steps
+    assert 0 <= start <= 2  # the start's solve and Hairer's starting-step trial
+    before = counters.rhs
+    first, again = method.dense_output(), method.dense_output()
+    assert counters.rhs == before + 1 + 3  # the end's rate once, and DOP853's three more stages
+    t = method.t - 0.5 * method._dense_step[1]
+    assert again is first and np.isfinite(first(t)[0]).all()

@@ -371,6 +371,8 @@ class Integrator(SingularPoses):
 
     def _break_near(self, t: float) -> float | None:
         """The break of the laws ``t`` is on (to :attr:`_break_tolerance`), or None."""
+        if not self._breaks.size:
+            return None
         k = np.searchsorted(self._breaks, t)
         for near in self._breaks[max(k - 1, 0):k + 1]:
             if abs(near - t) <= self._break_tolerance:

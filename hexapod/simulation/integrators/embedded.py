@@ -225,14 +225,11 @@ class DormandPrince853(EmbeddedRungeKutta):
     E3, E5 = DOP853_E3, DOP853_E5
 
     def _error(self, h, K, y0, y1):
-        n_q = self.model.n_q
-        # the rate at y1, in the step's regime (a step ending on a break reads its laws before
-        # it, as its stages do): the dense output's too
-        K = np.vstack([K, self._derivative(self._laws_until(self.t + h), y1[:n_q], y1[n_q:])])
-        self._stages_at_end = K
+        # from the twelve stages: the rate at y1 has no weight in either estimate (the last
+        # coefficient of E3 and E5 is zero), and only the dense output needs it
         weight = self.atol_vector + self.rtol * np.maximum(np.abs(y0), np.abs(y1))
-        err5 = np.sum((self.E5 @ K / weight) ** 2)
-        err3 = np.sum((self.E3 @ K / weight) ** 2)
+        err5 = np.sum((self.E5[:DOP853_STAGES] @ K / weight) ** 2)
+        err3 = np.sum((self.E3[:DOP853_STAGES] @ K / weight) ** 2)
         if err5 == 0.0 and err3 == 0.0:
             return 0.0
         return float(h * err5 / np.sqrt((err5 + 0.01 * err3) * y0.size))
@@ -242,19 +239,25 @@ class DormandPrince853(EmbeddedRungeKutta):
         ``scipy.integrate.DOP853`` builds it: three more stages (the rows of
         :data:`~.tableaus.DOP853_A` and ``DOP853_C`` after the twelve stages and the rate at
         the new state) and the coefficients :data:`~.tableaus.DOP853_D`; exact at both ends
-        of the step (at its end, the state before the projection)."""
-        t_old, h, y0, K, y1 = self._dense_step
+        of the step (at its end, the state before the projection). Made once per step: the
+        event-driven scheme asks for it at each event it locates."""
+        step = self._dense_step
+        kept = getattr(self, "_interpolant", None)  # this step's, when asked before
+        if kept is not None and kept[0] is step:
+            return kept[1]
+        t_old, h, y0, K, y1 = step
         n_q, n = self.model.n_q, DOP853_STAGES
-        stages = getattr(self, "_stages_at_end", None)
-        if stages is None or not np.array_equal(stages[:n], K):  # not the accepted step's
-            stages = np.vstack([K, self._derivative(t_old + h, y1[:n_q], y1[n_q:])])
         extended = np.empty((DOP853_STAGES_EXTENDED, y0.size))
-        extended[:n + 1] = stages
+        extended[:n] = K
+        # the rate at y1, in the step's regime (before a break the step ends on)
+        extended[n] = self._derivative(self._laws_until(t_old + h), y1[:n_q], y1[n_q:])
         for s, (a, c) in enumerate(zip(DOP853_A[n + 1:], DOP853_C[n + 1:], strict=True),
                                    start=n + 1):
             y = y0 + h * (a[:s] @ extended[:s])
             extended[s] = self._derivative(t_old + c * h, y[:n_q], y[n_q:])
-        return _Dop853Interpolant(self.model, t_old, h, y0, y1, extended)
+        interpolant = _Dop853Interpolant(self.model, t_old, h, y0, y1, extended)
+        self._interpolant = (step, interpolant)
+        return interpolant
 
 
 class _Dop853Interpolant(Interpolant):
