@@ -1,7 +1,7 @@
 """The contact schemes' constrained solve in one CasADi call
-(:class:`hexapod.simulation.kernels.CompiledContactStep`: Moreau-Jean's step, the event-driven
-scheme's accelerations and impulses) against the same equations formed from the model's own
-functions and solved densely by NumPy, on a planar rod hinged at one end
+(:class:`hexapod.simulation.contact_kernel.CompiledContactStep`: Moreau-Jean's step, the
+event-driven scheme's accelerations and impulses) against the same equations formed from the
+model's own functions and solved densely by NumPy, on a planar rod hinged at one end
 and driven by a PD controller (its gains make the stiffness ``K`` and damping ``C`` of the
 linearly implicit step nonzero); and its refusal of a row set that no longer serves."""
 
@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from test_controller import rod as servo_rod
 
-from hexapod.simulation.kernels import CompiledContactStep
+from hexapod.simulation.contact_kernel import CompiledContactStep
 
 SERVO = """
 target = { type = "harmonic", sin = [0.3], frequency = 1.0 }

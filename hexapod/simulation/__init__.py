@@ -1,6 +1,6 @@
-"""Forward simulation (layer 4): the integrator registry and contract, compiled kernels, the
-time loop, its results (the joint controllers' tracking errors among them) and the diagnostics
-of a state."""
+"""Forward simulation (layer 4): the integrator registry and contract, compiled kernels (the
+contact schemes' in :mod:`~hexapod.simulation.contact_kernel`), the time loop, its results (the
+joint controllers' tracking errors among them) and the diagnostics of a state."""
 
 from hexapod._support.lazy import attach
 

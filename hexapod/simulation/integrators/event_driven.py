@@ -6,7 +6,7 @@ fixed, events located on their conditions, impacts by an impulse map (Pfeiffer a
 is smooth and integrated by DOP853 with its error control and its projection (the embedded
 pair of :class:`~.embedded.DormandPrince853`), on accelerations that hold the closed contacts:
 the engine's constrained step with the contacts' forces ``F`` on its right-hand side
-(:class:`~hexapod.simulation.kernels.CompiledContactStep`), so that the contacts'
+(:class:`~hexapod.simulation.contact_kernel.CompiledContactStep`), so that the contacts'
 accelerations are ``c + W F`` (``c = J a_free + J_dot v``, ``W`` the Delassus operator).
 A sticking contact keeps all its acceleration zero (``d`` unknowns); a slipping one its normal
 acceleration, with the tangential force ``-mu F_N s`` against its slip ``s`` (one unknown).
@@ -48,9 +48,9 @@ from hexapod.algorithms.contact_frames import (
 )
 from hexapod.algorithms.frictional import solve_contacts
 from hexapod.errors import HexapodError, IntegrationError
+from hexapod.simulation.contact_kernel import CompiledContactStep, contact_solution
 from hexapod.simulation.integrators.embedded import DormandPrince853
 from hexapod.simulation.integrators.moreau_jean import GAP_TOLERANCE, ContactEvent
-from hexapod.simulation.kernels import CompiledContactStep, contact_solution
 from hexapod.simulation.methods import CONTACT_METHODS
 from hexapod.simulation.scales import ROUND_OFF
 
@@ -526,7 +526,7 @@ class EventDriven(DormandPrince853):
 
     def _contact_solve(self, level: str, t, q, v, laws, G) -> tuple:
         """The engine's solve with the contacts' columns ``G`` at ``level``
-        (:class:`~hexapod.simulation.kernels.CompiledContactStep`: ``acceleration`` or
+        (:class:`~hexapod.simulation.contact_kernel.CompiledContactStep`: ``acceleration`` or
         ``impulse``), its kernel kept per level and number of columns, its rows decided again
         at ``(t, q)`` when they no longer serve."""
         key = (level, G.shape[1])

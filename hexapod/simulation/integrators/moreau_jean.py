@@ -51,8 +51,8 @@ import numpy as np
 
 from hexapod.algorithms.contact_frames import armed, contact_frames, ground_contacts
 from hexapod.algorithms.frictional import solve_contacts
+from hexapod.simulation.contact_kernel import CompiledContactStep, contact_solution
 from hexapod.simulation.integrators.base import Integrator
-from hexapod.simulation.kernels import CompiledContactStep, contact_solution
 from hexapod.simulation.methods import CONTACT_METHODS
 from hexapod.simulation.scales import ROUND_OFF
 
@@ -170,7 +170,7 @@ class MoreauJean(Integrator):
     def _constrained(self, t1, q_mid, v0, mid, G, h):
         """The saddle-point solve of the step on the bilateral rows kept, at the mid-step
         positions ``q_mid``, in one call
-        (:class:`~hexapod.simulation.kernels.CompiledContactStep`): the free velocity
+        (:class:`~hexapod.simulation.contact_kernel.CompiledContactStep`): the free velocity
         (``y = M^1/2 v``, with the rows' impulses ``lam``) and the response to the contacts'
         unit impulses (``Y``, ``Lam``). Forces that depend on the state (a controller's gains,
         dampers, springs, the gyroscopic terms) enter linearly implicit at ``theta`` (Acary and
