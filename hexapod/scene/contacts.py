@@ -59,12 +59,9 @@ def stance_weight(contact, t) -> np.ndarray:
     over the middle of the stance, a quintic smooth step over ``ramp`` of the stance at each
     end (C2)."""
     s = stance_progress(contact, t)
-    if np.ndim(contact.duty) == 0 and contact.duty >= 1.0:  # always on the ground
-        return np.ones_like(np.asarray(t, dtype=float))
     u = np.clip(np.minimum(s, 1.0 - s) / contact.ramp, 0.0, 1.0)
     weight = np.where(np.isnan(s), 0.0, u**3 * (10 - 15 * u + 6 * u**2))
-    # (contacts as arrays, :func:`schedule_arrays`: those always on the ground weigh 1)
-    return weight if np.ndim(contact.duty) == 0 else np.where(contact.duty >= 1.0, 1.0, weight)
+    return np.where(contact.duty >= 1.0, 1.0, weight)  # always on the ground: 1
 
 
 def schedule_arrays(contacts) -> SimpleNamespace:

@@ -202,8 +202,8 @@ class Integrator(SingularPoses, StepEnds):
         (:meth:`~hexapod.simulation.kernels.CompiledRates.dynamics`, see
         :meth:`_kernels_serve`), else the exact solve's."""
         serve = self._kernels_serve(t)
-        policy = self._compiled.policy
-        solved = serve and policy is not None and policy.holds(t, q, v)  # by _end_rates
+        policy = self._compiled.policy if serve else None
+        solved = policy is not None and policy.holds(t, q, v)  # by _end_rates
         solution = self._compiled.dynamics(t, q, v) if serve else None
         if solution is not None:
             self.counters.rhs += 0 if solved else 1
