@@ -225,25 +225,44 @@ def test_kernels_compiled_with_pivots_solve_by_lu_to_the_exact_numbers():
     assert np.abs(model.call("phi", q=state[0], w=reference[1]) / model.row_scale).max() <= 1e-12
 
 
-def test_a_states_pivots_are_chosen_once_for_its_kernels_and_kept_for_a_few_states():
+def test_a_states_pivots_are_chosen_once_for_its_kernels_and_kept_where_they_serve():
     """The rates' and the projection's kernels of one state (an integrator's start) share one
-    choice of pivots; a model keeps its last eight states' (a pure function of the rows, the
-    positions and the laws' values)."""
-    from hexapod.simulation.kernels import RECENT_PIVOTS, pivots_near
+    choice of pivots; at other states the pivots first chosen for the same rows are kept
+    where they serve (:meth:`StaticLU.serves`: the same kernels, compiled once, where a walk
+    made and compiled new ones at contact changes stride after stride); a model keeps its
+    last eight states' decisions. Pivots that no longer serve are chosen again."""
+    from hexapod.simulation import kernels
 
     scene = four_bar(3, 0.7, driven=False, gravity=[0, -9.81, 0])
     model, q, _, _, data = solve_state(scene, 0.2)
     rows, w = data.independent_rows, model.law_values(0.2)[0]
-    first = pivots_near(model, rows, (q, w))
-    assert pivots_near(model, rows, (q.copy(), w.copy())) is first
+    first = kernels.pivots_near(model, rows, (q, w))
+    assert kernels.pivots_near(model, rows, (q.copy(), w.copy())) is first
     moved = [model.integrate(q, 1e-3 * k * np.ones(model.n_v)) for k in range(1, 9)]
-    chosen = [pivots_near(model, rows, (x, w)) for x in moved]
-    assert all(lu is not first for lu in chosen) and RECENT_PIVOTS == 8
-    assert pivots_near(model, rows, (moved[-1], w)) is chosen[-1]
-    assert pivots_near(model, rows, (q, w)) is not first  # the oldest was let go
-    again = pivots_near(model, rows, (q, w))
-    assert np.array_equal(again.row_order, first.row_order)
-    assert np.array_equal(again.column_order, first.column_order)
+    assert all(kernels.pivots_near(model, rows, (x, w)) is first for x in moved)
+    assert kernels.RECENT_PIVOTS == 8
+    # where the first pivots do not serve, the state's own are chosen (and kept for it)
+    serves = first.serves
+    first.serves = lambda values, bound=10.0: False
+    try:
+        other = kernels.pivots_near(model, rows, (model.integrate(q, 0.01 * np.ones(model.n_v)),
+                                                  w))
+    finally:
+        first.serves = serves
+    assert other is not first and kernels.pivots_near(model, rows, (moved[0], w)) is first
+
+
+def test_pivots_that_a_matrix_has_outgrown_do_not_serve_it():
+    """:meth:`StaticLU.serves`: the pivots of one matrix serve another of its pattern while
+    their factors' growth stays within ten times partial pivoting's; a pivot gone to nearly
+    zero (growth 1e12) does not, nor an exactly zero one."""
+    from hexapod.algorithms.static_lu import StaticLU
+
+    rows, columns = np.array([0, 0, 1, 1]), np.array([0, 1, 0, 1])
+    lu = StaticLU.pivoted(rows, columns, 2, [2.0, 1.0, 1.0, 1.0])  # pivot on the 2
+    assert lu.serves([3.0, 1.0, 1.0, 2.0])
+    assert not lu.serves([1e-12, 1.0, 1.0, 1.0])
+    assert not lu.serves([0.0, 1.0, 1.0, 1.0])
 
 
 def test_kernels_refuse_what_gives_nan_though_their_residual_maxima_skip_it():

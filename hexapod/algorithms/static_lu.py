@@ -63,7 +63,41 @@ class StaticLU:
         pivots = [(np.argsort(lu.perm_r), np.argsort(lu.perm_c))
                   for lu in (splu(A, **order) for order in orders)]
         row_order, column_order = min(pivots, key=lambda p: _operations(rows, columns, n, *p))
-        return cls(rows, columns, n, row_order, column_order)
+        lu = cls(rows, columns, n, row_order, column_order)
+        lu.chosen_growth = lu.growth(values)  # what serves() measures others against
+        return lu
+
+    def growth(self, values) -> float:
+        """The growth of these pivots' factors on the matrix of these values (of this
+        pattern): the largest entry of ``U`` over the matrix's (what bounds a solve's error);
+        ``inf`` where a pivot is zero."""
+        from scipy.sparse import csc_array
+        from scipy.sparse.linalg import splu
+
+        values = np.asarray(values, dtype=float)
+        n = self.n
+        where_row, where_column = np.argsort(self.row_order), np.argsort(self.column_order)
+        permuted = csc_array((values, (where_row[self.rows], where_column[self.columns])),
+                             shape=(n, n))
+        try:
+            lu = splu(permuted, permc_spec="NATURAL", diag_pivot_thresh=0.0,
+                      options={"SymmetricMode": True})
+        except RuntimeError:  # exactly singular with these pivots
+            return float("inf")
+        if not np.array_equal(lu.perm_r, np.arange(n)):
+            return float("inf")  # a pivot of these was zero: SuperLU took another
+        growth = float(abs(lu.U).max() / max(np.abs(values).max(), 1e-300))
+        return growth if np.isfinite(growth) else float("inf")
+
+    def serves(self, values, bound: float = 10.0) -> bool:
+        """Whether these pivots serve the matrix of these values (of this pattern): their
+        factors' growth there within ``bound`` times what it was on the matrix they were
+        chosen for (:meth:`pivoted`). A kernel built with pivots chosen at another state keeps
+        them (its compiled library too) where they serve."""
+        chosen = getattr(self, "chosen_growth", None)
+        if chosen is None:
+            return False
+        return self.growth(values) <= bound * chosen
 
     def _pattern(self) -> None:
         """The symbolic factorisation: the entries of ``L`` (strictly lower) and ``U`` in the

@@ -65,13 +65,26 @@ def kept_pivots(model: Model, rows: list[int], q: np.ndarray, w: np.ndarray) -> 
     fewer rows than velocities), chosen by SuperLU at positions ``q`` and law values ``w``: a
     kernel built with them serves the states near there, its residual checks saying when they
     no longer do."""
-    symbols = {"q": ca.SX.sym("q", model.n_q), "w": ca.SX.sym("w", model.n_w)}
-    Phi_v = model.Phi_v(*[symbols[n] for n in model.Phi_v.name_in()])
-    K = kept_matrix(*equilibrated(Phi_v, mass_factors(model)[0]), rows)
-    values = ca.Function("K", list(symbols.values()), [K])(q, w)
-    pattern_rows, pattern_columns = K.sparsity().get_triplet()
-    return StaticLU.pivoted(pattern_rows, pattern_columns, K.size1(),
-                            np.array(values.nonzeros()))
+    return StaticLU.pivoted(*kept_values(model, rows, q, w))
+
+
+def kept_values(model: Model, rows: list[int], q: np.ndarray,
+                w: np.ndarray) -> tuple[np.ndarray, np.ndarray, int, np.ndarray]:
+    """The saddle-point matrix of the kept ``rows`` (:func:`kept_matrix`) at positions ``q``
+    and law values ``w``: its pattern's rows and columns, its size and its values there (its
+    Function built once per model and row set)."""
+    def build(m: Model) -> tuple[ca.Function, np.ndarray, np.ndarray]:
+        symbols = {"q": ca.SX.sym("q", m.n_q), "w": ca.SX.sym("w", m.n_w)}
+        Phi_v = m.Phi_v(*[symbols[n] for n in m.Phi_v.name_in()])
+        K = kept_matrix(*equilibrated(Phi_v, mass_factors(m)[0]), rows)
+        pattern_rows, pattern_columns = K.sparsity().get_triplet()
+        return (ca.Function("K", list(symbols.values()), [K]), np.array(pattern_rows),
+                np.array(pattern_columns))
+
+    function, pattern_rows, pattern_columns = model.built_once(
+        ("kept matrix", tuple(int(r) for r in rows)), build)
+    values = np.array(function(q, w).nonzeros())
+    return pattern_rows, pattern_columns, function.size1_out(0), values
 
 
 def solve_kept(W_all: ca.MX, d: ca.MX, zero: ca.MX, rows: list[int], top: ca.MX,

@@ -43,6 +43,7 @@ from hexapod.algorithms.static_lu import StaticLU
 from hexapod.algorithms.step import (
     equilibrated,
     kept_pivots,
+    kept_values,
     mass_factors,
     newton,
     solve_kept,
@@ -496,7 +497,17 @@ def pivots_near(model: Model, rows: np.ndarray, reference: tuple | None) -> Stat
     key = (rows.tobytes(), q.tobytes(), w.tobytes())
     lu = recent.get(key)
     if lu is None:
-        lu = recent.keep(key, kept_pivots(model, rows.tolist(), q, w))
+        # the pivots first chosen for these rows, where they serve this state too: the same
+        # kernels then (compiled once), where new pivots at each contact change of a walk
+        # made new kernels, and compiled them, stride after stride
+        first = model.built_once(("first pivots",), lambda m: {})
+        held = first.get(rows.tobytes())
+        if held is not None and held.serves(kept_values(model, rows.tolist(), q, w)[3]):
+            lu = held
+        else:
+            lu = kept_pivots(model, rows.tolist(), q, w)
+            first.setdefault(rows.tobytes(), lu)
+        recent.keep(key, lu)
     return lu
 
 
