@@ -54,11 +54,6 @@ ACTIVE_TOL = 1e-9
 PRIMAL_TOL = 1e-10
 
 
-def contact_weights(model: Model, t: float) -> np.ndarray:
-    """Each contact's weight in the ground-force policy at ``t`` (0 in swing)."""
-    return np.array([float(c.weight(t)) for c in model.contacts])
-
-
 def ground_reactions(model: Model, lam: np.ndarray) -> np.ndarray:
     """The ground's force on each foot (n_contacts, 3), N, world axes: ``-lam`` of the
     contact's rows (their Jacobian on the foot point is the identity in stance).

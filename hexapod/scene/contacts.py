@@ -144,8 +144,8 @@ def _schedules(laws: tuple, ndim: int) -> SimpleNamespace:
     footholds, their first positions and advances per stance (``foothold``, ``advance``) and the
     laws whose footholds turn or are raised by the ground (``apart``: each evaluated alone)."""
     shape = (len(laws),) + (1,) * ndim
-    arrays = {key: np.array([getattr(law.contact, key) for law in laws]).reshape(shape)
-              for key in ("period", "lift_off", "duty")}
+    arrays = {key: value.reshape(shape) for key, value in
+              vars(schedule_arrays([law.contact for law in laws])).items()}
     if all(hasattr(law, "axis") for law in laws):
         for key in ("foothold", "advance"):
             arrays[key] = np.array([getattr(law.contact, key)[law.axis]
