@@ -71,20 +71,13 @@ class StaticLU:
         """The growth of these pivots' factors on the matrix of these values (of this
         pattern): the largest entry of ``U`` over the matrix's (what bounds a solve's error);
         ``inf`` where a pivot is zero."""
-        from scipy.sparse import csc_array
-        from scipy.sparse.linalg import splu
-
         values = np.asarray(values, dtype=float)
-        n = self.n
-        where_row, where_column = np.argsort(self.row_order), np.argsort(self.column_order)
-        permuted = csc_array((values, (where_row[self.rows], where_column[self.columns])),
-                             shape=(n, n))
         try:
-            lu = splu(permuted, permc_spec="NATURAL", diag_pivot_thresh=0.0,
-                      options={"SymmetricMode": True})
+            lu = _in_order(self.rows, self.columns, self.n, self.row_order, self.column_order,
+                           values)
         except RuntimeError:  # exactly singular with these pivots
             return float("inf")
-        if not np.array_equal(lu.perm_r, np.arange(n)):
+        if not np.array_equal(lu.perm_r, np.arange(self.n)):
             return float("inf")  # a pivot of these was zero: SuperLU took another
         growth = float(abs(lu.U).max() / max(np.abs(values).max(), 1e-300))
         return growth if np.isfinite(growth) else float("inf")
@@ -192,22 +185,32 @@ def _sparsity(n: int, entries: list[tuple[int, int, int]]) -> tuple[ca.Sparsity,
             [position for _, _, position in entries])
 
 
+def _in_order(rows, columns, n: int, row_order, column_order, values, diagonal: float = 0.0):
+    """SuperLU's factors of the matrix of these values permuted to the pivots' order, without
+    pivoting (SuperLU takes another pivot only where one of these is zero), ``diagonal`` added
+    to it (to keep the pivots' places for a pattern's count); raises ``RuntimeError`` where
+    a pivot is exactly zero and none other is found."""
+    from scipy.sparse import csc_array
+    from scipy.sparse.linalg import splu
+
+    where_row, where_column = np.argsort(row_order), np.argsort(column_order)
+    entries = (where_row[np.asarray(rows)], where_column[np.asarray(columns)])
+    permuted = csc_array((np.asarray(values, dtype=float), entries), shape=(n, n))
+    if diagonal:
+        permuted = permuted + csc_array((np.full(n, diagonal), (np.arange(n), np.arange(n))),
+                                        shape=(n, n))
+    return splu(permuted, permc_spec="NATURAL", diag_pivot_thresh=0.0,
+                options={"SymmetricMode": True})
+
+
 def _operations(rows, columns, n: int, row_order, column_order) -> int:
     """What the elimination of the pattern with these pivots costs written out: its divisions
     and multiply-adds (pivot ``k``: the entries of ``L`` below it, each times one plus those
     of ``U`` right of it) and a solve's (the factors' entries). From SuperLU's factors of the
     permuted pattern with random values and no pivoting (their pattern is the symbolic one:
     no cancellation), milliseconds where :class:`StaticLU`'s own symbolic pass takes tens."""
-    from scipy.sparse import csc_array
-    from scipy.sparse.linalg import splu
-
-    where_row, where_column = np.argsort(row_order), np.argsort(column_order)
     values = np.random.default_rng(0).uniform(1.0, 2.0, len(rows))
-    permuted = csc_array((values, (where_row[rows], where_column[columns])), shape=(n, n))
-    permuted = permuted + csc_array((np.full(n, 4.0 * n), (np.arange(n), np.arange(n))),
-                                    shape=(n, n))  # the pivots' places, kept
-    lu = splu(permuted, permc_spec="NATURAL", diag_pivot_thresh=0.0,
-              options={"SymmetricMode": True})
+    lu = _in_order(rows, columns, n, row_order, column_order, values, diagonal=4.0 * n)
     below = np.diff(lu.L.tocsc().indptr) - 1  # each column's entries; L holds its diagonal
     right = np.diff(lu.U.tocsr().indptr) - 1  # each row's, right of the diagonal
     return int(np.sum(below * (1 + right)) + lu.L.nnz + lu.U.nnz)
