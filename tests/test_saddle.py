@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import hexapod as hx
-from hexapod.algorithms import linalg, saddle, sparse_qr, step
+from hexapod.algorithms import linalg, rows, saddle, sparse_qr, step
 from hexapod.algorithms.kinematics import rank_split
 from hexapod.benchmarks import n_four_bar
 from hexapod.benchmarks.redundant import bricard
@@ -137,6 +137,26 @@ def test_a_split_tells_a_bound_below_its_smallest_singular_value(name, sparse, m
             assert not split.smallest_exceeds(factor * smallest), (name, factor)
     assert split.smallest_exceeds(0.0) and smallest < 1e-3
 
+
+@pytest.mark.parametrize("name", ["chain of 40", "closed loop (planar N-four-bar)", "Bricard"])
+def test_the_gram_certificate_of_every_row_agrees_with_the_svd(name):
+    """``gram_exceeds`` on ``W W^T`` (the integrators' check of a rejected step where every
+    row is kept, without a rank decision) says what the SVD of the whole ``W`` says: true for
+    bounds below its smallest singular value by more than the margin, false at or above it;
+    where rows are dependent (Bricard's linkage: redundant) it is never true above zero, so
+    the rank decision decides there."""
+    model = hx.assemble(SCENES[name]())
+    q, _ = _state(model, 0.0)
+    w = model.law_values(0.0)[0]
+    W, _ = linalg.equilibrate(saddle.constraint_jacobian(model, q, w), model.mass_inv_sqrt)
+    gram, smallest = W @ W.T, np.linalg.svd(W, compute_uv=False).min()
+    for factor in (0.5, 0.99):
+        assert rows.gram_exceeds(gram, factor * smallest, model.n_v) == (smallest > 1e-6), name
+    for factor in (1.0, 1.01, 2.0):
+        assert not rows.gram_exceeds(gram, factor * smallest, model.n_v), (name, factor)
+    assert not rows.gram_exceeds(gram, 1e-7, model.n_v) or smallest > 1e-7
+    if name == "Bricard":
+        assert smallest < 1e-9  # the case of dependent rows
 
 def test_near_a_singular_pose_the_smallest_singular_value_is_found_to_round_off(sparse_path):
     """The integrators take differences of it along the motion there: ARPACK's value is

@@ -76,10 +76,7 @@ class RowSplit:
 
         if "_gram" not in self.__dict__:  # R R^T, its upper triangle (R's singular values)
             self._gram = lapack.dlauum(self.R, lower=0)[0]
-        gram, r = self._gram, self.rank
-        shift = bound**2 * (1.0 + 1e-3) + 10.0 * r * np.finfo(float).eps * np.trace(gram)
-        shifted = gram - shift * np.eye(r)
-        return lapack.dpotrf(shifted, lower=0, clean=0, overwrite_a=1)[1] == 0
+        return gram_exceeds(self._gram, bound, self.rank)
 
     def condition_number(self, n_v: int) -> float:
         """2-norm condition number of the equilibrated saddle-point matrix
@@ -118,6 +115,20 @@ class RowSplit:
     def redundant_coefficients(self) -> np.ndarray:
         """``C`` (r, n_redundant): each redundant row of ``W`` as ``sum_i C_ik W_Ii``."""
         return solve_triangular(self.R, self.basis.T @ self.W[self.redundant].T)
+
+
+def gram_exceeds(gram: np.ndarray, bound: float, inner: int) -> bool:
+    """Whether the smallest singular value of ``A`` is above ``bound`` by more than round-off
+    could hide, from ``gram = A A^T`` (its upper triangle suffices; ``inner``: the columns of
+    ``A``, the length of the products): ``gram - s I`` has a Cholesky factor, ``s`` above
+    ``bound^2`` by a thousandth of it and by ``10 max(r, inner) eps trace(gram)`` (a bound on
+    the product's and the factorisation's errors). False where it cannot tell."""
+    from scipy.linalg import lapack
+
+    r = gram.shape[0]
+    shift = bound**2 * (1.0 + 1e-3) + 10.0 * max(r, inner) * np.finfo(float).eps * np.trace(gram)
+    shifted = gram - shift * np.eye(r)
+    return lapack.dpotrf(shifted, lower=0, clean=0, overwrite_a=1)[1] == 0
 
 
 def is_sparse(A) -> bool:

@@ -18,7 +18,8 @@ import numpy as np
 from scipy.linalg import qr
 
 from hexapod.algorithms.kinematics import rank_split
-from hexapod.algorithms.linalg import as_dense
+from hexapod.algorithms.linalg import as_dense, equilibrate
+from hexapod.algorithms.rows import gram_exceeds, is_sparse
 from hexapod.algorithms.saddle import constraint_jacobian, is_large
 from hexapod.errors import HexapodError
 from hexapod.simulation.kernels import compiled_rates
@@ -91,7 +92,7 @@ class SingularPoses:
         system of fewer rows, compiled for them, and the projection after each step puts the
         state back on every constraint. Widening (the error test still failing) multiplies the
         tolerance by ``CROSSING_FACTOR`` again, up to ``CROSSING_FACTOR * SINGULAR_BAND``."""
-        if not self.model.n_c:
+        if not self.model.n_c or (self._crossing is None and self._every_row_clear()):
             return False
         split = self._rank_split()
         # most rejections are far from any pose, and a Cholesky factorisation says so at a
@@ -137,6 +138,30 @@ class SingularPoses:
                                      self._crossing_step_limit())
             self.h = min(self.h, self._crossing_cap)
         return True
+
+    def _every_row_clear(self) -> bool:
+        """Whether the rows of the equilibrated ``Phi_v`` at the current state have, all of them,
+        a smallest singular value above one of the bounds that begin a crossing (see
+        :meth:`_cross_singular`), certified by a Cholesky factor of ``W W^T``
+        (:func:`~hexapod.algorithms.rows.gram_exceeds`) without a rank decision. A fresh
+        decision would then keep every row (each is farther than that from the others' span)
+        and certify the same: where the run keeps every row (chains, trees, most mechanisms),
+        a rejected step pays a product and a Cholesky factor instead of the decision's QR (the
+        18-joint robot's run to 1e-7: a fifth of its CPU went to these checks). False where
+        a row is left out, ``W`` is sparse, or the certificate cannot tell."""
+        model, redundant = self.model, self.data.redundant_rows
+        if redundant is None or redundant.size or model.n_c > model.n_v:
+            return False
+        w, _, _ = model.law_values(self.t, self.data)
+        Phi_v = constraint_jacobian(model, self.q, w, self.data)
+        if is_sparse(Phi_v):
+            return False
+        self.counters.jacobians += 1
+        self.counters.factorisations += 1
+        W, _ = equilibrate(Phi_v, model.mass_inv_sqrt)
+        gram = W @ W.T
+        return (gram_exceeds(gram, SINGULAR_BAND, model.n_v)
+                or gram_exceeds(gram, FALLEN * self._spectrum_start[0], model.n_v))
 
     def _crossing_step_limit(self) -> float:
         """The longest step a crossing may take: the one over which the rows it leaves out,
