@@ -111,6 +111,48 @@ def solve_kept(W_all: ca.MX, d: ca.MX, zero: ca.MX, rows: list[int], top: ca.MX,
     return solution[:n_v, :], solution[n_v:, :]
 
 
+class KeptFactors:
+    """The LU factors (by ``lu``'s fixed pivots) of the saddle-point matrix of the kept
+    ``rows`` (:func:`kept_matrix`, the identity metric), formed once and solved with many
+    times: the steps of a chord method, a projection's velocities after its positions.
+    CasADi's sparse QR factorises at every solve, and cannot share them."""
+
+    def __init__(self, W_all: ca.MX, d: ca.MX, zero: ca.MX, rows: list[int], lu: StaticLU):
+        K = kept_matrix(W_all, d, zero, rows)
+        self.n_v, self.rows, self.d, self.lu = W_all.size2(), rows, d, lu
+        self.factors = _lu_factor(lu, K.sparsity())(K)
+
+    def solve(self, top: ca.MX, bottom: ca.MX) -> tuple[ca.MX, ca.MX]:
+        """``(y, mu)`` as :func:`solve_kept` gives them (``bottom``: all rows' right-hand
+        sides), from the factors formed once."""
+        rows = self.rows
+        scaled = bottom[rows, :] / ca.repmat(self.d[rows], 1, bottom.size2())
+        solution = _lu_factored(self.lu, top.size2())(self.factors, ca.vertcat(top, scaled))
+        return solution[:self.n_v, :], solution[self.n_v:, :]
+
+
+def _lu_factor(lu: StaticLU, pattern: ca.Sparsity) -> ca.Function:
+    """``K -> F``: the packed factors of ``K`` (of ``pattern``) by ``lu``, one SX Function
+    built once per LU and pattern."""
+    key = ("factor", tuple(pattern.colind()), tuple(pattern.row()))
+    functions = lu.__dict__.setdefault("_functions", {})
+    if key not in functions:
+        K = ca.SX.sym("K", pattern)
+        functions[key] = ca.Function("lu_factor", [K], [lu.factor(ca.vertcat(*K.nonzeros()))])
+    return functions[key]
+
+
+def _lu_factored(lu: StaticLU, columns: int) -> ca.Function:
+    """``(F, B) -> K^-1 B`` from the packed factors ``F`` of :func:`_lu_factor`."""
+    key = ("solve", columns)
+    functions = lu.__dict__.setdefault("_functions", {})
+    if key not in functions:
+        F, B = ca.SX.sym("F", lu.nnz), ca.SX.sym("B", lu.n, columns)
+        X = ca.horzcat(*[lu.solve(F, B[:, k]) for k in range(columns)])
+        functions[key] = ca.Function("lu_factored_solve", [F, B], [X])
+    return functions[key]
+
+
 def _lu_solve(lu: StaticLU, pattern: ca.Sparsity, columns: int) -> ca.Function:
     """``(K, B) -> K^-1 B`` by ``lu``, for ``K`` of ``pattern``: its straight-line SX code as
     one Function (one node in an MX graph, inlined on SX), built once per LU and shape."""

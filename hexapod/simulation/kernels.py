@@ -41,11 +41,13 @@ from hexapod._support.recent import Recent
 from hexapod.algorithms.ground import ground_policy
 from hexapod.algorithms.static_lu import StaticLU
 from hexapod.algorithms.step import (
+    KeptFactors,
     equilibrated,
     kept_pivots,
     kept_values,
     mass_factors,
     newton,
+    retract,
     solve_kept,
 )
 from hexapod.model.model import Model
@@ -434,15 +436,32 @@ class CompiledProjection:
             W_all, d, zero = equilibrated(call(model.Phi_v, q=position), m_inv_sqrt)
             return solve_kept(W_all, d, zero, rows, top, bottom_all, lu)[0]
 
-        position = q
-        for _ in range(self.newton):  # the Jacobian at each iterate: Newton's method proper
-            position = newton(model, position, lambda x: call(model.phi, q=x),
-                              lambda x: call(model.Phi_v, q=x), rows, m_inv_sqrt, 1, lu)
+        position, Phi_v = q, None
+        if lu is None:
+            for _ in range(self.newton):  # the Jacobian at each iterate: Newton's method proper
+                position = newton(model, position, lambda x: call(model.phi, q=x),
+                                  lambda x: call(model.Phi_v, q=x), rows, m_inv_sqrt, 1, lu)
+            nu = call(model.nu, q=position)
+            y = saddle(position, ca.mtimes(m_sqrt, v), nu)
+        else:
+            # factors kept (the compiled LU): the Newton steps and the velocities all solve
+            # with those at the given positions, a chord method, the velocities corrected
+            # twice by the constraints' residual at the positions found (each correction
+            # multiplies it by the change of the Jacobian between the two, some 1e-8)
+            factors = KeptFactors(*equilibrated(call(model.Phi_v), m_inv_sqrt), rows, lu)
+            zeros = ca.MX.zeros(model.n_v)
+            for _ in range(self.newton):
+                y, _ = factors.solve(zeros, -call(model.phi, q=position))
+                position = retract(model, position, ca.mtimes(m_inv_sqrt, y))
+            nu, Phi_v = call(model.nu, q=position), call(model.Phi_v, q=position)
+            y = ca.mtimes(m_sqrt, v)
+            for _ in range(2):
+                residual = nu - ca.mtimes(Phi_v, ca.mtimes(m_inv_sqrt, y))
+                y = y + factors.solve(zeros, residual)[0]
         phi_error = ca.mmax(ca.fabs(call(model.phi, q=position) / scale))
-        nu = call(model.nu, q=position)
-        y = saddle(position, ca.mtimes(m_sqrt, v), nu)
         velocity = ca.mtimes(m_inv_sqrt, y)
-        rate_error = (ca.mtimes(call(model.Phi_v, q=position), velocity) - nu) / scale
+        Phi_v = call(model.Phi_v, q=position) if Phi_v is None else Phi_v
+        rate_error = (ca.mtimes(Phi_v, velocity) - nu) / scale
         size = ca.norm_inf(velocity) + ca.norm_inf(nu / scale) + 1e-300
         rate_error = ca.mmax(ca.fabs(rate_error))
         return ca.Function("project", [q, v, *laws], [position, velocity, phi_error,
