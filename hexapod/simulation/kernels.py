@@ -400,7 +400,8 @@ class CompiledProjection:
     and :func:`solve_velocities` compute it from a state near the constraints (the end of an
     integration step): ``newton`` Newton iterations on ``phi = 0``, each the least-``M``-norm
     correction through the equilibrated saddle-point system, then the velocities projected
-    onto ``Phi_v v = nu``, in one call. Returns None when the result cannot be trusted (the
+    onto ``Phi_v v = nu``, in one call (compiled, with the LU's factors at the given positions
+    kept for all of them: :class:`~hexapod.algorithms.step.KeptFactors`). Returns None when the result cannot be trusted (the
     largest scaled residual above ``tol``, a change of rank): the caller then projects with the
     exact, rank-deciding functions.
     """
