@@ -401,9 +401,9 @@ class CompiledProjection:
     integration step): ``newton`` Newton iterations on ``phi = 0``, each the least-``M``-norm
     correction through the equilibrated saddle-point system, then the velocities projected
     onto ``Phi_v v = nu``, in one call (compiled, with the LU's factors at the given positions
-    kept for all of them: :class:`~hexapod.algorithms.step.KeptFactors`). Returns None when the result cannot be trusted (the
-    largest scaled residual above ``tol``, a change of rank): the caller then projects with the
-    exact, rank-deciding functions.
+    kept for all of them: :class:`~hexapod.algorithms.step.KeptFactors`). Returns None when
+    the result cannot be trusted (the largest scaled residual above ``tol``, a change of
+    rank): the caller then projects with the exact, rank-deciding functions.
     """
 
     def __init__(self, model: Model, rows: np.ndarray, newton: int = 2, tol: float = 1e-12,
