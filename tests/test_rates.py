@@ -219,10 +219,25 @@ def test_kernels_compiled_with_pivots_solve_by_lu_to_the_exact_numbers():
     assert pivots_near(model, rows, reference).n == model.n_v + rows.size  # [[I, W^T], [W, 0]]
     _, v_dot, _ = rates.solve(0.2, q, v)
     assert np.abs(v_dot - exact).max() <= 1e-9 * np.abs(exact).max()
-    drifted = model.integrate(q, 1e-6 * np.random.default_rng(1).normal(size=model.n_v))
-    state = projection(0.2, drifted, v)
+    rng = np.random.default_rng(1)
+    drifted = model.integrate(q, 1e-6 * rng.normal(size=model.n_v))
+    drifted_v = v + 1e-5 * rng.normal(size=model.n_v)
+    state = projection(0.2, drifted, drifted_v)
     assert state is not None
     assert np.abs(model.call("phi", q=state[0], w=reference[1]) / model.row_scale).max() <= 1e-12
+    # its factors kept from the drifted positions (a chord method, the velocities corrected by
+    # the residual where the positions end) against Newton's method proper on the same rows
+    # (the interpreted kernel's; the exact projection decides the rank again, and the drift
+    # makes this four-bar's redundant rows independent to it): the same positions to
+    # round-off, velocities on the constraints projected along the rows' directions at the
+    # drifted positions rather than at the projected ones, apart by the product of the two
+    # corrections (1e-6 and 1e-5 here) times the rows' conditioning: 5e-9 of the speeds
+    newton_q, newton_v = compiled_projection(model, rows)(0.2, drifted, drifted_v)
+    assert np.abs(state[0] - newton_q).max() <= 1e-13
+    rate = model.call("Phi_v", q=state[0], w=reference[1]) @ state[1] - model.call(
+        "nu", q=state[0], w=reference[1], wd=model.law_values(0.2)[1])
+    assert np.abs(rate).max() <= 1e-12 * np.abs(newton_v).max()
+    assert 0 < np.abs(state[1] - newton_v).max() <= 1e-7 * np.abs(newton_v).max()
 
 
 def test_a_states_pivots_are_chosen_once_for_its_kernels_and_kept_where_they_serve():
