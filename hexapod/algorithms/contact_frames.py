@@ -16,16 +16,21 @@ The contacts' acceleration is ``J v_dot + b`` with the bias ``b = J_dot v`` (a p
 fixed): ``R (w' x (w' x s))`` for a spatial body, ``-theta_dot^2 R s`` for a planar one, zero
 for a particle (:func:`contact_bias`).
 
-These few numbers per contact are evaluated in NumPy: a contact costs a rotation and a product.
+These few numbers per contact are written once, as CasADi expressions
+(:func:`contact_expressions`): the contact schemes' kernels may take them in, and
+:func:`contact_frames` evaluates them through a run's call buffers.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+import casadi as ca
 import numpy as np
 
+from hexapod._support.fastcall import FastFunction, dense_outputs
 from hexapod.errors import HexapodError
+from hexapod.model.data import Data, kept
 from hexapod.model.infos import ForceInfo
 from hexapod.model.model import Model
 from hexapod.spatial import rotation_2d, rotation_from_euler_parameters
@@ -77,7 +82,8 @@ def refuse_contacts(model: Model) -> None:
 
 
 def contact_frames(model: Model, q: np.ndarray,
-                   contacts: tuple[ForceInfo, ...] | None = None) -> ContactFrames:
+                   contacts: tuple[ForceInfo, ...] | None = None,
+                   data: Data | None = None) -> ContactFrames:
     """Gaps, Jacobian, points and axes of ``contacts`` (default all the model's) at ``q``.
 
     Parameters
@@ -86,65 +92,62 @@ def contact_frames(model: Model, q: np.ndarray,
     q : ndarray, shape (n_q,)
     contacts : tuple of ForceInfo, optional
         Default :func:`ground_contacts`.
+    data : Data, optional
+        A run's workspace, whose call buffers serve the evaluation (fresh ones without it).
 
     Returns
     -------
     ContactFrames
     """
     contacts = ground_contacts(model) if contacts is None else contacts
+    d, m = model.dimension, len(contacts)
+    if not m:
+        return ContactFrames(np.zeros(0), np.zeros((0, model.n_v)), np.zeros((0, d)),
+                             np.zeros((0, d, d)))
+    key = ("contact frames", tuple(id(c) for c in contacts))
+    function, axes = model.built_once(key, lambda built: _frames_function(built, contacts))
+    evaluate = kept(data, key, lambda: FastFunction(function))
+    gaps, jacobian, points = evaluate(np.asarray(q, dtype=float))
+    return ContactFrames(gaps, jacobian.reshape(m * d, model.n_v), points.reshape(m, d),
+                         axes.copy())
+
+
+def contact_expressions(model: Model, q, contacts: tuple[ForceInfo, ...]) -> tuple:
+    """``(gaps, jacobian, points)`` of ``contacts`` at the positions ``q`` (CasADi SX):
+    :func:`contact_frames`'s quantities as expressions (see the module's description for the
+    formulas), ``points`` stacked, ``(m d,)``."""
     fixed = model.built_once(("contact statics",), _statics)
     d = model.dimension
-    q = np.asarray(q, dtype=float)
-    gaps = np.zeros(len(contacts))
-    jacobian = np.zeros((len(contacts) * d, model.n_v))
-    points = np.zeros((len(contacts), d))
-    axes = np.zeros((len(contacts), d, d))
-    spatial = model.built_once(("spatial contacts", tuple(id(c) for c in contacts)),
-                               lambda m: _spatial_layout(m, contacts))
-    if spatial is not None:  # J_P = [I, -R [s]x], every spatial contact at once
-        k, position, quaternion, local, frame, skew_local, surface, rows, linear, angular = spatial
-        rotation = np.moveaxis(rotation_from_euler_parameters(q[quaternion].T), -1, 0)
-        point = q[position] + np.einsum("mij,mj->mi", rotation, local)
-        jacobian[rows, linear] = frame
-        jacobian[rows, angular] = -(frame @ rotation @ skew_local)
-        gaps[k] = np.einsum("mi,mi->m", frame[:, 0], point - surface)
-        points[k], axes[k] = point, frame
+    gaps, points = [], []
+    jacobian = ca.SX(len(contacts) * d, model.n_v)
     for k, element in enumerate(contacts):
         info, columns, local, frame, skew_local, surface = fixed[id(element)]
-        if info.kind == "spatial":
-            continue
-        rows = slice(k * d, (k + 1) * d)
-        qb = q[info.q]
-        if info.kind == "planar":  # J_P = [I, k x R s]
-            arm = rotation_2d(float(qb[2])) @ local
+        qb, axes = q[info.q], ca.DM(frame)
+        if info.kind == "spatial":  # J_P = [I, -R [s]x]
+            rotation = rotation_from_euler_parameters(qb[3:])
+            point = qb[:3] + ca.mtimes(rotation, ca.DM(local))
+            block = ca.horzcat(axes, -ca.mtimes(axes, ca.mtimes(rotation, ca.DM(skew_local))))
+        elif info.kind == "planar":  # J_P = [I, k x R s]
+            arm = ca.mtimes(rotation_2d(qb[2]), ca.DM(local))
             point = qb[:2] + arm
-            jacobian[rows, columns] = frame @ np.array([[1.0, 0.0, -arm[1]],
-                                                        [0.0, 1.0, arm[0]]])
+            block = ca.mtimes(axes, ca.vertcat(ca.horzcat(1.0, 0.0, -arm[1]),
+                                               ca.horzcat(0.0, 1.0, arm[0])))
         else:  # a particle: J_P = I
-            point = qb + local
-            jacobian[rows, columns] = frame
-        gaps[k] = frame[0] @ (point - surface)
-        points[k], axes[k] = point, frame
-    return ContactFrames(gaps, jacobian, points, axes)
+            point, block = qb + ca.DM(local), axes
+        jacobian[k * d:(k + 1) * d, columns.tolist()] = block
+        gaps.append(ca.dot(axes[0, :].T, point - ca.DM(surface)))
+        points.append(point)
+    return ca.vertcat(*gaps), jacobian, ca.vertcat(*points)
 
 
-def _spatial_layout(model: Model, contacts) -> tuple | None:
-    """The contacts among ``contacts`` on spatial bodies, stacked for :func:`contact_frames`:
-    their indices, their bodies' position and Euler-parameter coordinates, their points,
-    axes, points' cross-product matrices and surface points, and the Jacobian's row and
-    column indices of their linear and angular blocks; None when there is none."""
+def _frames_function(model: Model, contacts: tuple[ForceInfo, ...]) -> tuple:
+    """The Function ``q -> (gaps, jacobian, points)`` of ``contacts`` and their axes (rows:
+    normal, tangents), built once per model and contact set."""
     fixed = model.built_once(("contact statics",), _statics)
-    chosen = [(k, fixed[id(c)]) for k, c in enumerate(contacts)
-              if fixed[id(c)][0].kind == "spatial"]
-    if not chosen:
-        return None
-    k = np.array([i for i, _ in chosen])
-    coordinates = np.array([np.arange(model.n_q)[info.q] for _, (info, *_) in chosen])
-    columns = np.array([c for _, (_, c, *_) in chosen])
-    stacked = [np.array([entry[j] for _, entry in chosen]) for j in (2, 3, 4, 5)]
-    rows = (3 * k[:, None] + np.arange(3))[:, :, None]
-    return (k, coordinates[:, :3], coordinates[:, 3:], *stacked, rows,
-            columns[:, None, :3], columns[:, None, 3:])
+    q = ca.SX.sym("q", model.n_q)
+    function = ca.Function("contact_frames", [q], list(contact_expressions(model, q, contacts)),
+                           ["q"], ["gaps", "jacobian", "points"])
+    return dense_outputs(function), np.array([fixed[id(c)][3] for c in contacts])
 
 
 def _statics(model: Model) -> dict:

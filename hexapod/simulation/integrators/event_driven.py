@@ -96,7 +96,7 @@ class EventDriven(DormandPrince853):
         self._direction = np.zeros((m, d - 1))  # each slip's direction, contact axes
         self._just = np.zeros(m, bool)  # left the ground or began to slip at the step's start
         self._gap_tol = GAP_TOLERANCE * model.characteristic_length
-        frames = contact_frames(model, self.q, self.contacts)
+        frames = contact_frames(model, self.q, self.contacts, self.data)
         touching = np.flatnonzero((frames.gaps <= self._gap_tol)
                                   & armed(frames, self.contacts))
         u = (frames.jacobian @ self.v).reshape(m, d)
@@ -132,7 +132,7 @@ class EventDriven(DormandPrince853):
         modes = self.modes if modes is None else modes
         laws = tuple(np.array(x) for x in model.law_values(t, data))
         half = model.mass_inv_sqrt
-        frames = contact_frames(model, q, self.contacts)
+        frames = contact_frames(model, q, self.contacts, self.data)
         G = half @ frames.jacobian.T
         y, lam, Y, Lam = self._contact_solve("acceleration", t, q, v, laws, G)
         self.counters.rhs += 1
@@ -266,7 +266,7 @@ class EventDriven(DormandPrince853):
         to its slip at the step's start."""
         if "slip" not in self.modes:
             return
-        u = contact_frames(self.model, self.q, self.contacts).jacobian @ self.v
+        u = contact_frames(self.model, self.q, self.contacts, self.data).jacobian @ self.v
         for k, mode in enumerate(self.modes):
             if mode == "slip" and not self._just[k]:
                 self._direction[k] = self._slip(k, u)
@@ -294,7 +294,7 @@ class EventDriven(DormandPrince853):
         """The accelerations, multipliers and contact forces of the current state."""
         self.v_dot, lam, F = self._solve(self.t, self.q, self.v)[:3]
         self.lam = lam
-        axes = contact_frames(self.model, self.q, self.contacts).axes
+        axes = contact_frames(self.model, self.q, self.contacts, self.data).axes
         self.contact_forces = np.einsum("mij,mi->mj", axes, F)
         self.contact_states = tuple(self.modes)
 
@@ -309,7 +309,7 @@ class EventDriven(DormandPrince853):
             return values
         F = self._solve(t, q, v)[2] if any(x == "slip" for x in self.modes) else np.zeros(
             (m, d))
-        frames = contact_frames(self.model, q, self.contacts)
+        frames = contact_frames(self.model, q, self.contacts, self.data)
         u = (frames.jacobian @ v).reshape(m, d)
         ready = armed(frames, self.contacts)
         for k, mode in enumerate(self.modes):
@@ -399,7 +399,7 @@ class EventDriven(DormandPrince853):
             return
         k, column = index
         if self.modes[k] == "open":  # a touch-down, with the contacts touching at once
-            frames = contact_frames(self.model, self.q, self.contacts)
+            frames = contact_frames(self.model, self.q, self.contacts, self.data)
             closed = np.array([mode != "open" for mode in self.modes])
             touching = np.flatnonzero((frames.gaps <= max(self._gap_tol, frames.gaps[k]))
                                       & (armed(frames, self.contacts) | closed))
@@ -409,7 +409,7 @@ class EventDriven(DormandPrince853):
             self._just[k] = True
         else:  # a slip ends, with those ending at once: they stick, or slip back (below)
             m, d = len(self.contacts), self.model.dimension
-            u = (contact_frames(self.model, self.q, self.contacts).jacobian
+            u = (contact_frames(self.model, self.q, self.contacts, self.data).jacobian
                  @ self.v).reshape(m, d)
             resting = MODE_TOLERANCE * max(1.0, np.abs(self.v).max())
             for j, mode in enumerate(self.modes):
@@ -477,7 +477,7 @@ class EventDriven(DormandPrince853):
         frictional problem at acceleration level (:meth:`_stick_states`): stick, slip (along
         their tangential acceleration) or open."""
         m, d = len(self.contacts), self.model.dimension
-        frames = contact_frames(self.model, q, self.contacts)
+        frames = contact_frames(self.model, q, self.contacts, self.data)
         u = (frames.jacobian @ v).reshape(m, d)
         speed = ROUND_OFF * max(1.0, np.abs(v).max())
         ready = armed(frames, self.contacts)
@@ -518,7 +518,7 @@ class EventDriven(DormandPrince853):
         ``G = M^-1/2 J_rows^T``: what an impact and the contact projection solve on."""
         model = self.model
         laws = model.law_values(t, self.data)[:2]
-        frames = contact_frames(model, q, self.contacts)
+        frames = contact_frames(model, q, self.contacts, self.data)
         G = model.mass_inv_sqrt @ frames.jacobian[rows].T
         y, _, Y, _ = self._contact_solve("impulse", t, q, v, laws, G)
         self.counters.factorisations += 1

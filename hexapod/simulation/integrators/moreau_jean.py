@@ -107,7 +107,7 @@ class MoreauJean(Integrator):
         self._mu = np.array([c.contact.mu for c in self.contacts])
         self._restitution = np.array([c.contact.restitution for c in self.contacts])
         self._last_impulses = np.zeros((len(self.contacts), d))  # where the sweeps start
-        frames = contact_frames(self.model, self.q, self.contacts)
+        frames = contact_frames(self.model, self.q, self.contacts, self.data)
         self._unconditional = np.array([c.contact.armed_ahead_of is None
                                         for c in self.contacts], dtype=bool)
         self._armed = armed(frames, self.contacts) & ((frames.gaps >= 0.0)
@@ -129,7 +129,7 @@ class MoreauJean(Integrator):
         mid = tuple(np.array(x) for x in model.law_values(t0 + THETA * h, data))
         half = model.mass_inv_sqrt
         q_mid = model.integrate(q0, THETA * h * v0)
-        frames = contact_frames(model, q_mid, self.contacts)
+        frames = contact_frames(model, q_mid, self.contacts, self.data)
         G = half @ frames.jacobian.T  # M^-1/2 J^T
         y, lam, Y, Lam = self._constrained(t1, q_mid, v0, mid, G, h)
         self.counters.rhs += 1
@@ -226,7 +226,7 @@ class MoreauJean(Integrator):
         pushed = np.flatnonzero(impulses[:, 0] > 0.0)
         if not pushed.size:
             return q1
-        gaps = contact_frames(model, q1, tuple(self.contacts[a] for a in pushed)).gaps
+        gaps = contact_frames(model, q1, self.contacts, self.data).gaps[pushed]
         # a contact that rebounds (leaving at its normal speed) is only pushed out
         gaps = np.where(staying[pushed], gaps, np.minimum(gaps, 0.0))
         if np.max(np.abs(gaps)) <= GAP_TOLERANCE * model.characteristic_length:
