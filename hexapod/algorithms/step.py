@@ -158,11 +158,9 @@ def _lu_solve(lu: StaticLU, pattern: ca.Sparsity, columns: int) -> ca.Function:
     one Function (one node in an MX graph, inlined on SX), built once per LU and shape."""
     key = (tuple(pattern.colind()), tuple(pattern.row()), columns)
     functions = lu.__dict__.setdefault("_functions", {})
-    if key not in functions:
-        K = ca.SX.sym("K", pattern)
-        F = lu.factor(ca.vertcat(*K.nonzeros()))
-        B = ca.SX.sym("B", K.size1(), columns)
-        X = ca.horzcat(*[lu.solve(F, B[:, k]) for k in range(columns)])
+    if key not in functions:  # the factorisation and the solve, inlined on SX
+        K, B = ca.SX.sym("K", pattern), ca.SX.sym("B", pattern.size1(), columns)
+        X = _lu_factored(lu, columns)(_lu_factor(lu, pattern)(K), B)
         functions[key] = ca.Function("lu_solve", [K, B], [X])
     return functions[key]
 

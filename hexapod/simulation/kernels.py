@@ -406,9 +406,9 @@ class CompiledProjection:
     from the exact projection by the product of the two corrections (5e-9 of the speeds for
     corrections of 1e-6 and 1e-5 on a four-bar; a second of DOP853 at rtol 1e-6 on chains and
     the 18-joint robot ended 5e-13 to 4e-12 from where it did with three factorisations), on
-    the constraints to round-off all the same. Returns None when
-    the result cannot be trusted (the largest scaled residual above ``tol``, a change of
-    rank): the caller then projects with the exact, rank-deciding functions.
+    the constraints to round-off all the same. Returns None when the result cannot be
+    trusted (the largest scaled residual above ``tol``, a change of rank): the caller then
+    projects with the exact, rank-deciding functions.
     """
 
     def __init__(self, model: Model, rows: np.ndarray, newton: int = 2, tol: float = 1e-12,
@@ -437,18 +437,13 @@ class CompiledProjection:
         if model.n_c == 0:  # nothing to project on
             return ca.Function("project", [q, v, *laws], [q, v] + [ca.MX(0.0)] * 3)
 
-        def saddle(position, top, bottom_all):
-            """Solve [[I, W^T], [W, 0]] [y; mu] = [top; bottom / d] on the kept rows."""
-            W_all, d, zero = equilibrated(call(model.Phi_v, q=position), m_inv_sqrt)
-            return solve_kept(W_all, d, zero, rows, top, bottom_all, lu)[0]
-
-        position, Phi_v = q, None
-        if lu is None:
-            for _ in range(self.newton):  # the Jacobian at each iterate: Newton's method proper
+        position = q
+        if lu is None:  # CasADi's QR factorises at every solve: Newton's method proper
+            for _ in range(self.newton):  # the Jacobian at each iterate
                 position = newton(model, position, lambda x: call(model.phi, q=x),
-                                  lambda x: call(model.Phi_v, q=x), rows, m_inv_sqrt, 1, lu)
-            nu = call(model.nu, q=position)
-            y = saddle(position, ca.mtimes(m_sqrt, v), nu)
+                                  lambda x: call(model.Phi_v, q=x), rows, m_inv_sqrt, 1)
+            nu, Phi_v = call(model.nu, q=position), call(model.Phi_v, q=position)
+            y, _ = solve_kept(*equilibrated(Phi_v, m_inv_sqrt), rows, ca.mtimes(m_sqrt, v), nu)
         else:
             # factors kept (the compiled LU): the Newton steps and the velocities all solve
             # with those at the given positions, a chord method, the velocities corrected
@@ -466,7 +461,6 @@ class CompiledProjection:
                 y = y + factors.solve(zeros, residual)[0]
         phi_error = ca.mmax(ca.fabs(call(model.phi, q=position) / scale))
         velocity = ca.mtimes(m_inv_sqrt, y)
-        Phi_v = call(model.Phi_v, q=position) if Phi_v is None else Phi_v
         rate_error = (ca.mtimes(Phi_v, velocity) - nu) / scale
         size = ca.norm_inf(velocity) + ca.norm_inf(nu / scale) + 1e-300
         rate_error = ca.mmax(ca.fabs(rate_error))
