@@ -37,7 +37,6 @@ import numpy as np
 
 from hexapod.algorithms.static_lu import StaticLU
 from hexapod.model.model import Model
-from hexapod.spatial import retract_symbolic
 
 
 def equilibrated(Phi_v: ca.MX, m_inv_sqrt: ca.DM) -> tuple[ca.MX, ca.MX, ca.MX]:
@@ -166,16 +165,10 @@ def _lu_solve(lu: StaticLU, pattern: ca.Sparsity, columns: int) -> ca.Function:
 
 
 def retract(model: Model, q, dv):
-    """``q (+) dv`` as :meth:`Model.integrate` computes it, on CasADi symbols: one call of an
-    SX Function built once per model (inlined on SX arguments; on MX one node, where the
-    expression itself costs a tenth of a second per use to build on the walking robot)."""
-    return model.built_once(("retraction",), _retraction)(q, dv)
-
-
-def _retraction(model: Model) -> ca.Function:
-    q, dv = ca.SX.sym("q", model.n_q), ca.SX.sym("dv", model.n_v)
-    q_new = retract_symbolic(q, dv, model._lin_q, model._lin_v, model._quat_q, model._omega_v)
-    return ca.Function("retract", [q, dv], [q_new], ["q", "dv"], ["q_new"])
+    """``q (+) dv`` as :meth:`Model.integrate` computes it, on CasADi symbols: one call of the
+    model's SX Function :attr:`Model.retract` (inlined on SX arguments; on MX one node, where
+    the expression itself costs a tenth of a second per use to build on the walking robot)."""
+    return model.retract(q, dv)
 
 
 def newton(model: Model, position: ca.MX, residual, jacobian, rows: list[int],
