@@ -330,3 +330,26 @@ def test_bad_input_is_one_message_exit_1_and_nothing_written(tmp_path, capsys, c
     assert status == 1 and not out.exists()
     assert words in error
     assert "Traceback" not in error
+
+
+@pytest.mark.parametrize("foreseen", ["none", "all"])
+def test_a_contact_closing_unforeseen_has_the_step_solved_again_with_all(monkeypatch,
+                                                                         foreseen):
+    """Moreau-Jean's solve carries the unit impulses of the contacts that may close in the
+    step only (the compass gait's stance foot, its swing foot near the strike); one closing
+    unforeseen has the step solved again with all of them. Foreseeing none (every closing
+    unforeseen, one more solve a step) or all gives the same walk to round-off."""
+    from hexapod.simulation.integrators.moreau_jean import MoreauJean
+
+    model = hexapod.assemble(hexapod.load_scene(SCENES / "compass-gait.toml"))
+    usual = hexapod.simulate(model, 0.76, step=2e-3)
+    monkeypatch.setattr(MoreauJean, "_candidates",
+                        lambda self, *_: np.full(len(self.contacts), foreseen == "all"))
+    other = hexapod.simulate(model, 0.76, step=2e-3)
+    assert [(e.kind, e.contact, e.t) for e in other.events] == [
+        (e.kind, e.contact, e.t) for e in usual.events]
+    assert np.abs(other.q - usual.q).max() <= 1e-12
+    assert np.abs(other.contact_forces - usual.contact_forces).max() <= 1e-9
+    steps = usual.counters.steps
+    assert usual.counters.rhs == steps + 1 == (other.counters.rhs if foreseen == "all" else
+                                               other.counters.rhs - steps)

@@ -47,6 +47,9 @@ class ContactFrames:
         ``n . (P - S)`` per contact (m): positive when apart.
     jacobian : ndarray, shape (m d, n_v)
         Rows ``[n; t_1 ...]`` of each contact in turn (``d`` the scene's dimension).
+    scaled : ndarray, shape (m d, n_v)
+        ``jacobian M^-1/2``: the rows on the mass-scaled velocities ``M^1/2 v`` (the transpose
+        of what the contact schemes' kernels take).
     points : ndarray, shape (m, d)
         The touching points, world (m).
     axes : ndarray, shape (m, d, d)
@@ -57,6 +60,7 @@ class ContactFrames:
     jacobian: np.ndarray
     points: np.ndarray
     axes: np.ndarray
+    scaled: np.ndarray
 
 
 def ground_contacts(model: Model) -> tuple[ForceInfo, ...]:
@@ -104,13 +108,13 @@ def contact_frames(model: Model, q: np.ndarray,
     d, m = model.dimension, len(contacts)
     if not m:
         return ContactFrames(np.zeros(0), np.zeros((0, model.n_v)), np.zeros((0, d)),
-                             np.zeros((0, d, d)))
+                             np.zeros((0, d, d)), np.zeros((0, model.n_v)))
     key = ("contact frames", tuple(id(c) for c in contacts))
     function, axes = model.built_once(key, lambda built: _frames_function(built, contacts))
     evaluate = kept(data, key, lambda: FastFunction(function))
-    gaps, jacobian, points = evaluate(np.asarray(q, dtype=float))
+    gaps, jacobian, points, scaled = evaluate(np.asarray(q, dtype=float))
     return ContactFrames(gaps, jacobian.reshape(m * d, model.n_v), points.reshape(m, d),
-                         axes.copy())
+                         axes.copy(), scaled.reshape(m * d, model.n_v))
 
 
 def contact_expressions(model: Model, q, contacts: tuple[ForceInfo, ...]) -> tuple:
@@ -142,12 +146,14 @@ def contact_expressions(model: Model, q, contacts: tuple[ForceInfo, ...]) -> tup
 
 
 def _frames_function(model: Model, contacts: tuple[ForceInfo, ...]) -> tuple:
-    """The Function ``q -> (gaps, jacobian, points)`` of ``contacts`` and their axes (rows:
-    normal, tangents), built once per model and contact set."""
+    """The Function ``q -> (gaps, jacobian, points, scaled)`` of ``contacts`` and their axes
+    (rows: normal, tangents), built once per model and contact set."""
     fixed = model.built_once(("contact statics",), _statics)
     q = ca.SX.sym("q", model.n_q)
-    function = ca.Function("contact_frames", [q], list(contact_expressions(model, q, contacts)),
-                           ["q"], ["gaps", "jacobian", "points"])
+    gaps, jacobian, points = contact_expressions(model, q, contacts)
+    scaled = ca.mtimes(jacobian, ca.sparsify(ca.DM(model.mass_inv_sqrt.dense())))
+    function = ca.Function("contact_frames", [q], [gaps, jacobian, points, scaled], ["q"],
+                           ["gaps", "jacobian", "points", "scaled"])
     return dense_outputs(function), np.array([fixed[id(c)][3] for c in contacts])
 
 

@@ -66,6 +66,10 @@ class CompiledContactStep:
         return cls(model, none if rows is None else rows,
                    none if rows is None else data.redundant_rows, columns, level)
 
+    def with_columns(self, columns: int) -> CompiledContactStep:
+        """The same solve (rows, level) for ``columns`` contact columns."""
+        return CompiledContactStep(self.model, self.rows, self.left_out, columns, self.level)
+
     def _build(self) -> ca.Function:
         model, level, n = self.model, self.level, self.model.n_w
         symbols = {"q": ca.MX.sym("q", model.n_q), "v": ca.MX.sym("v", model.n_v),

@@ -131,9 +131,8 @@ class EventDriven(DormandPrince853):
         model, data = self.model, self.data
         modes = self.modes if modes is None else modes
         laws = tuple(np.array(x) for x in model.law_values(t, data))
-        half = model.mass_inv_sqrt
         frames = contact_frames(model, q, self.contacts, self.data)
-        G = half @ frames.jacobian.T
+        G = frames.scaled.T  # M^-1/2 J^T
         y, lam, Y, Lam = self._contact_solve("acceleration", t, q, v, laws, G)
         self.counters.rhs += 1
         self.counters.factorisations += 1
@@ -141,7 +140,7 @@ class EventDriven(DormandPrince853):
         F = self._forces(t, frames.jacobian @ v, free, G.T @ Y, modes)
         x = F.reshape(-1)
         W = G.T @ Y
-        return half @ (y + Y @ x), lam + Lam @ x, F, free + W @ x, W
+        return model.mass_inv_sqrt @ (y + Y @ x), lam + Lam @ x, F, free + W @ x, W
 
     def _forces(self, t, u, free, W, modes) -> np.ndarray:
         """The closed contacts' forces that keep their accelerations as their modes say."""
@@ -519,7 +518,7 @@ class EventDriven(DormandPrince853):
         model = self.model
         laws = model.law_values(t, self.data)[:2]
         frames = contact_frames(model, q, self.contacts, self.data)
-        G = model.mass_inv_sqrt @ frames.jacobian[rows].T
+        G = frames.scaled[rows].T
         y, _, Y, _ = self._contact_solve("impulse", t, q, v, laws, G)
         self.counters.factorisations += 1
         return frames, G, y, Y

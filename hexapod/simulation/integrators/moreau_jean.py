@@ -118,6 +118,11 @@ class MoreauJean(Integrator):
         self.contact_states = tuple("open" if not c else "slip" if s else "stick"
                                     for c, s in zip(closed, sliding, strict=True))
         self._kernel = CompiledContactStep.started(self.model, self.data, len(self.contacts) * d)
+        # by columns, the rows kept at the start: made (compiled) before the time loop
+        self._kernels = {columns: self._kernel.with_columns(columns) for columns
+                         in {self._columns_for(0), self._columns_for(len(self.contacts))}}
+        self._speed_change = np.full(len(self.contacts), np.inf)  # unknown before a step
+        self._closed = np.array([state != "open" for state in self.contact_states], dtype=bool)
 
     def _step(self) -> None:
         model, data = self.model, self.data
@@ -127,26 +132,31 @@ class MoreauJean(Integrator):
         if model.n_w and not self._laws_kept(t0 + THETA * h):
             self._laws_ahead()
         mid = tuple(np.array(x) for x in model.law_values(t0 + THETA * h, data))
-        half = model.mass_inv_sqrt
+        d = model.dimension
         q_mid = model.integrate(q0, THETA * h * v0)
         frames = contact_frames(model, q_mid, self.contacts, self.data)
-        G = half @ frames.jacobian.T  # M^-1/2 J^T
-        y, lam, Y, Lam = self._constrained(t1, q_mid, v0, mid, G, h)
-        self.counters.rhs += 1
-        self.counters.jacobians += 1
-        self.counters.factorisations += 1
-        impulses, states = self._impulses(h, frames, v0, G, y, Y)
-        y_free, y = y, y + Y @ impulses.reshape(-1)
-        lam = lam + Lam @ impulses.reshape(-1)
-        v1 = half @ y
+        start = frames.jacobian @ v0  # the contacts' velocities, their axes
+        carried = self._candidates(frames, start[::d], h)
+        y, lam, Y, Lam = self._constrained(t1, q_mid, v0, mid, frames, h, carried)
+        free = frames.scaled @ y  # at the step's end without contact impulses
+        active = self._active(h, frames, start[::d], free[::d])
+        if (active & ~carried).any():  # one closes that was not foreseen: all of them
+            carried = np.ones(len(self.contacts), dtype=bool)
+            y, lam, Y, Lam = self._constrained(t1, q_mid, v0, mid, frames, h, carried)
+            free = frames.scaled @ y
+        impulses, states = self._impulses(frames, start[::d], free,
+                                          Y[:, _columns(active, carried, d)], active)
+        y = y + Y @ impulses[carried].reshape(-1)
+        lam = lam + Lam @ impulses[carried].reshape(-1)
+        end = frames.scaled @ y
+        v1 = model.mass_inv_sqrt @ y
         q1 = model.integrate(q0, h * ((1 - THETA) * v0 + THETA * v1))
         staying = np.array([state != "open" for state in states])
         if staying.any():  # those that rebound leave at their normal speed
-            staying &= ((frames.jacobian @ v1)[::model.dimension]
-                        <= ROUND_OFF * max(np.abs(v0).max(), np.abs(v1).max()))
-        q1 = self._onto_ground(q1, impulses, staying, Y)
+            staying &= end[::d] <= ROUND_OFF * max(np.abs(v0).max(), np.abs(v1).max())
+        q1 = self._onto_ground(q1, impulses, staying, Y, carried)
         q1, v1 = self._project(t1, q1, v1)
-        self._record(t1, h, frames, impulses, states, v0, G, y_free, y)
+        self._record(t1, h, frames, impulses, states, start, free, end)
         self.t, self.q, self.v = t1, q1, v1
         self.v_dot, self.lam = (v1 - v0) / h, lam / h
 
@@ -167,29 +177,56 @@ class MoreauJean(Integrator):
                 break
         self.model.law_values(np.array(times), self.data)
 
-    def _constrained(self, t1, q_mid, v0, mid, G, h):
+    def _candidates(self, frames, normal_speed, h) -> np.ndarray:
+        """The contacts (a mask) whose unit impulses the step's solve carries: those closed,
+        and those whose gap could close in the step, their normal speed changed by up to four
+        times the change of the step before (all of them at the first step). A contact that
+        closes unforeseen has the solve made again with all of them: the impulses are the
+        same, and the walking robot's solve carries its three feet down instead of six."""
+        lowest = frames.gaps + h * ((1 - THETA) * normal_speed
+                                    - THETA * 4.0 * self._speed_change)
+        return self._closed | (lowest <= 0.0)
+
+    def _constrained(self, t1, q_mid, v0, mid, frames, h, carried):
         """The saddle-point solve of the step on the bilateral rows kept, at the mid-step
         positions ``q_mid``, in one call
         (:class:`~hexapod.simulation.contact_kernel.CompiledContactStep`): the free velocity
-        (``y = M^1/2 v``, with the rows' impulses ``lam``) and the response to the contacts'
-        unit impulses (``Y``, ``Lam``). Forces that depend on the state (a controller's gains,
-        dampers, springs, the gyroscopic terms) enter linearly implicit at ``theta`` (Acary and
-        Brogliato 2008, 10.1): stable for gains an explicit force would need steps far shorter
-        than the controller's period for. When the rows kept at the start no longer serve,
-        they are decided again here."""
+        (``y = M^1/2 v``, with the rows' impulses ``lam``) and the response to the unit
+        impulses of the ``carried`` contacts (a mask; ``Y``, ``Lam``: their columns in
+        order). Forces that depend on the state (a controller's gains, dampers, springs, the
+        gyroscopic terms) enter linearly implicit at ``theta`` (Acary and Brogliato 2008,
+        10.1): stable for gains an explicit force would need steps far shorter than the
+        controller's period for. When the rows kept at the start no longer serve, they are
+        decided again here."""
+        d, n_v = self.model.dimension, self.model.n_v
+        count = int(carried.sum())
+        columns = self._columns_for(count)
+        kernel = self._kernels.get(columns) or self._kernel.with_columns(columns)
+        G_carried = np.zeros((n_v, columns))  # M^-1/2 J^T, padded with zero columns
+        G_carried[:, :count * d] = frames.scaled[np.repeat(carried, d)].T
         end = self.model.law_values(t1, self.data)[:2]
-        self._kernel, solution = contact_solution(
-            self._kernel, lambda: self._rank_split(q_mid, self.t + THETA * h), q_mid, v0,
-            (*mid, *end), G, h, THETA)
-        return solution
+        self._kernel, (y, lam, Y, Lam) = contact_solution(
+            kernel, lambda: self._rank_split(q_mid, self.t + THETA * h), q_mid, v0,
+            (*mid, *end), G_carried, h, THETA)
+        if self._kernel is not kernel:  # the rows were decided again: the others no longer serve
+            self._kernels = {}
+        self._kernels[columns] = self._kernel
+        self.counters.rhs += 1
+        self.counters.jacobians += 1
+        self.counters.factorisations += 1
+        return y, lam, Y[:, :count * d], Lam[:, :count * d]
 
-    def _impulses(self, h, frames, v0, G, y, Y):
-        """Each contact's impulse in its axes (m, d) and its state after the step."""
+    def _columns_for(self, count: int) -> int:
+        """The kernel's contact columns for ``count`` contacts carried: there are kernels for
+        half of the contacts and for all of them, the carried padded with zero columns."""
         m, d = len(self.contacts), self.model.dimension
-        impulses = np.zeros((m, d))
-        states = ["open"] * m
-        normal_speed = (frames.jacobian @ v0)[::d]
-        free_speed = (G.T @ y)[::d]  # the normal speeds at the step's end without contact
+        return d * (m if count > (m + 1) // 2 else (m + 1) // 2)
+
+    def _active(self, h, frames, normal_speed, free_speed) -> np.ndarray:
+        """The contacts (a mask) whose gap would close in the step without their impulses (the
+        position update applied to the normal speeds ``free_speed`` at the step's end without
+        them), armed or closed."""
+        self._speed_change = np.abs(free_speed - normal_speed)
         # the gaps at q_k+theta (the frames') and the rest of the way, q_k+1 = q_k+theta (+)
         # h ((1 - 2 theta) v_k + theta v_k+1)
         predicted = frames.gaps + h * ((1 - 2 * THETA) * normal_speed + THETA * free_speed)
@@ -198,15 +235,22 @@ class MoreauJean(Integrator):
         # pushed out); one closed stays so whatever its condition
         self._armed = armed(frames, self.contacts) & (
             self._armed | (frames.gaps > 0.0) | self._unconditional)
-        closed = np.array([state != "open" for state in self.contact_states], dtype=bool)
-        active = np.flatnonzero((predicted <= 0.0) & (self._armed | closed))
+        return (predicted <= 0.0) & (self._armed | self._closed)
+
+    def _impulses(self, frames, normal_speed, free, Y, active):
+        """Each contact's impulse in its axes (m, d) and its state after the step; ``free`` the
+        contacts' velocities at the step's end without contact impulses, ``Y`` the unit
+        impulses' responses of the ``active`` contacts (a mask)."""
+        m, d = len(self.contacts), self.model.dimension
+        impulses = np.zeros((m, d))
+        states = ["open"] * m
+        active = np.flatnonzero(active)
         if active.size:
             rows = (active[:, None] * d + np.arange(d)).reshape(-1)
-            W = G[:, rows].T @ Y[:, rows]
-            free = G[:, rows].T @ y
-            approach = np.where(_impacting(normal_speed[active], free[::d]),
+            W = frames.scaled[rows] @ Y
+            approach = np.where(_impacting(normal_speed[active], free[rows][::d]),
                                 -normal_speed[active], 0.0)
-            solution = solve_contacts((W + W.T) / 2, free, self._mu[active],
+            solution = solve_contacts((W + W.T) / 2, free[rows], self._mu[active],
                                       self._restitution[active] * approach,
                                       tuple(self.contact_names[a] for a in active),
                                       initial=self._last_impulses[active])
@@ -216,14 +260,16 @@ class MoreauJean(Integrator):
         self._last_impulses = impulses
         return impulses, tuple(states)
 
-    def _onto_ground(self, q1, impulses, staying, Y):
+    def _onto_ground(self, q1, impulses, staying, Y, carried):
         """The gaps of the contacts the ground pushed in the step closed by the least
         ``M``-norm correction along their normals, under the bilateral rows (linearised at the
         step's start). Closed both ways: out of the ground, and down onto it where a plastic
         touch-down stopped a contact short of it (which would otherwise fall again, and hop):
-        ``staying`` says which stay (their normal speed is zero at the step's end)."""
+        ``staying`` says which stay (their normal speed is zero at the step's end); ``Y`` the
+        unit impulses' responses of the ``carried`` contacts."""
         model, d = self.model, self.model.dimension
-        pushed = np.flatnonzero(impulses[:, 0] > 0.0)
+        pushing = impulses[:, 0] > 0.0
+        pushed = np.flatnonzero(pushing)
         if not pushed.size:
             return q1
         gaps = contact_frames(model, q1, self.contacts, self.data).gaps[pushed]
@@ -231,20 +277,20 @@ class MoreauJean(Integrator):
         gaps = np.where(staying[pushed], gaps, np.minimum(gaps, 0.0))
         if np.max(np.abs(gaps)) <= GAP_TOLERANCE * model.characteristic_length:
             return q1
-        G = Y[:, pushed * d]  # the normal columns
+        G = Y[:, _columns(pushing, carried, d)[::d]]  # the normal columns
         correction = np.linalg.lstsq(G.T @ G, -gaps, rcond=None)[0]
         return model.integrate(q1, model.mass_inv_sqrt @ (G @ correction))
 
-    def _record(self, t1, h, frames, impulses, states, v0, G, y_free, y) -> None:
-        """The step's contact forces and events."""
+    def _record(self, t1, h, frames, impulses, states, start, free, end) -> None:
+        """The step's contact forces and events; ``start``, ``free`` and ``end`` the contacts'
+        velocities (their axes) at the step's start, at its end without contact impulses and
+        with them."""
         d = self.model.dimension
         world = np.einsum("mij,mi->mj", frames.axes, impulses)  # axes as rows: J^T P
         m = len(self.contacts)
         if not m:
             return
-        start = (frames.jacobian @ v0).reshape(m, d)
-        free = (G.T @ y_free).reshape(m, d)
-        end = (G.T @ y).reshape(m, d)
+        start, free, end = start.reshape(m, d), free.reshape(m, d), end.reshape(m, d)
         # an impact: an approach faster than twice what the smooth forces change the contact's
         # velocity by in the step, or a slip stopped (or started) by more than that: a
         # tangential impact (Painleve's rod)
@@ -266,7 +312,15 @@ class MoreauJean(Integrator):
             elif old == "slip" and new == "stick":
                 self.events.append(ContactEvent(t1, "slip-end", name, np.zeros(d)))
         self.contact_states = states
+        self._closed = np.array([state != "open" for state in states], dtype=bool)
         self.contact_forces = world / h
+
+
+def _columns(chosen: np.ndarray, carried: np.ndarray, d: int) -> np.ndarray:
+    """The columns, among those of the ``carried`` contacts (``d`` each, in order), of the
+    ``chosen`` ones (both masks over all contacts; the chosen are carried)."""
+    first = (np.cumsum(carried) - 1)[chosen] * d
+    return (first[:, None] + np.arange(d)).reshape(-1)
 
 
 def _impacting(before: np.ndarray, free: np.ndarray) -> np.ndarray:
