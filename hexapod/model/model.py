@@ -493,15 +493,17 @@ class Model:
 
     @cached_property
     def force_tangents(self) -> ca.Function:
-        """``force_tangents(q, v, w) -> (K, C)``: :attr:`tangent_matrices` with no multiplier,
-        the derivatives of ``-Q`` alone (what a linearly implicit step takes), without the
-        constraints' second derivatives that zero multipliers would multiply (on the walking
-        robot half the instructions)."""
+        """``force_tangents(q, v, w) -> (K, C, Q)``: :attr:`tangent_matrices` with no
+        multiplier, the derivatives of ``-Q`` alone (what a linearly implicit step takes),
+        without the constraints' second derivatives that zero multipliers would multiply (on
+        the walking robot half the instructions), and ``Q`` itself: one Function, their common
+        subexpressions shared (the walking robot on the ground, its 36 joints under
+        controllers: 45,049 instructions against 54,405 for ``Q`` and the tangents apart)."""
         s = self._sym
         names = [n for n in ("q", "v", "w") if n != "w" or self.n_w > 0]
         symbols = {"q": s.q, "v": s.v, "w": s.w}
-        return ca.Function("force_tangents", [symbols[n] for n in names], self._tangents(-s.Q),
-                           names, ["K", "C"])
+        return ca.Function("force_tangents", [symbols[n] for n in names],
+                           ca.cse([*self._tangents(-s.Q), s.Q]), names, ["K", "C", "Q"])
 
     def _tangents(self, g: ca.SX) -> list[ca.SX]:
         """``[dg/dq B(q), dg/dv]``: ``g``'s derivatives along a Lie-group displacement of the

@@ -93,8 +93,7 @@ class CompiledContactStep:
         elif level == "impulse":
             first, bottom = ca.mtimes(m_sqrt, v), call(model.nu) if model.n_c else None
         else:
-            Q = call(model.Q)  # not dynamics_terms: gamma would be computed for nothing
-            K, C = call(model.force_tangents)
+            K, C, Q = call(model.force_tangents)  # not dynamics_terms: no gamma needed
             a = h * theta
             force = h * Q + ca.mtimes(a * C + a * a * K, v)
             first = ca.mtimes(m_sqrt, v) + ca.mtimes(m_inv_sqrt, force)
