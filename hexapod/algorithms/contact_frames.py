@@ -117,6 +117,15 @@ def contact_frames(model: Model, q: np.ndarray,
                          axes.copy(), scaled.reshape(m * d, model.n_v))
 
 
+def contact_gaps(model: Model, q: np.ndarray, contacts: tuple[ForceInfo, ...],
+                 data: Data | None = None) -> np.ndarray:
+    """The gaps of ``contacts`` at ``q`` alone (:attr:`ContactFrames.gaps`), through the call
+    buffers of ``data``: what a position correction reads, without the Jacobians."""
+    key = ("contact gaps", tuple(id(c) for c in contacts))
+    function = model.built_once(key, lambda built: _gaps_function(built, contacts))
+    return kept(data, key, lambda: FastFunction(function))(np.asarray(q, dtype=float))[0]
+
+
 def contact_expressions(model: Model, q, contacts: tuple[ForceInfo, ...]) -> tuple:
     """``(gaps, jacobian, points)`` of ``contacts`` at the positions ``q`` (CasADi SX):
     :func:`contact_frames`'s quantities as expressions (see the module's description for the
@@ -155,6 +164,13 @@ def _frames_function(model: Model, contacts: tuple[ForceInfo, ...]) -> tuple:
     function = ca.Function("contact_frames", [q], [gaps, jacobian, points, scaled], ["q"],
                            ["gaps", "jacobian", "points", "scaled"])
     return dense_outputs(function), np.array([fixed[id(c)][3] for c in contacts])
+
+
+def _gaps_function(model: Model, contacts: tuple[ForceInfo, ...]) -> ca.Function:
+    """The Function ``q -> gaps`` of ``contacts``."""
+    q = ca.SX.sym("q", model.n_q)
+    gaps = contact_expressions(model, q, contacts)[0]
+    return dense_outputs(ca.Function("contact_gaps", [q], [gaps], ["q"], ["gaps"]))
 
 
 def _statics(model: Model) -> dict:

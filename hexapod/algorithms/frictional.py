@@ -96,15 +96,14 @@ def solve_contacts(W: np.ndarray, b: np.ndarray, mu: np.ndarray, target: np.ndar
     """
     m = mu.size
     d = b.size // m if m else 1
-    P = np.zeros((m, d)) if initial is None else np.array(initial, dtype=float).reshape(m, d)
-    states = ["open"] * m
-    shift = np.zeros((m, d))
-    shift[:, 0] = target
-    rest = (b.reshape(m, d) - shift)  # the normal condition becomes u_N >= 0 on this velocity
+    rest = b.reshape(m, d).copy()
+    rest[:, 0] -= target  # the normal condition becomes u_N >= 0 on this velocity
     sticking = _all_stick(W, rest, mu)
     if sticking is not None:
         return ContactSolution(sticking, (W @ sticking.reshape(-1) + b).reshape(m, d),
                                ("stick",) * m, 0)
+    P = np.zeros((m, d)) if initial is None else np.array(initial, dtype=float).reshape(m, d)
+    states = ["open"] * m
     blocks = [W[a * d:(a + 1) * d, a * d:(a + 1) * d] for a in range(m)]
     scale = float(np.max(np.abs(rest))) if m else 0.0
     sweeps = 0
@@ -134,10 +133,11 @@ def _all_stick(W: np.ndarray, rest: np.ndarray, mu: np.ndarray) -> np.ndarray | 
     m, d = rest.shape
     if m == 0 or d == 1:
         return None
-    P = np.linalg.lstsq(W, -rest.reshape(-1), rcond=1e-12)[0].reshape(m, d)
-    residual = np.max(np.abs(W @ P.reshape(-1) + rest.reshape(-1)))
-    if residual > SWEEP_TOLERANCE * max(float(np.max(np.abs(rest))), 1e-300):
+    r = rest.reshape(-1)
+    P = np.linalg.lstsq(W, -r, rcond=1e-12)[0]
+    if np.abs(W @ P + r).max() > SWEEP_TOLERANCE * max(float(np.abs(r).max()), 1e-300):
         return None
+    P = P.reshape(m, d)
     if np.all(P[:, 0] >= 0.0) and np.all(np.linalg.norm(P[:, 1:], axis=1)
                                          <= mu * P[:, 0] * (1 + 1e-12)):
         return P

@@ -49,7 +49,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hexapod.algorithms.contact_frames import armed, contact_frames, ground_contacts
+from hexapod.algorithms.contact_frames import (
+    armed,
+    contact_frames,
+    contact_gaps,
+    ground_contacts,
+)
 from hexapod.algorithms.frictional import solve_contacts
 from hexapod.simulation.contact_kernel import CompiledContactStep, contact_solution
 from hexapod.simulation.integrators.base import Integrator
@@ -233,8 +238,9 @@ class MoreauJean(Integrator):
         # a contact with an arming condition may touch down ahead of its other contact once
         # above the ground there (a scuffing swing foot, below it when it passes, is not
         # pushed out); one closed stays so whatever its condition
-        self._armed = armed(frames, self.contacts) & (
-            self._armed | (frames.gaps > 0.0) | self._unconditional)
+        if not self._unconditional.all():
+            self._armed = armed(frames, self.contacts) & (
+                self._armed | (frames.gaps > 0.0) | self._unconditional)
         return (predicted <= 0.0) & (self._armed | self._closed)
 
     def _impulses(self, frames, normal_speed, free, Y, active):
@@ -272,7 +278,7 @@ class MoreauJean(Integrator):
         pushed = np.flatnonzero(pushing)
         if not pushed.size:
             return q1
-        gaps = contact_frames(model, q1, self.contacts, self.data).gaps[pushed]
+        gaps = contact_gaps(model, q1, self.contacts, self.data)[pushed]
         # a contact that rebounds (leaving at its normal speed) is only pushed out
         gaps = np.where(staying[pushed], gaps, np.minimum(gaps, 0.0))
         if np.max(np.abs(gaps)) <= GAP_TOLERANCE * model.characteristic_length:
@@ -298,8 +304,10 @@ class MoreauJean(Integrator):
         slip_jump = np.linalg.norm(end[:, 1:] - free[:, 1:], axis=1)
         impacting = _impacting(start[:, 0], free[:, 0]) | (
             (slip_jump > 2.0 * smooth) & (slip_jump > ROUND_OFF * np.abs(start).max()))
-        for a, (old, new) in enumerate(zip(self.contact_states, states, strict=True)):
-            name = self.contact_names[a]
+        changed = [a for a, (old, new) in enumerate(zip(self.contact_states, states, strict=True))
+                   if old != new or impacting[a]]
+        for a in changed:
+            old, new, name = self.contact_states[a], states[a], self.contact_names[a]
             if impacting[a] and new != "open":
                 self.events.append(ContactEvent(t1, "impact", name, world[a].copy()))
             if old == "open" and new != "open":
