@@ -136,7 +136,7 @@ class MoreauJean(Integrator):
         t1 = t0 + h
         if model.n_w and not self._laws_kept(t0 + THETA * h):
             self._laws_ahead()
-        mid = tuple(np.array(x) for x in model.law_values(t0 + THETA * h, data))
+        mid = model.law_values(t0 + THETA * h, data)
         d = model.dimension
         q_mid = model.integrate(q0, THETA * h * v0)
         frames = contact_frames(model, q_mid, self.contacts, self.data)
@@ -292,7 +292,7 @@ class MoreauJean(Integrator):
         velocities (their axes) at the step's start, at its end without contact impulses and
         with them."""
         d = self.model.dimension
-        world = np.einsum("mij,mi->mj", frames.axes, impulses)  # axes as rows: J^T P
+        world = (impulses[:, None, :] @ frames.axes)[:, 0]  # axes as rows: J^T P
         m = len(self.contacts)
         if not m:
             return
