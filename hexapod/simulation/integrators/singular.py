@@ -159,9 +159,9 @@ class SingularPoses:
         self.counters.jacobians += 1
         self.counters.factorisations += 1
         W, _ = equilibrate(Phi_v, model.mass_inv_sqrt)
-        gram = W @ W.T
-        return (gram_exceeds(gram, SINGULAR_BAND, model.n_v)
-                or gram_exceeds(gram, FALLEN * self._spectrum_start[0], model.n_v))
+        # above either bound is above the lower one: one factorisation
+        bound = min(SINGULAR_BAND, FALLEN * self._spectrum_start[0])
+        return gram_exceeds(W @ W.T, bound, model.n_v)
 
     def _crossing_step_limit(self) -> float:
         """The longest step a crossing may take: the one over which the rows it leaves out,
