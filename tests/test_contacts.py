@@ -332,9 +332,7 @@ def test_bad_input_is_one_message_exit_1_and_nothing_written(tmp_path, capsys, c
     assert "Traceback" not in error
 
 
-@pytest.mark.parametrize("foreseen", ["none", "all"])
-def test_a_contact_closing_unforeseen_has_the_step_solved_again_with_all(monkeypatch,
-                                                                         foreseen):
+def test_a_contact_closing_unforeseen_has_the_step_solved_again_with_all(monkeypatch):
     """Moreau-Jean's solve carries the unit impulses of the contacts that may close in the
     step only (the compass gait's stance foot, its swing foot near the strike); one closing
     unforeseen has the step solved again with all of them. Foreseeing none (every closing
@@ -343,13 +341,14 @@ def test_a_contact_closing_unforeseen_has_the_step_solved_again_with_all(monkeyp
 
     model = hexapod.assemble(hexapod.load_scene(SCENES / "compass-gait.toml"))
     usual = hexapod.simulate(model, 0.76, step=2e-3)
-    monkeypatch.setattr(MoreauJean, "_candidates",
-                        lambda self, *_: np.full(len(self.contacts), foreseen == "all"))
-    other = hexapod.simulate(model, 0.76, step=2e-3)
-    assert [(e.kind, e.contact, e.t) for e in other.events] == [
-        (e.kind, e.contact, e.t) for e in usual.events]
-    assert np.abs(other.q - usual.q).max() <= 1e-12
-    assert np.abs(other.contact_forces - usual.contact_forces).max() <= 1e-9
     steps = usual.counters.steps
-    assert usual.counters.rhs == steps + 1 == (other.counters.rhs if foreseen == "all" else
-                                               other.counters.rhs - steps)
+    assert usual.counters.rhs == steps + 1
+    for foreseen, more in ((False, steps), (True, 0)):
+        monkeypatch.setattr(MoreauJean, "_candidates",
+                            lambda self, *_, f=foreseen: np.full(len(self.contacts), f))
+        other = hexapod.simulate(model, 0.76, step=2e-3)
+        assert [(e.kind, e.contact, e.t) for e in other.events] == [
+            (e.kind, e.contact, e.t) for e in usual.events]
+        assert np.abs(other.q - usual.q).max() <= 1e-12  # measured 4e-15
+        assert np.abs(other.contact_forces - usual.contact_forces).max() <= 1e-9  # of 7e3 N
+        assert other.counters.rhs == usual.counters.rhs + more
