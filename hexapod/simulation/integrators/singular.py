@@ -18,11 +18,11 @@ import numpy as np
 from scipy.linalg import qr
 
 from hexapod.algorithms.kinematics import rank_split
-from hexapod.algorithms.linalg import as_dense, equilibrate
-from hexapod.algorithms.rows import gram_exceeds, is_sparse
+from hexapod.algorithms.linalg import as_dense
+from hexapod.algorithms.rows import gram_exceeds
 from hexapod.algorithms.saddle import constraint_jacobian, is_large
 from hexapod.errors import HexapodError
-from hexapod.simulation.kernels import compiled_rates
+from hexapod.simulation.kernels import compiled_rates, row_gram
 from hexapod.simulation.scales import characteristic_time
 
 #: smallest singular value of the equilibrated ``Phi_v`` (rows of unit length, so 1 is
@@ -146,22 +146,20 @@ class SingularPoses:
         (:func:`~hexapod.algorithms.rows.gram_exceeds`) without a rank decision. A fresh
         decision would then keep every row (each is farther than that from the others' span)
         and certify the same: where the run keeps every row (chains, trees, most mechanisms),
-        a rejected step pays a product and a Cholesky factor instead of the decision's QR (the
-        18-joint robot's run to 1e-7: a fifth of its CPU went to these checks). False where
-        a row is left out, ``W`` is sparse, or the certificate cannot tell."""
+        a rejected step pays ``W W^T`` in one call (:func:`~hexapod.simulation.kernels.
+        row_gram`) and a Cholesky factor instead of the decision's QR (the 18-joint robot's run
+        to 1e-7: a fifth of its CPU went to these checks). False where a row is left out, the
+        model is large (its ``Phi_v`` sparse), or the certificate cannot tell."""
         model, redundant = self.model, self.data.redundant_rows
-        if redundant is None or redundant.size or model.n_c > model.n_v:
-            return False
-        w, _, _ = model.law_values(self.t, self.data)
-        Phi_v = constraint_jacobian(model, self.q, w, self.data)
-        if is_sparse(Phi_v):
+        if (redundant is None or redundant.size or model.n_c > model.n_v
+                or is_large(model)):
             return False
         self.counters.jacobians += 1
         self.counters.factorisations += 1
-        W, _ = equilibrate(Phi_v, model.mass_inv_sqrt)
+        gram = row_gram(model, self.data, self.q, model.law_values(self.t, self.data)[0])
         # above either bound is above the lower one: one factorisation
         bound = min(SINGULAR_BAND, FALLEN * self._spectrum_start[0])
-        return gram_exceeds(W @ W.T, bound, model.n_v)
+        return gram_exceeds(gram, bound, model.n_v)
 
     def _crossing_step_limit(self) -> float:
         """The longest step a crossing may take: the one over which the rows it leaves out,
