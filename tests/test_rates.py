@@ -226,12 +226,13 @@ def test_kernels_compiled_with_pivots_solve_by_lu_to_the_exact_numbers():
     assert state is not None
     assert np.abs(model.call("phi", q=state[0], w=reference[1]) / model.row_scale).max() <= 1e-12
     # its factors kept from the drifted positions (a chord method, the velocities corrected by
-    # the residual where the positions end) against Newton's method proper on the same rows
-    # (the interpreted kernel's; the exact projection decides the rank again, and the drift
-    # makes this four-bar's redundant rows independent to it): the same positions to
-    # round-off, velocities on the constraints projected along the rows' directions at the
-    # drifted positions rather than at the projected ones, apart by the product of the two
-    # corrections (1e-6 and 1e-5 here) times the rows' conditioning: 5e-9 of the speeds
+    # the residual where the positions end) against the interpreted kernel on the same rows
+    # (the same chord; the velocities projected exactly at the positions found; the exact
+    # projection decides the rank again, and the drift makes this four-bar's redundant rows
+    # independent to it): the same positions to round-off, velocities on the constraints
+    # projected along the rows' directions at the drifted positions rather than at the
+    # projected ones, apart by the product of the two corrections (1e-6 and 1e-5 here) times
+    # the rows' conditioning: 5e-9 of the speeds
     newton_q, newton_v = compiled_projection(model, rows)(0.2, drifted, drifted_v)
     assert np.abs(state[0] - newton_q).max() <= 1e-13
     rate = model.call("Phi_v", q=state[0], w=reference[1]) @ state[1] - model.call(
