@@ -38,9 +38,10 @@
     steps = [[0.3, 0.03]]            # risers: [at, rise] (m) along the heading
 
 :func:`read_robot` checks everything and lists every problem at once, naming the file and the
-key; :func:`robot_scene` builds the walking scene (:mod:`legs.walker`). A scene file whose
-document has a ``[robot]`` table is read as a robot description wherever a scene is
-(``hexapod report ROBOT.toml``), through the entry point ``hexapod.robots``.
+key; :func:`legs.walker.robot_scene` builds the walking scene. A scene file whose document has
+a ``[robot]`` table is read as a robot description wherever a scene is (``hexapod report
+ROBOT.toml``), through the entry point ``hexapod.robots``
+(:func:`legs.walker.robot_from_document`).
 """
 
 from __future__ import annotations
@@ -53,7 +54,7 @@ import numpy as np
 
 from hexapod import ModelError, Scene
 from hexapod.scene import ActuatorTable, GroundForces, Problem, read_actuators
-from legs.walker import PATTERNS
+from legs.patterns import PATTERNS
 
 _ROBOT_KEYS = {"name", "urdf", "trunk", "rest", "feet", "actuators", "weights", "coupled"}
 _GROUND_KEYS = {"policy", "mu", "faces", "min_normal", "default_reference", "reference_efforts",
@@ -340,17 +341,3 @@ def rest_angles(description: RobotDescription, joints) -> dict[str, float]:
     """The rest angle of each of ``joints`` (names): the first entry of ``rest`` whose name or
     pattern matches it, else 0 (left out)."""
     return by_pattern(description.rest, joints)
-
-
-def robot_from_document(document: dict, path: str | Path):
-    """The walking scene of the robot description ``document`` read from ``path`` (the entry
-    point ``hexapod.robots``: a scene file with a ``[robot]`` table).
-
-    Raises
-    ------
-    ModelError
-        Every problem of the description, or of its URDF.
-    """
-    from legs.walker import robot_scene
-
-    return robot_scene(read_robot(document, path))

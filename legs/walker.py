@@ -6,11 +6,11 @@ trunk's pose and each foot's path are **guides** (:mod:`hexapod.scene.laws.guide
 actuated joint follows them, so the engine's Newton solve places the legs and the joints carry
 the efforts; each foot in stance is a contact whose ground force the scene's policy shares.
 
-**Gaits** (:data:`PATTERNS`): each foot lifts off at a fraction of the period (its phase) and
-is on the ground for the fraction ``duty`` before that. Patterns name the feet by role: on four
-legs ``LF RF LH RH`` (left/right, fore/hind), on six ``L1 L2 L3 R1 R2 R3`` (front to hind), on
-two ``L R``; the roles are the robot's feet sorted by their rest positions (left: ``y > 0``;
-front first). An explicit phase table names the feet themselves.
+**Gaits** (:data:`~legs.patterns.PATTERNS`): each foot lifts off at a fraction of the period
+(its phase) and is on the ground for the fraction ``duty`` before that. Patterns name the feet
+by role: on four legs ``LF RF LH RH`` (left/right, fore/hind), on six ``L1 L2 L3 R1 R2 R3``
+(front to hind), on two ``L R``; the roles are the robot's feet sorted by their rest positions
+(left: ``y > 0``; front first). An explicit phase table names the feet themselves.
 
 **Paths** (:class:`StepPath`), in world axes, walking along ``x`` at the constant speed
 ``stride / period``: a foot in stance stands still on its foothold; in swing it moves to the
@@ -31,29 +31,12 @@ from pathlib import Path
 import numpy as np
 
 from hexapod.scene import Law
+from legs.description import by_pattern, read_robot, rest_angles
 from legs.duty import StepPathDuty, duty_parameter
+from legs.patterns import PATTERNS
 from legs.posing import at_start, posed
 from legs.stepping import LIFT_RATES, STEP_RATES, OnSchedule
 from legs.swing import stance_progress, swing_schedule
-
-#: Lift-off phases (fractions of the period) by foot role, and the default duty factor, of
-#: each pattern, by the number of legs. A trot, a pace and a bound have two feet down, whose
-#: line the trunk's motion must not tip about (:mod:`legs.carried`), and four while the load
-#: passes from one pair to the other: a duty factor above one half.
-PATTERNS: dict[int, dict[str, tuple[dict[str, float], float]]] = {
-    2: {"walk": ({"L": 0.0, "R": 0.5}, 0.6)},
-    4: {"walk": ({"LH": 0.0, "LF": 0.25, "RH": 0.5, "RF": 0.75}, 0.75),
-        "trot": ({"LF": 0.0, "RH": 0.0, "RF": 0.5, "LH": 0.5}, 0.6),
-        "pace": ({"LF": 0.0, "LH": 0.0, "RF": 0.5, "RH": 0.5}, 0.6),
-        "bound": ({"LF": 0.0, "RF": 0.0, "LH": 0.5, "RH": 0.5}, 0.6)},
-    6: {"tripod": ({"L1": 0.0, "R2": 0.0, "L3": 0.0, "R1": 0.5, "L2": 0.5, "R3": 0.5}, 0.5),
-        "tetrapod": ({"L3": 0.0, "R2": 0.0, "L2": 1 / 3, "R1": 1 / 3, "L1": 2 / 3,
-                      "R3": 2 / 3}, 2 / 3),
-        "wave": ({"L3": 0.0, "L2": 1 / 6, "L1": 2 / 6, "R3": 3 / 6, "R2": 4 / 6, "R1": 5 / 6},
-                 5 / 6),
-        "ripple": ({"L1": 0.0, "R2": 1 / 6, "L3": 2 / 6, "R1": 3 / 6, "L2": 4 / 6,
-                    "R3": 5 / 6}, 2 / 3)},
-}
 
 
 def roles(rest: dict[str, np.ndarray]) -> dict[str, str]:
@@ -272,7 +255,6 @@ def robot_scene(description):
         swing that would not clear a step's edge.
     """
     from hexapod.scene import GroundForces, Guided, JointDriver, read_urdf
-    from legs.description import rest_angles
 
     urdf = (description.body if description.body is not None
             else read_urdf(description.urdf, base="free"))
@@ -442,7 +424,6 @@ def _coupled_laws(description, chains: dict, walk: _Walk) -> dict:
     """The laws of the joints that follow their foot through the cycle (the description's
     ``coupled``, among each foot's leg joints ``chains``): joint name ->
     :class:`legs.stepping.GaitCoupled` on its foot's schedule."""
-    from legs.description import by_pattern
     from legs.stepping import GaitCoupled
 
     gait, out = walk.gait, {}
@@ -469,7 +450,6 @@ def _add_posture(scene, description, name: str, joints: list[str], angles: dict)
     """For a leg of more than three joints, the rule that resolves it: the posture nearest
     its rest posture (the description's ``rest``), weighted by ``robot.weights``."""
     from hexapod.scene import PostureDriver
-    from legs.description import by_pattern
 
     if len(joints) <= 3:
         return
@@ -602,3 +582,15 @@ def _carry(scene, walk: _Walk, phases: list, height: float, kinematics=None) -> 
         kinematics = hx.assemble(scene).guidance.kinematics
     for name, law in carry(kinematics, sways, phases, feet, weight * height).items():
         scene.drivers[name].law = law
+
+
+def robot_from_document(document: dict, path: str | Path):
+    """The walking scene of the robot description ``document`` read from ``path`` (the entry
+    point ``hexapod.robots``: a scene file with a ``[robot]`` table).
+
+    Raises
+    ------
+    ModelError
+        Every problem of the description, or of its URDF.
+    """
+    return robot_scene(read_robot(document, path))
