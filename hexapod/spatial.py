@@ -133,27 +133,34 @@ def quaternion_product(p, q):
 
 
 def retract_symbolic(q, dv, lin_q, lin_v, quat_q, omega_v):
-    """``q (+) dv`` on CasADi symbols (SX or MX), as :meth:`hexapod.model.model.Model.integrate`
-    computes it on numbers: coordinates ``lin_q`` move by the velocity-space entries ``lin_v``,
-    and each spatial body's Euler parameters (the rows of ``quat_q``) turn by the body-frame
-    rotation vector at ``omega_v``, ``p <- p * exp(dpi'/2)``, renormalised."""
-    parts = [q[i] for i in range(q.numel())]
-    for i, j in zip(lin_q, lin_v, strict=True):
-        parts[int(i)] = q[int(i)] + dv[int(j)]
-    for quat, omega in zip(quat_q, omega_v, strict=True):
-        theta = dv[[int(j) for j in omega]]
-        angle2 = ca.dot(theta, theta)
-        small = angle2 < 1e-16
-        angle = ca.sqrt(ca.if_else(small, 1.0, angle2))
-        # sin(x/2)/x with its series near zero (no 0/0 in the branch not taken)
-        k = ca.if_else(small, 0.5 - angle2 / 48.0, ca.sin(angle / 2) / angle)
-        c = ca.if_else(small, 1.0 - angle2 / 8.0, ca.cos(angle / 2))
-        p = ca.vertcat(*[q[int(i)] for i in quat])
-        product = quaternion_product(p, ca.vertcat(c, k * theta))
-        product = product / ca.norm_2(product)
-        for n, i in enumerate(quat):
-            parts[int(i)] = product[n]
-    return ca.vertcat(*parts)
+    """``q (+) dv`` on CasADi SX symbols (:meth:`hexapod.model.model.Model.integrate`
+    evaluates it on numbers): coordinates ``lin_q`` move by the velocity-space entries
+    ``lin_v``, and each spatial body's Euler parameters (the rows of ``quat_q``) turn by the
+    body-frame rotation vector at ``omega_v``, ``p <- p * exp(dpi'/2)``, renormalised. Written
+    on the vectors of all bodies' components at once (a few dozen operations to build, whatever
+    the bodies: the body-by-body writing took 13 ms to build for 19 bodies)."""
+    out = ca.SX(q)
+    if len(lin_q):
+        out[[int(i) for i in lin_q]] = q[[int(i) for i in lin_q]] + dv[[int(j) for j in lin_v]]
+    if not len(quat_q):
+        return out
+    theta = [dv[[int(j) for j in omega_v[:, a]]] for a in range(3)]
+    angle2 = theta[0] * theta[0] + theta[1] * theta[1] + theta[2] * theta[2]
+    small = angle2 < 1e-16
+    angle = ca.sqrt(ca.if_else(small, 1.0, angle2))
+    # sin(x/2)/x with its series near zero (no 0/0 in the branch not taken)
+    k = ca.if_else(small, 0.5 - angle2 / 48.0, ca.sin(angle / 2) / angle)
+    c = ca.if_else(small, 1.0 - angle2 / 8.0, ca.cos(angle / 2))
+    p0, p1, p2, p3 = (q[[int(i) for i in quat_q[:, a]]] for a in range(4))
+    q1, q2, q3 = (k * t for t in theta)  # the step's quaternion is (c, q1, q2, q3)
+    product = [p0 * c - (p1 * q1 + p2 * q2 + p3 * q3),  # as quaternion_product on numbers
+               p0 * q1 + c * p1 + (p2 * q3 - p3 * q2),
+               p0 * q2 + c * p2 + (p3 * q1 - p1 * q3),
+               p0 * q3 + c * p3 + (p1 * q2 - p2 * q1)]
+    norm = ca.sqrt(sum(x * x for x in product))
+    for a in range(4):
+        out[[int(i) for i in quat_q[:, a]]] = product[a] / norm
+    return out
 
 
 # ---------------------------------------------------------------- numbers only
