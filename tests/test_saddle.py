@@ -160,6 +160,31 @@ def test_the_gram_certificate_of_every_row_agrees_with_the_svd(name):
     if name == "Bricard":
         assert smallest < 1e-9  # the case of dependent rows
 
+def test_the_least_norm_psd_solve_is_the_least_squares_one():
+    """``least_norm_psd`` (a time step's contact solves: Cholesky where the shifted matrix is
+    positive definite) gives ``lstsq``'s least-norm solution, with singular values below
+    ``rcond`` dropped as it drops them: on a well-conditioned Delassus-like matrix (by
+    Cholesky), on a rank-deficient one (four contacts of one rigid block, 12 x 12 of rank 6:
+    by least squares, the load shared) and on one just below and above the threshold."""
+    rng = np.random.default_rng(3)
+    B = rng.standard_normal((12, 12))
+    corners = rng.standard_normal((12, 6))  # four contacts of 3 rows on 6 dofs
+    for A in (B @ B.T, corners @ corners.T):
+        for b in (rng.standard_normal(12), A @ rng.standard_normal(12)):
+            reference = np.linalg.lstsq(A, b, rcond=1e-12)[0]
+            x = linalg.least_norm_psd(A, b)
+            assert np.abs(x - reference).max() <= 1e-9 * np.abs(reference).max()
+    U = np.linalg.qr(B)[0]
+    for smallest, kept in ((1e-13, False), (1e-11, True)):  # eigenvalues: 1 ... smallest
+        A = U @ np.diag(np.r_[np.linspace(1.0, 0.1, 11), smallest]) @ U.T
+        b = U[:, -1] + U[:, 0]
+        x = linalg.least_norm_psd(A, b, rcond=1e-12)
+        # the last eigenvector's part is 1 / smallest when kept, none when dropped
+        assert (U[:, -1] @ x) == pytest.approx(1 / smallest if kept else 0.0, abs=1e-3,
+                                               rel=1e-4)  # its round-off: 1e-16 / smallest
+    assert linalg.least_norm_psd(np.zeros((0, 0)), np.zeros(0)).shape == (0,)
+
+
 def test_near_a_singular_pose_the_smallest_singular_value_is_found_to_round_off(sparse_path):
     """The integrators take differences of it along the motion there: ARPACK's value is
     refined below 1e-3."""

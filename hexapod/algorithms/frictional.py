@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
+from hexapod.algorithms.linalg import least_norm_psd
 from hexapod.errors import HexapodError
 
 #: sweeps stop when no contact velocity changed by more than this, relative to their scale
@@ -134,7 +135,7 @@ def _all_stick(W: np.ndarray, rest: np.ndarray, mu: np.ndarray) -> np.ndarray | 
     if m == 0 or d == 1:
         return None
     r = rest.reshape(-1)
-    P = np.linalg.lstsq(W, -r, rcond=1e-12)[0]
+    P = least_norm_psd(W, -r)
     if np.abs(W @ P + r).max() > SWEEP_TOLERANCE * max(float(np.abs(r).max()), 1e-300):
         return None
     P = P.reshape(m, d)

@@ -47,6 +47,7 @@ from hexapod.algorithms.contact_frames import (
     ground_contacts,
 )
 from hexapod.algorithms.frictional import solve_contacts
+from hexapod.algorithms.linalg import least_norm_psd
 from hexapod.errors import HexapodError, IntegrationError
 from hexapod.simulation.contact_kernel import CompiledContactStep, contact_solution
 from hexapod.simulation.integrators.embedded import DormandPrince853
@@ -550,10 +551,10 @@ class EventDriven(DormandPrince853):
             frames, G, y, Y = self._velocity_response(t, q, v, rows)
             if stage == "positions":
                 gaps = frames.gaps[closed]
-                x = np.linalg.lstsq(Y.T @ Y, -gaps, rcond=None)[0]
+                x = least_norm_psd(Y.T @ Y, -gaps)
                 q = model.integrate(q, half @ (Y @ x))
             else:
-                x = np.linalg.lstsq(Y.T @ Y, -(G.T @ y), rcond=None)[0]
+                x = least_norm_psd(Y.T @ Y, -(G.T @ y))
                 v = half @ (y + Y @ x)
         return q, v
 

@@ -56,6 +56,7 @@ from hexapod.algorithms.contact_frames import (
     ground_contacts,
 )
 from hexapod.algorithms.frictional import solve_contacts
+from hexapod.algorithms.linalg import least_norm_psd
 from hexapod.simulation.contact_kernel import CompiledContactStep, contact_solution
 from hexapod.simulation.integrators.base import Integrator
 from hexapod.simulation.methods import CONTACT_METHODS
@@ -284,7 +285,7 @@ class MoreauJean(Integrator):
         if np.max(np.abs(gaps)) <= GAP_TOLERANCE * model.characteristic_length:
             return q1
         G = Y[:, _columns(pushing, carried, d)[::d]]  # the normal columns
-        correction = np.linalg.lstsq(G.T @ G, -gaps, rcond=None)[0]
+        correction = least_norm_psd(G.T @ G, -gaps)
         return model.integrate(q1, model.mass_inv_sqrt @ (G @ correction))
 
     def _record(self, t1, h, frames, impulses, states, start, free, end) -> None:
