@@ -93,8 +93,9 @@ def solve_kept(W_all: ca.MX, d: ca.MX, zero: ca.MX, rows: list[int], top: ca.MX,
     right-hand sides (those of the kept rows are used), ``top`` and ``bottom`` with as many
     columns as there are systems to solve with one factorisation. With ``lu`` (the pivots of
     :func:`kept_pivots`) the saddle-point form is factorised by that LU, written out, instead
-    of CasADi's sparse QR; the square form always by the QR. ``extra``: the metric's
-    addition (:func:`kept_matrix`; the saddle-point form and the QR then)."""
+    of CasADi's sparse QR (pivots chosen for the matrix with ``extra`` when it is given);
+    the square form always by the QR. ``extra``: the metric's addition (:func:`kept_matrix`;
+    the saddle-point form then)."""
     n_v = W_all.size2()
     scaled = bottom[rows, :] / ca.repmat(d[rows], 1, bottom.size2())
     if len(rows) == n_v and extra is None:
@@ -102,11 +103,9 @@ def solve_kept(W_all: ca.MX, d: ca.MX, zero: ca.MX, rows: list[int], top: ca.MX,
         y = ca.solve(W, scaled, "qr")
         return y, ca.solve(W.T, top - y, "qr")
     K = kept_matrix(W_all, d, zero, rows, extra)
-    if extra is not None:
-        lu = None  # the pivots were chosen for the identity metric's pattern
     rhs = ca.vertcat(top, scaled)
     solution = (ca.solve(K, rhs, "qr") if lu is None else
-                _lu_solve(lu, K.sparsity(), rhs.size2())(K, rhs))
+                _lu_factored(lu, rhs.size2())(_lu_factor(lu, K.sparsity())(K), rhs))
     return solution[:n_v, :], solution[n_v:, :]
 
 
@@ -131,36 +130,30 @@ class KeptFactors:
 
 
 def _lu_factor(lu: StaticLU, pattern: ca.Sparsity) -> ca.Function:
-    """``K -> F``: the packed factors of ``K`` (of ``pattern``) by ``lu``, one SX Function
-    built once per LU and pattern."""
+    """``K -> F``: the packed factors of ``K`` (of ``pattern``, the one ``lu``'s pivots were
+    chosen for) by ``lu``, one SX Function built once per LU and pattern."""
     key = ("factor", tuple(pattern.colind()), tuple(pattern.row()))
     functions = lu.__dict__.setdefault("_functions", {})
     if key not in functions:
+        rows, columns = pattern.get_triplet()
+        if not (np.array_equal(rows, lu.rows) and np.array_equal(columns, lu.columns)):
+            raise ValueError("the LU's pivots were chosen for another pattern")
         K = ca.SX.sym("K", pattern)
         functions[key] = ca.Function("lu_factor", [K], [lu.factor(ca.vertcat(*K.nonzeros()))])
     return functions[key]
 
 
 def _lu_factored(lu: StaticLU, columns: int) -> ca.Function:
-    """``(F, B) -> K^-1 B`` from the packed factors ``F`` of :func:`_lu_factor`."""
+    """``(F, B) -> K^-1 B`` from the packed factors ``F`` of :func:`_lu_factor`: one column's
+    solve, mapped over the columns (compiled, a loop over one copy of its code, where the
+    columns written out made a contact step's code, and its compiling, grow with them)."""
     key = ("solve", columns)
     functions = lu.__dict__.setdefault("_functions", {})
     if key not in functions:
-        F, B = ca.SX.sym("F", lu.nnz), ca.SX.sym("B", lu.n, columns)
-        X = ca.horzcat(*[lu.solve(F, B[:, k]) for k in range(columns)])
-        functions[key] = ca.Function("lu_factored_solve", [F, B], [X])
-    return functions[key]
-
-
-def _lu_solve(lu: StaticLU, pattern: ca.Sparsity, columns: int) -> ca.Function:
-    """``(K, B) -> K^-1 B`` by ``lu``, for ``K`` of ``pattern``: its straight-line SX code as
-    one Function (one node in an MX graph, inlined on SX), built once per LU and shape."""
-    key = (tuple(pattern.colind()), tuple(pattern.row()), columns)
-    functions = lu.__dict__.setdefault("_functions", {})
-    if key not in functions:  # the factorisation and the solve, inlined on SX
-        K, B = ca.SX.sym("K", pattern), ca.SX.sym("B", pattern.size1(), columns)
-        X = _lu_factored(lu, columns)(_lu_factor(lu, pattern)(K), B)
-        functions[key] = ca.Function("lu_solve", [K, B], [X])
+        F, b = ca.SX.sym("F", lu.nnz), ca.SX.sym("b", lu.n)
+        one = ca.Function("lu_factored_solve", [F, b], [lu.solve(F, b)])
+        functions[key] = one if columns == 1 else one.map(
+            f"lu_factored_solve_{columns}", "serial", columns, [0], [])
     return functions[key]
 
 

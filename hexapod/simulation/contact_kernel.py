@@ -10,13 +10,15 @@ import numpy as np
 
 from hexapod._support.execution import current
 from hexapod._support.fastcall import FastFunction
-from hexapod.algorithms.step import equilibrated, mass_factors, solve_kept
+from hexapod.algorithms.static_lu import StaticLU
+from hexapod.algorithms.step import equilibrated, kept_matrix, mass_factors, solve_kept
 from hexapod.errors import IntegrationError
 from hexapod.model.model import Model
 from hexapod.simulation.kernels import (
     REDUNDANT_TOLERANCE,
     RESIDUAL_TOLERANCE,
     evaluated_as_set,
+    pivot_key,
 )
 
 
@@ -24,7 +26,8 @@ class CompiledContactStep:
     """The engine's constrained solve with contact forces or impulses on its right-hand side,
     linear in them, in one call. With ``M^1/2``-scaled unknowns ``y = M^1/2 x``, the
     equilibrated saddle-point system of the kept ``rows`` (:func:`~hexapod.algorithms.step.
-    solve_kept`, CasADi's sparse QR) is solved for the forces in ``top`` alone, ``(y, lam)``,
+    solve_kept`: CasADi's sparse QR, or an LU with pivots chosen at a state, :meth:`pivoted`)
+    is solved for the forces in ``top`` alone, ``(y, lam)``,
     and for unit contact forces (``G = M^-1/2 J^T`` given), ``(Y, Lam)``: the contacts then
     see ``J x = G^T y + W F`` with the Delassus operator ``W = G^T Y``. The ``level``:
 
@@ -50,14 +53,25 @@ class CompiledContactStep:
     longer serve: the call returns None, and :func:`contact_solution` decides them again."""
 
     def __init__(self, model: Model, rows: np.ndarray, left_out: np.ndarray, columns: int,
-                 level: str = "step"):
+                 level: str = "step", lu: StaticLU | None = None):
         self.model, self.rows, self.columns = model, np.asarray(rows, dtype=int), columns
-        self.left_out, self.level = np.asarray(left_out, dtype=int), level
-        to_c = current().compiled
-        key = ("contact " + level, tuple(self.rows.tolist()), tuple(self.left_out.tolist()),
-               columns, to_c)
-        self.function = model.built_once(key, lambda m: evaluated_as_set(self._build(), to_c))
-        self._fast = FastFunction(self.function)
+        self.left_out, self.level, self.lu = np.asarray(left_out, dtype=int), level, lu
+        self._to_c = current().compiled
+        self._key = ("contact " + level, tuple(self.rows.tolist()),
+                     tuple(self.left_out.tolist()), columns, self._to_c, pivot_key(lu))
+        self._fast: FastFunction | None = None  # built (compiled) at the first call
+
+    def made(self) -> CompiledContactStep:
+        """Itself, its Function built (compiled) now rather than at its first call."""
+        if self._fast is None:
+            self._fast = FastFunction(self.function)
+        return self
+
+    @property
+    def function(self) -> ca.Function:
+        """The kernel's Function, built (and compiled) once per model at its first use."""
+        return self.model.built_once(self._key, lambda m: evaluated_as_set(self._build(),
+                                                                          self._to_c))
 
     @classmethod
     def started(cls, model: Model, data, columns: int, level: str = "step"):
@@ -67,10 +81,43 @@ class CompiledContactStep:
                    none if rows is None else data.redundant_rows, columns, level)
 
     def with_columns(self, columns: int) -> CompiledContactStep:
-        """The same solve (rows, level) for ``columns`` contact columns."""
-        return CompiledContactStep(self.model, self.rows, self.left_out, columns, self.level)
+        """The same solve (rows, level, pivots) for ``columns`` contact columns."""
+        return CompiledContactStep(self.model, self.rows, self.left_out, columns, self.level,
+                                   self.lu)
 
-    def _build(self) -> ca.Function:
+    def pivoted(self, q: np.ndarray, v: np.ndarray, laws: tuple, h: float = 0.0,
+                theta: float = 0.0) -> CompiledContactStep:
+        """The same solve by an LU of the saddle-point matrix with pivots chosen at this call's
+        arguments (:meth:`__call__`'s, without ``G``), written out as straight-line code, when
+        compiled: on the walking robot a step's solve then takes 0.29 instead of 0.42 ms in
+        its loop, for some 50 s more of compiling per kernel (the factors' 120,000
+        instructions: the controller's stiffness and damping couple each body's six
+        coordinates). Itself where the LU does not apply (interpreted: CasADi's virtual
+        machine gains nothing from it; no rows; as many rows as velocities: the square form).
+        Pivots first chosen for these rows serve later runs whose matrix they still factor
+        with little growth (:meth:`~hexapod.algorithms.static_lu.StaticLU.serves`): the same
+        kernel then, compiled once."""
+        model = self.model
+        if (not current().compiled or self.level != "step" or not self.rows.size
+                or self.rows.size == model.n_v):
+            return self
+        matrix = model.built_once(("contact matrix", self.level, tuple(self.rows.tolist())),
+                                  lambda m: self._matrix())
+        arguments = [q, v, *(laws if model.n_w else ()), h, theta]
+        values = np.asarray(matrix(*arguments).nonzeros(), dtype=float)
+        first = model.built_once(("contact pivots", self.level), lambda m: {})
+        lu = first.get(self.rows.tobytes())
+        if lu is None or not lu.serves(values):
+            pattern_rows, pattern_columns = matrix.sparsity_out(0).get_triplet()
+            lu = StaticLU.pivoted(pattern_rows, pattern_columns, matrix.size1_out(0), values)
+            first.setdefault(self.rows.tobytes(), lu)
+        return CompiledContactStep(model, self.rows, self.left_out, self.columns, self.level,
+                                   lu)
+
+    def _terms(self) -> tuple:
+        """The step's symbols by name, its inputs' names, and its expressions: the free
+        right-hand side's first column and its rows' part, the metric's addition (None: the
+        identity) and the rows' Jacobian: ``(named, inputs, first, bottom, extra, Phi_v)``."""
         model, level, n = self.model, self.level, self.model.n_w
         symbols = {"q": ca.MX.sym("q", model.n_q), "v": ca.MX.sym("v", model.n_v),
                    "w": ca.MX.sym("w", n), "wd": ca.MX.sym("wd", n), "wdd": ca.MX.sym("wdd", n),
@@ -99,26 +146,40 @@ class CompiledContactStep:
             first = ca.mtimes(m_sqrt, v) + ca.mtimes(m_inv_sqrt, force)
             bottom = call(model.nu, **end) if model.n_c else None
             extra = ca.mtimes(ca.mtimes(m_inv_sqrt, a * C + a * a * K), m_inv_sqrt)
-        top = ca.horzcat(first, G)
-        y, lam, residual = self._solve(top, bottom, extra, call, Phi_v)
         named = {**symbols, "w1": end["w"], "wd1": end["wd"], "G": G, "h": h, "theta": theta}
         inputs = ["q", "v", *laws, "G"] + (["h", "theta"] if level == "step" else [])
-        return ca.Function("contact_" + level, [named[k] for k in inputs], [y, lam, residual],
-                           inputs, ["y", "lam", "residual"])
+        if model.n_c and Phi_v is None:
+            Phi_v = call(model.Phi_v)
+        return named, inputs, first, bottom, extra, Phi_v
 
-    def _solve(self, top, bottom, extra, call, Phi_v=None) -> tuple:
+    def _build(self) -> ca.Function:
+        named, inputs, first, bottom, extra, Phi_v = self._terms()
+        top = ca.horzcat(first, named["G"])
+        y, lam, residual = self._solve(top, bottom, extra, Phi_v)
+        return ca.Function("contact_" + self.level, [named[k] for k in inputs],
+                           [y, lam, residual], inputs, ["y", "lam", "residual"])
+
+    def _matrix(self) -> ca.Function:
+        """The saddle-point matrix of the kept rows (:func:`~hexapod.algorithms.step.
+        kept_matrix`, with the step's metric) from the step's arguments without ``G``."""
+        named, inputs, _, _, extra, Phi_v = self._terms()
+        K = kept_matrix(*equilibrated(Phi_v, mass_factors(self.model)[0]),
+                        self.rows.tolist(), extra)
+        inputs = [k for k in inputs if k != "G"]
+        return ca.Function("contact_matrix", [named[k] for k in inputs], [K], inputs, ["K"])
+
+    def _solve(self, top, bottom, extra, Phi_v) -> tuple:
         """``(y, lam, residual)`` of the kept rows' system (see the class's description);
-        ``Phi_v`` the rows' Jacobian when already formed."""
+        ``Phi_v`` the rows' Jacobian."""
         model, rows, columns = self.model, self.rows.tolist(), self.columns
         if model.n_c == 0:
             solved = extra is not None and extra.nnz()
             y = ca.solve(ca.MX.eye(model.n_v) + extra, top, "qr") if solved else top
             return y, ca.MX(0, columns + 1), ca.MX.zeros(2)
         m_inv_sqrt, _ = mass_factors(model)
-        Phi_v = call(model.Phi_v) if Phi_v is None else Phi_v
         W_all, d, zero = equilibrated(Phi_v, m_inv_sqrt)
         y, mu = solve_kept(W_all, d, zero, rows, top,
-                           ca.horzcat(bottom, ca.MX(model.n_c, columns)), extra=extra)
+                           ca.horzcat(bottom, ca.MX(model.n_c, columns)), self.lu, extra)
         lam = ca.MX(model.n_c, columns + 1)
         lam[rows, :] = mu / ca.repmat(d[rows], 1, columns + 1)
         scaled = ca.fabs(ca.mtimes(Phi_v, ca.mtimes(m_inv_sqrt, y[:, 0])) - bottom) / d
@@ -137,7 +198,7 @@ class CompiledContactStep:
         if self.level == "step":
             arguments += [h, theta]
         try:
-            y, lam, residual = self._fast(*arguments)
+            y, lam, residual = self.made()._fast(*arguments)
         except RuntimeError:  # the factorisation failed: a singular matrix, or NaN in it
             return None
         columns = self.columns + 1

@@ -93,7 +93,7 @@ class CompiledRates:
         # object's
         to_c = current().compiled
         lu = pivots_near(model, self.rows, reference) if to_c else None
-        self._key = ("rates", tuple(self.rows.tolist()), to_c, _pivot_key(lu))
+        self._key = ("rates", tuple(self.rows.tolist()), to_c, pivot_key(lu))
         self.function = model.built_once(self._key,
                                          lambda m: evaluated_as_set(self._build(lu), to_c))
         self._fast = FastFunction(self.function)
@@ -422,7 +422,7 @@ class CompiledProjection:
         to_c = current().compiled
         lu = pivots_near(model, self.rows, reference) if to_c else None
         self.function = model.built_once(("projection", tuple(self.rows.tolist()), newton, to_c,
-                                          _pivot_key(lu)),
+                                          pivot_key(lu)),
                                          lambda m: evaluated_as_set(self._build(lu), to_c))
         self._fast = FastFunction(self.function)
         self._args = ["q", "v"] + (["w", "wd"] if model.n_w else [])
@@ -560,7 +560,7 @@ def pivots_near(model: Model, rows: np.ndarray, reference: tuple | None) -> Stat
     return lu
 
 
-def _pivot_key(lu: StaticLU | None) -> tuple:
+def pivot_key(lu: StaticLU | None) -> tuple:
     """What a kernel built with ``lu`` is known by: its pivot orders."""
     return () if lu is None else (lu.row_order.tobytes(), lu.column_order.tobytes())
 

@@ -124,8 +124,12 @@ class MoreauJean(Integrator):
         self.contact_states = tuple("open" if not c else "slip" if s else "stick"
                                     for c, s in zip(closed, sliding, strict=True))
         self._kernel = CompiledContactStep.started(self.model, self.data, len(self.contacts) * d)
+        h = self.next_step()  # compiled, the LU's pivots are chosen at the first step's call
+        laws = (*self.model.law_values(self.t + THETA * h, self.data),
+                *self.model.law_values(self.t + h, self.data)[:2])
+        self._kernel = self._kernel.pivoted(self.q, self.v, laws, h, THETA)
         # by columns, the rows kept at the start: made (compiled) before the time loop
-        self._kernels = {columns: self._kernel.with_columns(columns) for columns
+        self._kernels = {columns: self._kernel.with_columns(columns).made() for columns
                          in {self._columns_for(0), self._columns_for(len(self.contacts))}}
         self._speed_change = np.full(len(self.contacts), np.inf)  # unknown before a step
         self._closed = np.array([state != "open" for state in self.contact_states], dtype=bool)
