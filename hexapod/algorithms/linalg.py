@@ -26,6 +26,7 @@ from scipy.linalg.lapack import dpotrf, dpotrs
 from hexapod.algorithms.rows import (
     RowSplit,
     as_dense,
+    gram_exceeds,
     is_sparse,
     require_finite,
     solve_triangular,
@@ -369,16 +370,17 @@ def solve_or_least_squares(A: np.ndarray, b: np.ndarray, pivot_ratio: float = 1e
 def least_norm_psd(A: np.ndarray, b: np.ndarray, rcond: float = 1e-12) -> np.ndarray:
     """The least-norm solution of ``A x = b`` for a symmetric positive semi-definite ``A`` (a
     Delassus operator, a Gram matrix), singular values below ``rcond`` of the largest dropped
-    as :func:`numpy.linalg.lstsq` drops them. By Cholesky when ``A - rcond trace(A) I`` is
-    positive definite: every eigenvalue of ``A`` is then above ``rcond`` times the largest
-    (at most the trace), none is dropped and the solution is unique; a few microseconds where
-    the SVD's least squares take tens, in a time step's loop. By least squares otherwise
-    (contacts that share their load: a block on four corners)."""
+    as :func:`numpy.linalg.lstsq` drops them. By Cholesky when a shifted Cholesky factor
+    certifies every eigenvalue of ``A`` above ``rcond trace(A)`` (:func:`~hexapod.algorithms.
+    rows.gram_exceeds`), so above ``rcond`` times the largest: none is dropped and the
+    solution is unique; a few microseconds where the SVD's least squares take tens, in a time
+    step's loop. By least squares otherwise (contacts that share their load: a block on four
+    corners)."""
     A = np.asarray(A, dtype=float)
     if A.size == 0:
         return np.zeros(A.shape[1:2] + np.shape(b)[1:])
     shift = rcond * float(np.trace(A))
-    if shift > 0.0 and dpotrf(A - shift * np.eye(A.shape[0]), lower=1, clean=0)[1] == 0:
+    if shift > 0.0 and gram_exceeds(A, np.sqrt(shift), A.shape[0]):
         factor, info = dpotrf(A, lower=1, clean=0)
         if info == 0:
             x, info = dpotrs(factor, b, lower=1)
