@@ -117,3 +117,36 @@ def test_the_pivots_are_those_of_the_cheaper_order(scene):
     K = np.zeros((n, n))
     K[rows, columns] = values
     assert np.abs(K @ x - 1.0).max() <= 1e-10 * np.abs(K).max() * np.abs(x).max()
+
+
+def test_the_tree_order_factors_any_state_and_fills_less_than_superlus():
+    """:func:`~hexapod.algorithms.step.tree_order` (the articulated-body recursion's order of
+    the saddle-point matrix, each body's velocities after its children, then its joint's rows)
+    is a valid set of pivots whatever the values: the solves meet their equations at the start
+    and with the rows' entries perturbed by a tenth; on a tree of 10 bodies its elimination
+    fills no more than SuperLU's cheaper order chosen at the start; a loop-closing joint's rows
+    have no place in it (None)."""
+    from hexapod.algorithms.step import tree_order
+    from hexapod.simulation.integrators import DormandPrince853
+
+    from mechanisms import four_bar, random_tree
+
+    model = hx.assemble(random_tree(3, 10, driven=False))
+    kept = DormandPrince853(model, 0.0, 0.1)._compiled.rows
+    rows, columns, n, values = _saddle_matrix(model)
+    order = tree_order(model, kept)
+    assert sorted(order.tolist()) == list(range(n))
+    lu = StaticLU(rows, columns, n, order, order)
+    assert lu.nnz <= StaticLU.pivoted(rows, columns, n, values).nnz
+    entries, b = ca.SX.sym("values", rows.size), ca.SX.sym("b", n)
+    solve = ca.Function("solve", [entries, b], [lu.solve(lu.factor(entries), b)])
+    rng = np.random.default_rng(0)
+    for scale in (0.0, 0.1, 0.1):
+        perturbed = values * (1 + scale * rng.normal(size=values.size) * (rows != columns))
+        K = np.zeros((n, n))
+        K[rows, columns] = perturbed
+        rhs = rng.normal(size=n)
+        x = np.array(solve(perturbed, rhs)).ravel()
+        assert np.abs(K @ x - rhs).max() <= 1e-11 * np.abs(K).max() * np.abs(x).max()
+    loop = hx.assemble(four_bar(3, 0.3))
+    assert tree_order(loop, np.arange(loop.n_c)) is None

@@ -36,7 +36,7 @@ import casadi as ca
 import numpy as np
 
 from hexapod.algorithms.static_lu import StaticLU
-from hexapod.model.model import Model
+from hexapod.model.model import GROUND_INDEX, Model
 
 
 def equilibrated(Phi_v: ca.MX, m_inv_sqrt: ca.DM) -> tuple[ca.MX, ca.MX, ca.MX]:
@@ -65,6 +65,46 @@ def kept_pivots(model: Model, rows: list[int], q: np.ndarray, w: np.ndarray) -> 
     kernel built with them serves the states near there, its residual checks saying when they
     no longer do."""
     return StaticLU.pivoted(*kept_values(model, rows, q, w))
+
+
+def tree_order(model: Model, rows) -> np.ndarray | None:
+    """A symmetric elimination order of the saddle-point matrix of the kept ``rows``
+    (:func:`kept_matrix`) that follows the body-joint tree: each body's velocities once its
+    children's subtrees are eliminated, then the kept rows of the joint that holds it to its
+    parent (its own and its drivers'). The articulated-body recursion's order: the pivots are
+    the bodies' articulated metrics (positive definite with the metric) and the joints' rows
+    seen through them (negative definite while the rows are independent), whatever the state,
+    and nothing fills in beyond each body's parent. None where a kept row is no tree joint's
+    (a loop-closing joint's, a coordinate driver's)."""
+    n_v, rows = model.n_v, np.asarray(rows, dtype=int)
+    place = {int(r): n_v + i for i, r in enumerate(rows)}
+    holding, children = {}, {}
+    for joint in model.joints:
+        if not joint.loop_closing:
+            holding[joint.child] = joint
+            children.setdefault(joint.parent, []).append(joint.child)
+    # the ground and the free bodies are the roots
+    roots = [GROUND_INDEX] + [b for b in range(len(model.bodies)) if b not in holding]
+    order: list[int] = []
+    # post-order, without recursion (chains of thousands of bodies)
+    stack = [(b, False) for b in reversed(roots)]
+    while stack:
+        body, done = stack.pop()
+        if not done:
+            stack.append((body, True))
+            stack.extend((c, False) for c in reversed(children.get(body, [])))
+            continue
+        if body == GROUND_INDEX:
+            continue
+        v = model.bodies[body].v
+        order.extend(range(v.start, v.stop))
+        joint = holding.get(body)
+        if joint is not None:
+            order.extend(place[int(r)] for r in (*joint.rows, *joint.driver_rows)
+                         if int(r) in place)
+    if len(order) != n_v + rows.size or len(set(order)) != len(order):
+        return None
+    return np.asarray(order, dtype=int)
 
 
 def kept_values(model: Model, rows: list[int], q: np.ndarray,

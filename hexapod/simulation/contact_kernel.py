@@ -11,7 +11,13 @@ import numpy as np
 from hexapod._support.execution import current
 from hexapod._support.fastcall import FastFunction
 from hexapod.algorithms.static_lu import StaticLU
-from hexapod.algorithms.step import equilibrated, kept_matrix, mass_factors, solve_kept
+from hexapod.algorithms.step import (
+    equilibrated,
+    kept_matrix,
+    mass_factors,
+    solve_kept,
+    tree_order,
+)
 from hexapod.errors import IntegrationError
 from hexapod.model.model import Model
 from hexapod.simulation.kernels import (
@@ -87,30 +93,39 @@ class CompiledContactStep:
 
     def pivoted(self, q: np.ndarray, v: np.ndarray, laws: tuple, h: float = 0.0,
                 theta: float = 0.0) -> CompiledContactStep:
-        """The same solve by an LU of the saddle-point matrix with pivots chosen at this call's
-        arguments (:meth:`__call__`'s, without ``G``), written out as straight-line code, when
-        compiled: on the walking robot a step's solve then takes 0.29 instead of 0.42 ms in
-        its loop, for some 50 s more of compiling per kernel (the factors' 120,000
-        instructions: the controller's stiffness and damping couple each body's six
-        coordinates). Itself where the LU does not apply (interpreted: CasADi's virtual
-        machine gains nothing from it; no rows; as many rows as velocities: the square form).
-        Pivots first chosen for these rows serve later runs whose matrix they still factor
-        with little growth (:meth:`~hexapod.algorithms.static_lu.StaticLU.serves`): the same
-        kernel then, compiled once."""
+        """The same solve by an LU of the saddle-point matrix, written out as straight-line
+        code, when compiled. Its pivots follow the body-joint tree where every kept row is a
+        tree joint's (:func:`~hexapod.algorithms.step.tree_order`): the same for every state,
+        so one kernel serves every run of the model, and on the walking robot 55,000
+        instructions to factor where SuperLU's pivots took 121,000 (the QR's kernel 0.42 ms
+        of a step inside its loop, this LU's 0.2 ms; see the commits). Elsewhere SuperLU
+        chooses them at this call's arguments (:meth:`__call__`'s without ``G``; pivots first
+        chosen for these rows serve later runs whose matrix they still factor with little
+        growth, :meth:`~hexapod.algorithms.static_lu.StaticLU.serves`). Itself where the LU
+        does not apply (interpreted: CasADi's virtual machine gains nothing from it; no rows;
+        as many rows as velocities: the square form). Stale pivots show in the residual
+        check, which falls back to the QR's kernel (:func:`contact_solution`)."""
         model = self.model
         if (not current().compiled or self.level != "step" or not self.rows.size
                 or self.rows.size == model.n_v):
             return self
         matrix = model.built_once(("contact matrix", self.level, tuple(self.rows.tolist())),
                                   lambda m: self._matrix())
-        arguments = [q, v, *(laws if model.n_w else ()), h, theta]
-        values = np.asarray(matrix(*arguments).nonzeros(), dtype=float)
-        first = model.built_once(("contact pivots", self.level), lambda m: {})
-        lu = first.get(self.rows.tobytes())
-        if lu is None or not lu.serves(values):
-            pattern_rows, pattern_columns = matrix.sparsity_out(0).get_triplet()
-            lu = StaticLU.pivoted(pattern_rows, pattern_columns, matrix.size1_out(0), values)
-            first.setdefault(self.rows.tobytes(), lu)
+        pattern_rows, pattern_columns = matrix.sparsity_out(0).get_triplet()
+        size = matrix.size1_out(0)
+        order = tree_order(model, self.rows)
+        if order is not None:
+            lu = model.built_once(
+                ("contact tree LU", self.level, tuple(self.rows.tolist())),
+                lambda m: StaticLU(pattern_rows, pattern_columns, size, order, order))
+        else:
+            arguments = [q, v, *(laws if model.n_w else ()), h, theta]
+            values = np.asarray(matrix(*arguments).nonzeros(), dtype=float)
+            first = model.built_once(("contact pivots", self.level), lambda m: {})
+            lu = first.get(self.rows.tobytes())
+            if lu is None or not lu.serves(values):
+                lu = StaticLU.pivoted(pattern_rows, pattern_columns, size, values)
+                first.setdefault(self.rows.tobytes(), lu)
         return CompiledContactStep(model, self.rows, self.left_out, self.columns, self.level,
                                    lu)
 
