@@ -25,7 +25,9 @@ the batched inverse dynamics factorises its square ``W_I`` instead by an LU with
 at the decision (:mod:`hexapod.algorithms.static_lu`, a tenth of the QR's operations), and so
 do the integrators' kernels compiled to C in the saddle-point form, with pivots chosen at the
 state where they are built (:func:`kept_pivots`; written out, the LU runs in 40 % of the
-compiled QR's time, where CasADi's virtual machine gains nothing from it). What
+compiled QR's time, where CasADi's virtual machine gains nothing from it), or, for the
+contact step's metric, in the body-joint tree's order whatever the state (:func:`tree_order`).
+What
 can go wrong as the state moves (a row that becomes dependent, a singular pose, pivots gone
 stale) shows in the residual checks the callers evaluate.
 """
