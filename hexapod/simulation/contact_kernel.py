@@ -32,7 +32,7 @@ class CompiledContactStep:
     """The engine's constrained solve with contact forces or impulses on its right-hand side,
     linear in them, in one call. With ``M^1/2``-scaled unknowns ``y = M^1/2 x``, the
     equilibrated saddle-point system of the kept ``rows`` (:func:`~hexapod.algorithms.step.
-    solve_kept`: CasADi's sparse QR, or an LU with pivots chosen at a state, :meth:`pivoted`)
+    solve_kept`: CasADi's sparse QR, or an LU written out, :meth:`pivoted`)
     is solved for the forces in ``top`` alone, ``(y, lam)``,
     and for unit contact forces (``G = M^-1/2 J^T`` given), ``(Y, Lam)``: the contacts then
     see ``J x = G^T y + W F`` with the Delassus operator ``W = G^T Y``. The ``level``:
@@ -98,7 +98,7 @@ class CompiledContactStep:
         tree joint's (:func:`~hexapod.algorithms.step.tree_order`): the same for every state,
         so one kernel serves every run of the model, and on the walking robot 55,000
         instructions to factor where SuperLU's pivots took 121,000 (the QR's kernel 0.42 ms
-        of a step inside its loop, this LU's 0.2 ms; see the commits). Elsewhere SuperLU
+        of a step inside its loop, this LU's 0.24 ms; see the commits). Elsewhere SuperLU
         chooses them at this call's arguments (:meth:`__call__`'s without ``G``; pivots first
         chosen for these rows serve later runs whose matrix they still factor with little
         growth, :meth:`~hexapod.algorithms.static_lu.StaticLU.serves`). Itself where the LU
