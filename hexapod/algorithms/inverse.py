@@ -309,8 +309,7 @@ def _saddle(model, data, times, frame, progress, known=None) -> InverseResult:
         else:
             sample = exact_sample(model, data, times[k - 1] if k else t,
                                   Q[k - 1] if k else model.q0, t,
-                                  (V[k - 1], A[k - 1]) if k else None, frame=frame,
-                                  first=k == 0)
+                                  (V[k - 1], A[k - 1]) if k else None, frame=frame)
         Q[k], V[k], A[k] = sample.q, sample.v, sample.v_dot
         force[k], torque[k], effort[k] = sample.force, sample.torque, sample.effort
         if model.contacts:

@@ -278,8 +278,8 @@ def _exact(model: Model, data: Data, out: _Results, times: np.ndarray, k: int, f
     t0, q0, rates = ((times[0], model.q0, None) if k == 0 else
                      (times[k - 1], out.q[k - 1], (out.v[k - 1], out.v_dot[k - 1])))
     if motion:
-        return exact_motion(model, data, t0, q0, times[k], rates, first=k == 0)
-    return exact_sample(model, data, t0, q0, times[k], rates, frame=frame, first=k == 0)
+        return exact_motion(model, data, t0, q0, times[k], rates)
+    return exact_sample(model, data, t0, q0, times[k], rates, frame=frame)
 
 
 class _Decisions:

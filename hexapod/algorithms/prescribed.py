@@ -69,7 +69,7 @@ def prescribed_motion(model: Model, times: ArrayLike, *, data: Data | None = Non
     n = times.size
     q, v, v_dot = np.zeros((n, model.n_q)), np.zeros((n, model.n_v)), np.zeros((n, model.n_v))
     for k, t in enumerate(times):
-        sample = (exact_motion(model, data, t, model.q0, t, first=True) if k == 0 else
+        sample = (exact_motion(model, data, t, model.q0, t) if k == 0 else
                   exact_motion(model, data, times[k - 1], q[k - 1], t, (v[k - 1], v_dot[k - 1])))
         q[k], v[k], v_dot[k] = sample.q, sample.v, sample.v_dot
         if signals.received() is not None:  # an interruption a library call swallowed

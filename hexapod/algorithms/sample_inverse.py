@@ -48,11 +48,12 @@ class SampleResult:
 
 
 def exact_sample(model: Model, data: Data, t0: float, q0: np.ndarray, t: float,
-                 rates=None, *, frame: str = "joint", first: bool = False,
+                 rates=None, *, frame: str = "joint",
                  known: tuple | None = None) -> SampleResult:
     """The sample at ``t`` from the solved positions ``q0`` at ``t0`` (and their velocities
-    and accelerations ``rates``, for a second-order prediction); ``first`` checks that the
-    drivers leave no degree of freedom free. ``known``: the velocities and accelerations at
+    and accelerations ``rates``, for a second-order prediction), checking that the drivers
+    leave no degree of freedom free (wherever the dynamics' rank decision keeps fewer rows
+    than velocities: that decision is the check). ``known``: the velocities and accelerations at
     ``t`` when the motion is known already (a guided model's, from its guides' kinematics,
     ``q0`` its positions there): a motion the constraints leave free (a trunk on two feet
     turning about the line through them) then takes the known velocities, and the dynamics'
@@ -61,15 +62,13 @@ def exact_sample(model: Model, data: Data, t0: float, q0: np.ndarray, t: float,
     Raises
     ------
     SingularSystemError
-        When ``first`` and the drivers leave degrees of freedom free (without ``known``).
+        When the drivers leave degrees of freedom free (without ``known``).
     HexapodError
         When the dynamics does not follow the ``known`` motion.
     AssemblyError
         When the positions cannot be found.
     """
     q = next_positions(model, data, t0, q0, t, rates)
-    if first and known is None:
-        require_prescribed(model, data, t, q)
     v = solve_velocities(model, data, t, q, None if known is None else known[0])
     out = exact_forces(model, data, t, q, v, frame=frame)
     if known is not None:
@@ -82,7 +81,7 @@ def exact_sample(model: Model, data: Data, t0: float, q0: np.ndarray, t: float,
 
 
 def exact_motion(model: Model, data: Data, t0: float, q0: np.ndarray, t: float,
-                 rates=None, *, first: bool = False) -> SampleResult:
+                 rates=None) -> SampleResult:
     """The motion alone at ``t`` (positions as :func:`exact_sample` finds them, velocities and
     accelerations by the constraints), for a kinematics run: no multipliers, wrenches or
     ground forces (empty arrays). The rank decision taken is left in ``data``
@@ -91,14 +90,13 @@ def exact_motion(model: Model, data: Data, t0: float, q0: np.ndarray, t: float,
     Raises
     ------
     SingularSystemError
-        When the drivers leave degrees of freedom free (checked at ``first`` and wherever the
-        constraints' rank falls short).
+        When the drivers leave degrees of freedom free (wherever the velocities' rank
+        decision keeps fewer rows than velocities: that decision is the check, none is taken
+        for it alone).
     AssemblyError
         When the positions cannot be found.
     """
     q = next_positions(model, data, t0, q0, t, rates)
-    if first:
-        require_prescribed(model, data, t, q)
     v = solve_velocities(model, data, t, q)
     v_dot = solve_accelerations(model, data, t, q, v)  # leaves Phi_v in data
     w = model.law_values(t, data)[0]
