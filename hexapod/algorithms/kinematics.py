@@ -30,6 +30,10 @@ from hexapod.spatial import rotation_from_euler_parameters
 #: 3e-6 for the walking robot's samples a millisecond apart) instead of deciding again; a
 #: held decision whose rows have come near dependence is decided again anyway.
 HOLD_BELOW = 1e-3
+#: A scaled residual this small is round-off already: Newton's method returns without the
+#: polishing step (and its rank decision), as from positions solved before (a guided model's
+#: twin starts from its guides' positions, 3e-16 off on the walking robot).
+ROUND_OFF = 1e-14
 #: A Newton step keeps the factorisation of the one before when it reduced the largest scaled
 #: residual by at least this factor (as Newton's method proper does near the solution);
 #: a slower step factorises again.
@@ -250,7 +254,7 @@ def _newton(model: Model, data: Data, t: float, w: np.ndarray, q: np.ndarray, to
     polished, split, factorised_at = False, None, None
     for _ in range(max_iterations):
         if merit <= tol:
-            if polished:
+            if polished or merit <= ROUND_OFF:
                 return q
             # Newton converges quadratically: one more step takes the residual to round-off
             # (joint points coincide to ~1e-16 m instead of ~tol), kept only if it helps
