@@ -99,8 +99,7 @@ def split_rows(W: np.ndarray, scale: np.ndarray, priority: np.ndarray, tol: floa
         kept += chosen
     taken = set(kept)
     redundant = [row for row in order if row not in taken]
-    R = np.triu(basis.T @ W[kept].T) if kept else np.zeros((0, 0))
-    return RowSplit(np.array(kept, dtype=int), np.array(redundant, dtype=int), basis, R,
+    return RowSplit(np.array(kept, dtype=int), np.array(redundant, dtype=int), basis, None,
                     scale, W)
 
 

@@ -31,7 +31,9 @@ class RowSplit:
     basis : ndarray (n_v, r)
         Orthonormal basis ``Q_I`` of the span of the kept rows of ``W``.
     R : ndarray (r, r)
-        Upper triangular, ``W[independent].T = basis @ R``.
+        Upper triangular, ``W[independent].T = basis @ R`` (given as None, formed from the
+        basis when first asked: a rank decision alone, such as which feet's rows a new contact
+        set keeps, does not need it; 0.6 ms of the walking robot's 2.2 ms decision).
     scale : ndarray (n_c,)
         Row norms ``d`` of ``Phi_v M^-1/2`` (1 for rows that are zero).
     W : ndarray (n_c, n_v)
@@ -41,13 +43,20 @@ class RowSplit:
     independent: np.ndarray
     redundant: np.ndarray
     basis: np.ndarray
-    R: np.ndarray
+    _R: np.ndarray | None
     scale: np.ndarray
     W: np.ndarray
 
     @property
     def rank(self) -> int:
         return int(self.independent.size)
+
+    @property
+    def R(self) -> np.ndarray:
+        if self._R is None:
+            self._R = (np.triu(self.basis.T @ self.W[self.independent].T) if self.rank
+                       else np.zeros((0, 0)))
+        return self._R
 
     def singular_values(self) -> np.ndarray:
         """Singular values of the kept rows of ``W`` (those of ``R``), computed once."""
