@@ -73,7 +73,8 @@ class Watch:
             worst["velocity"] = max(worst["velocity"],
                                     float(np.abs(rate / model.row_scale).max()))
         if self.conserved:
-            kinetic, total = energy(model, q, v, integrator.data)
+            kinetic, potential = integrator.state_energy()
+            total = kinetic + potential
             worst["kinetic"] = max(worst["kinetic"], kinetic)
             worst["drift"] = max(worst["drift"], abs(total - self.energy0))
             self.latest = total
@@ -129,7 +130,7 @@ class Watch:
         run ends as a failure)."""
         integrator = self.integrator
         for key, what in (("v_dot", "accelerations"), ("lam", "multipliers")):
-            if not np.all(np.isfinite(values[key])):
+            if not np.isfinite(values[key]).all():
                 integrator.status = "failed"
                 integrator.message = (f"{integrator.name}: non-finite {what} at t = "
                                       f"{float(values['t']):.6g} s (an overflow: the "

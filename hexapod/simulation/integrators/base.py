@@ -175,6 +175,10 @@ class Integrator(SingularPoses, StepEnds):
         self._accepted_step = 0.0  # the last accepted step's length (s)
         self._recent_steps: deque[float] = deque(maxlen=FORESIGHT_STEPS)  # and those before
         self._kinetic_peak = 0.0  # the largest kinetic energy of the run so far (J)
+        # (q, v, q_dot) of the last step end's compiled solve; (q, v, energies) of the last
+        # state weighed: the same arrays are asked again (the next step, the run's watch)
+        self._position_rates_at: tuple | None = None
+        self._energy_at: tuple | None = None
         q, v = self._project(self.t0, q0, v0)  # guesses of None: the scene's initial state
         self.t, self.q, self.v = self.t0, q, v
         self._q_start = q
@@ -228,7 +232,16 @@ class Integrator(SingularPoses, StepEnds):
         if solution is None:
             return self._rates(t, q, v)[1], None
         self.counters.rhs += 1
+        self._position_rates_at = (q, v, solution[0])  # the next step's first stage
         return solution[1], solution[2]
+
+    def _position_rates(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """``q_dot`` at ``(q, v)``: the one the step end's compiled solve gave with the
+        accelerations (:meth:`_end_rates`), where the state is that one, else evaluated."""
+        kept = self._position_rates_at
+        if kept is not None and kept[0] is q and kept[1] is v:
+            return kept[2]
+        return self.model.call("qdot", self.data, q=q, v=v)
 
     def _kernels_serve(self, t: float) -> bool:
         """Whether the compiled kernels give the accelerations and multipliers of a state to
@@ -267,7 +280,7 @@ class Integrator(SingularPoses, StepEnds):
             self.status = "failed"
             self.message = f"{self.name} failed after t = {t_before:.6g} s: {error}"
             # the cause behind the symptom, unless the state itself blew up (its pose is noise)
-            blew_up = "non-finite" in str(error) or not np.all(np.isfinite(self.q))
+            blew_up = "non-finite" in str(error) or not np.isfinite(self.q).all()
             known = "singular configuration" in str(error)
             where = "" if blew_up or known else self._singular_pose()
             if where:
@@ -285,7 +298,7 @@ class Integrator(SingularPoses, StepEnds):
         self._recent_steps.append(self._accepted_step)
         # a fixed smooth step is weighed: a jump of its velocities or energy is not an impact
         weighed = not (self.adaptive or self.impulsive)
-        if not np.all(np.isfinite(self.q)) or not np.all(np.isfinite(self.v)):
+        if not np.isfinite(self.q).all() or not np.isfinite(self.v).all():
             self.status = "failed"
             self.message = (f"{self.name}: non-finite state at t = {self.t:.6g} s (the step is "
                             "too large for this method, or the motion is unstable)")
@@ -442,9 +455,19 @@ class Integrator(SingularPoses, StepEnds):
 
     def _energy(self, q: np.ndarray, v: np.ndarray) -> tuple[float, float]:
         """Kinetic and potential energy (J), through the method's call buffers (a plain
-        CasADi call costs some 100 microseconds, several times a step of a small model)."""
+        CasADi call costs some 100 microseconds, several times a step of a small model); the
+        last state's again without a call (states are replaced, never changed in place)."""
+        kept = self._energy_at
+        if kept is not None and kept[0] is q and kept[1] is v:
+            return kept[2]
         kinetic, potential = self.model.fast("energy", self.data)(q, v)
-        return float(kinetic[0]), float(potential[0])
+        self._energy_at = (q, v, (float(kinetic[0]), float(potential[0])))
+        return self._energy_at[2]
+
+    def state_energy(self) -> tuple[float, float]:
+        """Kinetic and potential energy (J) of the current state (the run's watch asks for
+        the state the step's own check weighed)."""
+        return self._energy(self.q, self.v)
 
     @cached_property
     def _scales(self) -> tuple[float, float, float]:

@@ -142,7 +142,7 @@ class EmbeddedRungeKutta(Integrator):
     def _step(self) -> None:
         model, n_q = self.model, self.model.n_q
         y0 = np.concatenate([self.q, self.v])
-        f0 = np.concatenate([model.call("qdot", self.data, q=self.q, v=self.v), self.v_dot])
+        f0 = np.concatenate([self._position_rates(self.q, self.v), self.v_dot])
         nudged, rejected = False, False
         while True:
             h = self.next_step()
@@ -151,7 +151,7 @@ class EmbeddedRungeKutta(Integrator):
                                   "met: the motion may be singular or too stiff for an "
                                   "explicit method)")
             K, y1 = self._stages(self.t, h, y0, f0)
-            error = self._error(h, K, y0, y1) if np.all(np.isfinite(y1)) else np.inf
+            error = self._error(h, K, y0, y1) if np.isfinite(y1).all() else np.inf
             if error <= 1.0:
                 if not nudged and self._lands_on_pose(self.t + h, y1[:n_q]):
                     # a crossing's step ending at the pose: the projection there is as badly
