@@ -214,7 +214,7 @@ class CompiledRates:
         # the residuals' maxima skip NaN (C's fmax): a singular matrix (a kept row that a
         # lift-off zeroed, at the end of a step on the lift-off) shows in the outputs
         if not (residual[0] <= RESIDUAL_TOLERANCE and residual[1] <= left_out
-                and np.all(np.isfinite(v_dot)) and np.all(np.isfinite(lam))):
+                and np.isfinite(v_dot).all() and np.isfinite(lam).all()):
             return None
         return q_dot, v_dot, lam
 
@@ -250,7 +250,7 @@ class CompiledStages:
             return None
         residual = residual.reshape(2, -1, order="F")
         if not (np.all(residual[0] <= RESIDUAL_TOLERANCE) and np.all(residual[1] <= left_out)
-                and np.all(np.isfinite(K))):
+                and np.isfinite(K).all()):
             return None
         return K.reshape(y0.size, -1, order="F").T
 
@@ -368,8 +368,8 @@ class PolicyMultipliers:
             v_dot = None
         if v_dot is not None and (
                 checks[0] <= RESIDUAL_TOLERANCE and checks[1] <= CONSISTENCY_TOLERANCE
-                and checks[2] <= model.rank_tolerance and np.all(np.isfinite(N))
-                and np.all(np.isfinite(lam0)) and np.all(np.isfinite(v_dot))):
+                and checks[2] <= model.rank_tolerance and np.isfinite(N).all()
+                and np.isfinite(lam0).all() and np.isfinite(v_dot).all()):
             found = v_dot, lam0, N.reshape(model.n_c, -1, order="F"), Phi
         # (else refused: the maxima skip NaN, C's fmax, and the outputs say it)
         self._last = (t, q, v, found)
@@ -488,7 +488,7 @@ class CompiledProjection:
         except RuntimeError:  # the factorisation failed: a singular matrix, or NaN in it
             return None
         if not (phi_error[0] <= self.tol and relative[0] <= RESIDUAL_TOLERANCE
-                and np.all(np.isfinite(position)) and np.all(np.isfinite(velocity))):
+                and np.isfinite(position).all() and np.isfinite(velocity).all()):
             return None  # the maxima skip NaN (C's fmax): the outputs say it
         self.residuals = (float(phi_error[0]), float(rate_error[0]))
         return position, velocity
