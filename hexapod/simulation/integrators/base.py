@@ -182,6 +182,11 @@ class Integrator(SingularPoses, StepEnds):
         q, v = self._project(self.t0, q0, v0)  # guesses of None: the scene's initial state
         self.t, self.q, self.v = self.t0, q, v
         self._q_start = q
+        # the projection's rank decision, taken at this state, serves the dynamics there (two
+        # workspaces, one decision: a fifth of a small model's start)
+        decided = self._kinematics.built.get("state decision")
+        if decided is not None:
+            self.data.built["state decision"] = decided
         self.v_dot, self.lam = self._dynamics(self.t, q, v)
         # the stages' right-hand sides and the projection, compiled for the rows independent
         # at the start
