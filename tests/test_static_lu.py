@@ -150,3 +150,35 @@ def test_the_tree_order_factors_any_state_and_fills_less_than_superlus():
         assert np.abs(K @ x - rhs).max() <= 1e-11 * np.abs(K).max() * np.abs(x).max()
     loop = hx.assemble(four_bar(3, 0.3))
     assert tree_order(loop, np.arange(loop.n_c)) is None
+
+
+@pytest.mark.parametrize("chain", [False, True])
+def test_kernels_take_the_tree_order_where_it_is_cheaper(chain):
+    """The integrators' kernels weigh the body-joint tree's order with SuperLU's
+    (:func:`~hexapod.algorithms.step.kept_pivots`): on a tree of 10 bodies it writes fewer
+    operations and is taken, on a chain of 10 links COLAMD's writes fewer and is kept; the
+    pivots taken solve the matrix to round-off."""
+    from hexapod.algorithms.static_lu import _operations
+    from hexapod.algorithms.step import kept_pivots, tree_order
+    from hexapod.simulation.integrators import DormandPrince853
+
+    from mechanisms import random_tree
+
+    model = hx.assemble(random_tree(3 if not chain else 7, 10, chain=chain, driven=False))
+    method = DormandPrince853(model, 0.0, 0.1)
+    kept = method._compiled.rows
+    rows, columns, n, values = _saddle_matrix(model)  # at the method's start, as below
+    order = tree_order(model, kept)
+    superlu = StaticLU.pivoted(rows, columns, n, values)
+    tree_cheaper = (_operations(rows, columns, n, order, order)
+                    < _operations(rows, columns, n, superlu.row_order, superlu.column_order))
+    assert tree_cheaper == (not chain)
+    chosen = kept_pivots(model, kept.tolist(), method.q, np.zeros(model.n_w))
+    taken = chosen.row_order if tree_cheaper else superlu.row_order
+    assert np.array_equal(chosen.row_order, taken)
+    entries, b = ca.SX.sym("values", rows.size), ca.SX.sym("b", n)
+    x = np.array(ca.Function("solve", [entries, b], [chosen.solve(chosen.factor(entries), b)])(
+        values, np.ones(n))).ravel()
+    K = np.zeros((n, n))
+    K[rows, columns] = values
+    assert np.abs(K @ x - 1.0).max() <= 1e-10 * np.abs(K).max() * np.abs(x).max()

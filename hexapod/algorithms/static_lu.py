@@ -43,28 +43,39 @@ class StaticLU:
         self._pattern()
 
     @classmethod
-    def pivoted(cls, rows, columns, n: int, values) -> StaticLU:
+    def pivoted(cls, rows, columns, n: int, values, orders=()) -> StaticLU:
         """The pattern ``(rows, columns)`` with the pivots SuperLU chooses for the matrix of
         these values, in the order of the two that costs fewer operations: partial pivoting
         with COLAMD's column order, or threshold pivoting (0.1, SuperLU's advice for a pattern
         near symmetric) with the minimum degree order of ``A^T + A``. Neither wins everywhere:
         on the integrators' saddle-point matrices the second wrote a quarter fewer operations
         for the 18-joint robot (its run to 1e-6: 51 -> 38 ms of CPU) and twice as many for a
-        chain of 10 links; the checks of every solve catch pivots the matrix has outgrown."""
+        chain of 10 links; the checks of every solve catch pivots the matrix has outgrown.
+        ``orders``: symmetric pivot orders weighed with them (the body-joint tree's,
+        :func:`~hexapod.algorithms.step.tree_order`), each taken where it costs fewer
+        operations still and factors these values (no zero pivot)."""
         from scipy.sparse import csc_array
         from scipy.sparse.linalg import splu
 
         rows, columns = np.asarray(rows, dtype=int), np.asarray(columns, dtype=int)
         A = csc_array((np.asarray(values, dtype=float), (rows, columns)), shape=(n, n))
-        orders = ({"permc_spec": "COLAMD"},
-                  {"permc_spec": "MMD_AT_PLUS_A", "diag_pivot_thresh": 0.1,
-                   "options": {"SymmetricMode": True}})
+        superlu_orders = ({"permc_spec": "COLAMD"},
+                          {"permc_spec": "MMD_AT_PLUS_A", "diag_pivot_thresh": 0.1,
+                           "options": {"SymmetricMode": True}})
         # P_r A P_c = L U with (P_r A)[perm_r[i]] = A[i] and (A P_c)[:, perm_c[j]] = A[:, j]
-        pivots = [(np.argsort(lu.perm_r), np.argsort(lu.perm_c))
-                  for lu in (splu(A, **order) for order in orders)]
-        row_order, column_order = min(pivots, key=lambda p: _operations(rows, columns, n, *p))
-        lu = cls(rows, columns, n, row_order, column_order)
+        chosen = min(((np.argsort(lu.perm_r), np.argsort(lu.perm_c))
+                      for lu in (splu(A, **order) for order in superlu_orders)),
+                     key=lambda p: _operations(rows, columns, n, *p))
+        lu = cls(rows, columns, n, *chosen)
         lu.chosen_growth = lu.growth(values)  # what serves() measures others against
+        least = _operations(rows, columns, n, *chosen)
+        for order in orders:
+            if _operations(rows, columns, n, order, order) < least:
+                given = cls(rows, columns, n, order, order)
+                growth = given.growth(values)
+                if np.isfinite(growth):
+                    lu, least = given, _operations(rows, columns, n, order, order)
+                    lu.chosen_growth = growth
         return lu
 
     def growth(self, values) -> float:

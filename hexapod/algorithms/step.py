@@ -63,10 +63,13 @@ def kept_matrix(W_all: ca.MX, d: ca.MX, zero: ca.MX, rows: list[int],
 
 def kept_pivots(model: Model, rows: list[int], q: np.ndarray, w: np.ndarray) -> StaticLU:
     """Pivots for the LU of the saddle-point matrix of the kept ``rows`` (:func:`kept_matrix`,
-    fewer rows than velocities), chosen by SuperLU at positions ``q`` and law values ``w``: a
-    kernel built with them serves the states near there, its residual checks saying when they
-    no longer do."""
-    return StaticLU.pivoted(*kept_values(model, rows, q, w))
+    fewer rows than velocities), chosen by SuperLU at positions ``q`` and law values ``w``, or
+    the body-joint tree's order (:func:`tree_order`) where it costs fewer operations (the
+    18-joint robot's: 12,582 against 16,552; a chain's costs more): a kernel built with them
+    serves the states near there, its residual checks saying when they no longer do."""
+    tree = tree_order(model, rows)
+    return StaticLU.pivoted(*kept_values(model, rows, q, w),
+                            orders=() if tree is None else (tree,))
 
 
 def tree_order(model: Model, rows) -> np.ndarray | None:
