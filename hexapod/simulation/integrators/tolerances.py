@@ -17,9 +17,11 @@ KIND_OF_UNIT = {unit: kind for kind, units in ATOL_KINDS.items() for unit in uni
 
 
 def state_units(model: Model) -> list[str]:
-    """The unit of each component of ``(q, v)``, as the results' columns say it."""
-    return ([COORDINATE_UNITS[component(name)][0] for name in model.coordinate_names]
-            + [VELOCITY_UNITS[component(name)][0] for name in model.velocity_names])
+    """The unit of each component of ``(q, v)``, as the results' columns say it (read once
+    per model: every run's start asked, 0.15 ms of a 10-link chain's)."""
+    return list(model.built_once(("state units",), lambda m: tuple(
+        [COORDINATE_UNITS[component(name)][0] for name in m.coordinate_names]
+        + [VELOCITY_UNITS[component(name)][0] for name in m.velocity_names])))
 
 
 def default_tolerances(model: Model) -> dict[str, float]:
