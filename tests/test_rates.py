@@ -53,8 +53,9 @@ def test_a_steps_stages_in_one_call_are_those_taken_one_by_one(case):
     """DOP853's eleven later stages in one call of the kernel (the tableau applied inside
     the Function) are the stages one by one, from the same sums in the same order: equal to
     round-off (they were bit for bit on both cases), with redundant rows left out
-    (four-bar-3d) and time laws read at each stage's time (driven-tree). A stage whose
-    solve would be refused refuses the call."""
+    (four-bar-3d) and time laws read at each stage's time (driven-tree); the stages'
+    combinations the call forms (the propagated solution's and the error estimate's) are
+    those of the stages one by one. A stage whose solve would be refused refuses the call."""
     from hexapod.simulation.integrators import DormandPrince853
 
     scene = (four_bar(3, 0.7, driven=False, gravity=[0, -9.81, 0]) if case == "four-bar-3d"
@@ -65,7 +66,8 @@ def test_a_steps_stages_in_one_call_are_those_taken_one_by_one(case):
     y0 = np.concatenate([method.q, method.v])
     f0 = np.concatenate([model.call("qdot", q=method.q, v=method.v), method.v_dot])
     h = 1e-2
-    K = method._compiled.stages(method.A, method.c, 0.2, h, y0, f0)
+    K, combined = method._compiled.stages(method.A, method.c, 0.2, h, y0, f0,
+                                          weights=method._combinations)
     stages = [f0]
     for i in range(1, len(method.c)):
         y = y0 + h * sum(a * k for a, k in zip(method.A[i, :i], stages, strict=True))
@@ -73,6 +75,9 @@ def test_a_steps_stages_in_one_call_are_those_taken_one_by_one(case):
     one_by_one = np.array(stages[1:])
     assert K.shape == one_by_one.shape == (len(method.c) - 1, y0.size)
     assert np.abs(K - one_by_one).max() <= 1e-14 * np.abs(one_by_one).max()
+    expected = method._combinations @ np.array(stages)
+    assert combined.shape == expected.shape == (3, y0.size)
+    assert np.abs(combined - expected).max() <= 1e-14 * np.abs(one_by_one).max()
     bad = y0.copy()
     bad[3] = np.nan  # an Euler parameter: every term of the first body depends on it
     assert method._compiled.stages(method.A, method.c, 0.2, h, bad, f0) is None

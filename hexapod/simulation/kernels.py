@@ -170,19 +170,23 @@ class CompiledRates:
         return self._policy
 
     def stages(self, A: np.ndarray, c: np.ndarray, t: float, h: float, y0: np.ndarray,
-               f0: np.ndarray, left_out: float = REDUNDANT_TOLERANCE,
-               until: float = np.inf) -> np.ndarray | None:
+               f0: np.ndarray, left_out: float = REDUNDANT_TOLERANCE, until: float = np.inf,
+               weights: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray] | None:
         """The stages after the first of an explicit Runge-Kutta step ``h`` from ``(t, y0)``
         (``f0`` its rate there; ``A``, ``c`` the tableau), as rows, in one call of a Function
         that evaluates this kernel once per stage (:class:`CompiledStages`): the same numbers
-        as the stages called one by one, without their Python overhead. None when a stage's
-        solve would be refused (see :meth:`solve`): the caller then takes its stages one by
-        one, each refused one by the exact solve. The laws are read at the stages' times, none
-        later than ``until`` (a step that ends on a break of the laws reads them before it)."""
-        key = (A.tobytes(), c.tobytes())
+        as the stages called one by one, without their Python overhead; with the stages'
+        combinations ``weights @ K`` (``K`` every stage, ``f0`` first: the propagated
+        solution's and the error estimate's, formed in the same call), as rows (empty without
+        ``weights``). None when a stage's solve would be refused (see :meth:`solve`): the
+        caller then takes its stages one by one, each refused one by the exact solve. The laws
+        are read at the stages' times, none later than ``until`` (a step that ends on a break
+        of the laws reads them before it)."""
+        weights = np.zeros((0, c.size)) if weights is None else np.asarray(weights, dtype=float)
+        key = (A.tobytes(), c.tobytes(), weights.tobytes())
         stages = self.__dict__.setdefault("_stages", {})
         if key not in stages:
-            stages[key] = CompiledStages(self, A, c)
+            stages[key] = CompiledStages(self, A, c, weights)
         return stages[key](t, h, y0, f0, left_out, until)
 
     @property
@@ -224,35 +228,42 @@ class CompiledStages:
     the tableau (:func:`explicit_stages`, as the stages one by one do) and calls the rates
     kernel's Function at each stage, the laws' values at the stage times given. A call of a
     stage one by one costs Python some 80 us besides the kernel's own time (the 10-link
-    chain's: 40 us compiled); DOP853 takes 11 such calls a step."""
+    chain's: 40 us compiled); DOP853 takes 11 such calls a step. The combinations of the
+    stages an embedded pair needs (its solution's and its error estimate's) come with them:
+    three products in NumPy cost some 10 us an attempt."""
 
-    def __init__(self, rates: CompiledRates, A: np.ndarray, c: np.ndarray):
+    def __init__(self, rates: CompiledRates, A: np.ndarray, c: np.ndarray,
+                 weights: np.ndarray):
         self.model, self.c = rates.model, np.asarray(c, dtype=float)
         A = np.asarray(A, dtype=float)
-        # built once per model, kernel and tableau (a run's start would otherwise pay it)
+        # built once per model, kernel, tableau and combinations (a run's start would
+        # otherwise pay it)
         self.function = rates.model.built_once(
-            ("stages", rates._key, A.tobytes(), self.c.tobytes()),
-            lambda m: _stages_function(rates.function, A, self.c, m))
+            ("stages", rates._key, A.tobytes(), self.c.tobytes(), weights.tobytes()),
+            lambda m: _stages_function(rates.function, A, self.c, weights, m))
         self._fast = FastFunction(self.function)
 
     def __call__(self, t: float, h: float, y0: np.ndarray, f0: np.ndarray,
-                 left_out: float, until: float = np.inf) -> np.ndarray | None:
-        """The stages after the first, as rows, or None (see :meth:`CompiledRates.stages`);
-        the laws read at the stages' times, none later than ``until``."""
+                 left_out: float, until: float = np.inf
+                 ) -> tuple[np.ndarray, np.ndarray] | None:
+        """The stages after the first and the combinations, as rows, or None (see
+        :meth:`CompiledRates.stages`); the laws read at the stages' times, none later than
+        ``until``."""
         model = self.model
         arguments = [h, y0, f0]
         if model.n_w:  # the laws at the stages' times, read together (the same bits)
             times = np.minimum(t + self.c[1:] * h, until)
             arguments.append(np.concatenate(model.law_values(times)))
         try:
-            K, residual = self._fast(*arguments)
+            K, residual, combined = self._fast(*arguments)
         except RuntimeError:  # a factorisation failed: a singular matrix, or NaN in it
             return None
         residual = residual.reshape(2, -1, order="F")
         if not (np.all(residual[0] <= RESIDUAL_TOLERANCE) and np.all(residual[1] <= left_out)
                 and np.isfinite(K).all()):
             return None
-        return K.reshape(y0.size, -1, order="F").T
+        return (K.reshape(y0.size, -1, order="F").T,
+                combined.reshape(y0.size, -1, order="F").T)
 
 
 def explicit_stages(derivative, h, y0, f0, A: np.ndarray) -> list:
@@ -272,7 +283,7 @@ def explicit_stages(derivative, h, y0, f0, A: np.ndarray) -> list:
     return stages
 
 
-def _stages_function(rates: ca.Function, A: np.ndarray, c: np.ndarray,
+def _stages_function(rates: ca.Function, A: np.ndarray, c: np.ndarray, weights: np.ndarray,
                      model: Model) -> ca.Function:
     n_q, n_w, s = model.n_q, model.n_w, c.size
     h = ca.MX.sym("h")
@@ -288,7 +299,10 @@ def _stages_function(rates: ca.Function, A: np.ndarray, c: np.ndarray,
 
     stages = explicit_stages(derivative, h, y0, f0, A)
     inputs = [h, y0, f0] + ([laws] if n_w else [])
-    return ca.Function("stages", inputs, [ca.horzcat(*stages[1:]), ca.horzcat(*residuals)])
+    combined = (ca.mtimes(ca.horzcat(*stages), ca.DM(weights.T)) if weights.shape[0]
+                else ca.MX(y0.size1(), 0))
+    return ca.Function("stages", inputs, [ca.horzcat(*stages[1:]), ca.horzcat(*residuals),
+                                          combined])
 
 
 class PolicyMultipliers:

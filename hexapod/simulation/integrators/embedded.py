@@ -77,6 +77,8 @@ class EmbeddedRungeKutta(Integrator):
         self._given_step = step
         self._error_before = 1e-4  # the last accepted step's error (at least 1e-4, as Hairer's)
         self._dense_step = None  # (t_old, h, y0, K, y1) of the last accepted step
+        # the stages' combinations a step reads (rows): the solution's and the error's
+        self._combinations = np.vstack([self.b.reshape(1, -1), self.error_weights()])
         super().__init__(*args, step=step, **kwargs)
 
     def _start(self) -> None:
@@ -90,9 +92,15 @@ class EmbeddedRungeKutta(Integrator):
         weight = self.atol_vector + self.rtol * np.maximum(np.abs(y0), np.abs(y1))
         return float(np.sqrt(np.mean((x / weight) ** 2)))
 
-    def _error(self, h: float, K: np.ndarray, y0: np.ndarray, y1: np.ndarray) -> float:
-        """The step's error in the weighted RMS norm (at most 1: accepted)."""
-        return self._norm(h * ((self.b - self.b_hat) @ K), y0, y1)
+    @classmethod
+    def error_weights(cls) -> np.ndarray:
+        """The combinations of the stages the error estimate reads (rows): ``b - b_hat``."""
+        return (cls.b - cls.b_hat).reshape(1, -1)
+
+    def _error(self, h: float, E: np.ndarray, y0: np.ndarray, y1: np.ndarray) -> float:
+        """The step's error in the weighted RMS norm (at most 1: accepted), from the stages'
+        combinations ``E = error_weights() @ K``."""
+        return self._norm(h * E[0], y0, y1)
 
     def _growth(self, error: float, rejected: bool) -> float:
         """The factor of the next step after one accepted with ``error``: Gustafsson's PI
@@ -121,22 +129,25 @@ class EmbeddedRungeKutta(Integrator):
         return self._starting_step(d0, d1, rate_change, self.error_order)
 
     def _stages(self, t: float, h: float, y0: np.ndarray,
-                f0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The stages ``K`` of a step ``h`` from ``(t, y0)``, ``f0`` the rate there, and the
-        propagated solution ``y1``: in one call of the compiled kernel
+                f0: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The stages ``K`` of a step ``h`` from ``(t, y0)``, ``f0`` the rate there, the
+        propagated solution ``y1`` and the error estimate's combinations of the stages
+        (:meth:`error_weights`): in one call of the compiled kernel
         (:meth:`~hexapod.simulation.kernels.CompiledRates.stages`), else one by one."""
         kernel, left_out = ((self._compiled, REDUNDANT_TOLERANCE) if self._crossing is None
                             else (self._crossing_rates, np.inf))
         until = self._laws_until(t + h)
-        later = kernel.stages(self.A, self.c, t, h, y0, f0, left_out, until)
-        if later is not None:
+        found = kernel.stages(self.A, self.c, t, h, y0, f0, left_out, until,
+                              self._combinations)
+        if found is not None:
+            later, combined = found
             self.counters.rhs += later.shape[0]
-            K = np.vstack([f0, later])
-            return K, y0 + h * (self.b @ K)
+            return np.vstack([f0, later]), y0 + h * combined[0], combined[1:]
         return self._stages_one_by_one(t, h, y0, f0, until)
 
     def _stages_one_by_one(self, t: float, h: float, y0: np.ndarray, f0: np.ndarray,
-                           until: float = np.inf) -> tuple[np.ndarray, np.ndarray]:
+                           until: float = np.inf
+                           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """:meth:`_stages`, each stage's rate from :meth:`_derivative` (its laws read no later
         than ``until``)."""
         n_q = self.model.n_q
@@ -144,7 +155,8 @@ class EmbeddedRungeKutta(Integrator):
             lambda i, y: self._derivative(min(t + self.c[i] * h, until), y[:n_q], y[n_q:]),
             h, y0, f0,
             self.A))
-        return K, y0 + h * (self.b @ K)
+        return K, y0 + h * (self.b @ K), self.error_weights() @ K
+
 
     def _step(self) -> None:
         model, n_q = self.model, self.model.n_q
@@ -157,8 +169,8 @@ class EmbeddedRungeKutta(Integrator):
                 raise IntegrationError(f"the step size fell to {h:.3g} s (the error test cannot be "
                                   "met: the motion may be singular or too stiff for an "
                                   "explicit method)")
-            K, y1 = self._stages(self.t, h, y0, f0)
-            error = self._error(h, K, y0, y1) if np.isfinite(y1).all() else np.inf
+            K, y1, E = self._stages(self.t, h, y0, f0)
+            error = self._error(h, E, y0, y1) if np.isfinite(y1).all() else np.inf
             if error <= 1.0:
                 if not nudged and self._lands_on_pose(self.t + h, y1[:n_q]):
                     # a crossing's step ending at the pose: the projection there is as badly
@@ -231,12 +243,16 @@ class DormandPrince853(EmbeddedRungeKutta):
     b_hat = DOP853_B  # unused: the error comes from the embedded 5th and 3rd order solutions
     E3, E5 = DOP853_E3, DOP853_E5
 
-    def _error(self, h, K, y0, y1):
+    @classmethod
+    def error_weights(cls) -> np.ndarray:
         # from the twelve stages: the rate at y1 has no weight in either estimate (the last
         # coefficient of E3 and E5 is zero), and only the dense output needs it
+        return np.vstack([cls.E5[:DOP853_STAGES], cls.E3[:DOP853_STAGES]])
+
+    def _error(self, h, E, y0, y1):
         weight = self.atol_vector + self.rtol * np.maximum(np.abs(y0), np.abs(y1))
-        err5 = np.sum((self.E5[:DOP853_STAGES] @ K / weight) ** 2)
-        err3 = np.sum((self.E3[:DOP853_STAGES] @ K / weight) ** 2)
+        err5 = np.sum((E[0] / weight) ** 2)
+        err3 = np.sum((E[1] / weight) ** 2)
         if err5 == 0.0 and err3 == 0.0:
             return 0.0
         return float(h * err5 / np.sqrt((err5 + 0.01 * err3) * y0.size))
