@@ -121,10 +121,18 @@ def main() -> None:
                         help="kernels compiled to C (kept in OUT/kernels)")
     parser.add_argument("--out", default="step-controller")
     args = parser.parse_args()
+    known = forward_problems([]) + robot_problems()
+    unknown = sorted(set(args.problems or ()) - {p.key for p in known})
+    if unknown:
+        parser.error(f"unknown problem {unknown[0]!r}: choose among "
+                     + ", ".join(p.key for p in known))
+    if not all(0.0 < s <= 1.0 for s in args.safety):
+        parser.error("--safety: each factor must be in (0, 1]")
+    if any(m not in ("dop853-projection", "dopri5-projection") for m in args.methods):
+        parser.error("--methods: the embedded pairs only (dop853-projection, dopri5-projection)")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    todo = [p for p in forward_problems([]) + robot_problems()
-            if args.problems is None or p.key in args.problems]
+    todo = [p for p in known if args.problems is None or p.key in args.problems]
     rows = []
     settings = {"compiled": True, "cache": out / "kernels"} if args.compile else {}
     with hx.executing(**settings):
