@@ -63,18 +63,18 @@ class StaticLU:
                           {"permc_spec": "MMD_AT_PLUS_A", "diag_pivot_thresh": 0.1,
                            "options": {"SymmetricMode": True}})
         # P_r A P_c = L U with (P_r A)[perm_r[i]] = A[i] and (A P_c)[:, perm_c[j]] = A[:, j]
-        chosen = min(((np.argsort(lu.perm_r), np.argsort(lu.perm_c))
-                      for lu in (splu(A, **order) for order in superlu_orders)),
-                     key=lambda p: _operations(rows, columns, n, *p))
+        least, chosen = min(((_operations(rows, columns, n, *p), p) for p in (
+            (np.argsort(lu.perm_r), np.argsort(lu.perm_c))
+            for lu in (splu(A, **order) for order in superlu_orders))), key=lambda c: c[0])
         lu = cls(rows, columns, n, *chosen)
         lu.chosen_growth = lu.growth(values)  # what serves() measures others against
-        least = _operations(rows, columns, n, *chosen)
         for order in orders:
-            if _operations(rows, columns, n, order, order) < least:
+            cost = _operations(rows, columns, n, order, order)
+            if cost < least:
                 given = cls(rows, columns, n, order, order)
                 growth = given.growth(values)
                 if np.isfinite(growth):
-                    lu, least = given, _operations(rows, columns, n, order, order)
+                    lu, least = given, cost
                     lu.chosen_growth = growth
         return lu
 

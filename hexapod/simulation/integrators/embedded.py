@@ -155,8 +155,8 @@ class EmbeddedRungeKutta(Integrator):
             lambda i, y: self._derivative(min(t + self.c[i] * h, until), y[:n_q], y[n_q:]),
             h, y0, f0,
             self.A))
-        return K, y0 + h * (self.b @ K), self.error_weights() @ K
-
+        combined = self._combinations @ K
+        return K, y0 + h * combined[0], combined[1:]
 
     def _step(self) -> None:
         model, n_q = self.model, self.model.n_q
