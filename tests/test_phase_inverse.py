@@ -156,16 +156,31 @@ def test_a_change_of_rank_is_redone_exactly(monkeypatch):
     assert fields["exact_samples"] >= 2
 
 
-def test_samples_too_far_apart_for_newton_are_redone_exactly():
-    """A four-bar sampled coarsely: the predicted positions are too far off for the Newton
-    steps, those samples are redone exactly (and later ones take more steps), and the numbers
-    agree."""
+@pytest.mark.parametrize("count", [41, 9])
+def test_samples_too_far_apart_for_newton_take_more_steps(count):
+    """A four-bar sampled coarsely: the predicted positions are too far off for the first
+    Newton steps, the samples from there on take more (the most for samples 0.15 s apart), none
+    is redone exactly, and the numbers agree."""
     model = four_bar_model(3)
-    times = np.linspace(0.0, 1.2, 9)
+    times = np.linspace(0.0, 1.2, count)
+    exact = inverse_dynamics(model, times, method="saddle")
+    fields = phase(model, times)
+    assert_agree(fields, exact)
+    assert fields["exact_samples"] == 1
+    steps = phase_plan.NEWTON_STEPS
+    assert fields["newton_steps"] == {41: steps[1], 9: steps[-1]}[count]
+
+
+def test_samples_too_far_apart_for_the_most_newton_steps_are_redone_exactly():
+    """Samples 0.2 s apart: not even the most Newton steps converge, those samples are redone
+    exactly, and the numbers agree."""
+    model = four_bar_model(3)
+    times = np.linspace(0.0, 1.2, 7)
     exact = inverse_dynamics(model, times, method="saddle")
     fields = phase(model, times)
     assert_agree(fields, exact)
     assert 1 < fields["exact_samples"] < times.size
+    assert fields["newton_steps"] == phase_plan.NEWTON_STEPS[-1]
 
 
 def test_friction_keeps_the_exact_qp_where_a_cone_binds():

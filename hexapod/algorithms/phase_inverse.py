@@ -16,10 +16,11 @@ does the same work in CasADi Functions evaluated over many samples in one call:
   that carry nothing at that sample last, so that their multipliers can be held at zero.
 * **checks**: each sample comes with its position residual, the residuals of its kept and
   left-out rows, the size of the rows its decision did not weigh (the feet in swing: zero) and
-  an estimate of its smallest singular value. A sample that fails them (Newton did not
-  converge: the later samples then take more Newton steps; the rows left out no longer follow
-  from those kept; a foot touched down unweighed; a singular pose), or one whose kept rows
-  belong to a foot that carries nothing, is redone by the exact path
+  an estimate of its smallest singular value. A sample whose positions did not converge is
+  evaluated again with more Newton steps, as are the samples after it (:data:`NEWTON_STEPS`).
+  A sample that fails the checks otherwise (or with the most Newton steps: the rows left out no
+  longer follow from those kept; a foot touched down unweighed; a singular pose), or one whose
+  kept rows belong to a foot that carries nothing, is redone by the exact path
   (:func:`~hexapod.algorithms.sample_inverse.exact_sample`), and the phase goes on from it
   with the exact solve's decision when the failure was the decision's.
 * **the first sample** is always exact: it finds the positions from the scene's guess and checks
@@ -49,7 +50,7 @@ from hexapod._support.execution import current
 from hexapod.algorithms.ground import NO_LOAD, foot_values, in_contact_axes, sharing_weights
 from hexapod.algorithms.liaison import efforts_and_axes
 from hexapod.algorithms.linalg import as_dense, equilibrate, split_rows
-from hexapod.algorithms.phase_plan import MORE_NEWTON_STEPS, NEWTON_STEPS, PhasePlan, plan_for
+from hexapod.algorithms.phase_plan import NEWTON_STEPS, PhasePlan, plan_for
 from hexapod.algorithms.sample_inverse import (
     SampleResult,
     exact_forces,
@@ -164,12 +165,14 @@ def phase_inverse(model: Model, data: Data, times: np.ndarray, w, wd, wdd, frame
                   known: tuple | None = None, motion: bool = False) -> dict:
     """The phase path over ``times`` (laws ``w, wd, wdd`` given, n_w x N): the fields of an
     :class:`~hexapod.algorithms.inverse.InverseResult` as a dict, with ``exact_samples``, the
-    number of samples solved by the exact path. Compiled or interpreted as the execution
-    setting says (:mod:`hexapod._support.execution`). ``known``: the motion ``(q, v, v_dot)``
-    at the samples when it is known already (a guided model's): Newton's starting points, and
-    where the constraints leave a motion free, its velocities (by the exact path). ``motion``:
-    the motion alone (a kinematics run: the fields of forces are empty, and the drivers must
-    prescribe every degree of freedom), as :func:`phase_motion` gives it."""
+    number of samples solved by the exact path, and ``newton_steps``, the Newton steps a
+    sample took at the end (:data:`~hexapod.algorithms.phase_plan.NEWTON_STEPS`). Compiled or
+    interpreted as the execution setting says (:mod:`hexapod._support.execution`). ``known``:
+    the motion ``(q, v, v_dot)`` at the samples when it is known already (a guided model's):
+    Newton's starting points, and where the constraints leave a motion free, its velocities
+    (by the exact path). ``motion``: the motion alone (a kinematics run: the fields of forces
+    are empty, and the drivers must prescribe every degree of freedom), as
+    :func:`phase_motion` gives it."""
     to_c = current().compiled
     n = times.size
     out = _Results(model, n, frame == "world", motion)
@@ -179,7 +182,7 @@ def phase_inverse(model: Model, data: Data, times: np.ndarray, w, wd, wdd, frame
     decisions = _Decisions(model, data, terms_of(model), feet, to_c, motion)
     decisions.adopt(0, data, w[:, 0])
     # Newton steps per sample (none from known positions): more once samples prove far apart
-    newton = NEWTON_STEPS if known is None else 0
+    newton = NEWTON_STEPS[0] if known is None else 0
     k, chunk = 1, CHUNK
     while k < n:
         plan = decisions.plan(k, out.predicted(k, times), w[:, k])
@@ -187,13 +190,15 @@ def phase_inverse(model: Model, data: Data, times: np.ndarray, w, wd, wdd, frame
         failed = None
         if plan is not None:
             failed = _run(plan, data, newton, out, feet, times, w, wd, wdd, k, stop)
-        if plan is None or failed is not None:
+        more = [] if failed is None or failed[1] != "newton" else [
+            steps for steps in NEWTON_STEPS if steps > newton]
+        if more:  # samples too far apart for the Newton steps taken: from there on, more
+            newton, k = more[0], failed[0]
+        elif plan is None or failed is not None:
             bad, blame = (k, "rank") if plan is None else failed
             out.store(bad, _exact(model, data, out, times, bad, frame, known, motion))
             if blame == "rank":  # the decision no longer holds: take the exact solve's
                 decisions.adopt(bad, data, w[:, bad], plan)
-            elif blame == "newton":  # samples too far apart for the Newton steps taken
-                newton = MORE_NEWTON_STEPS
             k, chunk = bad + 1, 1  # short runs after a failure, growing again
         else:
             k, chunk = stop, min(2 * chunk, CHUNK)
@@ -204,14 +209,16 @@ def phase_inverse(model: Model, data: Data, times: np.ndarray, w, wd, wdd, frame
     if motion:
         return {"q": out.q, "v": out.v, "v_dot": out.v_dot,
                 "max_violation": float(out.violation.max()),
-                "redundant_rows": tuple(out.redundant), "exact_samples": int(out.exact.sum())}
+                "redundant_rows": tuple(out.redundant), "exact_samples": int(out.exact.sum()),
+                "newton_steps": newton}
     _frames(model, out, frame)
     if model.contacts and model.ground.policy == "friction":
         _friction(model, data, out, feet, times, frame)
     return {"q": out.q, "v": out.v, "v_dot": out.v_dot, "force": out.force,
             "torque": out.torque, "effort": out.effort, "ground": out.ground,
             "max_violation": float(out.violation.max()),
-            "redundant_rows": tuple(out.redundant), "exact_samples": int(out.exact.sum())}
+            "redundant_rows": tuple(out.redundant), "exact_samples": int(out.exact.sum()),
+            "newton_steps": newton}
 
 
 def phase_motion(model: Model, data: Data, times: np.ndarray, w, wd, wdd, *,

@@ -10,7 +10,7 @@ evaluated over the samples of a phase with ``mapaccum`` (each sample starts from
 before; in blocks, :func:`blocks`). One sample:
 
 1. positions: ``q_p = q (+) (h v + h^2/2 v_dot)`` predicted from the sample before (or known:
-   a guided model's, an input ``known``), then :data:`NEWTON_STEPS` Newton steps on
+   a guided model's, an input ``known``), then a few Newton steps (:data:`NEWTON_STEPS`) on
    ``phi_I = 0`` (none from known positions) with the Jacobian of ``q_p`` (one
    factorisation), each step applied with the retraction;
 2. ``J = Phi_v[I]`` at the positions found, factorised once (:class:`StaticLU`: pivots chosen
@@ -51,12 +51,12 @@ from hexapod.algorithms.step_terms import StepTerms, sx_function
 from hexapod.model.data import kept
 from hexapod.model.model import Data
 
-#: Newton steps on the positions per sample, from the positions predicted by the sample before
-#: (enough for samples up to a few milliseconds apart on the walking hexapod) ...
-NEWTON_STEPS = 3
-#: ... and the steps taken instead once a sample's positions did not converge in those (samples
-#: a hundredth of a second apart); each step contracts the error by a factor of about 100 there.
-MORE_NEWTON_STEPS = 6
+#: Newton steps on the positions per sample, from the positions predicted by the sample before:
+#: the first count while the samples converge in it (two reach round-off on the walking hexapod
+#: with samples up to 2 ms apart: a scaled residual of 3e-14 against the 1e-13 asked, 1e-15 at
+#: 1 ms), the next ones from the first sample that did not on (samples a hundredth of a second
+#: apart; each step contracts the error by a factor of about 100 there).
+NEWTON_STEPS = (2, 3, 6)
 #: Samples after which a plan evaluates its step expanded into one SX Function (when it is not
 #: compiled): one loop of CasADi's virtual machine instead of an MX graph calling some thirty
 #: Functions, a sixth less time a sample (the walking robot: 1.57 against 1.90 ms) and the
@@ -176,7 +176,7 @@ class PhasePlan:
 
     # ---------------------------------------------------------------- one sample
 
-    def step(self, newton: int = NEWTON_STEPS, expanded: bool = False,
+    def step(self, newton: int = NEWTON_STEPS[0], expanded: bool = False,
              known: bool = False) -> ca.Function:
         """The Function of one sample with ``newton`` Newton steps (built once per count), or
         the same expanded into one SX Function (see :data:`EXPAND_AFTER`); ``known``: a last
@@ -264,7 +264,7 @@ class PhasePlan:
             cache[key] = self.step(newton, expanded, known).mapaccum("phase_steps", n)
         return kept(data, ("phase-buffer", id(self), *key), lambda: InPlaceFunction(cache[key]))
 
-    def evaluate(self, data: Data, x0, h, w, wd, wdd, feet, mask, newton: int = NEWTON_STEPS,
+    def evaluate(self, data: Data, x0, h, w, wd, wdd, feet, mask, newton: int = NEWTON_STEPS[0],
                  state_known=None):
         """The samples of one run: ``x0`` the state ``[q; v; v_dot]`` of the sample before,
         ``h`` (N,) the time steps, laws and per-foot inputs (rows x N), and ``state_known``
