@@ -11,7 +11,7 @@ from robots import builtin_model
 
 import hexapod as hx
 from hexapod.scene.reader import read_scene
-from hexapod.simulation.kernels import CompiledRates, compiled_rates
+from hexapod.simulation.kernels import CompiledRates, compiled_rates, weighted_squares
 
 from mechanisms import four_bar, random_tree, solve_state
 
@@ -55,7 +55,8 @@ def test_a_steps_stages_in_one_call_are_those_taken_one_by_one(case):
     round-off (they were bit for bit on both cases), with redundant rows left out
     (four-bar-3d) and time laws read at each stage's time (driven-tree); the stages'
     combinations the call forms (the propagated solution's and the error estimate's) are
-    those of the stages one by one. A stage whose solve would be refused refuses the call."""
+    those of the stages one by one, and so are the error test's sums of squares. A stage
+    whose solve would be refused refuses the call."""
     from hexapod.simulation.integrators import DormandPrince853
 
     scene = (four_bar(3, 0.7, driven=False, gravity=[0, -9.81, 0]) if case == "four-bar-3d"
@@ -66,8 +67,10 @@ def test_a_steps_stages_in_one_call_are_those_taken_one_by_one(case):
     y0 = np.concatenate([method.q, method.v])
     f0 = np.concatenate([model.call("qdot", q=method.q, v=method.v), method.v_dot])
     h = 1e-2
-    K, combined = method._compiled.stages(method.A, method.c, 0.2, h, y0, f0,
-                                          weights=method._combinations)
+    tolerances = (method.atol_vector, method.rtol)
+    K, combined, sums = method._compiled.stages(method.A, method.c, 0.2, h, y0, f0,
+                                                weights=method._combinations,
+                                                tolerances=tolerances)
     stages = [f0]
     for i in range(1, len(method.c)):
         y = y0 + h * sum(a * k for a, k in zip(method.A[i, :i], stages, strict=True))
@@ -78,6 +81,12 @@ def test_a_steps_stages_in_one_call_are_those_taken_one_by_one(case):
     expected = method._combinations @ np.array(stages)
     assert combined.shape == expected.shape == (3, y0.size)
     assert np.abs(combined - expected).max() <= 1e-14 * np.abs(one_by_one).max()
+    # the error test's sums, formed in the call as the step one by one forms them from its
+    # combinations (compared on the call's own: the error's are differences of stages, whose
+    # round-off they magnify)
+    y1 = y0 + h * combined[0]
+    by_numpy = [weighted_squares(e, y0, y1, *tolerances) for e in combined[1:]]
+    assert np.allclose(sums, by_numpy, rtol=1e-13, atol=0.0) and min(by_numpy) > 0
     bad = y0.copy()
     bad[3] = np.nan  # an Euler parameter: every term of the first body depends on it
     assert method._compiled.stages(method.A, method.c, 0.2, h, bad, f0) is None

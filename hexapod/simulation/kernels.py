@@ -173,23 +173,27 @@ class CompiledRates:
 
     def stages(self, A: np.ndarray, c: np.ndarray, t: float, h: float, y0: np.ndarray,
                f0: np.ndarray, left_out: float = REDUNDANT_TOLERANCE, until: float = np.inf,
-               weights: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray] | None:
+               weights: np.ndarray | None = None, tolerances: tuple | None = None
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """The stages after the first of an explicit Runge-Kutta step ``h`` from ``(t, y0)``
         (``f0`` its rate there; ``A``, ``c`` the tableau), as rows, in one call of a Function
         that evaluates this kernel once per stage (:class:`CompiledStages`): the same numbers
         as the stages called one by one, without their Python overhead; with the stages'
         combinations ``weights @ K`` (``K`` every stage, ``f0`` first: the propagated
-        solution's and the error estimate's, formed in the same call), as rows (empty without
-        ``weights``). None when a stage's solve would be refused (see :meth:`solve`): the
-        caller then takes its stages one by one, each refused one by the exact solve. The laws
-        are read at the stages' times, none later than ``until`` (a step that ends on a break
-        of the laws reads them before it)."""
+        solution's, ``y1 = y0 + h`` times the first, and the error estimate's, formed in the
+        same call), as rows (empty without ``weights``), and the error test's sums of those
+        after the first (:func:`weighted_squares` at ``y0, y1`` with ``tolerances``, the
+        absolute tolerances' vector and the relative one; none without). None when a
+        stage's solve would be refused (see :meth:`solve`): the caller then takes its stages
+        one by one, each refused one by the exact solve. The laws are read at the stages'
+        times, none later than ``until`` (a step that ends on a break of the laws reads them
+        before it)."""
         weights = np.zeros((0, c.size)) if weights is None else np.asarray(weights, dtype=float)
         key = (A.tobytes(), c.tobytes(), weights.tobytes())
         stages = self.__dict__.setdefault("_stages", {})
         if key not in stages:
             stages[key] = CompiledStages(self, A, c, weights)
-        return stages[key](t, h, y0, f0, left_out, until)
+        return stages[key](t, h, y0, f0, left_out, until, tolerances)
 
     @property
     def complete(self) -> bool:
@@ -231,8 +235,9 @@ class CompiledStages:
     kernel's Function at each stage, the laws' values at the stage times given. A call of a
     stage one by one costs Python some 80 us besides the kernel's own time (the 10-link
     chain's: 40 us compiled); DOP853 takes 11 such calls a step. The combinations of the
-    stages an embedded pair needs (its solution's and its error estimate's) come with them:
-    three products in NumPy cost some 10 us an attempt."""
+    stages an embedded pair needs (its solution's and its error estimate's) come with them
+    (three products in NumPy cost some 10 us an attempt), and so do the error test's
+    weighted sums of squares (9 us an attempt in NumPy)."""
 
     def __init__(self, rates: CompiledRates, A: np.ndarray, c: np.ndarray,
                  weights: np.ndarray):
@@ -246,18 +251,19 @@ class CompiledStages:
         self._fast = FastFunction(self.function)
 
     def __call__(self, t: float, h: float, y0: np.ndarray, f0: np.ndarray,
-                 left_out: float, until: float = np.inf
-                 ) -> tuple[np.ndarray, np.ndarray] | None:
-        """The stages after the first and the combinations, as rows, or None (see
-        :meth:`CompiledRates.stages`); the laws read at the stages' times, none later than
-        ``until``."""
+                 left_out: float, until: float = np.inf, tolerances: tuple | None = None
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """The stages after the first and the combinations, as rows, and the error test's
+        sums, or None (see :meth:`CompiledRates.stages`); the laws read at the stages' times,
+        none later than ``until``."""
         model = self.model
         arguments = [h, y0, f0]
         if model.n_w:  # the laws at the stages' times, read together (the same bits)
             times = np.minimum(t + self.c[1:] * h, until)
             arguments.append(np.concatenate(model.law_values(times)))
+        atol, rtol = (1.0, 0.0) if tolerances is None else tolerances
         try:
-            K, residual, combined = self._fast(*arguments)
+            K, residual, combined, sums = self._fast(*arguments, atol, rtol)
         except RuntimeError:  # a factorisation failed: a singular matrix, or NaN in it
             return None
         residual = residual.reshape(2, -1, order="F")
@@ -265,7 +271,8 @@ class CompiledStages:
                 and np.isfinite(K).all()):
             return None
         return (K.reshape(y0.size, -1, order="F").T,
-                combined.reshape(y0.size, -1, order="F").T)
+                combined.reshape(y0.size, -1, order="F").T,
+                sums if tolerances is not None else sums[:0])
 
 
 def explicit_stages(derivative, h, y0, f0, A: np.ndarray) -> list:
@@ -285,11 +292,21 @@ def explicit_stages(derivative, h, y0, f0, A: np.ndarray) -> list:
     return stages
 
 
+def weighted_squares(x, y0, y1, atol, rtol):
+    """``sum((x / weight)^2)``, ``weight = atol + rtol max(|y0|, |y1|)``: the error test's
+    weights (Hairer's), between a step's start ``y0`` and end ``y1``; on NumPy arrays (a
+    float) or CasADi symbols (an expression) alike, as :func:`explicit_stages`."""
+    if isinstance(x, ca.MX):
+        return ca.sumsqr(x / (atol + rtol * ca.fmax(ca.fabs(y0), ca.fabs(y1))))
+    return float(np.sum((x / (atol + rtol * np.maximum(np.abs(y0), np.abs(y1)))) ** 2))
+
+
 def _stages_function(rates: ca.Function, A: np.ndarray, c: np.ndarray, weights: np.ndarray,
                      model: Model) -> ca.Function:
     n_q, n_w, s = model.n_q, model.n_w, c.size
     h = ca.MX.sym("h")
     y0, f0 = ca.MX.sym("y0", n_q + model.n_v), ca.MX.sym("f0", n_q + model.n_v)
+    atol, rtol = ca.MX.sym("atol", n_q + model.n_v), ca.MX.sym("rtol")
     laws = ca.MX.sym("laws", 3 * n_w, s - 1)
     residuals = []
 
@@ -300,11 +317,14 @@ def _stages_function(rates: ca.Function, A: np.ndarray, c: np.ndarray, weights: 
         return ca.vertcat(q_dot, v_dot)
 
     stages = explicit_stages(derivative, h, y0, f0, A)
-    inputs = [h, y0, f0] + ([laws] if n_w else [])
+    inputs = [h, y0, f0] + ([laws] if n_w else []) + [atol, rtol]
     combined = (ca.mtimes(ca.horzcat(*stages), ca.DM(weights.T)) if weights.shape[0]
                 else ca.MX(y0.size1(), 0))
+    y1 = y0 + h * combined[:, 0] if weights.shape[0] else y0
+    sums = [weighted_squares(combined[:, j], y0, y1, atol, rtol)
+            for j in range(1, weights.shape[0])]
     return ca.Function("stages", inputs, [ca.horzcat(*stages[1:]), ca.horzcat(*residuals),
-                                          combined])
+                                          combined, ca.vertcat(ca.MX(0, 1), *sums)])
 
 
 class PolicyMultipliers:

@@ -35,7 +35,7 @@ from hexapod.simulation.integrators.tableaus import (
     DOPRI5_C,
     DOPRI5_DENSE,
 )
-from hexapod.simulation.kernels import REDUNDANT_TOLERANCE, explicit_stages
+from hexapod.simulation.kernels import REDUNDANT_TOLERANCE, explicit_stages, weighted_squares
 from hexapod.simulation.methods import METHODS
 
 
@@ -89,18 +89,18 @@ class EmbeddedRungeKutta(Integrator):
         return np.concatenate(self._rates(t, q, v))
 
     def _norm(self, x: np.ndarray, y0: np.ndarray, y1: np.ndarray) -> float:
-        weight = self.atol_vector + self.rtol * np.maximum(np.abs(y0), np.abs(y1))
-        return float(np.sqrt(np.mean((x / weight) ** 2)))
+        return float(np.sqrt(weighted_squares(x, y0, y1, self.atol_vector, self.rtol) / x.size))
 
     @classmethod
     def error_weights(cls) -> np.ndarray:
         """The combinations of the stages the error estimate reads (rows): ``b - b_hat``."""
         return (cls.b - cls.b_hat).reshape(1, -1)
 
-    def _error(self, h: float, E: np.ndarray, y0: np.ndarray, y1: np.ndarray) -> float:
-        """The step's error in the weighted RMS norm (at most 1: accepted), from the stages'
-        combinations ``E = error_weights() @ K``."""
-        return self._norm(h * E[0], y0, y1)
+    def _error(self, h: float, sums: np.ndarray, size: int) -> float:
+        """The step's error in the weighted RMS norm (at most 1: accepted), from the error
+        test's sums (:func:`~hexapod.simulation.kernels.weighted_squares`) of the stages'
+        combinations ``error_weights() @ K`` (``size``: the state's)."""
+        return float(h * np.sqrt(sums[0] / size))
 
     def _growth(self, error: float, rejected: bool) -> float:
         """The factor of the next step after one accepted with ``error``: Gustafsson's PI
@@ -131,18 +131,19 @@ class EmbeddedRungeKutta(Integrator):
     def _stages(self, t: float, h: float, y0: np.ndarray,
                 f0: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The stages ``K`` of a step ``h`` from ``(t, y0)``, ``f0`` the rate there, the
-        propagated solution ``y1`` and the error estimate's combinations of the stages
+        propagated solution ``y1`` and the error test's sums (:func:`~hexapod.simulation.
+        kernels.weighted_squares`) of the error estimate's combinations of the stages
         (:meth:`error_weights`): in one call of the compiled kernel
         (:meth:`~hexapod.simulation.kernels.CompiledRates.stages`), else one by one."""
         kernel, left_out = ((self._compiled, REDUNDANT_TOLERANCE) if self._crossing is None
                             else (self._crossing_rates, np.inf))
         until = self._laws_until(t + h)
         found = kernel.stages(self.A, self.c, t, h, y0, f0, left_out, until,
-                              self._combinations)
+                              self._combinations, (self.atol_vector, self.rtol))
         if found is not None:
-            later, combined = found
+            later, combined, sums = found
             self.counters.rhs += later.shape[0]
-            return np.vstack([f0, later]), y0 + h * combined[0], combined[1:]
+            return np.vstack([f0, later]), y0 + h * combined[0], sums
         return self._stages_one_by_one(t, h, y0, f0, until)
 
     def _stages_one_by_one(self, t: float, h: float, y0: np.ndarray, f0: np.ndarray,
@@ -156,7 +157,9 @@ class EmbeddedRungeKutta(Integrator):
             h, y0, f0,
             self.A))
         combined = self._combinations @ K
-        return K, y0 + h * combined[0], combined[1:]
+        y1 = y0 + h * combined[0]
+        return K, y1, np.array([weighted_squares(e, y0, y1, self.atol_vector, self.rtol)
+                                for e in combined[1:]])
 
     def _step(self) -> None:
         model, n_q = self.model, self.model.n_q
@@ -169,8 +172,8 @@ class EmbeddedRungeKutta(Integrator):
                 raise IntegrationError(f"the step size fell to {h:.3g} s (the error test cannot be "
                                   "met: the motion may be singular or too stiff for an "
                                   "explicit method)")
-            K, y1, E = self._stages(self.t, h, y0, f0)
-            error = self._error(h, E, y0, y1) if np.isfinite(y1).all() else np.inf
+            K, y1, sums = self._stages(self.t, h, y0, f0)
+            error = self._error(h, sums, y0.size) if np.isfinite(y1).all() else np.inf
             if error <= 1.0:
                 if not nudged and self._lands_on_pose(self.t + h, y1[:n_q]):
                     # a crossing's step ending at the pose: the projection there is as badly
@@ -249,13 +252,11 @@ class DormandPrince853(EmbeddedRungeKutta):
         # coefficient of E3 and E5 is zero), and only the dense output needs it
         return np.vstack([cls.E5[:DOP853_STAGES], cls.E3[:DOP853_STAGES]])
 
-    def _error(self, h, E, y0, y1):
-        weight = self.atol_vector + self.rtol * np.maximum(np.abs(y0), np.abs(y1))
-        err5 = np.sum((E[0] / weight) ** 2)
-        err3 = np.sum((E[1] / weight) ** 2)
+    def _error(self, h, sums, size):
+        err5, err3 = sums
         if err5 == 0.0 and err3 == 0.0:
             return 0.0
-        return float(h * err5 / np.sqrt((err5 + 0.01 * err3) * y0.size))
+        return float(h * err5 / np.sqrt((err5 + 0.01 * err3) * size))
 
     def dense_output(self) -> Interpolant:
         """DOP853's continuous extension of order 7 (Hairer, Norsett and Wanner, II.6), as
