@@ -182,31 +182,3 @@ def test_kernels_take_the_tree_order_where_it_is_cheaper(chain):
     taken = order if tree_cheaper else superlu.row_order
     assert np.array_equal(chosen.row_order, taken)
     _assert_solves(chosen, rows, columns, n, values)
-
-
-@pytest.mark.parametrize("n", [6, 40])
-def test_symmetric_pivots_certify_positive_definiteness(n):
-    """Diagonal pivots in the minimum degree order of a sparse symmetric pattern: on
-    ``A - s I`` they are all positive for ``s`` below ``A``'s smallest eigenvalue and not all
-    above it (the certificate of ``rows_exceed``), their product is the determinant, and the
-    order fills less than the natural one on a pattern shaped like a tree's rows."""
-    rng = np.random.default_rng(n)
-    B = rng.normal(size=(n, n)) * (rng.random((n, n)) < 3.0 / n)
-    B[0] = rng.normal(size=n)  # a hub, as a trunk is: eliminated first, it fills everything
-    A = B @ B.T + 0.5 * np.eye(n)
-    rows, columns = np.nonzero(A)
-    lu = StaticLU.symmetric(rows, columns, n)
-    assert np.array_equal(lu.row_order, lu.column_order)
-    values, shift = ca.SX.sym("values", rows.size), ca.SX.sym("shift")
-    shifted = values - shift * ca.DM((rows == columns).astype(float))
-    pivots = ca.Function("pivots", [values, shift], [lu.pivots(lu.factor(shifted))])
-    smallest = np.linalg.eigvalsh(A).min()
-    for s, positive in ((0.0, True), (0.999 * smallest, True), (1.001 * smallest, False),
-                        (2.0 * smallest, False)):
-        found = np.array(pivots(A[rows, columns], s)).ravel()
-        assert np.all(found > 0) == positive, (n, s)
-    found = np.array(pivots(A[rows, columns], 0.0)).ravel()
-    sign, log_det = np.linalg.slogdet(A)
-    assert sign > 0 and abs(np.log(found).sum() - log_det) <= 1e-10 * max(1.0, abs(log_det))
-    natural = StaticLU(rows, columns, n, np.arange(n), np.arange(n))
-    assert lu.nnz <= natural.nnz

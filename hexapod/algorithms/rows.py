@@ -129,24 +129,15 @@ class RowSplit:
 def gram_exceeds(gram: np.ndarray, bound: float, inner: int) -> bool:
     """Whether the smallest singular value of ``A`` is above ``bound`` by more than round-off
     could hide, from ``gram = A A^T`` (its upper triangle suffices; ``inner``: the columns of
-    ``A``, the length of the products): ``gram - s I`` has a Cholesky factor, ``s`` the
-    :func:`certificate_shift`. False where it cannot tell."""
+    ``A``, the length of the products): ``gram - s I`` has a Cholesky factor, ``s`` above
+    ``bound^2`` by a thousandth of it and by ``10 max(r, inner) eps trace(gram)`` (a bound on
+    the product's and the factorisation's errors). False where it cannot tell."""
     from scipy.linalg import lapack
 
     r = gram.shape[0]
-    shift = certificate_shift(bound, r, inner, np.trace(gram))
-    shifted = np.array(gram, dtype=float, order="F")  # LAPACK's order: factored in place
-    shifted.flat[::r + 1] -= shift  # the diagonal (an identity's product: a quarter of a check)
+    shift = bound**2 * (1.0 + 1e-3) + 10.0 * max(r, inner) * np.finfo(float).eps * np.trace(gram)
+    shifted = gram - shift * np.eye(r)
     return lapack.dpotrf(shifted, lower=0, clean=0, overwrite_a=1)[1] == 0
-
-
-def certificate_shift(bound, rows: int, inner: int, trace):
-    """The shift ``s`` of the certificate that the smallest singular value of ``A`` (``rows``
-    by ``inner``) is above ``bound``: ``A A^T - s I`` positive definite (every pivot of its
-    factorisation positive), ``s`` above ``bound^2`` by a thousandth of it and by ``10
-    max(rows, inner) eps trace(A A^T)`` (a bound on the product's and the factorisation's
-    errors, whatever the order of the pivots). Numbers or CasADi symbols."""
-    return bound**2 * (1.0 + 1e-3) + 10.0 * max(rows, inner) * np.finfo(float).eps * trace
 
 
 def is_sparse(A) -> bool:

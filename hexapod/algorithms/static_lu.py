@@ -78,32 +78,6 @@ class StaticLU:
                     lu.chosen_growth = growth
         return lu
 
-    @classmethod
-    def symmetric(cls, rows, columns, n: int) -> StaticLU:
-        """The pattern ``(rows, columns)`` (symmetric, its diagonal included) with diagonal
-        pivots in SuperLU's minimum degree order of ``A^T + A``, chosen on the pattern alone:
-        for symmetric positive definite matrices, which need no pivoting (the factorisation
-        is then Cholesky's, ``U = D L^T``: every pivot is positive exactly when the matrix is
-        positive definite)."""
-        from scipy.sparse import csc_array
-        from scipy.sparse.linalg import splu
-
-        rows, columns = np.asarray(rows, dtype=int), np.asarray(columns, dtype=int)
-        # symmetric values, diagonally dominant: positive definite, so SuperLU keeps the
-        # diagonal pivots its order gives
-        values = np.where(rows == columns, 2.0 * n, 1.0 / (1.0 + np.minimum(rows, columns)
-                                                           + np.maximum(rows, columns)))
-        lu = splu(csc_array((values, (rows, columns)), shape=(n, n)),
-                  permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                  options={"SymmetricMode": True})
-        order = np.argsort(lu.perm_c)
-        return cls(rows, columns, n, order, order)
-
-    def pivots(self, F):
-        """The pivots (the diagonal of ``U``) from the packed factors ``F`` of
-        :meth:`factor`, in the pivots' order."""
-        return F[self._diagonal.tolist()]
-
     def growth(self, values) -> float:
         """The growth of these pivots' factors on the matrix of these values (of this
         pattern): the largest entry of ``U`` over the matrix's (what bounds a solve's error);

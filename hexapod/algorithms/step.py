@@ -188,11 +188,6 @@ def _lu_factor(lu: StaticLU, pattern: ca.Sparsity) -> ca.Function:
     return functions[key]
 
 
-def lu_pivots(lu: StaticLU, K: ca.MX) -> ca.MX:
-    """The pivots of ``K``'s factorisation by ``lu`` (of ``K``'s pattern)."""
-    return lu.pivots(_lu_factor(lu, K.sparsity())(K))
-
-
 def _lu_factored(lu: StaticLU, columns: int) -> ca.Function:
     """``(F, B) -> K^-1 B`` from the packed factors ``F`` of :func:`_lu_factor`: one column's
     solve, mapped over the columns (compiled, a loop over one copy of its code, where the

@@ -19,9 +19,10 @@ from scipy.linalg import qr
 
 from hexapod.algorithms.kinematics import rank_split
 from hexapod.algorithms.linalg import as_dense
+from hexapod.algorithms.rows import gram_exceeds
 from hexapod.algorithms.saddle import constraint_jacobian, is_large
 from hexapod.errors import HexapodError
-from hexapod.simulation.kernels import compiled_rates, rows_exceed
+from hexapod.simulation.kernels import compiled_rates, row_gram
 from hexapod.simulation.scales import characteristic_time
 
 #: smallest singular value of the equilibrated ``Phi_v`` (rows of unit length, so 1 is
@@ -141,12 +142,13 @@ class SingularPoses:
     def _every_row_clear(self) -> bool:
         """Whether the rows of the equilibrated ``Phi_v`` at the current state have, all of them,
         a smallest singular value above one of the bounds that begin a crossing (see
-        :meth:`_cross_singular`), certified by the pivots of ``W W^T - s I`` without a rank
-        decision (:func:`~hexapod.simulation.kernels.rows_exceed`, one call). A fresh decision
-        would then keep every row (each is farther than that from the others' span) and
-        certify the same: where the run keeps every row (chains, trees, most mechanisms), a
-        rejected step pays that call instead of the decision's QR (the 18-joint robot's run to
-        1e-7: a fifth of its CPU went to these checks). False where a row is left out, the
+        :meth:`_cross_singular`), certified by a Cholesky factor of ``W W^T``
+        (:func:`~hexapod.algorithms.rows.gram_exceeds`) without a rank decision. A fresh
+        decision would then keep every row (each is farther than that from the others' span)
+        and certify the same: where the run keeps every row (chains, trees, most mechanisms),
+        a rejected step pays ``W W^T`` in one call (:func:`~hexapod.simulation.kernels.
+        row_gram`) and a Cholesky factor instead of the decision's QR (the 18-joint robot's run
+        to 1e-7: a fifth of its CPU went to these checks). False where a row is left out, the
         model is large (its ``Phi_v`` sparse), or the certificate cannot tell."""
         model, redundant = self.model, self.data.redundant_rows
         if (redundant is None or redundant.size or model.n_c > model.n_v
@@ -154,14 +156,14 @@ class SingularPoses:
             return False
         self.counters.jacobians += 1
         self.counters.factorisations += 1
-        w = model.law_values(self.t, self.data)[0]
+        gram = row_gram(model, self.data, self.q, model.law_values(self.t, self.data)[0])
         # above either bound is above the lower one. The band's first: a mechanism clear of
         # it never needs the start's spectrum, a rank decision and an SVD (a third of the
         # checks' cost over the 18-joint robot's run to 1e-6)
-        if rows_exceed(model, self.data, self.q, w, SINGULAR_BAND):
+        if gram_exceeds(gram, SINGULAR_BAND, model.n_v):
             return True
         bound = FALLEN * self._spectrum_start[0]
-        return bool(bound < SINGULAR_BAND) and rows_exceed(model, self.data, self.q, w, bound)
+        return bool(bound < SINGULAR_BAND) and gram_exceeds(gram, bound, model.n_v)
 
     def _crossing_step_limit(self) -> float:
         """The longest step a crossing may take: the one over which the rows it leaves out,
