@@ -127,6 +127,10 @@ class Integrator(SingularPoses, StepEnds):
     #: True for a contact scheme: its velocities jump at impacts, and unilateral contacts
     #: (``ground-contact`` force elements) are its to integrate; the other methods refuse them
     impulsive: ClassVar[bool] = False
+    #: True when the method reads nothing at its start but the state, its rates and the
+    #: compiled kernels: the start's accelerations then come from the kernels' solve (built
+    #: first, from the projection's rank decision) where it serves, not from the exact one
+    starts_by_kernels: ClassVar[bool] = False
 
     @classmethod
     def largest_stable_step(cls, eigenvalues, constrained: bool = False,
@@ -187,7 +191,12 @@ class Integrator(SingularPoses, StepEnds):
         decided = self._kinematics.built.get("state decision")
         if decided is not None:
             self.data.built["state decision"] = decided
-        self.v_dot, self.lam = self._dynamics(self.t, q, v)
+        if self.starts_by_kernels and decided is not None:
+            split = decided[3]
+            self.data.independent_rows, self.data.redundant_rows = (split.independent,
+                                                                    split.redundant)
+        else:
+            self.v_dot, self.lam = self._dynamics(self.t, q, v)
         # the stages' right-hand sides and the projection, compiled for the rows independent
         # at the start
         here = self._here()
@@ -195,6 +204,9 @@ class Integrator(SingularPoses, StepEnds):
                                         self.data.redundant_rows)
         self._compiled_projection = compiled_projection(model, self.data.independent_rows, here)
         self._feet_down = self._contact_set(self.t)
+        if self.starts_by_kernels and decided is not None:
+            # the kernels' solve (its checks passed), else the exact one (which says why not)
+            self.v_dot, self.lam = self._end_rates(self.t, q, v)
         self._start()
 
     @property

@@ -59,6 +59,9 @@ class EmbeddedRungeKutta(Integrator):
     #: (``scripts/studies/step_controller.py``): -15 to +1 % with DOP853, -10 to +1 % with
     #: DOPRI5
     safety, min_factor, max_factor = 0.8, 0.2, 10.0
+    #: the start's accelerations by the compiled kernels' solve (see Integrator): a fifth of a
+    #: small model's start, which is a tenth of its run to 1e-6
+    starts_by_kernels = True
     #: the step controller's memory of the last accepted error (Gustafsson's PI control with
     #: Hairer's coefficients, *Solving ODEs I*, IV.2 and the codes DOPRI5 and DOP853: 0.04 and
     #: 0): a step grows less after one whose error was large, which damps the alternation of

@@ -83,6 +83,7 @@ class EventDriven(DormandPrince853):
     order, index, adaptive, stabilisation = CONTACT_METHODS[name]
     description = "event-driven: DOP853 between contact events, impacts by an impulse map"
     impulsive = True
+    starts_by_kernels = False  # its start: the exact solve, every contact open
 
     def _start(self) -> None:
         model = self.model
