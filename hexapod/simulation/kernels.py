@@ -293,10 +293,12 @@ def explicit_stages(derivative, h, y0, f0, A: np.ndarray) -> list:
 def weighted_squares(x, y0, y1, atol, rtol):
     """``sum((x / weight)^2)``, ``weight = atol + rtol max(|y0|, |y1|)``: the error test's
     weights (Hairer's), between a step's start ``y0`` and end ``y1``; on NumPy arrays (a
-    float) or CasADi symbols (an expression) alike, as :func:`explicit_stages`."""
-    if isinstance(x, ca.MX):
-        return ca.sumsqr(x / (atol + rtol * ca.fmax(ca.fabs(y0), ca.fabs(y1))))
-    return float(np.sum((x / (atol + rtol * np.maximum(np.abs(y0), np.abs(y1)))) ** 2))
+    float) or CasADi symbols (an expression) alike, as :func:`explicit_stages`: one formula,
+    C's ``fmax`` and ``fabs`` from either library."""
+    symbolic = isinstance(x, ca.MX)
+    library = ca if symbolic else np
+    z = x / (atol + rtol * library.fmax(library.fabs(y0), library.fabs(y1)))
+    return ca.dot(z, z) if symbolic else float(z @ z)
 
 
 def _stages_function(rates: ca.Function, A: np.ndarray, c: np.ndarray, weights: np.ndarray,
