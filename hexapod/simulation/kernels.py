@@ -181,7 +181,8 @@ class CompiledRates:
         solution's, ``y1 = y0 + h`` times the first, and the error estimate's, formed in the
         same call), as rows (empty without ``weights``), and the error test's sums of those
         after the first (:func:`weighted_squares` at ``y0, y1`` with ``tolerances``, the
-        absolute tolerances' vector and the relative one; none without). None when a
+        absolute tolerances' vector and the relative one; by default 1 and 0, the plain sums
+        of squares). None when a
         stage's solve would be refused (see :meth:`solve`): the caller then takes its stages
         one by one, each refused one by the exact solve. The laws are read at the stages'
         times, none later than ``until`` (a step that ends on a break of the laws reads them
@@ -269,8 +270,7 @@ class CompiledStages:
                 and np.isfinite(K).all()):
             return None
         return (K.reshape(y0.size, -1, order="F").T,
-                combined.reshape(y0.size, -1, order="F").T,
-                sums if tolerances is not None else sums[:0])
+                combined.reshape(y0.size, -1, order="F").T, sums)
 
 
 def explicit_stages(derivative, h, y0, f0, A: np.ndarray) -> list:

@@ -191,7 +191,8 @@ class Integrator(SingularPoses, StepEnds):
         decided = self._kinematics.built.get("state decision")
         if decided is not None:
             self.data.built["state decision"] = decided
-        if self.starts_by_kernels and decided is not None:
+        by_kernels = self.starts_by_kernels and decided is not None
+        if by_kernels:
             split = decided[3]
             self.data.independent_rows, self.data.redundant_rows = (split.independent,
                                                                     split.redundant)
@@ -204,7 +205,7 @@ class Integrator(SingularPoses, StepEnds):
                                         self.data.redundant_rows)
         self._compiled_projection = compiled_projection(model, self.data.independent_rows, here)
         self._feet_down = self._contact_set(self.t)
-        if self.starts_by_kernels and decided is not None:
+        if by_kernels:
             # the kernels' solve (its checks passed), else the exact one (which says why not)
             self.v_dot, self.lam = self._end_rates(self.t, q, v)
         self._start()
