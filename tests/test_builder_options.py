@@ -365,3 +365,22 @@ def test_the_leg_scenes_take_no_option_their_loads_cannot_follow():
     for option in ("duty", "payload", *FACTORS):
         with pytest.raises(TypeError, match=option):
             front_leg_walking(**{option: 1.0})
+
+
+def test_a_walking_scene_built_again_is_a_fresh_builds_copy():
+    """The walking scenes are built once per process for the same arguments: each call gets a
+    copy equal, element by element and law by law, to a fresh build, and an edit to one never
+    reaches the next (other arguments, other scenes: the payload tests above)."""
+    from hexapod.model.digest import describe
+    from legs import robot
+
+    def content(scene):
+        return describe(list(scene.elements), time_laws=True)
+
+    first = hexapod_walking(payload=0.25)
+    first.bodies["trunk"].mass *= 2.0
+    again = hexapod_walking(payload=0.25)
+    assert again is not first and again.bodies["trunk"].mass != first.bodies["trunk"].mass
+    fresh = robot._walked_scene(walking_pattern("tripod", None), PERIOD, robot.MODEL_SCALE,
+                                None, "hexapod", 0.25, None, None)
+    assert content(again) == content(fresh)
