@@ -112,7 +112,10 @@ from hexapod.output import write_atomically  # noqa: E402
 
 # ------------------------------------------------------------------ one problem
 
-def bench_problem(problem: Problem, methods: list[str], args, exudyn_ok: bool) -> dict:
+def bench_problem(problem: Problem, methods: list[str], args, exudyn_ok: bool,
+                  keep: dict | None = None) -> dict:
+    """hexapod's (and Exudyn's) runs on ``problem``; ``keep``: given, it receives the model and
+    the reference the runs were measured on (``"model"``, ``"reference"``), to run again."""
     log(f"{problem.key}: {problem.title}, {problem.t_end} s")
     tic = time.process_time()
     model = hx.assemble(problem.build())
@@ -137,6 +140,8 @@ def bench_problem(problem: Problem, methods: list[str], args, exudyn_ok: bool) -
                             "interpolation_check": ref.interpolation_check()},
               "methods": {}, "exudyn": None}
     log(f"  reference interpolation check: {result['reference']['interpolation_check']:.1e}")
+    if keep is not None:
+        keep.update(model=model, reference=ref)
 
     def ladder_of(fixed: bool) -> tuple[list[float], int]:
         if fixed:

@@ -113,17 +113,33 @@ def walk(ladder: list[float], start: int, run: Callable[[float], Run], growth: f
     return runs
 
 
+def bracket(runs: dict[int, Run]) -> list[int]:
+    """The rungs :func:`time_to_target` reads: the loosest that reaches ``TARGET`` and, when
+    the rung before it ran and did not, that one first (none when no rung reaches it)."""
+    below = [i for i, r in sorted(runs.items()) if r.ok and r.error <= TARGET]
+    if not below:
+        return []
+    i = min(below)
+    loose = runs.get(i - 1)
+    return [i - 1, i] if loose is not None and loose.ok and loose.error > TARGET else [i]
+
+
 def time_to_target(runs: dict[int, Run]) -> tuple[float, str]:
     """CPU time to reach ``TARGET``: (value, qualifier '=', '<=' or '>')."""
-    done = sorted(runs.items())
-    below = [i for i, r in done if r.ok and r.error <= TARGET]
-    if not below:
-        finished = [r.cpu for _, r in done if r.status in ("finished", "budget")]
+    rungs = bracket(runs)
+    if not rungs:
+        finished = [r.cpu for _, r in sorted(runs.items()) if r.status in ("finished", "budget")]
         return (max(finished), ">") if finished else (float("nan"), "")
-    i = min(below)  # the loosest rung that reaches the target
-    tight = runs[i]
-    loose = runs.get(i - 1)
-    if loose is None or not loose.ok or not loose.error > TARGET:
-        return tight.cpu, "<="
+    if len(rungs) == 1:
+        return runs[rungs[0]].cpu, "<="
+    loose, tight = runs[rungs[0]], runs[rungs[1]]
     x = (np.log(TARGET) - np.log(loose.error)) / (np.log(tight.error) - np.log(loose.error))
     return float(np.exp(np.log(loose.cpu) + x * (np.log(tight.cpu) - np.log(loose.cpu)))), "="
+
+
+def runs_of(entry: dict, ladder: list[float]) -> dict[int, Run]:
+    """The runs of a method's entry in the results (its ``rungs``), by their place in
+    ``ladder``."""
+    return {ladder.index(d["setting"]): Run(d["setting"], d["cpu_s"], d["steps"], d["error"],
+                                            d["status"], d["message"], d["counters"])
+            for d in entry["rungs"]}
