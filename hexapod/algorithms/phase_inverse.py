@@ -23,8 +23,10 @@ does the same work in CasADi Functions evaluated over many samples in one call:
   kept rows belong to a foot that carries nothing, is redone by the exact path
   (:func:`~hexapod.algorithms.sample_inverse.exact_sample`), and the phase goes on from it
   with the exact solve's decision when the failure was the decision's.
-* **the first sample** is always exact: it finds the positions from the scene's guess and checks
-  that the drivers fix every degree of freedom.
+* **the first sample**: its positions by Newton's method from the scene's guess (or known),
+  its rank decision there (which checks that the drivers fix every degree of freedom), then the
+  plan's step from those positions, checked as any other sample; the exact path where the
+  decision keeps fewer rows than velocities (it names what is free).
 * **friction** (a QP): the plan gives the least-effort forces without the cones; a sample where
   they leave a pyramid (or fall below the least normal force), and every sample of the exact
   cone (``faces = 0``, IPOPT), gets its forces from the exact per-sample solve, QP included, at
@@ -48,6 +50,7 @@ import numpy as np
 from hexapod._support import signals
 from hexapod._support.execution import current
 from hexapod.algorithms.ground import NO_LOAD, foot_values, in_contact_axes, sharing_weights
+from hexapod.algorithms.kinematics import assemble_positions, state_split
 from hexapod.algorithms.liaison import efforts_and_axes
 from hexapod.algorithms.linalg import as_dense, equilibrate, split_rows
 from hexapod.algorithms.phase_plan import NEWTON_STEPS, PhasePlan, plan_for
@@ -178,18 +181,20 @@ def phase_inverse(model: Model, data: Data, times: np.ndarray, w, wd, wdd, frame
     out = _Results(model, n, frame == "world", motion)
     out.known = known
     feet = _Feet(model, times, motion)
-    out.store(0, _exact(model, data, out, times, 0, frame, known, motion))
+    first = _first_positions(model, data, times, w, known)
+    if first is None:  # the drivers leave a motion free there: the exact path says which
+        out.store(0, _exact(model, data, out, times, 0, frame, known, motion))
     decisions = _Decisions(model, data, terms_of(model), feet, to_c, motion)
     decisions.adopt(0, data, w[:, 0])
     # Newton steps per sample (none from known positions): more once samples prove far apart
     newton = NEWTON_STEPS[0] if known is None else 0
-    k, chunk = 1, CHUNK
+    k, chunk = (1 if first is None else 0), CHUNK
     while k < n:
-        plan = decisions.plan(k, out.predicted(k, times), w[:, k])
+        plan = decisions.plan(k, out.predicted(k, times) if k else first, w[:, k])
         stop = min(n, k + chunk, feet.run_end(k))
         failed = None
         if plan is not None:
-            failed = _run(plan, data, newton, out, feet, times, w, wd, wdd, k, stop)
+            failed = _run(plan, data, newton, out, feet, times, w, wd, wdd, k, stop, first)
         more = [] if failed is None or failed[1] != "newton" else [
             steps for steps in NEWTON_STEPS if steps > newton]
         if more:  # samples too far apart for the Newton steps taken: from there on, more
@@ -273,6 +278,27 @@ def sample_plans(model: Model, data: Data, times: np.ndarray, w, known: tuple, *
         mask = (~feet.rows_idle(plan.left_out, k)).astype(float)
         out.append((plan, mask, feet.values[:, k]))
     return out
+
+
+def _first_positions(model: Model, data: Data, times: np.ndarray, w, known: tuple | None
+                     ) -> np.ndarray | None:
+    """The first sample's positions, Newton's from the scene's guess (or known there), with
+    the rank decision at them left in ``data`` as the exact path leaves its own, when that
+    decision keeps as many rows as velocities (the drivers fix every degree of freedom): the
+    plan's step then evaluates the sample from them, as if from the sample before at rest and
+    no time before, and checks it like any other. None where rows are missing: the exact path
+    evaluates the sample and says what the drivers leave free."""
+    t = float(times[0])
+    if known is None:
+        q = assemble_positions(model, data, t, model.q0)
+    else:
+        q = np.array(known[0][0], dtype=float)
+        data.at(t, q)
+    split = state_split(model, data, q, w[:, 0], model.call("Phi_v", data, q=q, w=w[:, 0]))
+    if split.independent.size != model.n_v:
+        return None
+    data.independent_rows, data.redundant_rows = split.independent, split.redundant
+    return q
 
 
 def _exact(model: Model, data: Data, out: _Results, times: np.ndarray, k: int, frame: str,
@@ -380,8 +406,9 @@ class _Decisions:
 
 
 def _run(plan: PhasePlan, data: Data, newton: int, out: _Results, feet: _Feet, times, w, wd,
-         wdd, k: int, stop: int):
-    """Samples ``k`` to ``stop - 1`` by the plan; results kept up to the first that fails.
+         wdd, k: int, stop: int, first: np.ndarray | None = None):
+    """Samples ``k`` to ``stop - 1`` by the plan; results kept up to the first that fails
+    (from the first sample on, ``k = 0``: from its positions ``first``, at rest).
     Returns None, or that sample and what failed: ``"newton"`` (its positions did not
     converge), ``"rank"`` (its rows left out no longer follow from those kept, or rows the
     decision did not weigh constrain it, or it is near a singular pose, or its kept rows hold a
@@ -389,8 +416,13 @@ def _run(plan: PhasePlan, data: Data, newton: int, out: _Results, feet: _Feet, t
     model = plan.model
     span = slice(k, stop)
     mask = (~feet.rows_idle_over(plan.left_out, k, stop)).astype(float).T
+    if k:
+        before, steps = out.state(k - 1), np.diff(times[k - 1:stop])
+    else:  # the first sample: its own positions predicted over no time
+        before = np.concatenate([first, np.zeros(2 * model.n_v)])
+        steps = np.diff(times[:stop], prepend=times[0])
     state, lam, wrench, frames, checks = plan.evaluate(
-        data, out.state(k - 1), np.diff(times[k - 1:stop]), w[:, span], wd[:, span], wdd[:, span],
+        data, before, steps, w[:, span], wd[:, span], wdd[:, span],
         feet.values[:, span], mask, newton,
         None if out.known is None else np.hstack([x[span] for x in out.known]))
     checks = np.nan_to_num(checks, nan=np.inf)
