@@ -126,6 +126,28 @@ def test_the_walking_hexapod_agrees_across_a_touch_down():
     assert stance.sum(axis=1)[0] == 3 and stance.sum(axis=1)[-1] == 6
 
 
+def test_a_known_motion_whose_first_accelerations_break_the_constraints_is_refused():
+    """A guided model's twin takes its guides' motion as it is; at the first sample the
+    accelerations are checked against the constraints first: the guides' own are taken (every
+    sample by the plan), a motion pushed off them there goes to the exact path, which names
+    the body the dynamics moves away from it."""
+    from hexapod.algorithms.guided import followed_guides, guided_twin
+
+    model = scene_model("hexapod")
+    times = np.linspace(0.1, 0.104, 3)
+    q, v, v_dot, joints = followed_guides(model, times)
+    twin = guided_twin(model, times, q, v, v_dot, joints)
+    w, wd, wdd = (x.reshape(twin.n_w, times.size) for x in twin.law_values(times))
+    fields = phase_inverse.phase_inverse(twin, twin.create_data(), times, w, wd, wdd, "joint",
+                                         known=(q, v, v_dot))
+    assert fields["exact_samples"] == 0
+    pushed = v_dot.copy()
+    pushed[0, 2] += 1e-3  # the trunk's vertical acceleration, m/s^2
+    with pytest.raises(hx.HexapodError, match="does not follow the known motion"):
+        phase_inverse.phase_inverse(twin, twin.create_data(), times, w, wd, wdd, "joint",
+                                    known=(q, v, pushed))
+
+
 def test_the_expanded_step_gives_the_numbers_of_the_graph_it_expands(monkeypatch):
     """A plan that has evaluated enough samples runs its step expanded into one SX Function
     (phase_plan.EXPAND_AFTER): the same operations, so the same numbers, to round-off."""

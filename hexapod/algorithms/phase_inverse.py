@@ -181,7 +181,7 @@ def phase_inverse(model: Model, data: Data, times: np.ndarray, w, wd, wdd, frame
     out = _Results(model, n, frame == "world", motion)
     out.known = known
     feet = _Feet(model, times, motion)
-    first = _first_positions(model, data, times, w, known)
+    first = _first_positions(model, data, times, w, wd, wdd, known)
     if first is None:  # the drivers leave a motion free there: the exact path says which
         out.store(0, _exact(model, data, out, times, 0, frame, known, motion))
     decisions = _Decisions(model, data, terms_of(model), feet, to_c, motion)
@@ -280,25 +280,42 @@ def sample_plans(model: Model, data: Data, times: np.ndarray, w, known: tuple, *
     return out
 
 
-def _first_positions(model: Model, data: Data, times: np.ndarray, w, known: tuple | None
-                     ) -> np.ndarray | None:
+def _first_positions(model: Model, data: Data, times: np.ndarray, w, wd, wdd,
+                     known: tuple | None) -> np.ndarray | None:
     """The first sample's positions, Newton's from the scene's guess (or known there), with
     the rank decision at them left in ``data`` as the exact path leaves its own, when that
     decision keeps as many rows as velocities (the drivers fix every degree of freedom): the
     plan's step then evaluates the sample from them, as if from the sample before at rest and
-    no time before, and checks it like any other. None where rows are missing: the exact path
-    evaluates the sample and says what the drivers leave free."""
+    no time before, and checks it like any other. None where rows are missing, or where a
+    known motion's accelerations do not meet the constraints (:func:`_accelerations_met`):
+    the exact path evaluates the sample and says what the drivers leave free, or where the
+    dynamics leaves the known motion."""
     t = float(times[0])
     if known is None:
         q = assemble_positions(model, data, t, model.q0)
     else:
         q = np.array(known[0][0], dtype=float)
         data.at(t, q)
-    split = state_split(model, data, q, w[:, 0], model.call("Phi_v", data, q=q, w=w[:, 0]))
-    if split.independent.size != model.n_v:
+    Phi = model.call("Phi_v", data, q=q, w=w[:, 0])
+    split = state_split(model, data, q, w[:, 0], Phi)
+    if split.independent.size != model.n_v or (known is not None and not _accelerations_met(
+            model, data, q, known[1][0], known[2][0], Phi, w[:, 0], wd[:, 0], wdd[:, 0])):
         return None
     data.independent_rows, data.redundant_rows = split.independent, split.redundant
     return q
+
+
+def _accelerations_met(model: Model, data: Data, q, v, v_dot, Phi, w, wd, wdd) -> bool:
+    """Whether a known motion's accelerations ``v_dot`` meet the acceleration constraints at
+    ``(q, v)``, each row's residual weighed as the plans' checks weigh it (relative to the
+    accelerations' and the right-hand side's sizes, at most :data:`RESIDUAL_TOL`). A plan
+    takes a known motion's accelerations as they are; at the first sample the exact path
+    checked that the dynamics follows them, and this is that check."""
+    gamma = model.call("gamma", data, q=q, v=v, w=w, wd=wd, wdd=wdd)
+    _, d = equilibrate(Phi, model.mass_inv_sqrt)
+    size = (np.max(np.abs(model.mass @ (model.mass_inv_sqrt @ v_dot)), initial=0.0)
+            + np.max(np.abs(gamma / d), initial=0.0) + 1e-300)
+    return bool(np.max(np.abs(Phi @ v_dot - gamma) / d, initial=0.0) <= RESIDUAL_TOL * size)
 
 
 def _exact(model: Model, data: Data, out: _Results, times: np.ndarray, k: int, frame: str,
