@@ -62,7 +62,7 @@ from hexapod.algorithms.sample_inverse import (
     known_sample,
 )
 from hexapod.algorithms.static_lu import StaticLU
-from hexapod.algorithms.step_terms import StepTerms, terms_of
+from hexapod.algorithms.step_terms import StepTerms, relative_residuals, terms_of
 from hexapod.errors import HexapodError
 from hexapod.model.model import Data, Model
 
@@ -299,23 +299,23 @@ def _first_positions(model: Model, data: Data, times: np.ndarray, w, wd, wdd,
     Phi = model.call("Phi_v", data, q=q, w=w[:, 0])
     split = state_split(model, data, q, w[:, 0], Phi)
     if split.independent.size != model.n_v or (known is not None and not _accelerations_met(
-            model, data, q, known[1][0], known[2][0], Phi, w[:, 0], wd[:, 0], wdd[:, 0])):
+            model, data, q, known[1][0], known[2][0], Phi, split.scale, w[:, 0], wd[:, 0],
+            wdd[:, 0])):
         return None
     data.independent_rows, data.redundant_rows = split.independent, split.redundant
     return q
 
 
-def _accelerations_met(model: Model, data: Data, q, v, v_dot, Phi, w, wd, wdd) -> bool:
+def _accelerations_met(model: Model, data: Data, q, v, v_dot, Phi, d, w, wd, wdd) -> bool:
     """Whether a known motion's accelerations ``v_dot`` meet the acceleration constraints at
-    ``(q, v)``, each row's residual weighed as the plans' checks weigh it (relative to the
-    accelerations' and the right-hand side's sizes, at most :data:`RESIDUAL_TOL`). A plan
-    takes a known motion's accelerations as they are; at the first sample the exact path
-    checked that the dynamics follows them, and this is that check."""
+    ``(q, v)`` (``d``: the rows' norms, the rank decision's scales), each row's residual
+    weighed as the plans' checks weigh it (:func:`~hexapod.algorithms.step_terms.
+    relative_residuals`, at most :data:`RESIDUAL_TOL`). A plan takes a known motion's
+    accelerations as they are; at the first sample the exact path checked that the dynamics
+    follows them, and this is that check."""
     gamma = model.call("gamma", data, q=q, v=v, w=w, wd=wd, wdd=wdd)
-    _, d = equilibrate(Phi, model.mass_inv_sqrt)
-    size = (np.max(np.abs(model.mass @ (model.mass_inv_sqrt @ v_dot)), initial=0.0)
-            + np.max(np.abs(gamma / d), initial=0.0) + 1e-300)
-    return bool(np.max(np.abs(Phi @ v_dot - gamma) / d, initial=0.0) <= RESIDUAL_TOL * size)
+    residuals = relative_residuals(Phi, v_dot, gamma, d, model.mass.power(0.5))
+    return bool(np.max(residuals, initial=0.0) <= RESIDUAL_TOL)
 
 
 def _exact(model: Model, data: Data, out: _Results, times: np.ndarray, k: int, frame: str,

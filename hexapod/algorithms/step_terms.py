@@ -152,8 +152,7 @@ class StepTerms:
         root_mass = sparse_dm(np.linalg.inv(model.mass_inv_sqrt.dense()))
 
         def relative(x, rhs):
-            size = (ca.norm_inf(ca.mtimes(root_mass, x)) + ca.norm_inf(rhs / d) + 1e-300)
-            return ca.fabs(ca.mtimes(Phi, x) - rhs) / d / size
+            return relative_residuals(Phi, x, rhs, d, root_mass)
 
         position = ca.mmax(ca.fabs(phi / ca.DM(model.row_scale))) if n_c else ca.SX(0)
         names = ["Phi", "phi", "v", "nu", "a", "gamma", "d"]
@@ -516,6 +515,21 @@ def terms_of(model: Model) -> StepTerms:
 
     to_c = current().compiled
     return model.built_once(("phase-terms", to_c), lambda m: StepTerms(m, to_c))
+
+
+def relative_residuals(Phi, x, rhs, d, root_mass):
+    """Each constraint row's residual ``|Phi x - rhs| / d`` relative to the size of the
+    problem, ``|M^1/2 x|_inf + |rhs / d|_inf`` (``d``: the rows' norms in ``M^-1/2``-scaled
+    space, ``root_mass``: ``M^1/2``): how the phase path's checks weigh the velocity and
+    acceleration constraints, on CasADi expressions (the plans' checks) or NumPy arrays (a
+    first sample's known motion, ``root_mass`` anything with ``@``) alike."""
+    symbolic = isinstance(x, (ca.SX, ca.MX))
+    if symbolic:
+        size = ca.norm_inf(ca.mtimes(root_mass, x)) + ca.norm_inf(rhs / d) + 1e-300
+        return ca.fabs(ca.mtimes(Phi, x) - rhs) / d / size
+    size = (np.max(np.abs(root_mass @ x), initial=0.0) + np.max(np.abs(rhs / d), initial=0.0)
+            + 1e-300)
+    return np.abs(Phi @ x - rhs) / d / size
 
 
 def sx_function(name: str, inputs, outputs, to_c: bool, *names) -> ca.Function:
