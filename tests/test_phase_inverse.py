@@ -126,6 +126,30 @@ def test_the_walking_hexapod_agrees_across_a_touch_down():
     assert stance.sum(axis=1)[0] == 3 and stance.sum(axis=1)[-1] == 6
 
 
+def test_the_guides_kinematics_leave_every_foot_row_out_without_deciding_again(monkeypatch):
+    """The guides' kinematics (a motion run) across the touch-down: their drivers fix every
+    velocity, so the new contact set's plan leaves the feet's rows out without a rank
+    decision (none is taken: the split is made to fail), and the motion is the exact path's."""
+    from hexapod.algorithms.prescribed import prescribed_motion
+
+    kinematics = scene_model("hexapod").guidance.kinematics
+    times = np.linspace(*TOUCH_DOWN)
+    exact = prescribed_motion(kinematics, times)  # fewer samples than the phase path's: exact
+    w, wd, wdd = (x.reshape(kinematics.n_w, times.size) for x in kinematics.law_values(times))
+
+    def no_split(*args, **kwargs):
+        raise AssertionError("a rank decision at a new contact set")
+
+    monkeypatch.setattr(phase_inverse, "split_rows", no_split)
+    fields = phase_inverse.phase_inverse(kinematics, kinematics.create_data(), times, w, wd,
+                                         wdd, "joint", motion=True)
+    assert fields["exact_samples"] == 0
+    for key, theirs in zip(("q", "v", "v_dot"), exact, strict=True):
+        assert np.max(np.abs(fields[key] - theirs)) <= 1e-10 * max(np.max(np.abs(theirs)), 1)
+    stance = np.array([c.in_stance(times) for c in kinematics.contacts])
+    assert stance[:, 0].sum() == 3 and stance[:, -1].sum() == 6
+
+
 def test_a_known_motion_whose_first_accelerations_break_the_constraints_is_refused():
     """A guided model's twin takes its guides' motion as it is; at the first sample the
     accelerations are checked against the constraints first: the guides' own are taken (every

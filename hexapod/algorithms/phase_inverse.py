@@ -380,15 +380,21 @@ class _Decisions:
     def _select(self, k: int, q, w_k) -> PhasePlan | None:
         """The feet's rows to keep at sample ``k`` with the joints' and drivers' as decided:
         the rank decision (:func:`~hexapod.algorithms.linalg.split_rows`) on those rows, then
-        the feet that carry load, then the others."""
+        the feet that carry load, then the others; none of the feet's when the joints' and
+        drivers' rows already fix every velocity (what that decision would find)."""
         model = self.model
         if self.base is None or not model.contacts:
             return None
         base, left = self.base
-        Phi = model.call("Phi_v", self.data, q=q, w=w_k)
-        W, d = equilibrate(Phi, model.mass_inv_sqrt)
         priority, _ = model.rank_order(w_k)
         feet = priority[self.feet.owner[priority] >= 0]
+        if base.size == model.n_v:
+            # the joints' and drivers' rows fix every velocity (a kinematics run's guides):
+            # every foot's row is left out, the decision's outcome without its factorisation
+            # (each sample's checks still watch the kept rows' rank)
+            return self._plan(q, w_k, base, np.concatenate([left, feet]).astype(int))
+        Phi = model.call("Phi_v", self.data, q=q, w=w_k)
+        W, d = equilibrate(Phi, model.mass_inv_sqrt)
         idle = self.feet.rows_idle(feet, k)
         order = np.concatenate([base, feet[~idle], feet[idle]]).astype(int)
         groups = np.concatenate([np.arange(base.size), np.full((~idle).sum(), base.size),
