@@ -116,6 +116,25 @@ def test_keys_are_stable_across_processes_and_tell_their_parts_apart():
     assert cache.key("ab", "c") != cache.key("a", "bc")
 
 
+def test_code_for_the_processor_is_kept_under_its_features(monkeypatch):
+    """Compiled for the processor's own instruction set (x86-64 Linux, where its features can
+    be read), a library is kept under those features: a processor with others never loads
+    it; without them, the portable flags alone."""
+    import hexapod._support.compiled as module
+
+    keys = set()
+    try:
+        for features in ("fpu sse2", "fpu sse2 avx2 fma", ""):
+            monkeypatch.setattr(module, "_processor_features", lambda f=features: f)
+            module.compiler_flags.cache_clear()
+            keys.add(compiled_key("m", "/usr/bin/gcc"))
+            native = set(module.NATIVE_FLAGS) <= set(module.compiler_flags())
+            assert native == bool(features)
+    finally:
+        module.compiler_flags.cache_clear()
+    assert len(keys) == 3
+
+
 def test_keys_change_with_the_version_of_hexapod_and_of_casadi(monkeypatch):
     import hexapod._version
 

@@ -11,8 +11,8 @@ checkout's over the revision's, so below 1 is faster):
   empty cache and no C compiler (``HEXAPOD_NO_JIT=1``), as a whole command;
 * ``tree``: the tree path of the inverse dynamics, CPU per sample over ``--samples`` samples
   after a warm-up run, on the front leg and the 18-joint robot on a fixed trunk, interpreted
-  (CasADi's virtual machine) and compiled (``-O2``); for the revision, also its default
-  evaluation (which may be neither);
+  (CasADi's virtual machine) and compiled (the C compiler's flags of each revision); for the
+  revision, also its default evaluation (which may be neither);
 * ``exact``: the exact path (``method="saddle"``: every sample solved with its own rank
   decision) of the walking robot, per sample over 20 samples after a warm-up.
 

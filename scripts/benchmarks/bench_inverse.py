@@ -30,7 +30,7 @@ and the 18-joint hexapod (``--samples`` samples, default 1000), timed in the sam
 
 * ``interpreted``: the default, evaluated by CasADi's virtual machine (nothing is cached:
   only compiled libraries are);
-* ``compiled``: ``--compile yes`` with the cache holding the optimized (``-O2``) library (put
+* ``compiled``: ``--compile yes`` with the cache holding the optimized library (put
   there beforehand by a compiled run), which later compiled runs then load;
 * Pinocchio's script.
 
