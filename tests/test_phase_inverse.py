@@ -84,6 +84,29 @@ def test_four_bars_agree_with_the_saddle_path(dimension):
     assert result.method == "phase" and result.redundant_rows == exact.redundant_rows
 
 
+def test_the_first_sample_s_newton_stops_early_and_the_plan_takes_it_to_round_off(monkeypatch):
+    """The first sample's positions are found to FIRST_TOL only (the scene's guess at t = 1e-10
+    s is off by its motion over that time: within it, no exact Newton step), the plan's own
+    Newton steps take them to round-off, and the sample agrees with the saddle path's."""
+    from hexapod.algorithms.kinematics import assemble_positions
+
+    model = four_bar_model(3)
+    times = np.linspace(1e-10, 1.2, 25)
+    found = []
+
+    def kept(*args, **kwargs):
+        found.append(assemble_positions(*args, **kwargs))
+        return found[-1]
+
+    monkeypatch.setattr(phase_inverse, "assemble_positions", kept)
+    fields = phase(model, times)
+    assert_agree(fields, inverse_dynamics(model, times, method="saddle"))
+    assert fields["exact_samples"] == 0
+    w = model.law_values(times[0])[0]
+    off = np.abs(model.call("phi", q=found[0], w=w) / model.row_scale).max()
+    assert 1e-12 < off <= phase_inverse.FIRST_TOL
+
+
 def test_a_run_goes_in_blocks_that_carry_the_state_from_one_to_the_next(monkeypatch):
     """The samples are evaluated in blocks (phase_plan.blocks: BLOCK samples, then the binary
     digits of the rest), each starting from the last state of the block before: small blocks

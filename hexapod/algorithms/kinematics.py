@@ -116,7 +116,8 @@ def _violations(model: Model, scaled: np.ndarray, count: int = 5) -> str:
 
 def assemble_positions(model: Model, data: Data, t: float = 0.0, q: np.ndarray | None = None,
                        *, tol: float = 1e-12, max_iterations: int = 60,
-                       counts: dict | None = None, diagnose: bool = True) -> np.ndarray:
+                       counts: dict | None = None, diagnose: bool = True,
+                       polish: bool = True) -> np.ndarray:
     """A configuration satisfying every constraint at time ``t``, near the guess ``q``; left in
     ``data.t`` and ``data.q``.
 
@@ -141,6 +142,9 @@ def assemble_positions(model: Model, data: Data, t: float = 0.0, q: np.ndarray |
         from assembling, for the error's message (a Newton solve per foot and more: seconds
         for the walking robot). False for a caller that catches the error and tries another
         way.
+    polish : bool
+        Once within ``tol``, one more Newton step (to round-off, kept only if it helps); False
+        for a caller whose own Newton steps follow (the phase path's first sample).
 
     Returns
     -------
@@ -154,16 +158,17 @@ def assemble_positions(model: Model, data: Data, t: float = 0.0, q: np.ndarray |
     """
     model.check(data)
     q = _assemble(model, data, t, model.normalize(model.q0 if q is None else q), tol,
-                  max_iterations, counts, diagnose)
+                  max_iterations, counts, diagnose, polish)
     data.at(t, q)
     return q
 
 
 def _assemble(model: Model, data: Data, t: float, q: np.ndarray, tol: float,
-              max_iterations: int, counts: dict | None, diagnose: bool) -> np.ndarray:
+              max_iterations: int, counts: dict | None, diagnose: bool,
+              polish: bool = True) -> np.ndarray:
     w, _, _ = model.law_values(t, data)
     try:
-        return _newton(model, data, t, w, q, tol, max_iterations, counts)
+        return _newton(model, data, t, w, q, tol, max_iterations, counts, polish)
     except AssemblyError as error:
         if not diagnose:
             raise
@@ -236,7 +241,7 @@ def null_space(model: Model, matrix: np.ndarray) -> np.ndarray:
 
 
 def _newton(model: Model, data: Data, t: float, w: np.ndarray, q: np.ndarray, tol: float,
-            max_iterations: int, counts: dict | None) -> np.ndarray:
+            max_iterations: int, counts: dict | None, polish: bool = True) -> np.ndarray:
     """Newton's method on the constraints at law values ``w`` from ``q`` (see
     :func:`assemble_positions`)."""
     if model.n_c == 0:
@@ -254,7 +259,7 @@ def _newton(model: Model, data: Data, t: float, w: np.ndarray, q: np.ndarray, to
     polished, split, factorised_at = False, None, None
     for _ in range(max_iterations):
         if merit <= tol:
-            if polished or merit <= ROUND_OFF:
+            if polished or merit <= ROUND_OFF or not polish:
                 return q
             # Newton converges quadratically: one more step takes the residual to round-off
             # (joint points coincide to ~1e-16 m instead of ~tol), kept only if it helps

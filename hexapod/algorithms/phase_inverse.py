@@ -75,6 +75,10 @@ RESIDUAL_TOL = 1e-9
 #: (an estimate from above: at most about sqrt(n_v) times the true value, so that the exact
 #: rank decision, with its tolerance of 1e-9, keeps every row whenever this one passes).
 SIGMA_TOL = 1e-6
+#: The first sample's positions are found from the scene's guess to this scaled residual (the
+#: exact path's Newton goes to 1e-12, then a step more): the plan's Newton steps take them to
+#: round-off, as they do from the sample before's prediction (1e-6 off at samples 2 ms apart).
+FIRST_TOL = 1e-8
 #: Samples per call when progress is reported, and the most per call.
 CHUNK = 2_000
 
@@ -291,8 +295,8 @@ def _first_positions(model: Model, data: Data, times: np.ndarray, w, wd, wdd,
     the exact path evaluates the sample and says what the drivers leave free, or where the
     dynamics leaves the known motion."""
     t = float(times[0])
-    if known is None:
-        q = assemble_positions(model, data, t, model.q0)
+    if known is None:  # to FIRST_TOL: the plan's Newton steps take them to round-off
+        q = assemble_positions(model, data, t, model.q0, tol=FIRST_TOL, polish=False)
     else:
         q = np.array(known[0][0], dtype=float)
         data.at(t, q)
