@@ -88,8 +88,7 @@ def _processor_features() -> str:
     code compiled for one processor's instruction set may not run on another."""
     if sys.platform != "linux" or _machine() != "x86_64":
         return ""
-    with contextlib.suppress(OSError, UnicodeDecodeError), open(
-            "/proc/cpuinfo", encoding="ascii") as lines:
+    with contextlib.suppress(OSError), open("/proc/cpuinfo", encoding="latin-1") as lines:
         for line in lines:
             if line.startswith("flags"):
                 return " ".join(line.partition(":")[2].split())
