@@ -359,9 +359,29 @@ def test_compiled_the_step_solves_by_its_lu_and_walks_as_by_the_qr(tmp_path, mon
     chosen at the run's start, written out (:meth:`CompiledContactStep.pivoted`), instead of
     CasADi's sparse QR: the compass gait walks the same to round-off (4e-15 measured; the
     compiled and interpreted runs differ by 5e-10, their projections' Newton steps not being
-    the same), events and forces too."""
+    the same), events and forces too. Nothing is compiled inside the time loop (its CPU counts
+    the compiler's: the retraction, compiled at its first use there, made a walking robot's
+    stride 2.5 times as costly)."""
+    from hexapod._support import compiled
+    from hexapod.simulation import loop
     from hexapod.simulation.contact_kernel import CompiledContactStep
 
+    inside, in_loop = [False], []
+    run, compile_ = loop._run, compiled._compile
+
+    def watched_run(*args, **kwargs):
+        inside[0] = True
+        try:
+            return run(*args, **kwargs)
+        finally:
+            inside[0] = False
+
+    def watched_compile(function, *args):
+        in_loop.extend([function.name()] if inside[0] else [])
+        return compile_(function, *args)
+
+    monkeypatch.setattr(loop, "_run", watched_run)
+    monkeypatch.setattr(compiled, "_compile", watched_compile)
     scene = hexapod.load_scene(SCENES / "compass-gait.toml")
     chosen, runs = [], {}
     pivoted = CompiledContactStep.pivoted
@@ -371,6 +391,7 @@ def test_compiled_the_step_solves_by_its_lu_and_walks_as_by_the_qr(tmp_path, mon
         with hexapod.executing(compiled=True, cache=str(tmp_path)):
             runs[solve] = hexapod.simulate(hexapod.assemble(scene), 0.76, step=2e-3)
     assert [k.lu is not None for k in chosen] == [True]
+    assert in_loop == []
     lu, qr = runs["lu"], runs["qr"]
     assert [(e.kind, e.contact, e.t) for e in lu.events] == [
         (e.kind, e.contact, e.t) for e in qr.events]

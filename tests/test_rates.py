@@ -226,7 +226,7 @@ def test_kernels_compiled_to_c_give_the_interpreters_numbers_and_are_kept(tmp_pa
         assert {f"forward rates, compiled {flags}", f"forward project, compiled {flags}"} <= kept
 
         def no_compiler(*args):
-            raise AssertionError("a kernel was compiled again")
+            raise AssertionError(f"a kernel was compiled again: {args[0].name()}")
 
         monkeypatch.setattr(compiled, "_compile", no_compiler)
         again = hx.simulate(hx.assemble(scene), 0.12, **options)

@@ -592,14 +592,21 @@ class Model:
         :attr:`retract` Function evaluated through this thread's call buffers, compiled when
         the execution setting says so (on the walking robot 12 us a call by CasADi's virtual
         machine, 5 compiled, against 29 for the NumPy formulas it replaced)."""
+        return self.retraction()(q, dv)[0]
+
+    def retraction(self) -> FastFunction:
+        """:meth:`integrate`'s Function under the execution setting, through this thread's call
+        buffers: made once per thread (a tenth of a millisecond), compiled (or loaded from the
+        cache) when the setting says so. An integrator makes it before its time loop, so that
+        no compiler runs inside the loop (whose CPU counts the compiler's)."""
         compiled = current().compiled
         own, name = self._own_calls, "compiled retract" if compiled else "retract"
         fast = own.__dict__.get(name)
-        if fast is None:  # made once per thread (a tenth of a millisecond)
+        if fast is None:
             function = self._evaluated("retract")
             fast = own.__dict__[name] = FastFunction(
                 compiled_graph(function, "model", "the retraction") if compiled else function)
-        return fast(q, dv)[0]
+        return fast
 
     @cached_property
     def retract(self) -> ca.Function:

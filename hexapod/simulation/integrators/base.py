@@ -163,6 +163,7 @@ class Integrator(SingularPoses, StepEnds):
         if not (rtol > 0 and atol > 0):
             raise ValueError(f"rtol and atol must be positive, got {rtol} and {atol}")
         self.model = model
+        model.retraction()  # made here, not at the first step: no compiler inside the time loop
         self.t0, self.t_bound = float(t0), float(t_bound)
         self.rtol, self.atol, self.max_step = float(rtol), float(atol), float(max_step)
         self.h = float(step) if step is not None else (self.t_bound - self.t0) / self.default_steps
