@@ -137,11 +137,17 @@ def test_the_standing_hexapod_agrees_with_the_saddle_path():
     assert len(exact.redundant_rows) == 12
 
 
-def test_the_walking_hexapod_agrees_across_a_touch_down():
+def _no_split(*args, **kwargs):
+    raise AssertionError("a rank decision at a new contact set")
+
+
+def test_the_walking_hexapod_agrees_across_a_touch_down(monkeypatch):
     """Three feet down, then six: a new contact set, whose new feet carry nothing at the
-    touch-down itself (their multipliers held at zero); the ground forces by the least-wrench
-    policy with the feet's load-sharing weights."""
+    touch-down itself (their multipliers held at zero) and whose feet down before keep the
+    rows they had (no rank decision: the split is made to fail); the ground forces by the
+    least-wrench policy with the feet's load-sharing weights."""
     model, exact = scene_model("hexapod"), saddle("hexapod", *TOUCH_DOWN)
+    monkeypatch.setattr(phase_inverse, "split_rows", _no_split)
     fields = phase(model, exact.times)
     assert_agree(fields, exact)
     assert fields["exact_samples"] == 0
@@ -151,19 +157,16 @@ def test_the_walking_hexapod_agrees_across_a_touch_down():
 
 def test_the_guides_kinematics_leave_every_foot_row_out_without_deciding_again(monkeypatch):
     """The guides' kinematics (a motion run) across the touch-down: their drivers fix every
-    velocity, so the new contact set's plan leaves the feet's rows out without a rank
-    decision (none is taken: the split is made to fail), and the motion is the exact path's."""
+    velocity, so the new contact set's plan keeps no foot's row, as the plan before, without a
+    rank decision (none is taken: the split is made to fail), and the motion is the exact
+    path's."""
     from hexapod.algorithms.prescribed import prescribed_motion
 
     kinematics = scene_model("hexapod").guidance.kinematics
     times = np.linspace(*TOUCH_DOWN)
     exact = prescribed_motion(kinematics, times)  # fewer samples than the phase path's: exact
     w, wd, wdd = (x.reshape(kinematics.n_w, times.size) for x in kinematics.law_values(times))
-
-    def no_split(*args, **kwargs):
-        raise AssertionError("a rank decision at a new contact set")
-
-    monkeypatch.setattr(phase_inverse, "split_rows", no_split)
+    monkeypatch.setattr(phase_inverse, "split_rows", _no_split)
     fields = phase_inverse.phase_inverse(kinematics, kinematics.create_data(), times, w, wd,
                                          wdd, "joint", motion=True)
     assert fields["exact_samples"] == 0

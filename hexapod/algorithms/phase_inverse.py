@@ -341,9 +341,13 @@ class _Decisions:
 
     A decision is the exact solve's where it has one (the first sample, and where it redid a
     sample because the decision had stopped holding); for a new contact set, the rows of the
-    joints and drivers are kept as decided and those of the feet are chosen among the feet on
-    the ground as the exact decision chooses them (the farthest from the span of those kept
-    first), the feet that carry nothing last, so that their multipliers can be held at zero."""
+    joints and drivers are kept as decided, and the feet's rows the run before kept are held
+    while their feet are on the ground and carry load (as the exact path holds its last
+    decision while its rows stay independent: each sample's checks watch their rank, and the
+    policy's forces do not depend on which independent rows are kept); else those of the feet
+    are chosen among the feet on the ground as the exact decision chooses them (the farthest
+    from the span of those kept first), the feet that carry nothing last, so that their
+    multipliers can be held at zero."""
 
     def __init__(self, model: Model, data: Data, terms: StepTerms, feet: _Feet, to_c: bool,
                  motion: bool = False):
@@ -351,6 +355,7 @@ class _Decisions:
         self.motion = motion
         self.plans: dict = {}
         self.base = None  # the kept and left-out rows that are no foot's
+        self.last: PhasePlan | None = None  # the plan of the run before
         self.generation: dict = {}  # per kept and left-out rows: plans whose pivots failed
 
     def adopt(self, k: int, data, w_k, failed: PhasePlan | None = None) -> None:
@@ -378,27 +383,40 @@ class _Decisions:
         key = self.feet.contact_set(k)
         plan = self.plans.get(key)
         if plan is None or self.feet.rows_idle(plan.kept, k).any():
-            plan = self.plans[key] = self._select(k, q, w_k)
+            plan = self.plans[key] = self._held(k, q, w_k) or self._select(k, q, w_k)
+        self.last = plan
         return plan
+
+    def _held(self, k: int, q, w_k) -> PhasePlan | None:
+        """The plan keeping the rows the plan of the run before kept, at sample ``k``'s new
+        contact set, when their feet are on the ground and carry load there (the other feet's
+        rows left out); None otherwise."""
+        last, feet = self.last, self.feet
+        if last is None or self.base is None:
+            return None
+        owner = feet.owner[last.kept]
+        held = owner[owner >= 0]
+        base, left = self.base
+        if (not np.array_equal(last.kept[owner < 0], base) or not feet.stance[held, k].all()
+                or (feet.idle.size and feet.idle[held, k].any())):
+            return None
+        priority, _ = self.model.rank_order(w_k)
+        on_ground = priority[feet.owner[priority] >= 0]
+        return self._plan(q, w_k, last.kept,
+                          np.concatenate([left, np.setdiff1d(on_ground, last.kept)]).astype(int))
 
     def _select(self, k: int, q, w_k) -> PhasePlan | None:
         """The feet's rows to keep at sample ``k`` with the joints' and drivers' as decided:
         the rank decision (:func:`~hexapod.algorithms.linalg.split_rows`) on those rows, then
-        the feet that carry load, then the others; none of the feet's when the joints' and
-        drivers' rows already fix every velocity (what that decision would find)."""
+        the feet that carry load, then the others."""
         model = self.model
         if self.base is None or not model.contacts:
             return None
         base, left = self.base
-        priority, _ = model.rank_order(w_k)
-        feet = priority[self.feet.owner[priority] >= 0]
-        if base.size == model.n_v:
-            # the joints' and drivers' rows fix every velocity (a kinematics run's guides):
-            # every foot's row is left out, the decision's outcome without its factorisation
-            # (each sample's checks still watch the kept rows' rank)
-            return self._plan(q, w_k, base, np.concatenate([left, feet]).astype(int))
         Phi = model.call("Phi_v", self.data, q=q, w=w_k)
         W, d = equilibrate(Phi, model.mass_inv_sqrt)
+        priority, _ = model.rank_order(w_k)
+        feet = priority[self.feet.owner[priority] >= 0]
         idle = self.feet.rows_idle(feet, k)
         order = np.concatenate([base, feet[~idle], feet[idle]]).astype(int)
         groups = np.concatenate([np.arange(base.size), np.full((~idle).sum(), base.size),
