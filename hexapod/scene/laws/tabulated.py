@@ -259,8 +259,8 @@ def read_pieces(times: np.ndarray, pieces: np.ndarray, t) -> np.ndarray:
 
 def _sum_last(x: np.ndarray) -> np.ndarray:
     """The sum over the last axis (of length 6), one term after the other: the order NumPy's
-    own reduction takes for fewer than 8 terms, whatever the shape (the same bits), at a
-    quarter of its cost on these short rows (18 laws at 501 times: 0.48 -> 0.1 ms)."""
+    own reduction takes for fewer than 8 terms, whatever the shape (the same bits), cheaper
+    on these short rows (18 laws at 501 times: :func:`read_pieces` 0.99 -> 0.48 ms)."""
     total = x[..., 0] + x[..., 1]
     for k in range(2, x.shape[-1]):
         total += x[..., k]
