@@ -395,15 +395,20 @@ class _Decisions:
         if last is None or self.base is None:
             return None
         owner = feet.owner[last.kept]
-        held = owner[owner >= 0]
         base, left = self.base
-        if (not np.array_equal(last.kept[owner < 0], base) or not feet.stance[held, k].all()
-                or (feet.idle.size and feet.idle[held, k].any())):
+        if (not np.array_equal(last.kept[owner < 0], base)
+                or not feet.stance[owner[owner >= 0], k].all()
+                or feet.rows_idle(last.kept, k).any()):
             return None
-        priority, _ = self.model.rank_order(w_k)
-        on_ground = priority[feet.owner[priority] >= 0]
+        on_ground = self._feet_rows(w_k)
         return self._plan(q, w_k, last.kept,
                           np.concatenate([left, np.setdiff1d(on_ground, last.kept)]).astype(int))
+
+    def _feet_rows(self, w_k) -> np.ndarray:
+        """The rows of the feet on the ground at law values ``w_k``, in the model's priority
+        order."""
+        priority, _ = self.model.rank_order(w_k)
+        return priority[self.feet.owner[priority] >= 0]
 
     def _select(self, k: int, q, w_k) -> PhasePlan | None:
         """The feet's rows to keep at sample ``k`` with the joints' and drivers' as decided:
@@ -415,8 +420,7 @@ class _Decisions:
         base, left = self.base
         Phi = model.call("Phi_v", self.data, q=q, w=w_k)
         W, d = equilibrate(Phi, model.mass_inv_sqrt)
-        priority, _ = model.rank_order(w_k)
-        feet = priority[self.feet.owner[priority] >= 0]
+        feet = self._feet_rows(w_k)
         idle = self.feet.rows_idle(feet, k)
         order = np.concatenate([base, feet[~idle], feet[idle]]).astype(int)
         groups = np.concatenate([np.arange(base.size), np.full((~idle).sum(), base.size),
