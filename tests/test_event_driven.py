@@ -13,7 +13,7 @@ import pytest
 from test_contacts import DOWN, GAMMA, SCENES, G, block, planar_incline
 
 import hexapod
-from hexapod.scene import GroundContact, PlanarBody
+from hexapod.scene import GroundContact, Particle, PlanarBody
 
 #: the ball's landings: sqrt(2 h / g), then bounces of 2 e u / g, u the landing speed
 LANDING = np.sqrt(2.0 / G)
@@ -79,6 +79,25 @@ def test_the_block_stays_stuck_and_a_push_stops_when_the_closed_form_says():
     ends = [e for e in pushed.events if e.kind == "slip-end"]
     assert len(ends) == 4 and all(abs(e.t - stop) < 1e-10 for e in ends)
     assert np.max(np.abs(pushed.v[pushed.t > stop])) < 1e-12
+
+
+def test_a_landing_beside_a_resting_block_leaves_its_corners_sticking():
+    """A particle lands 1 mm down the incline from the stuck block (mu = 0.7). The impact's
+    contact problem holds the block's closed corners too; its zero-speed answer for them,
+    "slip" at round-off speeds, is not a slip: no event but the landing's, the block still."""
+    scene = hexapod.load_scene(SCENES / "sliding-block.toml")
+    for element in scene.elements:
+        if getattr(element, "kind", "") == "ground-contact":
+            element.mu = 0.7
+    normal = np.array([np.sin(GAMMA), 0.0, np.cos(GAMMA)])
+    where = np.array([0.5, 0.0, -0.5 * np.tan(GAMMA)]) + 1e-3 * normal  # 1 mm above
+    scene.add(Particle("ball", mass=0.1, position=where))
+    scene.add(GroundContact("ball-contact", "ball", normal=normal, mu=0.7))
+    result = hexapod.simulate(hexapod.assemble(scene), 0.05, method="event-driven")
+    assert result.success, result.message
+    assert [(e.kind, e.contact) for e in result.events] == [
+        ("touch-down", "ball-contact"), ("impact", "ball-contact")]
+    assert np.max(np.abs(result.v[:, :6])) < 1e-12
 
 
 @pytest.mark.parametrize("mu", [0.2, 0.9])

@@ -449,6 +449,10 @@ class EventDriven(DormandPrince853):
             restitution[short] = 0.0
         world = np.einsum("mij,mi->mj", frames.axes[touching], solution.impulses)
         scale = ROUND_OFF * max(1.0, np.abs(v).max())
+        # a slip after the impulse slower than the modes' tolerance is the impact's round-off
+        # on a contact that stays put (a sticking foot beside a foot landing at nearly zero
+        # speed): it sticks, as at the start
+        resting = MODE_TOLERANCE * max(1.0, np.abs(v).max())
         for j, k in enumerate(touching):
             pushed = solution.impulses[j, 0] > 0.0
             leaving = rebound[j] > scale
@@ -460,7 +464,8 @@ class EventDriven(DormandPrince853):
             if leaving:  # a rebound
                 self._mode(k, "open", t)
                 self._just[k] = True
-            elif solution.states[j] == "slip":
+            elif (solution.states[j] == "slip"
+                  and np.linalg.norm(solution.velocities[j, 1:]) > resting):
                 slip = solution.velocities[j, 1:]
                 self._direction[k] = slip / np.linalg.norm(slip)
                 self._mode(k, "slip", t)
