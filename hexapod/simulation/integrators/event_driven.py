@@ -138,7 +138,7 @@ class EventDriven(DormandPrince853):
         y, lam, Y, Lam = self._contact_solve("acceleration", t, q, v, laws, G)
         self.counters.rhs += 1
         self.counters.factorisations += 1
-        free = G.T @ y + contact_bias(model, q, v, self.contacts)
+        free = G.T @ y + contact_bias(model, q, v, self.contacts, self.data)
         F = self._forces(t, frames.jacobian @ v, free, G.T @ Y, modes)
         x = F.reshape(-1)
         W = G.T @ Y
