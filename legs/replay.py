@@ -335,28 +335,60 @@ def wrapped(x: np.ndarray) -> np.ndarray:
     return np.arctan2(np.sin(x), np.cos(x))
 
 
-def event_times(events) -> dict:
+def grazes(events) -> list[tuple[float, str, np.ndarray]]:
+    """The contacts that touch and leave at the same instant (a simulation's ``events``): a foot
+    arriving at nearly zero speed, stopped by a plastic impulse, then drawn on along its path
+    by its controller, with no time on the ground. ``(t, contact, impulse)`` each, the impulse
+    of its impact (world axes, N s; zero where there is none)."""
+    events = list(events or ())
+    out = []
+    for k, event in enumerate(events):
+        if event.kind != "touch-down":
+            continue
+        at_once = [e for e in events[k + 1:] if e.t == event.t and e.contact == event.contact]
+        if any(e.kind == "lift-off" for e in at_once):
+            impulse = next((np.asarray(e.impulse, dtype=float) for e in at_once
+                            if e.kind == "impact"), np.zeros(3))
+            out.append((float(event.t), event.contact, impulse))
+    return out
+
+
+def event_times(events, *, with_grazes: bool = True) -> dict:
     """Contact events (``t``, ``kind``, ``contact``: a simulation's) as the times of each
-    kind per contact, ``{contact: {kind: [t, ...]}}``."""
+    kind per contact, ``{contact: {kind: [t, ...]}}``; ``with_grazes=False`` leaves out the
+    touch-down and lift-off of each :func:`grazes` (a contact without time on the ground)."""
+    touched = {(t, name) for t, name, _ in grazes(events)} if not with_grazes else set()
     times: dict = {}
     for event in events or ():
+        if event.kind in ("touch-down", "lift-off") and (event.t, event.contact) in touched:
+            continue
         times.setdefault(event.contact, {}).setdefault(event.kind, []).append(event.t)
     return times
 
 
 def schedule_lateness(model, times: dict, t_end: float) -> dict[str, float]:
     """The largest ``|simulated - scheduled|`` time (s) of the touch-downs and of the
-    lift-offs of ``model``'s contacts up to ``t_end``, each scheduled one matched with its
-    foot's nearest simulated event of its kind (``times``: :func:`event_times`; a foot that
-    never touches or leaves: infinite)."""
+    lift-offs of ``model``'s contacts up to ``t_end`` (``times``: :func:`event_times`).
+    Each scheduled touch-down is matched with its foot's first simulated touch-down from the
+    middle of the swing before it to the middle of the stance after it, each lift-off with the
+    last simulated lift-off from the middle of its stance to the middle of the swing after it:
+    a foot that lands early and bounces counts by its first landing, one that leaves, lands
+    again and leaves counts by its last leaving (a foot with none there: infinite)."""
     worst = {"touch-down": 0.0, "lift-off": 0.0}
     for contact in model.contacts:
-        for start, stop in contact.stances(0.0, t_end):
-            for kind, when in (("touch-down", start), ("lift-off", stop)):
-                if 0.0 < when < t_end:  # not the run's own ends
-                    near = np.asarray(times.get(contact.name, {}).get(kind, []))
-                    gap = float(np.abs(near - when).min()) if near.size else np.inf
-                    worst[kind] = max(worst[kind], gap)
+        scheduled = [(when, kind) for start, stop in contact.stances(-t_end - 1.0, 2 * t_end + 1.0)
+                     for when, kind in ((start, "touch-down"), (stop, "lift-off"))]
+        for k, (when, kind) in enumerate(scheduled):
+            if not 0.0 < when < t_end or not 0 < k < len(scheduled) - 1:
+                continue  # not the run's own ends
+            low, high = (0.5 * (when + scheduled[k + j][0]) for j in (-1, 1))
+            near = np.asarray(times.get(contact.name, {}).get(kind, []), dtype=float)
+            near = near[(near > low) & (near < high)]
+            if not near.size:
+                worst[kind] = np.inf
+                continue
+            chosen = near.min() if kind == "touch-down" else near.max()
+            worst[kind] = max(worst[kind], abs(float(chosen) - when))
     return worst
 
 

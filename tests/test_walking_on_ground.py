@@ -133,3 +133,44 @@ def test_the_built_in_walking_robot_on_ground_simulates_from_the_command_line(tm
     assert all(float(rows[-1][f"GRz:{leg}"]) == 0.0 for leg in legs if leg not in pushed)
     for name in ("events.csv", "contacts.png", "gait.png", "tracking.png"):
         assert (out / name).is_file(), name
+
+
+def test_the_schedule_is_met_by_first_landings_and_last_leavings_and_grazes_are_named():
+    """``schedule_lateness`` matches each scheduled touch-down with the foot's first landing
+    around it and each lift-off with its last leaving (a bounce is not hidden by a later
+    landing on time); ``grazes`` names the touches without time on the ground, which
+    ``event_times(..., with_grazes=False)`` leaves out. Tripod, 0.5 s: L1, R2, L3 land at
+    0.2 s; R1, L2, R3 leave at 0.25 s and land at 0.45 s."""
+    from types import SimpleNamespace
+
+    from legs.replay import event_times, grazes, schedule_lateness
+
+    def event(t, kind, foot, impulse=(0.0, 0.0, 0.0)):
+        return SimpleNamespace(t=t, kind=kind, contact=f"{foot}/ground",
+                               impulse=np.array(impulse))
+
+    events = [event(t, "lift-off", foot) for foot, t in
+              (("L1", 2e-4), ("R2", 2e-4), ("L3", 2e-4), ("R1", 0.2501), ("L2", 0.2502),
+               ("R3", 0.2503))]
+    events += [event(0.1985, "touch-down", "L1"), event(0.1985, "impact", "L1", (0, 0, 1e-9)),
+               event(0.1985, "lift-off", "L1"), event(0.2002, "touch-down", "L1")]
+    events += [event(0.2001, "touch-down", foot) for foot in ("R2", "L3")]
+    events += [event(0.447, "touch-down", "R1"), event(0.448, "lift-off", "R1"),
+               event(0.4501, "touch-down", "R1")]
+    events += [event(0.4504, "touch-down", foot) for foot in ("L2", "R3")]
+    events.sort(key=lambda e: e.t)
+    model = builtin_model("hexapod")
+    assert [(t, name) for t, name, _ in grazes(events)] == [(0.1985, "L1/ground")]
+    assert grazes(events)[0][2][2] == 1e-9
+    every = schedule_lateness(model, event_times(events), 0.5)
+    landed = schedule_lateness(model, event_times(events, with_grazes=False), 0.5)
+    assert every["touch-down"] == pytest.approx(3e-3) == landed["touch-down"]  # R1's bounce
+    assert every["lift-off"] == pytest.approx(3e-4) == landed["lift-off"]
+    events = [e for e in events if e.contact != "R1/ground" or e.t < 0.44]
+    events.append(event(0.4501, "touch-down", "R1"))
+    assert schedule_lateness(model, event_times(events), 0.5)["touch-down"] == pytest.approx(
+        1.5e-3)  # L1's graze
+    assert schedule_lateness(model, event_times(events, with_grazes=False), 0.5)[
+        "touch-down"] == pytest.approx(4e-4)
+    events = [e for e in events if e.contact != "L2/ground" or e.kind != "lift-off"]
+    assert schedule_lateness(model, event_times(events), 0.5)["lift-off"] == np.inf
