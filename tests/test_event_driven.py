@@ -100,6 +100,28 @@ def test_a_landing_beside_a_resting_block_leaves_its_corners_sticking():
     assert np.max(np.abs(result.v[:, :6])) < 1e-12
 
 
+def test_a_contact_let_go_touches_again_only_past_the_gap_tolerance():
+    """A lift-off (a force let the contact go) leaves at zero speed, and a walking foot's gap
+    then grows as the fifth power of the time since: its gap stays within round-off of zero,
+    and a touch-down found there is followed by a lift-off at the same instant, endlessly
+    (the walking robot under 100 Hz gains stopped at 0.3 ms after 257 of them). Until its
+    gap has passed the gap tolerance, such a contact touches down only that far into the
+    ground; past the tolerance, at zero gap again."""
+    from hexapod.simulation.integrators.event_driven import EventDriven
+
+    scene = hexapod.Scene("resting", dimension=3, gravity=[0.0, 0.0, 0.0])
+    scene.add(Particle("ball", mass=1.0, position=[0.0, 0.0, 0.0]))
+    scene.add(GroundContact("floor", "ball", mu=0.5))
+    run = EventDriven(hexapod.assemble(scene), 0.0, 1.0)
+    tol = run._gap_tol
+    run._mode(0, "open", 0.0)  # a lift-off
+    values = [run._gap_value(0, gap, 0.0, 1.0, True) for gap in (-0.5 * tol, -2 * tol)]
+    assert values[0] > 0 > values[1]
+    run.q = run.q + np.array([0.0, 0.0, 2 * tol])  # a step leaves it clear of the ground
+    run._step()
+    assert not run.events[1:] and run._gap_value(0, -0.5 * tol, 0.0, 1.0, True) < 0
+
+
 @pytest.mark.parametrize("mu", [0.2, 0.9])
 def test_in_the_plane_a_particle_slides_or_sticks(mu):
     result = hexapod.simulate(planar_incline(mu), 0.2, method="event-driven")

@@ -24,7 +24,12 @@ start. A function that falls below zero in a step has a root located on the step
 output by Illinois' method (to round-off in time); a gap is also watched inside the step
 (a ball's bounce may be shorter than the step). A function zero at the step's start (a
 contact that has just left, or begun to slip) is divided by the time since, so that its
-root there is not found again.
+root there is not found again. A contact whose force let it go (a lift-off, not a rebound)
+leaves at zero speed, often tangent to the ground to high order (a walking foot's path: its
+height grows as the fifth power of the time since), so that its gap stays within round-off
+of zero for a while: until the gap has passed the gap tolerance, it touches down again only
+once that far into the ground (a foot that falls back), else it would touch and leave again
+at the same instant, endlessly.
 
 **Impacts.** At a touch-down the velocities jump by the impulse map ``M (v+ - v-) = J^T P``
 under the bilateral rows: the frictional contact problem of the touching contacts
@@ -44,6 +49,7 @@ from hexapod.algorithms.contact_frames import (
     armed,
     contact_bias,
     contact_frames,
+    contact_gaps,
     ground_contacts,
 )
 from hexapod.algorithms.frictional import solve_contacts
@@ -97,6 +103,7 @@ class EventDriven(DormandPrince853):
         self.modes = ["open"] * m
         self._direction = np.zeros((m, d - 1))  # each slip's direction, contact axes
         self._just = np.zeros(m, bool)  # left the ground or began to slip at the step's start
+        self._lifted = np.zeros(m, bool)  # let go by its force, its gap not yet past the tolerance
         self._gap_tol = GAP_TOLERANCE * model.characteristic_length
         frames = contact_frames(model, self.q, self.contacts, self.data)
         touching = np.flatnonzero((frames.gaps <= self._gap_tol)
@@ -260,6 +267,9 @@ class EventDriven(DormandPrince853):
             self._handle(index)
         else:
             self._just[:] = False
+        if self._lifted.any():  # those clear of the ground from here touch at zero gap again
+            self._lifted &= contact_gaps(self.model, self.q, self.contacts,
+                                         self.data) <= self._gap_tol
         self._refresh()
 
     def _follow_slips(self) -> None:
@@ -326,10 +336,13 @@ class EventDriven(DormandPrince853):
         return values
 
     def _gap_value(self, k, gap, normal_speed, since, ready) -> float:
-        """An open contact's gap event function: its gap, divided by the time since it left
+        """An open contact's gap event function: its gap (plus the gap tolerance while it has
+        not cleared the ground since its force let it go), divided by the time since it left
         when it left at the step's start (its speed there); NaN while it is not armed."""
         if not ready:
             return np.nan
+        if self._lifted[k]:
+            gap = gap + self._gap_tol
         if self._just[k]:
             return gap / since if since > 0 else normal_speed
         return gap
@@ -426,6 +439,7 @@ class EventDriven(DormandPrince853):
         if old != mode:
             self.events.append(ContactEvent(t, kind, self.contact_names[k], np.zeros(d)))
             self.modes[k] = mode
+        self._lifted[k] = mode == "open"  # a lift-off; a rebound clears it (_impact)
 
     def _impact(self, t, q, v, touching) -> np.ndarray:
         """The velocities after the impulse map of the ``touching`` contacts (see the module's
@@ -464,6 +478,7 @@ class EventDriven(DormandPrince853):
             if leaving:  # a rebound
                 self._mode(k, "open", t)
                 self._just[k] = True
+                self._lifted[k] = False
             elif (solution.states[j] == "slip"
                   and np.linalg.norm(solution.velocities[j, 1:]) > resting):
                 slip = solution.velocities[j, 1:]
@@ -496,9 +511,12 @@ class EventDriven(DormandPrince853):
                 self._mode(pulling[0], "open", t)
                 self._just[pulling[0]] = True
                 continue
+            # (a contact its force let go is not closed again here: at the instant it left,
+            # tangent to the ground, its acceleration open is round-off, which the modes'
+            # tolerance reads as sticking; it comes back by a touch-down, past the tolerance)
             candidates = [k for k, mode in enumerate(self.modes) if mode == "stick" or (
-                mode == "open" and frames.gaps[k] <= self._gap_tol and u[k, 0] <= speed
-                and ready[k])]
+                mode == "open" and not self._lifted[k] and frames.gaps[k] <= self._gap_tol
+                and u[k, 0] <= speed and ready[k])]
             if not candidates:
                 return
             states, accelerations = self._stick_states(t, q, v, candidates)
