@@ -570,14 +570,15 @@ def gait_diagram_figure(legs: list[str], stance: list, start: float, stop: float
         ax.broken_barh([(a, b - a) for a, b in intervals],
                        (y - 0.2, 0.4) if scheduled is not None else (y - 0.35, 0.7),
                        facecolors="black", label="simulated" if row == 0 else None)
-    if scheduled is not None:  # above the axes, beside the title
-        ax.legend(loc="lower right", bbox_to_anchor=(1.0, 1.0), fontsize=7, ncols=2,
-                  frameon=False, borderaxespad=0.1)
+    if scheduled is not None:  # in the bottom right corner, beside the axis' label (a long
+        # title reaches the top right corner)
+        figure.legend(loc="lower right", bbox_to_anchor=(1 - 0.1 / width, 0.02), fontsize=7,
+                      ncols=2, frameon=False, borderaxespad=0.1)
     ax.set_yticks(range(len(legs)), list(reversed(legs)))
     ax.set_ylim(-0.6, len(legs) - 0.4)
     ax.set_xlim(start, stop)
     ax.set_xlabel("t (s)")
     ax.grid(True, axis="x", linewidth=0.4, alpha=0.6)
-    ax.set_title(title, fontsize=10, y=1.0, loc="center" if scheduled is None else "left")
+    ax.set_title(title, fontsize=10, y=1.0)
     few_ticks(ax, "x")
     return figure
