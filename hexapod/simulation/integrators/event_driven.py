@@ -356,14 +356,17 @@ class EventDriven(DormandPrince853):
         m = before.shape[0]
         watched = [k for k in range(m) if self.modes[k] == "open"]
         grid = np.linspace(t0, self.t, GAP_WATCH + 1)
+        # the open contacts' gaps inside the step too (a short flight), all of them from one
+        # evaluation of the watch at each point
+        inside = np.array([self._watch(s, *interpolant(s), t0)[:, 0] for s in grid[1:-1]]
+                          ) if watched else None
         for k in range(m):
             for column in (0, 1):
                 values = [before[k, column], after[k, column]]
                 times = [t0, self.t]
-                if column == 0 and k in watched:  # inside the step too: a short flight
+                if column == 0 and k in watched:
                     times = list(grid)
-                    values = [before[k, 0], *(self._value(interpolant, s, k, 0, t0)
-                                              for s in grid[1:-1]), after[k, 0]]
+                    values = [before[k, 0], *inside[:, k], after[k, 0]]
                 for a in range(len(times) - 1):
                     if values[a] >= 0.0 and values[a + 1] < 0.0:  # (NaN: not armed)
                         root = self._locate(interpolant, k, column, t0, times[a], times[a + 1],
