@@ -340,12 +340,17 @@ def grazes(events) -> list[tuple[float, str, np.ndarray]]:
     arriving at nearly zero speed, stopped by a plastic impulse, then drawn on along its path
     by its controller, with no time on the ground. ``(t, contact, impulse)`` each, the impulse
     of its impact (world axes, N s; zero where there is none)."""
-    events = list(events or ())
+    events = list(events or ())  # in time order, as a run records them
     out = []
     for k, event in enumerate(events):
         if event.kind != "touch-down":
             continue
-        at_once = [e for e in events[k + 1:] if e.t == event.t and e.contact == event.contact]
+        at_once = []
+        for later in (events[j] for j in range(k + 1, len(events))):
+            if later.t != event.t:
+                break
+            if later.contact == event.contact:
+                at_once.append(later)
         if any(e.kind == "lift-off" for e in at_once):
             impulse = next((np.asarray(e.impulse, dtype=float) for e in at_once
                             if e.kind == "impact"), np.zeros(3))
@@ -375,8 +380,9 @@ def schedule_lateness(model, times: dict, t_end: float) -> dict[str, float]:
     a foot that lands early and bounces counts by its first landing, one that leaves, lands
     again and leaves counts by its last leaving (a foot with none there: infinite)."""
     worst = {"touch-down": 0.0, "lift-off": 0.0}
+    reach = t_end + (model.cycle_time() or 1.0)  # a stride or more beyond the run's ends
     for contact in model.contacts:
-        scheduled = [(when, kind) for start, stop in contact.stances(-t_end - 1.0, 2 * t_end + 1.0)
+        scheduled = [(when, kind) for start, stop in contact.stances(-reach, t_end + reach)
                      for when, kind in ((start, "touch-down"), (stop, "lift-off"))]
         for k, (when, kind) in enumerate(scheduled):
             if not 0.0 < when < t_end or not 0 < k < len(scheduled) - 1:
