@@ -22,7 +22,8 @@ open contact's gap (once its arming condition holds, see
 cone margin ``mu F_N - |F_T|``, a slipping one's slip speed along its direction at the step's
 start. A function that falls below zero in a step has a root located on the step's dense
 output by Illinois' method (to round-off in time); a gap is also watched inside the step
-(a ball's bounce may be shorter than the step). A function zero at the step's start (a
+(a ball's bounce may be shorter than the step) when the contact's normal speed and
+acceleration could take it to the ground within the step. A function zero at the step's start (a
 contact that has just left, or begun to slip) is divided by the time since, so that its
 root there is not found again. A contact whose force let it go (a lift-off, not a rebound)
 leaves at zero speed, often tangent to the ground to high order (a walking foot's path: its
@@ -137,19 +138,33 @@ class EventDriven(DormandPrince853):
         """At a state with ``modes`` (default the current ones): the accelerations, the
         multipliers, the contacts' forces (contact axes, (m, d)), the contacts' accelerations
         (m d) and the Delassus operator ``W`` (m d, m d)."""
-        model, data = self.model, self.data
         modes = self.modes if modes is None else modes
-        laws = tuple(np.array(x) for x in model.law_values(t, data))
+        frames, y, lam, Y, Lam, free, W = self._free_motion(t, q, v)
+        F = self._forces(t, frames.jacobian @ v, free, W, modes)
+        x = F.reshape(-1)
+        return self.model.mass_inv_sqrt @ (y + Y @ x), lam + Lam @ x, F, free + W @ x, W
+
+    def _free_motion(self, t: float, q: np.ndarray, v: np.ndarray) -> tuple:
+        """What :meth:`_solve` needs at a state whatever the modes: the contacts' frames, the
+        solve without contact forces ``(y, lam)`` and its response to unit contact forces
+        ``(Y, Lam)``, the contacts' accelerations without forces ``free`` and the Delassus
+        operator ``W``. Kept for the last state asked: a step's end is asked for by the
+        sticking contacts' check, the accelerations there and the watch on slips alike."""
+        key = (t, q.tobytes(), v.tobytes())
+        kept = getattr(self, "_free_kept", None)
+        if kept is not None and kept[0] == key:
+            return kept[1]
+        model = self.model
+        laws = tuple(np.array(x) for x in model.law_values(t, self.data))
         frames = contact_frames(model, q, self.contacts, self.data)
         G = frames.scaled.T  # M^-1/2 J^T
         y, lam, Y, Lam = self._contact_solve("acceleration", t, q, v, laws, G)
         self.counters.rhs += 1
         self.counters.factorisations += 1
         free = G.T @ y + contact_bias(model, q, v, self.contacts, self.data)
-        F = self._forces(t, frames.jacobian @ v, free, G.T @ Y, modes)
-        x = F.reshape(-1)
-        W = G.T @ Y
-        return model.mass_inv_sqrt @ (y + Y @ x), lam + Lam @ x, F, free + W @ x, W
+        terms = (frames, y, lam, Y, Lam, free, G.T @ Y)
+        self._free_kept = (key, terms)
+        return terms
 
     def _forces(self, t, u, free, W, modes) -> np.ndarray:
         """The closed contacts' forces that keep their accelerations as their modes say."""
@@ -235,6 +250,11 @@ class EventDriven(DormandPrince853):
     def multipliers(self, t, q, v):
         return self._solve(t, q, v)[1]
 
+    def _end_rates(self, t, q, v):
+        # the step's end moves on (onto the contacts, back to an event): :meth:`_refresh`
+        # solves for the accelerations where it stays
+        return self.v_dot, None
+
     def _stages(self, t, h, y0, f0):  # the contacts' forces are not in the compiled kernel
         return self._stages_one_by_one(t, h, y0, f0)
 
@@ -244,6 +264,7 @@ class EventDriven(DormandPrince853):
         t0 = self.t
         self._follow_slips()
         before = self._watch(t0, self.q, self.v, t0)
+        start = self._clearance(t0, self.q, self.v)
         self._stage_error = ""
         try:
             super()._step()
@@ -254,7 +275,8 @@ class EventDriven(DormandPrince853):
                 from None
         self.q, self.v = self._onto_contacts(self.t, self.q, self.v)
         after = self._watch(self.t, self.q, self.v, t0)
-        fired = self._first_root(t0, before, after)
+        near = self._near(self.t - t0, start, self._clearance(self.t, self.q, self.v))
+        fired = self._first_root(t0, before, after, near)
         if not self._sticking(self.t, self.q, self.v):  # a sticking contact slips or leaves
             t_stick = self._bisect(t0)
             if fired is None or t_stick < fired[0]:
@@ -347,14 +369,41 @@ class EventDriven(DormandPrince853):
             return gap / since if since > 0 else normal_speed
         return gap
 
-    def _first_root(self, t0, before, after):
-        """The first event of the step ``(t0, t]``: ``(t, (contact, column))`` or None."""
-        interpolant = self.dense_output() if self._dense_step is not None else None
-        if interpolant is None:
+    def _clearance(self, t, q, v) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Each contact's gap, normal speed and normal acceleration (magnitudes) at a state
+        (the accelerations infinite where the modes' forces have no solution there)."""
+        d = self.model.dimension
+        frames = self._free_motion(t, q, v)[0]
+        try:
+            accelerations = np.abs(self._solve(t, q, v)[3][::d])
+        except (HexapodError, np.linalg.LinAlgError):
+            accelerations = np.full(len(self.contacts), np.inf)
+        return frames.gaps, np.abs(frames.jacobian[::d] @ v), accelerations
+
+    def _near(self, h, start, end) -> np.ndarray:
+        """Which contacts may touch the ground inside a step ``h`` whose ends are both clear
+        of it: those whose gap at either end is within what their normal speed and twice
+        their normal acceleration (the larger of the ends') cover in the step. The others'
+        gaps are watched at the step's ends alone, without the dense output (four more
+        solves a step): a smooth phase's accelerations change little within a step its
+        error control accepts."""
+        (g0, u0, a0), (g1, u1, a1) = start, end
+        reach = h * np.maximum(u0, u1) + h * h * np.maximum(a0, a1) + self._gap_tol
+        return np.minimum(g0, g1) <= reach
+
+    def _first_root(self, t0, before, after, near):
+        """The first event of the step ``(t0, t]``: ``(t, (contact, column))`` or None.
+        ``near``: the open contacts whose gaps are also watched inside the step."""
+        if self._dense_step is None:
             return None
-        best = None
         m = before.shape[0]
-        watched = [k for k in range(m) if self.modes[k] == "open"]
+        crossed = (before >= 0.0) & (after < 0.0)  # (NaN: not armed)
+        watched = [k for k in range(m) if self.modes[k] == "open" and (near[k]
+                                                                       or crossed[k, 0])]
+        if not watched and not crossed.any():
+            return None
+        interpolant = self.dense_output()
+        best = None
         grid = np.linspace(t0, self.t, GAP_WATCH + 1)
         # the open contacts' gaps inside the step too (a short flight), all of them from one
         # evaluation of the watch at each point
