@@ -204,3 +204,52 @@ def test_a_slipping_contacts_normal_compliance_is_its_schur_complement():
     assert _normal_compliance(np.array([[-0.3]]), 0) == -0.3
     shared = np.ones((4, 4))  # four contacts that carry one load (rank 1)
     assert abs(_normal_compliance(shared, 2)) < 1e-12
+
+
+@pytest.mark.slow
+def test_compiled_its_solves_by_the_lu_walk_as_by_the_qr(tmp_path, monkeypatch):
+    """Compiled, the event-driven scheme's acceleration and impulse solves go by an LU with
+    pivots chosen at the run's start, written out (:meth:`CompiledContactStep.pivoted`),
+    instead of CasADi's sparse QR: the compass gait's step is the same, its strike at the
+    same instant to 1e-12 s and its end state to 1e-9 (measured 5e-15 s, 8e-15 and 1.3e-13:
+    the two factorisations' round-off), and neither kernel is compiled inside the time
+    loop."""
+    from hexapod._support import compiled
+    from hexapod.simulation import loop
+    from hexapod.simulation.contact_kernel import CompiledContactStep
+
+    inside, in_loop = [False], []
+    run, compile_ = loop._run, compiled._compile
+
+    def watched_run(*args, **kwargs):
+        inside[0] = True
+        try:
+            return run(*args, **kwargs)
+        finally:
+            inside[0] = False
+
+    def watched_compile(function, *args):
+        in_loop.extend([function.name()] if inside[0] else [])
+        return compile_(function, *args)
+
+    monkeypatch.setattr(loop, "_run", watched_run)
+    monkeypatch.setattr(compiled, "_compile", watched_compile)
+    model = hexapod.assemble(hexapod.load_scene(SCENES / "compass-gait.toml"))
+    chosen, runs = [], {}
+    pivoted = CompiledContactStep.pivoted
+    for solve in ("lu", "qr"):
+        monkeypatch.setattr(CompiledContactStep, "pivoted", lambda self, *a, s=solve: (
+            chosen.append(pivoted(self, *a)) or chosen[-1]) if s == "lu" else self)
+        with hexapod.executing(compiled=True, cache=str(tmp_path)):
+            runs[solve] = hexapod.simulate(model, 0.8, method="event-driven", rtol=1e-10,
+                                           atol=1e-12)
+    assert [(k.level, k.lu is not None) for k in chosen] == [("acceleration", True),
+                                                             ("impulse", True)]
+    # (the base step's check of a rejected step, W W^T, is compiled at its first use)
+    assert [name for name in in_loop if name != "row_gram"] == []
+    lu, qr = runs["lu"], runs["qr"]
+    assert lu.success and qr.success, (lu.message, qr.message)
+    assert [(e.kind, e.contact) for e in lu.events] == [(e.kind, e.contact) for e in qr.events]
+    assert max(abs(a.t - b.t) for a, b in zip(lu.events, qr.events, strict=True)) <= 1e-12
+    assert np.abs(lu.q[-1] - qr.q[-1]).max() <= 1e-9
+    assert np.abs(lu.v[-1] - qr.v[-1]).max() <= 1e-9

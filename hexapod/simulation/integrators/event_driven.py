@@ -94,7 +94,7 @@ class EventDriven(DormandPrince853):
 
     def _start(self) -> None:
         model = self.model
-        self._kernels: dict = {}  # (level, columns) -> CompiledContactStep
+        self._kernels: dict = {}  # level -> CompiledContactStep (every contact's columns)
         self.contacts = ground_contacts(model)
         self.contact_names = tuple(c.name for c in self.contacts)
         m, d = len(self.contacts), model.dimension
@@ -106,6 +106,10 @@ class EventDriven(DormandPrince853):
         self._just = np.zeros(m, bool)  # left the ground or began to slip at the step's start
         self._lifted = np.zeros(m, bool)  # let go by its force, its gap not yet past the tolerance
         self._gap_tol = GAP_TOLERANCE * model.characteristic_length
+        # both kernels made (compiled) before the time loop, whose CPU they would count
+        laws = model.law_values(self.t, self.data)
+        for level, arrays in (("acceleration", 3), ("impulse", 2)):
+            self._kernels[level] = self._kernel(level, self.q, self.v, laws[:arrays])
         frames = contact_frames(model, self.q, self.contacts, self.data)
         touching = np.flatnonzero((frames.gaps <= self._gap_tol)
                                   & armed(frames, self.contacts))
@@ -595,22 +599,27 @@ class EventDriven(DormandPrince853):
         model = self.model
         laws = model.law_values(t, self.data)[:2]
         frames = contact_frames(model, q, self.contacts, self.data)
-        G = frames.scaled[rows].T
-        y, _, Y, _ = self._contact_solve("impulse", t, q, v, laws, G)
+        # every contact's columns, of which the rows': one kernel serves every set of rows
+        y, _, Y, _ = self._contact_solve("impulse", t, q, v, laws, frames.scaled.T)
         self.counters.factorisations += 1
-        return frames, G, y, Y
+        return frames, frames.scaled[rows].T, y, Y[:, rows]
 
     def _contact_solve(self, level: str, t, q, v, laws, G) -> tuple:
         """The engine's solve with the contacts' columns ``G`` at ``level``
         (:class:`~hexapod.simulation.contact_kernel.CompiledContactStep`: ``acceleration`` or
-        ``impulse``), its kernel kept per level and number of columns, its rows decided again
-        at ``(t, q)`` when they no longer serve."""
-        key = (level, G.shape[1])
-        kernel = self._kernels.get(key) or CompiledContactStep.started(self.model, self.data,
-                                                                       G.shape[1], level)
-        self._kernels[key], solution = contact_solution(
+        ``impulse``; ``G`` every contact's columns), its kernel kept per level, its rows
+        decided again at ``(t, q)`` when they no longer serve."""
+        kernel = self._kernels.get(level) or self._kernel(level, q, v, laws)
+        self._kernels[level], solution = contact_solution(
             kernel, lambda: self._rank_split(q, t), q, v, laws, G)
         return solution
+
+    def _kernel(self, level: str, q, v, laws) -> CompiledContactStep:
+        """The ``level``'s kernel for every contact's columns, of the rows decided at the
+        start, made now (compiled: by an LU whose pivots follow the tree, where it applies)."""
+        columns = len(self.contacts) * self.model.dimension
+        return CompiledContactStep.started(self.model, self.data, columns, level).pivoted(
+            q, v, laws).made()
 
     def _onto_contacts(self, t, q, v) -> tuple[np.ndarray, np.ndarray]:
         """The closed contacts' gaps, normal velocities and (sticking) tangential velocities
