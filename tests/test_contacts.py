@@ -354,17 +354,11 @@ def test_a_contact_closing_unforeseen_has_the_step_solved_again_with_all(monkeyp
         assert other.counters.rhs == usual.counters.rhs + more
 
 
-def test_compiled_the_step_solves_by_its_lu_and_walks_as_by_the_qr(tmp_path, monkeypatch):
-    """Compiled, Moreau-Jean's step solves its saddle-point system by an LU with pivots
-    chosen at the run's start, written out (:meth:`CompiledContactStep.pivoted`), instead of
-    CasADi's sparse QR: the compass gait walks the same to round-off (4e-15 measured; the
-    compiled and interpreted runs differ by 5e-10, their projections' Newton steps not being
-    the same), events and forces too. Nothing is compiled inside the time loop (its CPU counts
-    the compiler's: the retraction, compiled at its first use there, made a walking robot's
-    stride 2.5 times as costly)."""
+def compiled_in_the_loop(monkeypatch) -> list:
+    """The names of the Functions compiled inside a run's time loop from now on (a list that
+    fills as runs go): what the loop's CPU would count."""
     from hexapod._support import compiled
     from hexapod.simulation import loop
-    from hexapod.simulation.contact_kernel import CompiledContactStep
 
     inside, in_loop = [False], []
     run, compile_ = loop._run, compiled._compile
@@ -382,14 +376,37 @@ def test_compiled_the_step_solves_by_its_lu_and_walks_as_by_the_qr(tmp_path, mon
 
     monkeypatch.setattr(loop, "_run", watched_run)
     monkeypatch.setattr(compiled, "_compile", watched_compile)
-    scene = hexapod.load_scene(SCENES / "compass-gait.toml")
+    return in_loop
+
+
+def by_lu_and_by_qr(monkeypatch, cache, run) -> tuple[list, dict]:
+    """``run()`` compiled twice (``cache`` the compiled code's folder), the contact kernels'
+    LU written out allowed (``"lu"``) and refused (``"qr"``: CasADi's sparse QR): the kernels
+    the first run pivoted, and both results."""
+    from hexapod.simulation.contact_kernel import CompiledContactStep
+
     chosen, runs = [], {}
     pivoted = CompiledContactStep.pivoted
     for solve in ("lu", "qr"):
         monkeypatch.setattr(CompiledContactStep, "pivoted", lambda self, *a, s=solve: (
             chosen.append(pivoted(self, *a)) or chosen[-1]) if s == "lu" else self)
-        with hexapod.executing(compiled=True, cache=str(tmp_path)):
-            runs[solve] = hexapod.simulate(hexapod.assemble(scene), 0.76, step=2e-3)
+        with hexapod.executing(compiled=True, cache=str(cache)):
+            runs[solve] = run()
+    return chosen, runs
+
+
+def test_compiled_the_step_solves_by_its_lu_and_walks_as_by_the_qr(tmp_path, monkeypatch):
+    """Compiled, Moreau-Jean's step solves its saddle-point system by an LU with pivots
+    chosen at the run's start, written out (:meth:`CompiledContactStep.pivoted`), instead of
+    CasADi's sparse QR: the compass gait walks the same to round-off (4e-15 measured; the
+    compiled and interpreted runs differ by 5e-10, their projections' Newton steps not being
+    the same), events and forces too. Nothing is compiled inside the time loop (its CPU counts
+    the compiler's: the retraction, compiled at its first use there, made a walking robot's
+    stride 2.5 times as costly)."""
+    in_loop = compiled_in_the_loop(monkeypatch)
+    scene = hexapod.load_scene(SCENES / "compass-gait.toml")
+    chosen, runs = by_lu_and_by_qr(monkeypatch, tmp_path, lambda: hexapod.simulate(
+        hexapod.assemble(scene), 0.76, step=2e-3))
     assert [k.lu is not None for k in chosen] == [True]
     assert in_loop == []
     lu, qr = runs["lu"], runs["qr"]

@@ -10,7 +10,16 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_contacts import DOWN, GAMMA, SCENES, G, block, planar_incline
+from test_contacts import (
+    DOWN,
+    GAMMA,
+    SCENES,
+    G,
+    block,
+    by_lu_and_by_qr,
+    compiled_in_the_loop,
+    planar_incline,
+)
 
 import hexapod
 from hexapod.scene import GroundContact, Particle, PlanarBody
@@ -214,35 +223,10 @@ def test_compiled_its_solves_by_the_lu_walk_as_by_the_qr(tmp_path, monkeypatch):
     same instant to 1e-12 s and its end state to 1e-9 (measured 5e-15 s, 8e-15 and 1.3e-13:
     the two factorisations' round-off), and neither kernel is compiled inside the time
     loop."""
-    from hexapod._support import compiled
-    from hexapod.simulation import loop
-    from hexapod.simulation.contact_kernel import CompiledContactStep
-
-    inside, in_loop = [False], []
-    run, compile_ = loop._run, compiled._compile
-
-    def watched_run(*args, **kwargs):
-        inside[0] = True
-        try:
-            return run(*args, **kwargs)
-        finally:
-            inside[0] = False
-
-    def watched_compile(function, *args):
-        in_loop.extend([function.name()] if inside[0] else [])
-        return compile_(function, *args)
-
-    monkeypatch.setattr(loop, "_run", watched_run)
-    monkeypatch.setattr(compiled, "_compile", watched_compile)
+    in_loop = compiled_in_the_loop(monkeypatch)
     model = hexapod.assemble(hexapod.load_scene(SCENES / "compass-gait.toml"))
-    chosen, runs = [], {}
-    pivoted = CompiledContactStep.pivoted
-    for solve in ("lu", "qr"):
-        monkeypatch.setattr(CompiledContactStep, "pivoted", lambda self, *a, s=solve: (
-            chosen.append(pivoted(self, *a)) or chosen[-1]) if s == "lu" else self)
-        with hexapod.executing(compiled=True, cache=str(tmp_path)):
-            runs[solve] = hexapod.simulate(model, 0.8, method="event-driven", rtol=1e-10,
-                                           atol=1e-12)
+    chosen, runs = by_lu_and_by_qr(monkeypatch, tmp_path, lambda: hexapod.simulate(
+        model, 0.8, method="event-driven", rtol=1e-10, atol=1e-12))
     assert [(k.level, k.lu is not None) for k in chosen] == [("acceleration", True),
                                                              ("impulse", True)]
     # (the base step's check of a rejected step, W W^T, is compiled at its first use)
