@@ -3,26 +3,26 @@
 The tripod gait of the free-trunk hexapod (``legs.robot.hexapod_scene(gait, trunk="free")``,
 stride 0.5 s): inverse dynamics at samples chosen until each joint's effort spline is within
 ``--tol`` of its largest (``legs.replay.adaptive_inverse``); the robot on real ground
-(``legs.replay.grounded_scene``): each joint driven by a controller (target the driver's law,
-feedforward the inverse efforts, gains ``--kp`` and ``--kd``), each foot a unilateral contact
-with the ground (Coulomb friction ``--mu``, plastic impacts) instead of its scheduled rows;
-simulated by Moreau-Jean time-stepping at ``--step`` (or ``--method event-driven`` at
-``--rtol``) over ``--strides`` strides (the efforts of one stride repeat). Printed: each
-foot's touch-downs and lift-offs against its schedule (the table for one stride; over more,
-the largest lateness of each: ``legs.replay.schedule_lateness``, a foot's first landing and
-last leaving around each scheduled one), the impacts with their impulses, the grazes (a foot
-that touches and leaves at the same instant, with no time on the ground; the touch-downs'
-lateness is given with them and without them), the slips, the largest joint tracking error
-(the engine's ``err:`` columns, checked against an independent measure of the joint
-angles), the trunk's position against the prescribed one at the end, the CPU time per
-simulated second (of the time loop; the whole run's beside it), the largest difference of the
-feet's normal forces from the inverse dynamics' inside the stances, and the feet that slip
-inside a stance beside those the inverse dynamics marks ``slip`` at ``--mu`` (its friction
-demand ``|F_t| / F_n`` above it). With ``--figures DIR``, the simulated gait against the
-scheduled one (``gait.png``), the ground forces (``contacts.png``) and the tracking errors
-(``tracking.png``) are written there; nothing else is written. With ``--actuators TABLE``
-each controller is limited by its joint's motor (its torque-speed line), as a robot with
-those motors would be.
+(``legs.replay.grounded_scene``): each joint driven by a controller (target the driver's
+law, feedforward the inverse efforts, gains ``--kp`` and ``--kd``), each foot a unilateral
+contact with the ground (Coulomb friction ``--mu``, plastic impacts) instead of its
+scheduled rows; simulated by Moreau-Jean time-stepping at ``--step`` (or ``--method
+event-driven`` at ``--rtol``) over ``--strides`` strides (the efforts of one stride repeat).
+Printed: each foot's touch-downs and lift-offs against its schedule (the table for one
+stride; over more, the largest lateness of each: ``legs.replay.schedule_lateness``, a foot's
+first landing and last leaving around each scheduled one), the impacts with their impulses,
+the grazes (a foot that touches and leaves at the same instant, with no time on the ground;
+the touch-downs' lateness is given with them and without them), the slips, the largest joint
+tracking error (the engine's ``err:`` columns, checked against an independent measure of the
+joint angles; over several strides, per stride too), the trunk's position against the
+prescribed one at the end, the CPU time per simulated second (of the time loop; the whole
+run's beside it), the largest difference of the feet's normal forces from the inverse
+dynamics' inside the stances, and the feet that slip inside a stance beside those the
+inverse dynamics marks ``slip`` at ``--mu`` (its friction demand ``|F_t| / F_n`` above it).
+With ``--figures DIR``, the simulated gait against the scheduled one (``gait.png``), the
+ground forces (``contacts.png``) and the tracking errors (``tracking.png``) are written
+there; nothing else is written. With ``--actuators TABLE`` each controller is limited by its
+joint's motor (its torque-speed line), as a robot with those motors would be.
 
     python3 scripts/studies/walking_on_ground.py [--gait tripod] [--kp 200] [--kd 2]
         [--bandwidth HZ] [--mu 0.8] [--method moreau-jean] [--step 1e-3] [--rtol 1e-6]
@@ -217,6 +217,11 @@ def main() -> None:
     engine = float(np.abs(result.tracking).max())
     print(f"largest joint tracking error {error[k, j]:.3g} rad ({joints[j]} at "
           f"{result.t[k]:.3f} s); the engine's err: columns say {engine:.3g} rad")
+    if args.strides > 1:  # whether the errors settle or grow from stride to stride
+        stride = np.minimum((result.t // period).astype(int), args.strides - 1)
+        print("largest joint tracking error per stride (rad): " + ", ".join(
+            f"{error[stride == n].max():.2g}" for n in range(args.strides)
+            if (stride == n).any()))
     if args.figures is not None:
         write_figures(args.figures, model, result, float(result.t[-1]))
     trunk = [b.name for b in grounded.bodies].index("trunk")
