@@ -176,28 +176,30 @@ def test_the_schedule_is_met_by_first_landings_and_last_leavings_and_grazes_are_
     assert schedule_lateness(model, event_times(events), 0.5)["lift-off"] == np.inf
 
 
-@pytest.mark.slow  # a stride event-driven: some 70 s of CPU
+@pytest.mark.slow  # a stride event-driven: some 50 s of CPU
 def test_event_driven_the_robot_lands_on_the_schedule():
-    """The tripod stride on real ground by the event-driven scheme (gains by the rule at 100
-    Hz, the feedforward fitted to 3e-8; ``scripts/studies/walking_on_ground.py --method
-    event-driven``): every foot lands within 0.3 ms of the schedule (measured 0.11) and leaves
-    within 0.5 ms (0.23); the touches before landing, with no time on the ground, come within
-    1 ms (0.75) with impulses under 1e-8 N s (3.7e-9 at most over ten strides); the stance
-    feet's normal forces within 0.1 N of the inverse dynamics' (0.062) away from their ends."""
+    """The tripod stride on real ground by the event-driven scheme (gains by the rule at 150
+    Hz, the feedforward fitted to 1e-8; ``scripts/studies/walking_on_ground.py --method
+    event-driven``): every foot touches the ground within 1 ms of the schedule, the touches
+    with no time on the ground before some landings included (measured 0.41 ms over ten
+    strides), lands within 0.5 ms and leaves within 0.5 ms (0.30 over ten); the touches'
+    impulses are under 1e-9 N s (8.3e-11 at most over ten strides: the feet arrive at zero
+    speed); the stance feet's normal forces within 0.1 N of the inverse dynamics' (0.0385)
+    away from their ends."""
     from legs.efforts import adaptive_inverse
     from legs.replay import event_times, grazes, schedule_lateness
 
     scene = hexapod_scene(gait="tripod", trunk="free", period=0.5)
     driven = hx.assemble(scene)
-    inverse, _ = adaptive_inverse(driven, scene, 0.0, 0.5, tol=3e-8)
-    kp, kd = hx.simulation.critical_gains(driven, inverse.q[0], 100.0)
+    inverse, _ = adaptive_inverse(driven, scene, 0.0, 0.5, tol=1e-8)
+    kp, kd = hx.simulation.critical_gains(driven, inverse.q[0], 150.0)
     model = hx.assemble(grounded_scene(scene, inverse, kp=kp, kd=kd, mu=0.8, periodic=True))
     run = hx.simulate(model, 0.5, method="event-driven", rtol=1e-6)
     assert run.success, run.message
     landed = schedule_lateness(driven, event_times(run.events, with_grazes=False), 0.5)
-    assert landed["touch-down"] < 3e-4 and landed["lift-off"] < 5e-4
+    assert landed["touch-down"] < 5e-4 and landed["lift-off"] < 5e-4
     assert schedule_lateness(driven, event_times(run.events), 0.5)["touch-down"] < 1e-3
-    assert all(np.linalg.norm(p) < 1e-8 for *_, p in grazes(run.events))
+    assert all(np.linalg.norm(p) < 1e-9 for *_, p in grazes(run.events))
     names = [c.name for c in driven.contacts]
     order = [run.contact_names.index(n) for n in names]
     for c, contact in enumerate(driven.contacts):
