@@ -23,9 +23,9 @@ cone margin ``mu F_N - |F_T|``, a slipping one's slip speed along its direction 
 start. A function that falls below zero in a step has a root located on the step's dense
 output by Illinois' method (to round-off in time); a gap is also watched inside the step
 (a ball's bounce may be shorter than the step) when the contact's normal speed and
-acceleration could take it to the ground within the step. A function zero at the step's start (a
-contact that has just left, or begun to slip) is divided by the time since, so that its
-root there is not found again. A contact whose force let it go (a lift-off, not a rebound)
+acceleration could take it to the ground within the step. A function zero at the step's
+start (a contact that has just left, or begun to slip) is divided by the time since, so that
+its root there is not found again. A contact whose force let it go (a lift-off, not a rebound)
 leaves at zero speed, often tangent to the ground to high order (a walking foot's path: its
 height grows as the fifth power of the time since), so that its gap stays within round-off
 of zero for a while: until the gap has passed the gap tolerance, it touches down again only
@@ -95,6 +95,7 @@ class EventDriven(DormandPrince853):
     def _start(self) -> None:
         model = self.model
         self._kernels: dict = {}  # level -> CompiledContactStep (every contact's columns)
+        self._free_kept: tuple | None = None  # (state, terms) of _free_motion's last state
         self.contacts = ground_contacts(model)
         self.contact_names = tuple(c.name for c in self.contacts)
         m, d = len(self.contacts), model.dimension
@@ -155,9 +156,8 @@ class EventDriven(DormandPrince853):
         operator ``W``. Kept for the last state asked: a step's end is asked for by the
         sticking contacts' check, the accelerations there and the watch on slips alike."""
         key = (t, q.tobytes(), v.tobytes())
-        kept = getattr(self, "_free_kept", None)
-        if kept is not None and kept[0] == key:
-            return kept[1]
+        if self._free_kept is not None and self._free_kept[0] == key:
+            return self._free_kept[1]
         model = self.model
         laws = tuple(np.array(x) for x in model.law_values(t, self.data))
         frames = contact_frames(model, q, self.contacts, self.data)
