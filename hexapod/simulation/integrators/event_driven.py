@@ -96,6 +96,7 @@ class EventDriven(DormandPrince853):
         model = self.model
         self._kernels: dict = {}  # level -> CompiledContactStep (every contact's columns)
         self._free_kept: tuple | None = None  # (state, terms) of _free_motion's last state
+        self._here: tuple = ()  # the current state's clearance (_refresh)
         self.contacts = ground_contacts(model)
         self.contact_names = tuple(c.name for c in self.contacts)
         m, d = len(self.contacts), model.dimension
@@ -271,7 +272,7 @@ class EventDriven(DormandPrince853):
         t0 = self.t
         self._follow_slips()
         before = self._watch(t0, self.q, self.v, t0)
-        start = self._clearance(t0, self.q, self.v)
+        start = self._here  # the state the last refresh left
         self._stage_error = ""
         try:
             super()._step()
@@ -331,12 +332,14 @@ class EventDriven(DormandPrince853):
         return b
 
     def _refresh(self) -> None:
-        """The accelerations, multipliers and contact forces of the current state."""
-        self.v_dot, lam, F = self._solve(self.t, self.q, self.v)[:3]
+        """The accelerations, multipliers and contact forces of the current state, and its
+        contacts' clearance (:meth:`_clearance`), where the next step starts."""
+        self.v_dot, lam, F, accelerations = self._solve(self.t, self.q, self.v)[:4]
         self.lam = lam
         axes = contact_frames(self.model, self.q, self.contacts, self.data).axes
         self.contact_forces = np.einsum("mij,mi->mj", axes, F)
         self.contact_states = tuple(self.modes)
+        self._here = self._clearance(self.t, self.q, self.v, accelerations)
 
     def _watch(self, t, q, v, t0) -> np.ndarray:
         """The event functions (m, 2) at a state of the step from ``t0`` (see the module's
@@ -376,16 +379,18 @@ class EventDriven(DormandPrince853):
             return gap / since if since > 0 else normal_speed
         return gap
 
-    def _clearance(self, t, q, v) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def _clearance(self, t, q, v, accelerations=None) -> tuple:
         """Each contact's gap, normal speed and normal acceleration (magnitudes) at a state
-        (the accelerations infinite where the modes' forces have no solution there)."""
+        (``accelerations``: the contacts', when solved already; infinite where the modes'
+        forces have no solution there)."""
         d = self.model.dimension
         frames = self._free_motion(t, q, v)[0]
-        try:
-            accelerations = np.abs(self._solve(t, q, v)[3][::d])
-        except (HexapodError, np.linalg.LinAlgError):
-            accelerations = np.full(len(self.contacts), np.inf)
-        return frames.gaps, np.abs(frames.jacobian[::d] @ v), accelerations
+        if accelerations is None:
+            try:
+                accelerations = self._solve(t, q, v)[3]
+            except (HexapodError, np.linalg.LinAlgError):
+                accelerations = np.full(len(self.contacts) * d, np.inf)
+        return frames.gaps, np.abs(frames.jacobian[::d] @ v), np.abs(accelerations[::d])
 
     def _near(self, h, start, end) -> np.ndarray:
         """Which contacts may touch the ground inside a step ``h`` whose ends are both clear
@@ -610,11 +615,10 @@ class EventDriven(DormandPrince853):
     def _contact_solve(self, level: str, t, q, v, laws, G) -> tuple:
         """The engine's solve with the contacts' columns ``G`` at ``level``
         (:class:`~hexapod.simulation.contact_kernel.CompiledContactStep`: ``acceleration`` or
-        ``impulse``; ``G`` every contact's columns), its kernel kept per level, its rows
-        decided again at ``(t, q)`` when they no longer serve."""
-        kernel = self._kernels.get(level) or self._kernel(level, q, v, laws)
+        ``impulse``; ``G`` every contact's columns), its kernel kept per level (made at the
+        start), its rows decided again at ``(t, q)`` when they no longer serve."""
         self._kernels[level], solution = contact_solution(
-            kernel, lambda: self._rank_split(q, t), q, v, laws, G)
+            self._kernels[level], lambda: self._rank_split(q, t), q, v, laws, G)
         return solution
 
     def _kernel(self, level: str, q, v, laws) -> CompiledContactStep:
