@@ -15,7 +15,7 @@ from robots import builtin_model, walking_robot
 
 import hexapod as hx
 from hexapod._support.compiled import compiler
-from hexapod.algorithms import phase_inverse, phase_plan
+from hexapod.algorithms import phase_inverse, phase_plan, prescribed
 from hexapod.algorithms.inverse import inverse_dynamics
 
 from mechanisms import four_bar
@@ -198,18 +198,52 @@ def test_a_known_motion_whose_first_accelerations_break_the_constraints_is_refus
                                     known=(q, v, pushed))
 
 
-def test_the_expanded_step_gives_the_numbers_of_the_graph_it_expands(monkeypatch):
-    """A plan that has evaluated enough samples runs its step expanded into one SX Function
-    (phase_plan.EXPAND_AFTER): the same operations, so the same numbers, to round-off."""
+def test_samples_evaluated_apart_give_the_numbers_of_the_chain(monkeypatch):
+    """A plan that has evaluated enough samples (phase_plan.EXPAND_AFTER), interpreted, runs
+    its step expanded into one SX Function and evaluates its samples apart, ACROSS at a time
+    by the MX virtual machine: here a chain of every other sample (2 ms apart, within
+    CHAIN_SPACING) starts the others. Each converges to round-off from its own start, so the
+    numbers are the sequential run's to round-off."""
     model, exact = scene_model("hexapod"), saddle("hexapod", *TOUCH_DOWN)
     monkeypatch.setattr(phase_plan, "EXPAND_AFTER", 10**9)
     graph = phase(model, exact.times)
     monkeypatch.setattr(phase_plan, "EXPAND_AFTER", 0)
-    expanded = phase(model, exact.times)
-    assert any(key[2] for plan in _plans(model) for key in plan.__dict__.get("_mapped", {}))
+    apart = phase(model, exact.times)
+    assert any(key[0] == "across" for plan in _plans(model)
+               for key in plan.__dict__.get("_mapped", {}))
+    assert apart["exact_samples"] == graph["exact_samples"]
     for key in ("force", "torque", "q", "v", "v_dot", "ground"):
         scale = max(np.nanmax(np.abs(graph[key])), 1.0)
-        assert np.nanmax(np.abs(expanded[key] - graph[key])) <= 1e-14 * scale, key
+        assert np.nanmax(np.abs(apart[key] - graph[key])) <= 1e-12 * scale, key
+    assert_agree(apart, exact)
+
+
+def test_a_guided_robot_s_samples_evaluated_apart_agree_with_the_saddle_path(monkeypatch):
+    """The guided walking robot by the phase path, its plans evaluating samples apart from
+    the first: its guides' kinematics from a chain every 4 ms (samples 1 ms apart: each
+    at most 2 ms from it), its twin's dynamics each sample alone from the known motion; the
+    same numbers as the saddle path's, across a touch-down."""
+    apart = []
+    evaluate = phase_plan.PhasePlan._apart
+
+    def watched(plan, data, states, mapped, outputs, newton, known):
+        apart.append((plan.motion, known, states.shape[0]))
+        return evaluate(plan, data, states, mapped, outputs, newton, known)
+
+    monkeypatch.setattr(phase_plan.PhasePlan, "_apart", watched)
+    monkeypatch.setattr(phase_plan, "EXPAND_AFTER", 0)
+    monkeypatch.setattr(prescribed, "PHASE_FROM_SAMPLES", 0)  # the guides' too
+    times = np.linspace(0.19, 0.21, 21)
+    model = builtin_model("hexapod")
+    result = inverse_dynamics(model, times, method="phase")
+    apart = list(apart)  # the saddle path's guides' kinematics are the phase path's too
+    exact = inverse_dynamics(model, times, method="saddle")
+    fields = {key: getattr(result, key) for key in QUANTITIES}
+    fields.update(ground=result.ground_force, max_violation=result.max_violation)
+    assert_agree(fields, exact)
+    assert {(motion, known) for motion, known, _ in apart} == {(True, False), (False, True)}
+    assert sum(n for motion, _, n in apart if not motion) == times.size  # the twin: all
+    assert sum(n for motion, _, n in apart if motion) > 0  # on the guides' own grid
 
 
 def _plans(model) -> list:

@@ -7,7 +7,8 @@ Function per sample,
     step(x, h, w, wd, wdd, feet, mask) -> (x, lam, wrench, frames, checks),  x = [q; v; v_dot]
 
 evaluated over the samples of a phase with ``mapaccum`` (each sample starts from the one
-before; in blocks, :func:`blocks`). One sample:
+before; in blocks, :func:`blocks`), or, interpreted past :data:`EXPAND_AFTER` samples, over
+samples apart (:meth:`PhasePlan.evaluate`). One sample:
 
 1. positions: ``q_p = q (+) (h v + h^2/2 v_dot)`` predicted from the sample before (or known:
    a guided model's, an input ``known``), then a few Newton steps (:data:`NEWTON_STEPS`) on
@@ -44,6 +45,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
+from hexapod._support.across_samples import across_samples
 from hexapod._support.fastcall import InPlaceFunction
 from hexapod.algorithms.static_lu import StaticLU
 from hexapod.algorithms.step import sparse_dm
@@ -57,12 +59,23 @@ from hexapod.model.model import Data
 #: 1 ms), the next ones from the first sample that did not on (samples a hundredth of a second
 #: apart; each step contracts the error by a factor of about 100 there).
 NEWTON_STEPS = (2, 3, 6)
-#: Samples after which a plan evaluates its step expanded into one SX Function (when it is not
-#: compiled): one loop of CasADi's virtual machine instead of an MX graph calling some thirty
-#: Functions, a sixth less time a sample (the walking robot: 1.57 against 1.90 ms) and the
-#: same numbers. The expansion costs about what 500 samples gain, so a plan expands once the
-#: samples it has evaluated and those it is asked for reach this.
+#: Samples after which a plan, when it is not compiled, evaluates its step expanded into one
+#: SX Function (one loop of CasADi's virtual machine instead of an MX graph calling some
+#: thirty Functions) and its samples apart, :data:`ACROSS` at a time, by the MX virtual
+#: machine (:mod:`hexapod._support.across_samples`): the walking robot's samples cost some
+#: 230 us instead of 850. Expanding and writing the step over samples cost some 0.3 to 0.6 s
+#: a plan, what 500 to 1,000 samples gain, so a plan does it once the samples it has evaluated
+#: and those it is asked for reach this.
 EXPAND_AFTER = 1_000
+#: Samples evaluated together once a plan evaluates samples apart (see
+#: :meth:`PhasePlan.evaluate`): the width of one row of the MX virtual machine's work
+#: (:mod:`hexapod._support.across_samples`); wider rows leave the processor's caches.
+ACROSS = 32
+#: The most time between two samples of the chain that starts the others when samples are
+#: evaluated apart (s): the walking robot's positions converge to round-off from 4 ms in the
+#: next count of Newton steps (3: a scaled residual of 2e-14), and from 2 ms, half of it, in
+#: the first (2: 3e-14).
+CHAIN_SPACING = 4e-3
 #: The most samples one evaluation takes (see :func:`blocks`): the MX graph of the step mapped
 #: over a block holds one call per sample, so that a block of 64 costs what one of 500 does a
 #: sample to evaluate, and an eighth to build.
@@ -264,6 +277,16 @@ class PhasePlan:
             cache[key] = self.step(newton, expanded, known).mapaccum("phase_steps", n)
         return kept(data, ("phase-buffer", id(self), *key), lambda: InPlaceFunction(cache[key]))
 
+    def _across(self, data: Data, newton: int, known: bool):
+        """The expanded step over :data:`ACROSS` independent samples (each from its own
+        state; :func:`~hexapod._support.across_samples.across_samples`), built once per plan,
+        and its buffer, made once per workspace ``data``."""
+        cache = self.__dict__.setdefault("_mapped", {})
+        key = ("across", newton, known)
+        if key not in cache:
+            cache[key] = across_samples(self.step(newton, True, known), ACROSS)
+        return kept(data, ("phase-buffer", id(self), *key), lambda: InPlaceFunction(cache[key]))
+
     def evaluate(self, data: Data, x0, h, w, wd, wdd, feet, mask, newton: int = NEWTON_STEPS[0],
                  state_known=None):
         """The samples of one run: ``x0`` the state ``[q; v; v_dot]`` of the sample before,
@@ -274,8 +297,15 @@ class PhasePlan:
         samples first: states (N, n_q + 2 n_v), multipliers (N, n_c), wrenches (N, J, 6) in
         the joint frames, the joint frames' rotations (N, J, 9, column-major) and the checks
         (N, 6), NaN from the block of samples where the evaluation fails on; a motion plan's
-        multipliers, wrenches and rotations are empty (N, 0, ...). The samples go in blocks
-        (:func:`blocks`)."""
+        multipliers, wrenches and rotations are empty (N, 0, ...).
+
+        Compiled, or for a plan's first :data:`EXPAND_AFTER` samples, each sample starts from
+        the one before, in blocks (:func:`blocks`). Past that, interpreted, the samples are
+        evaluated :data:`ACROSS` at a time (:meth:`_across`): from known positions each sample
+        alone; else a chain of every few samples (:func:`chain_samples`, with the next count
+        of Newton steps) starts the others, each from the nearest sample of the chain, at
+        most half the chain's spacing away. Every sample is checked as before; a sample that
+        fails is redone by the caller, with those after it."""
         model, n = self.model, h.size
         done = self.__dict__.get("_evaluated", 0)
         self._evaluated = done + n
@@ -290,8 +320,46 @@ class PhasePlan:
         J, n_c = (0, 0) if self.motion else (len(model.joints), model.n_c)
         outputs = [np.empty((n, model.n_q + 2 * model.n_v)), np.empty((n, n_c)),
                    np.empty((n, J, 6)), np.empty((n, J, 9)), np.empty((n, len(CHECKS)))]
-        x, start = np.ascontiguousarray(x0, dtype=float), 0
-        for size in blocks(n):
+        x0 = np.ascontiguousarray(x0, dtype=float)
+        if not expanded:
+            self._chain(data, x0, mapped, outputs, newton, False, known)
+            return outputs
+        if known:  # every sample from its own known positions
+            self._apart(data, np.broadcast_to(x0, (n, x0.size)), mapped, outputs, newton,
+                        known)
+            return outputs
+        chain = chain_samples(h)
+        if chain.size == n:
+            self._chain(data, x0, mapped, outputs, newton, True, known)
+            return outputs
+        # the chain, each from the one before over its spacing ...
+        times = np.cumsum(h)
+        on = [mapped[0][chain].copy()]
+        on[0][:, 0] = np.diff(times[chain], prepend=0.0)
+        on += [y[chain] for y in mapped[1:]]
+        results = [np.empty((chain.size, *y.shape[1:])) for y in outputs]
+        self._chain(data, x0, on, results, NEWTON_STEPS[min(
+            NEWTON_STEPS.index(newton) + 1, len(NEWTON_STEPS) - 1)], True, known)
+        for y, r in zip(outputs, results, strict=True):
+            y[chain] = r
+        # ... then the others, each from the nearest of the chain
+        rest = np.setdiff1d(np.arange(n), chain)
+        m = int(chain[1]) if chain.size > 1 else n
+        nearest = chain[np.minimum((rest + m // 2) // m, chain.size - 1)]
+        off = [np.ascontiguousarray((times[rest] - times[nearest])[:, None])]
+        off += [y[rest] for y in mapped[1:]]
+        found = [np.empty((rest.size, *y.shape[1:])) for y in outputs]
+        self._apart(data, outputs[0][nearest], off, found, newton, known)
+        for y, r in zip(outputs, found, strict=True):
+            y[rest] = r
+        return outputs
+
+    def _chain(self, data: Data, x0, mapped, outputs, newton: int, expanded: bool,
+               known: bool) -> None:
+        """The samples of ``mapped`` each from the one before (the first from ``x0``), in
+        blocks, into ``outputs``; NaN from a block that fails on."""
+        x, start = x0, 0
+        for size in blocks(mapped[0].shape[0]):
             span = slice(start, start + size)
             written = [outputs[0][span], outputs[4][span]] if self.motion else [
                 y[span] for y in outputs]
@@ -303,12 +371,36 @@ class PhasePlan:
                     y[start:] = np.nan
                 break
             x, start = outputs[0][start + size - 1], start + size
-        return outputs
+
+    def _apart(self, data: Data, states, mapped, outputs, newton: int, known: bool) -> None:
+        """The samples of ``mapped``, sample ``i`` from ``states[i]`` (each alone),
+        :data:`ACROSS` at a time, into ``outputs`` (the last group filled up with copies of
+        its last sample)."""
+        n, evaluate = states.shape[0], self._across(data, newton, known)
+        group = [states, *mapped]
+        written = [0, 4] if self.motion else range(len(outputs))
+        for start in range(0, n, ACROSS):
+            take = np.minimum(np.arange(start, start + ACROSS), n - 1)
+            results = [np.empty((ACROSS, *outputs[i].shape[1:])) for i in written]
+            evaluate([np.ascontiguousarray(y[take]) for y in group], results)
+            count = min(ACROSS, n - start)
+            for i, r in zip(written, results, strict=True):
+                outputs[i][start:start + count] = r[:count]
 
     def _policy(self, W, F, Phi, offset, lam0, feet, mask, w):
         """``lam0 + N z`` of least policy objective, ``z`` zero where ``mask`` is."""
         policy = self.terms.policy(self.left_out.size)
         return policy(W, offset, feet, lam0, self.null_space(F, Phi), mask, w)
+
+
+def chain_samples(h: np.ndarray) -> np.ndarray:
+    """The samples of a run (time steps ``h``) that start the others when they are evaluated
+    apart (:meth:`PhasePlan.evaluate`): every ``m``-th from the first, ``m`` the most samples
+    of the run's typical spacing within :data:`CHAIN_SPACING` (all of them where that is
+    one)."""
+    typical = float(np.median(h[1:])) if h.size > 1 else 0.0
+    m = max(1, int(CHAIN_SPACING / typical * (1 + 1e-9))) if typical > 0 else 1
+    return np.arange(0, h.size, m)
 
 
 def blocks(n: int) -> list[int]:
