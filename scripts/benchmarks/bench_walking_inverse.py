@@ -13,6 +13,10 @@ Protocol
   first call of a fresh model on that warm cache (what the next run pays). Per sample: the
   median of ``--repeats`` later calls' ``time.process_time``, after a warm-up call, each on the
   times moved by a picosecond (the gait laws keep their last samples), over the samples.
+  The interpreted path twice: a model's first calls, then the same model once every sample
+  count has run (``settled``: each of its plans has evaluated more than
+  ``hexapod.algorithms.phase_plan.EXPAND_AFTER`` samples, and evaluates its samples apart,
+  32 at a time, by CasADi's MX virtual machine; what a sweep or a long run pays).
 * The gait laws' share: ``law_values(times)`` the same way (moved the other way) of the
   guides' kinematics (``model.guidance.kinematics``: the foot paths, the trunk's motion, the
   gates; the guided joints' own laws would solve that kinematics), which the inverse dynamics
@@ -105,6 +109,17 @@ def hexapod_interpreted(counts: list[int], repeats: int) -> tuple[dict, dict]:
         out["us"][n] = per_sample(lambda t: hx.inverse_dynamics(model, t), times, repeats)
         out["laws_us"][n] = per_sample(gait.law_values, times, repeats, sign=-1.0)
         log(f"  hexapod interpreted, {n} samples: {out['us'][n]:.0f} us a sample")
+    # the same model again: every plan has now evaluated more than EXPAND_AFTER samples and
+    # evaluates them apart (its own samples' share: a phase of a tenth of a stride, at 501
+    # samples a call, reaches it after twenty calls)
+    out["settled_us"] = {}
+    for n in counts:
+        times = np.linspace(0.0, STRIDE, n)
+        hx.inverse_dynamics(model, times)
+        out["settled_us"][n] = per_sample(lambda t: hx.inverse_dynamics(model, t), times,
+                                          repeats)
+        log(f"  hexapod interpreted, settled, {n} samples: {out['settled_us'][n]:.0f} us a "
+            "sample")
     return out, results
 
 
@@ -227,7 +242,10 @@ def rows(figures: dict) -> list[dict]:
     torques = peer.get(variant_name("least-norm", False), {})
     wrenches = peer.get(variant_name("least-norm", True), {})
     for n in figures["samples"]:
-        paths = [("hexapod interpreted", figures["interpreted"]["us"][n], "interpreted"),
+        paths = [("hexapod interpreted, a model's first calls", figures["interpreted"]["us"][n],
+                  "interpreted"),
+                 ("hexapod interpreted, settled (every plan past EXPAND_AFTER samples)",
+                  figures["interpreted"].get("settled_us", {}).get(n), "interpreted"),
                  ("hexapod compiled", figures.get("compiled", {}).get("us", {}).get(n),
                   "compiled"),
                  ("gait laws (the guides' law_values)", figures["interpreted"]["laws_us"][n],
