@@ -302,7 +302,7 @@ class PhasePlan:
         Compiled, or for a plan's first :data:`EXPAND_AFTER` samples, each sample starts from
         the one before, in blocks (:func:`blocks`). Past that, interpreted, the samples are
         evaluated :data:`ACROSS` at a time (:meth:`_across`): from known positions each sample
-        alone; else a chain of every few samples (:func:`chain_samples`, with the next count
+        alone; else a chain of every few samples (:func:`chain_stride`, with the next count
         of Newton steps) starts the others, each from the nearest sample of the chain, at
         most half the chain's spacing away. Every sample is checked as before; a sample that
         fails is redone by the caller, with those after it."""
@@ -328,23 +328,23 @@ class PhasePlan:
             self._apart(data, np.broadcast_to(x0, (n, x0.size)), mapped, outputs, newton,
                         known)
             return outputs
-        chain = chain_samples(h)
-        if chain.size == n:
+        m = chain_stride(h)
+        if m == 1:
             self._chain(data, x0, mapped, outputs, newton, True, known)
             return outputs
+        chain = np.arange(0, n, m)
         # the chain, each from the one before over its spacing ...
         times = np.cumsum(h)
         on = [mapped[0][chain].copy()]
         on[0][:, 0] = np.diff(times[chain], prepend=0.0)
         on += [y[chain] for y in mapped[1:]]
         results = [np.empty((chain.size, *y.shape[1:])) for y in outputs]
-        self._chain(data, x0, on, results, NEWTON_STEPS[min(
-            NEWTON_STEPS.index(newton) + 1, len(NEWTON_STEPS) - 1)], True, known)
+        more = min((steps for steps in NEWTON_STEPS if steps > newton), default=newton)
+        self._chain(data, x0, on, results, more, True, known)
         for y, r in zip(outputs, results, strict=True):
             y[chain] = r
         # ... then the others, each from the nearest of the chain
         rest = np.setdiff1d(np.arange(n), chain)
-        m = int(chain[1]) if chain.size > 1 else n
         nearest = chain[np.minimum((rest + m // 2) // m, chain.size - 1)]
         off = [np.ascontiguousarray((times[rest] - times[nearest])[:, None])]
         off += [y[rest] for y in mapped[1:]]
@@ -393,14 +393,12 @@ class PhasePlan:
         return policy(W, offset, feet, lam0, self.null_space(F, Phi), mask, w)
 
 
-def chain_samples(h: np.ndarray) -> np.ndarray:
-    """The samples of a run (time steps ``h``) that start the others when they are evaluated
-    apart (:meth:`PhasePlan.evaluate`): every ``m``-th from the first, ``m`` the most samples
-    of the run's typical spacing within :data:`CHAIN_SPACING` (all of them where that is
-    one)."""
+def chain_stride(h: np.ndarray) -> int:
+    """Every how many samples of a run (time steps ``h``) the chain takes one, when samples
+    are evaluated apart (:meth:`PhasePlan.evaluate`): the most of the run's typical spacing
+    within :data:`CHAIN_SPACING` (1: the chain is the run)."""
     typical = float(np.median(h[1:])) if h.size > 1 else 0.0
-    m = max(1, int(CHAIN_SPACING / typical * (1 + 1e-9))) if typical > 0 else 1
-    return np.arange(0, h.size, m)
+    return max(1, int(CHAIN_SPACING / typical * (1 + 1e-9))) if typical > 0 else 1
 
 
 def blocks(n: int) -> list[int]:
