@@ -200,14 +200,23 @@ def test_a_known_motion_whose_first_accelerations_break_the_constraints_is_refus
 
 def test_samples_evaluated_apart_give_the_numbers_of_the_chain(monkeypatch):
     """A plan that has evaluated enough samples (phase_plan.EXPAND_AFTER), interpreted, runs
-    its step expanded into one SX Function and evaluates its samples apart, ACROSS at a time
-    by the MX virtual machine: here a chain of every other sample (2 ms apart, within
-    CHAIN_SPACING) starts the others. Each converges to round-off from its own start, so the
-    numbers are the sequential run's to round-off."""
+    its step expanded into one SX Function: along a chain of every sample (no CHAIN_SPACING),
+    the same operations as the graph it expands, so the same numbers to round-off. And it
+    evaluates its samples apart, ACROSS at a time by the MX virtual machine: here a chain of
+    every other sample (2 ms apart, within CHAIN_SPACING) starts the others. Each converges
+    to round-off from its own start, so the numbers are the sequential run's to round-off."""
     model, exact = scene_model("hexapod"), saddle("hexapod", *TOUCH_DOWN)
     monkeypatch.setattr(phase_plan, "EXPAND_AFTER", 10**9)
     graph = phase(model, exact.times)
     monkeypatch.setattr(phase_plan, "EXPAND_AFTER", 0)
+    with monkeypatch.context() as patched:
+        patched.setattr(phase_plan, "CHAIN_SPACING", 0.0)  # the chain is the run
+        expanded = phase(model, exact.times)
+    assert any(key[2] for plan in _plans(model) for key in plan.__dict__.get("_mapped", {})
+               if key[0] != "across")
+    for key in ("force", "torque", "q", "v", "v_dot", "ground"):
+        scale = max(np.nanmax(np.abs(graph[key])), 1.0)
+        assert np.nanmax(np.abs(expanded[key] - graph[key])) <= 1e-14 * scale, key
     apart = phase(model, exact.times)
     assert any(key[0] == "across" for plan in _plans(model)
                for key in plan.__dict__.get("_mapped", {}))
