@@ -158,7 +158,9 @@ class PhasePlan:
             N[self.kept.tolist(), :] = -C
             for i, row in enumerate(self.left_out):
                 N[int(row), i] = 1.0
-            self.null_space = self._sx("phase_null_space", [packed, Phi], [N])
+            # its entries that are zero whatever the state dropped (half of them): the policy
+            # is written for what is left (:meth:`StepTerms.policy`)
+            self.null_space = self._sx("phase_null_space", [packed, Phi], [ca.sparsify(N)])
 
     def _build_checks(self) -> None:
         model = self.model
@@ -389,7 +391,7 @@ class PhasePlan:
 
     def _policy(self, W, F, Phi, offset, lam0, feet, mask, w):
         """``lam0 + N z`` of least policy objective, ``z`` zero where ``mask`` is."""
-        policy = self.terms.policy(self.left_out.size)
+        policy = self.terms.policy(self.null_space.sparsity_out(0))
         return policy(W, offset, feet, lam0, self.null_space(F, Phi), mask, w)
 
 

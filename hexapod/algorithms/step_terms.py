@@ -407,23 +407,27 @@ class StepTerms:
                 A[len(efforts) + 3 * k + i, int(row)] = feet[k] * lever
         return A, ca.SX.zeros(A.shape[0])
 
-    def policy(self, m: int) -> ca.Function:
-        """``(W, offset, feet, lam, N, mask, w) -> lam``: among ``lam + N z`` (``N``, n_c x m,
-        spanning the multipliers that change no constraint force), the one of least
-        objective (``W`` the wrench map of :attr:`wrench_terms`), the entries of ``z`` where
-        ``mask`` is 0 held at zero; by the normal equations, scaled to unit diagonal, and with
-        feet on the ground (whose small weights near touch-down and lift-off make the problem
-        ill-conditioned) refined once (corrected semi-normal equations). Built once per
-        ``m``."""
+    def policy(self, pattern: ca.Sparsity) -> ca.Function:
+        """``(W, offset, feet, lam, N, mask, w) -> lam``: among ``lam + N z`` (``N``, n_c x m
+        of this ``pattern``, spanning the multipliers that change no constraint force), the
+        one of least objective (``W`` the wrench map of :attr:`wrench_terms`), the entries of
+        ``z`` where ``mask`` is 0 held at zero; by the normal equations, scaled to unit
+        diagonal, and with feet on the ground (whose small weights near touch-down and
+        lift-off make the problem ill-conditioned) refined once (corrected semi-normal
+        equations). Built once per pattern: a plan's null space holds about half its entries
+        (a foot's force travels through its own leg, the trunk and the kept feet's legs), and
+        written for a dense one the walking robot's policy took twice the operations (87,641
+        against 45,770 with twelve rows left out)."""
+        key = (pattern.size1(), pattern.size2(), tuple(pattern.colind()),
+               tuple(pattern.row()))
         cache = self.__dict__.setdefault("_policies", {})
-        if m in cache:
-            return cache[m]
-        model = self.model
+        if key in cache:
+            return cache[key]
+        model, m = self.model, pattern.size2()
         W = ca.SX.sym("W", self._wrench_terms.sparsity_out(0))
         offset, feet = ca.SX.sym("offset", 6 * self.owners), ca.SX.sym("feet",
                                                                         len(model.contacts))
-        lam, N, mask = ca.SX.sym("lam", model.n_c), ca.SX.sym("N", model.n_c, m), \
-            ca.SX.sym("mask", m)
+        lam, N, mask = ca.SX.sym("lam", model.n_c), ca.SX.sym("N", pattern), ca.SX.sym("mask", m)
         A, b = self._objective(W, offset, feet)
         G = ca.mtimes(A, N)
         H = ca.SX(m, m)
@@ -435,11 +439,11 @@ class StepTerms:
         z = solve(H, ca.mtimes(G.T, g), mask)
         if model.contacts:  # feet of small weight make G ill-conditioned: refine once
             z = z + solve(H, ca.mtimes(G.T, ca.mtimes(G, z) + g), mask)
-        cache[m] = self._function(f"phase_policy_{m}", [W, offset, feet, lam, N, mask, self.w],
+        cache[key] = self._function(f"phase_policy_{m}", [W, offset, feet, lam, N, mask, self.w],
                                   [lam + ca.mtimes(N, z)],
                                   ["W", "offset", "feet", "lam", "N", "mask", "w"],
                                   ["lam_policy"], cse=False)  # it would save 2 %
-        return cache[m]
+        return cache[key]
 
     @cached_property
     def report(self) -> ca.Function:
