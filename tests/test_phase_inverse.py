@@ -257,6 +257,25 @@ def test_a_guided_robot_s_samples_evaluated_apart_agree_with_its_sequential_run(
     assert sum(n for motion, _, n in apart if motion) > 0  # on the guides' own grid
 
 
+def test_guided_coordinates_evaluated_apart_are_those_of_the_samples_one_by_one(monkeypatch):
+    """Interpreted, past EXPAND_AFTER samples, a guided model's joint coordinates, rates and
+    accelerations come ACROSS samples at a time from the MX virtual machine: the operations
+    of the SX Function, in its order, so the same numbers bit for bit (37 samples: the last
+    group filled up)."""
+    from hexapod.algorithms.guided import guided_coordinates, guides_motion
+
+    model = builtin_model("hexapod")
+    q, v, v_dot = guides_motion(model, np.linspace(0.0, 0.5, 37))
+    monkeypatch.setattr(phase_plan, "EXPAND_AFTER", 10**9)
+    one_by_one = guided_coordinates(model, q, v, v_dot)
+    monkeypatch.setattr(phase_plan, "EXPAND_AFTER", 0)
+    apart = guided_coordinates(model, q, v, v_dot)
+    assert ("guided coordinates across",) in model._built
+    for mine, theirs in zip(apart, one_by_one, strict=True):
+        assert mine.shape == theirs.shape == (len(model.guidance.laws), 37)
+        assert np.array_equal(mine, theirs)
+
+
 def _plans(model) -> list:
     """The phase plans a model has built."""
     return [v for v in model._built.values() if isinstance(v, phase_plan.PhasePlan)]

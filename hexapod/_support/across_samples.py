@@ -20,6 +20,7 @@ walking robot's step of 100,000), once per Function and width.
 from __future__ import annotations
 
 import casadi as ca
+import numpy as np
 
 
 def across_samples(function: ca.Function, n: int) -> ca.Function:
@@ -69,3 +70,19 @@ def _row(y: ca.MX | None, n: int) -> ca.MX:
     if y is None:
         return ca.MX.zeros(1, n)
     return y if y.size2() == n else ca.repmat(y, 1, n)
+
+
+def in_groups(evaluate, inputs: list[np.ndarray], outputs: list[np.ndarray], width: int) -> None:
+    """``evaluate(group_inputs, group_outputs)`` (a Function over ``width`` samples, such as
+    :func:`across_samples` gives, called on arrays with the samples first: an
+    :class:`~hexapod._support.fastcall.InPlaceFunction`) over every sample of ``inputs`` into
+    ``outputs`` (arrays with the samples first), ``width`` samples at a time; the last group
+    filled up with copies of its last sample."""
+    n = inputs[0].shape[0]
+    for start in range(0, n, width):
+        take = np.minimum(np.arange(start, start + width), n - 1)
+        results = [np.empty((width, *y.shape[1:])) for y in outputs]
+        evaluate([np.ascontiguousarray(x[take]) for x in inputs], results)
+        count = min(width, n - start)
+        for y, r in zip(outputs, results, strict=True):
+            y[start:start + count] = r[:count]

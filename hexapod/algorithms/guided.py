@@ -18,9 +18,11 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
+from hexapod._support.across_samples import across_samples, in_groups
 from hexapod._support.compiled import compiled_graph
 from hexapod._support.execution import current
-from hexapod._support.fastcall import FastFunction
+from hexapod._support.fastcall import FastFunction, InPlaceFunction, dense_outputs
+from hexapod.algorithms import phase_plan
 from hexapod.algorithms.phase_plan import blocks
 from hexapod.algorithms.prescribed import prescribed_motion
 from hexapod.errors import AssemblyError, HexapodError
@@ -57,9 +59,25 @@ def guided_coordinates(model: Model, q: np.ndarray, v: np.ndarray, v_dot: np.nda
     mapping the Function over N samples costs its building in proportion to N (0.12 s for
     5,001 samples of the walking robot), over a block once per model; compiled to C when the
     execution setting says so, and called through buffers (CasADi's own call converting the
-    arrays cost ten times the compiled evaluation)."""
+    arrays cost ten times the compiled evaluation). Interpreted, once the model has evaluated
+    :data:`~hexapod.algorithms.phase_plan.EXPAND_AFTER` samples, :data:`~hexapod.algorithms.
+    phase_plan.ACROSS` samples at a time by CasADi's MX virtual machine
+    (:func:`~hexapod._support.across_samples.across_samples`, the same numbers: the walking
+    robot's 8,393 operations a sample cost some 43 us a sample one at a time, 9 us 32 at a
+    time, in a one-off timing at 501 samples)."""
     to_c = current().compiled
     n = q.shape[0]
+    evaluated = model.built_once(("guided coordinates evaluated",), lambda m: _Samples())
+    evaluated.count += n
+    if not to_c and evaluated.count >= phase_plan.EXPAND_AFTER:
+        across = InPlaceFunction(model.built_once(("guided coordinates across",), lambda m: (
+            across_samples(dense_outputs(m.built_once(("guided coordinates",), _coordinates)),
+                           phase_plan.ACROSS))))
+        out = [np.empty((n, len(model.guidance.laws))) for _ in range(3)]
+        in_groups(across, [np.ascontiguousarray(x, dtype=float) for x in (q, v, v_dot)], out,
+                  phase_plan.ACROSS)
+        theta, rate, acceleration = (x.T for x in out)
+        return np.unwrap(theta, axis=1), rate, acceleration
     out = np.empty((3, len(model.guidance.laws), n))
     start, calls = 0, {}  # the blocks' Functions through buffers (this call's: threads)
     for size in blocks(n):
@@ -73,6 +91,12 @@ def guided_coordinates(model: Model, q: np.ndarray, v: np.ndarray, v_dot: np.nda
         start += size
     theta, rate, acceleration = out
     return np.unwrap(theta, axis=1), rate, acceleration
+
+
+class _Samples:
+    """How many samples a model's guided coordinates have been evaluated at (all its runs')."""
+
+    count = 0
 
 
 def _mapped_coordinates(model: Model, to_c: bool, size: int) -> ca.Function:

@@ -45,7 +45,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from hexapod._support.across_samples import across_samples
+from hexapod._support.across_samples import across_samples, in_groups
 from hexapod._support.fastcall import InPlaceFunction
 from hexapod.algorithms.static_lu import StaticLU
 from hexapod.algorithms.step import sparse_dm
@@ -378,16 +378,9 @@ class PhasePlan:
         """The samples of ``mapped``, sample ``i`` from ``states[i]`` (each alone),
         :data:`ACROSS` at a time, into ``outputs`` (the last group filled up with copies of
         its last sample)."""
-        n, evaluate = states.shape[0], self._across(data, newton, known)
-        group = [states, *mapped]
         written = [0, 4] if self.motion else range(len(outputs))
-        for start in range(0, n, ACROSS):
-            take = np.minimum(np.arange(start, start + ACROSS), n - 1)
-            results = [np.empty((ACROSS, *outputs[i].shape[1:])) for i in written]
-            evaluate([np.ascontiguousarray(y[take]) for y in group], results)
-            count = min(ACROSS, n - start)
-            for i, r in zip(written, results, strict=True):
-                outputs[i][start:start + count] = r[:count]
+        in_groups(self._across(data, newton, known), [states, *mapped],
+                  [outputs[i] for i in written], ACROSS)
 
     def _policy(self, W, F, Phi, offset, lam0, feet, mask, w):
         """``lam0 + N z`` of least policy objective, ``z`` zero where ``mask`` is."""
