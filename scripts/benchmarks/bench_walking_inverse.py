@@ -368,9 +368,10 @@ def figure(figures: dict) -> bytes:
         ax.grid(True, axis="x", which="both", linewidth=0.4, alpha=0.6)
     every = [r["us"] for r in rows(figures)] + [TARGETS["laws_us"]]
     axes[0].set_xlim(0.5 * min(every), 2.0 * max(every))  # room for the labels
-    axes[0].legend(fontsize=7, loc="lower right")
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, fontsize=7, loc="lower center", ncol=len(labels))  # off the bars
     axes[-1].set_xlabel("CPU time per sample (us, log scale)")
-    fig.tight_layout()
+    fig.tight_layout(rect=(0.0, 0.04, 1.0, 1.0))
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=120)
     return buffer.getvalue()
