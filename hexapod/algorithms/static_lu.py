@@ -53,12 +53,15 @@ class StaticLU:
         chain of 10 links; the checks of every solve catch pivots the matrix has outgrown.
         ``orders``: symmetric pivot orders weighed with them (the body-joint tree's,
         :func:`~hexapod.algorithms.step.tree_order`), each taken where it costs fewer
-        operations still and factors these values (no zero pivot)."""
+        operations still and factors these values (no zero pivot). The pivots are chosen on the
+        values rounded (:func:`steady`), so that round-off in them does not decide a tie
+        between equal candidates (the legs of a symmetric robot): the same matrix gives the
+        same pivots, and the same compiled code, whatever its last bits."""
         from scipy.sparse import csc_array
         from scipy.sparse.linalg import splu
 
         rows, columns = np.asarray(rows, dtype=int), np.asarray(columns, dtype=int)
-        A = csc_array((np.asarray(values, dtype=float), (rows, columns)), shape=(n, n))
+        A = csc_array((steady(values), (rows, columns)), shape=(n, n))
         superlu_orders = ({"permc_spec": "COLAMD"},
                           {"permc_spec": "MMD_AT_PLUS_A", "diag_pivot_thresh": 0.1,
                            "options": {"SymmetricMode": True}})
@@ -184,6 +187,17 @@ class StaticLU:
             out[self.row_order.tolist()] = ca.solve(L.T, ca.solve(U.T,
                                                                   b[self.column_order.tolist()]))
         return out
+
+
+def steady(values) -> np.ndarray:
+    """``values`` rounded to 26 significant bits (some 8 digits): what a pivot choice reads.
+    A matrix's entries that are equal in exact arithmetic (the mirrored legs of a robot) differ
+    by round-off, which then decided SuperLU's pivots: 1e-15 of noise on the walking robot's
+    Jacobian gave 20 pivot orders in 20 tries (one-off script), so a run whose positions
+    differed in their last bits from an earlier one's (another process's BLAS, say) compiled
+    its plans' code again."""
+    mantissa, exponent = np.frexp(np.asarray(values, dtype=float))
+    return np.ldexp(np.round(np.ldexp(mantissa, 26)), exponent - 26)
 
 
 def _sparsity(n: int, entries: list[tuple[int, int, int]]) -> tuple[ca.Sparsity, list[int]]:
