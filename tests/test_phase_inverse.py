@@ -276,6 +276,31 @@ def test_guided_coordinates_evaluated_apart_are_those_of_the_samples_one_by_one(
         assert np.array_equal(mine, theirs)
 
 
+def test_plans_take_the_same_pivots_whatever_the_samples(monkeypatch):
+    """A plan's pivots are chosen at the model's reference positions where they serve, not at
+    the decision's own (which move with the samples a run is given): two fresh models of the
+    walking robot, run on different samples across a touch-down, build the same plans (rows
+    and pivots), so that compiled, the second run finds the first one's code. A decision's
+    own pivots differed with the positions it was taken at (5 to 8 pivot orders at 8 positions
+    of a contact phase, one-off script)."""
+    monkeypatch.setattr(prescribed, "PHASE_FROM_SAMPLES", 0)  # the guides' too
+
+    def pivots(times) -> dict:
+        model = hx.assemble(hx.load_scene("hexapod"))
+        inverse_dynamics(model, times, method="phase")
+        found = {}
+        for owner in (model, model.guidance.kinematics):
+            for plan in _plans(owner):
+                found[(plan.motion, plan.kept.tobytes(), plan.left_out.tobytes())] = (
+                    plan.lu.row_order.tobytes(), plan.lu.column_order.tobytes())
+        return found
+
+    first, second = pivots(np.linspace(0.19, 0.21, 11)), pivots(np.linspace(0.185, 0.215, 23))
+    common = first.keys() & second.keys()
+    assert {motion for motion, _, _ in common} == {False, True}  # the guides' and the twin's
+    assert all(first[key] == second[key] for key in common)
+
+
 def _plans(model) -> list:
     """The phase plans a model has built."""
     return [v for v in model._built.values() if isinstance(v, phase_plan.PhasePlan)]

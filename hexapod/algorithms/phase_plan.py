@@ -15,9 +15,9 @@ samples apart (:meth:`PhasePlan.evaluate`). One sample:
    ``phi_I = 0`` (none from known positions) with the Jacobian of ``q_p`` (one
    factorisation), each step applied with the retraction;
 2. ``J = Phi_v[I]`` at the positions found, factorised once (:class:`StaticLU`: pivots chosen
-   at the decision, the elimination written out as straight-line code, about 1 400
-   multiply-adds for the walking hexapod where a sparse QR of the same matrix takes some
-   25 000; the checks below catch pivots gone stale): ``v = J^-1 nu_I``,
+   once for the rows (see :func:`plan_for`), the elimination written out as straight-line
+   code, about 1 400 multiply-adds for the walking hexapod where a sparse QR of the same
+   matrix takes some 25 000; the checks below catch pivots gone stale): ``v = J^-1 nu_I``,
    ``v_dot = J^-1 gamma_I`` (or both known: a guided model's twin's), ``lam_I = J^-T (Q - M
    v_dot)``;
 3. the redundancy policy (when rows are left out): every multiplier vector that balances the
@@ -95,7 +95,7 @@ class PhasePlan:
     kept, left_out : sequence of int
         The rows ``I`` (``len(kept) == n_v``) and the redundant rows ``R``.
     lu : StaticLU
-        The factorisation's pattern and pivots for ``Phi_v[kept]``, chosen at the decision.
+        The factorisation's pattern and pivots for ``Phi_v[kept]`` (see :func:`plan_for`).
     to_c : bool
         Compile the plan's own SX Functions to C (kept in the execution setting's cache).
     motion : bool
@@ -411,10 +411,12 @@ def plan_for(terms: StepTerms, kept, left_out, make, generation: int = 0,
     """The :class:`PhasePlan` of a rank decision, built once per model and ``generation``:
     ``make()`` gives the factorisation's pivots (:class:`StaticLU`) when it is built. A later
     decision with the same rows reuses it, whatever the positions it was taken at (its pivots
-    are checked at every sample); a new ``generation`` takes new pivots. The pivots are those
-    of the first decision of these rows the model saw, so results may differ from run to run
-    by round-off (never more: every sample is checked against the constraints). ``motion``:
-    the plan of the motion alone (see :class:`PhasePlan`)."""
+    are checked at every sample); a new ``generation`` takes new pivots. The pivots are
+    ``make()``'s: those of the model's reference positions where they serve, the same in every
+    run and process (and so is the plan's compiled code), else those of the first decision of
+    these rows the model saw, so that results may then differ from run to run by round-off
+    (never more: every sample is checked against the constraints). ``motion``: the plan of
+    the motion alone (see :class:`PhasePlan`)."""
     key = ("phase-plan", tuple(int(r) for r in kept), tuple(int(r) for r in left_out),
            generation, to_c, motion)
     return terms.model.built_once(key, lambda m: PhasePlan(terms, kept, left_out, make(), to_c,
