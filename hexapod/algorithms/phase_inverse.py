@@ -450,18 +450,23 @@ class _Decisions:
             def values(at) -> np.ndarray:
                 return model.call("Phi_v", self.data, q=at, w=w_k)[kept[rows], columns]
 
+            def at_reference() -> StaticLU | None:
+                try:
+                    return StaticLU.pivoted(rows, columns, model.n_v, values(model.q0))
+                except RuntimeError:  # singular at q0
+                    return None
+
             here = values(q)
             if generation == 0:
                 # the same pivots whatever the samples and the process (the decisions' own
                 # differed with the positions they were taken at: a run on other samples
                 # compiled its plans' code again); on the walking robot they factor every
-                # sample of a stride with a growth of at most 2.9 (1.3 to 2.0 at q0)
-                try:
-                    reference = StaticLU.pivoted(rows, columns, model.n_v, values(model.q0))
-                    if reference.serves(here):
-                        return reference
-                except RuntimeError:  # singular at q0
-                    pass
+                # sample of a stride with a growth of at most 2.9 (1.3 to 2.0 at q0). One
+                # object per kept rows: plans that leave out other rows share its Functions.
+                reference = model.built_once(("phase reference pivots", kept.tobytes()),
+                                             lambda m: at_reference())
+                if reference is not None and reference.serves(here):
+                    return reference
             return StaticLU.pivoted(rows, columns, model.n_v, here)
 
         try:

@@ -123,30 +123,45 @@ class PhasePlan:
         return sx_function(name, inputs, outputs, self.to_c)
 
     def _build_linear_algebra(self) -> None:
-        """The plan's own Functions: the factorisation of ``Phi_v[I]`` and its solves, the
+        """The plan's own Functions: the factorisation of ``Phi_v[I]`` and its solves (shared by
+        the model's plans of the same kept rows and pivots, :meth:`_shared`), the
         coefficients of the left-out rows, the policy's small solve and the checks."""
         lu, model, terms = self.lu, self.model, self.terms
         n_v, n_c = model.n_v, model.n_c
         Phi = ca.SX.sym("Phi", terms.pattern.nnz())
-        factors = lu.factor(Phi[self._J_entries])
-        self.factor = self._sx("phase_lu", [Phi], [factors])
-        packed = ca.SX.sym("F", factors.numel())
+        packed = ca.SX.sym("F", lu.nnz)
         b, y = ca.SX.sym("b", n_c), ca.SX.sym("y", n_v)
+        self.factor = self._shared("factor", lambda: self._sx(
+            "phase_lu", [Phi], [lu.factor(Phi[self._J_entries])]))
         # the transposed solve, formed once and called (inlined) where needed
-        solve_t = ca.Function("solve_t", [packed, y], [lu.solve(packed, y, True)])
-        self.solve = self._sx("phase_solve", [packed, b], [lu.solve(packed, b[self.kept])])
+        solve_t = self._shared("transposed solve", lambda: ca.Function(
+            "solve_t", [packed, y], [lu.solve(packed, y, True)]))
+        self.solve = self._shared("solve", lambda: self._sx(
+            "phase_solve", [packed, b], [lu.solve(packed, b[self.kept])]))
         if not self.motion:
             self._build_multipliers(Phi, packed, solve_t)
         self._build_checks()
+
+    def _shared(self, name: str, build):
+        """``build()``, once per model for the kept rows, the pivots and the compiling of this
+        plan (plans that leave out other rows, or that a later run decided again, share the
+        factorisation's Functions: the walking robot's seven plans of a stride hold three)."""
+        key = ("phase plan part", name, self.kept.tobytes(), self.lu.row_order.tobytes(),
+               self.lu.column_order.tobytes(), self.to_c)
+        return self.model.built_once(key, lambda m: build())
 
     def _build_multipliers(self, Phi, packed, solve_t) -> None:
         """The multipliers of the kept rows and the coefficients of the left-out ones."""
         model, terms = self.model, self.terms
         n_v, n_c = model.n_v, model.n_c
         Q, a = ca.SX.sym("Q", n_v), ca.SX.sym("a", n_v)
-        lam = ca.SX(n_c, 1)
-        lam[self.kept.tolist()] = solve_t(packed, Q - ca.mtimes(sparse_dm(model.mass.dense()), a))
-        self.multipliers = self._sx("phase_multipliers", [packed, Q, a], [lam])
+
+        def multipliers() -> ca.Function:
+            lam = ca.SX(n_c, 1)
+            lam[self.kept.tolist()] = solve_t(
+                packed, Q - ca.mtimes(sparse_dm(model.mass.dense()), a))
+            return self._sx("phase_multipliers", [packed, Q, a], [lam])
+        self.multipliers = self._shared("multipliers", multipliers)
         if self.left_out.size:
             place = {int(r): i for i, r in enumerate(self.left_out)}
             Phi_R = ca.SX(self.left_out.size, n_v)

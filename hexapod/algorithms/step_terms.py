@@ -434,7 +434,9 @@ class StepTerms:
         for i in range(m):
             for j in range(i, m):
                 H[i, j] = H[j, i] = ca.dot(G[:, i], G[:, j])
-        solve = ca.Function("normal_solve", *_normal_solve(m))
+        solve = self.__dict__.setdefault("_normal_solves", {}).get(m)
+        if solve is None:  # once per size: 11 ms each for the walking robot's
+            solve = self._normal_solves[m] = ca.Function("normal_solve", *_normal_solve(m))
         g = ca.mtimes(A, lam) + b
         z = solve(H, ca.mtimes(G.T, g), mask)
         if model.contacts:  # feet of small weight make G ill-conditioned: refine once
