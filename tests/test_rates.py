@@ -426,3 +426,26 @@ def test_a_step_ends_accelerations_and_its_saved_multipliers_come_from_one_call(
     assert np.array_equal(integrator.v_dot, kernel.solve(t, q, v)[1])
     apart = policy_multipliers(model, kernel.rows, kernel.left_out)(t, q.copy(), v.copy())
     assert np.array_equal(lam, apart[1]) and np.array_equal(integrator.v_dot, apart[0])
+
+
+def test_runs_from_other_states_take_the_same_pivots():
+    """A model's first pivots for a row set are those of its reference positions ``q0`` where
+    they serve the run's state, not the state's own: two fresh models started at different
+    states take the same pivots (the same kernels' code, found again in the cache), where
+    each state's own pivots differ (checked too)."""
+    from hexapod.algorithms.step import kept_pivots
+    from hexapod.simulation import kernels
+
+    scene = random_tree(3, 8, chain=True, driven=False)
+    model, q, _, _, data = solve_state(scene)
+    rows, w = data.independent_rows, model.law_values(0.0)[0]
+    other_model = hx.assemble(scene)
+    rng = np.random.default_rng(5)
+    moved = other_model.integrate(q, 0.3 * rng.standard_normal(model.n_v))
+    own = [kept_pivots(model, rows.tolist(), x, w) for x in (q, moved)]
+    assert not (np.array_equal(own[0].row_order, own[1].row_order)
+                and np.array_equal(own[0].column_order, own[1].column_order))
+    first = kernels.pivots_near(model, rows, (q, w))
+    second = kernels.pivots_near(other_model, rows, (moved, w))
+    assert np.array_equal(first.row_order, second.row_order)
+    assert np.array_equal(first.column_order, second.column_order)

@@ -587,13 +587,26 @@ def pivots_near(model: Model, rows: np.ndarray, reference: tuple | None) -> Stat
         # made new kernels, and compiled them, stride after stride
         first = model.built_once(("first pivots",), lambda m: {})
         held = first.get(rows.tobytes())
+        if held is None:
+            # the pivots of the model's reference positions where they serve: the same in
+            # every run and process whatever its start (and so are the kernels' libraries)
+            held = _reference_pivots(model, rows, w)
         if held is not None and held.serves(kept_values(model, rows.tolist(), q, w)[3]):
             lu = held
         else:
             lu = kept_pivots(model, rows.tolist(), q, w)
-            first.setdefault(rows.tobytes(), lu)
+        first.setdefault(rows.tobytes(), lu)
         recent.keep(key, lu)
     return lu
+
+
+def _reference_pivots(model: Model, rows: np.ndarray, w: np.ndarray) -> StaticLU | None:
+    """:func:`~hexapod.algorithms.step.kept_pivots` at the model's reference positions ``q0``
+    (None where the rows are singular there)."""
+    try:
+        return kept_pivots(model, rows.tolist(), np.asarray(model.q0, dtype=float), w)
+    except RuntimeError:
+        return None
 
 
 def pivot_key(lu: StaticLU | None) -> tuple:
